@@ -1,0 +1,529 @@
+//! The scene data model: meshes, instances, Phong materials, lights and a camera.
+//!
+//! Everything here is plain data with no GPU types, so loaders, built-in scenes, the light-space
+//! maths and the CPU reference can all be used (and tested) without a graphics device.
+
+use glam::{Mat4, Vec3};
+
+use crate::SceneError;
+
+/// An indexed triangle mesh in object space.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// A name for messages (file name, primitive name).
+    pub name: String,
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Per-vertex unit normals, one per position.
+    pub normals: Vec<Vec3>,
+    /// Triangle list: three indices per triangle into `positions`.
+    pub indices: Vec<u32>,
+}
+
+impl Mesh {
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// Axis-aligned bounds `(min, max)` of the positions; `None` for an empty mesh.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let first = *self.positions.first()?;
+        Some(
+            self.positions
+                .iter()
+                .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))),
+        )
+    }
+
+    /// Replaces the normals with area-weighted vertex normals computed from the triangles.
+    /// Vertices used by no (or only degenerate) triangles get `+Y`.
+    pub fn compute_normals(&mut self) {
+        let mut acc = vec![Vec3::ZERO; self.positions.len()];
+        for tri in self.indices.chunks_exact(3) {
+            let [a, b, c] = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
+            if a >= acc.len() || b >= acc.len() || c >= acc.len() {
+                continue;
+            }
+            let n = (self.positions[b] - self.positions[a]).cross(self.positions[c] - self.positions[a]);
+            acc[a] += n;
+            acc[b] += n;
+            acc[c] += n;
+        }
+        self.normals = acc
+            .into_iter()
+            .map(|n| n.try_normalize().unwrap_or(Vec3::Y))
+            .collect();
+    }
+
+    /// Checks the mesh is usable: indices in range, a multiple of three, one normal per
+    /// position, every coordinate finite. Degenerate (zero-area) triangles are allowed: they
+    /// rasterize to nothing and cast no shadow.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        let bad = |reason: String| SceneError::InvalidMesh {
+            mesh: self.name.clone(),
+            reason,
+        };
+        if self.indices.len() % 3 != 0 {
+            return Err(bad(format!(
+                "{} indices is not a multiple of 3",
+                self.indices.len()
+            )));
+        }
+        if self.normals.len() != self.positions.len() {
+            return Err(bad(format!(
+                "{} normals for {} positions",
+                self.normals.len(),
+                self.positions.len()
+            )));
+        }
+        if let Some(i) = self.indices.iter().find(|&&i| i as usize >= self.positions.len()) {
+            return Err(bad(format!(
+                "index {i} is out of range ({} vertices)",
+                self.positions.len()
+            )));
+        }
+        if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
+            return Err(bad(format!(
+                "vertex {i} has a non-finite position {:?}",
+                self.positions[i]
+            )));
+        }
+        if let Some(i) = self.normals.iter().position(|n| !n.is_finite()) {
+            return Err(bad(format!("vertex {i} has a non-finite normal")));
+        }
+        Ok(())
+    }
+}
+
+/// A Phong material (seed 004): colours of the ambient, diffuse and specular terms and the
+/// specular exponent.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    /// Ambient reflectance (multiplies each light's ambient colour).
+    #[serde(default = "Material::default_ambient")]
+    pub ambient: Vec3,
+    /// Diffuse reflectance.
+    #[serde(default = "Material::default_diffuse")]
+    pub diffuse: Vec3,
+    /// Specular reflectance.
+    #[serde(default = "Material::default_specular")]
+    pub specular: Vec3,
+    /// Specular exponent (higher = tighter highlight).
+    #[serde(default = "Material::default_shininess")]
+    pub shininess: f32,
+}
+
+impl Material {
+    fn default_ambient() -> Vec3 {
+        Vec3::splat(0.8)
+    }
+    fn default_diffuse() -> Vec3 {
+        Vec3::splat(0.8)
+    }
+    fn default_specular() -> Vec3 {
+        Vec3::splat(0.2)
+    }
+    fn default_shininess() -> f32 {
+        16.0
+    }
+
+    /// A matte material of one colour (ambient = diffuse = `color`, faint white specular).
+    pub fn matte(color: Vec3) -> Self {
+        Self {
+            ambient: color,
+            diffuse: color,
+            specular: Vec3::splat(0.1),
+            shininess: 8.0,
+        }
+    }
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self {
+            ambient: Self::default_ambient(),
+            diffuse: Self::default_diffuse(),
+            specular: Self::default_specular(),
+            shininess: Self::default_shininess(),
+        }
+    }
+}
+
+/// One placement of a mesh in the world.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Instance {
+    /// Index into [`Scene::meshes`].
+    pub mesh: usize,
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+    /// Object-to-world transform (affine).
+    pub transform: Mat4,
+    /// Whether this instance is drawn into shadow maps.
+    pub casts_shadows: bool,
+}
+
+/// Distance attenuation `1 / (constant + linear·d + quadratic·d²)` (seed 004).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Attenuation {
+    /// Constant term.
+    pub constant: f32,
+    /// Linear term (per world unit).
+    pub linear: f32,
+    /// Quadratic term (per world unit squared).
+    pub quadratic: f32,
+}
+
+impl Attenuation {
+    /// No fall-off with distance (used for directional lights).
+    pub const NONE: Self = Self {
+        constant: 1.0,
+        linear: 0.0,
+        quadratic: 0.0,
+    };
+
+    /// A common fit for a light of reach `range`: the attenuation is about 1/100 at `range`
+    /// (linear 4.5/range, quadratic 75/range²), as in widely used tables for Phong lights.
+    pub fn for_range(range: f32) -> Self {
+        let r = range.max(1e-3);
+        Self {
+            constant: 1.0,
+            linear: 4.5 / r,
+            quadratic: 75.0 / (r * r),
+        }
+    }
+
+    /// The attenuation factor at distance `d`.
+    pub fn factor(&self, d: f32) -> f32 {
+        1.0 / (self.constant + self.linear * d + self.quadratic * d * d).max(1e-6)
+    }
+}
+
+/// The type-specific part of a light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightKind {
+    /// Parallel rays, like the sun. Shadows by cascaded orthographic maps.
+    Directional {
+        /// Direction the light travels (from the light towards the scene), unit length.
+        direction: Vec3,
+        /// Number of shadow cascades, 1–4.
+        cascades: u32,
+        /// Split scheme blend: 0 = uniform splits, 1 = logarithmic (the "practical" scheme).
+        split_lambda: f32,
+    },
+    /// A cone of light from a point.
+    Spot {
+        /// Light position.
+        position: Vec3,
+        /// Axis of the cone (from the light outwards), unit length.
+        direction: Vec3,
+        /// Half-angle of the cone in degrees (the angle between the axis and the cone's side).
+        cutoff_deg: f32,
+        /// Distance beyond which the light has no effect.
+        range: f32,
+    },
+    /// Light in all directions from a point. Shadows by six cube-face views.
+    Point {
+        /// Light position.
+        position: Vec3,
+        /// Distance beyond which the light has no effect.
+        range: f32,
+    },
+}
+
+/// A light source with Phong colours.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Light {
+    /// Type and geometry.
+    pub kind: LightKind,
+    /// Ambient colour.
+    pub ambient: Vec3,
+    /// Diffuse colour.
+    pub diffuse: Vec3,
+    /// Specular colour.
+    pub specular: Vec3,
+    /// Distance attenuation (ignored for directional lights).
+    pub attenuation: Attenuation,
+    /// Whether the light casts shadows.
+    pub casts_shadows: bool,
+    /// Requested shadow-map resolution in texels (per face / per cascade); the renderer may
+    /// shrink it to fit the atlas and says so.
+    pub shadow_resolution: u32,
+}
+
+impl Light {
+    /// A short name of the light's type: `"directional"`, `"spot"` or `"point"`.
+    pub fn type_name(&self) -> &'static str {
+        match self.kind {
+            LightKind::Directional { .. } => "directional",
+            LightKind::Spot { .. } => "spot",
+            LightKind::Point { .. } => "point",
+        }
+    }
+}
+
+/// A perspective camera.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    /// Eye position.
+    pub position: Vec3,
+    /// Point looked at.
+    pub target: Vec3,
+    /// Up direction (need not be orthogonal to the view direction).
+    #[serde(default = "Camera::default_up")]
+    pub up: Vec3,
+    /// Vertical field of view in degrees.
+    #[serde(default = "Camera::default_fov")]
+    pub fov_y_deg: f32,
+    /// Near plane distance.
+    #[serde(default = "Camera::default_near")]
+    pub near: f32,
+    /// Far plane distance.
+    #[serde(default = "Camera::default_far")]
+    pub far: f32,
+}
+
+impl Camera {
+    fn default_up() -> Vec3 {
+        Vec3::Y
+    }
+    fn default_fov() -> f32 {
+        60.0
+    }
+    fn default_near() -> f32 {
+        0.1
+    }
+    fn default_far() -> f32 {
+        200.0
+    }
+
+    /// A camera at `position` looking at `target` with default up, field of view and planes.
+    pub fn look_at(position: Vec3, target: Vec3) -> Self {
+        Self {
+            position,
+            target,
+            up: Self::default_up(),
+            fov_y_deg: Self::default_fov(),
+            near: Self::default_near(),
+            far: Self::default_far(),
+        }
+    }
+
+    /// World-to-view matrix (right-handed, looking down −Z).
+    pub fn view(&self) -> Mat4 {
+        Mat4::look_at_rh(self.position, self.target, self.up)
+    }
+
+    /// View-to-clip matrix for the given aspect ratio (wgpu depth range 0..1).
+    pub fn projection(&self, aspect: f32) -> Mat4 {
+        Mat4::perspective_rh(self.fov_y_deg.to_radians(), aspect, self.near, self.far)
+    }
+
+    /// Checks the camera is usable (finite, distinct eye and target, sane planes and angle).
+    pub fn validate(&self) -> Result<(), SceneError> {
+        let bad = |reason: &str| SceneError::InvalidCamera(reason.to_string());
+        if !(self.position.is_finite() && self.target.is_finite() && self.up.is_finite()) {
+            return Err(bad("position, target and up must be finite"));
+        }
+        let dir = self.target - self.position;
+        if dir.length_squared() < 1e-12 {
+            return Err(bad("position and target coincide"));
+        }
+        if dir.normalize().cross(self.up).length_squared() < 1e-8 {
+            return Err(bad("up is parallel to the view direction"));
+        }
+        if !(self.fov_y_deg > 0.5 && self.fov_y_deg < 179.0) {
+            return Err(bad("fov_y_deg must be between 0.5 and 179 degrees"));
+        }
+        if !(self.near > 0.0 && self.far > self.near && self.far.is_finite()) {
+            return Err(bad("need 0 < near < far < infinity"));
+        }
+        Ok(())
+    }
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Self::look_at(Vec3::new(0.0, 5.0, 10.0), Vec3::ZERO)
+    }
+}
+
+/// A whole scene: what the renderer draws and lights.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Scene {
+    /// A name for messages and summaries.
+    pub name: String,
+    /// Meshes, referenced by instances.
+    pub meshes: Vec<Mesh>,
+    /// Materials, referenced by instances.
+    pub materials: Vec<Material>,
+    /// Mesh placements.
+    pub instances: Vec<Instance>,
+    /// Lights.
+    pub lights: Vec<Light>,
+    /// The viewpoint.
+    pub camera: Camera,
+}
+
+impl Scene {
+    /// Total triangles drawn (summed over instances).
+    pub fn triangle_count(&self) -> usize {
+        self.instances
+            .iter()
+            .map(|i| self.meshes.get(i.mesh).map_or(0, Mesh::triangle_count))
+            .sum()
+    }
+
+    /// World-space bounds `(min, max)` of all instances (optionally only shadow casters);
+    /// `None` if there is no geometry.
+    pub fn world_bounds(&self, casters_only: bool) -> Option<(Vec3, Vec3)> {
+        let mut out: Option<(Vec3, Vec3)> = None;
+        for inst in &self.instances {
+            if casters_only && !inst.casts_shadows {
+                continue;
+            }
+            let Some((lo, hi)) = self.meshes.get(inst.mesh).and_then(Mesh::bounds) else {
+                continue;
+            };
+            for i in 0..8 {
+                let corner = Vec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                );
+                let p = inst.transform.transform_point3(corner);
+                out = Some(match out {
+                    None => (p, p),
+                    Some((a, b)) => (a.min(p), b.max(p)),
+                });
+            }
+        }
+        out
+    }
+
+    /// Checks every reference, number and shape in the scene; the renderer calls this first so
+    /// bad input becomes a clear error instead of a GPU fault.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        for m in &self.meshes {
+            m.validate()?;
+        }
+        for (i, inst) in self.instances.iter().enumerate() {
+            if inst.mesh >= self.meshes.len() {
+                return Err(SceneError::InvalidInstance {
+                    index: i,
+                    reason: format!("mesh {} does not exist ({} meshes)", inst.mesh, self.meshes.len()),
+                });
+            }
+            if inst.material >= self.materials.len() {
+                return Err(SceneError::InvalidInstance {
+                    index: i,
+                    reason: format!(
+                        "material {} does not exist ({} materials)",
+                        inst.material,
+                        self.materials.len()
+                    ),
+                });
+            }
+            if !inst.transform.is_finite() || inst.transform.determinant().abs() < 1e-12 {
+                return Err(SceneError::InvalidInstance {
+                    index: i,
+                    reason: "transform must be finite and invertible".into(),
+                });
+            }
+        }
+        for (i, m) in self.materials.iter().enumerate() {
+            let ok = m.ambient.is_finite()
+                && m.diffuse.is_finite()
+                && m.specular.is_finite()
+                && m.shininess.is_finite()
+                && m.shininess >= 0.0;
+            if !ok {
+                return Err(SceneError::InvalidMaterial {
+                    index: i,
+                    reason: "colours must be finite and shininess >= 0".into(),
+                });
+            }
+        }
+        for (i, l) in self.lights.iter().enumerate() {
+            validate_light(l).map_err(|reason| SceneError::InvalidLight { index: i, reason })?;
+        }
+        self.camera.validate()
+    }
+}
+
+fn validate_light(l: &Light) -> Result<(), String> {
+    if !(l.ambient.is_finite() && l.diffuse.is_finite() && l.specular.is_finite()) {
+        return Err("colours must be finite".into());
+    }
+    let a = l.attenuation;
+    if !(a.constant.is_finite() && a.linear.is_finite() && a.quadratic.is_finite())
+        || a.constant < 0.0
+        || a.linear < 0.0
+        || a.quadratic < 0.0
+        || a.constant + a.linear + a.quadratic <= 0.0
+    {
+        return Err("attenuation terms must be finite, non-negative and not all zero".into());
+    }
+    if l.casts_shadows && !(1..=16384).contains(&l.shadow_resolution) {
+        return Err(format!(
+            "shadow_resolution {} must be between 1 and 16384",
+            l.shadow_resolution
+        ));
+    }
+    let unit = |v: Vec3, what: &str| -> Result<(), String> {
+        if !v.is_finite() || v.length_squared() < 1e-12 {
+            Err(format!("{what} must be a finite non-zero vector"))
+        } else {
+            Ok(())
+        }
+    };
+    let range_ok = |r: f32| -> Result<(), String> {
+        if r.is_finite() && r > 0.0 {
+            Ok(())
+        } else {
+            Err(format!("range {r} must be finite and > 0"))
+        }
+    };
+    match l.kind {
+        LightKind::Directional {
+            direction,
+            cascades,
+            split_lambda,
+        } => {
+            unit(direction, "direction")?;
+            if !(1..=4).contains(&cascades) {
+                return Err(format!("cascades {cascades} must be 1 to 4"));
+            }
+            if !(0.0..=1.0).contains(&split_lambda) {
+                return Err(format!("split_lambda {split_lambda} must be in 0..=1"));
+            }
+        }
+        LightKind::Spot {
+            position,
+            direction,
+            cutoff_deg,
+            range,
+        } => {
+            if !position.is_finite() {
+                return Err("position must be finite".into());
+            }
+            unit(direction, "direction")?;
+            if !(cutoff_deg > 0.0 && cutoff_deg < 89.0) {
+                return Err(format!(
+                    "cutoff_deg {cutoff_deg} must be between 0 and 89 degrees (use a point light for wider cones)"
+                ));
+            }
+            range_ok(range)?;
+        }
+        LightKind::Point { position, range } => {
+            if !position.is_finite() {
+                return Err("position must be finite".into());
+            }
+            range_ok(range)?;
+        }
+    }
+    Ok(())
+}
