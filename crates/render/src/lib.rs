@@ -1,1 +1,117 @@
-//! render
+//! # manyshadows
+//!
+//! Many shadow-casting lights on wgpu. The flow of one frame:
+//!
+//! `Scene` → [`ShadowPlan`] (every shadow view and its atlas tile) → [`GpuScene`] (buffers) →
+//! a [`ShadowTechnique`] fills the [`ShadowAtlas`] → the lighting pass reads it → image,
+//! visibility mask and timings ([`Frame`]).
+//!
+//! ```no_run
+//! use manyshadows::{AdapterRequest, GpuContext, Renderer, RenderSettings};
+//! let ctx = GpuContext::new(&AdapterRequest::default())?;
+//! let scene = manyshadows_scene::builtin::build("cubes", &Default::default())?;
+//! let mut renderer = Renderer::new(&ctx, &scene, RenderSettings::default())?;
+//! let frame = renderer.render()?;
+//! assert_eq!(frame.rgba.len(), 1280 * 720 * 4);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+pub mod atlas_image;
+pub mod context;
+pub mod gbuffer;
+pub mod gpu_scene;
+pub mod gpu_types;
+pub mod lighting;
+pub mod readback;
+pub mod renderer;
+pub mod shaders;
+pub mod shadow;
+pub mod techniques;
+pub mod timing;
+pub mod visibility;
+
+pub use context::{AdapterRequest, GpuContext};
+pub use gpu_scene::GpuScene;
+pub use renderer::{Frame, FrameTimings, Pcf, RenderSettings, Renderer, ShadowBias};
+pub use shadow::{ShadowAtlas, ShadowPlan, ShadowStats, ShadowTechnique, Technique};
+pub use visibility::VisibilityMask;
+
+pub use manyshadows_scene as scene;
+pub use wgpu;
+
+/// Everything that can go wrong in the renderer. Each message says what to do.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// No graphics adapter matched.
+    #[error("no graphics adapter (backends {backends}): {detail}")]
+    NoAdapter {
+        /// The backends searched.
+        backends: String,
+        /// What was found and what to install or change.
+        detail: String,
+    },
+    /// The adapter refused to create a device.
+    #[error("could not create a device on {0}")]
+    Device(String),
+    /// The scene is invalid.
+    #[error(transparent)]
+    Scene(#[from] manyshadows_scene::SceneError),
+    /// The shadow maps do not fit the atlas.
+    #[error(transparent)]
+    Atlas(#[from] manyshadows_scene::atlas::AtlasError),
+    /// The image size is not possible on this adapter.
+    #[error("resolution {width}x{height} is not possible: {reason}")]
+    ResolutionTooLarge {
+        /// Requested width.
+        width: u32,
+        /// Requested height.
+        height: u32,
+        /// Which limit.
+        reason: String,
+    },
+    /// More shadow views than the renderer supports in one frame.
+    #[error("{views} shadow views requested but at most {max} are supported per frame; use fewer shadowed lights (a point light needs 6 views, a directional light one per cascade)")]
+    TooManyShadowViews {
+        /// Views requested.
+        views: usize,
+        /// The limit.
+        max: usize,
+    },
+    /// A scene buffer would exceed the adapter's limits.
+    #[error("scene too large for this adapter: {0}")]
+    SceneTooLarge(String),
+    /// The GPU reported a validation or out-of-memory error.
+    #[error("GPU error while {0}")]
+    Gpu(String),
+    /// Reading results back failed.
+    #[error("reading results back from the GPU failed: {0}")]
+    Readback(String),
+}
+
+/// Bind-group layout entry of a read-only storage buffer.
+pub(crate) fn storage_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// Bind-group layout entry of a uniform buffer.
+pub(crate) fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}

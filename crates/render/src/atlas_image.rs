@@ -1,0 +1,150 @@
+//! Reading the depth atlas back and turning it into a picture: linearized depth per tile (seed
+//! 004's shadow-map visualization, done properly with each view's near and far) and the tile
+//! outlines.
+
+use wgpu::util::DeviceExt;
+
+use crate::shadow::{ShadowAtlas, ShadowPlan};
+use crate::{GpuContext, RenderError};
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct CopyParams {
+    first_row: u32,
+    rows: u32,
+    width: u32,
+    _pad: u32,
+}
+
+/// Reads the atlas depth (`size`² floats, row-major from the top-left texel). Works on GL too:
+/// the depth texture is loaded as an unfilterable float texture by a compute shader, in bands
+/// of rows that fit the storage-binding limit.
+pub fn read_depth(ctx: &GpuContext, atlas: &ShadowAtlas) -> Result<Vec<f32>, RenderError> {
+    let device = &ctx.device;
+    let size = atlas.size;
+    let limit = (ctx.limits().max_storage_buffer_binding_size as u64).min(64 << 20);
+    let rows_per_band = ((limit / (size as u64 * 4)) as u32).clamp(1, size);
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("atlas_copy.layout"),
+        entries: &[
+            crate::lighting::texture_entry(0, wgpu::TextureSampleType::Float { filterable: false }, wgpu::ShaderStages::COMPUTE),
+            wgpu::BindGroupLayoutEntry {
+                binding: 1,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: false },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+            crate::uniform_entry(2, wgpu::ShaderStages::COMPUTE),
+        ],
+    });
+    let module = crate::shaders::module(device, "atlas_copy.shader", &crate::shaders::atlas_copy());
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("atlas_copy.pipeline_layout"),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("atlas_copy.pipeline"),
+        layout: Some(&pipeline_layout),
+        module: &module,
+        entry_point: Some("cs_main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let mut out = Vec::with_capacity(size as usize * size as usize);
+    let mut first_row = 0;
+    while first_row < size {
+        let rows = rows_per_band.min(size - first_row);
+        let bytes = rows as u64 * size as u64 * 4;
+        let storage = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("atlas_copy.band"),
+            size: bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("atlas_copy.readback"),
+            size: bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("atlas_copy.params"),
+            contents: bytemuck::bytes_of(&CopyParams { first_row, rows, width: size, _pad: 0 }),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("atlas_copy.bind_group"),
+            layout: &layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&atlas.view) },
+                wgpu::BindGroupEntry { binding: 1, resource: storage.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: params.as_entire_binding() },
+            ],
+        });
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("atlas_copy.encoder") });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("atlas_copy.pass"), timestamp_writes: None });
+            pass.set_pipeline(&pipeline);
+            pass.set_bind_group(0, &bind_group, &[]);
+            pass.dispatch_workgroups(size.div_ceil(16), rows.div_ceil(16), 1);
+        }
+        encoder.copy_buffer_to_buffer(&storage, 0, &readback, 0, bytes);
+        ctx.queue.submit([encoder.finish()]);
+        let data = crate::readback::map_read(ctx, &readback, 0..bytes)?;
+        out.extend_from_slice(bytemuck::cast_slice::<u8, f32>(&data));
+        first_row += rows;
+    }
+    Ok(out)
+}
+
+/// Largest side of the atlas picture; bigger atlases are shown scaled down (nearest texel).
+pub const MAX_ATLAS_IMAGE: u32 = 4096;
+
+/// An RGB picture of the atlas: each tile's depth linearized between its view's near and far
+/// plane (near = white, far or empty = black), tiles outlined (spot yellow, point cyan,
+/// cascade magenta), unused atlas area dark blue. Returns `(side, rgb bytes)`.
+pub fn atlas_picture(depth: &[f32], atlas_size: u32, plan: &ShadowPlan) -> (u32, Vec<u8>) {
+    use manyshadows_scene::light_space::ViewKind;
+    let scale = atlas_size.div_ceil(MAX_ATLAS_IMAGE).max(1);
+    let side = atlas_size / scale;
+    let mut rgb = vec![0u8; side as usize * side as usize * 3];
+    for px in rgb.chunks_exact_mut(3) {
+        px.copy_from_slice(&[10, 12, 40]);
+    }
+    for (view, tile) in plan.views.iter().zip(&plan.layout.tiles) {
+        let (x0, y0) = (tile.x / scale, tile.y / scale);
+        let n = (tile.size / scale).max(1);
+        let outline: [u8; 3] = match view.kind {
+            ViewKind::Spot => [255, 220, 0],
+            ViewKind::CubeFace(_) => [0, 220, 255],
+            ViewKind::Cascade(_) => [255, 0, 220],
+        };
+        for ty in 0..n {
+            for tx in 0..n {
+                let (ax, ay) = (x0 + tx, y0 + ty);
+                if ax >= side || ay >= side {
+                    continue;
+                }
+                let d = depth[((ay * scale) * atlas_size + ax * scale) as usize];
+                let lin = if view.orthographic {
+                    d
+                } else {
+                    // Perspective depth d = far(z - near) / (z (far - near)) → view distance z.
+                    let (nr, fr) = (view.near, view.far);
+                    let z = nr * fr / (fr - d * (fr - nr));
+                    ((z - nr) / (fr - nr)).clamp(0.0, 1.0)
+                };
+                let g = if d >= 1.0 { 0 } else { (255.0 * (1.0 - lin).powf(1.5)) as u8 };
+                let border = tx == 0 || ty == 0 || tx + 1 == n || ty + 1 == n;
+                let i = (ay as usize * side as usize + ax as usize) * 3;
+                rgb[i..i + 3].copy_from_slice(&if border { outline } else { [g, g, g] });
+            }
+        }
+    }
+    (side, rgb)
+}

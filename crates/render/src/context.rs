@@ -1,0 +1,282 @@
+//! The GPU context: headless adapter choice, device creation and the optional features the
+//! renderer turns on.
+//!
+//! The development and CI machines have no GPU, so the adapter order matters: a hardware GPU
+//! first, then Vulkan on the CPU (lavapipe), then OpenGL on the CPU (llvmpipe through EGL). The
+//! user can narrow the choice with `WGPU_BACKEND` (or [`AdapterRequest::backends`]) and
+//! `WGPU_ADAPTER_NAME` (a case-insensitive substring of the adapter's name).
+
+use std::sync::{Arc, Mutex};
+
+pub use wgpu::Backends;
+
+use crate::RenderError;
+
+/// What the caller asks of the adapter choice.
+#[derive(Clone, Debug, Default)]
+pub struct AdapterRequest {
+    /// Backends to consider; `None` = `WGPU_BACKEND` if set, otherwise all.
+    pub backends: Option<wgpu::Backends>,
+    /// Case-insensitive substring the adapter name must contain; `None` = `WGPU_ADAPTER_NAME`.
+    pub name: Option<String>,
+}
+
+/// Optional adapter features and whether the renderer uses them.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FeatureUse {
+    /// Feature name as wgpu spells it.
+    pub name: &'static str,
+    /// The adapter has it.
+    pub available: bool,
+    /// What the renderer does with it.
+    pub purpose: &'static str,
+}
+
+/// Optional features the renderer turns on when present, with their purpose.
+const OPTIONAL_FEATURES: &[(wgpu::Features, &str, &str)] = &[
+    (
+        wgpu::Features::TIMESTAMP_QUERY,
+        "TIMESTAMP_QUERY",
+        "GPU time per pass",
+    ),
+    (
+        wgpu::Features::PIPELINE_STATISTICS_QUERY,
+        "PIPELINE_STATISTICS_QUERY",
+        "vertex-shader invocation and primitive counts (benchmarks)",
+    ),
+    (
+        wgpu::Features::MULTIVIEW,
+        "MULTIVIEW",
+        "multiview shadow generation (layered technique, later)",
+    ),
+    (
+        wgpu::Features::MULTI_DRAW_INDIRECT_COUNT,
+        "MULTI_DRAW_INDIRECT_COUNT",
+        "GPU-driven shadow generation (later)",
+    ),
+];
+
+/// An adapter and the device made on it.
+pub struct GpuContext {
+    /// The wgpu instance.
+    pub instance: wgpu::Instance,
+    /// The chosen adapter.
+    pub adapter: wgpu::Adapter,
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// The adapter's description.
+    pub info: wgpu::AdapterInfo,
+    /// GPU errors nobody captured in an error scope (they would otherwise panic).
+    uncaptured: Arc<Mutex<Vec<String>>>,
+}
+
+impl std::fmt::Debug for GpuContext {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GpuContext").field("info", &self.info).finish()
+    }
+}
+
+/// A one-line description of an adapter: name, backend, type and driver.
+pub fn describe_adapter(info: &wgpu::AdapterInfo) -> String {
+    let driver = [info.driver.as_str(), info.driver_info.as_str()]
+        .iter()
+        .filter(|s| !s.is_empty())
+        .copied()
+        .collect::<Vec<_>>()
+        .join(" ");
+    format!(
+        "{} ({:?}, {:?}{})",
+        info.name,
+        info.backend,
+        info.device_type,
+        if driver.is_empty() {
+            String::new()
+        } else {
+            format!(", {driver}")
+        }
+    )
+}
+
+/// Preference rank of an adapter (lower is better): hardware first, then Vulkan on the CPU,
+/// then anything else on the CPU.
+fn rank(info: &wgpu::AdapterInfo) -> u32 {
+    use wgpu::DeviceType::*;
+    let hw = match info.device_type {
+        DiscreteGpu => 0,
+        IntegratedGpu => 1,
+        VirtualGpu => 2,
+        Other => 4,
+        Cpu => 5,
+    };
+    let backend = match info.backend {
+        wgpu::Backend::Vulkan => 0,
+        wgpu::Backend::Metal | wgpu::Backend::Dx12 => 1,
+        wgpu::Backend::Gl => 2,
+        _ => 3,
+    };
+    hw * 10 + backend
+}
+
+/// Which backends a request considers.
+pub fn requested_backends(req: &AdapterRequest) -> wgpu::Backends {
+    req.backends
+        .or_else(wgpu::Backends::from_env)
+        .unwrap_or(wgpu::Backends::all())
+}
+
+fn requested_name(req: &AdapterRequest) -> Option<String> {
+    req.name
+        .clone()
+        .or_else(|| std::env::var("WGPU_ADAPTER_NAME").ok())
+        .filter(|s| !s.trim().is_empty())
+}
+
+fn new_instance(backends: wgpu::Backends) -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle().with_env();
+    desc.backends = backends;
+    wgpu::Instance::new(desc)
+}
+
+/// Every adapter the request's backends expose, best first (the first is the one
+/// [`GpuContext::new`] picks when no name filter is given).
+pub fn list_adapters(req: &AdapterRequest) -> Vec<wgpu::AdapterInfo> {
+    let instance = new_instance(requested_backends(req));
+    let mut infos: Vec<_> = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()))
+        .into_iter()
+        .map(|a| a.get_info())
+        .collect();
+    infos.sort_by_key(rank);
+    infos
+}
+
+/// The optional features of an adapter and what the renderer does with each.
+pub fn feature_use(features: wgpu::Features) -> Vec<FeatureUse> {
+    OPTIONAL_FEATURES
+        .iter()
+        .map(|&(f, name, purpose)| FeatureUse {
+            name,
+            available: features.contains(f),
+            purpose,
+        })
+        .collect()
+}
+
+impl GpuContext {
+    /// Picks the best adapter for `req` and creates a device with the adapter's full limits and
+    /// the optional features the renderer uses. Fails with an error that says what to install
+    /// when there is no adapter at all.
+    pub fn new(req: &AdapterRequest) -> Result<Self, RenderError> {
+        let backends = requested_backends(req);
+        let instance = new_instance(backends);
+        let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+        let all_names: Vec<String> = adapters
+            .iter()
+            .map(|a| describe_adapter(&a.get_info()))
+            .collect();
+        if let Some(name) = requested_name(req) {
+            let needle = name.to_lowercase();
+            adapters.retain(|a| a.get_info().name.to_lowercase().contains(&needle));
+            if adapters.is_empty() {
+                return Err(RenderError::NoAdapter {
+                    backends: format!("{backends:?}"),
+                    detail: format!(
+                        "no adapter's name contains '{name}' (WGPU_ADAPTER_NAME / --adapter); adapters found: {}",
+                        if all_names.is_empty() { "none".to_string() } else { all_names.join("; ") }
+                    ),
+                });
+            }
+        }
+        adapters.sort_by_key(|a| rank(&a.get_info()));
+        let Some(adapter) = adapters.into_iter().next() else {
+            return Err(RenderError::NoAdapter {
+                backends: format!("{backends:?}"),
+                detail: "no graphics adapter was found. Install a driver: on Debian/Ubuntu \
+                         `apt-get install -y mesa-vulkan-drivers` gives Vulkan on the CPU \
+                         (lavapipe), and `libegl1 libgl1-mesa-dri` give OpenGL on the CPU \
+                         (llvmpipe). If WGPU_BACKEND is set, check that it names an installed \
+                         backend (vulkan, gl)."
+                    .to_string(),
+            });
+        };
+        let info = adapter.get_info();
+        let wanted = OPTIONAL_FEATURES
+            .iter()
+            .fold(wgpu::Features::empty(), |acc, &(f, _, _)| acc | f);
+        let features = adapter.features() & wanted;
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("manyshadows.device"),
+            required_features: features,
+            required_limits: limits,
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| RenderError::Device(format!("{}: {e}", describe_adapter(&info))))?;
+        let uncaptured = Arc::new(Mutex::new(Vec::new()));
+        let sink = uncaptured.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            log::error!("uncaptured GPU error: {e}");
+            if let Ok(mut v) = sink.lock() {
+                v.push(e.to_string());
+            }
+        }));
+        log::info!("adapter: {}", describe_adapter(&info));
+        Ok(Self {
+            instance,
+            adapter,
+            device,
+            queue,
+            info,
+            uncaptured,
+        })
+    }
+
+    /// True if the device has every feature in `f`.
+    pub fn has(&self, f: wgpu::Features) -> bool {
+        self.device.features().contains(f)
+    }
+
+    /// The device's limits.
+    pub fn limits(&self) -> wgpu::Limits {
+        self.device.limits()
+    }
+
+    /// Runs `f` inside a validation + out-of-memory error scope; a GPU error becomes
+    /// [`RenderError::Gpu`] with `what` in its message instead of a panic.
+    pub fn scoped<T>(&self, what: &str, f: impl FnOnce() -> Result<T, RenderError>) -> Result<T, RenderError> {
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let out = f();
+        let v = pollster::block_on(validation.pop());
+        let o = pollster::block_on(oom.pop());
+        if let Some(e) = v.or(o) {
+            return Err(RenderError::Gpu(format!("{what}: {e}")));
+        }
+        if let Some(e) = self.take_uncaptured() {
+            return Err(RenderError::Gpu(format!("{what}: {e}")));
+        }
+        out
+    }
+
+    /// The first GPU error that escaped every error scope since the last call, if any.
+    pub fn take_uncaptured(&self) -> Option<String> {
+        let mut v = self.uncaptured.lock().ok()?;
+        let first = v.first().cloned();
+        v.clear();
+        first
+    }
+
+    /// Blocks until the GPU has finished all submitted work.
+    pub fn wait_idle(&self) -> Result<(), RenderError> {
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: None,
+            })
+            .map(|_| ())
+            .map_err(|e| RenderError::Gpu(format!("waiting for the GPU: {e}")))
+    }
+}

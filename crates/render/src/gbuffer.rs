@@ -1,0 +1,162 @@
+//! The G-buffer pass: for each pixel the world position, normal and material of the nearest
+//! surface. Positions are stored directly (not reconstructed from depth) so the quality
+//! reference can ray-trace from exactly the points the frame shades.
+
+use crate::gpu_scene::{GpuScene, NORMAL_LAYOUT, POSITION_LAYOUT};
+use crate::timing::{GpuTimer, Span};
+use crate::GpuContext;
+
+/// xyz world position, w = 1 on geometry.
+pub const POSITION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// xyz normal, w = material index.
+pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// Camera depth buffer.
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// G-buffer targets and the pipeline that fills them.
+pub struct GBuffer {
+    /// World positions.
+    pub position: wgpu::Texture,
+    /// Normals and material indices.
+    pub normal: wgpu::Texture,
+    depth: wgpu::Texture,
+    pipeline: wgpu::RenderPipeline,
+    bind_group: wgpu::BindGroup,
+}
+
+fn target(ctx: &GpuContext, label: &str, w: u32, h: u32, format: wgpu::TextureFormat, usage: wgpu::TextureUsages) -> wgpu::Texture {
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    })
+}
+
+impl GBuffer {
+    /// Creates `w`×`h` targets; `frame` is the frame-uniform buffer.
+    pub fn new(ctx: &GpuContext, scene: &GpuScene, frame: &wgpu::Buffer, w: u32, h: u32) -> Self {
+        use wgpu::TextureUsages as U;
+        let color_usage = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC;
+        let position = target(ctx, "gbuffer.position", w, h, POSITION_FORMAT, color_usage);
+        let normal = target(ctx, "gbuffer.normal", w, h, NORMAL_FORMAT, color_usage);
+        let depth = target(ctx, "gbuffer.depth", w, h, DEPTH_FORMAT, U::RENDER_ATTACHMENT);
+        let device = &ctx.device;
+        let module = crate::shaders::module(device, "gbuffer.shader", &crate::shaders::gbuffer());
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gbuffer.layout"),
+            entries: &[
+                crate::uniform_entry(0, wgpu::ShaderStages::VERTEX),
+                crate::storage_entry(1, wgpu::ShaderStages::VERTEX),
+            ],
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("gbuffer.bind_group"),
+            layout: &layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: frame.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: scene.instances.as_entire_binding(),
+                },
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("gbuffer.pipeline_layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("gbuffer.pipeline"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(POSITION_LAYOUT), Some(NORMAL_LAYOUT)],
+            },
+            primitive: wgpu::PrimitiveState {
+                front_face: wgpu::FrontFace::Ccw,
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(POSITION_FORMAT.into()), Some(NORMAL_FORMAT.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        Self {
+            position,
+            normal,
+            depth,
+            pipeline,
+            bind_group,
+        }
+    }
+
+    /// Records the pass: every instance, no culling (the camera sees a handful of instances
+    /// fewer at most; the shadow passes are where culling pays).
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, scene: &GpuScene, timer: &GpuTimer, span: Option<Span>) {
+        let pv = self.position.create_view(&Default::default());
+        let nv = self.normal.create_view(&Default::default());
+        let dv = self.depth.create_view(&Default::default());
+        let clear = |view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        };
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("gbuffer.pass"),
+            color_attachments: &[clear(&pv), clear(&nv)],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &dv,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timer.render_writes(span, true, true),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.set_vertex_buffer(0, scene.positions.slice(..));
+        pass.set_vertex_buffer(1, scene.normals.slice(..));
+        pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+        for d in &scene.draws {
+            let m = d.mesh;
+            pass.draw_indexed(m.first_index..m.first_index + m.index_count, m.base_vertex, d.instance..d.instance + 1);
+        }
+    }
+}

@@ -1,0 +1,225 @@
+//! The scene on the GPU: one vertex buffer of positions (what depth-only passes read), one of
+//! normals, one index buffer, and storage buffers of instances and materials. Each instance is
+//! drawn with its index as `instance_index`, so shaders fetch its transform from storage.
+
+use glam::{Mat4, Vec3, Vec4};
+use manyshadows_scene::Scene;
+use wgpu::util::DeviceExt;
+
+use crate::gpu_types::{InstanceData, MaterialData};
+use crate::{GpuContext, RenderError};
+
+/// Where one mesh lives in the shared buffers.
+#[derive(Clone, Copy, Debug)]
+pub struct MeshRange {
+    /// First index in the index buffer.
+    pub first_index: u32,
+    /// Number of indices.
+    pub index_count: u32,
+    /// Added to every index.
+    pub base_vertex: i32,
+}
+
+/// An instance ready to draw: its mesh range and world-space bounding sphere.
+#[derive(Clone, Copy, Debug)]
+pub struct DrawItem {
+    /// Instance index (`instance_index` in shaders).
+    pub instance: u32,
+    /// Mesh range.
+    pub mesh: MeshRange,
+    /// World-space bounding sphere: centre, radius.
+    pub sphere: (Vec3, f32),
+    /// Drawn into shadow maps.
+    pub casts_shadows: bool,
+}
+
+/// Scene buffers on the GPU.
+pub struct GpuScene {
+    /// Vertex positions (`vec3<f32>`, 12-byte stride).
+    pub positions: wgpu::Buffer,
+    /// Vertex normals (`vec3<f32>`, 12-byte stride).
+    pub normals: wgpu::Buffer,
+    /// `u32` triangle indices.
+    pub indices: wgpu::Buffer,
+    /// `array<InstanceData>`.
+    pub instances: wgpu::Buffer,
+    /// `array<MaterialData>`.
+    pub materials: wgpu::Buffer,
+    /// One per instance, in instance order.
+    pub draws: Vec<DrawItem>,
+    /// Triangles over all instances.
+    pub triangles: u64,
+}
+
+/// Bytes per vertex position.
+pub const POSITION_STRIDE: u64 = 12;
+
+/// Vertex layout of the position buffer (location 0).
+pub const POSITION_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: POSITION_STRIDE,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &wgpu::vertex_attr_array![0 => Float32x3],
+};
+
+/// Vertex layout of the normal buffer (location 1).
+pub const NORMAL_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: 12,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &wgpu::vertex_attr_array![1 => Float32x3],
+};
+
+impl GpuScene {
+    /// Uploads a validated scene. Fails if a buffer would exceed the device's limits.
+    pub fn new(ctx: &GpuContext, scene: &Scene) -> Result<Self, RenderError> {
+        let limits = ctx.limits();
+        let mut positions: Vec<[f32; 3]> = Vec::new();
+        let mut normals: Vec<[f32; 3]> = Vec::new();
+        let mut indices: Vec<u32> = Vec::new();
+        let mut ranges = Vec::with_capacity(scene.meshes.len());
+        let mut spheres = Vec::with_capacity(scene.meshes.len());
+        for mesh in &scene.meshes {
+            ranges.push(MeshRange {
+                first_index: indices.len() as u32,
+                index_count: mesh.indices.len() as u32,
+                base_vertex: positions.len() as i32,
+            });
+            positions.extend(mesh.positions.iter().map(|p| p.to_array()));
+            normals.extend(mesh.normals.iter().map(|n| n.to_array()));
+            indices.extend_from_slice(&mesh.indices);
+            let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
+            let c = (lo + hi) * 0.5;
+            let r = mesh
+                .positions
+                .iter()
+                .map(|p| p.distance(c))
+                .fold(0.0f32, f32::max);
+            spheres.push((c, r));
+        }
+        let bytes = [
+            ("positions", positions.len() as u64 * 12),
+            ("indices", indices.len() as u64 * 4),
+            ("instances", scene.instances.len() as u64 * std::mem::size_of::<InstanceData>() as u64),
+        ];
+        for (what, size) in bytes {
+            if size > limits.max_buffer_size || (what == "instances" && size > limits.max_storage_buffer_binding_size as u64) {
+                return Err(RenderError::SceneTooLarge(format!(
+                    "the {what} buffer would be {size} bytes, over this adapter's limit"
+                )));
+            }
+        }
+        // Zero-sized buffers are invalid; keep one dummy element so an empty scene still renders.
+        if positions.is_empty() {
+            positions.push([0.0; 3]);
+            normals.push([0.0, 1.0, 0.0]);
+        }
+        if indices.is_empty() {
+            indices.extend([0, 0, 0]);
+        }
+        let instance_data: Vec<InstanceData> = if scene.instances.is_empty() {
+            vec![InstanceData::new(Mat4::IDENTITY, 0)]
+        } else {
+            scene
+                .instances
+                .iter()
+                .map(|i| InstanceData::new(i.transform, i.material as u32))
+                .collect()
+        };
+        let mut material_data: Vec<MaterialData> = scene.materials.iter().map(MaterialData::from).collect();
+        if material_data.is_empty() {
+            material_data.push(MaterialData::from(&manyshadows_scene::Material::default()));
+        }
+        let draws = scene
+            .instances
+            .iter()
+            .enumerate()
+            .map(|(i, inst)| {
+                let (c, r) = spheres[inst.mesh];
+                let m = inst.transform;
+                let scale = [m.x_axis, m.y_axis, m.z_axis]
+                    .iter()
+                    .map(|a| Vec4::truncate(*a).length())
+                    .fold(0.0f32, f32::max);
+                DrawItem {
+                    instance: i as u32,
+                    mesh: ranges[inst.mesh],
+                    sphere: (m.transform_point3(c), r * scale),
+                    casts_shadows: inst.casts_shadows,
+                }
+            })
+            .collect();
+        let device = &ctx.device;
+        let buf = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        Ok(Self {
+            positions: buf(
+                "scene.positions",
+                bytemuck::cast_slice(&positions),
+                wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
+            ),
+            normals: buf("scene.normals", bytemuck::cast_slice(&normals), wgpu::BufferUsages::VERTEX),
+            indices: buf(
+                "scene.indices",
+                bytemuck::cast_slice(&indices),
+                wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE,
+            ),
+            instances: buf(
+                "scene.instances",
+                bytemuck::cast_slice(&instance_data),
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            ),
+            materials: buf(
+                "scene.materials",
+                bytemuck::cast_slice(&material_data),
+                wgpu::BufferUsages::STORAGE,
+            ),
+            draws,
+            triangles: scene.triangle_count() as u64,
+        })
+    }
+}
+
+/// The six planes of a view-projection's frustum (wgpu clip space: depth 0..1), as
+/// `(normal, d)` with `normal·p + d >= 0` inside, normals normalised.
+pub fn frustum_planes(view_proj: Mat4) -> [Vec4; 6] {
+    let r0 = view_proj.row(0);
+    let r1 = view_proj.row(1);
+    let r2 = view_proj.row(2);
+    let r3 = view_proj.row(3);
+    let planes = [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2];
+    planes.map(|p| {
+        let len = p.truncate().length();
+        if len > 0.0 {
+            p / len
+        } else {
+            p
+        }
+    })
+}
+
+/// True if a sphere is at least partly inside the frustum given by [`frustum_planes`].
+pub fn sphere_visible(planes: &[Vec4; 6], center: Vec3, radius: f32) -> bool {
+    planes.iter().all(|p| p.truncate().dot(center) + p.w >= -radius)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frustum_culling_of_spheres() {
+        let vp = Mat4::perspective_rh(90f32.to_radians(), 1.0, 0.1, 10.0)
+            * Mat4::look_at_rh(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y);
+        let planes = frustum_planes(vp);
+        assert!(sphere_visible(&planes, Vec3::new(0.0, 0.0, -5.0), 0.1));
+        assert!(!sphere_visible(&planes, Vec3::new(0.0, 0.0, 5.0), 1.0), "behind the eye");
+        assert!(!sphere_visible(&planes, Vec3::new(0.0, 0.0, -12.0), 1.0), "beyond far");
+        assert!(sphere_visible(&planes, Vec3::new(0.0, 0.0, -10.5), 1.0), "straddles far");
+        assert!(!sphere_visible(&planes, Vec3::new(8.0, 0.0, -5.0), 1.0), "right of the 90° cone");
+        assert!(sphere_visible(&planes, Vec3::new(5.5, 0.0, -5.0), 1.0), "straddles the right plane");
+    }
+}

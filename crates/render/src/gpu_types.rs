@@ -1,0 +1,214 @@
+//! Rust mirrors of the structs in `shaders/common.wgsl`.
+//!
+//! Keep in sync with `shaders/common.wgsl`: the test at the bottom asks naga for the WGSL
+//! layout of each struct and compares it with the Rust size, so a drifted field fails the test.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+use manyshadows_scene::{light_space::ShadowView, Light, LightKind, Material};
+
+/// Light type codes, as `LIGHT_*` in `common.wgsl`.
+pub const LIGHT_DIRECTIONAL: u32 = 0;
+/// Spot light type code.
+pub const LIGHT_SPOT: u32 = 1;
+/// Point light type code.
+pub const LIGHT_POINT: u32 = 2;
+
+/// Per-frame constants (`FrameUniforms`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct FrameUniforms {
+    /// Camera world → clip.
+    pub view_proj: [[f32; 4]; 4],
+    /// Camera world → view.
+    pub view: [[f32; 4]; 4],
+    /// Eye position (xyz).
+    pub camera_pos: [f32; 4],
+    /// width, height, 1/width, 1/height.
+    pub viewport: [f32; 4],
+    /// light count, PCF mode, atlas side, visibility words per pixel.
+    pub counts: [u32; 4],
+    /// constant, slope, normal-offset bias in texels; unused.
+    pub bias: [f32; 4],
+    /// Sky colour (rgb).
+    pub sky: [f32; 4],
+}
+
+/// Per-instance data (`InstanceData`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct InstanceData {
+    /// Object → world.
+    pub model: [[f32; 4]; 4],
+    /// Inverse transpose of `model`.
+    pub normal: [[f32; 4]; 4],
+    /// x: material index.
+    pub material: [u32; 4],
+}
+
+impl InstanceData {
+    /// From a transform and a material index.
+    pub fn new(model: Mat4, material: u32) -> Self {
+        Self {
+            model: model.to_cols_array_2d(),
+            normal: model.inverse().transpose().to_cols_array_2d(),
+            material: [material, 0, 0, 0],
+        }
+    }
+}
+
+/// A Phong material (`MaterialData`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct MaterialData {
+    /// rgb ambient, a: shininess.
+    pub ambient: [f32; 4],
+    /// rgb diffuse.
+    pub diffuse: [f32; 4],
+    /// rgb specular.
+    pub specular: [f32; 4],
+}
+
+impl From<&Material> for MaterialData {
+    fn from(m: &Material) -> Self {
+        Self {
+            ambient: m.ambient.extend(m.shininess).to_array(),
+            diffuse: m.diffuse.extend(0.0).to_array(),
+            specular: m.specular.extend(0.0).to_array(),
+        }
+    }
+}
+
+/// A light (`LightData`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct LightData {
+    /// xyz position.
+    pub position: [f32; 4],
+    /// xyz direction, w: cos(cutoff).
+    pub direction: [f32; 4],
+    /// rgb ambient, w: range.
+    pub ambient: [f32; 4],
+    /// rgb diffuse.
+    pub diffuse: [f32; 4],
+    /// rgb specular.
+    pub specular: [f32; 4],
+    /// constant, linear, quadratic.
+    pub attenuation: [f32; 4],
+    /// Cascade far splits.
+    pub splits: [f32; 4],
+    /// first view, view count, type, unused.
+    pub shadow: [u32; 4],
+}
+
+impl LightData {
+    /// Packs a light whose shadow views are `views[first_view .. first_view + view_count]`
+    /// (`view_count` 0 = no shadow).
+    pub fn new(light: &Light, first_view: u32, views: &[ShadowView]) -> Self {
+        let (kind, position, direction, cos_cutoff, range) = match light.kind {
+            LightKind::Directional { direction, .. } => {
+                (LIGHT_DIRECTIONAL, Vec3::ZERO, direction.normalize(), -1.0, f32::MAX)
+            }
+            LightKind::Spot {
+                position,
+                direction,
+                cutoff_deg,
+                range,
+            } => (
+                LIGHT_SPOT,
+                position,
+                direction.normalize(),
+                cutoff_deg.to_radians().cos(),
+                range,
+            ),
+            LightKind::Point { position, range } => (LIGHT_POINT, position, Vec3::Y, -1.0, range),
+        };
+        let mut splits = [f32::MAX; 4];
+        for (i, v) in views.iter().take(4).enumerate() {
+            if v.split_far > 0.0 {
+                splits[i] = v.split_far;
+            }
+        }
+        let a = light.attenuation;
+        Self {
+            position: position.extend(1.0).to_array(),
+            direction: direction.extend(cos_cutoff).to_array(),
+            ambient: light.ambient.extend(range).to_array(),
+            diffuse: light.diffuse.extend(0.0).to_array(),
+            specular: light.specular.extend(0.0).to_array(),
+            attenuation: [a.constant, a.linear, a.quadratic, 0.0],
+            splits,
+            shadow: [first_view, views.len() as u32, kind, 0],
+        }
+    }
+}
+
+/// A shadow view and its atlas tile (`ShadowViewData`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ShadowViewData {
+    /// Light world → clip.
+    pub view_proj: [[f32; 4]; 4],
+    /// x0, y0, side in texels.
+    pub tile: [f32; 4],
+    /// near, far, texel_world, orthographic (1/0).
+    pub params: [f32; 4],
+}
+
+/// The per-view uniform of depth-only passes, padded to the 256-byte dynamic-offset alignment.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ViewUniform {
+    /// Light world → clip.
+    pub view_proj: [[f32; 4]; 4],
+    /// Padding to 256 bytes.
+    pub _pad: [[f32; 4]; 12],
+}
+
+/// Byte stride between consecutive [`ViewUniform`]s (the common `min_uniform_buffer_offset_alignment`).
+pub const VIEW_UNIFORM_STRIDE: u64 = std::mem::size_of::<ViewUniform>() as u64;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use wgpu::naga;
+
+    /// naga's (size, [(member, offset)]) of the WGSL struct `name` in `common.wgsl`.
+    fn wgsl_layout(name: &str) -> (u32, Vec<(String, u32)>) {
+        let module = naga::front::wgsl::parse_str(crate::shaders::COMMON).expect("common.wgsl parses");
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(module.to_ctx()).expect("layout");
+        let (handle, ty) = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("struct {name} not found in common.wgsl"));
+        let naga::TypeInner::Struct { members, .. } = &ty.inner else {
+            panic!("{name} is not a struct");
+        };
+        let fields = members
+            .iter()
+            .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+            .collect();
+        (layouter[handle].size, fields)
+    }
+
+    macro_rules! same_layout {
+        ($ty:ty, $($field:ident),+) => {{
+            let (size, fields) = wgsl_layout(stringify!($ty));
+            let rust: Vec<(String, u32)> = vec![$((stringify!($field).to_string(), std::mem::offset_of!($ty, $field) as u32)),+];
+            assert_eq!(fields, rust, "{} fields/offsets differ between WGSL and Rust", stringify!($ty));
+            assert_eq!(size as usize, std::mem::size_of::<$ty>(), "{} size differs", stringify!($ty));
+        }};
+    }
+
+    #[test]
+    fn rust_structs_match_wgsl_layouts() {
+        same_layout!(FrameUniforms, view_proj, view, camera_pos, viewport, counts, bias, sky);
+        same_layout!(InstanceData, model, normal, material);
+        same_layout!(MaterialData, ambient, diffuse, specular);
+        same_layout!(LightData, position, direction, ambient, diffuse, specular, attenuation, splits, shadow);
+        same_layout!(ShadowViewData, view_proj, tile, params);
+        assert_eq!(VIEW_UNIFORM_STRIDE, 256);
+    }
+}

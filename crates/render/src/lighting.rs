@@ -1,0 +1,174 @@
+//! The deferred Phong lighting pass (seed 004): reads the G-buffer and the shadow atlas, writes
+//! the final colour. Every light is visited per pixel for now; the light list is one storage
+//! buffer so a clustered (per-tile) list can replace it without touching the shading.
+
+use crate::gbuffer::GBuffer;
+use crate::shadow::ShadowAtlas;
+use crate::timing::{GpuTimer, Span};
+use crate::GpuContext;
+
+/// Output colour format (sRGB-encoded on write).
+pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+
+/// The lighting pass and its output image.
+pub struct LightingPass {
+    /// The shaded frame.
+    pub color: wgpu::Texture,
+    pipeline: wgpu::RenderPipeline,
+    bind_group: wgpu::BindGroup,
+}
+
+/// Buffers the lighting and visibility passes read.
+pub struct LightingInputs<'a> {
+    /// `FrameUniforms`.
+    pub frame: &'a wgpu::Buffer,
+    /// `array<LightData>`.
+    pub lights: &'a wgpu::Buffer,
+    /// `array<MaterialData>`.
+    pub materials: &'a wgpu::Buffer,
+    /// G-buffer.
+    pub gbuffer: &'a GBuffer,
+    /// Shadow atlas and its views.
+    pub atlas: &'a ShadowAtlas,
+}
+
+/// A bind-group layout entry for a non-multisampled 2D texture.
+pub(crate) fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+impl LightingPass {
+    /// Creates the output texture and pipeline.
+    pub fn new(ctx: &GpuContext, inputs: &LightingInputs<'_>, w: u32, h: u32) -> Self {
+        let device = &ctx.device;
+        let color = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("lighting.color"),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: COLOR_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let frag = wgpu::ShaderStages::FRAGMENT;
+        let float = wgpu::TextureSampleType::Float { filterable: false };
+        let cmp = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: frag,
+            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lighting.layout"),
+            entries: &[
+                crate::uniform_entry(0, frag),
+                crate::storage_entry(1, frag),
+                crate::storage_entry(2, frag),
+                crate::storage_entry(3, frag),
+                texture_entry(4, float, frag),
+                texture_entry(5, float, frag),
+                texture_entry(6, wgpu::TextureSampleType::Depth, frag),
+                cmp(7),
+                cmp(8),
+            ],
+        });
+        let sampler = |label, filter| {
+            device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some(label),
+                mag_filter: filter,
+                min_filter: filter,
+                compare: Some(wgpu::CompareFunction::LessEqual),
+                ..Default::default()
+            })
+        };
+        let nearest = sampler("lighting.cmp_nearest", wgpu::FilterMode::Nearest);
+        let linear = sampler("lighting.cmp_linear", wgpu::FilterMode::Linear);
+        let pv = inputs.gbuffer.position.create_view(&Default::default());
+        let nv = inputs.gbuffer.normal.create_view(&Default::default());
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("lighting.bind_group"),
+            layout: &layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: inputs.frame.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: inputs.lights.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: inputs.atlas.views_buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: inputs.materials.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(&pv) },
+                wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(&nv) },
+                wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(&inputs.atlas.view) },
+                wgpu::BindGroupEntry { binding: 7, resource: wgpu::BindingResource::Sampler(&nearest) },
+                wgpu::BindGroupEntry { binding: 8, resource: wgpu::BindingResource::Sampler(&linear) },
+            ],
+        });
+        let module = crate::shaders::module(device, "lighting.shader", &crate::shaders::lighting());
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("lighting.pipeline_layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("lighting.pipeline"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_fullscreen"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(COLOR_FORMAT.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        Self {
+            color,
+            pipeline,
+            bind_group,
+        }
+    }
+
+    /// Records the pass.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: &GpuTimer, span: Option<Span>) {
+        let view = self.color.create_view(&Default::default());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("lighting.pass"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: timer.render_writes(span, true, true),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}

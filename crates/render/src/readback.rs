@@ -1,0 +1,59 @@
+//! Reading GPU results back to the CPU: textures through a row-padded buffer, buffers by
+//! mapping. Every wait is bounded by the device poll and every failure is an error, not a panic.
+
+use crate::{GpuContext, RenderError};
+
+/// Maps `range` of a `MAP_READ` buffer after the work that fills it has been submitted, and
+/// copies the bytes out.
+pub fn map_read(ctx: &GpuContext, buffer: &wgpu::Buffer, range: std::ops::Range<u64>) -> Result<Vec<u8>, RenderError> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    buffer.map_async(wgpu::MapMode::Read, range.clone(), move |r| {
+        let _ = tx.send(r);
+    });
+    ctx.wait_idle()?;
+    rx.recv()
+        .map_err(|_| RenderError::Readback("the map callback never ran".into()))?
+        .map_err(|e| RenderError::Readback(format!("mapping a read-back buffer: {e}")))?;
+    let bytes = buffer
+        .get_mapped_range(range)
+        .map_err(|e| RenderError::Readback(format!("{e}")))?
+        .to_vec();
+    buffer.unmap();
+    Ok(bytes)
+}
+
+/// Copies a whole 2D texture (colour formats) to tightly packed bytes.
+pub fn read_texture(ctx: &GpuContext, texture: &wgpu::Texture, bytes_per_pixel: u32) -> Result<Vec<u8>, RenderError> {
+    let (w, h) = (texture.width(), texture.height());
+    let row = w * bytes_per_pixel;
+    let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback.texture"),
+        size: padded as u64 * h as u64,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+        label: Some("readback.encoder"),
+    });
+    encoder.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded),
+                rows_per_image: Some(h),
+            },
+        },
+        texture.size(),
+    );
+    ctx.queue.submit([encoder.finish()]);
+    let data = map_read(ctx, &buffer, 0..padded as u64 * h as u64)?;
+    let mut out = Vec::with_capacity((row * h) as usize);
+    for y in 0..h as usize {
+        let start = y * padded as usize;
+        out.extend_from_slice(&data[start..start + row as usize]);
+    }
+    Ok(out)
+}

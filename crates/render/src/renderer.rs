@@ -1,0 +1,358 @@
+//! The frame, assembled from its passes in the order of the algorithm:
+//!
+//! 1. G-buffer (world position, normal, material per pixel),
+//! 2. shadow generation (the chosen technique fills the atlas),
+//! 3. deferred Phong lighting with the shadow test,
+//! 4. optionally, the hard visibility mask.
+
+use std::time::Instant;
+
+use glam::Vec3;
+use manyshadows_scene::atlas::FitPolicy;
+use manyshadows_scene::Scene;
+use wgpu::util::DeviceExt;
+
+use crate::gbuffer::GBuffer;
+use crate::gpu_scene::GpuScene;
+use crate::gpu_types::FrameUniforms;
+use crate::lighting::{LightingInputs, LightingPass};
+use crate::shadow::{ShadowAtlas, ShadowInput, ShadowPlan, ShadowStats, ShadowTechnique, Technique, DEFAULT_MAX_ATLAS_SIZE};
+use crate::timing::GpuTimer;
+use crate::visibility::{VisibilityMask, VisibilityPass};
+use crate::{GpuContext, RenderError};
+
+/// Percentage-closer filtering of the shadow test.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Pcf {
+    /// One comparison at the nearest texel: hard edges.
+    Off,
+    /// Bilinearly weighted comparison of the 2×2 nearest texels (one hardware lookup).
+    #[default]
+    Pcf2x2,
+    /// Mean of the 3×3 texels around the nearest one.
+    Pcf3x3,
+}
+
+impl Pcf {
+    /// Every mode.
+    pub const ALL: &'static [Pcf] = &[Pcf::Off, Pcf::Pcf2x2, Pcf::Pcf3x3];
+
+    /// CLI name: `off`, `2x2`, `3x3`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Pcf::Off => "off",
+            Pcf::Pcf2x2 => "2x2",
+            Pcf::Pcf3x3 => "3x3",
+        }
+    }
+
+    fn code(self) -> u32 {
+        match self {
+            Pcf::Off => 0,
+            Pcf::Pcf2x2 => 1,
+            Pcf::Pcf3x3 => 2,
+        }
+    }
+}
+
+impl std::str::FromStr for Pcf {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Pcf::ALL
+            .iter()
+            .copied()
+            .find(|p| p.name() == s)
+            .ok_or_else(|| format!("unknown PCF mode '{s}' (expected off, 2x2 or 3x3)"))
+    }
+}
+
+/// Receiver-side shadow bias, in shadow-map texels at the receiving point.
+///
+/// Before the depth comparison the point is moved `normal_offset` texels along its normal and
+/// `constant + slope·tan θ` texels towards the light (θ = angle between normal and light
+/// direction). Texel-relative bias scales with each view's resolution and distance, so one
+/// setting fits spot, point and cascade views alike.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowBias {
+    /// Constant offset towards the light, texels.
+    pub constant: f32,
+    /// Offset towards the light per unit of tan θ, texels (clamped at tan θ = 10).
+    pub slope: f32,
+    /// Offset along the surface normal, texels.
+    pub normal_offset: f32,
+}
+
+impl Default for ShadowBias {
+    fn default() -> Self {
+        Self {
+            constant: 1.0,
+            slope: 1.0,
+            normal_offset: 1.0,
+        }
+    }
+}
+
+/// How a frame is rendered.
+#[derive(Clone, Debug)]
+pub struct RenderSettings {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Shadow generation technique.
+    pub technique: Technique,
+    /// Shadow filtering.
+    pub pcf: Pcf,
+    /// Receiver bias.
+    pub bias: ShadowBias,
+    /// Largest atlas side (clamped to the adapter's limit); `None` = [`DEFAULT_MAX_ATLAS_SIZE`].
+    pub max_atlas_size: Option<u32>,
+    /// What to do when the shadow maps do not fit the atlas.
+    pub fit: FitPolicy,
+    /// Also compute the hard visibility mask.
+    pub visibility: bool,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            width: 1280,
+            height: 720,
+            technique: Technique::default(),
+            pcf: Pcf::default(),
+            bias: ShadowBias::default(),
+            max_atlas_size: None,
+            fit: FitPolicy::default(),
+            visibility: false,
+        }
+    }
+}
+
+/// Times of one frame.
+#[derive(Clone, Debug, Default)]
+pub struct FrameTimings {
+    /// GPU milliseconds per stage (`gbuffer`, `shadows`, `lighting`, `visibility`), empty if
+    /// the adapter has no timestamp queries.
+    pub gpu_ms: Vec<(String, f64)>,
+    /// CPU milliseconds to record and submit the frame's commands.
+    pub cpu_record_ms: f64,
+    /// Wall milliseconds from the start of recording until the image is back on the CPU.
+    pub wall_ms: f64,
+}
+
+/// A rendered frame.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+    /// sRGB RGBA8 pixels, row-major from the top-left.
+    pub rgba: Vec<u8>,
+    /// The hard visibility mask, if asked for.
+    pub visibility: Option<VisibilityMask>,
+    /// Timings.
+    pub timings: FrameTimings,
+    /// Shadow-generation work counters.
+    pub shadow_stats: ShadowStats,
+}
+
+/// A scene uploaded and ready to render frames.
+pub struct Renderer<'c> {
+    ctx: &'c GpuContext,
+    settings: RenderSettings,
+    scene: GpuScene,
+    plan: ShadowPlan,
+    atlas: ShadowAtlas,
+    technique: Box<dyn ShadowTechnique>,
+    frame_buffer: wgpu::Buffer,
+    lights: wgpu::Buffer,
+    gbuffer: GBuffer,
+    lighting: LightingPass,
+    visibility: Option<VisibilityPass>,
+    timer: GpuTimer,
+    light_count: usize,
+}
+
+impl<'c> Renderer<'c> {
+    /// Validates the scene and settings, uploads the scene, plans and creates the shadow atlas
+    /// and builds every pipeline.
+    pub fn new(ctx: &'c GpuContext, scene: &Scene, settings: RenderSettings) -> Result<Self, RenderError> {
+        scene.validate()?;
+        let limits = ctx.limits();
+        let max_dim = limits.max_texture_dimension_2d;
+        if settings.width == 0 || settings.height == 0 || settings.width > max_dim || settings.height > max_dim {
+            return Err(RenderError::ResolutionTooLarge {
+                width: settings.width,
+                height: settings.height,
+                reason: format!("width and height must be 1..={max_dim} on this adapter"),
+            });
+        }
+        let max_atlas = settings.max_atlas_size.unwrap_or(DEFAULT_MAX_ATLAS_SIZE).min(max_dim);
+        ctx.scoped("creating the renderer", || {
+            let aspect = settings.width as f32 / settings.height as f32;
+            let plan = ShadowPlan::new(scene, aspect, max_atlas, settings.fit)?;
+            let gpu_scene = GpuScene::new(ctx, scene)?;
+            let atlas = ShadowAtlas::new(ctx, &plan);
+            let mut light_data = plan.light_data(scene);
+            if light_data.is_empty() {
+                light_data.push(bytemuck::Zeroable::zeroed());
+            }
+            let lights = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("scene.lights"),
+                contents: bytemuck::cast_slice(&light_data),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+            let frame_buffer = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("frame.uniforms"),
+                contents: bytemuck::bytes_of(&frame_uniforms(scene, &settings, atlas.size)),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            });
+            let gbuffer = GBuffer::new(ctx, &gpu_scene, &frame_buffer, settings.width, settings.height);
+            let inputs = LightingInputs {
+                frame: &frame_buffer,
+                lights: &lights,
+                materials: &gpu_scene.materials,
+                gbuffer: &gbuffer,
+                atlas: &atlas,
+            };
+            let lighting = LightingPass::new(ctx, &inputs, settings.width, settings.height);
+            let visibility = if settings.visibility {
+                Some(VisibilityPass::new(ctx, settings.width, settings.height, scene.lights.len() as u32)?)
+            } else {
+                None
+            };
+            Ok(Self {
+                ctx,
+                technique: settings.technique.create(ctx),
+                settings,
+                scene: gpu_scene,
+                plan,
+                atlas,
+                frame_buffer,
+                lights,
+                gbuffer,
+                lighting,
+                visibility,
+                timer: GpuTimer::new(ctx),
+                light_count: scene.lights.len(),
+            })
+        })
+    }
+
+    /// The shadow views and atlas layout.
+    pub fn plan(&self) -> &ShadowPlan {
+        &self.plan
+    }
+
+    /// The settings in use.
+    pub fn settings(&self) -> &RenderSettings {
+        &self.settings
+    }
+
+    /// Triangles in the scene (over all instances).
+    pub fn triangles(&self) -> u64 {
+        self.scene.triangles
+    }
+
+    /// The GPU context.
+    pub fn context(&self) -> &GpuContext {
+        self.ctx
+    }
+
+    /// The shadow atlas.
+    pub fn atlas(&self) -> &ShadowAtlas {
+        &self.atlas
+    }
+
+    /// Renders one frame and reads it back.
+    pub fn render(&mut self) -> Result<Frame, RenderError> {
+        let ctx = self.ctx;
+        ctx.scoped("rendering a frame", || {
+            let start = Instant::now();
+            self.timer.reset();
+            let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("frame.encoder"),
+            });
+            let span = self.timer.span("gbuffer");
+            self.gbuffer.record(&mut encoder, &self.scene, &self.timer, span);
+            let span = self.timer.span("shadows");
+            let input = ShadowInput {
+                ctx,
+                scene: &self.scene,
+                views: &self.plan.views,
+                atlas: &self.atlas,
+            };
+            let shadow_stats = self.technique.generate(&input, &mut encoder, &self.timer, span);
+            let span = self.timer.span("lighting");
+            self.lighting.record(&mut encoder, &self.timer, span);
+            ctx.queue.submit([encoder.finish()]);
+            let cpu_record_ms = start.elapsed().as_secs_f64() * 1e3;
+            let rgba = crate::readback::read_texture(ctx, &self.lighting.color, 4)?;
+            let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+            let visibility = match &self.visibility {
+                Some(pass) => {
+                    let span = self.timer.span("visibility");
+                    let inputs = LightingInputs {
+                        frame: &self.frame_buffer,
+                        lights: &self.lights,
+                        materials: &self.scene.materials,
+                        gbuffer: &self.gbuffer,
+                        atlas: &self.atlas,
+                    };
+                    Some(pass.run(ctx, &inputs, &self.timer, span)?)
+                }
+                None => None,
+            };
+            let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("timer.encoder"),
+            });
+            self.timer.resolve(&mut encoder);
+            ctx.queue.submit([encoder.finish()]);
+            let gpu_ms = self.timer.read(ctx)?;
+            debug_assert!(visibility.as_ref().is_none_or(|v: &VisibilityMask| v.lights as usize == self.light_count));
+            Ok(Frame {
+                width: self.settings.width,
+                height: self.settings.height,
+                rgba,
+                visibility,
+                timings: FrameTimings {
+                    gpu_ms,
+                    cpu_record_ms,
+                    wall_ms,
+                },
+                shadow_stats,
+            })
+        })
+    }
+
+    /// Reads the depth atlas back (`size`² floats, row-major).
+    pub fn read_atlas(&self) -> Result<Vec<f32>, RenderError> {
+        self.ctx
+            .scoped("reading the shadow atlas", || crate::atlas_image::read_depth(self.ctx, &self.atlas))
+    }
+}
+
+fn frame_uniforms(scene: &Scene, s: &RenderSettings, atlas_size: u32) -> FrameUniforms {
+    let cam = &scene.camera;
+    let aspect = s.width as f32 / s.height as f32;
+    let view = cam.view();
+    let proj = cam.projection(aspect);
+    FrameUniforms {
+        view_proj: (proj * view).to_cols_array_2d(),
+        view: view.to_cols_array_2d(),
+        camera_pos: cam.position.extend(1.0).to_array(),
+        viewport: [s.width as f32, s.height as f32, 1.0 / s.width as f32, 1.0 / s.height as f32],
+        counts: [
+            scene.lights.len() as u32,
+            s.pcf.code(),
+            atlas_size,
+            (scene.lights.len() as u32).div_ceil(32).max(1),
+        ],
+        bias: [s.bias.constant, s.bias.slope, s.bias.normal_offset, 0.0],
+        sky: SKY.extend(1.0).to_array(),
+    }
+}
+
+/// Colour of pixels with no geometry (linear).
+const SKY: Vec3 = Vec3::new(0.015, 0.018, 0.03);

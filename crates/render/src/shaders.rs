@@ -1,0 +1,74 @@
+//! WGSL sources and the one way they share code: `common.wgsl` (struct declarations, kept in
+//! sync with `gpu_types.rs`) and `shadow_lookup.wgsl` (where a point falls in the atlas) are
+//! prepended to the shaders that need them. Every composed shader is parsed and validated by
+//! naga in a test, so broken WGSL fails `cargo test` without a GPU.
+
+/// Struct declarations shared by all shaders.
+pub const COMMON: &str = include_str!("shaders/common.wgsl");
+/// Shadow-view selection, receiver bias and atlas addressing.
+pub const SHADOW_LOOKUP: &str = include_str!("shaders/shadow_lookup.wgsl");
+
+/// Concatenates shader parts in order.
+pub fn compose(parts: &[&str]) -> String {
+    parts.join("\n")
+}
+
+/// G-buffer pass.
+pub fn gbuffer() -> String {
+    compose(&[COMMON, include_str!("shaders/gbuffer.wgsl")])
+}
+
+/// Deferred lighting pass.
+pub fn lighting() -> String {
+    compose(&[COMMON, SHADOW_LOOKUP, include_str!("shaders/lighting.wgsl")])
+}
+
+/// Hard visibility mask.
+pub fn visibility() -> String {
+    compose(&[COMMON, SHADOW_LOOKUP, include_str!("shaders/visibility.wgsl")])
+}
+
+/// Atlas read-back copy.
+pub fn atlas_copy() -> String {
+    compose(&[include_str!("shaders/atlas_copy.wgsl")])
+}
+
+/// Depth-only pass of the traditional technique.
+pub fn traditional() -> String {
+    compose(&[COMMON, include_str!("techniques/traditional.wgsl")])
+}
+
+/// Every composed shader with its name (for validation).
+pub fn all() -> Vec<(&'static str, String)> {
+    vec![
+        ("gbuffer", gbuffer()),
+        ("lighting", lighting()),
+        ("visibility", visibility()),
+        ("atlas_copy", atlas_copy()),
+        ("traditional", traditional()),
+    ]
+}
+
+/// Creates a shader module from composed WGSL.
+pub fn module(device: &wgpu::Device, label: &str, source: &str) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use wgpu::naga;
+
+    #[test]
+    fn every_shader_parses_and_validates() {
+        for (name, src) in super::all() {
+            let module = naga::front::wgsl::parse_str(&src)
+                .unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(&src)));
+            naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
+                .validate(&module)
+                .unwrap_or_else(|e| panic!("{name}.wgsl does not validate: {e:?}"));
+        }
+    }
+}

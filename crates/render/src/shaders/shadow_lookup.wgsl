@@ -1,0 +1,121 @@
+// Where a surface point falls in the shadow atlas, for one light. Shared by the lighting pass
+// (filtered comparison) and the visibility pass (one hard test per light).
+// Needs: `frame: FrameUniforms`, `shadow_views: array<ShadowViewData>` declared by the includer.
+
+struct ShadowCoord {
+    // Continuous atlas texel coordinates of the point.
+    texel: vec2<f32>,
+    // Depth of the (biased) point in the view's clip space, 0..1.
+    depth: f32,
+    // Tile bounds in texels: [tile_min, tile_max).
+    tile_min: vec2<f32>,
+    tile_max: vec2<f32>,
+    // False when the light casts no shadow here (no shadow view, beyond the last cascade,
+    // outside the view): the point counts as unoccluded.
+    valid: bool,
+}
+
+// Index of the shadow view that covers `p` for `light`, or -1.
+fn select_shadow_view(light: LightData, p: vec3<f32>, view_depth: f32) -> i32 {
+    let first = i32(light.shadow.x);
+    let count = light.shadow.y;
+    if (count == 0u) {
+        return -1;
+    }
+    let kind = light.shadow.z;
+    if (kind == LIGHT_SPOT) {
+        return first;
+    }
+    if (kind == LIGHT_POINT) {
+        // Cube face by the major axis of the light-to-point vector: +X, -X, +Y, -Y, +Z, -Z.
+        let d = p - light.position.xyz;
+        let a = abs(d);
+        if (a.x >= a.y && a.x >= a.z) {
+            return first + select(1, 0, d.x > 0.0);
+        }
+        if (a.y >= a.z) {
+            return first + select(3, 2, d.y > 0.0);
+        }
+        return first + select(5, 4, d.z > 0.0);
+    }
+    // Directional: the first cascade whose far split lies beyond the pixel's view depth.
+    for (var i = 0u; i < count; i = i + 1u) {
+        if (view_depth <= light.splits[i]) {
+            return first + i32(i);
+        }
+    }
+    return -1;
+}
+
+// Unit vector from `p` towards the light.
+fn to_light(light: LightData, p: vec3<f32>) -> vec3<f32> {
+    if (light.shadow.z == LIGHT_DIRECTIONAL) {
+        return -light.direction.xyz;
+    }
+    return normalize(light.position.xyz - p);
+}
+
+fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, view_depth: f32) -> ShadowCoord {
+    var out: ShadowCoord;
+    out.valid = false;
+    let vi = select_shadow_view(light, p, view_depth);
+    if (vi < 0) {
+        return out;
+    }
+    let sv = shadow_views[vi];
+    // World size of one shadow texel at p.
+    let clip0 = sv.view_proj * vec4<f32>(p, 1.0);
+    var texel_world = sv.params.z;
+    if (sv.params.w < 0.5) {
+        texel_world = texel_world * max(clip0.w, 0.0);
+    }
+    // Receiver bias (documented in ARCHITECTURE.md): move the point along its normal and towards
+    // the light by a number of texels; the slope term grows with the tangent of the angle
+    // between normal and light, as a depth slope does.
+    let l = to_light(light, p);
+    let cos_t = clamp(dot(n, l), 0.0, 1.0);
+    let tan_t = min(sqrt(max(1.0 - cos_t * cos_t, 0.0)) / max(cos_t, 1e-4), 10.0);
+    let offset = n * (frame.bias.z * texel_world)
+        + l * ((frame.bias.x + frame.bias.y * tan_t) * texel_world);
+    let clip = sv.view_proj * vec4<f32>(p + offset, 1.0);
+    if (clip.w <= 0.0) {
+        return out;
+    }
+    let ndc = clip.xyz / clip.w;
+    if (any(abs(ndc.xy) > vec2<f32>(1.0))) {
+        // Outside the view (a spot light's cone edge, a cascade's side): no shadow information.
+        // Point-light faces never get here except through the bias offset; clamp those instead.
+        if (light.shadow.z != LIGHT_POINT) {
+            return out;
+        }
+    }
+    let uv = clamp(ndc.xy * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5), vec2<f32>(0.0), vec2<f32>(1.0));
+    out.tile_min = sv.tile.xy;
+    out.tile_max = sv.tile.xy + vec2<f32>(sv.tile.z);
+    out.texel = sv.tile.xy + uv * sv.tile.z;
+    out.depth = clamp(ndc.z, 0.0, 1.0);
+    out.valid = true;
+    return out;
+}
+
+// The atlas texel holding the nearest sample to `c` (what a nearest-filtered lookup reads).
+fn hard_texel(c: ShadowCoord) -> vec2<i32> {
+    return vec2<i32>(clamp(floor(c.texel), c.tile_min, c.tile_max - vec2<f32>(1.0)));
+}
+
+// True when `p` lies within the light's range and cone (directional lights reach everywhere).
+fn in_reach(light: LightData, p: vec3<f32>) -> bool {
+    let kind = light.shadow.z;
+    if (kind == LIGHT_DIRECTIONAL) {
+        return true;
+    }
+    let d = p - light.position.xyz;
+    let dist = length(d);
+    if (dist > light.ambient.w) {
+        return false;
+    }
+    if (kind == LIGHT_SPOT) {
+        return dot(d / max(dist, 1e-6), light.direction.xyz) >= light.direction.w;
+    }
+    return true;
+}

@@ -1,0 +1,288 @@
+//! Shadow storage and the interface every shadow-generation technique implements.
+//!
+//! The unit of work is a *shadow view*: a view-projection plus a square tile of one depth
+//! atlas ([`manyshadows_scene::light_space::ShadowView`] + [`manyshadows_scene::atlas::Tile`]).
+//! Tiles may differ in size per light (the remedy seed 000 §19.6 names for the equal-size
+//! limit of texture arrays). A technique fills every view's tile; the lighting pass reads them.
+
+use manyshadows_scene::atlas::{self, AtlasLayout, FitPolicy, Tile};
+use manyshadows_scene::light_space::{self, ShadowView};
+use manyshadows_scene::Scene;
+use wgpu::util::DeviceExt;
+
+use crate::gpu_scene::GpuScene;
+use crate::gpu_types::{LightData, ShadowViewData, ViewUniform, VIEW_UNIFORM_STRIDE};
+use crate::timing::{GpuTimer, Span};
+use crate::{GpuContext, RenderError};
+
+/// Depth format of the atlas.
+pub const ATLAS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// Largest atlas side the renderer uses by default (256 MiB of depth), further clamped to the
+/// adapter's `max_texture_dimension_2d`.
+pub const DEFAULT_MAX_ATLAS_SIZE: u32 = 8192;
+
+/// Most shadow views a frame may have (e.g. 4096 spot lights, or 682 point lights).
+pub const MAX_SHADOW_VIEWS: usize = 4096;
+
+/// Every shadow view of a scene and its place in the atlas.
+#[derive(Clone, Debug)]
+pub struct ShadowPlan {
+    /// All views, grouped by light in light order.
+    pub views: Vec<ShadowView>,
+    /// The atlas layout: one tile per view.
+    pub layout: AtlasLayout,
+    /// Per light: `(first view, view count)`; count 0 for lights without shadows.
+    pub light_views: Vec<(u32, u32)>,
+}
+
+impl ShadowPlan {
+    /// Computes the views of every shadow-casting light and packs their tiles.
+    pub fn new(scene: &Scene, aspect: f32, max_atlas: u32, fit: FitPolicy) -> Result<Self, RenderError> {
+        let views = light_space::shadow_views(scene, aspect);
+        if views.len() > MAX_SHADOW_VIEWS {
+            return Err(RenderError::TooManyShadowViews {
+                views: views.len(),
+                max: MAX_SHADOW_VIEWS,
+            });
+        }
+        let requests: Vec<u32> = views.iter().map(|v| v.resolution).collect();
+        let layout = if requests.is_empty() {
+            AtlasLayout {
+                size: atlas::MIN_TILE,
+                tiles: Vec::new(),
+                shrink_steps: 0,
+            }
+        } else {
+            atlas::layout(&requests, max_atlas, fit)?
+        };
+        if layout.shrink_steps > 0 {
+            log::warn!(
+                "shadow maps shrunk {}x ({}x smaller per side) to fit a {}² atlas",
+                layout.shrink_steps,
+                1u32 << layout.shrink_steps,
+                layout.size
+            );
+        }
+        let mut light_views = vec![(0u32, 0u32); scene.lights.len()];
+        let mut i = 0;
+        while i < views.len() {
+            let light = views[i].light;
+            let n = views[i..].iter().take_while(|v| v.light == light).count();
+            light_views[light] = (i as u32, n as u32);
+            i += n;
+        }
+        Ok(Self {
+            views,
+            layout,
+            light_views,
+        })
+    }
+
+    /// GPU records of the views with their tiles.
+    pub fn view_data(&self) -> Vec<ShadowViewData> {
+        self.views
+            .iter()
+            .zip(&self.layout.tiles)
+            .map(|(v, t)| {
+                // The view was planned for `v.resolution` texels; a shrunk tile has fewer, so a
+                // texel covers proportionally more of the world.
+                let texel_world = v.texel_world * v.resolution as f32 / t.size as f32;
+                ShadowViewData {
+                    view_proj: v.view_proj.to_cols_array_2d(),
+                    tile: [t.x as f32, t.y as f32, t.size as f32, 0.0],
+                    params: [v.near, v.far, texel_world, if v.orthographic { 1.0 } else { 0.0 }],
+                }
+            })
+            .collect()
+    }
+
+    /// GPU records of the scene's lights.
+    pub fn light_data(&self, scene: &Scene) -> Vec<LightData> {
+        scene
+            .lights
+            .iter()
+            .zip(&self.light_views)
+            .map(|(l, &(first, n))| LightData::new(l, first, &self.views[first as usize..(first + n) as usize]))
+            .collect()
+    }
+
+    /// Texels covered by tiles / texels in the atlas.
+    pub fn fill(&self) -> f64 {
+        let used: u64 = self.layout.tiles.iter().map(|t| t.size as u64 * t.size as u64).sum();
+        used as f64 / (self.layout.size as u64 * self.layout.size as u64) as f64
+    }
+}
+
+/// The depth atlas and the per-view data techniques read.
+pub struct ShadowAtlas {
+    /// Depth32Float, `size`².
+    pub texture: wgpu::Texture,
+    /// Depth view of the whole atlas.
+    pub view: wgpu::TextureView,
+    /// Side in texels.
+    pub size: u32,
+    /// `array<ShadowViewData>` (storage; at least one element).
+    pub views_buffer: wgpu::Buffer,
+    /// One [`ViewUniform`] per view at [`VIEW_UNIFORM_STRIDE`] (dynamic uniform offsets).
+    pub view_uniforms: wgpu::Buffer,
+    /// Tiles in view order.
+    pub tiles: Vec<Tile>,
+}
+
+impl ShadowAtlas {
+    /// Creates the atlas texture and view buffers for `plan`.
+    pub fn new(ctx: &GpuContext, plan: &ShadowPlan) -> Self {
+        let size = plan.layout.size;
+        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("shadow.atlas"),
+            size: wgpu::Extent3d {
+                width: size,
+                height: size,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: ATLAS_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&wgpu::TextureViewDescriptor {
+            label: Some("shadow.atlas.view"),
+            dimension: Some(wgpu::TextureViewDimension::D2),
+            ..Default::default()
+        });
+        let mut data = plan.view_data();
+        let uniforms: Vec<ViewUniform> = data
+            .iter()
+            .map(|d| ViewUniform {
+                view_proj: d.view_proj,
+                _pad: [[0.0; 4]; 12],
+            })
+            .collect();
+        if data.is_empty() {
+            data.push(bytemuck::Zeroable::zeroed());
+        }
+        let views_buffer = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("shadow.views"),
+            contents: bytemuck::cast_slice(&data),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let mut uniform_bytes: Vec<u8> = bytemuck::cast_slice(&uniforms).to_vec();
+        if uniform_bytes.is_empty() {
+            uniform_bytes.resize(VIEW_UNIFORM_STRIDE as usize, 0);
+        }
+        let view_uniforms = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("shadow.view_uniforms"),
+            contents: &uniform_bytes,
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        Self {
+            texture,
+            view,
+            size,
+            views_buffer,
+            view_uniforms,
+            tiles: plan.layout.tiles.clone(),
+        }
+    }
+}
+
+/// What a technique is given to fill the atlas.
+pub struct ShadowInput<'a> {
+    /// GPU context.
+    pub ctx: &'a GpuContext,
+    /// Scene buffers.
+    pub scene: &'a GpuScene,
+    /// Views to fill (same order as the atlas tiles).
+    pub views: &'a [ShadowView],
+    /// The atlas to fill.
+    pub atlas: &'a ShadowAtlas,
+}
+
+/// Work counters of one shadow generation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ShadowStats {
+    /// Render or compute passes recorded.
+    pub passes: u32,
+    /// Draw calls recorded.
+    pub draws: u64,
+    /// (view, instance) pairs skipped by CPU frustum culling.
+    pub culled: u64,
+    /// Triangles submitted over all draws.
+    pub triangles: u64,
+}
+
+/// A shadow-generation technique: fills every view's tile of the atlas with depth.
+pub trait ShadowTechnique {
+    /// The technique's stable CLI name.
+    fn name(&self) -> &'static str;
+    /// Records the generation into `encoder`; `span` is the timer span for its passes.
+    fn generate(
+        &mut self,
+        input: &ShadowInput<'_>,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &GpuTimer,
+        span: Option<Span>,
+    ) -> ShadowStats;
+}
+
+/// The techniques that exist, by CLI name.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Technique {
+    /// One depth-only pass per shadow view (seed 004, seed 000 §19.2).
+    #[default]
+    Traditional,
+}
+
+impl Technique {
+    /// Every technique.
+    pub const ALL: &'static [Technique] = &[Technique::Traditional];
+
+    /// The CLI name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Technique::Traditional => "traditional",
+        }
+    }
+
+    /// Builds the technique's pipelines.
+    pub fn create(self, ctx: &GpuContext) -> Box<dyn ShadowTechnique> {
+        match self {
+            Technique::Traditional => Box::new(crate::techniques::traditional::Traditional::new(ctx)),
+        }
+    }
+}
+
+impl std::str::FromStr for Technique {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Technique::ALL
+            .iter()
+            .copied()
+            .find(|t| t.name() == s)
+            .ok_or_else(|| {
+                format!(
+                    "unknown technique '{s}' (techniques: {})",
+                    Technique::ALL.iter().map(|t| t.name()).collect::<Vec<_>>().join(", ")
+                )
+            })
+    }
+}
+
+impl std::fmt::Display for Technique {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Per-view CPU culling shared by techniques that draw instance by instance: the shadow
+/// casters whose bounding sphere touches the view's frustum.
+pub fn visible_casters<'a>(scene: &'a GpuScene, view: &ShadowView) -> impl Iterator<Item = &'a crate::gpu_scene::DrawItem> + 'a {
+    let planes = crate::gpu_scene::frustum_planes(view.view_proj);
+    scene
+        .draws
+        .iter()
+        .filter(move |d| d.casts_shadows && crate::gpu_scene::sphere_visible(&planes, d.sphere.0, d.sphere.1))
+}

@@ -1,0 +1,162 @@
+//! `traditional`: one depth-only render pass per shadow view, the whole (CPU-culled) scene
+//! each time (seed 004's shadow pass; seed 000 §19.2, the baseline the layered techniques
+//! beat). Position-only vertex input and no fragment stage, as seed 004 recommends: the only
+//! output is depth.
+
+use crate::gpu_scene::{GpuScene, POSITION_LAYOUT};
+use crate::gpu_types::{ViewUniform, VIEW_UNIFORM_STRIDE};
+use crate::shadow::{visible_casters, ShadowInput, ShadowStats, ShadowTechnique, ATLAS_FORMAT};
+use crate::timing::{GpuTimer, Span};
+use crate::GpuContext;
+
+/// The traditional technique's pipeline and layout.
+pub struct Traditional {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+}
+
+impl Traditional {
+    /// Builds the depth-only pipeline.
+    pub fn new(ctx: &GpuContext) -> Self {
+        let device = &ctx.device;
+        let module = crate::shaders::module(device, "traditional.shader", &crate::shaders::traditional());
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("traditional.layout"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: true,
+                        min_binding_size: wgpu::BufferSize::new(64),
+                    },
+                    count: None,
+                },
+                crate::storage_entry(1, wgpu::ShaderStages::VERTEX),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("traditional.pipeline_layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("traditional.pipeline"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_depth"),
+                compilation_options: Default::default(),
+                buffers: &[Some(POSITION_LAYOUT)],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                front_face: wgpu::FrontFace::Ccw,
+                // Two-sided casters: open meshes (planes, quads) must cast from both sides.
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: ATLAS_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                // Bias is applied on the receiver in the lighting pass, so every technique
+                // (including compute rasterizers with no fixed-function bias) writes the same
+                // depth.
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: None,
+            multiview_mask: None,
+            cache: None,
+        });
+        Self { pipeline, layout }
+    }
+
+    fn bind_group(&self, ctx: &GpuContext, input: &ShadowInput<'_>) -> wgpu::BindGroup {
+        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("traditional.bind_group"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &input.atlas.view_uniforms,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(std::mem::size_of::<[[f32; 4]; 4]>() as u64),
+                    }),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: input.scene.instances.as_entire_binding(),
+                },
+            ],
+        })
+    }
+}
+
+/// Records one draw per visible caster of `view` (shared with other instance-drawing paths).
+fn draw_casters(pass: &mut wgpu::RenderPass<'_>, scene: &GpuScene, view: &manyshadows_scene::light_space::ShadowView, stats: &mut ShadowStats) {
+    let mut drawn = 0u64;
+    for d in visible_casters(scene, view) {
+        let m = d.mesh;
+        pass.draw_indexed(m.first_index..m.first_index + m.index_count, m.base_vertex, d.instance..d.instance + 1);
+        stats.draws += 1;
+        stats.triangles += m.index_count as u64 / 3;
+        drawn += 1;
+    }
+    let casters = scene.draws.iter().filter(|d| d.casts_shadows).count() as u64;
+    stats.culled += casters - drawn;
+}
+
+impl ShadowTechnique for Traditional {
+    fn name(&self) -> &'static str {
+        "traditional"
+    }
+
+    fn generate(&mut self, input: &ShadowInput<'_>, encoder: &mut wgpu::CommandEncoder, timer: &GpuTimer, span: Option<Span>) -> ShadowStats {
+        let _ = std::mem::size_of::<ViewUniform>();
+        let bind_group = self.bind_group(input.ctx, input);
+        let mut stats = ShadowStats::default();
+        let n = input.views.len();
+        if n == 0 {
+            return stats;
+        }
+        encoder.push_debug_group("traditional");
+        for (i, (view, tile)) in input.views.iter().zip(&input.atlas.tiles).enumerate() {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("traditional.view"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &input.atlas.view,
+                    depth_ops: Some(wgpu::Operations {
+                        // The first pass clears the whole atlas; later passes keep what earlier
+                        // ones wrote into other tiles.
+                        load: if i == 0 {
+                            wgpu::LoadOp::Clear(1.0)
+                        } else {
+                            wgpu::LoadOp::Load
+                        },
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: timer.render_writes(span, i == 0, i + 1 == n),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_viewport(tile.x as f32, tile.y as f32, tile.size as f32, tile.size as f32, 0.0, 1.0);
+            pass.set_scissor_rect(tile.x, tile.y, tile.size, tile.size);
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &bind_group, &[(i as u64 * VIEW_UNIFORM_STRIDE) as u32]);
+            pass.set_vertex_buffer(0, input.scene.positions.slice(..));
+            pass.set_index_buffer(input.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+            draw_casters(&mut pass, input.scene, view, &mut stats);
+            stats.passes += 1;
+        }
+        encoder.pop_debug_group();
+        stats
+    }
+}

@@ -1,0 +1,222 @@
+//! The visibility mask: one bit per light and pixel, the hard (unfiltered) shadow test. It is
+//! what shadow quality is measured on, so it reads the atlas with the same coordinates and
+//! bias as the lighting pass but without filtering.
+//!
+//! File format written by [`VisibilityMask::write_raw`] (`.msvis`, little-endian):
+//! the 8 bytes `MSVIS001`, then `u32` width, height, light count, words per pixel, then
+//! `width·height·words` `u32` words row-major from the top-left pixel; bit `b` of word `w` of a
+//! pixel is light `32·w + b`; set = lit (within the light's reach and unoccluded).
+
+use std::io::Write;
+
+use crate::lighting::{texture_entry, LightingInputs};
+use crate::timing::{GpuTimer, Span};
+use crate::{GpuContext, RenderError};
+
+/// Per-pixel light bits read back from the GPU.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct VisibilityMask {
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Number of lights.
+    pub lights: u32,
+    /// `ceil(lights / 32)` (at least 1).
+    pub words_per_pixel: u32,
+    /// `width · height · words_per_pixel` words.
+    pub words: Vec<u32>,
+}
+
+impl VisibilityMask {
+    /// Whether `light` reaches pixel `(x, y)` unoccluded.
+    pub fn lit(&self, x: u32, y: u32, light: u32) -> bool {
+        let i = ((y * self.width + x) * self.words_per_pixel + light / 32) as usize;
+        self.words[i] >> (light % 32) & 1 == 1
+    }
+
+    /// Writes the `.msvis` format described in the module docs.
+    pub fn write_raw(&self, mut w: impl Write) -> std::io::Result<()> {
+        w.write_all(b"MSVIS001")?;
+        for v in [self.width, self.height, self.lights, self.words_per_pixel] {
+            w.write_all(&v.to_le_bytes())?;
+        }
+        for v in &self.words {
+            w.write_all(&v.to_le_bytes())?;
+        }
+        Ok(())
+    }
+
+    /// Reads the `.msvis` format.
+    pub fn read_raw(bytes: &[u8]) -> Result<Self, String> {
+        if bytes.len() < 24 || &bytes[..8] != b"MSVIS001" {
+            return Err("not a .msvis file (bad header)".into());
+        }
+        let u = |i: usize| u32::from_le_bytes(bytes[8 + 4 * i..12 + 4 * i].try_into().unwrap());
+        let (width, height, lights, words_per_pixel) = (u(0), u(1), u(2), u(3));
+        let n = width as u64 * height as u64 * words_per_pixel as u64;
+        if bytes.len() as u64 != 24 + 4 * n {
+            return Err(format!("expected {} bytes of words, found {}", 4 * n, bytes.len() - 24));
+        }
+        let words = bytes[24..].chunks_exact(4).map(|c| u32::from_le_bytes(c.try_into().unwrap())).collect();
+        Ok(Self { width, height, lights, words_per_pixel, words })
+    }
+
+    /// A greyscale image of one light's bits (white = lit), 8 bits per pixel.
+    pub fn light_image(&self, light: u32) -> Vec<u8> {
+        let mut out = Vec::with_capacity((self.width * self.height) as usize);
+        for y in 0..self.height {
+            for x in 0..self.width {
+                out.push(if self.lit(x, y, light) { 255 } else { 0 });
+            }
+        }
+        out
+    }
+}
+
+/// Layout of `VisibilityParams` in `visibility.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct VisibilityParams {
+    first_word: u32,
+    word_count: u32,
+    _pad: [u32; 2],
+}
+
+/// The visibility compute pass.
+pub struct VisibilityPass {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    width: u32,
+    height: u32,
+    lights: u32,
+    /// 32-light words per pixel in total.
+    words: u32,
+    /// Words computed per dispatch (so one chunk's buffer stays within the binding limit).
+    chunk_words: u32,
+}
+
+impl VisibilityPass {
+    /// Plans the pass; fails if even one word per pixel exceeds the storage-binding limit.
+    pub fn new(ctx: &GpuContext, w: u32, h: u32, lights: u32) -> Result<Self, RenderError> {
+        let device = &ctx.device;
+        let limit = ctx.limits().max_storage_buffer_binding_size as u64;
+        let words = lights.div_ceil(32).max(1);
+        let per_word = w as u64 * h as u64 * 4;
+        if per_word > limit {
+            return Err(RenderError::ResolutionTooLarge {
+                width: w,
+                height: h,
+                reason: format!("the visibility mask needs {per_word} bytes per 32 lights, over this adapter's storage-buffer binding limit of {limit} bytes"),
+            });
+        }
+        let chunk_words = ((limit / per_word) as u32).clamp(1, words);
+        let comp = wgpu::ShaderStages::COMPUTE;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("visibility.layout"),
+            entries: &[
+                crate::uniform_entry(0, comp),
+                crate::storage_entry(1, comp),
+                crate::storage_entry(2, comp),
+                texture_entry(3, wgpu::TextureSampleType::Float { filterable: false }, comp),
+                texture_entry(4, wgpu::TextureSampleType::Float { filterable: false }, comp),
+                texture_entry(5, wgpu::TextureSampleType::Float { filterable: false }, comp),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 6,
+                    visibility: comp,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: false },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                crate::uniform_entry(7, comp),
+            ],
+        });
+        let module = crate::shaders::module(device, "visibility.shader", &crate::shaders::visibility());
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("visibility.pipeline_layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("visibility.pipeline"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("cs_main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        Ok(Self { pipeline, layout, width: w, height: h, lights, words, chunk_words })
+    }
+
+    /// Computes and reads back the mask (its own submissions, after the frame's).
+    pub fn run(&self, ctx: &GpuContext, inputs: &LightingInputs<'_>, timer: &GpuTimer, span: Option<Span>) -> Result<VisibilityMask, RenderError> {
+        let device = &ctx.device;
+        let pixels = self.width as u64 * self.height as u64;
+        let mut words = vec![0u32; (pixels * self.words as u64) as usize];
+        let pv = inputs.gbuffer.position.create_view(&Default::default());
+        let nv = inputs.gbuffer.normal.create_view(&Default::default());
+        let mut first = 0;
+        while first < self.words {
+            let count = self.chunk_words.min(self.words - first);
+            let size = pixels * count as u64 * 4;
+            let mask = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("visibility.mask"),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let readback = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("visibility.readback"),
+                size,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let params = wgpu::util::DeviceExt::create_buffer_init(
+                device,
+                &wgpu::util::BufferInitDescriptor {
+                    label: Some("visibility.params"),
+                    contents: bytemuck::bytes_of(&VisibilityParams { first_word: first, word_count: count, _pad: [0; 2] }),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                },
+            );
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("visibility.bind_group"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: inputs.frame.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 1, resource: inputs.lights.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 2, resource: inputs.atlas.views_buffer.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&pv) },
+                    wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(&nv) },
+                    wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(&inputs.atlas.view) },
+                    wgpu::BindGroupEntry { binding: 6, resource: mask.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 7, resource: params.as_entire_binding() },
+                ],
+            });
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("visibility.encoder") });
+            {
+                let last = first + count >= self.words;
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("visibility.pass"),
+                    timestamp_writes: timer.compute_writes(span, first == 0, last),
+                });
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, &bind_group, &[]);
+                pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
+            }
+            encoder.copy_buffer_to_buffer(&mask, 0, &readback, 0, size);
+            ctx.queue.submit([encoder.finish()]);
+            let bytes = crate::readback::map_read(ctx, &readback, 0..size)?;
+            let chunk: &[u32] = bytemuck::cast_slice(&bytes);
+            for px in 0..pixels as usize {
+                let dst = px * self.words as usize + first as usize;
+                words[dst..dst + count as usize].copy_from_slice(&chunk[px * count as usize..(px + 1) * count as usize]);
+            }
+            first += count;
+        }
+        Ok(VisibilityMask { width: self.width, height: self.height, lights: self.lights, words_per_pixel: self.words, words })
+    }
+}

@@ -1,0 +1,291 @@
+//! Shared pieces of the seeded light layouts: the random source, how a count splits into
+//! types, colours, brightness, and the generic [`scatter`] layout.
+//!
+//! Why one place: every scene must follow the same rules (type split, default shadow
+//! resolutions, ambient budget, brightness at a key distance) so that light counts and mixes
+//! mean the same thing in every scene and benchmark.
+
+use std::f32::consts::TAU;
+
+use glam::{Vec2, Vec3};
+use rand_core::{Rng, SeedableRng};
+use rand_pcg::Pcg32;
+
+use super::LightMix;
+use crate::{Attenuation, Light, LightKind, Scene};
+
+/// Default shadow-map resolution of spot lights (texels per side).
+pub const SPOT_SHADOW_RESOLUTION: u32 = 512;
+/// Default shadow-map resolution of point lights (texels per cube face).
+pub const POINT_SHADOW_RESOLUTION: u32 = 256;
+/// Default shadow-map resolution of directional lights (texels per cascade).
+pub const DIRECTIONAL_SHADOW_RESOLUTION: u32 = 1024;
+/// Default cascade count of directional lights.
+pub const DIRECTIONAL_CASCADES: u32 = 3;
+/// Default cascade split blend of directional lights.
+pub const DIRECTIONAL_SPLIT_LAMBDA: f32 = 0.75;
+
+/// Seeded random numbers for layouts: PCG32 with our own float mapping (24 random bits, so
+/// every value is exact and the same on every platform).
+pub(crate) struct Rand(Pcg32);
+
+impl Rand {
+    /// A generator for `seed`; `stream` separates independent uses of one seed (geometry,
+    /// lights of one scene, ...).
+    pub(crate) fn new(seed: u64, stream: u64) -> Self {
+        Self(Pcg32::seed_from_u64(
+            seed ^ stream.wrapping_mul(0x9e37_79b9_7f4a_7c15),
+        ))
+    }
+
+    /// Uniform in `[0, 1)`.
+    pub(crate) fn unit(&mut self) -> f32 {
+        (self.0.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+    }
+
+    /// Uniform in `[lo, hi)`.
+    pub(crate) fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.unit()
+    }
+
+    /// Uniform integer in `0..n` (`n > 0`).
+    pub(crate) fn below(&mut self, n: usize) -> usize {
+        ((self.0.next_u64() >> 11) as f64 / (1u64 << 53) as f64 * n as f64) as usize % n.max(1)
+    }
+}
+
+/// How many lights of each type a layout of `n` lights gets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LightCounts {
+    /// Spot lights.
+    pub spot: usize,
+    /// Point lights.
+    pub point: usize,
+    /// Directional lights.
+    pub directional: usize,
+}
+
+impl LightCounts {
+    /// Splits `n` lights by `mix`. For [`LightMix::All`]: one directional light when `n ≥ 3`
+    /// and a second from 64 lights on (they are the most expensive: cascades), then a third of
+    /// the rest points (at least one when `n ≥ 2`) and the remainder spots. E.g. 32 → 21 spots,
+    /// 10 points, 1 directional; 3 → one of each.
+    pub fn split(n: usize, mix: LightMix) -> Self {
+        match mix {
+            LightMix::Spot => Self { spot: n, point: 0, directional: 0 },
+            LightMix::Point => Self { spot: 0, point: n, directional: 0 },
+            LightMix::Directional => Self { spot: 0, point: 0, directional: n },
+            LightMix::All => {
+                let directional = match n {
+                    0..=2 => 0,
+                    3..=63 => 1,
+                    _ => 2,
+                };
+                let rest = n - directional;
+                let mut point = (rest + 1) / 3;
+                if n >= 2 {
+                    point = point.max(1);
+                }
+                Self {
+                    spot: rest - point,
+                    point,
+                    directional,
+                }
+            }
+        }
+    }
+
+    /// Total number of lights.
+    pub fn total(&self) -> usize {
+        self.spot + self.point + self.directional
+    }
+}
+
+/// The ambient colour factor each of `n` lights gets: 0.02, lowered so that all lights
+/// together add at most 0.15 (ambient accumulates over lights; with many lights a fixed share
+/// would wash out every shadow).
+pub fn ambient_share(n: usize) -> f32 {
+    (0.15 / n.max(1) as f32).min(0.02)
+}
+
+/// A light colour with a varied tint: warm (tungsten, torch), cool (sky, moon) or near white,
+/// jittered, brightest channel 1.
+pub(crate) fn tint(rng: &mut Rand) -> Vec3 {
+    let base = match rng.below(20) {
+        0..=8 => Vec3::new(1.0, 0.78, 0.55),
+        9..=14 => Vec3::new(0.68, 0.8, 1.0),
+        _ => Vec3::new(1.0, 0.96, 0.9),
+    };
+    let c = base * Vec3::new(rng.range(0.9, 1.1), rng.range(0.9, 1.1), rng.range(0.9, 1.1));
+    c / c.max_element()
+}
+
+/// Colours and brightness shared by the light constructors.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Tone {
+    /// Tint, brightest channel 1.
+    pub color: Vec3,
+    /// Diffuse brightness (after attenuation, at the key distance).
+    pub brightness: f32,
+    /// Ambient factor (see [`ambient_share`]).
+    pub ambient: f32,
+}
+
+impl Tone {
+    fn light(&self, kind: LightKind, attenuation: Attenuation, gain: f32, resolution: u32) -> Light {
+        Light {
+            kind,
+            ambient: self.color * self.ambient,
+            diffuse: self.color * gain,
+            specular: self.color * (0.5 * gain),
+            attenuation,
+            casts_shadows: true,
+            shadow_resolution: resolution,
+        }
+    }
+}
+
+/// A shadow-casting spot light at `position` aimed at `target`, bright `tone.brightness` at
+/// `key_distance`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn spot(
+    position: Vec3,
+    direction: Vec3,
+    cutoff_deg: f32,
+    range: f32,
+    key_distance: f32,
+    tone: Tone,
+    resolution: Option<u32>,
+) -> Light {
+    let attenuation = Attenuation::for_range(range);
+    let gain = tone.brightness / attenuation.factor(key_distance);
+    tone.light(
+        LightKind::Spot {
+            position,
+            direction: direction.normalize_or(Vec3::NEG_Y),
+            cutoff_deg,
+            range,
+        },
+        attenuation,
+        gain,
+        resolution.unwrap_or(SPOT_SHADOW_RESOLUTION),
+    )
+}
+
+/// A shadow-casting point light, bright `tone.brightness` at `key_distance`.
+pub(crate) fn point(
+    position: Vec3,
+    range: f32,
+    key_distance: f32,
+    tone: Tone,
+    resolution: Option<u32>,
+) -> Light {
+    let attenuation = Attenuation::for_range(range);
+    let gain = tone.brightness / attenuation.factor(key_distance);
+    tone.light(
+        LightKind::Point { position, range },
+        attenuation,
+        gain,
+        resolution.unwrap_or(POINT_SHADOW_RESOLUTION),
+    )
+}
+
+/// A shadow-casting directional light with the default cascades.
+pub(crate) fn directional(direction: Vec3, tone: Tone, resolution: Option<u32>) -> Light {
+    tone.light(
+        LightKind::Directional {
+            direction: direction.normalize_or(Vec3::NEG_Y),
+            cascades: DIRECTIONAL_CASCADES,
+            split_lambda: DIRECTIONAL_SPLIT_LAMBDA,
+        },
+        Attenuation::NONE,
+        tone.brightness,
+        resolution.unwrap_or(DIRECTIONAL_SHADOW_RESOLUTION),
+    )
+}
+
+/// A sun-like direction: azimuth uniform, elevation between `min_deg` and `max_deg` above the
+/// horizon, pointing down.
+pub(crate) fn slanted_direction(rng: &mut Rand, min_deg: f32, max_deg: f32) -> Vec3 {
+    let az = rng.range(0.0, TAU);
+    let el = rng.range(min_deg, max_deg).to_radians();
+    Vec3::new(el.cos() * az.cos(), -el.sin(), el.cos() * az.sin())
+}
+
+/// The `k`-th point of a seeded R2 low-discrepancy sequence in the unit square: any prefix
+/// covers the square evenly, so any light count spreads out.
+pub(crate) fn r2(k: usize, offset: Vec2) -> Vec2 {
+    const A1: f64 = 0.754_877_666_246_692_7;
+    const A2: f64 = 0.569_840_290_998_053_2;
+    let x = (offset.x as f64 + A1 * k as f64).fract();
+    let y = (offset.y as f64 + A2 * k as f64).fract();
+    Vec2::new(x as f32, y as f32)
+}
+
+/// See [`super::scatter_lights`].
+pub(crate) fn scatter(
+    scene: &Scene,
+    n: usize,
+    seed: u64,
+    mix: LightMix,
+    resolution: Option<u32>,
+) -> Vec<Light> {
+    let (lo, hi) = scene
+        .world_bounds(false)
+        .unwrap_or((Vec3::new(-5.0, 0.0, -5.0), Vec3::new(5.0, 2.0, 5.0)));
+    let size = hi - lo;
+    let diag = Vec2::new(size.x, size.z).length().max(1.0);
+    let height = size.y.max(0.3 * diag);
+    let counts = LightCounts::split(n, mix);
+    let mut rng = Rand::new(seed, 0x5ca7);
+    let ambient = ambient_share(n);
+    let offset = Vec2::new(rng.unit(), rng.unit());
+    let reach = diag * (0.75 / (n.max(1) as f32).sqrt()).max(0.15);
+    let inset = |u: Vec2| {
+        Vec2::new(
+            lo.x + size.x * (0.1 + 0.8 * u.x),
+            lo.z + size.z * (0.1 + 0.8 * u.y),
+        )
+    };
+    let mut out = Vec::with_capacity(n);
+    for _ in 0..counts.directional {
+        let tone = Tone {
+            color: tint(&mut rng),
+            brightness: 0.8 / counts.directional as f32,
+            ambient,
+        };
+        out.push(directional(slanted_direction(&mut rng, 35.0, 65.0), tone, resolution));
+    }
+    let mut k = 0;
+    for _ in 0..counts.spot {
+        let xz = inset(r2(k, offset));
+        k += 1;
+        let above = height * rng.range(0.55, 0.9);
+        let position = Vec3::new(xz.x, lo.y + above, xz.y);
+        let tilt = rng.range(0.0, 25f32.to_radians());
+        let az = rng.range(0.0, TAU);
+        let direction = Vec3::new(tilt.sin() * az.cos(), -tilt.cos(), tilt.sin() * az.sin());
+        let key = above / tilt.cos();
+        let tone = Tone {
+            color: tint(&mut rng),
+            brightness: 0.7,
+            ambient,
+        };
+        let range = reach.max(2.5 * key);
+        out.push(spot(position, direction, rng.range(30.0, 45.0), range, key, tone, resolution));
+    }
+    for _ in 0..counts.point {
+        let xz = inset(r2(k, offset));
+        k += 1;
+        let above = height * rng.range(0.15, 0.5);
+        let position = Vec3::new(xz.x, lo.y + above, xz.y);
+        let tone = Tone {
+            color: tint(&mut rng),
+            brightness: 0.6,
+            ambient,
+        };
+        let range = (0.7 * reach).max(2.5 * above);
+        out.push(point(position, range, above, tone, resolution));
+    }
+    out
+}
