@@ -6,10 +6,11 @@ use crate::gpu_scene::{GpuScene, NORMAL_LAYOUT, POSITION_LAYOUT};
 use crate::timing::{GpuTimer, Span};
 use crate::GpuContext;
 
-/// xyz world position, w = 1 on geometry.
-pub const POSITION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
-/// xyz normal, w = material index.
-pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// xyz world position, w = 1 on geometry: `f32` bits in a `u32` target, because OpenGL ES and
+/// WebGL cannot render to `Rgba32Float` but can to `Rgba32Uint`, and positions must be exact.
+pub const POSITION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
+/// xyz normal (`f32` bits), w = material index.
+pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
 /// Camera depth buffer.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 

@@ -65,7 +65,6 @@ impl LightingPass {
             view_formats: &[],
         });
         let frag = wgpu::ShaderStages::FRAGMENT;
-        let float = wgpu::TextureSampleType::Float { filterable: false };
         let cmp = |binding| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: frag,
@@ -79,24 +78,19 @@ impl LightingPass {
                 crate::storage_entry(1, frag),
                 crate::storage_entry(2, frag),
                 crate::storage_entry(3, frag),
-                texture_entry(4, float, frag),
-                texture_entry(5, float, frag),
+                texture_entry(4, wgpu::TextureSampleType::Uint, frag),
+                texture_entry(5, wgpu::TextureSampleType::Uint, frag),
                 texture_entry(6, wgpu::TextureSampleType::Depth, frag),
                 cmp(7),
-                cmp(8),
             ],
         });
-        let sampler = |label, filter| {
-            device.create_sampler(&wgpu::SamplerDescriptor {
-                label: Some(label),
-                mag_filter: filter,
-                min_filter: filter,
-                compare: Some(wgpu::CompareFunction::LessEqual),
-                ..Default::default()
-            })
-        };
-        let nearest = sampler("lighting.cmp_nearest", wgpu::FilterMode::Nearest);
-        let linear = sampler("lighting.cmp_linear", wgpu::FilterMode::Linear);
+        let linear = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("lighting.cmp_linear"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            compare: Some(wgpu::CompareFunction::LessEqual),
+            ..Default::default()
+        });
         let pv = inputs.gbuffer.position.create_view(&Default::default());
         let nv = inputs.gbuffer.normal.create_view(&Default::default());
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -110,8 +104,7 @@ impl LightingPass {
                 wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(&pv) },
                 wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(&nv) },
                 wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(&inputs.atlas.view) },
-                wgpu::BindGroupEntry { binding: 7, resource: wgpu::BindingResource::Sampler(&nearest) },
-                wgpu::BindGroupEntry { binding: 8, resource: wgpu::BindingResource::Sampler(&linear) },
+                wgpu::BindGroupEntry { binding: 7, resource: wgpu::BindingResource::Sampler(&linear) },
             ],
         });
         let module = crate::shaders::module(device, "lighting.shader", &crate::shaders::lighting());

@@ -118,8 +118,8 @@ impl VisibilityPass {
                 crate::uniform_entry(0, comp),
                 crate::storage_entry(1, comp),
                 crate::storage_entry(2, comp),
-                texture_entry(3, wgpu::TextureSampleType::Float { filterable: false }, comp),
-                texture_entry(4, wgpu::TextureSampleType::Float { filterable: false }, comp),
+                texture_entry(3, wgpu::TextureSampleType::Uint, comp),
+                texture_entry(4, wgpu::TextureSampleType::Uint, comp),
                 texture_entry(5, wgpu::TextureSampleType::Float { filterable: false }, comp),
                 wgpu::BindGroupLayoutEntry {
                     binding: 6,

@@ -580,7 +580,7 @@ fn gltf_bad_accessor_is_an_error_not_a_panic() {
         // A stride smaller than one element.
         good.replace(r#""byteLength": 96 }"#, r#""byteLength": 96, "byteStride": 4 }"#),
         // Index referring to a missing vertex.
-        good.replace(r#""bufferView": 1, "componentType": 5123, "count": 6"#, r#""bufferView": 0, "componentType": 5123, "count": 6"#),
+        good.replace(r#""bufferView": 1, "componentType": 5123, "count": 6"#, r#""bufferView": 0, "byteOffset": 12, "componentType": 5123, "count": 6"#),
         // A node that is its own child.
         good.replace(r#"[ { "mesh": 0 } ]"#, r#"[ { "mesh": 0, "children": [0] } ]"#),
     ];

@@ -26,11 +26,12 @@ fn vs_main(
     return out;
 }
 
+// Both targets hold f32 bit patterns in u32 channels (exact, and renderable on every backend).
 struct GBufferOut {
-    // xyz world position, w = 1 where there is geometry (the clear value is 0).
-    @location(0) position: vec4<f32>,
-    // xyz unit normal facing the camera, w = material index.
-    @location(1) normal_material: vec4<f32>,
+    // xyz world position, w = 1.0 where there is geometry (the clear value 0 reads as 0.0).
+    @location(0) position: vec4<u32>,
+    // xyz unit normal facing the camera, w = material index (as u32, not bits).
+    @location(1) normal_material: vec4<u32>,
 }
 
 @fragment
@@ -41,7 +42,7 @@ fn fs_main(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOut {
         n = -n;
     }
     var out: GBufferOut;
-    out.position = vec4<f32>(in.world, 1.0);
-    out.normal_material = vec4<f32>(n, f32(in.material));
+    out.position = bitcast<vec4<u32>>(vec4<f32>(in.world, 1.0));
+    out.normal_material = vec4<u32>(bitcast<vec3<u32>>(n), in.material);
     return out;
 }

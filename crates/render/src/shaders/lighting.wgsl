@@ -6,11 +6,13 @@
 @group(0) @binding(1) var<storage, read> lights: array<LightData>;
 @group(0) @binding(2) var<storage, read> shadow_views: array<ShadowViewData>;
 @group(0) @binding(3) var<storage, read> materials: array<MaterialData>;
-@group(0) @binding(4) var gbuf_position: texture_2d<f32>;
-@group(0) @binding(5) var gbuf_normal: texture_2d<f32>;
+@group(0) @binding(4) var gbuf_position: texture_2d<u32>;
+@group(0) @binding(5) var gbuf_normal: texture_2d<u32>;
 @group(0) @binding(6) var atlas: texture_depth_2d;
-@group(0) @binding(7) var cmp_nearest: sampler_comparison;
-@group(0) @binding(8) var cmp_linear: sampler_comparison;
+// One bilinear comparison sampler for every PCF mode: OpenGL cannot pair one texture with two
+// samplers. At a texel centre bilinear weights are (1, 0, 0, 0), so a lookup there compares
+// exactly one texel, as a nearest-filtered one would.
+@group(0) @binding(7) var cmp_linear: sampler_comparison;
 
 @vertex
 fn vs_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
@@ -21,7 +23,7 @@ fn vs_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> 
 
 fn compare_texel(texel: vec2<f32>, depth: f32) -> f32 {
     let size = f32(frame.counts.z);
-    return textureSampleCompareLevel(atlas, cmp_nearest, (texel + vec2<f32>(0.5)) / size, depth);
+    return textureSampleCompareLevel(atlas, cmp_linear, (texel + vec2<f32>(0.5)) / size, depth);
 }
 
 // Fraction of the light that reaches the point (1 = fully lit).
@@ -54,14 +56,14 @@ fn shadow_factor(c: ShadowCoord) -> f32 {
 @fragment
 fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     let px = vec2<i32>(frag.xy);
-    let pos = textureLoad(gbuf_position, px, 0);
+    let pos = bitcast<vec4<f32>>(textureLoad(gbuf_position, px, 0));
     if (pos.w < 0.5) {
         return vec4<f32>(frame.sky.rgb, 1.0);
     }
     let nm = textureLoad(gbuf_normal, px, 0);
     let p = pos.xyz;
-    let n = normalize(nm.xyz);
-    let mat = materials[u32(nm.w)];
+    let n = normalize(bitcast<vec3<f32>>(nm.xyz));
+    let mat = materials[nm.w];
     let v = normalize(frame.camera_pos.xyz - p);
     let view_depth = -(frame.view * vec4<f32>(p, 1.0)).z;
     var color = vec3<f32>(0.0);

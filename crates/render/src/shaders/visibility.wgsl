@@ -13,8 +13,8 @@ struct VisibilityParams {
 @group(0) @binding(0) var<uniform> frame: FrameUniforms;
 @group(0) @binding(1) var<storage, read> lights: array<LightData>;
 @group(0) @binding(2) var<storage, read> shadow_views: array<ShadowViewData>;
-@group(0) @binding(3) var gbuf_position: texture_2d<f32>;
-@group(0) @binding(4) var gbuf_normal: texture_2d<f32>;
+@group(0) @binding(3) var gbuf_position: texture_2d<u32>;
+@group(0) @binding(4) var gbuf_normal: texture_2d<u32>;
 // The depth atlas read as plain floats: compute shaders on GL cannot load depth textures.
 @group(0) @binding(5) var atlas: texture_2d<f32>;
 @group(0) @binding(6) var<storage, read_write> mask: array<u32>;
@@ -28,10 +28,10 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let pixel = gid.y * w + gid.x;
-    let pos = textureLoad(gbuf_position, vec2<i32>(gid.xy), 0);
+    let pos = bitcast<vec4<f32>>(textureLoad(gbuf_position, vec2<i32>(gid.xy), 0));
     let has_geometry = pos.w >= 0.5;
     let p = pos.xyz;
-    let n = normalize(textureLoad(gbuf_normal, vec2<i32>(gid.xy), 0).xyz);
+    let n = normalize(bitcast<vec3<f32>>(textureLoad(gbuf_normal, vec2<i32>(gid.xy), 0).xyz));
     let view_depth = -(frame.view * vec4<f32>(p, 1.0)).z;
     let count = frame.counts.x;
     for (var wi = 0u; wi < params.word_count; wi = wi + 1u) {
