@@ -132,7 +132,9 @@ pub fn heightfield(
             let v10 = v00 + n;
             let v11 = v10 + 1;
             // (x0,z0) → (x0,z1) → (x1,z0) is counter-clockwise seen from +Y.
-            b.mesh.indices.extend_from_slice(&[v00, v01, v10, v10, v01, v11]);
+            b.mesh
+                .indices
+                .extend_from_slice(&[v00, v01, v10, v10, v01, v11]);
         }
     }
     let mut mesh = b.finish();
@@ -352,9 +354,7 @@ pub fn tube(points: &[Vec3], sides: u32, radius: impl Fn(usize, f32) -> f32) -> 
     if n < 3 {
         return b.finish();
     }
-    let tangent = |k: usize| {
-        (points[(k + 1) % n] - points[(k + n - 1) % n]).normalize_or(Vec3::X)
-    };
+    let tangent = |k: usize| (points[(k + 1) % n] - points[(k + n - 1) % n]).normalize_or(Vec3::X);
     let tangents: Vec<Vec3> = (0..n).map(tangent).collect();
     // Parallel transport of a normal round the loop.
     let mut normals = Vec::with_capacity(n + 1);
@@ -363,7 +363,11 @@ pub fn tube(points: &[Vec3], sides: u32, radius: impl Fn(usize, f32) -> f32) -> 
         let t = tangents[k % n];
         let prev: Vec3 = normals[k - 1];
         let projected = prev - t * prev.dot(t);
-        normals.push(projected.try_normalize().unwrap_or_else(|| t.any_orthonormal_vector()));
+        normals.push(
+            projected
+                .try_normalize()
+                .unwrap_or_else(|| t.any_orthonormal_vector()),
+        );
     }
     // Twist left over when the transported frame comes back to the start.
     let t0 = tangents[0];
@@ -455,7 +459,7 @@ pub fn torus_knot_curve(p: u32, q: u32, knot_radius: f32, segments: u32) -> Vec<
 /// arch springs at `y = 0` and its two legs are `width/2 − radius` wide at the bottom. Place one
 /// between two column capitals and its legs sit on them. `radius` is clamped to
 /// `(0, min(width/2, height)]`. `segments` steps round the half circle (≥ 4, rounded to a
-/// multiple of 4) give `≈ 6·segments + 8` triangles.
+/// multiple of 4) give about `6·segments + 10` triangles.
 pub fn arch(width: f32, height: f32, radius: f32, depth: f32, segments: u32) -> Mesh {
     let n = segments.max(4).div_ceil(4) * 4;
     let hw = 0.5 * width;
@@ -490,8 +494,13 @@ pub fn arch(width: f32, height: f32, radius: f32, depth: f32, segments: u32) -> 
             b.vertex(p_in.extend(z), normal);
             b.vertex(p_out.extend(z), normal);
         }
-        for i in 0..n as u32 {
-            let (ia, oa, ib, ob) = (first + 2 * i, first + 2 * i + 1, first + 2 * i + 2, first + 2 * i + 3);
+        for i in 0..n {
+            let (ia, oa, ib, ob) = (
+                first + 2 * i,
+                first + 2 * i + 1,
+                first + 2 * i + 2,
+                first + 2 * i + 3,
+            );
             b.tri_facing(ia, ib, ob, normal);
             b.tri_facing(ia, ob, oa, normal);
         }
@@ -503,17 +512,35 @@ pub fn arch(width: f32, height: f32, radius: f32, depth: f32, segments: u32) -> 
         b.vertex(p.extend(hd), nrm);
         b.vertex(p.extend(-hd), nrm);
     }
-    for i in 0..n as u32 {
-        let (fa, ba, fb, bb) = (first + 2 * i, first + 2 * i + 1, first + 2 * i + 2, first + 2 * i + 3);
+    for i in 0..n {
+        let (fa, ba, fb, bb) = (
+            first + 2 * i,
+            first + 2 * i + 1,
+            first + 2 * i + 2,
+            first + 2 * i + 3,
+        );
         b.tri_auto(fa, fb, bb);
         b.tri_auto(fa, bb, ba);
     }
     // Top, outer sides, and the legs' bottoms.
     let quad_xy = |b: &mut Builder, p0: Vec2, p1: Vec2, normal: Vec3| {
-        b.flat_quad([p0.extend(hd), p1.extend(hd), p1.extend(-hd), p0.extend(-hd)], normal);
+        b.flat_quad(
+            [p0.extend(hd), p1.extend(hd), p1.extend(-hd), p0.extend(-hd)],
+            normal,
+        );
     };
-    quad_xy(&mut b, Vec2::new(-hw, height), Vec2::new(hw, height), Vec3::Y);
-    quad_xy(&mut b, Vec2::new(-hw, 0.0), Vec2::new(-hw, height), Vec3::NEG_X);
+    quad_xy(
+        &mut b,
+        Vec2::new(-hw, height),
+        Vec2::new(hw, height),
+        Vec3::Y,
+    );
+    quad_xy(
+        &mut b,
+        Vec2::new(-hw, 0.0),
+        Vec2::new(-hw, height),
+        Vec3::NEG_X,
+    );
     quad_xy(&mut b, Vec2::new(hw, 0.0), Vec2::new(hw, height), Vec3::X);
     if hw - r > 1e-5 {
         quad_xy(&mut b, Vec2::new(-hw, 0.0), Vec2::new(-r, 0.0), Vec3::NEG_Y);
@@ -525,7 +552,7 @@ pub fn arch(width: f32, height: f32, radius: f32, depth: f32, segments: u32) -> 
 /// A classical column standing on `y = 0`, `height` tall, with shaft radius `radius`: a square
 /// plinth, a rounded base moulding, a shaft with entasis (it swells slightly and tapers to
 /// 85 %), a neck ring, a flared capital (echinus) and a square abacus `3·radius` wide on top.
-/// `segments` around (≥ 8); about `70·segments + 24` triangles, so a well-tessellated column is
+/// `segments` around (≥ 8); about `110·segments` triangles, so a well-tessellated column is
 /// a few thousand triangles: the atrium gets its triangle count from many of these.
 pub fn column(radius: f32, height: f32, segments: u32) -> Mesh {
     let (r, h) = (radius, height);
@@ -537,7 +564,10 @@ pub fn column(radius: f32, height: f32, segments: u32) -> Mesh {
     let base_h = 0.05 * h;
     for k in 0..=8 {
         let a = -PI / 2.0 + PI * k as f32 / 8.0;
-        profile.push(Vec2::new(1.3 * r + 0.15 * r * a.cos(), plinth_h + base_h * (0.5 + 0.5 * a.sin())));
+        profile.push(Vec2::new(
+            1.3 * r + 0.15 * r * a.cos(),
+            plinth_h + base_h * (0.5 + 0.5 * a.sin()),
+        ));
     }
     // Shaft with entasis.
     let (s0, s1) = (plinth_h + base_h, 0.86 * h);
@@ -545,29 +575,44 @@ pub fn column(radius: f32, height: f32, segments: u32) -> Mesh {
     for k in 1..=28 {
         let t = k as f32 / 28.0;
         let swell = 0.02 * (PI * t).sin();
-        profile.push(Vec2::new(r * (1.0 - 0.15 * t * t + swell), s0 + (s1 - s0) * t));
+        profile.push(Vec2::new(
+            r * (1.0 - 0.15 * t * t + swell),
+            s0 + (s1 - s0) * t,
+        ));
     }
     // Neck ring.
     let top = 0.85 * r;
     let ring_h = 0.012 * h;
     for k in 0..=6 {
         let a = -PI / 2.0 + PI * k as f32 / 6.0;
-        profile.push(Vec2::new(top + 0.08 * r * a.cos(), s1 + ring_h * (0.5 + 0.5 * a.sin())));
+        profile.push(Vec2::new(
+            top + 0.08 * r * a.cos(),
+            s1 + ring_h * (0.5 + 0.5 * a.sin()),
+        ));
     }
     // Echinus: a quarter-round flare up to the abacus.
     let (e0, e1) = (s1 + ring_h, h - abacus_h);
     for k in 0..=10 {
         let a = PI / 2.0 * k as f32 / 10.0;
-        profile.push(Vec2::new(top + (1.45 * r - top) * (1.0 - a.cos()), e0 + (e1 - e0) * a.sin()));
+        profile.push(Vec2::new(
+            top + (1.45 * r - top) * (1.0 - a.cos()),
+            e0 + (e1 - e0) * a.sin(),
+        ));
     }
     profile.push(Vec2::new(0.0, e1));
     let body = lathe(&profile, segs);
     let plinth = cuboid(Vec3::new(3.2 * r, plinth_h, 3.2 * r));
     let abacus = cuboid(Vec3::new(3.0 * r, abacus_h, 3.0 * r));
     let mut mesh = merge(&[
-        (plinth, Mat4::from_translation(Vec3::new(0.0, 0.5 * plinth_h, 0.0))),
+        (
+            plinth,
+            Mat4::from_translation(Vec3::new(0.0, 0.5 * plinth_h, 0.0)),
+        ),
         (body, Mat4::IDENTITY),
-        (abacus, Mat4::from_translation(Vec3::new(0.0, h - 0.5 * abacus_h, 0.0))),
+        (
+            abacus,
+            Mat4::from_translation(Vec3::new(0.0, h - 0.5 * abacus_h, 0.0)),
+        ),
     ]);
     mesh.name = "column".into();
     mesh
@@ -592,8 +637,11 @@ pub fn merge(meshes: &[(Mesh, Mat4)]) -> Mesh {
         } else {
             linear
         };
-        out.positions
-            .extend(mesh.positions.iter().map(|&p| transform.transform_point3(p)));
+        out.positions.extend(
+            mesh.positions
+                .iter()
+                .map(|&p| transform.transform_point3(p)),
+        );
         out.normals.extend(
             mesh.normals
                 .iter()

@@ -243,7 +243,11 @@ struct Ctx<'a> {
 impl Ctx<'_> {
     fn line(&self, span: std::ops::Range<usize>) -> usize {
         let end = span.start.min(self.text.len());
-        self.text.as_bytes()[..end].iter().filter(|&&b| b == b'\n').count() + 1
+        self.text.as_bytes()[..end]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count()
+            + 1
     }
 
     /// A [`SceneError::Parse`] whose message starts with the line of `span`.
@@ -262,7 +266,12 @@ impl Ctx<'_> {
     }
 }
 
-fn parse(text: &str, base_dir: &Path, source: &Path, default_name: &str) -> Result<Scene, SceneError> {
+fn parse(
+    text: &str,
+    base_dir: &Path,
+    source: &Path,
+    default_name: &str,
+) -> Result<Scene, SceneError> {
     check_file_size(source, text.len() as u64)?;
     let doc: SceneDoc = toml::from_str(text).map_err(|e| SceneError::Parse {
         path: source.to_path_buf(),
@@ -292,7 +301,10 @@ fn parse(text: &str, base_dir: &Path, source: &Path, default_name: &str) -> Resu
     for m in &doc.material {
         let span = m.span();
         let m = m.get_ref();
-        if material_index.insert(m.name.as_str(), materials.len()).is_some() {
+        if material_index
+            .insert(m.name.as_str(), materials.len())
+            .is_some()
+        {
             return Err(cx.err(span, format_args!("duplicate material name '{}'", m.name)));
         }
         let d = Material::default();
@@ -308,7 +320,10 @@ fn parse(text: &str, base_dir: &Path, source: &Path, default_name: &str) -> Resu
     let mut mesh_index = HashMap::new();
     for (i, m) in doc.mesh.iter().enumerate() {
         if mesh_index.insert(m.get_ref().name.as_str(), i).is_some() {
-            return Err(cx.err(m.span(), format_args!("duplicate mesh name '{}'", m.get_ref().name)));
+            return Err(cx.err(
+                m.span(),
+                format_args!("duplicate mesh name '{}'", m.get_ref().name),
+            ));
         }
     }
 
@@ -346,7 +361,10 @@ fn parse(text: &str, base_dir: &Path, source: &Path, default_name: &str) -> Resu
         let scale = match &d.scale {
             None => Vec3::ONE,
             Some(s) => vec3_param(s).ok_or_else(|| {
-                cx.err(span.clone(), format_args!("[[instance]] {i}: scale must be a number or [x, y, z]"))
+                cx.err(
+                    span.clone(),
+                    format_args!("[[instance]] {i}: scale must be a number or [x, y, z]"),
+                )
             })?,
         };
         let r = d.rotate_deg.unwrap_or(Vec3::ZERO);
@@ -406,7 +424,12 @@ fn list_names<'a>(names: impl Iterator<Item = &'a str>) -> String {
     if all.is_empty() {
         return "none".into();
     }
-    let mut s = all.iter().take(20).map(|n| format!("'{n}'")).collect::<Vec<_>>().join(", ");
+    let mut s = all
+        .iter()
+        .take(20)
+        .map(|n| format!("'{n}'"))
+        .collect::<Vec<_>>()
+        .join(", ");
     if all.len() > 20 {
         s.push_str(&format!(", … ({} in all)", all.len()));
     }
@@ -440,7 +463,13 @@ fn build_light(cx: &Ctx<'_>, i: usize, l: &Spanned<LightDef>) -> Result<Light, S
         ("split_lambda", d.split_lambda.is_some()),
     ];
     let allowed: &[&str] = match d.kind {
-        LightType::Spot => &["position", "direction", "cutoff_deg", "range", "attenuation"],
+        LightType::Spot => &[
+            "position",
+            "direction",
+            "cutoff_deg",
+            "range",
+            "attenuation",
+        ],
         LightType::Point => &["position", "range", "attenuation"],
         LightType::Directional => &["direction", "cascades", "split_lambda"],
     };
@@ -457,10 +486,20 @@ fn build_light(cx: &Ctx<'_>, i: usize, l: &Spanned<LightDef>) -> Result<Light, S
         }
     }
     let need = |v: Option<Vec3>, key: &str| {
-        v.ok_or_else(|| cx.err(span.clone(), format_args!("[[light]] {i}: a {type_name} light needs `{key}`")))
+        v.ok_or_else(|| {
+            cx.err(
+                span.clone(),
+                format_args!("[[light]] {i}: a {type_name} light needs `{key}`"),
+            )
+        })
     };
     let need_f = |v: Option<f32>, key: &str| {
-        v.ok_or_else(|| cx.err(span.clone(), format_args!("[[light]] {i}: a {type_name} light needs `{key}`")))
+        v.ok_or_else(|| {
+            cx.err(
+                span.clone(),
+                format_args!("[[light]] {i}: a {type_name} light needs `{key}`"),
+            )
+        })
     };
     // Directions are normalized; a zero or non-finite one is kept for `Scene::validate` to name.
     let unit = |v: Vec3| v.try_normalize().unwrap_or(v);
@@ -474,7 +513,8 @@ fn build_light(cx: &Ctx<'_>, i: usize, l: &Spanned<LightDef>) -> Result<Light, S
                     cutoff_deg: need_f(d.cutoff_deg, "cutoff_deg")?,
                     range,
                 },
-                d.attenuation.unwrap_or_else(|| Attenuation::for_range(range)),
+                d.attenuation
+                    .unwrap_or_else(|| Attenuation::for_range(range)),
                 1024,
             )
         }
@@ -485,7 +525,8 @@ fn build_light(cx: &Ctx<'_>, i: usize, l: &Spanned<LightDef>) -> Result<Light, S
                     position: need(d.position, "position")?,
                     range,
                 },
-                d.attenuation.unwrap_or_else(|| Attenuation::for_range(range)),
+                d.attenuation
+                    .unwrap_or_else(|| Attenuation::for_range(range)),
                 1024,
             )
         }
@@ -526,11 +567,15 @@ fn build_mesh(cx: &Ctx<'_>, m: &Spanned<MeshDef>) -> Result<Mesh, SceneError> {
         ("rings", d.rings.is_some()),
     ];
     let kind = match (&d.file, d.primitive) {
-        (Some(_), Some(_)) => return Err(err("give either `file` or `primitive`, not both".into())),
+        (Some(_), Some(_)) => {
+            return Err(err("give either `file` or `primitive`, not both".into()))
+        }
         (None, None) => return Err(err("needs `file = \"...\"` or `primitive = \"...\"`".into())),
         (Some(file), None) => {
             if let Some((key, _)) = set_keys.iter().find(|(_, set)| *set) {
-                return Err(err(format!("`{key}` is a primitive parameter; it does not apply to a `file` mesh")));
+                return Err(err(format!(
+                    "`{key}` is a primitive parameter; it does not apply to a `file` mesh"
+                )));
             }
             let mut mesh = load_merged(cx, file, name)?;
             mesh.name = name.to_string();
@@ -545,7 +590,10 @@ fn build_mesh(cx: &Ctx<'_>, m: &Spanned<MeshDef>) -> Result<Mesh, SceneError> {
         PrimitiveKind::Sphere => ("sphere", &["radius", "segments", "rings"]),
         PrimitiveKind::Cylinder => ("cylinder", &["radius", "height", "segments"]),
     };
-    if let Some((key, _)) = set_keys.iter().find(|(k, set)| *set && !allowed.contains(k)) {
+    if let Some((key, _)) = set_keys
+        .iter()
+        .find(|(k, set)| *set && !allowed.contains(k))
+    {
         return Err(err(format!(
             "`{key}` does not apply to primitive \"{kind_name}\" (its parameters: {})",
             allowed.join(", ")
@@ -564,7 +612,9 @@ fn build_mesh(cx: &Ctx<'_>, m: &Spanned<MeshDef>) -> Result<Mesh, SceneError> {
         if (min..=MAX_PRIMITIVE_SEGMENTS).contains(&v) {
             Ok(v)
         } else {
-            Err(err(format!("`{key}` = {v} must be between {min} and {MAX_PRIMITIVE_SEGMENTS}")))
+            Err(err(format!(
+                "`{key}` = {v} must be between {min} and {MAX_PRIMITIVE_SEGMENTS}"
+            )))
         }
     };
     let size_of = |dims: usize| -> Result<Vec<f32>, SceneError> {

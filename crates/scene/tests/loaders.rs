@@ -9,10 +9,8 @@ use manyshadows_scene::{Mesh, SceneError};
 
 /// A fresh, empty directory for one test.
 fn temp_dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "manyshadows-loaders-{}-{test}",
-        std::process::id()
-    ));
+    let dir =
+        std::env::temp_dir().join(format!("manyshadows-loaders-{}-{test}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
@@ -82,7 +80,14 @@ const CUBE_QUADS: [[u32; 4]; 6] = [
     [1, 2, 6, 5], // -Y
     [4, 8, 7, 3], // +Y
 ];
-const CUBE_NORMALS: [Vec3; 6] = [Vec3::NEG_Z, Vec3::Z, Vec3::NEG_X, Vec3::X, Vec3::NEG_Y, Vec3::Y];
+const CUBE_NORMALS: [Vec3; 6] = [
+    Vec3::NEG_Z,
+    Vec3::Z,
+    Vec3::NEG_X,
+    Vec3::X,
+    Vec3::NEG_Y,
+    Vec3::Y,
+];
 
 // ---------------------------------------------------------------------------------------------
 // OBJ
@@ -93,15 +98,18 @@ fn obj_cube_without_normals_gets_computed_unit_normals() {
     let dir = temp_dir("obj_no_normals");
     let mut text = String::from(CUBE_V);
     for q in CUBE_QUADS {
-        text += &format!("f {} {} {}\nf {} {} {}\n", q[0], q[1], q[2], q[0], q[2], q[3]);
+        text += &format!(
+            "f {} {} {}\nf {} {} {}\n",
+            q[0], q[1], q[2], q[0], q[2], q[3]
+        );
     }
     let m = load_one(&write(&dir, "cube.obj", text.as_bytes()));
     assert_eq!(m.triangle_count(), 12);
     assert_eq!(m.positions.len(), 8);
     assert_unit_normals(&m);
-    // Computed corner normals point away from the centre.
+    // Computed corner normals point away from the centre (the faces wind outward).
     for (p, n) in m.positions.iter().zip(&m.normals) {
-        assert!((*n - p.normalize()).length() < 1e-5, "{p} -> {n}");
+        assert!(n.dot(*p) > 0.5, "{p} -> {n}");
     }
     m.validate().unwrap();
 }
@@ -241,7 +249,11 @@ fn binary_ply(big_endian: bool) -> (Vec<u8>, Vec<Vec3>, Vec<u32>) {
         Vec3::new(9.0, 9.0, 9.0),
     ];
     let faces: Vec<Vec<i32>> = vec![vec![0, 1, 2, 3], vec![1, 4, 2]];
-    let fmt = if big_endian { "binary_big_endian" } else { "binary_little_endian" };
+    let fmt = if big_endian {
+        "binary_big_endian"
+    } else {
+        "binary_little_endian"
+    };
     let mut out = format!(
         "ply\nformat {fmt} 1.0\ncomment hand-written\nelement vertex {}\n\
          property double x\nproperty double y\nproperty double z\nproperty uchar red\n\
@@ -251,8 +263,20 @@ fn binary_ply(big_endian: bool) -> (Vec<u8>, Vec<Vec3>, Vec<u32>) {
         faces.len()
     )
     .into_bytes();
-    let f64b = |v: f64| if big_endian { v.to_be_bytes() } else { v.to_le_bytes() };
-    let i32b = |v: i32| if big_endian { v.to_be_bytes() } else { v.to_le_bytes() };
+    let f64b = |v: f64| {
+        if big_endian {
+            v.to_be_bytes()
+        } else {
+            v.to_le_bytes()
+        }
+    };
+    let i32b = |v: i32| {
+        if big_endian {
+            v.to_be_bytes()
+        } else {
+            v.to_le_bytes()
+        }
+    };
     for p in &positions {
         for c in p.to_array() {
             out.extend_from_slice(&f64b(c as f64));
@@ -265,7 +289,11 @@ fn binary_ply(big_endian: bool) -> (Vec<u8>, Vec<Vec3>, Vec<u32>) {
             out.extend_from_slice(&i32b(i));
         }
     }
-    out.extend_from_slice(&if big_endian { 7u16.to_be_bytes() } else { 7u16.to_le_bytes() });
+    out.extend_from_slice(&if big_endian {
+        7u16.to_be_bytes()
+    } else {
+        7u16.to_le_bytes()
+    });
     // The quad is fan-triangulated from its first corner.
     (out, positions, vec![0, 1, 2, 0, 2, 3, 1, 4, 2])
 }
@@ -400,7 +428,9 @@ fn base64(bytes: &[u8]) -> String {
     const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut s = String::new();
     for c in bytes.chunks(3) {
-        let n = (c[0] as u32) << 16 | (*c.get(1).unwrap_or(&0) as u32) << 8 | *c.get(2).unwrap_or(&0) as u32;
+        let n = (c[0] as u32) << 16
+            | (*c.get(1).unwrap_or(&0) as u32) << 8
+            | *c.get(2).unwrap_or(&0) as u32;
         for k in 0..4 {
             if k <= c.len() {
                 s.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
@@ -441,7 +471,9 @@ fn quad_buffer() -> Vec<u8> {
 /// glTF JSON for the buffer above. `nodes` is the JSON of the node array; node meshes: 0 = quad,
 /// 1 = non-indexed triangle. `buffer_uri` is `None` for a GLB's BIN chunk.
 fn gltf_json(nodes: &str, buffer_uri: Option<&str>, buffer_len: usize) -> String {
-    let uri = buffer_uri.map(|u| format!("\"uri\": \"{u}\", ")).unwrap_or_default();
+    let uri = buffer_uri
+        .map(|u| format!("\"uri\": \"{u}\", "))
+        .unwrap_or_default();
     format!(
         r#"{{
   "asset": {{ "version": "2.0" }},
@@ -541,11 +573,11 @@ fn gltf_external_buffer_and_glb() {
 
     // The same document as binary glTF: header, JSON chunk, BIN chunk (each 4-byte aligned).
     let mut json = gltf_json(nodes, None, buf.len()).into_bytes();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let mut bin = buf.clone();
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + json.len() + 8 + bin.len();
@@ -560,7 +592,10 @@ fn gltf_external_buffer_and_glb() {
     glb.extend_from_slice(b"BIN\0");
     glb.extend_from_slice(&bin);
     let from_glb = load_one(&write(&dir, "quad.GLB", &glb));
-    assert_eq!(ext, from_glb);
+    assert_eq!(
+        (&ext.positions, &ext.normals, &ext.indices),
+        (&from_glb.positions, &from_glb.normals, &from_glb.indices)
+    );
     assert_eq!(ext.positions[2], Vec3::new(1.0, 1.0, 5.0));
 
     // A truncated GLB fails cleanly.
@@ -574,21 +609,48 @@ fn gltf_bad_accessor_is_an_error_not_a_panic() {
     let good = embedded_gltf(r#"[ { "mesh": 0 } ]"#);
     let cases = [
         // Index accessor reaching past its buffer view.
-        good.replace(r#""componentType": 5123, "count": 6"#, r#""componentType": 5123, "count": 60"#),
+        good.replace(
+            r#""componentType": 5123, "count": 6"#,
+            r#""componentType": 5123, "count": 60"#,
+        ),
         // Positions declared as unsigned bytes.
-        good.replacen(r#""componentType": 5126, "count": 4, "type": "VEC3""#, r#""componentType": 5121, "count": 4, "type": "VEC3""#, 1),
+        good.replacen(
+            r#""componentType": 5126, "count": 4, "type": "VEC3""#,
+            r#""componentType": 5121, "count": 4, "type": "VEC3""#,
+            1,
+        ),
         // A stride smaller than one element.
-        good.replace(r#""byteLength": 96 }"#, r#""byteLength": 96, "byteStride": 4 }"#),
+        good.replace(
+            r#""byteLength": 96 }"#,
+            r#""byteLength": 96, "byteStride": 4 }"#,
+        ),
         // Index referring to a missing vertex.
-        good.replace(r#""bufferView": 1, "componentType": 5123, "count": 6"#, r#""bufferView": 0, "byteOffset": 12, "componentType": 5123, "count": 6"#),
+        good.replace(
+            r#""bufferView": 1, "componentType": 5123, "count": 6"#,
+            r#""bufferView": 0, "byteOffset": 12, "componentType": 5123, "count": 6"#,
+        ),
         // A node that is its own child.
-        good.replace(r#"[ { "mesh": 0 } ]"#, r#"[ { "mesh": 0, "children": [0] } ]"#),
+        good.replace(
+            r#"[ { "mesh": 0 } ]"#,
+            r#"[ { "mesh": 0, "children": [0] } ]"#,
+        ),
     ];
-    for (i, json) in cases.iter().enumerate() {
+    let reasons = [
+        "outside its buffer",
+        "expected Vec3",
+        "stride",
+        "out of range",
+        "reached twice",
+    ];
+    for (i, (json, reason)) in cases.iter().zip(reasons).enumerate() {
         assert_ne!(json, &good, "case {i} did not change the document");
-        let r = load_mesh(&write(&dir, &format!("bad{i}.gltf"), json.as_bytes()));
-        assert!(r.is_err(), "case {i} loaded: {r:?}");
+        match load_mesh(&write(&dir, &format!("bad{i}.gltf"), json.as_bytes())) {
+            Err(e) => assert!(e.to_string().contains(reason), "case {i}: {e}"),
+            Ok(m) => panic!("case {i} loaded: {m:?}"),
+        }
     }
+    // The untouched document loads.
+    load_one(&write(&dir, "good.gltf", good.as_bytes()));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -599,7 +661,9 @@ fn garbage(len: usize, seed: u64) -> Vec<u8> {
     let mut x = seed;
     (0..len)
         .map(|_| {
-            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (x >> 56) as u8
         })
         .collect()
@@ -619,14 +683,21 @@ fn garbage_files_are_errors() {
     let dir = temp_dir("garbage");
     for (seed, ext) in ["obj", "ply", "ply.gz", "gltf", "glb"].iter().enumerate() {
         for len in [1, 7, 100, 5000] {
-            let p = write(&dir, &format!("g{len}.{ext}"), &garbage(len, seed as u64 + len as u64));
+            let p = write(
+                &dir,
+                &format!("g{len}.{ext}"),
+                &garbage(len, seed as u64 + len as u64),
+            );
             assert!(load_mesh(&p).is_err(), "{}", p.display());
         }
     }
     // Plausible-looking garbage.
     let cases: [(&str, &[u8]); 6] = [
         ("text.obj", b"hello world\nthis is not an obj\n"),
-        ("text.ply", b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n"),
+        (
+            "text.ply",
+            b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n",
+        ),
         ("json.gltf", b"{\"asset\": {}}"),
         ("magic.glb", b"glTF\x02\x00\x00\x00\x05\x00\x00\x00"),
         ("short.glb", b"glTF"),
@@ -653,7 +724,10 @@ fn unsupported_extension_is_reported() {
     for name in ["cube.stl", "cube.gz", "cube", "cube.obj.txt"] {
         let p = write(&dir, name, b"solid cube\n");
         let e = load_mesh(&p).unwrap_err();
-        assert!(matches!(e, SceneError::UnsupportedFormat { .. }), "{name}: {e:?}");
+        assert!(
+            matches!(e, SceneError::UnsupportedFormat { .. }),
+            "{name}: {e:?}"
+        );
     }
 }
 

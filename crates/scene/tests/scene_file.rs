@@ -76,13 +76,24 @@ fn example_scene_parses() {
     // The point light kept its explicit attenuation and resolution.
     let point = &scene.lights[1];
     assert_eq!(point.shadow_resolution, 512);
-    assert_eq!(point.attenuation, Attenuation { constant: 1.0, linear: 0.2, quadratic: 0.05 });
+    assert_eq!(
+        point.attenuation,
+        Attenuation {
+            constant: 1.0,
+            linear: 0.2,
+            quadratic: 0.05
+        }
+    );
     // The directional light: normalized direction, its own defaults.
     let sun = &scene.lights[2];
     assert_eq!(sun.shadow_resolution, 2048);
     assert_eq!(sun.attenuation, Attenuation::NONE);
     match sun.kind {
-        LightKind::Directional { direction, cascades, split_lambda } => {
+        LightKind::Directional {
+            direction,
+            cascades,
+            split_lambda,
+        } => {
             assert!((direction.length() - 1.0).abs() < 1e-6);
             assert!(direction.y < 0.0);
             assert_eq!((cascades, split_lambda), (4, 0.8));
@@ -116,7 +127,9 @@ fn unknown_field_error_names_the_field_and_line() {
     assert!(msg.contains("colour"), "{msg}");
     assert!(msg.contains("line 3"), "{msg}");
 
-    let msg = parse_err(&format!("{BASE}[[instance]]\nmesh = \"box\"\ntranslation = [1, 2, 3]\n"));
+    let msg = parse_err(&format!(
+        "{BASE}[[instance]]\nmesh = \"box\"\ntranslation = [1, 2, 3]\n"
+    ));
     assert!(msg.contains("translation"), "{msg}");
 
     let msg = parse_err("[camera]\nposition = [0, 1, 2]\ntarget = [0, 0, 0]\nfov = 60\n");
@@ -133,13 +146,17 @@ fn unknown_mesh_and_material_names_are_named() {
     assert!(msg.contains("'floor'"), "lists the defined meshes: {msg}");
     assert!(msg.contains("line 12"), "{msg}");
 
-    let msg = parse_err(&format!("{BASE}[[instance]]\nmesh = \"box\"\nmaterial = \"marble\"\n"));
+    let msg = parse_err(&format!(
+        "{BASE}[[instance]]\nmesh = \"box\"\nmaterial = \"marble\"\n"
+    ));
     assert!(msg.contains("'marble'"), "{msg}");
 }
 
 #[test]
 fn duplicate_names_are_errors() {
-    let msg = parse_err(&format!("{BASE}[[mesh]]\nname = \"box\"\nprimitive = \"sphere\"\nradius = 1\n"));
+    let msg = parse_err(&format!(
+        "{BASE}[[mesh]]\nname = \"box\"\nprimitive = \"sphere\"\nradius = 1\n"
+    ));
     assert!(msg.contains("duplicate mesh name 'box'"), "{msg}");
     let msg = parse_err("[[material]]\nname = \"a\"\n[[material]]\nname = \"a\"\n");
     assert!(msg.contains("duplicate material name 'a'"), "{msg}");
@@ -154,9 +171,12 @@ fn bad_light_type_is_parse_error() {
 
 #[test]
 fn light_keys_must_fit_the_type() {
-    let msg = parse_err("[[light]]\ntype = \"point\"\nposition = [0, 1, 0]\nrange = 5\ncutoff_deg = 20\n");
+    let msg = parse_err(
+        "[[light]]\ntype = \"point\"\nposition = [0, 1, 0]\nrange = 5\ncutoff_deg = 20\n",
+    );
     assert!(msg.contains("cutoff_deg") && msg.contains("point"), "{msg}");
-    let msg = parse_err("[[light]]\ntype = \"spot\"\nposition = [0, 1, 0]\nrange = 5\ncutoff_deg = 20\n");
+    let msg =
+        parse_err("[[light]]\ntype = \"spot\"\nposition = [0, 1, 0]\nrange = 5\ncutoff_deg = 20\n");
     assert!(msg.contains("needs `direction`"), "{msg}");
     let msg = parse_err("[[light]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nrange = 5\n");
     assert!(msg.contains("range"), "{msg}");
@@ -195,13 +215,25 @@ fn malformed_toml_is_parse_error() {
 #[test]
 fn nan_values_are_rejected() {
     let e = parse("[[light]]\ntype = \"point\"\nposition = [nan, 1, 0]\nrange = 5\n").unwrap_err();
-    assert!(matches!(e, SceneError::InvalidLight { index: 0, .. }), "{e:?}");
+    assert!(
+        matches!(e, SceneError::InvalidLight { index: 0, .. }),
+        "{e:?}"
+    );
 
-    let e = parse(&format!("{BASE}[[instance]]\nmesh = \"box\"\ntranslate = [0, nan, 0]\n")).unwrap_err();
-    assert!(matches!(e, SceneError::InvalidInstance { index: 0, .. }), "{e:?}");
+    let e = parse(&format!(
+        "{BASE}[[instance]]\nmesh = \"box\"\ntranslate = [0, nan, 0]\n"
+    ))
+    .unwrap_err();
+    assert!(
+        matches!(e, SceneError::InvalidInstance { index: 0, .. }),
+        "{e:?}"
+    );
 
     let e = parse("[[material]]\nname = \"m\"\nshininess = nan\n[[mesh]]\nname = \"b\"\nprimitive = \"cube\"\nsize = 1\n[[instance]]\nmesh = \"b\"\nmaterial = \"m\"\n").unwrap_err();
-    assert!(matches!(e, SceneError::InvalidMaterial { index: 0, .. }), "{e:?}");
+    assert!(
+        matches!(e, SceneError::InvalidMaterial { index: 0, .. }),
+        "{e:?}"
+    );
 
     let msg = parse_err("[[mesh]]\nname = \"s\"\nprimitive = \"sphere\"\nradius = nan\n");
     assert!(msg.contains("radius"), "{msg}");
@@ -214,7 +246,8 @@ fn nan_values_are_rejected() {
 fn primitive_parameters_are_checked() {
     let msg = parse_err("[[mesh]]\nname = \"s\"\nprimitive = \"sphere\"\n");
     assert!(msg.contains("needs `radius`"), "{msg}");
-    let msg = parse_err("[[mesh]]\nname = \"p\"\nprimitive = \"plane\"\nsize = [1, 1]\nradius = 2\n");
+    let msg =
+        parse_err("[[mesh]]\nname = \"p\"\nprimitive = \"plane\"\nsize = [1, 1]\nradius = 2\n");
     assert!(msg.contains("radius") && msg.contains("plane"), "{msg}");
     let msg = parse_err("[[mesh]]\nname = \"p\"\nprimitive = \"plane\"\nsize = [1, 2, 3]\n");
     assert!(msg.contains("size"), "{msg}");
@@ -226,7 +259,8 @@ fn primitive_parameters_are_checked() {
     assert!(msg.contains("teapot"), "{msg}");
     let msg = parse_err("[[mesh]]\nname = \"x\"\n");
     assert!(msg.contains("file") && msg.contains("primitive"), "{msg}");
-    let msg = parse_err("[[mesh]]\nname = \"x\"\nfile = \"a.obj\"\nprimitive = \"cube\"\nsize = 1\n");
+    let msg =
+        parse_err("[[mesh]]\nname = \"x\"\nfile = \"a.obj\"\nprimitive = \"cube\"\nsize = 1\n");
     assert!(msg.contains("not both"), "{msg}");
 
     let scene = parse(
@@ -235,9 +269,15 @@ fn primitive_parameters_are_checked() {
     )
     .unwrap();
     let (lo, hi) = scene.meshes[0].bounds().unwrap();
-    assert!(lo.y.abs() < 1e-5 && (hi.y - 3.0).abs() < 1e-5, "cylinder base at y = 0: {lo} {hi}");
+    assert!(
+        lo.y.abs() < 1e-5 && (hi.y - 3.0).abs() < 1e-5,
+        "cylinder base at y = 0: {lo} {hi}"
+    );
     let (lo, hi) = scene.meshes[1].bounds().unwrap();
-    assert!((hi.y - 2.0).abs() < 1e-4 && (lo.y + 2.0).abs() < 1e-4, "{lo} {hi}");
+    assert!(
+        (hi.y - 2.0).abs() < 1e-4 && (lo.y + 2.0).abs() < 1e-4,
+        "{lo} {hi}"
+    );
 }
 
 #[test]
@@ -254,12 +294,17 @@ fn instance_transform_order_and_scale_forms() {
     // Scale, then rotate 90° about Z, then translate: [1, 0, 0] -> [2, 0, 0] -> [0, 2, 0] -> [1, 4, 3].
     let p = scene.instances[1].transform.transform_point3(Vec3::X);
     assert!((p - Vec3::new(1.0, 4.0, 3.0)).length() < 1e-5, "{p}");
-    assert_eq!(scene.instances[2].transform, Mat4::from_scale(Vec3::splat(0.5)));
+    assert_eq!(
+        scene.instances[2].transform,
+        Mat4::from_scale(Vec3::splat(0.5))
+    );
     assert!(!scene.instances[2].casts_shadows);
     // Default material appended once for the three instances.
     assert_eq!(scene.materials, vec![Material::default()]);
 
-    let msg = parse_err(&format!("{BASE}[[instance]]\nmesh = \"box\"\nscale = [1, 2]\n"));
+    let msg = parse_err(&format!(
+        "{BASE}[[instance]]\nmesh = \"box\"\nscale = [1, 2]\n"
+    ));
     assert!(msg.contains("scale"), "{msg}");
     let e = parse(&format!("{BASE}[[instance]]\nmesh = \"box\"\nscale = 0\n")).unwrap_err();
     assert!(matches!(e, SceneError::InvalidInstance { .. }), "{e:?}");
@@ -271,7 +316,11 @@ fn mesh_files_are_loaded_relative_and_merged() {
     std::fs::create_dir_all(dir.join("models")).unwrap();
     let tri = |z: f32| Mesh {
         name: "t".into(),
-        positions: vec![Vec3::new(0.0, 0.0, z), Vec3::new(1.0, 0.0, z), Vec3::new(0.0, 1.0, z)],
+        positions: vec![
+            Vec3::new(0.0, 0.0, z),
+            Vec3::new(1.0, 0.0, z),
+            Vec3::new(0.0, 1.0, z),
+        ],
         normals: vec![Vec3::Z; 3],
         indices: vec![0, 1, 2],
     };
@@ -280,7 +329,10 @@ fn mesh_files_are_loaded_relative_and_merged() {
     write_obj(&tri(0.0), &mut obj).unwrap();
     let mut second = Vec::new();
     write_obj(&tri(5.0), &mut second).unwrap();
-    let second = String::from_utf8(second).unwrap().replace("o t", "o u").replace("f 1//1 2//2 3//3", "f 4//4 5//5 6//6");
+    let second = String::from_utf8(second)
+        .unwrap()
+        .replace("o t", "o u")
+        .replace("f 1//1 2//2 3//3", "f 4//4 5//5 6//6");
     obj.extend_from_slice(second.as_bytes());
     std::fs::write(dir.join("models/two.obj"), obj).unwrap();
 
@@ -306,7 +358,10 @@ fn mesh_files_are_loaded_relative_and_merged() {
     )
     .unwrap();
     let e = load_scene_file(&scene_path).unwrap_err();
-    assert!(matches!(e, SceneError::Io { .. }) && e.to_string().contains("gone.ply"), "{e:?}");
+    assert!(
+        matches!(e, SceneError::Io { .. }) && e.to_string().contains("gone.ply"),
+        "{e:?}"
+    );
     let msg = parse_err("[[mesh]]\nname = \"x\"\nfile = \"a.obj\"\nradius = 1\n");
     assert!(msg.contains("radius"), "{msg}");
 }
@@ -340,5 +395,7 @@ fn limits_are_enforced() {
     let dir = temp_dir("limits");
     let p = dir.join("big.toml");
     std::fs::write(&p, &big).unwrap();
-    assert!(matches!(load_scene_file(&p), Err(SceneError::TooLarge { .. })));
+    let r = load_scene_file(&p);
+    let _ = std::fs::remove_file(&p);
+    assert!(matches!(r, Err(SceneError::TooLarge { .. })), "{r:?}");
 }

@@ -14,6 +14,9 @@
 // exactly one texel, as a nearest-filtered one would.
 @group(0) @binding(7) var cmp_linear: sampler_comparison;
 
+// Scale of the linear colour before tone mapping.
+const EXPOSURE: f32 = 1.4;
+
 @vertex
 fn vs_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
     // One triangle that covers the screen.
@@ -93,5 +96,6 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
         let lit = shadow_factor(shadow_coord(light, p, n, view_depth));
         color = color + ambient + lit * att * (diffuse + spec);
     }
-    return vec4<f32>(min(color, vec3<f32>(1.0)), 1.0);
+    // Exponential tone mapping: many overlapping lights add up past 1 without clipping to white.
+    return vec4<f32>(vec3<f32>(1.0) - exp(-color * EXPOSURE), 1.0);
 }

@@ -15,7 +15,7 @@
 
 use glam::Vec3;
 
-use super::lights::{ambient_share, Tone};
+use super::lights::{Tone, AMBIENT_FRACTION};
 use super::BuiltinOptions;
 use crate::{primitives, Attenuation, Camera, Instance, Light, LightKind, Material, Scene};
 
@@ -99,7 +99,6 @@ impl AnalyticLight {
         let tone = Tone {
             color: Vec3::ONE,
             brightness: 0.85,
-            ambient: ambient_share(1),
         };
         // Bright enough directly under the light (the floor at y = 0).
         let (kind, attenuation) = match self {
@@ -135,7 +134,7 @@ impl AnalyticLight {
         let gain = tone.brightness / attenuation.factor(key);
         Light {
             kind,
-            ambient: tone.color * tone.ambient,
+            ambient: tone.color * (AMBIENT_FRACTION * gain),
             diffuse: tone.color * gain,
             specular: tone.color * (0.5 * gain),
             attenuation,

@@ -25,7 +25,7 @@
 
 use glam::{Mat4, Quat, Vec2, Vec3};
 
-use super::lights::{self, ambient_share, slanted_direction, tint, Rand, Tone};
+use super::lights::{self, slanted_direction, tint, Rand, Tone};
 use super::{BuiltinOptions, LightCounts, LightMix};
 use crate::{primitives, Camera, Instance, Light, Material, Mesh, Scene};
 
@@ -131,7 +131,11 @@ fn named(mut mesh: Mesh, name: &str) -> Mesh {
 
 /// A turned baluster, 0.85 m tall.
 fn baluster() -> Mesh {
-    let mut profile = vec![Vec2::new(0.0, 0.0), Vec2::new(0.07, 0.0), Vec2::new(0.07, 0.06)];
+    let mut profile = vec![
+        Vec2::new(0.0, 0.0),
+        Vec2::new(0.07, 0.0),
+        Vec2::new(0.07, 0.06),
+    ];
     profile.extend(smooth_profile(
         &[
             Vec2::new(0.05, 0.08),
@@ -142,13 +146,21 @@ fn baluster() -> Mesh {
         ],
         3,
     ));
-    profile.extend([Vec2::new(0.07, 0.76), Vec2::new(0.07, 0.85), Vec2::new(0.0, 0.85)]);
+    profile.extend([
+        Vec2::new(0.07, 0.76),
+        Vec2::new(0.07, 0.85),
+        Vec2::new(0.0, 0.85),
+    ]);
     named(primitives::lathe(&profile, 10), "baluster")
 }
 
 /// A two-handled-looking urn (turned), 1.2 m tall, on the floor.
 fn urn() -> Mesh {
-    let mut profile = vec![Vec2::new(0.0, 0.0), Vec2::new(0.2, 0.0), Vec2::new(0.2, 0.08)];
+    let mut profile = vec![
+        Vec2::new(0.0, 0.0),
+        Vec2::new(0.2, 0.0),
+        Vec2::new(0.2, 0.08),
+    ];
     profile.extend(smooth_profile(
         &[
             Vec2::new(0.12, 0.12),
@@ -162,7 +174,12 @@ fn urn() -> Mesh {
         4,
     ));
     // Lip and the inside of the mouth (open, down to a floor inside).
-    profile.extend([Vec2::new(0.24, 1.2), Vec2::new(0.2, 1.15), Vec2::new(0.15, 1.02), Vec2::new(0.0, 1.0)]);
+    profile.extend([
+        Vec2::new(0.24, 1.2),
+        Vec2::new(0.2, 1.15),
+        Vec2::new(0.15, 1.02),
+        Vec2::new(0.0, 1.0),
+    ]);
     named(primitives::lathe(&profile, 24), "urn")
 }
 
@@ -213,7 +230,6 @@ pub fn atrium_lights(
 ) -> Vec<Light> {
     let counts = LightCounts::split(n, mix);
     let mut rng = Rand::new(seed, 0xa7e1);
-    let ambient = ambient_share(n);
     // Slots in bay-major order, alternating storey and side, so an even pick over the list
     // covers both arcades, both storeys and the whole length.
     let order = [(0usize, 1.0f32), (1, -1.0), (0, -1.0), (1, 1.0)];
@@ -237,18 +253,27 @@ pub fn atrium_lights(
     for d in 0..counts.directional {
         let (direction, color, brightness) = match (d, counts.directional) {
             (0, 1..=2) => (
-                Vec3::new(0.35, -1.0, 0.25) + 0.08 * Vec3::new(rng.range(-1.0, 1.0), 0.0, rng.range(-1.0, 1.0)),
+                Vec3::new(0.35, -1.0, 0.25)
+                    + 0.08 * Vec3::new(rng.range(-1.0, 1.0), 0.0, rng.range(-1.0, 1.0)),
                 Vec3::new(1.0, 0.94, 0.82),
-                0.9,
+                0.55,
             ),
-            (1, 2) => (Vec3::new(-0.4, -1.0, -0.3), Vec3::new(0.75, 0.85, 1.0), 0.35),
+            (1, 2) => (
+                Vec3::new(-0.4, -1.0, -0.3),
+                Vec3::new(0.75, 0.85, 1.0),
+                0.25,
+            ),
             _ => (
                 slanted_direction(&mut rng, 50.0, 80.0),
                 tint(&mut rng),
-                1.5 / counts.directional as f32,
+                1.0 / counts.directional as f32,
             ),
         };
-        out.push(lights::directional(direction, Tone { color, brightness, ambient }, shadow_resolution));
+        out.push(lights::directional(
+            direction,
+            Tone { color, brightness },
+            shadow_resolution,
+        ));
     }
     for (slot, cycle) in pick(counts.spot, &mut rng) {
         let (b, storey, side) = slots[slot];
@@ -263,9 +288,24 @@ pub fn atrium_lights(
         let inward = if storey == 0 { 0.35 } else { 0.3 };
         let direction = Vec3::new(rng.range(-0.1, 0.1), -1.0, -side * inward).normalize();
         let key = position.y / -direction.y;
-        let (cutoff, range) = if storey == 0 { (40.0, 14.0) } else { (32.0, 24.0) };
-        let tone = Tone { color: tint(&mut rng), brightness: 0.6, ambient };
-        out.push(lights::spot(position, direction, cutoff, range, key, tone, shadow_resolution));
+        let (cutoff, range) = if storey == 0 {
+            (40.0, 14.0)
+        } else {
+            (32.0, 24.0)
+        };
+        let tone = Tone {
+            color: tint(&mut rng),
+            brightness: 0.4,
+        };
+        out.push(lights::spot(
+            position,
+            direction,
+            cutoff,
+            range,
+            key,
+            tone,
+            shadow_resolution,
+        ));
     }
     for (slot, cycle) in pick(counts.point, &mut rng) {
         let (b, storey, side) = slots[slot];
@@ -275,10 +315,17 @@ pub fn atrium_lights(
             Vec3::new(bay_x(b), 9.0, side * 6.0)
         };
         if cycle > 0 {
-            position += Vec3::new(rng.range(-1.3, 1.3), rng.range(-0.4, 0.4), rng.range(-0.8, 0.8));
+            position += Vec3::new(
+                rng.range(-1.3, 1.3),
+                rng.range(-0.4, 0.4),
+                rng.range(-0.8, 0.8),
+            );
         }
         let (range, key) = if storey == 0 { (9.0, 3.5) } else { (8.0, 2.8) };
-        let tone = Tone { color: tint(&mut rng), brightness: 0.55, ambient };
+        let tone = Tone {
+            color: tint(&mut rng),
+            brightness: 0.45,
+        };
         out.push(lights::point(position, range, key, tone, shadow_resolution));
     }
     out
@@ -340,7 +387,10 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
         primitives::arch(BAY, ARCH_HEIGHT, UPPER_ARCH_RADIUS, ARCH_DEPTH, 48),
         "arch-upper",
     ));
-    let door_arch = h.mesh(named(primitives::arch(3.0, 2.0, 1.5, WALL, 32), "door-arch"));
+    let door_arch = h.mesh(named(
+        primitives::arch(3.0, 2.0, 1.5, WALL, 32),
+        "door-arch",
+    ));
     let baluster = h.mesh(baluster());
     let urn = h.mesh(urn());
     let fountain = h.mesh(fountain());
@@ -359,7 +409,11 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
         for j in 0..(HALL_WIDTH / BAY) as usize {
             let x = -hx + BAY * (i as f32 + 0.5);
             let z = -hz + BAY * (j as f32 + 0.5);
-            h.put(floor_tile, mat::FLOOR, Mat4::from_translation(Vec3::new(x, 0.0, z)));
+            h.put(
+                floor_tile,
+                mat::FLOOR,
+                Mat4::from_translation(Vec3::new(x, 0.0, z)),
+            );
         }
     }
     for side in [-1.0f32, 1.0] {
@@ -367,8 +421,16 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
         // Columns, both storeys.
         for k in 0..COLUMNS_PER_ROW {
             let x = column_x(k);
-            h.put(lower_column, mat::STONE, Mat4::from_translation(Vec3::new(x, 0.0, z)));
-            h.put(upper_column, mat::STONE, Mat4::from_translation(Vec3::new(x, upper_base, z)));
+            h.put(
+                lower_column,
+                mat::STONE,
+                Mat4::from_translation(Vec3::new(x, 0.0, z)),
+            );
+            h.put(
+                upper_column,
+                mat::STONE,
+                Mat4::from_translation(Vec3::new(x, upper_base, z)),
+            );
             // Pilasters on the outer wall, facing each column.
             h.block(
                 cube,
@@ -380,11 +442,23 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
         // Arches over every bay, both storeys, and the balustrade between upper columns.
         for b in 0..COLUMNS_PER_ROW - 1 {
             let x = bay_x(b);
-            h.put(lower_arch, mat::STONE, Mat4::from_translation(Vec3::new(x, LOWER_COLUMN_HEIGHT, z)));
-            h.put(upper_arch, mat::STONE, Mat4::from_translation(Vec3::new(x, upper_spring, z)));
+            h.put(
+                lower_arch,
+                mat::STONE,
+                Mat4::from_translation(Vec3::new(x, LOWER_COLUMN_HEIGHT, z)),
+            );
+            h.put(
+                upper_arch,
+                mat::STONE,
+                Mat4::from_translation(Vec3::new(x, upper_spring, z)),
+            );
             for m in 0..11 {
                 let bx = column_x(b) + 0.5 + 0.3 * m as f32;
-                h.put(baluster, mat::STONE, Mat4::from_translation(Vec3::new(bx, upper_base, z)));
+                h.put(
+                    baluster,
+                    mat::STONE,
+                    Mat4::from_translation(Vec3::new(bx, upper_base, z)),
+                );
             }
             h.block(
                 cube,
@@ -407,25 +481,74 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
             }
         }
         // Gallery floor over the aisle and the aisle roof, in 8 m pieces.
-        let (za, zb) = if side > 0.0 { (arch_z0, hz) } else { (-hz, -arch_z0) };
-        let (ra, rb) = if side > 0.0 { (arch_z0 - 0.1, hz + WALL) } else { (-hz - WALL, -arch_z0 + 0.1) };
+        let (za, zb) = if side > 0.0 {
+            (arch_z0, hz)
+        } else {
+            (-hz, -arch_z0)
+        };
+        let (ra, rb) = if side > 0.0 {
+            (arch_z0 - 0.1, hz + WALL)
+        } else {
+            (-hz - WALL, -arch_z0 + 0.1)
+        };
         for piece in 0..5 {
             let x0 = -hx + 8.0 * piece as f32;
-            h.block(cube, mat::STONE, Vec3::new(x0, lower_top, za), Vec3::new(x0 + 8.0, upper_base, zb));
-            h.block(cube, mat::PLASTER, Vec3::new(x0, roof_lo, ra), Vec3::new(x0 + 8.0, HALL_HEIGHT, rb));
+            h.block(
+                cube,
+                mat::STONE,
+                Vec3::new(x0, lower_top, za),
+                Vec3::new(x0 + 8.0, upper_base, zb),
+            );
+            h.block(
+                cube,
+                mat::PLASTER,
+                Vec3::new(x0, roof_lo, ra),
+                Vec3::new(x0 + 8.0, HALL_HEIGHT, rb),
+            );
             // Outer wall.
-            let (wa, wb) = if side > 0.0 { (hz, hz + WALL) } else { (-hz - WALL, -hz) };
-            let (xa, xb) = (x0 - if piece == 0 { WALL } else { 0.0 }, x0 + 8.0 + if piece == 4 { WALL } else { 0.0 });
-            h.block(cube, mat::PLASTER, Vec3::new(xa, 0.0, wa), Vec3::new(xb, HALL_HEIGHT, wb));
+            let (wa, wb) = if side > 0.0 {
+                (hz, hz + WALL)
+            } else {
+                (-hz - WALL, -hz)
+            };
+            let (xa, xb) = (
+                x0 - if piece == 0 { WALL } else { 0.0 },
+                x0 + 8.0 + if piece == 4 { WALL } else { 0.0 },
+            );
+            h.block(
+                cube,
+                mat::PLASTER,
+                Vec3::new(xa, 0.0, wa),
+                Vec3::new(xb, HALL_HEIGHT, wb),
+            );
         }
     }
     // End walls with a round-headed doorway (3 m wide, 4.5 m high).
     for end in [-1.0f32, 1.0] {
-        let (xa, xb) = if end > 0.0 { (hx, hx + WALL) } else { (-hx - WALL, -hx) };
+        let (xa, xb) = if end > 0.0 {
+            (hx, hx + WALL)
+        } else {
+            (-hx - WALL, -hx)
+        };
         let xc = 0.5 * (xa + xb);
-        h.block(cube, mat::PLASTER, Vec3::new(xa, 0.0, -hz), Vec3::new(xb, HALL_HEIGHT, -1.5));
-        h.block(cube, mat::PLASTER, Vec3::new(xa, 0.0, 1.5), Vec3::new(xb, HALL_HEIGHT, hz));
-        h.block(cube, mat::PLASTER, Vec3::new(xa, 5.0, -1.5), Vec3::new(xb, HALL_HEIGHT, 1.5));
+        h.block(
+            cube,
+            mat::PLASTER,
+            Vec3::new(xa, 0.0, -hz),
+            Vec3::new(xb, HALL_HEIGHT, -1.5),
+        );
+        h.block(
+            cube,
+            mat::PLASTER,
+            Vec3::new(xa, 0.0, 1.5),
+            Vec3::new(xb, HALL_HEIGHT, hz),
+        );
+        h.block(
+            cube,
+            mat::PLASTER,
+            Vec3::new(xa, 5.0, -1.5),
+            Vec3::new(xb, HALL_HEIGHT, 1.5),
+        );
         h.put(
             door_arch,
             mat::PLASTER,
@@ -438,11 +561,19 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
     // Props.
     h.put(fountain, mat::MARBLE, Mat4::IDENTITY);
     for (x, z) in [(3.2, 1.8), (3.2, -1.8), (-3.2, 1.8), (-3.2, -1.8)] {
-        h.put(urn, mat::BRONZE, Mat4::from_translation(Vec3::new(x, 0.0, z)));
+        h.put(
+            urn,
+            mat::BRONZE,
+            Mat4::from_translation(Vec3::new(x, 0.0, z)),
+        );
     }
     for b in 0..COLUMNS_PER_ROW - 1 {
         for side in [-1.0f32, 1.0] {
-            h.put(urn, mat::TERRACOTTA, Mat4::from_translation(Vec3::new(bay_x(b), 0.0, side * 6.9)));
+            h.put(
+                urn,
+                mat::TERRACOTTA,
+                Mat4::from_translation(Vec3::new(bay_x(b), 0.0, side * 6.9)),
+            );
             if b % 2 == 1 {
                 h.put(
                     urn,
@@ -455,14 +586,32 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
     for x in [-14.0f32, -10.0, -6.0, 6.0, 10.0, 14.0] {
         for side in [-1.0f32, 1.0] {
             let z = side * 2.6;
-            h.block(cube, mat::WOOD, Vec3::new(x - 0.5, 0.0, z - 0.5), Vec3::new(x + 0.5, 0.5, z + 0.5));
-            h.put(bush, mat::FOLIAGE, Mat4::from_translation(Vec3::new(x, 0.85, z)));
+            h.block(
+                cube,
+                mat::WOOD,
+                Vec3::new(x - 0.5, 0.0, z - 0.5),
+                Vec3::new(x + 0.5, 0.5, z + 0.5),
+            );
+            h.put(
+                bush,
+                mat::FOLIAGE,
+                Mat4::from_translation(Vec3::new(x, 0.85, z)),
+            );
         }
     }
     // Spheres on pedestals near the doorways, crates in the end passages of the aisles.
     for (x, z) in [(-17.0, 2.2), (-17.0, -2.2), (17.0, 2.2), (17.0, -2.2)] {
-        h.block(cube, mat::MARBLE, Vec3::new(x - 0.25, 0.0, z - 0.25), Vec3::new(x + 0.25, 1.0, z + 0.25));
-        h.put(ball, mat::BRONZE, Mat4::from_translation(Vec3::new(x, 1.3, z)));
+        h.block(
+            cube,
+            mat::MARBLE,
+            Vec3::new(x - 0.25, 0.0, z - 0.25),
+            Vec3::new(x + 0.25, 1.0, z + 0.25),
+        );
+        h.put(
+            ball,
+            mat::BRONZE,
+            Mat4::from_translation(Vec3::new(x, 1.3, z)),
+        );
     }
     let mut rng = Rand::new(0xc4a7e5, 0);
     for end in [-1.0f32, 1.0] {

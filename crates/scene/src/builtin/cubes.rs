@@ -8,7 +8,7 @@
 
 use glam::{Mat4, Quat, Vec3};
 
-use super::lights::{self, ambient_share, Tone};
+use super::lights::{self, Tone};
 use super::{BuiltinOptions, LightMix};
 use crate::{primitives, Camera, Instance, Light, Material, Scene};
 
@@ -19,7 +19,6 @@ pub const CUBES_CAMERA_TARGET: Vec3 = Vec3::new(0.0, 0.5, 0.0);
 
 /// The three fixed lights: a warm spot, a cool point light and a white sun.
 pub fn cubes_default_lights(shadow_resolution: Option<u32>) -> Vec<Light> {
-    let ambient = ambient_share(3);
     let spot_pos = Vec3::new(-3.0, 5.0, 3.0);
     let point_pos = Vec3::new(2.5, 3.0, 2.5);
     vec![
@@ -32,7 +31,6 @@ pub fn cubes_default_lights(shadow_resolution: Option<u32>) -> Vec<Light> {
             Tone {
                 color: Vec3::new(1.0, 0.82, 0.6),
                 brightness: 0.7,
-                ambient,
             },
             shadow_resolution,
         ),
@@ -43,7 +41,6 @@ pub fn cubes_default_lights(shadow_resolution: Option<u32>) -> Vec<Light> {
             Tone {
                 color: Vec3::new(0.7, 0.82, 1.0),
                 brightness: 0.5,
-                ambient,
             },
             shadow_resolution,
         ),
@@ -52,7 +49,6 @@ pub fn cubes_default_lights(shadow_resolution: Option<u32>) -> Vec<Light> {
             Tone {
                 color: Vec3::new(1.0, 0.98, 0.95),
                 brightness: 0.45,
-                ambient,
             },
             shadow_resolution,
         ),
@@ -89,20 +85,44 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
         casts_shadows: true,
     };
     let boxed = |size: Vec3, pos: Vec3, yaw_deg: f32| {
-        Mat4::from_scale_rotation_translation(size, Quat::from_rotation_y(yaw_deg.to_radians()), pos)
+        Mat4::from_scale_rotation_translation(
+            size,
+            Quat::from_rotation_y(yaw_deg.to_radians()),
+            pos,
+        )
     };
     let instances = vec![
         inst(0, 0, Mat4::IDENTITY),
         inst(1, 1, boxed(Vec3::ONE, Vec3::new(-2.0, 0.5, -1.0), 0.0)),
-        inst(1, 2, boxed(Vec3::splat(1.5), Vec3::new(1.5, 0.75, 1.0), 30.0)),
-        inst(1, 3, boxed(Vec3::new(0.6, 2.5, 0.6), Vec3::new(-0.5, 1.25, 2.0), 15.0)),
-        inst(1, 1, boxed(Vec3::splat(0.5), Vec3::new(1.5, 1.75, 1.0), 50.0)),
-        inst(1, 2, boxed(Vec3::new(2.0, 0.4, 0.8), Vec3::new(-2.5, 0.2, 2.5), -20.0)),
-        inst(2, 4, Mat4::from_scale_rotation_translation(
-            Vec3::splat(0.8),
-            Quat::IDENTITY,
-            Vec3::new(2.0, 0.8, -2.0),
-        )),
+        inst(
+            1,
+            2,
+            boxed(Vec3::splat(1.5), Vec3::new(1.5, 0.75, 1.0), 30.0),
+        ),
+        inst(
+            1,
+            3,
+            boxed(Vec3::new(0.6, 2.5, 0.6), Vec3::new(-0.5, 1.25, 2.0), 15.0),
+        ),
+        inst(
+            1,
+            1,
+            boxed(Vec3::splat(0.5), Vec3::new(1.5, 1.75, 1.0), 50.0),
+        ),
+        inst(
+            1,
+            2,
+            boxed(Vec3::new(2.0, 0.4, 0.8), Vec3::new(-2.5, 0.2, 2.5), -20.0),
+        ),
+        inst(
+            2,
+            4,
+            Mat4::from_scale_rotation_translation(
+                Vec3::splat(0.8),
+                Quat::IDENTITY,
+                Vec3::new(2.0, 0.8, -2.0),
+            ),
+        ),
     ];
     let mut scene = Scene {
         name: "cubes".into(),

@@ -14,7 +14,7 @@ use std::f32::consts::{PI, TAU};
 
 use glam::{Mat4, Quat, Vec3};
 
-use super::lights::{self, ambient_share, tint, Rand, Tone};
+use super::lights::{self, tint, Rand, Tone};
 use super::{BuiltinOptions, LightMix};
 use crate::{primitives, Camera, Instance, Light, Material, Mesh, Scene, SceneError};
 
@@ -35,7 +35,7 @@ pub const RING_RANGE: f32 = 16.0;
 /// Default number of ring lights.
 pub const DEFAULT_RING_LIGHTS: usize = 8;
 /// Camera distance from [`RING_TARGET`], looking down at 45°.
-pub const DRAGON_CAMERA_DISTANCE: f32 = 7.5;
+pub const DRAGON_CAMERA_DISTANCE: f32 = 6.0;
 
 /// The procedural stand-in for the Stanford dragon: a (2, 3) torus knot tube with bumps (a
 /// ridge of "scales" along its back), 593 × 30 quads = 35,580 triangles (the seed's dragon has
@@ -86,10 +86,16 @@ pub fn normalising_transform(mesh: &Mesh) -> Result<Mat4, SceneError> {
 }
 
 /// The ring of `n` lights of `mix`'s type (spots for `all` and `spot`).
-pub fn ring_lights(n: usize, seed: u64, mix: LightMix, shadow_resolution: Option<u32>) -> Vec<Light> {
+pub fn ring_lights(
+    n: usize,
+    seed: u64,
+    mix: LightMix,
+    shadow_resolution: Option<u32>,
+) -> Vec<Light> {
     let mut rng = Rand::new(seed, 0xd2a9);
     let phase = rng.range(0.0, TAU);
-    let ambient = ambient_share(n);
+    // All ring lights overlap on the model and the floor around it: share the brightness.
+    let brightness = (1.6 / n.max(1) as f32).min(0.7);
     (0..n)
         .map(|k| {
             let a = phase + TAU * k as f32 / n as f32;
@@ -104,14 +110,14 @@ pub fn ring_lights(n: usize, seed: u64, mix: LightMix, shadow_resolution: Option
                     RING_SPOT_CUTOFF_DEG,
                     RING_RANGE,
                     key,
-                    Tone { color, brightness: 0.7, ambient },
+                    Tone { color, brightness },
                     shadow_resolution,
                 ),
                 LightMix::Point => lights::point(
                     position,
                     RING_RANGE,
                     key,
-                    Tone { color, brightness: 0.7, ambient },
+                    Tone { color, brightness },
                     shadow_resolution,
                 ),
                 LightMix::Directional => lights::directional(
@@ -119,7 +125,6 @@ pub fn ring_lights(n: usize, seed: u64, mix: LightMix, shadow_resolution: Option
                     Tone {
                         color,
                         brightness: (1.5 / n as f32).min(0.7),
-                        ambient,
                     },
                     shadow_resolution,
                 ),

@@ -2,7 +2,7 @@
 //! types, colours, brightness, and the generic [`scatter`] layout.
 //!
 //! Why one place: every scene must follow the same rules (type split, default shadow
-//! resolutions, ambient budget, brightness at a key distance) so that light counts and mixes
+//! resolutions, ambient fraction, brightness at a key distance) so that light counts and mixes
 //! mean the same thing in every scene and benchmark.
 
 use std::f32::consts::TAU;
@@ -72,9 +72,21 @@ impl LightCounts {
     /// 10 points, 1 directional; 3 → one of each.
     pub fn split(n: usize, mix: LightMix) -> Self {
         match mix {
-            LightMix::Spot => Self { spot: n, point: 0, directional: 0 },
-            LightMix::Point => Self { spot: 0, point: n, directional: 0 },
-            LightMix::Directional => Self { spot: 0, point: 0, directional: n },
+            LightMix::Spot => Self {
+                spot: n,
+                point: 0,
+                directional: 0,
+            },
+            LightMix::Point => Self {
+                spot: 0,
+                point: n,
+                directional: 0,
+            },
+            LightMix::Directional => Self {
+                spot: 0,
+                point: 0,
+                directional: n,
+            },
             LightMix::All => {
                 let directional = match n {
                     0..=2 => 0,
@@ -101,12 +113,16 @@ impl LightCounts {
     }
 }
 
-/// The ambient colour factor each of `n` lights gets: 0.02, lowered so that all lights
-/// together add at most 0.15 (ambient accumulates over lights; with many lights a fixed share
-/// would wash out every shadow).
-pub fn ambient_share(n: usize) -> f32 {
-    (0.15 / n.max(1) as f32).min(0.02)
-}
+/// Each light's ambient colour as a fraction of its diffuse colour.
+///
+/// Why a fraction and not a fixed small colour: the lighting pass (seed 004's Phong) attenuates
+/// a light's ambient term with distance and applies it only within the light's reach, like its
+/// diffuse term. A fixed `0.02·colour` would therefore vanish a few metres from any light whose
+/// diffuse colour is scaled up to fight [`Attenuation::for_range`]'s steep fall-off. As a
+/// fraction of the diffuse colour, a shadowed point receives 5 % of what the same lights give
+/// it when lit, at any light count and density: shadows stay dark but not black, and ambient
+/// grows with light density exactly as direct light does instead of washing shadows out.
+pub const AMBIENT_FRACTION: f32 = 0.05;
 
 /// A light colour with a varied tint: warm (tungsten, torch), cool (sky, moon) or near white,
 /// jittered, brightest channel 1.
@@ -116,7 +132,12 @@ pub(crate) fn tint(rng: &mut Rand) -> Vec3 {
         9..=14 => Vec3::new(0.68, 0.8, 1.0),
         _ => Vec3::new(1.0, 0.96, 0.9),
     };
-    let c = base * Vec3::new(rng.range(0.9, 1.1), rng.range(0.9, 1.1), rng.range(0.9, 1.1));
+    let c = base
+        * Vec3::new(
+            rng.range(0.9, 1.1),
+            rng.range(0.9, 1.1),
+            rng.range(0.9, 1.1),
+        );
     c / c.max_element()
 }
 
@@ -127,15 +148,19 @@ pub(crate) struct Tone {
     pub color: Vec3,
     /// Diffuse brightness (after attenuation, at the key distance).
     pub brightness: f32,
-    /// Ambient factor (see [`ambient_share`]).
-    pub ambient: f32,
 }
 
 impl Tone {
-    fn light(&self, kind: LightKind, attenuation: Attenuation, gain: f32, resolution: u32) -> Light {
+    fn light(
+        &self,
+        kind: LightKind,
+        attenuation: Attenuation,
+        gain: f32,
+        resolution: u32,
+    ) -> Light {
         Light {
             kind,
-            ambient: self.color * self.ambient,
+            ambient: self.color * (AMBIENT_FRACTION * gain),
             diffuse: self.color * gain,
             specular: self.color * (0.5 * gain),
             attenuation,
@@ -238,7 +263,6 @@ pub(crate) fn scatter(
     let height = size.y.max(0.3 * diag);
     let counts = LightCounts::split(n, mix);
     let mut rng = Rand::new(seed, 0x5ca7);
-    let ambient = ambient_share(n);
     let offset = Vec2::new(rng.unit(), rng.unit());
     let reach = diag * (0.75 / (n.max(1) as f32).sqrt()).max(0.15);
     let inset = |u: Vec2| {
@@ -252,9 +276,12 @@ pub(crate) fn scatter(
         let tone = Tone {
             color: tint(&mut rng),
             brightness: 0.8 / counts.directional as f32,
-            ambient,
         };
-        out.push(directional(slanted_direction(&mut rng, 35.0, 65.0), tone, resolution));
+        out.push(directional(
+            slanted_direction(&mut rng, 35.0, 65.0),
+            tone,
+            resolution,
+        ));
     }
     let mut k = 0;
     for _ in 0..counts.spot {
@@ -269,10 +296,17 @@ pub(crate) fn scatter(
         let tone = Tone {
             color: tint(&mut rng),
             brightness: 0.7,
-            ambient,
         };
         let range = reach.max(2.5 * key);
-        out.push(spot(position, direction, rng.range(30.0, 45.0), range, key, tone, resolution));
+        out.push(spot(
+            position,
+            direction,
+            rng.range(30.0, 45.0),
+            range,
+            key,
+            tone,
+            resolution,
+        ));
     }
     for _ in 0..counts.point {
         let xz = inset(r2(k, offset));
@@ -282,7 +316,6 @@ pub(crate) fn scatter(
         let tone = Tone {
             color: tint(&mut rng),
             brightness: 0.6,
-            ambient,
         };
         let range = (0.7 * reach).max(2.5 * above);
         out.push(point(position, range, above, tone, resolution));

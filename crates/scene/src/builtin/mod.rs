@@ -21,8 +21,8 @@
 //! Brightness: the lights use [`Attenuation::for_range`](crate::Attenuation::for_range), which
 //! falls to about 1/10 a third of the way to the range, so each light's colour is scaled up to
 //! reach a useful brightness at the distance it is meant to light (its "key distance").
-//! Ambient light adds up over all lights, so each light's ambient share shrinks as the count
-//! grows ([`ambient_share`]): shadowed areas stay dark but not black whatever the count.
+//! Each light's ambient colour is a small fraction of its diffuse colour ([`AMBIENT_FRACTION`]),
+//! so shadowed areas stay dark but not black whatever the count.
 
 pub mod analytic;
 pub mod atrium;
@@ -38,8 +38,8 @@ use crate::{Light, Mesh, Scene, SceneError};
 
 pub use analytic::*;
 pub use lights::{
-    ambient_share, LightCounts, DIRECTIONAL_CASCADES, DIRECTIONAL_SHADOW_RESOLUTION,
-    DIRECTIONAL_SPLIT_LAMBDA, POINT_SHADOW_RESOLUTION, SPOT_SHADOW_RESOLUTION,
+    LightCounts, DIRECTIONAL_CASCADES, DIRECTIONAL_SHADOW_RESOLUTION, DIRECTIONAL_SPLIT_LAMBDA,
+    POINT_SHADOW_RESOLUTION, SPOT_SHADOW_RESOLUTION,
 };
 
 /// Names accepted by [`build`], in the order the CLI lists them.

@@ -15,7 +15,7 @@ use std::f32::consts::TAU;
 
 use glam::{Mat4, Quat, Vec2, Vec3};
 
-use super::lights::{self, ambient_share, r2, tint, Rand, Tone};
+use super::lights::{self, r2, tint, Rand, Tone};
 use super::{BuiltinOptions, LightCounts};
 use crate::{primitives, Camera, Instance, Light, Material, Mesh, Scene};
 
@@ -112,9 +112,18 @@ pub fn terrain_mesh() -> Mesh {
 fn tree_a() -> Mesh {
     let mut m = primitives::merge(&[
         (primitives::cylinder(0.18, 1.6, 12), Mat4::IDENTITY),
-        (primitives::cone(1.5, 2.4, 24), Mat4::from_translation(Vec3::Y * 1.2)),
-        (primitives::cone(1.15, 2.0, 24), Mat4::from_translation(Vec3::Y * 2.3)),
-        (primitives::cone(0.8, 1.7, 24), Mat4::from_translation(Vec3::Y * 3.3)),
+        (
+            primitives::cone(1.5, 2.4, 24),
+            Mat4::from_translation(Vec3::Y * 1.2),
+        ),
+        (
+            primitives::cone(1.15, 2.0, 24),
+            Mat4::from_translation(Vec3::Y * 2.3),
+        ),
+        (
+            primitives::cone(0.8, 1.7, 24),
+            Mat4::from_translation(Vec3::Y * 3.3),
+        ),
     ]);
     m.name = "tree-a".into();
     m
@@ -123,9 +132,18 @@ fn tree_a() -> Mesh {
 fn tree_b() -> Mesh {
     let mut m = primitives::merge(&[
         (primitives::cylinder(0.2, 2.6, 12), Mat4::IDENTITY),
-        (primitives::uv_sphere(1.3, 12, 8), Mat4::from_translation(Vec3::new(0.0, 3.2, 0.0))),
-        (primitives::uv_sphere(0.9, 10, 6), Mat4::from_translation(Vec3::new(0.8, 2.7, 0.3))),
-        (primitives::uv_sphere(0.85, 10, 6), Mat4::from_translation(Vec3::new(-0.6, 2.8, -0.6))),
+        (
+            primitives::uv_sphere(1.3, 12, 8),
+            Mat4::from_translation(Vec3::new(0.0, 3.2, 0.0)),
+        ),
+        (
+            primitives::uv_sphere(0.9, 10, 6),
+            Mat4::from_translation(Vec3::new(0.8, 2.7, 0.3)),
+        ),
+        (
+            primitives::uv_sphere(0.85, 10, 6),
+            Mat4::from_translation(Vec3::new(-0.6, 2.8, -0.6)),
+        ),
     ]);
     m.name = "tree-b".into();
     m
@@ -134,7 +152,13 @@ fn tree_b() -> Mesh {
 fn rock() -> Mesh {
     let mut m = primitives::uv_sphere(1.0, 12, 8);
     for p in &mut m.positions {
-        let lump = 1.0 + 0.25 * (value_noise(2.0 * p.x + 5.0, 2.0 * p.z + 2.0 * p.y + 9.0, TERRAIN_SEED ^ 0x50c) - 0.5);
+        let lump = 1.0
+            + 0.25
+                * (value_noise(
+                    2.0 * p.x + 5.0,
+                    2.0 * p.z + 2.0 * p.y + 9.0,
+                    TERRAIN_SEED ^ 0x50c,
+                ) - 0.5);
         *p *= lump * Vec3::new(1.2, 0.65, 1.0);
     }
     m.compute_normals();
@@ -147,11 +171,14 @@ fn grass() -> Mesh {
         .map(|k| {
             let a = TAU * k as f32 / 7.0;
             let h = 0.5 + 0.1 * (k % 3) as f32;
-            let tilt = Quat::from_rotation_y(a) * Quat::from_rotation_x(0.25 + 0.05 * (k % 2) as f32);
+            let tilt =
+                Quat::from_rotation_y(a) * Quat::from_rotation_x(0.25 + 0.05 * (k % 2) as f32);
             (
                 primitives::cuboid(Vec3::new(0.12, h, 0.03)),
-                Mat4::from_rotation_translation(tilt, Vec3::new(0.06 * a.cos(), 0.0, 0.06 * a.sin()))
-                    * Mat4::from_translation(Vec3::Y * (0.5 * h)),
+                Mat4::from_rotation_translation(
+                    tilt,
+                    Vec3::new(0.06 * a.cos(), 0.0, 0.06 * a.sin()),
+                ) * Mat4::from_translation(Vec3::Y * (0.5 * h)),
             )
         })
         .collect();
@@ -171,18 +198,30 @@ pub fn terrain_lights(
 ) -> Vec<Light> {
     let counts = LightCounts::split(n, mix);
     let mut rng = Rand::new(seed, 0x7e44);
-    let ambient = ambient_share(n);
     let offset = Vec2::new(rng.unit(), rng.unit());
     let mut out = Vec::with_capacity(n);
     for d in 0..counts.directional {
         let direction = if d == 0 {
-            Vec3::new(0.55, -0.5, 0.45) + 0.1 * Vec3::new(rng.range(-1.0, 1.0), 0.0, rng.range(-1.0, 1.0))
+            Vec3::new(0.55, -0.5, 0.45)
+                + 0.1 * Vec3::new(rng.range(-1.0, 1.0), 0.0, rng.range(-1.0, 1.0))
         } else {
             lights::slanted_direction(&mut rng, 30.0, 60.0)
         };
-        let brightness = if d == 0 { 0.75 } else { 0.6 / counts.directional as f32 };
-        let color = if d == 0 { Vec3::new(1.0, 0.93, 0.8) } else { tint(&mut rng) };
-        out.push(lights::directional(direction, Tone { color, brightness, ambient }, shadow_resolution));
+        let brightness = if d == 0 {
+            0.75
+        } else {
+            0.6 / counts.directional as f32
+        };
+        let color = if d == 0 {
+            Vec3::new(1.0, 0.93, 0.8)
+        } else {
+            tint(&mut rng)
+        };
+        out.push(lights::directional(
+            direction,
+            Tone { color, brightness },
+            shadow_resolution,
+        ));
     }
     let mut k = 0;
     let mut place = |rng: &mut Rand| {
@@ -199,7 +238,10 @@ pub fn terrain_lights(
         let az = rng.range(0.0, TAU);
         let direction = Vec3::new(tilt.sin() * az.cos(), -tilt.cos(), tilt.sin() * az.sin());
         let key = above / tilt.cos();
-        let tone = Tone { color: tint(&mut rng), brightness: 0.8, ambient };
+        let tone = Tone {
+            color: tint(&mut rng),
+            brightness: 0.8,
+        };
         out.push(lights::spot(
             Vec3::new(x, ground + above, z),
             direction,
@@ -213,7 +255,10 @@ pub fn terrain_lights(
     for _ in 0..counts.point {
         let (x, z, ground) = place(&mut rng);
         let above = rng.range(2.0, 4.0);
-        let tone = Tone { color: tint(&mut rng), brightness: 0.7, ambient };
+        let tone = Tone {
+            color: tint(&mut rng),
+            brightness: 0.7,
+        };
         out.push(lights::point(
             Vec3::new(x, ground + above, z),
             3.0 * above,

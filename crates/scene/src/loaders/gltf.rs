@@ -66,7 +66,10 @@ pub(super) fn load(path: &Path) -> Result<Vec<Mesh>, SceneError> {
         Ok(())
     };
 
-    match document.default_scene().or_else(|| document.scenes().next()) {
+    match document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    {
         Some(scene) => {
             // Depth-first walk with an explicit stack; a node reached twice means the "tree" has
             // a cycle or shared child, which the specification forbids.
@@ -78,7 +81,10 @@ pub(super) fn load(path: &Path) -> Result<Vec<Mesh>, SceneError> {
                 if std::mem::replace(&mut seen[node.index()], true) {
                     return Err(parse_error(
                         path,
-                        format!("glTF: node {} is reached twice (the node graph is not a tree)", node.index()),
+                        format!(
+                            "glTF: node {} is reached twice (the node graph is not a tree)",
+                            node.index()
+                        ),
                     ));
                 }
                 let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
@@ -112,11 +118,16 @@ fn check_buffer_sources(path: &Path, document: &Document, base: &Path) -> Result
             continue; // data: URIs (bounded by the file size) or schemes the crate rejects.
         } else {
             let decoded = percent_decode(uri).ok_or_else(|| {
-                parse_error(path, format!("glTF: buffer URI '{uri}' is not valid percent-encoded UTF-8"))
+                parse_error(
+                    path,
+                    format!("glTF: buffer URI '{uri}' is not valid percent-encoded UTF-8"),
+                )
             })?;
             base.join(decoded)
         };
-        let len = std::fs::metadata(&file).map_err(|e| io_error(&file, e))?.len();
+        let len = std::fs::metadata(&file)
+            .map_err(|e| io_error(&file, e))?
+            .len();
         if len > MAX_FILE_BYTES {
             return Err(too_large(
                 &file,
@@ -156,7 +167,8 @@ fn check_accessor(
     types: &[DataType],
     dims: Dimensions,
 ) -> Result<(), SceneError> {
-    let bad = |reason: String| parse_error(path, format!("glTF primitive {label}: {what} {reason}"));
+    let bad =
+        |reason: String| parse_error(path, format!("glTF primitive {label}: {what} {reason}"));
     if !types.contains(&a.data_type()) || a.dimensions() != dims || a.normalized() {
         return Err(bad(format!(
             "accessor has type {:?} {:?}{}; expected {dims:?} of {types:?}",
@@ -173,7 +185,9 @@ fn check_accessor(
     for v in views {
         if let Some(stride) = v.stride() {
             if stride < size {
-                return Err(bad(format!("buffer view stride {stride} is smaller than an element ({size} bytes)")));
+                return Err(bad(format!(
+                    "buffer view stride {stride} is smaller than an element ({size} bytes)"
+                )));
             }
         }
     }
@@ -197,17 +211,35 @@ where
 {
     let name = mesh_name(path, Some(label));
     let pos_acc = prim.get(&Semantic::Positions).ok_or_else(|| {
-        parse_error(path, format!("glTF primitive {label} has no POSITION attribute"))
+        parse_error(
+            path,
+            format!("glTF primitive {label} has no POSITION attribute"),
+        )
     })?;
-    check_accessor(path, label, "POSITION", &pos_acc, &[DataType::F32], Dimensions::Vec3)?;
+    check_accessor(
+        path,
+        label,
+        "POSITION",
+        &pos_acc,
+        &[DataType::F32],
+        Dimensions::Vec3,
+    )?;
     let vertex_count = pos_acc.count();
     if vertex_count == 0 {
-        return Ok(Mesh { name, ..Mesh::default() });
+        return Ok(Mesh {
+            name,
+            ..Mesh::default()
+        });
     }
     if vertex_count > u32::MAX as usize {
-        return Err(too_large(path, format!("glTF primitive {label} has {vertex_count} vertices")));
+        return Err(too_large(
+            path,
+            format!("glTF primitive {label} has {vertex_count} vertices"),
+        ));
     }
-    let normal_acc = prim.get(&Semantic::Normals).filter(|a| a.count() == vertex_count);
+    let normal_acc = prim
+        .get(&Semantic::Normals)
+        .filter(|a| a.count() == vertex_count);
     if let Some(a) = &normal_acc {
         check_accessor(path, label, "NORMAL", a, &[DataType::F32], Dimensions::Vec3)?;
     }
@@ -228,7 +260,10 @@ where
 
     let reader = prim.reader(get.clone());
     let missing = |what: &str| {
-        parse_error(path, format!("glTF primitive {label}: {what} data is missing or outside its buffer"))
+        parse_error(
+            path,
+            format!("glTF primitive {label}: {what} data is missing or outside its buffer"),
+        )
     };
     let positions: Vec<Vec3> = reader
         .read_positions()
@@ -262,15 +297,21 @@ where
         }
         None => (0..vertex_count as u32).collect(),
     };
-    if indices.len() % 3 != 0 {
+    if !indices.len().is_multiple_of(3) {
         return Err(parse_error(
             path,
-            format!("glTF primitive {label}: {} indices is not a multiple of 3", indices.len()),
+            format!(
+                "glTF primitive {label}: {} indices is not a multiple of 3",
+                indices.len()
+            ),
         ));
     }
 
     // Bake the node's world transform.
-    let positions: Vec<Vec3> = positions.into_iter().map(|p| world.transform_point3(p)).collect();
+    let positions: Vec<Vec3> = positions
+        .into_iter()
+        .map(|p| world.transform_point3(p))
+        .collect();
     let linear = Mat3::from_mat4(world);
     let det = linear.determinant();
     if det < 0.0 {
@@ -291,10 +332,17 @@ where
         normals: Vec::new(),
         indices,
     };
-    if let Some(&i) = mesh.indices.iter().find(|&&i| i as usize >= mesh.positions.len()) {
+    if let Some(&i) = mesh
+        .indices
+        .iter()
+        .find(|&&i| i as usize >= mesh.positions.len())
+    {
         return Err(SceneError::InvalidMesh {
             mesh: mesh.name,
-            reason: format!("index {i} is out of range ({} vertices)", mesh.positions.len()),
+            reason: format!(
+                "index {i} is out of range ({} vertices)",
+                mesh.positions.len()
+            ),
         });
     }
     set_normals(&mut mesh, normals);

@@ -115,7 +115,10 @@ fn catch_parser_panic<T>(
                 .map(|s| s.to_string())
                 .or_else(|| payload.downcast_ref::<String>().cloned())
                 .unwrap_or_else(|| "unknown panic".into());
-            Err(parse_error(path, format!("the parser failed on malformed data ({what})")))
+            Err(parse_error(
+                path,
+                format!("the parser failed on malformed data ({what})"),
+            ))
         }
     }
 }
@@ -144,7 +147,9 @@ pub(crate) fn too_large(path: &Path, reason: impl Into<String>) -> SceneError {
 /// Refuses files over [`MAX_FILE_BYTES`] from their metadata alone (also gives the `Io` error
 /// for a missing file).
 pub(crate) fn check_file_size(path: &Path) -> Result<u64, SceneError> {
-    let len = std::fs::metadata(path).map_err(|e| io_error(path, e))?.len();
+    let len = std::fs::metadata(path)
+        .map_err(|e| io_error(path, e))?
+        .len();
     if len > MAX_FILE_BYTES {
         return Err(too_large(
             path,
@@ -171,7 +176,10 @@ fn read_limited(path: &Path) -> Result<Vec<u8>, SceneError> {
         .read_to_end(&mut bytes)
         .map_err(|e| io_error(path, e))?;
     if bytes.len() as u64 > MAX_FILE_BYTES {
-        return Err(too_large(path, "file grew past the 2 GiB limit while being read"));
+        return Err(too_large(
+            path,
+            "file grew past the 2 GiB limit while being read",
+        ));
     }
     Ok(bytes)
 }
@@ -187,7 +195,8 @@ pub(crate) fn check_triangles(path: &Path, triangles: usize) -> Result<(), Scene
     Ok(())
 }
 
-/// Installs per-vertex normals read from a file: each finite one is normalized; zero-length ones
+/// Installs per-vertex normals read from a file: each finite one is normalized (unless it already
+/// is unit length to within 1e-5, then it is kept as it is); zero-length ones
 /// are replaced by the computed (area-weighted) normal; non-finite ones are kept so that
 /// [`Mesh::validate`] reports them. `None` (or a count mismatch) computes all normals.
 fn set_normals(mesh: &mut Mesh, normals: Option<Vec<Vec3>>) {
@@ -199,6 +208,9 @@ fn set_normals(mesh: &mut Mesh, normals: Option<Vec<Vec3>>) {
     for (i, n) in normals.iter_mut().enumerate() {
         if !n.is_finite() {
             continue;
+        }
+        if (n.length_squared() - 1.0).abs() <= 1e-5 {
+            continue; // already unit: kept bit-exact, so written files round-trip exactly
         }
         *n = match n.try_normalize() {
             Some(unit) => unit,
@@ -241,8 +253,14 @@ mod tests {
         assert_eq!(format_of(Path::new("a/B.OBJ")), Some(Format::Obj));
         assert_eq!(format_of(Path::new("x.GlB")), Some(Format::Gltf));
         assert_eq!(format_of(Path::new("x.gltf")), Some(Format::Gltf));
-        assert_eq!(format_of(Path::new("x.Ply")), Some(Format::Ply { gzip: false }));
-        assert_eq!(format_of(Path::new("x.PLY.GZ")), Some(Format::Ply { gzip: true }));
+        assert_eq!(
+            format_of(Path::new("x.Ply")),
+            Some(Format::Ply { gzip: false })
+        );
+        assert_eq!(
+            format_of(Path::new("x.PLY.GZ")),
+            Some(Format::Ply { gzip: true })
+        );
         assert_eq!(format_of(Path::new("x.gz")), None);
         assert_eq!(format_of(Path::new("x.stl")), None);
         assert_eq!(format_of(Path::new("noext")), None);

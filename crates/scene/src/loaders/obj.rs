@@ -17,6 +17,8 @@ use crate::{Mesh, SceneError};
 /// Loads every object / group with faces as one mesh.
 pub(super) fn load(path: &Path) -> Result<Vec<Mesh>, SceneError> {
     let mut reader = BufReader::new(open_limited(path)?);
+    // `..Default::default()` covers fields that only exist with some of tobj's optional features.
+    #[allow(clippy::needless_update)]
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -25,9 +27,10 @@ pub(super) fn load(path: &Path) -> Result<Vec<Mesh>, SceneError> {
         ..Default::default()
     };
     // Material libraries are deliberately not opened (see the module docs).
-    let (models, _materials) =
-        tobj::load_obj_buf(&mut reader, &options, |_| Err(tobj::LoadError::OpenFileFailed))
-            .map_err(|e| parse_error(path, format!("OBJ: {e}")))?;
+    let (models, _materials) = tobj::load_obj_buf(&mut reader, &options, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })
+    .map_err(|e| parse_error(path, format!("OBJ: {e}")))?;
 
     let mut meshes = Vec::with_capacity(models.len());
     for model in models {
@@ -45,10 +48,17 @@ pub(super) fn load(path: &Path) -> Result<Vec<Mesh>, SceneError> {
             indices: m.indices,
         };
         // Check indices before computing normals so the error is InvalidMesh, not a silent skip.
-        if let Some(&i) = mesh.indices.iter().find(|&&i| i as usize >= mesh.positions.len()) {
+        if let Some(&i) = mesh
+            .indices
+            .iter()
+            .find(|&&i| i as usize >= mesh.positions.len())
+        {
             return Err(SceneError::InvalidMesh {
                 mesh: mesh.name,
-                reason: format!("index {i} is out of range ({} vertices)", mesh.positions.len()),
+                reason: format!(
+                    "index {i} is out of range ({} vertices)",
+                    mesh.positions.len()
+                ),
             });
         }
         set_normals(&mut mesh, normals);
@@ -72,7 +82,15 @@ pub fn write_obj(mesh: &Mesh, w: impl Write) -> std::io::Result<()> {
     let mut w = std::io::BufWriter::new(w);
     let name = mesh.name.replace(['\n', '\r'], " ");
     writeln!(w, "# written by manyshadows-scene")?;
-    writeln!(w, "o {}", if name.trim().is_empty() { "mesh" } else { name.trim() })?;
+    writeln!(
+        w,
+        "o {}",
+        if name.trim().is_empty() {
+            "mesh"
+        } else {
+            name.trim()
+        }
+    )?;
     for p in &mesh.positions {
         writeln!(w, "v {} {} {}", p.x, p.y, p.z)?;
     }

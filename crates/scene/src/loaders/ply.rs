@@ -39,7 +39,8 @@ pub(super) fn load(path: &Path, gzip: bool) -> Result<Vec<Mesh>, SceneError> {
 /// Decompresses through `take(limit + 1)`: if the parser fails having consumed more than `limit`
 /// bytes, the file is reported as too large rather than truncated.
 fn load_gz(path: &Path, compressed: impl BufRead, limit: u64) -> Result<Vec<Mesh>, SceneError> {
-    let mut limited = flate2::bufread::MultiGzDecoder::new(compressed).take(limit.saturating_add(1));
+    let mut limited =
+        flate2::bufread::MultiGzDecoder::new(compressed).take(limit.saturating_add(1));
     let result = read_ply(path, BufReader::new(&mut limited));
     if limited.limit() == 0 {
         return Err(too_large(
@@ -121,9 +122,7 @@ fn check_header(path: &Path, header: &Header) -> Result<Layout, SceneError> {
         .elements
         .get("vertex")
         .ok_or_else(|| parse_error(path, "PLY: the header declares no 'vertex' element"))?;
-    let scalar = |e: &ElementDef, p: &str| {
-        matches!(e.properties.get(p), Some(d) if matches!(d.data_type, PropertyType::Scalar(_)))
-    };
+    let scalar = |e: &ElementDef, p: &str| matches!(e.properties.get(p), Some(d) if matches!(d.data_type, PropertyType::Scalar(_)));
     for p in ["x", "y", "z"] {
         if !scalar(vertex, p) {
             return Err(parse_error(
@@ -136,25 +135,37 @@ fn check_header(path: &Path, header: &Header) -> Result<Layout, SceneError> {
     if vertex.count > u32::MAX as usize {
         return Err(too_large(
             path,
-            format!("{} vertices cannot be indexed with 32-bit indices", vertex.count),
+            format!(
+                "{} vertices cannot be indexed with 32-bit indices",
+                vertex.count
+            ),
         ));
     }
     let face = header.elements.get("face").ok_or_else(|| {
-        parse_error(path, "PLY: the header declares no 'face' element (point clouds are not meshes)")
+        parse_error(
+            path,
+            "PLY: the header declares no 'face' element (point clouds are not meshes)",
+        )
     })?;
     let list = face
         .properties
         .get("vertex_indices")
         .or_else(|| face.properties.get("vertex_index"))
         .ok_or_else(|| {
-            parse_error(path, "PLY: the face element has no 'vertex_indices' (or 'vertex_index') list")
+            parse_error(
+                path,
+                "PLY: the face element has no 'vertex_indices' (or 'vertex_index') list",
+            )
         })?;
     match &list.data_type {
         PropertyType::List(_, t) if !matches!(t, ScalarType::Float | ScalarType::Double) => {}
         other => {
             return Err(parse_error(
                 path,
-                format!("PLY: face '{}' must be a list of integers, not {other:?}", list.name),
+                format!(
+                    "PLY: face '{}' must be a list of integers, not {other:?}",
+                    list.name
+                ),
             ))
         }
     }
@@ -252,10 +263,17 @@ fn read_ply(path: &Path, source: impl BufRead) -> Result<Mesh, SceneError> {
             path.display()
         );
     }
-    if let Some(&i) = mesh.indices.iter().find(|&&i| i as usize >= mesh.positions.len()) {
+    if let Some(&i) = mesh
+        .indices
+        .iter()
+        .find(|&&i| i as usize >= mesh.positions.len())
+    {
         return Err(SceneError::InvalidMesh {
             mesh: mesh.name,
-            reason: format!("face index {i} is out of range ({} vertices)", mesh.positions.len()),
+            reason: format!(
+                "face index {i} is out of range ({} vertices)",
+                mesh.positions.len()
+            ),
         });
     }
     set_normals(&mut mesh, layout.has_normals.then_some(normals));
@@ -335,8 +353,12 @@ mod tests {
     #[test]
     fn gzip_within_limit_loads() {
         let data = triangle_ply();
-        let meshes = load_gz(Path::new("t.ply.gz"), Cursor::new(gz(&data)), data.len() as u64)
-            .unwrap();
+        let meshes = load_gz(
+            Path::new("t.ply.gz"),
+            Cursor::new(gz(&data)),
+            data.len() as u64,
+        )
+        .unwrap();
         assert_eq!(meshes[0].indices, vec![0, 1, 2]);
     }
 

@@ -1,0 +1,117 @@
+//! The `manyshadows` binary end to end: it renders, writes what it promises, and turns bad
+//! input into a one-line error with exit code 1 (2 for argument errors), never a panic.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_manyshadows"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("manyshadows-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().expect("run manyshadows")
+}
+
+fn assert_clean_failure(out: &Output, code: i32, needle: &str) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(code), "exit code; stderr: {stderr}");
+    assert!(!stderr.contains("panicked"), "panic: {stderr}");
+    assert!(!stderr.contains("Validation Error"), "GPU validation error: {stderr}");
+    assert!(stderr.to_lowercase().contains(&needle.to_lowercase()), "expected '{needle}' in: {stderr}");
+}
+
+#[test]
+fn renders_frame_atlas_and_visibility() {
+    let dir = tmp("render");
+    let frame = dir.join("frame.png");
+    let atlas = dir.join("atlas.png");
+    let vis = dir.join("vis");
+    let json = dir.join("summary.json");
+    let out = run(&[
+        "render", "--scene", "cubes", "--width", "96", "--height", "64",
+        "--out", frame.to_str().unwrap(),
+        "--atlas-out", atlas.to_str().unwrap(),
+        "--visibility-out", vis.to_str().unwrap(),
+        "--json", json.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    for needle in ["adapter", "10 views", "atlas", "GPU time", "CPU record"] {
+        assert!(stdout.contains(needle), "summary lacks '{needle}':\n{stdout}");
+    }
+    assert_eq!(image::open(&frame).unwrap().width(), 96);
+    assert!(image::open(&atlas).unwrap().width() >= 16);
+    let raw = std::fs::read(vis.join("visibility.msvis")).unwrap();
+    let mask = manyshadows::VisibilityMask::read_raw(&raw).unwrap();
+    assert_eq!((mask.width, mask.height, mask.lights), (96, 64, 3));
+    let pngs = std::fs::read_dir(&vis).unwrap().filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "png")).count();
+    assert_eq!(pngs, 3);
+    let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(summary["shadow_views"], 1 + 6 + 3, "spot + point + 3 cascades");
+}
+
+#[test]
+fn info_lists_the_chosen_adapter() {
+    let out = run(&["info"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("chosen:") && stdout.contains("max_texture_dimension_2d") && stdout.contains("TIMESTAMP_QUERY"), "{stdout}");
+}
+
+#[test]
+fn missing_scene_file() {
+    assert_clean_failure(&run(&["render", "--scene", "/nonexistent/scene.toml"]), 1, "cannot read");
+}
+
+#[test]
+fn unknown_builtin_scene_lists_the_names() {
+    assert_clean_failure(&run(&["render", "--scene", "sponza"]), 1, "atrium");
+}
+
+#[test]
+fn malformed_toml() {
+    let dir = tmp("toml");
+    let path = dir.join("bad.toml");
+    std::fs::write(&path, "[[light]]\ntype = \"spot\"\nposition = [0, 1\n").unwrap();
+    assert_clean_failure(&run(&["render", "--scene", path.to_str().unwrap()]), 1, "bad.toml");
+}
+
+#[test]
+fn malformed_meshes() {
+    let dir = tmp("mesh");
+    for (name, bytes) in [
+        ("bad.obj", b"v 0 0 0\nv 1 0 0\nf 1 2 9\n".as_slice()),
+        ("bad.ply", b"ply\nformat binary_little_endian 1.0\nelement vertex 100\nproperty float x\nend_header\n\x01\x02".as_slice()),
+        ("bad.glb", b"glTF\x02\x00\x00\x00garbage".as_slice()),
+        ("bad.ply.gz", b"not gzip at all".as_slice()),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let out = run(&["render", "--scene", "dragon", "--mesh", path.to_str().unwrap(), "--width", "32", "--height", "32"]);
+        assert_clean_failure(&out, 1, name);
+    }
+}
+
+#[test]
+fn absurd_numbers() {
+    assert_clean_failure(&run(&["render", "--scene", "cubes", "--lights", "100000"]), 1, "4096");
+    assert_clean_failure(&run(&["render", "--scene", "cubes", "--width", "100000"]), 1, "resolution");
+    assert_clean_failure(&run(&["render", "--scene", "cubes", "--shadow-resolution", "0"]), 1, "resolution");
+    assert_clean_failure(&run(&["render", "--pcf", "5x5"]), 2, "pcf");
+    assert_clean_failure(&run(&["render", "--technique", "magic"]), 2, "traditional");
+    assert_clean_failure(&run(&["render", "--light-types", "laser"]), 1, "laser");
+}
+
+#[test]
+fn zero_lights_is_fine() {
+    let dir = tmp("zero");
+    let out = run(&["render", "--scene", "cubes", "--lights", "0", "--width", "32", "--height", "32", "--out", dir.join("f.png").to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
