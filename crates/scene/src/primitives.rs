@@ -98,6 +98,7 @@ impl Builder {
 pub fn plane(size_x: f32, size_z: f32, subdivisions: u32) -> Mesh {
     let mut mesh = heightfield(size_x, size_z, subdivisions, |_, _| 0.0);
     mesh.name = "plane".into();
+    mesh.normals.fill(Vec3::Y); // exact, not re-normalised sums
     mesh
 }
 
@@ -241,6 +242,21 @@ pub fn lathe(profile: &[Vec2], segments: u32) -> Mesh {
     const CREASE_COS: f32 = 0.819; // cos 35°
     let segs = segments.max(3);
     let mut b = Builder::new("lathe");
+    // Drop points that (nearly) repeat the previous one: a zero-length step has no normal and
+    // would only add slivers.
+    let scale = profile
+        .iter()
+        .fold(0.0f32, |s, p| s.max(p.abs().max_element()));
+    let mut points: Vec<Vec2> = Vec::with_capacity(profile.len());
+    for &p in profile {
+        if points
+            .last()
+            .is_none_or(|&q| q.distance(p) > 1e-5 * scale.max(1e-6))
+        {
+            points.push(p);
+        }
+    }
+    let profile = &points[..];
     let m = profile.len();
     if m < 2 {
         return b.finish();

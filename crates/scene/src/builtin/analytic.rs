@@ -52,12 +52,12 @@ pub const PLANE_SPOT_CUTOFF_DEG: f32 = 40.0;
 /// `plane-spot`: range.
 pub const PLANE_SPOT_RANGE: f32 = 20.0;
 /// `plane-point`: light position.
-pub const PLANE_POINT_POSITION: Vec3 = Vec3::new(0.5, 5.0, 0.3);
+pub const PLANE_POINT_POSITION: Vec3 = Vec3::new(1.5, 4.0, 1.0);
 /// `plane-point`: range.
 pub const PLANE_POINT_RANGE: f32 = 20.0;
 /// `plane-directional`: the light's direction before normalisation; the light uses
 /// [`plane_directional_direction`].
-pub const PLANE_DIRECTIONAL_DIRECTION_RAW: Vec3 = Vec3::new(0.3, -1.0, 0.2);
+pub const PLANE_DIRECTIONAL_DIRECTION_RAW: Vec3 = Vec3::new(0.6, -1.0, 0.4);
 /// `plane-directional`: cascade count.
 pub const PLANE_DIRECTIONAL_CASCADES: u32 = 2;
 /// `plane-directional`: cascade split blend.

@@ -25,7 +25,7 @@
 
 use glam::{Mat4, Quat, Vec2, Vec3};
 
-use super::lights::{self, slanted_direction, tint, Rand, Tone};
+use super::lights::{self, density_dim, slanted_direction, tint, Rand, Tone};
 use super::{BuiltinOptions, LightCounts, LightMix};
 use crate::{primitives, Camera, Instance, Light, Material, Mesh, Scene};
 
@@ -241,8 +241,12 @@ pub fn atrium_lights(
         (0..count)
             .map(|k| {
                 if count <= len {
-                    let idx = ((k as f32 + rng.unit()) * len as f32 / count as f32) as usize;
-                    (idx.min(len - 1), 0)
+                    // Light k takes a random slot among those in the k-th of `count` equal
+                    // strata of the list; each stratum holds at least one slot, and strata
+                    // don't overlap, so no two lights share a slot.
+                    let first = (k * len).div_ceil(count);
+                    let last = ((k + 1) * len).div_ceil(count) - 1;
+                    (first + rng.below(last - first + 1), 0)
                 } else {
                     (k % len, k / len)
                 }
@@ -295,7 +299,7 @@ pub fn atrium_lights(
         };
         let tone = Tone {
             color: tint(&mut rng),
-            brightness: 0.4,
+            brightness: 0.4 * density_dim(counts.spot, slots.len()),
         };
         out.push(lights::spot(
             position,
@@ -324,7 +328,7 @@ pub fn atrium_lights(
         let (range, key) = if storey == 0 { (9.0, 3.5) } else { (8.0, 2.8) };
         let tone = Tone {
             color: tint(&mut rng),
-            brightness: 0.45,
+            brightness: 0.45 * density_dim(counts.point, slots.len()),
         };
         out.push(lights::point(position, range, key, tone, shadow_resolution));
     }

@@ -40,7 +40,8 @@ pub const DRAGON_CAMERA_DISTANCE: f32 = 6.0;
 /// The procedural stand-in for the Stanford dragon: a (2, 3) torus knot tube with bumps (a
 /// ridge of "scales" along its back), 593 × 30 quads = 35,580 triangles (the seed's dragon has
 /// 35,577), standing up and tilted so every light of the ring sees crossings that shadow other
-/// parts of it. Not yet normalised: [`build`] scales it like any other model.
+/// parts of it. Not yet normalised: the scene scales it with [`normalising_transform`] like any other
+/// model.
 pub fn dragon_stand_in() -> Mesh {
     const SEGMENTS: u32 = 593;
     const SIDES: u32 = 30;

@@ -229,6 +229,17 @@ pub(crate) fn directional(direction: Vec3, tone: Tone, resolution: Option<u32>) 
     )
 }
 
+/// Brightness factor for `count` local lights sharing an area that `capacity` lights light
+/// well: 1 up to `capacity`, then `capacity / count`. Dense layouts keep roughly the same total
+/// light instead of washing out to white, so `--lights 1000` still shows shadows.
+pub(crate) fn density_dim(count: usize, capacity: usize) -> f32 {
+    if count <= capacity {
+        1.0
+    } else {
+        capacity as f32 / count as f32
+    }
+}
+
 /// A sun-like direction: azimuth uniform, elevation between `min_deg` and `max_deg` above the
 /// horizon, pointing down.
 pub(crate) fn slanted_direction(rng: &mut Rand, min_deg: f32, max_deg: f32) -> Vec3 {
@@ -271,6 +282,7 @@ pub(crate) fn scatter(
             lo.z + size.z * (0.1 + 0.8 * u.y),
         )
     };
+    let dim = density_dim(counts.spot + counts.point, 16);
     let mut out = Vec::with_capacity(n);
     for _ in 0..counts.directional {
         let tone = Tone {
@@ -295,7 +307,7 @@ pub(crate) fn scatter(
         let key = above / tilt.cos();
         let tone = Tone {
             color: tint(&mut rng),
-            brightness: 0.7,
+            brightness: 0.7 * dim,
         };
         let range = reach.max(2.5 * key);
         out.push(spot(
@@ -315,7 +327,7 @@ pub(crate) fn scatter(
         let position = Vec3::new(xz.x, lo.y + above, xz.y);
         let tone = Tone {
             color: tint(&mut rng),
-            brightness: 0.6,
+            brightness: 0.6 * dim,
         };
         let range = (0.7 * reach).max(2.5 * above);
         out.push(point(position, range, above, tone, resolution));

@@ -15,7 +15,7 @@ use std::f32::consts::TAU;
 
 use glam::{Mat4, Quat, Vec2, Vec3};
 
-use super::lights::{self, r2, tint, Rand, Tone};
+use super::lights::{self, density_dim, r2, tint, Rand, Tone};
 use super::{BuiltinOptions, LightCounts};
 use crate::{primitives, Camera, Instance, Light, Material, Mesh, Scene};
 
@@ -199,6 +199,7 @@ pub fn terrain_lights(
     let counts = LightCounts::split(n, mix);
     let mut rng = Rand::new(seed, 0x7e44);
     let offset = Vec2::new(rng.unit(), rng.unit());
+    let dim = density_dim(counts.spot + counts.point, 16);
     let mut out = Vec::with_capacity(n);
     for d in 0..counts.directional {
         let direction = if d == 0 {
@@ -240,7 +241,7 @@ pub fn terrain_lights(
         let key = above / tilt.cos();
         let tone = Tone {
             color: tint(&mut rng),
-            brightness: 0.8,
+            brightness: 0.8 * dim,
         };
         out.push(lights::spot(
             Vec3::new(x, ground + above, z),
@@ -257,7 +258,7 @@ pub fn terrain_lights(
         let above = rng.range(2.0, 4.0);
         let tone = Tone {
             color: tint(&mut rng),
-            brightness: 0.7,
+            brightness: 0.7 * dim,
         };
         out.push(lights::point(
             Vec3::new(x, ground + above, z),
