@@ -12,7 +12,9 @@ use manyshadows::context::{describe_adapter, feature_use, list_adapters, request
 use manyshadows::scene::atlas::FitPolicy;
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::scene::Scene;
-use manyshadows::{AdapterRequest, Frame, GpuContext, Pcf, RenderSettings, Renderer, ShadowBias, Technique};
+use manyshadows::{
+    AdapterRequest, Frame, GpuContext, Pcf, RenderSettings, Renderer, ShadowBias, Technique,
+};
 
 const ABOUT: &str = "Render scenes lit by many shadow-casting lights, headless, to PNG.";
 
@@ -49,7 +51,7 @@ struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Render a scene to PNG (the default when no subcommand is given).
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// List the graphics adapters, the one that would be chosen, its limits and the optional
     /// features the renderer uses.
     Info(GpuArgs),
@@ -173,7 +175,27 @@ fn parse_pcf(s: &str) -> Result<Pcf, String> {
     s.parse()
 }
 
+/// The GL backend probes for a Wayland display, and libwayland prints a misleading
+/// "XDG_RUNTIME_DIR is invalid" error on headless machines where that variable is unset. Give
+/// it a private, empty runtime directory so the probe fails quietly.
+fn quiet_wayland_probe() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_some() {
+        return;
+    }
+    let dir = std::env::temp_dir().join("manyshadows-runtime");
+    if std::fs::create_dir_all(&dir).is_ok() {
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700));
+        }
+        // Still single-threaded here: nothing else reads the environment concurrently.
+        std::env::set_var("XDG_RUNTIME_DIR", &dir);
+    }
+}
+
 fn main() {
+    quiet_wayland_probe();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = Cli::parse();
     let result = match cli.command {
@@ -189,7 +211,9 @@ fn main() {
 
 fn spinner(msg: &str) -> ProgressBar {
     let pb = ProgressBar::new_spinner();
-    pb.set_style(ProgressStyle::with_template("{spinner} {msg} [{elapsed}]").expect("valid template"));
+    pb.set_style(
+        ProgressStyle::with_template("{spinner} {msg} [{elapsed}]").expect("valid template"),
+    );
     pb.enable_steady_tick(Duration::from_millis(120));
     pb.set_message(msg.to_string());
     pb
@@ -204,9 +228,13 @@ fn load_scene(args: &RenderArgs) -> Result<Scene> {
         let mut scene = manyshadows::scene::scene_file::load_scene_file(path)?;
         if let Some(n) = args.lights {
             if n > builtin::MAX_LIGHTS {
-                bail!("--lights {n} is more than the supported {}", builtin::MAX_LIGHTS);
+                bail!(
+                    "--lights {n} is more than the supported {}",
+                    builtin::MAX_LIGHTS
+                );
             }
-            scene.lights = builtin::scatter_lights(&scene, n, args.seed, mix, args.shadow_resolution);
+            scene.lights =
+                builtin::scatter_lights(&scene, n, args.seed, mix, args.shadow_resolution);
         } else if let Some(r) = args.shadow_resolution {
             for l in &mut scene.lights {
                 l.shadow_resolution = r;
@@ -218,7 +246,10 @@ fn load_scene(args: &RenderArgs) -> Result<Scene> {
         Some(p) => {
             let meshes = manyshadows::scene::loaders::load_mesh(p)?;
             Some(manyshadows::scene::primitives::merge(
-                &meshes.into_iter().map(|m| (m, glam::Mat4::IDENTITY)).collect::<Vec<_>>(),
+                &meshes
+                    .into_iter()
+                    .map(|m| (m, glam::Mat4::IDENTITY))
+                    .collect::<Vec<_>>(),
             ))
         }
         None => None,
@@ -250,7 +281,11 @@ fn render(args: &RenderArgs) -> Result<()> {
             normal_offset: args.bias_normal,
         },
         max_atlas_size: Some(args.atlas_max),
-        fit: if args.strict_atlas { FitPolicy::Strict } else { FitPolicy::Shrink },
+        fit: if args.strict_atlas {
+            FitPolicy::Strict
+        } else {
+            FitPolicy::Shrink
+        },
         visibility: args.visibility_out.is_some(),
     };
     pb.set_message("uploading the scene and building pipelines");
@@ -261,7 +296,8 @@ fn render(args: &RenderArgs) -> Result<()> {
     write_rgba_png(&args.out, frame.width, frame.height, &frame.rgba)?;
     if let Some(path) = &args.atlas_out {
         let depth = renderer.read_atlas()?;
-        let (side, rgb) = manyshadows::atlas_image::atlas_picture(&depth, renderer.atlas().size, renderer.plan());
+        let (side, rgb) =
+            manyshadows::atlas_image::atlas_picture(&depth, renderer.atlas().size, renderer.plan());
         image::save_buffer(path, &rgb, side, side, image::ExtendedColorType::Rgb8)
             .with_context(|| format!("writing {}", path.display()))?;
     }
@@ -272,7 +308,8 @@ fn render(args: &RenderArgs) -> Result<()> {
     let summary = summary(&ctx, &scene, &renderer, &frame, args, started.elapsed());
     print_summary(&summary);
     if let Some(path) = &args.json {
-        std::fs::write(path, serde_json::to_string_pretty(&summary)?).with_context(|| format!("writing {}", path.display()))?;
+        std::fs::write(path, serde_json::to_string_pretty(&summary)?)
+            .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
 }
@@ -281,7 +318,8 @@ fn write_rgba_png(path: &Path, w: u32, h: u32, rgba: &[u8]) -> Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    image::save_buffer(path, rgba, w, h, image::ExtendedColorType::Rgba8).with_context(|| format!("writing {}", path.display()))
+    image::save_buffer(path, rgba, w, h, image::ExtendedColorType::Rgba8)
+        .with_context(|| format!("writing {}", path.display()))
 }
 
 fn write_visibility(dir: &Path, vis: &manyshadows::VisibilityMask, scene: &Scene) -> Result<()> {
@@ -291,13 +329,26 @@ fn write_visibility(dir: &Path, vis: &manyshadows::VisibilityMask, scene: &Scene
     vis.write_raw(std::io::BufWriter::new(file))?;
     for (i, light) in scene.lights.iter().enumerate() {
         let path = dir.join(format!("light_{i:03}_{}.png", light.type_name()));
-        image::save_buffer(&path, &vis.light_image(i as u32), vis.width, vis.height, image::ExtendedColorType::L8)
-            .with_context(|| format!("writing {}", path.display()))?;
+        image::save_buffer(
+            &path,
+            &vis.light_image(i as u32),
+            vis.width,
+            vis.height,
+            image::ExtendedColorType::L8,
+        )
+        .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
 }
 
-fn summary(ctx: &GpuContext, scene: &Scene, r: &Renderer<'_>, frame: &Frame, args: &RenderArgs, total: Duration) -> serde_json::Value {
+fn summary(
+    ctx: &GpuContext,
+    scene: &Scene,
+    r: &Renderer<'_>,
+    frame: &Frame,
+    args: &RenderArgs,
+    total: Duration,
+) -> serde_json::Value {
     let count = |t: &str| scene.lights.iter().filter(|l| l.type_name() == t).count();
     let plan = r.plan();
     serde_json::json!({
@@ -328,7 +379,12 @@ fn print_summary(s: &serde_json::Value) {
     let a = &s["atlas"];
     let w = &s["shadow_work"];
     println!("adapter      {}", s["adapter"].as_str().unwrap_or("?"));
-    println!("scene        {} ({} triangles, {} instances)", s["scene"].as_str().unwrap_or("?"), s["triangles"], s["instances"]);
+    println!(
+        "scene        {} ({} triangles, {} instances)",
+        s["scene"].as_str().unwrap_or("?"),
+        s["triangles"],
+        s["instances"]
+    );
     println!(
         "lights       {} ({} spot, {} point, {} directional; {} shadowed)",
         l["total"], l["spot"], l["point"], l["directional"], l["shadowed"]
@@ -344,7 +400,11 @@ fn print_summary(s: &serde_json::Value) {
         "atlas        {0}x{0}, {1:.0}% filled{2}",
         a["size"],
         a["fill"].as_f64().unwrap_or(0.0) * 100.0,
-        if shrink > 0 { format!(", maps shrunk {}x per side to fit", 1u64 << shrink) } else { String::new() }
+        if shrink > 0 {
+            format!(", maps shrunk {}x per side to fit", 1u64 << shrink)
+        } else {
+            String::new()
+        }
     );
     println!(
         "shadow work  {} passes, {} draws ({} culled), {} triangles",
@@ -352,7 +412,10 @@ fn print_summary(s: &serde_json::Value) {
     );
     match s["gpu_ms"].as_object() {
         Some(m) if !m.is_empty() => {
-            let parts: Vec<String> = m.iter().map(|(k, v)| format!("{k} {:.2} ms", v.as_f64().unwrap_or(0.0))).collect();
+            let parts: Vec<String> = m
+                .iter()
+                .map(|(k, v)| format!("{k} {:.2} ms", v.as_f64().unwrap_or(0.0)))
+                .collect();
             println!("GPU time     {}", parts.join(", "));
         }
         _ => println!("GPU time     (no timestamp queries on this adapter)"),
@@ -383,20 +446,46 @@ fn info(args: &GpuArgs) -> Result<()> {
     println!("chosen: {}", describe_adapter(&ctx.info));
     let l = ctx.limits();
     println!("limits:");
-    println!("  max_texture_dimension_2d        {}", l.max_texture_dimension_2d);
-    println!("  max_texture_array_layers        {}", l.max_texture_array_layers);
-    println!("  max_storage_buffer_binding_size {}", l.max_storage_buffer_binding_size);
+    println!(
+        "  max_texture_dimension_2d        {}",
+        l.max_texture_dimension_2d
+    );
+    println!(
+        "  max_texture_array_layers        {}",
+        l.max_texture_array_layers
+    );
+    println!(
+        "  max_storage_buffer_binding_size {}",
+        l.max_storage_buffer_binding_size
+    );
     println!("  max_buffer_size                 {}", l.max_buffer_size);
-    println!("  max_compute_workgroup_size      {}x{}x{}", l.max_compute_workgroup_size_x, l.max_compute_workgroup_size_y, l.max_compute_workgroup_size_z);
-    println!("  max_compute_invocations/group   {}", l.max_compute_invocations_per_workgroup);
-    println!("  max_multiview_view_count        {}", l.max_multiview_view_count);
+    println!(
+        "  max_compute_workgroup_size      {}x{}x{}",
+        l.max_compute_workgroup_size_x,
+        l.max_compute_workgroup_size_y,
+        l.max_compute_workgroup_size_z
+    );
+    println!(
+        "  max_compute_invocations/group   {}",
+        l.max_compute_invocations_per_workgroup
+    );
+    println!(
+        "  max_multiview_view_count        {}",
+        l.max_multiview_view_count
+    );
     println!("optional features:");
     for f in feature_use(ctx.adapter.features()) {
-        println!("  [{}] {:<28} {}", if f.available { "x" } else { " " }, f.name, f.purpose);
+        println!(
+            "  [{}] {:<28} {}",
+            if f.available { "x" } else { " " },
+            f.name,
+            f.purpose
+        );
     }
     println!(
         "shadow atlas: up to {0}x{0} (default cap {1})",
-        l.max_texture_dimension_2d.min(manyshadows::shadow::DEFAULT_MAX_ATLAS_SIZE),
+        l.max_texture_dimension_2d
+            .min(manyshadows::shadow::DEFAULT_MAX_ATLAS_SIZE),
         manyshadows::shadow::DEFAULT_MAX_ATLAS_SIZE
     );
     Ok(())

@@ -23,8 +23,14 @@ fn assert_clean_failure(out: &Output, code: i32, needle: &str) {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(code), "exit code; stderr: {stderr}");
     assert!(!stderr.contains("panicked"), "panic: {stderr}");
-    assert!(!stderr.contains("Validation Error"), "GPU validation error: {stderr}");
-    assert!(stderr.to_lowercase().contains(&needle.to_lowercase()), "expected '{needle}' in: {stderr}");
+    assert!(
+        !stderr.contains("Validation Error"),
+        "GPU validation error: {stderr}"
+    );
+    assert!(
+        stderr.to_lowercase().contains(&needle.to_lowercase()),
+        "expected '{needle}' in: {stderr}"
+    );
 }
 
 #[test]
@@ -35,39 +41,83 @@ fn renders_frame_atlas_and_visibility() {
     let vis = dir.join("vis");
     let json = dir.join("summary.json");
     let out = run(&[
-        "render", "--scene", "cubes", "--width", "96", "--height", "64",
-        "--out", frame.to_str().unwrap(),
-        "--atlas-out", atlas.to_str().unwrap(),
-        "--visibility-out", vis.to_str().unwrap(),
-        "--json", json.to_str().unwrap(),
+        "render",
+        "--scene",
+        "cubes",
+        "--width",
+        "96",
+        "--height",
+        "64",
+        "--out",
+        frame.to_str().unwrap(),
+        "--atlas-out",
+        atlas.to_str().unwrap(),
+        "--visibility-out",
+        vis.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let stdout = String::from_utf8_lossy(&out.stdout);
     for needle in ["adapter", "10 views", "atlas", "GPU time", "CPU record"] {
-        assert!(stdout.contains(needle), "summary lacks '{needle}':\n{stdout}");
+        assert!(
+            stdout.contains(needle),
+            "summary lacks '{needle}':\n{stdout}"
+        );
     }
     assert_eq!(image::open(&frame).unwrap().width(), 96);
     assert!(image::open(&atlas).unwrap().width() >= 16);
     let raw = std::fs::read(vis.join("visibility.msvis")).unwrap();
     let mask = manyshadows::VisibilityMask::read_raw(&raw).unwrap();
     assert_eq!((mask.width, mask.height, mask.lights), (96, 64, 3));
-    let pngs = std::fs::read_dir(&vis).unwrap().filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "png")).count();
+    let pngs = std::fs::read_dir(&vis)
+        .unwrap()
+        .filter(|e| {
+            e.as_ref()
+                .unwrap()
+                .path()
+                .extension()
+                .is_some_and(|x| x == "png")
+        })
+        .count();
     assert_eq!(pngs, 3);
-    let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
-    assert_eq!(summary["shadow_views"], 1 + 6 + 3, "spot + point + 3 cascades");
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(
+        summary["shadow_views"],
+        1 + 6 + 3,
+        "spot + point + 3 cascades"
+    );
 }
 
 #[test]
 fn info_lists_the_chosen_adapter() {
     let out = run(&["info"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(stdout.contains("chosen:") && stdout.contains("max_texture_dimension_2d") && stdout.contains("TIMESTAMP_QUERY"), "{stdout}");
+    assert!(
+        stdout.contains("chosen:")
+            && stdout.contains("max_texture_dimension_2d")
+            && stdout.contains("TIMESTAMP_QUERY"),
+        "{stdout}"
+    );
 }
 
 #[test]
 fn missing_scene_file() {
-    assert_clean_failure(&run(&["render", "--scene", "/nonexistent/scene.toml"]), 1, "cannot read");
+    assert_clean_failure(
+        &run(&["render", "--scene", "/nonexistent/scene.toml"]),
+        1,
+        "cannot read",
+    );
 }
 
 #[test]
@@ -80,7 +130,11 @@ fn malformed_toml() {
     let dir = tmp("toml");
     let path = dir.join("bad.toml");
     std::fs::write(&path, "[[light]]\ntype = \"spot\"\nposition = [0, 1\n").unwrap();
-    assert_clean_failure(&run(&["render", "--scene", path.to_str().unwrap()]), 1, "bad.toml");
+    assert_clean_failure(
+        &run(&["render", "--scene", path.to_str().unwrap()]),
+        1,
+        "bad.toml",
+    );
 }
 
 #[test]
@@ -101,9 +155,21 @@ fn malformed_meshes() {
 
 #[test]
 fn absurd_numbers() {
-    assert_clean_failure(&run(&["render", "--scene", "cubes", "--lights", "100000"]), 1, "4096");
-    assert_clean_failure(&run(&["render", "--scene", "cubes", "--width", "100000"]), 1, "resolution");
-    assert_clean_failure(&run(&["render", "--scene", "cubes", "--shadow-resolution", "0"]), 1, "resolution");
+    assert_clean_failure(
+        &run(&["render", "--scene", "cubes", "--lights", "100000"]),
+        1,
+        "4096",
+    );
+    assert_clean_failure(
+        &run(&["render", "--scene", "cubes", "--width", "100000"]),
+        1,
+        "resolution",
+    );
+    assert_clean_failure(
+        &run(&["render", "--scene", "cubes", "--shadow-resolution", "0"]),
+        1,
+        "resolution",
+    );
     assert_clean_failure(&run(&["render", "--pcf", "5x5"]), 2, "pcf");
     assert_clean_failure(&run(&["render", "--technique", "magic"]), 2, "traditional");
     assert_clean_failure(&run(&["render", "--light-types", "laser"]), 1, "laser");
@@ -112,6 +178,22 @@ fn absurd_numbers() {
 #[test]
 fn zero_lights_is_fine() {
     let dir = tmp("zero");
-    let out = run(&["render", "--scene", "cubes", "--lights", "0", "--width", "32", "--height", "32", "--out", dir.join("f.png").to_str().unwrap()]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = run(&[
+        "render",
+        "--scene",
+        "cubes",
+        "--lights",
+        "0",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--out",
+        dir.join("f.png").to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }

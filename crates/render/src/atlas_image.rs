@@ -22,12 +22,16 @@ struct CopyParams {
 pub fn read_depth(ctx: &GpuContext, atlas: &ShadowAtlas) -> Result<Vec<f32>, RenderError> {
     let device = &ctx.device;
     let size = atlas.size;
-    let limit = (ctx.limits().max_storage_buffer_binding_size as u64).min(64 << 20);
+    let limit = ctx.limits().max_storage_buffer_binding_size.min(64 << 20);
     let rows_per_band = ((limit / (size as u64 * 4)) as u32).clamp(1, size);
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("atlas_copy.layout"),
         entries: &[
-            crate::lighting::texture_entry(0, wgpu::TextureSampleType::Float { filterable: false }, wgpu::ShaderStages::COMPUTE),
+            crate::lighting::texture_entry(
+                0,
+                wgpu::TextureSampleType::Float { filterable: false },
+                wgpu::ShaderStages::COMPUTE,
+            ),
             wgpu::BindGroupLayoutEntry {
                 binding: 1,
                 visibility: wgpu::ShaderStages::COMPUTE,
@@ -74,21 +78,40 @@ pub fn read_depth(ctx: &GpuContext, atlas: &ShadowAtlas) -> Result<Vec<f32>, Ren
         });
         let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("atlas_copy.params"),
-            contents: bytemuck::bytes_of(&CopyParams { first_row, rows, width: size, _pad: 0 }),
+            contents: bytemuck::bytes_of(&CopyParams {
+                first_row,
+                rows,
+                width: size,
+                _pad: 0,
+            }),
             usage: wgpu::BufferUsages::UNIFORM,
         });
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("atlas_copy.bind_group"),
             layout: &layout,
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&atlas.view) },
-                wgpu::BindGroupEntry { binding: 1, resource: storage.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: params.as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&atlas.view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: storage.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: params.as_entire_binding(),
+                },
             ],
         });
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("atlas_copy.encoder") });
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("atlas_copy.encoder"),
+        });
         {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("atlas_copy.pass"), timestamp_writes: None });
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("atlas_copy.pass"),
+                timestamp_writes: None,
+            });
             pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, &bind_group, &[]);
             pass.dispatch_workgroups(size.div_ceil(16), rows.div_ceil(16), 1);
@@ -139,7 +162,11 @@ pub fn atlas_picture(depth: &[f32], atlas_size: u32, plan: &ShadowPlan) -> (u32,
                     let z = nr * fr / (fr - d * (fr - nr));
                     ((z - nr) / (fr - nr)).clamp(0.0, 1.0)
                 };
-                let g = if d >= 1.0 { 0 } else { (255.0 * (1.0 - lin).powf(1.5)) as u8 };
+                let g = if d >= 1.0 {
+                    0
+                } else {
+                    (255.0 * (1.0 - lin).powf(1.5)) as u8
+                };
                 let border = tx == 0 || ty == 0 || tx + 1 == n || ty + 1 == n;
                 let i = (ay as usize * side as usize + ax as usize) * 3;
                 rgb[i..i + 3].copy_from_slice(&if border { outline } else { [g, g, g] });

@@ -74,7 +74,9 @@ pub struct GpuContext {
 
 impl std::fmt::Debug for GpuContext {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("GpuContext").field("info", &self.info).finish()
+        f.debug_struct("GpuContext")
+            .field("info", &self.info)
+            .finish()
     }
 }
 
@@ -121,9 +123,9 @@ fn rank(info: &wgpu::AdapterInfo) -> u32 {
 
 /// Which backends a request considers.
 pub fn requested_backends(req: &AdapterRequest) -> wgpu::Backends {
-    req.backends
-        .or_else(wgpu::Backends::from_env)
-        .unwrap_or(wgpu::Backends::all())
+    req.backends.or_else(wgpu::Backends::from_env).unwrap_or(
+        wgpu::Backends::VULKAN | wgpu::Backends::METAL | wgpu::Backends::DX12 | wgpu::Backends::GL,
+    )
 }
 
 fn requested_name(req: &AdapterRequest) -> Option<String> {
@@ -246,7 +248,11 @@ impl GpuContext {
 
     /// Runs `f` inside a validation + out-of-memory error scope; a GPU error becomes
     /// [`RenderError::Gpu`] with `what` in its message instead of a panic.
-    pub fn scoped<T>(&self, what: &str, f: impl FnOnce() -> Result<T, RenderError>) -> Result<T, RenderError> {
+    pub fn scoped<T>(
+        &self,
+        what: &str,
+        f: impl FnOnce() -> Result<T, RenderError>,
+    ) -> Result<T, RenderError> {
         let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let out = f();

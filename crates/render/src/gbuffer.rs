@@ -25,7 +25,14 @@ pub struct GBuffer {
     bind_group: wgpu::BindGroup,
 }
 
-fn target(ctx: &GpuContext, label: &str, w: u32, h: u32, format: wgpu::TextureFormat, usage: wgpu::TextureUsages) -> wgpu::Texture {
+fn target(
+    ctx: &GpuContext,
+    label: &str,
+    w: u32,
+    h: u32,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
     ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {
@@ -49,7 +56,14 @@ impl GBuffer {
         let color_usage = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC;
         let position = target(ctx, "gbuffer.position", w, h, POSITION_FORMAT, color_usage);
         let normal = target(ctx, "gbuffer.normal", w, h, NORMAL_FORMAT, color_usage);
-        let depth = target(ctx, "gbuffer.depth", w, h, DEPTH_FORMAT, U::RENDER_ATTACHMENT);
+        let depth = target(
+            ctx,
+            "gbuffer.depth",
+            w,
+            h,
+            DEPTH_FORMAT,
+            U::RENDER_ATTACHMENT,
+        );
         let device = &ctx.device;
         let module = crate::shaders::module(device, "gbuffer.shader", &crate::shaders::gbuffer());
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -120,7 +134,13 @@ impl GBuffer {
 
     /// Records the pass: every instance, no culling (the camera sees a handful of instances
     /// fewer at most; the shadow passes are where culling pays).
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, scene: &GpuScene, timer: &GpuTimer, span: Option<Span>) {
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        timer: &GpuTimer,
+        span: Option<Span>,
+    ) {
         let pv = self.position.create_view(&Default::default());
         let nv = self.normal.create_view(&Default::default());
         let dv = self.depth.create_view(&Default::default());
@@ -157,7 +177,11 @@ impl GBuffer {
         pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
         for d in &scene.draws {
             let m = d.mesh;
-            pass.draw_indexed(m.first_index..m.first_index + m.index_count, m.base_vertex, d.instance..d.instance + 1);
+            pass.draw_indexed(
+                m.first_index..m.first_index + m.index_count,
+                m.base_vertex,
+                d.instance..d.instance + 1,
+            );
         }
     }
 }

@@ -98,10 +98,15 @@ impl GpuScene {
         let bytes = [
             ("positions", positions.len() as u64 * 12),
             ("indices", indices.len() as u64 * 4),
-            ("instances", scene.instances.len() as u64 * std::mem::size_of::<InstanceData>() as u64),
+            (
+                "instances",
+                scene.instances.len() as u64 * std::mem::size_of::<InstanceData>() as u64,
+            ),
         ];
         for (what, size) in bytes {
-            if size > limits.max_buffer_size || (what == "instances" && size > limits.max_storage_buffer_binding_size as u64) {
+            if size > limits.max_buffer_size
+                || (what == "instances" && size > limits.max_storage_buffer_binding_size)
+            {
                 return Err(RenderError::SceneTooLarge(format!(
                     "the {what} buffer would be {size} bytes, over this adapter's limit"
                 )));
@@ -124,7 +129,8 @@ impl GpuScene {
                 .map(|i| InstanceData::new(i.transform, i.material as u32))
                 .collect()
         };
-        let mut material_data: Vec<MaterialData> = scene.materials.iter().map(MaterialData::from).collect();
+        let mut material_data: Vec<MaterialData> =
+            scene.materials.iter().map(MaterialData::from).collect();
         if material_data.is_empty() {
             material_data.push(MaterialData::from(&manyshadows_scene::Material::default()));
         }
@@ -161,7 +167,11 @@ impl GpuScene {
                 bytemuck::cast_slice(&positions),
                 wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
             ),
-            normals: buf("scene.normals", bytemuck::cast_slice(&normals), wgpu::BufferUsages::VERTEX),
+            normals: buf(
+                "scene.normals",
+                bytemuck::cast_slice(&normals),
+                wgpu::BufferUsages::VERTEX,
+            ),
             indices: buf(
                 "scene.indices",
                 bytemuck::cast_slice(&indices),
@@ -203,7 +213,9 @@ pub fn frustum_planes(view_proj: Mat4) -> [Vec4; 6] {
 
 /// True if a sphere is at least partly inside the frustum given by [`frustum_planes`].
 pub fn sphere_visible(planes: &[Vec4; 6], center: Vec3, radius: f32) -> bool {
-    planes.iter().all(|p| p.truncate().dot(center) + p.w >= -radius)
+    planes
+        .iter()
+        .all(|p| p.truncate().dot(center) + p.w >= -radius)
 }
 
 #[cfg(test)]
@@ -216,10 +228,25 @@ mod tests {
             * Mat4::look_at_rh(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y);
         let planes = frustum_planes(vp);
         assert!(sphere_visible(&planes, Vec3::new(0.0, 0.0, -5.0), 0.1));
-        assert!(!sphere_visible(&planes, Vec3::new(0.0, 0.0, 5.0), 1.0), "behind the eye");
-        assert!(!sphere_visible(&planes, Vec3::new(0.0, 0.0, -12.0), 1.0), "beyond far");
-        assert!(sphere_visible(&planes, Vec3::new(0.0, 0.0, -10.5), 1.0), "straddles far");
-        assert!(!sphere_visible(&planes, Vec3::new(8.0, 0.0, -5.0), 1.0), "right of the 90° cone");
-        assert!(sphere_visible(&planes, Vec3::new(5.5, 0.0, -5.0), 1.0), "straddles the right plane");
+        assert!(
+            !sphere_visible(&planes, Vec3::new(0.0, 0.0, 5.0), 1.0),
+            "behind the eye"
+        );
+        assert!(
+            !sphere_visible(&planes, Vec3::new(0.0, 0.0, -12.0), 1.0),
+            "beyond far"
+        );
+        assert!(
+            sphere_visible(&planes, Vec3::new(0.0, 0.0, -10.5), 1.0),
+            "straddles far"
+        );
+        assert!(
+            !sphere_visible(&planes, Vec3::new(8.0, 0.0, -5.0), 1.0),
+            "right of the 90° cone"
+        );
+        assert!(
+            sphere_visible(&planes, Vec3::new(5.5, 0.0, -5.0), 1.0),
+            "straddles the right plane"
+        );
     }
 }

@@ -106,9 +106,13 @@ impl LightData {
     /// (`view_count` 0 = no shadow).
     pub fn new(light: &Light, first_view: u32, views: &[ShadowView]) -> Self {
         let (kind, position, direction, cos_cutoff, range) = match light.kind {
-            LightKind::Directional { direction, .. } => {
-                (LIGHT_DIRECTIONAL, Vec3::ZERO, direction.normalize(), -1.0, f32::MAX)
-            }
+            LightKind::Directional { direction, .. } => (
+                LIGHT_DIRECTIONAL,
+                Vec3::ZERO,
+                direction.normalize(),
+                -1.0,
+                f32::MAX,
+            ),
             LightKind::Spot {
                 position,
                 direction,
@@ -175,7 +179,8 @@ mod tests {
 
     /// naga's (size, [(member, offset)]) of the WGSL struct `name` in `common.wgsl`.
     fn wgsl_layout(name: &str) -> (u32, Vec<(String, u32)>) {
-        let module = naga::front::wgsl::parse_str(crate::shaders::COMMON).expect("common.wgsl parses");
+        let module =
+            naga::front::wgsl::parse_str(crate::shaders::COMMON).expect("common.wgsl parses");
         let mut layouter = naga::proc::Layouter::default();
         layouter.update(module.to_ctx()).expect("layout");
         let (handle, ty) = module
@@ -204,10 +209,29 @@ mod tests {
 
     #[test]
     fn rust_structs_match_wgsl_layouts() {
-        same_layout!(FrameUniforms, view_proj, view, camera_pos, viewport, counts, bias, sky);
+        same_layout!(
+            FrameUniforms,
+            view_proj,
+            view,
+            camera_pos,
+            viewport,
+            counts,
+            bias,
+            sky
+        );
         same_layout!(InstanceData, model, normal, material);
         same_layout!(MaterialData, ambient, diffuse, specular);
-        same_layout!(LightData, position, direction, ambient, diffuse, specular, attenuation, splits, shadow);
+        same_layout!(
+            LightData,
+            position,
+            direction,
+            ambient,
+            diffuse,
+            specular,
+            attenuation,
+            splits,
+            shadow
+        );
         same_layout!(ShadowViewData, view_proj, tile, params);
         assert_eq!(VIEW_UNIFORM_STRIDE, 256);
     }

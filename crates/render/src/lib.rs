@@ -89,7 +89,10 @@ pub enum RenderError {
 }
 
 /// Bind-group layout entry of a read-only storage buffer.
-pub(crate) fn storage_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+pub(crate) fn storage_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility,
@@ -103,7 +106,10 @@ pub(crate) fn storage_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgp
 }
 
 /// Bind-group layout entry of a uniform buffer.
-pub(crate) fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+pub(crate) fn uniform_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility,

@@ -33,7 +33,11 @@ pub struct LightingInputs<'a> {
 }
 
 /// A bind-group layout entry for a non-multisampled 2D texture.
-pub(crate) fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+pub(crate) fn texture_entry(
+    binding: u32,
+    sample_type: wgpu::TextureSampleType,
+    visibility: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility,
@@ -97,14 +101,38 @@ impl LightingPass {
             label: Some("lighting.bind_group"),
             layout: &layout,
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: inputs.frame.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: inputs.lights.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: inputs.atlas.views_buffer.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: inputs.materials.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(&pv) },
-                wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(&nv) },
-                wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(&inputs.atlas.view) },
-                wgpu::BindGroupEntry { binding: 7, resource: wgpu::BindingResource::Sampler(&linear) },
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: inputs.frame.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: inputs.lights.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: inputs.atlas.views_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: inputs.materials.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::TextureView(&pv),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::TextureView(&nv),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: wgpu::BindingResource::TextureView(&inputs.atlas.view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 7,
+                    resource: wgpu::BindingResource::Sampler(&linear),
+                },
             ],
         });
         let module = crate::shaders::module(device, "lighting.shader", &crate::shaders::lighting());

@@ -5,7 +5,11 @@ use crate::{GpuContext, RenderError};
 
 /// Maps `range` of a `MAP_READ` buffer after the work that fills it has been submitted, and
 /// copies the bytes out.
-pub fn map_read(ctx: &GpuContext, buffer: &wgpu::Buffer, range: std::ops::Range<u64>) -> Result<Vec<u8>, RenderError> {
+pub fn map_read(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    range: std::ops::Range<u64>,
+) -> Result<Vec<u8>, RenderError> {
     let (tx, rx) = std::sync::mpsc::channel();
     buffer.map_async(wgpu::MapMode::Read, range.clone(), move |r| {
         let _ = tx.send(r);
@@ -23,19 +27,26 @@ pub fn map_read(ctx: &GpuContext, buffer: &wgpu::Buffer, range: std::ops::Range<
 }
 
 /// Copies a whole 2D texture (colour formats) to tightly packed bytes.
-pub fn read_texture(ctx: &GpuContext, texture: &wgpu::Texture, bytes_per_pixel: u32) -> Result<Vec<u8>, RenderError> {
+pub fn read_texture(
+    ctx: &GpuContext,
+    texture: &wgpu::Texture,
+    bytes_per_pixel: u32,
+) -> Result<Vec<u8>, RenderError> {
     let (w, h) = (texture.width(), texture.height());
     let row = w * bytes_per_pixel;
-    let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let padded =
+        row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
     let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("readback.texture"),
         size: padded as u64 * h as u64,
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-        label: Some("readback.encoder"),
-    });
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("readback.encoder"),
+        });
     encoder.copy_texture_to_buffer(
         texture.as_image_copy(),
         wgpu::TexelCopyBufferInfo {

@@ -16,7 +16,10 @@ use crate::gbuffer::GBuffer;
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::FrameUniforms;
 use crate::lighting::{LightingInputs, LightingPass};
-use crate::shadow::{ShadowAtlas, ShadowInput, ShadowPlan, ShadowStats, ShadowTechnique, Technique, DEFAULT_MAX_ATLAS_SIZE};
+use crate::shadow::{
+    ShadowAtlas, ShadowInput, ShadowPlan, ShadowStats, ShadowTechnique, Technique,
+    DEFAULT_MAX_ATLAS_SIZE,
+};
 use crate::timing::GpuTimer;
 use crate::visibility::{VisibilityMask, VisibilityPass};
 use crate::{GpuContext, RenderError};
@@ -177,18 +180,29 @@ pub struct Renderer<'c> {
 impl<'c> Renderer<'c> {
     /// Validates the scene and settings, uploads the scene, plans and creates the shadow atlas
     /// and builds every pipeline.
-    pub fn new(ctx: &'c GpuContext, scene: &Scene, settings: RenderSettings) -> Result<Self, RenderError> {
+    pub fn new(
+        ctx: &'c GpuContext,
+        scene: &Scene,
+        settings: RenderSettings,
+    ) -> Result<Self, RenderError> {
         scene.validate()?;
         let limits = ctx.limits();
         let max_dim = limits.max_texture_dimension_2d;
-        if settings.width == 0 || settings.height == 0 || settings.width > max_dim || settings.height > max_dim {
+        if settings.width == 0
+            || settings.height == 0
+            || settings.width > max_dim
+            || settings.height > max_dim
+        {
             return Err(RenderError::ResolutionTooLarge {
                 width: settings.width,
                 height: settings.height,
                 reason: format!("width and height must be 1..={max_dim} on this adapter"),
             });
         }
-        let max_atlas = settings.max_atlas_size.unwrap_or(DEFAULT_MAX_ATLAS_SIZE).min(max_dim);
+        let max_atlas = settings
+            .max_atlas_size
+            .unwrap_or(DEFAULT_MAX_ATLAS_SIZE)
+            .min(max_dim);
         ctx.scoped("creating the renderer", || {
             let aspect = settings.width as f32 / settings.height as f32;
             let plan = ShadowPlan::new(scene, aspect, max_atlas, settings.fit)?;
@@ -198,17 +212,27 @@ impl<'c> Renderer<'c> {
             if light_data.is_empty() {
                 light_data.push(bytemuck::Zeroable::zeroed());
             }
-            let lights = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("scene.lights"),
-                contents: bytemuck::cast_slice(&light_data),
-                usage: wgpu::BufferUsages::STORAGE,
-            });
-            let frame_buffer = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("frame.uniforms"),
-                contents: bytemuck::bytes_of(&frame_uniforms(scene, &settings, atlas.size)),
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            });
-            let gbuffer = GBuffer::new(ctx, &gpu_scene, &frame_buffer, settings.width, settings.height);
+            let lights = ctx
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("scene.lights"),
+                    contents: bytemuck::cast_slice(&light_data),
+                    usage: wgpu::BufferUsages::STORAGE,
+                });
+            let frame_buffer = ctx
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("frame.uniforms"),
+                    contents: bytemuck::bytes_of(&frame_uniforms(scene, &settings, atlas.size)),
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                });
+            let gbuffer = GBuffer::new(
+                ctx,
+                &gpu_scene,
+                &frame_buffer,
+                settings.width,
+                settings.height,
+            );
             let inputs = LightingInputs {
                 frame: &frame_buffer,
                 lights: &lights,
@@ -218,7 +242,12 @@ impl<'c> Renderer<'c> {
             };
             let lighting = LightingPass::new(ctx, &inputs, settings.width, settings.height);
             let visibility = if settings.visibility {
-                Some(VisibilityPass::new(ctx, settings.width, settings.height, scene.lights.len() as u32)?)
+                Some(VisibilityPass::new(
+                    ctx,
+                    settings.width,
+                    settings.height,
+                    scene.lights.len() as u32,
+                )?)
             } else {
                 None
             };
@@ -271,11 +300,14 @@ impl<'c> Renderer<'c> {
         ctx.scoped("rendering a frame", || {
             let start = Instant::now();
             self.timer.reset();
-            let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("frame.encoder"),
-            });
+            let mut encoder = ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("frame.encoder"),
+                });
             let span = self.timer.span("gbuffer");
-            self.gbuffer.record(&mut encoder, &self.scene, &self.timer, span);
+            self.gbuffer
+                .record(&mut encoder, &self.scene, &self.timer, span);
             let span = self.timer.span("shadows");
             let input = ShadowInput {
                 ctx,
@@ -283,7 +315,9 @@ impl<'c> Renderer<'c> {
                 views: &self.plan.views,
                 atlas: &self.atlas,
             };
-            let shadow_stats = self.technique.generate(&input, &mut encoder, &self.timer, span);
+            let shadow_stats = self
+                .technique
+                .generate(&input, &mut encoder, &self.timer, span);
             let span = self.timer.span("lighting");
             self.lighting.record(&mut encoder, &self.timer, span);
             ctx.queue.submit([encoder.finish()]);
@@ -304,13 +338,17 @@ impl<'c> Renderer<'c> {
                 }
                 None => None,
             };
-            let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("timer.encoder"),
-            });
+            let mut encoder = ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("timer.encoder"),
+                });
             self.timer.resolve(&mut encoder);
             ctx.queue.submit([encoder.finish()]);
             let gpu_ms = self.timer.read(ctx)?;
-            debug_assert!(visibility.as_ref().is_none_or(|v: &VisibilityMask| v.lights as usize == self.light_count));
+            debug_assert!(visibility
+                .as_ref()
+                .is_none_or(|v: &VisibilityMask| v.lights as usize == self.light_count));
             Ok(Frame {
                 width: self.settings.width,
                 height: self.settings.height,
@@ -328,8 +366,9 @@ impl<'c> Renderer<'c> {
 
     /// Reads the depth atlas back (`size`² floats, row-major).
     pub fn read_atlas(&self) -> Result<Vec<f32>, RenderError> {
-        self.ctx
-            .scoped("reading the shadow atlas", || crate::atlas_image::read_depth(self.ctx, &self.atlas))
+        self.ctx.scoped("reading the shadow atlas", || {
+            crate::atlas_image::read_depth(self.ctx, &self.atlas)
+        })
     }
 }
 
@@ -342,7 +381,12 @@ fn frame_uniforms(scene: &Scene, s: &RenderSettings, atlas_size: u32) -> FrameUn
         view_proj: (proj * view).to_cols_array_2d(),
         view: view.to_cols_array_2d(),
         camera_pos: cam.position.extend(1.0).to_array(),
-        viewport: [s.width as f32, s.height as f32, 1.0 / s.width as f32, 1.0 / s.height as f32],
+        viewport: [
+            s.width as f32,
+            s.height as f32,
+            1.0 / s.width as f32,
+            1.0 / s.height as f32,
+        ],
         counts: [
             scene.lights.len() as u32,
             s.pcf.code(),

@@ -25,7 +25,11 @@ pub fn lighting() -> String {
 
 /// Hard visibility mask.
 pub fn visibility() -> String {
-    compose(&[COMMON, SHADOW_LOOKUP, include_str!("shaders/visibility.wgsl")])
+    compose(&[
+        COMMON,
+        SHADOW_LOOKUP,
+        include_str!("shaders/visibility.wgsl"),
+    ])
 }
 
 /// Atlas read-back copy.
@@ -66,9 +70,12 @@ mod tests {
         for (name, src) in super::all() {
             let module = naga::front::wgsl::parse_str(&src)
                 .unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(&src)));
-            naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
-                .validate(&module)
-                .unwrap_or_else(|e| panic!("{name}.wgsl does not validate: {e:?}"));
+            naga::valid::Validator::new(
+                naga::valid::ValidationFlags::all(),
+                naga::valid::Capabilities::all(),
+            )
+            .validate(&module)
+            .unwrap_or_else(|e| panic!("{name}.wgsl does not validate: {e:?}"));
         }
     }
 }

@@ -38,7 +38,12 @@ pub struct ShadowPlan {
 
 impl ShadowPlan {
     /// Computes the views of every shadow-casting light and packs their tiles.
-    pub fn new(scene: &Scene, aspect: f32, max_atlas: u32, fit: FitPolicy) -> Result<Self, RenderError> {
+    pub fn new(
+        scene: &Scene,
+        aspect: f32,
+        max_atlas: u32,
+        fit: FitPolicy,
+    ) -> Result<Self, RenderError> {
         let views = light_space::shadow_views(scene, aspect);
         if views.len() > MAX_SHADOW_VIEWS {
             return Err(RenderError::TooManyShadowViews {
@@ -91,7 +96,12 @@ impl ShadowPlan {
                 ShadowViewData {
                     view_proj: v.view_proj.to_cols_array_2d(),
                     tile: [t.x as f32, t.y as f32, t.size as f32, 0.0],
-                    params: [v.near, v.far, texel_world, if v.orthographic { 1.0 } else { 0.0 }],
+                    params: [
+                        v.near,
+                        v.far,
+                        texel_world,
+                        if v.orthographic { 1.0 } else { 0.0 },
+                    ],
                 }
             })
             .collect()
@@ -103,13 +113,20 @@ impl ShadowPlan {
             .lights
             .iter()
             .zip(&self.light_views)
-            .map(|(l, &(first, n))| LightData::new(l, first, &self.views[first as usize..(first + n) as usize]))
+            .map(|(l, &(first, n))| {
+                LightData::new(l, first, &self.views[first as usize..(first + n) as usize])
+            })
             .collect()
     }
 
     /// Texels covered by tiles / texels in the atlas.
     pub fn fill(&self) -> f64 {
-        let used: u64 = self.layout.tiles.iter().map(|t| t.size as u64 * t.size as u64).sum();
+        let used: u64 = self
+            .layout
+            .tiles
+            .iter()
+            .map(|t| t.size as u64 * t.size as u64)
+            .sum();
         used as f64 / (self.layout.size as u64 * self.layout.size as u64) as f64
     }
 }
@@ -164,20 +181,24 @@ impl ShadowAtlas {
         if data.is_empty() {
             data.push(bytemuck::Zeroable::zeroed());
         }
-        let views_buffer = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("shadow.views"),
-            contents: bytemuck::cast_slice(&data),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
+        let views_buffer = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("shadow.views"),
+                contents: bytemuck::cast_slice(&data),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
         let mut uniform_bytes: Vec<u8> = bytemuck::cast_slice(&uniforms).to_vec();
         if uniform_bytes.is_empty() {
             uniform_bytes.resize(VIEW_UNIFORM_STRIDE as usize, 0);
         }
-        let view_uniforms = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("shadow.view_uniforms"),
-            contents: &uniform_bytes,
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let view_uniforms = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("shadow.view_uniforms"),
+                contents: &uniform_bytes,
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
         Self {
             texture,
             view,
@@ -250,7 +271,9 @@ impl Technique {
     /// Builds the technique's pipelines.
     pub fn create(self, ctx: &GpuContext) -> Box<dyn ShadowTechnique> {
         match self {
-            Technique::Traditional => Box::new(crate::techniques::traditional::Traditional::new(ctx)),
+            Technique::Traditional => {
+                Box::new(crate::techniques::traditional::Traditional::new(ctx))
+            }
         }
     }
 }
@@ -265,7 +288,11 @@ impl std::str::FromStr for Technique {
             .ok_or_else(|| {
                 format!(
                     "unknown technique '{s}' (techniques: {})",
-                    Technique::ALL.iter().map(|t| t.name()).collect::<Vec<_>>().join(", ")
+                    Technique::ALL
+                        .iter()
+                        .map(|t| t.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 )
             })
     }
@@ -279,10 +306,12 @@ impl std::fmt::Display for Technique {
 
 /// Per-view CPU culling shared by techniques that draw instance by instance: the shadow
 /// casters whose bounding sphere touches the view's frustum.
-pub fn visible_casters<'a>(scene: &'a GpuScene, view: &ShadowView) -> impl Iterator<Item = &'a crate::gpu_scene::DrawItem> + 'a {
+pub fn visible_casters<'a>(
+    scene: &'a GpuScene,
+    view: &ShadowView,
+) -> impl Iterator<Item = &'a crate::gpu_scene::DrawItem> + 'a {
     let planes = crate::gpu_scene::frustum_planes(view.view_proj);
-    scene
-        .draws
-        .iter()
-        .filter(move |d| d.casts_shadows && crate::gpu_scene::sphere_visible(&planes, d.sphere.0, d.sphere.1))
+    scene.draws.iter().filter(move |d| {
+        d.casts_shadows && crate::gpu_scene::sphere_visible(&planes, d.sphere.0, d.sphere.1)
+    })
 }

@@ -80,7 +80,12 @@ impl GpuTimer {
     }
 
     /// Timestamp writes for a render pass that is the `first` and/or `last` of a span.
-    pub fn render_writes(&self, span: Option<Span>, first: bool, last: bool) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+    pub fn render_writes(
+        &self,
+        span: Option<Span>,
+        first: bool,
+        last: bool,
+    ) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
         let (set, _, _) = self.queries.as_ref()?;
         let span = span?;
         if !first && !last {
@@ -94,7 +99,12 @@ impl GpuTimer {
     }
 
     /// Timestamp writes for a compute pass that is the `first` and/or `last` of a span.
-    pub fn compute_writes(&self, span: Option<Span>, first: bool, last: bool) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+    pub fn compute_writes(
+        &self,
+        span: Option<Span>,
+        first: bool,
+        last: bool,
+    ) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
         let (set, _, _) = self.queries.as_ref()?;
         let span = span?;
         if !first && !last {

@@ -56,10 +56,23 @@ impl VisibilityMask {
         let (width, height, lights, words_per_pixel) = (u(0), u(1), u(2), u(3));
         let n = width as u64 * height as u64 * words_per_pixel as u64;
         if bytes.len() as u64 != 24 + 4 * n {
-            return Err(format!("expected {} bytes of words, found {}", 4 * n, bytes.len() - 24));
+            return Err(format!(
+                "expected {} bytes of words, found {}",
+                4 * n,
+                bytes.len() - 24
+            ));
         }
-        let words = bytes[24..].chunks_exact(4).map(|c| u32::from_le_bytes(c.try_into().unwrap())).collect();
-        Ok(Self { width, height, lights, words_per_pixel, words })
+        let words = bytes[24..]
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        Ok(Self {
+            width,
+            height,
+            lights,
+            words_per_pixel,
+            words,
+        })
     }
 
     /// A greyscale image of one light's bits (white = lit), 8 bits per pixel.
@@ -100,7 +113,7 @@ impl VisibilityPass {
     /// Plans the pass; fails if even one word per pixel exceeds the storage-binding limit.
     pub fn new(ctx: &GpuContext, w: u32, h: u32, lights: u32) -> Result<Self, RenderError> {
         let device = &ctx.device;
-        let limit = ctx.limits().max_storage_buffer_binding_size as u64;
+        let limit = ctx.limits().max_storage_buffer_binding_size;
         let words = lights.div_ceil(32).max(1);
         let per_word = w as u64 * h as u64 * 4;
         if per_word > limit {
@@ -120,7 +133,11 @@ impl VisibilityPass {
                 crate::storage_entry(2, comp),
                 texture_entry(3, wgpu::TextureSampleType::Uint, comp),
                 texture_entry(4, wgpu::TextureSampleType::Uint, comp),
-                texture_entry(5, wgpu::TextureSampleType::Float { filterable: false }, comp),
+                texture_entry(
+                    5,
+                    wgpu::TextureSampleType::Float { filterable: false },
+                    comp,
+                ),
                 wgpu::BindGroupLayoutEntry {
                     binding: 6,
                     visibility: comp,
@@ -134,7 +151,8 @@ impl VisibilityPass {
                 crate::uniform_entry(7, comp),
             ],
         });
-        let module = crate::shaders::module(device, "visibility.shader", &crate::shaders::visibility());
+        let module =
+            crate::shaders::module(device, "visibility.shader", &crate::shaders::visibility());
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("visibility.pipeline_layout"),
             bind_group_layouts: &[Some(&layout)],
@@ -148,11 +166,25 @@ impl VisibilityPass {
             compilation_options: Default::default(),
             cache: None,
         });
-        Ok(Self { pipeline, layout, width: w, height: h, lights, words, chunk_words })
+        Ok(Self {
+            pipeline,
+            layout,
+            width: w,
+            height: h,
+            lights,
+            words,
+            chunk_words,
+        })
     }
 
     /// Computes and reads back the mask (its own submissions, after the frame's).
-    pub fn run(&self, ctx: &GpuContext, inputs: &LightingInputs<'_>, timer: &GpuTimer, span: Option<Span>) -> Result<VisibilityMask, RenderError> {
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        inputs: &LightingInputs<'_>,
+        timer: &GpuTimer,
+        span: Option<Span>,
+    ) -> Result<VisibilityMask, RenderError> {
         let device = &ctx.device;
         let pixels = self.width as u64 * self.height as u64;
         let mut words = vec![0u32; (pixels * self.words as u64) as usize];
@@ -178,7 +210,11 @@ impl VisibilityPass {
                 device,
                 &wgpu::util::BufferInitDescriptor {
                     label: Some("visibility.params"),
-                    contents: bytemuck::bytes_of(&VisibilityParams { first_word: first, word_count: count, _pad: [0; 2] }),
+                    contents: bytemuck::bytes_of(&VisibilityParams {
+                        first_word: first,
+                        word_count: count,
+                        _pad: [0; 2],
+                    }),
                     usage: wgpu::BufferUsages::UNIFORM,
                 },
             );
@@ -186,17 +222,43 @@ impl VisibilityPass {
                 label: Some("visibility.bind_group"),
                 layout: &self.layout,
                 entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: inputs.frame.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 1, resource: inputs.lights.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 2, resource: inputs.atlas.views_buffer.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&pv) },
-                    wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(&nv) },
-                    wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(&inputs.atlas.view) },
-                    wgpu::BindGroupEntry { binding: 6, resource: mask.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 7, resource: params.as_entire_binding() },
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: inputs.frame.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: inputs.lights.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: inputs.atlas.views_buffer.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: wgpu::BindingResource::TextureView(&pv),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: wgpu::BindingResource::TextureView(&nv),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 5,
+                        resource: wgpu::BindingResource::TextureView(&inputs.atlas.view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 6,
+                        resource: mask.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 7,
+                        resource: params.as_entire_binding(),
+                    },
                 ],
             });
-            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("visibility.encoder") });
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("visibility.encoder"),
+            });
             {
                 let last = first + count >= self.words;
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -213,10 +275,17 @@ impl VisibilityPass {
             let chunk: &[u32] = bytemuck::cast_slice(&bytes);
             for px in 0..pixels as usize {
                 let dst = px * self.words as usize + first as usize;
-                words[dst..dst + count as usize].copy_from_slice(&chunk[px * count as usize..(px + 1) * count as usize]);
+                words[dst..dst + count as usize]
+                    .copy_from_slice(&chunk[px * count as usize..(px + 1) * count as usize]);
             }
             first += count;
         }
-        Ok(VisibilityMask { width: self.width, height: self.height, lights: self.lights, words_per_pixel: self.words, words })
+        Ok(VisibilityMask {
+            width: self.width,
+            height: self.height,
+            lights: self.lights,
+            words_per_pixel: self.words,
+            words,
+        })
     }
 }

@@ -27,7 +27,11 @@ fn ray_box(o: Vec3, d: Vec3, lo: Vec3, hi: Vec3) -> Option<f32> {
 /// Truth per pixel: `None` = sky, `Some(lit)`.
 fn truth(scene: &Scene) -> Vec<Option<bool>> {
     let c = builtin::OCCLUDER_CENTER;
-    let half = Vec3::new(builtin::OCCLUDER_HALF_SIZE, builtin::OCCLUDER_THICKNESS * 0.5, builtin::OCCLUDER_HALF_SIZE);
+    let half = Vec3::new(
+        builtin::OCCLUDER_HALF_SIZE,
+        builtin::OCCLUDER_THICKNESS * 0.5,
+        builtin::OCCLUDER_HALF_SIZE,
+    );
     let (lo, hi) = (c - half, c + half);
     let cam = &scene.camera;
     let inv = (cam.projection(1.0) * cam.view()).inverse();
@@ -44,7 +48,10 @@ fn truth(scene: &Scene) -> Vec<Option<bool>> {
             let t_floor = if d.y < 0.0 { -o.y / d.y } else { f32::INFINITY };
             let t_box = ray_box(o, d, lo, hi).unwrap_or(f32::INFINITY);
             let t = t_floor.min(t_box);
-            if !t.is_finite() || (o + d * t).x.abs() > 10.0 || (o + d * t).z.abs() > 10.0 && t == t_floor {
+            if !t.is_finite()
+                || (o + d * t).x.abs() > 10.0
+                || (o + d * t).z.abs() > 10.0 && t == t_floor
+            {
                 out.push(None);
                 continue;
             }
@@ -55,15 +62,26 @@ fn truth(scene: &Scene) -> Vec<Option<bool>> {
                 continue;
             }
             let lit = match light.kind {
-                LightKind::Directional { direction, .. } => ray_box(p, -direction, lo, hi).is_none(),
-                LightKind::Spot { position, direction, cutoff_deg, range } => {
+                LightKind::Directional { direction, .. } => {
+                    ray_box(p, -direction, lo, hi).is_none()
+                }
+                LightKind::Spot {
+                    position,
+                    direction,
+                    cutoff_deg,
+                    range,
+                } => {
                     let to_p = p - position;
-                    let in_cone = to_p.normalize().dot(direction.normalize()) >= cutoff_deg.to_radians().cos();
-                    in_cone && to_p.length() <= range && ray_box(p, -to_p.normalize(), lo, hi).is_none_or(|t| t > to_p.length())
+                    let in_cone = to_p.normalize().dot(direction.normalize())
+                        >= cutoff_deg.to_radians().cos();
+                    in_cone
+                        && to_p.length() <= range
+                        && ray_box(p, -to_p.normalize(), lo, hi).is_none_or(|t| t > to_p.length())
                 }
                 LightKind::Point { position, range } => {
                     let to_p = p - position;
-                    to_p.length() <= range && ray_box(p, -to_p.normalize(), lo, hi).is_none_or(|t| t > to_p.length())
+                    to_p.length() <= range
+                        && ray_box(p, -to_p.normalize(), lo, hi).is_none_or(|t| t > to_p.length())
                 }
             };
             out.push(Some(lit));
@@ -75,7 +93,13 @@ fn truth(scene: &Scene) -> Vec<Option<bool>> {
 fn check(name: &str) {
     let ctx = common::context();
     let scene = builtin::build(name, &BuiltinOptions::default()).expect("builtin scene");
-    let settings = RenderSettings { width: SIZE, height: SIZE, pcf: Pcf::Off, visibility: true, ..Default::default() };
+    let settings = RenderSettings {
+        width: SIZE,
+        height: SIZE,
+        pcf: Pcf::Off,
+        visibility: true,
+        ..Default::default()
+    };
     let mut r = Renderer::new(&ctx, &scene, settings).expect("renderer");
     let frame = r.render().expect("frame");
     let vis = frame.visibility.expect("visibility mask");
@@ -89,7 +113,11 @@ fn check(name: &str) {
             let near_edge = (-EDGE_BAND_PX..=EDGE_BAND_PX).any(|dy| {
                 (-EDGE_BAND_PX..=EDGE_BAND_PX).any(|dx| {
                     let (nx, ny) = (x + dx, y + dy);
-                    nx < 0 || ny < 0 || nx >= SIZE as i32 || ny >= SIZE as i32 || at(nx, ny) != Some(expected)
+                    nx < 0
+                        || ny < 0
+                        || nx >= SIZE as i32
+                        || ny >= SIZE as i32
+                        || at(nx, ny) != Some(expected)
                 })
             });
             let got = vis.lit(x as u32, y as u32, 0);
@@ -104,7 +132,11 @@ fn check(name: &str) {
                 continue;
             }
             compared += 1;
-            if expected { lit += 1 } else { shadowed += 1 }
+            if expected {
+                lit += 1
+            } else {
+                shadowed += 1
+            }
             if got != expected {
                 wrong += 1;
             }
@@ -112,7 +144,10 @@ fn check(name: &str) {
     }
     let path = common::artifacts_dir().join(format!("analytic-{name}.png"));
     image::save_buffer(&path, &diff, SIZE, SIZE, image::ExtendedColorType::Rgb8).unwrap();
-    assert!(shadowed > 200 && lit > 200, "{name}: degenerate test ({shadowed} shadowed, {lit} lit pixels)");
+    assert!(
+        shadowed > 200 && lit > 200,
+        "{name}: degenerate test ({shadowed} shadowed, {lit} lit pixels)"
+    );
     assert_eq!(wrong, 0, "{name}: {wrong} of {compared} pixels away from edges disagree with the exact shadow (red = false shadow, green = false light: {})", path.display());
 }
 

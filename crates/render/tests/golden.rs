@@ -19,21 +19,41 @@ fn golden(scene: &str, pcf: Pcf, file: &str) {
     let ctx = common::context();
     let scene = builtin::build(scene, &BuiltinOptions::default()).expect("scene");
     let (w, h) = (240, 160);
-    let settings = RenderSettings { width: w, height: h, pcf, ..Default::default() };
-    let frame = Renderer::new(&ctx, &scene, settings).expect("renderer").render().expect("frame");
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden").join(file);
+    let settings = RenderSettings {
+        width: w,
+        height: h,
+        pcf,
+        ..Default::default()
+    };
+    let frame = Renderer::new(&ctx, &scene, settings)
+        .expect("renderer")
+        .render()
+        .expect("frame");
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/golden")
+        .join(file);
     if std::env::var_os("MANYSHADOWS_BLESS").is_some() {
         image::save_buffer(&path, &frame.rgba, w, h, image::ExtendedColorType::Rgba8).unwrap();
         eprintln!("blessed {}", path.display());
         return;
     }
     let expected = image::open(&path)
-        .unwrap_or_else(|e| panic!("missing golden {} ({e}); bless with MANYSHADOWS_BLESS=1", path.display()))
+        .unwrap_or_else(|e| {
+            panic!(
+                "missing golden {} ({e}); bless with MANYSHADOWS_BLESS=1",
+                path.display()
+            )
+        })
         .to_rgba8();
     assert_eq!((expected.width(), expected.height()), (w, h), "golden size");
     let (mut differing, mut sum) = (0usize, 0u64);
     let mut diff = vec![0u8; (w * h * 4) as usize];
-    for (i, (a, b)) in frame.rgba.chunks_exact(4).zip(expected.as_raw().chunks_exact(4)).enumerate() {
+    for (i, (a, b)) in frame
+        .rgba
+        .chunks_exact(4)
+        .zip(expected.as_raw().chunks_exact(4))
+        .enumerate()
+    {
         let d = (0..3).map(|c| a[c].abs_diff(b[c])).max().unwrap();
         sum += (0..3).map(|c| a[c].abs_diff(b[c]) as u64).sum::<u64>();
         if d > PIXEL_TOLERANCE {

@@ -45,7 +45,8 @@ impl Mesh {
             if a >= acc.len() || b >= acc.len() || c >= acc.len() {
                 continue;
             }
-            let n = (self.positions[b] - self.positions[a]).cross(self.positions[c] - self.positions[a]);
+            let n = (self.positions[b] - self.positions[a])
+                .cross(self.positions[c] - self.positions[a]);
             acc[a] += n;
             acc[b] += n;
             acc[c] += n;
@@ -64,7 +65,7 @@ impl Mesh {
             mesh: self.name.clone(),
             reason,
         };
-        if self.indices.len() % 3 != 0 {
+        if !self.indices.len().is_multiple_of(3) {
             return Err(bad(format!(
                 "{} indices is not a multiple of 3",
                 self.indices.len()
@@ -77,7 +78,11 @@ impl Mesh {
                 self.positions.len()
             )));
         }
-        if let Some(i) = self.indices.iter().find(|&&i| i as usize >= self.positions.len()) {
+        if let Some(i) = self
+            .indices
+            .iter()
+            .find(|&&i| i as usize >= self.positions.len())
+        {
             return Err(bad(format!(
                 "index {i} is out of range ({} vertices)",
                 self.positions.len()
@@ -414,7 +419,11 @@ impl Scene {
             if inst.mesh >= self.meshes.len() {
                 return Err(SceneError::InvalidInstance {
                     index: i,
-                    reason: format!("mesh {} does not exist ({} meshes)", inst.mesh, self.meshes.len()),
+                    reason: format!(
+                        "mesh {} does not exist ({} meshes)",
+                        inst.mesh,
+                        self.meshes.len()
+                    ),
                 });
             }
             if inst.material >= self.materials.len() {

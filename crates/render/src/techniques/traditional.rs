@@ -19,7 +19,8 @@ impl Traditional {
     /// Builds the depth-only pipeline.
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let module = crate::shaders::module(device, "traditional.shader", &crate::shaders::traditional());
+        let module =
+            crate::shaders::module(device, "traditional.shader", &crate::shaders::traditional());
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("traditional.layout"),
             entries: &[
@@ -98,11 +99,20 @@ impl Traditional {
 }
 
 /// Records one draw per visible caster of `view` (shared with other instance-drawing paths).
-fn draw_casters(pass: &mut wgpu::RenderPass<'_>, scene: &GpuScene, view: &manyshadows_scene::light_space::ShadowView, stats: &mut ShadowStats) {
+fn draw_casters(
+    pass: &mut wgpu::RenderPass<'_>,
+    scene: &GpuScene,
+    view: &manyshadows_scene::light_space::ShadowView,
+    stats: &mut ShadowStats,
+) {
     let mut drawn = 0u64;
     for d in visible_casters(scene, view) {
         let m = d.mesh;
-        pass.draw_indexed(m.first_index..m.first_index + m.index_count, m.base_vertex, d.instance..d.instance + 1);
+        pass.draw_indexed(
+            m.first_index..m.first_index + m.index_count,
+            m.base_vertex,
+            d.instance..d.instance + 1,
+        );
         stats.draws += 1;
         stats.triangles += m.index_count as u64 / 3;
         drawn += 1;
@@ -116,7 +126,13 @@ impl ShadowTechnique for Traditional {
         "traditional"
     }
 
-    fn generate(&mut self, input: &ShadowInput<'_>, encoder: &mut wgpu::CommandEncoder, timer: &GpuTimer, span: Option<Span>) -> ShadowStats {
+    fn generate(
+        &mut self,
+        input: &ShadowInput<'_>,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &GpuTimer,
+        span: Option<Span>,
+    ) -> ShadowStats {
         let _ = std::mem::size_of::<ViewUniform>();
         let bind_group = self.bind_group(input.ctx, input);
         let mut stats = ShadowStats::default();
@@ -147,7 +163,14 @@ impl ShadowTechnique for Traditional {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_viewport(tile.x as f32, tile.y as f32, tile.size as f32, tile.size as f32, 0.0, 1.0);
+            pass.set_viewport(
+                tile.x as f32,
+                tile.y as f32,
+                tile.size as f32,
+                tile.size as f32,
+                0.0,
+                1.0,
+            );
             pass.set_scissor_rect(tile.x, tile.y, tile.size, tile.size);
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &bind_group, &[(i as u64 * VIEW_UNIFORM_STRIDE) as u32]);

@@ -9,7 +9,10 @@ use manyshadows::{AdapterRequest, GpuContext};
 pub fn context() -> GpuContext {
     match GpuContext::new(&AdapterRequest::default()) {
         Ok(ctx) => {
-            eprintln!("GPU test adapter: {}", manyshadows::context::describe_adapter(&ctx.info));
+            eprintln!(
+                "GPU test adapter: {}",
+                manyshadows::context::describe_adapter(&ctx.info)
+            );
             ctx
         }
         Err(e) => panic!(
