@@ -442,10 +442,18 @@ pub fn shadow_views(scene: &Scene, aspect: f32) -> Vec<ShadowView> {
                 direction,
                 cascades,
                 split_lambda,
+                cascade_resolution_scale,
             } => {
                 let count = cascades.clamp(1, u8::MAX as u32);
                 let splits = cascade_splits(depth_range.0, depth_range.1, count, split_lambda);
                 for (i, pair) in splits.windows(2).enumerate() {
+                    // Per-cascade resolution (seed 004): each cascade `scale` times the last.
+                    let resolution = ((resolution as f32
+                        * cascade_resolution_scale
+                            .clamp(f32::MIN_POSITIVE, 1.0)
+                            .powi(i as i32))
+                    .round() as u32)
+                        .max(1);
                     let (centre, radius) =
                         slice_bounding_sphere(&scene.camera, aspect, pair[0], pair[1]);
                     let fit = directional_fit(direction, centre, radius, casters, resolution);
@@ -577,12 +585,30 @@ mod tests {
         }
     }
 
+    #[test]
+    fn cascades_can_halve_their_resolution_one_after_another() {
+        let mut scene = test_scene(vec![sun(3, 1024)]);
+        if let LightKind::Directional {
+            cascade_resolution_scale,
+            ..
+        } = &mut scene.lights[0].kind
+        {
+            *cascade_resolution_scale = 0.5;
+        }
+        let views = shadow_views(&scene, 1.5);
+        let res: Vec<u32> = views.iter().map(|v| v.resolution).collect();
+        assert_eq!(res, vec![1024, 512, 256]);
+        // A coarser cascade covers the same slice with bigger texels.
+        assert!(views[1].texel_world > views[0].texel_world);
+    }
+
     fn sun(cascades: u32, resolution: u32) -> Light {
         light(
             LightKind::Directional {
                 direction: Vec3::new(-0.4, -1.0, -0.3).normalize(),
                 cascades,
                 split_lambda: 0.7,
+                cascade_resolution_scale: 1.0,
             },
             resolution,
         )
@@ -1019,6 +1045,7 @@ mod tests {
             direction: Vec3::NEG_Y,
             cascades: 1,
             split_lambda: 0.5,
+            cascade_resolution_scale: 1.0,
         };
         assert!(shadow_views(&scene, 1.0)[0].view_proj.is_finite());
     }

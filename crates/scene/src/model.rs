@@ -217,6 +217,9 @@ pub enum LightKind {
         cascades: u32,
         /// Split scheme blend: 0 = uniform splits, 1 = logarithmic (the "practical" scheme).
         split_lambda: f32,
+        /// Resolution of each cascade relative to the previous one (seed 004: e.g. 0.5 gives
+        /// 100 %, 50 %, 25 % of `shadow_resolution`); 1 = every cascade at full resolution.
+        cascade_resolution_scale: f32,
     },
     /// A cone of light from a point.
     Spot {
@@ -501,7 +504,13 @@ fn validate_light(l: &Light) -> Result<(), String> {
             direction,
             cascades,
             split_lambda,
+            cascade_resolution_scale,
         } => {
+            if !(cascade_resolution_scale > 0.0 && cascade_resolution_scale <= 1.0) {
+                return Err(format!(
+                    "cascade_resolution_scale {cascade_resolution_scale} must be in (0, 1]"
+                ));
+            }
             unit(direction, "direction")?;
             if !(1..=4).contains(&cascades) {
                 return Err(format!("cascades {cascades} must be 1 to 4"));

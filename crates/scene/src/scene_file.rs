@@ -185,6 +185,7 @@ struct LightDef {
     range: Option<f32>,
     cascades: Option<u32>,
     split_lambda: Option<f32>,
+    cascade_resolution_scale: Option<f32>,
     ambient: Option<Vec3>,
     diffuse: Option<Vec3>,
     specular: Option<Vec3>,
@@ -461,6 +462,10 @@ fn build_light(cx: &Ctx<'_>, i: usize, l: &Spanned<LightDef>) -> Result<Light, S
         ("attenuation", d.attenuation.is_some()),
         ("cascades", d.cascades.is_some()),
         ("split_lambda", d.split_lambda.is_some()),
+        (
+            "cascade_resolution_scale",
+            d.cascade_resolution_scale.is_some(),
+        ),
     ];
     let allowed: &[&str] = match d.kind {
         LightType::Spot => &[
@@ -471,7 +476,12 @@ fn build_light(cx: &Ctx<'_>, i: usize, l: &Spanned<LightDef>) -> Result<Light, S
             "attenuation",
         ],
         LightType::Point => &["position", "range", "attenuation"],
-        LightType::Directional => &["direction", "cascades", "split_lambda"],
+        LightType::Directional => &[
+            "direction",
+            "cascades",
+            "split_lambda",
+            "cascade_resolution_scale",
+        ],
     };
     for (key, is_set) in present {
         if is_set && !allowed.contains(&key) {
@@ -535,6 +545,7 @@ fn build_light(cx: &Ctx<'_>, i: usize, l: &Spanned<LightDef>) -> Result<Light, S
                 direction: unit(need(d.direction, "direction")?),
                 cascades: d.cascades.unwrap_or(3),
                 split_lambda: d.split_lambda.unwrap_or(0.75),
+                cascade_resolution_scale: d.cascade_resolution_scale.unwrap_or(1.0),
             },
             Attenuation::NONE,
             2048,

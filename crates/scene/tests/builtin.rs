@@ -647,6 +647,7 @@ fn analytic_scenes_are_exactly_as_specified() {
                         direction,
                         cascades,
                         split_lambda,
+                        ..
                     },
                 ) => {
                     assert_eq!(direction, Vec3::new(0.6, -1.0, 0.4).normalize());

@@ -93,7 +93,12 @@ fn example_scene_parses() {
             direction,
             cascades,
             split_lambda,
+            cascade_resolution_scale,
         } => {
+            assert_eq!(
+                cascade_resolution_scale, 1.0,
+                "default: every cascade at full size"
+            );
             assert!((direction.length() - 1.0).abs() < 1e-6);
             assert!(direction.y < 0.0);
             assert_eq!((cascades, split_lambda), (4, 0.8));

@@ -123,6 +123,7 @@ impl AnalyticLight {
                     direction: plane_directional_direction(),
                     cascades: PLANE_DIRECTIONAL_CASCADES,
                     split_lambda: PLANE_DIRECTIONAL_SPLIT_LAMBDA,
+                    cascade_resolution_scale: 1.0,
                 },
                 Attenuation::NONE,
             ),

@@ -222,6 +222,7 @@ pub(crate) fn directional(direction: Vec3, tone: Tone, resolution: Option<u32>) 
             direction: direction.normalize_or(Vec3::NEG_Y),
             cascades: DIRECTIONAL_CASCADES,
             split_lambda: DIRECTIONAL_SPLIT_LAMBDA,
+            cascade_resolution_scale: 1.0,
         },
         Attenuation::NONE,
         tone.brightness,
