@@ -32,16 +32,7 @@ pub fn read_depth(ctx: &GpuContext, atlas: &ShadowAtlas) -> Result<Vec<f32>, Ren
                 wgpu::TextureSampleType::Float { filterable: false },
                 wgpu::ShaderStages::COMPUTE,
             ),
-            wgpu::BindGroupLayoutEntry {
-                binding: 1,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only: false },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
+            crate::storage_rw_entry(1, wgpu::ShaderStages::COMPUTE),
             crate::uniform_entry(2, wgpu::ShaderStages::COMPUTE),
         ],
     });

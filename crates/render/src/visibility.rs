@@ -138,16 +138,7 @@ impl VisibilityPass {
                     wgpu::TextureSampleType::Float { filterable: false },
                     comp,
                 ),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 6,
-                    visibility: comp,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: false },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                crate::storage_rw_entry(6, comp),
                 crate::uniform_entry(7, comp),
             ],
         });

@@ -4,7 +4,7 @@
 //! output is depth.
 
 use crate::gpu_scene::{GpuScene, POSITION_LAYOUT};
-use crate::gpu_types::{ViewUniform, VIEW_UNIFORM_STRIDE};
+use crate::gpu_types::VIEW_UNIFORM_STRIDE;
 use crate::shadow::{visible_casters, ShadowInput, ShadowStats, ShadowTechnique, ATLAS_FORMAT};
 use crate::timing::{GpuTimer, Span};
 use crate::GpuContext;
@@ -133,7 +133,6 @@ impl ShadowTechnique for Traditional {
         timer: &GpuTimer,
         span: Option<Span>,
     ) -> ShadowStats {
-        let _ = std::mem::size_of::<ViewUniform>();
         let bind_group = self.bind_group(input.ctx, input);
         let mut stats = ShadowStats::default();
         let n = input.views.len();
