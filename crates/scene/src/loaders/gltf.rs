@@ -332,19 +332,7 @@ where
         normals: Vec::new(),
         indices,
     };
-    if let Some(&i) = mesh
-        .indices
-        .iter()
-        .find(|&&i| i as usize >= mesh.positions.len())
-    {
-        return Err(SceneError::InvalidMesh {
-            mesh: mesh.name,
-            reason: format!(
-                "index {i} is out of range ({} vertices)",
-                mesh.positions.len()
-            ),
-        });
-    }
+    super::check_indices(&mesh)?;
     set_normals(&mut mesh, normals);
     Ok(mesh)
 }

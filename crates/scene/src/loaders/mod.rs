@@ -198,6 +198,25 @@ pub(crate) fn check_triangles(path: &Path, triangles: usize) -> Result<(), Scene
 /// Installs per-vertex normals read from a file: each finite one is normalized (unless it already
 /// is unit length to within 1e-5, then it is kept as it is); zero-length ones
 /// are replaced by the computed (area-weighted) normal; non-finite ones are kept so that
+/// Fails with [`SceneError::InvalidMesh`] if any index points past the vertices. Loaders call it
+/// before computing normals, so a bad index is reported rather than silently skipped.
+pub(crate) fn check_indices(mesh: &Mesh) -> Result<(), SceneError> {
+    match mesh
+        .indices
+        .iter()
+        .find(|&&i| i as usize >= mesh.positions.len())
+    {
+        Some(&i) => Err(SceneError::InvalidMesh {
+            mesh: mesh.name.clone(),
+            reason: format!(
+                "index {i} is out of range ({} vertices)",
+                mesh.positions.len()
+            ),
+        }),
+        None => Ok(()),
+    }
+}
+
 /// [`Mesh::validate`] reports them. `None` (or a count mismatch) computes all normals.
 fn set_normals(mesh: &mut Mesh, normals: Option<Vec<Vec3>>) {
     let Some(mut normals) = normals.filter(|n| n.len() == mesh.positions.len()) else {

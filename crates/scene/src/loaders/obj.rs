@@ -48,19 +48,7 @@ pub(super) fn load(path: &Path) -> Result<Vec<Mesh>, SceneError> {
             indices: m.indices,
         };
         // Check indices before computing normals so the error is InvalidMesh, not a silent skip.
-        if let Some(&i) = mesh
-            .indices
-            .iter()
-            .find(|&&i| i as usize >= mesh.positions.len())
-        {
-            return Err(SceneError::InvalidMesh {
-                mesh: mesh.name,
-                reason: format!(
-                    "index {i} is out of range ({} vertices)",
-                    mesh.positions.len()
-                ),
-            });
-        }
+        super::check_indices(&mesh)?;
         set_normals(&mut mesh, normals);
         meshes.push(mesh);
     }

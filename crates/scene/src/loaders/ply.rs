@@ -263,19 +263,7 @@ fn read_ply(path: &Path, source: impl BufRead) -> Result<Mesh, SceneError> {
             path.display()
         );
     }
-    if let Some(&i) = mesh
-        .indices
-        .iter()
-        .find(|&&i| i as usize >= mesh.positions.len())
-    {
-        return Err(SceneError::InvalidMesh {
-            mesh: mesh.name,
-            reason: format!(
-                "face index {i} is out of range ({} vertices)",
-                mesh.positions.len()
-            ),
-        });
-    }
+    super::check_indices(&mesh)?;
     set_normals(&mut mesh, layout.has_normals.then_some(normals));
     Ok(mesh)
 }
