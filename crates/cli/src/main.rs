@@ -12,9 +12,13 @@ use manyshadows::context::{describe_adapter, feature_use, list_adapters, request
 use manyshadows::scene::atlas::FitPolicy;
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::scene::Scene;
-use manyshadows::{
+use manyshadows::{CullMode, ShadowOptions, 
     AdapterRequest, Frame, GpuContext, Pcf, RenderSettings, Renderer, ShadowBias, Technique,
 };
+
+mod bench;
+mod compare;
+mod plot;
 
 const ABOUT: &str = "Render scenes lit by many shadow-casting lights, headless, to PNG.";
 
@@ -55,10 +59,24 @@ enum Command {
     /// List the graphics adapters, the one that would be chosen, its limits and the optional
     /// features the renderer uses.
     Info(GpuArgs),
+    /// Score every shadow technique against an exact CPU ray-traced reference.
+    #[command(long_about = compare::LONG_ABOUT)]
+    Compare(Box<compare::CompareArgs>),
+    /// Benchmarks with tables, JSON and plots (`bench layered`: seed 000's experiments).
+    #[command(subcommand)]
+    Bench(BenchCommand),
+}
+
+#[derive(Subcommand, Debug)]
+enum BenchCommand {
+    /// Shadow-map generation time against the number of maps, for every technique and the
+    /// seed's variants (simple, no-raster, skinned, instances, backface, combined). Writes
+    /// results.txt, results.json and one plot per variant and resolution into --out-dir.
+    Layered(Box<bench::LayeredArgs>),
 }
 
 #[derive(Args, Debug, Clone)]
-struct GpuArgs {
+pub(crate) struct GpuArgs {
     /// Graphics backend (default: WGPU_BACKEND, else the best adapter of any backend:
     /// hardware first, then Vulkan on the CPU, then OpenGL on the CPU).
     #[arg(long, value_enum)]
@@ -77,7 +95,7 @@ enum Backend {
 }
 
 impl GpuArgs {
-    fn request(&self) -> AdapterRequest {
+    pub(crate) fn request(&self) -> AdapterRequest {
         AdapterRequest {
             backends: self.backend.map(|b| match b {
                 Backend::Vulkan => wgpu_backends("vulkan"),
@@ -100,9 +118,28 @@ struct RenderArgs {
     /// terrain, dragon, cubes, plane-spot, plane-point, plane-directional.
     #[arg(long, default_value = "atrium")]
     scene: String,
-    /// Shadow generation technique.
+    /// Shadow generation technique: traditional (one depth pass per shadow view), layered
+    /// (one instanced draw into every view's tile), multiview (one pass per group of views via
+    /// the MULTIVIEW feature, Vulkan), gpu-driven (compute culls triangle clusters per view,
+    /// then one multi-draw-indirect). All fill the same atlas.
     #[arg(long, default_value = "traditional", value_parser = parse_technique)]
     technique: Technique,
+    /// Per-view triangle culling of the single-pass techniques: none, frustum, backface
+    /// (closed meshes only, so shadows never change) or all. `traditional` ignores it.
+    #[arg(long, default_value = "all", value_parser = parse_cull)]
+    cull: CullMode,
+    /// Render this many frames; with more than one, one shadow caster (see --move-instance)
+    /// moves a little each frame and a line per frame reports the shadow work. The last frame
+    /// is written.
+    #[arg(long, default_value_t = 1)]
+    frames: u32,
+    /// Keep the atlas tiles of views that saw no change since the last frame (seed 004's
+    /// caching); with --frames, shows how many views each frame redraws.
+    #[arg(long)]
+    cache: bool,
+    /// The instance that moves when --frames > 1 (default: the smallest shadow caster).
+    #[arg(long)]
+    move_instance: Option<usize>,
     /// Number of lights, placed by a seeded layout (default: the scene's own lights).
     #[arg(long)]
     lights: Option<usize>,
@@ -171,6 +208,10 @@ fn parse_technique(s: &str) -> Result<Technique, String> {
     s.parse()
 }
 
+fn parse_cull(s: &str) -> Result<CullMode, String> {
+    s.parse()
+}
+
 fn parse_pcf(s: &str) -> Result<Pcf, String> {
     s.parse()
 }
@@ -201,6 +242,8 @@ fn main() {
     let result = match cli.command {
         Some(Command::Render(args)) => render(&args),
         Some(Command::Info(args)) => info(&args),
+        Some(Command::Compare(args)) => compare::run(&args),
+        Some(Command::Bench(BenchCommand::Layered(args))) => bench::layered(&args),
         None => render(&cli.render),
     };
     if let Err(e) = result {
@@ -274,6 +317,11 @@ fn render(args: &RenderArgs) -> Result<()> {
         width: args.width,
         height: args.height,
         technique: args.technique,
+        shadow: ShadowOptions {
+            cull: args.cull,
+            ..Default::default()
+        },
+        cache_shadows: args.cache,
         pcf: args.pcf,
         bias: ShadowBias {
             constant: args.bias_constant,
@@ -290,8 +338,50 @@ fn render(args: &RenderArgs) -> Result<()> {
     };
     pb.set_message("uploading the scene and building pipelines");
     let mut renderer = Renderer::new(&ctx, &scene, settings)?;
-    pb.set_message("rendering");
-    let frame = renderer.render()?;
+    if args.frames == 0 {
+        bail!("--frames must be at least 1");
+    }
+    let mover = match args.move_instance {
+        Some(k) if k >= scene.instances.len() => bail!(
+            "--move-instance {k}: the scene has {} instances",
+            scene.instances.len()
+        ),
+        Some(k) => Some(k),
+        None => smallest_caster(&scene),
+    };
+    let mut frame = None;
+    for f in 0..args.frames {
+        pb.set_message(format!("rendering frame {}/{}", f + 1, args.frames));
+        if f > 0 {
+            if let Some(k) = mover {
+                // A small circle in the ground plane, one step per frame.
+                let a = f as f32 * 0.35;
+                let offset = glam::Vec3::new(0.3 * a.cos() - 0.3, 0.0, 0.3 * a.sin());
+                renderer.set_instance_transform(
+                    k,
+                    glam::Mat4::from_translation(offset) * scene.instances[k].transform,
+                );
+            }
+        }
+        let fr = renderer.render()?;
+        if args.frames > 1 {
+            let shadow_ms = fr
+                .timings
+                .gpu_ms
+                .iter()
+                .find(|(k, _)| k == "shadows")
+                .map_or("n/a".to_string(), |(_, v)| format!("{v:.2} ms"));
+            let line = format!(
+                "frame {:>3}: {:>4} of {} shadow views redrawn, shadow GPU time {shadow_ms}",
+                f + 1,
+                fr.shadow_stats.views_drawn,
+                renderer.plan().views.len()
+            );
+            pb.suspend(|| eprintln!("{line}"));
+        }
+        frame = Some(fr);
+    }
+    let frame = frame.expect("at least one frame");
     pb.set_message("writing images");
     write_rgba_png(&args.out, frame.width, frame.height, &frame.rgba)?;
     if let Some(path) = &args.atlas_out {
@@ -312,6 +402,22 @@ fn render(args: &RenderArgs) -> Result<()> {
             .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
+}
+
+/// The shadow caster with the smallest mesh: moving it changes few views.
+fn smallest_caster(scene: &Scene) -> Option<usize> {
+    scene
+        .instances
+        .iter()
+        .enumerate()
+        .filter(|(_, i)| i.casts_shadows)
+        .filter_map(|(k, i)| {
+            let (lo, hi) = scene.meshes.get(i.mesh)?.bounds()?;
+            let scale = i.transform.to_scale_rotation_translation().0.max_element();
+            Some((k, (hi - lo).length() * scale))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(k, _)| k)
 }
 
 fn write_rgba_png(path: &Path, w: u32, h: u32, rgba: &[u8]) -> Result<()> {
@@ -364,7 +470,7 @@ fn summary(
                     "shadowed": scene.lights.iter().filter(|l| l.casts_shadows).count() },
         "shadow_views": plan.views.len(),
         "atlas": { "size": plan.layout.size, "fill": plan.fill(), "shrink_steps": plan.layout.shrink_steps },
-        "shadow_work": { "passes": frame.shadow_stats.passes, "draws": frame.shadow_stats.draws,
+        "shadow_work": { "passes": frame.shadow_stats.passes, "draws": frame.shadow_stats.draws, "views_drawn": frame.shadow_stats.views_drawn,
                          "culled_draws": frame.shadow_stats.culled, "triangles": frame.shadow_stats.triangles },
         "gpu_ms": frame.timings.gpu_ms.iter().map(|(k, v)| (k.clone(), serde_json::json!(v))).collect::<serde_json::Map<_, _>>(),
         "cpu_record_ms": frame.timings.cpu_record_ms,

@@ -47,12 +47,17 @@ const OPTIONAL_FEATURES: &[(wgpu::Features, &str, &str)] = &[
     (
         wgpu::Features::MULTIVIEW,
         "MULTIVIEW",
-        "multiview shadow generation (layered technique, later)",
+        "multiview shadow generation (--technique multiview)",
     ),
     (
         wgpu::Features::MULTI_DRAW_INDIRECT_COUNT,
         "MULTI_DRAW_INDIRECT_COUNT",
-        "GPU-driven shadow generation (later)",
+        "compacted indirect draws of the gpu-driven technique",
+    ),
+    (
+        wgpu::Features::CLIP_DISTANCES,
+        "CLIP_DISTANCES",
+        "keeping layered and gpu-driven draws inside their atlas tiles",
     ),
 ];
 

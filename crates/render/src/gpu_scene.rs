@@ -31,6 +31,10 @@ pub struct DrawItem {
     pub sphere: (Vec3, f32),
     /// Drawn into shadow maps.
     pub casts_shadows: bool,
+    /// Object-space bounding sphere of the mesh.
+    pub object_sphere: (Vec3, f32),
+    /// Material index.
+    pub material: u32,
 }
 
 /// Scene buffers on the GPU.
@@ -49,6 +53,8 @@ pub struct GpuScene {
     pub draws: Vec<DrawItem>,
     /// Triangles over all instances.
     pub triangles: u64,
+    /// Skinning, if attached with [`GpuScene::attach_skin`] (benchmarks).
+    pub skin: Option<crate::casters::GpuSkin>,
 }
 
 /// Bytes per vertex position.
@@ -141,11 +147,10 @@ impl GpuScene {
             .map(|(i, inst)| {
                 let (c, r) = spheres[inst.mesh];
                 let m = inst.transform;
-                let scale = [m.x_axis, m.y_axis, m.z_axis]
-                    .iter()
-                    .map(|a| Vec4::truncate(*a).length())
-                    .fold(0.0f32, f32::max);
+                let scale = max_axis_scale(m);
                 DrawItem {
+                    object_sphere: (c, r),
+                    material: inst.material as u32,
                     instance: i as u32,
                     mesh: ranges[inst.mesh],
                     sphere: (m.transform_point3(c), r * scale),
@@ -189,8 +194,45 @@ impl GpuScene {
             ),
             draws,
             triangles: scene.triangle_count() as u64,
+            skin: None,
         })
     }
+
+    /// Skins every vertex (seed 000 §19.4.1's skeletal-animation workload). Shadow techniques
+    /// then transform vertices by the bones and then by the instance's model matrix.
+    pub fn attach_skin(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        skin: &crate::casters::Skin,
+    ) -> Result<(), RenderError> {
+        self.skin = Some(crate::casters::GpuSkin::new(ctx, scene, skin)?);
+        Ok(())
+    }
+
+    /// Replaces one instance's model matrix (e.g. a moving object between frames) and its
+    /// world bounding sphere. Out-of-range instances are ignored.
+    pub fn set_instance_transform(&mut self, queue: &wgpu::Queue, instance: usize, m: Mat4) {
+        let Some(d) = self.draws.get_mut(instance) else {
+            return;
+        };
+        let (c, r) = d.object_sphere;
+        d.sphere = (m.transform_point3(c), r * max_axis_scale(m));
+        let data = InstanceData::new(m, d.material);
+        queue.write_buffer(
+            &self.instances,
+            (instance * std::mem::size_of::<InstanceData>()) as u64,
+            bytemuck::bytes_of(&data),
+        );
+    }
+}
+
+/// Largest length of the matrix's three axes: how much it can grow a sphere.
+fn max_axis_scale(m: Mat4) -> f32 {
+    [m.x_axis, m.y_axis, m.z_axis]
+        .iter()
+        .map(|a| Vec4::truncate(*a).length())
+        .fold(0.0f32, f32::max)
 }
 
 /// The six planes of a view-projection's frustum (wgpu clip space: depth 0..1), as

@@ -17,8 +17,11 @@
 //! ```
 
 pub mod atlas_image;
+pub mod casters;
 pub mod context;
 pub mod gbuffer;
+pub mod generator;
+pub mod gbuffer_readback;
 pub mod gpu_scene;
 pub mod gpu_types;
 pub mod lighting;
@@ -31,9 +34,13 @@ pub mod timing;
 pub mod visibility;
 
 pub use context::{AdapterRequest, GpuContext};
+pub use gbuffer_readback::GBufferData;
 pub use gpu_scene::GpuScene;
 pub use renderer::{Frame, FrameTimings, Pcf, RenderSettings, Renderer, ShadowBias};
-pub use shadow::{ShadowAtlas, ShadowPlan, ShadowStats, ShadowTechnique, Technique};
+pub use generator::ShadowGenerator;
+pub use shadow::{
+    CullMode, ShadowAtlas, ShadowOptions, ShadowPlan, ShadowStats, ShadowTechnique, Technique,
+};
 pub use visibility::VisibilityMask;
 
 pub use manyshadows_scene as scene;
@@ -83,6 +90,9 @@ pub enum RenderError {
     /// The GPU reported a validation or out-of-memory error.
     #[error("GPU error while {0}")]
     Gpu(String),
+    /// The adapter lacks a feature the chosen path needs.
+    #[error("{0}")]
+    Unsupported(String),
     /// Reading results back failed.
     #[error("reading results back from the GPU failed: {0}")]
     Readback(String),

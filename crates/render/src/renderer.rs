@@ -16,9 +16,9 @@ use crate::gbuffer::GBuffer;
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::FrameUniforms;
 use crate::lighting::{LightingInputs, LightingPass};
+use crate::generator::ShadowGenerator;
 use crate::shadow::{
-    ShadowAtlas, ShadowInput, ShadowPlan, ShadowStats, ShadowTechnique, Technique,
-    DEFAULT_MAX_ATLAS_SIZE,
+    ShadowAtlas, ShadowOptions, ShadowPlan, ShadowStats, Technique, DEFAULT_MAX_ATLAS_SIZE,
 };
 use crate::timing::GpuTimer;
 use crate::visibility::{VisibilityMask, VisibilityPass};
@@ -104,6 +104,10 @@ pub struct RenderSettings {
     pub height: u32,
     /// Shadow generation technique.
     pub technique: Technique,
+    /// Culling and caster options of the technique.
+    pub shadow: ShadowOptions,
+    /// Keep the tiles of unchanged views between frames (see [`crate::generator`]).
+    pub cache_shadows: bool,
     /// Shadow filtering.
     pub pcf: Pcf,
     /// Receiver bias.
@@ -122,6 +126,8 @@ impl Default for RenderSettings {
             width: 1280,
             height: 720,
             technique: Technique::default(),
+            shadow: ShadowOptions::default(),
+            cache_shadows: false,
             pcf: Pcf::default(),
             bias: ShadowBias::default(),
             max_atlas_size: None,
@@ -165,12 +171,10 @@ pub struct Renderer<'c> {
     ctx: &'c GpuContext,
     settings: RenderSettings,
     scene: GpuScene,
-    plan: ShadowPlan,
-    atlas: ShadowAtlas,
-    technique: Box<dyn ShadowTechnique>,
+    shadows: ShadowGenerator,
     frame_buffer: wgpu::Buffer,
     lights: wgpu::Buffer,
-    gbuffer: GBuffer,
+    pub(crate) gbuffer: GBuffer,
     lighting: LightingPass,
     visibility: Option<VisibilityPass>,
     timer: GpuTimer,
@@ -207,8 +211,17 @@ impl<'c> Renderer<'c> {
             let aspect = settings.width as f32 / settings.height as f32;
             let plan = ShadowPlan::new(scene, aspect, max_atlas, settings.fit)?;
             let gpu_scene = GpuScene::new(ctx, scene)?;
-            let atlas = ShadowAtlas::new(ctx, &plan);
             let mut light_data = plan.light_data(scene);
+            let mut shadows = ShadowGenerator::new(
+                ctx,
+                scene,
+                &gpu_scene,
+                plan,
+                settings.technique,
+                settings.shadow,
+            )?;
+            shadows.set_caching(settings.cache_shadows);
+            let atlas = &shadows.atlas;
             if light_data.is_empty() {
                 light_data.push(bytemuck::Zeroable::zeroed());
             }
@@ -238,7 +251,7 @@ impl<'c> Renderer<'c> {
                 lights: &lights,
                 materials: &gpu_scene.materials,
                 gbuffer: &gbuffer,
-                atlas: &atlas,
+                atlas,
             };
             let lighting = LightingPass::new(ctx, &inputs, settings.width, settings.height);
             let visibility = if settings.visibility {
@@ -253,11 +266,9 @@ impl<'c> Renderer<'c> {
             };
             Ok(Self {
                 ctx,
-                technique: settings.technique.create(ctx),
                 settings,
                 scene: gpu_scene,
-                plan,
-                atlas,
+                shadows,
                 frame_buffer,
                 lights,
                 gbuffer,
@@ -271,7 +282,7 @@ impl<'c> Renderer<'c> {
 
     /// The shadow views and atlas layout.
     pub fn plan(&self) -> &ShadowPlan {
-        &self.plan
+        &self.shadows.plan
     }
 
     /// The settings in use.
@@ -291,7 +302,21 @@ impl<'c> Renderer<'c> {
 
     /// The shadow atlas.
     pub fn atlas(&self) -> &ShadowAtlas {
-        &self.atlas
+        &self.shadows.atlas
+    }
+
+    /// Moves instance `instance` (a new model matrix) before the next frame; with
+    /// [`RenderSettings::cache_shadows`] only the views that see it are redrawn.
+    pub fn set_instance_transform(&mut self, instance: usize, transform: glam::Mat4) {
+        let Some(old) = self.scene.draws.get(instance).copied() else {
+            return;
+        };
+        self.scene
+            .set_instance_transform(&self.ctx.queue, instance, transform);
+        if old.casts_shadows {
+            self.shadows
+                .note_moved(old.sphere, self.scene.draws[instance].sphere);
+        }
     }
 
     /// Renders one frame and reads it back.
@@ -309,15 +334,9 @@ impl<'c> Renderer<'c> {
             self.gbuffer
                 .record(&mut encoder, &self.scene, &self.timer, span);
             let span = self.timer.span("shadows");
-            let input = ShadowInput {
-                ctx,
-                scene: &self.scene,
-                views: &self.plan.views,
-                atlas: &self.atlas,
-            };
-            let shadow_stats = self
-                .technique
-                .generate(&input, &mut encoder, &self.timer, span);
+            let shadow_stats =
+                self.shadows
+                    .generate(ctx, &self.scene, &mut encoder, &self.timer, span);
             let span = self.timer.span("lighting");
             self.lighting.record(&mut encoder, &self.timer, span);
             ctx.queue.submit([encoder.finish()]);
@@ -332,7 +351,7 @@ impl<'c> Renderer<'c> {
                         lights: &self.lights,
                         materials: &self.scene.materials,
                         gbuffer: &self.gbuffer,
-                        atlas: &self.atlas,
+                        atlas: &self.shadows.atlas,
                     };
                     Some(pass.run(ctx, &inputs, &self.timer, span)?)
                 }
@@ -366,9 +385,7 @@ impl<'c> Renderer<'c> {
 
     /// Reads the depth atlas back (`size`² floats, row-major).
     pub fn read_atlas(&self) -> Result<Vec<f32>, RenderError> {
-        self.ctx.scoped("reading the shadow atlas", || {
-            crate::atlas_image::read_depth(self.ctx, &self.atlas)
-        })
+        self.shadows.read_atlas(self.ctx)
     }
 }
 

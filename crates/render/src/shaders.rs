@@ -42,6 +42,54 @@ pub fn traditional() -> String {
     compose(&[COMMON, include_str!("techniques/traditional.wgsl")])
 }
 
+/// Per-frame world transform of shadow casters.
+pub fn casters() -> String {
+    compose(&[COMMON, include_str!("shaders/casters.wgsl")])
+}
+
+/// Per-view triangle culling (frustum, back-face).
+pub const CULL: &str = include_str!("techniques/cull.wgsl");
+
+/// Clearing single tiles of the atlas.
+pub fn tile_clear() -> String {
+    compose(&[COMMON, include_str!("techniques/tile_clear.wgsl")])
+}
+
+/// Mapping clip positions into atlas tiles with clip distances (`layered`, `gpu-driven`).
+pub const TILE: &str = include_str!("techniques/tile.wgsl");
+
+/// The `layered` technique's vertex shaders.
+pub fn layered() -> String {
+    compose(&[
+        "enable clip_distances;",
+        COMMON,
+        CULL,
+        TILE,
+        include_str!("techniques/layered.wgsl"),
+    ])
+}
+
+/// The `multiview` technique's vertex shaders (one view per `view_index`).
+pub fn multiview() -> String {
+    compose(&[COMMON, CULL, include_str!("techniques/multiview.wgsl")])
+}
+
+/// The `multiview` technique's copy of scratch layers into atlas tiles.
+pub fn multiview_copy() -> String {
+    compose(&[COMMON, include_str!("techniques/multiview_copy.wgsl")])
+}
+
+/// The `gpu-driven` technique's cluster culling (compute) and draw (vertex) shaders.
+pub fn gpu_driven() -> String {
+    compose(&[
+        "enable clip_distances;",
+        COMMON,
+        CULL,
+        TILE,
+        include_str!("techniques/gpu_driven.wgsl"),
+    ])
+}
+
 /// Every composed shader with its name (for validation).
 pub fn all() -> Vec<(&'static str, String)> {
     vec![
@@ -50,6 +98,12 @@ pub fn all() -> Vec<(&'static str, String)> {
         ("visibility", visibility()),
         ("atlas_copy", atlas_copy()),
         ("traditional", traditional()),
+        ("casters", casters()),
+        ("tile_clear", tile_clear()),
+        ("layered", layered()),
+        ("multiview", multiview()),
+        ("multiview_copy", multiview_copy()),
+        ("gpu_driven", gpu_driven()),
     ]
 }
 

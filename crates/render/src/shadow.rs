@@ -10,6 +10,7 @@ use manyshadows_scene::light_space::{self, ShadowView};
 use manyshadows_scene::Scene;
 use wgpu::util::DeviceExt;
 
+use crate::casters::{CasterGeometry, CasterOptions};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{LightData, ShadowViewData, ViewUniform, VIEW_UNIFORM_STRIDE};
 use crate::timing::{GpuTimer, Span};
@@ -145,6 +146,23 @@ pub struct ShadowAtlas {
     pub view_uniforms: wgpu::Buffer,
     /// Tiles in view order.
     pub tiles: Vec<Tile>,
+    /// `array<vec4<f32>>` per view, what back-face culling faces: the light's position
+    /// (w = 1) or, for orthographic views, the direction light travels (w = 0).
+    pub eyes: wgpu::Buffer,
+    /// `array<u32>`: the views a generation draws (see [`ShadowInput::draw_list`]).
+    pub draw_list: wgpu::Buffer,
+}
+
+/// What back-face culling of `view` faces: `(position, 1)` or `(direction of travel, 0)`.
+pub fn view_eye(view: &ShadowView) -> glam::Vec4 {
+    let inv = view.view.inverse();
+    if view.orthographic {
+        inv.transform_vector3(glam::Vec3::NEG_Z)
+            .normalize_or_zero()
+            .extend(0.0)
+    } else {
+        inv.w_axis.truncate().extend(1.0)
+    }
 }
 
 impl ShadowAtlas {
@@ -199,6 +217,23 @@ impl ShadowAtlas {
                 contents: &uniform_bytes,
                 usage: wgpu::BufferUsages::UNIFORM,
             });
+        let mut eyes: Vec<[f32; 4]> = plan.views.iter().map(|v| view_eye(v).to_array()).collect();
+        eyes.resize(eyes.len().max(1), [0.0; 4]);
+        let eyes = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("shadow.eyes"),
+                contents: bytemuck::cast_slice(&eyes),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+        let all: Vec<u32> = (0..plan.views.len().max(1) as u32).collect();
+        let draw_list = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("shadow.draw_list"),
+                contents: bytemuck::cast_slice(&all),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            });
         Self {
             texture,
             view,
@@ -206,6 +241,8 @@ impl ShadowAtlas {
             views_buffer,
             view_uniforms,
             tiles: plan.layout.tiles.clone(),
+            eyes,
+            draw_list,
         }
     }
 }
@@ -220,10 +257,101 @@ pub struct ShadowInput<'a> {
     pub views: &'a [ShadowView],
     /// The atlas to fill.
     pub atlas: &'a ShadowAtlas,
+    /// World-space caster geometry (techniques that use it record its transform).
+    pub casters: &'a CasterGeometry,
+    /// Culling and raster options.
+    pub options: &'a ShadowOptions,
+    /// The views to draw this time, ascending (all of them unless caching kept some);
+    /// also uploaded to [`ShadowAtlas::draw_list`].
+    pub draw_list: &'a [u32],
+}
+
+impl ShadowInput<'_> {
+    /// True if every view is drawn: the whole atlas may be cleared at once. Otherwise only the
+    /// listed views' tiles may be touched.
+    pub fn full(&self) -> bool {
+        self.draw_list.len() == self.views.len()
+    }
+}
+
+/// Which triangles single-pass techniques drop per view before rasterization (seed 000
+/// Listings 19.9 and 19.10).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum CullMode {
+    /// Every triangle goes to every view.
+    None,
+    /// Triangles wholly outside a view's frustum are dropped for that view.
+    Frustum,
+    /// Triangles facing away from the light are dropped (closed meshes only; see
+    /// [`crate::casters`]).
+    Backface,
+    /// Both.
+    #[default]
+    All,
+}
+
+impl CullMode {
+    /// Every mode.
+    pub const ALL: &'static [CullMode] = &[
+        CullMode::None,
+        CullMode::Frustum,
+        CullMode::Backface,
+        CullMode::All,
+    ];
+
+    /// CLI name.
+    pub fn name(self) -> &'static str {
+        match self {
+            CullMode::None => "none",
+            CullMode::Frustum => "frustum",
+            CullMode::Backface => "backface",
+            CullMode::All => "all",
+        }
+    }
+
+    /// Frustum culling on.
+    pub fn frustum(self) -> bool {
+        matches!(self, CullMode::Frustum | CullMode::All)
+    }
+
+    /// Back-face culling on.
+    pub fn backface(self) -> bool {
+        matches!(self, CullMode::Backface | CullMode::All)
+    }
+
+    /// Bit flags for shaders: 1 = frustum, 2 = back-face.
+    pub fn bits(self) -> u32 {
+        u32::from(self.frustum()) | (u32::from(self.backface()) << 1)
+    }
+}
+
+impl std::str::FromStr for CullMode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        CullMode::ALL
+            .iter()
+            .copied()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| format!("unknown cull mode '{s}' (expected none, frustum, backface or all)"))
+    }
+}
+
+/// Options every technique honours.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ShadowOptions {
+    /// Per-view triangle culling of the single-pass techniques (`traditional` always culls
+    /// whole instances by their bounding sphere on the CPU, and nothing else).
+    pub cull: CullMode,
+    /// How caster geometry is prepared.
+    pub casters: CasterOptions,
+    /// Benchmark only: a zero-sized scissor rectangle, so geometry is transformed, culled,
+    /// clipped and set up but no fragment is produced. The closest wgpu gets to seed 000's
+    /// `GL_RASTERIZER_DISCARD`; the atlas is left cleared.
+    pub discard_raster: bool,
 }
 
 /// Work counters of one shadow generation.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct ShadowStats {
     /// Render or compute passes recorded.
     pub passes: u32,
@@ -233,6 +361,8 @@ pub struct ShadowStats {
     pub culled: u64,
     /// Triangles submitted over all draws.
     pub triangles: u64,
+    /// Views drawn (fewer than all when caching kept some tiles).
+    pub views_drawn: u32,
 }
 
 /// A shadow-generation technique: fills every view's tile of the atlas with depth.
@@ -255,26 +385,71 @@ pub enum Technique {
     /// One depth-only pass per shadow view (seed 004, seed 000 §19.2).
     #[default]
     Traditional,
+    /// One instanced draw fills every view's tile (seed 000 §19.3).
+    Layered,
+    /// One multiview pass per group of equal-size views (seed 000 §19.5); needs `MULTIVIEW`.
+    Multiview,
+    /// Clusters culled per view in compute, one indirect multi-draw (seed 002).
+    GpuDriven,
 }
 
 impl Technique {
     /// Every technique.
-    pub const ALL: &'static [Technique] = &[Technique::Traditional];
+    pub const ALL: &'static [Technique] = &[
+        Technique::Traditional,
+        Technique::Layered,
+        Technique::Multiview,
+        Technique::GpuDriven,
+    ];
 
     /// The CLI name.
     pub fn name(self) -> &'static str {
         match self {
             Technique::Traditional => "traditional",
+            Technique::Layered => "layered",
+            Technique::Multiview => "multiview",
+            Technique::GpuDriven => "gpu-driven",
         }
     }
 
-    /// Builds the technique's pipelines.
-    pub fn create(self, ctx: &GpuContext) -> Box<dyn ShadowTechnique> {
+    /// One line for `--help` and tables.
+    pub fn summary(self) -> &'static str {
         match self {
+            Technique::Traditional => "one depth pass per shadow view, instances culled on the CPU",
+            Technique::Layered => {
+                "one instanced draw into every tile; per-view triangle culling in the vertex shader"
+            }
+            Technique::Multiview => {
+                "one multiview pass per group of equal-size views (cube faces, cascades), then \
+                 a copy into the tiles; needs MULTIVIEW"
+            }
+            Technique::GpuDriven => {
+                "compute culls triangle clusters per view and writes indirect draws; one \
+                 multi-draw fills every tile"
+            }
+        }
+    }
+
+    /// Builds the technique's pipelines; fails with a clear message where the adapter lacks
+    /// a feature the technique needs.
+    pub fn create(
+        self,
+        ctx: &GpuContext,
+        options: &ShadowOptions,
+    ) -> Result<Box<dyn ShadowTechnique>, RenderError> {
+        let _ = options;
+        Ok(match self {
             Technique::Traditional => {
                 Box::new(crate::techniques::traditional::Traditional::new(ctx))
             }
-        }
+            Technique::Layered => Box::new(crate::techniques::layered::Layered::new(ctx)?),
+            Technique::Multiview => {
+                Box::new(crate::techniques::multiview::Multiview::new(ctx)?)
+            }
+            Technique::GpuDriven => {
+                Box::new(crate::techniques::gpu_driven::GpuDriven::new(ctx)?)
+            }
+        })
     }
 }
 

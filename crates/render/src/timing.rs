@@ -3,8 +3,41 @@
 //! A *span* is a named pair of timestamps; a stage made of many passes (one per shadow view)
 //! writes the span's start in its first pass and its end in its last. Without the
 //! `TIMESTAMP_QUERY` feature every call is a no-op and no GPU times are reported.
+//!
+//! Benchmarks may also turn on pipeline-statistics queries
+//! ([`GpuTimer::enable_statistics`]): techniques bracket each pass they record with
+//! `begin_*_stats` / `end_*_stats`, and the counts of all bracketed passes are summed.
+
+use std::cell::Cell;
 
 use crate::{GpuContext, RenderError};
+
+/// Pipeline-statistics counters summed over the passes of one generation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct PipelineCounts {
+    /// Vertex-shader invocations.
+    pub vertex_shader_invocations: u64,
+    /// Primitives that entered the clipper.
+    pub clipper_invocations: u64,
+    /// Primitives that left the clipper (what is rasterized).
+    pub clipper_primitives_out: u64,
+    /// Fragment-shader invocations (0 for depth-only pipelines without a fragment stage).
+    pub fragment_shader_invocations: u64,
+    /// Compute-shader invocations.
+    pub compute_shader_invocations: u64,
+}
+
+const STAT_TYPES: wgpu::PipelineStatisticsTypes = wgpu::PipelineStatisticsTypes::all();
+const STAT_WORDS: u64 = 5;
+
+struct StatQueries {
+    set: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    capacity: u32,
+    next: Cell<u32>,
+    overflow: Cell<bool>,
+}
 
 /// Most spans per frame.
 const MAX_SPANS: u32 = 32;
@@ -21,6 +54,7 @@ pub struct GpuTimer {
     queries: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     labels: Vec<(String, Span)>,
     period_ns: f32,
+    stats: Option<StatQueries>,
 }
 
 impl GpuTimer {
@@ -51,7 +85,114 @@ impl GpuTimer {
             queries,
             labels: Vec::new(),
             period_ns: ctx.queue.get_timestamp_period(),
+            stats: None,
         }
+    }
+
+    /// Turns on pipeline-statistics queries for up to `passes` bracketed passes per frame.
+    /// Returns false (and stays off) if the adapter lacks `PIPELINE_STATISTICS_QUERY`.
+    pub fn enable_statistics(&mut self, ctx: &GpuContext, passes: u32) -> bool {
+        if !ctx.has(wgpu::Features::PIPELINE_STATISTICS_QUERY) {
+            return false;
+        }
+        let capacity = passes.clamp(1, 4096);
+        let bytes = capacity as u64 * STAT_WORDS * 8;
+        self.stats = Some(StatQueries {
+            set: ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("timer.statistics"),
+                ty: wgpu::QueryType::PipelineStatistics(STAT_TYPES),
+                count: capacity,
+            }),
+            resolve: ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timer.statistics.resolve"),
+                size: bytes,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+            readback: ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timer.statistics.readback"),
+                size: bytes,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            capacity,
+            next: Cell::new(0),
+            overflow: Cell::new(false),
+        });
+        true
+    }
+
+    fn stat_slot(&self) -> Option<(&wgpu::QuerySet, u32)> {
+        let q = self.stats.as_ref()?;
+        let i = q.next.get();
+        if i >= q.capacity {
+            q.overflow.set(true);
+            return None;
+        }
+        q.next.set(i + 1);
+        Some((&q.set, i))
+    }
+
+    /// Starts counting a render pass; pass the result to [`GpuTimer::end_render_stats`].
+    pub fn begin_render_stats(&self, pass: &mut wgpu::RenderPass<'_>) -> bool {
+        match self.stat_slot() {
+            Some((set, i)) => {
+                pass.begin_pipeline_statistics_query(set, i);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Ends counting a render pass.
+    pub fn end_render_stats(&self, pass: &mut wgpu::RenderPass<'_>, began: bool) {
+        if began {
+            pass.end_pipeline_statistics_query();
+        }
+    }
+
+    /// Starts counting a compute pass; pass the result to [`GpuTimer::end_compute_stats`].
+    pub fn begin_compute_stats(&self, pass: &mut wgpu::ComputePass<'_>) -> bool {
+        match self.stat_slot() {
+            Some((set, i)) => {
+                pass.begin_pipeline_statistics_query(set, i);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Ends counting a compute pass.
+    pub fn end_compute_stats(&self, pass: &mut wgpu::ComputePass<'_>, began: bool) {
+        if began {
+            pass.end_pipeline_statistics_query();
+        }
+    }
+
+    /// Sums the statistics of this frame's bracketed passes (after submission); `None` if
+    /// statistics are off, or if more passes were bracketed than the capacity allows.
+    pub fn read_statistics(&self, ctx: &GpuContext) -> Result<Option<PipelineCounts>, RenderError> {
+        let Some(q) = self.stats.as_ref() else {
+            return Ok(None);
+        };
+        if q.overflow.get() {
+            return Ok(None);
+        }
+        let n = q.next.get() as u64;
+        if n == 0 {
+            return Ok(Some(PipelineCounts::default()));
+        }
+        let bytes = crate::readback::map_read(ctx, &q.readback, 0..n * STAT_WORDS * 8)?;
+        let words: &[u64] = bytemuck::cast_slice(&bytes);
+        let mut c = PipelineCounts::default();
+        for q in words.chunks_exact(STAT_WORDS as usize) {
+            c.vertex_shader_invocations += q[0];
+            c.clipper_invocations += q[1];
+            c.clipper_primitives_out += q[2];
+            c.fragment_shader_invocations += q[3];
+            c.compute_shader_invocations += q[4];
+        }
+        Ok(Some(c))
     }
 
     /// True if GPU times will be measured.
@@ -62,6 +203,10 @@ impl GpuTimer {
     /// Forgets the spans of the previous frame.
     pub fn reset(&mut self) {
         self.labels.clear();
+        if let Some(q) = &self.stats {
+            q.next.set(0);
+            q.overflow.set(false);
+        }
     }
 
     /// Starts a named span; `None` if timing is off or the span budget is spent.
@@ -119,6 +264,13 @@ impl GpuTimer {
 
     /// Records the resolve of this frame's queries; call once after the last timed pass.
     pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(q) = &self.stats {
+            let n = q.next.get().min(q.capacity);
+            if n > 0 {
+                encoder.resolve_query_set(&q.set, 0..n, &q.resolve, 0);
+                encoder.copy_buffer_to_buffer(&q.resolve, 0, &q.readback, 0, n as u64 * STAT_WORDS * 8);
+            }
+        }
         let Some((set, resolve, readback)) = self.queries.as_ref() else {
             return;
         };

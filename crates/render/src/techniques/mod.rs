@@ -1,4 +1,119 @@
 //! Shadow-generation techniques, one module each with its WGSL beside it. Adding a technique
 //! means a module here and one line in [`crate::shadow::Technique`].
 
+pub mod gpu_driven;
+pub mod layered;
+pub mod multiview;
 pub mod traditional;
+
+use crate::shadow::{ShadowInput, ATLAS_FORMAT};
+use crate::GpuContext;
+
+/// Clears only the tiles of the views in [`ShadowInput::draw_list`] (to depth 1), for
+/// generations that must keep the other, cached tiles.
+pub struct TileClear {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+}
+
+impl TileClear {
+    /// Builds the clear pipeline.
+    pub fn new(ctx: &GpuContext) -> Self {
+        let device = &ctx.device;
+        let module =
+            crate::shaders::module(device, "tile_clear.shader", &crate::shaders::tile_clear());
+        let vs = wgpu::ShaderStages::VERTEX;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("tile_clear.layout"),
+            entries: &[
+                crate::storage_entry(0, vs),
+                crate::storage_entry(1, vs),
+                crate::uniform_entry(2, vs),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("tile_clear.pipeline_layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("tile_clear.pipeline"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_clear"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: ATLAS_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: None,
+            multiview_mask: None,
+            cache: None,
+        });
+        Self { pipeline, layout }
+    }
+
+    /// Records the clear of every listed view's tile into `pass` (whose viewport must be the
+    /// whole atlas). Does nothing when every view is drawn: that pass clears on load instead.
+    pub fn record(&self, ctx: &GpuContext, input: &ShadowInput<'_>, pass: &mut wgpu::RenderPass<'_>) {
+        if input.full() || input.draw_list.is_empty() {
+            return;
+        }
+        let size = wgpu::util::DeviceExt::create_buffer_init(
+            &ctx.device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("tile_clear.atlas"),
+                contents: bytemuck::cast_slice(&[input.atlas.size as f32, 0.0, 0.0, 0.0]),
+                usage: wgpu::BufferUsages::UNIFORM,
+            },
+        );
+        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("tile_clear.bind_group"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: input.atlas.views_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: input.atlas.draw_list.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: size.as_entire_binding(),
+                },
+            ],
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.draw(0..6, 0..input.draw_list.len() as u32);
+    }
+}
+
+/// The atlas as a depth attachment, cleared on load when every view is redrawn.
+pub(crate) fn atlas_attachment<'a>(
+    input: &'a ShadowInput<'_>,
+    clear: bool,
+) -> wgpu::RenderPassDepthStencilAttachment<'a> {
+    wgpu::RenderPassDepthStencilAttachment {
+        view: &input.atlas.view,
+        depth_ops: Some(wgpu::Operations {
+            load: if clear {
+                wgpu::LoadOp::Clear(1.0)
+            } else {
+                wgpu::LoadOp::Load
+            },
+            store: wgpu::StoreOp::Store,
+        }),
+        stencil_ops: None,
+    }
+}

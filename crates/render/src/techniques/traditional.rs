@@ -3,16 +3,21 @@
 //! beat). Position-only vertex input and no fragment stage, as seed 004 recommends: the only
 //! output is depth.
 
+use crate::casters::{MAX_BONES, SKIN_LAYOUT};
 use crate::gpu_scene::{GpuScene, POSITION_LAYOUT};
 use crate::gpu_types::VIEW_UNIFORM_STRIDE;
 use crate::shadow::{visible_casters, ShadowInput, ShadowStats, ShadowTechnique, ATLAS_FORMAT};
+use crate::techniques::{atlas_attachment, TileClear};
 use crate::timing::{GpuTimer, Span};
 use crate::GpuContext;
 
-/// The traditional technique's pipeline and layout.
+/// The traditional technique's pipelines and layout.
 pub struct Traditional {
     pipeline: wgpu::RenderPipeline,
+    skinned: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
+    clear: TileClear,
+    no_bones: wgpu::Buffer,
 }
 
 impl Traditional {
@@ -35,6 +40,7 @@ impl Traditional {
                     count: None,
                 },
                 crate::storage_entry(1, wgpu::ShaderStages::VERTEX),
+                crate::uniform_entry(2, wgpu::ShaderStages::VERTEX),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -42,14 +48,15 @@ impl Traditional {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("traditional.pipeline"),
+        let pipeline = |entry: &str, layout: wgpu::VertexBufferLayout<'static>| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(entry),
             layout: Some(&pipeline_layout),
             vertex: wgpu::VertexState {
                 module: &module,
-                entry_point: Some("vs_depth"),
+                entry_point: Some(entry),
                 compilation_options: Default::default(),
-                buffers: &[Some(POSITION_LAYOUT)],
+                buffers: &[Some(layout)],
             },
             primitive: wgpu::PrimitiveState {
                 topology: wgpu::PrimitiveTopology::TriangleList,
@@ -72,11 +79,27 @@ impl Traditional {
             fragment: None,
             multiview_mask: None,
             cache: None,
-        });
-        Self { pipeline, layout }
+        })
+        };
+        let no_bones = wgpu::util::DeviceExt::create_buffer_init(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("traditional.no_bones"),
+                contents: bytemuck::cast_slice(&[glam::Mat4::IDENTITY.to_cols_array(); MAX_BONES]),
+                usage: wgpu::BufferUsages::UNIFORM,
+            },
+        );
+        Self {
+            pipeline: pipeline("vs_depth", POSITION_LAYOUT),
+            skinned: pipeline("vs_skinned", SKIN_LAYOUT),
+            layout,
+            clear: TileClear::new(ctx),
+            no_bones,
+        }
     }
 
     fn bind_group(&self, ctx: &GpuContext, input: &ShadowInput<'_>) -> wgpu::BindGroup {
+        let bones = input.scene.skin.as_ref().map_or(&self.no_bones, |s| &s.bones);
         ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("traditional.bind_group"),
             layout: &self.layout,
@@ -92,6 +115,10 @@ impl Traditional {
                 wgpu::BindGroupEntry {
                     binding: 1,
                     resource: input.scene.instances.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: bones.as_entire_binding(),
                 },
             ],
         })
@@ -135,33 +162,33 @@ impl ShadowTechnique for Traditional {
     ) -> ShadowStats {
         let bind_group = self.bind_group(input.ctx, input);
         let mut stats = ShadowStats::default();
-        let n = input.views.len();
+        let n = input.draw_list.len();
         if n == 0 {
             return stats;
         }
+        let (pipeline, vertices) = match &input.scene.skin {
+            Some(skin) => (&self.skinned, &skin.vertices),
+            None => (&self.pipeline, &input.scene.positions),
+        };
         encoder.push_debug_group("traditional");
-        for (i, (view, tile)) in input.views.iter().zip(&input.atlas.tiles).enumerate() {
+        for (k, &i) in input.draw_list.iter().enumerate() {
+            let i = i as usize;
+            let (view, tile) = (&input.views[i], &input.atlas.tiles[i]);
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("traditional.view"),
                 color_attachments: &[],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &input.atlas.view,
-                    depth_ops: Some(wgpu::Operations {
-                        // The first pass clears the whole atlas; later passes keep what earlier
-                        // ones wrote into other tiles.
-                        load: if i == 0 {
-                            wgpu::LoadOp::Clear(1.0)
-                        } else {
-                            wgpu::LoadOp::Load
-                        },
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: timer.render_writes(span, i == 0, i + 1 == n),
+                // The first pass clears the whole atlas when every view is redrawn (or only
+                // the listed tiles, when caching keeps the others); later passes keep what
+                // earlier ones wrote into other tiles.
+                depth_stencil_attachment: Some(atlas_attachment(input, k == 0 && input.full())),
+                timestamp_writes: timer.render_writes(span, k == 0, k + 1 == n),
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
+            let s = timer.begin_render_stats(&mut pass);
+            if k == 0 {
+                self.clear.record(input.ctx, input, &mut pass);
+            }
             pass.set_viewport(
                 tile.x as f32,
                 tile.y as f32,
@@ -170,12 +197,17 @@ impl ShadowTechnique for Traditional {
                 0.0,
                 1.0,
             );
-            pass.set_scissor_rect(tile.x, tile.y, tile.size, tile.size);
-            pass.set_pipeline(&self.pipeline);
+            if input.options.discard_raster {
+                pass.set_scissor_rect(0, 0, 0, 0);
+            } else {
+                pass.set_scissor_rect(tile.x, tile.y, tile.size, tile.size);
+            }
+            pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &bind_group, &[(i as u64 * VIEW_UNIFORM_STRIDE) as u32]);
-            pass.set_vertex_buffer(0, input.scene.positions.slice(..));
+            pass.set_vertex_buffer(0, vertices.slice(..));
             pass.set_index_buffer(input.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
             draw_casters(&mut pass, input.scene, view, &mut stats);
+            timer.end_render_stats(&mut pass, s);
             stats.passes += 1;
         }
         encoder.pop_debug_group();

@@ -12,3 +12,25 @@ struct ViewUniform {
 fn vs_depth(@location(0) position: vec3<f32>, @builtin(instance_index) instance: u32) -> @builtin(position) vec4<f32> {
     return shadow_view.view_proj * (instances[instance].model * vec4<f32>(position, 1.0));
 }
+
+struct Bones {
+    m: array<mat4x4<f32>, 64>,
+}
+
+@group(0) @binding(2) var<uniform> bones: Bones;
+
+// Seed 000 Listing 19.7's workload: up to four bones per vertex, then the instance's model
+// matrix. The arithmetic matches `skinned_position` in casters.wgsl operation for operation.
+@vertex
+fn vs_skinned(
+    @location(0) position: vec3<f32>,
+    @location(1) joints: u32,
+    @location(2) weights: vec4<f32>,
+    @builtin(instance_index) instance: u32,
+) -> @builtin(position) vec4<f32> {
+    let p = vec4<f32>(position, 1.0);
+    let j = unpack4xU8(joints);
+    let s = weights.x * (bones.m[j.x] * p) + weights.y * (bones.m[j.y] * p)
+        + weights.z * (bones.m[j.z] * p) + weights.w * (bones.m[j.w] * p);
+    return shadow_view.view_proj * (instances[instance].model * s);
+}

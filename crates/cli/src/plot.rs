@@ -1,0 +1,150 @@
+//! Plots in the manner of seed 000's Figures 19.3–19.9: time against the number of shadow
+//! maps, one line per method; total on the left, per map on the right; GPU on top, CPU below.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{anyhow, Result};
+use plotters::prelude::*;
+use plotters::style::{register_font, FontStyle};
+
+use crate::bench::PlotPoint;
+
+static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+
+fn ensure_font() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // The bundled DejaVu Sans, so plots need no system fonts.
+        let _ = register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+}
+
+const COLOURS: &[RGBColor] = &[
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(255, 127, 14),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(23, 190, 207),
+];
+
+type Series = (String, Vec<(f64, f64)>);
+
+/// Writes one PNG per (variant, resolution) into `dir` and returns their paths.
+pub fn layered_plots(points: &[PlotPoint], adapter: &str, dir: &Path) -> Result<Vec<PathBuf>> {
+    ensure_font();
+    let mut keys: Vec<(String, u32)> = Vec::new();
+    for p in points {
+        let k = (p.variant.clone(), p.resolution);
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    let mut written = Vec::new();
+    for (variant, res) in keys {
+        let rows: Vec<&PlotPoint> = points
+            .iter()
+            .filter(|p| p.variant == variant && p.resolution == res)
+            .collect();
+        let mut methods: Vec<String> = Vec::new();
+        for r in &rows {
+            if !methods.contains(&r.method) {
+                methods.push(r.method.clone());
+            }
+        }
+        let series = |f: &dyn Fn(&PlotPoint) -> Option<f64>, per_map: bool| -> Vec<Series> {
+            methods
+                .iter()
+                .map(|m| {
+                    let pts = rows
+                        .iter()
+                        .filter(|r| &r.method == m)
+                        .filter_map(|r| {
+                            f(r).filter(|v| v.is_finite()).map(|v| {
+                                let y = if per_map { v / r.maps as f64 } else { v };
+                                (r.maps as f64, y)
+                            })
+                        })
+                        .collect();
+                    (m.clone(), pts)
+                })
+                .collect()
+        };
+        let path = dir.join(format!("layered-{variant}-{res}.png"));
+        let root = BitMapBackend::new(&path, (1400, 1000)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| anyhow!("plot: {e}"))?;
+        let (title, body) = root.split_vertically(50);
+        title
+            .titled(
+                &format!("bench layered: {variant}, {res}² maps — {adapter}"),
+                ("sans-serif", 20),
+            )
+            .map_err(|e| anyhow!("plot: {e}"))?;
+        let panels = body.split_evenly((2, 2));
+        let specs: [(&str, Vec<Series>); 4] = [
+            ("GPU ms, total", series(&|p| p.gpu_ms, false)),
+            ("GPU ms per map", series(&|p| p.gpu_ms, true)),
+            ("CPU ms (record + submit), total", series(&|p| Some(p.cpu_ms), false)),
+            ("CPU ms per map", series(&|p| Some(p.cpu_ms), true)),
+        ];
+        for (area, (caption, data)) in panels.iter().zip(specs) {
+            panel(area, caption, &data)?;
+        }
+        root.present().map_err(|e| anyhow!("plot: {e}"))?;
+        written.push(path.clone());
+    }
+    Ok(written)
+}
+
+fn panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    caption: &str,
+    data: &[Series],
+) -> Result<()> {
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("plot: {e}");
+    let all: Vec<(f64, f64)> = data.iter().flat_map(|s| s.1.iter().copied()).collect();
+    if all.is_empty() {
+        area.titled(&format!("{caption}: no data"), ("sans-serif", 16))
+            .map_err(err)?;
+        return Ok(());
+    }
+    let xmax = all.iter().map(|p| p.0).fold(1.0, f64::max).max(2.0);
+    let ymax = all.iter().map(|p| p.1).fold(0.0, f64::max).max(1e-3) * 1.1;
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, ("sans-serif", 18))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d((1.0..xmax).log_scale(), 0.0..ymax)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("shadow maps")
+        .y_desc("ms")
+        .x_label_formatter(&|x| format!("{x:.0}"))
+        .label_style(("sans-serif", 13))
+        .draw()
+        .map_err(err)?;
+    for (i, (name, pts)) in data.iter().enumerate() {
+        let c = COLOURS[i % COLOURS.len()];
+        chart
+            .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(2)))
+            .map_err(err)?
+            .label(name.clone())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
+        chart
+            .draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))
+            .map_err(err)?;
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 13))
+        .draw()
+        .map_err(err)?;
+    Ok(())
+}

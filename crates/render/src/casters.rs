@@ -1,0 +1,589 @@
+//! Shadow-caster geometry shared by the single-pass techniques.
+//!
+//! Seed 000 §19.4.1 locates layered rendering's saving in the per-vertex work (model
+//! transform, skinning) that a one-pass-per-map renderer repeats for every map. Here that work
+//! runs **once per frame**: a compute pass writes the world position of every vertex of every
+//! shadow-casting instance into [`CasterGeometry::world`], and every shadow view then only
+//! applies its view-projection. The same buffers feed `layered` (vertex pulling),
+//! `multiview`, and `gpu-driven` (triangle clusters).
+//!
+//! Layout, built once on the CPU:
+//! - *caster vertices*: one per (caster instance, mesh vertex), `sources[i] = (scene vertex,
+//!   instance)`;
+//! - *corners*: three caster-vertex indices per triangle (also usable as an index buffer);
+//!   triangles that may be back-face culled come first ([`CasterGeometry::cullable_triangles`]),
+//!   so shaders need one comparison instead of a per-triangle flag;
+//! - *clusters*: runs of at most [`CLUSTER_TRIANGLES`] triangles of one instance, with an
+//!   object-space normal cone; their world bounding spheres are recomputed per frame.
+//!
+//! Back-face culling is only exact for closed meshes seen from outside: the nearest surface
+//! along a ray entering a closed mesh always faces the ray's origin. So a triangle is
+//! *cullable* only if its mesh is closed (checked on welded positions) and no spot or point
+//! light lies inside the instance's bounding box; inward-wound closed meshes are flipped.
+//! [`CasterOptions::assume_closed`] reproduces the seed instead, which culled every mesh.
+
+use std::collections::HashMap;
+
+use glam::{Mat4, Vec3};
+use manyshadows_scene::{LightKind, Mesh, Scene};
+use wgpu::util::DeviceExt;
+
+use crate::gpu_scene::GpuScene;
+use crate::{GpuContext, RenderError};
+
+/// Most triangles per cluster.
+pub const CLUSTER_TRIANGLES: u32 = 128;
+
+/// Bone matrices of a skinned scene (seed 000 Listing 19.7).
+pub const MAX_BONES: usize = 64;
+
+/// Bytes per skinned vertex: position, 4 joint bytes, 4 weights.
+pub const SKIN_VERTEX_STRIDE: u64 = 32;
+
+/// Skinning of every vertex of a scene (in the order of [`GpuScene`]'s vertex buffer: meshes
+/// concatenated), up to four bones per vertex out of [`MAX_BONES`].
+#[derive(Clone, Debug)]
+pub struct Skin {
+    /// Bone indices per vertex.
+    pub joints: Vec<[u8; 4]>,
+    /// Bone weights per vertex (summing to 1).
+    pub weights: Vec<[f32; 4]>,
+}
+
+/// A skin on the GPU.
+pub struct GpuSkin {
+    /// Interleaved 32-byte vertices (vertex buffer and storage).
+    pub vertices: wgpu::Buffer,
+    /// `array<mat4x4<f32>, 64>` (uniform).
+    pub bones: wgpu::Buffer,
+}
+
+/// Vertex layout of skinned vertices (locations 0, 1, 2).
+pub const SKIN_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: SKIN_VERTEX_STRIDE,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32, 2 => Float32x4],
+};
+
+impl GpuSkin {
+    /// Uploads a skin for `scene`; every bone starts as the identity.
+    pub fn new(ctx: &GpuContext, scene: &Scene, skin: &Skin) -> Result<Self, RenderError> {
+        let n: usize = scene.meshes.iter().map(|m| m.positions.len()).sum();
+        if skin.joints.len() != n || skin.weights.len() != n {
+            return Err(RenderError::SceneTooLarge(format!(
+                "the skin has {} joint and {} weight entries but the scene has {n} vertices",
+                skin.joints.len(),
+                skin.weights.len()
+            )));
+        }
+        if let Some(j) = skin.joints.iter().flatten().find(|&&j| j as usize >= MAX_BONES) {
+            return Err(RenderError::SceneTooLarge(format!(
+                "joint index {j} is out of range (at most {MAX_BONES} bones)"
+            )));
+        }
+        let mut bytes = Vec::with_capacity(n * SKIN_VERTEX_STRIDE as usize);
+        let positions = scene.meshes.iter().flat_map(|m| m.positions.iter());
+        for ((p, j), w) in positions.zip(&skin.joints).zip(&skin.weights) {
+            bytes.extend_from_slice(bytemuck::cast_slice(&p.to_array()));
+            bytes.extend_from_slice(j);
+            bytes.extend_from_slice(bytemuck::cast_slice(w));
+        }
+        if bytes.is_empty() {
+            bytes.resize(SKIN_VERTEX_STRIDE as usize, 0);
+        }
+        let vertices = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("skin.vertices"),
+                contents: &bytes,
+                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
+            });
+        let bones = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("skin.bones"),
+                contents: bytemuck::cast_slice(&[Mat4::IDENTITY.to_cols_array(); MAX_BONES]),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            });
+        Ok(Self { vertices, bones })
+    }
+
+    /// Replaces the bone matrices (at most [`MAX_BONES`]; missing ones keep their value).
+    pub fn set_bones(&self, queue: &wgpu::Queue, bones: &[Mat4]) {
+        let m: Vec<[f32; 16]> = bones
+            .iter()
+            .take(MAX_BONES)
+            .map(|b| b.to_cols_array())
+            .collect();
+        queue.write_buffer(&self.bones, 0, bytemuck::cast_slice(&m));
+    }
+}
+
+/// How caster geometry is prepared.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CasterOptions {
+    /// Treat every mesh as closed and outward-facing for back-face culling, as seed 000 did.
+    /// Faster on open meshes, but their back sides then cast no shadow.
+    pub assume_closed: bool,
+}
+
+/// CPU record of a cluster.
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct ClusterData {
+    /// First triangle (in corner order).
+    pub first_triangle: u32,
+    /// Triangles in the run.
+    pub triangles: u32,
+    /// Instance the triangles belong to.
+    pub instance: u32,
+    /// Unused.
+    pub flags: u32,
+    /// Object-space normal cone: unit axis, half angle (radians; ≥ π/2 = no cone).
+    pub cone: [f32; 4],
+}
+
+/// Half angle stored for clusters that must never be back-face culled.
+pub const NO_CONE: f32 = 4.0;
+
+/// World-space caster geometry, recomputed once per frame by [`CasterGeometry::record`].
+pub struct CasterGeometry {
+    /// Caster vertices.
+    pub vertices: u32,
+    /// Caster triangles.
+    pub triangles: u32,
+    /// The first `cullable_triangles` triangles may be back-face culled.
+    pub cullable_triangles: u32,
+    /// Clusters.
+    pub clusters: Vec<ClusterData>,
+    /// `array<vec4<f32>>` world positions (w = 1), one per caster vertex.
+    pub world: wgpu::Buffer,
+    /// `u32` caster-vertex indices, three per triangle (STORAGE | INDEX).
+    pub corners: wgpu::Buffer,
+    /// `array<Cluster>`.
+    pub cluster_buffer: wgpu::Buffer,
+    /// `array<vec4<f32>>` world bounding sphere per cluster (written each frame).
+    pub cluster_bounds: wgpu::Buffer,
+    skinned: bool,
+    transform: wgpu::ComputePipeline,
+    bounds: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Closure {
+    Open,
+    Outward,
+    Inward,
+}
+
+/// Whether a mesh is closed, judged on welded positions (seams with split normals or UVs do not
+/// open a mesh); degenerate triangles (e.g. at sphere poles) are ignored.
+fn closure(mesh: &Mesh) -> Closure {
+    let mut weld: HashMap<[u32; 3], u32> = HashMap::new();
+    let ids: Vec<u32> = mesh
+        .positions
+        .iter()
+        .map(|p| {
+            // `+ 0.0` folds -0.0 into +0.0 so both weld together.
+            let key = p.to_array().map(|c| (c + 0.0).to_bits());
+            let next = weld.len() as u32;
+            *weld.entry(key).or_insert(next)
+        })
+        .collect();
+    let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut volume = 0.0f64;
+    let mut any = false;
+    for t in mesh.indices.chunks_exact(3) {
+        let [a, b, c] = [ids[t[0] as usize], ids[t[1] as usize], ids[t[2] as usize]];
+        if a == b || b == c || c == a {
+            continue;
+        }
+        any = true;
+        for e in [(a, b), (b, c), (c, a)] {
+            *edges.entry(e).or_insert(0) += 1;
+        }
+        let [p0, p1, p2] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize].as_dvec3());
+        volume += p0.dot(p1.cross(p2));
+    }
+    let closed = any
+        && edges
+            .iter()
+            .all(|(&(a, b), &n)| n == 1 && edges.get(&(b, a)) == Some(&1));
+    match (closed, volume > 0.0) {
+        (false, _) => Closure::Open,
+        (true, true) => Closure::Outward,
+        (true, false) => Closure::Inward,
+    }
+}
+
+/// True if the matrix is a rotation times a uniform scale (plus translation): normal cones
+/// keep their angle under it.
+fn is_similarity(m: Mat4) -> bool {
+    let [x, y, z] = [m.x_axis, m.y_axis, m.z_axis].map(|a| a.truncate());
+    let s = x.length();
+    let tol = 1e-4 * s.max(1e-12);
+    (y.length() - s).abs() <= tol
+        && (z.length() - s).abs() <= tol
+        && x.dot(y).abs() <= tol * s
+        && y.dot(z).abs() <= tol * s
+        && z.dot(x).abs() <= tol * s
+}
+
+/// Unit axis and half angle of the smallest cone (around the mean normal) holding every
+/// triangle normal; [`NO_CONE`] if the normals spread over a hemisphere or more.
+fn normal_cone(normals: &[Vec3]) -> [f32; 4] {
+    let sum: Vec3 = normals.iter().sum();
+    let Some(axis) = sum.try_normalize() else {
+        return [0.0, 0.0, 1.0, NO_CONE];
+    };
+    let min_dot = normals
+        .iter()
+        .map(|n| n.dot(axis))
+        .fold(1.0f32, f32::min);
+    if min_dot <= 0.0 {
+        return [axis.x, axis.y, axis.z, NO_CONE];
+    }
+    // Round the angle up a little: the cone must contain every normal.
+    let angle = min_dot.clamp(-1.0, 1.0).acos() + 1e-3;
+    [axis.x, axis.y, axis.z, angle]
+}
+
+fn dispatch_2d(items: u32) -> (u32, u32) {
+    let groups = items.div_ceil(64).max(1);
+    let x = groups.min(65535);
+    (x, groups.div_ceil(x))
+}
+
+impl CasterGeometry {
+    /// Builds the caster buffers of `scene` (already uploaded as `gpu`).
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &Scene,
+        gpu: &GpuScene,
+        options: CasterOptions,
+    ) -> Result<Self, RenderError> {
+        let mut closures: Vec<Option<Closure>> = vec![None; scene.meshes.len()];
+        let mut base_vertex = Vec::with_capacity(scene.meshes.len());
+        let mut acc = 0u32;
+        for m in &scene.meshes {
+            base_vertex.push(acc);
+            acc += m.positions.len() as u32;
+        }
+        let light_points: Vec<Vec3> = scene
+            .lights
+            .iter()
+            .filter(|l| l.casts_shadows)
+            .filter_map(|l| match l.kind {
+                LightKind::Spot { position, .. } | LightKind::Point { position, .. } => {
+                    Some(position)
+                }
+                LightKind::Directional { .. } => None,
+            })
+            .collect();
+        let skinned = gpu.skin.is_some();
+
+        let mut sources: Vec<[u32; 2]> = Vec::new();
+        // (corners, cluster cones) per class: 0 = cullable, 1 = not.
+        let mut corners: [Vec<u32>; 2] = [Vec::new(), Vec::new()];
+        let mut clusters: [Vec<ClusterData>; 2] = [Vec::new(), Vec::new()];
+        for (i, inst) in scene.instances.iter().enumerate() {
+            if !inst.casts_shadows {
+                continue;
+            }
+            let mesh = &scene.meshes[inst.mesh];
+            let closure = if options.assume_closed {
+                Closure::Outward
+            } else {
+                *closures[inst.mesh].get_or_insert_with(|| closure(mesh))
+            };
+            let light_inside = mesh.bounds().is_some_and(|(lo, hi)| {
+                let corners = (0..8).map(|k| {
+                    inst.transform.transform_point3(Vec3::new(
+                        if k & 1 == 0 { lo.x } else { hi.x },
+                        if k & 2 == 0 { lo.y } else { hi.y },
+                        if k & 4 == 0 { lo.z } else { hi.z },
+                    ))
+                });
+                let (wlo, whi) = corners.fold(
+                    (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                    |(a, b), p| (a.min(p), b.max(p)),
+                );
+                light_points
+                    .iter()
+                    .any(|p| p.cmpge(wlo).all() && p.cmple(whi).all())
+            });
+            let cullable = closure != Closure::Open && (options.assume_closed || !light_inside);
+            let flip = cullable && closure == Closure::Inward;
+            // A mirroring transform turns the winding around as well.
+            let mirrored = inst.transform.determinant() < 0.0;
+            let class = usize::from(!cullable);
+            let first_vertex = sources.len() as u32;
+            let bv = base_vertex[inst.mesh];
+            sources.extend((0..mesh.positions.len() as u32).map(|v| [bv + v, i as u32]));
+            let cone_ok = cullable && !skinned && is_similarity(inst.transform);
+            for chunk in mesh.indices.chunks(3 * CLUSTER_TRIANGLES as usize) {
+                let first_triangle = (corners[class].len() / 3) as u32;
+                let mut normals = Vec::with_capacity(chunk.len() / 3);
+                for t in chunk.chunks_exact(3) {
+                    let (b, c) = if flip != mirrored {
+                        (t[2], t[1])
+                    } else {
+                        (t[1], t[2])
+                    };
+                    corners[class].extend([t[0], b, c].map(|v| first_vertex + v));
+                    let [p0, p1, p2] = [t[0], b, c].map(|v| mesh.positions[v as usize]);
+                    if let Some(n) = (p1 - p0).cross(p2 - p0).try_normalize() {
+                        // A mirroring transform flips normals relative to the winding.
+                        normals.push(if mirrored { -n } else { n });
+                    }
+                }
+                let cone = if cone_ok {
+                    normal_cone(&normals)
+                } else {
+                    [0.0, 0.0, 1.0, NO_CONE]
+                };
+                clusters[class].push(ClusterData {
+                    first_triangle,
+                    triangles: (chunk.len() / 3) as u32,
+                    instance: i as u32,
+                    flags: 0,
+                    cone,
+                });
+            }
+        }
+        let cullable_triangles = (corners[0].len() / 3) as u32;
+        let [mut all_corners, rest] = corners;
+        let [mut all_clusters, rest_clusters] = clusters;
+        all_corners.extend(rest);
+        all_clusters.extend(rest_clusters.into_iter().map(|mut c| {
+            c.first_triangle += cullable_triangles;
+            c
+        }));
+        let vertices = sources.len() as u32;
+        let triangles = (all_corners.len() / 3) as u32;
+
+        let limits = ctx.limits();
+        for (what, bytes) in [
+            ("caster world-position", vertices as u64 * 16),
+            ("caster corner", all_corners.len() as u64 * 4),
+        ] {
+            if bytes > limits.max_storage_buffer_binding_size {
+                return Err(RenderError::SceneTooLarge(format!(
+                    "the {what} buffer would be {bytes} bytes, over this adapter's \
+                     storage-binding limit of {} bytes",
+                    limits.max_storage_buffer_binding_size
+                )));
+            }
+        }
+
+        // Zero-sized buffers are invalid: keep one dummy element.
+        if sources.is_empty() {
+            sources.push([0, 0]);
+        }
+        if all_corners.is_empty() {
+            all_corners.extend([0, 0, 0]);
+        }
+        let cluster_list = all_clusters.clone();
+        if all_clusters.is_empty() {
+            all_clusters.push(bytemuck::Zeroable::zeroed());
+        }
+        let device = &ctx.device;
+        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        let world = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("casters.world"),
+            size: sources.len() as u64 * 16,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let corners_buf = init(
+            "casters.corners",
+            bytemuck::cast_slice(&all_corners),
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDEX,
+        );
+        let sources_buf = init(
+            "casters.sources",
+            bytemuck::cast_slice(&sources),
+            wgpu::BufferUsages::STORAGE,
+        );
+        let cluster_buffer = init(
+            "casters.clusters",
+            bytemuck::cast_slice(&all_clusters),
+            wgpu::BufferUsages::STORAGE,
+        );
+        let cluster_bounds = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("casters.cluster_bounds"),
+            size: all_clusters.len() as u64 * 16,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let params = init(
+            "casters.params",
+            bytemuck::cast_slice(&[
+                vertices,
+                cluster_list.len() as u32,
+                u32::from(skinned),
+                0,
+            ]),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        // A bound but unused skin when the scene has none.
+        let dummy_skin;
+        let (skin_vertices, bones) = match &gpu.skin {
+            Some(s) => (&s.vertices, &s.bones),
+            None => {
+                dummy_skin = (
+                    init(
+                        "casters.no_skin",
+                        &[0u8; SKIN_VERTEX_STRIDE as usize],
+                        wgpu::BufferUsages::STORAGE,
+                    ),
+                    init(
+                        "casters.no_bones",
+                        bytemuck::cast_slice(&[Mat4::IDENTITY.to_cols_array(); MAX_BONES]),
+                        wgpu::BufferUsages::UNIFORM,
+                    ),
+                );
+                (&dummy_skin.0, &dummy_skin.1)
+            }
+        };
+
+        let module = crate::shaders::module(device, "casters.shader", &crate::shaders::casters());
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("casters.layout"),
+            entries: &[
+                crate::uniform_entry(0, cs),
+                crate::storage_entry(1, cs),
+                crate::storage_entry(2, cs),
+                crate::storage_entry(3, cs),
+                crate::storage_rw_entry(4, cs),
+                crate::uniform_entry(5, cs),
+                crate::storage_entry(6, cs),
+                crate::storage_entry(7, cs),
+                crate::storage_entry(8, cs),
+                crate::storage_rw_entry(9, cs),
+            ],
+        });
+        let buffers = [
+            &params,
+            &gpu.positions,
+            &gpu.instances,
+            &sources_buf,
+            &world,
+            bones,
+            skin_vertices,
+            &cluster_buffer,
+            &corners_buf,
+            &cluster_bounds,
+        ];
+        let entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("casters.bind_group"),
+            layout: &layout,
+            entries: &entries,
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("casters.pipeline_layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        Ok(Self {
+            vertices,
+            triangles,
+            cullable_triangles,
+            clusters: cluster_list,
+            transform: pipeline("cs_transform"),
+            bounds: pipeline("cs_bounds"),
+            world,
+            corners: corners_buf,
+            cluster_buffer,
+            cluster_bounds,
+            skinned,
+            bind_group,
+        })
+    }
+
+    /// True if world positions come from the skin.
+    pub fn skinned(&self) -> bool {
+        self.skinned
+    }
+
+    /// Records the per-frame world transform (and, with `bounds`, the cluster spheres) into a
+    /// compute pass.
+    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>, bounds: bool) {
+        if self.vertices == 0 {
+            return;
+        }
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.set_pipeline(&self.transform);
+        let (x, y) = dispatch_2d(self.vertices);
+        pass.dispatch_workgroups(x, y, 1);
+        if bounds && !self.clusters.is_empty() {
+            pass.set_pipeline(&self.bounds);
+            pass.dispatch_workgroups((self.clusters.len() as u32).div_ceil(64), 1, 1);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use manyshadows_scene::primitives;
+
+    #[test]
+    fn closed_primitives_are_recognised_and_planes_are_not() {
+        assert!(closure(&primitives::cuboid(Vec3::ONE)) == Closure::Outward);
+        assert!(closure(&primitives::uv_sphere(1.0, 16, 8)) == Closure::Outward);
+        assert!(closure(&primitives::plane(2.0, 2.0, 1)) == Closure::Open);
+        let mut inside_out = primitives::cuboid(Vec3::ONE);
+        for t in inside_out.indices.chunks_exact_mut(3) {
+            t.swap(1, 2);
+        }
+        assert!(closure(&inside_out) == Closure::Inward);
+    }
+
+    #[test]
+    fn normal_cones_contain_their_normals() {
+        let ns = [Vec3::Z, Vec3::new(0.1, 0.0, 1.0).normalize(), Vec3::new(0.0, -0.2, 1.0).normalize()];
+        let c = normal_cone(&ns);
+        let axis = Vec3::new(c[0], c[1], c[2]);
+        for n in ns {
+            assert!(n.dot(axis).acos() <= c[3], "{n} outside the cone");
+        }
+        assert_eq!(normal_cone(&[Vec3::Z, -Vec3::Z])[3], NO_CONE);
+    }
+
+    #[test]
+    fn similarity_detection() {
+        assert!(is_similarity(Mat4::from_scale_rotation_translation(
+            Vec3::splat(2.0),
+            glam::Quat::from_rotation_y(0.7),
+            Vec3::new(1.0, 2.0, 3.0)
+        )));
+        assert!(!is_similarity(Mat4::from_scale(Vec3::new(1.0, 2.0, 1.0))));
+    }
+}

@@ -1,0 +1,81 @@
+//! Reading the G-buffer back: per pixel the world position and normal the frame shaded.
+//!
+//! The exact CPU reference (`manyshadows-reference`) casts its shadow rays from these points,
+//! so the reference and every technique judge the very same surface samples. The targets hold
+//! `f32` bit patterns in `Rgba32Uint` texels (see [`crate::gbuffer`]); they are read back as
+//! bits and reinterpreted, so nothing is rounded on the way.
+
+use glam::Vec3;
+
+use crate::{RenderError, Renderer};
+
+/// The G-buffer of the last rendered frame on the CPU, row-major from the top-left pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GBufferData {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// World position per pixel (meaningless where `covered` is false).
+    pub position: Vec<Vec3>,
+    /// Unit normal per pixel, facing the camera (back faces are flipped by the G-buffer pass).
+    pub normal: Vec<Vec3>,
+    /// Material index per pixel.
+    pub material: Vec<u32>,
+    /// Whether the pixel saw geometry.
+    pub covered: Vec<bool>,
+}
+
+/// Bytes per texel of the G-buffer targets (four 32-bit channels).
+const TEXEL_BYTES: u32 = 16;
+
+fn texels(bytes: &[u8]) -> impl Iterator<Item = [u32; 4]> + '_ {
+    bytes.chunks_exact(TEXEL_BYTES as usize).map(|t| {
+        let w = |i: usize| u32::from_le_bytes([t[4 * i], t[4 * i + 1], t[4 * i + 2], t[4 * i + 3]]);
+        [w(0), w(1), w(2), w(3)]
+    })
+}
+
+impl Renderer<'_> {
+    /// Reads the G-buffer of the last frame [`Renderer::render`] produced (before the first
+    /// frame every pixel reads as uncovered).
+    pub fn read_gbuffer(&self) -> Result<GBufferData, RenderError> {
+        let ctx = self.context();
+        ctx.scoped("reading the G-buffer", || {
+            let position = crate::readback::read_texture(ctx, &self.gbuffer.position, TEXEL_BYTES)?;
+            let normal = crate::readback::read_texture(ctx, &self.gbuffer.normal, TEXEL_BYTES)?;
+            let (width, height) = (
+                self.gbuffer.position.width(),
+                self.gbuffer.position.height(),
+            );
+            let pixels = width as usize * height as usize;
+            if position.len() != pixels * TEXEL_BYTES as usize
+                || normal.len() != pixels * TEXEL_BYTES as usize
+            {
+                return Err(RenderError::Readback(format!(
+                    "G-buffer read-back returned {} and {} bytes for {width}x{height} pixels",
+                    position.len(),
+                    normal.len()
+                )));
+            }
+            let f = f32::from_bits;
+            let mut out = GBufferData {
+                width,
+                height,
+                position: Vec::with_capacity(pixels),
+                normal: Vec::with_capacity(pixels),
+                material: Vec::with_capacity(pixels),
+                covered: Vec::with_capacity(pixels),
+            };
+            for (p, n) in texels(&position).zip(texels(&normal)) {
+                out.position.push(Vec3::new(f(p[0]), f(p[1]), f(p[2])));
+                // w is 1.0 on geometry and the clear value 0 elsewhere (gbuffer.wgsl).
+                out.covered.push(f(p[3]) >= 0.5);
+                out.normal
+                    .push(Vec3::new(f(n[0]), f(n[1]), f(n[2])).normalize_or_zero());
+                out.material.push(n[3]);
+            }
+            Ok(out)
+        })
+    }
+}

@@ -1,0 +1,463 @@
+//! `gpu-driven`: clusters culled per view in compute, drawn by one indirect multi-draw (seed
+//! 002's route, the one meant to scale to thousands of views).
+//!
+//! After the per-frame caster transform (which also writes each cluster's world bounding
+//! sphere, [`crate::casters`]), a compute pass runs one thread per (cluster, listed view)
+//! (views along the dispatch's y). A cluster survives a view unless its sphere is wholly
+//! outside the view frustum (frustum culling on) or its normal cone proves that every triangle
+//! faces away from the light from every point of the sphere (back-face culling on; only
+//! clusters of cullable triangles). Survivors become indexed-indirect commands over the caster
+//! corner buffer.
+//!
+//! The view is not passed through `first_instance` (OpenGL's support for it is shaky): a
+//! command for the view in batch slot `s` has `base_vertex = s · V` (V = caster vertices), so
+//! the vertex shader sees `vertex_index = vertex + s · V` and recovers both. It then maps the
+//! view's clip position into the tile exactly as `layered` does (`tile.wgsl`).
+//!
+//! With `MULTI_DRAW_INDIRECT_COUNT` the commands are compacted through an atomic counter and
+//! drawn with `multi_draw_indexed_indirect_count`; without it (OpenGL) every (cluster, view)
+//! slot gets a command, zero indices when culled, drawn by `multi_draw_indexed_indirect`.
+//!
+//! Views are processed in *rounds*: a round's slots must keep `s · V` below 2³¹ and its
+//! command buffer (clusters × views × 20 bytes) within the storage-binding limit, so large
+//! scenes with many views run several cull + draw rounds instead of truncating. Clusters are
+//! split too if even one view's commands would not fit.
+
+use crate::shadow::{ShadowInput, ShadowStats, ShadowTechnique};
+use crate::techniques::layered::{depth_pipeline, require_clip_distances};
+use crate::techniques::{atlas_attachment, TileClear};
+use crate::timing::{GpuTimer, Span};
+use crate::{GpuContext, RenderError};
+
+/// Bytes of one indexed-indirect command (`wgpu::util::DrawIndexedIndirectArgs`).
+pub const COMMAND_SIZE: u64 = std::mem::size_of::<wgpu::util::DrawIndexedIndirectArgs>() as u64;
+
+/// Bytes of one round's parameters (`GpuParams` in gpu_driven.wgsl).
+const PARAMS_SIZE: u64 = 48;
+
+/// Largest workgroup count per dispatch dimension WebGPU guarantees.
+const MAX_GROUPS: u64 = 65535;
+
+/// One cull + draw round: a run of the draw list and a run of the clusters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Round {
+    /// First position in the draw list.
+    pub first_view: u32,
+    /// Views (batch slots) in the round.
+    pub views: u32,
+    /// First cluster.
+    pub first_cluster: u32,
+    /// Clusters.
+    pub clusters: u32,
+}
+
+impl Round {
+    /// Command slots of the round.
+    pub fn commands(&self) -> u64 {
+        self.views as u64 * self.clusters as u64
+    }
+}
+
+/// Splits `views` listed views × `clusters` clusters into rounds of at most `max_commands`
+/// commands whose slots keep `slot · vertices` below 2³¹ (and within dispatch limits).
+pub fn plan_rounds(views: u32, clusters: u32, vertices: u32, max_commands: u64) -> Vec<Round> {
+    if views == 0 || clusters == 0 {
+        return Vec::new();
+    }
+    let max_commands = max_commands.max(1);
+    let chunk = (clusters as u64).min(max_commands).min(MAX_GROUPS * 64) as u32;
+    // slot · V + (V − 1) must fit an i32 (base_vertex) and the u32 vertex index.
+    let by_vertex = (1u64 << 31) / vertices.max(1) as u64;
+    let batch = (max_commands / chunk as u64)
+        .min(by_vertex)
+        .min(MAX_GROUPS)
+        .max(1) as u32;
+    let mut rounds = Vec::new();
+    let mut first_view = 0;
+    while first_view < views {
+        let n = batch.min(views - first_view);
+        let mut first_cluster = 0;
+        while first_cluster < clusters {
+            let c = chunk.min(clusters - first_cluster);
+            rounds.push(Round {
+                first_view,
+                views: n,
+                first_cluster,
+                clusters: c,
+            });
+            first_cluster += c;
+        }
+        first_view += n;
+    }
+    rounds
+}
+
+/// The gpu-driven technique's pipelines and command buffers.
+pub struct GpuDriven {
+    cull: wgpu::ComputePipeline,
+    draw: wgpu::RenderPipeline,
+    cull_layout: wgpu::BindGroupLayout,
+    draw_layout: wgpu::BindGroupLayout,
+    clear: TileClear,
+    compact: bool,
+    max_round_commands: u64,
+    commands: Option<(wgpu::Buffer, u64)>,
+    counter: wgpu::Buffer,
+}
+
+fn dynamic_uniform_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: true,
+            min_binding_size: wgpu::BufferSize::new(PARAMS_SIZE),
+        },
+        count: None,
+    }
+}
+
+impl GpuDriven {
+    /// Builds the pipelines; needs `CLIP_DISTANCES`. Uses the compacted count draw where the
+    /// adapter has `MULTI_DRAW_INDIRECT_COUNT`.
+    pub fn new(ctx: &GpuContext) -> Result<Self, RenderError> {
+        require_clip_distances(ctx, "gpu-driven")?;
+        if !ctx
+            .adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION)
+        {
+            return Err(RenderError::Unsupported(format!(
+                "--technique gpu-driven needs indirect draws, and {} lacks them; use \
+                 --technique layered",
+                crate::context::describe_adapter(&ctx.info)
+            )));
+        }
+        let device = &ctx.device;
+        let module =
+            crate::shaders::module(device, "gpu_driven.shader", &crate::shaders::gpu_driven());
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let cull_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gpu_driven.cull_layout"),
+            entries: &[
+                dynamic_uniform_entry(0, cs),
+                crate::storage_entry(1, cs),
+                crate::storage_entry(2, cs),
+                crate::storage_entry(3, cs),
+                crate::storage_entry(4, cs),
+                crate::storage_entry(5, cs),
+                crate::storage_entry(6, cs),
+                crate::storage_rw_entry(7, cs),
+                crate::storage_rw_entry(8, cs),
+            ],
+        });
+        let vs = wgpu::ShaderStages::VERTEX;
+        let draw_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gpu_driven.draw_layout"),
+            entries: &[
+                dynamic_uniform_entry(0, vs),
+                crate::storage_entry(1, vs),
+                crate::storage_entry(2, vs),
+                crate::storage_entry(9, vs),
+            ],
+        });
+        let cull_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("gpu_driven.cull_pipeline_layout"),
+            bind_group_layouts: &[Some(&cull_layout)],
+            immediate_size: 0,
+        });
+        let draw_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("gpu_driven.draw_pipeline_layout"),
+            bind_group_layouts: &[Some(&draw_layout)],
+            immediate_size: 0,
+        });
+        let cull = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("gpu_driven.cull"),
+            layout: Some(&cull_pipeline_layout),
+            module: &module,
+            entry_point: Some("cs_cull"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let draw = depth_pipeline(device, &draw_pipeline_layout, &module, "vs_draw");
+        let counter = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("gpu_driven.count"),
+            size: 4,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::INDIRECT
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let limits = ctx.limits();
+        let max_round_commands =
+            limits.max_storage_buffer_binding_size.min(limits.max_buffer_size) / COMMAND_SIZE;
+        Ok(Self {
+            cull,
+            draw,
+            cull_layout,
+            draw_layout,
+            clear: TileClear::new(ctx),
+            compact: ctx.has(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT),
+            max_round_commands,
+            commands: None,
+            counter,
+        })
+    }
+
+    /// Caps the commands of one cull + draw round below what the adapter allows (smaller
+    /// command buffers, more rounds). For tests of the batching path and memory-tight setups.
+    pub fn with_max_round_commands(mut self, commands: u64) -> Self {
+        self.max_round_commands = self.max_round_commands.min(commands.max(1));
+        self
+    }
+
+    /// True if commands are compacted and drawn with `multi_draw_indexed_indirect_count`.
+    pub fn compacts(&self) -> bool {
+        self.compact
+    }
+
+    /// The command buffer, holding at least `commands` commands.
+    fn command_buffer(&mut self, ctx: &GpuContext, commands: u64) -> &wgpu::Buffer {
+        if self.commands.as_ref().is_none_or(|(_, n)| *n < commands) {
+            let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("gpu_driven.commands"),
+                size: commands.max(1) * COMMAND_SIZE,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+                mapped_at_creation: false,
+            });
+            self.commands = Some((buffer, commands));
+        }
+        &self.commands.as_ref().expect("command buffer").0
+    }
+}
+
+fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: buffer.as_entire_binding(),
+    }
+}
+
+impl ShadowTechnique for GpuDriven {
+    fn name(&self) -> &'static str {
+        "gpu-driven"
+    }
+
+    fn generate(
+        &mut self,
+        input: &ShadowInput<'_>,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &GpuTimer,
+        span: Option<Span>,
+    ) -> ShadowStats {
+        let mut stats = ShadowStats::default();
+        let views = input.draw_list.len() as u32;
+        if views == 0 {
+            return stats;
+        }
+        let ctx = input.ctx;
+        let casters = input.casters;
+        let rounds = plan_rounds(
+            views,
+            casters.clusters.len() as u32,
+            casters.vertices,
+            self.max_round_commands,
+        );
+        let capacity = rounds.iter().map(Round::commands).max().unwrap_or(1);
+        self.command_buffer(ctx, capacity);
+        let commands = &self.commands.as_ref().expect("command buffer").0;
+
+        let stride = (ctx.limits().min_uniform_buffer_offset_alignment as u64).max(PARAMS_SIZE);
+        let mut bytes = vec![0u8; stride as usize * rounds.len().max(1)];
+        let atlas = input.atlas.size as f32;
+        for (k, r) in rounds.iter().enumerate() {
+            let record: [u32; 12] = [
+                casters.vertices,
+                casters.cullable_triangles,
+                input.options.cull.bits(),
+                r.clusters,
+                r.first_view,
+                r.views,
+                r.first_cluster,
+                u32::from(self.compact),
+                atlas.to_bits(),
+                (1.0 / atlas).to_bits(),
+                0,
+                0,
+            ];
+            let at = k * stride as usize;
+            bytes[at..at + PARAMS_SIZE as usize].copy_from_slice(bytemuck::cast_slice(&record));
+        }
+        let params = wgpu::util::DeviceExt::create_buffer_init(
+            &ctx.device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("gpu_driven.params"),
+                contents: &bytes,
+                usage: wgpu::BufferUsages::UNIFORM,
+            },
+        );
+        let params_binding = || wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &params,
+            offset: 0,
+            size: wgpu::BufferSize::new(PARAMS_SIZE),
+        });
+        let cull_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("gpu_driven.cull_group"),
+            layout: &self.cull_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: params_binding(),
+                },
+                entry(1, &input.atlas.views_buffer),
+                entry(2, &input.atlas.draw_list),
+                entry(3, &input.atlas.eyes),
+                entry(4, &casters.cluster_buffer),
+                entry(5, &casters.cluster_bounds),
+                entry(6, &input.scene.instances),
+                entry(7, commands),
+                entry(8, &self.counter),
+            ],
+        });
+        let draw_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("gpu_driven.draw_group"),
+            layout: &self.draw_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: params_binding(),
+                },
+                entry(1, &input.atlas.views_buffer),
+                entry(2, &input.atlas.draw_list),
+                entry(9, &casters.world),
+            ],
+        });
+
+        encoder.push_debug_group("gpu-driven");
+        if rounds.is_empty() {
+            // No casters: the transform (a no-op) and a pass that clears the listed tiles.
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("gpu_driven.transform"),
+                    timestamp_writes: timer.compute_writes(span, true, false),
+                });
+                let s = timer.begin_compute_stats(&mut pass);
+                casters.record(&mut pass, true);
+                timer.end_compute_stats(&mut pass, s);
+            }
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("gpu_driven.draw"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(atlas_attachment(input, input.full())),
+                timestamp_writes: timer.render_writes(span, false, true),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            let s = timer.begin_render_stats(&mut pass);
+            self.clear.record(ctx, input, &mut pass);
+            timer.end_render_stats(&mut pass, s);
+            drop(pass);
+            encoder.pop_debug_group();
+            stats.passes += 2;
+            return stats;
+        }
+        let corners = casters.corners.slice(..);
+        for (k, r) in rounds.iter().enumerate() {
+            let offset = [(k as u64 * stride) as u32];
+            let first = k == 0;
+            let last = k + 1 == rounds.len();
+            if self.compact {
+                encoder.clear_buffer(&self.counter, 0, None);
+            }
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("gpu_driven.cull"),
+                    timestamp_writes: timer.compute_writes(span, first, false),
+                });
+                let s = timer.begin_compute_stats(&mut pass);
+                if first {
+                    // The per-frame transform and cluster spheres, once for every round.
+                    casters.record(&mut pass, true);
+                }
+                pass.set_pipeline(&self.cull);
+                pass.set_bind_group(0, &cull_group, &offset);
+                pass.dispatch_workgroups(r.clusters.div_ceil(64), r.views, 1);
+                timer.end_compute_stats(&mut pass, s);
+                stats.passes += 1;
+            }
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("gpu_driven.draw"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(atlas_attachment(input, first && input.full())),
+                timestamp_writes: timer.render_writes(span, false, last),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            let s = timer.begin_render_stats(&mut pass);
+            if first {
+                self.clear.record(ctx, input, &mut pass);
+            }
+            if input.options.discard_raster {
+                pass.set_scissor_rect(0, 0, 0, 0);
+            }
+            pass.set_pipeline(&self.draw);
+            pass.set_bind_group(0, &draw_group, &offset);
+            pass.set_index_buffer(corners, wgpu::IndexFormat::Uint32);
+            let max = r.commands() as u32;
+            if self.compact {
+                pass.multi_draw_indexed_indirect_count(commands, 0, &self.counter, 0, max);
+            } else {
+                pass.multi_draw_indexed_indirect(commands, 0, max);
+            }
+            timer.end_render_stats(&mut pass, s);
+            stats.passes += 1;
+            stats.draws += r.commands();
+        }
+        encoder.pop_debug_group();
+        // Triangles offered to culling (what a draw without culling would submit); how many
+        // survive is known only on the GPU.
+        stats.triangles += casters.triangles as u64 * views as u64;
+        stats
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn covered(rounds: &[Round], views: u32, clusters: u32) -> bool {
+        let mut seen = vec![0u32; (views * clusters) as usize];
+        for r in rounds {
+            for v in r.first_view..r.first_view + r.views {
+                for c in r.first_cluster..r.first_cluster + r.clusters {
+                    seen[(v * clusters + c) as usize] += 1;
+                }
+            }
+        }
+        seen.iter().all(|&n| n == 1)
+    }
+
+    #[test]
+    fn rounds_cover_every_pair_once_within_limits() {
+        for &(views, clusters, vertices, max) in &[
+            (24u32, 374u32, 30_000u32, u64::MAX),
+            (24, 374, 30_000, 1000),
+            (24, 374, 30_000, 100),
+            (7, 5, 1 << 29, u64::MAX),
+            (1, 1, 1, 1),
+        ] {
+            let rounds = plan_rounds(views, clusters, vertices, max);
+            assert!(covered(&rounds, views, clusters), "{views} {clusters} {vertices} {max}");
+            for r in &rounds {
+                assert!(r.commands() <= max);
+                assert!((r.views as u64) * (vertices as u64) <= 1 << 31);
+            }
+        }
+        // One round when everything fits; 2^29 vertices allow four slots per round.
+        assert_eq!(plan_rounds(24, 374, 30_000, u64::MAX).len(), 1);
+        assert_eq!(plan_rounds(7, 5, 1 << 29, u64::MAX).len(), 2);
+        assert!(plan_rounds(0, 5, 10, 10).is_empty());
+    }
+}

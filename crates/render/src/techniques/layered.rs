@@ -1,0 +1,214 @@
+//! `layered`: every shadow view in one render pass and one instanced draw (seed 000 §19.3).
+//!
+//! wgpu has no geometry shader and cannot pick a render-target layer per primitive, so the
+//! seed's layered rendering maps onto the atlas: instance *i* of the draw renders into view
+//! `draw_list[i]`, and the vertex shader moves clip-space xy into that view's tile while four
+//! clip distances keep the triangle inside it. The per-vertex work that does not depend on the
+//! view (model transform, skinning) runs once per frame in the caster transform
+//! ([`crate::casters`]); per view only the view-projection remains.
+//!
+//! Culling (seed 000 Listings 19.9 and 19.10) happens per triangle and view in the vertex
+//! shader: with culling on, the draw is non-indexed and each invocation pulls its triangle's
+//! three corners, tests them, and emits a degenerate triangle when the triangle is dropped.
+//! Without culling the draw is indexed, so post-transform vertex reuse still applies.
+
+use crate::shadow::{ShadowInput, ShadowStats, ShadowTechnique, ATLAS_FORMAT};
+use crate::techniques::{atlas_attachment, TileClear};
+use crate::timing::{GpuTimer, Span};
+use crate::{GpuContext, RenderError};
+
+/// Error text when the adapter cannot clip to tiles.
+pub(crate) fn require_clip_distances(ctx: &GpuContext, technique: &str) -> Result<(), RenderError> {
+    if ctx.has(wgpu::Features::CLIP_DISTANCES) {
+        Ok(())
+    } else {
+        Err(RenderError::Unsupported(format!(
+            "--technique {technique} needs the CLIP_DISTANCES feature to keep each view inside \
+             its atlas tile, and {} lacks it; use --technique traditional",
+            crate::context::describe_adapter(&ctx.info)
+        )))
+    }
+}
+
+/// The layered technique's pipelines.
+pub struct Layered {
+    indexed: wgpu::RenderPipeline,
+    pulled: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    clear: TileClear,
+}
+
+impl Layered {
+    /// Builds the pipelines; needs `CLIP_DISTANCES`.
+    pub fn new(ctx: &GpuContext) -> Result<Self, RenderError> {
+        require_clip_distances(ctx, "layered")?;
+        let device = &ctx.device;
+        let module = crate::shaders::module(device, "layered.shader", &crate::shaders::layered());
+        let vs = wgpu::ShaderStages::VERTEX;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("layered.layout"),
+            entries: &[
+                crate::uniform_entry(0, vs),
+                crate::storage_entry(1, vs),
+                crate::storage_entry(2, vs),
+                crate::storage_entry(3, vs),
+                crate::storage_entry(4, vs),
+                crate::storage_entry(5, vs),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("layered.pipeline_layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = |entry: &str| depth_pipeline(device, &pipeline_layout, &module, entry);
+        Ok(Self {
+            indexed: pipeline("vs_indexed"),
+            pulled: pipeline("vs_pulled"),
+            layout,
+            clear: TileClear::new(ctx),
+        })
+    }
+}
+
+/// A depth-only, two-sided pipeline over the whole atlas with the given vertex entry point.
+pub(crate) fn depth_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(entry),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::TriangleList,
+            front_face: wgpu::FrontFace::Ccw,
+            // Culling is per view in the shader; what survives casts from both sides, as in
+            // `traditional`.
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: ATLAS_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: None,
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+impl ShadowTechnique for Layered {
+    fn name(&self) -> &'static str {
+        "layered"
+    }
+
+    fn generate(
+        &mut self,
+        input: &ShadowInput<'_>,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &GpuTimer,
+        span: Option<Span>,
+    ) -> ShadowStats {
+        let mut stats = ShadowStats::default();
+        let views = input.draw_list.len() as u32;
+        let casters = input.casters;
+        if views == 0 {
+            return stats;
+        }
+        let ctx = input.ctx;
+        let cull = input.options.cull;
+        let params: [u32; 8] = [
+            casters.cullable_triangles,
+            cull.bits(),
+            0,
+            0,
+            (input.atlas.size as f32).to_bits(),
+            (1.0 / input.atlas.size as f32).to_bits(),
+            0,
+            0,
+        ];
+        let params = wgpu::util::DeviceExt::create_buffer_init(
+            &ctx.device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("layered.params"),
+                contents: bytemuck::cast_slice(&params),
+                usage: wgpu::BufferUsages::UNIFORM,
+            },
+        );
+        let buffers = [
+            &params,
+            &input.atlas.views_buffer,
+            &input.atlas.eyes,
+            &casters.world,
+            &casters.corners,
+            &input.atlas.draw_list,
+        ];
+        let entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("layered.bind_group"),
+            layout: &self.layout,
+            entries: &entries,
+        });
+
+        encoder.push_debug_group("layered");
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("layered.transform"),
+                timestamp_writes: timer.compute_writes(span, true, false),
+            });
+            let s = timer.begin_compute_stats(&mut pass);
+            casters.record(&mut pass, false);
+            timer.end_compute_stats(&mut pass, s);
+            stats.passes += 1;
+        }
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("layered.draw"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(atlas_attachment(input, input.full())),
+            timestamp_writes: timer.render_writes(span, false, true),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        let s = timer.begin_render_stats(&mut pass);
+        self.clear.record(ctx, input, &mut pass);
+        if input.options.discard_raster {
+            pass.set_scissor_rect(0, 0, 0, 0);
+        }
+        pass.set_bind_group(0, &bind_group, &[]);
+        let corners = 3 * casters.triangles;
+        if cull == crate::shadow::CullMode::None {
+            pass.set_pipeline(&self.indexed);
+            pass.set_index_buffer(casters.corners.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..corners, 0, 0..views);
+        } else {
+            pass.set_pipeline(&self.pulled);
+            pass.draw(0..corners, 0..views);
+        }
+        timer.end_render_stats(&mut pass, s);
+        drop(pass);
+        encoder.pop_debug_group();
+        stats.passes += 1;
+        stats.draws += 1;
+        stats.triangles += casters.triangles as u64 * views as u64;
+        stats
+    }
+}

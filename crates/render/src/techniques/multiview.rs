@@ -1,0 +1,493 @@
+//! `multiview`: one render pass per group of equal-size views through wgpu's `MULTIVIEW`
+//! feature (seed 000 §19.5; seed 003's cube in one pass).
+//!
+//! Multiview renders into the layers of an array texture, but the atlas is one 2D texture with
+//! tiles of different sizes. So consecutive views of the draw list with the same tile size form
+//! a group (a point light's six cube faces, a run of equal cascades or spot lights), at most
+//! `max_multiview_view_count` views (6 on lavapipe, up to 32 on desktop Vulkan). Each group is
+//! rendered into layers `0..n` of a scratch `Depth32Float` array (viewport = the tile size,
+//! `@builtin(view_index)` picks the view), then a small render pass copies every layer into its
+//! atlas tile: a quad per tile whose fragments load the scratch texel and write it as
+//! `frag_depth` (depth copies into a sub-rectangle are not allowed by
+//! `copy_texture_to_texture`). Rasterizing at the tile size from the origin gives the same
+//! texels as `traditional`'s viewport at the tile's integer offset.
+//!
+//! World positions come from the per-frame caster transform ([`crate::casters`]); per-triangle
+//! culling pulls each triangle's corners as `layered` does and emits a degenerate triangle when
+//! the triangle is dropped for that view.
+//!
+//! Without `MULTIVIEW` (OpenGL) the technique refuses to start and names `layered`, which
+//! produces the same atlas in one instanced draw.
+
+use std::collections::HashMap;
+use std::num::NonZeroU32;
+
+use crate::shadow::{CullMode, ShadowInput, ShadowStats, ShadowTechnique, ATLAS_FORMAT};
+use crate::techniques::{atlas_attachment, TileClear};
+use crate::timing::{GpuTimer, Span};
+use crate::{GpuContext, RenderError};
+
+/// Bytes of one group's parameters (`MultiviewParams` in multiview.wgsl).
+const PARAMS_SIZE: u64 = 32;
+
+/// Splits `draw_list` into runs of consecutive views whose tiles have the same side, at most
+/// `max` views each: `(first position in the list, views)`.
+pub fn groups(draw_list: &[u32], tile_size: impl Fn(u32) -> u32, max: u32) -> Vec<(u32, u32)> {
+    let max = max.max(1);
+    let mut out: Vec<(u32, u32)> = Vec::new();
+    let mut prev_size = None;
+    for (k, &view) in draw_list.iter().enumerate() {
+        let size = tile_size(view);
+        match out.last_mut() {
+            Some(g) if prev_size == Some(size) && g.1 < max => g.1 += 1,
+            _ => out.push((k as u32, 1)),
+        }
+        prev_size = Some(size);
+    }
+    out
+}
+
+/// The multiview technique's pipelines and scratch texture.
+pub struct Multiview {
+    module: wgpu::ShaderModule,
+    layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    /// Geometry pipelines by (views in the group, pulled vertices): a pipeline's multiview
+    /// mask must equal its pass's.
+    pipelines: HashMap<(u32, bool), wgpu::RenderPipeline>,
+    copy_pipeline: wgpu::RenderPipeline,
+    copy_layout: wgpu::BindGroupLayout,
+    scratch: Option<Scratch>,
+    clear: TileClear,
+    max_views: u32,
+}
+
+/// The scratch depth array a group renders into.
+struct Scratch {
+    texture: wgpu::Texture,
+    side: u32,
+    layers: u32,
+    /// Layers `0..n` as a render target, by `n`.
+    targets: HashMap<u32, wgpu::TextureView>,
+    /// Every layer, for the copy's `textureLoad`.
+    all: wgpu::TextureView,
+}
+
+fn dynamic_uniform_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: true,
+            min_binding_size: wgpu::BufferSize::new(PARAMS_SIZE),
+        },
+        count: None,
+    }
+}
+
+impl Multiview {
+    /// Builds the pipelines; fails with [`RenderError::Unsupported`] without `MULTIVIEW`.
+    pub fn new(ctx: &GpuContext) -> Result<Self, RenderError> {
+        let max_views = ctx.limits().max_multiview_view_count.min(32);
+        if !ctx.has(wgpu::Features::MULTIVIEW) || max_views == 0 {
+            return Err(RenderError::Unsupported(format!(
+                "--technique multiview needs the MULTIVIEW feature (one render pass per group \
+                 of up to 6-32 equal-size shadow views), and {} lacks it; use --technique \
+                 layered, which fills the same atlas with one instanced draw",
+                crate::context::describe_adapter(&ctx.info)
+            )));
+        }
+        let device = &ctx.device;
+        let module =
+            crate::shaders::module(device, "multiview.shader", &crate::shaders::multiview());
+        let vs = wgpu::ShaderStages::VERTEX;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("multiview.layout"),
+            entries: &[
+                dynamic_uniform_entry(0, vs),
+                crate::storage_entry(1, vs),
+                crate::storage_entry(2, vs),
+                crate::storage_entry(3, vs),
+                crate::storage_entry(4, vs),
+                crate::storage_entry(5, vs),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("multiview.pipeline_layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+
+        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let copy_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("multiview.copy_layout"),
+            entries: &[
+                dynamic_uniform_entry(0, vf),
+                crate::storage_entry(1, vf),
+                crate::storage_entry(2, vf),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 3,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Depth,
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let copy_module = crate::shaders::module(
+            device,
+            "multiview_copy.shader",
+            &crate::shaders::multiview_copy(),
+        );
+        let copy_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("multiview.copy_pipeline_layout"),
+            bind_group_layouts: &[Some(&copy_layout)],
+            immediate_size: 0,
+        });
+        let copy_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("multiview.copy"),
+            layout: Some(&copy_pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &copy_module,
+                entry_point: Some("vs_copy"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: ATLAS_FORMAT,
+                depth_write_enabled: Some(true),
+                // A copy: every texel of the tile is replaced.
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &copy_module,
+                entry_point: Some("fs_copy"),
+                compilation_options: Default::default(),
+                targets: &[],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        Ok(Self {
+            module,
+            layout,
+            pipeline_layout,
+            pipelines: HashMap::new(),
+            copy_pipeline,
+            copy_layout,
+            scratch: None,
+            clear: TileClear::new(ctx),
+            max_views,
+        })
+    }
+
+    /// The geometry pipeline for groups of `n` views.
+    fn pipeline(&mut self, ctx: &GpuContext, n: u32, pulled: bool) -> &wgpu::RenderPipeline {
+        let (module, layout) = (&self.module, &self.pipeline_layout);
+        self.pipelines.entry((n, pulled)).or_insert_with(|| {
+            let mask = if n >= 32 { u32::MAX } else { (1u32 << n) - 1 };
+            let entry = if pulled { "vs_pulled" } else { "vs_indexed" };
+            ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(entry),
+                layout: Some(layout),
+                vertex: wgpu::VertexState {
+                    module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    front_face: wgpu::FrontFace::Ccw,
+                    // Culling is per view in the shader; survivors cast from both sides.
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: ATLAS_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: None,
+                multiview_mask: NonZeroU32::new(mask),
+                cache: None,
+            })
+        })
+    }
+
+    /// Makes sure the scratch array holds `layers` layers of `side`² texels.
+    fn ensure_scratch(&mut self, ctx: &GpuContext, side: u32, layers: u32) {
+        if let Some(s) = &self.scratch {
+            if s.side >= side && s.layers >= layers {
+                return;
+            }
+        }
+        let (side, layers) = match &self.scratch {
+            Some(s) => (side.max(s.side), layers.max(s.layers)),
+            None => (side, layers),
+        };
+        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("multiview.scratch"),
+            size: wgpu::Extent3d {
+                width: side,
+                height: side,
+                depth_or_array_layers: layers,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: ATLAS_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let all = texture.create_view(&wgpu::TextureViewDescriptor {
+            label: Some("multiview.scratch.all"),
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        self.scratch = Some(Scratch {
+            texture,
+            side,
+            layers,
+            targets: HashMap::new(),
+            all,
+        });
+    }
+}
+
+impl Scratch {
+    /// Layers `0..n` as a multiview render target.
+    fn target(&mut self, n: u32) -> &wgpu::TextureView {
+        let texture = &self.texture;
+        self.targets.entry(n).or_insert_with(|| {
+            texture.create_view(&wgpu::TextureViewDescriptor {
+                label: Some("multiview.scratch.target"),
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                base_array_layer: 0,
+                array_layer_count: Some(n),
+                ..Default::default()
+            })
+        })
+    }
+}
+
+impl ShadowTechnique for Multiview {
+    fn name(&self) -> &'static str {
+        "multiview"
+    }
+
+    fn generate(
+        &mut self,
+        input: &ShadowInput<'_>,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &GpuTimer,
+        span: Option<Span>,
+    ) -> ShadowStats {
+        let mut stats = ShadowStats::default();
+        if input.draw_list.is_empty() {
+            return stats;
+        }
+        let ctx = input.ctx;
+        let casters = input.casters;
+        let cull = input.options.cull;
+        let tiles = &input.atlas.tiles;
+        let groups = groups(input.draw_list, |v| tiles[v as usize].size, self.max_views);
+        let side = input
+            .draw_list
+            .iter()
+            .map(|&v| tiles[v as usize].size)
+            .max()
+            .unwrap_or(1);
+        let layers = groups.iter().map(|g| g.1).max().unwrap_or(1);
+        self.ensure_scratch(ctx, side, layers);
+
+        // One parameter record per group, at the uniform-offset alignment.
+        let stride = (ctx.limits().min_uniform_buffer_offset_alignment as u64).max(PARAMS_SIZE);
+        let mut bytes = vec![0u8; stride as usize * groups.len()];
+        for (g, &(first, _)) in groups.iter().enumerate() {
+            let record: [u32; 8] = [
+                first,
+                casters.cullable_triangles,
+                cull.bits(),
+                0,
+                (input.atlas.size as f32).to_bits(),
+                0,
+                0,
+                0,
+            ];
+            let at = g * stride as usize;
+            bytes[at..at + PARAMS_SIZE as usize].copy_from_slice(bytemuck::cast_slice(&record));
+        }
+        let params = wgpu::util::DeviceExt::create_buffer_init(
+            &ctx.device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("multiview.params"),
+                contents: &bytes,
+                usage: wgpu::BufferUsages::UNIFORM,
+            },
+        );
+        let params_binding = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &params,
+            offset: 0,
+            size: wgpu::BufferSize::new(PARAMS_SIZE),
+        });
+        let buffers = [
+            &input.atlas.views_buffer,
+            &input.atlas.eyes,
+            &casters.world,
+            &casters.corners,
+            &input.atlas.draw_list,
+        ];
+        let mut entries = vec![wgpu::BindGroupEntry {
+            binding: 0,
+            resource: params_binding.clone(),
+        }];
+        entries.extend(buffers.iter().enumerate().map(|(i, b)| wgpu::BindGroupEntry {
+            binding: i as u32 + 1,
+            resource: b.as_entire_binding(),
+        }));
+        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("multiview.bind_group"),
+            layout: &self.layout,
+            entries: &entries,
+        });
+        let copy_bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("multiview.copy_bind_group"),
+            layout: &self.copy_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: params_binding,
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: input.atlas.views_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: input.atlas.draw_list.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(
+                        &self.scratch.as_ref().expect("scratch").all,
+                    ),
+                },
+            ],
+        });
+        let pulled = cull != CullMode::None;
+        for &(_, n) in &groups {
+            self.pipeline(ctx, n, pulled);
+        }
+
+        encoder.push_debug_group("multiview");
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("multiview.transform"),
+                timestamp_writes: timer.compute_writes(span, true, false),
+            });
+            let s = timer.begin_compute_stats(&mut pass);
+            casters.record(&mut pass, false);
+            timer.end_compute_stats(&mut pass, s);
+            stats.passes += 1;
+        }
+        let corners = 3 * casters.triangles;
+        for (g, &(first, n)) in groups.iter().enumerate() {
+            let offset = [(g as u64 * stride) as u32];
+            let size = tiles[input.draw_list[first as usize] as usize].size;
+            let pipeline = &self.pipelines[&(n, pulled)];
+            let scratch = self.scratch.as_mut().expect("scratch");
+            {
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("multiview.group"),
+                    color_attachments: &[],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: scratch.target(n),
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: NonZeroU32::new(if n >= 32 { u32::MAX } else { (1 << n) - 1 }),
+                });
+                let s = timer.begin_render_stats(&mut pass);
+                pass.set_viewport(0.0, 0.0, size as f32, size as f32, 0.0, 1.0);
+                if input.options.discard_raster {
+                    pass.set_scissor_rect(0, 0, 0, 0);
+                } else {
+                    pass.set_scissor_rect(0, 0, size, size);
+                }
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, &bind_group, &offset);
+                if pulled {
+                    pass.draw(0..corners, 0..1);
+                } else {
+                    pass.set_index_buffer(casters.corners.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..corners, 0, 0..1);
+                }
+                timer.end_render_stats(&mut pass, s);
+                stats.passes += 1;
+                stats.draws += 1;
+            }
+            let last = g + 1 == groups.len();
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("multiview.copy"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(atlas_attachment(input, g == 0 && input.full())),
+                timestamp_writes: timer.render_writes(span, false, last),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            let s = timer.begin_render_stats(&mut pass);
+            if g == 0 {
+                self.clear.record(ctx, input, &mut pass);
+            }
+            if input.options.discard_raster {
+                pass.set_scissor_rect(0, 0, 0, 0);
+            }
+            pass.set_pipeline(&self.copy_pipeline);
+            pass.set_bind_group(0, &copy_bind_group, &offset);
+            pass.draw(0..6, 0..n);
+            timer.end_render_stats(&mut pass, s);
+            stats.passes += 1;
+            stats.draws += 1;
+        }
+        encoder.pop_debug_group();
+        stats.triangles += casters.triangles as u64 * input.draw_list.len() as u64;
+        stats
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::groups;
+
+    #[test]
+    fn groups_split_on_size_and_count() {
+        // A point light (6 equal faces), three cascades of two sizes, two spot lights.
+        let sizes = [256, 256, 256, 256, 256, 256, 512, 512, 256, 128, 128];
+        let list: Vec<u32> = (0..sizes.len() as u32).collect();
+        let g = groups(&list, |v| sizes[v as usize], 6);
+        assert_eq!(g, vec![(0, 6), (6, 2), (8, 1), (9, 2)]);
+        let g = groups(&list, |v| sizes[v as usize], 4);
+        assert_eq!(g, vec![(0, 4), (4, 2), (6, 2), (8, 1), (9, 2)]);
+        // A partial draw list groups by list position.
+        let g = groups(&[1, 2, 7, 9], |v| sizes[v as usize], 6);
+        assert_eq!(g, vec![(0, 2), (2, 1), (3, 1)]);
+        assert!(groups(&[], |_| 1, 6).is_empty());
+    }
+}
