@@ -217,10 +217,20 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     );
     let mut reference: Option<Reference> = None;
     let mut results = Vec::new();
+    let mut skipped: Vec<(String, String)> = Vec::new();
     for v in &variants {
         bar.set_message(format!("rendering {}", v.label()));
         let scene_v = with_resolution(&scene, v.resolution);
-        let mut renderer = Renderer::new(&ctx, &scene_v, settings(args, v.technique))?;
+        let mut renderer = match Renderer::new(&ctx, &scene_v, settings(args, v.technique)) {
+            Ok(r) => r,
+            // Asked for every technique: run those this adapter can, say which it cannot.
+            Err(manyshadows::RenderError::Unsupported(why)) if args.techniques.is_empty() => {
+                skipped.push((v.label(), why));
+                bar.inc(1);
+                continue;
+            }
+            Err(e) => return Err(e.into()),
+        };
         let frame = renderer.render()?;
         if reference.is_none() {
             bar.set_message("ray tracing the reference");
@@ -287,9 +297,16 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         bar.inc(1);
     }
     bar.finish_and_clear();
-    let r = reference.context("no technique was run")?;
-    let report = report(&ctx, &scene, args, &tracer, bvh_ms, &r, &results, started);
+    let r = reference.context("no technique could run on this adapter")?;
+    let mut report = report(&ctx, &scene, args, &tracer, bvh_ms, &r, &results, started);
+    report["skipped"] = json!(skipped
+        .iter()
+        .map(|(label, why)| json!({ "variant": label, "reason": why }))
+        .collect::<Vec<_>>());
     print_table(&report, &results, &scene);
+    for (label, why) in &skipped {
+        println!("skipped    {label}: {why}");
+    }
     if let Some(path) = &args.json {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;

@@ -12,8 +12,9 @@
 //!   Inside the band: 0 (spot, point) and 9 of 65,536 pixels (directional, 0.014 %) measured;
 //!   the bound is 0.1 % of in-reach pixels, a sub-texel placement error of the outline.
 //! - `cubes` (boxes and a sphere resting on a floor): 2 of 86,102 scored pixels outside the
-//!   band measured (where the sphere touches the floor, the bias lets light under the contact
-//!   point). Bound 0.02 % (about 17 pixels): a handful of contact pixels, never a region.
+//!   band measured, both false shadow of the spot light on the floor right at the foot of the
+//!   tall box (a contact line, where the biased floor point meets the box's depth). Bound
+//!   0.02 % (about 17 pixels): a handful of contact pixels, never a region.
 //! - a deliberately wrong bias (−1 texel in every term: the receiver is pushed *into* its
 //!   surface, so it shadows itself) gives 78 % false shadow on `plane-spot`; the test requires
 //!   more than 50 %, against 0 with the default bias, so the score cannot miss acne.

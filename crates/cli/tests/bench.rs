@@ -1,0 +1,94 @@
+//! `manyshadows bench layered` end to end on a tiny configuration: it measures every method it
+//! was asked for, writes consistent JSON, a table and plots, and rejects bad arguments cleanly.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("manyshadows-bench-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn bench(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_manyshadows"))
+        .arg("bench")
+        .arg("layered")
+        .args(args)
+        .output()
+        .expect("run manyshadows")
+}
+
+#[test]
+fn bench_layered_writes_table_json_and_plots() {
+    let dir = tmp("run");
+    let out = bench(&[
+        "--maps",
+        "1,3",
+        "--resolutions",
+        "128",
+        "--variants",
+        "skinned,backface",
+        "--methods",
+        "traditional,layered",
+        "--repeats",
+        "2",
+        "--warmup",
+        "0",
+        "--out-dir",
+        dir.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "bench failed: {stderr}");
+    assert!(!stderr.contains("Validation Error"), "{stderr}");
+    assert!(stdout.contains("adapter:"), "every table names the adapter: {stdout}");
+
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("results.json")).unwrap()).unwrap();
+    let records = json["records"].as_array().unwrap();
+    // skinned: traditional + layered:none; backface: traditional + layered:none +
+    // layered:backface; two map counts each.
+    assert_eq!(records.len(), (2 + 3) * 2, "{json}");
+    for r in records {
+        let maps = r["maps"].as_u64().unwrap();
+        assert_eq!(r["cpu_ms_runs"].as_array().unwrap().len(), 2, "repeats");
+        assert!(r["cpu_ms"].as_f64().unwrap() > 0.0);
+        // Every method generated every map: one view drawn per map.
+        assert_eq!(r["stats"]["views_drawn"].as_u64().unwrap(), maps, "{r}");
+        if r["method"] == "traditional" {
+            assert_eq!(r["stats"]["passes"].as_u64().unwrap(), maps, "one pass per map");
+            if let Some(ratio) = r["gpu_ratio_vs_traditional"].as_f64() {
+                assert!((ratio - 1.0).abs() < 1e-9, "traditional against itself: {ratio}");
+            }
+        } else {
+            assert_eq!(r["stats"]["draws"].as_u64().unwrap(), 1, "one draw for all maps");
+        }
+    }
+    for variant in ["skinned", "backface"] {
+        let png = dir.join(format!("layered-{variant}-128.png"));
+        let img = image::open(&png).unwrap_or_else(|e| panic!("{}: {e}", png.display()));
+        assert_eq!((img.width(), img.height()), (1400, 1000));
+    }
+    assert!(std::fs::read_to_string(dir.join("results.txt")).unwrap().contains("traditional"));
+}
+
+#[test]
+fn bench_layered_rejects_bad_arguments() {
+    for (args, needle) in [
+        (vec!["--maps", "0"], "--maps 0"),
+        (vec!["--maps", "5000"], "--maps 5000"),
+        (vec!["--resolutions", "3"], "--resolutions 3"),
+        (vec!["--variants", "nope"], "unknown variant"),
+        (vec!["--methods", "raytraced"], "unknown technique"),
+        (vec!["--methods", "layered:sideways"], "unknown cull mode"),
+        (vec!["--repeats", "0"], "--repeats"),
+    ] {
+        let out = bench(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+        assert!(stderr.contains(needle), "{args:?}: expected '{needle}' in {stderr}");
+    }
+}
