@@ -20,9 +20,7 @@ use glam::{Mat4, Quat, Vec3};
 use indicatif::{ProgressBar, ProgressStyle};
 use manyshadows::casters::{CasterOptions, Skin, MAX_BONES};
 use manyshadows::scene::atlas::FitPolicy;
-use manyshadows::scene::{
-    Attenuation, Camera, Instance, Light, LightKind, Material, Mesh, Scene,
-};
+use manyshadows::scene::{Attenuation, Camera, Instance, Light, LightKind, Material, Mesh, Scene};
 use manyshadows::timing::{GpuTimer, PipelineCounts};
 use manyshadows::wgpu;
 use manyshadows::{
@@ -444,7 +442,11 @@ pub fn layered(args: &LayeredArgs) -> Result<()> {
             VARIANTS.iter().find(|x| x.name == v).with_context(|| {
                 format!(
                     "unknown variant '{v}' (variants: {})",
-                    VARIANTS.iter().map(|x| x.name).collect::<Vec<_>>().join(", ")
+                    VARIANTS
+                        .iter()
+                        .map(|x| x.name)
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 )
             })
         })
@@ -464,7 +466,10 @@ pub fn layered(args: &LayeredArgs) -> Result<()> {
             let meshes = manyshadows::scene::loaders::load_mesh(path)
                 .with_context(|| format!("loading {}", path.display()))?;
             let mut mesh = manyshadows::scene::primitives::merge(
-                &meshes.into_iter().map(|m| (m, Mat4::IDENTITY)).collect::<Vec<_>>(),
+                &meshes
+                    .into_iter()
+                    .map(|m| (m, Mat4::IDENTITY))
+                    .collect::<Vec<_>>(),
             );
             if mesh.normals.len() != mesh.positions.len() {
                 mesh.compute_normals();
@@ -478,8 +483,8 @@ pub fn layered(args: &LayeredArgs) -> Result<()> {
         .with_context(|| format!("creating {}", args.out_dir.display()))?;
     let ctx = GpuContext::new(&args.gpu.request())?;
     let adapter = manyshadows::context::describe_adapter(&ctx.info);
-    let max_atlas = manyshadows::shadow::DEFAULT_MAX_ATLAS_SIZE
-        .min(ctx.limits().max_texture_dimension_2d);
+    let max_atlas =
+        manyshadows::shadow::DEFAULT_MAX_ATLAS_SIZE.min(ctx.limits().max_texture_dimension_2d);
     let stats_on = ctx.has(wgpu::Features::PIPELINE_STATISTICS_QUERY);
     let timestamps = ctx.has(wgpu::Features::TIMESTAMP_QUERY);
     eprintln!("adapter: {adapter}");
@@ -555,7 +560,14 @@ pub fn layered(args: &LayeredArgs) -> Result<()> {
                 discard_raster: variant.discard && !args.raster,
             };
             let created = ctx.scoped(&format!("building {}", m.technique), || {
-                ShadowGenerator::new(&ctx, &scene, &gpu, shadow_plan.clone(), m.technique, options)
+                ShadowGenerator::new(
+                    &ctx,
+                    &scene,
+                    &gpu,
+                    shadow_plan.clone(),
+                    m.technique,
+                    options,
+                )
             });
             match created {
                 Ok(g) => gens.push((m, g, GpuTimer::new(&ctx))),
@@ -752,15 +764,18 @@ fn table(records: &[Record], adapter: &str) -> String {
             let _ = writeln!(out, "   work at {maxmaps} maps (passes, draws, vertex-shader invocations, clipper primitives in → out):");
             for m in &methods {
                 if let Some(r) = rows.iter().find(|r| r.maps == maxmaps && r.method == *m) {
-                    let p = r.pipeline.map_or("no pipeline statistics on this adapter".to_string(), |p| {
-                        format!(
-                            "VS {}, clipper {} → {}, CS {}",
-                            p.vertex_shader_invocations,
-                            p.clipper_invocations,
-                            p.clipper_primitives_out,
-                            p.compute_shader_invocations
-                        )
-                    });
+                    let p = r.pipeline.map_or(
+                        "no pipeline statistics on this adapter".to_string(),
+                        |p| {
+                            format!(
+                                "VS {}, clipper {} → {}, CS {}",
+                                p.vertex_shader_invocations,
+                                p.clipper_invocations,
+                                p.clipper_primitives_out,
+                                p.compute_shader_invocations
+                            )
+                        },
+                    );
                     let _ = writeln!(
                         out,
                         "   {m:<22} passes {:>5}, draws {:>7}: {p}",

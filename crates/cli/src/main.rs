@@ -12,8 +12,9 @@ use manyshadows::context::{describe_adapter, feature_use, list_adapters, request
 use manyshadows::scene::atlas::FitPolicy;
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::scene::Scene;
-use manyshadows::{CullMode, ShadowOptions, 
-    AdapterRequest, Frame, GpuContext, Pcf, RenderSettings, Renderer, ShadowBias, Technique,
+use manyshadows::{
+    AdapterRequest, CullMode, Frame, GpuContext, Pcf, RenderSettings, Renderer, ShadowBias,
+    ShadowOptions, Technique,
 };
 
 mod bench;

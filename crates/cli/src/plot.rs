@@ -86,7 +86,10 @@ pub fn layered_plots(points: &[PlotPoint], adapter: &str, dir: &Path) -> Result<
         let specs: [(&str, Vec<Series>); 4] = [
             ("GPU ms, total", series(&|p| p.gpu_ms, false)),
             ("GPU ms per map", series(&|p| p.gpu_ms, true)),
-            ("CPU ms (record + submit), total", series(&|p| Some(p.cpu_ms), false)),
+            (
+                "CPU ms (record + submit), total",
+                series(&|p| Some(p.cpu_ms), false),
+            ),
             ("CPU ms per map", series(&|p| Some(p.cpu_ms), true)),
         ];
         for (area, (caption, data)) in panels.iter().zip(specs) {

@@ -43,7 +43,10 @@ fn bench_layered_writes_table_json_and_plots() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "bench failed: {stderr}");
     assert!(!stderr.contains("Validation Error"), "{stderr}");
-    assert!(stdout.contains("adapter:"), "every table names the adapter: {stdout}");
+    assert!(
+        stdout.contains("adapter:"),
+        "every table names the adapter: {stdout}"
+    );
 
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("results.json")).unwrap()).unwrap();
@@ -58,12 +61,23 @@ fn bench_layered_writes_table_json_and_plots() {
         // Every method generated every map: one view drawn per map.
         assert_eq!(r["stats"]["views_drawn"].as_u64().unwrap(), maps, "{r}");
         if r["method"] == "traditional" {
-            assert_eq!(r["stats"]["passes"].as_u64().unwrap(), maps, "one pass per map");
+            assert_eq!(
+                r["stats"]["passes"].as_u64().unwrap(),
+                maps,
+                "one pass per map"
+            );
             if let Some(ratio) = r["gpu_ratio_vs_traditional"].as_f64() {
-                assert!((ratio - 1.0).abs() < 1e-9, "traditional against itself: {ratio}");
+                assert!(
+                    (ratio - 1.0).abs() < 1e-9,
+                    "traditional against itself: {ratio}"
+                );
             }
         } else {
-            assert_eq!(r["stats"]["draws"].as_u64().unwrap(), 1, "one draw for all maps");
+            assert_eq!(
+                r["stats"]["draws"].as_u64().unwrap(),
+                1,
+                "one draw for all maps"
+            );
         }
     }
     for variant in ["skinned", "backface"] {
@@ -71,7 +85,9 @@ fn bench_layered_writes_table_json_and_plots() {
         let img = image::open(&png).unwrap_or_else(|e| panic!("{}: {e}", png.display()));
         assert_eq!((img.width(), img.height()), (1400, 1000));
     }
-    assert!(std::fs::read_to_string(dir.join("results.txt")).unwrap().contains("traditional"));
+    assert!(std::fs::read_to_string(dir.join("results.txt"))
+        .unwrap()
+        .contains("traditional"));
 }
 
 #[test]
@@ -89,6 +105,9 @@ fn bench_layered_rejects_bad_arguments() {
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
         assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
-        assert!(stderr.contains(needle), "{args:?}: expected '{needle}' in {stderr}");
+        assert!(
+            stderr.contains(needle),
+            "{args:?}: expected '{needle}' in {stderr}"
+        );
     }
 }

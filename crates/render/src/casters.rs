@@ -76,7 +76,12 @@ impl GpuSkin {
                 skin.weights.len()
             )));
         }
-        if let Some(j) = skin.joints.iter().flatten().find(|&&j| j as usize >= MAX_BONES) {
+        if let Some(j) = skin
+            .joints
+            .iter()
+            .flatten()
+            .find(|&&j| j as usize >= MAX_BONES)
+        {
             return Err(RenderError::SceneTooLarge(format!(
                 "joint index {j} is out of range (at most {MAX_BONES} bones)"
             )));
@@ -237,10 +242,7 @@ fn normal_cone(normals: &[Vec3]) -> [f32; 4] {
     let Some(axis) = sum.try_normalize() else {
         return [0.0, 0.0, 1.0, NO_CONE];
     };
-    let min_dot = normals
-        .iter()
-        .map(|n| n.dot(axis))
-        .fold(1.0f32, f32::min);
+    let min_dot = normals.iter().map(|n| n.dot(axis)).fold(1.0f32, f32::min);
     if min_dot <= 0.0 {
         return [axis.x, axis.y, axis.z, NO_CONE];
     }
@@ -425,12 +427,7 @@ impl CasterGeometry {
         });
         let params = init(
             "casters.params",
-            bytemuck::cast_slice(&[
-                vertices,
-                cluster_list.len() as u32,
-                u32::from(skinned),
-                0,
-            ]),
+            bytemuck::cast_slice(&[vertices, cluster_list.len() as u32, u32::from(skinned), 0]),
             wgpu::BufferUsages::UNIFORM,
         );
         // A bound but unused skin when the scene has none.
@@ -568,7 +565,11 @@ mod tests {
 
     #[test]
     fn normal_cones_contain_their_normals() {
-        let ns = [Vec3::Z, Vec3::new(0.1, 0.0, 1.0).normalize(), Vec3::new(0.0, -0.2, 1.0).normalize()];
+        let ns = [
+            Vec3::Z,
+            Vec3::new(0.1, 0.0, 1.0).normalize(),
+            Vec3::new(0.0, -0.2, 1.0).normalize(),
+        ];
         let c = normal_cone(&ns);
         let axis = Vec3::new(c[0], c[1], c[2]);
         for n in ns {

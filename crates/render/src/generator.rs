@@ -91,10 +91,9 @@ impl ShadowGenerator {
         for (i, view) in self.plan.views.iter().enumerate() {
             let dirty = !self.valid[i] || {
                 let planes = frustum_planes(view.view_proj);
-                moves.iter().any(|m| {
-                    m.iter()
-                        .any(|&(c, r)| sphere_visible(&planes, c, r))
-                })
+                moves
+                    .iter()
+                    .any(|m| m.iter().any(|&(c, r)| sphere_visible(&planes, c, r)))
             };
             if dirty {
                 list.push(i as u32);

@@ -20,8 +20,8 @@ pub mod atlas_image;
 pub mod casters;
 pub mod context;
 pub mod gbuffer;
-pub mod generator;
 pub mod gbuffer_readback;
+pub mod generator;
 pub mod gpu_scene;
 pub mod gpu_types;
 pub mod lighting;
@@ -35,9 +35,9 @@ pub mod visibility;
 
 pub use context::{AdapterRequest, GpuContext};
 pub use gbuffer_readback::GBufferData;
+pub use generator::ShadowGenerator;
 pub use gpu_scene::GpuScene;
 pub use renderer::{Frame, FrameTimings, Pcf, RenderSettings, Renderer, ShadowBias};
-pub use generator::ShadowGenerator;
 pub use shadow::{
     CullMode, ShadowAtlas, ShadowOptions, ShadowPlan, ShadowStats, ShadowTechnique, Technique,
 };

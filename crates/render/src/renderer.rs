@@ -13,10 +13,10 @@ use manyshadows_scene::Scene;
 use wgpu::util::DeviceExt;
 
 use crate::gbuffer::GBuffer;
+use crate::generator::ShadowGenerator;
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::FrameUniforms;
 use crate::lighting::{LightingInputs, LightingPass};
-use crate::generator::ShadowGenerator;
 use crate::shadow::{
     ShadowAtlas, ShadowOptions, ShadowPlan, ShadowStats, Technique, DEFAULT_MAX_ATLAS_SIZE,
 };

@@ -332,7 +332,9 @@ impl std::str::FromStr for CullMode {
             .iter()
             .copied()
             .find(|m| m.name() == s)
-            .ok_or_else(|| format!("unknown cull mode '{s}' (expected none, frustum, backface or all)"))
+            .ok_or_else(|| {
+                format!("unknown cull mode '{s}' (expected none, frustum, backface or all)")
+            })
     }
 }
 
@@ -443,12 +445,8 @@ impl Technique {
                 Box::new(crate::techniques::traditional::Traditional::new(ctx))
             }
             Technique::Layered => Box::new(crate::techniques::layered::Layered::new(ctx)?),
-            Technique::Multiview => {
-                Box::new(crate::techniques::multiview::Multiview::new(ctx)?)
-            }
-            Technique::GpuDriven => {
-                Box::new(crate::techniques::gpu_driven::GpuDriven::new(ctx)?)
-            }
+            Technique::Multiview => Box::new(crate::techniques::multiview::Multiview::new(ctx)?),
+            Technique::GpuDriven => Box::new(crate::techniques::gpu_driven::GpuDriven::new(ctx)?),
         })
     }
 }

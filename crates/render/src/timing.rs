@@ -268,7 +268,13 @@ impl GpuTimer {
             let n = q.next.get().min(q.capacity);
             if n > 0 {
                 encoder.resolve_query_set(&q.set, 0..n, &q.resolve, 0);
-                encoder.copy_buffer_to_buffer(&q.resolve, 0, &q.readback, 0, n as u64 * STAT_WORDS * 8);
+                encoder.copy_buffer_to_buffer(
+                    &q.resolve,
+                    0,
+                    &q.readback,
+                    0,
+                    n as u64 * STAT_WORDS * 8,
+                );
             }
         }
         let Some((set, resolve, readback)) = self.queries.as_ref() else {

@@ -73,8 +73,16 @@ fn cached_generation_equals_a_full_one_after_a_move() {
         };
         cached.set_caching(true);
         let views = cached.plan.views.len() as u32;
-        assert_eq!(generate(&ctx, &mut cached, &gpu), views, "{t}: first frame draws all");
-        assert_eq!(generate(&ctx, &mut cached, &gpu), 0, "{t}: nothing moved, nothing drawn");
+        assert_eq!(
+            generate(&ctx, &mut cached, &gpu),
+            views,
+            "{t}: first frame draws all"
+        );
+        assert_eq!(
+            generate(&ctx, &mut cached, &gpu),
+            0,
+            "{t}: nothing moved, nothing drawn"
+        );
         let old = gpu.draws[k].sphere;
         gpu.set_instance_transform(&ctx.queue, k, moved);
         cached.note_moved(old, gpu.draws[k].sphere);
@@ -85,10 +93,22 @@ fn cached_generation_equals_a_full_one_after_a_move() {
         let mut fresh = generator(&ctx, &moved_scene, &fresh_gpu, t).expect("fresh");
         generate(&ctx, &mut fresh, &fresh_gpu);
         let want = fresh.read_atlas(&ctx).expect("read");
-        let differing = got.iter().zip(&want).filter(|(a, b)| (**a - **b).abs() > 2e-6).count();
-        eprintln!("{t}: {redrawn} of {views} views redrawn after the move, {differing} texels differ");
-        assert!(redrawn > 0 && redrawn < views, "{t}: {redrawn} of {views} views redrawn");
-        assert_eq!(differing, 0, "{t}: the cached atlas differs from a full generation");
+        let differing = got
+            .iter()
+            .zip(&want)
+            .filter(|(a, b)| (**a - **b).abs() > 2e-6)
+            .count();
+        eprintln!(
+            "{t}: {redrawn} of {views} views redrawn after the move, {differing} texels differ"
+        );
+        assert!(
+            redrawn > 0 && redrawn < views,
+            "{t}: {redrawn} of {views} views redrawn"
+        );
+        assert_eq!(
+            differing, 0,
+            "{t}: the cached atlas differs from a full generation"
+        );
         ran.push(t);
     }
     assert!(ran.contains(&Technique::Traditional) && ran.contains(&Technique::Layered));

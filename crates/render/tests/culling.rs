@@ -58,7 +58,12 @@ fn scene() -> Scene {
     }
 }
 
-fn atlas(ctx: &GpuContext, scene: &Scene, technique: Technique, options: ShadowOptions) -> Vec<f32> {
+fn atlas(
+    ctx: &GpuContext,
+    scene: &Scene,
+    technique: Technique,
+    options: ShadowOptions,
+) -> Vec<f32> {
     let plan = ShadowPlan::new(scene, 1.0, 4096, FitPolicy::Strict).expect("plan");
     let gpu = GpuScene::new(ctx, scene).expect("upload");
     let mut g = ShadowGenerator::new(ctx, scene, &gpu, plan, technique, options)
@@ -71,14 +76,22 @@ fn atlas(ctx: &GpuContext, scene: &Scene, technique: Technique, options: ShadowO
 }
 
 fn differing(a: &[f32], b: &[f32]) -> usize {
-    a.iter().zip(b).filter(|(x, y)| (**x - **y).abs() > 2e-6).count()
+    a.iter()
+        .zip(b)
+        .filter(|(x, y)| (**x - **y).abs() > 2e-6)
+        .count()
 }
 
 #[test]
 fn backface_culling_removes_back_faces_only_where_that_is_exact() {
     let ctx = common::context();
     let scene = scene();
-    let reference = atlas(&ctx, &scene, Technique::Traditional, ShadowOptions::default());
+    let reference = atlas(
+        &ctx,
+        &scene,
+        Technique::Traditional,
+        ShadowOptions::default(),
+    );
     // The quad covers a square of roughly (1 m / (2·2 m·tan 45°))² of the 256² map: ~4000
     // texels nearer than the floor.
     let safe = ShadowOptions {
@@ -95,7 +108,10 @@ fn backface_culling_removes_back_faces_only_where_that_is_exact() {
     let kept = differing(&reference, &atlas(&ctx, &scene, Technique::Layered, safe));
     let culled = differing(&reference, &atlas(&ctx, &scene, Technique::Layered, forced));
     eprintln!("open quad kept: {kept} texels differ; culling forced: {culled} texels differ");
-    assert!(kept <= 4, "the default check must keep open meshes ({kept} texels differ)");
+    assert!(
+        kept <= 4,
+        "the default check must keep open meshes ({kept} texels differ)"
+    );
     assert!(
         culled > 2000,
         "forced back-face culling must drop the upside-down quad ({culled} texels differ)"

@@ -70,8 +70,7 @@ pub fn plan_rounds(views: u32, clusters: u32, vertices: u32, max_commands: u64) 
     let by_vertex = (1u64 << 31) / vertices.max(1) as u64;
     let batch = (max_commands / chunk as u64)
         .min(by_vertex)
-        .min(MAX_GROUPS)
-        .max(1) as u32;
+        .clamp(1, MAX_GROUPS) as u32;
     let mut rounds = Vec::new();
     let mut first_view = 0;
     while first_view < views {
@@ -105,7 +104,10 @@ pub struct GpuDriven {
     counter: wgpu::Buffer,
 }
 
-fn dynamic_uniform_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+fn dynamic_uniform_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility,
@@ -191,8 +193,10 @@ impl GpuDriven {
             mapped_at_creation: false,
         });
         let limits = ctx.limits();
-        let max_round_commands =
-            limits.max_storage_buffer_binding_size.min(limits.max_buffer_size) / COMMAND_SIZE;
+        let max_round_commands = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size)
+            / COMMAND_SIZE;
         Ok(Self {
             cull,
             draw,
@@ -269,7 +273,8 @@ impl ShadowTechnique for GpuDriven {
         self.command_buffer(ctx, capacity);
         let commands = &self.commands.as_ref().expect("command buffer").0;
 
-        let stride = (ctx.limits().min_uniform_buffer_offset_alignment as u64).max(PARAMS_SIZE);
+        let stride =
+            PARAMS_SIZE.next_multiple_of(ctx.limits().min_uniform_buffer_offset_alignment as u64);
         let mut bytes = vec![0u8; stride as usize * rounds.len().max(1)];
         let atlas = input.atlas.size as f32;
         for (k, r) in rounds.iter().enumerate() {
@@ -298,11 +303,13 @@ impl ShadowTechnique for GpuDriven {
                 usage: wgpu::BufferUsages::UNIFORM,
             },
         );
-        let params_binding = || wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-            buffer: &params,
-            offset: 0,
-            size: wgpu::BufferSize::new(PARAMS_SIZE),
-        });
+        let params_binding = || {
+            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &params,
+                offset: 0,
+                size: wgpu::BufferSize::new(PARAMS_SIZE),
+            })
+        };
         let cull_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("gpu_driven.cull_group"),
             layout: &self.cull_layout,
@@ -449,7 +456,10 @@ mod tests {
             (1, 1, 1, 1),
         ] {
             let rounds = plan_rounds(views, clusters, vertices, max);
-            assert!(covered(&rounds, views, clusters), "{views} {clusters} {vertices} {max}");
+            assert!(
+                covered(&rounds, views, clusters),
+                "{views} {clusters} {vertices} {max}"
+            );
             for r in &rounds {
                 assert!(r.commands() <= max);
                 assert!((r.views as u64) * (vertices as u64) <= 1 << 31);

@@ -42,17 +42,24 @@ fn vs_pulled(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> 
     let p0 = world[corners[3u * tri]];
     let p1 = world[corners[3u * tri + 1u]];
     let p2 = world[corners[3u * tri + 2u]];
-    let c0 = view.view_proj * p0;
-    let c1 = view.view_proj * p1;
-    let c2 = view.view_proj * p2;
     let bits = lparams.counts.y;
-    if ((bits & CULL_FRUSTUM) != 0u && outside_frustum(c0, c1, c2)) {
-        return culled_vertex();
-    }
+    // Back-face test first: world space, no projection needed.
     if ((bits & CULL_BACKFACE) != 0u && tri < lparams.counts.x
         && faces_away(p0.xyz, p1.xyz, p2.xyz, eyes[view_id])) {
         return culled_vertex();
     }
-    let c = select(select(c2, c1, corner == 1u), c0, corner == 0u);
+    var c: vec4<f32>;
+    if ((bits & CULL_FRUSTUM) != 0u) {
+        let c0 = view.view_proj * p0;
+        let c1 = view.view_proj * p1;
+        let c2 = view.view_proj * p2;
+        if (outside_frustum(c0, c1, c2)) {
+            return culled_vertex();
+        }
+        c = select(select(c2, c1, corner == 1u), c0, corner == 0u);
+    } else {
+        // Only this invocation's corner needs projecting.
+        c = view.view_proj * select(select(p2, p1, corner == 1u), p0, corner == 0u);
+    }
     return into_tile(c, view.tile);
 }

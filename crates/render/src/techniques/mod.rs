@@ -63,7 +63,12 @@ impl TileClear {
 
     /// Records the clear of every listed view's tile into `pass` (whose viewport must be the
     /// whole atlas). Does nothing when every view is drawn: that pass clears on load instead.
-    pub fn record(&self, ctx: &GpuContext, input: &ShadowInput<'_>, pass: &mut wgpu::RenderPass<'_>) {
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        input: &ShadowInput<'_>,
+        pass: &mut wgpu::RenderPass<'_>,
+    ) {
         if input.full() || input.draw_list.is_empty() {
             return;
         }

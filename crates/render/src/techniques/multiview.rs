@@ -47,6 +47,14 @@ pub fn groups(draw_list: &[u32], tile_size: impl Fn(u32) -> u32, max: u32) -> Ve
     out
 }
 
+/// True for drivers whose multiview loses the view index of primitives that go through the
+/// clipper (they all land in layer 0): Mesa's lavapipe (checked on 22.3.6; a point light's
+/// cube faces, whose floor crosses the frustum, came out as the union of all six faces in
+/// layer 0, while groups whose triangles needed no clipping were exact).
+pub fn clips_into_layer_zero(info: &wgpu::AdapterInfo) -> bool {
+    info.backend == wgpu::Backend::Vulkan && info.name.to_lowercase().contains("llvmpipe")
+}
+
 /// The multiview technique's pipelines and scratch texture.
 pub struct Multiview {
     module: wgpu::ShaderModule,
@@ -73,7 +81,10 @@ struct Scratch {
     all: wgpu::TextureView,
 }
 
-fn dynamic_uniform_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+fn dynamic_uniform_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility,
@@ -89,7 +100,7 @@ fn dynamic_uniform_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::
 impl Multiview {
     /// Builds the pipelines; fails with [`RenderError::Unsupported`] without `MULTIVIEW`.
     pub fn new(ctx: &GpuContext) -> Result<Self, RenderError> {
-        let max_views = ctx.limits().max_multiview_view_count.min(32);
+        let mut max_views = ctx.limits().max_multiview_view_count.min(32);
         if !ctx.has(wgpu::Features::MULTIVIEW) || max_views == 0 {
             return Err(RenderError::Unsupported(format!(
                 "--technique multiview needs the MULTIVIEW feature (one render pass per group \
@@ -97,6 +108,15 @@ impl Multiview {
                  layered, which fills the same atlas with one instanced draw",
                 crate::context::describe_adapter(&ctx.info)
             )));
+        }
+        if clips_into_layer_zero(&ctx.info) {
+            log::warn!(
+                "multiview: {} renders every primitive that needs clipping into view 0's layer \
+                 (Mesa lavapipe's clipper drops the view index), so each multiview pass holds \
+                 one view here; expect no multiview speed-up on this adapter",
+                crate::context::describe_adapter(&ctx.info)
+            );
+            max_views = 1;
         }
         let device = &ctx.device;
         let module =
@@ -189,40 +209,46 @@ impl Multiview {
         })
     }
 
+    /// Most views one multiview pass renders on this adapter.
+    pub fn views_per_pass(&self) -> u32 {
+        self.max_views
+    }
+
     /// The geometry pipeline for groups of `n` views.
     fn pipeline(&mut self, ctx: &GpuContext, n: u32, pulled: bool) -> &wgpu::RenderPipeline {
         let (module, layout) = (&self.module, &self.pipeline_layout);
         self.pipelines.entry((n, pulled)).or_insert_with(|| {
             let mask = if n >= 32 { u32::MAX } else { (1u32 << n) - 1 };
             let entry = if pulled { "vs_pulled" } else { "vs_indexed" };
-            ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(entry),
-                layout: Some(layout),
-                vertex: wgpu::VertexState {
-                    module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState {
-                    topology: wgpu::PrimitiveTopology::TriangleList,
-                    front_face: wgpu::FrontFace::Ccw,
-                    // Culling is per view in the shader; survivors cast from both sides.
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: ATLAS_FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: None,
-                multiview_mask: NonZeroU32::new(mask),
-                cache: None,
-            })
+            ctx.device
+                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(entry),
+                    layout: Some(layout),
+                    vertex: wgpu::VertexState {
+                        module,
+                        entry_point: Some(entry),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    primitive: wgpu::PrimitiveState {
+                        topology: wgpu::PrimitiveTopology::TriangleList,
+                        front_face: wgpu::FrontFace::Ccw,
+                        // Culling is per view in the shader; survivors cast from both sides.
+                        cull_mode: None,
+                        ..Default::default()
+                    },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: ATLAS_FORMAT,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(wgpu::CompareFunction::Less),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: None,
+                    multiview_mask: NonZeroU32::new(mask),
+                    cache: None,
+                })
         })
     }
 
@@ -313,7 +339,8 @@ impl ShadowTechnique for Multiview {
         self.ensure_scratch(ctx, side, layers);
 
         // One parameter record per group, at the uniform-offset alignment.
-        let stride = (ctx.limits().min_uniform_buffer_offset_alignment as u64).max(PARAMS_SIZE);
+        let stride =
+            PARAMS_SIZE.next_multiple_of(ctx.limits().min_uniform_buffer_offset_alignment as u64);
         let mut bytes = vec![0u8; stride as usize * groups.len()];
         for (g, &(first, _)) in groups.iter().enumerate() {
             let record: [u32; 8] = [
@@ -353,10 +380,15 @@ impl ShadowTechnique for Multiview {
             binding: 0,
             resource: params_binding.clone(),
         }];
-        entries.extend(buffers.iter().enumerate().map(|(i, b)| wgpu::BindGroupEntry {
-            binding: i as u32 + 1,
-            resource: b.as_entire_binding(),
-        }));
+        entries.extend(
+            buffers
+                .iter()
+                .enumerate()
+                .map(|(i, b)| wgpu::BindGroupEntry {
+                    binding: i as u32 + 1,
+                    resource: b.as_entire_binding(),
+                }),
+        );
         let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("multiview.bind_group"),
             layout: &self.layout,
@@ -461,7 +493,7 @@ impl ShadowTechnique for Multiview {
             }
             pass.set_pipeline(&self.copy_pipeline);
             pass.set_bind_group(0, &copy_bind_group, &offset);
-            pass.draw(0..6, 0..n);
+            pass.draw(0..6 * n, 0..1);
             timer.end_render_stats(&mut pass, s);
             stats.passes += 1;
             stats.draws += 1;

@@ -19,8 +19,9 @@ struct MultiviewParams {
 @group(0) @binding(4) var<storage, read> corners: array<u32>;
 @group(0) @binding(5) var<storage, read> draw_list: array<u32>;
 
-// Where all three corners of a culled triangle go: zero area, beyond the far plane.
-const MV_CULLED: vec4<f32> = vec4<f32>(0.0, 0.0, 2.0, 1.0);
+// Where all three corners of a culled triangle go: zero area, and inside the clip volume so
+// the triangle never reaches the clipper (lavapipe's clipper loses the view index).
+const MV_CULLED: vec4<f32> = vec4<f32>(0.0, 0.0, 0.5, 1.0);
 
 // No culling: an indexed draw of the caster corners (post-transform vertex reuse applies).
 @vertex
@@ -52,3 +53,4 @@ fn vs_pulled(@builtin(vertex_index) v: u32, @builtin(view_index) layer: u32) -> 
     }
     return select(select(c2, c1, corner == 1u), c0, corner == 0u);
 }
+

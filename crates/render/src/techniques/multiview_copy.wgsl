@@ -1,5 +1,5 @@
 // `multiview`, second half: copies each layer of the scratch depth array into its view's atlas
-// tile. One instanced draw per group, instance = layer: a quad covering the tile exactly,
+// tile. One draw per group, six vertices per layer: a quad covering the tile exactly,
 // whose fragments load the scratch texel and write it as depth (depth copies into a
 // sub-rectangle of a texture are not allowed by copy_texture_to_texture).
 
@@ -21,7 +21,8 @@ struct CopyOut {
 }
 
 @vertex
-fn vs_copy(@builtin(vertex_index) v: u32, @builtin(instance_index) layer: u32) -> CopyOut {
+fn vs_copy(@builtin(vertex_index) v: u32) -> CopyOut {
+    let layer = v / 6u;
     let tile = copy_views[copy_list[cparams.counts.x + layer]].tile;
     var quad = array<vec2<f32>, 6>(
         vec2<f32>(0.0, 0.0), vec2<f32>(1.0, 0.0), vec2<f32>(0.0, 1.0),

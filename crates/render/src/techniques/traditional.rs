@@ -50,36 +50,36 @@ impl Traditional {
         });
         let pipeline = |entry: &str, layout: wgpu::VertexBufferLayout<'static>| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(entry),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                buffers: &[Some(layout)],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                front_face: wgpu::FrontFace::Ccw,
-                // Two-sided casters: open meshes (planes, quads) must cast from both sides.
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: ATLAS_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                // Bias is applied on the receiver in the lighting pass, so every technique
-                // (including compute rasterizers with no fixed-function bias) writes the same
-                // depth.
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: None,
-            multiview_mask: None,
-            cache: None,
-        })
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(layout)],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    front_face: wgpu::FrontFace::Ccw,
+                    // Two-sided casters: open meshes (planes, quads) must cast from both sides.
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: ATLAS_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    // Bias is applied on the receiver in the lighting pass, so every technique
+                    // (including compute rasterizers with no fixed-function bias) writes the same
+                    // depth.
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: None,
+                multiview_mask: None,
+                cache: None,
+            })
         };
         let no_bones = wgpu::util::DeviceExt::create_buffer_init(
             device,
@@ -99,7 +99,11 @@ impl Traditional {
     }
 
     fn bind_group(&self, ctx: &GpuContext, input: &ShadowInput<'_>) -> wgpu::BindGroup {
-        let bones = input.scene.skin.as_ref().map_or(&self.no_bones, |s| &s.bones);
+        let bones = input
+            .scene
+            .skin
+            .as_ref()
+            .map_or(&self.no_bones, |s| &s.bones);
         ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("traditional.bind_group"),
             layout: &self.layout,
