@@ -599,7 +599,7 @@ pub fn layered(args: &LayeredArgs) -> Result<()> {
         let mut counts: Vec<Option<PipelineCounts>> = Vec::new();
         for (_, gen, _) in gens.iter_mut() {
             let mut timer = GpuTimer::new(&ctx);
-            let on = timer.enable_statistics(&ctx, maps as u32 + 8);
+            let on = timer.enable_statistics(&ctx, 2 * maps as u32 + 16);
             let (_, c) = run_once(&ctx, gen, &gpu, &mut timer)?;
             counts.push(if on { c } else { None });
             pb.inc(maps as u64);

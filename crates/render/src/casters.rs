@@ -251,6 +251,45 @@ fn normal_cone(normals: &[Vec3]) -> [f32; 4] {
     [axis.x, axis.y, axis.z, angle]
 }
 
+/// The mesh's triangles (as index triples) sorted along a Morton curve through their
+/// centroids, so consecutive runs — the clusters — are spatially compact: tight bounding
+/// spheres for frustum culling, narrow normal cones for back-face culling. Depth-only
+/// rendering with a `Less` test does not depend on triangle order.
+pub(crate) fn morton_order(mesh: &Mesh) -> Vec<u32> {
+    let Some((lo, hi)) = mesh.bounds() else {
+        return mesh.indices.clone();
+    };
+    let extent = (hi - lo).max(Vec3::splat(1e-12));
+    let spread = |v: u32| -> u32 {
+        // 10 bits → every third bit of 30.
+        let mut x = v & 0x3ff;
+        x = (x | (x << 16)) & 0x0300_00ff;
+        x = (x | (x << 8)) & 0x0300_f00f;
+        x = (x | (x << 4)) & 0x030c_30c3;
+        (x | (x << 2)) & 0x0924_9249
+    };
+    let mut keyed: Vec<(u32, usize)> = mesh
+        .indices
+        .chunks_exact(3)
+        .enumerate()
+        .map(|(t, tri)| {
+            let c = tri
+                .iter()
+                .map(|&v| mesh.positions[v as usize])
+                .sum::<Vec3>()
+                / 3.0;
+            let q = ((c - lo) / extent * 1023.0).clamp(Vec3::ZERO, Vec3::splat(1023.0));
+            let key = spread(q.x as u32) | (spread(q.y as u32) << 1) | (spread(q.z as u32) << 2);
+            (key, t)
+        })
+        .collect();
+    keyed.sort_by_key(|&(k, t)| (k, t));
+    keyed
+        .iter()
+        .flat_map(|&(_, t)| mesh.indices[3 * t..3 * t + 3].iter().copied())
+        .collect()
+}
+
 fn dispatch_2d(items: u32) -> (u32, u32) {
     let groups = items.div_ceil(64).max(1);
     let x = groups.min(65535);
@@ -266,6 +305,7 @@ impl CasterGeometry {
         options: CasterOptions,
     ) -> Result<Self, RenderError> {
         let mut closures: Vec<Option<Closure>> = vec![None; scene.meshes.len()];
+        let mut orders: Vec<Option<Vec<u32>>> = vec![None; scene.meshes.len()];
         let mut base_vertex = Vec::with_capacity(scene.meshes.len());
         let mut acc = 0u32;
         for m in &scene.meshes {
@@ -324,7 +364,8 @@ impl CasterGeometry {
             let bv = base_vertex[inst.mesh];
             sources.extend((0..mesh.positions.len() as u32).map(|v| [bv + v, i as u32]));
             let cone_ok = cullable && !skinned && is_similarity(inst.transform);
-            for chunk in mesh.indices.chunks(3 * CLUSTER_TRIANGLES as usize) {
+            let ordered = orders[inst.mesh].get_or_insert_with(|| morton_order(mesh));
+            for chunk in ordered.chunks(3 * CLUSTER_TRIANGLES as usize) {
                 let first_triangle = (corners[class].len() / 3) as u32;
                 let mut normals = Vec::with_capacity(chunk.len() / 3);
                 for t in chunk.chunks_exact(3) {

@@ -91,7 +91,8 @@ impl GpuScene {
             });
             positions.extend(mesh.positions.iter().map(|p| p.to_array()));
             normals.extend(mesh.normals.iter().map(|n| n.to_array()));
-            indices.extend_from_slice(&mesh.indices);
+            // Morton-ordered triangles: better vertex reuse in every pass (same image).
+            indices.extend(crate::casters::morton_order(mesh));
             let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
             let c = (lo + hi) * 0.5;
             let r = mesh

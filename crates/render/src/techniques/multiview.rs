@@ -110,12 +110,15 @@ impl Multiview {
             )));
         }
         if clips_into_layer_zero(&ctx.info) {
-            log::warn!(
+            static WARNED: std::sync::Once = std::sync::Once::new();
+            WARNED.call_once(|| {
+                log::warn!(
                 "multiview: {} renders every primitive that needs clipping into view 0's layer \
                  (Mesa lavapipe's clipper drops the view index), so each multiview pass holds \
                  one view here; expect no multiview speed-up on this adapter",
                 crate::context::describe_adapter(&ctx.info)
-            );
+            )
+            });
             max_views = 1;
         }
         let device = &ctx.device;
