@@ -74,6 +74,9 @@ pub struct LayeredArgs {
     /// Rasterize in every variant (the seed turned rasterization off after `simple`).
     #[arg(long)]
     pub raster: bool,
+    /// Draw the plots from an earlier run's results.json instead of measuring.
+    #[arg(long)]
+    pub replot: Option<PathBuf>,
     /// Directory for results.json, results.txt and the plots.
     #[arg(long, default_value = "bench-layered")]
     pub out_dir: PathBuf,
@@ -432,6 +435,9 @@ fn run_unscoped(
 
 /// Runs `manyshadows bench layered`.
 pub fn layered(args: &LayeredArgs) -> Result<()> {
+    if let Some(path) = &args.replot {
+        return replot(path, &args.out_dir);
+    }
     if args.repeats == 0 {
         bail!("--repeats must be at least 1");
     }
@@ -532,7 +538,7 @@ pub fn layered(args: &LayeredArgs) -> Result<()> {
                     "{} {res}² ×{maps}: skipped, the maps do not fit one atlas ({e})",
                     variant.name
                 );
-                pb.println(&note);
+                pb.suspend(|| eprintln!("{note}"));
                 notes.push(note);
                 pb.inc(work);
                 continue;
@@ -573,7 +579,7 @@ pub fn layered(args: &LayeredArgs) -> Result<()> {
                 Ok(g) => gens.push((m, g, GpuTimer::new(&ctx))),
                 Err(RenderError::Unsupported(why)) => {
                     let note = format!("{} skipped: {why}", m.technique);
-                    pb.println(&note);
+                    pb.suspend(|| eprintln!("{note}"));
                     notes.push(note);
                     unsupported.push(m.technique);
                 }
@@ -683,6 +689,37 @@ pub struct PlotPoint {
     pub gpu_ms: Option<f64>,
     /// Median CPU ms.
     pub cpu_ms: f64,
+}
+
+/// Plots an earlier run's JSON again (e.g. after a change to the plot style).
+fn replot(path: &std::path::Path, out_dir: &std::path::Path) -> Result<()> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let json: serde_json::Value = serde_json::from_str(&text)
+        .with_context(|| format!("{} is not bench results JSON", path.display()))?;
+    let records = json["records"]
+        .as_array()
+        .with_context(|| format!("{} has no `records` array", path.display()))?;
+    let points = records
+        .iter()
+        .map(|r| {
+            Some(PlotPoint {
+                variant: r["variant"].as_str()?.to_string(),
+                resolution: r["resolution"].as_u64()? as u32,
+                maps: r["maps"].as_u64()? as usize,
+                method: r["method"].as_str()?.to_string(),
+                gpu_ms: r["gpu_ms"].as_f64(),
+                cpu_ms: r["cpu_ms"].as_f64()?,
+            })
+        })
+        .collect::<Option<Vec<_>>>()
+        .with_context(|| format!("{}: a record lacks a field", path.display()))?;
+    std::fs::create_dir_all(out_dir)?;
+    let adapter = json["adapter"].as_str().unwrap_or("unknown adapter");
+    for p in crate::plot::layered_plots(&points, adapter, out_dir)? {
+        eprintln!("wrote {}", p.display());
+    }
+    Ok(())
 }
 
 fn records_view(records: &[Record]) -> Vec<PlotPoint> {
