@@ -36,8 +36,12 @@ const DIM: f32 = 0.35;
 /// The options of `manyshadows compare`.
 #[derive(Args, Debug, Clone)]
 pub struct CompareArgs {
-    /// Built-in scene name or a TOML scene file (as for `render`).
-    #[arg(long, default_value = "atrium")]
+    /// Built-in scene name or a TOML scene file (as for `render`); several, comma-separated,
+    /// are scored one after the other, each into its own sub-directory of --out-dir (e.g.
+    /// `atrium,plane-spot,plane-point,plane-directional`).
+    #[arg(long = "scene", default_value = "atrium", value_delimiter = ',')]
+    scenes: Vec<String>,
+    #[arg(skip)]
     scene: String,
     /// Techniques to score, comma-separated (default: every technique).
     #[arg(long, value_delimiter = ',', value_parser = crate::parse_technique)]
@@ -140,8 +144,40 @@ impl Variant {
     }
 }
 
-/// Runs the comparison.
+/// Runs the comparison of every `--scene`.
 pub fn run(args: &CompareArgs) -> Result<()> {
+    if args.scenes.is_empty() {
+        bail!("--scene needs at least one scene");
+    }
+    if let [one] = args.scenes.as_slice() {
+        let mut a = args.clone();
+        a.scene = one.clone();
+        return run_scene(&a).map(|_| ());
+    }
+    let mut reports = Vec::new();
+    for name in &args.scenes {
+        let mut a = args.clone();
+        a.scene = name.clone();
+        let stem = Path::new(name)
+            .file_stem()
+            .map_or(name.clone(), |s| s.to_string_lossy().into_owned());
+        a.out_dir = args.out_dir.join(&stem);
+        a.json = None;
+        println!("\n=== scene {name} (images in {}) ===", a.out_dir.display());
+        reports.push(run_scene(&a)?);
+    }
+    if let Some(path) = &args.json {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
+        std::fs::write(path, serde_json::to_string_pretty(&json!({ "scenes": reports }))?)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// Scores the techniques on `args.scene`; returns the JSON report.
+fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
     let started = Instant::now();
     if args.edge_band > MAX_EDGE_BAND {
         bail!(
@@ -314,7 +350,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         std::fs::write(path, serde_json::to_string_pretty(&report)?)
             .with_context(|| format!("writing {}", path.display()))?;
     }
-    Ok(())
+    Ok(report)
 }
 
 /// The reference of the frame, computed once (the G-buffer is the same for every technique).
