@@ -56,6 +56,12 @@ pub struct CompareArgs {
     /// Light types the layout uses: all (mixed), spot, point or directional.
     #[arg(long, default_value = "all")]
     light_types: String,
+    /// Point-light shadows: cube or dual-paraboloid (scored by the same reference).
+    #[arg(long, default_value = "cube", value_parser = crate::parse_point_shadows)]
+    point_shadows: manyshadows::scene::light_space::PointShadows,
+    /// Split every triangle into four this many times first (as for `render`).
+    #[arg(long, default_value_t = 0)]
+    subdivide: u32,
     /// Mesh file for the dragon scene.
     #[arg(long)]
     mesh: Option<PathBuf>,
@@ -386,6 +392,7 @@ fn load(args: &CompareArgs) -> Result<Scene> {
         seed: args.seed,
         light_types: args.light_types.clone(),
         mesh: args.mesh.clone(),
+        subdivide: args.subdivide,
         ..RenderArgs::default()
     };
     crate::load_scene(&ra)
@@ -422,6 +429,7 @@ fn settings(args: &CompareArgs, technique: Technique) -> RenderSettings {
             FitPolicy::Shrink
         },
         visibility: true,
+        point_shadows: args.point_shadows,
         ..Default::default()
     }
 }

@@ -11,6 +11,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use manyshadows::context::{describe_adapter, feature_use, list_adapters, requested_backends};
 use manyshadows::scene::atlas::FitPolicy;
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
+use manyshadows::scene::light_space::PointShadows;
 use manyshadows::scene::Scene;
 use manyshadows::{
     AdapterRequest, CullMode, Frame, GpuContext, Pcf, RenderSettings, Renderer, ShadowBias,
@@ -129,6 +130,15 @@ struct RenderArgs {
     /// (closed meshes only, so shadows never change) or all. `traditional` ignores it.
     #[arg(long, default_value = "all", value_parser = parse_cull)]
     cull: CullMode,
+    /// Point-light shadows: cube (six 90° faces) or dual-paraboloid (two hemispheres, each
+    /// map twice the per-face resolution; needs finely tessellated geometry, see --subdivide).
+    /// Supported by traditional and layered.
+    #[arg(long, default_value = "cube", value_parser = parse_point_shadows)]
+    point_shadows: PointShadows,
+    /// Split every triangle into four this many times before rendering (4^N triangles), e.g.
+    /// to give dual-paraboloid maps the fine geometry their non-linear warp needs.
+    #[arg(long, default_value_t = 0)]
+    subdivide: u32,
     /// Render this many frames; with more than one, one shadow caster (see --move-instance)
     /// moves a little each frame and a line per frame reports the shadow work. The last frame
     /// is written.
@@ -209,6 +219,10 @@ fn parse_technique(s: &str) -> Result<Technique, String> {
     s.parse()
 }
 
+fn parse_point_shadows(s: &str) -> Result<PointShadows, String> {
+    s.parse()
+}
+
 fn parse_cull(s: &str) -> Result<CullMode, String> {
     s.parse()
 }
@@ -265,6 +279,14 @@ fn spinner(msg: &str) -> ProgressBar {
 
 /// Loads a built-in scene or a TOML file, applying `--lights`/`--seed`/`--light-types`.
 fn load_scene(args: &RenderArgs) -> Result<Scene> {
+    let mut scene = load_scene_unsubdivided(args)?;
+    if args.subdivide > 0 {
+        scene.subdivide(args.subdivide)?;
+    }
+    Ok(scene)
+}
+
+fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
     let mix: LightMix = args.light_types.parse()?;
     let path = Path::new(&args.scene);
     let is_file = args.scene.ends_with(".toml") || path.exists();
@@ -323,6 +345,7 @@ fn render(args: &RenderArgs) -> Result<()> {
             ..Default::default()
         },
         cache_shadows: args.cache,
+        point_shadows: args.point_shadows,
         pcf: args.pcf,
         bias: ShadowBias {
             constant: args.bias_constant,

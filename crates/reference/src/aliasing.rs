@@ -212,6 +212,10 @@ pub fn footprints(
             }
             let vi = match light.kind {
                 LightKind::Spot { .. } => Some(first),
+                // Dual paraboloid: hemisphere 0 towards +Y, 1 towards −Y (as the shader).
+                LightKind::Point { position, .. } if count == 2 => {
+                    Some(first + usize::from(sp.position.y < position.y))
+                }
                 LightKind::Point { position, .. } => {
                     Some(first + cube_face(sp.position - position).min(count - 1))
                 }
@@ -224,6 +228,20 @@ pub fn footprints(
             };
             let Some(vi) = vi else { continue };
             let v = &planned.views[vi];
+            if matches!(v.kind, manyshadows_scene::light_space::ViewKind::Paraboloid(_)) {
+                // x = tan(θ/2) on the disk: a texel spans (2/res)·(1 + cos θ) radians, i.e.
+                // texel_world·(1 + front)/2 at distance 1 (texel_world is the pole's).
+                let lv = v.view.transform_point3(sp.position);
+                let dist = lv.length();
+                let front = if dist > 0.0 { -lv.z / dist } else { 1.0 };
+                let tile = planned.tile_sizes[vi].max(1) as f32;
+                let texel = v.texel_world * v.resolution as f32 / tile
+                    * 0.5
+                    * (1.0 + front.max(0.0))
+                    * dist;
+                out[li].add(texel / pixel_world);
+                continue;
+            }
             let clip = v.view_proj * sp.position.extend(1.0);
             if clip.w <= 0.0 {
                 continue;

@@ -137,6 +137,7 @@ pub fn atlas_picture(depth: &[f32], atlas_size: u32, plan: &ShadowPlan) -> (u32,
             ViewKind::Spot => [255, 220, 0],
             ViewKind::CubeFace(_) => [0, 220, 255],
             ViewKind::Cascade(_) => [255, 0, 220],
+            ViewKind::Paraboloid(_) => [80, 255, 120],
         };
         for ty in 0..n {
             for tx in 0..n {

@@ -12,7 +12,7 @@ use glam::Vec3;
 use manyshadows_scene::Scene;
 
 use crate::casters::CasterGeometry;
-use crate::gpu_scene::{frustum_planes, sphere_visible, GpuScene};
+use crate::gpu_scene::GpuScene;
 use crate::shadow::{
     ShadowAtlas, ShadowInput, ShadowOptions, ShadowPlan, ShadowStats, ShadowTechnique, Technique,
 };
@@ -46,6 +46,31 @@ impl ShadowGenerator {
         technique: Technique,
         options: ShadowOptions,
     ) -> Result<Self, RenderError> {
+        let paraboloid = plan
+            .views
+            .iter()
+            .any(|v| matches!(v.kind, manyshadows_scene::light_space::ViewKind::Paraboloid(_)));
+        if paraboloid && !matches!(technique, Technique::Traditional | Technique::Layered) {
+            return Err(RenderError::Unsupported(format!(
+                "--technique {technique} renders cube-map point shadows only; use \
+                 --point-shadows cube, or --technique traditional or layered for \
+                 dual-paraboloid maps"
+            )));
+        }
+        if paraboloid && !ctx.has(wgpu::Features::CLIP_DISTANCES) {
+            return Err(RenderError::Unsupported(format!(
+                "dual-paraboloid shadows clip triangles at the hemisphere's base with the \
+                 CLIP_DISTANCES feature, which {} lacks; use --point-shadows cube",
+                crate::context::describe_adapter(&ctx.info)
+            )));
+        }
+        if paraboloid && gpu.skin.is_some() {
+            return Err(RenderError::Unsupported(
+                "dual-paraboloid shadows of skinned scenes are not implemented; use \
+                 --point-shadows cube"
+                    .into(),
+            ));
+        }
         let atlas = ShadowAtlas::new(ctx, &plan);
         let casters = CasterGeometry::new(ctx, scene, gpu, options.casters)?;
         let valid = vec![false; plan.views.len()];
@@ -89,12 +114,10 @@ impl ShadowGenerator {
         let moves = std::mem::take(&mut self.moves);
         let mut list = Vec::new();
         for (i, view) in self.plan.views.iter().enumerate() {
-            let dirty = !self.valid[i] || {
-                let planes = frustum_planes(view.view_proj);
-                moves
+            let dirty = !self.valid[i]
+                || moves
                     .iter()
-                    .any(|m| m.iter().any(|&(c, r)| sphere_visible(&planes, c, r)))
-            };
+                    .any(|m| m.iter().any(|&(c, r)| view.sphere_visible(c, r)));
             if dirty {
                 list.push(i as u32);
                 self.valid[i] = true;

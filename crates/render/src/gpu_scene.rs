@@ -236,30 +236,7 @@ fn max_axis_scale(m: Mat4) -> f32 {
         .fold(0.0f32, f32::max)
 }
 
-/// The six planes of a view-projection's frustum (wgpu clip space: depth 0..1), as
-/// `(normal, d)` with `normal·p + d >= 0` inside, normals normalised.
-pub fn frustum_planes(view_proj: Mat4) -> [Vec4; 6] {
-    let r0 = view_proj.row(0);
-    let r1 = view_proj.row(1);
-    let r2 = view_proj.row(2);
-    let r3 = view_proj.row(3);
-    let planes = [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2];
-    planes.map(|p| {
-        let len = p.truncate().length();
-        if len > 0.0 {
-            p / len
-        } else {
-            p
-        }
-    })
-}
-
-/// True if a sphere is at least partly inside the frustum given by [`frustum_planes`].
-pub fn sphere_visible(planes: &[Vec4; 6], center: Vec3, radius: f32) -> bool {
-    planes
-        .iter()
-        .all(|p| p.truncate().dot(center) + p.w >= -radius)
-}
+pub use manyshadows_scene::light_space::{frustum_planes, sphere_in_planes as sphere_visible};
 
 #[cfg(test)]
 mod tests {

@@ -165,8 +165,11 @@ pub struct ShadowViewData {
 pub struct ViewUniform {
     /// Light world → clip.
     pub view_proj: [[f32; 4]; 4],
+    /// near, far, texel size, projection (0 perspective, 1 orthographic, 2 paraboloid), as
+    /// in [`ShadowViewData::params`].
+    pub params: [f32; 4],
     /// Padding to 256 bytes.
-    pub _pad: [[f32; 4]; 12],
+    pub _pad: [[f32; 4]; 11],
 }
 
 /// Byte stride between consecutive [`ViewUniform`]s (the common `min_uniform_buffer_offset_alignment`).

@@ -108,6 +108,8 @@ pub struct RenderSettings {
     pub shadow: ShadowOptions,
     /// Keep the tiles of unchanged views between frames (see [`crate::generator`]).
     pub cache_shadows: bool,
+    /// Point-light shadows: six cube faces or two paraboloid hemispheres.
+    pub point_shadows: manyshadows_scene::light_space::PointShadows,
     /// Shadow filtering.
     pub pcf: Pcf,
     /// Receiver bias.
@@ -128,6 +130,7 @@ impl Default for RenderSettings {
             technique: Technique::default(),
             shadow: ShadowOptions::default(),
             cache_shadows: false,
+            point_shadows: Default::default(),
             pcf: Pcf::default(),
             bias: ShadowBias::default(),
             max_atlas_size: None,
@@ -209,7 +212,8 @@ impl<'c> Renderer<'c> {
             .min(max_dim);
         ctx.scoped("creating the renderer", || {
             let aspect = settings.width as f32 / settings.height as f32;
-            let plan = ShadowPlan::new(scene, aspect, max_atlas, settings.fit)?;
+            let plan =
+                ShadowPlan::with_points(scene, aspect, max_atlas, settings.fit, settings.point_shadows)?;
             let gpu_scene = GpuScene::new(ctx, scene)?;
             let mut light_data = plan.light_data(scene);
             let mut shadows = ShadowGenerator::new(

@@ -20,13 +20,19 @@ pub fn gbuffer() -> String {
 
 /// Deferred lighting pass.
 pub fn lighting() -> String {
-    compose(&[COMMON, SHADOW_LOOKUP, include_str!("shaders/lighting.wgsl")])
+    compose(&[
+        COMMON,
+        PARABOLOID,
+        SHADOW_LOOKUP,
+        include_str!("shaders/lighting.wgsl"),
+    ])
 }
 
 /// Hard visibility mask.
 pub fn visibility() -> String {
     compose(&[
         COMMON,
+        PARABOLOID,
         SHADOW_LOOKUP,
         include_str!("shaders/visibility.wgsl"),
     ])
@@ -47,6 +53,19 @@ pub fn casters() -> String {
     compose(&[COMMON, include_str!("shaders/casters.wgsl")])
 }
 
+/// The dual-paraboloid warp.
+pub const PARABOLOID: &str = include_str!("shaders/paraboloid.wgsl");
+
+/// `traditional` into dual-paraboloid views.
+pub fn traditional_dp() -> String {
+    compose(&[
+        "enable clip_distances;",
+        COMMON,
+        PARABOLOID,
+        include_str!("techniques/traditional_dp.wgsl"),
+    ])
+}
+
 /// Per-view triangle culling (frustum, back-face).
 pub const CULL: &str = include_str!("techniques/cull.wgsl");
 
@@ -65,6 +84,7 @@ pub fn layered() -> String {
         COMMON,
         CULL,
         TILE,
+        PARABOLOID,
         include_str!("techniques/layered.wgsl"),
     ])
 }
@@ -90,6 +110,16 @@ pub fn gpu_driven() -> String {
     ])
 }
 
+/// The `compute` technique's software rasterizer (clear, setup, large triangles).
+pub fn compute() -> String {
+    compose(&[COMMON, CULL, include_str!("techniques/compute.wgsl")])
+}
+
+/// The `compute` technique's copy of its depth buffer into atlas tiles.
+pub fn compute_copy() -> String {
+    compose(&[COMMON, include_str!("techniques/compute_copy.wgsl")])
+}
+
 /// Every composed shader with its name (for validation).
 pub fn all() -> Vec<(&'static str, String)> {
     vec![
@@ -101,9 +131,12 @@ pub fn all() -> Vec<(&'static str, String)> {
         ("casters", casters()),
         ("tile_clear", tile_clear()),
         ("layered", layered()),
+        ("traditional_dp", traditional_dp()),
         ("multiview", multiview()),
         ("multiview_copy", multiview_copy()),
         ("gpu_driven", gpu_driven()),
+        ("compute", compute()),
+        ("compute_copy", compute_copy()),
     ]
 }
 

@@ -6,7 +6,7 @@
 //! limit of texture arrays). A technique fills every view's tile; the lighting pass reads them.
 
 use manyshadows_scene::atlas::{self, AtlasLayout, FitPolicy, Tile};
-use manyshadows_scene::light_space::{self, ShadowView};
+use manyshadows_scene::light_space::{self, PointShadows, ShadowView, ViewKind};
 use manyshadows_scene::Scene;
 use wgpu::util::DeviceExt;
 
@@ -45,7 +45,18 @@ impl ShadowPlan {
         max_atlas: u32,
         fit: FitPolicy,
     ) -> Result<Self, RenderError> {
-        let views = light_space::shadow_views(scene, aspect);
+        Self::with_points(scene, aspect, max_atlas, fit, PointShadows::Cube)
+    }
+
+    /// [`ShadowPlan::new`] with a choice of point-light shadows (cube or dual paraboloid).
+    pub fn with_points(
+        scene: &Scene,
+        aspect: f32,
+        max_atlas: u32,
+        fit: FitPolicy,
+        points: PointShadows,
+    ) -> Result<Self, RenderError> {
+        let views = light_space::shadow_views_with(scene, aspect, points);
         if views.len() > MAX_SHADOW_VIEWS {
             return Err(RenderError::TooManyShadowViews {
                 views: views.len(),
@@ -101,7 +112,11 @@ impl ShadowPlan {
                         v.near,
                         v.far,
                         texel_world,
-                        if v.orthographic { 1.0 } else { 0.0 },
+                        match v.kind {
+                            ViewKind::Paraboloid(_) => 2.0,
+                            _ if v.orthographic => 1.0,
+                            _ => 0.0,
+                        },
                     ],
                 }
             })
@@ -193,7 +208,8 @@ impl ShadowAtlas {
             .iter()
             .map(|d| ViewUniform {
                 view_proj: d.view_proj,
-                _pad: [[0.0; 4]; 12],
+                params: d.params,
+                _pad: [[0.0; 4]; 11],
             })
             .collect();
         if data.is_empty() {
@@ -393,6 +409,8 @@ pub enum Technique {
     Multiview,
     /// Clusters culled per view in compute, one indirect multi-draw (seed 002).
     GpuDriven,
+    /// A compute-shader rasterizer: every view in one set of dispatches, depth by atomicMin.
+    Compute,
 }
 
 impl Technique {
@@ -402,6 +420,7 @@ impl Technique {
         Technique::Layered,
         Technique::Multiview,
         Technique::GpuDriven,
+        Technique::Compute,
     ];
 
     /// The CLI name.
@@ -411,6 +430,7 @@ impl Technique {
             Technique::Layered => "layered",
             Technique::Multiview => "multiview",
             Technique::GpuDriven => "gpu-driven",
+            Technique::Compute => "compute",
         }
     }
 
@@ -428,6 +448,10 @@ impl Technique {
             Technique::GpuDriven => {
                 "compute culls triangle clusters per view and writes indirect draws; one \
                  multi-draw fills every tile"
+            }
+            Technique::Compute => {
+                "compute-shader rasterizer: per-view culling, clipping and binning in compute, \
+                 depth by atomicMin into a buffer, then copied into the tiles"
             }
         }
     }
@@ -447,6 +471,7 @@ impl Technique {
             Technique::Layered => Box::new(crate::techniques::layered::Layered::new(ctx)?),
             Technique::Multiview => Box::new(crate::techniques::multiview::Multiview::new(ctx)?),
             Technique::GpuDriven => Box::new(crate::techniques::gpu_driven::GpuDriven::new(ctx)?),
+            Technique::Compute => Box::new(crate::techniques::compute::Compute::new(ctx)?),
         })
     }
 }
@@ -483,8 +508,9 @@ pub fn visible_casters<'a>(
     scene: &'a GpuScene,
     view: &ShadowView,
 ) -> impl Iterator<Item = &'a crate::gpu_scene::DrawItem> + 'a {
-    let planes = crate::gpu_scene::frustum_planes(view.view_proj);
-    scene.draws.iter().filter(move |d| {
-        d.casts_shadows && crate::gpu_scene::sphere_visible(&planes, d.sphere.0, d.sphere.1)
-    })
+    let view = *view;
+    scene
+        .draws
+        .iter()
+        .filter(move |d| d.casts_shadows && view.sphere_visible(d.sphere.0, d.sphere.1))
 }

@@ -9,7 +9,8 @@ mod common;
 use glam::{Vec3, Vec4Swizzles};
 use manyshadows::scene::builtin::{self, BuiltinOptions};
 use manyshadows::scene::{LightKind, Scene};
-use manyshadows::{Pcf, RenderSettings, Renderer};
+use manyshadows::scene::light_space::PointShadows;
+use manyshadows::{Pcf, RenderSettings, Renderer, Technique};
 
 const SIZE: u32 = 256;
 const EDGE_BAND_PX: i32 = 2;
@@ -91,13 +92,23 @@ fn truth(scene: &Scene) -> Vec<Option<bool>> {
 }
 
 fn check(name: &str) {
+    let wrong = wrong_pixels(name, Technique::Traditional, PointShadows::Cube, 0);
+    assert_eq!(wrong, 0, "{name}: {wrong} pixels away from edges disagree with the exact shadow");
+}
+
+/// Pixels more than [`EDGE_BAND_PX`] from an edge whose visibility disagrees with the exact
+/// shadow (a difference image goes to target/test-artifacts).
+fn wrong_pixels(name: &str, technique: Technique, points: PointShadows, subdivide: u32) -> usize {
     let ctx = common::context();
-    let scene = builtin::build(name, &BuiltinOptions::default()).expect("builtin scene");
+    let mut scene = builtin::build(name, &BuiltinOptions::default()).expect("builtin scene");
+    scene.subdivide(subdivide).expect("subdivide");
     let settings = RenderSettings {
         width: SIZE,
         height: SIZE,
         pcf: Pcf::Off,
         visibility: true,
+        technique,
+        point_shadows: points,
         ..Default::default()
     };
     let mut r = Renderer::new(&ctx, &scene, settings).expect("renderer");
@@ -142,13 +153,22 @@ fn check(name: &str) {
             }
         }
     }
-    let path = common::artifacts_dir().join(format!("analytic-{name}.png"));
+    let path = common::artifacts_dir().join(format!(
+        "analytic-{name}-{technique}-{}-sub{subdivide}.png",
+        points.name()
+    ));
     image::save_buffer(&path, &diff, SIZE, SIZE, image::ExtendedColorType::Rgb8).unwrap();
     assert!(
         shadowed > 200 && lit > 200,
         "{name}: degenerate test ({shadowed} shadowed, {lit} lit pixels)"
     );
-    assert_eq!(wrong, 0, "{name}: {wrong} of {compared} pixels away from edges disagree with the exact shadow (red = false shadow, green = false light: {})", path.display());
+    eprintln!(
+        "{name} {technique} {} subdivided {subdivide}x: {wrong} of {compared} pixels away from \
+         edges disagree with the exact shadow (red = false shadow, green = false light: {})",
+        points.name(),
+        path.display()
+    );
+    wrong
 }
 
 #[test]
@@ -164,4 +184,28 @@ fn point_light_shadow_matches_exact_outline() {
 #[test]
 fn directional_light_shadow_matches_exact_outline() {
     check("plane-directional");
+}
+
+/// Dual-paraboloid maps on geometry fine enough for the warp (every triangle split 4 times:
+/// the occluder's edges become 16 segments each, short enough that the straight segments the
+/// rasterizer draws in paraboloid space stay within a texel of the true curves): exact away
+/// from edges, with both techniques that support the mode.
+#[test]
+fn point_light_dual_paraboloid_matches_exact_outline_on_fine_geometry() {
+    for t in [Technique::Traditional, Technique::Layered] {
+        let wrong = wrong_pixels("plane-point", t, PointShadows::DualParaboloid, 4);
+        assert_eq!(wrong, 0, "{t}: dual-paraboloid shadow disagrees in {wrong} pixels");
+    }
+}
+
+/// The known weakness (seed 003): on the unsubdivided scene the occluder's edges are single
+/// triangles, drawn straight in paraboloid space where the true outline curves, so the shadow
+/// outline is visibly wrong. If this ever passes with zero errors, the warp is not being
+/// exercised.
+#[test]
+fn dual_paraboloid_bends_outlines_of_coarse_geometry() {
+    let wrong = wrong_pixels("plane-point", Technique::Traditional, PointShadows::DualParaboloid, 0);
+    assert!(wrong > 20, "coarse geometry should show the paraboloid's error ({wrong} pixels)");
+    let cube = wrong_pixels("plane-point", Technique::Traditional, PointShadows::Cube, 0);
+    assert_eq!(cube, 0, "cube maps are exact on the same coarse geometry ({cube} pixels)");
 }

@@ -36,7 +36,7 @@
 //! Conventions everywhere: right-handed views looking down −Z, wgpu clip depth 0..1, standard
 //! depth (near → 0, far → 1, depth test `Less`).
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec3, Vec4};
 
 use crate::{Camera, LightKind, Scene};
 
@@ -81,6 +81,110 @@ pub enum ViewKind {
     CubeFace(u8),
     /// Cascade `0..count` of a directional light, nearest first.
     Cascade(u8),
+    /// Hemisphere `0` (towards +Y) or `1` (towards −Y) of a point light's dual-paraboloid map.
+    /// Its `view` looks down −Z at the hemisphere's pole; `proj` is the identity because the
+    /// paraboloid warp is not a matrix (see [`paraboloid_project`]).
+    Paraboloid(u8),
+}
+
+/// How point lights are shadowed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PointShadows {
+    /// Six perspective cube faces of 90°.
+    #[default]
+    Cube,
+    /// Two paraboloid hemispheres (seed 003), each map twice the light's per-face resolution
+    /// so the texel at a hemisphere's pole matches a cube face's centre texel.
+    DualParaboloid,
+}
+
+impl PointShadows {
+    /// Both modes.
+    pub const ALL: &'static [PointShadows] = &[PointShadows::Cube, PointShadows::DualParaboloid];
+
+    /// CLI name.
+    pub fn name(self) -> &'static str {
+        match self {
+            PointShadows::Cube => "cube",
+            PointShadows::DualParaboloid => "dual-paraboloid",
+        }
+    }
+}
+
+impl std::str::FromStr for PointShadows {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        PointShadows::ALL
+            .iter()
+            .copied()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| format!("unknown point-shadow mode '{s}' (expected cube or dual-paraboloid)"))
+    }
+}
+
+/// The paraboloid warp of a world point for a hemisphere view: `(x, y, depth, front)` where
+/// `x, y` in −1..1 cover the hemisphere (the unit disk), `depth = (d − near)/(far − near)` of
+/// the distance `d` to the light, and `front = −z/d` (≥ 0 inside the hemisphere). Matches
+/// `paraboloid_clip` in the renderer's WGSL.
+pub fn paraboloid_project(view: Mat4, near: f32, far: f32, p: Vec3) -> Vec4 {
+    let v = view.transform_point3(p);
+    let d = v.length();
+    let n = v / d.max(1e-20);
+    let front = -n.z;
+    let k = 1.0 / (1.0 + front).max(1e-3);
+    Vec4::new(n.x * k, n.y * k, (d - near) / (far - near), front)
+}
+
+/// The two hemisphere views of a point light: `(views, near, far)`, hemisphere 0 looking
+/// towards +Y, 1 towards −Y.
+pub fn paraboloid_views(position: Vec3, range: f32) -> ([Mat4; 2], f32, f32) {
+    let (near, far) = light_depth_range(range);
+    let views = [Vec3::Y, Vec3::NEG_Y].map(|dir| Mat4::look_to_rh(position, dir, Vec3::Z));
+    (views, near, far)
+}
+
+/// The six planes `(normal, d)` (`normal·p + d ≥ 0` inside, normals unit length) of a
+/// view-projection's frustum in wgpu clip space (depth 0..1).
+pub fn frustum_planes(view_proj: Mat4) -> [Vec4; 6] {
+    let r0 = view_proj.row(0);
+    let r1 = view_proj.row(1);
+    let r2 = view_proj.row(2);
+    let r3 = view_proj.row(3);
+    let planes = [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2];
+    planes.map(|p| {
+        let len = p.truncate().length();
+        if len > 0.0 {
+            p / len
+        } else {
+            p
+        }
+    })
+}
+
+/// True if a sphere is at least partly inside the frustum given by [`frustum_planes`].
+pub fn sphere_in_planes(planes: &[Vec4; 6], center: Vec3, radius: f32) -> bool {
+    planes
+        .iter()
+        .all(|p| p.truncate().dot(center) + p.w >= -radius)
+}
+
+impl ShadowView {
+    /// True if a world-space sphere may cover part of this view (conservative).
+    pub fn sphere_visible(&self, center: Vec3, radius: f32) -> bool {
+        match self.kind {
+            ViewKind::Paraboloid(_) => {
+                let inv = self.view.inverse();
+                let eye = inv.w_axis.truncate();
+                let axis = inv.transform_vector3(Vec3::NEG_Z);
+                let d = center - eye;
+                let dist = d.length();
+                dist - radius <= self.far
+                    && dist + radius >= self.near
+                    && d.dot(axis) >= -radius
+            }
+            _ => sphere_in_planes(&frustum_planes(self.view_proj), center, radius),
+        }
+    }
 }
 
 /// One view-projection that a shadow technique renders into one atlas tile.
@@ -376,6 +480,11 @@ pub fn directional_fit(
 /// (depth range reaching every caster in `scene.world_bounds(true)`). With no geometry at all
 /// they cover the camera's own near..far.
 pub fn shadow_views(scene: &Scene, aspect: f32) -> Vec<ShadowView> {
+    shadow_views_with(scene, aspect, PointShadows::Cube)
+}
+
+/// [`shadow_views`] with a choice of point-light shadows.
+pub fn shadow_views_with(scene: &Scene, aspect: f32, points: PointShadows) -> Vec<ShadowView> {
     let aspect = if aspect.is_finite() && aspect > 0.0 {
         aspect
     } else {
@@ -425,6 +534,27 @@ pub fn shadow_views(scene: &Scene, aspect: f32) -> Vec<ShadowView> {
                 let (view, proj, near, far) =
                     spot_view(position, direction, cutoff_deg, range, resolution);
                 out.push(perspective(ViewKind::Spot, view, proj, near, far));
+            }
+            LightKind::Point { position, range } if points == PointShadows::DualParaboloid => {
+                let (views, near, far) = paraboloid_views(position, range);
+                let resolution = resolution.saturating_mul(2).max(1);
+                for (h, view) in views.into_iter().enumerate() {
+                    out.push(ShadowView {
+                        light: index,
+                        kind: ViewKind::Paraboloid(h as u8),
+                        view,
+                        proj: Mat4::IDENTITY,
+                        view_proj: view,
+                        near,
+                        far,
+                        orthographic: false,
+                        resolution,
+                        split_far: 0.0,
+                        // Largest texel, at the pole: 2 NDC units span 4 world units at
+                        // distance 1 there (x = v/(1+1)).
+                        texel_world: 4.0 / resolution as f32,
+                    });
+                }
             }
             LightKind::Point { position, range } => {
                 let (views, proj, near, far) = cube_face_views(position, range);

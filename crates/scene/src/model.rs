@@ -377,6 +377,22 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Splits every mesh's triangles `levels` times ([`crate::primitives::subdivide`]: 4^levels
+    /// as many triangles). Fails past 20 million triangles over all instances.
+    pub fn subdivide(&mut self, levels: u32) -> Result<(), crate::SceneError> {
+        const MAX: u64 = 20_000_000;
+        let after = (self.triangle_count() as u64).saturating_mul(4u64.saturating_pow(levels));
+        if levels > 12 || after > MAX {
+            return Err(crate::SceneError::InvalidRequest(format!(
+                "subdividing {levels} times would make {after} triangles (at most {MAX})"
+            )));
+        }
+        for m in &mut self.meshes {
+            *m = crate::primitives::subdivide(m, levels);
+        }
+        Ok(())
+    }
+
     /// Total triangles drawn (summed over instances).
     pub fn triangle_count(&self) -> usize {
         self.instances

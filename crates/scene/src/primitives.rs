@@ -676,3 +676,36 @@ pub fn merge(meshes: &[(Mesh, Mat4)]) -> Mesh {
     }
     out
 }
+
+/// Splits every triangle into four at its edge midpoints, `levels` times (4^levels as many
+/// triangles; shared edges get one midpoint, so closed meshes stay closed). Normals of new
+/// vertices are the normalised mean of the edge's ends. For non-linear shadow projections
+/// (dual paraboloid) that need finely tessellated geometry.
+pub fn subdivide(mesh: &Mesh, levels: u32) -> Mesh {
+    let mut m = mesh.clone();
+    if m.normals.len() != m.positions.len() {
+        m.compute_normals();
+    }
+    for _ in 0..levels {
+        let mut mids: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
+        let mut indices = Vec::with_capacity(m.indices.len() * 4);
+        for t in m.indices.clone().chunks_exact(3) {
+            let mut mid = |a: u32, b: u32, m: &mut Mesh| -> u32 {
+                *mids.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                    let p = (m.positions[a as usize] + m.positions[b as usize]) * 0.5;
+                    let n = (m.normals[a as usize] + m.normals[b as usize]).normalize_or_zero();
+                    m.positions.push(p);
+                    m.normals.push(n);
+                    (m.positions.len() - 1) as u32
+                })
+            };
+            let (a, b, c) = (t[0], t[1], t[2]);
+            let ab = mid(a, b, &mut m);
+            let bc = mid(b, c, &mut m);
+            let ca = mid(c, a, &mut m);
+            indices.extend([a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca]);
+        }
+        m.indices = indices;
+    }
+    m
+}

@@ -26,6 +26,10 @@ fn select_shadow_view(light: LightData, p: vec3<f32>, view_depth: f32) -> i32 {
     if (kind == LIGHT_SPOT) {
         return first;
     }
+    if (kind == LIGHT_POINT && count == 2u) {
+        // Dual paraboloid: hemisphere 0 looks towards +Y, hemisphere 1 towards −Y.
+        return first + select(1, 0, p.y >= light.position.y);
+    }
     if (kind == LIGHT_POINT) {
         // Cube face by the major axis of the light-to-point vector: +X, -X, +Y, -Y, +Z, -Z.
         let d = p - light.position.xyz;
@@ -63,10 +67,13 @@ fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, view_depth: f32) -
         return out;
     }
     let sv = shadow_views[vi];
+    let paraboloid = sv.params.w > 1.5;
     // World size of one shadow texel at p.
     let clip0 = sv.view_proj * vec4<f32>(p, 1.0);
     var texel_world = sv.params.z;
-    if (sv.params.w < 0.5) {
+    if (paraboloid) {
+        texel_world = texel_world * length(p - light.position.xyz);
+    } else if (sv.params.w < 0.5) {
         texel_world = texel_world * max(clip0.w, 0.0);
     }
     // Receiver bias (documented in ARCHITECTURE.md): move the point along its normal and towards
@@ -77,7 +84,10 @@ fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, view_depth: f32) -
     let tan_t = min(sqrt(max(1.0 - cos_t * cos_t, 0.0)) / max(cos_t, 1e-4), 10.0);
     let offset = n * (frame.bias.z * texel_world)
         + l * ((frame.bias.x + frame.bias.y * tan_t) * texel_world);
-    let clip = sv.view_proj * vec4<f32>(p + offset, 1.0);
+    var clip = sv.view_proj * vec4<f32>(p + offset, 1.0);
+    if (paraboloid) {
+        clip = paraboloid_clip(sv.view_proj, sv.params, vec4<f32>(p + offset, 1.0)).clip;
+    }
     if (clip.w <= 0.0) {
         return out;
     }

@@ -418,6 +418,7 @@ impl ShadowTechnique for GpuDriven {
             } else {
                 pass.multi_draw_indexed_indirect(commands, 0, max);
             }
+            self.clear.reset_clip_distances(&mut pass);
             timer.end_render_stats(&mut pass, s);
             stats.passes += 1;
             stats.draws += r.commands();

@@ -203,6 +203,7 @@ impl ShadowTechnique for Layered {
             pass.set_pipeline(&self.pulled);
             pass.draw(0..corners, 0..views);
         }
+        self.clear.reset_clip_distances(&mut pass);
         timer.end_render_stats(&mut pass, s);
         drop(pass);
         encoder.pop_debug_group();

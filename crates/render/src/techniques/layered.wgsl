@@ -25,10 +25,32 @@ fn into_tile(c: vec4<f32>, tile: vec4<f32>) -> TileOut {
 }
 
 // No culling: an indexed draw of the caster corners, so shared vertices can be reused.
+// The view's projection of a world point, for the tile: a matrix, or the paraboloid warp
+// (whose hemisphere base becomes the fifth clip distance).
+fn project_into_tile(view: ShadowViewData, p: vec4<f32>) -> TileOut {
+    if (view.params.w > 1.5) {
+        let pc = paraboloid_clip(view.view_proj, view.params, p);
+        var out = into_tile(pc.clip, view.tile);
+        out.clip[4] = pc.front;
+        return out;
+    }
+    return into_tile(view.view_proj * p, view.tile);
+}
+
+// Clip position used by the frustum test: for paraboloid views the warped position, with
+// points behind the hemisphere pushed beyond the far plane so "all behind" culls.
+fn cull_clip(view: ShadowViewData, p: vec4<f32>) -> vec4<f32> {
+    if (view.params.w > 1.5) {
+        let pc = paraboloid_clip(view.view_proj, view.params, p);
+        return select(vec4<f32>(pc.clip.xy, 2.0, 1.0), pc.clip, pc.front >= 0.0);
+    }
+    return view.view_proj * p;
+}
+
 @vertex
 fn vs_indexed(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> TileOut {
     let view = views[draw_list[i]];
-    return into_tile(view.view_proj * world[v], view.tile);
+    return project_into_tile(view, world[v]);
 }
 
 // Culling: a non-indexed draw, three invocations per triangle; each pulls the whole triangle
@@ -43,23 +65,17 @@ fn vs_pulled(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> 
     let p1 = world[corners[3u * tri + 1u]];
     let p2 = world[corners[3u * tri + 2u]];
     let bits = lparams.counts.y;
-    // Back-face test first: world space, no projection needed.
-    if ((bits & CULL_BACKFACE) != 0u && tri < lparams.counts.x
+    // Back-face test first: world space, no projection needed. Not for paraboloid views: the
+    // warp's interpolation error can put a back face's depth in front of the front face it
+    // hides, so dropping back faces would change the map there.
+    if ((bits & CULL_BACKFACE) != 0u && tri < lparams.counts.x && view.params.w < 1.5
         && faces_away(p0.xyz, p1.xyz, p2.xyz, eyes[view_id])) {
         return culled_vertex();
     }
-    var c: vec4<f32>;
-    if ((bits & CULL_FRUSTUM) != 0u) {
-        let c0 = view.view_proj * p0;
-        let c1 = view.view_proj * p1;
-        let c2 = view.view_proj * p2;
-        if (outside_frustum(c0, c1, c2)) {
-            return culled_vertex();
-        }
-        c = select(select(c2, c1, corner == 1u), c0, corner == 0u);
-    } else {
-        // Only this invocation's corner needs projecting.
-        c = view.view_proj * select(select(p2, p1, corner == 1u), p0, corner == 0u);
+    if ((bits & CULL_FRUSTUM) != 0u
+        && outside_frustum(cull_clip(view, p0), cull_clip(view, p1), cull_clip(view, p2))) {
+        return culled_vertex();
     }
-    return into_tile(c, view.tile);
+    // Only this invocation's corner needs projecting for output.
+    return project_into_tile(view, select(select(p2, p1, corner == 1u), p0, corner == 0u));
 }

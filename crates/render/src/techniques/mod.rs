@@ -1,6 +1,7 @@
 //! Shadow-generation techniques, one module each with its WGSL beside it. Adding a technique
 //! means a module here and one line in [`crate::shadow::Technique`].
 
+pub mod compute;
 pub mod gpu_driven;
 pub mod layered;
 pub mod multiview;
@@ -101,6 +102,17 @@ impl TileClear {
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &bind_group, &[]);
         pass.draw(0..6, 0..input.draw_list.len() as u32);
+    }
+}
+
+impl TileClear {
+    /// Leaves `pass` with a pipeline that writes no clip distances. wgpu-hal 30's OpenGL
+    /// backend enables `GL_CLIP_DISTANCEi` when a pipeline that writes them is set, but forgets
+    /// that at the next command encoder, so the enables outlive the pass and clip later
+    /// pipelines (which never write those distances) at random. Setting a pipeline without
+    /// clip distances before the pass ends disables them. Harmless elsewhere.
+    pub fn reset_clip_distances(&self, pass: &mut wgpu::RenderPass<'_>) {
+        pass.set_pipeline(&self.pipeline);
     }
 }
 

@@ -4,7 +4,7 @@
 
 struct TileOut {
     @builtin(position) position: vec4<f32>,
-    @builtin(clip_distances) clip: array<f32, 4>,
+    @builtin(clip_distances) clip: array<f32, 5>,
 }
 
 // Maps a view's clip position into its tile of the atlas-wide viewport (`inv` = 1 / atlas
@@ -16,7 +16,7 @@ fn into_tile_of(c: vec4<f32>, tile: vec4<f32>, inv: f32) -> TileOut {
     let oy = 1.0 - (2.0 * tile.y + tile.z) * inv;
     var out: TileOut;
     out.position = vec4<f32>(c.x * s + c.w * ox, c.y * s + c.w * oy, c.z, c.w);
-    out.clip = array<f32, 4>(c.w + c.x, c.w - c.x, c.w + c.y, c.w - c.y);
+    out.clip = array<f32, 5>(c.w + c.x, c.w - c.x, c.w + c.y, c.w - c.y, 1.0);
     return out;
 }
 
@@ -24,6 +24,6 @@ fn culled_vertex() -> TileOut {
     var out: TileOut;
     // All three corners of a culled triangle land here: zero area, and clipped anyway.
     out.position = vec4<f32>(0.0, 0.0, 2.0, 1.0);
-    out.clip = array<f32, 4>(-1.0, -1.0, -1.0, -1.0);
+    out.clip = array<f32, 5>(-1.0, -1.0, -1.0, -1.0, -1.0);
     return out;
 }

@@ -4,6 +4,10 @@
 //! output is depth.
 
 use crate::casters::{MAX_BONES, SKIN_LAYOUT};
+use manyshadows_scene::light_space::ViewKind;
+
+/// Bytes of the per-view uniform the shaders read: view-projection and params.
+const VIEW_BINDING: u64 = 80;
 use crate::gpu_scene::{GpuScene, POSITION_LAYOUT};
 use crate::gpu_types::VIEW_UNIFORM_STRIDE;
 use crate::shadow::{visible_casters, ShadowInput, ShadowStats, ShadowTechnique, ATLAS_FORMAT};
@@ -14,6 +18,8 @@ use crate::GpuContext;
 /// The traditional technique's pipelines and layout.
 pub struct Traditional {
     pipeline: wgpu::RenderPipeline,
+    /// Dual-paraboloid views (needs `CLIP_DISTANCES`; `None` without it).
+    paraboloid: Option<wgpu::RenderPipeline>,
     skinned: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     clear: TileClear,
@@ -35,7 +41,7 @@ impl Traditional {
                     ty: wgpu::BindingType::Buffer {
                         ty: wgpu::BufferBindingType::Uniform,
                         has_dynamic_offset: true,
-                        min_binding_size: wgpu::BufferSize::new(64),
+                        min_binding_size: wgpu::BufferSize::new(VIEW_BINDING),
                     },
                     count: None,
                 },
@@ -48,12 +54,15 @@ impl Traditional {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = |entry: &str, layout: wgpu::VertexBufferLayout<'static>| {
+        let dp_module = ctx.has(wgpu::Features::CLIP_DISTANCES).then(|| {
+            crate::shaders::module(device, "traditional_dp.shader", &crate::shaders::traditional_dp())
+        });
+        let pipeline = |module: &wgpu::ShaderModule, entry: &str, layout: wgpu::VertexBufferLayout<'static>| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(entry),
                 layout: Some(&pipeline_layout),
                 vertex: wgpu::VertexState {
-                    module: &module,
+                    module,
                     entry_point: Some(entry),
                     compilation_options: Default::default(),
                     buffers: &[Some(layout)],
@@ -90,8 +99,11 @@ impl Traditional {
             },
         );
         Self {
-            pipeline: pipeline("vs_depth", POSITION_LAYOUT),
-            skinned: pipeline("vs_skinned", SKIN_LAYOUT),
+            pipeline: pipeline(&module, "vs_depth", POSITION_LAYOUT),
+            skinned: pipeline(&module, "vs_skinned", SKIN_LAYOUT),
+            paraboloid: dp_module
+                .as_ref()
+                .map(|m| pipeline(m, "vs_paraboloid", POSITION_LAYOUT)),
             layout,
             clear: TileClear::new(ctx),
             no_bones,
@@ -113,7 +125,7 @@ impl Traditional {
                     resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                         buffer: &input.atlas.view_uniforms,
                         offset: 0,
-                        size: wgpu::BufferSize::new(std::mem::size_of::<[[f32; 4]; 4]>() as u64),
+                        size: wgpu::BufferSize::new(VIEW_BINDING),
                     }),
                 },
                 wgpu::BindGroupEntry {
@@ -206,11 +218,25 @@ impl ShadowTechnique for Traditional {
             } else {
                 pass.set_scissor_rect(tile.x, tile.y, tile.size, tile.size);
             }
-            pass.set_pipeline(pipeline);
+            if matches!(view.kind, ViewKind::Paraboloid(_)) {
+                match (&self.paraboloid, &input.scene.skin) {
+                    (Some(p), None) => pass.set_pipeline(p),
+                    // Refused up front by `ShadowGenerator`; draw nothing if it ever happens.
+                    _ => {
+                        timer.end_render_stats(&mut pass, s);
+                        continue;
+                    }
+                }
+            } else {
+                pass.set_pipeline(pipeline);
+            }
             pass.set_bind_group(0, &bind_group, &[(i as u64 * VIEW_UNIFORM_STRIDE) as u32]);
             pass.set_vertex_buffer(0, vertices.slice(..));
             pass.set_index_buffer(input.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
             draw_casters(&mut pass, input.scene, view, &mut stats);
+            if matches!(view.kind, ViewKind::Paraboloid(_)) {
+                self.clear.reset_clip_distances(&mut pass);
+            }
             timer.end_render_stats(&mut pass, s);
             stats.passes += 1;
         }

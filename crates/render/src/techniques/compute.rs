@@ -1,0 +1,580 @@
+//! `compute`: a software rasterizer in compute shaders fills every listed view's tile, without
+//! the fixed-function pipeline (UE5 Nanite's idea for dense geometry; on an H100 only two TPCs
+//! can run graphics work at all).
+//!
+//! Per generation ([`compute.wgsl`](compute.wgsl)): the caster transform writes world positions
+//! once; then per *round* (below) a clear pass sets a storage buffer of one `u32` per texel of
+//! the round's tiles to 1.0's bits; one thread per (triangle, view) culls (frustum, back-face,
+//! zero area, zero coverage), clips against the near plane, applies the viewport transform and
+//! snaps to 1/256 texel; a small triangle (≤ [`SMALL_AREA`] texels of bounding box) is
+//! rasterized by that thread with exact integer edge functions, a large one is appended as
+//! chunks of 32² texels that one 8×8 workgroup each rasterizes (an indirect dispatch). Depth is
+//! written with `atomicMin` on the float's bits (non-negative floats order like their bits).
+//! A render pass finally copies the buffer into the atlas tiles with `frag_depth` (GL can
+//! neither copy into depth textures nor store to them from compute).
+//!
+//! **Same depth as the hardware**: the fixed-function viewport transform in the same order, 8
+//! sub-pixel bits, texel centres at +0.5, the top-left fill rule, depth from the plane through
+//! the window positions (z/w is affine in screen space), near clipping in clip space, far
+//! clipping per texel. Large triangles use f32 edge functions evaluated from the edge's
+//! lexicographically first end so neighbours agree exactly (no cracks).
+//!
+//! **No silent drops**: the chunk list is sized from the round's texels (every texel covered by
+//! large triangles four times over); when it is full anyway, the setup thread rasterizes the
+//! chunk itself (correct, slower) and counts it ([`Compute::overflowed`] reads the count).
+//!
+//! **Memory**: the depth buffer covers only the drawn tiles (an offset per *entry*). When they
+//! exceed the adapter's storage-binding limit, the draw list is split into rounds, each cleared,
+//! rasterized and copied in turn; a single tile over the limit is split into bands of rows.
+
+use wgpu::util::DeviceExt;
+
+use crate::shadow::{ShadowInput, ShadowStats, ShadowTechnique, ATLAS_FORMAT};
+use crate::timing::{GpuTimer, Span};
+use crate::{GpuContext, RenderError};
+
+/// Most bounding-box texels a setup thread rasterizes itself (must match compute.wgsl).
+pub const SMALL_AREA: u32 = 128;
+/// Bytes of one chunk record (`Chunk` in compute.wgsl).
+const CHUNK_BYTES: u64 = 64;
+/// Largest workgroup count per dispatch dimension WebGPU guarantees.
+const MAX_GROUPS: u32 = 65535;
+/// Most bytes the depth buffer of one round may take, whatever the adapter allows.
+const MAX_DEPTH_BYTES: u64 = 256 << 20;
+/// Initial and largest chunk-list capacity.
+const MIN_CHUNKS: u32 = 1 << 16;
+const MAX_CHUNKS: u32 = 1 << 21;
+
+/// One round entry: a band of rows of one view's tile and where it sits in the depth buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct Entry {
+    /// The view.
+    pub view: u32,
+    /// First texel of the band in the depth buffer.
+    pub base: u32,
+    /// First row of the tile in the band.
+    pub row: u32,
+    /// Rows in the band.
+    pub rows: u32,
+}
+
+/// Splits the draw list into rounds whose depth buffer holds at most `max_texels` texels and
+/// whose setup dispatch has at most `max_threads` threads (`triangles` per entry). A tile
+/// larger than `max_texels` becomes bands of rows.
+pub fn plan_rounds(
+    draw_list: &[u32],
+    tile_size: impl Fn(u32) -> u32,
+    triangles: u32,
+    max_texels: u64,
+    max_threads: u64,
+) -> Vec<Vec<Entry>> {
+    let max_entries = (max_threads / triangles.max(1) as u64).max(1);
+    let mut rounds: Vec<Vec<Entry>> = Vec::new();
+    let mut current: Vec<Entry> = Vec::new();
+    let mut texels = 0u64;
+    for &view in draw_list {
+        let size = tile_size(view) as u64;
+        let rows_per_band = (max_texels / size).clamp(1, size);
+        let mut row = 0u64;
+        while row < size {
+            let rows = rows_per_band.min(size - row);
+            let need = rows * size;
+            if !current.is_empty()
+                && (texels + need > max_texels || current.len() as u64 >= max_entries)
+            {
+                rounds.push(std::mem::take(&mut current));
+                texels = 0;
+            }
+            current.push(Entry {
+                view,
+                base: texels as u32,
+                row: row as u32,
+                rows: rows as u32,
+            });
+            texels += need;
+            row += rows;
+        }
+    }
+    if !current.is_empty() {
+        rounds.push(current);
+    }
+    rounds
+}
+
+fn texels(round: &[Entry], tile_size: impl Fn(u32) -> u32) -> u64 {
+    round
+        .iter()
+        .map(|e| e.rows as u64 * tile_size(e.view) as u64)
+        .sum()
+}
+
+/// A 1D workload of `items` threads (64 per workgroup) as a 2D dispatch.
+fn dispatch_2d(items: u64, max_groups: u32) -> (u32, u32) {
+    let groups = items.div_ceil(64).max(1);
+    let x = groups.min(max_groups as u64);
+    (x as u32, groups.div_ceil(x) as u32)
+}
+
+/// The compute rasterizer's pipelines and buffers.
+pub struct Compute {
+    clear: wgpu::ComputePipeline,
+    setup: wgpu::ComputePipeline,
+    finalize: wgpu::ComputePipeline,
+    large: wgpu::ComputePipeline,
+    copy: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    copy_layout: wgpu::BindGroupLayout,
+    depth: Option<(wgpu::Buffer, u64)>,
+    chunks: Option<(wgpu::Buffer, u32)>,
+    counters: wgpu::Buffer,
+    counters_read: wgpu::Buffer,
+    args: wgpu::Buffer,
+    args_bind_group: wgpu::BindGroup,
+    max_texels: u64,
+    max_groups: u32,
+    chunk_capacity: Option<u32>,
+    pending_read: bool,
+}
+
+impl Compute {
+    /// Builds the pipelines (core WebGPU only: compute, storage buffers, atomics).
+    pub fn new(ctx: &GpuContext) -> Result<Self, RenderError> {
+        let device = &ctx.device;
+        let limits = ctx.limits();
+        let max_texels = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size)
+            .min(MAX_DEPTH_BYTES)
+            / 4;
+        if max_texels < 64 * 64 {
+            return Err(RenderError::Unsupported(format!(
+                "--technique compute needs storage buffers of at least 16 KiB, and {} allows {} \
+                 bytes",
+                crate::context::describe_adapter(&ctx.info),
+                limits.max_storage_buffer_binding_size
+            )));
+        }
+        let module = crate::shaders::module(device, "compute.shader", &crate::shaders::compute());
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("compute.layout"),
+            entries: &[
+                crate::uniform_entry(0, cs),
+                crate::storage_entry(1, cs),
+                crate::storage_entry(2, cs),
+                crate::storage_entry(3, cs),
+                crate::storage_entry(4, cs),
+                crate::storage_entry(5, cs),
+                crate::storage_rw_entry(6, cs),
+                crate::storage_rw_entry(7, cs),
+                crate::storage_rw_entry(8, cs),
+            ],
+        });
+        let args_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("compute.args_layout"),
+            entries: &[crate::storage_rw_entry(0, cs)],
+        });
+        let main_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("compute.pipeline_layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let finalize_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("compute.finalize_layout"),
+            bind_group_layouts: &[Some(&layout), Some(&args_layout)],
+            immediate_size: 0,
+        });
+        let pipeline = |entry: &str, layout: &wgpu::PipelineLayout| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+
+        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let copy_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("compute.copy_layout"),
+            entries: &[
+                crate::uniform_entry(0, vf),
+                crate::storage_entry(1, vf),
+                crate::storage_entry(2, vf),
+                crate::storage_entry(3, wgpu::ShaderStages::FRAGMENT),
+            ],
+        });
+        let copy_module = crate::shaders::module(
+            device,
+            "compute_copy.shader",
+            &crate::shaders::compute_copy(),
+        );
+        let copy_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("compute.copy_pipeline_layout"),
+            bind_group_layouts: &[Some(&copy_layout)],
+            immediate_size: 0,
+        });
+        let copy = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("compute.copy"),
+            layout: Some(&copy_pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &copy_module,
+                entry_point: Some("vs_copy"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: ATLAS_FORMAT,
+                depth_write_enabled: Some(true),
+                // A copy: every texel of the band is replaced.
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &copy_module,
+                entry_point: Some("fs_copy"),
+                compilation_options: Default::default(),
+                targets: &[],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+
+        let counters = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("compute.counters"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let counters_read = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("compute.counters_read"),
+            size: 16,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let args = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("compute.args"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+            mapped_at_creation: false,
+        });
+        let args_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("compute.args_bind_group"),
+            layout: &args_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: args.as_entire_binding(),
+            }],
+        });
+        Ok(Self {
+            clear: pipeline("cs_clear", &main_layout),
+            setup: pipeline("cs_setup", &main_layout),
+            finalize: pipeline("cs_finalize", &finalize_layout),
+            large: pipeline("cs_large", &main_layout),
+            copy,
+            layout,
+            copy_layout,
+            depth: None,
+            chunks: None,
+            counters,
+            counters_read,
+            args,
+            args_bind_group,
+            max_texels,
+            max_groups: limits.max_compute_workgroups_per_dimension.min(MAX_GROUPS),
+            chunk_capacity: None,
+            pending_read: false,
+        })
+    }
+
+    /// Test knobs: at most `max_texels` texels per round, exactly `chunks` chunk records,
+    /// `max_groups` workgroups per dispatch dimension.
+    pub fn with_limits(mut self, max_texels: u64, chunks: u32, max_groups: u32) -> Self {
+        self.max_texels = max_texels.clamp(1, self.max_texels);
+        self.chunk_capacity = Some(chunks.max(1));
+        self.max_groups = max_groups.clamp(1, self.max_groups);
+        self
+    }
+
+    /// `(chunks requested, chunks that did not fit the list and were rasterized by their setup
+    /// thread)` in the last generation's final round (waits for the GPU; call after submitting
+    /// it). `None` before the first generation or when already read.
+    pub fn overflowed(&mut self, ctx: &GpuContext) -> Result<Option<(u32, u32)>, RenderError> {
+        if !self.pending_read {
+            return Ok(None);
+        }
+        self.pending_read = false;
+        let bytes = crate::readback::map_read(ctx, &self.counters_read, 0..16)?;
+        let words: &[u32] = bytemuck::cast_slice(&bytes);
+        Ok(Some((words[0], words[1])))
+    }
+
+    fn ensure_buffers(&mut self, ctx: &GpuContext, texels: u64, chunks_wanted: u32) {
+        if self.depth.as_ref().is_none_or(|(_, n)| *n < texels) {
+            let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("compute.depth"),
+                size: texels.max(1) * 4,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            });
+            self.depth = Some((buffer, texels));
+        }
+        let max_chunks =
+            ((ctx.limits().max_storage_buffer_binding_size / CHUNK_BYTES) as u32).min(MAX_CHUNKS);
+        let want = self
+            .chunk_capacity
+            .unwrap_or(chunks_wanted)
+            .clamp(1, max_chunks);
+        if self.chunks.as_ref().is_none_or(|(_, n)| *n < want) {
+            let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("compute.chunks"),
+                size: want as u64 * CHUNK_BYTES,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            });
+            self.chunks = Some((buffer, want));
+        }
+    }
+}
+
+impl ShadowTechnique for Compute {
+    fn name(&self) -> &'static str {
+        "compute"
+    }
+
+    fn generate(
+        &mut self,
+        input: &ShadowInput<'_>,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &GpuTimer,
+        span: Option<Span>,
+    ) -> ShadowStats {
+        let mut stats = ShadowStats::default();
+        if input.draw_list.is_empty() {
+            return stats;
+        }
+        let ctx = input.ctx;
+        let device = &ctx.device;
+        let casters = input.casters;
+        let tiles = &input.atlas.tiles;
+        let tile_size = |v: u32| tiles[v as usize].size;
+        let max_threads = (1u64 << 31).min(self.max_groups as u64 * self.max_groups as u64 * 64);
+        let rounds = plan_rounds(
+            input.draw_list,
+            tile_size,
+            casters.triangles,
+            self.max_texels,
+            max_threads,
+        );
+        let most_texels = rounds
+            .iter()
+            .map(|r| texels(r, tile_size))
+            .max()
+            .unwrap_or(1);
+        // Room for every texel of the round to be covered by large triangles 4 times over.
+        let chunks_wanted = ((most_texels / 256) as u32).max(MIN_CHUNKS);
+        self.pending_read = false;
+        self.ensure_buffers(ctx, most_texels, chunks_wanted);
+        let (depth, _) = self.depth.as_ref().expect("depth buffer");
+        let (chunks, capacity) = self.chunks.as_ref().expect("chunk list");
+        let discard = input.options.discard_raster;
+
+        encoder.push_debug_group("compute");
+        let last_round = rounds.len() - 1;
+        for (r, round) in rounds.iter().enumerate() {
+            let round_texels = texels(round, tile_size);
+            let params: [u32; 8] = [
+                casters.triangles,
+                casters.cullable_triangles,
+                input.options.cull.bits(),
+                round.len() as u32,
+                round_texels as u32,
+                *capacity,
+                self.max_groups,
+                u32::from(discard),
+            ];
+            let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("compute.params"),
+                contents: bytemuck::cast_slice(&params),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let entries = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("compute.entries"),
+                contents: bytemuck::cast_slice(round),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+            let buffers = [
+                &params,
+                &input.atlas.views_buffer,
+                &input.atlas.eyes,
+                &casters.world,
+                &casters.corners,
+                &entries,
+                depth,
+                chunks,
+                &self.counters,
+            ];
+            let bind_entries: Vec<wgpu::BindGroupEntry> = buffers
+                .iter()
+                .enumerate()
+                .map(|(i, b)| wgpu::BindGroupEntry {
+                    binding: i as u32,
+                    resource: b.as_entire_binding(),
+                })
+                .collect();
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("compute.bind_group"),
+                layout: &self.layout,
+                entries: &bind_entries,
+            });
+            encoder.clear_buffer(&self.counters, 0, None);
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("compute.transform_clear"),
+                    timestamp_writes: timer.compute_writes(span, r == 0, false),
+                });
+                let s = timer.begin_compute_stats(&mut pass);
+                if r == 0 {
+                    casters.record(&mut pass, false);
+                }
+                pass.set_pipeline(&self.clear);
+                pass.set_bind_group(0, &bind_group, &[]);
+                let (x, y) = dispatch_2d(round_texels, self.max_groups);
+                pass.dispatch_workgroups(x, y, 1);
+                timer.end_compute_stats(&mut pass, s);
+                stats.passes += 1;
+            }
+            if casters.triangles > 0 {
+                {
+                    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some("compute.setup"),
+                        timestamp_writes: None,
+                    });
+                    let s = timer.begin_compute_stats(&mut pass);
+                    pass.set_pipeline(&self.setup);
+                    pass.set_bind_group(0, &bind_group, &[]);
+                    let threads = casters.triangles as u64 * round.len() as u64;
+                    let (x, y) = dispatch_2d(threads, self.max_groups);
+                    pass.dispatch_workgroups(x, y, 1);
+                    pass.set_pipeline(&self.finalize);
+                    pass.set_bind_group(1, &self.args_bind_group, &[]);
+                    pass.dispatch_workgroups(1, 1, 1);
+                    timer.end_compute_stats(&mut pass, s);
+                    stats.passes += 1;
+                }
+                if !discard {
+                    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some("compute.large"),
+                        timestamp_writes: None,
+                    });
+                    let s = timer.begin_compute_stats(&mut pass);
+                    pass.set_pipeline(&self.large);
+                    pass.set_bind_group(0, &bind_group, &[]);
+                    pass.dispatch_workgroups_indirect(&self.args, 0);
+                    timer.end_compute_stats(&mut pass, s);
+                    stats.passes += 1;
+                }
+            }
+            if r == last_round {
+                encoder.copy_buffer_to_buffer(&self.counters, 0, &self.counters_read, 0, 16);
+            }
+
+            let atlas_size = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("compute.copy_params"),
+                contents: bytemuck::cast_slice(&[input.atlas.size as f32, 0.0, 0.0, 0.0]),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let copy_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("compute.copy_bind_group"),
+                layout: &self.copy_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: atlas_size.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: input.atlas.views_buffer.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: entries.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: depth.as_entire_binding(),
+                    },
+                ],
+            });
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("compute.copy"),
+                color_attachments: &[],
+                // Every view redrawn: the first copy may clear the whole atlas; otherwise only
+                // the listed tiles are written.
+                depth_stencil_attachment: Some(crate::techniques::atlas_attachment(
+                    input,
+                    r == 0 && input.full(),
+                )),
+                timestamp_writes: timer.render_writes(span, false, r == last_round),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            let s = timer.begin_render_stats(&mut pass);
+            pass.set_pipeline(&self.copy);
+            pass.set_bind_group(0, &copy_bind_group, &[]);
+            pass.draw(0..6, 0..round.len() as u32);
+            timer.end_render_stats(&mut pass, s);
+            stats.passes += 1;
+            stats.draws += 1;
+            stats.triangles += casters.triangles as u64 * round.len() as u64;
+        }
+        encoder.pop_debug_group();
+        self.pending_read = true;
+        stats
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rounds_respect_texel_and_thread_limits() {
+        let sizes = [256u32, 256, 512, 128];
+        let list = [0u32, 1, 2, 3];
+        let size = |v: u32| sizes[v as usize];
+        // Everything fits one round.
+        let r = plan_rounds(&list, size, 10, 1 << 20, 1 << 31);
+        assert_eq!(r.len(), 1);
+        assert_eq!(r[0].len(), 4);
+        assert_eq!(r[0][2].base, 2 * 256 * 256);
+        // 512² texels per round: the 512 tile alone, the others packed around it.
+        let r = plan_rounds(&list, size, 10, 512 * 512, 1 << 31);
+        assert!(r.iter().all(|r| texels(r, size) <= 512 * 512));
+        assert_eq!(r.iter().map(|r| r.len()).sum::<usize>(), 4);
+        // A tile over the limit becomes bands of rows that cover it exactly once.
+        let r = plan_rounds(&[2], size, 10, 100 * 512, 1 << 31);
+        let rows: Vec<(u32, u32)> = r.iter().flatten().map(|e| (e.row, e.rows)).collect();
+        assert_eq!(rows.iter().map(|&(_, n)| n).sum::<u32>(), 512);
+        assert!(rows.windows(2).all(|w| w[0].0 + w[0].1 == w[1].0));
+        assert!(rows.iter().all(|&(_, n)| n <= 100));
+        // Threads: 10 triangles, at most 20 threads → two entries per round.
+        let r = plan_rounds(&list, size, 10, 1 << 30, 20);
+        assert_eq!(r.len(), 2);
+    }
+
+    #[test]
+    fn dispatches_stay_within_the_dimension_limit() {
+        let (x, y) = dispatch_2d(64 * 65535 * 3 + 1, 65535);
+        assert!(x <= 65535 && y <= 65535);
+        assert!(x as u64 * y as u64 * 64 >= 64 * 65535 * 3 + 1);
+        assert_eq!(dispatch_2d(10, 65535), (1, 1));
+    }
+}

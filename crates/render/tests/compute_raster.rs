@@ -1,0 +1,398 @@
+//! The compute rasterizer (`--technique compute`) on hand-built scenes that probe the corners of
+//! rasterization: edges exactly through texel centres and along tile borders (the top-left fill
+//! rule and tile clamping), slivers and triangles far larger than the view, geometry behind the
+//! light and crossing its near plane (clipping), and more (triangle, view) pairs than one
+//! dispatch dimension holds, plus the fall-backs that must never drop work (rounds, bands of
+//! rows, chunk-list overflow). Each atlas is compared with `traditional`'s (the hardware path).
+
+mod common;
+
+use glam::{Mat4, Vec3, Vec4};
+use manyshadows::casters::CasterGeometry;
+use manyshadows::scene::atlas::FitPolicy;
+use manyshadows::scene::{
+    primitives, Attenuation, Camera, Instance, Light, LightKind, Material, Mesh, Scene,
+};
+use manyshadows::techniques::compute::Compute;
+use manyshadows::{
+    CullMode, GpuContext, GpuScene, ShadowAtlas, ShadowOptions, ShadowPlan, ShadowTechnique,
+    Technique,
+};
+
+/// Depth difference that counts as a different texel (as in the equivalence tests).
+const DEPTH_TOL: f32 = 2e-6;
+
+fn spot(position: Vec3, direction: Vec3, resolution: u32) -> Light {
+    Light {
+        kind: LightKind::Spot {
+            position,
+            direction,
+            cutoff_deg: 40.0,
+            range: 20.0,
+        },
+        ambient: Vec3::ZERO,
+        diffuse: Vec3::ONE,
+        specular: Vec3::ZERO,
+        attenuation: Attenuation::for_range(20.0),
+        casts_shadows: true,
+        shadow_resolution: resolution,
+    }
+}
+
+fn point(position: Vec3, resolution: u32) -> Light {
+    Light {
+        kind: LightKind::Point {
+            position,
+            range: 20.0,
+        },
+        ..spot(position, Vec3::NEG_Y, resolution)
+    }
+}
+
+/// A mesh of separate triangles.
+fn triangles(name: &str, tris: &[[Vec3; 3]]) -> Mesh {
+    let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
+    let normals = tris
+        .iter()
+        .flat_map(|t| {
+            let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or(Vec3::Y);
+            [n; 3]
+        })
+        .collect();
+    Mesh {
+        name: name.into(),
+        indices: (0..positions.len() as u32).collect(),
+        positions,
+        normals,
+    }
+}
+
+fn scene(meshes: Vec<Mesh>, lights: Vec<Light>) -> Scene {
+    Scene {
+        name: "compute raster test".into(),
+        instances: (0..meshes.len())
+            .map(|mesh| Instance {
+                mesh,
+                material: 0,
+                transform: Mat4::IDENTITY,
+                casts_shadows: true,
+            })
+            .collect(),
+        meshes,
+        materials: vec![Material::default()],
+        lights,
+        camera: Camera::look_at(Vec3::new(0.0, 6.0, 8.0), Vec3::ZERO),
+    }
+}
+
+fn plan(scene: &Scene) -> ShadowPlan {
+    ShadowPlan::new(scene, 1.0, 4096, FitPolicy::Strict).expect("plan")
+}
+
+/// The atlas `technique` fills for every view of `scene`.
+fn run(
+    ctx: &GpuContext,
+    scene: &Scene,
+    technique: &mut dyn ShadowTechnique,
+    options: ShadowOptions,
+) -> Vec<f32> {
+    let plan = plan(scene);
+    let gpu = GpuScene::new(ctx, scene).expect("upload");
+    let atlas = ShadowAtlas::new(ctx, &plan);
+    let casters = CasterGeometry::new(ctx, scene, &gpu, options.casters).expect("casters");
+    let list: Vec<u32> = (0..plan.views.len() as u32).collect();
+    let input = manyshadows::shadow::ShadowInput {
+        ctx,
+        scene: &gpu,
+        views: &plan.views,
+        atlas: &atlas,
+        casters: &casters,
+        options: &options,
+        draw_list: &list,
+    };
+    let timer = manyshadows::timing::GpuTimer::new(ctx);
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    technique.generate(&input, &mut encoder, &timer, None);
+    ctx.queue.submit([encoder.finish()]);
+    let depth = manyshadows::atlas_image::read_depth(ctx, &atlas).expect("read atlas");
+    assert_eq!(ctx.take_uncaptured(), None, "GPU errors");
+    depth
+}
+
+fn traditional(ctx: &GpuContext, scene: &Scene) -> Vec<f32> {
+    let mut t = Technique::Traditional
+        .create(ctx, &ShadowOptions::default())
+        .expect("traditional");
+    run(ctx, scene, t.as_mut(), ShadowOptions::default())
+}
+
+/// Depth difference above which a texel counts as covered by a different triangle (or not at
+/// all) rather than as the same plane evaluated with different rounding.
+const COVERAGE_TOL: f32 = 1e-4;
+
+/// How two atlases differ.
+#[derive(Debug, Default)]
+struct Diff {
+    /// Texels covered (depth < 1) in either.
+    covered: usize,
+    /// Texels whose depth differs by more than [`DEPTH_TOL`] (as the equivalence tests count).
+    differing: usize,
+    /// Of those, texels differing by more than [`COVERAGE_TOL`]: different coverage.
+    coverage: usize,
+    /// Largest difference of a texel that is not a coverage difference.
+    max_rounding: f32,
+}
+
+fn diff(a: &[f32], b: &[f32]) -> Diff {
+    let mut d = Diff::default();
+    let side = (a.len() as f64).sqrt() as usize;
+    for (i, (&x, &y)) in a.iter().zip(b).enumerate() {
+        d.covered += usize::from(x < 1.0 || y < 1.0);
+        let e = (x - y).abs();
+        if e > DEPTH_TOL {
+            d.differing += 1;
+        }
+        if e > COVERAGE_TOL {
+            if std::env::var("CR_DEBUG").is_ok() && d.coverage < 12 {
+                eprintln!(
+                    "  texel ({}, {}): traditional {x} compute {y}",
+                    i % side,
+                    i / side
+                );
+            }
+            d.coverage += 1;
+        } else {
+            d.max_rounding = d.max_rounding.max(e);
+        }
+    }
+    d
+}
+
+/// Compares `compute` with every cull mode against `traditional`.
+fn check(
+    ctx: &GpuContext,
+    label: &str,
+    scene: &Scene,
+    budget: usize,
+    depth_limit: f32,
+) -> Vec<f32> {
+    let reference = traditional(ctx, scene);
+    let covered = reference.iter().filter(|&&d| d < 1.0).count();
+    assert!(
+        covered > 100,
+        "{label}: nearly empty atlas ({covered} texels)"
+    );
+    let mut last = Vec::new();
+    for &cull in CullMode::ALL {
+        let options = ShadowOptions {
+            cull,
+            ..Default::default()
+        };
+        let mut c = Compute::new(ctx).expect("compute");
+        let got = run(ctx, scene, &mut c, options);
+        let d = diff(&reference, &got);
+        eprintln!(
+            "{label}: compute --cull {}: {} of {} covered texels differ by more than \
+             {DEPTH_TOL:e}; {} of them by more than {COVERAGE_TOL:e} (coverage, budget \
+             {budget}); the others by at most {:e} (limit {depth_limit:e})",
+            cull.name(),
+            d.differing,
+            d.covered,
+            d.coverage,
+            d.max_rounding
+        );
+        assert!(
+            d.coverage <= budget && d.max_rounding <= depth_limit,
+            "{label}: compute --cull {} differs from traditional: {d:?} (budget {budget}, \
+             depth limit {depth_limit:e})",
+            cull.name()
+        );
+        last = got;
+    }
+    last
+}
+
+/// World point at window position `(x, y)` (atlas texels) and NDC depth `z` of `view`.
+fn at_window(plan: &ShadowPlan, view: usize, x: f32, y: f32, z: f32) -> Vec3 {
+    let tile = plan.layout.tiles[view];
+    let s = tile.size as f32;
+    let ndc = Vec4::new(
+        (x - tile.x as f32) / s * 2.0 - 1.0,
+        1.0 - (y - tile.y as f32) / s * 2.0,
+        z,
+        1.0,
+    );
+    let w = plan.views[view].view_proj.inverse() * ndc;
+    w.truncate() / w.w
+}
+
+fn floor() -> Mesh {
+    primitives::plane(30.0, 30.0, 4)
+}
+
+/// Edges exactly through texel centres (ties decided by the top-left rule, including a shared
+/// diagonal), triangles ending exactly on a tile border, and triangles reaching over the border
+/// into the neighbouring tile (which must not receive them).
+#[test]
+fn edges_on_texel_centres_and_tile_borders() {
+    let ctx = common::context();
+    let lights = vec![
+        spot(Vec3::new(-2.0, 3.0, 0.0), Vec3::NEG_Y, 64),
+        spot(Vec3::new(2.0, 3.0, 0.0), Vec3::NEG_Y, 64),
+    ];
+    let base = scene(vec![floor()], lights.clone());
+    let p = plan(&base);
+    let mut tris = Vec::new();
+    for view in 0..p.views.len() {
+        let t = p.layout.tiles[view];
+        let (x0, y0, s) = (t.x as f32, t.y as f32, t.size as f32);
+        let w = |x: f32, y: f32, z: f32| at_window(&p, view, x0 + x, y0 + y, z);
+        // A square with edges through texel centres, split along a diagonal through centres.
+        tris.push([w(10.5, 8.5, 0.6), w(30.5, 8.5, 0.6), w(30.5, 28.5, 0.8)]);
+        tris.push([w(10.5, 8.5, 0.6), w(30.5, 28.5, 0.8), w(10.5, 28.5, 0.7)]);
+        // Exactly on the tile's top-left and bottom-right borders.
+        tris.push([w(0.0, 0.0, 0.5), w(12.0, 0.0, 0.5), w(0.0, 12.0, 0.5)]);
+        tris.push([w(s, s, 0.5), w(s - 12.0, s, 0.5), w(s, s - 12.0, 0.5)]);
+        // Over the right and bottom borders, into the neighbour's texels. No texel centre lies
+        // exactly on these edges: the hardware clips such triangles at the viewport, and its
+        // clipped corners, rounded to 1/256 texel, may tip an exact tie either way.
+        tris.push([
+            w(s - 6.2, 40.3, 0.55),
+            w(s + 20.1, 36.6, 0.55),
+            w(s + 4.3, 52.2, 0.55),
+        ]);
+        tris.push([
+            w(40.3, s - 5.2, 0.55),
+            w(52.1, s + 30.7, 0.55),
+            w(30.6, s + 9.3, 0.55),
+        ]);
+        // Horizontal and vertical edges through centres with varying depth, both windings.
+        tris.push([w(40.5, 5.5, 0.3), w(40.5, 20.5, 0.9), w(55.5, 5.5, 0.5)]);
+        tris.push([w(44.5, 24.5, 0.3), w(59.5, 24.5, 0.9), w(44.5, 39.5, 0.5)]);
+    }
+    let s = scene(vec![floor(), triangles("probes", &tris)], lights);
+    check(&ctx, "texel-centre and tile-border edges", &s, 0, 1e-5);
+}
+
+/// Needle-thin triangles at many angles and triangles hundreds of times larger than the view
+/// (the large-triangle path with vertices far outside the tile).
+#[test]
+fn slivers_and_huge_triangles() {
+    let ctx = common::context();
+    let mut tris = Vec::new();
+    for k in 0..24 {
+        let a = k as f32 * std::f32::consts::PI / 24.0;
+        let d = Vec3::new(a.cos(), 0.0, a.sin());
+        let side = Vec3::new(-d.z, 0.0, d.x) * 0.002;
+        let c = Vec3::new(0.0, 1.0 + 0.01 * k as f32, 0.0);
+        tris.push([c - 2.0 * d, c + 2.0 * d, c + 2.0 * d + side]);
+    }
+    // Huge: a tilted triangle 400 m across above the floor, under part of the view.
+    tris.push([
+        Vec3::new(-200.0, 0.5, -200.0),
+        Vec3::new(200.0, 0.3, -200.0),
+        Vec3::new(0.0, 0.7, 200.0),
+    ]);
+    let s = scene(
+        vec![
+            primitives::plane(2000.0, 2000.0, 1),
+            triangles("slivers", &tris),
+        ],
+        vec![
+            spot(Vec3::new(0.0, 3.0, 0.0), Vec3::NEG_Y, 256),
+            spot(Vec3::new(1.0, 2.0, 1.0), Vec3::new(0.3, -1.0, 0.2), 128),
+        ],
+    );
+    check(&ctx, "slivers and huge triangles", &s, 24, 1e-5);
+}
+
+/// Triangles behind the light, crossing its near plane and the plane through the light (w = 0),
+/// and a point light inside a closed room, whose walls cross every cube face's frustum.
+#[test]
+fn behind_the_light_and_across_the_near_plane() {
+    let ctx = common::context();
+    let light = Vec3::new(0.0, 2.0, 0.0);
+    let tris = vec![
+        // Entirely behind the spot light.
+        [
+            Vec3::new(-1.0, 2.5, -1.0),
+            Vec3::new(1.0, 2.5, -1.0),
+            Vec3::new(0.0, 3.0, 1.0),
+        ],
+        // From behind the light to well in front of it, beside it (crosses w = 0 and near).
+        [
+            Vec3::new(-0.3, 3.0, -0.5),
+            Vec3::new(0.4, 3.0, -0.5),
+            Vec3::new(0.1, 0.5, 0.6),
+        ],
+        // Crossing the near plane only (just below the light).
+        [
+            Vec3::new(-0.5, 1.999, 0.3),
+            Vec3::new(0.5, 1.999, 0.3),
+            Vec3::new(0.0, 1.2, -0.4),
+        ],
+    ];
+    let s = scene(
+        vec![floor(), triangles("crossing", &tris)],
+        vec![spot(light, Vec3::NEG_Y, 256)],
+    );
+    check(&ctx, "behind and across the near plane", &s, 32, 1e-5);
+
+    let mut room = primitives::cuboid(Vec3::new(6.0, 4.0, 5.0));
+    // Inward-facing walls, as a room is modelled.
+    for t in room.indices.chunks_exact_mut(3) {
+        t.swap(1, 2);
+    }
+    let s = scene(
+        vec![room, triangles("crossing", &tris)],
+        vec![point(Vec3::new(0.5, 0.3, -0.2), 128)],
+    );
+    check(&ctx, "point light in a room", &s, 64, 1e-5);
+}
+
+/// More (triangle, view) pairs than one dispatch dimension holds (65535 workgroups of 64), and
+/// the same scene through every splitting fall-back: tiny rounds and bands of rows, a chunk list
+/// of 8 records that overflows (chunks rasterized by their setup thread), and 16 workgroups
+/// per dimension. Every variant must give the very same atlas (atomicMin is order-independent).
+#[test]
+fn more_work_than_one_dispatch_and_every_fallback() {
+    let ctx = common::context();
+    // 2·600² = 720,000 triangles × 6 cube faces = 4.32 M threads > 65535 · 64.
+    let mut floor = primitives::plane(12.0, 12.0, 600);
+    for p in &mut floor.positions {
+        p.y = 0.05 * (3.0 * p.x).sin() * (2.0 * p.z).cos();
+    }
+    let s = scene(
+        vec![floor, primitives::cuboid(Vec3::splat(1.0))],
+        vec![point(Vec3::new(0.3, 2.0, -0.4), 64)],
+    );
+    let threads = 720_000u64 * 6;
+    assert!(threads > 65535 * 64);
+    let full = check(&ctx, "720k triangles x 6 views", &s, 64, 1e-5);
+
+    // Rounds of one band of 40 rows each (12 rounds), 16 workgroups along x.
+    let mut split = Compute::new(&ctx)
+        .expect("compute")
+        .with_limits(40 * 64, 1 << 16, 16);
+    let got = run(&ctx, &s, &mut split, ShadowOptions::default());
+    let d = diff(&full, &got);
+    eprintln!("rounds and bands: {d:?} against the default run");
+    assert_eq!(d.differing, 0, "rounds and bands changed the atlas");
+    // One round with a chunk list of 8 records.
+    let mut small = Compute::new(&ctx)
+        .expect("compute")
+        .with_limits(1 << 24, 8, 65535);
+    let got = run(&ctx, &s, &mut small, ShadowOptions::default());
+    let (requested, overflowed) = small
+        .overflowed(&ctx)
+        .expect("read counters")
+        .expect("counters of the last round");
+    eprintln!(
+        "chunk list of 8: {requested} chunks requested, {overflowed} rasterized by their setup \
+         thread"
+    );
+    assert!(overflowed > 0, "the 8-record chunk list must overflow");
+    let d = diff(&full, &got);
+    eprintln!("fall-backs: {d:?} against the default run");
+    assert_eq!(d.differing, 0, "the fall-backs changed the atlas");
+}
