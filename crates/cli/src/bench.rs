@@ -254,7 +254,7 @@ struct Report<'a> {
     records: &'a [Record],
 }
 
-fn median(v: &[f64]) -> f64 {
+pub(crate) fn median(v: &[f64]) -> f64 {
     let mut s = v.to_vec();
     s.sort_by(f64::total_cmp);
     let n = s.len();
@@ -380,16 +380,16 @@ fn bones_at(pivots: &[f32], t: f32) -> Vec<Mat4> {
         .collect()
 }
 
-struct Timed {
-    gpu_ms: Option<f64>,
-    cpu_ms: f64,
-    wall_ms: f64,
-    stats: ShadowStats,
+pub(crate) struct Timed {
+    pub(crate) gpu_ms: Option<f64>,
+    pub(crate) cpu_ms: f64,
+    pub(crate) wall_ms: f64,
+    pub(crate) stats: ShadowStats,
 }
 
 /// One generation, timed; any GPU validation error fails the benchmark (numbers from an
 /// invalid pipeline would be meaningless).
-fn run_once(
+pub(crate) fn run_once(
     ctx: &GpuContext,
     gen: &mut ShadowGenerator,
     gpu: &GpuScene,

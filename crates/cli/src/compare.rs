@@ -176,8 +176,11 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         }
-        std::fs::write(path, serde_json::to_string_pretty(&json!({ "scenes": reports }))?)
-            .with_context(|| format!("writing {}", path.display()))?;
+        std::fs::write(
+            path,
+            serde_json::to_string_pretty(&json!({ "scenes": reports }))?,
+        )
+        .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
 }
@@ -325,7 +328,9 @@ fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
                 write_diff(&path, &frame.rgba, &c, frame.width, frame.height)?;
             }
         }
+        let by_distance = point_errors_by_distance(&scene, &r, &mask)?;
         results.push(VariantResult {
+            by_distance,
             label: v.label(),
             technique: v.technique,
             resolution: v.resolution,
@@ -341,11 +346,47 @@ fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
     bar.finish_and_clear();
     let r = reference.context("no technique could run on this adapter")?;
     let mut report = report(&ctx, &scene, args, &tracer, bvh_ms, &r, &results, started);
+    for (i, v) in results.iter().enumerate() {
+        if !v.by_distance.is_empty() {
+            report["variants"][i]["point_light_errors_by_distance"] = json!(v
+                .by_distance
+                .iter()
+                .map(|&(b, n, e)| json!({ "below_m": if b.is_finite() { json!(b) } else { json!(null) }, "pairs": n, "errors": e }))
+                .collect::<Vec<_>>());
+        }
+    }
     report["skipped"] = json!(skipped
         .iter()
         .map(|(label, why)| json!({ "variant": label, "reason": why }))
         .collect::<Vec<_>>());
     print_table(&report, &results, &scene);
+    if results.iter().any(|v| !v.by_distance.is_empty()) {
+        println!("\npoint-light errors (outside the band) by distance from the light:");
+        print!("{:<24}", "technique");
+        let mut lo = 0.0;
+        for &b in &DISTANCE_BINS {
+            let head = if b.is_finite() {
+                format!("{lo}-{b} m")
+            } else {
+                format!(">{lo} m")
+            };
+            print!(" {head:>14}");
+            lo = b;
+        }
+        println!();
+        for v in &results {
+            print!("{:<24}", v.label);
+            for &(_, n, e) in &v.by_distance {
+                let cell = if n == 0 {
+                    "-".to_string()
+                } else {
+                    format!("{:.3}%", 100.0 * e as f64 / n as f64)
+                };
+                print!(" {cell:>14}");
+            }
+            println!();
+        }
+    }
     for (label, why) in &skipped {
         println!("skipped    {label}: {why}");
     }
@@ -378,6 +419,47 @@ struct VariantResult {
     score: score::Score,
     footprints: Vec<Footprints>,
     diff_image: PathBuf,
+    /// Point lights only: (upper bound of the distance bin in m, scored pairs, errors outside
+    /// the edge band).
+    by_distance: Vec<(f32, u64, u64)>,
+}
+
+/// Distance bins (upper bounds, metres) of the point-light error breakdown.
+const DISTANCE_BINS: [f32; 5] = [2.0, 4.0, 8.0, 16.0, f32::INFINITY];
+
+/// Errors of point-light shadows (outside the edge band) by the receiver's distance from the
+/// light: where a map's texels grow (cube faces towards their corners, paraboloids towards
+/// the rim) or its warp bends, errors concentrate at some distances.
+fn point_errors_by_distance(
+    scene: &Scene,
+    r: &Reference,
+    mask: &Mask,
+) -> Result<Vec<(f32, u64, u64)>> {
+    let mut bins: Vec<(f32, u64, u64)> = DISTANCE_BINS.iter().map(|&b| (b, 0, 0)).collect();
+    let mut any = false;
+    for (l, light) in scene.lights.iter().enumerate() {
+        let manyshadows::scene::LightKind::Point { position, .. } = light.kind else {
+            continue;
+        };
+        any = true;
+        let c = score::error_classes(&r.vis, &r.band, mask, Some(l as u32))?;
+        for (p, sp) in r.surfaces.points.iter().enumerate() {
+            let Some(sp) = sp else { continue };
+            if !(r.vis.reach.get(p, l as u32) && r.vis.facing.get(p, l as u32)) {
+                continue;
+            }
+            let d = sp.position.distance(position);
+            let k = DISTANCE_BINS
+                .iter()
+                .position(|&b| d < b)
+                .unwrap_or(DISTANCE_BINS.len() - 1);
+            bins[k].1 += 1;
+            if c[p] & (class::FALSE_SHADOW | class::FALSE_LIGHT) != 0 {
+                bins[k].2 += 1;
+            }
+        }
+    }
+    Ok(if any { bins } else { Vec::new() })
 }
 
 fn load(args: &CompareArgs) -> Result<Scene> {

@@ -20,6 +20,7 @@ use manyshadows::{
 
 mod bench;
 mod compare;
+mod omni;
 mod plot;
 
 const ABOUT: &str = "Render scenes lit by many shadow-casting lights, headless, to PNG.";
@@ -75,6 +76,10 @@ enum BenchCommand {
     /// seed's variants (simple, no-raster, skinned, instances, backface, combined). Writes
     /// results.txt, results.json and one plot per variant and resolution into --out-dir.
     Layered(Box<bench::LayeredArgs>),
+    /// Point-light shadows in the atrium: cube maps (six passes, or one) against dual
+    /// paraboloids (two passes, or one), for 1..N lights: GPU and CPU time per light and
+    /// atlas memory per light, as a table, results.json and plots (seed 003's comparison).
+    Omni(Box<omni::OmniArgs>),
 }
 
 #[derive(Args, Debug, Clone)]
@@ -259,6 +264,7 @@ fn main() {
         Some(Command::Info(args)) => info(&args),
         Some(Command::Compare(args)) => compare::run(&args),
         Some(Command::Bench(BenchCommand::Layered(args))) => bench::layered(&args),
+        Some(Command::Bench(BenchCommand::Omni(args))) => omni::omni(&args),
         None => render(&cli.render),
     };
     if let Err(e) = result {

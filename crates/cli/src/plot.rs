@@ -34,6 +34,17 @@ type Series = (String, Vec<(f64, f64)>);
 
 /// Writes one PNG per (variant, resolution) into `dir` and returns their paths.
 pub fn layered_plots(points: &[PlotPoint], adapter: &str, dir: &Path) -> Result<Vec<PathBuf>> {
+    plots(points, adapter, dir, "layered", "shadow maps")
+}
+
+/// Plots of any benchmark whose x axis is a count (`x_name`), files `<prefix>-<variant>-<res>.png`.
+pub fn plots(
+    points: &[PlotPoint],
+    adapter: &str,
+    dir: &Path,
+    prefix: &str,
+    x_name: &str,
+) -> Result<Vec<PathBuf>> {
     ensure_font();
     let mut keys: Vec<(String, u32)> = Vec::new();
     for p in points {
@@ -72,33 +83,36 @@ pub fn layered_plots(points: &[PlotPoint], adapter: &str, dir: &Path) -> Result<
                 })
                 .collect()
         };
-        let path = dir.join(format!("layered-{variant}-{res}.png"));
+        let path = dir.join(format!("{prefix}-{variant}-{res}.png"));
         let (w, h) = (1400u32, 1000u32);
         let mut pixels = vec![0u8; (w * h * 3) as usize];
         {
-        let root = BitMapBackend::with_buffer(&mut pixels, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| anyhow!("plot: {e}"))?;
-        let (title, body) = root.split_vertically(50);
-        title
-            .titled(
-                &format!("bench layered: {variant}, {res}² maps — {adapter}"),
-                ("sans-serif", 20),
-            )
-            .map_err(|e| anyhow!("plot: {e}"))?;
-        let panels = body.split_evenly((2, 2));
-        let specs: [(&str, Vec<Series>); 4] = [
-            ("GPU ms, total", series(&|p| p.gpu_ms, false)),
-            ("GPU ms per map", series(&|p| p.gpu_ms, true)),
-            (
-                "CPU ms (record + submit), total",
-                series(&|p| Some(p.cpu_ms), false),
-            ),
-            ("CPU ms per map", series(&|p| Some(p.cpu_ms), true)),
-        ];
-        for (area, (caption, data)) in panels.iter().zip(specs) {
-            panel(area, caption, &data)?;
-        }
-        root.present().map_err(|e| anyhow!("plot: {e}"))?;
+            let root = BitMapBackend::with_buffer(&mut pixels, (w, h)).into_drawing_area();
+            root.fill(&WHITE).map_err(|e| anyhow!("plot: {e}"))?;
+            let (title, body) = root.split_vertically(50);
+            title
+                .titled(
+                    &format!("bench {prefix}: {variant}, {res}² maps — {adapter}"),
+                    ("sans-serif", 20),
+                )
+                .map_err(|e| anyhow!("plot: {e}"))?;
+            let panels = body.split_evenly((2, 2));
+            let unit = x_name.trim_end_matches('s');
+            let per_label_gpu = format!("GPU ms per {unit}");
+            let per_label_cpu = format!("CPU ms per {unit}");
+            let specs: [(&str, Vec<Series>); 4] = [
+                ("GPU ms, total", series(&|p| p.gpu_ms, false)),
+                (per_label_gpu.as_str(), series(&|p| p.gpu_ms, true)),
+                (
+                    "CPU ms (record + submit), total",
+                    series(&|p| Some(p.cpu_ms), false),
+                ),
+                (per_label_cpu.as_str(), series(&|p| Some(p.cpu_ms), true)),
+            ];
+            for (area, (caption, data)) in panels.iter().zip(specs) {
+                panel(area, caption, x_name, &data)?;
+            }
+            root.present().map_err(|e| anyhow!("plot: {e}"))?;
         }
         save_png(&path, &pixels, w, h)?;
         written.push(path);
@@ -110,7 +124,8 @@ pub fn layered_plots(points: &[PlotPoint], adapter: &str, dir: &Path) -> Result<
 fn save_png(path: &Path, rgb: &[u8], w: u32, h: u32) -> Result<()> {
     use image::codecs::png::{CompressionType, FilterType, PngEncoder};
     use image::ImageEncoder;
-    let file = std::fs::File::create(path).map_err(|e| anyhow!("writing {}: {e}", path.display()))?;
+    let file =
+        std::fs::File::create(path).map_err(|e| anyhow!("writing {}: {e}", path.display()))?;
     PngEncoder::new_with_quality(
         std::io::BufWriter::new(file),
         CompressionType::Best,
@@ -123,6 +138,7 @@ fn save_png(path: &Path, rgb: &[u8], w: u32, h: u32) -> Result<()> {
 fn panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     caption: &str,
+    x_name: &str,
     data: &[Series],
 ) -> Result<()> {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("plot: {e}");
@@ -143,7 +159,7 @@ fn panel<DB: DrawingBackend>(
         .map_err(err)?;
     chart
         .configure_mesh()
-        .x_desc("shadow maps")
+        .x_desc(x_name)
         .y_desc("ms")
         .x_label_formatter(&|x| format!("{x:.0}"))
         .light_line_style(TRANSPARENT)

@@ -111,3 +111,60 @@ fn bench_layered_rejects_bad_arguments() {
         );
     }
 }
+
+#[test]
+fn bench_omni_compares_cube_and_paraboloid_per_light() {
+    let dir = tmp("omni");
+    let out = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
+        .args([
+            "bench",
+            "omni",
+            "--lights",
+            "1,2",
+            "--resolution",
+            "64",
+            "--methods",
+            "cube:traditional,dp:traditional,dp:layered",
+            "--repeats",
+            "1",
+            "--warmup",
+            "0",
+            "--out-dir",
+            dir.to_str().unwrap(),
+        ])
+        .output()
+        .expect("run manyshadows");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "bench omni failed: {stderr}");
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("results.json")).unwrap()).unwrap();
+    let records = json["records"].as_array().unwrap();
+    assert_eq!(records.len(), 6, "{json}");
+    for r in records {
+        let lights = r["lights"].as_u64().unwrap();
+        let per_light = if r["method"] == "cube:traditional" {
+            6
+        } else {
+            2
+        };
+        assert_eq!(r["views"].as_u64().unwrap(), per_light * lights, "{r}");
+        // Memory per light: six 64² faces or two 128² hemispheres of 4-byte depth.
+        let expected = if per_light == 6 {
+            6 * 64 * 64 * 4
+        } else {
+            2 * 128 * 128 * 4
+        };
+        assert_eq!(
+            r["memory_bytes_per_light"].as_f64().unwrap(),
+            expected as f64,
+            "{r}"
+        );
+    }
+    assert!(dir.join("omni-atrium-64.png").exists());
+    let bad = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
+        .args(["bench", "omni", "--methods", "sphere:traditional"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("unknown mode"));
+}

@@ -228,7 +228,10 @@ pub fn footprints(
             };
             let Some(vi) = vi else { continue };
             let v = &planned.views[vi];
-            if matches!(v.kind, manyshadows_scene::light_space::ViewKind::Paraboloid(_)) {
+            if matches!(
+                v.kind,
+                manyshadows_scene::light_space::ViewKind::Paraboloid(_)
+            ) {
                 // x = tan(θ/2) on the disk: a texel spans (2/res)·(1 + cos θ) radians, i.e.
                 // texel_world·(1 + front)/2 at distance 1 (texel_world is the pole's).
                 let lv = v.view.transform_point3(sp.position);

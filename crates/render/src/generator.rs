@@ -46,10 +46,12 @@ impl ShadowGenerator {
         technique: Technique,
         options: ShadowOptions,
     ) -> Result<Self, RenderError> {
-        let paraboloid = plan
-            .views
-            .iter()
-            .any(|v| matches!(v.kind, manyshadows_scene::light_space::ViewKind::Paraboloid(_)));
+        let paraboloid = plan.views.iter().any(|v| {
+            matches!(
+                v.kind,
+                manyshadows_scene::light_space::ViewKind::Paraboloid(_)
+            )
+        });
         if paraboloid && !matches!(technique, Technique::Traditional | Technique::Layered) {
             return Err(RenderError::Unsupported(format!(
                 "--technique {technique} renders cube-map point shadows only; use \

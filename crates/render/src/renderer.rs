@@ -212,8 +212,13 @@ impl<'c> Renderer<'c> {
             .min(max_dim);
         ctx.scoped("creating the renderer", || {
             let aspect = settings.width as f32 / settings.height as f32;
-            let plan =
-                ShadowPlan::with_points(scene, aspect, max_atlas, settings.fit, settings.point_shadows)?;
+            let plan = ShadowPlan::with_points(
+                scene,
+                aspect,
+                max_atlas,
+                settings.fit,
+                settings.point_shadows,
+            )?;
             let gpu_scene = GpuScene::new(ctx, scene)?;
             let mut light_data = plan.light_data(scene);
             let mut shadows = ShadowGenerator::new(

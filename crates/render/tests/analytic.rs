@@ -8,8 +8,8 @@ mod common;
 
 use glam::{Vec3, Vec4Swizzles};
 use manyshadows::scene::builtin::{self, BuiltinOptions};
-use manyshadows::scene::{LightKind, Scene};
 use manyshadows::scene::light_space::PointShadows;
+use manyshadows::scene::{LightKind, Scene};
 use manyshadows::{Pcf, RenderSettings, Renderer, Technique};
 
 const SIZE: u32 = 256;
@@ -93,7 +93,10 @@ fn truth(scene: &Scene) -> Vec<Option<bool>> {
 
 fn check(name: &str) {
     let wrong = wrong_pixels(name, Technique::Traditional, PointShadows::Cube, 0);
-    assert_eq!(wrong, 0, "{name}: {wrong} pixels away from edges disagree with the exact shadow");
+    assert_eq!(
+        wrong, 0,
+        "{name}: {wrong} pixels away from edges disagree with the exact shadow"
+    );
 }
 
 /// Pixels more than [`EDGE_BAND_PX`] from an edge whose visibility disagrees with the exact
@@ -194,7 +197,10 @@ fn directional_light_shadow_matches_exact_outline() {
 fn point_light_dual_paraboloid_matches_exact_outline_on_fine_geometry() {
     for t in [Technique::Traditional, Technique::Layered] {
         let wrong = wrong_pixels("plane-point", t, PointShadows::DualParaboloid, 4);
-        assert_eq!(wrong, 0, "{t}: dual-paraboloid shadow disagrees in {wrong} pixels");
+        assert_eq!(
+            wrong, 0,
+            "{t}: dual-paraboloid shadow disagrees in {wrong} pixels"
+        );
     }
 }
 
@@ -204,8 +210,19 @@ fn point_light_dual_paraboloid_matches_exact_outline_on_fine_geometry() {
 /// exercised.
 #[test]
 fn dual_paraboloid_bends_outlines_of_coarse_geometry() {
-    let wrong = wrong_pixels("plane-point", Technique::Traditional, PointShadows::DualParaboloid, 0);
-    assert!(wrong > 20, "coarse geometry should show the paraboloid's error ({wrong} pixels)");
+    let wrong = wrong_pixels(
+        "plane-point",
+        Technique::Traditional,
+        PointShadows::DualParaboloid,
+        0,
+    );
+    assert!(
+        wrong > 20,
+        "coarse geometry should show the paraboloid's error ({wrong} pixels)"
+    );
     let cube = wrong_pixels("plane-point", Technique::Traditional, PointShadows::Cube, 0);
-    assert_eq!(cube, 0, "cube maps are exact on the same coarse geometry ({cube} pixels)");
+    assert_eq!(
+        cube, 0,
+        "cube maps are exact on the same coarse geometry ({cube} pixels)"
+    );
 }

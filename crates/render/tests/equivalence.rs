@@ -51,24 +51,17 @@ fn diff(a: &[f32], b: &[f32]) -> Diff {
         covered: 0,
         max_depth_diff: 0.0,
     };
-    let side = (a.len() as f64).sqrt() as usize;
-    let mut hist = std::collections::BTreeMap::new();
-    for (i, (&x, &y)) in a.iter().zip(b).enumerate() {
-        if (x - y).abs() > DEPTH_TOL { *hist.entry(((i % side) / 256, (i / side) / 256)).or_insert(0) += 1; }
+    for (&x, &y) in a.iter().zip(b) {
         if x < 1.0 || y < 1.0 {
             d.covered += 1;
         }
         let e = (x - y).abs();
         if e > DEPTH_TOL {
-            if std::env::var("CR_DEBUG").is_ok() && d.differing < 15 {
-                eprintln!("  {} {}: {x} vs {y}", i % side, i / side);
-            }
             d.differing += 1;
         } else {
             d.max_depth_diff = d.max_depth_diff.max(e);
         }
     }
-    if std::env::var("CR_DEBUG").is_ok() { eprintln!("per 256 block: {hist:?}"); }
     d
 }
 
@@ -197,15 +190,19 @@ fn compute_matches_traditional() {
     let ctx = common::context();
     // The compute rasterizer reproduces the fixed-function rules (viewport transform, 8-bit
     // sub-pixel snapping, top-left fill rule, screen-space depth plane, near clipping) in
-    // compute; BUDGETS.
+    // compute, with depth from the triangle's clip-space plane. Measured on lavapipe and
+    // llvmpipe GL (every cull mode): cubes 5 and 8 differing texels, plane-point 0 and 0,
+    // plane-directional 4 and 4, dragon 0 and 0 (edge texels and depths a few ULPs beyond
+    // the tolerance where the hardware interpolates from corners it clipped). The budgets are
+    // layered's, with room to spare.
     let cubes = scene("cubes", Some(6), LightMix::All, 256);
-    check(&ctx, "cubes", &cubes, Technique::Compute, 1000000);
+    check(&ctx, "cubes", &cubes, Technique::Compute, 64);
     let point = scene("plane-point", None, LightMix::All, 256);
-    check(&ctx, "plane-point", &point, Technique::Compute, 1000000);
+    check(&ctx, "plane-point", &point, Technique::Compute, 16);
     let sun = scene("plane-directional", None, LightMix::All, 512);
-    check(&ctx, "plane-directional", &sun, Technique::Compute, 1000000);
+    check(&ctx, "plane-directional", &sun, Technique::Compute, 16);
     let dragon = scene("dragon", Some(4), LightMix::Spot, 256);
-    check(&ctx, "dragon", &dragon, Technique::Compute, 1000000);
+    check(&ctx, "dragon", &dragon, Technique::Compute, 64);
 }
 
 /// Runs `technique` directly on `scene`'s views with the given draw list into `atlas`.

@@ -12,8 +12,8 @@ use manyshadows::scene::{
     primitives, Attenuation, Camera, Instance, Light, LightKind, Material, Scene,
 };
 use manyshadows::{
-    CullMode, GpuContext, GpuScene, Pcf, RenderError, RenderSettings, Renderer,
-    ShadowGenerator, ShadowOptions, ShadowPlan, Technique,
+    CullMode, GpuContext, GpuScene, Pcf, RenderError, RenderSettings, Renderer, ShadowGenerator,
+    ShadowOptions, ShadowPlan, Technique,
 };
 
 /// Depth tolerance of the paraboloid comparison. Triangles that cross a hemisphere's base are
@@ -26,8 +26,14 @@ use manyshadows::{
 const DEPTH_TOL: f32 = 1e-4;
 
 fn atlas(ctx: &GpuContext, scene: &Scene, t: Technique, cull: CullMode) -> Vec<f32> {
-    let plan = ShadowPlan::with_points(scene, 1.0, 4096, FitPolicy::Shrink, PointShadows::DualParaboloid)
-        .expect("plan");
+    let plan = ShadowPlan::with_points(
+        scene,
+        1.0,
+        4096,
+        FitPolicy::Shrink,
+        PointShadows::DualParaboloid,
+    )
+    .expect("plan");
     let gpu = GpuScene::new(ctx, scene).expect("upload");
     let options = ShadowOptions {
         cull,
@@ -66,7 +72,10 @@ fn layered_dual_paraboloid_atlas_matches_traditional() {
     let ctx = common::context();
     let mut plane = builtin::build("plane-point", &BuiltinOptions::default()).expect("scene");
     plane.subdivide(2).expect("subdivide");
-    for (label, scene) in [("plane-point", plane), ("cubes, 3 point lights", point_scene(1))] {
+    for (label, scene) in [
+        ("plane-point", plane),
+        ("cubes, 3 point lights", point_scene(1)),
+    ] {
         let reference = atlas(&ctx, &scene, Technique::Traditional, CullMode::None);
         let covered = reference.iter().filter(|&&d| d < 1.0).count();
         assert!(covered > 1000, "{label}: nearly empty atlas ({covered})");
@@ -92,12 +101,20 @@ fn layered_dual_paraboloid_atlas_matches_traditional() {
                  than {DEPTH_TOL:e} ({small} by more than 2e-6; largest difference {max:e})",
                 cull.name()
             );
-            assert!(differing <= 16, "{label} --cull {}: {differing} texels differ", cull.name());
+            assert!(
+                differing <= 16,
+                "{label} --cull {}: {differing} texels differ",
+                cull.name()
+            );
         }
     }
 }
 
-fn visibility(ctx: &GpuContext, scene: &Scene, points: PointShadows) -> manyshadows::VisibilityMask {
+fn visibility(
+    ctx: &GpuContext,
+    scene: &Scene,
+    points: PointShadows,
+) -> manyshadows::VisibilityMask {
     let settings = RenderSettings {
         width: 256,
         height: 256,
@@ -131,7 +148,10 @@ fn cube_and_dual_paraboloid_agree_on_fine_geometry() {
         }
     }
     eprintln!("cube vs dual paraboloid: {differ} of {total} (pixel, light) pairs differ");
-    assert!(shadowed > total / 20, "degenerate scene: {shadowed} unlit pairs of {total}");
+    assert!(
+        shadowed > total / 20,
+        "degenerate scene: {shadowed} unlit pairs of {total}"
+    );
     assert!(differ * 100 <= total, "{differ} of {total} pairs differ");
 }
 
@@ -197,7 +217,12 @@ fn light_inside_geometry_lights_nothing_outside() {
                 .flat_map(|y| (0..128).map(move |x| (x, y)))
                 .filter(|&(x, y)| vis.lit(x, y, 0))
                 .count();
-            assert_eq!(lit, 0, "{technique} {}: {lit} pixels lit through the box", points.name());
+            assert_eq!(
+                lit,
+                0,
+                "{technique} {}: {lit} pixels lit through the box",
+                points.name()
+            );
         }
     }
 }
@@ -215,7 +240,9 @@ fn bad_point_shadow_configurations_are_clear_errors() {
         point_shadows: PointShadows::DualParaboloid,
         ..Default::default()
     };
-    let err = Renderer::new(&ctx, &scene, settings.clone()).err().expect("zero range must fail");
+    let err = Renderer::new(&ctx, &scene, settings.clone())
+        .err()
+        .expect("zero range must fail");
     assert!(err.to_string().contains("range"), "{err}");
 
     // Techniques without a paraboloid path refuse instead of drawing cube-shaped nonsense.

@@ -118,7 +118,9 @@ impl std::str::FromStr for PointShadows {
             .iter()
             .copied()
             .find(|m| m.name() == s)
-            .ok_or_else(|| format!("unknown point-shadow mode '{s}' (expected cube or dual-paraboloid)"))
+            .ok_or_else(|| {
+                format!("unknown point-shadow mode '{s}' (expected cube or dual-paraboloid)")
+            })
     }
 }
 
@@ -178,9 +180,7 @@ impl ShadowView {
                 let axis = inv.transform_vector3(Vec3::NEG_Z);
                 let d = center - eye;
                 let dist = d.length();
-                dist - radius <= self.far
-                    && dist + radius >= self.near
-                    && d.dot(axis) >= -radius
+                dist - radius <= self.far && dist + radius >= self.near && d.dot(axis) >= -radius
             }
             _ => sphere_in_planes(&frustum_planes(self.view_proj), center, radius),
         }

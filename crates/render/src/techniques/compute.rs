@@ -3,20 +3,23 @@
 //! can run graphics work at all).
 //!
 //! Per generation ([`compute.wgsl`](compute.wgsl)): the caster transform writes world positions
-//! once; then per *round* (below) a clear pass sets a storage buffer of one `u32` per texel of
-//! the round's tiles to 1.0's bits; one thread per (triangle, view) culls (frustum, back-face,
+//! once; then per *round* (below) a storage buffer of one `u32` per texel of the round's tiles
+//! is filled with zeros (= far); one thread per (triangle, view) culls (frustum, back-face,
 //! zero area, zero coverage), clips against the near plane, applies the viewport transform and
 //! snaps to 1/256 texel; a small triangle (≤ [`SMALL_AREA`] texels of bounding box) is
 //! rasterized by that thread with exact integer edge functions, a large one is appended as
 //! chunks of 32² texels that one 8×8 workgroup each rasterizes (an indirect dispatch). Depth is
-//! written with `atomicMin` on the float's bits (non-negative floats order like their bits).
+//! written as `atomicMax(1.0's bits − depth's bits)`: `atomicMin` on the float's bits (depths in
+//! [0, 1] order like their bits) turned around so that far is 0 and a zero fill clears the
+//! buffer (on lavapipe a clear shader cost as much as the whole setup).
 //! A render pass finally copies the buffer into the atlas tiles with `frag_depth` (GL can
 //! neither copy into depth textures nor store to them from compute).
 //!
 //! **Same depth as the hardware**: the fixed-function viewport transform in the same order, 8
 //! sub-pixel bits, texel centres at +0.5, the top-left fill rule, depth from the plane through
-//! the window positions (z/w is affine in screen space), near clipping in clip space, far
-//! clipping per texel. Large triangles use f32 edge functions evaluated from the edge's
+//! the triangle's clip-space plane (z/w is affine in screen space; the plane from the clip
+//! coordinates stays accurate where corners lie far outside the tile or were clipped), near
+//! clipping in clip space, far clipping per texel. Large triangles use f32 edge functions evaluated from the edge's
 //! lexicographically first end so neighbours agree exactly (no cracks).
 //!
 //! **No silent drops**: the chunk list is sized from the round's texels (every texel covered by
@@ -34,7 +37,7 @@ use crate::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
 /// Most bounding-box texels a setup thread rasterizes itself (must match compute.wgsl).
-pub const SMALL_AREA: u32 = 128;
+pub const SMALL_AREA: u32 = 512;
 /// Bytes of one chunk record (`Chunk` in compute.wgsl).
 const CHUNK_BYTES: u64 = 64;
 /// Largest workgroup count per dispatch dimension WebGPU guarantees.
@@ -118,7 +121,6 @@ fn dispatch_2d(items: u64, max_groups: u32) -> (u32, u32) {
 
 /// The compute rasterizer's pipelines and buffers.
 pub struct Compute {
-    clear: wgpu::ComputePipeline,
     setup: wgpu::ComputePipeline,
     finalize: wgpu::ComputePipeline,
     large: wgpu::ComputePipeline,
@@ -274,7 +276,6 @@ impl Compute {
             }],
         });
         Ok(Self {
-            clear: pipeline("cs_clear", &main_layout),
             setup: pipeline("cs_setup", &main_layout),
             finalize: pipeline("cs_finalize", &finalize_layout),
             large: pipeline("cs_large", &main_layout),
@@ -321,7 +322,7 @@ impl Compute {
             let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("compute.depth"),
                 size: texels.max(1) * 4,
-                usage: wgpu::BufferUsages::STORAGE,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
             self.depth = Some((buffer, texels));
@@ -434,23 +435,19 @@ impl ShadowTechnique for Compute {
                 layout: &self.layout,
                 entries: &bind_entries,
             });
-            encoder.clear_buffer(&self.counters, 0, None);
-            {
+            if r == 0 {
+                // The first pass opens the timer span (a fill records no timestamps).
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("compute.transform_clear"),
-                    timestamp_writes: timer.compute_writes(span, r == 0, false),
+                    label: Some("compute.transform"),
+                    timestamp_writes: timer.compute_writes(span, true, false),
                 });
                 let s = timer.begin_compute_stats(&mut pass);
-                if r == 0 {
-                    casters.record(&mut pass, false);
-                }
-                pass.set_pipeline(&self.clear);
-                pass.set_bind_group(0, &bind_group, &[]);
-                let (x, y) = dispatch_2d(round_texels, self.max_groups);
-                pass.dispatch_workgroups(x, y, 1);
+                casters.record(&mut pass, false);
                 timer.end_compute_stats(&mut pass, s);
                 stats.passes += 1;
             }
+            encoder.clear_buffer(&self.counters, 0, None);
+            encoder.clear_buffer(depth, 0, Some(round_texels * 4));
             if casters.triangles > 0 {
                 {
                     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {

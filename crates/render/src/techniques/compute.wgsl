@@ -1,6 +1,5 @@
 // `compute`: a software rasterizer for every listed shadow view in compute shaders.
 //
-// cs_clear     one thread per texel of the round's depth buffer: far (1.0's bits).
 // cs_setup     one thread per (triangle, round entry): per-view culling, near-plane clipping,
 //              the fixed-function viewport transform and 8-bit sub-pixel snapping, then either
 //              rasterizes a small triangle itself (exact integer edge functions) or appends its
@@ -8,15 +7,18 @@
 // cs_finalize  one thread: the indirect dispatch of cs_large (2D beyond the per-dimension limit).
 // cs_large     one 8×8 workgroup per chunk.
 //
-// Depth goes into `depth` (one u32 per texel of the round's tiles) with atomicMin on the f32
-// bit pattern: non-negative floats order like their bits. A render pass then copies the
-// buffer into the atlas (compute_copy.wgsl).
+// Depth goes into `depth` (one u32 per texel of the round's tiles) as 1.0's bits minus the
+// depth's bits, with atomicMax: depths in [0, 1] order like their bits, so the largest value
+// is the nearest depth (atomicMin on the bits, turned around so that the far plane is 0 and
+// the buffer is cleared by a fill with zeros, much faster than a clear shader on software
+// drivers). A render pass then copies the buffer into the atlas (compute_copy.wgsl).
 //
 // Matching the hardware path (`traditional`): window x = ndc.x · size/2 + (tile.x + size/2),
 // y = ndc.y · (−size/2) + (tile.y + size/2), z = ndc.z; vertices snapped to 1/256 texel; a texel
 // is covered when its centre (+0.5) is inside all three edges, ties going to top and left edges
-// (D3D/Vulkan rule, y down); depth is the plane through the unsnapped window positions
-// evaluated at the texel centre (z/w is affine in screen space); z < 0 is clipped
+// (D3D/Vulkan rule, y down); depth is the triangle's plane
+// evaluated at the texel centre (z/w is affine in screen space; computed from the triangle's
+// clip-space plane, which stays accurate for corners far outside the tile); z < 0 is clipped
 // geometrically (the near plane, which also removes w ≤ 0), z ≥ 1 per texel (the far plane).
 
 struct ComputeParams {
@@ -47,7 +49,7 @@ const SUB: f32 = 256.0;
 // exact 32-bit edge functions: every product stays below 2^30.
 const EXACT_EXTENT: f32 = 32768.0;
 // Most texels of a bounding box rasterized by the setup thread itself.
-const SMALL_AREA: u32 = 128u;
+const SMALL_AREA: u32 = 512u;
 // Side of a large triangle's chunk in texels (one 8×8 workgroup each).
 const CHUNK: u32 = 32u;
 const FAR_BITS: u32 = 0x3f800000u;
@@ -86,7 +88,7 @@ fn texel_index(entry: vec4<u32>, tile: vec4<f32>, x: u32, y: u32) -> u32 {
 fn write_depth(index: u32, z: f32) {
     // Far clipping per texel; NaN fails too. -0.0 and rounding below the near plane become 0.
     if (z < 1.0) {
-        atomicMin(&depth[index], select(bitcast<u32>(z), 0u, z <= 0.0));
+        atomicMax(&depth[index], FAR_BITS - select(bitcast<u32>(z), 0u, z <= 0.0));
     }
 }
 
@@ -266,14 +268,6 @@ fn raster_triangle(c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, plane: vec3<f32>
     }
 }
 
-@compute @workgroup_size(64, 1, 1)
-fn cs_clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = gid.x + gid.y * groups.x * 64u;
-    if (i < params.sizes.x) {
-        atomicStore(&depth[i], FAR_BITS);
-    }
-}
-
 fn det3(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> f32 {
     return dot(a, cross(b, c));
 }
@@ -335,33 +329,32 @@ fn cs_setup(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     let in0 = c0.z >= 0.0;
     let in1 = c1.z >= 0.0;
     let in2 = c2.z >= 0.0;
-    if (in0 && in1 && in2) {
-        raster_triangle(c0, c1, c2, plane, e, entry, view.tile);
-        return;
-    }
     if (!in0 && !in1 && !in2) {
         return;
     }
     // Clip against the near plane (z ≥ 0; this also removes every w ≤ 0): walk the edges
     // 0→1→2→0 keeping inside corners and adding crossings, then fan the 3 or 4 corners.
-    var poly: array<vec4<f32>, 4>;
-    var n = 0u;
-    var cs = array<vec4<f32>, 3>(c0, c1, c2);
-    var ins = array<bool, 3>(in0, in1, in2);
-    for (var k = 0u; k < 3u; k++) {
-        let k1 = (k + 1u) % 3u;
-        if (ins[k]) {
-            poly[n] = cs[k];
-            n++;
-        }
-        if (ins[k] != ins[k1]) {
-            poly[n] = near_crossing(cs[k], cs[k1]);
-            n++;
+    var poly = array<vec4<f32>, 4>(c0, c1, c2, c2);
+    var n = 3u;
+    if (!(in0 && in1 && in2)) {
+        n = 0u;
+        var cs = array<vec4<f32>, 3>(c0, c1, c2);
+        var ins = array<bool, 3>(in0, in1, in2);
+        for (var k = 0u; k < 3u; k++) {
+            let k1 = (k + 1u) % 3u;
+            if (ins[k]) {
+                poly[n] = cs[k];
+                n++;
+            }
+            if (ins[k] != ins[k1]) {
+                poly[n] = near_crossing(cs[k], cs[k1]);
+                n++;
+            }
         }
     }
-    raster_triangle(poly[0], poly[1], poly[2], plane, e, entry, view.tile);
-    if (n == 4u) {
-        raster_triangle(poly[0], poly[2], poly[3], plane, e, entry, view.tile);
+    // One call site keeps the shader small (software drivers pay for code size).
+    for (var k = 2u; k < n; k++) {
+        raster_triangle(poly[0], poly[k - 1u], poly[k], plane, e, entry, view.tile);
     }
 }
 

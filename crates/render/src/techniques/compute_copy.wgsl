@@ -41,5 +41,6 @@ fn fs_copy(in: CopyOut) -> @builtin(frag_depth) f32 {
     let tile = copy_views[entry.x].tile;
     let p = vec2<u32>(floor(in.position.xy));
     let index = entry.y + (p.y - u32(tile.y) - entry.z) * u32(tile.z) + (p.x - u32(tile.x));
-    return bitcast<f32>(copy_depth[index]);
+    // Stored as 1.0's bits minus the depth's bits (0 = far; see compute.wgsl).
+    return bitcast<f32>(0x3f800000u - copy_depth[index]);
 }

@@ -55,9 +55,15 @@ impl Traditional {
             immediate_size: 0,
         });
         let dp_module = ctx.has(wgpu::Features::CLIP_DISTANCES).then(|| {
-            crate::shaders::module(device, "traditional_dp.shader", &crate::shaders::traditional_dp())
+            crate::shaders::module(
+                device,
+                "traditional_dp.shader",
+                &crate::shaders::traditional_dp(),
+            )
         });
-        let pipeline = |module: &wgpu::ShaderModule, entry: &str, layout: wgpu::VertexBufferLayout<'static>| {
+        let pipeline = |module: &wgpu::ShaderModule,
+                        entry: &str,
+                        layout: wgpu::VertexBufferLayout<'static>| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(entry),
                 layout: Some(&pipeline_layout),
