@@ -521,19 +521,7 @@ impl CasterGeometry {
             &corners_buf,
             &cluster_bounds,
         ];
-        let entries: Vec<wgpu::BindGroupEntry> = buffers
-            .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("casters.bind_group"),
-            layout: &layout,
-            entries: &entries,
-        });
+        let bind_group = crate::buffer_bind_group(device, "casters.bind_group", &layout, &buffers);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("casters.pipeline_layout"),
             bind_group_layouts: &[Some(&layout)],

@@ -98,6 +98,28 @@ pub enum RenderError {
     Readback(String),
 }
 
+/// A bind group of whole buffers at bindings 0, 1, 2, … in order.
+pub(crate) fn buffer_bind_group(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry> = buffers
+        .iter()
+        .enumerate()
+        .map(|(i, b)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}
+
 /// Bind-group layout entry of a read-only storage buffer.
 pub(crate) fn storage_entry(
     binding: u32,

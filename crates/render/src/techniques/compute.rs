@@ -16,11 +16,11 @@
 //! neither copy into depth textures nor store to them from compute).
 //!
 //! **Same depth as the hardware**: the fixed-function viewport transform in the same order, 8
-//! sub-pixel bits, texel centres at +0.5, the top-left fill rule, depth from the plane through
-//! the triangle's clip-space plane (z/w is affine in screen space; the plane from the clip
-//! coordinates stays accurate where corners lie far outside the tile or were clipped), near
-//! clipping in clip space, far clipping per texel. Large triangles use f32 edge functions evaluated from the edge's
-//! lexicographically first end so neighbours agree exactly (no cracks).
+//! sub-pixel bits, texel centres at +0.5, the top-left fill rule, depth from the triangle's
+//! clip-space plane (z/w is affine in screen space; the plane from the clip coordinates stays
+//! accurate where corners lie far outside the tile or were clipped), near clipping in clip
+//! space, far clipping per texel. Large triangles use f32 edge functions evaluated from the
+//! edge's lexicographically first end so neighbours agree exactly (no cracks).
 //!
 //! **No silent drops**: the chunk list is sized from the round's texels (every texel covered by
 //! large triangles four times over); when it is full anyway, the setup thread rasterizes the
@@ -295,8 +295,8 @@ impl Compute {
         })
     }
 
-    /// Test knobs: at most `max_texels` texels per round, exactly `chunks` chunk records,
-    /// `max_groups` workgroups per dispatch dimension.
+    /// Test knobs: at most `max_texels` texels per round, exactly `chunks` chunk records, at
+    /// most `max_groups` workgroups along x of a dispatch (the rest goes along y).
     pub fn with_limits(mut self, max_texels: u64, chunks: u32, max_groups: u32) -> Self {
         self.max_texels = max_texels.clamp(1, self.max_texels);
         self.chunk_capacity = Some(chunks.max(1));
@@ -568,10 +568,17 @@ mod tests {
     }
 
     #[test]
+    fn small_area_matches_the_shader() {
+        let wgsl = crate::shaders::compute();
+        assert!(wgsl.contains(&format!("const SMALL_AREA: u32 = {SMALL_AREA}u;")));
+    }
+
+    #[test]
     fn dispatches_stay_within_the_dimension_limit() {
-        let (x, y) = dispatch_2d(64 * 65535 * 3 + 1, 65535);
+        let items = 64 * 65535 * 3 + 1;
+        let (x, y) = dispatch_2d(items, 65535);
         assert!(x <= 65535 && y <= 65535);
-        assert!(x as u64 * y as u64 * 64 >= 64 * 65535 * 3 + 1);
+        assert!(x as u64 * y as u64 * 64 >= items);
         assert_eq!(dispatch_2d(10, 65535), (1, 1));
     }
 }

@@ -16,15 +16,15 @@
 // Matching the hardware path (`traditional`): window x = ndc.x · size/2 + (tile.x + size/2),
 // y = ndc.y · (−size/2) + (tile.y + size/2), z = ndc.z; vertices snapped to 1/256 texel; a texel
 // is covered when its centre (+0.5) is inside all three edges, ties going to top and left edges
-// (D3D/Vulkan rule, y down); depth is the triangle's plane
-// evaluated at the texel centre (z/w is affine in screen space; computed from the triangle's
-// clip-space plane, which stays accurate for corners far outside the tile); z < 0 is clipped
+// (D3D/Vulkan rule, y down); depth is the triangle's plane evaluated at the texel centre (z/w
+// is affine in screen space; taken from the clip-space plane, which stays accurate for corners
+// far outside the tile or clipped away); z < 0 is clipped
 // geometrically (the near plane, which also removes w ≤ 0), z ≥ 1 per texel (the far plane).
 
 struct ComputeParams {
     // triangles, cullable triangles, cull bits, entries in this round
     counts: vec4<u32>,
-    // texels in this round, chunk capacity, most workgroups per dispatch dimension, flags
+    // texels in this round, chunk capacity, most workgroups along x of a dispatch, flags
     sizes: vec4<u32>,
 }
 

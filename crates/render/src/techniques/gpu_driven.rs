@@ -183,7 +183,7 @@ impl GpuDriven {
             compilation_options: Default::default(),
             cache: None,
         });
-        let draw = depth_pipeline(device, &draw_pipeline_layout, &module, "vs_draw");
+        let draw = depth_pipeline(device, &draw_pipeline_layout, &module, "vs_draw", &[]);
         let counter = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("gpu_driven.count"),
             size: 4,

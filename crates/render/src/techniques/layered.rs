@@ -12,7 +12,7 @@
 //! three corners, tests them, and emits a degenerate triangle when the triangle is dropped.
 //! Without culling the draw is indexed, so post-transform vertex reuse still applies.
 
-use crate::shadow::{ShadowInput, ShadowStats, ShadowTechnique, ATLAS_FORMAT};
+use crate::shadow::{ShadowInput, ShadowStats, ShadowTechnique};
 use crate::techniques::{atlas_attachment, TileClear};
 use crate::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
@@ -61,7 +61,7 @@ impl Layered {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = |entry: &str| depth_pipeline(device, &pipeline_layout, &module, entry);
+        let pipeline = |entry: &str| depth_pipeline(device, &pipeline_layout, &module, entry, &[]);
         Ok(Self {
             indexed: pipeline("vs_indexed"),
             pulled: pipeline("vs_pulled"),
@@ -71,43 +71,7 @@ impl Layered {
     }
 }
 
-/// A depth-only, two-sided pipeline over the whole atlas with the given vertex entry point.
-pub(crate) fn depth_pipeline(
-    device: &wgpu::Device,
-    layout: &wgpu::PipelineLayout,
-    module: &wgpu::ShaderModule,
-    entry: &str,
-) -> wgpu::RenderPipeline {
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(entry),
-        layout: Some(layout),
-        vertex: wgpu::VertexState {
-            module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: wgpu::PrimitiveState {
-            topology: wgpu::PrimitiveTopology::TriangleList,
-            front_face: wgpu::FrontFace::Ccw,
-            // Culling is per view in the shader; what survives casts from both sides, as in
-            // `traditional`.
-            cull_mode: None,
-            ..Default::default()
-        },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: ATLAS_FORMAT,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: Default::default(),
-        fragment: None,
-        multiview_mask: None,
-        cache: None,
-    })
-}
+pub(crate) use crate::techniques::depth_pipeline;
 
 impl ShadowTechnique for Layered {
     fn name(&self) -> &'static str {
@@ -155,19 +119,8 @@ impl ShadowTechnique for Layered {
             &casters.corners,
             &input.atlas.draw_list,
         ];
-        let entries: Vec<wgpu::BindGroupEntry> = buffers
-            .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
-        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("layered.bind_group"),
-            layout: &self.layout,
-            entries: &entries,
-        });
+        let bind_group =
+            crate::buffer_bind_group(&ctx.device, "layered.bind_group", &self.layout, &buffers);
 
         encoder.push_debug_group("layered");
         {

@@ -116,6 +116,46 @@ impl TileClear {
     }
 }
 
+/// A depth-only, two-sided pipeline writing the atlas with the given vertex entry point and
+/// vertex buffers (none for vertex-pulling shaders): `Depth32Float`, compare `Less`, no
+/// depth bias (bias is applied by the receiver), no fragment stage, no culling (what survives
+/// per-view culling casts from both sides, as open meshes must).
+pub(crate) fn depth_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(entry),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            buffers,
+        },
+        primitive: wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::TriangleList,
+            front_face: wgpu::FrontFace::Ccw,
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: ATLAS_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: None,
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
 /// The atlas as a depth attachment, cleared on load when every view is redrawn.
 pub(crate) fn atlas_attachment<'a>(
     input: &'a ShadowInput<'_>,

@@ -10,7 +10,7 @@ use manyshadows_scene::light_space::ViewKind;
 const VIEW_BINDING: u64 = 80;
 use crate::gpu_scene::{GpuScene, POSITION_LAYOUT};
 use crate::gpu_types::VIEW_UNIFORM_STRIDE;
-use crate::shadow::{visible_casters, ShadowInput, ShadowStats, ShadowTechnique, ATLAS_FORMAT};
+use crate::shadow::{visible_casters, ShadowInput, ShadowStats, ShadowTechnique};
 use crate::techniques::{atlas_attachment, TileClear};
 use crate::timing::{GpuTimer, Span};
 use crate::GpuContext;
@@ -63,38 +63,14 @@ impl Traditional {
         });
         let pipeline = |module: &wgpu::ShaderModule,
                         entry: &str,
-                        layout: wgpu::VertexBufferLayout<'static>| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(layout)],
-                },
-                primitive: wgpu::PrimitiveState {
-                    topology: wgpu::PrimitiveTopology::TriangleList,
-                    front_face: wgpu::FrontFace::Ccw,
-                    // Two-sided casters: open meshes (planes, quads) must cast from both sides.
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: ATLAS_FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: Default::default(),
-                    // Bias is applied on the receiver in the lighting pass, so every technique
-                    // (including compute rasterizers with no fixed-function bias) writes the same
-                    // depth.
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: None,
-                multiview_mask: None,
-                cache: None,
-            })
+                        vertex: wgpu::VertexBufferLayout<'static>| {
+            crate::techniques::depth_pipeline(
+                device,
+                &pipeline_layout,
+                module,
+                entry,
+                &[Some(vertex)],
+            )
         };
         let no_bones = wgpu::util::DeviceExt::create_buffer_init(
             device,
