@@ -56,12 +56,12 @@ pub struct LayeredArgs {
         value_delimiter = ','
     )]
     pub variants: Vec<String>,
-    /// Methods, comma-separated: a technique (traditional, layered, multiview, gpu-driven),
-    /// optionally with a cull mode (`layered:frustum`). A bare single-pass technique runs with
-    /// each of the variant's cull modes (none, plus the culling the variant is about).
+    /// Methods, comma-separated: a technique (traditional, layered, multiview, gpu-driven,
+    /// compute), optionally with a cull mode (`layered:frustum`). A bare single-pass technique
+    /// runs with each of the variant's cull modes (none, plus the culling the variant is about).
     #[arg(
         long,
-        default_value = "traditional,layered,multiview,gpu-driven",
+        default_value = "traditional,layered,multiview,gpu-driven,compute",
         value_delimiter = ','
     )]
     pub methods: Vec<String>,

@@ -128,7 +128,8 @@ struct RenderArgs {
     /// Shadow generation technique: traditional (one depth pass per shadow view), layered
     /// (one instanced draw into every view's tile), multiview (one pass per group of views via
     /// the MULTIVIEW feature, Vulkan), gpu-driven (compute culls triangle clusters per view,
-    /// then one multi-draw-indirect). All fill the same atlas.
+    /// then one multi-draw-indirect), compute (a compute-shader rasterizer: every view in one
+    /// dispatch, atomicMin on depth). All fill the same atlas.
     #[arg(long, default_value = "traditional", value_parser = parse_technique)]
     technique: Technique,
     /// Per-view triangle culling of the single-pass techniques: none, frustum, backface
