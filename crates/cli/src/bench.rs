@@ -185,6 +185,12 @@ fn methods_for(specs: &[String], variant: &Variant) -> Result<Vec<Method>> {
             None => (spec.as_str(), None),
         };
         let technique: Technique = t.parse().map_err(anyhow::Error::msg)?;
+        if technique == Technique::Irregular {
+            anyhow::bail!(
+                "method '{spec}': {}",
+                manyshadows::shadow::IRREGULAR_NO_ATLAS
+            );
+        }
         if technique == Technique::Traditional {
             push(Method {
                 technique,

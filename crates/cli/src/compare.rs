@@ -328,7 +328,7 @@ fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
                 write_diff(&path, &frame.rgba, &c, frame.width, frame.height)?;
             }
         }
-        let by_distance = point_errors_by_distance(&scene, &r, &mask)?;
+        let by_distance = point_errors_by_distance(&scene, r, &mask)?;
         results.push(VariantResult {
             by_distance,
             label: v.label(),

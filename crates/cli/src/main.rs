@@ -129,7 +129,9 @@ struct RenderArgs {
     /// (one instanced draw into every view's tile), multiview (one pass per group of views via
     /// the MULTIVIEW feature, Vulkan), gpu-driven (compute culls triangle clusters per view,
     /// then one multi-draw-indirect), compute (a compute-shader rasterizer: every view in one
-    /// dispatch, atomicMin on depth). All fill the same atlas.
+    /// dispatch, atomicMin on depth). All fill the same atlas. irregular (irregular shadow
+    /// maps: camera samples in light-space lists, exact per-triangle tests, alias-free) computes
+    /// the visibility mask instead and fills no atlas.
     #[arg(long, default_value = "traditional", value_parser = parse_technique)]
     technique: Technique,
     /// Per-view triangle culling of the single-pass techniques: none, frustum, backface
@@ -197,6 +199,10 @@ struct RenderArgs {
     /// Fail when the shadow maps don't fit the atlas, instead of shrinking them.
     #[arg(long)]
     strict_atlas: bool,
+    /// Grid side (texels) of each light view for --technique irregular (default: the view's
+    /// shadow resolution, at most 512). Changes speed, not the result.
+    #[arg(long)]
+    irregular_grid: Option<u32>,
     /// Output image.
     #[arg(long, short, default_value = "frame.png")]
     out: PathBuf,
@@ -296,7 +302,9 @@ fn load_scene(args: &RenderArgs) -> Result<Scene> {
 fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
     let mix: LightMix = args.light_types.parse()?;
     let path = Path::new(&args.scene);
-    let is_file = args.scene.ends_with(".toml") || path.exists();
+    // A built-in name wins over a same-named directory in the working directory.
+    let is_file = args.scene.ends_with(".toml")
+        || (path.is_file() && !builtin::SCENE_NAMES.contains(&args.scene.as_str()));
     if is_file {
         let mut scene = manyshadows::scene::scene_file::load_scene_file(path)?;
         if let Some(n) = args.lights {
@@ -366,6 +374,10 @@ fn render(args: &RenderArgs) -> Result<()> {
             FitPolicy::Shrink
         },
         visibility: args.visibility_out.is_some(),
+        irregular: manyshadows::irregular::IrregularOptions {
+            grid: args.irregular_grid,
+            ..Default::default()
+        },
     };
     pb.set_message("uploading the scene and building pipelines");
     let mut renderer = Renderer::new(&ctx, &scene, settings)?;

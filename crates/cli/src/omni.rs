@@ -82,7 +82,11 @@ fn parse_method(s: &str) -> Result<(PointShadows, Technique)> {
         "dp" | "dual-paraboloid" => PointShadows::DualParaboloid,
         other => bail!("method '{s}': unknown mode '{other}' (cube or dp)"),
     };
-    Ok((mode, t.parse().map_err(anyhow::Error::msg)?))
+    let technique: Technique = t.parse().map_err(anyhow::Error::msg)?;
+    if technique == Technique::Irregular {
+        bail!("method '{s}': {}", manyshadows::shadow::IRREGULAR_NO_ATLAS);
+    }
+    Ok((mode, technique))
 }
 
 fn label(mode: PointShadows, t: Technique) -> String {

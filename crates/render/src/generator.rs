@@ -29,7 +29,8 @@ pub struct ShadowGenerator {
     pub casters: CasterGeometry,
     /// Options in use.
     pub options: ShadowOptions,
-    technique: Box<dyn ShadowTechnique>,
+    /// `None` for `irregular`, which fills no atlas ([`ShadowGenerator::views_only`]).
+    technique: Option<Box<dyn ShadowTechnique>>,
     kind: Technique,
     caching: bool,
     valid: Vec<bool>,
@@ -77,7 +78,7 @@ impl ShadowGenerator {
         let casters = CasterGeometry::new(ctx, scene, gpu, options.casters)?;
         let valid = vec![false; plan.views.len()];
         Ok(Self {
-            technique: technique.create(ctx, &options)?,
+            technique: Some(technique.create(ctx, &options)?),
             kind: technique,
             plan,
             atlas,
@@ -85,6 +86,30 @@ impl ShadowGenerator {
             options,
             caching: false,
             valid,
+            moves: Vec::new(),
+        })
+    }
+
+    /// The plan's view buffers and the caster geometry without an atlas or a technique:
+    /// what `irregular` shadow maps use. [`ShadowGenerator::generate`] then draws nothing.
+    pub fn views_only(
+        ctx: &GpuContext,
+        scene: &Scene,
+        gpu: &GpuScene,
+        plan: ShadowPlan,
+        options: ShadowOptions,
+    ) -> Result<Self, RenderError> {
+        let atlas = ShadowAtlas::views_only(ctx, &plan);
+        let casters = CasterGeometry::new(ctx, scene, gpu, options.casters)?;
+        Ok(Self {
+            technique: None,
+            kind: Technique::Irregular,
+            valid: vec![true; plan.views.len()],
+            plan,
+            atlas,
+            casters,
+            options,
+            caching: false,
             moves: Vec::new(),
         })
     }
@@ -137,6 +162,9 @@ impl ShadowGenerator {
         timer: &GpuTimer,
         span: Option<Span>,
     ) -> ShadowStats {
+        if self.technique.is_none() {
+            return ShadowStats::default();
+        }
         let list = self.draw_list(gpu);
         if !list.is_empty() {
             ctx.queue
@@ -151,7 +179,8 @@ impl ShadowGenerator {
             options: &self.options,
             draw_list: &list,
         };
-        let mut stats = self.technique.generate(&input, encoder, timer, span);
+        let technique = self.technique.as_mut().expect("checked above");
+        let mut stats = technique.generate(&input, encoder, timer, span);
         stats.views_drawn = list.len() as u32;
         stats
     }

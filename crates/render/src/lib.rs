@@ -24,6 +24,7 @@ pub mod gbuffer_readback;
 pub mod generator;
 pub mod gpu_scene;
 pub mod gpu_types;
+pub mod irregular;
 pub mod lighting;
 pub mod readback;
 pub mod renderer;
@@ -93,6 +94,20 @@ pub enum RenderError {
     /// The adapter lacks a feature the chosen path needs.
     #[error("{0}")]
     Unsupported(String),
+    /// Irregular shadow maps ran out of list nodes; the frame's visibility would be wrong.
+    #[error("irregular shadow maps: the node pool of {capacity} samples overflowed ({dropped} samples dropped, {needed} needed by one batch of lights); the frame was discarded. Lower the resolution or use fewer lights")]
+    NodePoolOverflow {
+        /// Samples that found no node.
+        dropped: u64,
+        /// Nodes one batch asked for.
+        needed: u64,
+        /// The pool's capacity.
+        capacity: u64,
+    },
+    /// Irregular shadow maps could not finish a frame exactly (a work queue or a driver limit);
+    /// the frame was discarded.
+    #[error("irregular shadow maps: {0}")]
+    Irregular(String),
     /// Reading results back failed.
     #[error("reading results back from the GPU failed: {0}")]
     Readback(String),

@@ -30,6 +30,9 @@ pub struct LightingInputs<'a> {
     pub gbuffer: &'a GBuffer,
     /// Shadow atlas and its views.
     pub atlas: &'a ShadowAtlas,
+    /// A per-pixel visibility mask to shade with instead of the atlas (irregular shadow maps:
+    /// `fs_mask`); `None` = the atlas (`fs_main`).
+    pub mask: Option<&'a wgpu::Buffer>,
 }
 
 /// A bind-group layout entry for a non-multisampled 2D texture.
@@ -86,6 +89,7 @@ impl LightingPass {
                 texture_entry(5, wgpu::TextureSampleType::Uint, frag),
                 texture_entry(6, wgpu::TextureSampleType::Depth, frag),
                 cmp(7),
+                crate::storage_entry(8, frag),
             ],
         });
         let linear = device.create_sampler(&wgpu::SamplerDescriptor {
@@ -95,6 +99,20 @@ impl LightingPass {
             compare: Some(wgpu::CompareFunction::LessEqual),
             ..Default::default()
         });
+        // `fs_main` never reads the mask, but one layout serves both entry points.
+        let dummy_mask;
+        let mask = match inputs.mask {
+            Some(m) => m,
+            None => {
+                dummy_mask = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("lighting.no_mask"),
+                    size: 4,
+                    usage: wgpu::BufferUsages::STORAGE,
+                    mapped_at_creation: false,
+                });
+                &dummy_mask
+            }
+        };
         let pv = inputs.gbuffer.position.create_view(&Default::default());
         let nv = inputs.gbuffer.normal.create_view(&Default::default());
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -133,6 +151,10 @@ impl LightingPass {
                     binding: 7,
                     resource: wgpu::BindingResource::Sampler(&linear),
                 },
+                wgpu::BindGroupEntry {
+                    binding: 8,
+                    resource: mask.as_entire_binding(),
+                },
             ],
         });
         let module = crate::shaders::module(device, "lighting.shader", &crate::shaders::lighting());
@@ -155,7 +177,11 @@ impl LightingPass {
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &module,
-                entry_point: Some("fs_main"),
+                entry_point: Some(if inputs.mask.is_some() {
+                    "fs_mask"
+                } else {
+                    "fs_main"
+                }),
                 compilation_options: Default::default(),
                 targets: &[Some(COLOR_FORMAT.into())],
             }),

@@ -4,6 +4,9 @@
 //! 2. shadow generation (the chosen technique fills the atlas),
 //! 3. deferred Phong lighting with the shadow test,
 //! 4. optionally, the hard visibility mask.
+//!
+//! With [`Technique::Irregular`] step 2 computes the visibility mask itself
+//! ([`crate::irregular`]; no atlas), step 3 shades with that mask, and step 4 reads it back.
 
 use std::time::Instant;
 
@@ -16,6 +19,7 @@ use crate::gbuffer::GBuffer;
 use crate::generator::ShadowGenerator;
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::FrameUniforms;
+use crate::irregular::{IrregularInputs, IrregularOptions, IrregularShadows};
 use crate::lighting::{LightingInputs, LightingPass};
 use crate::shadow::{
     ShadowAtlas, ShadowOptions, ShadowPlan, ShadowStats, Technique, DEFAULT_MAX_ATLAS_SIZE,
@@ -120,6 +124,8 @@ pub struct RenderSettings {
     pub fit: FitPolicy,
     /// Also compute the hard visibility mask.
     pub visibility: bool,
+    /// Knobs of [`Technique::Irregular`] (ignored by the other techniques).
+    pub irregular: IrregularOptions,
 }
 
 impl Default for RenderSettings {
@@ -136,6 +142,7 @@ impl Default for RenderSettings {
             max_atlas_size: None,
             fit: FitPolicy::default(),
             visibility: false,
+            irregular: IrregularOptions::default(),
         }
     }
 }
@@ -180,6 +187,7 @@ pub struct Renderer<'c> {
     pub(crate) gbuffer: GBuffer,
     lighting: LightingPass,
     visibility: Option<VisibilityPass>,
+    irregular: Option<IrregularShadows>,
     timer: GpuTimer,
     light_count: usize,
 }
@@ -221,14 +229,19 @@ impl<'c> Renderer<'c> {
             )?;
             let gpu_scene = GpuScene::new(ctx, scene)?;
             let mut light_data = plan.light_data(scene);
-            let mut shadows = ShadowGenerator::new(
-                ctx,
-                scene,
-                &gpu_scene,
-                plan,
-                settings.technique,
-                settings.shadow,
-            )?;
+            let irregular = settings.technique == Technique::Irregular;
+            let mut shadows = if irregular {
+                ShadowGenerator::views_only(ctx, scene, &gpu_scene, plan, settings.shadow)?
+            } else {
+                ShadowGenerator::new(
+                    ctx,
+                    scene,
+                    &gpu_scene,
+                    plan,
+                    settings.technique,
+                    settings.shadow,
+                )?
+            };
             shadows.set_caching(settings.cache_shadows);
             let atlas = &shadows.atlas;
             if light_data.is_empty() {
@@ -255,15 +268,35 @@ impl<'c> Renderer<'c> {
                 settings.width,
                 settings.height,
             );
+            let irregular = if irregular {
+                Some(IrregularShadows::new(
+                    ctx,
+                    scene,
+                    &shadows.plan,
+                    &IrregularInputs {
+                        frame: &frame_buffer,
+                        lights: &lights,
+                        views: &atlas.views_buffer,
+                        gbuffer: &gbuffer,
+                        casters: &shadows.casters,
+                    },
+                    (settings.width, settings.height),
+                    settings.irregular,
+                )?)
+            } else {
+                None
+            };
             let inputs = LightingInputs {
                 frame: &frame_buffer,
                 lights: &lights,
                 materials: &gpu_scene.materials,
                 gbuffer: &gbuffer,
                 atlas,
+                mask: irregular.as_ref().map(|i| i.mask()),
             };
             let lighting = LightingPass::new(ctx, &inputs, settings.width, settings.height);
-            let visibility = if settings.visibility {
+            // Irregular shadows read their own mask back instead.
+            let visibility = if settings.visibility && irregular.is_none() {
                 Some(VisibilityPass::new(
                     ctx,
                     settings.width,
@@ -283,6 +316,7 @@ impl<'c> Renderer<'c> {
                 gbuffer,
                 lighting,
                 visibility,
+                irregular,
                 timer: GpuTimer::new(ctx),
                 light_count: scene.lights.len(),
             })
@@ -343,17 +377,28 @@ impl<'c> Renderer<'c> {
             self.gbuffer
                 .record(&mut encoder, &self.scene, &self.timer, span);
             let span = self.timer.span("shadows");
-            let shadow_stats =
-                self.shadows
-                    .generate(ctx, &self.scene, &mut encoder, &self.timer, span);
+            let shadow_stats = match &self.irregular {
+                Some(irr) => {
+                    irr.record(&mut encoder, &self.shadows.casters, &self.timer, span);
+                    ShadowStats::default()
+                }
+                None => self
+                    .shadows
+                    .generate(ctx, &self.scene, &mut encoder, &self.timer, span),
+            };
             let span = self.timer.span("lighting");
             self.lighting.record(&mut encoder, &self.timer, span);
             ctx.queue.submit([encoder.finish()]);
             let cpu_record_ms = start.elapsed().as_secs_f64() * 1e3;
             let rgba = crate::readback::read_texture(ctx, &self.lighting.color, 4)?;
             let wall_ms = start.elapsed().as_secs_f64() * 1e3;
-            let visibility = match &self.visibility {
-                Some(pass) => {
+            if let Some(irr) = self.irregular.as_mut() {
+                // A full node pool makes the frame an error, never a wrong image.
+                irr.finish(ctx)?;
+            }
+            let visibility = match (&self.visibility, &self.irregular) {
+                (_, Some(irr)) if self.settings.visibility => Some(irr.read_mask(ctx)?),
+                (Some(pass), _) => {
                     let span = self.timer.span("visibility");
                     let inputs = LightingInputs {
                         frame: &self.frame_buffer,
@@ -361,10 +406,11 @@ impl<'c> Renderer<'c> {
                         materials: &self.scene.materials,
                         gbuffer: &self.gbuffer,
                         atlas: &self.shadows.atlas,
+                        mask: None,
                     };
                     Some(pass.run(ctx, &inputs, &self.timer, span)?)
                 }
-                None => None,
+                _ => None,
             };
             let mut encoder = ctx
                 .device
@@ -392,8 +438,19 @@ impl<'c> Renderer<'c> {
         })
     }
 
-    /// Reads the depth atlas back (`size`² floats, row-major).
+    /// Counters of the last frame of [`Technique::Irregular`] (`None` for other techniques).
+    pub fn irregular_stats(&self) -> Option<crate::irregular::IrregularStats> {
+        self.irregular.as_ref().map(|i| i.stats())
+    }
+
+    /// Reads the depth atlas back (`size`² floats, row-major); `irregular` has no atlas and
+    /// answers [`RenderError::Unsupported`].
     pub fn read_atlas(&self) -> Result<Vec<f32>, RenderError> {
+        if self.irregular.is_some() {
+            return Err(RenderError::Unsupported(
+                crate::shadow::IRREGULAR_NO_ATLAS.into(),
+            ));
+        }
         self.shadows.read_atlas(self.ctx)
     }
 }

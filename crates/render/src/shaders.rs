@@ -38,6 +38,16 @@ pub fn visibility() -> String {
     ])
 }
 
+/// Irregular shadow maps: sample lists per light-space texel, exact per-triangle tests.
+pub fn irregular() -> String {
+    compose(&[
+        COMMON,
+        PARABOLOID,
+        SHADOW_LOOKUP,
+        include_str!("shaders/irregular.wgsl"),
+    ])
+}
+
 /// Atlas read-back copy.
 pub fn atlas_copy() -> String {
     compose(&[include_str!("shaders/atlas_copy.wgsl")])
@@ -126,6 +136,7 @@ pub fn all() -> Vec<(&'static str, String)> {
         ("gbuffer", gbuffer()),
         ("lighting", lighting()),
         ("visibility", visibility()),
+        ("irregular", irregular()),
         ("atlas_copy", atlas_copy()),
         ("traditional", traditional()),
         ("casters", casters()),

@@ -183,7 +183,16 @@ pub fn view_eye(view: &ShadowView) -> glam::Vec4 {
 impl ShadowAtlas {
     /// Creates the atlas texture and view buffers for `plan`.
     pub fn new(ctx: &GpuContext, plan: &ShadowPlan) -> Self {
-        let size = plan.layout.size;
+        Self::with_size(ctx, plan, plan.layout.size)
+    }
+
+    /// The view buffers of `plan` with a 1×1 placeholder texture: for `irregular`, which
+    /// reads the views but fills no tiles.
+    pub fn views_only(ctx: &GpuContext, plan: &ShadowPlan) -> Self {
+        Self::with_size(ctx, plan, 1)
+    }
+
+    fn with_size(ctx: &GpuContext, plan: &ShadowPlan, size: u32) -> Self {
         let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("shadow.atlas"),
             size: wgpu::Extent3d {
@@ -397,6 +406,12 @@ pub trait ShadowTechnique {
     ) -> ShadowStats;
 }
 
+/// Why `irregular` cannot stand where an atlas-filling technique is expected.
+pub const IRREGULAR_NO_ATLAS: &str = "--technique irregular computes the visibility mask \
+     directly and fills no shadow atlas, so it runs in frames (render, compare) but not where \
+     atlas tiles are generated or benchmarked on their own (bench layered, bench omni, atlas \
+     read-back)";
+
 /// The techniques that exist, by CLI name.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Technique {
@@ -411,6 +426,10 @@ pub enum Technique {
     GpuDriven,
     /// A compute-shader rasterizer: every view in one set of dispatches, depth by atomicMin.
     Compute,
+    /// Irregular shadow maps (seed 001): camera samples in per-texel lists of each light
+    /// view, exact tests per triangle; produces the visibility mask, not atlas tiles
+    /// ([`crate::irregular`]), so it runs in the [`crate::Renderer`] only.
+    Irregular,
 }
 
 impl Technique {
@@ -421,6 +440,7 @@ impl Technique {
         Technique::Multiview,
         Technique::GpuDriven,
         Technique::Compute,
+        Technique::Irregular,
     ];
 
     /// The CLI name.
@@ -431,6 +451,7 @@ impl Technique {
             Technique::Multiview => "multiview",
             Technique::GpuDriven => "gpu-driven",
             Technique::Compute => "compute",
+            Technique::Irregular => "irregular",
         }
     }
 
@@ -453,6 +474,11 @@ impl Technique {
                 "compute-shader rasterizer: per-view culling, clipping and binning in compute, \
                  depth by atomicMin into a buffer, then copied into the tiles"
             }
+            Technique::Irregular => {
+                "irregular shadow maps: camera samples in per-texel lists of each light view, \
+                 every caster triangle tested exactly against the samples under it; \
+                 alias-free, fills no atlas"
+            }
         }
     }
 
@@ -472,6 +498,9 @@ impl Technique {
             Technique::Multiview => Box::new(crate::techniques::multiview::Multiview::new(ctx)?),
             Technique::GpuDriven => Box::new(crate::techniques::gpu_driven::GpuDriven::new(ctx)?),
             Technique::Compute => Box::new(crate::techniques::compute::Compute::new(ctx)?),
+            Technique::Irregular => {
+                return Err(RenderError::Unsupported(IRREGULAR_NO_ATLAS.into()))
+            }
         })
     }
 }

@@ -13,6 +13,9 @@
 // samplers. At a texel centre bilinear weights are (1, 0, 0, 0), so a lookup there compares
 // exactly one texel, as a nearest-filtered one would.
 @group(0) @binding(7) var cmp_linear: sampler_comparison;
+// Visibility computed elsewhere (irregular shadow maps): `counts.w` words per pixel, bit set =
+// lit. Read by `fs_mask` only; the atlas entry point `fs_main` is bound to a dummy.
+@group(0) @binding(8) var<storage, read> vis_mask: array<u32>;
 
 // Scale of the linear colour before tone mapping.
 const EXPOSURE: f32 = 1.4;
@@ -56,9 +59,19 @@ fn shadow_factor(c: ShadowCoord) -> f32 {
     return compare_texel(vec2<f32>(hard_texel(c)), c.depth);
 }
 
+// Shadows from the atlas (every shadow-map technique).
 @fragment
 fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
-    let px = vec2<i32>(frag.xy);
+    return shade(vec2<i32>(frag.xy), false);
+}
+
+// Shadows from the visibility mask (irregular shadow maps).
+@fragment
+fn fs_mask(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
+    return shade(vec2<i32>(frag.xy), true);
+}
+
+fn shade(px: vec2<i32>, from_mask: bool) -> vec4<f32> {
     let pos = bitcast<vec4<f32>>(textureLoad(gbuf_position, px, 0));
     if (pos.w < 0.5) {
         return vec4<f32>(frame.sky.rgb, 1.0);
@@ -93,7 +106,13 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
         let diffuse = light.diffuse.rgb * mat.diffuse.rgb * ndl;
         let r = reflect(-l, n);
         let spec = light.specular.rgb * mat.specular.rgb * pow(max(dot(r, v), 0.0), max(mat.ambient.w, 1.0));
-        let lit = shadow_factor(shadow_coord(light, p, n, view_depth));
+        var lit = 1.0;
+        if (from_mask) {
+            let word = vis_mask[(u32(px.y) * u32(frame.viewport.x) + u32(px.x)) * frame.counts.w + i / 32u];
+            lit = f32((word >> (i % 32u)) & 1u);
+        } else {
+            lit = shadow_factor(shadow_coord(light, p, n, view_depth));
+        }
         color = color + ambient + lit * att * (diffuse + spec);
     }
     // Exponential tone mapping: many overlapping lights add up past 1 without clipping to white.

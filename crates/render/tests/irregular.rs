@@ -1,0 +1,355 @@
+//! `--technique irregular` (irregular shadow maps, [`manyshadows::irregular`]): exact shadow
+//! outlines of the analytic scenes (the check of `analytic.rs`), equality with the CPU
+//! reference on a many-light scene (more than 32 lights, so more than one mask word), a
+//! reported node-pool overflow, and the cases it refuses.
+
+mod common;
+
+use glam::{Vec3, Vec4Swizzles};
+use manyshadows::irregular::IrregularOptions;
+use manyshadows::scene::builtin::{self, BuiltinOptions};
+use manyshadows::scene::light_space::PointShadows;
+use manyshadows::scene::{LightKind, Scene};
+use manyshadows::{
+    GpuScene, Pcf, RenderError, RenderSettings, Renderer, ShadowGenerator, ShadowOptions,
+    ShadowPlan, Technique,
+};
+use manyshadows_reference::{score, SurfacePoint, Surfaces, Tracer};
+
+const SIZE: u32 = 256;
+const EDGE_BAND_PX: i32 = 2;
+
+/// Ray/box slab test; returns the entry distance.
+fn ray_box(o: Vec3, d: Vec3, lo: Vec3, hi: Vec3) -> Option<f32> {
+    let inv = d.recip();
+    let t0 = (lo - o) * inv;
+    let t1 = (hi - o) * inv;
+    let tmin = t0.min(t1).max_element();
+    let tmax = t0.max(t1).min_element();
+    (tmax >= tmin.max(0.0)).then_some(tmin.max(0.0))
+}
+
+/// Truth per pixel: `None` = sky, `Some(lit)`.
+fn truth(scene: &Scene) -> Vec<Option<bool>> {
+    let c = builtin::OCCLUDER_CENTER;
+    let half = Vec3::new(
+        builtin::OCCLUDER_HALF_SIZE,
+        builtin::OCCLUDER_THICKNESS * 0.5,
+        builtin::OCCLUDER_HALF_SIZE,
+    );
+    let (lo, hi) = (c - half, c + half);
+    let cam = &scene.camera;
+    let inv = (cam.projection(1.0) * cam.view()).inverse();
+    let light = scene.lights[0];
+    let mut out = Vec::new();
+    for y in 0..SIZE {
+        for x in 0..SIZE {
+            let ndc_x = (x as f32 + 0.5) / SIZE as f32 * 2.0 - 1.0;
+            let ndc_y = 1.0 - (y as f32 + 0.5) / SIZE as f32 * 2.0;
+            let near = inv * glam::Vec4::new(ndc_x, ndc_y, 0.0, 1.0);
+            let far = inv * glam::Vec4::new(ndc_x, ndc_y, 1.0, 1.0);
+            let o = near.xyz() / near.w;
+            let d = (far.xyz() / far.w - o).normalize();
+            let t_floor = if d.y < 0.0 { -o.y / d.y } else { f32::INFINITY };
+            let t_box = ray_box(o, d, lo, hi).unwrap_or(f32::INFINITY);
+            let t = t_floor.min(t_box);
+            if !t.is_finite()
+                || (o + d * t).x.abs() > 10.0
+                || (o + d * t).z.abs() > 10.0 && t == t_floor
+            {
+                out.push(None);
+                continue;
+            }
+            let p = o + d * t;
+            if t_box <= t_floor {
+                // The occluder's top face: nothing is above it.
+                out.push(Some(true));
+                continue;
+            }
+            let lit = match light.kind {
+                LightKind::Directional { direction, .. } => {
+                    ray_box(p, -direction, lo, hi).is_none()
+                }
+                LightKind::Spot {
+                    position,
+                    direction,
+                    cutoff_deg,
+                    range,
+                } => {
+                    let to_p = p - position;
+                    let in_cone = to_p.normalize().dot(direction.normalize())
+                        >= cutoff_deg.to_radians().cos();
+                    in_cone
+                        && to_p.length() <= range
+                        && ray_box(p, -to_p.normalize(), lo, hi).is_none_or(|t| t > to_p.length())
+                }
+                LightKind::Point { position, range } => {
+                    let to_p = p - position;
+                    to_p.length() <= range
+                        && ray_box(p, -to_p.normalize(), lo, hi).is_none_or(|t| t > to_p.length())
+                }
+            };
+            out.push(Some(lit));
+        }
+    }
+    out
+}
+
+fn settings(w: u32, h: u32) -> RenderSettings {
+    RenderSettings {
+        width: w,
+        height: h,
+        pcf: Pcf::Off,
+        visibility: true,
+        technique: Technique::Irregular,
+        ..Default::default()
+    }
+}
+
+/// Pixels more than [`EDGE_BAND_PX`] from an edge whose visibility disagrees with the exact
+/// analytic shadow, and all disagreeing pixels (a difference image goes to
+/// target/test-artifacts).
+fn wrong_pixels(name: &str, grid: Option<u32>) -> (usize, usize) {
+    let ctx = common::context();
+    let scene = builtin::build(name, &BuiltinOptions::default()).expect("builtin scene");
+    let mut s = settings(SIZE, SIZE);
+    s.irregular.grid = grid;
+    let mut r = Renderer::new(&ctx, &scene, s).expect("renderer");
+    let frame = r.render().expect("frame");
+    let vis = frame.visibility.expect("visibility mask");
+    let truth = truth(&scene);
+    let at = |x: i32, y: i32| truth[(y as u32 * SIZE + x as u32) as usize];
+    let (mut wrong, mut wrong_anywhere, mut shadowed, mut lit) = (0, 0, 0, 0);
+    let mut diff = vec![0u8; (SIZE * SIZE * 3) as usize];
+    for y in 0..SIZE as i32 {
+        for x in 0..SIZE as i32 {
+            let Some(expected) = at(x, y) else { continue };
+            let near_edge = (-EDGE_BAND_PX..=EDGE_BAND_PX).any(|dy| {
+                (-EDGE_BAND_PX..=EDGE_BAND_PX).any(|dx| {
+                    let (nx, ny) = (x + dx, y + dy);
+                    nx < 0
+                        || ny < 0
+                        || nx >= SIZE as i32
+                        || ny >= SIZE as i32
+                        || at(nx, ny) != Some(expected)
+                })
+            });
+            let got = vis.lit(x as u32, y as u32, 0);
+            let i = ((y as u32 * SIZE + x as u32) * 3) as usize;
+            diff[i..i + 3].copy_from_slice(&match (expected, got) {
+                (true, true) => [200, 200, 200],
+                (false, false) => [40, 40, 40],
+                (true, false) => [255, 0, 0],
+                (false, true) => [0, 255, 0],
+            });
+            if got != expected {
+                wrong_anywhere += 1;
+            }
+            if near_edge {
+                continue;
+            }
+            if expected {
+                lit += 1
+            } else {
+                shadowed += 1
+            }
+            if got != expected {
+                wrong += 1;
+            }
+        }
+    }
+    let path = common::artifacts_dir().join(format!("irregular-{name}.png"));
+    image::save_buffer(&path, &diff, SIZE, SIZE, image::ExtendedColorType::Rgb8).unwrap();
+    assert!(
+        shadowed > 200 && lit > 200,
+        "{name}: degenerate test ({shadowed} shadowed, {lit} lit pixels)"
+    );
+    eprintln!(
+        "{name} irregular (grid {grid:?}): {wrong} pixels away from edges and \
+         {wrong_anywhere} in all disagree with the exact shadow ({})",
+        path.display()
+    );
+    (wrong, wrong_anywhere)
+}
+
+fn check(name: &str) {
+    // The default grid, and a coarse one (long lists): the grid changes the cost only.
+    for grid in [None, Some(16)] {
+        let (wrong, _) = wrong_pixels(name, grid);
+        assert_eq!(
+            wrong, 0,
+            "{name} (grid {grid:?}): {wrong} pixels away from edges disagree with the exact shadow"
+        );
+    }
+}
+
+#[test]
+fn spot_light_shadow_matches_exact_outline() {
+    check("plane-spot");
+}
+
+#[test]
+fn point_light_shadow_matches_exact_outline() {
+    check("plane-point");
+}
+
+#[test]
+fn directional_light_shadow_matches_exact_outline() {
+    check("plane-directional");
+}
+
+/// 40 lights of every type over the atrium: the mask has two words per pixel, and every bit
+/// must equal the exact CPU reference traced from the same G-buffer points, except within
+/// two pixels of a reference edge (where single-precision differences between the GPU and
+/// CPU segment tests may flip a bit).
+#[test]
+fn many_lights_match_the_reference() {
+    let ctx = common::context();
+    let opts = BuiltinOptions {
+        lights: Some(40),
+        ..Default::default()
+    };
+    let scene = builtin::build("atrium", &opts).expect("atrium");
+    let (w, h) = (160, 90);
+    let mut r = Renderer::new(&ctx, &scene, settings(w, h)).expect("renderer");
+    let frame = r.render().expect("frame");
+    let vis = frame.visibility.expect("mask");
+    assert_eq!(vis.words_per_pixel, 2);
+    let stats = r.irregular_stats().expect("irregular stats");
+    assert_eq!(stats.unmapped, 0, "{stats:?}");
+    let g = r.read_gbuffer().expect("gbuffer");
+    let points = (0..g.position.len())
+        .map(|i| {
+            g.covered[i].then(|| SurfacePoint {
+                position: g.position[i],
+                normal: g.normal[i],
+            })
+        })
+        .collect();
+    let surfaces = Surfaces::new(w, h, points).expect("surfaces");
+    let tracer = Tracer::new(&scene).expect("tracer");
+    let reference = manyshadows_reference::reference_visibility(
+        &tracer,
+        &scene.lights,
+        &surfaces,
+        &|| {},
+        &Default::default(),
+    )
+    .expect("reference");
+    let band = score::edge_band(&reference.lit, &surfaces.covered(), 2);
+    let (mut pairs, mut lit, mut wrong, mut wrong_in_band) = (0u64, 0u64, 0u64, 0u64);
+    for p in 0..(w * h) as usize {
+        for l in 0..scene.lights.len() as u32 {
+            let want = reference.lit.get(p, l);
+            let got = vis.lit(p as u32 % w, p as u32 / w, l);
+            pairs += 1;
+            lit += u64::from(want);
+            if want != got {
+                if band.get(p, l) {
+                    wrong_in_band += 1;
+                } else {
+                    wrong += 1;
+                }
+            }
+        }
+    }
+    eprintln!(
+        "atrium, 40 lights, {w}x{h}: {wrong} of {pairs} (pixel, light) bits differ from the \
+         reference outside the edge band, {wrong_in_band} inside it ({lit} lit; {stats:?})"
+    );
+    assert!(lit > pairs / 20, "degenerate: {lit} lit bits of {pairs}");
+    assert_eq!(
+        wrong, 0,
+        "bits differ from the reference outside the edge band"
+    );
+    assert!(
+        wrong_in_band * 10_000 <= pairs,
+        "{wrong_in_band} bits differ inside the edge band"
+    );
+}
+
+/// A node pool too small for the frame's samples is an error, never a silently wrong mask.
+#[test]
+fn node_pool_overflow_is_reported() {
+    let ctx = common::context();
+    let scene = builtin::build("plane-spot", &BuiltinOptions::default()).expect("scene");
+    let mut s = settings(64, 64);
+    s.irregular = IrregularOptions {
+        node_capacity: Some(100),
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&ctx, &scene, s).expect("renderer");
+    match r.render() {
+        Err(RenderError::NodePoolOverflow {
+            dropped, capacity, ..
+        }) => {
+            assert_eq!(capacity, 100);
+            assert!(dropped > 0);
+        }
+        Err(e) => panic!("expected a node-pool overflow, got {e}"),
+        Ok(_) => panic!("a 100-node pool cannot hold a 64x64 frame's samples"),
+    }
+    // The same frame with the planned pool renders.
+    let mut r = Renderer::new(&ctx, &scene, settings(64, 64)).expect("renderer");
+    let frame = r.render().expect("frame");
+    let stats = r.irregular_stats().expect("stats");
+    assert!(stats.peak_nodes > 0 && stats.peak_nodes <= stats.node_capacity);
+    assert!(frame.visibility.is_some());
+}
+
+/// What irregular refuses, with a clear error: atlas generation on its own (benchmarks,
+/// caching), the atlas read-back, and dual-paraboloid point shadows (curved edges).
+#[test]
+fn refuses_atlas_paths_and_paraboloids() {
+    let ctx = common::context();
+    let scene = builtin::build("plane-point", &BuiltinOptions::default()).expect("scene");
+    let gpu = GpuScene::new(&ctx, &scene).expect("upload");
+    let plan = ShadowPlan::new(&scene, 1.0, 4096, Default::default()).expect("plan");
+    let err = ShadowGenerator::new(
+        &ctx,
+        &scene,
+        &gpu,
+        plan,
+        Technique::Irregular,
+        ShadowOptions::default(),
+    )
+    .err()
+    .expect("no atlas generator for irregular");
+    assert!(matches!(err, RenderError::Unsupported(_)), "{err}");
+    let r = Renderer::new(&ctx, &scene, settings(32, 32)).expect("renderer");
+    assert!(matches!(r.read_atlas(), Err(RenderError::Unsupported(_))));
+    let mut s = settings(32, 32);
+    s.point_shadows = PointShadows::DualParaboloid;
+    let err = Renderer::new(&ctx, &scene, s)
+        .err()
+        .expect("paraboloids refused");
+    assert!(err.to_string().contains("--point-shadows cube"), "{err}");
+}
+
+/// One grid texel for a whole frame: every sample in one list. On llvmpipe (which ends an
+/// invocation's loops after 65535 iterations) the walk is cut short and the frame must be an
+/// error; on adapters without that limit the frame must be exact. Never a wrong mask.
+#[test]
+fn long_lists_are_exact_or_an_error() {
+    let ctx = common::context();
+    let scene = builtin::build("plane-directional", &BuiltinOptions::default()).expect("scene");
+    let mut s = settings(384, 384);
+    s.irregular.grid = Some(1);
+    let mut r = Renderer::new(&ctx, &scene, s).expect("renderer");
+    match r.render() {
+        Err(RenderError::Irregular(why)) => {
+            eprintln!("refused as expected on this adapter: {why}");
+            assert!(why.contains("loop limit"), "{why}");
+        }
+        Err(e) => panic!("unexpected error {e}"),
+        Ok(frame) => {
+            let mut fine = Renderer::new(&ctx, &scene, settings(384, 384)).expect("renderer");
+            let want = fine.render().expect("frame").visibility.expect("mask");
+            assert_eq!(
+                frame.visibility.expect("mask"),
+                want,
+                "grid 1 changed the mask"
+            );
+        }
+    }
+}
