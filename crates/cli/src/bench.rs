@@ -693,7 +693,7 @@ pub struct PlotPoint {
     pub method: String,
     /// Median GPU ms.
     pub gpu_ms: Option<f64>,
-    /// Median CPU ms.
+    /// Median CPU ms (`bench irregular`: the shadow stage's GPU ms; the plots name it).
     pub cpu_ms: f64,
 }
 

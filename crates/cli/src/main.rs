@@ -20,6 +20,7 @@ use manyshadows::{
 
 mod bench;
 mod compare;
+mod irregular_bench;
 mod omni;
 mod plot;
 
@@ -80,6 +81,9 @@ enum BenchCommand {
     /// paraboloids (two passes, or one), for 1..N lights: GPU and CPU time per light and
     /// atlas memory per light, as a table, results.json and plots (seed 003's comparison).
     Omni(Box<omni::OmniArgs>),
+    /// Alias-free irregular shadows against traditional shadow maps: frame GPU time by number
+    /// of lights and screen resolution, as a table, results.json and plots.
+    Irregular(Box<irregular_bench::IrregularArgs>),
 }
 
 #[derive(Args, Debug, Clone)]
@@ -272,6 +276,7 @@ fn main() {
         Some(Command::Compare(args)) => compare::run(&args),
         Some(Command::Bench(BenchCommand::Layered(args))) => bench::layered(&args),
         Some(Command::Bench(BenchCommand::Omni(args))) => omni::omni(&args),
+        Some(Command::Bench(BenchCommand::Irregular(args))) => irregular_bench::irregular(&args),
         None => render(&cli.render),
     };
     if let Err(e) = result {

@@ -276,7 +276,14 @@ pub fn omni(args: &OmniArgs) -> Result<()> {
             cpu_ms: r.cpu_ms,
         })
         .collect();
-    for p in crate::plot::plots(&points, &adapter, &args.out_dir, "omni", "point lights")? {
+    for p in crate::plot::plots(
+        &points,
+        &adapter,
+        &args.out_dir,
+        "omni",
+        "point lights",
+        crate::plot::CPU_TIME,
+    )? {
         eprintln!("wrote {}", p.display());
     }
     eprintln!("wrote {}", json_path.display());

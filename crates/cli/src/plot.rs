@@ -9,6 +9,9 @@ use plotters::style::{register_font, FontStyle};
 
 use crate::bench::PlotPoint;
 
+/// What [`PlotPoint::cpu_ms`] holds in the benchmarks of shadow generation.
+pub const CPU_TIME: &str = "CPU ms (record + submit)";
+
 static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 
 fn ensure_font() {
@@ -34,7 +37,7 @@ type Series = (String, Vec<(f64, f64)>);
 
 /// Writes one PNG per (variant, resolution) into `dir` and returns their paths.
 pub fn layered_plots(points: &[PlotPoint], adapter: &str, dir: &Path) -> Result<Vec<PathBuf>> {
-    plots(points, adapter, dir, "layered", "shadow maps")
+    plots(points, adapter, dir, "layered", "shadow maps", CPU_TIME)
 }
 
 /// Plots of any benchmark whose x axis is a count (`x_name`), files `<prefix>-<variant>-<res>.png`.
@@ -44,6 +47,7 @@ pub fn plots(
     dir: &Path,
     prefix: &str,
     x_name: &str,
+    second: &str,
 ) -> Result<Vec<PathBuf>> {
     ensure_font();
     let mut keys: Vec<(String, u32)> = Vec::new();
@@ -83,7 +87,11 @@ pub fn plots(
                 })
                 .collect()
         };
-        let path = dir.join(format!("{prefix}-{variant}-{res}.png"));
+        let path = if res > 0 {
+            dir.join(format!("{prefix}-{variant}-{res}.png"))
+        } else {
+            dir.join(format!("{prefix}-{variant}.png"))
+        };
         let (w, h) = (1400u32, 1000u32);
         let mut pixels = vec![0u8; (w * h * 3) as usize];
         {
@@ -92,21 +100,23 @@ pub fn plots(
             let (title, body) = root.split_vertically(50);
             title
                 .titled(
-                    &format!("bench {prefix}: {variant}, {res}² maps — {adapter}"),
+                    &if res > 0 {
+                        format!("bench {prefix}: {variant}, {res}² maps — {adapter}")
+                    } else {
+                        format!("bench {prefix}: {variant} — {adapter}")
+                    },
                     ("sans-serif", 20),
                 )
                 .map_err(|e| anyhow!("plot: {e}"))?;
             let panels = body.split_evenly((2, 2));
             let unit = x_name.trim_end_matches('s');
             let per_label_gpu = format!("GPU ms per {unit}");
-            let per_label_cpu = format!("CPU ms per {unit}");
+            let per_label_cpu = format!("{second} per {unit}");
+            let total_cpu = format!("{second}, total");
             let specs: [(&str, Vec<Series>); 4] = [
                 ("GPU ms, total", series(&|p| p.gpu_ms, false)),
                 (per_label_gpu.as_str(), series(&|p| p.gpu_ms, true)),
-                (
-                    "CPU ms (record + submit), total",
-                    series(&|p| Some(p.cpu_ms), false),
-                ),
+                (total_cpu.as_str(), series(&|p| Some(p.cpu_ms), false)),
                 (per_label_cpu.as_str(), series(&|p| Some(p.cpu_ms), true)),
             ];
             for (area, (caption, data)) in panels.iter().zip(specs) {

@@ -168,3 +168,53 @@ fn bench_omni_compares_cube_and_paraboloid_per_light() {
     assert_eq!(bad.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("unknown mode"));
 }
+
+#[test]
+fn bench_irregular_times_frames_against_traditional() {
+    let dir = tmp("irregular");
+    let out = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
+        .args([
+            "bench",
+            "irregular",
+            "--scene",
+            "cubes",
+            "--lights",
+            "2",
+            "--screens",
+            "96x64",
+            "--methods",
+            "irregular,traditional@512",
+            "--repeats",
+            "1",
+            "--warmup",
+            "0",
+            "--out-dir",
+            dir.to_str().unwrap(),
+        ])
+        .output()
+        .expect("run manyshadows");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "bench irregular failed: {stderr}");
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("results.json")).unwrap()).unwrap();
+    let records = json["records"].as_array().unwrap();
+    assert_eq!(records.len(), 2, "{json}");
+    for r in records {
+        assert_eq!(
+            r["frame_ms_runs"].as_array().unwrap().len(),
+            usize::from(r["frame_gpu_ms"].is_number())
+        );
+        if r["method"] == "traditional@512" {
+            if let Some(x) = r["ratio_vs_traditional_512"].as_f64() {
+                assert!((x - 1.0).abs() < 1e-9);
+            }
+        }
+    }
+    assert!(dir.join("irregular-96x64.png").exists());
+    let bad = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
+        .args(["bench", "irregular", "--methods", "traditional@huge"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("bad resolution"));
+}
