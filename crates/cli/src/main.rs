@@ -207,6 +207,10 @@ struct RenderArgs {
     /// shadow resolution, at most 512). Changes speed, not the result.
     #[arg(long)]
     irregular_grid: Option<u32>,
+    /// Multimap hash of --technique irregular: N texels share a list head (seed 001's
+    /// equalising hash; default: one list per texel). Changes speed, not the result.
+    #[arg(long)]
+    irregular_hash: Option<u32>,
     /// Output image.
     #[arg(long, short, default_value = "frame.png")]
     out: PathBuf,
@@ -381,6 +385,7 @@ fn render(args: &RenderArgs) -> Result<()> {
         visibility: args.visibility_out.is_some(),
         irregular: manyshadows::irregular::IrregularOptions {
             grid: args.irregular_grid,
+            hash: args.irregular_hash,
             ..Default::default()
         },
     };

@@ -94,8 +94,20 @@ pub const GRID_LIMIT: u32 = 1024;
 const TILE: u32 = 8;
 
 /// Words of `heads` one view uses: its grid, then its occupancy flags.
-fn view_words(side: u32) -> u64 {
-    side as u64 * side as u64 + side.div_ceil(TILE) as u64 * side.div_ceil(TILE) as u64
+fn view_words(side: u32, hash: u32) -> u64 {
+    buckets(side, hash) as u64 + side.div_ceil(TILE) as u64 * side.div_ceil(TILE) as u64
+}
+
+/// List heads of a view's grid: one per texel, or with the multimap hash (seed 001: "a small
+/// multimap size while hashing point coordinates to equalize the number of points at each
+/// multimap cell") `side² / hash` buckets that the texels are hashed into.
+fn buckets(side: u32, hash: u32) -> u32 {
+    let texels = side * side;
+    if hash <= 1 {
+        texels
+    } else {
+        texels.div_ceil(hash).max(1)
+    }
 }
 /// Bytes per node: `next`, ray origin (3 × f32), pixel index.
 const NODE_BYTES: u64 = 20;
@@ -113,6 +125,11 @@ pub struct IrregularOptions {
     /// Grid side per view in texels; `None` = the view's tile size capped at
     /// [`DEFAULT_GRID_MAX`]. Changes the cost, not the result.
     pub grid: Option<u32>,
+    /// Multimap shrink factor (seed 001's equalising hash): each view keeps `grid² / hash`
+    /// list heads and texels are hashed into them, so crowded texels spread over buckets
+    /// (lists get longer on average; samples of other texels in a bucket are tested too, which
+    /// the exact test makes harmless). `None` or 1: one list per texel.
+    pub hash: Option<u32>,
     /// Test only: force the node pool to this many nodes (to exercise overflow reporting).
     #[doc(hidden)]
     pub node_capacity: Option<u32>,
@@ -249,6 +266,7 @@ impl IrregularShadows {
         // Per view: its grid (side, base within its batch) and light.
         let view_data = plan.view_data();
         let grid_max = options.grid.unwrap_or(DEFAULT_GRID_MAX);
+        let hash = options.hash.unwrap_or(1).max(1);
         let sides: Vec<u32> = plan
             .layout
             .tiles
@@ -274,7 +292,7 @@ impl IrregularShadows {
         let mut bases = vec![0u32; plan.views.len()];
         for (li, &(first, n)) in plan.light_views.iter().enumerate() {
             let light_heads: u64 = (first..first + n)
-                .map(|v| view_words(sides[v as usize]))
+                .map(|v| view_words(sides[v as usize], hash))
                 .sum();
             if light_heads > head_limit {
                 return Err(RenderError::SceneTooLarge(format!(
@@ -293,7 +311,7 @@ impl IrregularShadows {
             }
             for v in first..first + n {
                 bases[v as usize] = heads as u32;
-                heads += view_words(sides[v as usize]);
+                heads += view_words(sides[v as usize], hash);
             }
             k += needs;
         }
@@ -339,10 +357,12 @@ impl IrregularShadows {
                     // Clip triangles 1e-3 of the near distance in front of the light's plane.
                     params: [v.near.max(1e-6) * 1e-3, 0.0, 0.0, 0.0],
                     // The view's occupancy flags follow its heads.
+                    // z: bucket count when texels are hashed into a smaller multimap (0: one
+                    // list per texel).
                     occ: [
-                        bases[i] + sides[i] * sides[i],
+                        bases[i] + buckets(sides[i], hash),
                         sides[i].div_ceil(TILE),
-                        0,
+                        if hash > 1 { buckets(sides[i], hash) } else { 0 },
                         0,
                     ],
                 }

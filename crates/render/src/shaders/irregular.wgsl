@@ -121,6 +121,16 @@ fn cs_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroup
 }
 
 // Continuous grid coordinates of a point in ndc (x right, y down, like atlas tiles).
+// Index in `heads` of texel `t`'s list: the texel itself, or (multimap hash, `occ.z`
+// buckets) the bucket the texel hashes to.
+fn bucket(v: IView, t: vec2<u32>) -> u32 {
+    if (v.occ.z == 0u) {
+        return v.grid.x + t.y * v.grid.y + t.x;
+    }
+    let h = (t.x * 73856093u) ^ (t.y * 19349663u);
+    return v.grid.x + h % v.occ.z;
+}
+
 fn grid_xy(ndc: vec2<f32>, side: u32) -> vec2<f32> {
     return vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * f32(side);
 }
@@ -204,7 +214,7 @@ fn cs_insert(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         nodes[d + 1u] = bitcast<u32>(o.y);
         nodes[d + 2u] = bitcast<u32>(o.z);
         nodes[d + 3u] = pixel;
-        nodes[node] = atomicExchange(&heads[v.grid.x + t.y * side + t.x], node + 1u);
+        nodes[node] = atomicExchange(&heads[bucket(v, t)], node + 1u);
         let occ = v.occ.x + (t.y / TILE) * v.occ.y + t.x / TILE;
         if (atomicLoad(&heads[occ]) == 0u) {
             atomicStore(&heads[occ], 1u);
@@ -376,7 +386,7 @@ fn walk(f: Footprint, v: IView, t: vec2<i32>) {
     let word = li / 32u;
     let bit = 1u << (li % 32u);
     let directional = v.light.w < 0.5;
-    var n = atomicLoad(&heads[v.grid.x + u32(t.y) * v.grid.y + u32(t.x)]);
+    var n = atomicLoad(&heads[bucket(v, vec2<u32>(t))]);
     loop {
         if (n == 0u) {
             break;
