@@ -5,11 +5,9 @@
 
 mod common;
 
-use glam::{Vec3, Vec4Swizzles};
 use manyshadows::irregular::IrregularOptions;
 use manyshadows::scene::builtin::{self, BuiltinOptions};
 use manyshadows::scene::light_space::PointShadows;
-use manyshadows::scene::{LightKind, Scene};
 use manyshadows::{
     GpuScene, Pcf, RenderError, RenderSettings, Renderer, ShadowGenerator, ShadowOptions,
     ShadowPlan, Technique,
@@ -19,81 +17,6 @@ use manyshadows_reference::{score, SurfacePoint, Surfaces, Tracer};
 const SIZE: u32 = 256;
 const EDGE_BAND_PX: i32 = 2;
 
-/// Ray/box slab test; returns the entry distance.
-fn ray_box(o: Vec3, d: Vec3, lo: Vec3, hi: Vec3) -> Option<f32> {
-    let inv = d.recip();
-    let t0 = (lo - o) * inv;
-    let t1 = (hi - o) * inv;
-    let tmin = t0.min(t1).max_element();
-    let tmax = t0.max(t1).min_element();
-    (tmax >= tmin.max(0.0)).then_some(tmin.max(0.0))
-}
-
-/// Truth per pixel: `None` = sky, `Some(lit)`.
-fn truth(scene: &Scene) -> Vec<Option<bool>> {
-    let c = builtin::OCCLUDER_CENTER;
-    let half = Vec3::new(
-        builtin::OCCLUDER_HALF_SIZE,
-        builtin::OCCLUDER_THICKNESS * 0.5,
-        builtin::OCCLUDER_HALF_SIZE,
-    );
-    let (lo, hi) = (c - half, c + half);
-    let cam = &scene.camera;
-    let inv = (cam.projection(1.0) * cam.view()).inverse();
-    let light = scene.lights[0];
-    let mut out = Vec::new();
-    for y in 0..SIZE {
-        for x in 0..SIZE {
-            let ndc_x = (x as f32 + 0.5) / SIZE as f32 * 2.0 - 1.0;
-            let ndc_y = 1.0 - (y as f32 + 0.5) / SIZE as f32 * 2.0;
-            let near = inv * glam::Vec4::new(ndc_x, ndc_y, 0.0, 1.0);
-            let far = inv * glam::Vec4::new(ndc_x, ndc_y, 1.0, 1.0);
-            let o = near.xyz() / near.w;
-            let d = (far.xyz() / far.w - o).normalize();
-            let t_floor = if d.y < 0.0 { -o.y / d.y } else { f32::INFINITY };
-            let t_box = ray_box(o, d, lo, hi).unwrap_or(f32::INFINITY);
-            let t = t_floor.min(t_box);
-            if !t.is_finite()
-                || (o + d * t).x.abs() > 10.0
-                || (o + d * t).z.abs() > 10.0 && t == t_floor
-            {
-                out.push(None);
-                continue;
-            }
-            let p = o + d * t;
-            if t_box <= t_floor {
-                // The occluder's top face: nothing is above it.
-                out.push(Some(true));
-                continue;
-            }
-            let lit = match light.kind {
-                LightKind::Directional { direction, .. } => {
-                    ray_box(p, -direction, lo, hi).is_none()
-                }
-                LightKind::Spot {
-                    position,
-                    direction,
-                    cutoff_deg,
-                    range,
-                } => {
-                    let to_p = p - position;
-                    let in_cone = to_p.normalize().dot(direction.normalize())
-                        >= cutoff_deg.to_radians().cos();
-                    in_cone
-                        && to_p.length() <= range
-                        && ray_box(p, -to_p.normalize(), lo, hi).is_none_or(|t| t > to_p.length())
-                }
-                LightKind::Point { position, range } => {
-                    let to_p = p - position;
-                    to_p.length() <= range
-                        && ray_box(p, -to_p.normalize(), lo, hi).is_none_or(|t| t > to_p.length())
-                }
-            };
-            out.push(Some(lit));
-        }
-    }
-    out
-}
 
 fn settings(w: u32, h: u32) -> RenderSettings {
     RenderSettings {
@@ -122,7 +45,7 @@ fn wrong_pixels_hashed(name: &str, grid: Option<u32>, hash: Option<u32>) -> (usi
     let mut r = Renderer::new(&ctx, &scene, s).expect("renderer");
     let frame = r.render().expect("frame");
     let vis = frame.visibility.expect("visibility mask");
-    let truth = truth(&scene);
+    let truth = common::analytic_truth(&scene, SIZE);
     let at = |x: i32, y: i32| truth[(y as u32 * SIZE + x as u32) as usize];
     let (mut wrong, mut wrong_anywhere, mut shadowed, mut lit) = (0, 0, 0, 0);
     let mut diff = vec![0u8; (SIZE * SIZE * 3) as usize];

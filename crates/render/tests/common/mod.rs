@@ -1,6 +1,9 @@
 //! Shared helpers of the GPU integration tests.
 #![allow(dead_code)]
 
+use glam::{Vec3, Vec4Swizzles};
+use manyshadows::scene::builtin;
+use manyshadows::scene::{LightKind, Scene};
 use manyshadows::{AdapterRequest, GpuContext};
 
 /// The GPU context every GPU test runs on: the adapter `GpuContext::new` picks, narrowed by
@@ -28,4 +31,83 @@ pub fn artifacts_dir() -> std::path::PathBuf {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/test-artifacts");
     std::fs::create_dir_all(&dir).expect("create target/test-artifacts");
     dir
+}
+
+/// Ray/box slab test; returns the entry distance.
+pub fn ray_box(o: Vec3, d: Vec3, lo: Vec3, hi: Vec3) -> Option<f32> {
+    let inv = d.recip();
+    let t0 = (lo - o) * inv;
+    let t1 = (hi - o) * inv;
+    let tmin = t0.min(t1).max_element();
+    let tmax = t0.max(t1).min_element();
+    (tmax >= tmin.max(0.0)).then_some(tmin.max(0.0))
+}
+
+/// The exact shadow of an analytic scene (`plane-*`: one light over the square occluder) for a
+/// `size`² frame of its camera: ray from the camera to the first surface, then a segment from
+/// that point to the light against the occluder box.
+/// Truth per pixel: `None` = sky, `Some(lit)`.
+pub fn analytic_truth(scene: &Scene, size: u32) -> Vec<Option<bool>> {
+    let c = builtin::OCCLUDER_CENTER;
+    let half = Vec3::new(
+        builtin::OCCLUDER_HALF_SIZE,
+        builtin::OCCLUDER_THICKNESS * 0.5,
+        builtin::OCCLUDER_HALF_SIZE,
+    );
+    let (lo, hi) = (c - half, c + half);
+    let cam = &scene.camera;
+    let inv = (cam.projection(1.0) * cam.view()).inverse();
+    let light = scene.lights[0];
+    let mut out = Vec::new();
+    for y in 0..size {
+        for x in 0..size {
+            let ndc_x = (x as f32 + 0.5) / size as f32 * 2.0 - 1.0;
+            let ndc_y = 1.0 - (y as f32 + 0.5) / size as f32 * 2.0;
+            let near = inv * glam::Vec4::new(ndc_x, ndc_y, 0.0, 1.0);
+            let far = inv * glam::Vec4::new(ndc_x, ndc_y, 1.0, 1.0);
+            let o = near.xyz() / near.w;
+            let d = (far.xyz() / far.w - o).normalize();
+            let t_floor = if d.y < 0.0 { -o.y / d.y } else { f32::INFINITY };
+            let t_box = ray_box(o, d, lo, hi).unwrap_or(f32::INFINITY);
+            let t = t_floor.min(t_box);
+            if !t.is_finite()
+                || (o + d * t).x.abs() > 10.0
+                || (o + d * t).z.abs() > 10.0 && t == t_floor
+            {
+                out.push(None);
+                continue;
+            }
+            let p = o + d * t;
+            if t_box <= t_floor {
+                // The occluder's top face: nothing is above it.
+                out.push(Some(true));
+                continue;
+            }
+            let lit = match light.kind {
+                LightKind::Directional { direction, .. } => {
+                    ray_box(p, -direction, lo, hi).is_none()
+                }
+                LightKind::Spot {
+                    position,
+                    direction,
+                    cutoff_deg,
+                    range,
+                } => {
+                    let to_p = p - position;
+                    let in_cone = to_p.normalize().dot(direction.normalize())
+                        >= cutoff_deg.to_radians().cos();
+                    in_cone
+                        && to_p.length() <= range
+                        && ray_box(p, -to_p.normalize(), lo, hi).is_none_or(|t| t > to_p.length())
+                }
+                LightKind::Point { position, range } => {
+                    let to_p = p - position;
+                    to_p.length() <= range
+                        && ray_box(p, -to_p.normalize(), lo, hi).is_none_or(|t| t > to_p.length())
+                }
+            };
+            out.push(Some(lit));
+        }
+    }
+    out
 }
