@@ -13,7 +13,6 @@ use manyshadows::{Pcf, RenderSettings, Renderer, Technique};
 const SIZE: u32 = 256;
 const EDGE_BAND_PX: i32 = 2;
 
-
 fn check(name: &str) {
     let wrong = wrong_pixels(name, Technique::Traditional, PointShadows::Cube, 0);
     assert_eq!(

@@ -17,7 +17,6 @@ use manyshadows_reference::{score, SurfacePoint, Surfaces, Tracer};
 const SIZE: u32 = 256;
 const EDGE_BAND_PX: i32 = 2;
 
-
 fn settings(w: u32, h: u32) -> RenderSettings {
     RenderSettings {
         width: w,
