@@ -262,6 +262,41 @@ pub struct Light {
 }
 
 impl Light {
+    /// The smallest sphere `(centre, radius)` around everything the light reaches: the ball of
+    /// its range for a point light, the sector (cone within its range) for a spot light;
+    /// `None` for a directional light, which reaches everywhere.
+    ///
+    /// For a spot of half-angle θ and range R the sphere is centred on the axis: at
+    /// `R / (2 cos θ)` with that radius when θ ≤ 45° (apex and rim on the sphere), else at
+    /// `R cos θ` with radius `R sin θ` (the rim circle is its equator).
+    pub fn bounding_sphere(&self) -> Option<(Vec3, f32)> {
+        match self.kind {
+            LightKind::Directional { .. } => None,
+            LightKind::Point { position, range } => Some((position, range)),
+            LightKind::Spot {
+                position,
+                direction,
+                cutoff_deg,
+                range,
+            } => {
+                let dir = direction.normalize_or(Vec3::NEG_Y);
+                let theta = cutoff_deg.to_radians();
+                if theta <= std::f32::consts::FRAC_PI_4 {
+                    let r = range / (2.0 * theta.cos());
+                    Some((position + dir * r, r))
+                } else {
+                    Some((position + dir * (range * theta.cos()), range * theta.sin()))
+                }
+            }
+        }
+    }
+
+    /// Checks the light is usable (finite, positive ranges, sane angles and resolution); the
+    /// reason names what is wrong.
+    pub fn validate(&self) -> Result<(), String> {
+        validate_light(self)
+    }
+
     /// A short name of the light's type: `"directional"`, `"spot"` or `"point"`.
     pub fn type_name(&self) -> &'static str {
         match self.kind {

@@ -311,7 +311,7 @@ fn atrium_has_200k_triangles_in_many_instances_and_32_mixed_lights() {
 #[test]
 fn atrium_lights_hang_along_the_arcades_with_moderate_ranges() {
     let (hx, hz) = (0.5 * atrium::HALL_LENGTH, 0.5 * atrium::HALL_WIDTH);
-    for n in [32, 100, 1000] {
+    for n in [32, builtin::LOCAL_LAYOUT_ABOVE] {
         let scene = builtin::build("atrium", &with_lights(n)).unwrap();
         let mut distinct = std::collections::HashSet::new();
         for l in &scene.lights {
@@ -379,6 +379,57 @@ fn atrium_lights_hang_along_the_arcades_with_moderate_ranges() {
             .map(|p| p.z)
             .collect();
         assert!(zs.iter().any(|&z| z < 0.0) && zs.iter().any(|&z| z > 0.0));
+    }
+}
+
+/// Above [`builtin::LOCAL_LAYOUT_ABOVE`] lights most are local: short, bounded ranges that
+/// shrink as the count grows (so a pixel sees a similar number of lights at any count), inside
+/// the hall, at distinct positions, and the same for the same seed.
+#[test]
+fn many_atrium_lights_are_local_with_bounded_ranges() {
+    let (hx, hz) = (0.5 * atrium::HALL_LENGTH, 0.5 * atrium::HALL_WIDTH);
+    let mut previous_mean = f32::INFINITY;
+    for n in [100, 1000, 16384] {
+        let scene = builtin::build("atrium", &with_lights(n)).unwrap();
+        assert_eq!(scene.lights.len(), n);
+        assert_eq!(
+            scene.lights,
+            builtin::build("atrium", &with_lights(n)).unwrap().lights,
+            "the layout is seeded"
+        );
+        let mut distinct = std::collections::HashSet::new();
+        let mut local = Vec::new();
+        for l in &scene.lights {
+            let Some(p) = light_position(&l.kind) else {
+                continue;
+            };
+            assert!(
+                p.x.abs() < hx && p.z.abs() < hz,
+                "light outside the hall: {p}"
+            );
+            assert!(p.y > 0.0 && p.y < atrium::HALL_HEIGHT, "height {}", p.y);
+            assert!(distinct.insert((p * 1000.0).round().as_ivec3().to_array()));
+            let range = match l.kind {
+                LightKind::Spot { range, .. } | LightKind::Point { range, .. } => range,
+                LightKind::Directional { .. } => unreachable!(),
+            };
+            if range <= builtin::LOCAL_RANGE.1 {
+                assert!(range >= builtin::LOCAL_RANGE.0, "range {range}");
+                local.push(range);
+            }
+        }
+        assert!(
+            local.len() >= n - 40,
+            "{} of {n} lights are local",
+            local.len()
+        );
+        let mean = local.iter().sum::<f32>() / local.len() as f32;
+        assert!(
+            mean < previous_mean,
+            "{n} lights: mean range {mean} did not shrink"
+        );
+        previous_mean = mean;
+        assert!(scene.validate().is_ok());
     }
 }
 

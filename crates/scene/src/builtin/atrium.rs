@@ -228,8 +228,75 @@ pub fn atrium_lights(
     mix: LightMix,
     shadow_resolution: Option<u32>,
 ) -> Vec<Light> {
+    build(&BuiltinOptions {
+        lights: Some(n),
+        seed,
+        mix,
+        mesh: None,
+        shadow_resolution,
+    })
+    .lights
+}
+
+/// Most spot and point lights on the arcade slots when the layout has local lights too.
+const ARCHITECTURAL_SPOTS: usize = 24;
+const ARCHITECTURAL_POINTS: usize = 12;
+
+/// Up to [`lights::LOCAL_LAYOUT_ABOVE`] lights: all on the arcade slots. Above: the suns,
+/// [`ARCHITECTURAL_SPOTS`] spots and [`ARCHITECTURAL_POINTS`] points on the slots, and every
+/// further light a local light over the ground floor or a gallery floor, kept out of the
+/// `obstacles` (the scene's instance boxes).
+fn layout_lights(
+    n: usize,
+    seed: u64,
+    mix: LightMix,
+    shadow_resolution: Option<u32>,
+    obstacles: &[(Vec3, Vec3)],
+) -> Vec<Light> {
     let counts = LightCounts::split(n, mix);
     let mut rng = Rand::new(seed, 0xa7e1);
+    if n <= lights::LOCAL_LAYOUT_ABOVE {
+        return slot_lights(counts, &mut rng, shadow_resolution);
+    }
+    let arch = LightCounts {
+        spot: counts.spot.min(ARCHITECTURAL_SPOTS),
+        point: counts.point.min(ARCHITECTURAL_POINTS),
+        directional: counts.directional,
+    };
+    let mut out = slot_lights(arch, &mut rng, shadow_resolution);
+    let (hx, hz) = (0.5 * HALL_LENGTH - 0.4, 0.5 * HALL_WIDTH - 0.4);
+    let gallery_z = ARCADE_Z + 0.45;
+    let floors = [
+        lights::Floor {
+            lo: Vec2::new(-hx, -hz),
+            hi: Vec2::new(hx, hz),
+        },
+        lights::Floor {
+            lo: Vec2::new(-hx, gallery_z),
+            hi: Vec2::new(hx, hz),
+        },
+        lights::Floor {
+            lo: Vec2::new(-hx, -hz),
+            hi: Vec2::new(hx, -gallery_z),
+        },
+    ];
+    let height = |floor: usize, _: Vec2| if floor == 0 { 0.0 } else { GALLERY_Y };
+    out.extend(lights::local(
+        counts.spot - arch.spot,
+        counts.point - arch.point,
+        &floors,
+        &height,
+        obstacles,
+        &mut rng,
+        lights::LOCAL_BRIGHTNESS,
+        shadow_resolution,
+    ));
+    out
+}
+
+/// The arcade-slot layout of `counts` lights; see the module docs.
+fn slot_lights(counts: LightCounts, rng: &mut Rand, shadow_resolution: Option<u32>) -> Vec<Light> {
+    let n = counts.total();
     // Slots in bay-major order, alternating storey and side, so an even pick over the list
     // covers both arcades, both storeys and the whole length.
     let order = [(0usize, 1.0f32), (1, -1.0), (0, -1.0), (1, 1.0)];
@@ -268,8 +335,8 @@ pub fn atrium_lights(
                 0.25,
             ),
             _ => (
-                slanted_direction(&mut rng, 50.0, 80.0),
-                tint(&mut rng),
+                slanted_direction(rng, 50.0, 80.0),
+                tint(rng),
                 1.0 / counts.directional as f32,
             ),
         };
@@ -279,7 +346,7 @@ pub fn atrium_lights(
             shadow_resolution,
         ));
     }
-    for (slot, cycle) in pick(counts.spot, &mut rng) {
+    for (slot, cycle) in pick(counts.spot, rng) {
         let (b, storey, side) = slots[slot];
         let mut position = if storey == 0 {
             Vec3::new(bay_x(b), 5.6, side * ARCADE_Z)
@@ -298,7 +365,7 @@ pub fn atrium_lights(
             (32.0, 24.0)
         };
         let tone = Tone {
-            color: tint(&mut rng),
+            color: tint(rng),
             brightness: 0.4 * density_dim(counts.spot, slots.len()),
         };
         out.push(lights::spot(
@@ -311,7 +378,7 @@ pub fn atrium_lights(
             shadow_resolution,
         ));
     }
-    for (slot, cycle) in pick(counts.point, &mut rng) {
+    for (slot, cycle) in pick(counts.point, rng) {
         let (b, storey, side) = slots[slot];
         let mut position = if storey == 0 {
             Vec3::new(bay_x(b), 3.2, side * 6.0)
@@ -327,7 +394,7 @@ pub fn atrium_lights(
         }
         let (range, key) = if storey == 0 { (9.0, 3.5) } else { (8.0, 2.8) };
         let tone = Tone {
-            color: tint(&mut rng),
+            color: tint(rng),
             brightness: 0.45 * density_dim(counts.point, slots.len()),
         };
         out.push(lights::point(position, range, key, tone, shadow_resolution));
@@ -643,10 +710,16 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
     camera.far = 80.0;
     Scene {
         name: "atrium".into(),
+        lights: layout_lights(
+            n,
+            opts.seed,
+            opts.mix,
+            opts.shadow_resolution,
+            &lights::instance_boxes(&h.meshes, &h.instances),
+        ),
         meshes: h.meshes,
         materials: materials(),
         instances: h.instances,
-        lights: atrium_lights(n, opts.seed, opts.mix, opts.shadow_resolution),
         camera,
     }
 }

@@ -12,10 +12,10 @@
 
 use std::f32::consts::{PI, TAU};
 
-use glam::{Mat4, Quat, Vec3};
+use glam::{Mat4, Quat, Vec2, Vec3};
 
 use super::lights::{self, tint, Rand, Tone};
-use super::{BuiltinOptions, LightMix};
+use super::{BuiltinOptions, LightCounts, LightMix};
 use crate::{primitives, Camera, Instance, Light, Material, Mesh, Scene, SceneError};
 
 /// Height the model is scaled to (metres).
@@ -134,6 +134,48 @@ pub fn ring_lights(
         .collect()
 }
 
+/// Up to [`lights::LOCAL_LAYOUT_ABOVE`] lights: the ring ([`ring_lights`]). Above (except
+/// for directional lights, which stay a ring of suns): a ring of [`DEFAULT_RING_LIGHTS`] and
+/// every further light a local light over the floor, kept out of the model's box.
+fn dragon_lights(
+    n: usize,
+    seed: u64,
+    mix: LightMix,
+    shadow_resolution: Option<u32>,
+    obstacles: &[(Vec3, Vec3)],
+) -> Vec<Light> {
+    if n <= lights::LOCAL_LAYOUT_ABOVE || mix == LightMix::Directional {
+        return ring_lights(n, seed, mix, shadow_resolution);
+    }
+    let mut out = ring_lights(DEFAULT_RING_LIGHTS, seed, mix, shadow_resolution);
+    let local = n - DEFAULT_RING_LIGHTS;
+    let (spots, points) = match mix {
+        LightMix::Spot => (local, 0),
+        LightMix::Point => (0, local),
+        _ => {
+            let c = LightCounts::split(local, LightMix::All);
+            (c.spot + c.directional, c.point)
+        }
+    };
+    let half = 0.5 * DRAGON_FLOOR_SIZE - 0.5;
+    let floor = lights::Floor {
+        lo: Vec2::splat(-half),
+        hi: Vec2::splat(half),
+    };
+    let mut rng = Rand::new(seed, 0xd2aa);
+    out.extend(lights::local(
+        spots,
+        points,
+        &[floor],
+        &|_, _| 0.0,
+        obstacles,
+        &mut rng,
+        lights::LOCAL_BRIGHTNESS,
+        shadow_resolution,
+    ));
+    out
+}
+
 /// Builds `dragon`.
 pub(crate) fn build(opts: &BuiltinOptions) -> Result<Scene, SceneError> {
     let model = match &opts.mesh {
@@ -154,6 +196,15 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Result<Scene, SceneError> {
     let dir = Vec3::new(0.0, 1.0, 1.0).normalize();
     let mut camera = Camera::look_at(RING_TARGET + dir * DRAGON_CAMERA_DISTANCE, RING_TARGET);
     camera.far = 60.0;
+    let obstacles = lights::instance_boxes(
+        std::slice::from_ref(&model),
+        &[Instance {
+            mesh: 0,
+            material: 0,
+            transform,
+            casts_shadows: true,
+        }],
+    );
     Ok(Scene {
         name: "dragon".into(),
         meshes: vec![floor, model],
@@ -179,7 +230,7 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Result<Scene, SceneError> {
                 casts_shadows: true,
             },
         ],
-        lights: ring_lights(n, opts.seed, opts.mix, opts.shadow_resolution),
+        lights: dragon_lights(n, opts.seed, opts.mix, opts.shadow_resolution, &obstacles),
         camera,
     })
 }

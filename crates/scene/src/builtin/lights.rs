@@ -285,6 +285,7 @@ pub(crate) fn scatter(
     };
     let dim = density_dim(counts.spot + counts.point, 16);
     let mut out = Vec::with_capacity(n);
+    let local_layout = n > LOCAL_LAYOUT_ABOVE;
     for _ in 0..counts.directional {
         let tone = Tone {
             color: tint(&mut rng),
@@ -295,6 +296,37 @@ pub(crate) fn scatter(
             tone,
             resolution,
         ));
+    }
+    if local_layout {
+        // Local lights over the bounds' floor: the footprint inset by 5 %, standing on the
+        // top of any large slab (over a quarter of the footprint) in the lower half.
+        let floor = Floor {
+            lo: Vec2::new(lo.x + 0.05 * size.x, lo.z + 0.05 * size.z),
+            hi: Vec2::new(hi.x - 0.05 * size.x, hi.z - 0.05 * size.z),
+        };
+        let boxes = instance_boxes(&scene.meshes, &scene.instances);
+        let footprint = (size.x * size.z).max(1e-6);
+        let (slabs, obstacles): (Vec<_>, Vec<_>) = boxes.into_iter().partition(|(a, b)| {
+            (b.x - a.x) * (b.z - a.z) > 0.25 * footprint && b.y < lo.y + 0.5 * size.y
+        });
+        let height = |_: usize, xz: Vec2| {
+            slabs
+                .iter()
+                .filter(|(a, b)| xz.x >= a.x && xz.x <= b.x && xz.y >= a.z && xz.y <= b.z)
+                .map(|(_, b)| b.y)
+                .fold(lo.y, f32::max)
+        };
+        out.extend(local(
+            counts.spot,
+            counts.point,
+            &[floor],
+            &height,
+            &obstacles,
+            &mut rng,
+            LOCAL_BRIGHTNESS,
+            resolution,
+        ));
+        return out;
     }
     let mut k = 0;
     for _ in 0..counts.spot {
@@ -334,4 +366,161 @@ pub(crate) fn scatter(
         out.push(point(position, range, above, tone, resolution));
     }
     out
+}
+
+/// Above this many lights a built-in layout keeps a fixed set of large "architectural" lights
+/// and turns every further spot and point light into a *local* light ([`local`]): bounded
+/// range near a floor, as real many-light scenes use. Up to this count every layout is the
+/// scene's hand-made one, unchanged.
+pub const LOCAL_LAYOUT_ABOVE: usize = 64;
+
+/// Brightness of a local light at its key distance (its height above the floor).
+pub const LOCAL_BRIGHTNESS: f32 = 0.3;
+
+/// Mean number of local lights whose range covers a point of the floors they stand on.
+pub const LOCAL_OVERLAP: f32 = 6.0;
+
+/// Shortest and longest range of a local light (metres).
+pub const LOCAL_RANGE: (f32, f32) = (0.25, 6.0);
+
+/// A horizontal region that local lights stand over: an XZ rectangle whose height at a point
+/// comes from the layout's height function.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Floor {
+    /// XZ corner with the smaller coordinates.
+    pub lo: Vec2,
+    /// XZ corner with the larger coordinates.
+    pub hi: Vec2,
+}
+
+impl Floor {
+    fn area(&self) -> f32 {
+        let d = (self.hi - self.lo).max(Vec2::ZERO);
+        d.x * d.y
+    }
+}
+
+/// The range of each of `n` local lights spread over `area` m² so that about
+/// [`LOCAL_OVERLAP`] of them reach any floor point: `π r² n = overlap · area`, clamped to
+/// [`LOCAL_RANGE`].
+pub fn local_range(n: usize, area: f32) -> f32 {
+    let r = (LOCAL_OVERLAP * area.max(1.0) / (std::f32::consts::PI * n.max(1) as f32)).sqrt();
+    r.clamp(LOCAL_RANGE.0, LOCAL_RANGE.1)
+}
+
+/// `spots` + `points` local lights over `floors`: positions follow a seeded low-discrepancy
+/// sequence over the floors' combined area (so any count covers them evenly), each light hangs
+/// a fraction of its range above the floor (`height(floor index, xz)` gives the floor's
+/// height), spots point down (tilted up to 25°), and a light that would sit inside one of the
+/// `obstacles` (world AABBs) moves to the next point of the sequence. The range comes from
+/// [`local_range`]; the brightness at the light's key distance (its height) is
+/// `brightness`, so the total light on a floor point stays about the same at any count.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn local(
+    spots: usize,
+    points: usize,
+    floors: &[Floor],
+    height: &dyn Fn(usize, Vec2) -> f32,
+    obstacles: &[(Vec3, Vec3)],
+    rng: &mut Rand,
+    brightness: f32,
+    resolution: Option<u32>,
+) -> Vec<Light> {
+    let n = spots + points;
+    let mut out = Vec::with_capacity(n);
+    let area: f32 = floors.iter().map(Floor::area).sum();
+    if n == 0 || floors.is_empty() || area <= 0.0 {
+        return out;
+    }
+    let range = local_range(n, area);
+    let offset = Vec2::new(rng.unit(), rng.unit());
+    // Cumulative area fractions: floor i owns u.x in [cum[i], cum[i + 1]).
+    let mut cum = Vec::with_capacity(floors.len() + 1);
+    cum.push(0.0f32);
+    for f in floors {
+        cum.push(cum.last().copied().unwrap_or(0.0) + f.area() / area);
+    }
+    let blocked = |p: Vec3| {
+        let pad = Vec3::splat(0.05);
+        obstacles
+            .iter()
+            .any(|&(lo, hi)| p.cmpge(lo - pad).all() && p.cmple(hi + pad).all())
+    };
+    let mut k = 0usize;
+    for i in 0..n {
+        let is_spot = i < spots;
+        let above = range
+            * if is_spot {
+                rng.range(0.45, 0.7)
+            } else {
+                rng.range(0.3, 0.6)
+            };
+        let jitter = Vec2::new(rng.range(-0.5, 0.5), rng.range(-0.5, 0.5));
+        let mut position = Vec3::ZERO;
+        for _attempt in 0..16 {
+            let u = r2(k, offset);
+            k += 1;
+            let f = cum
+                .windows(2)
+                .position(|w| u.x < w[1])
+                .unwrap_or(floors.len() - 1);
+            let floor = floors[f];
+            let fx = ((u.x - cum[f]) / (cum[f + 1] - cum[f]).max(1e-9)).clamp(0.0, 1.0);
+            let size = floor.hi - floor.lo;
+            // Jitter by up to half a light's spacing, staying on the floor.
+            let spacing = (area / n as f32).sqrt();
+            let xz =
+                (floor.lo + Vec2::new(fx, u.y) * size + jitter * spacing).clamp(floor.lo, floor.hi);
+            position = Vec3::new(xz.x, height(f, xz) + above, xz.y);
+            if !blocked(position) {
+                break;
+            }
+        }
+        let tone = Tone {
+            color: tint(rng),
+            brightness,
+        };
+        if is_spot {
+            let tilt = rng.range(0.0, 25f32.to_radians());
+            let az = rng.range(0.0, TAU);
+            let direction = Vec3::new(tilt.sin() * az.cos(), -tilt.cos(), tilt.sin() * az.sin());
+            let cutoff = rng.range(35.0, 50.0);
+            out.push(spot(
+                position,
+                direction,
+                cutoff,
+                range,
+                above / tilt.cos(),
+                tone,
+                resolution,
+            ));
+        } else {
+            out.push(point(position, range, above, tone, resolution));
+        }
+    }
+    out
+}
+
+/// World-space bounding boxes of a scene's instances (for [`local`]'s obstacles).
+pub(crate) fn instance_boxes(
+    meshes: &[crate::Mesh],
+    instances: &[crate::Instance],
+) -> Vec<(Vec3, Vec3)> {
+    instances
+        .iter()
+        .filter_map(|inst| {
+            let (lo, hi) = meshes.get(inst.mesh)?.bounds()?;
+            let corners = (0..8).map(|i| {
+                inst.transform.transform_point3(Vec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                ))
+            });
+            Some(corners.fold(
+                (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                |(a, b), p| (a.min(p), b.max(p)),
+            ))
+        })
+        .collect()
 }

@@ -38,8 +38,9 @@ use crate::{Light, Mesh, Scene, SceneError};
 
 pub use analytic::*;
 pub use lights::{
-    LightCounts, AMBIENT_FRACTION, DIRECTIONAL_CASCADES, DIRECTIONAL_SHADOW_RESOLUTION,
-    DIRECTIONAL_SPLIT_LAMBDA, POINT_SHADOW_RESOLUTION, SPOT_SHADOW_RESOLUTION,
+    local_range, LightCounts, AMBIENT_FRACTION, DIRECTIONAL_CASCADES,
+    DIRECTIONAL_SHADOW_RESOLUTION, DIRECTIONAL_SPLIT_LAMBDA, LOCAL_BRIGHTNESS, LOCAL_LAYOUT_ABOVE,
+    LOCAL_OVERLAP, LOCAL_RANGE, POINT_SHADOW_RESOLUTION, SPOT_SHADOW_RESOLUTION,
 };
 
 /// Names accepted by [`build`], in the order the CLI lists them.
@@ -54,8 +55,9 @@ pub const SCENE_NAMES: &[&str] = &[
 ];
 
 /// The most lights a built-in scene or [`scatter_lights`] layout may ask for; more is a
-/// [`SceneError::InvalidRequest`]. It bounds shadow-atlas and per-light buffer sizes.
-pub const MAX_LIGHTS: usize = 4096;
+/// [`SceneError::InvalidRequest`]. Layouts above [`LOCAL_LAYOUT_ABOVE`] lights are local
+/// lights of bounded range, so a frame stays readable at any count up to this one.
+pub const MAX_LIGHTS: usize = 16384;
 
 /// Which light types a seeded layout uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]

@@ -224,6 +224,25 @@ pub fn terrain_lights(
             shadow_resolution,
         ));
     }
+    if n > lights::LOCAL_LAYOUT_ABOVE {
+        // Local lights over the central 80 × 80 m, standing on the ground (trees and rocks
+        // are not avoided: a light in a canopy lights its tree).
+        let floor = lights::Floor {
+            lo: Vec2::splat(-40.0),
+            hi: Vec2::splat(40.0),
+        };
+        out.extend(lights::local(
+            counts.spot,
+            counts.point,
+            &[floor],
+            &|_, xz: Vec2| surface_height(xz.x, xz.y),
+            &[],
+            &mut rng,
+            lights::LOCAL_BRIGHTNESS,
+            shadow_resolution,
+        ));
+        return out;
+    }
     let mut k = 0;
     let mut place = |rng: &mut Rand| {
         let u = r2(k, offset);
