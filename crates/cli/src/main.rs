@@ -211,6 +211,17 @@ struct RenderArgs {
     /// equalising hash; default: one list per texel). Changes speed, not the result.
     #[arg(long)]
     irregular_hash: Option<u32>,
+    /// Which lights each pixel visits: clustered (the lights assigned to its cluster of a
+    /// tiles x depth-slices grid, built on the GPU each frame) or all (every light: the
+    /// reference the clustered image must equal, and slow past a few hundred lights).
+    #[arg(long, default_value = "clustered", value_parser = parse_light_loop)]
+    light_loop: manyshadows::clusters::LightLoop,
+    /// Cluster tile side in pixels.
+    #[arg(long, default_value_t = manyshadows::clusters::ClusterOptions::default().tile)]
+    cluster_tile: u32,
+    /// Exponential depth slices of the cluster grid (1 to 256).
+    #[arg(long, default_value_t = manyshadows::clusters::ClusterOptions::default().slices)]
+    cluster_slices: u32,
     /// Output image.
     #[arg(long, short, default_value = "frame.png")]
     out: PathBuf,
@@ -248,6 +259,10 @@ fn parse_cull(s: &str) -> Result<CullMode, String> {
 }
 
 fn parse_pcf(s: &str) -> Result<Pcf, String> {
+    s.parse()
+}
+
+fn parse_light_loop(s: &str) -> Result<manyshadows::clusters::LightLoop, String> {
     s.parse()
 }
 
@@ -388,6 +403,12 @@ fn render(args: &RenderArgs) -> Result<()> {
             hash: args.irregular_hash,
             ..Default::default()
         },
+        light_loop: args.light_loop,
+        clusters: manyshadows::clusters::ClusterOptions {
+            tile: args.cluster_tile,
+            slices: args.cluster_slices,
+            ..Default::default()
+        },
     };
     pb.set_message("uploading the scene and building pipelines");
     let mut renderer = Renderer::new(&ctx, &scene, settings)?;
@@ -525,6 +546,8 @@ fn summary(
         "atlas": { "size": plan.layout.size, "fill": plan.fill(), "shrink_steps": plan.layout.shrink_steps },
         "shadow_work": { "passes": frame.shadow_stats.passes, "draws": frame.shadow_stats.draws, "views_drawn": frame.shadow_stats.views_drawn,
                          "culled_draws": frame.shadow_stats.culled, "triangles": frame.shadow_stats.triangles },
+        "light_loop": r.settings().light_loop.name(),
+        "clusters": frame.clusters,
         "gpu_ms": frame.timings.gpu_ms.iter().map(|(k, v)| (k.clone(), serde_json::json!(v))).collect::<serde_json::Map<_, _>>(),
         "cpu_record_ms": frame.timings.cpu_record_ms,
         "frame_wall_ms": frame.timings.wall_ms,
@@ -569,6 +592,22 @@ fn print_summary(s: &serde_json::Value) {
         "shadow work  {} passes, {} draws ({} culled), {} triangles",
         w["passes"], w["draws"], w["culled_draws"], w["triangles"]
     );
+    let c = &s["clusters"];
+    if c.is_object() {
+        let overflow = c["overflowed"].as_u64().unwrap_or(0);
+        println!(
+            "clusters     {}x{}x{} grid, {} occupied, lights per cluster {:.1} mean / {} max, {} of {} lights in view{}",
+            c["tiles"][0], c["tiles"][1], c["slices"], c["occupied"],
+            c["mean_lights"].as_f64().unwrap_or(0.0), c["max_lights"], c["lights_in_view"], l["total"],
+            if overflow > 0 {
+                format!("; {overflow} clusters overflowed the {} KiB list pool and looped over every light", c["pool_bytes"].as_u64().unwrap_or(0) / 1024)
+            } else {
+                String::new()
+            }
+        );
+    } else {
+        println!("clusters     off (every pixel loops over every light)");
+    }
     match s["gpu_ms"].as_object() {
         Some(m) if !m.is_empty() => {
             let parts: Vec<String> = m

@@ -158,7 +158,7 @@ fn absurd_numbers() {
     assert_clean_failure(
         &run(&["render", "--scene", "cubes", "--lights", "100000"]),
         1,
-        "4096",
+        "16384",
     );
     assert_clean_failure(
         &run(&["render", "--scene", "cubes", "--width", "100000"]),

@@ -170,6 +170,9 @@ pub struct CasterGeometry {
     /// `array<vec4<f32>>` world bounding sphere per cluster (written each frame).
     pub cluster_bounds: wgpu::Buffer,
     skinned: bool,
+    options: CasterOptions,
+    cache: MeshCache,
+    decisions: Vec<Decision>,
     transform: wgpu::ComputePipeline,
     bounds: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
@@ -296,35 +299,113 @@ fn dispatch_2d(items: u32) -> (u32, u32) {
     (x, groups.div_ceil(x))
 }
 
-impl CasterGeometry {
-    /// Builds the caster buffers of `scene` (already uploaded as `gpu`).
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &Scene,
-        gpu: &GpuScene,
-        options: CasterOptions,
-    ) -> Result<Self, RenderError> {
-        let mut closures: Vec<Option<Closure>> = vec![None; scene.meshes.len()];
-        let mut orders: Vec<Option<Vec<u32>>> = vec![None; scene.meshes.len()];
+/// How one caster instance's triangles are laid out: what back-face culling may do with them.
+/// Recomputed whenever lights or instances move ([`CasterGeometry::refresh`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Decision {
+    /// Its triangles may be back-face culled (closed mesh, no spot or point light inside its
+    /// box).
+    cullable: bool,
+    /// Wind its triangles the other way (inward-wound closed mesh).
+    flip: bool,
+    /// The transform mirrors (negative determinant).
+    mirrored: bool,
+    /// Normal cones are valid (cullable, rigid, a similarity transform).
+    cone_ok: bool,
+}
+
+/// The CPU side of the caster buffers.
+struct Layout {
+    sources: Vec<[u32; 2]>,
+    corners: Vec<u32>,
+    clusters: Vec<ClusterData>,
+    cullable_triangles: u32,
+}
+
+/// Per-mesh facts that never change: closure and Morton order, computed on first use.
+#[derive(Default)]
+struct MeshCache {
+    closures: Vec<Option<Closure>>,
+    orders: Vec<Option<Vec<u32>>>,
+}
+
+/// World-space position of every spot and point light that casts shadows.
+fn light_points(scene: &Scene) -> Vec<Vec3> {
+    scene
+        .lights
+        .iter()
+        .filter(|l| l.casts_shadows)
+        .filter_map(|l| match l.kind {
+            LightKind::Spot { position, .. } | LightKind::Point { position, .. } => Some(position),
+            LightKind::Directional { .. } => None,
+        })
+        .collect()
+}
+
+/// True if any of `points` lies in the world box of `mesh` placed by `transform`.
+fn light_inside(mesh: &Mesh, transform: Mat4, points: &[Vec3]) -> bool {
+    mesh.bounds().is_some_and(|(lo, hi)| {
+        let corners = (0..8).map(|k| {
+            transform.transform_point3(Vec3::new(
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            ))
+        });
+        let (wlo, whi) = corners.fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(a, b), p| (a.min(p), b.max(p)),
+        );
+        points
+            .iter()
+            .any(|p| p.cmpge(wlo).all() && p.cmple(whi).all())
+    })
+}
+
+impl MeshCache {
+    fn new(meshes: usize) -> Self {
+        Self {
+            closures: vec![None; meshes],
+            orders: vec![None; meshes],
+        }
+    }
+
+    /// The decision of every instance of `scene` (non-casters get the default).
+    fn decisions(&mut self, scene: &Scene, options: CasterOptions, skinned: bool) -> Vec<Decision> {
+        let points = light_points(scene);
+        scene
+            .instances
+            .iter()
+            .map(|inst| {
+                if !inst.casts_shadows {
+                    return Decision::default();
+                }
+                let mesh = &scene.meshes[inst.mesh];
+                let closure = if options.assume_closed {
+                    Closure::Outward
+                } else {
+                    *self.closures[inst.mesh].get_or_insert_with(|| closure(mesh))
+                };
+                let cullable = closure != Closure::Open
+                    && (options.assume_closed || !light_inside(mesh, inst.transform, &points));
+                Decision {
+                    cullable,
+                    flip: cullable && closure == Closure::Inward,
+                    mirrored: inst.transform.determinant() < 0.0,
+                    cone_ok: cullable && !skinned && is_similarity(inst.transform),
+                }
+            })
+            .collect()
+    }
+
+    /// The caster buffers' contents for `decisions`.
+    fn layout(&mut self, scene: &Scene, decisions: &[Decision]) -> Layout {
         let mut base_vertex = Vec::with_capacity(scene.meshes.len());
         let mut acc = 0u32;
         for m in &scene.meshes {
             base_vertex.push(acc);
             acc += m.positions.len() as u32;
         }
-        let light_points: Vec<Vec3> = scene
-            .lights
-            .iter()
-            .filter(|l| l.casts_shadows)
-            .filter_map(|l| match l.kind {
-                LightKind::Spot { position, .. } | LightKind::Point { position, .. } => {
-                    Some(position)
-                }
-                LightKind::Directional { .. } => None,
-            })
-            .collect();
-        let skinned = gpu.skin.is_some();
-
         let mut sources: Vec<[u32; 2]> = Vec::new();
         // (corners, cluster cones) per class: 0 = cullable, 1 = not.
         let mut corners: [Vec<u32>; 2] = [Vec::new(), Vec::new()];
@@ -334,51 +415,34 @@ impl CasterGeometry {
                 continue;
             }
             let mesh = &scene.meshes[inst.mesh];
-            let closure = if options.assume_closed {
-                Closure::Outward
-            } else {
-                *closures[inst.mesh].get_or_insert_with(|| closure(mesh))
-            };
-            let light_inside = mesh.bounds().is_some_and(|(lo, hi)| {
-                let corners = (0..8).map(|k| {
-                    inst.transform.transform_point3(Vec3::new(
-                        if k & 1 == 0 { lo.x } else { hi.x },
-                        if k & 2 == 0 { lo.y } else { hi.y },
-                        if k & 4 == 0 { lo.z } else { hi.z },
-                    ))
-                });
-                let (wlo, whi) = corners.fold(
-                    (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-                    |(a, b), p| (a.min(p), b.max(p)),
-                );
-                light_points
-                    .iter()
-                    .any(|p| p.cmpge(wlo).all() && p.cmple(whi).all())
-            });
-            let cullable = closure != Closure::Open && (options.assume_closed || !light_inside);
-            let flip = cullable && closure == Closure::Inward;
-            // A mirroring transform turns the winding around as well.
-            let mirrored = inst.transform.determinant() < 0.0;
+            let Decision {
+                cullable,
+                flip,
+                mirrored,
+                cone_ok,
+            } = decisions[i];
             let class = usize::from(!cullable);
             let first_vertex = sources.len() as u32;
             let bv = base_vertex[inst.mesh];
             sources.extend((0..mesh.positions.len() as u32).map(|v| [bv + v, i as u32]));
-            let cone_ok = cullable && !skinned && is_similarity(inst.transform);
-            let ordered = orders[inst.mesh].get_or_insert_with(|| morton_order(mesh));
+            let ordered = self.orders[inst.mesh].get_or_insert_with(|| morton_order(mesh));
             for chunk in ordered.chunks(3 * CLUSTER_TRIANGLES as usize) {
                 let first_triangle = (corners[class].len() / 3) as u32;
                 let mut normals = Vec::with_capacity(chunk.len() / 3);
                 for t in chunk.chunks_exact(3) {
+                    // A mirroring transform turns the winding around as well.
                     let (b, c) = if flip != mirrored {
                         (t[2], t[1])
                     } else {
                         (t[1], t[2])
                     };
                     corners[class].extend([t[0], b, c].map(|v| first_vertex + v));
-                    let [p0, p1, p2] = [t[0], b, c].map(|v| mesh.positions[v as usize]);
-                    if let Some(n) = (p1 - p0).cross(p2 - p0).try_normalize() {
-                        // A mirroring transform flips normals relative to the winding.
-                        normals.push(if mirrored { -n } else { n });
+                    if cone_ok {
+                        let [p0, p1, p2] = [t[0], b, c].map(|v| mesh.positions[v as usize]);
+                        if let Some(n) = (p1 - p0).cross(p2 - p0).try_normalize() {
+                            // A mirroring transform flips normals relative to the winding.
+                            normals.push(if mirrored { -n } else { n });
+                        }
                     }
                 }
                 let cone = if cone_ok {
@@ -403,6 +467,32 @@ impl CasterGeometry {
             c.first_triangle += cullable_triangles;
             c
         }));
+        Layout {
+            sources,
+            corners: all_corners,
+            clusters: all_clusters,
+            cullable_triangles,
+        }
+    }
+}
+
+impl CasterGeometry {
+    /// Builds the caster buffers of `scene` (already uploaded as `gpu`).
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &Scene,
+        gpu: &GpuScene,
+        options: CasterOptions,
+    ) -> Result<Self, RenderError> {
+        let skinned = gpu.skin.is_some();
+        let mut cache = MeshCache::new(scene.meshes.len());
+        let decisions = cache.decisions(scene, options, skinned);
+        let Layout {
+            mut sources,
+            corners: mut all_corners,
+            clusters: mut all_clusters,
+            cullable_triangles,
+        } = cache.layout(scene, &decisions);
         let vertices = sources.len() as u32;
         let triangles = (all_corners.len() / 3) as u32;
 
@@ -448,7 +538,7 @@ impl CasterGeometry {
         let corners_buf = init(
             "casters.corners",
             bytemuck::cast_slice(&all_corners),
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDEX,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
         );
         let sources_buf = init(
             "casters.sources",
@@ -458,7 +548,7 @@ impl CasterGeometry {
         let cluster_buffer = init(
             "casters.clusters",
             bytemuck::cast_slice(&all_clusters),
-            wgpu::BufferUsages::STORAGE,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         );
         let cluster_bounds = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("casters.cluster_bounds"),
@@ -549,8 +639,41 @@ impl CasterGeometry {
             cluster_buffer,
             cluster_bounds,
             skinned,
+            options,
+            cache,
+            decisions,
             bind_group,
         })
+    }
+
+    /// Re-decides which instances may be back-face culled for `scene`'s current lights and
+    /// instance transforms (a light that moved into a closed caster's box, a caster that moved
+    /// over a light, a transform that became mirrored or non-uniform), and rewrites the corner
+    /// and cluster buffers in place when a decision changed: the same triangles and clusters,
+    /// regrouped. Returns true if anything was rewritten.
+    pub fn refresh(&mut self, ctx: &GpuContext, scene: &Scene) -> bool {
+        let decisions = self.cache.decisions(scene, self.options, self.skinned);
+        if decisions == self.decisions {
+            return false;
+        }
+        let layout = self.cache.layout(scene, &decisions);
+        debug_assert_eq!(layout.corners.len() as u32, 3 * self.triangles);
+        debug_assert_eq!(layout.clusters.len(), self.clusters.len());
+        if !layout.corners.is_empty() {
+            ctx.queue
+                .write_buffer(&self.corners, 0, bytemuck::cast_slice(&layout.corners));
+        }
+        if !layout.clusters.is_empty() {
+            ctx.queue.write_buffer(
+                &self.cluster_buffer,
+                0,
+                bytemuck::cast_slice(&layout.clusters),
+            );
+        }
+        self.cullable_triangles = layout.cullable_triangles;
+        self.clusters = layout.clusters;
+        self.decisions = decisions;
+        true
     }
 
     /// True if world positions come from the skin.

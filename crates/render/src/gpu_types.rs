@@ -147,6 +147,23 @@ impl LightData {
     }
 }
 
+/// Grid and list layout of the clustered light lists (`ClusterUniforms`, see
+/// [`crate::clusters`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct ClusterUniforms {
+    /// Tiles across, tiles down, depth slices, tile side in pixels.
+    pub grid: [u32; 4],
+    /// Summary words, light words, words per slot, 1 = shading reads the lists.
+    pub words: [u32; 4],
+    /// Slicing near depth, slices per unit of ln(depth), camera near, camera far.
+    pub depth: [f32; 4],
+    /// 1/P00, 1/P11 of the camera projection, unused ×2.
+    pub proj: [f32; 4],
+    /// Slot capacity, lights in the assignment list, clusters in the grid, unused.
+    pub counts: [u32; 4],
+}
+
 /// A shadow view and its atlas tile (`ShadowViewData`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -236,6 +253,7 @@ mod tests {
             shadow
         );
         same_layout!(ShadowViewData, view_proj, tile, params);
+        same_layout!(ClusterUniforms, grid, words, depth, proj, counts);
         assert_eq!(VIEW_UNIFORM_STRIDE, 256);
     }
 }

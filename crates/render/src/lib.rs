@@ -18,6 +18,7 @@
 
 pub mod atlas_image;
 pub mod casters;
+pub mod clusters;
 pub mod context;
 pub mod gbuffer;
 pub mod gbuffer_readback;

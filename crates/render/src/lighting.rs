@@ -33,6 +33,8 @@ pub struct LightingInputs<'a> {
     /// A per-pixel visibility mask to shade with instead of the atlas (irregular shadow maps:
     /// `fs_mask`); `None` = the atlas (`fs_main`).
     pub mask: Option<&'a wgpu::Buffer>,
+    /// The clustered light lists.
+    pub clusters: &'a crate::clusters::LightClusters,
 }
 
 /// A bind-group layout entry for a non-multisampled 2D texture.
@@ -90,6 +92,9 @@ impl LightingPass {
                 texture_entry(6, wgpu::TextureSampleType::Depth, frag),
                 cmp(7),
                 crate::storage_entry(8, frag),
+                crate::uniform_entry(9, frag),
+                crate::storage_entry(10, frag),
+                crate::storage_entry(11, frag),
             ],
         });
         let linear = device.create_sampler(&wgpu::SamplerDescriptor {
@@ -154,6 +159,18 @@ impl LightingPass {
                 wgpu::BindGroupEntry {
                     binding: 8,
                     resource: mask.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 9,
+                    resource: inputs.clusters.uniforms.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 10,
+                    resource: inputs.clusters.slots.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 11,
+                    resource: inputs.clusters.masks.as_entire_binding(),
                 },
             ],
         });

@@ -15,6 +15,7 @@ use manyshadows_scene::atlas::FitPolicy;
 use manyshadows_scene::Scene;
 use wgpu::util::DeviceExt;
 
+use crate::clusters::{ClusterOptions, ClusterStats, LightClusters, LightLoop};
 use crate::gbuffer::GBuffer;
 use crate::generator::ShadowGenerator;
 use crate::gpu_scene::GpuScene;
@@ -126,6 +127,10 @@ pub struct RenderSettings {
     pub visibility: bool,
     /// Knobs of [`Technique::Irregular`] (ignored by the other techniques).
     pub irregular: IrregularOptions,
+    /// Which lights each pixel visits: its cluster's (default) or every light (reference).
+    pub light_loop: LightLoop,
+    /// The cluster grid.
+    pub clusters: ClusterOptions,
 }
 
 impl Default for RenderSettings {
@@ -143,6 +148,8 @@ impl Default for RenderSettings {
             fit: FitPolicy::default(),
             visibility: false,
             irregular: IrregularOptions::default(),
+            light_loop: LightLoop::default(),
+            clusters: ClusterOptions::default(),
         }
     }
 }
@@ -174,6 +181,8 @@ pub struct Frame {
     pub timings: FrameTimings,
     /// Shadow-generation work counters.
     pub shadow_stats: ShadowStats,
+    /// Light-cluster counters (`None` with [`LightLoop::All`]).
+    pub clusters: Option<ClusterStats>,
 }
 
 /// A scene uploaded and ready to render frames.
@@ -186,6 +195,7 @@ pub struct Renderer<'c> {
     lights: wgpu::Buffer,
     pub(crate) gbuffer: GBuffer,
     lighting: LightingPass,
+    clusters: LightClusters,
     visibility: Option<VisibilityPass>,
     irregular: Option<IrregularShadows>,
     timer: GpuTimer,
@@ -286,6 +296,15 @@ impl<'c> Renderer<'c> {
             } else {
                 None
             };
+            let mut clusters = LightClusters::new(
+                ctx,
+                (settings.width, settings.height),
+                scene.lights.len(),
+                settings.clusters,
+                settings.light_loop == LightLoop::Clustered,
+            )?;
+            clusters.update(ctx, scene)?;
+            clusters.bind(ctx, &frame_buffer, &lights, &gbuffer);
             let inputs = LightingInputs {
                 frame: &frame_buffer,
                 lights: &lights,
@@ -293,6 +312,7 @@ impl<'c> Renderer<'c> {
                 gbuffer: &gbuffer,
                 atlas,
                 mask: irregular.as_ref().map(|i| i.mask()),
+                clusters: &clusters,
             };
             let lighting = LightingPass::new(ctx, &inputs, settings.width, settings.height);
             // Irregular shadows read their own mask back instead.
@@ -315,6 +335,7 @@ impl<'c> Renderer<'c> {
                 lights,
                 gbuffer,
                 lighting,
+                clusters,
                 visibility,
                 irregular,
                 timer: GpuTimer::new(ctx),
@@ -376,6 +397,10 @@ impl<'c> Renderer<'c> {
             let span = self.timer.span("gbuffer");
             self.gbuffer
                 .record(&mut encoder, &self.scene, &self.timer, span);
+            if self.clusters.enabled() {
+                let span = self.timer.span("clusters");
+                self.clusters.record(&mut encoder, &self.timer, span);
+            }
             let span = self.timer.span("shadows");
             let shadow_stats = match &self.irregular {
                 Some(irr) => {
@@ -392,6 +417,11 @@ impl<'c> Renderer<'c> {
             let cpu_record_ms = start.elapsed().as_secs_f64() * 1e3;
             let rgba = crate::readback::read_texture(ctx, &self.lighting.color, 4)?;
             let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+            let clusters = if self.clusters.enabled() {
+                Some(self.clusters.read_stats(ctx)?)
+            } else {
+                None
+            };
             if let Some(irr) = self.irregular.as_mut() {
                 // A full node pool makes the frame an error, never a wrong image.
                 irr.finish(ctx)?;
@@ -407,6 +437,7 @@ impl<'c> Renderer<'c> {
                         gbuffer: &self.gbuffer,
                         atlas: &self.shadows.atlas,
                         mask: None,
+                        clusters: &self.clusters,
                     };
                     Some(pass.run(ctx, &inputs, &self.timer, span)?)
                 }
@@ -434,6 +465,7 @@ impl<'c> Renderer<'c> {
                     wall_ms,
                 },
                 shadow_stats,
+                clusters,
             })
         })
     }

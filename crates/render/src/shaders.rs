@@ -28,6 +28,11 @@ pub fn lighting() -> String {
     ])
 }
 
+/// Clustered light assignment (mark, compact, assign, statistics).
+pub fn clusters() -> String {
+    compose(&[COMMON, include_str!("shaders/clusters.wgsl")])
+}
+
 /// Hard visibility mask.
 pub fn visibility() -> String {
     compose(&[
@@ -136,6 +141,7 @@ pub fn all() -> Vec<(&'static str, String)> {
         ("gbuffer", gbuffer()),
         ("lighting", lighting()),
         ("visibility", visibility()),
+        ("clusters", clusters()),
         ("irregular", irregular()),
         ("atlas_copy", atlas_copy()),
         ("traditional", traditional()),

@@ -140,6 +140,9 @@ impl VisibilityPass {
                 ),
                 crate::storage_rw_entry(6, comp),
                 crate::uniform_entry(7, comp),
+                crate::uniform_entry(8, comp),
+                crate::storage_entry(9, comp),
+                crate::storage_entry(10, comp),
             ],
         });
         let module =
@@ -244,6 +247,18 @@ impl VisibilityPass {
                     wgpu::BindGroupEntry {
                         binding: 7,
                         resource: params.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 8,
+                        resource: inputs.clusters.uniforms.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 9,
+                        resource: inputs.clusters.slots.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 10,
+                        resource: inputs.clusters.masks.as_entire_binding(),
                     },
                 ],
             });

@@ -65,3 +65,41 @@ struct ShadowViewData {
     // (perspective: multiply by clip w), 1 if orthographic else 0.
     params: vec4<f32>,
 }
+
+// The clustered light lists (clusters.rs): the view is cut into tiles of `grid.w` pixels and
+// `grid.z` depth slices (exponential in view depth); each cluster that holds a visible sample
+// gets a slot of `words.z` words: `words.x` summary words (bit w set = light word w is not
+// empty), then `words.y` light words (bit b of word w set = light 32w + b may reach the cluster).
+struct ClusterUniforms {
+    // Tiles across, tiles down, depth slices, tile side in pixels.
+    grid: vec4<u32>,
+    // Summary words, light words, words per slot, 1 = shading reads the lists (0 = every light).
+    words: vec4<u32>,
+    // Slicing near depth, slices per unit of ln(depth), camera near, camera far: slice s holds
+    // view depths near·e^(s/per_ln) .. near·e^((s+1)/per_ln); the first and last slices reach
+    // out to the camera's near and far planes.
+    depth: vec4<f32>,
+    // View-space x and y per unit depth per NDC unit (1/P00, 1/P11), unused, unused.
+    proj: vec4<f32>,
+    // Slot capacity, lights in the assignment list, clusters in the grid, unused.
+    counts: vec4<u32>,
+}
+
+// Depth slice of a view depth: ln(depth / near) · per_ln, clamped to the grid.
+fn cluster_slice(c: ClusterUniforms, view_depth: f32) -> u32 {
+    let s = floor(log(max(view_depth, 1e-30) / c.depth.x) * c.depth.y);
+    return u32(clamp(s, 0.0, f32(c.grid.z - 1u)));
+}
+
+// Cluster index of pixel `px` at `view_depth`.
+fn cluster_index(c: ClusterUniforms, px: vec2<u32>, view_depth: f32) -> u32 {
+    let t = min(px / c.grid.w, c.grid.xy - vec2<u32>(1u));
+    return (cluster_slice(c, view_depth) * c.grid.y + t.y) * c.grid.x + t.x;
+}
+
+// Slot values: 0 = no sample in the cluster, 1 = marked (before allocation), 2 + slot
+// index = allocated, CLUSTER_OVERFLOW = marked but the pool was full (shade with every light).
+const CLUSTER_EMPTY: u32 = 0u;
+const CLUSTER_MARKED: u32 = 1u;
+const CLUSTER_FIRST_SLOT: u32 = 2u;
+const CLUSTER_OVERFLOW: u32 = 0xffffffffu;

@@ -16,6 +16,10 @@
 // Visibility computed elsewhere (irregular shadow maps): `counts.w` words per pixel, bit set =
 // lit. Read by `fs_mask` only; the atlas entry point `fs_main` is bound to a dummy.
 @group(0) @binding(8) var<storage, read> vis_mask: array<u32>;
+// The clustered light lists (clusters.rs): per cluster a slot value, and the slot pool.
+@group(0) @binding(9) var<uniform> clusters: ClusterUniforms;
+@group(0) @binding(10) var<storage, read> cluster_slots: array<u32>;
+@group(0) @binding(11) var<storage, read> cluster_masks: array<u32>;
 
 // Scale of the linear colour before tone mapping.
 const EXPOSURE: f32 = 1.4;
@@ -71,49 +75,92 @@ fn fs_mask(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     return shade(vec2<i32>(frag.xy), true);
 }
 
+// The surface point a pixel shades, and what every light's term needs of it.
+struct Surface {
+    p: vec3<f32>,
+    n: vec3<f32>,
+    v: vec3<f32>,
+    view_depth: f32,
+    mat: MaterialData,
+    px: vec2<i32>,
+    from_mask: bool,
+}
+
+// `color` plus light `i`'s contribution at `s` (nothing beyond the light's reach). Both light
+// loops below call exactly this, in ascending light order, so they add the same numbers in the
+// same order.
+fn add_light(color: vec3<f32>, i: u32, s: Surface) -> vec3<f32> {
+    let light = lights[i];
+    if (!in_reach(light, s.p)) {
+        return color;
+    }
+    let kind = light.shadow.z;
+    var att = 1.0;
+    if (kind != LIGHT_DIRECTIONAL) {
+        let d = distance(light.position.xyz, s.p);
+        let a = light.attenuation;
+        att = 1.0 / max(a.x + a.y * d + a.z * d * d, 1e-6);
+    }
+    let l = to_light(light, s.p);
+    let ambient = light.ambient.rgb * s.mat.ambient.rgb * att;
+    let ndl = dot(s.n, l);
+    if (ndl <= 0.0) {
+        return color + ambient;
+    }
+    let diffuse = light.diffuse.rgb * s.mat.diffuse.rgb * ndl;
+    let r = reflect(-l, s.n);
+    let spec = light.specular.rgb * s.mat.specular.rgb * pow(max(dot(r, s.v), 0.0), max(s.mat.ambient.w, 1.0));
+    var lit = 1.0;
+    if (s.from_mask) {
+        let word = vis_mask[(u32(s.px.y) * u32(frame.viewport.x) + u32(s.px.x)) * frame.counts.w + i / 32u];
+        lit = f32((word >> (i % 32u)) & 1u);
+    } else {
+        lit = shadow_factor(shadow_coord(light, s.p, s.n, s.view_depth));
+    }
+    return color + ambient + lit * att * (diffuse + spec);
+}
+
 fn shade(px: vec2<i32>, from_mask: bool) -> vec4<f32> {
     let pos = bitcast<vec4<f32>>(textureLoad(gbuf_position, px, 0));
     if (pos.w < 0.5) {
         return vec4<f32>(frame.sky.rgb, 1.0);
     }
     let nm = textureLoad(gbuf_normal, px, 0);
-    let p = pos.xyz;
-    let n = normalize(bitcast<vec3<f32>>(nm.xyz));
-    let mat = materials[nm.w];
-    let v = normalize(frame.camera_pos.xyz - p);
-    let view_depth = -(frame.view * vec4<f32>(p, 1.0)).z;
+    var s: Surface;
+    s.p = pos.xyz;
+    s.n = normalize(bitcast<vec3<f32>>(nm.xyz));
+    s.mat = materials[nm.w];
+    s.v = normalize(frame.camera_pos.xyz - s.p);
+    s.view_depth = -(frame.view * vec4<f32>(s.p, 1.0)).z;
+    s.px = px;
+    s.from_mask = from_mask;
     var color = vec3<f32>(0.0);
-    let count = frame.counts.x;
-    for (var i = 0u; i < count; i = i + 1u) {
-        let light = lights[i];
-        if (!in_reach(light, p)) {
-            continue;
+    var slot = CLUSTER_OVERFLOW;
+    if (clusters.words.w != 0u) {
+        slot = cluster_slots[cluster_index(clusters, vec2<u32>(px), s.view_depth)];
+    }
+    if (slot < CLUSTER_FIRST_SLOT || slot == CLUSTER_OVERFLOW) {
+        // Every light: the reference loop, and the fallback of clusters without a slot.
+        let count = frame.counts.x;
+        for (var i = 0u; i < count; i = i + 1u) {
+            color = add_light(color, i, s);
         }
-        let kind = light.shadow.z;
-        var att = 1.0;
-        if (kind != LIGHT_DIRECTIONAL) {
-            let d = distance(light.position.xyz, p);
-            let a = light.attenuation;
-            att = 1.0 / max(a.x + a.y * d + a.z * d * d, 1e-6);
+    } else {
+        // The cluster's lights in ascending order: summary bits pick the non-empty words.
+        let base = (slot - CLUSTER_FIRST_SLOT) * clusters.words.z;
+        for (var sw = 0u; sw < clusters.words.x; sw = sw + 1u) {
+            var words = cluster_masks[base + sw];
+            while (words != 0u) {
+                let w = sw * 32u + firstTrailingBit(words);
+                words = words & (words - 1u);
+                var bits = cluster_masks[base + clusters.words.x + w];
+                while (bits != 0u) {
+                    let i = w * 32u + firstTrailingBit(bits);
+                    bits = bits & (bits - 1u);
+                    color = add_light(color, i, s);
+                }
+            }
         }
-        let l = to_light(light, p);
-        let ambient = light.ambient.rgb * mat.ambient.rgb * att;
-        let ndl = dot(n, l);
-        if (ndl <= 0.0) {
-            color = color + ambient;
-            continue;
-        }
-        let diffuse = light.diffuse.rgb * mat.diffuse.rgb * ndl;
-        let r = reflect(-l, n);
-        let spec = light.specular.rgb * mat.specular.rgb * pow(max(dot(r, v), 0.0), max(mat.ambient.w, 1.0));
-        var lit = 1.0;
-        if (from_mask) {
-            let word = vis_mask[(u32(px.y) * u32(frame.viewport.x) + u32(px.x)) * frame.counts.w + i / 32u];
-            lit = f32((word >> (i % 32u)) & 1u);
-        } else {
-            lit = shadow_factor(shadow_coord(light, p, n, view_depth));
-        }
-        color = color + ambient + lit * att * (diffuse + spec);
     }
     // Exponential tone mapping: many overlapping lights add up past 1 without clipping to white.
     return vec4<f32>(vec3<f32>(1.0) - exp(-color * EXPOSURE), 1.0);

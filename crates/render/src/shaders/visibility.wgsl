@@ -19,6 +19,34 @@ struct VisibilityParams {
 @group(0) @binding(5) var atlas: texture_2d<f32>;
 @group(0) @binding(6) var<storage, read_write> mask: array<u32>;
 @group(0) @binding(7) var<uniform> params: VisibilityParams;
+// The clustered light lists (clusters.rs), as in the lighting pass.
+@group(0) @binding(8) var<uniform> clusters: ClusterUniforms;
+@group(0) @binding(9) var<storage, read> cluster_slots: array<u32>;
+@group(0) @binding(10) var<storage, read> cluster_masks: array<u32>;
+
+// Bit b set = light 32·word + b is lit at the point (in reach, and the atlas says unoccluded),
+// for the lights whose bits are set in `candidates`.
+fn word_bits(word: u32, candidates: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) -> u32 {
+    var bits = 0u;
+    var left = candidates;
+    while (left != 0u) {
+        let b = firstTrailingBit(left);
+        left = left & (left - 1u);
+        let light = lights[word * 32u + b];
+        if (!in_reach(light, p)) {
+            continue;
+        }
+        let c = shadow_coord(light, p, n, view_depth);
+        var lit = true;
+        if (c.valid) {
+            lit = c.depth <= textureLoad(atlas, hard_texel(c), 0).r;
+        }
+        if (lit) {
+            bits = bits | (1u << b);
+        }
+    }
+    return bits;
+}
 
 @compute @workgroup_size(8, 8, 1)
 fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -34,28 +62,30 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let n = normalize(bitcast<vec3<f32>>(textureLoad(gbuf_normal, vec2<i32>(gid.xy), 0).xyz));
     let view_depth = -(frame.view * vec4<f32>(p, 1.0)).z;
     let count = frame.counts.x;
+    var slot = CLUSTER_OVERFLOW;
+    if (has_geometry && clusters.words.w != 0u) {
+        slot = cluster_slots[cluster_index(clusters, gid.xy, view_depth)];
+    }
+    let clustered = slot >= CLUSTER_FIRST_SLOT && slot != CLUSTER_OVERFLOW;
+    let base = (slot - CLUSTER_FIRST_SLOT) * clusters.words.z;
     for (var wi = 0u; wi < params.word_count; wi = wi + 1u) {
-        var bits = 0u;
         let word = params.first_word + wi;
+        var bits = 0u;
         if (has_geometry) {
-            for (var b = 0u; b < 32u; b = b + 1u) {
-                let li = word * 32u + b;
-                if (li >= count) {
-                    break;
-                }
-                let light = lights[li];
-                if (!in_reach(light, p)) {
-                    continue;
-                }
-                let c = shadow_coord(light, p, n, view_depth);
-                var lit = true;
-                if (c.valid) {
-                    lit = c.depth <= textureLoad(atlas, hard_texel(c), 0).r;
-                }
-                if (lit) {
-                    bits = bits | (1u << b);
+            // The lights of this word to test: the cluster's, or every light.
+            var candidates = 0xffffffffu;
+            if (word * 32u + 32u > count) {
+                candidates = (1u << (count - word * 32u)) - 1u;
+            }
+            if (clustered) {
+                let summary = cluster_masks[base + word / 32u];
+                if (((summary >> (word % 32u)) & 1u) == 0u) {
+                    candidates = 0u;
+                } else {
+                    candidates = candidates & cluster_masks[base + clusters.words.x + word];
                 }
             }
+            bits = word_bits(word, candidates, p, n, view_depth);
         }
         mask[pixel * params.word_count + wi] = bits;
     }

@@ -1,0 +1,533 @@
+//! Clustered light lists (Olsson, Billeter and Assarsson, "Clustered Deferred and Forward
+//! Shading", HPG 2012; seed 002 uses the same clusters for its virtual shadow maps): with
+//! thousands of lights a pixel must not loop over all of them, only over those that can reach
+//! it.
+//!
+//! **The grid.** The view is cut into square screen tiles ([`ClusterOptions::tile`] pixels)
+//! and [`ClusterOptions::slices`] depth slices, exponential in view depth between the nearest
+//! and farthest depth that holds geometry (the camera's near and far planes close the first
+//! and last slice). A cluster is one (tile, slice) cell: a small frustum segment.
+//!
+//! **Only occupied clusters** (seed 002's observation that most cells of the grid hold no
+//! visible sample): after the G-buffer, one thread per pixel marks its sample's cluster; one
+//! thread per cluster then hands each marked cluster a *slot* of a fixed pool. A slot is a
+//! bit set over all lights — `ceil(lights/32)` light words, plus one summary bit per light
+//! word — so a list can never overflow: every light that reaches a cluster has its bit.
+//!
+//! **Assignment.** The CPU lists the spot and point lights whose bounding sphere
+//! ([`manyshadows_scene::Light::bounding_sphere`]) meets the camera frustum; a light outside
+//! it reaches no visible sample. Directional lights reach everywhere: every slot starts with
+//! their bits. On the GPU one thread per (listed light, depth slice) projects the sphere's
+//! box within the slice to a tile rectangle and tests every occupied cluster in it: sphere
+//! against the cluster's view-space box, and for spots the cone against the box's bounding
+//! sphere (a conservative test: it only rejects clusters wholly outside the cone). Bits are
+//! set with `atomicOr`, so the result does not depend on thread order.
+//!
+//! **Shading** (`lighting.wgsl`, `visibility.wgsl`) walks a slot's set bits in ascending
+//! order — summary word, then light word, then bit — and applies the same per-light code as
+//! the loop over every light, in the same order. Since every light in reach of a pixel is in
+//! its cluster's set, the clustered sum is the *same* floating-point sum as the full loop, bit
+//! for bit ([`LightLoop::All`] keeps the full loop as the reference; a test compares them).
+//!
+//! **When the pool is full** (more occupied clusters than slots: only with a pool budget far
+//! below the default, or enormous frames), the clusters left without a slot are marked
+//! *overflowed* and their pixels loop over every light: slower, never wrong, and counted in
+//! [`ClusterStats::overflowed`].
+
+use glam::{Mat4, Vec3, Vec4};
+use manyshadows_scene::light_space;
+use manyshadows_scene::Scene;
+use wgpu::util::DeviceExt;
+
+use crate::gbuffer::GBuffer;
+use crate::gpu_types::ClusterUniforms;
+use crate::timing::{GpuTimer, Span};
+use crate::{GpuContext, RenderError};
+
+/// Default tile side in pixels.
+pub const DEFAULT_TILE: u32 = 32;
+/// Default number of depth slices.
+pub const DEFAULT_SLICES: u32 = 24;
+/// Default budget of the slot pool (further capped by the adapter's storage-binding limit).
+pub const DEFAULT_POOL_BYTES: u64 = 128 << 20;
+
+/// Which lights each pixel's shading visits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightLoop {
+    /// Only the lights of the pixel's cluster (the default).
+    #[default]
+    Clustered,
+    /// Every light, for every pixel: the reference the clustered result must equal.
+    All,
+}
+
+impl LightLoop {
+    /// Every mode.
+    pub const ALL: &'static [LightLoop] = &[LightLoop::Clustered, LightLoop::All];
+
+    /// CLI name: `clustered` or `all`.
+    pub fn name(self) -> &'static str {
+        match self {
+            LightLoop::Clustered => "clustered",
+            LightLoop::All => "all",
+        }
+    }
+}
+
+impl std::str::FromStr for LightLoop {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        LightLoop::ALL
+            .iter()
+            .copied()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| format!("unknown light loop '{s}' (expected clustered or all)"))
+    }
+}
+
+/// Shape of the cluster grid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ClusterOptions {
+    /// Tile side in pixels (at least 1).
+    pub tile: u32,
+    /// Depth slices (1..=256).
+    pub slices: u32,
+    /// Budget of the slot pool in bytes (capped by the adapter's storage-binding limit);
+    /// `None` = [`DEFAULT_POOL_BYTES`].
+    pub pool_bytes: Option<u64>,
+}
+
+impl Default for ClusterOptions {
+    fn default() -> Self {
+        Self {
+            tile: DEFAULT_TILE,
+            slices: DEFAULT_SLICES,
+            pool_bytes: None,
+        }
+    }
+}
+
+/// What the last frame's clustering did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct ClusterStats {
+    /// Tiles across and down.
+    pub tiles: [u32; 2],
+    /// Depth slices.
+    pub slices: u32,
+    /// Clusters in the grid.
+    pub clusters: u32,
+    /// Clusters holding at least one visible sample.
+    pub occupied: u32,
+    /// Occupied clusters that got no slot (their pixels loop over every light).
+    pub overflowed: u32,
+    /// Slots in the pool.
+    pub capacity: u32,
+    /// Spot and point lights whose bounding sphere meets the view (the assignment's input).
+    pub lights_in_view: u32,
+    /// Mean lights per occupied cluster with a slot (directional lights included).
+    pub mean_lights: f64,
+    /// Most lights in one cluster.
+    pub max_lights: u32,
+    /// Bytes of the slot pool.
+    pub pool_bytes: u64,
+}
+
+/// The cluster grid's buffers and passes.
+pub struct LightClusters {
+    /// `ClusterUniforms` (uniform).
+    pub uniforms: wgpu::Buffer,
+    /// One `u32` per cluster (see `clusters.wgsl`).
+    pub slots: wgpu::Buffer,
+    /// The slot pool.
+    pub masks: wgpu::Buffer,
+    global: wgpu::Buffer,
+    assign_index: wgpu::Buffer,
+    assign_sphere: wgpu::Buffer,
+    control: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    layout: wgpu::BindGroupLayout,
+    bind_group: Option<wgpu::BindGroup>,
+    mark: wgpu::ComputePipeline,
+    compact: wgpu::ComputePipeline,
+    assign: wgpu::ComputePipeline,
+    stats: wgpu::ComputePipeline,
+    data: ClusterUniforms,
+    width: u32,
+    height: u32,
+    options: ClusterOptions,
+    enabled: bool,
+    light_capacity: usize,
+    pool_limit: u64,
+}
+
+/// Light words and summary words of a slot for `lights` lights.
+fn slot_words(lights: usize) -> (u32, u32) {
+    let words = (lights as u32).div_ceil(32).max(1);
+    (words.div_ceil(32).max(1), words)
+}
+
+fn dispatch_2d(items: u32) -> (u32, u32) {
+    let groups = items.div_ceil(64).max(1);
+    let x = groups.min(65535);
+    (x, groups.div_ceil(x))
+}
+
+impl LightClusters {
+    /// Builds the grid for `width`×`height` frames and `lights` lights. `enabled = false`
+    /// ([`LightLoop::All`]) records nothing and makes shading loop over every light.
+    pub fn new(
+        ctx: &GpuContext,
+        (width, height): (u32, u32),
+        lights: usize,
+        options: ClusterOptions,
+        enabled: bool,
+    ) -> Result<Self, RenderError> {
+        if options.tile == 0 || !(1..=256).contains(&options.slices) {
+            return Err(RenderError::Unsupported(format!(
+                "cluster grid of {}-pixel tiles and {} slices: tiles must be at least 1 pixel \
+                 and slices 1 to 256",
+                options.tile, options.slices
+            )));
+        }
+        let device = &ctx.device;
+        let limit = ctx.limits().max_storage_buffer_binding_size;
+        let pool_limit = options.pool_bytes.unwrap_or(DEFAULT_POOL_BYTES).min(limit);
+        let tiles = [width.div_ceil(options.tile), height.div_ceil(options.tile)];
+        let clusters = tiles[0] as u64 * tiles[1] as u64 * options.slices as u64;
+        if clusters * 4 > limit {
+            return Err(RenderError::ResolutionTooLarge {
+                width,
+                height,
+                reason: format!(
+                    "{clusters} light clusters need more than this adapter's storage-binding \
+                     limit of {limit} bytes; use larger cluster tiles"
+                ),
+            });
+        }
+        let storage = wgpu::BufferUsages::STORAGE;
+        let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(16),
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let slots = buffer(
+            "clusters.slots",
+            clusters * 4,
+            storage | wgpu::BufferUsages::COPY_DST,
+        );
+        let control = buffer(
+            "clusters.control",
+            16,
+            storage | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        );
+        let readback = buffer(
+            "clusters.readback",
+            16,
+            wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        );
+        let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("clusters.uniforms"),
+            contents: bytemuck::bytes_of(&ClusterUniforms::default()),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("clusters.layout"),
+            entries: &[
+                crate::uniform_entry(0, cs),
+                crate::uniform_entry(1, cs),
+                crate::lighting::texture_entry(2, wgpu::TextureSampleType::Uint, cs),
+                crate::storage_rw_entry(3, cs),
+                crate::storage_rw_entry(4, cs),
+                crate::storage_entry(5, cs),
+                crate::storage_entry(6, cs),
+                crate::storage_entry(7, cs),
+                crate::storage_entry(8, cs),
+                crate::storage_rw_entry(9, cs),
+            ],
+        });
+        let module = crate::shaders::module(device, "clusters.shader", &crate::shaders::clusters());
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("clusters.pipeline_layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let mut me = Self {
+            uniforms,
+            slots,
+            masks: buffer("clusters.masks", 16, storage),
+            global: buffer("clusters.global", 16, storage),
+            assign_index: buffer("clusters.assign_index", 16, storage),
+            assign_sphere: buffer("clusters.assign_sphere", 16, storage),
+            control,
+            readback,
+            layout,
+            bind_group: None,
+            mark: pipeline("cs_mark"),
+            compact: pipeline("cs_compact"),
+            assign: pipeline("cs_assign"),
+            stats: pipeline("cs_stats"),
+            data: ClusterUniforms {
+                grid: [tiles[0], tiles[1], options.slices, options.tile],
+                counts: [0, 0, clusters as u32, 0],
+                ..Default::default()
+            },
+            width,
+            height,
+            options,
+            enabled,
+            light_capacity: 0,
+            pool_limit,
+        };
+        me.resize(ctx, lights)?;
+        Ok(me)
+    }
+
+    /// True when shading reads the lists.
+    pub fn enabled(&self) -> bool {
+        self.enabled
+    }
+
+    /// (Re)allocates the per-light buffers and the pool for `lights` lights, if it grew past
+    /// what they hold. Returns true if buffers were replaced (bind groups must be rebuilt).
+    fn resize(&mut self, ctx: &GpuContext, lights: usize) -> Result<bool, RenderError> {
+        let (summary, words) = slot_words(lights);
+        let stride = summary + words;
+        let clusters = self.data.counts[2] as u64;
+        let fits = (self.pool_limit / (stride as u64 * 4)).max(1);
+        let capacity = clusters.min(fits) as u32;
+        let same_layout = self.data.words[2] == stride && self.data.counts[0] == capacity;
+        self.data.words = [summary, words, stride, u32::from(self.enabled)];
+        self.data.counts[0] = capacity;
+        if same_layout && lights <= self.light_capacity {
+            return Ok(false);
+        }
+        let device = &ctx.device;
+        let storage = wgpu::BufferUsages::STORAGE;
+        let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(16),
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        if !same_layout {
+            // Only the passes write the pool: an allocation that is never recorded (the full
+            // light loop) stays tiny.
+            let bytes = if self.enabled {
+                capacity as u64 * stride as u64 * 4
+            } else {
+                16
+            };
+            self.masks = buffer("clusters.masks", bytes, storage);
+            self.global = buffer(
+                "clusters.global",
+                stride as u64 * 4,
+                storage | wgpu::BufferUsages::COPY_DST,
+            );
+        }
+        if lights > self.light_capacity {
+            let cap = lights.next_power_of_two().max(64);
+            self.assign_index = buffer(
+                "clusters.assign_index",
+                cap as u64 * 4,
+                storage | wgpu::BufferUsages::COPY_DST,
+            );
+            self.assign_sphere = buffer(
+                "clusters.assign_sphere",
+                cap as u64 * 16,
+                storage | wgpu::BufferUsages::COPY_DST,
+            );
+            self.light_capacity = cap;
+        }
+        self.bind_group = None;
+        let _ = ctx;
+        Ok(true)
+    }
+
+    /// Writes this frame's grid, directional bits and light list for `scene` (camera and
+    /// lights). Returns true when buffers were replaced: whoever binds [`Self::slots`],
+    /// [`Self::masks`] or [`Self::uniforms`] must rebuild its bind group.
+    pub fn update(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<bool, RenderError> {
+        let replaced = self.resize(ctx, scene.lights.len())?;
+        let cam = &scene.camera;
+        let aspect = self.width as f32 / self.height as f32;
+        let (lo, hi) = light_space::view_depth_range(cam, scene.world_bounds(false));
+        let near = lo.max(cam.near);
+        let far = hi.max(near * 1.01);
+        let proj = cam.projection(aspect);
+        self.data.depth = [
+            near,
+            self.options.slices as f32 / (far / near).ln(),
+            cam.near,
+            cam.far,
+        ];
+        self.data.proj = [1.0 / proj.x_axis.x, 1.0 / proj.y_axis.y, 0.0, 0.0];
+
+        let (summary, words) = (self.data.words[0] as usize, self.data.words[1] as usize);
+        let mut global = vec![0u32; summary + words];
+        let planes = light_space::frustum_planes(proj * cam.view());
+        let mut index = Vec::new();
+        let mut spheres: Vec<[f32; 4]> = Vec::new();
+        for (i, light) in scene.lights.iter().enumerate() {
+            match light.bounding_sphere() {
+                None => {
+                    let w = i / 32;
+                    global[summary + w] |= 1 << (i % 32);
+                    global[w / 32] |= 1 << (w % 32);
+                }
+                Some((c, r)) => {
+                    if light_space::sphere_in_planes(&planes, c, r * 1.001 + 1e-4) {
+                        index.push(i as u32);
+                        spheres.push(c.extend(r).to_array());
+                    }
+                }
+            }
+        }
+        self.data.counts[1] = index.len() as u32;
+        let q = &ctx.queue;
+        q.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&self.data));
+        q.write_buffer(&self.global, 0, bytemuck::cast_slice(&global));
+        if !index.is_empty() {
+            q.write_buffer(&self.assign_index, 0, bytemuck::cast_slice(&index));
+            q.write_buffer(&self.assign_sphere, 0, bytemuck::cast_slice(&spheres));
+        }
+        Ok(replaced)
+    }
+
+    /// Binds the frame's inputs (after [`Self::update`] replaced buffers, or the lights
+    /// buffer or G-buffer changed).
+    pub fn bind(
+        &mut self,
+        ctx: &GpuContext,
+        frame: &wgpu::Buffer,
+        lights: &wgpu::Buffer,
+        gbuffer: &GBuffer,
+    ) {
+        let pv = gbuffer.position.create_view(&Default::default());
+        let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
+        self.bind_group = Some(ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("clusters.bind_group"),
+            layout: &self.layout,
+            entries: &[
+                entry(0, frame.as_entire_binding()),
+                entry(1, self.uniforms.as_entire_binding()),
+                entry(2, wgpu::BindingResource::TextureView(&pv)),
+                entry(3, self.slots.as_entire_binding()),
+                entry(4, self.masks.as_entire_binding()),
+                entry(5, self.global.as_entire_binding()),
+                entry(6, self.assign_index.as_entire_binding()),
+                entry(7, self.assign_sphere.as_entire_binding()),
+                entry(8, lights.as_entire_binding()),
+                entry(9, self.control.as_entire_binding()),
+            ],
+        }));
+    }
+
+    /// True when [`Self::bind`] must run before the next [`Self::record`].
+    pub fn needs_bind(&self) -> bool {
+        self.bind_group.is_none()
+    }
+
+    /// Records marking, slot allocation, assignment and statistics (nothing when disabled).
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: &GpuTimer, span: Option<Span>) {
+        if !self.enabled {
+            return;
+        }
+        let Some(bind_group) = &self.bind_group else {
+            debug_assert!(false, "LightClusters::bind must run before record");
+            return;
+        };
+        encoder.clear_buffer(&self.slots, 0, None);
+        encoder.clear_buffer(&self.control, 0, None);
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("clusters.pass"),
+                timestamp_writes: timer.compute_writes(span, true, true),
+            });
+            pass.set_bind_group(0, bind_group, &[]);
+            pass.set_pipeline(&self.mark);
+            pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
+            let (x, y) = dispatch_2d(self.data.counts[2]);
+            pass.set_pipeline(&self.compact);
+            pass.dispatch_workgroups(x, y, 1);
+            if self.data.counts[1] > 0 {
+                pass.set_pipeline(&self.assign);
+                pass.dispatch_workgroups(self.data.counts[1].div_ceil(64), 1, self.data.grid[2]);
+            }
+            let (x, y) = dispatch_2d(self.data.counts[0]);
+            pass.set_pipeline(&self.stats);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        encoder.copy_buffer_to_buffer(&self.control, 0, &self.readback, 0, 16);
+    }
+
+    /// The counters of the last recorded frame (after its submission).
+    pub fn read_stats(&self, ctx: &GpuContext) -> Result<ClusterStats, RenderError> {
+        let d = &self.data;
+        let mut stats = ClusterStats {
+            tiles: [d.grid[0], d.grid[1]],
+            slices: d.grid[2],
+            clusters: d.counts[2],
+            capacity: d.counts[0],
+            lights_in_view: d.counts[1],
+            pool_bytes: self.masks.size(),
+            ..Default::default()
+        };
+        if !self.enabled {
+            return Ok(stats);
+        }
+        let bytes = crate::readback::map_read(ctx, &self.readback, 0..16)?;
+        let c: &[u32] = bytemuck::cast_slice(&bytes);
+        stats.occupied = c[0];
+        stats.overflowed = c[1];
+        let with_slot = c[0].min(d.counts[0]);
+        stats.mean_lights = if with_slot > 0 {
+            c[2] as f64 / with_slot as f64
+        } else {
+            0.0
+        };
+        stats.max_lights = c[3];
+        Ok(stats)
+    }
+}
+
+/// The camera's view-projection for `scene` at `aspect` (width / height).
+pub fn camera_view_proj(scene: &Scene, aspect: f32) -> Mat4 {
+    scene.camera.projection(aspect) * scene.camera.view()
+}
+
+/// True if the sphere `(centre, radius)` meets the frustum of `view_proj` (conservative).
+pub fn sphere_in_view(view_proj: Mat4, centre: Vec3, radius: f32) -> bool {
+    let planes: [Vec4; 6] = light_space::frustum_planes(view_proj);
+    light_space::sphere_in_planes(&planes, centre, radius)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slot_words_cover_every_light() {
+        assert_eq!(slot_words(0), (1, 1));
+        assert_eq!(slot_words(32), (1, 1));
+        assert_eq!(slot_words(33), (1, 2));
+        assert_eq!(slot_words(1024), (1, 32));
+        assert_eq!(slot_words(1025), (2, 33));
+        assert_eq!(slot_words(16384), (16, 512));
+    }
+}

@@ -1,0 +1,117 @@
+//! Clustered shading must change the cost of a frame, never its picture: the clustered light
+//! loop visits a pixel's lights in the same ascending order as the loop over every light, so
+//! the shaded image and the visibility mask must be identical, byte for byte. A pool too small
+//! for the occupied clusters must be reported and still give the same image (those clusters
+//! fall back to every light).
+
+mod common;
+
+use manyshadows::clusters::{ClusterOptions, LightLoop};
+use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
+use manyshadows::scene::Scene;
+use manyshadows::{Frame, GpuContext, RenderSettings, Renderer};
+
+fn scene(name: &str, lights: usize) -> Scene {
+    builtin::build(
+        name,
+        &BuiltinOptions {
+            lights: Some(lights),
+            seed: 3,
+            mix: LightMix::All,
+            shadow_resolution: Some(128),
+            ..Default::default()
+        },
+    )
+    .expect("builtin scene")
+}
+
+fn render(ctx: &GpuContext, scene: &Scene, light_loop: LightLoop, pool: Option<u64>) -> Frame {
+    let settings = RenderSettings {
+        width: 320,
+        height: 180,
+        visibility: true,
+        light_loop,
+        clusters: ClusterOptions {
+            pool_bytes: pool,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    Renderer::new(ctx, scene, settings)
+        .expect("renderer")
+        .render()
+        .expect("frame")
+}
+
+fn assert_same(name: &str, a: &Frame, b: &Frame) {
+    let differing = a
+        .rgba
+        .chunks(4)
+        .zip(b.rgba.chunks(4))
+        .filter(|(x, y)| x != y)
+        .count();
+    if differing > 0 {
+        let dir = common::artifacts_dir();
+        for (f, tag) in [(a, "clustered"), (b, "all")] {
+            image::save_buffer(
+                dir.join(format!("clusters_{name}_{tag}.png")),
+                &f.rgba,
+                f.width,
+                f.height,
+                image::ExtendedColorType::Rgba8,
+            )
+            .expect("write artifact");
+        }
+    }
+    assert_eq!(
+        differing, 0,
+        "{name}: {differing} pixels differ (images in target/test-artifacts)"
+    );
+    let (va, vb) = (
+        a.visibility.as_ref().unwrap(),
+        b.visibility.as_ref().unwrap(),
+    );
+    assert!(va.words == vb.words, "{name}: the visibility masks differ");
+}
+
+#[test]
+fn clustered_image_equals_the_loop_over_every_light() {
+    let ctx = common::context();
+    for (name, n) in [("atrium", 300), ("dragon", 200)] {
+        let scene = scene(name, n);
+        let clustered = render(&ctx, &scene, LightLoop::Clustered, None);
+        let all = render(&ctx, &scene, LightLoop::All, None);
+        assert!(all.clusters.is_none());
+        let stats = clustered.clusters.expect("cluster stats");
+        eprintln!("{name}, {n} lights: {stats:?}");
+        assert_eq!(stats.overflowed, 0);
+        assert!(stats.occupied > 0 && stats.lights_in_view > 0);
+        // The point of clustering: a cluster sees a small part of the lights.
+        assert!(
+            stats.mean_lights < 0.25 * n as f64,
+            "{name}: {:.1} lights per cluster of {n}",
+            stats.mean_lights
+        );
+        assert!(stats.max_lights as usize <= n);
+        // Some pixels must be lit by some light, or the comparison proves nothing.
+        assert!(clustered.rgba.chunks(4).any(|p| p[0] > 60));
+        assert_same(name, &clustered, &all);
+    }
+}
+
+#[test]
+fn overflowing_the_list_pool_is_reported_and_changes_nothing() {
+    let ctx = common::context();
+    let scene = scene("atrium", 300);
+    // Room for very few slots: most occupied clusters overflow.
+    let tight = render(&ctx, &scene, LightLoop::Clustered, Some(256));
+    let stats = tight.clusters.expect("cluster stats");
+    assert!(stats.capacity < stats.occupied, "{stats:?}");
+    assert_eq!(
+        stats.overflowed,
+        stats.occupied - stats.capacity,
+        "{stats:?}"
+    );
+    let all = render(&ctx, &scene, LightLoop::All, None);
+    assert_same("overflow", &tight, &all);
+}
