@@ -200,7 +200,10 @@ struct RenderArgs {
     /// Largest shadow-atlas side in texels (clamped to the adapter's limit).
     #[arg(long, default_value_t = manyshadows::shadow::DEFAULT_MAX_ATLAS_SIZE)]
     atlas_max: u32,
-    /// Fail when the shadow maps don't fit the atlas, instead of shrinking them.
+    /// Fail when the shadow maps don't fit the atlas. By default maps that don't fit degrade by
+    /// importance: lights that reach nothing on screen get no maps, the least important lights
+    /// (smallest angle at the camera) get smaller maps first, and as a last resort no shadows;
+    /// the summary counts each.
     #[arg(long)]
     strict_atlas: bool,
     /// Grid side (texels) of each light view for --technique irregular (default: the view's
@@ -395,7 +398,7 @@ fn render(args: &RenderArgs) -> Result<()> {
         fit: if args.strict_atlas {
             FitPolicy::Strict
         } else {
-            FitPolicy::Shrink
+            FitPolicy::Prioritize
         },
         visibility: args.visibility_out.is_some(),
         irregular: manyshadows::irregular::IrregularOptions {
@@ -543,7 +546,7 @@ fn summary(
         "lights": { "total": scene.lights.len(), "spot": count("spot"), "point": count("point"), "directional": count("directional"),
                     "shadowed": scene.lights.iter().filter(|l| l.casts_shadows).count() },
         "shadow_views": plan.views.len(),
-        "atlas": { "size": plan.layout.size, "fill": plan.fill(), "shrink_steps": plan.layout.shrink_steps },
+        "atlas": { "size": plan.layout.size, "fill": plan.fill(), "shrink_steps": plan.layout.shrink_steps, "fit": plan.fit },
         "shadow_work": { "passes": frame.shadow_stats.passes, "draws": frame.shadow_stats.draws, "views_drawn": frame.shadow_stats.views_drawn,
                          "culled_draws": frame.shadow_stats.culled, "triangles": frame.shadow_stats.triangles },
         "light_loop": r.settings().light_loop.name(),
@@ -588,6 +591,17 @@ fn print_summary(s: &serde_json::Value) {
             String::new()
         }
     );
+    let fit = &a["fit"];
+    if fit["reduced"].as_u64().unwrap_or(0)
+        + fit["unshadowed"].as_u64().unwrap_or(0)
+        + fit["off_screen"].as_u64().unwrap_or(0)
+        > 0
+    {
+        println!(
+            "shadow fit   {} lights at full resolution, {} with smaller maps, {} unshadowed (no room), {} off screen (no maps needed)",
+            fit["full"], fit["reduced"], fit["unshadowed"], fit["off_screen"]
+        );
+    }
     println!(
         "shadow work  {} passes, {} draws ({} culled), {} triangles",
         w["passes"], w["draws"], w["culled_draws"], w["triangles"]

@@ -78,14 +78,6 @@ pub enum RenderError {
         /// Which limit.
         reason: String,
     },
-    /// More shadow views than the renderer supports in one frame.
-    #[error("{views} shadow views requested but at most {max} are supported per frame; use fewer shadowed lights (a point light needs 6 views, a directional light one per cascade)")]
-    TooManyShadowViews {
-        /// Views requested.
-        views: usize,
-        /// The limit.
-        max: usize,
-    },
     /// A scene buffer would exceed the adapter's limits.
     #[error("scene too large for this adapter: {0}")]
     SceneTooLarge(String),

@@ -23,9 +23,6 @@ pub const ATLAS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// adapter's `max_texture_dimension_2d`.
 pub const DEFAULT_MAX_ATLAS_SIZE: u32 = 8192;
 
-/// Most shadow views a frame may have (e.g. 4096 spot lights, or 682 point lights).
-pub const MAX_SHADOW_VIEWS: usize = 4096;
-
 /// Every shadow view of a scene and its place in the atlas.
 #[derive(Clone, Debug)]
 pub struct ShadowPlan {
@@ -35,6 +32,193 @@ pub struct ShadowPlan {
     pub layout: AtlasLayout,
     /// Per light: `(first view, view count)`; count 0 for lights without shadows.
     pub light_views: Vec<(u32, u32)>,
+    /// How the maps were fitted into the atlas.
+    pub fit: FitReport,
+}
+
+/// How the shadow maps of a plan were fitted into the atlas (see [`FitPolicy::Prioritize`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct FitReport {
+    /// Shadow-casting lights whose maps have the requested resolution.
+    pub full: usize,
+    /// Shadow-casting lights whose maps were made smaller to fit.
+    pub reduced: usize,
+    /// Shadow-casting lights left unshadowed for lack of atlas room (the least important).
+    pub unshadowed: usize,
+    /// Shadow-casting lights that reach nothing the camera sees, so need no maps.
+    pub off_screen: usize,
+}
+
+/// Importance of a light for the shadow budget: the tangent of the half-angle its reach
+/// subtends at the camera (infinite for directional lights and lights around the camera).
+fn light_importance(scene: &Scene, light: usize) -> f32 {
+    match scene.lights[light].bounding_sphere() {
+        None => f32::INFINITY,
+        Some((c, r)) => {
+            let d = (c - scene.camera.position).length();
+            if d <= r {
+                f32::INFINITY
+            } else {
+                r / (d - r)
+            }
+        }
+    }
+}
+
+/// [`FitPolicy::Prioritize`]: the views to keep and their tile sides (powers of two).
+fn prioritize(
+    scene: &Scene,
+    aspect: f32,
+    views: Vec<ShadowView>,
+    max_atlas: u32,
+) -> (Vec<ShadowView>, Vec<u32>, FitReport) {
+    let max_side = 1u64 << (31 - max_atlas.max(1).leading_zeros());
+    let min = u64::from(atlas::MIN_TILE).min(max_side);
+    let cam = &scene.camera;
+    let planes = light_space::frustum_planes(cam.projection(aspect) * cam.view());
+    let mut report = FitReport::default();
+    // Per light with views: (light, first view, end, importance, tile sides).
+    struct Group {
+        light: usize,
+        range: std::ops::Range<usize>,
+        importance: f32,
+        sides: Vec<u64>,
+        kept: bool,
+    }
+    let mut groups = Vec::new();
+    let mut i = 0;
+    while i < views.len() {
+        let light = views[i].light;
+        let n = views[i..].iter().take_while(|v| v.light == light).count();
+        let range = i..i + n;
+        i += n;
+        if let Some((c, r)) = scene.lights[light].bounding_sphere() {
+            if !light_space::sphere_in_planes(&planes, c, r * 1.001 + 1e-4) {
+                report.off_screen += 1;
+                continue;
+            }
+        }
+        let sides = views[range.clone()]
+            .iter()
+            .map(|v| {
+                u64::from(v.resolution.max(atlas::MIN_TILE))
+                    .next_power_of_two()
+                    .min(max_side)
+            })
+            .collect();
+        groups.push(Group {
+            light,
+            importance: light_importance(scene, light),
+            range,
+            sides,
+            kept: true,
+        });
+    }
+    let requested: Vec<Vec<u64>> = groups.iter().map(|g| g.sides.clone()).collect();
+    let area = |g: &Group| g.sides.iter().map(|s| s * s).sum::<u64>();
+    let budget = max_side * max_side;
+    let mut total: u64 = groups.iter().map(area).sum();
+    // Least important first; among equals the later light gives way.
+    let mut order: Vec<usize> = (0..groups.len()).collect();
+    order.sort_by(|&a, &b| {
+        groups[a]
+            .importance
+            .total_cmp(&groups[b].importance)
+            .then(groups[b].light.cmp(&groups[a].light))
+    });
+    // Tile sides proportional to importance (as a virtual shadow map gives texels by screen
+    // size): side = k · importance rounded down to a power of two, clamped to the floor and the
+    // request; k is the largest that fits, found by bisection on its logarithm.
+    let sides_for = |k: f64, groups: &mut Vec<Group>| -> u64 {
+        let mut total = 0;
+        for (g, want) in groups.iter_mut().zip(&requested) {
+            let target = k * f64::from(g.importance);
+            for (s, &w) in g.sides.iter_mut().zip(want) {
+                *s = if target >= w as f64 {
+                    w
+                } else if target <= min as f64 {
+                    min.min(w)
+                } else {
+                    (1u64 << (63 - (target as u64).leading_zeros())).clamp(min.min(w), w)
+                };
+                total += *s * *s;
+            }
+        }
+        total
+    };
+    if total > budget {
+        let (mut lo, mut hi) = (-30.0f64, 60.0f64);
+        for _ in 0..64 {
+            let mid = 0.5 * (lo + hi);
+            if sides_for(mid.exp2(), &mut groups) <= budget {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        total = sides_for(lo.exp2(), &mut groups);
+        // Spend what rounding left over on the most important lights.
+        for &g in order.iter().rev() {
+            for v in 0..groups[g].sides.len() {
+                loop {
+                    let s = groups[g].sides[v];
+                    if s >= requested[g][v] || total + 3 * s * s > budget {
+                        break;
+                    }
+                    groups[g].sides[v] = 2 * s;
+                    total += 3 * s * s;
+                }
+            }
+        }
+    }
+    // Lights that matter infinitely (directional, or around the camera) may still not fit:
+    // halve one light at a time, least important first, until the maps fit or are all at the
+    // floor.
+    while total > budget {
+        let mut progressed = false;
+        for &g in &order {
+            let group = &mut groups[g];
+            if group.sides.iter().all(|&s| s <= min) {
+                continue;
+            }
+            let before = area(group);
+            for s in &mut group.sides {
+                *s = (*s / 2).max(min);
+            }
+            total = total - before + area(group);
+            progressed = true;
+            if total <= budget {
+                break;
+            }
+        }
+        if !progressed {
+            break;
+        }
+    }
+    // Then leave the least important lights unshadowed.
+    for &g in &order {
+        if total <= budget {
+            break;
+        }
+        total -= area(&groups[g]);
+        groups[g].kept = false;
+        report.unshadowed += 1;
+    }
+    let mut kept_views = Vec::new();
+    let mut sides = Vec::new();
+    for (g, want) in groups.iter().zip(&requested) {
+        if !g.kept {
+            continue;
+        }
+        if g.sides == *want {
+            report.full += 1;
+        } else {
+            report.reduced += 1;
+        }
+        kept_views.extend_from_slice(&views[g.range.clone()]);
+        sides.extend(g.sides.iter().map(|&s| s as u32));
+    }
+    (kept_views, sides, report)
 }
 
 impl ShadowPlan {
@@ -56,14 +240,34 @@ impl ShadowPlan {
         fit: FitPolicy,
         points: PointShadows,
     ) -> Result<Self, RenderError> {
-        let views = light_space::shadow_views_with(scene, aspect, points);
-        if views.len() > MAX_SHADOW_VIEWS {
-            return Err(RenderError::TooManyShadowViews {
-                views: views.len(),
-                max: MAX_SHADOW_VIEWS,
-            });
+        let mut views = light_space::shadow_views_with(scene, aspect, points);
+        let mut requests: Vec<u32> = views.iter().map(|v| v.resolution).collect();
+        let shadowed = views
+            .iter()
+            .enumerate()
+            .filter(|(i, v)| *i == 0 || views[i - 1].light != v.light)
+            .count();
+        let mut fit_report = FitReport {
+            full: shadowed,
+            ..Default::default()
+        };
+        if fit == FitPolicy::Prioritize
+            && !requests.is_empty()
+            && atlas::layout(&requests, max_atlas, FitPolicy::Strict).is_err()
+        {
+            let (kept, sides, report) = prioritize(scene, aspect, views, max_atlas);
+            views = kept;
+            requests = sides;
+            fit_report = report;
+            log::warn!(
+                "shadow maps do not fit a {max_atlas}² atlas: {} lights at full resolution, {} \
+                 reduced, {} unshadowed, {} off screen (no maps needed)",
+                report.full,
+                report.reduced,
+                report.unshadowed,
+                report.off_screen
+            );
         }
-        let requests: Vec<u32> = views.iter().map(|v| v.resolution).collect();
         let layout = if requests.is_empty() {
             AtlasLayout {
                 size: atlas::MIN_TILE,
@@ -93,6 +297,7 @@ impl ShadowPlan {
             views,
             layout,
             light_views,
+            fit: fit_report,
         })
     }
 

@@ -76,16 +76,43 @@ fn zero_lights_render_a_dark_frame() {
         .all(|p| p[0] < 40 && p[1] < 40 && p[2] < 60));
 }
 
+/// More maps than the atlas holds is no error: the plan halves the least important lights'
+/// maps first, then leaves the least important unshadowed, and says how many of each.
 #[test]
-fn too_many_shadow_views_is_a_clear_error() {
+fn maps_that_do_not_fit_degrade_by_importance_and_are_counted() {
     let ctx = common::context();
     let mut scene = triangle_scene([Vec3::ZERO, Vec3::X, Vec3::Z]);
+    // 5000 spots in a row going away from the camera: the nearest matter most.
     scene.lights = (0..5000).map(spot).collect();
-    match Renderer::new(&ctx, &scene, small()) {
-        Err(e @ RenderError::TooManyShadowViews { .. }) => assert!(e.to_string().contains("5000")),
-        Err(e) => panic!("wrong error: {e}"),
-        Ok(_) => panic!("5000 shadow views accepted"),
-    }
+    scene.camera.position = Vec3::new(-5.0, 5.0, 0.0);
+    scene.camera.target = Vec3::new(10.0, 0.0, 0.0);
+    let settings = RenderSettings {
+        max_atlas_size: Some(512),
+        ..small()
+    };
+    let mut renderer = Renderer::new(&ctx, &scene, settings).expect("5000 lights plan");
+    let plan = renderer.plan();
+    let fit = plan.fit;
+    assert_eq!(
+        fit.full + fit.reduced + fit.unshadowed + fit.off_screen,
+        5000,
+        "{fit:?}"
+    );
+    assert!(fit.unshadowed > 0 && fit.reduced > 0, "{fit:?}");
+    // 512² texels hold at most 1024 tiles of the 16-texel floor.
+    assert!(plan.views.len() <= 1024);
+    // Importance order: the lights that kept shadows are nearer the camera than the rest.
+    let shadowed: Vec<usize> = (0..5000).filter(|&l| plan.light_views[l].1 > 0).collect();
+    let last_shadowed = *shadowed.iter().max().unwrap();
+    assert_eq!(
+        shadowed.len(),
+        last_shadowed + 1,
+        "a nearer light went unshadowed"
+    );
+    let tile = |l: usize| plan.layout.tiles[plan.light_views[l].0 as usize].size;
+    assert!(tile(0) >= tile(last_shadowed));
+    let frame = renderer.render().expect("frame");
+    assert_eq!(frame.visibility.unwrap().lights, 5000);
 }
 
 #[test]
@@ -169,9 +196,32 @@ fn full_atlas_in_strict_mode_is_a_clear_error_and_shrinks_otherwise() {
     assert!(matches!(err, RenderError::Atlas(_)), "{err}");
     let shrink = RenderSettings {
         max_atlas_size: Some(2048),
+        fit: FitPolicy::Shrink,
         ..small()
     };
     let r = Renderer::new(&ctx, &scene, shrink).unwrap();
     assert!(r.plan().layout.shrink_steps >= 1);
     assert_eq!(r.plan().layout.size, 2048);
+    // The default gives no light a smaller map than shrinking all would, and fills the atlas
+    // at least as well.
+    let shrunk: Vec<u32> = r.plan().layout.tiles.iter().map(|t| t.size).collect();
+    let r = Renderer::new(
+        &ctx,
+        &scene,
+        RenderSettings {
+            max_atlas_size: Some(2048),
+            ..small()
+        },
+    )
+    .unwrap();
+    let fit = r.plan().fit;
+    assert_eq!((fit.full + fit.reduced, fit.unshadowed), (8, 0), "{fit:?}");
+    let tiles = &r.plan().layout.tiles;
+    assert!(
+        tiles.iter().zip(&shrunk).all(|(t, &s)| t.size >= s),
+        "{tiles:?} vs {shrunk:?}"
+    );
+    let area = |t: &[u32]| t.iter().map(|&s| u64::from(s).pow(2)).sum::<u64>();
+    let sizes: Vec<u32> = tiles.iter().map(|t| t.size).collect();
+    assert!(area(&sizes) <= 2048 * 2048 && area(&sizes) >= area(&shrunk));
 }

@@ -43,8 +43,14 @@ pub struct Tile {
 /// What to do when the requested tiles do not fit the largest atlas allowed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum FitPolicy {
-    /// Halve every request (keeping their ratios) until everything fits, down to a floor.
+    /// Keep the maps of the lights that matter most on screen: the renderer's shadow plan
+    /// gives no maps to lights that reach nothing the camera sees, then halves the maps of the
+    /// least important lights first (importance = the angle the light's reach subtends at the
+    /// camera), and as a last resort leaves the least important lights unshadowed, counting
+    /// each kind. [`layout`] alone knows no importance and treats it as [`FitPolicy::Shrink`].
     #[default]
+    Prioritize,
+    /// Halve every request (keeping their ratios) until everything fits, down to a floor.
     Shrink,
     /// Fail with [`AtlasError::Full`].
     Strict,
