@@ -160,6 +160,11 @@ struct RenderArgs {
     /// caching); with --frames, shows how many views each frame redraws.
     #[arg(long)]
     cache: bool,
+    /// With --frames > 1, turn the camera this many degrees per frame around its target (about
+    /// its up axis). The shadow plan follows: cascades refit, lights that leave the screen
+    /// give up their maps and lights that enter it get them.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    orbit: f32,
     /// The instance that moves when --frames > 1 (default: the smallest shadow caster).
     #[arg(long)]
     move_instance: Option<usize>,
@@ -437,7 +442,13 @@ fn render(args: &RenderArgs) -> Result<()> {
                 renderer.set_instance_transform(
                     k,
                     glam::Mat4::from_translation(offset) * scene.instances[k].transform,
-                );
+                )?;
+            }
+            if args.orbit != 0.0 {
+                let mut cam = renderer.scene().camera;
+                let turn = glam::Quat::from_axis_angle(cam.up.normalize(), args.orbit.to_radians());
+                cam.position = cam.target + turn * (cam.position - cam.target);
+                renderer.set_camera(cam)?;
             }
         }
         let fr = renderer.render()?;

@@ -130,6 +130,40 @@ impl ShadowGenerator {
         self.moves.push([old, new]);
     }
 
+    /// Replaces the plan with a new frame's (camera or lights changed). The atlas buffers are
+    /// rewritten in place; with caching, a view keeps its tile's depth only if the same view
+    /// of the same light (same view-projection) lands on the same tile and the caster geometry
+    /// did not change (`casters_changed`). Returns true if an atlas buffer or the texture was
+    /// replaced (bind groups holding them must be rebuilt).
+    pub fn set_plan(&mut self, ctx: &GpuContext, plan: ShadowPlan, casters_changed: bool) -> bool {
+        let replaced = self.atlas.update(ctx, &plan);
+        if self.technique.is_none() {
+            self.valid = vec![true; plan.views.len()];
+        } else {
+            let old: std::collections::HashMap<_, _> = self
+                .plan
+                .views
+                .iter()
+                .zip(&self.plan.layout.tiles)
+                .zip(&self.valid)
+                .filter(|(_, &valid)| valid)
+                .map(|((v, t), _)| ((v.light, v.kind), (v.view_proj, *t)))
+                .collect();
+            self.valid = plan
+                .views
+                .iter()
+                .zip(&plan.layout.tiles)
+                .map(|(v, t)| {
+                    !casters_changed
+                        && !replaced
+                        && old.get(&(v.light, v.kind)) == Some(&(v.view_proj, *t))
+                })
+                .collect();
+        }
+        self.plan = plan;
+        replaced
+    }
+
     /// The views the next generation draws.
     fn draw_list(&mut self, gpu: &GpuScene) -> Vec<u32> {
         let n = self.plan.views.len();

@@ -15,6 +15,8 @@ pub struct LightingPass {
     /// The shaded frame.
     pub color: wgpu::Texture,
     pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    sampler: wgpu::Sampler,
     bind_group: wgpu::BindGroup,
 }
 
@@ -104,76 +106,7 @@ impl LightingPass {
             compare: Some(wgpu::CompareFunction::LessEqual),
             ..Default::default()
         });
-        // `fs_main` never reads the mask, but one layout serves both entry points.
-        let dummy_mask;
-        let mask = match inputs.mask {
-            Some(m) => m,
-            None => {
-                dummy_mask = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("lighting.no_mask"),
-                    size: 4,
-                    usage: wgpu::BufferUsages::STORAGE,
-                    mapped_at_creation: false,
-                });
-                &dummy_mask
-            }
-        };
-        let pv = inputs.gbuffer.position.create_view(&Default::default());
-        let nv = inputs.gbuffer.normal.create_view(&Default::default());
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("lighting.bind_group"),
-            layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: inputs.frame.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: inputs.lights.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: inputs.atlas.views_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: inputs.materials.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: wgpu::BindingResource::TextureView(&pv),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: wgpu::BindingResource::TextureView(&nv),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 6,
-                    resource: wgpu::BindingResource::TextureView(&inputs.atlas.view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 7,
-                    resource: wgpu::BindingResource::Sampler(&linear),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 8,
-                    resource: mask.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 9,
-                    resource: inputs.clusters.uniforms.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 10,
-                    resource: inputs.clusters.slots.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 11,
-                    resource: inputs.clusters.masks.as_entire_binding(),
-                },
-            ],
-        });
+        let bind_group = bind(ctx, &layout, &linear, inputs);
         let module = crate::shaders::module(device, "lighting.shader", &crate::shaders::lighting());
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("lighting.pipeline_layout"),
@@ -208,8 +141,15 @@ impl LightingPass {
         Self {
             color,
             pipeline,
+            layout,
+            sampler: linear,
             bind_group,
         }
+    }
+
+    /// Binds new inputs (after a frame's update replaced a buffer or the atlas).
+    pub fn rebind(&mut self, ctx: &GpuContext, inputs: &LightingInputs<'_>) {
+        self.bind_group = bind(ctx, &self.layout, &self.sampler, inputs);
     }
 
     /// Records the pass.
@@ -235,4 +175,83 @@ impl LightingPass {
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.draw(0..3, 0..1);
     }
+}
+
+fn bind(
+    ctx: &GpuContext,
+    layout: &wgpu::BindGroupLayout,
+    sampler: &wgpu::Sampler,
+    inputs: &LightingInputs<'_>,
+) -> wgpu::BindGroup {
+    let device = &ctx.device;
+    // `fs_main` never reads the mask, but one layout serves both entry points.
+    let dummy_mask;
+    let mask = match inputs.mask {
+        Some(m) => m,
+        None => {
+            dummy_mask = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("lighting.no_mask"),
+                size: 4,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            });
+            &dummy_mask
+        }
+    };
+    let pv = inputs.gbuffer.position.create_view(&Default::default());
+    let nv = inputs.gbuffer.normal.create_view(&Default::default());
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("lighting.bind_group"),
+        layout,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: inputs.frame.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: inputs.lights.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: inputs.atlas.views_buffer.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: inputs.materials.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 4,
+                resource: wgpu::BindingResource::TextureView(&pv),
+            },
+            wgpu::BindGroupEntry {
+                binding: 5,
+                resource: wgpu::BindingResource::TextureView(&nv),
+            },
+            wgpu::BindGroupEntry {
+                binding: 6,
+                resource: wgpu::BindingResource::TextureView(&inputs.atlas.view),
+            },
+            wgpu::BindGroupEntry {
+                binding: 7,
+                resource: wgpu::BindingResource::Sampler(sampler),
+            },
+            wgpu::BindGroupEntry {
+                binding: 8,
+                resource: mask.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 9,
+                resource: inputs.clusters.uniforms.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 10,
+                resource: inputs.clusters.slots.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 11,
+                resource: inputs.clusters.masks.as_entire_binding(),
+            },
+        ],
+    })
 }

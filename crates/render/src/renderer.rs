@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 use manyshadows_scene::atlas::FitPolicy;
-use manyshadows_scene::Scene;
+use manyshadows_scene::{Camera, Light, Scene, SceneError};
 use wgpu::util::DeviceExt;
 
 use crate::clusters::{ClusterOptions, ClusterStats, LightClusters, LightLoop};
@@ -199,7 +199,11 @@ pub struct Renderer<'c> {
     visibility: Option<VisibilityPass>,
     irregular: Option<IrregularShadows>,
     timer: GpuTimer,
-    light_count: usize,
+    /// The frame's state (camera, lights, instance transforms) as last set.
+    current: Scene,
+    /// True when `current` changed since the GPU state was last derived from it.
+    dirty: bool,
+    max_atlas: u32,
 }
 
 impl<'c> Renderer<'c> {
@@ -262,7 +266,7 @@ impl<'c> Renderer<'c> {
                 .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("scene.lights"),
                     contents: bytemuck::cast_slice(&light_data),
-                    usage: wgpu::BufferUsages::STORAGE,
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                 });
             let frame_buffer = ctx
                 .device
@@ -339,7 +343,9 @@ impl<'c> Renderer<'c> {
                 visibility,
                 irregular,
                 timer: GpuTimer::new(ctx),
-                light_count: scene.lights.len(),
+                current: scene.clone(),
+                dirty: false,
+                max_atlas,
             })
         })
     }
@@ -364,23 +370,181 @@ impl<'c> Renderer<'c> {
         self.ctx
     }
 
+    /// The world-space shadow-caster geometry (its back-face culling decisions included).
+    pub fn casters(&self) -> &crate::casters::CasterGeometry {
+        &self.shadows.casters
+    }
+
     /// The shadow atlas.
     pub fn atlas(&self) -> &ShadowAtlas {
         &self.shadows.atlas
     }
 
+    /// The scene as the next frame will render it (camera, lights and instance transforms as
+    /// last set).
+    pub fn scene(&self) -> &Scene {
+        &self.current
+    }
+
+    /// Moves the camera before the next frame. The next [`Renderer::render`] re-plans the
+    /// shadows (cascades follow the view; lights that leave the screen give up their maps).
+    pub fn set_camera(&mut self, camera: Camera) -> Result<(), RenderError> {
+        camera.validate()?;
+        self.current.camera = camera;
+        self.dirty = true;
+        Ok(())
+    }
+
+    /// Replaces light `index` before the next frame; an index past the last light is an
+    /// error (use [`Renderer::set_lights`] to change the number of lights).
+    pub fn set_light(&mut self, index: usize, light: Light) -> Result<(), RenderError> {
+        let count = self.current.lights.len();
+        let slot = self
+            .current
+            .lights
+            .get_mut(index)
+            .ok_or_else(|| SceneError::InvalidLight {
+                index,
+                reason: format!("no such light (the scene has {count})"),
+            })?;
+        light
+            .validate()
+            .map_err(|reason| SceneError::InvalidLight { index, reason })?;
+        *slot = light;
+        self.dirty = true;
+        Ok(())
+    }
+
+    /// Replaces every light (any number, zero included) before the next frame.
+    pub fn set_lights(&mut self, lights: Vec<Light>) -> Result<(), RenderError> {
+        for (index, light) in lights.iter().enumerate() {
+            light
+                .validate()
+                .map_err(|reason| SceneError::InvalidLight { index, reason })?;
+        }
+        self.current.lights = lights;
+        self.dirty = true;
+        Ok(())
+    }
+
     /// Moves instance `instance` (a new model matrix) before the next frame; with
-    /// [`RenderSettings::cache_shadows`] only the views that see it are redrawn.
-    pub fn set_instance_transform(&mut self, instance: usize, transform: glam::Mat4) {
-        let Some(old) = self.scene.draws.get(instance).copied() else {
-            return;
+    /// [`RenderSettings::cache_shadows`] only the views that see it are redrawn. The next
+    /// frame re-checks which casters may be back-face culled for which lights (a caster moved
+    /// over a light may no longer be). An unknown instance or a singular or non-finite matrix
+    /// is an error.
+    pub fn set_instance_transform(
+        &mut self,
+        instance: usize,
+        transform: glam::Mat4,
+    ) -> Result<(), RenderError> {
+        let count = self.current.instances.len();
+        let bad = |reason: String| SceneError::InvalidInstance {
+            index: instance,
+            reason,
         };
+        let Some(old) = self.scene.draws.get(instance).copied() else {
+            return Err(bad(format!("no such instance (the scene has {count})")).into());
+        };
+        if !transform.is_finite() || transform.determinant().abs() < 1e-12 {
+            return Err(bad("transform must be finite and invertible".into()).into());
+        }
         self.scene
             .set_instance_transform(&self.ctx.queue, instance, transform);
+        self.current.instances[instance].transform = transform;
         if old.casts_shadows {
             self.shadows
                 .note_moved(old.sphere, self.scene.draws[instance].sphere);
         }
+        self.dirty = true;
+        Ok(())
+    }
+
+    /// Derives this frame's GPU state from [`Renderer::scene`] after a change: a new shadow
+    /// plan, re-decided caster culling, and the atlas, light, frame and cluster buffers
+    /// rewritten in place (replaced only when they must grow or the atlas side changed).
+    fn prepare(&mut self) -> Result<(), RenderError> {
+        if !self.dirty {
+            return Ok(());
+        }
+        let ctx = self.ctx;
+        let scene = &self.current;
+        let settings = &self.settings;
+        let aspect = settings.width as f32 / settings.height as f32;
+        let plan = ShadowPlan::with_points(
+            scene,
+            aspect,
+            self.max_atlas,
+            settings.fit,
+            settings.point_shadows,
+        )?;
+        let casters_changed = self.shadows.casters.refresh(ctx, scene);
+        self.shadows.set_plan(ctx, plan, casters_changed);
+        let mut light_data = self.shadows.plan.light_data(scene);
+        if light_data.is_empty() {
+            light_data.push(bytemuck::Zeroable::zeroed());
+        }
+        let bytes: &[u8] = bytemuck::cast_slice(&light_data);
+        if self.lights.size() < bytes.len() as u64 {
+            self.lights = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("scene.lights"),
+                size: 2 * bytes.len() as u64,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+        }
+        ctx.queue.write_buffer(&self.lights, 0, bytes);
+        ctx.queue.write_buffer(
+            &self.frame_buffer,
+            0,
+            bytemuck::bytes_of(&frame_uniforms(scene, settings, self.shadows.atlas.size)),
+        );
+        self.clusters.update(ctx, scene)?;
+        self.clusters
+            .bind(ctx, &self.frame_buffer, &self.lights, &self.gbuffer);
+        if self.irregular.is_some() {
+            // Irregular shadow maps size their light-space grids by the plan: rebuild them.
+            self.irregular = Some(IrregularShadows::new(
+                ctx,
+                scene,
+                &self.shadows.plan,
+                &IrregularInputs {
+                    frame: &self.frame_buffer,
+                    lights: &self.lights,
+                    views: &self.shadows.atlas.views_buffer,
+                    gbuffer: &self.gbuffer,
+                    casters: &self.shadows.casters,
+                },
+                (settings.width, settings.height),
+                settings.irregular,
+            )?);
+        }
+        self.lighting.rebind(
+            ctx,
+            &LightingInputs {
+                frame: &self.frame_buffer,
+                lights: &self.lights,
+                materials: &self.scene.materials,
+                gbuffer: &self.gbuffer,
+                atlas: &self.shadows.atlas,
+                mask: self.irregular.as_ref().map(|i| i.mask()),
+                clusters: &self.clusters,
+            },
+        );
+        let lights = scene.lights.len() as u32;
+        if self
+            .visibility
+            .as_ref()
+            .is_some_and(|v| v.lights() != lights)
+        {
+            self.visibility = Some(VisibilityPass::new(
+                ctx,
+                settings.width,
+                settings.height,
+                lights,
+            )?);
+        }
+        self.dirty = false;
+        Ok(())
     }
 
     /// Renders one frame and reads it back.
@@ -388,6 +552,7 @@ impl<'c> Renderer<'c> {
         let ctx = self.ctx;
         ctx.scoped("rendering a frame", || {
             let start = Instant::now();
+            self.prepare()?;
             self.timer.reset();
             let mut encoder = ctx
                 .device
@@ -453,7 +618,7 @@ impl<'c> Renderer<'c> {
             let gpu_ms = self.timer.read(ctx)?;
             debug_assert!(visibility
                 .as_ref()
-                .is_none_or(|v: &VisibilityMask| v.lights as usize == self.light_count));
+                .is_none_or(|v: &VisibilityMask| v.lights as usize == self.current.lights.len()));
             Ok(Frame {
                 width: self.settings.width,
                 height: self.settings.height,

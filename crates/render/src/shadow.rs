@@ -8,7 +8,6 @@
 use manyshadows_scene::atlas::{self, AtlasLayout, FitPolicy, Tile};
 use manyshadows_scene::light_space::{self, PointShadows, ShadowView, ViewKind};
 use manyshadows_scene::Scene;
-use wgpu::util::DeviceExt;
 
 use crate::casters::{CasterGeometry, CasterOptions};
 use crate::gpu_scene::GpuScene;
@@ -259,7 +258,7 @@ impl ShadowPlan {
             views = kept;
             requests = sides;
             fit_report = report;
-            log::warn!(
+            log::info!(
                 "shadow maps do not fit a {max_atlas}² atlas: {} lights at full resolution, {} \
                  reduced, {} unshadowed, {} off screen (no maps needed)",
                 report.full,
@@ -398,25 +397,46 @@ impl ShadowAtlas {
     }
 
     fn with_size(ctx: &GpuContext, plan: &ShadowPlan, size: u32) -> Self {
-        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("shadow.atlas"),
-            size: wgpu::Extent3d {
-                width: size,
-                height: size,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: ATLAS_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
-        let view = texture.create_view(&wgpu::TextureViewDescriptor {
-            label: Some("shadow.atlas.view"),
-            dimension: Some(wgpu::TextureViewDimension::D2),
-            ..Default::default()
-        });
+        let (texture, view) = atlas_texture(ctx, size);
+        let placeholder = |label: &str, usage: wgpu::BufferUsages| {
+            ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: 16,
+                usage: usage | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let mut atlas = Self {
+            texture,
+            view,
+            size,
+            views_buffer: placeholder("shadow.views", wgpu::BufferUsages::STORAGE),
+            view_uniforms: placeholder("shadow.view_uniforms", wgpu::BufferUsages::UNIFORM),
+            tiles: Vec::new(),
+            eyes: placeholder("shadow.eyes", wgpu::BufferUsages::STORAGE),
+            draw_list: placeholder("shadow.draw_list", wgpu::BufferUsages::STORAGE),
+        };
+        atlas.write_views(ctx, plan);
+        atlas
+    }
+
+    /// Makes the atlas hold `plan` (a new frame's views): view buffers are rewritten in place
+    /// (replaced only when the plan has more views than they hold), the texture only when the
+    /// atlas side changed. Returns true if a buffer or the texture was replaced, so bind groups
+    /// that hold them must be rebuilt.
+    pub fn update(&mut self, ctx: &GpuContext, plan: &ShadowPlan) -> bool {
+        let mut replaced = false;
+        // A views-only atlas keeps its 1×1 placeholder.
+        if self.size != 1 && self.size != plan.layout.size {
+            (self.texture, self.view) = atlas_texture(ctx, plan.layout.size);
+            self.size = plan.layout.size;
+            replaced = true;
+        }
+        replaced | self.write_views(ctx, plan)
+    }
+
+    /// Writes the per-view buffers of `plan`, growing them if needed (true if any grew).
+    fn write_views(&mut self, ctx: &GpuContext, plan: &ShadowPlan) -> bool {
         let mut data = plan.view_data();
         let uniforms: Vec<ViewUniform> = data
             .iter()
@@ -429,52 +449,58 @@ impl ShadowAtlas {
         if data.is_empty() {
             data.push(bytemuck::Zeroable::zeroed());
         }
-        let views_buffer = ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("shadow.views"),
-                contents: bytemuck::cast_slice(&data),
-                usage: wgpu::BufferUsages::STORAGE,
-            });
         let mut uniform_bytes: Vec<u8> = bytemuck::cast_slice(&uniforms).to_vec();
         if uniform_bytes.is_empty() {
             uniform_bytes.resize(VIEW_UNIFORM_STRIDE as usize, 0);
         }
-        let view_uniforms = ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("shadow.view_uniforms"),
-                contents: &uniform_bytes,
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
         let mut eyes: Vec<[f32; 4]> = plan.views.iter().map(|v| view_eye(v).to_array()).collect();
         eyes.resize(eyes.len().max(1), [0.0; 4]);
-        let eyes = ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("shadow.eyes"),
-                contents: bytemuck::cast_slice(&eyes),
-                usage: wgpu::BufferUsages::STORAGE,
-            });
         let all: Vec<u32> = (0..plan.views.len().max(1) as u32).collect();
-        let draw_list = ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("shadow.draw_list"),
-                contents: bytemuck::cast_slice(&all),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            });
-        Self {
-            texture,
-            view,
-            size,
-            views_buffer,
-            view_uniforms,
-            tiles: plan.layout.tiles.clone(),
-            eyes,
-            draw_list,
-        }
+        let mut grew = false;
+        let mut write = |buffer: &mut wgpu::Buffer, bytes: &[u8]| {
+            if buffer.size() < bytes.len() as u64 {
+                // Room for twice as many views: a growing scene reallocates rarely.
+                *buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("shadow.view_buffer"),
+                    size: (2 * bytes.len() as u64).next_multiple_of(16),
+                    usage: buffer.usage(),
+                    mapped_at_creation: false,
+                });
+                grew = true;
+            }
+            ctx.queue.write_buffer(buffer, 0, bytes);
+        };
+        write(&mut self.views_buffer, bytemuck::cast_slice(&data));
+        write(&mut self.view_uniforms, &uniform_bytes);
+        write(&mut self.eyes, bytemuck::cast_slice(&eyes));
+        write(&mut self.draw_list, bytemuck::cast_slice(&all));
+        self.tiles = plan.layout.tiles.clone();
+        grew
     }
+}
+
+/// A `size`² depth atlas texture and its view.
+fn atlas_texture(ctx: &GpuContext, size: u32) -> (wgpu::Texture, wgpu::TextureView) {
+    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("shadow.atlas"),
+        size: wgpu::Extent3d {
+            width: size,
+            height: size,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: ATLAS_FORMAT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    });
+    let view = texture.create_view(&wgpu::TextureViewDescriptor {
+        label: Some("shadow.atlas.view"),
+        dimension: Some(wgpu::TextureViewDimension::D2),
+        ..Default::default()
+    });
+    (texture, view)
 }
 
 /// What a technique is given to fill the atlas.

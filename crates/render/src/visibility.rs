@@ -171,6 +171,11 @@ impl VisibilityPass {
         })
     }
 
+    /// Lights the mask holds.
+    pub fn lights(&self) -> u32 {
+        self.lights
+    }
+
     /// Computes and reads back the mask (its own submissions, after the frame's).
     pub fn run(
         &self,

@@ -73,7 +73,7 @@ pub const CUBE_FACES: [(Vec3, Vec3); 6] = [
 ];
 
 /// Which part of a light a shadow view covers.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum ViewKind {
     /// The single perspective view of a spot light.
     Spot,

@@ -1,0 +1,227 @@
+//! Frames that change: a renderer whose camera, lights and instance transforms are changed
+//! between frames must draw exactly what a renderer built fresh on the new state draws. Each
+//! change is big enough to change a planning decision: the camera move refits the cascades and
+//! takes lights off screen, the light move changes its views, and moving a closed caster over
+//! a point light makes its back faces uncullable for that light (culling them would lose the
+//! caster's shadow). The changing renderer caches shadow tiles, so stale tiles would show too.
+
+mod common;
+
+use glam::{Mat4, Vec3};
+use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
+use manyshadows::scene::{
+    primitives, Attenuation, Camera, Instance, Light, LightKind, Material, Scene,
+};
+use manyshadows::{
+    CullMode, Frame, GpuContext, RenderSettings, Renderer, ShadowOptions, Technique,
+};
+
+fn light(kind: LightKind, range: f32) -> Light {
+    Light {
+        kind,
+        ambient: Vec3::splat(0.02),
+        diffuse: Vec3::splat(0.8),
+        specular: Vec3::splat(0.3),
+        attenuation: Attenuation::for_range(range),
+        casts_shadows: true,
+        shadow_resolution: 256,
+    }
+}
+
+/// A floor, a closed box and a sphere, lit by a spot, a point and a directional light.
+fn scene() -> Scene {
+    let instance = |mesh, transform| Instance {
+        mesh,
+        material: 0,
+        transform,
+        casts_shadows: true,
+    };
+    Scene {
+        name: "frame-changes".into(),
+        meshes: vec![
+            primitives::plane(20.0, 20.0, 1),
+            primitives::cuboid(Vec3::splat(1.0)),
+            primitives::uv_sphere(0.6, 24, 12),
+        ],
+        materials: vec![Material::default()],
+        instances: vec![
+            instance(0, Mat4::IDENTITY),
+            instance(1, Mat4::from_translation(Vec3::new(-2.0, 0.5, 0.0))),
+            instance(2, Mat4::from_translation(Vec3::new(2.0, 0.6, 1.0))),
+        ],
+        lights: vec![
+            light(
+                LightKind::Spot {
+                    position: Vec3::new(0.0, 5.0, 2.0),
+                    direction: Vec3::new(0.0, -1.0, -0.4).normalize(),
+                    cutoff_deg: 40.0,
+                    range: 15.0,
+                },
+                15.0,
+            ),
+            light(
+                LightKind::Point {
+                    position: Vec3::new(-4.0, 1.5, 0.0),
+                    range: 8.0,
+                },
+                8.0,
+            ),
+            light(
+                LightKind::Directional {
+                    direction: Vec3::new(0.4, -1.0, 0.3).normalize(),
+                    cascades: 3,
+                    split_lambda: 0.6,
+                    cascade_resolution_scale: 1.0,
+                },
+                1.0,
+            ),
+        ],
+        camera: Camera::look_at(Vec3::new(0.0, 6.0, 10.0), Vec3::ZERO),
+    }
+}
+
+fn settings(cache: bool) -> RenderSettings {
+    RenderSettings {
+        width: 160,
+        height: 90,
+        technique: Technique::Layered,
+        shadow: ShadowOptions {
+            cull: CullMode::All,
+            ..Default::default()
+        },
+        cache_shadows: cache,
+        visibility: true,
+        ..Default::default()
+    }
+}
+
+fn assert_like_fresh(ctx: &GpuContext, step: &str, changed: &mut Renderer<'_>) -> Frame {
+    let frame = changed.render().expect("changed frame");
+    let fresh = Renderer::new(ctx, changed.scene(), settings(false))
+        .expect("fresh renderer")
+        .render()
+        .expect("fresh frame");
+    let differing = frame
+        .rgba
+        .chunks(4)
+        .zip(fresh.rgba.chunks(4))
+        .filter(|(a, b)| a != b)
+        .count();
+    if differing > 0 {
+        let dir = common::artifacts_dir();
+        for (f, tag) in [(&frame, "changed"), (&fresh, "fresh")] {
+            image::save_buffer(
+                dir.join(format!("frame_changes_{step}_{tag}.png")),
+                &f.rgba,
+                f.width,
+                f.height,
+                image::ExtendedColorType::Rgba8,
+            )
+            .expect("write artifact");
+        }
+    }
+    assert_eq!(
+        differing, 0,
+        "after {step}: {differing} pixels differ from a fresh renderer"
+    );
+    assert!(
+        frame.visibility.as_ref().unwrap().words == fresh.visibility.as_ref().unwrap().words,
+        "after {step}: the visibility masks differ"
+    );
+    frame
+}
+
+#[test]
+fn changed_frames_equal_a_renderer_built_on_the_new_state() {
+    let ctx = common::context();
+    let mut r = Renderer::new(&ctx, &scene(), settings(true)).expect("renderer");
+    let first = r.render().expect("first frame");
+    let plan_views = r.plan().views.len();
+    let cullable = r.casters().cullable_triangles;
+
+    // 1. The camera: cascades refit (their view-projections change).
+    let cascades = |r: &Renderer<'_>| -> Vec<Mat4> {
+        r.plan()
+            .views
+            .iter()
+            .filter(|v| v.orthographic)
+            .map(|v| v.view_proj)
+            .collect()
+    };
+    let before = cascades(&r);
+    r.set_camera(Camera::look_at(
+        Vec3::new(-8.0, 4.0, 3.0),
+        Vec3::new(1.0, 0.0, 0.0),
+    ))
+    .unwrap();
+    let moved = assert_like_fresh(&ctx, "camera", &mut r);
+    assert_ne!(cascades(&r), before, "the cascades did not refit");
+    assert!(moved.rgba != first.rgba);
+
+    // 2. A light: the spot swings to the other side.
+    let mut spot = r.scene().lights[0];
+    spot.kind = LightKind::Spot {
+        position: Vec3::new(3.0, 4.0, -2.0),
+        direction: Vec3::new(-0.5, -1.0, 0.3).normalize(),
+        cutoff_deg: 40.0,
+        range: 15.0,
+    };
+    r.set_light(0, spot).unwrap();
+    assert_like_fresh(&ctx, "light", &mut r);
+
+    // 3. The closed box moves over the point light: the light is inside it now, so its back
+    //    faces may no longer be culled.
+    r.set_instance_transform(
+        1,
+        Mat4::from_translation(Vec3::new(-4.0, 1.5, 0.0)) * Mat4::from_scale(Vec3::splat(2.0)),
+    )
+    .unwrap();
+    assert_like_fresh(&ctx, "caster", &mut r);
+    assert!(
+        r.casters().cullable_triangles < cullable,
+        "the box over the light should have become uncullable"
+    );
+
+    // 4. Many more lights than the buffers were made for.
+    let many = builtin::build(
+        "cubes",
+        &BuiltinOptions {
+            lights: Some(300),
+            seed: 5,
+            mix: LightMix::All,
+            shadow_resolution: Some(64),
+            ..Default::default()
+        },
+    )
+    .unwrap()
+    .lights;
+    r.set_lights(many).unwrap();
+    assert_like_fresh(&ctx, "many-lights", &mut r);
+    assert!(r.plan().views.len() > plan_views);
+
+    // 5. Back to none.
+    r.set_lights(Vec::new()).unwrap();
+    assert_like_fresh(&ctx, "no-lights", &mut r);
+}
+
+#[test]
+fn bad_indices_and_values_are_errors() {
+    let ctx = common::context();
+    let scene = scene();
+    let mut r = Renderer::new(&ctx, &scene, settings(false)).expect("renderer");
+    let err = r.set_light(3, scene.lights[0]).unwrap_err();
+    assert!(err.to_string().contains("light 3"), "{err}");
+    let err = r.set_instance_transform(7, Mat4::IDENTITY).unwrap_err();
+    assert!(err.to_string().contains("instance 7"), "{err}");
+    assert!(r.set_instance_transform(1, Mat4::ZERO).is_err());
+    let mut cam = scene.camera;
+    cam.position.x = f32::NAN;
+    assert!(r.set_camera(cam).is_err());
+    let mut nan_light = scene.lights[0];
+    nan_light.diffuse = Vec3::NAN;
+    assert!(r.set_light(0, nan_light).is_err());
+    assert!(r.set_lights(vec![nan_light]).is_err());
+    // Nothing was changed by the refused calls.
+    assert_eq!(r.scene(), &scene);
+    r.render().expect("the renderer still works");
+}
