@@ -158,14 +158,10 @@ fn prioritize(
         total = sides_for(lo.exp2(), &mut groups);
         // Spend what rounding left over on the most important lights.
         for &g in order.iter().rev() {
-            for v in 0..groups[g].sides.len() {
-                loop {
-                    let s = groups[g].sides[v];
-                    if s >= requested[g][v] || total + 3 * s * s > budget {
-                        break;
-                    }
-                    groups[g].sides[v] = 2 * s;
-                    total += 3 * s * s;
+            for (side, &want) in groups[g].sides.iter_mut().zip(&requested[g]) {
+                while *side < want && total + 3 * *side * *side <= budget {
+                    total += 3 * *side * *side;
+                    *side *= 2;
                 }
             }
         }
