@@ -21,6 +21,7 @@ use manyshadows::{
 mod bench;
 mod compare;
 mod irregular_bench;
+mod lights_bench;
 mod omni;
 mod plot;
 
@@ -84,6 +85,11 @@ enum BenchCommand {
     /// Alias-free irregular shadows against traditional shadow maps: frame GPU time by number
     /// of lights and screen resolution, as a table, results.json and plots.
     Irregular(Box<irregular_bench::IrregularArgs>),
+    /// Whole frames from 16 to 16,384 lights with clustered shading: GPU time per stage
+    /// (G-buffer, clusters, shadows, lighting; lighting also over every light up to
+    /// --reference-up-to), lights per cluster, shadow-map fit and memory; table, results.json
+    /// and one plot per scene and screen.
+    Lights(Box<lights_bench::LightsArgs>),
 }
 
 #[derive(Args, Debug, Clone)]
@@ -304,6 +310,7 @@ fn main() {
         Some(Command::Bench(BenchCommand::Layered(args))) => bench::layered(&args),
         Some(Command::Bench(BenchCommand::Omni(args))) => omni::omni(&args),
         Some(Command::Bench(BenchCommand::Irregular(args))) => irregular_bench::irregular(&args),
+        Some(Command::Bench(BenchCommand::Lights(args))) => lights_bench::lights(&args),
         None => render(&cli.render),
     };
     if let Err(e) = result {

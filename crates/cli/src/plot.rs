@@ -145,10 +145,45 @@ fn save_png(path: &Path, rgb: &[u8], w: u32, h: u32) -> Result<()> {
     .map_err(|e| anyhow!("writing {}: {e}", path.display()))
 }
 
+/// One picture of four panels sharing a count axis (log scale): `(caption, y unit, series)`
+/// each, where a series is `(name, [(x, y)])`.
+pub fn panels(
+    path: &Path,
+    title: &str,
+    x_name: &str,
+    specs: &[(String, String, Vec<(String, Vec<(f64, f64)>)>)],
+) -> Result<()> {
+    ensure_font();
+    let (w, h) = (1400u32, 1000u32);
+    let mut pixels = vec![0u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut pixels, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| anyhow!("plot: {e}"))?;
+        let (top, body) = root.split_vertically(50);
+        top.titled(title, ("sans-serif", 20))
+            .map_err(|e| anyhow!("plot: {e}"))?;
+        for (area, (caption, unit, data)) in body.split_evenly((2, 2)).iter().zip(specs) {
+            panel_with_unit(area, caption, x_name, unit, data)?;
+        }
+        root.present().map_err(|e| anyhow!("plot: {e}"))?;
+    }
+    save_png(path, &pixels, w, h)
+}
+
 fn panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     caption: &str,
     x_name: &str,
+    data: &[Series],
+) -> Result<()> {
+    panel_with_unit(area, caption, x_name, "ms", data)
+}
+
+fn panel_with_unit<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    caption: &str,
+    x_name: &str,
+    unit: &str,
     data: &[Series],
 ) -> Result<()> {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("plot: {e}");
@@ -170,7 +205,7 @@ fn panel<DB: DrawingBackend>(
     chart
         .configure_mesh()
         .x_desc(x_name)
-        .y_desc("ms")
+        .y_desc(unit)
         .x_label_formatter(&|x| format!("{x:.0}"))
         .light_line_style(TRANSPARENT)
         .label_style(("sans-serif", 13))
