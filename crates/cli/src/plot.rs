@@ -35,6 +35,9 @@ const COLOURS: &[RGBColor] = &[
 
 type Series = (String, Vec<(f64, f64)>);
 
+/// One panel of [`panels`]: caption, y unit and its series.
+pub type Panel = (String, String, Vec<Series>);
+
 /// Writes one PNG per (variant, resolution) into `dir` and returns their paths.
 pub fn layered_plots(points: &[PlotPoint], adapter: &str, dir: &Path) -> Result<Vec<PathBuf>> {
     plots(points, adapter, dir, "layered", "shadow maps", CPU_TIME)
@@ -151,7 +154,7 @@ pub fn panels(
     path: &Path,
     title: &str,
     x_name: &str,
-    specs: &[(String, String, Vec<(String, Vec<(f64, f64)>)>)],
+    specs: &[Panel],
 ) -> Result<()> {
     ensure_font();
     let (w, h) = (1400u32, 1000u32);
