@@ -150,12 +150,7 @@ fn save_png(path: &Path, rgb: &[u8], w: u32, h: u32) -> Result<()> {
 
 /// One picture of four panels sharing a count axis (log scale): `(caption, y unit, series)`
 /// each, where a series is `(name, [(x, y)])`.
-pub fn panels(
-    path: &Path,
-    title: &str,
-    x_name: &str,
-    specs: &[Panel],
-) -> Result<()> {
+pub fn panels(path: &Path, title: &str, x_name: &str, specs: &[Panel]) -> Result<()> {
     ensure_font();
     let (w, h) = (1400u32, 1000u32);
     let mut pixels = vec![0u8; (w * h * 3) as usize];

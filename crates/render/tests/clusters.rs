@@ -115,3 +115,48 @@ fn overflowing_the_list_pool_is_reported_and_changes_nothing() {
     let all = render(&ctx, &scene, LightLoop::All, None);
     assert_same("overflow", &tight, &all);
 }
+
+/// The most lights a layout makes render without error: clustered lists, and shadows for as
+/// many lights as a deliberately small atlas holds (the rest reported, none silently lost).
+#[test]
+fn sixteen_thousand_lights_render() {
+    let ctx = common::context();
+    let n = builtin::MAX_LIGHTS;
+    let scene = builtin::build(
+        "cubes",
+        &BuiltinOptions {
+            lights: Some(n),
+            seed: 1,
+            mix: LightMix::All,
+            ..Default::default()
+        },
+    )
+    .expect("builtin scene");
+    assert_eq!(scene.lights.len(), 16384);
+    let settings = RenderSettings {
+        width: 96,
+        height: 54,
+        max_atlas_size: Some(1024),
+        ..Default::default()
+    };
+    let mut renderer = Renderer::new(&ctx, &scene, settings).expect("renderer");
+    let fit = renderer.plan().fit;
+    let shadowed = scene.lights.iter().filter(|l| l.casts_shadows).count();
+    assert_eq!(
+        fit.full + fit.reduced + fit.unshadowed + fit.off_screen,
+        shadowed,
+        "{fit:?}"
+    );
+    assert!(
+        fit.unshadowed > 0,
+        "a 1024² atlas cannot hold {n} lights' maps: {fit:?}"
+    );
+    let frame = renderer.render().expect("frame");
+    let stats = frame.clusters.expect("cluster stats");
+    eprintln!("{n} lights: {fit:?}, {stats:?}");
+    assert!(
+        stats.lights_in_view > 0 && stats.mean_lights < n as f64 / 8.0,
+        "{stats:?}"
+    );
+    assert!(frame.rgba.chunks(4).any(|p| p[0] > 40), "the frame is dark");
+}
