@@ -218,3 +218,41 @@ fn bench_irregular_times_frames_against_traditional() {
     assert_eq!(bad.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("bad resolution"));
 }
+
+#[test]
+fn bench_lights_reports_stages_clusters_and_fit_per_count() {
+    let dir = tmp("lights");
+    let out = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
+        .args([
+            "bench", "lights", "--scenes", "dragon", "--lights", "16,200",
+        ])
+        .args(["--screens", "96x54", "--repeats", "1", "--warmup", "0"])
+        .args(["--reference-up-to", "16", "--shadow-resolution", "64"])
+        .args(["--out-dir", dir.to_str().unwrap()])
+        .output()
+        .expect("run manyshadows");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "bench failed: {stderr}");
+    assert!(!stderr.contains("Validation Error"), "{stderr}");
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("results.json")).unwrap()).unwrap();
+    let records = json["records"].as_array().unwrap();
+    assert_eq!(records.len(), 2, "{json}");
+    for r in records {
+        let n = r["lights"].as_u64().unwrap();
+        let fit = &r["fit"];
+        let accounted: u64 = ["full", "reduced", "unshadowed", "off_screen"]
+            .iter()
+            .map(|k| fit[k].as_u64().unwrap())
+            .sum();
+        assert_eq!(accounted, n, "every shadowed light is accounted for: {r}");
+        assert!(r["mean_lights_per_cluster"].as_f64().unwrap() <= n as f64);
+        assert!(r["max_lights_per_cluster"].as_u64().unwrap() <= n);
+        // The reference loop is timed only up to --reference-up-to.
+        assert_eq!(r["lighting_all_ms"].is_null(), n > 16, "{r}");
+    }
+    assert!(dir.join("lights-dragon-96x54.png").is_file());
+    assert!(std::fs::read_to_string(dir.join("results.txt"))
+        .unwrap()
+        .contains("adapter:"));
+}
