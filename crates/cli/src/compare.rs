@@ -304,16 +304,34 @@ fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
         };
         let score = score::score(&r.vis, &r.band, &mask)?;
         let plan = renderer.plan();
-        let tile_sizes: Vec<u32> = plan.layout.tiles.iter().map(|t| t.size).collect();
-        let footprints = aliasing::footprints(
-            &scene_v,
-            &PlannedViews {
-                views: &plan.views,
-                tile_sizes: &tile_sizes,
-            },
-            &r.surfaces,
-            &r.vis.reach,
-        )?;
+        let footprints = match renderer.virtual_plan() {
+            Some(vp) => {
+                let sides: Vec<u32> = vp.faces.iter().map(|f| f.table[2]).collect();
+                aliasing::footprints(
+                    &scene_v,
+                    &PlannedViews {
+                        views: &vp.views,
+                        tile_sizes: &sides,
+                        virtual_lod: Some(renderer.settings().virtual_maps.lod),
+                    },
+                    &r.surfaces,
+                    &r.vis.reach,
+                )?
+            }
+            None => {
+                let tile_sizes: Vec<u32> = plan.layout.tiles.iter().map(|t| t.size).collect();
+                aliasing::footprints(
+                    &scene_v,
+                    &PlannedViews {
+                        views: &plan.views,
+                        tile_sizes: &tile_sizes,
+                        virtual_lod: None,
+                    },
+                    &r.surfaces,
+                    &r.vis.reach,
+                )?
+            }
+        };
         let classes = score::error_classes(&r.vis, &r.band, &mask, None)?;
         let diff_path = args.out_dir.join(format!("diff-{}.png", v.label()));
         write_diff(&diff_path, &frame.rgba, &classes, frame.width, frame.height)?;

@@ -141,7 +141,9 @@ struct RenderArgs {
     /// then one multi-draw-indirect), compute (a compute-shader rasterizer: every view in one
     /// dispatch, atomicMin on depth). All fill the same atlas. irregular (irregular shadow
     /// maps: camera samples in light-space lists, exact per-triangle tests, alias-free) computes
-    /// the visibility mask instead and fills no atlas.
+    /// the visibility mask instead and fills no atlas. virtual (virtual shadow maps: a paged
+    /// map of up to 16k² per light face, only the pages the camera's samples need, at the
+    /// resolution they need, rendered into a page pool; see --page-pool).
     #[arg(long, default_value = "traditional", value_parser = parse_technique)]
     technique: Technique,
     /// Per-view triangle culling of the single-pass techniques: none, frustum, backface
@@ -225,6 +227,18 @@ struct RenderArgs {
     /// equalising hash; default: one list per texel). Changes speed, not the result.
     #[arg(long)]
     irregular_hash: Option<u32>,
+    /// Page pool of --technique virtual, MiB of 32-bit depth (rounded down to a square
+    /// power-of-two pool of 128² pages; 256 = an 8192² pool of 4096 pages). Pages that do not
+    /// fit fall back to coarser levels, counted in the summary.
+    #[arg(long, default_value_t = (manyshadows::vsm::DEFAULT_POOL_BYTES >> 20) as u32)]
+    page_pool: u32,
+    /// Largest virtual side of a face for --technique virtual (128 to 16384 texels).
+    #[arg(long, default_value_t = manyshadows::vsm::MAX_SIDE)]
+    virtual_side: u32,
+    /// Shadow texels per screen pixel that --technique virtual aims for (1 = texel footprint
+    /// about the pixel footprint; 2 = twice as fine, four times the pages).
+    #[arg(long, default_value_t = 1.0)]
+    virtual_lod: f32,
     /// Which lights each pixel visits: clustered (the lights assigned to its cluster of a
     /// tiles x depth-slices grid, built on the GPU each frame) or all (every light: the
     /// reference the clustered image must equal, and slow past a few hundred lights).
@@ -418,6 +432,12 @@ fn render(args: &RenderArgs) -> Result<()> {
             hash: args.irregular_hash,
             ..Default::default()
         },
+        virtual_maps: manyshadows::vsm::VirtualOptions {
+            pool_bytes: u64::from(args.page_pool) << 20,
+            max_side: args.virtual_side,
+            lod: args.virtual_lod,
+            ..Default::default()
+        },
         light_loop: args.light_loop,
         clusters: manyshadows::clusters::ClusterOptions {
             tile: args.cluster_tile,
@@ -569,6 +589,7 @@ fn summary(
                          "culled_draws": frame.shadow_stats.culled, "triangles": frame.shadow_stats.triangles },
         "light_loop": r.settings().light_loop.name(),
         "clusters": frame.clusters,
+        "virtual": frame.virtual_maps,
         "gpu_ms": frame.timings.gpu_ms.iter().map(|(k, v)| (k.clone(), serde_json::json!(v))).collect::<serde_json::Map<_, _>>(),
         "cpu_record_ms": frame.timings.cpu_record_ms,
         "frame_wall_ms": frame.timings.wall_ms,
@@ -598,27 +619,55 @@ fn print_summary(s: &serde_json::Value) {
         s["technique"].as_str().unwrap_or("?"),
         s["pcf"].as_str().unwrap_or("?")
     );
-    let shrink = a["shrink_steps"].as_u64().unwrap_or(0);
-    println!(
-        "atlas        {0}x{0}, {1:.0}% filled{2}",
-        a["size"],
-        a["fill"].as_f64().unwrap_or(0.0) * 100.0,
-        if shrink > 0 {
-            format!(", maps shrunk {}x per side to fit", 1u64 << shrink)
-        } else {
-            String::new()
-        }
-    );
-    let fit = &a["fit"];
-    if fit["reduced"].as_u64().unwrap_or(0)
-        + fit["unshadowed"].as_u64().unwrap_or(0)
-        + fit["off_screen"].as_u64().unwrap_or(0)
-        > 0
-    {
+    let v = &s["virtual"];
+    if v.is_object() {
+        let fit = &v["fit"];
+        let capped = fit["capped_side"].as_u64().unwrap_or(0);
         println!(
-            "shadow fit   {} lights at full resolution, {} with smaller maps, {} unshadowed (no room), {} off screen (no maps needed)",
-            fit["full"], fit["reduced"], fit["unshadowed"], fit["off_screen"]
+            "virtual      {} faces of {} lights ({} off screen, no faces), page table {} entries ({} KiB){}",
+            fit["faces"], fit["lights"], fit["off_screen"], fit["table_entries"],
+            v["table_bytes"].as_u64().unwrap_or(0) / 1024,
+            if capped > 0 { format!(", virtual sides capped at {capped}² to fit it") } else { String::new() }
         );
+        let needed: Vec<String> = v["needed"]
+            .as_array()
+            .map(|a| a.iter().map(|x| x.to_string()).collect())
+            .unwrap_or_default();
+        let denied = v["denied"].as_u64().unwrap_or(0);
+        println!(
+            "pages        {} of {} rendered ({}x{} pool, {} MiB); needed by level (coarsest first) {}{}",
+            v["resident"], v["pool_pages"], v["pool_side"], v["pool_side"],
+            v["pool_bytes"].as_u64().unwrap_or(0) >> 20,
+            needed.join("/"),
+            if denied > 0 {
+                format!("; {denied} pages did not fit the pool, their samples used coarser levels")
+            } else {
+                String::new()
+            }
+        );
+    } else {
+        let shrink = a["shrink_steps"].as_u64().unwrap_or(0);
+        println!(
+            "atlas        {0}x{0}, {1:.0}% filled{2}",
+            a["size"],
+            a["fill"].as_f64().unwrap_or(0.0) * 100.0,
+            if shrink > 0 {
+                format!(", maps shrunk {}x per side to fit", 1u64 << shrink)
+            } else {
+                String::new()
+            }
+        );
+        let fit = &a["fit"];
+        if fit["reduced"].as_u64().unwrap_or(0)
+            + fit["unshadowed"].as_u64().unwrap_or(0)
+            + fit["off_screen"].as_u64().unwrap_or(0)
+            > 0
+        {
+            println!(
+                "shadow fit   {} lights at full resolution, {} with smaller maps, {} unshadowed (no room), {} off screen (no maps needed)",
+                fit["full"], fit["reduced"], fit["unshadowed"], fit["off_screen"]
+            );
+        }
     }
     println!(
         "shadow work  {} passes, {} draws ({} culled), {} triangles",

@@ -148,9 +148,18 @@ pub struct PlannedViews<'a> {
     /// Every view, grouped by light in light order (`ShadowPlan::views`).
     pub views: &'a [ShadowView],
     /// The atlas tile side each view actually got, in view order (it may be smaller than the
-    /// view's requested resolution when the atlas was shrunk to fit).
+    /// view's requested resolution when the atlas was shrunk to fit). For virtual shadow maps,
+    /// each face's virtual side.
     pub tile_sizes: &'a [u32],
+    /// Virtual shadow maps with this level-of-detail scale (texels per pixel): a pixel reads
+    /// the level the lookup picks, the coarsest whose texel is no wider than `pixel / lod`,
+    /// between the 128-texel level 0 and the face's virtual side (pages denied for lack of
+    /// pool room, which fall back to coarser levels, are not modelled).
+    pub virtual_lod: Option<f32>,
 }
+
+/// Side of a virtual shadow map page (level 0 spans the face with one page).
+const VIRTUAL_PAGE: u32 = 128;
 
 /// Footprint histograms per light (scene order) for the pixels `reach` marks.
 pub fn footprints(
@@ -257,6 +266,12 @@ pub fn footprints(
             let mut texel = v.texel_world * v.resolution as f32 / tile;
             if !v.orthographic {
                 texel *= clip.w;
+            }
+            if let Some(lod) = planned.virtual_lod {
+                // As vsm_level in shaders/vsm_common.wgsl: 2^k finest texels per level texel.
+                let finest = (planned.tile_sizes[vi] / VIRTUAL_PAGE).max(1).trailing_zeros();
+                let k = (pixel_world / lod / texel).log2().floor();
+                texel *= 2f32.powi(k.clamp(0.0, finest as f32) as i32);
             }
             out[li].add(texel / pixel_world);
         }

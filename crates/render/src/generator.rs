@@ -91,19 +91,21 @@ impl ShadowGenerator {
     }
 
     /// The plan's view buffers and the caster geometry without an atlas or a technique:
-    /// what `irregular` shadow maps use. [`ShadowGenerator::generate`] then draws nothing.
+    /// what `irregular` and `virtual` shadow maps (`kind`) use. [`ShadowGenerator::generate`]
+    /// then draws nothing.
     pub fn views_only(
         ctx: &GpuContext,
         scene: &Scene,
         gpu: &GpuScene,
         plan: ShadowPlan,
         options: ShadowOptions,
+        kind: Technique,
     ) -> Result<Self, RenderError> {
         let atlas = ShadowAtlas::views_only(ctx, &plan);
         let casters = CasterGeometry::new(ctx, scene, gpu, options.casters)?;
         Ok(Self {
             technique: None,
-            kind: Technique::Irregular,
+            kind,
             valid: vec![true; plan.views.len()],
             plan,
             atlas,

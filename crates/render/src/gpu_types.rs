@@ -176,6 +176,57 @@ pub struct ShadowViewData {
     pub params: [f32; 4],
 }
 
+/// A face of a virtual shadow map (`VirtualFace`, see [`crate::vsm`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct VirtualFace {
+    /// Light world → clip of the whole face.
+    pub view_proj: [[f32; 4]; 4],
+    /// Light position (w = 1) or direction of travel (w = 0), for back-face culling.
+    pub eye: [f32; 4],
+    /// near, far, world size of a finest-level texel (per unit distance if perspective),
+    /// orthographic (1/0).
+    pub params: [f32; 4],
+    /// First page-table entry, finest level, virtual side in texels, light index.
+    pub table: [u32; 4],
+}
+
+/// Pool and page-table layout of the virtual shadow maps (`VsmUniforms`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct VsmUniforms {
+    /// Pool side in texels, pages per pool row, page side in texels, pages in the pool.
+    pub pool: [u32; 4],
+    /// Faces, page-table entries, 1 = mark pages for back-facing samples too, unused.
+    pub counts: [u32; 4],
+    /// Texels per screen pixel wanted, unused ×3.
+    pub lod: [f32; 4],
+}
+
+/// A resident page (`VsmPage`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct VsmPage {
+    /// Face index.
+    pub face: u32,
+    /// Level (2^level pages per side).
+    pub level: u32,
+    /// Page column.
+    pub x: u32,
+    /// Page row.
+    pub y: u32,
+}
+
+/// One cull + draw round of the page rendering (`VsmRound`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct VsmRound {
+    /// First page, page slots, first cluster, clusters.
+    pub round: [u32; 4],
+    /// Caster vertices, cullable triangles, cull bits, 1 = compacted commands.
+    pub counts: [u32; 4],
+}
+
 /// The per-view uniform of depth-only passes, padded to the 256-byte dynamic-offset alignment.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -254,6 +305,10 @@ mod tests {
         );
         same_layout!(ShadowViewData, view_proj, tile, params);
         same_layout!(ClusterUniforms, grid, words, depth, proj, counts);
+        same_layout!(VirtualFace, view_proj, eye, params, table);
+        same_layout!(VsmUniforms, pool, counts, lod);
+        same_layout!(VsmPage, face, level, x, y);
+        same_layout!(VsmRound, round, counts);
         assert_eq!(VIEW_UNIFORM_STRIDE, 256);
     }
 }

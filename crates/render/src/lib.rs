@@ -34,6 +34,7 @@ pub mod shadow;
 pub mod techniques;
 pub mod timing;
 pub mod visibility;
+pub mod vsm;
 
 pub use context::{AdapterRequest, GpuContext};
 pub use gbuffer_readback::GBufferData;

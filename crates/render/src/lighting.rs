@@ -7,6 +7,9 @@ use crate::shadow::ShadowAtlas;
 use crate::timing::{GpuTimer, Span};
 use crate::GpuContext;
 
+/// First binding of the virtual maps' page-table declarations in the lighting pass.
+const VSM_FIRST_BINDING: u32 = 12;
+
 /// Output colour format (sRGB-encoded on write).
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 
@@ -37,6 +40,60 @@ pub struct LightingInputs<'a> {
     pub mask: Option<&'a wgpu::Buffer>,
     /// The clustered light lists.
     pub clusters: &'a crate::clusters::LightClusters,
+    /// Virtual shadow maps to read shadows from instead of the atlas.
+    pub vsm: Option<&'a crate::vsm::VirtualShadows>,
+}
+
+impl LightingInputs<'_> {
+    /// The depth texture shadows are read from: the virtual maps' page pool or the atlas.
+    pub fn shadow_texture(&self) -> &wgpu::TextureView {
+        match self.vsm {
+            Some(v) => &v.pool_view,
+            None => &self.atlas.view,
+        }
+    }
+
+    /// The shader's shadow source, its page-table declarations starting at binding `first`.
+    pub(crate) fn source(&self, first: u32) -> crate::shaders::ShadowSource {
+        match self.vsm {
+            Some(_) => crate::shaders::ShadowSource::Virtual { first },
+            None => crate::shaders::ShadowSource::Atlas,
+        }
+    }
+
+    /// Bind-group entries of the page-table declarations at `first`, `first + 1`,
+    /// `first + 2` (none for the atlas).
+    pub(crate) fn vsm_entries(&self, first: u32) -> Vec<wgpu::BindGroupEntry<'_>> {
+        match self.vsm {
+            Some(v) => vec![
+                wgpu::BindGroupEntry {
+                    binding: first,
+                    resource: v.uniforms().as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: first + 1,
+                    resource: v.faces().as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: first + 2,
+                    resource: v.table().as_entire_binding(),
+                },
+            ],
+            None => Vec::new(),
+        }
+    }
+}
+
+/// Layout entries of the page-table declarations at `first` .. `first + 2`.
+pub(crate) fn vsm_layout_entries(
+    first: u32,
+    visibility: wgpu::ShaderStages,
+) -> [wgpu::BindGroupLayoutEntry; 3] {
+    [
+        crate::uniform_entry(first, visibility),
+        crate::storage_entry(first + 1, visibility),
+        crate::storage_entry(first + 2, visibility),
+    ]
 }
 
 /// A bind-group layout entry for a non-multisampled 2D texture.
@@ -82,9 +139,7 @@ impl LightingPass {
             ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
             count: None,
         };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("lighting.layout"),
-            entries: &[
+        let mut entries = vec![
                 crate::uniform_entry(0, frag),
                 crate::storage_entry(1, frag),
                 crate::storage_entry(2, frag),
@@ -97,7 +152,13 @@ impl LightingPass {
                 crate::uniform_entry(9, frag),
                 crate::storage_entry(10, frag),
                 crate::storage_entry(11, frag),
-            ],
+        ];
+        if inputs.vsm.is_some() {
+            entries.extend(vsm_layout_entries(VSM_FIRST_BINDING, frag));
+        }
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lighting.layout"),
+            entries: &entries,
         });
         let linear = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("lighting.cmp_linear"),
@@ -107,7 +168,11 @@ impl LightingPass {
             ..Default::default()
         });
         let bind_group = bind(ctx, &layout, &linear, inputs);
-        let module = crate::shaders::module(device, "lighting.shader", &crate::shaders::lighting());
+        let module = crate::shaders::module(
+            device,
+            "lighting.shader",
+            &crate::shaders::lighting(inputs.source(VSM_FIRST_BINDING)),
+        );
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("lighting.pipeline_layout"),
             bind_group_layouts: &[Some(&layout)],
@@ -200,10 +265,7 @@ fn bind(
     };
     let pv = inputs.gbuffer.position.create_view(&Default::default());
     let nv = inputs.gbuffer.normal.create_view(&Default::default());
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("lighting.bind_group"),
-        layout,
-        entries: &[
+    let mut entries = vec![
             wgpu::BindGroupEntry {
                 binding: 0,
                 resource: inputs.frame.as_entire_binding(),
@@ -230,7 +292,7 @@ fn bind(
             },
             wgpu::BindGroupEntry {
                 binding: 6,
-                resource: wgpu::BindingResource::TextureView(&inputs.atlas.view),
+                resource: wgpu::BindingResource::TextureView(inputs.shadow_texture()),
             },
             wgpu::BindGroupEntry {
                 binding: 7,
@@ -252,6 +314,11 @@ fn bind(
                 binding: 11,
                 resource: inputs.clusters.masks.as_entire_binding(),
             },
-        ],
+    ];
+    entries.extend(inputs.vsm_entries(VSM_FIRST_BINDING));
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("lighting.bind_group"),
+        layout,
+        entries: &entries,
     })
 }

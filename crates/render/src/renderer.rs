@@ -27,6 +27,7 @@ use crate::shadow::{
 };
 use crate::timing::GpuTimer;
 use crate::visibility::{VisibilityMask, VisibilityPass};
+use crate::vsm::{VirtualOptions, VirtualShadows, VirtualStats, VsmInputs};
 use crate::{GpuContext, RenderError};
 
 /// Percentage-closer filtering of the shadow test.
@@ -127,6 +128,8 @@ pub struct RenderSettings {
     pub visibility: bool,
     /// Knobs of [`Technique::Irregular`] (ignored by the other techniques).
     pub irregular: IrregularOptions,
+    /// Knobs of [`Technique::Virtual`] (ignored by the other techniques).
+    pub virtual_maps: VirtualOptions,
     /// Which lights each pixel visits: its cluster's (default) or every light (reference).
     pub light_loop: LightLoop,
     /// The cluster grid.
@@ -148,6 +151,7 @@ impl Default for RenderSettings {
             fit: FitPolicy::default(),
             visibility: false,
             irregular: IrregularOptions::default(),
+            virtual_maps: VirtualOptions::default(),
             light_loop: LightLoop::default(),
             clusters: ClusterOptions::default(),
         }
@@ -183,6 +187,8 @@ pub struct Frame {
     pub shadow_stats: ShadowStats,
     /// Light-cluster counters (`None` with [`LightLoop::All`]).
     pub clusters: Option<ClusterStats>,
+    /// Virtual shadow map counters (`None` for other techniques).
+    pub virtual_maps: Option<VirtualStats>,
 }
 
 /// A scene uploaded and ready to render frames.
@@ -198,6 +204,7 @@ pub struct Renderer<'c> {
     clusters: LightClusters,
     visibility: Option<VisibilityPass>,
     irregular: Option<IrregularShadows>,
+    vsm: Option<VirtualShadows>,
     timer: GpuTimer,
     /// The frame's state (camera, lights, instance transforms) as last set.
     current: Scene,
@@ -234,18 +241,36 @@ impl<'c> Renderer<'c> {
             .min(max_dim);
         ctx.scoped("creating the renderer", || {
             let aspect = settings.width as f32 / settings.height as f32;
-            let plan = ShadowPlan::with_points(
-                scene,
-                aspect,
-                max_atlas,
-                settings.fit,
-                settings.point_shadows,
-            )?;
+            let is_virtual = settings.technique == Technique::Virtual;
+            if is_virtual && settings.point_shadows != Default::default() {
+                return Err(RenderError::Unsupported(
+                    "--technique virtual pages cube-map point shadows only; use \
+                     --point-shadows cube"
+                        .into(),
+                ));
+            }
+            let plan = if is_virtual {
+                ShadowPlan::none(scene.lights.len())
+            } else {
+                ShadowPlan::with_points(
+                    scene,
+                    aspect,
+                    max_atlas,
+                    settings.fit,
+                    settings.point_shadows,
+                )?
+            };
             let gpu_scene = GpuScene::new(ctx, scene)?;
-            let mut light_data = plan.light_data(scene);
             let irregular = settings.technique == Technique::Irregular;
-            let mut shadows = if irregular {
-                ShadowGenerator::views_only(ctx, scene, &gpu_scene, plan, settings.shadow)?
+            let mut shadows = if irregular || is_virtual {
+                ShadowGenerator::views_only(
+                    ctx,
+                    scene,
+                    &gpu_scene,
+                    plan,
+                    settings.shadow,
+                    settings.technique,
+                )?
             } else {
                 ShadowGenerator::new(
                     ctx,
@@ -257,7 +282,28 @@ impl<'c> Renderer<'c> {
                 )?
             };
             shadows.set_caching(settings.cache_shadows);
+            let mut vsm = if is_virtual {
+                let options = VirtualOptions {
+                    back_facing: settings.visibility,
+                    ..settings.virtual_maps
+                };
+                Some(VirtualShadows::new(
+                    ctx,
+                    scene,
+                    (settings.width, settings.height),
+                    options,
+                    settings.shadow,
+                    &shadows.casters,
+                )?)
+            } else {
+                None
+            };
+            let mut light_data = match &vsm {
+                Some(v) => v.light_data(scene),
+                None => shadows.plan.light_data(scene),
+            };
             let atlas = &shadows.atlas;
+            let shadow_side = vsm.as_ref().map_or(atlas.size, |v| v.pool_side());
             if light_data.is_empty() {
                 light_data.push(bytemuck::Zeroable::zeroed());
             }
@@ -272,7 +318,7 @@ impl<'c> Renderer<'c> {
                 .device
                 .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("frame.uniforms"),
-                    contents: bytemuck::bytes_of(&frame_uniforms(scene, &settings, atlas.size)),
+                    contents: bytemuck::bytes_of(&frame_uniforms(scene, &settings, shadow_side)),
                     usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 });
             let gbuffer = GBuffer::new(
@@ -309,6 +355,19 @@ impl<'c> Renderer<'c> {
             )?;
             clusters.update(ctx, scene)?;
             clusters.bind(ctx, &frame_buffer, &lights, &gbuffer);
+            if let Some(v) = vsm.as_mut() {
+                v.bind(
+                    ctx,
+                    &VsmInputs {
+                        frame: &frame_buffer,
+                        lights: &lights,
+                        gbuffer: &gbuffer,
+                        clusters: &clusters,
+                        instances: &gpu_scene.instances,
+                        casters: &shadows.casters,
+                    },
+                );
+            }
             let inputs = LightingInputs {
                 frame: &frame_buffer,
                 lights: &lights,
@@ -317,6 +376,7 @@ impl<'c> Renderer<'c> {
                 atlas,
                 mask: irregular.as_ref().map(|i| i.mask()),
                 clusters: &clusters,
+                vsm: vsm.as_ref(),
             };
             let lighting = LightingPass::new(ctx, &inputs, settings.width, settings.height);
             // Irregular shadows read their own mask back instead.
@@ -326,6 +386,7 @@ impl<'c> Renderer<'c> {
                     settings.width,
                     settings.height,
                     scene.lights.len() as u32,
+                    is_virtual,
                 )?)
             } else {
                 None
@@ -342,6 +403,7 @@ impl<'c> Renderer<'c> {
                 clusters,
                 visibility,
                 irregular,
+                vsm,
                 timer: GpuTimer::new(ctx),
                 current: scene.clone(),
                 dirty: false,
@@ -353,6 +415,11 @@ impl<'c> Renderer<'c> {
     /// The shadow views and atlas layout.
     pub fn plan(&self) -> &ShadowPlan {
         &self.shadows.plan
+    }
+
+    /// The faces of [`Technique::Virtual`] (`None` for other techniques).
+    pub fn virtual_plan(&self) -> Option<&crate::vsm::VirtualPlan> {
+        self.vsm.as_ref().map(|v| &v.plan)
     }
 
     /// The settings in use.
@@ -470,16 +537,26 @@ impl<'c> Renderer<'c> {
         let scene = &self.current;
         let settings = &self.settings;
         let aspect = settings.width as f32 / settings.height as f32;
-        let plan = ShadowPlan::with_points(
-            scene,
-            aspect,
-            self.max_atlas,
-            settings.fit,
-            settings.point_shadows,
-        )?;
+        let plan = if self.vsm.is_some() {
+            ShadowPlan::none(scene.lights.len())
+        } else {
+            ShadowPlan::with_points(
+                scene,
+                aspect,
+                self.max_atlas,
+                settings.fit,
+                settings.point_shadows,
+            )?
+        };
         let casters_changed = self.shadows.casters.refresh(ctx, scene);
         self.shadows.set_plan(ctx, plan, casters_changed);
-        let mut light_data = self.shadows.plan.light_data(scene);
+        let mut light_data = match self.vsm.as_mut() {
+            Some(v) => {
+                v.update(ctx, scene, (settings.width, settings.height));
+                v.light_data(scene)
+            }
+            None => self.shadows.plan.light_data(scene),
+        };
         if light_data.is_empty() {
             light_data.push(bytemuck::Zeroable::zeroed());
         }
@@ -496,11 +573,30 @@ impl<'c> Renderer<'c> {
         ctx.queue.write_buffer(
             &self.frame_buffer,
             0,
-            bytemuck::bytes_of(&frame_uniforms(scene, settings, self.shadows.atlas.size)),
+            bytemuck::bytes_of(&frame_uniforms(
+                scene,
+                settings,
+                self.vsm
+                    .as_ref()
+                    .map_or(self.shadows.atlas.size, |v| v.pool_side()),
+            )),
         );
         self.clusters.update(ctx, scene)?;
         self.clusters
             .bind(ctx, &self.frame_buffer, &self.lights, &self.gbuffer);
+        if let Some(v) = self.vsm.as_mut() {
+            v.bind(
+                ctx,
+                &VsmInputs {
+                    frame: &self.frame_buffer,
+                    lights: &self.lights,
+                    gbuffer: &self.gbuffer,
+                    clusters: &self.clusters,
+                    instances: &self.scene.instances,
+                    casters: &self.shadows.casters,
+                },
+            );
+        }
         if self.irregular.is_some() {
             // Irregular shadow maps size their light-space grids by the plan: rebuild them.
             self.irregular = Some(IrregularShadows::new(
@@ -528,6 +624,7 @@ impl<'c> Renderer<'c> {
                 atlas: &self.shadows.atlas,
                 mask: self.irregular.as_ref().map(|i| i.mask()),
                 clusters: &self.clusters,
+                vsm: self.vsm.as_ref(),
             },
         );
         let lights = scene.lights.len() as u32;
@@ -541,6 +638,7 @@ impl<'c> Renderer<'c> {
                 settings.width,
                 settings.height,
                 lights,
+                self.vsm.is_some(),
             )?);
         }
         self.dirty = false;
@@ -566,13 +664,28 @@ impl<'c> Renderer<'c> {
                 let span = self.timer.span("clusters");
                 self.clusters.record(&mut encoder, &self.timer, span);
             }
+            let pages_span = if self.vsm.is_some() {
+                self.timer.span("pages")
+            } else {
+                None
+            };
             let span = self.timer.span("shadows");
-            let shadow_stats = match &self.irregular {
-                Some(irr) => {
+            let shadow_stats = match (&self.irregular, &self.vsm) {
+                (Some(irr), _) => {
                     irr.record(&mut encoder, &self.shadows.casters, &self.timer, span);
                     ShadowStats::default()
                 }
-                None => self
+                (_, Some(vsm)) => {
+                    vsm.record(
+                        &mut encoder,
+                        &self.shadows.casters,
+                        &self.timer,
+                        pages_span,
+                        span,
+                    );
+                    ShadowStats::default()
+                }
+                _ => self
                     .shadows
                     .generate(ctx, &self.scene, &mut encoder, &self.timer, span),
             };
@@ -591,6 +704,10 @@ impl<'c> Renderer<'c> {
                 // A full node pool makes the frame an error, never a wrong image.
                 irr.finish(ctx)?;
             }
+            let virtual_maps = match &self.vsm {
+                Some(v) => Some(v.read_stats(ctx)?),
+                None => None,
+            };
             let visibility = match (&self.visibility, &self.irregular) {
                 (_, Some(irr)) if self.settings.visibility => Some(irr.read_mask(ctx)?),
                 (Some(pass), _) => {
@@ -603,6 +720,7 @@ impl<'c> Renderer<'c> {
                         atlas: &self.shadows.atlas,
                         mask: None,
                         clusters: &self.clusters,
+                        vsm: self.vsm.as_ref(),
                     };
                     Some(pass.run(ctx, &inputs, &self.timer, span)?)
                 }
@@ -631,6 +749,7 @@ impl<'c> Renderer<'c> {
                 },
                 shadow_stats,
                 clusters,
+                virtual_maps,
             })
         })
     }
@@ -648,10 +767,17 @@ impl<'c> Renderer<'c> {
                 crate::shadow::IRREGULAR_NO_ATLAS.into(),
             ));
         }
+        if self.vsm.is_some() {
+            return Err(RenderError::Unsupported(
+                crate::shadow::VIRTUAL_NO_ATLAS.into(),
+            ));
+        }
         self.shadows.read_atlas(self.ctx)
     }
 }
 
+/// The frame's uniforms; `atlas_size` is the side of the texture shadows are read from (the
+/// atlas, or the virtual maps' page pool).
 fn frame_uniforms(scene: &Scene, s: &RenderSettings, atlas_size: u32) -> FrameUniforms {
     let cam = &scene.camera;
     let aspect = s.width as f32 / s.height as f32;
@@ -673,7 +799,13 @@ fn frame_uniforms(scene: &Scene, s: &RenderSettings, atlas_size: u32) -> FrameUn
             atlas_size,
             (scene.lights.len() as u32).div_ceil(32).max(1),
         ],
-        bias: [s.bias.constant, s.bias.slope, s.bias.normal_offset, 0.0],
+        // w: world size of a pixel at view depth 1 (virtual maps pick levels by it).
+        bias: [
+            s.bias.constant,
+            s.bias.slope,
+            s.bias.normal_offset,
+            2.0 / (proj.y_axis.y * s.height as f32),
+        ],
         sky: SKY.extend(1.0).to_array(),
     }
 }

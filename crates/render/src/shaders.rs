@@ -7,6 +7,43 @@
 pub const COMMON: &str = include_str!("shaders/common.wgsl");
 /// Shadow-view selection, receiver bias and atlas addressing.
 pub const SHADOW_LOOKUP: &str = include_str!("shaders/shadow_lookup.wgsl");
+/// The lighting and visibility passes' `shadow_coord` when shadows come from the atlas.
+pub const ATLAS_COORD: &str = "fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, \
+     view_depth: f32) -> ShadowCoord {\n    return atlas_coord(light, p, n, view_depth);\n}";
+/// Virtual shadow maps: level and page selection shared by marking and lookups.
+pub const VSM_COMMON: &str = include_str!("shaders/vsm_common.wgsl");
+
+/// Where the lighting and visibility passes find shadows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShadowSource {
+    /// The atlas of per-view tiles (every shadow-map technique but `virtual`).
+    Atlas,
+    /// The virtual shadow maps' page table and pool; the three declarations take bindings
+    /// `first`, `first + 1`, `first + 2` of group 0.
+    Virtual {
+        /// First binding of the page-table declarations.
+        first: u32,
+    },
+}
+
+/// The pieces that define `shadow_coord` for `source`.
+fn shadow_source(source: ShadowSource) -> Vec<String> {
+    match source {
+        ShadowSource::Atlas => vec![ATLAS_COORD.to_string()],
+        ShadowSource::Virtual { first } => vec![
+            VSM_COMMON.to_string(),
+            format!(
+                "@group(0) @binding({}) var<uniform> vsm: VsmUniforms;\n\
+                 @group(0) @binding({}) var<storage, read> vsm_faces: array<VirtualFace>;\n\
+                 @group(0) @binding({}) var<storage, read> vsm_table: array<u32>;",
+                first,
+                first + 1,
+                first + 2
+            ),
+            include_str!("shaders/vsm_lookup.wgsl").to_string(),
+        ],
+    }
+}
 
 /// Concatenates shader parts in order.
 pub fn compose(parts: &[&str]) -> String {
@@ -18,14 +55,12 @@ pub fn gbuffer() -> String {
     compose(&[COMMON, include_str!("shaders/gbuffer.wgsl")])
 }
 
-/// Deferred lighting pass.
-pub fn lighting() -> String {
-    compose(&[
-        COMMON,
-        PARABOLOID,
-        SHADOW_LOOKUP,
-        include_str!("shaders/lighting.wgsl"),
-    ])
+/// Deferred lighting pass, shadows from `source` (bindings 12–14 for virtual maps).
+pub fn lighting(source: ShadowSource) -> String {
+    let mut parts = vec![COMMON.to_string(), PARABOLOID.to_string(), SHADOW_LOOKUP.to_string()];
+    parts.extend(shadow_source(source));
+    parts.push(include_str!("shaders/lighting.wgsl").to_string());
+    parts.join("\n")
 }
 
 /// Clustered light assignment (mark, compact, assign, statistics).
@@ -33,13 +68,34 @@ pub fn clusters() -> String {
     compose(&[COMMON, include_str!("shaders/clusters.wgsl")])
 }
 
-/// Hard visibility mask.
-pub fn visibility() -> String {
+/// Hard visibility mask, shadows from `source` (bindings 11–13 for virtual maps).
+pub fn visibility(source: ShadowSource) -> String {
+    let mut parts = vec![COMMON.to_string(), PARABOLOID.to_string(), SHADOW_LOOKUP.to_string()];
+    parts.extend(shadow_source(source));
+    parts.push(include_str!("shaders/visibility.wgsl").to_string());
+    parts.join("\n")
+}
+
+/// Virtual shadow maps: page marking, allocation and indirect arguments.
+pub fn vsm() -> String {
     compose(&[
         COMMON,
         PARABOLOID,
         SHADOW_LOOKUP,
-        include_str!("shaders/visibility.wgsl"),
+        VSM_COMMON,
+        include_str!("shaders/vsm.wgsl"),
+    ])
+}
+
+/// Virtual shadow maps: page culling, drawing and clearing.
+pub fn vsm_draw() -> String {
+    compose(&[
+        "enable clip_distances;",
+        COMMON,
+        CULL,
+        TILE,
+        CLUSTER_CULL,
+        include_str!("shaders/vsm_draw.wgsl"),
     ])
 }
 
@@ -89,6 +145,9 @@ pub fn tile_clear() -> String {
     compose(&[COMMON, include_str!("techniques/tile_clear.wgsl")])
 }
 
+/// Culling whole caster clusters by bounding sphere and normal cone (`gpu-driven`, virtual).
+pub const CLUSTER_CULL: &str = include_str!("techniques/cluster_cull.wgsl");
+
 /// Mapping clip positions into atlas tiles with clip distances (`layered`, `gpu-driven`).
 pub const TILE: &str = include_str!("techniques/tile.wgsl");
 
@@ -121,6 +180,7 @@ pub fn gpu_driven() -> String {
         COMMON,
         CULL,
         TILE,
+        CLUSTER_CULL,
         include_str!("techniques/gpu_driven.wgsl"),
     ])
 }
@@ -139,8 +199,12 @@ pub fn compute_copy() -> String {
 pub fn all() -> Vec<(&'static str, String)> {
     vec![
         ("gbuffer", gbuffer()),
-        ("lighting", lighting()),
-        ("visibility", visibility()),
+        ("lighting", lighting(ShadowSource::Atlas)),
+        ("lighting_vsm", lighting(ShadowSource::Virtual { first: 12 })),
+        ("visibility", visibility(ShadowSource::Atlas)),
+        ("visibility_vsm", visibility(ShadowSource::Virtual { first: 11 })),
+        ("vsm", vsm()),
+        ("vsm_draw", vsm_draw()),
         ("clusters", clusters()),
         ("irregular", irregular()),
         ("atlas_copy", atlas_copy()),

@@ -50,7 +50,7 @@ pub struct FitReport {
 
 /// Importance of a light for the shadow budget: the tangent of the half-angle its reach
 /// subtends at the camera (infinite for directional lights and lights around the camera).
-fn light_importance(scene: &Scene, light: usize) -> f32 {
+pub(crate) fn light_importance(scene: &Scene, light: usize) -> f32 {
     match scene.lights[light].bounding_sphere() {
         None => f32::INFINITY,
         Some((c, r)) => {
@@ -294,6 +294,20 @@ impl ShadowPlan {
             light_views,
             fit: fit_report,
         })
+    }
+
+    /// A plan without shadow views (techniques that plan their own: `virtual`).
+    pub fn none(lights: usize) -> Self {
+        Self {
+            views: Vec::new(),
+            layout: AtlasLayout {
+                size: atlas::MIN_TILE,
+                tiles: Vec::new(),
+                shrink_steps: 0,
+            },
+            light_views: vec![(0, 0); lights],
+            fit: FitReport::default(),
+        }
     }
 
     /// GPU records of the views with their tiles.
@@ -639,6 +653,12 @@ pub const IRREGULAR_NO_ATLAS: &str = "--technique irregular computes the visibil
      atlas tiles are generated or benchmarked on their own (bench layered, bench omni, atlas \
      read-back)";
 
+/// Why `virtual` cannot stand where an atlas-filling technique is expected.
+pub const VIRTUAL_NO_ATLAS: &str = "--technique virtual renders only the pages the camera's \
+     samples need, into a page pool instead of an atlas, so it runs in frames (render, \
+     compare, bench virtual) but not where atlas tiles are generated or benchmarked on their \
+     own (bench layered, bench omni, atlas read-back)";
+
 /// The techniques that exist, by CLI name.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Technique {
@@ -657,6 +677,10 @@ pub enum Technique {
     /// view, exact tests per triangle; produces the visibility mask, not atlas tiles
     /// ([`crate::irregular`]), so it runs in the [`crate::Renderer`] only.
     Irregular,
+    /// Virtual shadow maps (seed 002): a paged virtual map per light face, only the pages
+    /// visible samples need, rendered into a page pool ([`crate::vsm`]); fills no atlas, so it
+    /// runs in the [`crate::Renderer`] only.
+    Virtual,
 }
 
 impl Technique {
@@ -668,6 +692,7 @@ impl Technique {
         Technique::GpuDriven,
         Technique::Compute,
         Technique::Irregular,
+        Technique::Virtual,
     ];
 
     /// The CLI name.
@@ -679,6 +704,7 @@ impl Technique {
             Technique::GpuDriven => "gpu-driven",
             Technique::Compute => "compute",
             Technique::Irregular => "irregular",
+            Technique::Virtual => "virtual",
         }
     }
 
@@ -706,6 +732,10 @@ impl Technique {
                  every caster triangle tested exactly against the samples under it; \
                  alias-free, fills no atlas"
             }
+            Technique::Virtual => {
+                "virtual shadow maps: a 16k² paged map per light face, only the pages the \
+                 camera's samples need, at the resolution they need, rendered into a page pool"
+            }
         }
     }
 
@@ -728,6 +758,7 @@ impl Technique {
             Technique::Irregular => {
                 return Err(RenderError::Unsupported(IRREGULAR_NO_ATLAS.into()))
             }
+            Technique::Virtual => return Err(RenderError::Unsupported(VIRTUAL_NO_ATLAS.into())),
         })
     }
 }

@@ -109,9 +109,19 @@ pub struct VisibilityPass {
     chunk_words: u32,
 }
 
+/// First binding of the virtual maps' page-table declarations in the visibility pass.
+const VSM_FIRST_BINDING: u32 = 11;
+
 impl VisibilityPass {
     /// Plans the pass; fails if even one word per pixel exceeds the storage-binding limit.
-    pub fn new(ctx: &GpuContext, w: u32, h: u32, lights: u32) -> Result<Self, RenderError> {
+    /// `virtual_maps`: read shadows through the virtual shadow maps' page table.
+    pub fn new(
+        ctx: &GpuContext,
+        w: u32,
+        h: u32,
+        lights: u32,
+        virtual_maps: bool,
+    ) -> Result<Self, RenderError> {
         let device = &ctx.device;
         let limit = ctx.limits().max_storage_buffer_binding_size;
         let words = lights.div_ceil(32).max(1);
@@ -125,9 +135,7 @@ impl VisibilityPass {
         }
         let chunk_words = ((limit / per_word) as u32).clamp(1, words);
         let comp = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("visibility.layout"),
-            entries: &[
+        let mut entries = vec![
                 crate::uniform_entry(0, comp),
                 crate::storage_entry(1, comp),
                 crate::storage_entry(2, comp),
@@ -143,10 +151,24 @@ impl VisibilityPass {
                 crate::uniform_entry(8, comp),
                 crate::storage_entry(9, comp),
                 crate::storage_entry(10, comp),
-            ],
+        ];
+        let source = if virtual_maps {
+            entries.extend(crate::lighting::vsm_layout_entries(VSM_FIRST_BINDING, comp));
+            crate::shaders::ShadowSource::Virtual {
+                first: VSM_FIRST_BINDING,
+            }
+        } else {
+            crate::shaders::ShadowSource::Atlas
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("visibility.layout"),
+            entries: &entries,
         });
-        let module =
-            crate::shaders::module(device, "visibility.shader", &crate::shaders::visibility());
+        let module = crate::shaders::module(
+            device,
+            "visibility.shader",
+            &crate::shaders::visibility(source),
+        );
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("visibility.pipeline_layout"),
             bind_group_layouts: &[Some(&layout)],
@@ -217,10 +239,7 @@ impl VisibilityPass {
                     usage: wgpu::BufferUsages::UNIFORM,
                 },
             );
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("visibility.bind_group"),
-                layout: &self.layout,
-                entries: &[
+            let mut entries = vec![
                     wgpu::BindGroupEntry {
                         binding: 0,
                         resource: inputs.frame.as_entire_binding(),
@@ -243,7 +262,7 @@ impl VisibilityPass {
                     },
                     wgpu::BindGroupEntry {
                         binding: 5,
-                        resource: wgpu::BindingResource::TextureView(&inputs.atlas.view),
+                        resource: wgpu::BindingResource::TextureView(inputs.shadow_texture()),
                     },
                     wgpu::BindGroupEntry {
                         binding: 6,
@@ -265,7 +284,12 @@ impl VisibilityPass {
                         binding: 10,
                         resource: inputs.clusters.masks.as_entire_binding(),
                     },
-                ],
+            ];
+            entries.extend(inputs.vsm_entries(VSM_FIRST_BINDING));
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("visibility.bind_group"),
+                layout: &self.layout,
+                entries: &entries,
             });
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("visibility.encoder"),

@@ -19,7 +19,8 @@ struct FrameUniforms {
     viewport: vec4<f32>,
     // light count, PCF mode, atlas side in texels, visibility words per pixel.
     counts: vec4<u32>,
-    // Receiver bias in shadow texels: constant, slope (times tan of the light angle), normal offset.
+    // Receiver bias in shadow texels: constant, slope (times tan of the light angle), normal
+    // offset; w: world size of a screen pixel at view depth 1 (2 / (P11 · height)).
     bias: vec4<f32>,
     // Ambient-only colour of pixels no light reaches, and sky colour: rgb + unused.
     sky: vec4<f32>,
@@ -103,3 +104,53 @@ const CLUSTER_EMPTY: u32 = 0u;
 const CLUSTER_MARKED: u32 = 1u;
 const CLUSTER_FIRST_SLOT: u32 = 2u;
 const CLUSTER_OVERFLOW: u32 = 0xffffffffu;
+
+// ---- Virtual shadow maps (vsm.rs) ----
+// Every shadow view of the plan (spot, cube face, cascade) is a *face*: a virtual map of
+// `table.z`² texels cut into pages of `VsmUniforms.pool.z`² texels, held as a mip chain of
+// page grids: level l has 2^l × 2^l pages (level 0 = the whole face in one page). A face's
+// page-table entries are consecutive from `table.x`, coarsest level first, row-major.
+struct VirtualFace {
+    view_proj: mat4x4<f32>,
+    // What back-face culling faces: light position (w = 1) or direction of travel (w = 0).
+    eye: vec4<f32>,
+    // near, far, world size of a texel of the finest level (per unit distance if perspective),
+    // 1 if orthographic else 0.
+    params: vec4<f32>,
+    // first page-table entry, finest level, virtual side in texels, light index.
+    table: vec4<u32>,
+}
+
+struct VsmUniforms {
+    // Pool side in texels, pages per pool row, page side in texels, pages in the pool.
+    pool: vec4<u32>,
+    // Faces, page-table entries, 1 = mark pages for back-facing samples too, unused.
+    counts: vec4<u32>,
+    // Texels per screen pixel wanted (level of detail scale), unused ×3.
+    lod: vec4<f32>,
+}
+
+// A resident page: its face, level and page coordinates.
+struct VsmPage {
+    face: u32,
+    level: u32,
+    x: u32,
+    y: u32,
+}
+
+// One cull + draw round of the page rendering (dynamic uniform offset).
+struct VsmRound {
+    // First page of the round, page slots in the round, first cluster, clusters in the round.
+    round: vec4<u32>,
+    // Caster vertices V, cullable triangles, cull bits, 1 = commands compacted by a counter.
+    counts: vec4<u32>,
+}
+
+// Page-table entry values: 0 = not needed, 1 = needed (before allocation), VSM_FIRST_PAGE + p
+// = resident in pool page p, VSM_DENIED = needed but the pool was full.
+const VSM_EMPTY: u32 = 0u;
+const VSM_NEEDED: u32 = 1u;
+const VSM_FIRST_PAGE: u32 = 2u;
+const VSM_DENIED: u32 = 0xffffffffu;
+// Levels a face can have: 2^0 .. 2^(VSM_LEVELS - 1) pages per side.
+const VSM_LEVELS: u32 = 8u;

@@ -59,7 +59,19 @@ fn to_light(light: LightData, p: vec3<f32>) -> vec3<f32> {
     return normalize(light.position.xyz - p);
 }
 
-fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, view_depth: f32) -> ShadowCoord {
+// Receiver bias (documented in ARCHITECTURE.md): how far to move the point along its normal
+// and towards the light, in texels of `texel_world` world size; the slope term grows with the
+// tangent of the angle between normal and light, as a depth slope does.
+fn receiver_offset(light: LightData, p: vec3<f32>, n: vec3<f32>, texel_world: f32) -> vec3<f32> {
+    let l = to_light(light, p);
+    let cos_t = clamp(dot(n, l), 0.0, 1.0);
+    let tan_t = min(sqrt(max(1.0 - cos_t * cos_t, 0.0)) / max(cos_t, 1e-4), 10.0);
+    return n * (frame.bias.z * texel_world)
+        + l * ((frame.bias.x + frame.bias.y * tan_t) * texel_world);
+}
+
+// Where `p` (normal `n`, camera view depth `view_depth`) falls in the atlas for `light`.
+fn atlas_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, view_depth: f32) -> ShadowCoord {
     var out: ShadowCoord;
     out.valid = false;
     let vi = select_shadow_view(light, p, view_depth);
@@ -76,14 +88,7 @@ fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, view_depth: f32) -
     } else if (sv.params.w < 0.5) {
         texel_world = texel_world * max(clip0.w, 0.0);
     }
-    // Receiver bias (documented in ARCHITECTURE.md): move the point along its normal and towards
-    // the light by a number of texels; the slope term grows with the tangent of the angle
-    // between normal and light, as a depth slope does.
-    let l = to_light(light, p);
-    let cos_t = clamp(dot(n, l), 0.0, 1.0);
-    let tan_t = min(sqrt(max(1.0 - cos_t * cos_t, 0.0)) / max(cos_t, 1e-4), 10.0);
-    let offset = n * (frame.bias.z * texel_world)
-        + l * ((frame.bias.x + frame.bias.y * tan_t) * texel_world);
+    let offset = receiver_offset(light, p, n, texel_world);
     var clip = sv.view_proj * vec4<f32>(p + offset, 1.0);
     if (paraboloid) {
         clip = paraboloid_clip(sv.view_proj, sv.params, vec4<f32>(p + offset, 1.0)).clip;

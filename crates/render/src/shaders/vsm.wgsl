@@ -1,0 +1,201 @@
+// Virtual shadow maps (vsm.rs), the passes that decide which pages exist this frame:
+//
+// 1. cs_mark, one thread per pixel: for every light of the pixel's cluster that reaches the
+//    sample (and faces it, unless back-facing samples are wanted too), the page of the level
+//    whose texels match the pixel's footprint is marked needed, and so are its ancestors up
+//    to level 0 (a marked entry's ancestors are marked by whoever marked it, so the walk
+//    stops at the first one already marked). Newly marked entries are counted per level.
+// 2. cs_alloc, one thread per page-table entry: a needed page gets a pool page when its level,
+//    and every coarser level, fit the pool (levels are admitted coarsest first, whole or not
+//    at all, so the result does not depend on thread order); otherwise it is denied and
+//    lookups fall back to its resident ancestor. A resident page gets its record and its view:
+//    the face's projection cropped to the page, drawn into the page's tile of the pool.
+// 3. cs_args, one thread: the number of resident pages, and from it the indirect arguments of
+//    the page clear and of every cull round.
+
+@group(0) @binding(0) var<uniform> frame: FrameUniforms;
+@group(0) @binding(1) var<storage, read> lights: array<LightData>;
+@group(0) @binding(2) var gbuf_position: texture_2d<u32>;
+@group(0) @binding(3) var gbuf_normal: texture_2d<u32>;
+@group(0) @binding(4) var<uniform> clusters: ClusterUniforms;
+@group(0) @binding(5) var<storage, read> cluster_slots: array<u32>;
+@group(0) @binding(6) var<storage, read> cluster_masks: array<u32>;
+@group(0) @binding(7) var<uniform> vsm: VsmUniforms;
+@group(0) @binding(8) var<storage, read> vsm_faces: array<VirtualFace>;
+@group(0) @binding(9) var<storage, read_write> vsm_table: array<atomic<u32>>;
+// [0, 8): pages needed per level; [8, 16): pages allocated per level; 16: pages denied;
+// 17: pages resident; 18: faces marked at all.
+@group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(11) var<storage, read_write> pages: array<VsmPage>;
+@group(0) @binding(12) var<storage, read_write> page_views: array<ShadowViewData>;
+@group(0) @binding(13) var<storage, read> rounds: array<VsmRound>;
+// Per round: dispatch arguments (x, y, z); after them: the clear's draw arguments.
+@group(0) @binding(14) var<storage, read_write> args: array<u32>;
+// Declared for shadow_lookup.wgsl's `atlas_coord`, which these entry points never call.
+@group(1) @binding(0) var<storage, read> shadow_views: array<ShadowViewData>;
+
+const COUNT_DENIED: u32 = 16u;
+const COUNT_RESIDENT: u32 = 17u;
+
+fn mark_light(i: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
+    let light = lights[i];
+    if (light.shadow.y == 0u || !in_reach(light, p)) {
+        return;
+    }
+    // The lighting pass reads shadows only where the surface faces the light.
+    if (vsm.counts.z == 0u && dot(n, to_light(light, p)) <= 0.0) {
+        return;
+    }
+    let fi = select_shadow_view(light, p, view_depth);
+    if (fi < 0) {
+        return;
+    }
+    let face = vsm_faces[fi];
+    let level = vsm_level(face, p, view_depth, vsm.lod.x);
+    let q = vsm_project(light, face, p, n, level);
+    if (!q.valid) {
+        return;
+    }
+    var l = i32(level);
+    while (l >= 0) {
+        let e = vsm_entry(face, u32(l), q.uv);
+        if (atomicLoad(&vsm_table[e]) != VSM_EMPTY) {
+            break;
+        }
+        if (atomicMax(&vsm_table[e], VSM_NEEDED) != VSM_EMPTY) {
+            break;
+        }
+        atomicAdd(&counters[u32(l)], 1u);
+        l = l - 1;
+    }
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn cs_mark(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (gid.x >= u32(frame.viewport.x) || gid.y >= u32(frame.viewport.y)) {
+        return;
+    }
+    let pos = bitcast<vec4<f32>>(textureLoad(gbuf_position, vec2<i32>(gid.xy), 0));
+    if (pos.w < 0.5) {
+        return;
+    }
+    let p = pos.xyz;
+    let n = normalize(bitcast<vec3<f32>>(textureLoad(gbuf_normal, vec2<i32>(gid.xy), 0).xyz));
+    let view_depth = -(frame.view * vec4<f32>(p, 1.0)).z;
+    var slot = CLUSTER_OVERFLOW;
+    if (clusters.words.w != 0u) {
+        slot = cluster_slots[cluster_index(clusters, gid.xy, view_depth)];
+    }
+    if (slot < CLUSTER_FIRST_SLOT || slot == CLUSTER_OVERFLOW) {
+        for (var i = 0u; i < frame.counts.x; i = i + 1u) {
+            mark_light(i, p, n, view_depth);
+        }
+        return;
+    }
+    let base = (slot - CLUSTER_FIRST_SLOT) * clusters.words.z;
+    for (var sw = 0u; sw < clusters.words.x; sw = sw + 1u) {
+        var words = cluster_masks[base + sw];
+        while (words != 0u) {
+            let w = sw * 32u + firstTrailingBit(words);
+            words = words & (words - 1u);
+            var bits = cluster_masks[base + clusters.words.x + w];
+            while (bits != 0u) {
+                let i = w * 32u + firstTrailingBit(bits);
+                bits = bits & (bits - 1u);
+                mark_light(i, p, n, view_depth);
+            }
+        }
+    }
+}
+
+// Pages needed at levels 0..=level, i.e. the pool pages those levels take if admitted.
+fn needed_through(level: u32) -> u32 {
+    var sum = 0u;
+    for (var k = 0u; k <= level; k = k + 1u) {
+        sum = sum + atomicLoad(&counters[k]);
+    }
+    return sum;
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn cs_alloc(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let e = gid.x + gid.y * groups.x * 64u;
+    if (e >= vsm.counts.y || atomicLoad(&vsm_table[e]) != VSM_NEEDED) {
+        return;
+    }
+    // The face: the last whose first entry is at or before e.
+    var lo = 0u;
+    var hi = vsm.counts.x;
+    while (hi - lo > 1u) {
+        let mid = (lo + hi) / 2u;
+        if (vsm_faces[mid].table.x <= e) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let face = vsm_faces[lo];
+    let local = e - face.table.x;
+    var level = 0u;
+    while (((1u << (2u * (level + 1u))) - 1u) / 3u <= local) {
+        level = level + 1u;
+    }
+    let within = local - ((1u << (2u * level)) - 1u) / 3u;
+    let n = 1u << level;
+    let through = needed_through(level);
+    if (through > vsm.pool.w) {
+        atomicStore(&vsm_table[e], VSM_DENIED);
+        atomicAdd(&counters[COUNT_DENIED], 1u);
+        return;
+    }
+    let page = through - atomicLoad(&counters[level]) + atomicAdd(&counters[8u + level], 1u);
+    atomicStore(&vsm_table[e], VSM_FIRST_PAGE + page);
+    let x = within % n;
+    let y = within / n;
+    pages[page] = VsmPage(lo, level, x, y);
+    // Crop the face's clip space to the page: ndc' = (ndc - centre) · n.
+    let nf = f32(n);
+    let cx = (2.0 * f32(x) + 1.0) / nf - 1.0;
+    let cy = 1.0 - (2.0 * f32(y) + 1.0) / nf;
+    let crop = mat4x4<f32>(
+        vec4<f32>(nf, 0.0, 0.0, 0.0),
+        vec4<f32>(0.0, nf, 0.0, 0.0),
+        vec4<f32>(0.0, 0.0, 1.0, 0.0),
+        vec4<f32>(-nf * cx, -nf * cy, 0.0, 1.0),
+    );
+    let side = f32(vsm.pool.z);
+    var v: ShadowViewData;
+    v.view_proj = crop * face.view_proj;
+    v.tile = vec4<f32>(f32(page % vsm.pool.y) * side, f32(page / vsm.pool.y) * side, side, 0.0);
+    v.params = vec4<f32>(face.params.xy, face.params.z * f32(1u << (face.table.y - level)), face.params.w);
+    page_views[page] = v;
+}
+
+@compute @workgroup_size(1, 1, 1)
+fn cs_args() {
+    var resident = 0u;
+    var through = 0u;
+    for (var k = 0u; k < VSM_LEVELS; k = k + 1u) {
+        through = through + atomicLoad(&counters[k]);
+        if (through <= vsm.pool.w) {
+            resident = through;
+        }
+    }
+    atomicStore(&counters[COUNT_RESIDENT], resident);
+    let n = arrayLength(&rounds);
+    for (var r = 0u; r < n; r = r + 1u) {
+        let first = rounds[r].round.x;
+        var slots = 0u;
+        if (resident > first) {
+            slots = min(resident - first, rounds[r].round.y);
+        }
+        args[3u * r] = (rounds[r].round.w + 63u) / 64u;
+        args[3u * r + 1u] = slots;
+        args[3u * r + 2u] = 1u;
+    }
+    // draw_indirect: vertices, instances, first vertex, first instance.
+    args[3u * n] = 6u;
+    args[3u * n + 1u] = resident;
+    args[3u * n + 2u] = 0u;
+    args[3u * n + 3u] = 0u;
+}

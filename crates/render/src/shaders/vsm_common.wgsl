@@ -1,0 +1,61 @@
+// Virtual shadow maps (vsm.rs): which level and page of a face a surface point needs, and
+// where it falls there. Shared by the page-marking pass and the lookups of the lighting and
+// visibility passes, so that a lookup asks for exactly the page the marking requested.
+// Needs `frame: FrameUniforms` and shadow_lookup.wgsl (`receiver_offset`).
+
+// World size of one texel of `face` at `level` around `p`.
+fn vsm_texel_world(face: VirtualFace, level: u32, p: vec3<f32>) -> f32 {
+    var t = face.params.z * f32(1u << (face.table.y - level));
+    if (face.params.w < 0.5) {
+        t = t * max((face.view_proj * vec4<f32>(p, 1.0)).w, 0.0);
+    }
+    return t;
+}
+
+// The level a sample at `p` (camera view depth `view_depth`) needs: the coarsest whose texels
+// are no larger than the screen pixel there, divided by the level-of-detail scale `lod`
+// (texels per pixel). Level 0 when even the finest level is coarser than that.
+fn vsm_level(face: VirtualFace, p: vec3<f32>, view_depth: f32, lod: f32) -> u32 {
+    let finest = face.table.y;
+    let texel = vsm_texel_world(face, finest, p);
+    let pixel = view_depth * frame.bias.w / max(lod, 1e-6);
+    // Level l has texels 2^(finest - l) times the finest: the coarsest level with
+    // 2^(finest - l) · texel <= pixel is finest - floor(log2(pixel / texel)).
+    let k = floor(log2(max(pixel, 1e-30) / max(texel, 1e-30)));
+    return finest - u32(clamp(k, 0.0, f32(finest)));
+}
+
+// A point in a face: continuous coordinates over the whole face (0..1, y down, as atlas
+// tiles) and its depth, after the receiver bias of `level`'s texel size.
+struct VsmPoint {
+    uv: vec2<f32>,
+    depth: f32,
+    valid: bool,
+}
+
+fn vsm_project(light: LightData, face: VirtualFace, p: vec3<f32>, n: vec3<f32>, level: u32) -> VsmPoint {
+    var out: VsmPoint;
+    out.valid = false;
+    let offset = receiver_offset(light, p, n, vsm_texel_world(face, level, p));
+    let clip = face.view_proj * vec4<f32>(p + offset, 1.0);
+    if (clip.w <= 0.0) {
+        return out;
+    }
+    let ndc = clip.xyz / clip.w;
+    // Outside a spot's cone or a cascade: no shadow information (as in the atlas lookup);
+    // cube faces only get here through the bias offset and are clamped.
+    if (any(abs(ndc.xy) > vec2<f32>(1.0)) && light.shadow.z != LIGHT_POINT) {
+        return out;
+    }
+    out.uv = clamp(ndc.xy * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5), vec2<f32>(0.0), vec2<f32>(1.0));
+    out.depth = clamp(ndc.z, 0.0, 1.0);
+    out.valid = true;
+    return out;
+}
+
+// The page-table entry of the page of `level` that holds `uv`.
+fn vsm_entry(face: VirtualFace, level: u32, uv: vec2<f32>) -> u32 {
+    let n = 1u << level;
+    let xy = min(vec2<u32>(uv * f32(n)), vec2<u32>(n - 1u));
+    return face.table.x + ((1u << (2u * level)) - 1u) / 3u + xy.y * n + xy.x;
+}

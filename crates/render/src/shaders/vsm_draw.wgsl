@@ -1,0 +1,84 @@
+// Virtual shadow maps (vsm.rs), rendering the resident pages: every page is an ordinary
+// shadow view (the face's projection cropped to the page, one tile of the pool), so pages are
+// drawn the `gpu-driven` way: a compute pass culls caster clusters against each page's
+// frustum slice and writes indexed-indirect commands, one multi-draw renders the survivors
+// into the pages' tiles. The page count is known only on the GPU: cull dispatches are
+// indirect, and rounds past the last resident page cull nothing.
+
+@group(0) @binding(0) var<uniform> round: VsmRound;
+@group(0) @binding(1) var<uniform> vsm: VsmUniforms;
+@group(0) @binding(2) var<storage, read> page_views: array<ShadowViewData>;
+
+// ---- cull (compute) ----
+
+@group(0) @binding(3) var<storage, read> pages: array<VsmPage>;
+@group(0) @binding(4) var<storage, read> vsm_faces: array<VirtualFace>;
+@group(0) @binding(5) var<storage, read> clusters: array<GpuCluster>;
+@group(0) @binding(6) var<storage, read> cluster_bounds: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read> instances: array<InstanceData>;
+@group(0) @binding(8) var<storage, read_write> commands: array<DrawCommand>;
+@group(0) @binding(9) var<storage, read_write> command_count: atomic<u32>;
+@group(0) @binding(10) var<storage, read> counters: array<u32>;
+
+// One thread per (cluster, page slot) of the round.
+@compute @workgroup_size(64, 1, 1)
+fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let local = gid.x;
+    let slot = gid.y;
+    if (local >= round.round.w || slot >= round.round.y) {
+        return;
+    }
+    let page = round.round.x + slot;
+    let c = round.round.z + local;
+    let cl = clusters[c];
+    let sphere = cluster_bounds[c];
+    let bits = round.counts.z;
+    // Slots past the last resident page draw nothing (only reached without compaction,
+    // where every slot's command is written).
+    var visible = page < counters[17];
+    if (visible && (bits & CULL_FRUSTUM) != 0u && sphere_outside(page_views[page].view_proj, sphere)) {
+        visible = false;
+    }
+    if (visible && (bits & CULL_BACKFACE) != 0u && cl.first_triangle < round.counts.y
+        && cluster_faces_away(cl, instances[cl.instance].normal, sphere, vsm_faces[pages[page].face].eye)) {
+        visible = false;
+    }
+    var cmd: DrawCommand;
+    cmd.index_count = select(0u, 3u * cl.triangles, visible);
+    cmd.instance_count = 1u;
+    cmd.first_index = 3u * cl.first_triangle;
+    cmd.base_vertex = i32(slot * round.counts.x);
+    cmd.first_instance = 0u;
+    if (round.counts.w != 0u) {
+        if (visible) {
+            commands[atomicAdd(&command_count, 1u)] = cmd;
+        }
+    } else {
+        commands[slot * round.round.w + local] = cmd;
+    }
+}
+
+// ---- draw and clear (vertex) ----
+
+@group(0) @binding(11) var<storage, read> world: array<vec4<f32>>;
+
+@vertex
+fn vs_draw(@builtin(vertex_index) v: u32) -> TileOut {
+    let slot = v / round.counts.x;
+    let vertex = v - slot * round.counts.x;
+    let view = page_views[round.round.x + slot];
+    return into_tile_of(view.view_proj * world[vertex], view.tile, 1.0 / f32(vsm.pool.x));
+}
+
+// Covers resident page `i`'s tile at depth 1 (far), before its casters are drawn.
+@vertex
+fn vs_clear(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> @builtin(position) vec4<f32> {
+    let tile = page_views[i].tile;
+    var quad = array<vec2<f32>, 6>(
+        vec2<f32>(0.0, 0.0), vec2<f32>(1.0, 0.0), vec2<f32>(0.0, 1.0),
+        vec2<f32>(0.0, 1.0), vec2<f32>(1.0, 0.0), vec2<f32>(1.0, 1.0),
+    );
+    let px = tile.xy + quad[v % 6u] * tile.z;
+    let size = f32(vsm.pool.x);
+    return vec4<f32>(px.x / size * 2.0 - 1.0, 1.0 - px.y / size * 2.0, 1.0, 1.0);
+}

@@ -1,0 +1,43 @@
+// Shadow lookups through the virtual shadow maps' page table (vsm.rs), for the lighting and
+// visibility passes. The includer declares `vsm: VsmUniforms`, `vsm_faces` and `vsm_table`
+// (vsm.rs composes the declarations with the pass's binding numbers).
+
+// Where `p` falls in the page pool for `light`: the page of the level the point needs, or, if
+// that page is not resident (the pool was full), the nearest coarser resident page. Taps of
+// the filter stay inside the page (`tile_min`, `tile_max`), so pages never bleed into each
+// other. Invalid (unshadowed) when no level of the face is resident.
+fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, view_depth: f32) -> ShadowCoord {
+    var out: ShadowCoord;
+    out.valid = false;
+    let fi = select_shadow_view(light, p, view_depth);
+    if (fi < 0) {
+        return out;
+    }
+    let face = vsm_faces[fi];
+    var level = vsm_level(face, p, view_depth, vsm.lod.x);
+    loop {
+        let q = vsm_project(light, face, p, n, level);
+        if (!q.valid) {
+            return out;
+        }
+        let e = vsm_table[vsm_entry(face, level, q.uv)];
+        if (e >= VSM_FIRST_PAGE && e != VSM_DENIED) {
+            let page = e - VSM_FIRST_PAGE;
+            let side = f32(vsm.pool.z);
+            let tile = vec2<f32>(f32(page % vsm.pool.y), f32(page / vsm.pool.y)) * side;
+            let pages = f32(1u << level);
+            let cell = min(floor(q.uv * pages), vec2<f32>(pages - 1.0));
+            out.tile_min = tile;
+            out.tile_max = tile + vec2<f32>(side);
+            out.texel = tile + (q.uv * pages - cell) * side;
+            out.depth = q.depth;
+            out.valid = true;
+            return out;
+        }
+        if (level == 0u) {
+            return out;
+        }
+        level = level - 1u;
+    }
+    return out;
+}
