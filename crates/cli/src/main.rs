@@ -22,6 +22,7 @@ mod bench;
 mod compare;
 mod irregular_bench;
 mod lights_bench;
+mod virtual_bench;
 mod omni;
 mod plot;
 
@@ -90,6 +91,10 @@ enum BenchCommand {
     /// --reference-up-to), lights per cluster, shadow-map fit and memory; table, results.json
     /// and one plot per scene and screen.
     Lights(Box<lights_bench::LightsArgs>),
+    /// Virtual shadow maps against the atlas path, 16 to 4,096 lights, interleaved in the same
+    /// run: GPU time per stage, shadow memory kept, pages needed / rendered / denied; table,
+    /// results.json and a plot.
+    Virtual(Box<virtual_bench::VirtualArgs>),
 }
 
 #[derive(Args, Debug, Clone)]
@@ -325,6 +330,7 @@ fn main() {
         Some(Command::Bench(BenchCommand::Omni(args))) => omni::omni(&args),
         Some(Command::Bench(BenchCommand::Irregular(args))) => irregular_bench::irregular(&args),
         Some(Command::Bench(BenchCommand::Lights(args))) => lights_bench::lights(&args),
+        Some(Command::Bench(BenchCommand::Virtual(args))) => virtual_bench::virtual_maps(&args),
         None => render(&cli.render),
     };
     if let Err(e) = result {
@@ -640,7 +646,15 @@ fn print_summary(s: &serde_json::Value) {
             v["pool_bytes"].as_u64().unwrap_or(0) >> 20,
             needed.join("/"),
             if denied > 0 {
-                format!("; {denied} pages did not fit the pool, their samples used coarser levels")
+                let unshadowed = v["unshadowed_faces"].as_u64().unwrap_or(0);
+                format!(
+                    "; {denied} pages did not fit the pool, their samples used coarser levels{}",
+                    if unshadowed > 0 {
+                        format!(" ({unshadowed} faces had no room even for one page: unshadowed; raise --page-pool)")
+                    } else {
+                        String::new()
+                    }
+                )
             } else {
                 String::new()
             }

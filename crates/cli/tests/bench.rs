@@ -256,3 +256,53 @@ fn bench_lights_reports_stages_clusters_and_fit_per_count() {
         .unwrap()
         .contains("adapter:"));
 }
+
+/// `bench virtual` on a tiny frame: both paths run in the same run, every light count gets a
+/// record, the virtual side's pages add up (rendered + denied = needed, rendered within the
+/// pool), and a 1 MiB pool (16 pages) at 200 lights must deny pages and say so.
+#[test]
+fn bench_virtual_reports_pages_memory_and_both_paths() {
+    let dir = tmp("virtual");
+    let out = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
+        .args(["bench", "virtual", "--scene", "cubes", "--lights", "4,200"])
+        .args(["--width", "160", "--height", "90", "--page-pool", "1"])
+        .args(["--repeats", "1", "--warmup", "0"])
+        .args(["--out-dir", dir.to_str().unwrap()])
+        .output()
+        .expect("run manyshadows");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "bench failed: {stderr}");
+    assert!(!stderr.contains("Validation Error"), "{stderr}");
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("results.json")).unwrap()).unwrap();
+    let records = json["records"].as_array().unwrap();
+    assert_eq!(records.len(), 2, "{json}");
+    for r in records {
+        let s = &r["stats"];
+        let needed: u64 = s["needed"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_u64().unwrap())
+            .sum();
+        let (resident, denied) = (s["resident"].as_u64().unwrap(), s["denied"].as_u64().unwrap());
+        assert_eq!(resident + denied, needed, "{r}");
+        assert!(resident <= s["pool_pages"].as_u64().unwrap(), "{r}");
+        assert_eq!(s["pool_pages"].as_u64().unwrap(), 16, "1 MiB = 512² texels = 16 pages");
+        assert!(resident > 0, "{r}");
+        // Memory kept: the page pool (1 MiB) plus the table against the atlas.
+        let v_mib = r["virtual_maps"]["shadow_mib"].as_f64().unwrap();
+        assert!((1.0..2.0).contains(&v_mib), "{r}");
+        assert!(r["atlas"]["shadow_mib"].as_f64().unwrap() > 0.0, "{r}");
+    }
+    // 200 lights use hundreds of faces: not even one page each fits, so the pool fills with
+    // level-0 pages and the faces beyond it are counted unshadowed.
+    let s = &records[1]["stats"];
+    assert!(s["denied"].as_u64().unwrap() > 0, "200 lights cannot fit 16 pages: {s}");
+    assert_eq!(s["resident"].as_u64().unwrap(), 16, "{s}");
+    assert!(s["unshadowed_faces"].as_u64().unwrap() > 0, "{s}");
+    assert!(dir.join("virtual-cubes-160x90.png").is_file());
+    assert!(std::fs::read_to_string(dir.join("results.txt"))
+        .unwrap()
+        .contains("adapter:"));
+}

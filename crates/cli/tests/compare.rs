@@ -109,8 +109,14 @@ fn analytic_scenes_score_every_technique_within_bounds() {
                 var["difference_image"]
             );
             let band_err = u(&c["band_false_shadow"]) + u(&c["band_false_light"]);
+            // The atlas variants here have 2048² maps, far finer than the 256² frame
+            // (measured: at most 0.014 % of reach in the band). Virtual maps aim for one texel
+            // per pixel whatever the requested resolution, so their outline may sit half a
+            // texel off inside the band: measured 0.81 % (spot), 0.22 % (point), 0.06 %
+            // (directional).
+            let budget = if var["technique"] == "virtual" { 0.01 } else { 0.001 };
             assert!(
-                (band_err as f64) <= 0.001 * reach as f64,
+                (band_err as f64) <= budget * reach as f64,
                 "{scene} {label}: {band_err} errors in the edge band"
             );
             assert!(

@@ -19,7 +19,8 @@
 //! 2. *allocate*: needed pages get pool pages, coarsest level first, a level admitted whole or
 //!    not at all while the pool lasts; pages of levels that do not fit are *denied*, and
 //!    lookups fall back to their nearest resident ancestor — a coarser shadow, never a wrong
-//!    or missing one — and the frame's [`VirtualStats`] count them;
+//!    or missing one — and the frame's [`VirtualStats`] count them (a pool smaller than one
+//!    page per face in use leaves the faces beyond it unshadowed, counted too);
 //! 3. *render*: every resident page is an ordinary shadow view (the face's projection cropped
 //!    to the page, one tile of the pool), drawn the `gpu-driven` way: compute culls caster
 //!    clusters against each page's frustum slice (and by normal cone), one indirect multi-draw
@@ -240,6 +241,9 @@ pub struct VirtualStats {
     pub resident: u32,
     /// Needed pages that did not fit the pool (their samples used a coarser level).
     pub denied: u32,
+    /// Faces left without shadows because not even their level-0 page fitted (only when the
+    /// pool has fewer pages than faces in use; which faces is then up to thread order).
+    pub unshadowed_faces: u32,
     /// Pages the pool holds.
     pub pool_pages: u32,
     /// Pool side in texels.
@@ -624,7 +628,12 @@ impl VirtualShadows {
             viewport: (width, height),
             compact,
             uniforms,
-            faces: buffer(ctx, "vsm.faces", 16, storage),
+            faces: buffer(
+                ctx,
+                "vsm.faces",
+                std::mem::size_of::<VirtualFace>() as u64,
+                storage,
+            ),
             table: buffer(ctx, "vsm.table", 16, storage),
             counters,
             readback,
@@ -704,7 +713,13 @@ impl VirtualShadows {
             }
         };
         let face_bytes: &[u8] = bytemuck::cast_slice(&self.plan.faces);
-        grow(&mut self.faces, face_bytes.len() as u64, "vsm.faces");
+        // At least one record: shaders declare the array with a minimum of one element.
+        let face_size = std::mem::size_of::<VirtualFace>() as u64;
+        grow(
+            &mut self.faces,
+            (face_bytes.len() as u64).max(face_size),
+            "vsm.faces",
+        );
         let entries = self.plan.fit.table_entries.max(1) as u64;
         grow(&mut self.table, entries * 4, "vsm.table");
         if !face_bytes.is_empty() {
@@ -949,6 +964,7 @@ impl VirtualShadows {
             needed,
             resident: c[17],
             denied: c[16],
+            unshadowed_faces: c[18],
             pool_pages: self.pool_pages,
             pool_side: self.pool_side,
             pool_bytes: self.pool_side as u64 * self.pool_side as u64 * 4,

@@ -80,11 +80,11 @@ fn scene() -> Scene {
     }
 }
 
-fn settings(cache: bool) -> RenderSettings {
+fn settings(technique: Technique, cache: bool) -> RenderSettings {
     RenderSettings {
         width: 160,
         height: 90,
-        technique: Technique::Layered,
+        technique,
         shadow: ShadowOptions {
             cull: CullMode::All,
             ..Default::default()
@@ -97,7 +97,8 @@ fn settings(cache: bool) -> RenderSettings {
 
 fn assert_like_fresh(ctx: &GpuContext, step: &str, changed: &mut Renderer<'_>) -> Frame {
     let frame = changed.render().expect("changed frame");
-    let fresh = Renderer::new(ctx, changed.scene(), settings(false))
+    let technique = changed.settings().technique;
+    let fresh = Renderer::new(ctx, changed.scene(), settings(technique, false))
         .expect("fresh renderer")
         .render()
         .expect("fresh frame");
@@ -111,7 +112,7 @@ fn assert_like_fresh(ctx: &GpuContext, step: &str, changed: &mut Renderer<'_>) -
         let dir = common::artifacts_dir();
         for (f, tag) in [(&frame, "changed"), (&fresh, "fresh")] {
             image::save_buffer(
-                dir.join(format!("frame_changes_{step}_{tag}.png")),
+                dir.join(format!("frame_changes_{technique}_{step}_{tag}.png")),
                 &f.rgba,
                 f.width,
                 f.height,
@@ -122,27 +123,45 @@ fn assert_like_fresh(ctx: &GpuContext, step: &str, changed: &mut Renderer<'_>) -
     }
     assert_eq!(
         differing, 0,
-        "after {step}: {differing} pixels differ from a fresh renderer"
+        "{technique}, after {step}: {differing} pixels differ from a fresh renderer"
     );
     assert!(
         frame.visibility.as_ref().unwrap().words == fresh.visibility.as_ref().unwrap().words,
-        "after {step}: the visibility masks differ"
+        "{technique}, after {step}: the visibility masks differ"
     );
     frame
 }
 
+/// The shadow views (or virtual faces) of the renderer's current plan.
+fn views(r: &Renderer<'_>) -> Vec<manyshadows::scene::light_space::ShadowView> {
+    match r.virtual_plan() {
+        Some(v) => v.views.clone(),
+        None => r.plan().views.clone(),
+    }
+}
+
 #[test]
 fn changed_frames_equal_a_renderer_built_on_the_new_state() {
+    changes_equal_fresh(Technique::Layered);
+}
+
+/// The same changes with virtual shadow maps: faces re-planned, page table and pages rebuilt
+/// from the new state every frame.
+#[test]
+fn changed_virtual_frames_equal_a_renderer_built_on_the_new_state() {
+    changes_equal_fresh(Technique::Virtual);
+}
+
+fn changes_equal_fresh(technique: Technique) {
     let ctx = common::context();
-    let mut r = Renderer::new(&ctx, &scene(), settings(true)).expect("renderer");
+    let mut r = Renderer::new(&ctx, &scene(), settings(technique, true)).expect("renderer");
     let first = r.render().expect("first frame");
-    let plan_views = r.plan().views.len();
+    let plan_views = views(&r).len();
     let cullable = r.casters().cullable_triangles;
 
     // 1. The camera: cascades refit (their view-projections change).
     let cascades = |r: &Renderer<'_>| -> Vec<Mat4> {
-        r.plan()
-            .views
+        views(r)
             .iter()
             .filter(|v| v.orthographic)
             .map(|v| v.view_proj)
@@ -197,7 +216,7 @@ fn changed_frames_equal_a_renderer_built_on_the_new_state() {
     .lights;
     r.set_lights(many).unwrap();
     assert_like_fresh(&ctx, "many-lights", &mut r);
-    assert!(r.plan().views.len() > plan_views);
+    assert!(views(&r).len() > plan_views);
 
     // 5. Back to none.
     r.set_lights(Vec::new()).unwrap();
@@ -208,7 +227,7 @@ fn changed_frames_equal_a_renderer_built_on_the_new_state() {
 fn bad_indices_and_values_are_errors() {
     let ctx = common::context();
     let scene = scene();
-    let mut r = Renderer::new(&ctx, &scene, settings(false)).expect("renderer");
+    let mut r = Renderer::new(&ctx, &scene, settings(Technique::Layered, false)).expect("renderer");
     let err = r.set_light(3, scene.lights[0]).unwrap_err();
     assert!(err.to_string().contains("light 3"), "{err}");
     let err = r.set_instance_transform(7, Mat4::IDENTITY).unwrap_err();

@@ -8,7 +8,9 @@
 // 2. cs_alloc, one thread per page-table entry: a needed page gets a pool page when its level,
 //    and every coarser level, fit the pool (levels are admitted coarsest first, whole or not
 //    at all, so the result does not depend on thread order); otherwise it is denied and
-//    lookups fall back to its resident ancestor. A resident page gets its record and its view:
+//    lookups fall back to its resident ancestor. Only when level 0 alone (one page per face
+//    in use) exceeds the pool do faces go without shadows: the pool's worth of them get their
+//    page in thread order, the rest are counted unshadowed. A resident page gets its record and its view:
 //    the face's projection cropped to the page, drawn into the page's tile of the pool.
 // 3. cs_args, one thread: the number of resident pages, and from it the indirect arguments of
 //    the page clear and of every cull round.
@@ -24,7 +26,7 @@
 @group(0) @binding(8) var<storage, read> vsm_faces: array<VirtualFace>;
 @group(0) @binding(9) var<storage, read_write> vsm_table: array<atomic<u32>>;
 // [0, 8): pages needed per level; [8, 16): pages allocated per level; 16: pages denied;
-// 17: pages resident; 18: faces marked at all.
+// 17: pages resident; 18: level-0 pages denied (faces left unshadowed).
 @group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(11) var<storage, read_write> pages: array<VsmPage>;
 @group(0) @binding(12) var<storage, read_write> page_views: array<ShadowViewData>;
@@ -36,6 +38,7 @@
 
 const COUNT_DENIED: u32 = 16u;
 const COUNT_RESIDENT: u32 = 17u;
+const COUNT_UNSHADOWED: u32 = 18u;
 
 fn mark_light(i: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
     let light = lights[i];
@@ -143,12 +146,24 @@ fn cs_alloc(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     let within = local - ((1u << (2u * level)) - 1u) / 3u;
     let n = 1u << level;
     let through = needed_through(level);
-    if (through > vsm.pool.w) {
+    var page = 0u;
+    if (level == 0u && through > vsm.pool.w) {
+        // Not even one page per face fits: the pool's pages go to level-0 pages in the order
+        // threads reach them, the other faces stay unshadowed (counted apart).
+        page = atomicAdd(&counters[8], 1u);
+        if (page >= vsm.pool.w) {
+            atomicStore(&vsm_table[e], VSM_DENIED);
+            atomicAdd(&counters[COUNT_DENIED], 1u);
+            atomicAdd(&counters[COUNT_UNSHADOWED], 1u);
+            return;
+        }
+    } else if (through > vsm.pool.w) {
         atomicStore(&vsm_table[e], VSM_DENIED);
         atomicAdd(&counters[COUNT_DENIED], 1u);
         return;
+    } else {
+        page = through - atomicLoad(&counters[level]) + atomicAdd(&counters[8u + level], 1u);
     }
-    let page = through - atomicLoad(&counters[level]) + atomicAdd(&counters[8u + level], 1u);
     atomicStore(&vsm_table[e], VSM_FIRST_PAGE + page);
     let x = within % n;
     let y = within / n;
@@ -173,7 +188,9 @@ fn cs_alloc(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
 
 @compute @workgroup_size(1, 1, 1)
 fn cs_args() {
-    var resident = 0u;
+    // Whole levels, coarsest first, while they fit; the pool's worth of level 0 if not even
+    // that level fits.
+    var resident = min(atomicLoad(&counters[0]), vsm.pool.w);
     var through = 0u;
     for (var k = 0u; k < VSM_LEVELS; k = k + 1u) {
         through = through + atomicLoad(&counters[k]);
