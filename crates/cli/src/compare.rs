@@ -93,6 +93,13 @@ pub struct CompareArgs {
     /// Fail when the shadow maps don't fit the atlas, instead of shrinking them.
     #[arg(long)]
     strict_atlas: bool,
+    /// Page pool of --techniques virtual, MiB (compare at equal memory by setting it to the
+    /// atlas size the other variants report).
+    #[arg(long, default_value_t = (manyshadows::vsm::DEFAULT_POOL_BYTES >> 20) as u32)]
+    page_pool: u32,
+    /// Shadow texels per screen pixel that --techniques virtual aims for.
+    #[arg(long, default_value_t = 1.0)]
+    virtual_lod: f32,
     /// Directory for the frame, the difference images and reference.msvis.
     #[arg(long, default_value = "compare")]
     out_dir: PathBuf,
@@ -354,6 +361,10 @@ fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
             resolution: v.resolution,
             atlas: plan.layout.size,
             shrink_steps: plan.layout.shrink_steps,
+            shadow_bytes: match frame.virtual_maps {
+                Some(v) => v.pool_bytes + v.table_bytes,
+                None => u64::from(plan.layout.size).pow(2) * 4,
+            },
             gpu_ms: frame.timings.gpu_ms.clone(),
             score,
             footprints,
@@ -433,6 +444,8 @@ struct VariantResult {
     resolution: Option<u32>,
     atlas: u32,
     shrink_steps: u32,
+    /// Shadow memory the variant keeps: the atlas, or the page pool plus the page table.
+    shadow_bytes: u64,
     gpu_ms: Vec<(String, f64)>,
     score: score::Score,
     footprints: Vec<Footprints>,
@@ -530,6 +543,11 @@ fn settings(args: &CompareArgs, technique: Technique) -> RenderSettings {
         },
         visibility: true,
         point_shadows: args.point_shadows,
+        virtual_maps: manyshadows::vsm::VirtualOptions {
+            pool_bytes: u64::from(args.page_pool) << 20,
+            lod: args.virtual_lod,
+            ..Default::default()
+        },
         ..Default::default()
     }
 }
@@ -727,6 +745,7 @@ fn report(
                 "technique": v.technique.name(),
                 "shadow_resolution": v.resolution,
                 "atlas": { "size": v.atlas, "shrink_steps": v.shrink_steps },
+                "shadow_bytes": v.shadow_bytes,
                 "gpu_ms": v.gpu_ms.iter().map(|(k, ms)| (k.clone(), json!(ms))).collect::<serde_json::Map<_, _>>(),
                 "difference_image": v.diff_image,
                 "by_type": by_type,
@@ -830,6 +849,14 @@ fn print_table(report: &serde_json::Value, results: &[VariantResult], scene: &Sc
         "false shadow / false light: outside the edge band, as a share of in-reach (pixel, light) pairs;"
     );
     println!("band: the edge band's share; band err: errors inside it; fp: shadow-texel footprint in screen pixels.");
+    let memory: Vec<String> = results
+        .iter()
+        .map(|v| format!("{} {:.1}", v.label, v.shadow_bytes as f64 / (1024.0 * 1024.0)))
+        .collect();
+    println!(
+        "shadow memory kept (MiB; atlas, or page pool + page table): {}",
+        memory.join(", ")
+    );
     let first = results.first().map(|v| v.diff_image.clone());
     if let Some(dir) = first.as_ref().and_then(|p| p.parent()) {
         println!(

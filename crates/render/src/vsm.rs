@@ -16,8 +16,9 @@
 //! 1. *mark*: each pixel visits its cluster's lights; for each light that reaches it (and
 //!    faces it), the sample asks for the level whose texel matches its pixel footprint
 //!    ([`VirtualOptions::lod`] texels per pixel) and marks that page and its ancestors needed;
-//! 2. *allocate*: needed pages get pool pages, coarsest level first, a level admitted whole or
-//!    not at all while the pool lasts; pages of levels that do not fit are *denied*, and
+//! 2. *allocate*: needed pages get pool pages in page-table order (ranks from per-block counts
+//!    and a prefix sum, so the frame never depends on thread order), coarsest level first, a
+//!    level admitted whole or not at all while the pool lasts; pages of levels that do not fit are *denied*, and
 //!    lookups fall back to their nearest resident ancestor — a coarser shadow, never a wrong
 //!    or missing one — and the frame's [`VirtualStats`] count them (a pool smaller than one
 //!    page per face in use leaves the faces beyond it unshadowed, counted too);
@@ -53,6 +54,8 @@ pub const DEFAULT_POOL_BYTES: u64 = 256 << 20;
 pub const DEFAULT_TABLE_ENTRIES: u32 = 4 << 20;
 /// Largest command buffer of one page-render round.
 const MAX_ROUND_BYTES: u64 = 64 << 20;
+/// Page-table entries per allocation workgroup (`BLOCK` in `vsm.wgsl`).
+const ALLOC_BLOCK: u64 = 32;
 /// Words of the counters buffer (see `vsm.wgsl`).
 const COUNTERS: usize = 20;
 
@@ -303,6 +306,7 @@ pub struct VirtualShadows {
     uniforms: wgpu::Buffer,
     faces: wgpu::Buffer,
     table: wgpu::Buffer,
+    block_counts: wgpu::Buffer,
     counters: wgpu::Buffer,
     readback: wgpu::Buffer,
     pages: wgpu::Buffer,
@@ -315,6 +319,8 @@ pub struct VirtualShadows {
     commands: wgpu::Buffer,
     command_count: wgpu::Buffer,
     mark: wgpu::ComputePipeline,
+    count: wgpu::ComputePipeline,
+    scan: wgpu::ComputePipeline,
     alloc: wgpu::ComputePipeline,
     args_pipeline: wgpu::ComputePipeline,
     cull: wgpu::ComputePipeline,
@@ -533,6 +539,7 @@ impl VirtualShadows {
                 crate::storage_rw_entry(12, cs),
                 crate::storage_entry(13, cs),
                 crate::storage_rw_entry(14, cs),
+                crate::storage_rw_entry(15, cs),
             ],
         });
         let cull_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -587,6 +594,8 @@ impl VirtualShadows {
             })
         };
         let mark = compute("vsm.mark", &mark_module, &mark_pl, "cs_mark");
+        let count = compute("vsm.count", &mark_module, &mark_pl, "cs_count");
+        let scan = compute("vsm.scan", &mark_module, &mark_pl, "cs_scan");
         let alloc = compute("vsm.alloc", &mark_module, &mark_pl, "cs_alloc");
         let args_pipeline = compute("vsm.args", &mark_module, &mark_pl, "cs_args");
         let cull_pl = pipeline_layout("vsm.cull_pipeline_layout", &cull_layout);
@@ -635,6 +644,7 @@ impl VirtualShadows {
                 storage,
             ),
             table: buffer(ctx, "vsm.table", 16, storage),
+            block_counts: buffer(ctx, "vsm.block_counts", 16, storage),
             counters,
             readback,
             pages,
@@ -647,6 +657,8 @@ impl VirtualShadows {
             commands,
             command_count,
             mark,
+            count,
+            scan,
             alloc,
             args_pipeline,
             cull,
@@ -722,6 +734,11 @@ impl VirtualShadows {
         );
         let entries = self.plan.fit.table_entries.max(1) as u64;
         grow(&mut self.table, entries * 4, "vsm.table");
+        grow(
+            &mut self.block_counts,
+            entries.div_ceil(ALLOC_BLOCK) * MAX_LEVELS as u64 * 4,
+            "vsm.block_counts",
+        );
         if !face_bytes.is_empty() {
             ctx.queue.write_buffer(&self.faces, 0, face_bytes);
         }
@@ -784,6 +801,7 @@ impl VirtualShadows {
                 whole(12, &self.page_views),
                 whole(13, &self.rounds_storage),
                 whole(14, &self.args),
+                whole(15, &self.block_counts),
             ],
         });
         let casters = inputs.casters;
@@ -860,9 +878,14 @@ impl VirtualShadows {
             if !self.plan.faces.is_empty() {
                 pass.set_pipeline(&self.mark);
                 pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
-                let groups = (self.plan.fit.table_entries as u64).div_ceil(64);
-                let x = groups.min(65535) as u32;
-                let y = groups.div_ceil(65535) as u32;
+                // One workgroup per block of page-table entries (2D past 65,535 blocks).
+                let blocks = (self.plan.fit.table_entries as u64).div_ceil(ALLOC_BLOCK);
+                let x = blocks.min(65535) as u32;
+                let y = blocks.div_ceil(65535) as u32;
+                pass.set_pipeline(&self.count);
+                pass.dispatch_workgroups(x, y, 1);
+                pass.set_pipeline(&self.scan);
+                pass.dispatch_workgroups(1, 1, 1);
                 pass.set_pipeline(&self.alloc);
                 pass.dispatch_workgroups(x, y, 1);
             }

@@ -244,3 +244,31 @@ fn bad_indices_and_values_are_errors() {
     assert_eq!(r.scene(), &scene);
     r.render().expect("the renderer still works");
 }
+
+/// Virtual maps re-mark, re-allocate and re-render every page each frame; pool pages follow
+/// page-table order, not thread order, so a static scene renders the same frame every time
+/// (a page landing elsewhere in the pool rasterizes with different rounding and can flip a
+/// pixel). Atrium with 64 lights: thousands of pages over several levels.
+#[test]
+fn virtual_frames_of_a_static_scene_are_identical() {
+    let ctx = common::context();
+    let scene = builtin::build(
+        "atrium",
+        &BuiltinOptions {
+            lights: Some(64),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let mut r = Renderer::new(&ctx, &scene, settings(Technique::Virtual, false)).unwrap();
+    let a = r.render().unwrap();
+    let b = r.render().unwrap();
+    let stats = a.virtual_maps.unwrap();
+    assert!(stats.resident > 100, "{stats:?}");
+    assert_eq!(a.virtual_maps, b.virtual_maps);
+    assert!(a.rgba == b.rgba, "the image changed between identical frames");
+    assert!(
+        a.visibility.unwrap().words == b.visibility.unwrap().words,
+        "the visibility mask changed between identical frames"
+    );
+}

@@ -5,12 +5,18 @@
 //    whose texels match the pixel's footprint is marked needed, and so are its ancestors up
 //    to level 0 (a marked entry's ancestors are marked by whoever marked it, so the walk
 //    stops at the first one already marked). Newly marked entries are counted per level.
-// 2. cs_alloc, one thread per page-table entry: a needed page gets a pool page when its level,
-//    and every coarser level, fit the pool (levels are admitted coarsest first, whole or not
-//    at all, so the result does not depend on thread order); otherwise it is denied and
-//    lookups fall back to its resident ancestor. Only when level 0 alone (one page per face
-//    in use) exceeds the pool do faces go without shadows: the pool's worth of them get their
-//    page in thread order, the rest are counted unshadowed. A resident page gets its record and its view:
+// 2. cs_count, one workgroup per block of 32 page-table entries: each needed entry learns its
+//    level (tagged into the entry) and the block counts its needed entries per level;
+//    cs_scan, one thread per level: exclusive prefix sums of those counts over the blocks, and
+//    the totals per level;
+//    cs_alloc, one workgroup per block: a needed page's rank within its level is its block's
+//    prefix plus the needed entries of that level before it in the block (a bit count), so
+//    pool pages follow page-table order and the frame does not depend on thread order. A page
+//    gets a pool page when its level, and every coarser level, fit the pool (levels are
+//    admitted coarsest first, whole or not at all); otherwise it is denied and lookups fall
+//    back to its resident ancestor. Only when level 0 alone (one page per face in use) exceeds
+//    the pool do faces go without shadows: the first faces in light order get the pool's
+//    pages, the rest are counted unshadowed. A resident page gets its record and its view:
 //    the face's projection cropped to the page, drawn into the page's tile of the pool.
 // 3. cs_args, one thread: the number of resident pages, and from it the indirect arguments of
 //    the page clear and of every cull round.
@@ -33,12 +39,19 @@
 @group(0) @binding(13) var<storage, read> rounds: array<VsmRound>;
 // Per round: dispatch arguments (x, y, z); after them: the clear's draw arguments.
 @group(0) @binding(14) var<storage, read_write> args: array<u32>;
+// Per level, per block of BLOCK entries: needed entries (cs_count), then their exclusive
+// prefix over the blocks (cs_scan); level-major: [level · blocks + block].
+@group(0) @binding(15) var<storage, read_write> block_counts: array<u32>;
 // Declared for shadow_lookup.wgsl's `atlas_coord`, which these entry points never call.
 @group(1) @binding(0) var<storage, read> shadow_views: array<ShadowViewData>;
 
 const COUNT_DENIED: u32 = 16u;
 const COUNT_RESIDENT: u32 = 17u;
 const COUNT_UNSHADOWED: u32 = 18u;
+// Page-table entries per allocation block (one workgroup; ranks by bit count in one word).
+const BLOCK: u32 = 32u;
+// A needed entry after cs_count: this plus its level.
+const VSM_NEEDED_AT: u32 = 0x80000000u;
 
 fn mark_light(i: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
     let light = lights[i];
@@ -68,7 +81,6 @@ fn mark_light(i: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
         if (atomicMax(&vsm_table[e], VSM_NEEDED) != VSM_EMPTY) {
             break;
         }
-        atomicAdd(&counters[u32(l)], 1u);
         l = l - 1;
     }
 }
@@ -111,22 +123,8 @@ fn cs_mark(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 }
 
-// Pages needed at levels 0..=level, i.e. the pool pages those levels take if admitted.
-fn needed_through(level: u32) -> u32 {
-    var sum = 0u;
-    for (var k = 0u; k <= level; k = k + 1u) {
-        sum = sum + atomicLoad(&counters[k]);
-    }
-    return sum;
-}
-
-@compute @workgroup_size(64, 1, 1)
-fn cs_alloc(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let e = gid.x + gid.y * groups.x * 64u;
-    if (e >= vsm.counts.y || atomicLoad(&vsm_table[e]) != VSM_NEEDED) {
-        return;
-    }
-    // The face: the last whose first entry is at or before e.
+// The face owning page-table entry `e`: the last whose first entry is at or before it.
+fn face_of(e: u32) -> u32 {
     var lo = 0u;
     var hi = vsm.counts.x;
     while (hi - lo > 1u) {
@@ -137,37 +135,119 @@ fn cs_alloc(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
             hi = mid;
         }
     }
-    let face = vsm_faces[lo];
-    let local = e - face.table.x;
+    return lo;
+}
+
+// Level of entry `local` of a face's chain (coarsest level first).
+fn level_of(local: u32) -> u32 {
     var level = 0u;
     while (((1u << (2u * (level + 1u))) - 1u) / 3u <= local) {
         level = level + 1u;
     }
-    let within = local - ((1u << (2u * level)) - 1u) / 3u;
-    let n = 1u << level;
+    return level;
+}
+
+fn block_id(wg: vec3<u32>, groups: vec3<u32>) -> u32 {
+    return wg.x + wg.y * groups.x;
+}
+
+fn blocks() -> u32 {
+    return (vsm.counts.y + BLOCK - 1u) / BLOCK;
+}
+
+var<workgroup> level_bits: array<atomic<u32>, VSM_LEVELS>;
+
+@compute @workgroup_size(32, 1, 1)
+fn cs_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) i: u32, @builtin(num_workgroups) groups: vec3<u32>) {
+    let b = block_id(wg, groups);
+    if (i < VSM_LEVELS) {
+        atomicStore(&level_bits[i], 0u);
+    }
+    workgroupBarrier();
+    let e = b * BLOCK + i;
+    if (b < blocks() && e < vsm.counts.y && atomicLoad(&vsm_table[e]) == VSM_NEEDED) {
+        let face = vsm_faces[face_of(e)];
+        let level = level_of(e - face.table.x);
+        atomicStore(&vsm_table[e], VSM_NEEDED_AT + level);
+        atomicOr(&level_bits[level], 1u << i);
+    }
+    workgroupBarrier();
+    if (b < blocks() && i < VSM_LEVELS) {
+        block_counts[i * blocks() + b] = countOneBits(atomicLoad(&level_bits[i]));
+    }
+}
+
+@compute @workgroup_size(8, 1, 1)
+fn cs_scan(@builtin(local_invocation_index) level: u32) {
+    let n = blocks();
+    var sum = 0u;
+    for (var b = 0u; b < n; b = b + 1u) {
+        let c = block_counts[level * n + b];
+        block_counts[level * n + b] = sum;
+        sum = sum + c;
+    }
+    atomicStore(&counters[level], sum);
+}
+
+// Pages needed at levels 0..=level, i.e. the pool pages those levels take if admitted.
+fn needed_through(level: u32) -> u32 {
+    var sum = 0u;
+    for (var k = 0u; k <= level; k = k + 1u) {
+        sum = sum + atomicLoad(&counters[k]);
+    }
+    return sum;
+}
+
+@compute @workgroup_size(32, 1, 1)
+fn cs_alloc(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) i: u32, @builtin(num_workgroups) groups: vec3<u32>) {
+    let b = block_id(wg, groups);
+    if (i < VSM_LEVELS) {
+        atomicStore(&level_bits[i], 0u);
+    }
+    workgroupBarrier();
+    let e = b * BLOCK + i;
+    var level = VSM_LEVELS;
+    if (b < blocks() && e < vsm.counts.y) {
+        let v = atomicLoad(&vsm_table[e]);
+        if (v >= VSM_NEEDED_AT && v < VSM_NEEDED_AT + VSM_LEVELS) {
+            level = v - VSM_NEEDED_AT;
+            atomicOr(&level_bits[level], 1u << i);
+        }
+    }
+    workgroupBarrier();
+    if (level == VSM_LEVELS) {
+        return;
+    }
+    // Rank among the level's needed pages, in page-table order.
+    let rank = block_counts[level * blocks() + b]
+        + countOneBits(atomicLoad(&level_bits[level]) & ((1u << i) - 1u));
     let through = needed_through(level);
     var page = 0u;
     if (level == 0u && through > vsm.pool.w) {
-        // Not even one page per face fits: the pool's pages go to level-0 pages in the order
-        // threads reach them, the other faces stay unshadowed (counted apart).
-        page = atomicAdd(&counters[8], 1u);
-        if (page >= vsm.pool.w) {
+        // Not even one page per face fits: the first faces get the pool's pages, the others
+        // stay unshadowed (counted apart).
+        if (rank >= vsm.pool.w) {
             atomicStore(&vsm_table[e], VSM_DENIED);
             atomicAdd(&counters[COUNT_DENIED], 1u);
             atomicAdd(&counters[COUNT_UNSHADOWED], 1u);
             return;
         }
+        page = rank;
     } else if (through > vsm.pool.w) {
         atomicStore(&vsm_table[e], VSM_DENIED);
         atomicAdd(&counters[COUNT_DENIED], 1u);
         return;
     } else {
-        page = through - atomicLoad(&counters[level]) + atomicAdd(&counters[8u + level], 1u);
+        page = through - atomicLoad(&counters[level]) + rank;
     }
     atomicStore(&vsm_table[e], VSM_FIRST_PAGE + page);
+    let fi = face_of(e);
+    let face = vsm_faces[fi];
+    let within = e - face.table.x - ((1u << (2u * level)) - 1u) / 3u;
+    let n = 1u << level;
     let x = within % n;
     let y = within / n;
-    pages[page] = VsmPage(lo, level, x, y);
+    pages[page] = VsmPage(fi, level, x, y);
     // Crop the face's clip space to the page: ndc' = (ndc - centre) · n.
     let nf = f32(n);
     let cx = (2.0 * f32(x) + 1.0) / nf - 1.0;
