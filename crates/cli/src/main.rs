@@ -237,7 +237,8 @@ struct RenderArgs {
     /// fit fall back to coarser levels, counted in the summary.
     #[arg(long, default_value_t = (manyshadows::vsm::DEFAULT_POOL_BYTES >> 20) as u32)]
     page_pool: u32,
-    /// Largest virtual side of a face for --technique virtual (128 to 16384 texels).
+    /// Largest virtual side of a face for --technique virtual (rounded to a power of two and
+    /// clamped to 128..=16384 texels).
     #[arg(long, default_value_t = manyshadows::vsm::MAX_SIDE)]
     virtual_side: u32,
     /// Shadow texels per screen pixel that --technique virtual aims for (1 = texel footprint
@@ -451,6 +452,9 @@ fn render(args: &RenderArgs) -> Result<()> {
             ..Default::default()
         },
     };
+    if args.page_pool == 0 {
+        bail!("--page-pool must be at least 1 MiB");
+    }
     pb.set_message("uploading the scene and building pipelines");
     let mut renderer = Renderer::new(&ctx, &scene, settings)?;
     if args.frames == 0 {
@@ -589,7 +593,7 @@ fn summary(
         "instances": scene.instances.len(),
         "lights": { "total": scene.lights.len(), "spot": count("spot"), "point": count("point"), "directional": count("directional"),
                     "shadowed": scene.lights.iter().filter(|l| l.casts_shadows).count() },
-        "shadow_views": plan.views.len(),
+        "shadow_views": r.virtual_plan().map_or(plan.views.len(), |v| v.views.len()),
         "atlas": { "size": plan.layout.size, "fill": plan.fill(), "shrink_steps": plan.layout.shrink_steps, "fit": plan.fit },
         "shadow_work": { "passes": frame.shadow_stats.passes, "draws": frame.shadow_stats.draws, "views_drawn": frame.shadow_stats.views_drawn,
                          "culled_draws": frame.shadow_stats.culled, "triangles": frame.shadow_stats.triangles },
