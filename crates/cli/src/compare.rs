@@ -851,7 +851,13 @@ fn print_table(report: &serde_json::Value, results: &[VariantResult], scene: &Sc
     println!("band: the edge band's share; band err: errors inside it; fp: shadow-texel footprint in screen pixels.");
     let memory: Vec<String> = results
         .iter()
-        .map(|v| format!("{} {:.1}", v.label, v.shadow_bytes as f64 / (1024.0 * 1024.0)))
+        .map(|v| {
+            format!(
+                "{} {:.1}",
+                v.label,
+                v.shadow_bytes as f64 / (1024.0 * 1024.0)
+            )
+        })
         .collect();
     println!(
         "shadow memory kept (MiB; atlas, or page pool + page table): {}",

@@ -22,9 +22,9 @@ mod bench;
 mod compare;
 mod irregular_bench;
 mod lights_bench;
-mod virtual_bench;
 mod omni;
 mod plot;
+mod virtual_bench;
 
 const ABOUT: &str = "Render scenes lit by many shadow-casting lights, headless, to PNG.";
 
@@ -170,7 +170,8 @@ struct RenderArgs {
     #[arg(long, default_value_t = 1)]
     frames: u32,
     /// Keep the atlas tiles of views that saw no change since the last frame (seed 004's
-    /// caching); with --frames, shows how many views each frame redraws.
+    /// caching; with --technique virtual, the pages of unchanged faces); with --frames, shows
+    /// how many views (pages) each frame redraws.
     #[arg(long)]
     cache: bool,
     /// With --frames > 1, turn the camera this many degrees per frame around its target (about
@@ -496,12 +497,21 @@ fn render(args: &RenderArgs) -> Result<()> {
                 .iter()
                 .find(|(k, _)| k == "shadows")
                 .map_or("n/a".to_string(), |(_, v)| format!("{v:.2} ms"));
-            let line = format!(
-                "frame {:>3}: {:>4} of {} shadow views redrawn, shadow GPU time {shadow_ms}",
-                f + 1,
-                fr.shadow_stats.views_drawn,
-                renderer.plan().views.len()
-            );
+            let line = match &fr.virtual_maps {
+                Some(v) => format!(
+                    "frame {:>3}: {:>4} of {} resident pages drawn ({} kept), shadow GPU time {shadow_ms}",
+                    f + 1,
+                    v.drawn,
+                    v.resident,
+                    v.kept
+                ),
+                None => format!(
+                    "frame {:>3}: {:>4} of {} shadow views redrawn, shadow GPU time {shadow_ms}",
+                    f + 1,
+                    fr.shadow_stats.views_drawn,
+                    renderer.plan().views.len()
+                ),
+            };
             pb.suspend(|| eprintln!("{line}"));
         }
         frame = Some(fr);
@@ -645,8 +655,8 @@ fn print_summary(s: &serde_json::Value) {
             .unwrap_or_default();
         let denied = v["denied"].as_u64().unwrap_or(0);
         println!(
-            "pages        {} of {} rendered ({}x{} pool, {} MiB); needed by level (coarsest first) {}{}",
-            v["resident"], v["pool_pages"], v["pool_side"], v["pool_side"],
+            "pages        {} of {} resident ({} drawn, {} kept from the last frame; {}x{} pool, {} MiB); needed by level (coarsest first) {}{}",
+            v["resident"], v["pool_pages"], v["drawn"], v["kept"], v["pool_side"], v["pool_side"],
             v["pool_bytes"].as_u64().unwrap_or(0) >> 20,
             needed.join("/"),
             if denied > 0 {

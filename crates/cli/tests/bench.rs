@@ -285,10 +285,17 @@ fn bench_virtual_reports_pages_memory_and_both_paths() {
             .iter()
             .map(|v| v.as_u64().unwrap())
             .sum();
-        let (resident, denied) = (s["resident"].as_u64().unwrap(), s["denied"].as_u64().unwrap());
+        let (resident, denied) = (
+            s["resident"].as_u64().unwrap(),
+            s["denied"].as_u64().unwrap(),
+        );
         assert_eq!(resident + denied, needed, "{r}");
         assert!(resident <= s["pool_pages"].as_u64().unwrap(), "{r}");
-        assert_eq!(s["pool_pages"].as_u64().unwrap(), 16, "1 MiB = 512² texels = 16 pages");
+        assert_eq!(
+            s["pool_pages"].as_u64().unwrap(),
+            16,
+            "1 MiB = 512² texels = 16 pages"
+        );
         assert!(resident > 0, "{r}");
         // Memory kept: the page pool (1 MiB) plus the table against the atlas.
         let v_mib = r["virtual_maps"]["shadow_mib"].as_f64().unwrap();
@@ -298,7 +305,10 @@ fn bench_virtual_reports_pages_memory_and_both_paths() {
     // 200 lights use hundreds of faces: not even one page each fits, so the pool fills with
     // level-0 pages and the faces beyond it are counted unshadowed.
     let s = &records[1]["stats"];
-    assert!(s["denied"].as_u64().unwrap() > 0, "200 lights cannot fit 16 pages: {s}");
+    assert!(
+        s["denied"].as_u64().unwrap() > 0,
+        "200 lights cannot fit 16 pages: {s}"
+    );
     assert_eq!(s["resident"].as_u64().unwrap(), 16, "{s}");
     assert!(s["unshadowed_faces"].as_u64().unwrap() > 0, "{s}");
     assert!(dir.join("virtual-cubes-160x90.png").is_file());

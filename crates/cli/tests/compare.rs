@@ -114,7 +114,11 @@ fn analytic_scenes_score_every_technique_within_bounds() {
             // per pixel whatever the requested resolution, so their outline may sit half a
             // texel off inside the band: measured 0.81 % (spot), 0.22 % (point), 0.06 %
             // (directional).
-            let budget = if var["technique"] == "virtual" { 0.01 } else { 0.001 };
+            let budget = if var["technique"] == "virtual" {
+                0.01
+            } else {
+                0.001
+            };
             assert!(
                 (band_err as f64) <= budget * reach as f64,
                 "{scene} {label}: {band_err} errors in the edge band"

@@ -269,7 +269,9 @@ pub fn footprints(
             }
             if let Some(lod) = planned.virtual_lod {
                 // As vsm_level in shaders/vsm_common.wgsl: 2^k finest texels per level texel.
-                let finest = (planned.tile_sizes[vi] / VIRTUAL_PAGE).max(1).trailing_zeros();
+                let finest = (planned.tile_sizes[vi] / VIRTUAL_PAGE)
+                    .max(1)
+                    .trailing_zeros();
                 let k = (pixel_world / lod / texel).log2().floor();
                 texel *= 2f32.powi(k.clamp(0.0, finest as f32) as i32);
             }

@@ -187,7 +187,8 @@ pub struct VirtualFace {
     /// near, far, world size of a finest-level texel (per unit distance if perspective),
     /// orthographic (1/0).
     pub params: [f32; 4],
-    /// First page-table entry, finest level, virtual side in texels, light index.
+    /// First page-table entry, finest level, virtual side in texels, 1 + the face's first
+    /// entry in last frame's table when its pages may be kept (0: draw them anew).
     pub table: [u32; 4],
 }
 
@@ -201,20 +202,6 @@ pub struct VsmUniforms {
     pub counts: [u32; 4],
     /// Texels per screen pixel wanted, unused ×3.
     pub lod: [f32; 4],
-}
-
-/// A resident page (`VsmPage`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct VsmPage {
-    /// Face index.
-    pub face: u32,
-    /// Level (2^level pages per side).
-    pub level: u32,
-    /// Page column.
-    pub x: u32,
-    /// Page row.
-    pub y: u32,
 }
 
 /// One cull + draw round of the page rendering (`VsmRound`).
@@ -307,7 +294,6 @@ mod tests {
         same_layout!(ClusterUniforms, grid, words, depth, proj, counts);
         same_layout!(VirtualFace, view_proj, eye, params, table);
         same_layout!(VsmUniforms, pool, counts, lod);
-        same_layout!(VsmPage, face, level, x, y);
         same_layout!(VsmRound, round, counts);
         assert_eq!(VIEW_UNIFORM_STRIDE, 256);
     }

@@ -140,18 +140,18 @@ impl LightingPass {
             count: None,
         };
         let mut entries = vec![
-                crate::uniform_entry(0, frag),
-                crate::storage_entry(1, frag),
-                crate::storage_entry(2, frag),
-                crate::storage_entry(3, frag),
-                texture_entry(4, wgpu::TextureSampleType::Uint, frag),
-                texture_entry(5, wgpu::TextureSampleType::Uint, frag),
-                texture_entry(6, wgpu::TextureSampleType::Depth, frag),
-                cmp(7),
-                crate::storage_entry(8, frag),
-                crate::uniform_entry(9, frag),
-                crate::storage_entry(10, frag),
-                crate::storage_entry(11, frag),
+            crate::uniform_entry(0, frag),
+            crate::storage_entry(1, frag),
+            crate::storage_entry(2, frag),
+            crate::storage_entry(3, frag),
+            texture_entry(4, wgpu::TextureSampleType::Uint, frag),
+            texture_entry(5, wgpu::TextureSampleType::Uint, frag),
+            texture_entry(6, wgpu::TextureSampleType::Depth, frag),
+            cmp(7),
+            crate::storage_entry(8, frag),
+            crate::uniform_entry(9, frag),
+            crate::storage_entry(10, frag),
+            crate::storage_entry(11, frag),
         ];
         if inputs.vsm.is_some() {
             entries.extend(vsm_layout_entries(VSM_FIRST_BINDING, frag));
@@ -266,54 +266,54 @@ fn bind(
     let pv = inputs.gbuffer.position.create_view(&Default::default());
     let nv = inputs.gbuffer.normal.create_view(&Default::default());
     let mut entries = vec![
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: inputs.frame.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: inputs.lights.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: inputs.atlas.views_buffer.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: inputs.materials.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 4,
-                resource: wgpu::BindingResource::TextureView(&pv),
-            },
-            wgpu::BindGroupEntry {
-                binding: 5,
-                resource: wgpu::BindingResource::TextureView(&nv),
-            },
-            wgpu::BindGroupEntry {
-                binding: 6,
-                resource: wgpu::BindingResource::TextureView(inputs.shadow_texture()),
-            },
-            wgpu::BindGroupEntry {
-                binding: 7,
-                resource: wgpu::BindingResource::Sampler(sampler),
-            },
-            wgpu::BindGroupEntry {
-                binding: 8,
-                resource: mask.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 9,
-                resource: inputs.clusters.uniforms.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 10,
-                resource: inputs.clusters.slots.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 11,
-                resource: inputs.clusters.masks.as_entire_binding(),
-            },
+        wgpu::BindGroupEntry {
+            binding: 0,
+            resource: inputs.frame.as_entire_binding(),
+        },
+        wgpu::BindGroupEntry {
+            binding: 1,
+            resource: inputs.lights.as_entire_binding(),
+        },
+        wgpu::BindGroupEntry {
+            binding: 2,
+            resource: inputs.atlas.views_buffer.as_entire_binding(),
+        },
+        wgpu::BindGroupEntry {
+            binding: 3,
+            resource: inputs.materials.as_entire_binding(),
+        },
+        wgpu::BindGroupEntry {
+            binding: 4,
+            resource: wgpu::BindingResource::TextureView(&pv),
+        },
+        wgpu::BindGroupEntry {
+            binding: 5,
+            resource: wgpu::BindingResource::TextureView(&nv),
+        },
+        wgpu::BindGroupEntry {
+            binding: 6,
+            resource: wgpu::BindingResource::TextureView(inputs.shadow_texture()),
+        },
+        wgpu::BindGroupEntry {
+            binding: 7,
+            resource: wgpu::BindingResource::Sampler(sampler),
+        },
+        wgpu::BindGroupEntry {
+            binding: 8,
+            resource: mask.as_entire_binding(),
+        },
+        wgpu::BindGroupEntry {
+            binding: 9,
+            resource: inputs.clusters.uniforms.as_entire_binding(),
+        },
+        wgpu::BindGroupEntry {
+            binding: 10,
+            resource: inputs.clusters.slots.as_entire_binding(),
+        },
+        wgpu::BindGroupEntry {
+            binding: 11,
+            resource: inputs.clusters.masks.as_entire_binding(),
+        },
     ];
     entries.extend(inputs.vsm_entries(VSM_FIRST_BINDING));
     device.create_bind_group(&wgpu::BindGroupDescriptor {

@@ -519,8 +519,11 @@ impl<'c> Renderer<'c> {
             .set_instance_transform(&self.ctx.queue, instance, transform);
         self.current.instances[instance].transform = transform;
         if old.casts_shadows {
-            self.shadows
-                .note_moved(old.sphere, self.scene.draws[instance].sphere);
+            let new = self.scene.draws[instance].sphere;
+            self.shadows.note_moved(old.sphere, new);
+            if let Some(v) = self.vsm.as_mut() {
+                v.note_moved(old.sphere, new);
+            }
         }
         self.dirty = true;
         Ok(())
@@ -549,6 +552,11 @@ impl<'c> Renderer<'c> {
             )?
         };
         let casters_changed = self.shadows.casters.refresh(ctx, scene);
+        if casters_changed {
+            if let Some(v) = self.vsm.as_mut() {
+                v.forget_pages();
+            }
+        }
         self.shadows.set_plan(ctx, plan, casters_changed);
         let mut light_data = match self.vsm.as_mut() {
             Some(v) => {
@@ -670,18 +678,20 @@ impl<'c> Renderer<'c> {
                 None
             };
             let span = self.timer.span("shadows");
-            let shadow_stats = match (&self.irregular, &self.vsm) {
+            let shadow_stats = match (&self.irregular, self.vsm.as_mut()) {
                 (Some(irr), _) => {
                     irr.record(&mut encoder, &self.shadows.casters, &self.timer, span);
                     ShadowStats::default()
                 }
                 (_, Some(vsm)) => {
                     vsm.record(
+                        ctx,
                         &mut encoder,
                         &self.shadows.casters,
                         &self.timer,
                         pages_span,
                         span,
+                        self.settings.cache_shadows,
                     );
                     ShadowStats::default()
                 }

@@ -57,7 +57,11 @@ pub fn gbuffer() -> String {
 
 /// Deferred lighting pass, shadows from `source` (bindings 12–14 for virtual maps).
 pub fn lighting(source: ShadowSource) -> String {
-    let mut parts = vec![COMMON.to_string(), PARABOLOID.to_string(), SHADOW_LOOKUP.to_string()];
+    let mut parts = vec![
+        COMMON.to_string(),
+        PARABOLOID.to_string(),
+        SHADOW_LOOKUP.to_string(),
+    ];
     parts.extend(shadow_source(source));
     parts.push(include_str!("shaders/lighting.wgsl").to_string());
     parts.join("\n")
@@ -70,7 +74,11 @@ pub fn clusters() -> String {
 
 /// Hard visibility mask, shadows from `source` (bindings 11–13 for virtual maps).
 pub fn visibility(source: ShadowSource) -> String {
-    let mut parts = vec![COMMON.to_string(), PARABOLOID.to_string(), SHADOW_LOOKUP.to_string()];
+    let mut parts = vec![
+        COMMON.to_string(),
+        PARABOLOID.to_string(),
+        SHADOW_LOOKUP.to_string(),
+    ];
     parts.extend(shadow_source(source));
     parts.push(include_str!("shaders/visibility.wgsl").to_string());
     parts.join("\n")
@@ -200,9 +208,15 @@ pub fn all() -> Vec<(&'static str, String)> {
     vec![
         ("gbuffer", gbuffer()),
         ("lighting", lighting(ShadowSource::Atlas)),
-        ("lighting_vsm", lighting(ShadowSource::Virtual { first: 12 })),
+        (
+            "lighting_vsm",
+            lighting(ShadowSource::Virtual { first: 12 }),
+        ),
         ("visibility", visibility(ShadowSource::Atlas)),
-        ("visibility_vsm", visibility(ShadowSource::Virtual { first: 11 })),
+        (
+            "visibility_vsm",
+            visibility(ShadowSource::Virtual { first: 11 }),
+        ),
         ("vsm", vsm()),
         ("vsm_draw", vsm_draw()),
         ("clusters", clusters()),

@@ -136,21 +136,21 @@ impl VisibilityPass {
         let chunk_words = ((limit / per_word) as u32).clamp(1, words);
         let comp = wgpu::ShaderStages::COMPUTE;
         let mut entries = vec![
-                crate::uniform_entry(0, comp),
-                crate::storage_entry(1, comp),
-                crate::storage_entry(2, comp),
-                texture_entry(3, wgpu::TextureSampleType::Uint, comp),
-                texture_entry(4, wgpu::TextureSampleType::Uint, comp),
-                texture_entry(
-                    5,
-                    wgpu::TextureSampleType::Float { filterable: false },
-                    comp,
-                ),
-                crate::storage_rw_entry(6, comp),
-                crate::uniform_entry(7, comp),
-                crate::uniform_entry(8, comp),
-                crate::storage_entry(9, comp),
-                crate::storage_entry(10, comp),
+            crate::uniform_entry(0, comp),
+            crate::storage_entry(1, comp),
+            crate::storage_entry(2, comp),
+            texture_entry(3, wgpu::TextureSampleType::Uint, comp),
+            texture_entry(4, wgpu::TextureSampleType::Uint, comp),
+            texture_entry(
+                5,
+                wgpu::TextureSampleType::Float { filterable: false },
+                comp,
+            ),
+            crate::storage_rw_entry(6, comp),
+            crate::uniform_entry(7, comp),
+            crate::uniform_entry(8, comp),
+            crate::storage_entry(9, comp),
+            crate::storage_entry(10, comp),
         ];
         let source = if virtual_maps {
             entries.extend(crate::lighting::vsm_layout_entries(VSM_FIRST_BINDING, comp));
@@ -240,50 +240,50 @@ impl VisibilityPass {
                 },
             );
             let mut entries = vec![
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: inputs.frame.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: inputs.lights.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: inputs.atlas.views_buffer.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 3,
-                        resource: wgpu::BindingResource::TextureView(&pv),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 4,
-                        resource: wgpu::BindingResource::TextureView(&nv),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 5,
-                        resource: wgpu::BindingResource::TextureView(inputs.shadow_texture()),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 6,
-                        resource: mask.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 7,
-                        resource: params.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 8,
-                        resource: inputs.clusters.uniforms.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 9,
-                        resource: inputs.clusters.slots.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 10,
-                        resource: inputs.clusters.masks.as_entire_binding(),
-                    },
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: inputs.frame.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: inputs.lights.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: inputs.atlas.views_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(&pv),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::TextureView(&nv),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::TextureView(inputs.shadow_texture()),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: mask.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 7,
+                    resource: params.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 8,
+                    resource: inputs.clusters.uniforms.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 9,
+                    resource: inputs.clusters.slots.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 10,
+                    resource: inputs.clusters.masks.as_entire_binding(),
+                },
             ];
             entries.extend(inputs.vsm_entries(VSM_FIRST_BINDING));
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {

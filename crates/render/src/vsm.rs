@@ -21,22 +21,26 @@
 //!    level admitted whole or not at all while the pool lasts; pages of levels that do not fit are *denied*, and
 //!    lookups fall back to their nearest resident ancestor — a coarser shadow, never a wrong
 //!    or missing one — and the frame's [`VirtualStats`] count them (a pool smaller than one
-//!    page per face in use leaves the faces beyond it unshadowed, counted too);
-//! 3. *render*: every resident page is an ordinary shadow view (the face's projection cropped
-//!    to the page, one tile of the pool), drawn the `gpu-driven` way: compute culls caster
+//!    page per face in use leaves the faces beyond it unshadowed, counted too). With caching
+//!    ([`crate::RenderSettings::cache_shadows`]) a page resident last frame in a face whose
+//!    view and casters did not change keeps its pool page and its depth; only the other pages
+//!    get free pool pages and are drawn;
+//! 3. *render*: every page drawn this frame is an ordinary shadow view (the face's projection
+//!    cropped to the page, one tile of the pool), drawn the `gpu-driven` way: compute culls caster
 //!    clusters against each page's frustum slice (and by normal cone), one indirect multi-draw
 //!    per round draws the survivors, clipped to the page's tile (`shaders/vsm_draw.wgsl`).
 //!
 //! **Lookups** (`shaders/vsm_lookup.wgsl`) repeat the marking's level and page choice with the
 //! same code, read the page table and sample the pool; PCF taps are clamped to the page.
 
-use manyshadows_scene::light_space::{self, PointShadows, ShadowView};
+use glam::Vec3;
+use manyshadows_scene::light_space::{self, PointShadows, ShadowView, ViewKind};
 use manyshadows_scene::Scene;
 
 use crate::casters::CasterGeometry;
 use crate::clusters::LightClusters;
 use crate::gbuffer::GBuffer;
-use crate::gpu_types::{LightData, ShadowViewData, VirtualFace, VsmPage, VsmRound, VsmUniforms};
+use crate::gpu_types::{LightData, ShadowViewData, VirtualFace, VsmRound, VsmUniforms};
 use crate::shadow::{ShadowOptions, ATLAS_FORMAT};
 use crate::techniques::gpu_driven::{plan_rounds, Round, COMMAND_SIZE};
 use crate::timing::{GpuTimer, Span};
@@ -206,7 +210,8 @@ impl VirtualPlan {
                     v.texel_world * v.resolution as f32 / side as f32,
                     if v.orthographic { 1.0 } else { 0.0 },
                 ],
-                table: [first, finest, side, v.light as u32],
+                // w: last frame's first entry + 1 when its pages may be kept (set per frame).
+                table: [first, finest, side, 0],
             });
             first = first.saturating_add(table_entries(side));
         }
@@ -240,12 +245,17 @@ pub struct VirtualStats {
     pub fit: VirtualFit,
     /// Pages needed per level (level 0 = one page per face).
     pub needed: [u32; MAX_LEVELS as usize],
-    /// Pages resident (rendered) this frame.
+    /// Pages resident this frame (kept + drawn).
     pub resident: u32,
+    /// Resident pages kept, with their depth, from the last frame (caching).
+    pub kept: u32,
+    /// Pages drawn this frame.
+    pub drawn: u32,
     /// Needed pages that did not fit the pool (their samples used a coarser level).
     pub denied: u32,
     /// Faces left without shadows because not even their level-0 page fitted (only when the
-    /// pool has fewer pages than faces in use; which faces is then up to thread order).
+    /// pool has fewer pages than faces in use; the faces of the lowest-numbered lights get
+    /// the pool's pages).
     pub unshadowed_faces: u32,
     /// Pages the pool holds.
     pub pool_pages: u32,
@@ -306,11 +316,17 @@ pub struct VirtualShadows {
     uniforms: wgpu::Buffer,
     faces: wgpu::Buffer,
     table: wgpu::Buffer,
-    block_counts: wgpu::Buffer,
+    prev_table: wgpu::Buffer,
+    scratch: wgpu::Buffer,
     counters: wgpu::Buffer,
     readback: wgpu::Buffer,
-    pages: wgpu::Buffer,
     page_views: wgpu::Buffer,
+    /// Page-table entries of the last recorded frame (what `prev_table` receives).
+    prev_entries: u32,
+    /// The faces of the last recorded frame; empty when nothing may be kept.
+    last: std::collections::HashMap<(usize, ViewKind), LastFace>,
+    /// Caster bounding spheres moved since the last frame (old and new).
+    moves: Vec<[(Vec3, f32); 2]>,
     rounds: Vec<Round>,
     rounds_storage: wgpu::Buffer,
     round_uniforms: wgpu::Buffer,
@@ -321,20 +337,34 @@ pub struct VirtualShadows {
     mark: wgpu::ComputePipeline,
     count: wgpu::ComputePipeline,
     scan: wgpu::ComputePipeline,
-    alloc: wgpu::ComputePipeline,
+    retain: wgpu::ComputePipeline,
+    free: wgpu::ComputePipeline,
+    count_new: wgpu::ComputePipeline,
+    scan_new: wgpu::ComputePipeline,
+    alloc_new: wgpu::ComputePipeline,
     args_pipeline: wgpu::ComputePipeline,
     cull: wgpu::ComputePipeline,
     draw: wgpu::RenderPipeline,
     clear: wgpu::RenderPipeline,
     mark_layout: wgpu::BindGroupLayout,
+    alloc_layout: wgpu::BindGroupLayout,
     cull_layout: wgpu::BindGroupLayout,
     draw_layout: wgpu::BindGroupLayout,
     clear_layout: wgpu::BindGroupLayout,
     groups: Option<Groups>,
 }
 
+/// A face of the last recorded frame, by (light, view kind).
+#[derive(Clone, Copy, Debug)]
+struct LastFace {
+    view_proj: [[f32; 4]; 4],
+    side: u32,
+    first: u32,
+}
+
 struct Groups {
     mark: wgpu::BindGroup,
+    alloc: wgpu::BindGroup,
     cull: wgpu::BindGroup,
     draw: wgpu::BindGroup,
     clear: wgpu::BindGroup,
@@ -455,12 +485,6 @@ impl VirtualShadows {
             COUNTERS as u64 * 4,
             U::MAP_READ | U::COPY_DST,
         );
-        let pages = buffer(
-            ctx,
-            "vsm.pages",
-            pool_pages as u64 * std::mem::size_of::<VsmPage>() as u64,
-            storage,
-        );
         let page_views = buffer(
             ctx,
             "vsm.page_views",
@@ -518,9 +542,8 @@ impl VirtualShadows {
         }
 
         let cs = wgpu::ShaderStages::COMPUTE;
-        let tex = |binding| {
-            crate::lighting::texture_entry(binding, wgpu::TextureSampleType::Uint, cs)
-        };
+        let tex =
+            |binding| crate::lighting::texture_entry(binding, wgpu::TextureSampleType::Uint, cs);
         let mark_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("vsm.mark_layout"),
             entries: &[
@@ -534,11 +557,20 @@ impl VirtualShadows {
                 crate::uniform_entry(7, cs),
                 crate::storage_entry(8, cs),
                 crate::storage_rw_entry(9, cs),
+            ],
+        });
+        // The allocation passes: eight storage buffers, WebGPU's default per-stage limit.
+        let alloc_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("vsm.alloc_layout"),
+            entries: &[
+                crate::uniform_entry(7, cs),
+                crate::storage_entry(8, cs),
+                crate::storage_rw_entry(9, cs),
                 crate::storage_rw_entry(10, cs),
                 crate::storage_rw_entry(11, cs),
-                crate::storage_rw_entry(12, cs),
-                crate::storage_entry(13, cs),
-                crate::storage_rw_entry(14, cs),
+                crate::storage_entry(12, cs),
+                crate::storage_rw_entry(13, cs),
+                crate::storage_entry(14, cs),
                 crate::storage_rw_entry(15, cs),
             ],
         });
@@ -548,7 +580,6 @@ impl VirtualShadows {
                 dynamic_uniform(0, cs),
                 crate::uniform_entry(1, cs),
                 crate::storage_entry(2, cs),
-                crate::storage_entry(3, cs),
                 crate::storage_entry(4, cs),
                 crate::storage_entry(5, cs),
                 crate::storage_entry(6, cs),
@@ -583,21 +614,27 @@ impl VirtualShadows {
         let draw_module =
             crate::shaders::module(device, "vsm_draw.shader", &crate::shaders::vsm_draw());
         let mark_pl = pipeline_layout("vsm.mark_pipeline_layout", &mark_layout);
-        let compute = |label: &str, module: &wgpu::ShaderModule, pl: &wgpu::PipelineLayout, entry| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(label),
-                layout: Some(pl),
-                module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let compute =
+            |label: &str, module: &wgpu::ShaderModule, pl: &wgpu::PipelineLayout, entry| {
+                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(pl),
+                    module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
+            };
         let mark = compute("vsm.mark", &mark_module, &mark_pl, "cs_mark");
-        let count = compute("vsm.count", &mark_module, &mark_pl, "cs_count");
-        let scan = compute("vsm.scan", &mark_module, &mark_pl, "cs_scan");
-        let alloc = compute("vsm.alloc", &mark_module, &mark_pl, "cs_alloc");
-        let args_pipeline = compute("vsm.args", &mark_module, &mark_pl, "cs_args");
+        let alloc_pl = pipeline_layout("vsm.alloc_pipeline_layout", &alloc_layout);
+        let count = compute("vsm.count", &mark_module, &alloc_pl, "cs_count");
+        let scan = compute("vsm.scan", &mark_module, &alloc_pl, "cs_scan");
+        let retain = compute("vsm.retain", &mark_module, &alloc_pl, "cs_retain");
+        let free = compute("vsm.free", &mark_module, &alloc_pl, "cs_free");
+        let count_new = compute("vsm.count_new", &mark_module, &alloc_pl, "cs_count_new");
+        let scan_new = compute("vsm.scan_new", &mark_module, &alloc_pl, "cs_scan_new");
+        let alloc_new = compute("vsm.alloc_new", &mark_module, &alloc_pl, "cs_alloc_new");
+        let args_pipeline = compute("vsm.args", &mark_module, &alloc_pl, "cs_args");
         let cull_pl = pipeline_layout("vsm.cull_pipeline_layout", &cull_layout);
         let cull = compute("vsm.cull", &draw_module, &cull_pl, "cs_cull");
         let draw_pl = pipeline_layout("vsm.draw_pipeline_layout", &draw_layout);
@@ -643,12 +680,15 @@ impl VirtualShadows {
                 std::mem::size_of::<VirtualFace>() as u64,
                 storage,
             ),
-            table: buffer(ctx, "vsm.table", 16, storage),
-            block_counts: buffer(ctx, "vsm.block_counts", 16, storage),
+            table: buffer(ctx, "vsm.table", 16, storage | U::COPY_SRC),
+            prev_table: buffer(ctx, "vsm.prev_table", 16, storage),
+            scratch: buffer(ctx, "vsm.scratch", 16, storage),
             counters,
             readback,
-            pages,
             page_views,
+            prev_entries: 0,
+            last: Default::default(),
+            moves: Vec::new(),
             rounds,
             rounds_storage,
             round_uniforms,
@@ -659,12 +699,17 @@ impl VirtualShadows {
             mark,
             count,
             scan,
-            alloc,
+            retain,
+            free,
+            count_new,
+            scan_new,
+            alloc_new,
             args_pipeline,
             cull,
             draw,
             clear,
             mark_layout,
+            alloc_layout,
             cull_layout,
             draw_layout,
             clear_layout,
@@ -733,11 +778,19 @@ impl VirtualShadows {
             "vsm.faces",
         );
         let entries = self.plan.fit.table_entries.max(1) as u64;
+        let table_size = self.table.size();
         grow(&mut self.table, entries * 4, "vsm.table");
+        if self.table.size() != table_size {
+            // Last frame's table went with the old buffer: keep no pages this time.
+            self.last.clear();
+        }
+        let table_size = self.table.size();
+        grow(&mut self.prev_table, table_size, "vsm.prev_table");
+        let blocks = entries.div_ceil(ALLOC_BLOCK);
         grow(
-            &mut self.block_counts,
-            entries.div_ceil(ALLOC_BLOCK) * MAX_LEVELS as u64 * 4,
-            "vsm.block_counts",
+            &mut self.scratch,
+            (2 * self.pool_pages as u64 + (1 + MAX_LEVELS as u64) * blocks) * 4,
+            "vsm.scratch",
         );
         if !face_bytes.is_empty() {
             ctx.queue.write_buffer(&self.faces, 0, face_bytes);
@@ -796,12 +849,21 @@ impl VirtualShadows {
                 whole(7, &self.uniforms),
                 whole(8, &self.faces),
                 whole(9, &self.table),
+            ],
+        });
+        let alloc = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("vsm.alloc_group"),
+            layout: &self.alloc_layout,
+            entries: &[
+                whole(7, &self.uniforms),
+                whole(8, &self.faces),
+                whole(9, &self.table),
                 whole(10, &self.counters),
-                whole(11, &self.pages),
-                whole(12, &self.page_views),
-                whole(13, &self.rounds_storage),
-                whole(14, &self.args),
-                whole(15, &self.block_counts),
+                whole(11, &self.page_views),
+                whole(12, &self.rounds_storage),
+                whole(13, &self.args),
+                whole(14, &self.prev_table),
+                whole(15, &self.scratch),
             ],
         });
         let casters = inputs.casters;
@@ -812,7 +874,6 @@ impl VirtualShadows {
                 round(0),
                 whole(1, &self.uniforms),
                 whole(2, &self.page_views),
-                whole(3, &self.pages),
                 whole(4, &self.faces),
                 whole(5, &casters.cluster_buffer),
                 whole(6, &casters.cluster_bounds),
@@ -839,6 +900,7 @@ impl VirtualShadows {
         });
         self.groups = Some(Groups {
             mark,
+            alloc,
             cull,
             draw,
             clear,
@@ -850,10 +912,74 @@ impl VirtualShadows {
         self.groups.is_some()
     }
 
+    /// Notes that a shadow caster's bounding sphere moved from `old` to `new`: pages of faces
+    /// that see either are not kept at the next frame.
+    pub fn note_moved(&mut self, old: (Vec3, f32), new: (Vec3, f32)) {
+        self.moves.push([old, new]);
+    }
+
+    /// Keeps no page at the next frame (caster geometry or culling decisions changed).
+    pub fn forget_pages(&mut self) {
+        self.last.clear();
+    }
+
     /// Records one frame: the caster transform, page marking and allocation (`pages_span`),
     /// then the page clear and render rounds (`span`). Needs the G-buffer and the clusters of
-    /// this frame recorded before it.
+    /// this frame recorded before it. With `keep`, pages resident last frame in faces whose
+    /// view, virtual side and casters did not change keep their depth and are not redrawn.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        casters: &CasterGeometry,
+        timer: &GpuTimer,
+        pages_span: Option<Span>,
+        span: Option<Span>,
+        keep: bool,
+    ) {
+        if self.groups.is_none() {
+            return;
+        }
+        // Which faces may keep last frame's pages: `table.w` = their first entry then + 1.
+        let keep = keep && !casters.skinned();
+        let mut faces = self.plan.faces.clone();
+        for (face, view) in faces.iter_mut().zip(&self.plan.views) {
+            face.table[3] = 0;
+            let Some(last) = self.last.get(&(view.light, view.kind)) else {
+                continue;
+            };
+            let touched = self
+                .moves
+                .iter()
+                .flatten()
+                .any(|&(c, r)| view.sphere_visible(c, r));
+            if keep && last.view_proj == face.view_proj && last.side == face.table[2] && !touched {
+                face.table[3] = last.first + 1;
+            }
+        }
+        if !faces.is_empty() {
+            ctx.queue
+                .write_buffer(&self.faces, 0, bytemuck::cast_slice(&faces));
+        }
+        self.last = faces
+            .iter()
+            .zip(&self.plan.views)
+            .map(|(f, v)| {
+                let last = LastFace {
+                    view_proj: f.view_proj,
+                    side: f.table[2],
+                    first: f.table[0],
+                };
+                ((v.light, v.kind), last)
+            })
+            .collect();
+        self.moves.clear();
+        self.record_passes(encoder, casters, timer, pages_span, span);
+        self.prev_entries = self.plan.fit.table_entries;
+    }
+
+    fn record_passes(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         casters: &CasterGeometry,
@@ -866,35 +992,55 @@ impl VirtualShadows {
         };
         let (w, h) = self.viewport;
         encoder.push_debug_group("virtual shadow maps");
+        if self.prev_entries > 0 {
+            // Last frame's table, for the pages this frame keeps.
+            encoder.copy_buffer_to_buffer(
+                &self.table,
+                0,
+                &self.prev_table,
+                0,
+                self.prev_entries as u64 * 4,
+            );
+        }
         encoder.clear_buffer(&self.table, 0, None);
         encoder.clear_buffer(&self.counters, 0, None);
+        encoder.clear_buffer(&self.scratch, 0, None);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("vsm.pages"),
                 timestamp_writes: timer.compute_writes(pages_span, true, true),
             });
             casters.record(&mut pass, true);
-            pass.set_bind_group(0, &g.mark, &[]);
+            // One workgroup per block of page-table entries (2D past 65,535 blocks).
+            let groups_2d = |n: u64| (n.min(65535) as u32, n.div_ceil(65535) as u32);
+            let entries = self.plan.fit.table_entries as u64;
+            let (bx, by) = groups_2d(entries.div_ceil(ALLOC_BLOCK));
+            let (ex, ey) = groups_2d(entries.div_ceil(64));
             if !self.plan.faces.is_empty() {
+                pass.set_bind_group(0, &g.mark, &[]);
                 pass.set_pipeline(&self.mark);
                 pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
-                // One workgroup per block of page-table entries (2D past 65,535 blocks).
-                let blocks = (self.plan.fit.table_entries as u64).div_ceil(ALLOC_BLOCK);
-                let x = blocks.min(65535) as u32;
-                let y = blocks.div_ceil(65535) as u32;
-                pass.set_pipeline(&self.count);
-                pass.dispatch_workgroups(x, y, 1);
-                pass.set_pipeline(&self.scan);
-                pass.dispatch_workgroups(1, 1, 1);
-                pass.set_pipeline(&self.alloc);
-                pass.dispatch_workgroups(x, y, 1);
+                pass.set_bind_group(0, &g.alloc, &[]);
+                for (pipeline, (x, y)) in [
+                    (&self.count, (bx, by)),
+                    (&self.scan, (1, 1)),
+                    (&self.retain, (ex, ey)),
+                    (&self.free, (1, 1)),
+                    (&self.count_new, (bx, by)),
+                    (&self.scan_new, (1, 1)),
+                    (&self.alloc_new, (bx, by)),
+                ] {
+                    pass.set_pipeline(pipeline);
+                    pass.dispatch_workgroups(x, y, 1);
+                }
             }
+            pass.set_bind_group(0, &g.alloc, &[]);
             pass.set_pipeline(&self.args_pipeline);
             pass.dispatch_workgroups(1, 1, 1);
         }
         let clear_args = 3 * self.rounds.len() as u64 * 4;
         if self.rounds.is_empty() {
-            // No casters: the resident pages are cleared and stay empty.
+            // No casters: the drawn pages are cleared and stay empty.
             let mut pass = self.pool_pass(encoder, timer.render_writes(span, true, true));
             pass.set_pipeline(&self.clear);
             pass.set_bind_group(0, &g.clear, &[]);
@@ -960,20 +1106,20 @@ impl VirtualShadows {
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) -> wgpu::RenderPass<'e> {
         encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("vsm.draw"),
-                color_attachments: &[],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &self.pool_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
+            label: Some("vsm.draw"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &self.pool_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
                 }),
-                timestamp_writes,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            })
+                stencil_ops: None,
+            }),
+            timestamp_writes,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        })
     }
 
     /// The counters of the last recorded frame (after its submission).
@@ -985,7 +1131,9 @@ impl VirtualShadows {
         Ok(VirtualStats {
             fit: self.plan.fit,
             needed,
-            resident: c[17],
+            resident: c[9] + c[17],
+            kept: c[9],
+            drawn: c[17],
             denied: c[16],
             unshadowed_faces: c[18],
             pool_pages: self.pool_pages,
@@ -1010,7 +1158,10 @@ mod tests {
         assert_eq!(table_entries(128), 1);
         assert_eq!(table_entries(256), 1 + 4);
         assert_eq!(table_entries(512), 1 + 4 + 16);
-        assert_eq!(table_entries(16384), (0..8).map(|l| 1u32 << (2 * l)).sum::<u32>());
+        assert_eq!(
+            table_entries(16384),
+            (0..8).map(|l| 1u32 << (2 * l)).sum::<u32>()
+        );
     }
 
     #[test]

@@ -177,7 +177,10 @@ fn virtual_maps_match_exact_outlines_through_the_page_table() {
         let (wrong, frame) = wrong_pixels_with(name, settings, 0, "");
         let stats = frame.virtual_maps.expect("virtual stats");
         eprintln!("{name}: {stats:?}");
-        assert_eq!(wrong, 0, "{name}: {wrong} pixels disagree with the exact shadow");
+        assert_eq!(
+            wrong, 0,
+            "{name}: {wrong} pixels disagree with the exact shadow"
+        );
         // Pages of several levels were used (the footprint varies over the plane), and every
         // needed page was resident.
         assert!(
@@ -212,5 +215,8 @@ fn a_full_page_pool_is_reported_and_falls_back_to_coarser_levels() {
     assert_eq!(stats.resident, 1, "level 0 of the only face is resident");
     assert!(stats.denied > 0, "finer pages must be denied and counted");
     assert_eq!(stats.denied + stats.resident, stats.needed_total());
-    assert_eq!(wrong, 0, "the coarse fallback must still shadow: {wrong} wrong pixels");
+    assert_eq!(
+        wrong, 0,
+        "the coarse fallback must still shadow: {wrong} wrong pixels"
+    );
 }

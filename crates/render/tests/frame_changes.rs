@@ -266,7 +266,10 @@ fn virtual_frames_of_a_static_scene_are_identical() {
     let stats = a.virtual_maps.unwrap();
     assert!(stats.resident > 100, "{stats:?}");
     assert_eq!(a.virtual_maps, b.virtual_maps);
-    assert!(a.rgba == b.rgba, "the image changed between identical frames");
+    assert!(
+        a.rgba == b.rgba,
+        "the image changed between identical frames"
+    );
     assert!(
         a.visibility.unwrap().words == b.visibility.unwrap().words,
         "the visibility mask changed between identical frames"

@@ -12,7 +12,6 @@ use manyshadows::{
     GpuScene, Pcf, RenderError, RenderSettings, Renderer, ShadowGenerator, ShadowOptions,
     ShadowPlan, Technique,
 };
-use manyshadows_reference::{score, SurfacePoint, Surfaces, Tracer};
 
 const SIZE: u32 = 256;
 const EDGE_BAND_PX: i32 = 2;
@@ -157,42 +156,13 @@ fn many_lights_match_the_reference() {
     assert_eq!(vis.words_per_pixel, 2);
     let stats = r.irregular_stats().expect("irregular stats");
     assert_eq!(stats.unmapped, 0, "{stats:?}");
-    let g = r.read_gbuffer().expect("gbuffer");
-    let points = (0..g.position.len())
-        .map(|i| {
-            g.covered[i].then(|| SurfacePoint {
-                position: g.position[i],
-                normal: g.normal[i],
-            })
-        })
-        .collect();
-    let surfaces = Surfaces::new(w, h, points).expect("surfaces");
-    let tracer = Tracer::new(&scene).expect("tracer");
-    let reference = manyshadows_reference::reference_visibility(
-        &tracer,
-        &scene.lights,
-        &surfaces,
-        &|| {},
-        &Default::default(),
-    )
-    .expect("reference");
-    let band = score::edge_band(&reference.lit, &surfaces.covered(), 2);
-    let (mut pairs, mut lit, mut wrong, mut wrong_in_band) = (0u64, 0u64, 0u64, 0u64);
-    for p in 0..(w * h) as usize {
-        for l in 0..scene.lights.len() as u32 {
-            let want = reference.lit.get(p, l);
-            let got = vis.lit(p as u32 % w, p as u32 / w, l);
-            pairs += 1;
-            lit += u64::from(want);
-            if want != got {
-                if band.get(p, l) {
-                    wrong_in_band += 1;
-                } else {
-                    wrong += 1;
-                }
-            }
-        }
-    }
+    let common::ReferenceErrors {
+        pairs,
+        lit,
+        wrong,
+        wrong_in_band,
+        ..
+    } = common::reference_errors(&r, &scene, &vis, 2);
     eprintln!(
         "atrium, 40 lights, {w}x{h}: {wrong} of {pairs} (pixel, light) bits differ from the \
          reference outside the edge band, {wrong_in_band} inside it ({lit} lit; {stats:?})"

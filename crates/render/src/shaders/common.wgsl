@@ -117,7 +117,8 @@ struct VirtualFace {
     // near, far, world size of a texel of the finest level (per unit distance if perspective),
     // 1 if orthographic else 0.
     params: vec4<f32>,
-    // first page-table entry, finest level, virtual side in texels, light index.
+    // first page-table entry, finest level, virtual side in texels, and 1 + the face's first
+    // entry in last frame's table when its resident pages may be kept (0: draw them anew).
     table: vec4<u32>,
 }
 
@@ -128,14 +129,6 @@ struct VsmUniforms {
     counts: vec4<u32>,
     // Texels per screen pixel wanted (level of detail scale), unused ×3.
     lod: vec4<f32>,
-}
-
-// A resident page: its face, level and page coordinates.
-struct VsmPage {
-    face: u32,
-    level: u32,
-    x: u32,
-    y: u32,
 }
 
 // One cull + draw round of the page rendering (dynamic uniform offset).

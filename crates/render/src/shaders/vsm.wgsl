@@ -7,18 +7,21 @@
 //    stops at the first one already marked). Newly marked entries are counted per level.
 // 2. cs_count, one workgroup per block of 32 page-table entries: each needed entry learns its
 //    level (tagged into the entry) and the block counts its needed entries per level;
-//    cs_scan, one thread per level: exclusive prefix sums of those counts over the blocks, and
-//    the totals per level;
-//    cs_alloc, one workgroup per block: a needed page's rank within its level is its block's
-//    prefix plus the needed entries of that level before it in the block (a bit count), so
-//    pool pages follow page-table order and the frame does not depend on thread order. A page
-//    gets a pool page when its level, and every coarser level, fit the pool (levels are
-//    admitted coarsest first, whole or not at all); otherwise it is denied and lookups fall
-//    back to its resident ancestor. Only when level 0 alone (one page per face in use) exceeds
-//    the pool do faces go without shadows: the first faces in light order get the pool's
-//    pages, the rest are counted unshadowed. A resident page gets its record and its view:
-//    the face's projection cropped to the page, drawn into the page's tile of the pool.
-// 3. cs_args, one thread: the number of resident pages, and from it the indirect arguments of
+//    cs_scan, one thread per level: prefix sums of those counts and the totals per level.
+//    A level is admitted when it and every coarser level fit the pool (coarsest first, whole
+//    or not at all); pages of other levels are denied and lookups fall back to their resident
+//    ancestor. Only when level 0 alone (one page per face in use) exceeds the pool do faces go
+//    without shadows: the first faces in light order get the pool's pages, the rest are
+//    counted unshadowed.
+// 3. cs_retain, one thread per entry: an admitted page whose face is unchanged since the last
+//    frame (the CPU sets `table.w`) and that was resident then keeps its pool page and its
+//    contents (caching); the other admitted pages are tagged new.
+//    cs_free, one thread: the pool pages not kept, in order.
+//    cs_count_new / cs_scan_new / cs_alloc_new: new pages get free pool pages by their rank
+//    in page-table order (block bit counts and a prefix sum), so the frame never depends on
+//    thread order, and each gets its view in the draw list: the face's projection cropped to
+//    the page, drawn into the page's tile of the pool.
+// 4. cs_args, one thread: the number of pages to draw, and from it the indirect arguments of
 //    the page clear and of every cull round.
 
 @group(0) @binding(0) var<uniform> frame: FrameUniforms;
@@ -31,27 +34,37 @@
 @group(0) @binding(7) var<uniform> vsm: VsmUniforms;
 @group(0) @binding(8) var<storage, read> vsm_faces: array<VirtualFace>;
 @group(0) @binding(9) var<storage, read_write> vsm_table: array<atomic<u32>>;
-// [0, 8): pages needed per level; [8, 16): pages allocated per level; 16: pages denied;
-// 17: pages resident; 18: level-0 pages denied (faces left unshadowed).
+// [0, 8): pages needed per level; 9: pages kept from the last frame; 10: free pool pages;
+// 11: new pages; 16: pages denied; 17: pages drawn this frame; 18: level-0 pages denied
+// (faces left unshadowed).
 @group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
-@group(0) @binding(11) var<storage, read_write> pages: array<VsmPage>;
-@group(0) @binding(12) var<storage, read_write> page_views: array<ShadowViewData>;
-@group(0) @binding(13) var<storage, read> rounds: array<VsmRound>;
+// The pages to draw this frame, in rank order: each one's view (the face's projection
+// cropped to the page; `tile.w` holds the face index's bits).
+@group(0) @binding(11) var<storage, read_write> page_views: array<ShadowViewData>;
+@group(0) @binding(12) var<storage, read> rounds: array<VsmRound>;
 // Per round: dispatch arguments (x, y, z); after them: the clear's draw arguments.
-@group(0) @binding(14) var<storage, read_write> args: array<u32>;
-// Per level, per block of BLOCK entries: needed entries (cs_count), then their exclusive
-// prefix over the blocks (cs_scan); level-major: [level · blocks + block].
-@group(0) @binding(15) var<storage, read_write> block_counts: array<u32>;
+@group(0) @binding(13) var<storage, read_write> args: array<u32>;
+// Last frame's page table (for the pages it kept).
+@group(0) @binding(14) var<storage, read> prev_table: array<u32>;
+// Scratch, in u32 words: [0, P) pool page kept this frame (1/0); [P, 2P) free pool pages in
+// order; [2P, 2P + B) per block: new pages, then their prefix; [2P + B, 2P + 9B) per level and
+// block: needed pages, then their prefix (level-major). P = pool pages, B = blocks.
+@group(0) @binding(15) var<storage, read_write> scratch: array<u32>;
 // Declared for shadow_lookup.wgsl's `atlas_coord`, which these entry points never call.
 @group(1) @binding(0) var<storage, read> shadow_views: array<ShadowViewData>;
 
+const COUNT_KEPT: u32 = 9u;
+const COUNT_FREE: u32 = 10u;
+const COUNT_NEW: u32 = 11u;
 const COUNT_DENIED: u32 = 16u;
-const COUNT_RESIDENT: u32 = 17u;
+const COUNT_DRAWN: u32 = 17u;
 const COUNT_UNSHADOWED: u32 = 18u;
 // Page-table entries per allocation block (one workgroup; ranks by bit count in one word).
 const BLOCK: u32 = 32u;
 // A needed entry after cs_count: this plus its level.
 const VSM_NEEDED_AT: u32 = 0x80000000u;
+// An admitted entry without a kept page after cs_retain: this plus its level.
+const VSM_NEW_AT: u32 = 0xc0000000u;
 
 fn mark_light(i: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
     let light = lights[i];
@@ -155,6 +168,20 @@ fn blocks() -> u32 {
     return (vsm.counts.y + BLOCK - 1u) / BLOCK;
 }
 
+// Scratch sections (see the binding).
+fn kept_at() -> u32 {
+    return 0u;
+}
+fn free_at() -> u32 {
+    return vsm.pool.w;
+}
+fn new_counts_at() -> u32 {
+    return 2u * vsm.pool.w;
+}
+fn level_counts_at() -> u32 {
+    return 2u * vsm.pool.w + blocks();
+}
+
 var<workgroup> level_bits: array<atomic<u32>, VSM_LEVELS>;
 
 @compute @workgroup_size(32, 1, 1)
@@ -173,17 +200,18 @@ fn cs_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_inde
     }
     workgroupBarrier();
     if (b < blocks() && i < VSM_LEVELS) {
-        block_counts[i * blocks() + b] = countOneBits(atomicLoad(&level_bits[i]));
+        scratch[level_counts_at() + i * blocks() + b] = countOneBits(atomicLoad(&level_bits[i]));
     }
 }
 
 @compute @workgroup_size(8, 1, 1)
 fn cs_scan(@builtin(local_invocation_index) level: u32) {
     let n = blocks();
+    let at = level_counts_at() + level * n;
     var sum = 0u;
     for (var b = 0u; b < n; b = b + 1u) {
-        let c = block_counts[level * n + b];
-        block_counts[level * n + b] = sum;
+        let c = scratch[at + b];
+        scratch[at + b] = sum;
         sum = sum + c;
     }
     atomicStore(&counters[level], sum);
@@ -198,48 +226,127 @@ fn needed_through(level: u32) -> u32 {
     return sum;
 }
 
+fn deny(e: u32, level: u32) {
+    atomicStore(&vsm_table[e], VSM_DENIED);
+    atomicAdd(&counters[COUNT_DENIED], 1u);
+    if (level == 0u) {
+        atomicAdd(&counters[COUNT_UNSHADOWED], 1u);
+    }
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn cs_retain(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let e = gid.x + gid.y * groups.x * 64u;
+    if (e >= vsm.counts.y) {
+        return;
+    }
+    let v = atomicLoad(&vsm_table[e]);
+    if (v < VSM_NEEDED_AT || v >= VSM_NEEDED_AT + VSM_LEVELS) {
+        return;
+    }
+    let level = v - VSM_NEEDED_AT;
+    if (atomicLoad(&counters[0]) > vsm.pool.w) {
+        // Not even level 0 fits: level-0 pages compete by rank (cs_alloc_new), nothing else is
+        // admitted and nothing is kept.
+        if (level == 0u) {
+            atomicStore(&vsm_table[e], VSM_NEW_AT);
+        } else {
+            deny(e, level);
+        }
+        return;
+    }
+    if (needed_through(level) > vsm.pool.w) {
+        deny(e, level);
+        return;
+    }
+    let face = vsm_faces[face_of(e)];
+    if (face.table.w != 0u) {
+        let before = prev_table[face.table.w - 1u + (e - face.table.x)];
+        if (before >= VSM_FIRST_PAGE && before < VSM_NEEDED_AT) {
+            // Resident last frame, in an unchanged face: keep the page and its depth.
+            atomicStore(&vsm_table[e], before);
+            scratch[kept_at() + before - VSM_FIRST_PAGE] = 1u;
+            atomicAdd(&counters[COUNT_KEPT], 1u);
+            return;
+        }
+    }
+    atomicStore(&vsm_table[e], VSM_NEW_AT + level);
+}
+
+@compute @workgroup_size(1, 1, 1)
+fn cs_free() {
+    var k = 0u;
+    for (var p = 0u; p < vsm.pool.w; p = p + 1u) {
+        if (scratch[kept_at() + p] == 0u) {
+            scratch[free_at() + k] = p;
+            k = k + 1u;
+        }
+    }
+    atomicStore(&counters[COUNT_FREE], k);
+}
+
+var<workgroup> new_bits: atomic<u32>;
+
+fn is_new(v: u32) -> bool {
+    return v >= VSM_NEW_AT && v < VSM_NEW_AT + VSM_LEVELS;
+}
+
 @compute @workgroup_size(32, 1, 1)
-fn cs_alloc(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) i: u32, @builtin(num_workgroups) groups: vec3<u32>) {
+fn cs_count_new(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) i: u32, @builtin(num_workgroups) groups: vec3<u32>) {
     let b = block_id(wg, groups);
-    if (i < VSM_LEVELS) {
-        atomicStore(&level_bits[i], 0u);
+    if (i == 0u) {
+        atomicStore(&new_bits, 0u);
+    }
+    workgroupBarrier();
+    let e = b * BLOCK + i;
+    if (b < blocks() && e < vsm.counts.y && is_new(atomicLoad(&vsm_table[e]))) {
+        atomicOr(&new_bits, 1u << i);
+    }
+    workgroupBarrier();
+    if (b < blocks() && i == 0u) {
+        scratch[new_counts_at() + b] = countOneBits(atomicLoad(&new_bits));
+    }
+}
+
+@compute @workgroup_size(1, 1, 1)
+fn cs_scan_new() {
+    var sum = 0u;
+    for (var b = 0u; b < blocks(); b = b + 1u) {
+        let c = scratch[new_counts_at() + b];
+        scratch[new_counts_at() + b] = sum;
+        sum = sum + c;
+    }
+    atomicStore(&counters[COUNT_NEW], sum);
+}
+
+@compute @workgroup_size(32, 1, 1)
+fn cs_alloc_new(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) i: u32, @builtin(num_workgroups) groups: vec3<u32>) {
+    let b = block_id(wg, groups);
+    if (i == 0u) {
+        atomicStore(&new_bits, 0u);
     }
     workgroupBarrier();
     let e = b * BLOCK + i;
     var level = VSM_LEVELS;
     if (b < blocks() && e < vsm.counts.y) {
         let v = atomicLoad(&vsm_table[e]);
-        if (v >= VSM_NEEDED_AT && v < VSM_NEEDED_AT + VSM_LEVELS) {
-            level = v - VSM_NEEDED_AT;
-            atomicOr(&level_bits[level], 1u << i);
+        if (is_new(v)) {
+            level = v - VSM_NEW_AT;
+            atomicOr(&new_bits, 1u << i);
         }
     }
     workgroupBarrier();
     if (level == VSM_LEVELS) {
         return;
     }
-    // Rank among the level's needed pages, in page-table order.
-    let rank = block_counts[level * blocks() + b]
-        + countOneBits(atomicLoad(&level_bits[level]) & ((1u << i) - 1u));
-    let through = needed_through(level);
-    var page = 0u;
-    if (level == 0u && through > vsm.pool.w) {
-        // Not even one page per face fits: the first faces get the pool's pages, the others
-        // stay unshadowed (counted apart).
-        if (rank >= vsm.pool.w) {
-            atomicStore(&vsm_table[e], VSM_DENIED);
-            atomicAdd(&counters[COUNT_DENIED], 1u);
-            atomicAdd(&counters[COUNT_UNSHADOWED], 1u);
-            return;
-        }
-        page = rank;
-    } else if (through > vsm.pool.w) {
-        atomicStore(&vsm_table[e], VSM_DENIED);
-        atomicAdd(&counters[COUNT_DENIED], 1u);
+    // Rank among this frame's new pages, in page-table order.
+    let rank = scratch[new_counts_at() + b] + countOneBits(atomicLoad(&new_bits) & ((1u << i) - 1u));
+    if (rank >= atomicLoad(&counters[COUNT_FREE])) {
+        // Only when level 0 alone overflows the pool.
+        deny(e, level);
         return;
-    } else {
-        page = through - atomicLoad(&counters[level]) + rank;
     }
+    let page = scratch[free_at() + rank];
     atomicStore(&vsm_table[e], VSM_FIRST_PAGE + page);
     let fi = face_of(e);
     let face = vsm_faces[fi];
@@ -247,7 +354,6 @@ fn cs_alloc(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_inde
     let n = 1u << level;
     let x = within % n;
     let y = within / n;
-    pages[page] = VsmPage(fi, level, x, y);
     // Crop the face's clip space to the page: ndc' = (ndc - centre) · n.
     let nf = f32(n);
     let cx = (2.0 * f32(x) + 1.0) / nf - 1.0;
@@ -259,32 +365,23 @@ fn cs_alloc(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_inde
         vec4<f32>(-nf * cx, -nf * cy, 0.0, 1.0),
     );
     let side = f32(vsm.pool.z);
-    var v: ShadowViewData;
-    v.view_proj = crop * face.view_proj;
-    v.tile = vec4<f32>(f32(page % vsm.pool.y) * side, f32(page / vsm.pool.y) * side, side, 0.0);
-    v.params = vec4<f32>(face.params.xy, face.params.z * f32(1u << (face.table.y - level)), face.params.w);
-    page_views[page] = v;
+    var view: ShadowViewData;
+    view.view_proj = crop * face.view_proj;
+    view.tile = vec4<f32>(f32(page % vsm.pool.y) * side, f32(page / vsm.pool.y) * side, side, bitcast<f32>(fi));
+    view.params = vec4<f32>(face.params.xy, face.params.z * f32(1u << (face.table.y - level)), face.params.w);
+    page_views[rank] = view;
 }
 
 @compute @workgroup_size(1, 1, 1)
 fn cs_args() {
-    // Whole levels, coarsest first, while they fit; the pool's worth of level 0 if not even
-    // that level fits.
-    var resident = min(atomicLoad(&counters[0]), vsm.pool.w);
-    var through = 0u;
-    for (var k = 0u; k < VSM_LEVELS; k = k + 1u) {
-        through = through + atomicLoad(&counters[k]);
-        if (through <= vsm.pool.w) {
-            resident = through;
-        }
-    }
-    atomicStore(&counters[COUNT_RESIDENT], resident);
+    let drawn = min(atomicLoad(&counters[COUNT_NEW]), atomicLoad(&counters[COUNT_FREE]));
+    atomicStore(&counters[COUNT_DRAWN], drawn);
     let n = arrayLength(&rounds);
     for (var r = 0u; r < n; r = r + 1u) {
         let first = rounds[r].round.x;
         var slots = 0u;
-        if (resident > first) {
-            slots = min(resident - first, rounds[r].round.y);
+        if (drawn > first) {
+            slots = min(drawn - first, rounds[r].round.y);
         }
         args[3u * r] = (rounds[r].round.w + 63u) / 64u;
         args[3u * r + 1u] = slots;
@@ -292,7 +389,7 @@ fn cs_args() {
     }
     // draw_indirect: vertices, instances, first vertex, first instance.
     args[3u * n] = 6u;
-    args[3u * n + 1u] = resident;
+    args[3u * n + 1u] = drawn;
     args[3u * n + 2u] = 0u;
     args[3u * n + 3u] = 0u;
 }

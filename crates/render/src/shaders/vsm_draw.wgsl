@@ -2,8 +2,9 @@
 // shadow view (the face's projection cropped to the page, one tile of the pool), so pages are
 // drawn the `gpu-driven` way: a compute pass culls caster clusters against each page's
 // frustum slice and writes indexed-indirect commands, one multi-draw renders the survivors
-// into the pages' tiles. The page count is known only on the GPU: cull dispatches are
-// indirect, and rounds past the last resident page cull nothing.
+// into the pages' tiles. `page_views` lists this frame's pages to draw (kept pages are not in
+// it); their count is known only on the GPU: cull dispatches are indirect, and rounds past
+// the last page cull nothing.
 
 @group(0) @binding(0) var<uniform> round: VsmRound;
 @group(0) @binding(1) var<uniform> vsm: VsmUniforms;
@@ -11,7 +12,6 @@
 
 // ---- cull (compute) ----
 
-@group(0) @binding(3) var<storage, read> pages: array<VsmPage>;
 @group(0) @binding(4) var<storage, read> vsm_faces: array<VirtualFace>;
 @group(0) @binding(5) var<storage, read> clusters: array<GpuCluster>;
 @group(0) @binding(6) var<storage, read> cluster_bounds: array<vec4<f32>>;
@@ -36,11 +36,12 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
     // Slots past the last resident page draw nothing (only reached without compaction,
     // where every slot's command is written).
     var visible = page < counters[17];
-    if (visible && (bits & CULL_FRUSTUM) != 0u && sphere_outside(page_views[page].view_proj, sphere)) {
+    let view = page_views[min(page, arrayLength(&page_views) - 1u)];
+    if (visible && (bits & CULL_FRUSTUM) != 0u && sphere_outside(view.view_proj, sphere)) {
         visible = false;
     }
     if (visible && (bits & CULL_BACKFACE) != 0u && cl.first_triangle < round.counts.y
-        && cluster_faces_away(cl, instances[cl.instance].normal, sphere, vsm_faces[pages[page].face].eye)) {
+        && cluster_faces_away(cl, instances[cl.instance].normal, sphere, vsm_faces[bitcast<u32>(view.tile.w)].eye)) {
         visible = false;
     }
     var cmd: DrawCommand;
@@ -70,7 +71,7 @@ fn vs_draw(@builtin(vertex_index) v: u32) -> TileOut {
     return into_tile_of(view.view_proj * world[vertex], view.tile, 1.0 / f32(vsm.pool.x));
 }
 
-// Covers resident page `i`'s tile at depth 1 (far), before its casters are drawn.
+// Covers drawn page `i`'s tile at depth 1 (far), before its casters are drawn.
 @vertex
 fn vs_clear(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> @builtin(position) vec4<f32> {
     let tile = page_views[i].tile;

@@ -111,3 +111,82 @@ pub fn analytic_truth(scene: &Scene, size: u32) -> Vec<Option<bool>> {
     }
     out
 }
+
+/// How a renderer's visibility mask compares with the exact CPU reference traced from the same
+/// G-buffer points.
+#[derive(Debug, Default)]
+pub struct ReferenceErrors {
+    /// (pixel, light) pairs compared.
+    pub pairs: u64,
+    /// Pairs the reference sees lit.
+    pub lit: u64,
+    /// Pairs that differ more than `band` pixels from a reference edge.
+    pub wrong: u64,
+    /// Pairs that differ within the edge band.
+    pub wrong_in_band: u64,
+    /// The scores `compare` reports, over all lights: in-reach pairs facing the light, false
+    /// shadow and false light outside and inside the edge band.
+    pub counts: manyshadows_reference::score::Counts,
+}
+
+/// Renders nothing itself: reads `r`'s G-buffer, traces the reference for `scene`'s lights
+/// and compares it with `vis` (the frame's mask), errors within `band` pixels of a reference
+/// edge apart.
+pub fn reference_errors(
+    r: &manyshadows::Renderer<'_>,
+    scene: &Scene,
+    vis: &manyshadows::VisibilityMask,
+    band: u32,
+) -> ReferenceErrors {
+    use manyshadows_reference::{score, SurfacePoint, Surfaces, Tracer};
+    let (w, h) = (vis.width, vis.height);
+    let g = r.read_gbuffer().expect("gbuffer");
+    let points = (0..g.position.len())
+        .map(|i| {
+            g.covered[i].then(|| SurfacePoint {
+                position: g.position[i],
+                normal: g.normal[i],
+            })
+        })
+        .collect();
+    let surfaces = Surfaces::new(w, h, points).expect("surfaces");
+    let tracer = Tracer::new(scene).expect("tracer");
+    let reference = manyshadows_reference::reference_visibility(
+        &tracer,
+        &scene.lights,
+        &surfaces,
+        &|| {},
+        &Default::default(),
+    )
+    .expect("reference");
+    let edge = score::edge_band(&reference.lit, &surfaces.covered(), band);
+    let mask = manyshadows_reference::Mask {
+        width: vis.width,
+        height: vis.height,
+        lights: vis.lights,
+        words_per_pixel: vis.words_per_pixel,
+        words: vis.words.clone(),
+    };
+    let mut e = ReferenceErrors {
+        counts: score::score(&reference, &edge, &mask)
+            .expect("score")
+            .total(|_| true),
+        ..Default::default()
+    };
+    for p in 0..(w * h) as usize {
+        for l in 0..scene.lights.len() as u32 {
+            let want = reference.lit.get(p, l);
+            let got = vis.lit(p as u32 % w, p as u32 / w, l);
+            e.pairs += 1;
+            e.lit += u64::from(want);
+            if want != got {
+                if edge.get(p, l) {
+                    e.wrong_in_band += 1;
+                } else {
+                    e.wrong += 1;
+                }
+            }
+        }
+    }
+    e
+}

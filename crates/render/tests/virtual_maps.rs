@@ -1,0 +1,65 @@
+//! Virtual shadow maps against the exact CPU reference on real geometry: the atrium with 40
+//! lights of every type (two mask words per pixel), each bit of the hard visibility mask
+//! against a ray traced from the same G-buffer point, scored as `compare` scores it. (The
+//! analytic outlines, the one-page pool, caching and frame changes are tested in analytic.rs,
+//! caching.rs and frame_changes.rs.)
+
+mod common;
+
+use manyshadows::scene::builtin::{self, BuiltinOptions};
+use manyshadows::{Pcf, RenderSettings, Renderer, Technique};
+
+/// Misclassified (false shadow + false light) outside the edge band, as a fraction of the
+/// in-reach pairs facing the light (what `compare` reports).
+fn misclassified(technique: Technique) -> (f64, common::ReferenceErrors) {
+    let ctx = common::context();
+    let scene = builtin::build(
+        "atrium",
+        &BuiltinOptions {
+            lights: Some(40),
+            ..Default::default()
+        },
+    )
+    .expect("atrium");
+    let settings = RenderSettings {
+        width: 320,
+        height: 180,
+        pcf: Pcf::Off,
+        visibility: true,
+        technique,
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&ctx, &scene, settings).expect("renderer");
+    let frame = r.render().expect("frame");
+    if let Some(stats) = frame.virtual_maps {
+        assert_eq!(stats.denied, 0, "{stats:?}");
+    }
+    let vis = frame.visibility.expect("mask");
+    assert_eq!(vis.words_per_pixel, 2);
+    let e = common::reference_errors(&r, &scene, &vis, 2);
+    let c = &e.counts;
+    assert!(c.in_reach > 100_000, "degenerate: {c:?}");
+    let f = (c.false_shadow + c.false_light) as f64 / c.in_reach as f64;
+    eprintln!(
+        "atrium, 40 lights, 320x180, {technique}: {:.4} % misclassified; {c:?}",
+        f * 100.0
+    );
+    (f, e)
+}
+
+/// The virtual mask against the reference: under the 0.2 % outside the edge band, and
+/// better than the atlas (`traditional`, default maps) on the same frame. Measured (lavapipe
+/// and llvmpipe alike): virtual 0.151 %, traditional 0.424 % (at 960x540 `compare` measures
+/// 0.027 % against 0.417 % with 64 lights: at 320x180 a pixel, hence a page texel, is 3 times
+/// wider).
+#[test]
+fn virtual_mask_matches_the_reference_better_than_the_atlas() {
+    let (virt, _) = misclassified(Technique::Virtual);
+    let (atlas, _) = misclassified(Technique::Traditional);
+    assert!(
+        virt <= 0.002,
+        "virtual: {:.4} % misclassified",
+        virt * 100.0
+    );
+    assert!(virt < atlas, "virtual {virt} against traditional {atlas}");
+}
