@@ -406,12 +406,55 @@ fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
     Ok(builtin::build(&args.scene, &opts)?)
 }
 
+/// Refuses option values that could only be changed silently; checked before anything is
+/// loaded or uploaded.
+fn check_render_args(args: &RenderArgs) -> Result<()> {
+    if args.frames == 0 {
+        bail!("--frames must be at least 1");
+    }
+    if args.page_pool == 0 {
+        bail!("--page-pool must be at least 1 MiB");
+    }
+    if args.atlas_max < manyshadows::scene::atlas::MIN_TILE {
+        bail!(
+            "--atlas-max {}: the atlas must hold at least one {}-texel tile",
+            args.atlas_max,
+            manyshadows::scene::atlas::MIN_TILE
+        );
+    }
+    if args.irregular_hash == Some(0) {
+        bail!("--irregular-hash must be at least 1 (1 = one list per texel, no hashing)");
+    }
+    Ok(())
+}
+
+/// The atlas side `--atlas-max` really allows on this adapter (a power of two, at most the
+/// adapter's texture limit), with a note on stderr when it is not the number given.
+fn effective_atlas_max(ctx: &GpuContext, requested: u32) -> u32 {
+    let limit = ctx.limits().max_texture_dimension_2d;
+    let capped = requested.min(limit);
+    let side = 1u32 << (31 - capped.leading_zeros());
+    if side != requested {
+        eprintln!(
+            "note: --atlas-max {requested} is used as {side} (atlas sides are powers of two{})",
+            if requested > limit {
+                format!(", and this adapter's largest texture is {limit}")
+            } else {
+                String::new()
+            }
+        );
+    }
+    side
+}
+
 fn render(args: &RenderArgs) -> Result<()> {
     let started = Instant::now();
+    check_render_args(args)?;
     let pb = spinner("loading the scene");
     let scene = load_scene(args)?;
     pb.set_message("opening the GPU");
     let ctx = GpuContext::new(&args.gpu.request())?;
+    let atlas_max = pb.suspend(|| effective_atlas_max(&ctx, args.atlas_max));
     let settings = RenderSettings {
         width: args.width,
         height: args.height,
@@ -428,7 +471,7 @@ fn render(args: &RenderArgs) -> Result<()> {
             slope: args.bias_slope,
             normal_offset: args.bias_normal,
         },
-        max_atlas_size: Some(args.atlas_max),
+        max_atlas_size: Some(atlas_max),
         fit: if args.strict_atlas {
             FitPolicy::Strict
         } else {
@@ -453,14 +496,8 @@ fn render(args: &RenderArgs) -> Result<()> {
             ..Default::default()
         },
     };
-    if args.page_pool == 0 {
-        bail!("--page-pool must be at least 1 MiB");
-    }
     pb.set_message("uploading the scene and building pipelines");
     let mut renderer = Renderer::new(&ctx, &scene, settings)?;
-    if args.frames == 0 {
-        bail!("--frames must be at least 1");
-    }
     let mover = match args.move_instance {
         Some(k) if k >= scene.instances.len() => bail!(
             "--move-instance {k}: the scene has {} instances",

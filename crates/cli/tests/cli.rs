@@ -197,3 +197,49 @@ fn zero_lights_is_fine() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// Values that could only be changed silently are refused before the scene is loaded (a
+/// missing scene file would otherwise be the error reported), and an --atlas-max that is not
+/// a power of two is used as the next smaller one, with a note saying so.
+#[test]
+fn silently_changed_values_are_refused_or_announced() {
+    let missing = "no-such-scene-file.toml";
+    for (flag, value, needle) in [
+        ("--frames", "0", "--frames must be at least 1"),
+        (
+            "--irregular-hash",
+            "0",
+            "--irregular-hash must be at least 1",
+        ),
+        ("--page-pool", "0", "--page-pool must be at least 1"),
+        ("--atlas-max", "8", "--atlas-max 8"),
+    ] {
+        assert_clean_failure(
+            &run(&["render", "--scene", missing, flag, value]),
+            1,
+            needle,
+        );
+    }
+    let dir = tmp("atlas-max-note");
+    let out = run(&[
+        "render",
+        "--scene",
+        "plane-spot",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--atlas-max",
+        "3000",
+        "--json",
+        dir.join("s.json").to_str().unwrap(),
+        "--out",
+        dir.join("f.png").to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("--atlas-max 3000 is used as 2048"),
+        "no note: {stderr}"
+    );
+}

@@ -31,7 +31,8 @@ pub struct VisibilityMask {
 impl VisibilityMask {
     /// Whether `light` reaches pixel `(x, y)` unoccluded.
     pub fn lit(&self, x: u32, y: u32, light: u32) -> bool {
-        let i = ((y * self.width + x) * self.words_per_pixel + light / 32) as usize;
+        let pixel = y as usize * self.width as usize + x as usize;
+        let i = pixel * self.words_per_pixel as usize + (light / 32) as usize;
         self.words[i] >> (light % 32) & 1 == 1
     }
 
@@ -54,11 +55,25 @@ impl VisibilityMask {
         }
         let u = |i: usize| u32::from_le_bytes(bytes[8 + 4 * i..12 + 4 * i].try_into().unwrap());
         let (width, height, lights, words_per_pixel) = (u(0), u(1), u(2), u(3));
-        let n = width as u64 * height as u64 * words_per_pixel as u64;
-        if bytes.len() as u64 != 24 + 4 * n {
+        if words_per_pixel != lights.div_ceil(32).max(1) {
             return Err(format!(
-                "expected {} bytes of words, found {}",
-                4 * n,
+                "{lights} lights need {} words per pixel, the header says {words_per_pixel}",
+                lights.div_ceil(32).max(1)
+            ));
+        }
+        // The header's sizes are checked against the bytes present before anything is
+        // allocated: a header claiming 2^32 × 2^32 pixels is an error, not an allocation.
+        let n = (width as u64)
+            .checked_mul(height as u64)
+            .and_then(|p| p.checked_mul(words_per_pixel as u64))
+            .and_then(|n| n.checked_mul(4))
+            .ok_or_else(|| {
+                format!("{width}x{height} pixels of {words_per_pixel} words overflow")
+            })?;
+        if bytes.len() as u64 - 24 != n {
+            return Err(format!(
+                "{width}x{height} pixels of {words_per_pixel} words need {n} bytes of words, \
+                 found {}",
                 bytes.len() - 24
             ));
         }
@@ -322,5 +337,52 @@ impl VisibilityPass {
             words_per_pixel: self.words,
             words,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::VisibilityMask;
+
+    fn header(w: u32, h: u32, lights: u32, words: u32) -> Vec<u8> {
+        let mut b = b"MSVIS001".to_vec();
+        for v in [w, h, lights, words] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        b
+    }
+
+    #[test]
+    fn round_trip() {
+        let m = VisibilityMask {
+            width: 3,
+            height: 2,
+            lights: 40,
+            words_per_pixel: 2,
+            words: (0..12).map(|i| i * 0x0101_0101).collect(),
+        };
+        let mut bytes = Vec::new();
+        m.write_raw(&mut bytes).unwrap();
+        assert_eq!(VisibilityMask::read_raw(&bytes).unwrap(), m);
+    }
+
+    #[test]
+    fn lying_headers_are_errors_not_allocations() {
+        // Sizes whose product overflows u64, and ones that merely exceed the bytes present.
+        for (w, h, lights, words) in [
+            (u32::MAX, u32::MAX, u32::MAX, u32::MAX.div_ceil(32)),
+            (1 << 20, 1 << 20, 64, 2),
+            (2, 2, 1, 1),
+        ] {
+            let err = VisibilityMask::read_raw(&header(w, h, lights, words)).unwrap_err();
+            assert!(err.contains("overflow") || err.contains("need"), "{err}");
+        }
+        // Words per pixel that do not match the light count (lit() would read out of range).
+        let mut b = header(1, 1, 64, 1);
+        b.extend_from_slice(&[0; 4]);
+        let err = VisibilityMask::read_raw(&b).unwrap_err();
+        assert!(err.contains("64 lights need 2 words"), "{err}");
+        assert!(VisibilityMask::read_raw(b"MSVIS00").is_err());
+        assert!(VisibilityMask::read_raw(b"NOTMSVIS0000000000000000").is_err());
     }
 }
