@@ -21,6 +21,10 @@ use manyshadows_scene::{primitives, SceneError};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 
+/// Inputs on which a third-party parser panicked: the loaders catch that and report a parse
+/// error (so no input takes the process down), and the fuzz run counts them as findings.
+static CAUGHT_PANICS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
 /// Longest any single input may take to load or be refused.
 const MAX_CASE_TIME: Duration = Duration::from_secs(10);
 
@@ -118,7 +122,14 @@ fn check(path: &Path, bytes: &[u8], load: &dyn Fn(&Path) -> Result<usize, SceneE
     );
     if let Err(e) = outcome {
         // Every error names what went wrong; an empty message is not a clear error.
-        assert!(!e.to_string().trim().is_empty());
+        let message = e.to_string();
+        assert!(!message.trim().is_empty());
+        if message.contains("the parser failed on malformed data") {
+            let n = CAUGHT_PANICS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            if n < 20 {
+                eprintln!("caught parser panic: {message}");
+            }
+        }
     }
 }
 
@@ -158,6 +169,11 @@ fn fuzz(
             Ok(())
         })
         .unwrap_or_else(|e| panic!("{name}: {e}"));
+    eprintln!(
+        "{name}: {} cases; parser panics caught so far (all formats): {}",
+        cases(),
+        CAUGHT_PANICS.load(std::sync::atomic::Ordering::Relaxed)
+    );
     let _ = std::fs::remove_dir_all(&d);
 }
 
