@@ -29,9 +29,33 @@ use crate::{Mesh, SceneError};
 /// Loads every triangle primitive of the default scene, transforms baked.
 pub(super) fn load(path: &Path) -> Result<Vec<Mesh>, SceneError> {
     let bytes = read_limited(path)?;
-    let gltf = Gltf::from_slice(&bytes).map_err(|e| parse_error(path, format!("glTF: {e}")))?;
+    let gltf = Gltf::from_slice_without_validation(&bytes)
+        .map_err(|e| parse_error(path, format!("glTF: {e}")))?;
     drop(bytes);
     let Gltf { document, blob } = gltf;
+    // gltf-json 1.4.1's validation looks up a primitive's POSITION accessor before checking
+    // that it exists (a panic on a dangling index, found by fuzzing): check the accessor
+    // references of every primitive first, then validate.
+    let root = document.as_json();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let used = primitive
+                .attributes
+                .values()
+                .chain(primitive.indices.as_ref());
+            if let Some(bad) = used.map(|i| i.value()).find(|&i| i >= root.accessors.len()) {
+                return Err(parse_error(
+                    path,
+                    format!(
+                        "glTF: mesh {m}, primitive {p} uses accessor {bad}, but the file has {}",
+                        root.accessors.len()
+                    ),
+                ));
+            }
+        }
+    }
+    let document = ::gltf::Document::from_json(document.into_json())
+        .map_err(|e| parse_error(path, format!("glTF: {e}")))?;
     let base = path.parent().unwrap_or(Path::new("."));
     check_buffer_sources(path, &document, base)?;
     let buffers = ::gltf::import_buffers(&document, Some(base), blob)
