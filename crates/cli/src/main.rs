@@ -24,6 +24,7 @@ mod irregular_bench;
 mod lights_bench;
 mod omni;
 mod plot;
+mod soak;
 mod virtual_bench;
 
 const ABOUT: &str = "Render scenes lit by many shadow-casting lights, headless, to PNG.";
@@ -95,6 +96,10 @@ enum BenchCommand {
     /// run: GPU time per stage, shadow memory kept, pages needed / rendered / denied; table,
     /// results.json and a plot.
     Virtual(Box<virtual_bench::VirtualArgs>),
+    /// Thousands of frames in which the camera, a caster, a light and the light count change:
+    /// resident memory after a warm-up against its baseline (fails past --max-growth-mib),
+    /// frame times per interval, any failed frame; table and results.json.
+    Soak(Box<soak::SoakArgs>),
 }
 
 #[derive(Args, Debug, Clone)]
@@ -333,6 +338,7 @@ fn main() {
         Some(Command::Bench(BenchCommand::Irregular(args))) => irregular_bench::irregular(&args),
         Some(Command::Bench(BenchCommand::Lights(args))) => lights_bench::lights(&args),
         Some(Command::Bench(BenchCommand::Virtual(args))) => virtual_bench::virtual_maps(&args),
+        Some(Command::Bench(BenchCommand::Soak(args))) => soak::soak(&args),
         None => render(&cli.render),
     };
     if let Err(e) = result {

@@ -316,3 +316,34 @@ fn bench_virtual_reports_pages_memory_and_both_paths() {
         .unwrap()
         .contains("adapter:"));
 }
+
+/// `bench soak` on a tiny frame: every frame renders while the camera, a caster, a light and
+/// the light count change (the count halves at frame 200 of each 250, so 260 frames cover a
+/// drop and a return), samples are written, and resident memory stays within the bound.
+#[test]
+fn bench_soak_runs_changing_frames_and_samples_memory() {
+    let dir = tmp("soak");
+    let out = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
+        .args(["bench", "soak", "--frames", "260", "--warmup", "20", "--lights", "8"])
+        .args(["--width", "32", "--height", "18", "--cache"])
+        .args(["--out-dir", dir.to_str().unwrap()])
+        .output()
+        .expect("run manyshadows");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "soak failed: {stderr}");
+    assert!(!stderr.contains("Validation Error"), "{stderr}");
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("results.json")).unwrap()).unwrap();
+    let samples = json["samples"].as_array().unwrap();
+    assert!(samples.len() >= 10, "{json}");
+    assert_eq!(samples.last().unwrap()["frame"], 260);
+    let lights: Vec<u64> = samples.iter().map(|s| s["lights"].as_u64().unwrap()).collect();
+    assert!(lights.contains(&4) && lights.contains(&8), "the count must change: {lights:?}");
+    assert!(json["growth_mib"].as_f64().unwrap() < 64.0, "{json}");
+    let bad = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
+        .args(["bench", "soak", "--frames", "10", "--warmup", "20"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--frames must be larger"));
+}
