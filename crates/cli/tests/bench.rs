@@ -324,7 +324,9 @@ fn bench_virtual_reports_pages_memory_and_both_paths() {
 fn bench_soak_runs_changing_frames_and_samples_memory() {
     let dir = tmp("soak");
     let out = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
-        .args(["bench", "soak", "--frames", "260", "--warmup", "20", "--lights", "8"])
+        .args([
+            "bench", "soak", "--frames", "260", "--warmup", "20", "--lights", "8",
+        ])
         .args(["--width", "32", "--height", "18", "--cache"])
         .args(["--out-dir", dir.to_str().unwrap()])
         .output()
@@ -337,8 +339,14 @@ fn bench_soak_runs_changing_frames_and_samples_memory() {
     let samples = json["samples"].as_array().unwrap();
     assert!(samples.len() >= 10, "{json}");
     assert_eq!(samples.last().unwrap()["frame"], 260);
-    let lights: Vec<u64> = samples.iter().map(|s| s["lights"].as_u64().unwrap()).collect();
-    assert!(lights.contains(&4) && lights.contains(&8), "the count must change: {lights:?}");
+    let lights: Vec<u64> = samples
+        .iter()
+        .map(|s| s["lights"].as_u64().unwrap())
+        .collect();
+    assert!(
+        lights.contains(&4) && lights.contains(&8),
+        "the count must change: {lights:?}"
+    );
     assert!(json["growth_mib"].as_f64().unwrap() < 64.0, "{json}");
     let bad = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
         .args(["bench", "soak", "--frames", "10", "--warmup", "20"])
