@@ -260,6 +260,22 @@ struct Report<'a> {
     records: &'a [Record],
 }
 
+/// Median GPU milliseconds of `stage` over `frames` (`None` without timestamp queries).
+pub(crate) fn stage(frames: &[manyshadows::Frame], stage: &str) -> Option<f64> {
+    let v: Vec<f64> = frames
+        .iter()
+        .flat_map(|f| f.timings.gpu_ms.iter())
+        .filter(|(k, _)| k == stage)
+        .map(|(_, v)| *v)
+        .collect();
+    (!v.is_empty()).then(|| median(&v))
+}
+
+/// Milliseconds for a table cell, `n/a` when not measured.
+pub(crate) fn ms(v: Option<f64>) -> String {
+    v.map_or("n/a".into(), |v| format!("{v:.1}"))
+}
+
 pub(crate) fn median(v: &[f64]) -> f64 {
     let mut s = v.to_vec();
     s.sort_by(f64::total_cmp);

@@ -18,7 +18,7 @@ use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::{GpuContext, RenderSettings, Renderer, Technique};
 use serde::Serialize;
 
-use crate::bench::median;
+use crate::bench::{ms, stage};
 use crate::GpuArgs;
 
 /// Arguments of `manyshadows bench lights`.
@@ -100,17 +100,6 @@ fn parse_screen(s: &str) -> Result<(u32, u32)> {
         bail!("--screens '{s}': width and height must be 1..=8192");
     }
     Ok((w, h))
-}
-
-/// Median GPU milliseconds of `stage` over `frames`.
-fn stage(frames: &[manyshadows::Frame], stage: &str) -> Option<f64> {
-    let v: Vec<f64> = frames
-        .iter()
-        .flat_map(|f| f.timings.gpu_ms.iter())
-        .filter(|(k, _)| k == stage)
-        .map(|(_, v)| *v)
-        .collect();
-    (!v.is_empty()).then(|| median(&v))
 }
 
 /// Runs `manyshadows bench lights`.
@@ -259,10 +248,6 @@ pub fn lights(args: &LightsArgs) -> Result<()> {
         eprintln!("wrote {}", path.display());
     }
     Ok(())
-}
-
-fn ms(v: Option<f64>) -> String {
-    v.map_or("n/a".into(), |v| format!("{v:.1}"))
 }
 
 fn table(records: &[Record], adapter: &str, args: &LightsArgs) -> String {

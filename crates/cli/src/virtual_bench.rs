@@ -18,7 +18,7 @@ use manyshadows::vsm::{VirtualOptions, VirtualStats};
 use manyshadows::{GpuContext, RenderSettings, Renderer, Technique};
 use serde::Serialize;
 
-use crate::bench::median;
+use crate::bench::{ms, stage};
 use crate::GpuArgs;
 
 /// Arguments of `manyshadows bench virtual`.
@@ -81,17 +81,6 @@ struct Record {
     atlas_side: u32,
     virtual_maps: Side,
     stats: VirtualStats,
-}
-
-/// Median GPU milliseconds of `stage` over `frames`.
-fn stage(frames: &[manyshadows::Frame], stage: &str) -> Option<f64> {
-    let v: Vec<f64> = frames
-        .iter()
-        .flat_map(|f| f.timings.gpu_ms.iter())
-        .filter(|(k, _)| k == stage)
-        .map(|(_, v)| *v)
-        .collect();
-    (!v.is_empty()).then(|| median(&v))
 }
 
 fn side(frames: &[manyshadows::Frame], shadow_mib: f64) -> Side {
@@ -254,10 +243,6 @@ pub fn virtual_maps(args: &VirtualArgs) -> Result<()> {
     let path = plot(&records, &adapter, args)?;
     eprintln!("wrote {}", path.display());
     Ok(())
-}
-
-fn ms(v: Option<f64>) -> String {
-    v.map_or("n/a".into(), |v| format!("{v:.1}"))
 }
 
 fn table(records: &[Record], adapter: &str, args: &VirtualArgs) -> String {

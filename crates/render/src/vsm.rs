@@ -641,28 +641,7 @@ impl VirtualShadows {
         let draw =
             crate::techniques::depth_pipeline(device, &draw_pl, &draw_module, "vs_draw", &[]);
         let clear_pl = pipeline_layout("vsm.clear_pipeline_layout", &clear_layout);
-        let clear = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("vsm.clear"),
-            layout: Some(&clear_pl),
-            vertex: wgpu::VertexState {
-                module: &draw_module,
-                entry_point: Some("vs_clear"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: ATLAS_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Always),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: None,
-            multiview_mask: None,
-            cache: None,
-        });
+        let clear = crate::techniques::clear_pipeline(device, &clear_pl, &draw_module, "vs_clear");
         let mut this = Self {
             plan,
             options,
