@@ -162,6 +162,13 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     if args.scenes.is_empty() {
         bail!("--scene needs at least one scene");
     }
+    if args.atlas_max < manyshadows::scene::atlas::MIN_TILE {
+        bail!(
+            "--atlas-max {}: the atlas must hold at least one {}-texel tile",
+            args.atlas_max,
+            manyshadows::scene::atlas::MIN_TILE
+        );
+    }
     if let [one] = args.scenes.as_slice() {
         let mut a = args.clone();
         a.scene = one.clone();
@@ -254,6 +261,10 @@ fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
 
     pb.set_message("opening the GPU");
     let ctx = GpuContext::new(&args.gpu.request())?;
+    let args = &CompareArgs {
+        atlas_max: pb.suspend(|| crate::effective_atlas_max(&ctx, args.atlas_max)),
+        ..args.clone()
+    };
     pb.set_message("building the BVH of the shadow casters");
     let t = Instant::now();
     let tracer = Tracer::new(&scene)?;

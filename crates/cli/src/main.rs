@@ -111,6 +111,17 @@ pub(crate) struct GpuArgs {
     /// Use the adapter whose name contains this text (default: WGPU_ADAPTER_NAME).
     #[arg(long)]
     adapter: Option<String>,
+    /// Create the device with smaller limits than the adapter's: `webgpu` = what a browser
+    /// gives by default (8 storage buffers per stage, 8192² textures, 128 MiB storage
+    /// bindings) — how the renderer behaves on a small device, without one.
+    #[arg(long, value_enum)]
+    limits: Option<Limits>,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+enum Limits {
+    /// WebGPU's default limits.
+    Webgpu,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -131,6 +142,9 @@ impl GpuArgs {
                 Backend::Dx12 => wgpu_backends("dx12"),
             }),
             name: self.adapter.clone(),
+            limits: self.limits.map(|l| match l {
+                Limits::Webgpu => manyshadows::context::webgpu_default_limits(),
+            }),
         }
     }
 }
@@ -436,7 +450,7 @@ fn check_render_args(args: &RenderArgs) -> Result<()> {
 
 /// The atlas side `--atlas-max` really allows on this adapter (a power of two, at most the
 /// adapter's texture limit), with a note on stderr when it is not the number given.
-fn effective_atlas_max(ctx: &GpuContext, requested: u32) -> u32 {
+pub(crate) fn effective_atlas_max(ctx: &GpuContext, requested: u32) -> u32 {
     let limit = ctx.limits().max_texture_dimension_2d;
     let capped = requested.min(limit);
     let side = 1u32 << (31 - capped.leading_zeros());
@@ -809,6 +823,10 @@ fn info(args: &GpuArgs) -> Result<()> {
         l.max_storage_buffer_binding_size
     );
     println!("  max_buffer_size                 {}", l.max_buffer_size);
+    println!(
+        "  max_storage_buffers_per_stage   {}",
+        l.max_storage_buffers_per_shader_stage
+    );
     println!(
         "  max_compute_workgroup_size      {}x{}x{}",
         l.max_compute_workgroup_size_x,

@@ -243,3 +243,42 @@ fn silently_changed_values_are_refused_or_announced() {
         "no note: {stderr}"
     );
 }
+
+/// `--limits webgpu` creates the device with a browser's default limits: `info` reports them
+/// and the compute rasterizer (the pass with the most storage buffers) renders within them.
+#[test]
+fn webgpu_limits_are_enough_for_every_pass() {
+    let out = run(&["info", "--limits", "webgpu"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout
+            .lines()
+            .any(|l| l.split_whitespace().collect::<Vec<_>>()
+                == ["max_storage_buffers_per_stage", "8"]),
+        "{stdout}"
+    );
+    let dir = tmp("webgpu-limits");
+    let out = run(&[
+        "render",
+        "--limits",
+        "webgpu",
+        "--scene",
+        "cubes",
+        "--technique",
+        "compute",
+        "--width",
+        "48",
+        "--height",
+        "32",
+        "--out",
+        dir.join("f.png").to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("GPU error"), "{stderr}");
+}

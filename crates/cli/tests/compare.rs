@@ -223,6 +223,7 @@ fn bad_input_is_a_clear_error() {
         (&["--bias-constant", "NaN"], 1, "finite"),
         (&["--scene", "nope"], 1, "unknown built-in scene"),
         (&["--techniques", "nope"], 2, "unknown technique"),
+        (&["--atlas-max", "8"], 1, "--atlas-max 8"),
         (
             &["--lights", "4096", "--width", "8192", "--height", "8192"],
             1,
@@ -242,4 +243,31 @@ fn bad_input_is_a_clear_error() {
             "{extra:?}: expected '{needle}' in {stderr}"
         );
     }
+}
+
+/// `--atlas-max` that is not a power of two is announced, not changed silently.
+#[test]
+fn a_rounded_atlas_max_is_announced() {
+    let dir = tmp("atlas-note");
+    let out = run(&[
+        "compare",
+        "--out-dir",
+        dir.to_str().unwrap(),
+        "--scene",
+        "plane-spot",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--techniques",
+        "traditional",
+        "--atlas-max",
+        "3000",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("--atlas-max 3000 is used as 2048"),
+        "no note: {stderr}"
+    );
 }

@@ -19,6 +19,46 @@ pub struct AdapterRequest {
     pub backends: Option<wgpu::Backends>,
     /// Case-insensitive substring the adapter name must contain; `None` = `WGPU_ADAPTER_NAME`.
     pub name: Option<String>,
+    /// Limits to create the device with instead of the adapter's own; `None` = the adapter's
+    /// full limits. Use it to see how the renderer behaves on a smaller device
+    /// ([`webgpu_default_limits`] is what a browser gives). Every limit must be within
+    /// the adapter's, otherwise [`GpuContext::new`] fails naming the limits that are not.
+    pub limits: Option<wgpu::Limits>,
+}
+
+/// WebGPU's default limits (`wgpu::Limits::defaults()`): what a web page gets without asking
+/// for more.
+pub fn webgpu_default_limits() -> wgpu::Limits {
+    wgpu::Limits::defaults()
+}
+
+/// The smallest device limits every technique of the renderer runs with: WebGPU's defaults
+/// (bind groups, bindings per stage, workgroup sizes) with smaller textures and buffers
+/// (2048² textures, 4 MiB storage bindings and buffers). Capacities scale with the device: the
+/// shadow atlas and page pool are capped at the texture limit, the priority fit shrinks or
+/// drops maps that do not fit, and a scene or frame whose buffers would pass a limit is
+/// refused with [`RenderError::SceneTooLarge`] or [`RenderError::ResolutionTooLarge`].
+/// [`GpuContext::new`] refuses a device below these, naming each limit
+/// (`crates/render/tests/limits.rs` renders every technique on exactly these limits).
+pub fn required_limits() -> wgpu::Limits {
+    wgpu::Limits {
+        max_texture_dimension_1d: 2048,
+        max_texture_dimension_2d: 2048,
+        max_storage_buffer_binding_size: 4 << 20,
+        max_buffer_size: 4 << 20,
+        ..webgpu_default_limits()
+    }
+}
+
+/// The limits in `have` that fall short of `need`, as `name: have < need` lines.
+pub fn limit_shortfalls(have: &wgpu::Limits, need: &wgpu::Limits) -> Vec<String> {
+    let mut out = Vec::new();
+    need.check_limits_with_fail_fn(have, false, |name, need, have| {
+        out.push(format!(
+            "{name}: the device allows {have}, the renderer needs {need}"
+        ));
+    });
+    out
 }
 
 /// Optional adapter features and whether the renderer uses them.
@@ -212,7 +252,29 @@ impl GpuContext {
             .iter()
             .fold(wgpu::Features::empty(), |acc, &(f, _, _)| acc | f);
         let features = adapter.features() & wanted;
-        let limits = adapter.limits();
+        let adapter_limits = adapter.limits();
+        let limits = match &req.limits {
+            None => adapter_limits.clone(),
+            Some(wanted) => {
+                let over = limit_shortfalls(&adapter_limits, wanted);
+                if !over.is_empty() {
+                    return Err(RenderError::Device(format!(
+                        "{}: the requested limits exceed the adapter's: {}",
+                        describe_adapter(&info),
+                        over.join("; ")
+                    )));
+                }
+                wanted.clone()
+            }
+        };
+        let short = limit_shortfalls(&limits, &required_limits());
+        if !short.is_empty() {
+            return Err(RenderError::Unsupported(format!(
+                "{} has smaller limits than manyshadows needs (WebGPU's defaults): {}",
+                describe_adapter(&info),
+                short.join("; ")
+            )));
+        }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("manyshadows.device"),
             required_features: features,

@@ -74,7 +74,7 @@ impl ShadowGenerator {
                     .into(),
             ));
         }
-        let atlas = ShadowAtlas::new(ctx, &plan);
+        let atlas = ShadowAtlas::new(ctx, &plan)?;
         let casters = CasterGeometry::new(ctx, scene, gpu, options.casters)?;
         let valid = vec![false; plan.views.len()];
         Ok(Self {
@@ -101,7 +101,7 @@ impl ShadowGenerator {
         options: ShadowOptions,
         kind: Technique,
     ) -> Result<Self, RenderError> {
-        let atlas = ShadowAtlas::views_only(ctx, &plan);
+        let atlas = ShadowAtlas::views_only(ctx, &plan)?;
         let casters = CasterGeometry::new(ctx, scene, gpu, options.casters)?;
         Ok(Self {
             technique: None,
@@ -137,8 +137,13 @@ impl ShadowGenerator {
     /// of the same light (same view-projection) lands on the same tile and the caster geometry
     /// did not change (`casters_changed`). Returns true if an atlas buffer or the texture was
     /// replaced (bind groups holding them must be rebuilt).
-    pub fn set_plan(&mut self, ctx: &GpuContext, plan: ShadowPlan, casters_changed: bool) -> bool {
-        let replaced = self.atlas.update(ctx, &plan);
+    pub fn set_plan(
+        &mut self,
+        ctx: &GpuContext,
+        plan: ShadowPlan,
+        casters_changed: bool,
+    ) -> Result<bool, RenderError> {
+        let replaced = self.atlas.update(ctx, &plan)?;
         if self.technique.is_none() {
             self.valid = vec![true; plan.views.len()];
         } else {
@@ -163,7 +168,7 @@ impl ShadowGenerator {
                 .collect();
         }
         self.plan = plan;
-        replaced
+        Ok(replaced)
     }
 
     /// The views the next generation draws.

@@ -111,11 +111,20 @@ impl GpuScene {
             ),
         ];
         for (what, size) in bytes {
-            if size > limits.max_buffer_size
-                || (what == "instances" && size > limits.max_storage_buffer_binding_size)
-            {
+            let (limit, name) = if what == "instances" {
+                (
+                    limits
+                        .max_buffer_size
+                        .min(limits.max_storage_buffer_binding_size),
+                    "storage-binding",
+                )
+            } else {
+                (limits.max_buffer_size, "buffer-size")
+            };
+            if size > limit {
                 return Err(RenderError::SceneTooLarge(format!(
-                    "the {what} buffer would be {size} bytes, over this adapter's limit"
+                    "the {what} buffer would be {size} bytes, over this adapter's {name} limit \
+                     of {limit} bytes"
                 )));
             }
         }

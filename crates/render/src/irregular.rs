@@ -111,7 +111,8 @@ fn buckets(side: u32, hash: u32) -> u32 {
 }
 /// Bytes per node: `next`, ray origin (3 × f32), pixel index.
 const NODE_BYTES: u64 = 20;
-/// Capacity of the tile queue (16 bytes per 8×8-texel tile): 64 MiB.
+/// Capacity of the tile queue (16 bytes per 8×8-texel tile): 64 MiB, or what one storage
+/// binding of the device holds.
 const TILE_QUEUE: u64 = (1 << 22) - 1;
 /// Control words (see `irregular.wgsl`): 8 counters, then the indirect dispatch arguments.
 const CONTROL_WORDS: u64 = 12;
@@ -181,6 +182,7 @@ struct Batch {
 
 /// The irregular-shadow passes of one renderer and their buffers.
 pub struct IrregularShadows {
+    tile_queue: u64,
     width: u32,
     height: u32,
     lights: u32,
@@ -370,6 +372,7 @@ impl IrregularShadows {
             .chain(std::iter::once(bytemuck::Zeroable::zeroed()))
             .collect();
         let max_heads = ranges.iter().map(|r| r.2).max().unwrap_or(0);
+        let tile_queue = TILE_QUEUE.min(limit / 16 - 1);
         // One more word: the frame's count of walks cut short (`cut_short` in the shader).
         let cut_index = max_heads;
         let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
@@ -410,7 +413,7 @@ impl IrregularShadows {
             READBACK_WORDS * 4,
             wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         );
-        let tiles = buffer("irregular.tiles", (TILE_QUEUE + 1) * 16, storage);
+        let tiles = buffer("irregular.tiles", (tile_queue + 1) * 16, storage);
 
         let module =
             crate::shaders::module(device, "irregular.shader", &crate::shaders::irregular());
@@ -472,7 +475,7 @@ impl IrregularShadows {
             .map(|&((a, b), views, heads)| {
                 let data = BatchData {
                     lights_views: [a, b, views.0, views.1],
-                    caps: [capacity as u32, TILE_QUEUE as u32, triangles, words],
+                    caps: [capacity as u32, tile_queue as u32, triangles, words],
                     extra: [cut_index as u32, 0, 0, 0],
                 };
                 let buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -491,6 +494,7 @@ impl IrregularShadows {
             .collect();
         let [insert, triangles_pass, args, tiles_pass] = passes.map(|(p, _)| p);
         Ok(Self {
+            tile_queue,
             width: w,
             height: h,
             lights,
@@ -642,9 +646,9 @@ impl IrregularShadows {
         }
         if c[7] > 0 {
             return Err(RenderError::Irregular(format!(
-                "{} tiles of samples found the tile queue ({TILE_QUEUE} tiles) full; the frame \
-                 was discarded. Use a coarser grid (--irregular-grid) or fewer lights",
-                c[7]
+                "{} tiles of samples found the tile queue ({} tiles) full; the frame was \
+                 discarded. Use a coarser grid or fewer lights",
+                c[7], self.tile_queue
             )));
         }
         if c[12] > 0 {

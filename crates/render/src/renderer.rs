@@ -557,10 +557,10 @@ impl<'c> Renderer<'c> {
                 v.forget_pages();
             }
         }
-        self.shadows.set_plan(ctx, plan, casters_changed);
+        self.shadows.set_plan(ctx, plan, casters_changed)?;
         let mut light_data = match self.vsm.as_mut() {
             Some(v) => {
-                v.update(ctx, scene, (settings.width, settings.height));
+                v.update(ctx, scene, (settings.width, settings.height))?;
                 v.light_data(scene)
             }
             None => self.shadows.plan.light_data(scene),
@@ -569,14 +569,7 @@ impl<'c> Renderer<'c> {
             light_data.push(bytemuck::Zeroable::zeroed());
         }
         let bytes: &[u8] = bytemuck::cast_slice(&light_data);
-        if self.lights.size() < bytes.len() as u64 {
-            self.lights = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("scene.lights"),
-                size: 2 * bytes.len() as u64,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-        }
+        crate::grow_buffer(ctx, &mut self.lights, bytes.len() as u64, "lights")?;
         ctx.queue.write_buffer(&self.lights, 0, bytes);
         ctx.queue.write_buffer(
             &self.frame_buffer,

@@ -396,17 +396,17 @@ pub fn view_eye(view: &ShadowView) -> glam::Vec4 {
 
 impl ShadowAtlas {
     /// Creates the atlas texture and view buffers for `plan`.
-    pub fn new(ctx: &GpuContext, plan: &ShadowPlan) -> Self {
+    pub fn new(ctx: &GpuContext, plan: &ShadowPlan) -> Result<Self, RenderError> {
         Self::with_size(ctx, plan, plan.layout.size)
     }
 
     /// The view buffers of `plan` with a 1×1 placeholder texture: for `irregular`, which
     /// reads the views but fills no tiles.
-    pub fn views_only(ctx: &GpuContext, plan: &ShadowPlan) -> Self {
+    pub fn views_only(ctx: &GpuContext, plan: &ShadowPlan) -> Result<Self, RenderError> {
         Self::with_size(ctx, plan, 1)
     }
 
-    fn with_size(ctx: &GpuContext, plan: &ShadowPlan, size: u32) -> Self {
+    fn with_size(ctx: &GpuContext, plan: &ShadowPlan, size: u32) -> Result<Self, RenderError> {
         let (texture, view) = atlas_texture(ctx, size);
         let placeholder = |label: &str, usage: wgpu::BufferUsages| {
             ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -426,15 +426,15 @@ impl ShadowAtlas {
             eyes: placeholder("shadow.eyes", wgpu::BufferUsages::STORAGE),
             draw_list: placeholder("shadow.draw_list", wgpu::BufferUsages::STORAGE),
         };
-        atlas.write_views(ctx, plan);
-        atlas
+        atlas.write_views(ctx, plan)?;
+        Ok(atlas)
     }
 
     /// Makes the atlas hold `plan` (a new frame's views): view buffers are rewritten in place
     /// (replaced only when the plan has more views than they hold), the texture only when the
     /// atlas side changed. Returns true if a buffer or the texture was replaced, so bind groups
     /// that hold them must be rebuilt.
-    pub fn update(&mut self, ctx: &GpuContext, plan: &ShadowPlan) -> bool {
+    pub fn update(&mut self, ctx: &GpuContext, plan: &ShadowPlan) -> Result<bool, RenderError> {
         let mut replaced = false;
         // A views-only atlas keeps its 1×1 placeholder.
         if self.size != 1 && self.size != plan.layout.size {
@@ -442,11 +442,11 @@ impl ShadowAtlas {
             self.size = plan.layout.size;
             replaced = true;
         }
-        replaced | self.write_views(ctx, plan)
+        Ok(replaced | self.write_views(ctx, plan)?)
     }
 
     /// Writes the per-view buffers of `plan`, growing them if needed (true if any grew).
-    fn write_views(&mut self, ctx: &GpuContext, plan: &ShadowPlan) -> bool {
+    fn write_views(&mut self, ctx: &GpuContext, plan: &ShadowPlan) -> Result<bool, RenderError> {
         let mut data = plan.view_data();
         let uniforms: Vec<ViewUniform> = data
             .iter()
@@ -466,27 +466,40 @@ impl ShadowAtlas {
         let mut eyes: Vec<[f32; 4]> = plan.views.iter().map(|v| view_eye(v).to_array()).collect();
         eyes.resize(eyes.len().max(1), [0.0; 4]);
         let all: Vec<u32> = (0..plan.views.len().max(1) as u32).collect();
-        let mut grew = false;
-        let mut write = |buffer: &mut wgpu::Buffer, bytes: &[u8]| {
-            if buffer.size() < bytes.len() as u64 {
-                // Room for twice as many views: a growing scene reallocates rarely.
-                *buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("shadow.view_buffer"),
-                    size: (2 * bytes.len() as u64).next_multiple_of(16),
-                    usage: buffer.usage(),
-                    mapped_at_creation: false,
-                });
-                grew = true;
-            }
-            ctx.queue.write_buffer(buffer, 0, bytes);
-        };
-        write(&mut self.views_buffer, bytemuck::cast_slice(&data));
-        write(&mut self.view_uniforms, &uniform_bytes);
-        write(&mut self.eyes, bytemuck::cast_slice(&eyes));
-        write(&mut self.draw_list, bytemuck::cast_slice(&all));
+        let mut grew = crate::grow_buffer(
+            ctx,
+            &mut self.views_buffer,
+            data_bytes(&data),
+            "shadow views",
+        )?;
+        grew |= crate::grow_buffer(
+            ctx,
+            &mut self.view_uniforms,
+            uniform_bytes.len() as u64,
+            "shadow view uniforms",
+        )?;
+        grew |= crate::grow_buffer(ctx, &mut self.eyes, data_bytes(&eyes), "shadow view eyes")?;
+        grew |= crate::grow_buffer(
+            ctx,
+            &mut self.draw_list,
+            data_bytes(&all),
+            "shadow draw list",
+        )?;
+        ctx.queue
+            .write_buffer(&self.views_buffer, 0, bytemuck::cast_slice(&data));
+        ctx.queue
+            .write_buffer(&self.view_uniforms, 0, &uniform_bytes);
+        ctx.queue
+            .write_buffer(&self.eyes, 0, bytemuck::cast_slice(&eyes));
+        ctx.queue
+            .write_buffer(&self.draw_list, 0, bytemuck::cast_slice(&all));
         self.tiles = plan.layout.tiles.clone();
-        grew
+        Ok(grew)
     }
+}
+
+fn data_bytes<T>(v: &[T]) -> u64 {
+    std::mem::size_of_val(v) as u64
 }
 
 /// A `size`² depth atlas texture and its view.

@@ -92,7 +92,7 @@ impl VisibilityMask {
 
     /// A greyscale image of one light's bits (white = lit), 8 bits per pixel.
     pub fn light_image(&self, light: u32) -> Vec<u8> {
-        let mut out = Vec::with_capacity((self.width * self.height) as usize);
+        let mut out = Vec::with_capacity(self.width as usize * self.height as usize);
         for y in 0..self.height {
             for x in 0..self.width {
                 out.push(if self.lit(x, y, light) { 255 } else { 0 });

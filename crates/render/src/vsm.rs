@@ -694,7 +694,7 @@ impl VirtualShadows {
             clear_layout,
             groups: None,
         };
-        this.write_plan(ctx);
+        this.write_plan(ctx)?;
         Ok(this)
     }
 
@@ -726,51 +726,50 @@ impl VirtualShadows {
     /// Re-plans the faces for a changed frame (camera, lights); buffers are rewritten in
     /// place and replaced only when they must grow. Returns true if a buffer the lookups bind
     /// was replaced.
-    pub fn update(&mut self, ctx: &GpuContext, scene: &Scene, (width, height): (u32, u32)) -> bool {
+    pub fn update(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        (width, height): (u32, u32),
+    ) -> Result<bool, RenderError> {
         self.plan = VirtualPlan::new(scene, width as f32 / height as f32, height, &self.options);
-        let replaced = self.write_plan(ctx);
+        let replaced = self.write_plan(ctx)?;
         if replaced {
             self.groups = None;
         }
-        replaced
+        Ok(replaced)
     }
 
-    fn write_plan(&mut self, ctx: &GpuContext) -> bool {
-        let mut replaced = false;
-        let mut grow = |buffer: &mut wgpu::Buffer, bytes: u64, label: &str| {
-            if buffer.size() < bytes {
-                *buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(label),
-                    size: (2 * bytes).next_multiple_of(16),
-                    usage: buffer.usage(),
-                    mapped_at_creation: false,
-                });
-                replaced = true;
-            }
-        };
+    fn write_plan(&mut self, ctx: &GpuContext) -> Result<bool, RenderError> {
         let face_bytes: &[u8] = bytemuck::cast_slice(&self.plan.faces);
         // At least one record: shaders declare the array with a minimum of one element.
         let face_size = std::mem::size_of::<VirtualFace>() as u64;
-        grow(
+        let mut replaced = crate::grow_buffer(
+            ctx,
             &mut self.faces,
             (face_bytes.len() as u64).max(face_size),
-            "vsm.faces",
-        );
+            "virtual faces",
+        )?;
         let entries = self.plan.fit.table_entries.max(1) as u64;
-        let table_size = self.table.size();
-        grow(&mut self.table, entries * 4, "vsm.table");
-        if self.table.size() != table_size {
+        if crate::grow_buffer(ctx, &mut self.table, entries * 4, "virtual page table")? {
             // Last frame's table went with the old buffer: keep no pages this time.
             self.last.clear();
+            replaced = true;
         }
         let table_size = self.table.size();
-        grow(&mut self.prev_table, table_size, "vsm.prev_table");
+        replaced |= crate::grow_buffer(
+            ctx,
+            &mut self.prev_table,
+            table_size,
+            "virtual previous page table",
+        )?;
         let blocks = entries.div_ceil(ALLOC_BLOCK);
-        grow(
+        replaced |= crate::grow_buffer(
+            ctx,
             &mut self.scratch,
             (2 * self.pool_pages as u64 + (1 + MAX_LEVELS as u64) * blocks) * 4,
-            "vsm.scratch",
-        );
+            "virtual allocation scratch",
+        )?;
         if !face_bytes.is_empty() {
             ctx.queue.write_buffer(&self.faces, 0, face_bytes);
         }
@@ -791,7 +790,7 @@ impl VirtualShadows {
         };
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&data));
-        replaced
+        Ok(replaced)
     }
 
     /// Builds the bind groups for `inputs` (after creation or whenever a buffer they hold was

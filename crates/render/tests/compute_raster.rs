@@ -98,7 +98,7 @@ fn run(
 ) -> Vec<f32> {
     let plan = plan(scene);
     let gpu = GpuScene::new(ctx, scene).expect("upload");
-    let atlas = ShadowAtlas::new(ctx, &plan);
+    let atlas = ShadowAtlas::new(ctx, &plan).expect("atlas");
     let casters = CasterGeometry::new(ctx, scene, &gpu, options.casters).expect("casters");
     let list: Vec<u32> = (0..plan.views.len() as u32).collect();
     let input = manyshadows::shadow::ShadowInput {
@@ -420,7 +420,7 @@ fn partial_draw_lists_touch_only_listed_tiles() {
     );
     let plan = plan(&s);
     let gpu = GpuScene::new(&ctx, &s).expect("upload");
-    let atlas = ShadowAtlas::new(&ctx, &plan);
+    let atlas = ShadowAtlas::new(&ctx, &plan).expect("atlas");
     let casters = CasterGeometry::new(&ctx, &s, &gpu, Default::default()).expect("casters");
     let mut technique = Compute::new(&ctx).expect("compute");
     let mut generate = |list: &[u32], options: ShadowOptions| {

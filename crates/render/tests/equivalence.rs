@@ -242,7 +242,7 @@ struct Parts {
 fn parts(ctx: &GpuContext, scene: &Scene) -> Parts {
     let plan = ShadowPlan::new(scene, 16.0 / 9.0, 4096, FitPolicy::Shrink).expect("plan");
     let gpu = GpuScene::new(ctx, scene).expect("upload");
-    let atlas = manyshadows::ShadowAtlas::new(ctx, &plan);
+    let atlas = manyshadows::ShadowAtlas::new(ctx, &plan).expect("atlas");
     let casters = manyshadows::casters::CasterGeometry::new(ctx, scene, &gpu, Default::default())
         .expect("casters");
     Parts {

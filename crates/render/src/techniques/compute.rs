@@ -44,6 +44,9 @@ const CHUNK_BYTES: u64 = 64;
 const MAX_GROUPS: u32 = 65535;
 /// Most bytes the depth buffer of one round may take, whatever the adapter allows.
 const MAX_DEPTH_BYTES: u64 = 256 << 20;
+/// Most entries in one round: they are read from a 64 KiB uniform (compute.wgsl), which keeps
+/// the pass within WebGPU's 8 storage buffers per shader stage.
+pub const MAX_ROUND_ENTRIES: u64 = 4096;
 /// Initial and largest chunk-list capacity.
 const MIN_CHUNKS: u32 = 1 << 16;
 const MAX_CHUNKS: u32 = 1 << 21;
@@ -72,7 +75,7 @@ pub fn plan_rounds(
     max_texels: u64,
     max_threads: u64,
 ) -> Vec<Vec<Entry>> {
-    let max_entries = (max_threads / triangles.max(1) as u64).max(1);
+    let max_entries = (max_threads / triangles.max(1) as u64).clamp(1, MAX_ROUND_ENTRIES);
     let mut rounds: Vec<Vec<Entry>> = Vec::new();
     let mut current: Vec<Entry> = Vec::new();
     let mut texels = 0u64;
@@ -167,7 +170,7 @@ impl Compute {
                 crate::storage_entry(2, cs),
                 crate::storage_entry(3, cs),
                 crate::storage_entry(4, cs),
-                crate::storage_entry(5, cs),
+                crate::uniform_entry(5, cs),
                 crate::storage_rw_entry(6, cs),
                 crate::storage_rw_entry(7, cs),
                 crate::storage_rw_entry(8, cs),
@@ -406,10 +409,14 @@ impl ShadowTechnique for Compute {
                 contents: bytemuck::cast_slice(&params),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
+            // The uniform binding is the whole fixed-size array; the copy pass reads the same
+            // buffer as storage.
+            let mut list = round.clone();
+            list.resize(MAX_ROUND_ENTRIES as usize, bytemuck::Zeroable::zeroed());
             let entries = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("compute.entries"),
-                contents: bytemuck::cast_slice(round),
-                usage: wgpu::BufferUsages::STORAGE,
+                contents: bytemuck::cast_slice(&list),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::STORAGE,
             });
             let buffers = [
                 &params,
@@ -565,6 +572,15 @@ mod tests {
         // Threads: 10 triangles, at most 20 threads → two entries per round.
         let r = plan_rounds(&list, size, 10, 1 << 30, 20);
         assert_eq!(r.len(), 2);
+        // Never more entries than the shader's uniform array holds.
+        let many: Vec<u32> = (0..10_000).map(|v| v % 4).collect();
+        let r = plan_rounds(&many, |_| 16, 1, 1 << 30, 1 << 31);
+        assert!(r.iter().all(|r| r.len() as u64 <= MAX_ROUND_ENTRIES));
+        assert_eq!(r.iter().map(|r| r.len()).sum::<usize>(), 10_000);
+        let wgsl = crate::shaders::compute();
+        assert!(wgsl.contains(&format!(
+            "const MAX_ROUND_ENTRIES: u32 = {MAX_ROUND_ENTRIES}u;"
+        )));
     }
 
     #[test]

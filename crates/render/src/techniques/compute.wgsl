@@ -59,8 +59,13 @@ const FAR_BITS: u32 = 0x3f800000u;
 @group(0) @binding(2) var<storage, read> eyes: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> world: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read> corners: array<u32>;
-// Per round entry: view, first texel in `depth`, first tile row, rows.
-@group(0) @binding(5) var<storage, read> entries: array<vec4<u32>>;
+// Per round entry: view, first texel in `depth`, first tile row, rows. A uniform (at most
+// MAX_ROUND_ENTRIES per round) keeps the pass within WebGPU's 8 storage buffers per stage.
+const MAX_ROUND_ENTRIES: u32 = 4096u;
+struct RoundEntries {
+    list: array<vec4<u32>, MAX_ROUND_ENTRIES>,
+}
+@group(0) @binding(5) var<uniform> entries: RoundEntries;
 @group(0) @binding(6) var<storage, read_write> depth: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read_write> chunks: array<Chunk>;
 // Chunks requested, chunks rasterized by their setup thread because the list was full.
@@ -293,7 +298,7 @@ fn cs_setup(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
         return;
     }
     let tri = g - e * tris;
-    let entry = entries[e];
+    let entry = entries.list[e];
     let view = views[entry.x];
     let p0 = world[corners[3u * tri]];
     let p1 = world[corners[3u * tri + 1u]];
@@ -379,7 +384,7 @@ fn cs_large(
         return;
     }
     let ch = chunks[k];
-    let entry = entries[ch.rect.z];
+    let entry = entries.list[ch.rect.z];
     let tile = views[entry.x].tile;
     let lo = unpack_texel(ch.rect.x);
     let hi = unpack_texel(ch.rect.y);
