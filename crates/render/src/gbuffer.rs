@@ -69,7 +69,7 @@ impl GBuffer {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("gbuffer.layout"),
             entries: &[
-                crate::uniform_entry(0, wgpu::ShaderStages::VERTEX),
+                crate::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
                 crate::storage_entry(1, wgpu::ShaderStages::VERTEX),
             ],
         });

@@ -18,7 +18,8 @@ pub struct GBufferData {
     pub height: u32,
     /// World position per pixel (meaningless where `covered` is false).
     pub position: Vec<Vec3>,
-    /// Unit normal per pixel, facing the camera (back faces are flipped by the G-buffer pass).
+    /// Unit normal per pixel, on the side of its triangle the camera sees (the G-buffer pass
+    /// turns it by the triangle's plane, whatever the winding).
     pub normal: Vec<Vec3>,
     /// Material index per pixel.
     pub material: Vec<u32>,

@@ -36,10 +36,32 @@ struct GBufferOut {
 
 @fragment
 fn fs_main(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOut {
-    var n = normalize(in.normal);
-    // Surfaces are two-sided: a back face seen by the camera is shaded with its normal flipped.
-    if (!front) {
-        n = -n;
+    // Surfaces are two-sided: the shading normal is turned to the side of the triangle the
+    // camera sees. The side comes from the triangle's own plane (position derivatives), not
+    // from its winding: scanned meshes have triangles wound against their neighbours whose
+    // vertex normals still point outwards, and flipping those by winding shaded them as seen
+    // from inside (black speckles). Winding decides only where the plane is degenerate.
+    let to_eye = frame.camera_pos.xyz - in.world;
+    var ng = cross(dpdx(in.world), dpdy(in.world));
+    var facing = select(-1.0, 1.0, front);
+    let ng_len = length(ng);
+    if (ng_len > 0.0) {
+        ng = ng / ng_len;
+        if (dot(ng, to_eye) < 0.0) {
+            ng = -ng;
+        }
+    }
+    var n = in.normal;
+    let n_len = length(n);
+    if (n_len > 0.0) {
+        n = n / n_len;
+        if (ng_len > 0.0) {
+            facing = select(-1.0, 1.0, dot(n, ng) >= 0.0);
+        }
+        n = n * facing;
+    } else {
+        // Normals that cancel (opposite faces on one vertex): the plane's normal.
+        n = select(vec3<f32>(0.0, 1.0, 0.0), ng, ng_len > 0.0);
     }
     var out: GBufferOut;
     out.position = bitcast<vec4<u32>>(vec4<f32>(in.world, 1.0));
