@@ -565,7 +565,7 @@ fn settings(args: &CompareArgs, technique: Technique) -> RenderSettings {
 
 fn trace_reference(
     multi: &MultiProgress,
-    renderer: &Renderer<'_>,
+    renderer: &Renderer,
     tracer: &Tracer,
     scene: &Scene,
     edge_band: u32,

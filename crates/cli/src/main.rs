@@ -642,7 +642,7 @@ fn write_visibility(dir: &Path, vis: &manyshadows::VisibilityMask, scene: &Scene
 fn summary(
     ctx: &GpuContext,
     scene: &Scene,
-    r: &Renderer<'_>,
+    r: &Renderer,
     frame: &Frame,
     args: &RenderArgs,
     total: Duration,

@@ -101,7 +101,9 @@ const OPTIONAL_FEATURES: &[(wgpu::Features, &str, &str)] = &[
     ),
 ];
 
-/// An adapter and the device made on it.
+/// An adapter and the device made on it. Cloning is cheap (wgpu handles are reference
+/// counted): a [`crate::Renderer`] keeps its own clone, so it borrows nothing from the caller.
+#[derive(Clone)]
 pub struct GpuContext {
     /// The wgpu instance.
     pub instance: wgpu::Instance,
@@ -284,6 +286,31 @@ impl GpuContext {
             trace: wgpu::Trace::Off,
         }))
         .map_err(|e| RenderError::Device(format!("{}: {e}", describe_adapter(&info))))?;
+        log::info!("adapter: {}", describe_adapter(&info));
+        Self::from_parts(instance, adapter, device, queue)
+    }
+
+    /// Wraps a device the caller made (to render into the caller's own textures, beside the
+    /// caller's own passes). The renderer uses the optional features the device has
+    /// ([`feature_use`]) and its limits, which must reach [`required_limits`]; techniques that
+    /// need a feature the device lacks are refused when chosen. Replaces the device's
+    /// uncaptured-error handler with one that logs and records errors, so
+    /// [`GpuContext::take_uncaptured`] and every renderer call can report them.
+    pub fn from_parts(
+        instance: wgpu::Instance,
+        adapter: wgpu::Adapter,
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+    ) -> Result<Self, RenderError> {
+        let info = adapter.get_info();
+        let short = limit_shortfalls(&device.limits(), &required_limits());
+        if !short.is_empty() {
+            return Err(RenderError::Unsupported(format!(
+                "the device on {} has smaller limits than manyshadows needs: {}",
+                describe_adapter(&info),
+                short.join("; ")
+            )));
+        }
         let uncaptured = Arc::new(Mutex::new(Vec::new()));
         let sink = uncaptured.clone();
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
@@ -292,7 +319,6 @@ impl GpuContext {
                 v.push(e.to_string());
             }
         }));
-        log::info!("adapter: {}", describe_adapter(&info));
         Ok(Self {
             instance,
             adapter,

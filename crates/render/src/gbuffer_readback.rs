@@ -37,7 +37,7 @@ fn texels(bytes: &[u8]) -> impl Iterator<Item = [u32; 4]> + '_ {
     })
 }
 
-impl Renderer<'_> {
+impl Renderer {
     /// Reads the G-buffer of the last frame [`Renderer::render`] produced (before the first
     /// frame every pixel reads as uncovered).
     pub fn read_gbuffer(&self) -> Result<GBufferData, RenderError> {

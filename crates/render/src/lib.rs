@@ -17,6 +17,7 @@
 //! ```
 
 pub mod atlas_image;
+mod blit;
 pub mod casters;
 pub mod clusters;
 pub mod context;
@@ -40,7 +41,9 @@ pub use context::{AdapterRequest, GpuContext};
 pub use gbuffer_readback::GBufferData;
 pub use generator::ShadowGenerator;
 pub use gpu_scene::GpuScene;
-pub use renderer::{Frame, FrameTimings, Pcf, RenderSettings, Renderer, ShadowBias};
+pub use renderer::{
+    Frame, FrameTimings, Pcf, RenderSettings, Renderer, ShadowBias, SubmittedFrame,
+};
 pub use shadow::{
     CullMode, ShadowAtlas, ShadowOptions, ShadowPlan, ShadowStats, ShadowTechnique, Technique,
 };

@@ -191,9 +191,18 @@ pub struct Frame {
     pub virtual_maps: Option<VirtualStats>,
 }
 
+/// What [`Renderer::render_to`] reports: the frame is submitted, not read back.
+#[derive(Clone, Debug)]
+pub struct SubmittedFrame {
+    /// Shadow-generation work counters.
+    pub shadow_stats: ShadowStats,
+    /// CPU milliseconds to record and submit the frame's commands.
+    pub cpu_record_ms: f64,
+}
+
 /// A scene uploaded and ready to render frames.
-pub struct Renderer<'c> {
-    ctx: &'c GpuContext,
+pub struct Renderer {
+    ctx: GpuContext,
     settings: RenderSettings,
     scene: GpuScene,
     shadows: ShadowGenerator,
@@ -205,6 +214,8 @@ pub struct Renderer<'c> {
     visibility: Option<VisibilityPass>,
     irregular: Option<IrregularShadows>,
     vsm: Option<VirtualShadows>,
+    /// Copies frames into callers' textures ([`Renderer::render_to`]); built on first use.
+    blit: Option<crate::blit::Blit>,
     timer: GpuTimer,
     /// The frame's state (camera, lights, instance transforms) as last set.
     current: Scene,
@@ -213,11 +224,11 @@ pub struct Renderer<'c> {
     max_atlas: u32,
 }
 
-impl<'c> Renderer<'c> {
+impl Renderer {
     /// Validates the scene and settings, uploads the scene, plans and creates the shadow atlas
     /// and builds every pipeline.
     pub fn new(
-        ctx: &'c GpuContext,
+        ctx: &GpuContext,
         scene: &Scene,
         settings: RenderSettings,
     ) -> Result<Self, RenderError> {
@@ -392,7 +403,7 @@ impl<'c> Renderer<'c> {
                 None
             };
             Ok(Self {
-                ctx,
+                ctx: ctx.clone(),
                 settings,
                 scene: gpu_scene,
                 shadows,
@@ -404,6 +415,7 @@ impl<'c> Renderer<'c> {
                 visibility,
                 irregular,
                 vsm,
+                blit: None,
                 timer: GpuTimer::new(ctx),
                 current: scene.clone(),
                 dirty: false,
@@ -434,7 +446,7 @@ impl<'c> Renderer<'c> {
 
     /// The GPU context.
     pub fn context(&self) -> &GpuContext {
-        self.ctx
+        &self.ctx
     }
 
     /// The world-space shadow-caster geometry (its back-face culling decisions included).
@@ -536,7 +548,7 @@ impl<'c> Renderer<'c> {
         if !self.dirty {
             return Ok(());
         }
-        let ctx = self.ctx;
+        let ctx = &self.ctx.clone();
         let scene = &self.current;
         let settings = &self.settings;
         let aspect = settings.width as f32 / settings.height as f32;
@@ -646,54 +658,94 @@ impl<'c> Renderer<'c> {
         Ok(())
     }
 
-    /// Renders one frame and reads it back.
-    pub fn render(&mut self) -> Result<Frame, RenderError> {
-        let ctx = self.ctx;
-        ctx.scoped("rendering a frame", || {
+    /// Records one frame up to the lit image (G-buffer, clusters, shadows, lighting) after
+    /// deriving the GPU state from any change; returns the shadow work counters.
+    fn record_frame(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<ShadowStats, RenderError> {
+        self.prepare()?;
+        self.timer.reset();
+        let span = self.timer.span("gbuffer");
+        self.gbuffer.record(encoder, &self.scene, &self.timer, span);
+        if self.clusters.enabled() {
+            let span = self.timer.span("clusters");
+            self.clusters.record(encoder, &self.timer, span);
+        }
+        let pages_span = if self.vsm.is_some() {
+            self.timer.span("pages")
+        } else {
+            None
+        };
+        let span = self.timer.span("shadows");
+        let shadow_stats = match (&self.irregular, self.vsm.as_mut()) {
+            (Some(irr), _) => {
+                irr.record(encoder, &self.shadows.casters, &self.timer, span);
+                ShadowStats::default()
+            }
+            (_, Some(vsm)) => {
+                vsm.record(
+                    ctx,
+                    encoder,
+                    &self.shadows.casters,
+                    &self.timer,
+                    pages_span,
+                    span,
+                    self.settings.cache_shadows,
+                );
+                ShadowStats::default()
+            }
+            _ => self
+                .shadows
+                .generate(ctx, &self.scene, encoder, &self.timer, span),
+        };
+        let span = self.timer.span("lighting");
+        self.lighting.record(encoder, &self.timer, span);
+        Ok(shadow_stats)
+    }
+
+    /// Renders one frame into `target`, a texture the caller owns (created with
+    /// `RENDER_ATTACHMENT` usage; any size — the frame is scaled to it, nearest texel — and
+    /// any normalized or float colour format, sRGB or not: a window's surface texture, say),
+    /// and submits it without reading anything back. The caller presents or samples the
+    /// texture after this returns; [`Renderer::render`] is the same frame read back to the CPU.
+    /// With [`Technique::Irregular`] this waits for the frame's overflow check (an overflowed
+    /// frame is an error, never a wrong image).
+    pub fn render_to(&mut self, target: &wgpu::Texture) -> Result<SubmittedFrame, RenderError> {
+        let ctx = &self.ctx.clone();
+        ctx.scoped("rendering a frame into the caller's texture", || {
             let start = Instant::now();
-            self.prepare()?;
-            self.timer.reset();
             let mut encoder = ctx
                 .device
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                     label: Some("frame.encoder"),
                 });
-            let span = self.timer.span("gbuffer");
-            self.gbuffer
-                .record(&mut encoder, &self.scene, &self.timer, span);
-            if self.clusters.enabled() {
-                let span = self.timer.span("clusters");
-                self.clusters.record(&mut encoder, &self.timer, span);
+            let shadow_stats = self.record_frame(ctx, &mut encoder)?;
+            let blit = self.blit.get_or_insert_with(|| crate::blit::Blit::new(ctx));
+            blit.record(ctx, &mut encoder, &self.lighting.color, target)?;
+            ctx.queue.submit([encoder.finish()]);
+            if let Some(irr) = self.irregular.as_mut() {
+                irr.finish(ctx)?;
             }
-            let pages_span = if self.vsm.is_some() {
-                self.timer.span("pages")
-            } else {
-                None
-            };
-            let span = self.timer.span("shadows");
-            let shadow_stats = match (&self.irregular, self.vsm.as_mut()) {
-                (Some(irr), _) => {
-                    irr.record(&mut encoder, &self.shadows.casters, &self.timer, span);
-                    ShadowStats::default()
-                }
-                (_, Some(vsm)) => {
-                    vsm.record(
-                        ctx,
-                        &mut encoder,
-                        &self.shadows.casters,
-                        &self.timer,
-                        pages_span,
-                        span,
-                        self.settings.cache_shadows,
-                    );
-                    ShadowStats::default()
-                }
-                _ => self
-                    .shadows
-                    .generate(ctx, &self.scene, &mut encoder, &self.timer, span),
-            };
-            let span = self.timer.span("lighting");
-            self.lighting.record(&mut encoder, &self.timer, span);
+            Ok(SubmittedFrame {
+                shadow_stats,
+                cpu_record_ms: start.elapsed().as_secs_f64() * 1e3,
+            })
+        })
+    }
+
+    /// Renders one frame and reads it back.
+    pub fn render(&mut self) -> Result<Frame, RenderError> {
+        let ctx = &self.ctx.clone();
+        ctx.scoped("rendering a frame", || {
+            let start = Instant::now();
+            let mut encoder = ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("frame.encoder"),
+                });
+            let shadow_stats = self.record_frame(ctx, &mut encoder)?;
             ctx.queue.submit([encoder.finish()]);
             let cpu_record_ms = start.elapsed().as_secs_f64() * 1e3;
             let rgba = crate::readback::read_texture(ctx, &self.lighting.color, 4)?;
@@ -775,7 +827,7 @@ impl<'c> Renderer<'c> {
                 crate::shadow::VIRTUAL_NO_ATLAS.into(),
             ));
         }
-        self.shadows.read_atlas(self.ctx)
+        self.shadows.read_atlas(&self.ctx)
     }
 }
 

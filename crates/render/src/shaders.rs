@@ -117,6 +117,11 @@ pub fn irregular() -> String {
     ])
 }
 
+/// Copy of the lit frame into a caller's texture (`Renderer::render_to`).
+pub fn blit() -> String {
+    compose(&[include_str!("shaders/blit.wgsl")])
+}
+
 /// Atlas read-back copy.
 pub fn atlas_copy() -> String {
     compose(&[include_str!("shaders/atlas_copy.wgsl")])
@@ -232,6 +237,7 @@ pub fn all() -> Vec<(&'static str, String)> {
         ("gpu_driven", gpu_driven()),
         ("compute", compute()),
         ("compute_copy", compute_copy()),
+        ("blit", blit()),
     ]
 }
 

@@ -170,7 +170,7 @@ fn cached_virtual_pages_equal_a_full_regeneration() {
             .sum();
         (px, delta, bits)
     };
-    let fresh = |r: &Renderer<'_>| {
+    let fresh = |r: &Renderer| {
         Renderer::new(&ctx, r.scene(), settings(false))
             .expect("fresh renderer")
             .render()

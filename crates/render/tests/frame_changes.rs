@@ -95,7 +95,7 @@ fn settings(technique: Technique, cache: bool) -> RenderSettings {
     }
 }
 
-fn assert_like_fresh(ctx: &GpuContext, step: &str, changed: &mut Renderer<'_>) -> Frame {
+fn assert_like_fresh(ctx: &GpuContext, step: &str, changed: &mut Renderer) -> Frame {
     let frame = changed.render().expect("changed frame");
     let technique = changed.settings().technique;
     let fresh = Renderer::new(ctx, changed.scene(), settings(technique, false))
@@ -133,7 +133,7 @@ fn assert_like_fresh(ctx: &GpuContext, step: &str, changed: &mut Renderer<'_>) -
 }
 
 /// The shadow views (or virtual faces) of the renderer's current plan.
-fn views(r: &Renderer<'_>) -> Vec<manyshadows::scene::light_space::ShadowView> {
+fn views(r: &Renderer) -> Vec<manyshadows::scene::light_space::ShadowView> {
     match r.virtual_plan() {
         Some(v) => v.views.clone(),
         None => r.plan().views.clone(),
@@ -160,7 +160,7 @@ fn changes_equal_fresh(technique: Technique) {
     let cullable = r.casters().cullable_triangles;
 
     // 1. The camera: cascades refit (their view-projections change).
-    let cascades = |r: &Renderer<'_>| -> Vec<Mat4> {
+    let cascades = |r: &Renderer| -> Vec<Mat4> {
         views(r)
             .iter()
             .filter(|v| v.orthographic)

@@ -133,7 +133,7 @@ pub struct ReferenceErrors {
 /// and compares it with `vis` (the frame's mask), errors within `band` pixels of a reference
 /// edge apart.
 pub fn reference_errors(
-    r: &manyshadows::Renderer<'_>,
+    r: &manyshadows::Renderer,
     scene: &Scene,
     vis: &manyshadows::VisibilityMask,
     band: u32,

@@ -1,0 +1,175 @@
+//! Embedding the renderer in a caller's own wgpu device: the caller makes the instance,
+//! adapter, device and queue, wraps them with `GpuContext::from_parts`, keeps a `Renderer` in
+//! its own struct (no borrowed lifetime), and renders into textures it owns with
+//! `Renderer::render_to`. The frames must be the ones `Renderer::render` reads back.
+
+mod common;
+
+use manyshadows::scene::builtin::{self, BuiltinOptions};
+use manyshadows::{wgpu, GpuContext, RenderError, RenderSettings, Renderer};
+
+/// The caller's own device, on the backend `WGPU_BACKEND` names (as the other GPU tests).
+fn callers_device() -> GpuContext {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle().with_env();
+    desc.backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::all());
+    let instance = wgpu::Instance::new(desc);
+    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+        power_preference: wgpu::PowerPreference::HighPerformance,
+        ..Default::default()
+    }))
+    .expect(
+        "an adapter (install mesa-vulkan-drivers for lavapipe, or libegl1 + libgl1-mesa-dri \
+         for llvmpipe)",
+    );
+    // What a typical application asks for: WebGPU's default limits, no optional features.
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("the caller's device"),
+        required_features: wgpu::Features::empty(),
+        required_limits: wgpu::Limits::default(),
+        ..Default::default()
+    }))
+    .expect("a device with WebGPU's default limits");
+    GpuContext::from_parts(instance, adapter, device, queue).expect("the renderer accepts it")
+}
+
+/// A caller's struct that owns a renderer: no lifetime parameter needed.
+struct App {
+    renderer: Renderer,
+    target: wgpu::Texture,
+}
+
+fn texture(ctx: &GpuContext, w: u32, h: u32, format: wgpu::TextureFormat) -> wgpu::Texture {
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("the caller's texture"),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
+}
+
+#[test]
+fn render_to_a_callers_texture_gives_the_frame_render_reads_back() {
+    let ctx = callers_device();
+    let scene = builtin::build("cubes", &BuiltinOptions::default()).unwrap();
+    let settings = RenderSettings {
+        width: 96,
+        height: 64,
+        ..Default::default()
+    };
+    let mut app = App {
+        renderer: Renderer::new(&ctx, &scene, settings).unwrap(),
+        target: texture(&ctx, 96, 64, wgpu::TextureFormat::Rgba8UnormSrgb),
+    };
+    let frame = app.renderer.render().unwrap();
+    assert!(frame.rgba.iter().any(|&c| c > 40), "black reference frame");
+
+    // Same size, sRGB: the very same bytes.
+    let stats = app.renderer.render_to(&app.target).unwrap();
+    assert!(stats.shadow_stats.passes > 0);
+    let got = manyshadows::readback::read_texture(&ctx, &app.target, 4).unwrap();
+    assert!(
+        got == frame.rgba,
+        "sRGB target differs from the read-back frame"
+    );
+
+    // A swapchain-like BGRA target that stores raw 8-bit values: the shader encodes to sRGB
+    // itself; measured: every channel equal (Vulkan and OpenGL).
+    let bgra = texture(&ctx, 96, 64, wgpu::TextureFormat::Bgra8Unorm);
+    app.renderer.render_to(&bgra).unwrap();
+    let got = manyshadows::readback::read_texture(&ctx, &bgra, 4).unwrap();
+    let worst = got
+        .chunks_exact(4)
+        .zip(frame.rgba.chunks_exact(4))
+        .flat_map(|(b, r)| [(b[2], r[0]), (b[1], r[1]), (b[0], r[2]), (b[3], r[3])])
+        .map(|(a, b)| a.abs_diff(b))
+        .max()
+        .unwrap();
+    assert_eq!(worst, 0, "BGRA target off by up to {worst} levels");
+
+    // Twice the size: every 2×2 block is the frame's pixel (nearest texel).
+    let big = texture(&ctx, 192, 128, wgpu::TextureFormat::Rgba8UnormSrgb);
+    app.renderer.render_to(&big).unwrap();
+    let got = manyshadows::readback::read_texture(&ctx, &big, 4).unwrap();
+    let mut off = 0;
+    for y in 0..128usize {
+        for x in 0..192usize {
+            let (g, r) = ((y * 192 + x) * 4, ((y / 2) * 96 + x / 2) * 4);
+            off += usize::from(got[g..g + 4] != frame.rgba[r..r + 4]);
+        }
+    }
+    assert_eq!(
+        off, 0,
+        "{off} pixels of the doubled target are not the frame's"
+    );
+}
+
+#[test]
+fn render_to_refuses_a_texture_it_cannot_draw_into() {
+    let ctx = callers_device();
+    let scene = builtin::build("plane-spot", &BuiltinOptions::default()).unwrap();
+    let mut r = Renderer::new(
+        &ctx,
+        &scene,
+        RenderSettings {
+            width: 32,
+            height: 32,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let copy_only = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: None,
+        size: wgpu::Extent3d {
+            width: 32,
+            height: 32,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8Unorm,
+        usage: wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let err = r
+        .render_to(&copy_only)
+        .expect_err("no RENDER_ATTACHMENT usage");
+    assert!(
+        matches!(err, RenderError::Unsupported(_)) && err.to_string().contains("RENDER_ATTACHMENT"),
+        "{err}"
+    );
+    let depth = texture(&ctx, 32, 32, wgpu::TextureFormat::Depth32Float);
+    let err = r.render_to(&depth).expect_err("a depth target");
+    assert!(matches!(err, RenderError::Unsupported(_)), "{err}");
+    // The renderer still works afterwards.
+    r.render_to(&texture(&ctx, 32, 32, wgpu::TextureFormat::Rgba8Unorm))
+        .unwrap();
+}
+
+#[test]
+fn a_callers_device_below_the_minimum_is_refused() {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle().with_env();
+    desc.backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::all());
+    let instance = wgpu::Instance::new(desc);
+    let adapter = pollster::block_on(instance.request_adapter(&Default::default())).unwrap();
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        required_limits: wgpu::Limits::downlevel_defaults(),
+        ..Default::default()
+    }))
+    .unwrap();
+    let err = GpuContext::from_parts(instance, adapter, device, queue)
+        .expect_err("downlevel limits (4 storage buffers per stage) are below the minimum");
+    assert!(
+        err.to_string()
+            .contains("max_storage_buffers_per_shader_stage"),
+        "{err}"
+    );
+}
