@@ -25,6 +25,7 @@ mod lights_bench;
 mod omni;
 mod plot;
 mod soak;
+mod view;
 mod virtual_bench;
 
 const ABOUT: &str = "Render scenes lit by many shadow-casting lights, headless, to PNG.";
@@ -72,6 +73,11 @@ enum Command {
     /// Benchmarks with tables, JSON and plots (`bench layered`: seed 000's experiments).
     #[command(subcommand)]
     Bench(BenchCommand),
+    /// Fly through a scene in a window: switch technique, point shadows, PCF, light count and
+    /// caching at run time, with GPU time per stage on screen. Runs on a CPU adapter too (under
+    /// Xvfb without a desktop).
+    #[command(after_help = format!("Controls: {}", view::CONTROLS))]
+    View(Box<view::ViewArgs>),
 }
 
 #[derive(Subcommand, Debug)]
@@ -154,7 +160,7 @@ fn wgpu_backends(name: &str) -> manyshadows::context::Backends {
 }
 
 #[derive(Args, Debug, Clone)]
-struct RenderArgs {
+pub(crate) struct RenderArgs {
     /// Built-in scene name or a TOML scene file (see docs/SCENE_FORMAT.md). Built-ins: atrium,
     /// terrain, dragon, cubes, plane-spot, plane-point, plane-directional.
     #[arg(long, default_value = "atrium")]
@@ -217,6 +223,9 @@ struct RenderArgs {
     /// Shadow-map resolution per view (texels per side) for every light.
     #[arg(long)]
     shadow_resolution: Option<u32>,
+    /// Camera position and target, `PX,PY,PZ,TX,TY,TZ` (default: the scene's camera).
+    #[arg(long, value_parser = parse_camera, allow_hyphen_values = true)]
+    camera: Option<[f32; 6]>,
     /// Image width.
     #[arg(long, default_value_t = 1280)]
     width: u32,
@@ -300,11 +309,11 @@ impl Default for RenderArgs {
     }
 }
 
-fn parse_technique(s: &str) -> Result<Technique, String> {
+pub(crate) fn parse_technique(s: &str) -> Result<Technique, String> {
     s.parse()
 }
 
-fn parse_point_shadows(s: &str) -> Result<PointShadows, String> {
+pub(crate) fn parse_point_shadows(s: &str) -> Result<PointShadows, String> {
     s.parse()
 }
 
@@ -312,7 +321,30 @@ fn parse_cull(s: &str) -> Result<CullMode, String> {
     s.parse()
 }
 
-fn parse_pcf(s: &str) -> Result<Pcf, String> {
+/// `PX,PY,PZ,TX,TY,TZ`: six finite numbers.
+pub(crate) fn parse_camera(s: &str) -> Result<[f32; 6], String> {
+    let v: Vec<f32> = s
+        .split([',', ' '])
+        .filter(|t| !t.is_empty())
+        .map(|t| t.parse::<f32>().map_err(|e| format!("'{t}': {e}")))
+        .collect::<Result<_, _>>()?;
+    match <[f32; 6]>::try_from(v.as_slice()) {
+        Ok(a) if a.iter().all(|x| x.is_finite()) => {
+            if a[..3] == a[3..] {
+                Err("the camera position and target must differ".into())
+            } else {
+                Ok(a)
+            }
+        }
+        Ok(_) => Err("camera coordinates must be finite".into()),
+        Err(_) => Err(format!(
+            "expected six numbers PX,PY,PZ,TX,TY,TZ, got {}",
+            v.len()
+        )),
+    }
+}
+
+pub(crate) fn parse_pcf(s: &str) -> Result<Pcf, String> {
     s.parse()
 }
 
@@ -346,6 +378,7 @@ fn main() {
     let result = match cli.command {
         Some(Command::Render(args)) => render(&args),
         Some(Command::Info(args)) => info(&args),
+        Some(Command::View(args)) => view::run(&args),
         Some(Command::Compare(args)) => compare::run(&args),
         Some(Command::Bench(BenchCommand::Layered(args))) => bench::layered(&args),
         Some(Command::Bench(BenchCommand::Omni(args))) => omni::omni(&args),
@@ -372,10 +405,14 @@ fn spinner(msg: &str) -> ProgressBar {
 }
 
 /// Loads a built-in scene or a TOML file, applying `--lights`/`--seed`/`--light-types`.
-fn load_scene(args: &RenderArgs) -> Result<Scene> {
+pub(crate) fn load_scene(args: &RenderArgs) -> Result<Scene> {
     let mut scene = load_scene_unsubdivided(args)?;
     if args.subdivide > 0 {
         scene.subdivide(args.subdivide)?;
+    }
+    if let Some(c) = args.camera {
+        scene.camera.position = glam::Vec3::new(c[0], c[1], c[2]);
+        scene.camera.target = glam::Vec3::new(c[3], c[4], c[5]);
     }
     Ok(scene)
 }
@@ -467,15 +504,10 @@ pub(crate) fn effective_atlas_max(ctx: &GpuContext, requested: u32) -> u32 {
     side
 }
 
-fn render(args: &RenderArgs) -> Result<()> {
-    let started = Instant::now();
-    check_render_args(args)?;
-    let pb = spinner("loading the scene");
-    let scene = load_scene(args)?;
-    pb.set_message("opening the GPU");
-    let ctx = GpuContext::new(&args.gpu.request())?;
-    let atlas_max = pb.suspend(|| effective_atlas_max(&ctx, args.atlas_max));
-    let settings = RenderSettings {
+/// The renderer settings `args` ask for, with the atlas cap already checked against the
+/// adapter.
+pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettings {
+    RenderSettings {
         width: args.width,
         height: args.height,
         technique: args.technique,
@@ -515,7 +547,18 @@ fn render(args: &RenderArgs) -> Result<()> {
             slices: args.cluster_slices,
             ..Default::default()
         },
-    };
+    }
+}
+
+fn render(args: &RenderArgs) -> Result<()> {
+    let started = Instant::now();
+    check_render_args(args)?;
+    let pb = spinner("loading the scene");
+    let scene = load_scene(args)?;
+    pb.set_message("opening the GPU");
+    let ctx = GpuContext::new(&args.gpu.request())?;
+    let atlas_max = pb.suspend(|| effective_atlas_max(&ctx, args.atlas_max));
+    let settings = render_settings(args, atlas_max);
     pb.set_message("uploading the scene and building pipelines");
     let mut renderer = Renderer::new(&ctx, &scene, settings)?;
     let mover = match args.move_instance {
@@ -597,7 +640,7 @@ fn render(args: &RenderArgs) -> Result<()> {
 }
 
 /// The shadow caster with the smallest mesh: moving it changes few views.
-fn smallest_caster(scene: &Scene) -> Option<usize> {
+pub(crate) fn smallest_caster(scene: &Scene) -> Option<usize> {
     scene
         .instances
         .iter()

@@ -217,9 +217,23 @@ impl GpuContext {
     /// the optional features the renderer uses. Fails with an error that says what to install
     /// when there is no adapter at all.
     pub fn new(req: &AdapterRequest) -> Result<Self, RenderError> {
+        let instance = new_instance(requested_backends(req));
+        Self::with_instance(instance, req, None)
+    }
+
+    /// [`GpuContext::new`] on an instance the caller made (a windowed application makes it
+    /// with its display handle), choosing among the adapters that can present to
+    /// `compatible_surface` when one is given.
+    pub fn with_instance(
+        instance: wgpu::Instance,
+        req: &AdapterRequest,
+        compatible_surface: Option<&wgpu::Surface<'_>>,
+    ) -> Result<Self, RenderError> {
         let backends = requested_backends(req);
-        let instance = new_instance(backends);
-        let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+        let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
+        if let Some(surface) = compatible_surface {
+            adapters.retain(|a| a.is_surface_supported(surface));
+        }
         let all_names: Vec<String> = adapters
             .iter()
             .map(|a| describe_adapter(&a.get_info()))

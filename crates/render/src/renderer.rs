@@ -735,6 +735,22 @@ impl Renderer {
         })
     }
 
+    /// GPU milliseconds per stage of the last frame [`Renderer::render_to`] submitted (empty
+    /// without timestamp queries). Waits for that frame to finish.
+    pub fn read_gpu_timings(&mut self) -> Result<Vec<(String, f64)>, RenderError> {
+        let ctx = &self.ctx.clone();
+        ctx.scoped("reading the frame's GPU times", || {
+            let mut encoder = ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("timer.encoder"),
+                });
+            self.timer.resolve(&mut encoder);
+            ctx.queue.submit([encoder.finish()]);
+            self.timer.read(ctx)
+        })
+    }
+
     /// Renders one frame and reads it back.
     pub fn render(&mut self) -> Result<Frame, RenderError> {
         let ctx = &self.ctx.clone();

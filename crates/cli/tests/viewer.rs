@@ -1,0 +1,308 @@
+//! `manyshadows view` in a real window: an X server (Xvfb) gives the CPU adapters a window
+//! system; the viewer flies a scripted camera path, and a screenshot of the screen (`xwd`)
+//! must show the frame `render` makes for the script's last camera. Needs the `xvfb` and
+//! `x11-apps` packages (`.ci/run` installs them); without them the test fails and says so.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+const W: u32 = 320;
+const H: u32 = 240;
+
+fn tmp(name: &str) -> PathBuf {
+    let dir =
+        std::env::temp_dir().join(format!("manyshadows-viewer-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Kills the child when dropped (a failing assertion must not leave an X server behind).
+struct Killed(Child);
+
+impl Drop for Killed {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn require(tool: &str, package: &str) {
+    let found = std::env::var_os("PATH")
+        .map(|p| std::env::split_paths(&p).any(|d| d.join(tool).is_file()))
+        .unwrap_or(false);
+    assert!(
+        found,
+        "the viewer test needs `{tool}`: install it with `apt-get install -y {package}`"
+    );
+}
+
+/// Starts Xvfb on a free display; returns it and the display name.
+fn xvfb() -> (Killed, String) {
+    require("Xvfb", "xvfb");
+    require("xwd", "x11-apps");
+    // Tests of this file run in parallel: each takes its own display number.
+    static NEXT: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+    let first =
+        40 + std::process::id() % 200 * 8 + NEXT.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+    for n in (first..).step_by(2) {
+        if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists()
+            || Path::new(&format!("/tmp/.X{n}-lock")).exists()
+        {
+            continue;
+        }
+        let display = format!(":{n}");
+        let child = Command::new("Xvfb")
+            .args([
+                display.as_str(),
+                "-screen",
+                "0",
+                "800x600x24",
+                "-nolisten",
+                "tcp",
+            ])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("start Xvfb");
+        let server = Killed(child);
+        let start = Instant::now();
+        while start.elapsed() < Duration::from_secs(20) {
+            if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() {
+                return (server, display);
+            }
+            std::thread::sleep(Duration::from_millis(100));
+        }
+        panic!("Xvfb {display} did not start within 20 s");
+    }
+    unreachable!()
+}
+
+/// The screen's top-left `w`×`h` pixels as RGB, from `xwd -root` (ZPixmap, 32 bits per
+/// pixel, the depth-24 visual Xvfb gives).
+fn screenshot(display: &str, (w, h): (u32, u32)) -> Vec<[u8; 3]> {
+    let out = Command::new("xwd")
+        .args(["-root", "-silent", "-display", display])
+        .output()
+        .expect("run xwd");
+    assert!(out.status.success(), "xwd failed: {:?}", out);
+    let d = out.stdout;
+    let u = |i: usize| u32::from_be_bytes(d[4 * i..4 * i + 4].try_into().unwrap());
+    let (header, width, bpp, bpl, byte_order, ncolors) = (
+        u(0) as usize,
+        u(4),
+        u(11),
+        u(12) as usize,
+        u(7),
+        u(19) as usize,
+    );
+    assert_eq!(bpp, 32, "xwd: {bpp} bits per pixel");
+    assert!(width >= w);
+    let base = header + ncolors * 12;
+    let mut px = Vec::new();
+    for y in 0..h as usize {
+        for x in 0..w as usize {
+            let o = base + y * bpl + 4 * x;
+            let b: [u8; 4] = d[o..o + 4].try_into().unwrap();
+            let v = if byte_order == 0 {
+                u32::from_le_bytes(b)
+            } else {
+                u32::from_be_bytes(b)
+            };
+            px.push([(v >> 16) as u8, (v >> 8) as u8, v as u8]);
+        }
+    }
+    px
+}
+
+/// Runs the viewer on `display` with `args` until it has presented `frames` frames, then
+/// takes a screenshot of the top-left `size` pixels and closes it.
+fn view(display: &str, args: &[&str], frames: u64, size: (u32, u32)) -> Vec<[u8; 3]> {
+    let mut viewer = Killed(
+        Command::new(env!("CARGO_BIN_EXE_manyshadows"))
+            .arg("view")
+            .args(args)
+            .args(["--exit-after", "100000"])
+            .env("DISPLAY", display)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start the viewer"),
+    );
+    let stdout = viewer.0.stdout.take().unwrap();
+    let mut lines = BufReader::new(stdout).lines();
+    let start = Instant::now();
+    let mut shown = 0;
+    while shown < frames {
+        match lines.next() {
+            Some(Ok(l)) if l.starts_with("presented frame ") => {
+                shown = l["presented frame ".len()..].parse().unwrap();
+            }
+            Some(Ok(_)) => {}
+            _ => {
+                let _ = viewer.0.kill();
+                let mut err = String::new();
+                if let Some(mut e) = viewer.0.stderr.take() {
+                    let _ = std::io::Read::read_to_string(&mut e, &mut err);
+                }
+                panic!("the viewer stopped before frame {frames}: {err}");
+            }
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(300),
+            "{frames} frames took over 300 s"
+        );
+    }
+    screenshot(display, size)
+}
+
+fn render(dir: &Path, camera: &str, (w, h): (u32, u32)) -> image::RgbImage {
+    let png = dir.join("render.png");
+    let out = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
+        .args([
+            "render",
+            "--scene",
+            "cubes",
+            "--camera",
+            camera,
+            "--width",
+            &w.to_string(),
+            "--height",
+            &h.to_string(),
+            "--out",
+            png.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    image::open(&png).unwrap().to_rgb8()
+}
+
+fn save(shot: &[[u8; 3]], (w, h): (u32, u32), name: &str) {
+    let artifacts = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/test-artifacts");
+    std::fs::create_dir_all(&artifacts).unwrap();
+    let mut img = image::RgbImage::new(w, h);
+    for (i, p) in shot.iter().enumerate() {
+        img.put_pixel(i as u32 % w, i as u32 / w, image::Rgb(*p));
+    }
+    img.save(artifacts.join(name)).unwrap();
+}
+
+#[test]
+fn the_window_shows_the_frame_render_makes() {
+    let (_server, display) = xvfb();
+    let dir = tmp("script");
+    // Three cameras flying in; the last one stays.
+    let last = "2,3,7,0,0.5,0";
+    std::fs::write(
+        dir.join("path.txt"),
+        format!(
+            "# cubes fly-in\n0 4 9 0 1 0\n1 3.5 8 0 1 0\n{}\n",
+            last.replace(',', " ")
+        ),
+    )
+    .unwrap();
+    // The script's last camera has been on screen for a few frames by frame 6.
+    let shot = view(
+        &display,
+        &[
+            "--scene",
+            "cubes",
+            "--width",
+            &W.to_string(),
+            "--height",
+            &H.to_string(),
+            "--script",
+            dir.join("path.txt").to_str().unwrap(),
+            "--hide-panel",
+        ],
+        6,
+        (W, H),
+    );
+
+    let reference = render(&dir, last, (W, H));
+    save(&shot, (W, H), "viewer-screenshot.png");
+    let mean = shot
+        .iter()
+        .map(|p| p.iter().map(|&c| c as u64).sum::<u64>())
+        .sum::<u64>() as f64
+        / (3 * shot.len()) as f64;
+    assert!(mean > 30.0, "the window is black (mean level {mean:.1})");
+    // Measured: identical on lavapipe and llvmpipe (0 pixels off); a pixel may be 2 levels
+    // off before it counts, and 0.5 % may differ (a display server that dithers or scales).
+    let off = shot
+        .iter()
+        .zip(reference.pixels())
+        .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b.0[c]) > 2))
+        .count();
+    eprintln!("window vs render: {off} of {} pixels differ", shot.len());
+    assert!(
+        off * 200 <= shot.len(),
+        "the window shows a different frame: {off} pixels differ (screenshot in \
+         target/test-artifacts/viewer-screenshot.png)"
+    );
+}
+
+#[test]
+fn the_viewer_without_a_display_says_what_to_do() {
+    let out = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
+        .args(["view", "--scene", "cubes", "--exit-after", "1"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("Xvfb"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+/// With the panel: its corner shows the panel (differs from the frame), the rest of the
+/// window is the frame.
+#[test]
+fn the_panel_draws_over_the_frame() {
+    let (_server, display) = xvfb();
+    let dir = tmp("panel");
+    let size = (640, 400);
+    let camera = "2,3,7,0,0.5,0";
+    let shot = view(
+        &display,
+        &[
+            "--scene", "cubes", "--width", "640", "--height", "400", "--camera", camera,
+        ],
+        3,
+        size,
+    );
+    save(&shot, size, "viewer-panel.png");
+    let reference = render(&dir, camera, size);
+    let differs = |x0: u32, y0: u32, x1: u32, y1: u32| {
+        let mut n = 0;
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let a = shot[(y * size.0 + x) as usize];
+                let b = reference.get_pixel(x, y).0;
+                n += usize::from((0..3).any(|c| a[c].abs_diff(b[c]) > 2));
+            }
+        }
+        n as f64 / ((x1 - x0) * (y1 - y0)) as f64
+    };
+    // The panel's title bar and first rows (measured: the whole 200×60 corner differs).
+    let panel = differs(16, 8, 216, 68);
+    // Far right, below the panel's reach (measured: 0).
+    let frame = differs(560, 300, 640, 400);
+    eprintln!("panel corner {panel:.3} differs, frame corner {frame:.3}");
+    assert!(
+        panel > 0.5,
+        "no panel drawn ({panel:.3} of its corner differs)"
+    );
+    assert!(
+        frame < 0.005,
+        "the frame under the panel is not render's ({frame:.3})"
+    );
+}
