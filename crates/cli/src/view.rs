@@ -75,6 +75,15 @@ pub(crate) struct ViewArgs {
     /// Start with the panel hidden (F1 toggles it).
     #[arg(long)]
     hide_panel: bool,
+    /// Start with the shadow-atlas picture shown (read back once a second).
+    #[arg(long)]
+    show_atlas: bool,
+    /// Start with this light's hard visibility shown (white = lit; read back once a second).
+    #[arg(long)]
+    show_visibility: Option<usize>,
+    /// Start following this light (the camera at the light, looking where it shines).
+    #[arg(long)]
+    follow: Option<usize>,
     #[command(flatten)]
     gpu: crate::GpuArgs,
 }
@@ -157,6 +166,8 @@ struct Choice {
     point_shadows: PointShadows,
     pcf: Pcf,
     cache: bool,
+    /// The hard visibility mask is computed (for the per-light view).
+    visibility: bool,
 }
 
 struct State {
@@ -185,6 +196,22 @@ struct State {
     gpu_ms: Vec<(String, f64)>,
     frame_ms: f64,
     message: Option<String>,
+    overlays: Overlays,
+}
+
+/// The panel's pictures: the shadow atlas and one light's visibility, read back at most
+/// once a second while shown (a read-back of a 4096² atlas is 64 MiB).
+#[derive(Default)]
+struct Overlays {
+    atlas: bool,
+    atlas_texture: Option<egui::TextureHandle>,
+    atlas_note: String,
+    light: usize,
+    visibility_texture: Option<egui::TextureHandle>,
+    visibility_note: String,
+    refreshed: Option<Instant>,
+    /// Follow this light: the camera sits at it and looks where it shines.
+    follow: Option<usize>,
 }
 
 fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
@@ -195,6 +222,7 @@ fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
         point_shadows: c.point_shadows,
         pcf: c.pcf,
         cache_shadows: c.cache,
+        visibility: c.visibility,
         ..Default::default()
     }
 }
@@ -250,6 +278,7 @@ impl App {
             point_shadows: self.args.point_shadows,
             pcf: self.args.pcf,
             cache: self.args.cache,
+            visibility: self.args.show_visibility.is_some(),
         };
         let renderer = Renderer::new(
             &ctx,
@@ -299,6 +328,12 @@ impl App {
             gpu_ms: Vec::new(),
             frame_ms: 0.0,
             message: None,
+            overlays: Overlays {
+                atlas: self.args.show_atlas,
+                light: self.args.show_visibility.or(self.args.follow).unwrap_or(0),
+                follow: self.args.follow,
+                ..Default::default()
+            },
         })
     }
 }
@@ -361,6 +396,27 @@ impl State {
             }
             None => self.fly(dt),
         }
+        if let Some(k) = self.overlays.follow {
+            if let Some(l) = self.renderer.scene().lights.get(k) {
+                use manyshadows::scene::LightKind;
+                let forward = (self.camera.target - self.camera.position).normalize_or_zero();
+                match l.kind {
+                    LightKind::Spot {
+                        position,
+                        direction,
+                        ..
+                    } => {
+                        self.camera.position = position;
+                        self.camera.target = position + direction;
+                    }
+                    LightKind::Point { position, .. } => {
+                        self.camera.position = position;
+                        self.camera.target = position + forward;
+                    }
+                    LightKind::Directional { .. } => {}
+                }
+            }
+        }
         if let Err(e) = self.renderer.set_camera(self.camera) {
             self.message = Some(format!("camera: {e}"));
         }
@@ -404,12 +460,68 @@ impl State {
         }
         self.frame_ms = t0.elapsed().as_secs_f64() * 1e3;
         if self.panel {
+            self.refresh_overlays();
             self.draw_panel(app_scene, &texture.texture);
         }
         self.ctx.queue.present(texture);
         self.frames += 1;
         // A line per frame on stdout: scripts and tests follow the run by it.
         println!("presented frame {}", self.frames);
+    }
+
+    fn refresh_overlays(&mut self) {
+        let o = &mut self.overlays;
+        let due = o.refreshed.is_none_or(|t| t.elapsed().as_secs_f32() >= 1.0);
+        if !due || !(o.atlas || self.choice.visibility) {
+            return;
+        }
+        o.refreshed = Some(Instant::now());
+        if o.atlas {
+            match self.renderer.read_atlas() {
+                Ok(depth) => {
+                    let (side, rgb) = manyshadows::atlas_image::atlas_picture(
+                        &depth,
+                        self.renderer.atlas().size,
+                        self.renderer.plan(),
+                    );
+                    let (w, small) = shrink_rgb(side, &rgb, 256);
+                    let image = egui::ColorImage::from_rgb([w, w], &small);
+                    o.atlas_texture = Some(self.egui_ctx.load_texture(
+                        "atlas",
+                        image,
+                        Default::default(),
+                    ));
+                    o.atlas_note = format!("{side}² atlas, shown at {w}²");
+                }
+                Err(e) => {
+                    o.atlas_texture = None;
+                    o.atlas_note = e.to_string();
+                }
+            }
+        }
+        if self.choice.visibility {
+            // One more frame, read back with its visibility mask.
+            match self.renderer.render() {
+                Ok(frame) => match frame.visibility {
+                    Some(v) if v.lights > 0 => {
+                        let k = o.light.min(v.lights as usize - 1);
+                        let grey = v.light_image(k as u32);
+                        let image = egui::ColorImage::from_gray(
+                            [v.width as usize, v.height as usize],
+                            &grey,
+                        );
+                        o.visibility_texture = Some(self.egui_ctx.load_texture(
+                            "visibility",
+                            image,
+                            Default::default(),
+                        ));
+                        o.visibility_note = format!("light {k}: white = lit, black = shadowed");
+                    }
+                    _ => o.visibility_note = "no lights".into(),
+                },
+                Err(e) => o.visibility_note = e.to_string(),
+            }
+        }
     }
 
     fn draw_panel(&mut self, app_scene: &mut Scene, target: &wgpu::Texture) {
@@ -425,6 +537,7 @@ impl State {
         let frame_ms = self.frame_ms;
         let message = self.message.clone();
         let mut light_count = self.light_count;
+        let overlays = &mut self.overlays;
         let out = self.egui_ctx.run_pass(raw, |ctx| {
             egui::Window::new("manyshadows")
                 .default_pos([8.0, 8.0])
@@ -482,7 +595,49 @@ impl State {
                     if let Some(m) = &message {
                         ui.colored_label(egui::Color32::from_rgb(255, 120, 80), m);
                     }
+                    ui.separator();
+                    ui.checkbox(&mut overlays.atlas, "show the shadow atlas");
+                    ui.checkbox(&mut choice.visibility, "show one light's visibility");
+                    ui.horizontal(|ui| {
+                        ui.add(
+                            egui::DragValue::new(&mut overlays.light)
+                                .range(0..=lights.saturating_sub(1)),
+                        );
+                        ui.label("light");
+                        let mut following = overlays.follow.is_some();
+                        if ui.checkbox(&mut following, "follow it").changed() {
+                            overlays.follow = following.then_some(overlays.light);
+                        }
+                    });
+                    if let Some(f) = overlays.follow.as_mut() {
+                        *f = overlays.light;
+                    }
+                    if !features.contains(wgpu::Features::PIPELINE_STATISTICS_QUERY) {
+                        ui.label("(no pipeline statistics on this device: benches count less)");
+                    }
                 });
+            if overlays.atlas {
+                egui::Window::new("shadow atlas")
+                    .anchor(egui::Align2::RIGHT_TOP, [-8.0, 8.0])
+                    .show(ctx, |ui| {
+                        ui.label(&overlays.atlas_note);
+                        if let Some(t) = &overlays.atlas_texture {
+                            ui.image(t);
+                        }
+                    });
+            }
+            if choice.visibility {
+                egui::Window::new("visibility")
+                    .anchor(egui::Align2::RIGHT_BOTTOM, [-8.0, -8.0])
+                    .show(ctx, |ui| {
+                        ui.label(&overlays.visibility_note);
+                        if let Some(t) = &overlays.visibility_texture {
+                            let size = t.size_vec2();
+                            let scale = (240.0 / size.x).min(1.0);
+                            ui.add(egui::Image::new(t).fit_to_exact_size(size * scale));
+                        }
+                    });
+            }
         });
         self.egui_state
             .handle_platform_output(&self.window, out.platform_output);
@@ -542,6 +697,20 @@ impl State {
             self.rebuild(app_scene, choice);
         }
     }
+}
+
+/// `rgb` (`side`² pixels) shrunk by an integer factor to at most `max` per side (nearest).
+fn shrink_rgb(side: u32, rgb: &[u8], max: u32) -> (usize, Vec<u8>) {
+    let f = side.div_ceil(max).max(1) as usize;
+    let w = side as usize / f;
+    let mut out = Vec::with_capacity(w * w * 3);
+    for y in 0..w {
+        for x in 0..w {
+            let i = (y * f * side as usize + x * f) * 3;
+            out.extend_from_slice(&rgb[i..i + 3]);
+        }
+    }
+    (w, out)
 }
 
 /// A light turned by `angle` radians about the vertical through the scene's origin.

@@ -39,45 +39,41 @@ fn require(tool: &str, package: &str) {
     );
 }
 
-/// Starts Xvfb on a free display; returns it and the display name.
+/// Starts Xvfb on a display it picks itself (`-displayfd`: no race with other X servers or
+/// parallel tests); returns it and the display name.
 fn xvfb() -> (Killed, String) {
     require("Xvfb", "xvfb");
     require("xwd", "x11-apps");
-    // Tests of this file run in parallel: each takes its own display number.
-    static NEXT: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
-    let first =
-        40 + std::process::id() % 200 * 8 + NEXT.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-    for n in (first..).step_by(2) {
-        if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists()
-            || Path::new(&format!("/tmp/.X{n}-lock")).exists()
-        {
-            continue;
-        }
-        let display = format!(":{n}");
-        let child = Command::new("Xvfb")
-            .args([
-                display.as_str(),
-                "-screen",
-                "0",
-                "800x600x24",
-                "-nolisten",
-                "tcp",
-            ])
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("start Xvfb");
-        let server = Killed(child);
-        let start = Instant::now();
-        while start.elapsed() < Duration::from_secs(20) {
-            if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() {
-                return (server, display);
-            }
-            std::thread::sleep(Duration::from_millis(100));
-        }
-        panic!("Xvfb {display} did not start within 20 s");
-    }
-    unreachable!()
+    let mut child = Command::new("Xvfb")
+        .args([
+            "-displayfd",
+            "1",
+            "-screen",
+            "0",
+            "1024x768x24",
+            "-nolisten",
+            "tcp",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("start Xvfb");
+    let stdout = child.stdout.take().unwrap();
+    let server = Killed(child);
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut line = String::new();
+        let _ = BufReader::new(stdout).read_line(&mut line);
+        let _ = tx.send(line);
+    });
+    let line = rx
+        .recv_timeout(Duration::from_secs(20))
+        .expect("Xvfb did not report its display within 20 s");
+    let n: u32 = line
+        .trim()
+        .parse()
+        .unwrap_or_else(|_| panic!("Xvfb reported display '{line}'"));
+    (server, format!(":{n}"))
 }
 
 /// The screen's top-left `w`×`h` pixels as RGB, from `xwd -root` (ZPixmap, 32 bits per
@@ -263,18 +259,28 @@ fn the_viewer_without_a_display_says_what_to_do() {
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
-/// With the panel: its corner shows the panel (differs from the frame), the rest of the
-/// window is the frame.
+/// With the panel, the atlas picture and light 1's visibility: the panel covers its corner
+/// (differs from the frame) and the frame between the windows is `render`'s.
 #[test]
 fn the_panel_draws_over_the_frame() {
     let (_server, display) = xvfb();
     let dir = tmp("panel");
-    let size = (640, 400);
+    let size = (960, 640);
     let camera = "2,3,7,0,0.5,0";
     let shot = view(
         &display,
         &[
-            "--scene", "cubes", "--width", "640", "--height", "400", "--camera", camera,
+            "--scene",
+            "cubes",
+            "--width",
+            "960",
+            "--height",
+            "640",
+            "--camera",
+            camera,
+            "--show-atlas",
+            "--show-visibility",
+            "1",
         ],
         3,
         size,
@@ -294,9 +300,15 @@ fn the_panel_draws_over_the_frame() {
     };
     // The panel's title bar and first rows (measured: the whole 200×60 corner differs).
     let panel = differs(16, 8, 216, 68);
-    // Far right, below the panel's reach (measured: 0).
-    let frame = differs(560, 300, 640, 400);
-    eprintln!("panel corner {panel:.3} differs, frame corner {frame:.3}");
+    // Bottom middle, between the panel and the picture windows (measured: 0).
+    let frame = differs(380, 560, 600, 640);
+    // The atlas and visibility windows anchored on the right (measured: all differ).
+    let pictures = differs(720, 60, 940, 300).min(differs(720, 460, 940, 620));
+    eprintln!("panel corner {panel:.3} differs, pictures {pictures:.3}, frame corner {frame:.3}");
+    assert!(
+        pictures > 0.5,
+        "no atlas or visibility picture ({pictures:.3})"
+    );
     assert!(
         panel > 0.5,
         "no panel drawn ({panel:.3} of its corner differs)"
