@@ -230,6 +230,48 @@ pub struct ViewUniform {
 /// Byte stride between consecutive [`ViewUniform`]s (the common `min_uniform_buffer_offset_alignment`).
 pub const VIEW_UNIFORM_STRIDE: u64 = std::mem::size_of::<ViewUniform>() as u64;
 
+/// `LayeredParams` of `layered.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct LayeredParams {
+    /// Cullable triangles, cull bits, unused, unused.
+    pub counts: [u32; 4],
+    /// Atlas side in texels, its reciprocal, unused, unused.
+    pub atlas: [f32; 4],
+}
+
+/// `MultiviewParams` of `multiview.wgsl` (and `multiview_copy.wgsl`), one per view group.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct MultiviewParams {
+    /// First draw-list entry of the group, cullable triangles, cull bits, unused.
+    pub counts: [u32; 4],
+    /// Atlas side in texels, unused ×3.
+    pub atlas: [f32; 4],
+}
+
+/// `GpuParams` of `gpu_driven.wgsl`, one per round.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuParams {
+    /// Caster vertices, cullable triangles, cull bits, clusters in this round.
+    pub counts: [u32; 4],
+    /// First draw-list entry of the round, views in it, first cluster, 1 = compact commands.
+    pub round: [u32; 4],
+    /// Atlas side in texels, its reciprocal, unused, unused.
+    pub atlas: [f32; 4],
+}
+
+/// `ComputeParams` of `compute.wgsl`, one per round.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ComputeParams {
+    /// Triangles, cullable triangles, cull bits, entries in this round.
+    pub counts: [u32; 4],
+    /// Texels in this round, chunk capacity, most workgroups along x, flags (1 = discard).
+    pub sizes: [u32; 4],
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -237,15 +279,19 @@ mod tests {
 
     /// naga's (size, [(member, offset)]) of the WGSL struct `name` in `common.wgsl`.
     fn wgsl_layout(name: &str) -> (u32, Vec<(String, u32)>) {
-        let module =
-            naga::front::wgsl::parse_str(crate::shaders::COMMON).expect("common.wgsl parses");
+        wgsl_layout_in(crate::shaders::COMMON, name)
+    }
+
+    /// The same for a struct of a composed shader.
+    fn wgsl_layout_in(source: &str, name: &str) -> (u32, Vec<(String, u32)>) {
+        let module = naga::front::wgsl::parse_str(source).expect("the shader parses");
         let mut layouter = naga::proc::Layouter::default();
         layouter.update(module.to_ctx()).expect("layout");
         let (handle, ty) = module
             .types
             .iter()
             .find(|(_, t)| t.name.as_deref() == Some(name))
-            .unwrap_or_else(|| panic!("struct {name} not found in common.wgsl"));
+            .unwrap_or_else(|| panic!("struct {name} not found"));
         let naga::TypeInner::Struct { members, .. } = &ty.inner else {
             panic!("{name} is not a struct");
         };
@@ -258,7 +304,10 @@ mod tests {
 
     macro_rules! same_layout {
         ($ty:ty, $($field:ident),+) => {{
-            let (size, fields) = wgsl_layout(stringify!($ty));
+            same_layout!(in crate::shaders::COMMON, $ty, $($field),+)
+        }};
+        (in $src:expr, $ty:ty, $($field:ident),+) => {{
+            let (size, fields) = wgsl_layout_in(&$src, stringify!($ty));
             let rust: Vec<(String, u32)> = vec![$((stringify!($field).to_string(), std::mem::offset_of!($ty, $field) as u32)),+];
             assert_eq!(fields, rust, "{} fields/offsets differ between WGSL and Rust", stringify!($ty));
             assert_eq!(size as usize, std::mem::size_of::<$ty>(), "{} size differs", stringify!($ty));
@@ -296,5 +345,11 @@ mod tests {
         same_layout!(VsmUniforms, pool, counts, lod);
         same_layout!(VsmRound, round, counts);
         assert_eq!(VIEW_UNIFORM_STRIDE, 256);
+        // Technique parameters.
+        same_layout!(in crate::shaders::layered(), LayeredParams, counts, atlas);
+        same_layout!(in crate::shaders::multiview(), MultiviewParams, counts, atlas);
+        same_layout!(in crate::shaders::multiview_copy(), MultiviewParams, counts, atlas);
+        same_layout!(in crate::shaders::gpu_driven(), GpuParams, counts, round, atlas);
+        same_layout!(in crate::shaders::compute(), ComputeParams, counts, sizes);
     }
 }

@@ -394,19 +394,23 @@ impl ShadowTechnique for Compute {
         let last_round = rounds.len() - 1;
         for (r, round) in rounds.iter().enumerate() {
             let round_texels = texels(round, tile_size);
-            let params: [u32; 8] = [
-                casters.triangles,
-                casters.cullable_triangles,
-                input.options.cull.bits(),
-                round.len() as u32,
-                round_texels as u32,
-                *capacity,
-                self.max_groups,
-                u32::from(discard),
-            ];
+            let params = crate::gpu_types::ComputeParams {
+                counts: [
+                    casters.triangles,
+                    casters.cullable_triangles,
+                    input.options.cull.bits(),
+                    round.len() as u32,
+                ],
+                sizes: [
+                    round_texels as u32,
+                    *capacity,
+                    self.max_groups,
+                    u32::from(discard),
+                ],
+            };
             let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("compute.params"),
-                contents: bytemuck::cast_slice(&params),
+                contents: bytemuck::bytes_of(&params),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
             // The uniform binding is the whole fixed-size array; the copy pass reads the same

@@ -33,7 +33,7 @@ use crate::{GpuContext, RenderError};
 pub const COMMAND_SIZE: u64 = std::mem::size_of::<wgpu::util::DrawIndexedIndirectArgs>() as u64;
 
 /// Bytes of one round's parameters (`GpuParams` in gpu_driven.wgsl).
-const PARAMS_SIZE: u64 = 48;
+const PARAMS_SIZE: u64 = std::mem::size_of::<crate::gpu_types::GpuParams>() as u64;
 
 /// Largest workgroup count per dispatch dimension WebGPU guarantees.
 const MAX_GROUPS: u64 = 65535;
@@ -278,22 +278,23 @@ impl ShadowTechnique for GpuDriven {
         let mut bytes = vec![0u8; stride as usize * rounds.len().max(1)];
         let atlas = input.atlas.size as f32;
         for (k, r) in rounds.iter().enumerate() {
-            let record: [u32; 12] = [
-                casters.vertices,
-                casters.cullable_triangles,
-                input.options.cull.bits(),
-                r.clusters,
-                r.first_view,
-                r.views,
-                r.first_cluster,
-                u32::from(self.compact),
-                atlas.to_bits(),
-                (1.0 / atlas).to_bits(),
-                0,
-                0,
-            ];
+            let record = crate::gpu_types::GpuParams {
+                counts: [
+                    casters.vertices,
+                    casters.cullable_triangles,
+                    input.options.cull.bits(),
+                    r.clusters,
+                ],
+                round: [
+                    r.first_view,
+                    r.views,
+                    r.first_cluster,
+                    u32::from(self.compact),
+                ],
+                atlas: [atlas, 1.0 / atlas, 0.0, 0.0],
+            };
             let at = k * stride as usize;
-            bytes[at..at + PARAMS_SIZE as usize].copy_from_slice(bytemuck::cast_slice(&record));
+            bytes[at..at + PARAMS_SIZE as usize].copy_from_slice(bytemuck::bytes_of(&record));
         }
         let params = wgpu::util::DeviceExt::create_buffer_init(
             &ctx.device,

@@ -93,21 +93,16 @@ impl ShadowTechnique for Layered {
         }
         let ctx = input.ctx;
         let cull = input.options.cull;
-        let params: [u32; 8] = [
-            casters.cullable_triangles,
-            cull.bits(),
-            0,
-            0,
-            (input.atlas.size as f32).to_bits(),
-            (1.0 / input.atlas.size as f32).to_bits(),
-            0,
-            0,
-        ];
+        let atlas = input.atlas.size as f32;
+        let params = crate::gpu_types::LayeredParams {
+            counts: [casters.cullable_triangles, cull.bits(), 0, 0],
+            atlas: [atlas, 1.0 / atlas, 0.0, 0.0],
+        };
         let params = wgpu::util::DeviceExt::create_buffer_init(
             &ctx.device,
             &wgpu::util::BufferInitDescriptor {
                 label: Some("layered.params"),
-                contents: bytemuck::cast_slice(&params),
+                contents: bytemuck::bytes_of(&params),
                 usage: wgpu::BufferUsages::UNIFORM,
             },
         );

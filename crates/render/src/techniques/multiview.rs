@@ -28,7 +28,7 @@ use crate::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
 /// Bytes of one group's parameters (`MultiviewParams` in multiview.wgsl).
-const PARAMS_SIZE: u64 = 32;
+const PARAMS_SIZE: u64 = std::mem::size_of::<crate::gpu_types::MultiviewParams>() as u64;
 
 /// Splits `draw_list` into runs of consecutive views whose tiles have the same side, at most
 /// `max` views each: `(first position in the list, views)`.
@@ -346,18 +346,12 @@ impl ShadowTechnique for Multiview {
             PARAMS_SIZE.next_multiple_of(ctx.limits().min_uniform_buffer_offset_alignment as u64);
         let mut bytes = vec![0u8; stride as usize * groups.len()];
         for (g, &(first, _)) in groups.iter().enumerate() {
-            let record: [u32; 8] = [
-                first,
-                casters.cullable_triangles,
-                cull.bits(),
-                0,
-                (input.atlas.size as f32).to_bits(),
-                0,
-                0,
-                0,
-            ];
+            let record = crate::gpu_types::MultiviewParams {
+                counts: [first, casters.cullable_triangles, cull.bits(), 0],
+                atlas: [input.atlas.size as f32, 0.0, 0.0, 0.0],
+            };
             let at = g * stride as usize;
-            bytes[at..at + PARAMS_SIZE as usize].copy_from_slice(bytemuck::cast_slice(&record));
+            bytes[at..at + PARAMS_SIZE as usize].copy_from_slice(bytemuck::bytes_of(&record));
         }
         let params = wgpu::util::DeviceExt::create_buffer_init(
             &ctx.device,
