@@ -277,12 +277,7 @@ mod tests {
     use super::*;
     use wgpu::naga;
 
-    /// naga's (size, [(member, offset)]) of the WGSL struct `name` in `common.wgsl`.
-    fn wgsl_layout(name: &str) -> (u32, Vec<(String, u32)>) {
-        wgsl_layout_in(crate::shaders::COMMON, name)
-    }
-
-    /// The same for a struct of a composed shader.
+    /// naga's (size, [(member, offset)]) of the WGSL struct `name` in `source`.
     fn wgsl_layout_in(source: &str, name: &str) -> (u32, Vec<(String, u32)>) {
         let module = naga::front::wgsl::parse_str(source).expect("the shader parses");
         let mut layouter = naga::proc::Layouter::default();
