@@ -87,7 +87,7 @@ const OPTIONAL_FEATURES: &[(wgpu::Features, &str, &str)] = &[
     (
         wgpu::Features::MULTIVIEW,
         "MULTIVIEW",
-        "multiview shadow generation (--technique multiview)",
+        "multiview shadow generation (technique multiview)",
     ),
     (
         wgpu::Features::MULTI_DRAW_INDIRECT_COUNT,
@@ -245,7 +245,7 @@ impl GpuContext {
                 return Err(RenderError::NoAdapter {
                     backends: format!("{backends:?}"),
                     detail: format!(
-                        "no adapter's name contains '{name}' (WGPU_ADAPTER_NAME / --adapter); adapters found: {}",
+                        "no adapter's name contains '{name}' (WGPU_ADAPTER_NAME / AdapterRequest::name); adapters found: {}",
                         if all_names.is_empty() { "none".to_string() } else { all_names.join("; ") }
                     ),
                 });

@@ -55,22 +55,22 @@ impl ShadowGenerator {
         });
         if paraboloid && !matches!(technique, Technique::Traditional | Technique::Layered) {
             return Err(RenderError::Unsupported(format!(
-                "--technique {technique} renders cube-map point shadows only; use \
-                 --point-shadows cube, or --technique traditional or layered for \
+                "technique {technique} renders cube-map point shadows only; use \
+                 cube point shadows, or technique traditional or layered for \
                  dual-paraboloid maps"
             )));
         }
         if paraboloid && !ctx.has(wgpu::Features::CLIP_DISTANCES) {
             return Err(RenderError::Unsupported(format!(
                 "dual-paraboloid shadows clip triangles at the hemisphere's base with the \
-                 CLIP_DISTANCES feature, which {} lacks; use --point-shadows cube",
+                 CLIP_DISTANCES feature, which {} lacks; use cube point shadows",
                 crate::context::describe_adapter(&ctx.info)
             )));
         }
         if paraboloid && gpu.skin.is_some() {
             return Err(RenderError::Unsupported(
-                "dual-paraboloid shadows of skinned scenes are not implemented; use \
-                 --point-shadows cube"
+                "dual-paraboloid shadows of skinned scenes are not implemented; use cube \
+                 point shadows"
                     .into(),
             ));
         }

@@ -238,8 +238,8 @@ impl IrregularShadows {
             .any(|v| matches!(v.kind, ViewKind::Paraboloid(_)))
         {
             return Err(RenderError::Unsupported(
-                "--technique irregular needs straight triangle edges in light space: use \
-                 --point-shadows cube (six perspective faces) with it"
+                "technique irregular needs straight triangle edges in light space: use \
+                 cube point shadows (six perspective faces) with it"
                     .into(),
             ));
         }
@@ -655,7 +655,7 @@ impl IrregularShadows {
             return Err(RenderError::Irregular(format!(
                 "{} sample-list walks hit the driver's loop limit (llvmpipe ends loops after \
                  65535 iterations per invocation); the frame was discarded. Use a finer grid \
-                 (--irregular-grid) so lists are shorter",
+                 (IrregularOptions::grid) so lists are shorter",
                 c[12]
             )));
         }

@@ -255,8 +255,8 @@ impl Renderer {
             let is_virtual = settings.technique == Technique::Virtual;
             if is_virtual && settings.point_shadows != Default::default() {
                 return Err(RenderError::Unsupported(
-                    "--technique virtual pages cube-map point shadows only; use \
-                     --point-shadows cube"
+                    "technique virtual pages cube-map point shadows only; use cube point \
+                     shadows"
                         .into(),
                 ));
             }

@@ -661,13 +661,13 @@ pub trait ShadowTechnique {
 }
 
 /// Why `irregular` cannot stand where an atlas-filling technique is expected.
-pub const IRREGULAR_NO_ATLAS: &str = "--technique irregular computes the visibility mask \
+pub const IRREGULAR_NO_ATLAS: &str = "technique irregular computes the visibility mask \
      directly and fills no shadow atlas, so it runs in frames (render, compare) but not where \
      atlas tiles are generated or benchmarked on their own (bench layered, bench omni, atlas \
      read-back)";
 
 /// Why `virtual` cannot stand where an atlas-filling technique is expected.
-pub const VIRTUAL_NO_ATLAS: &str = "--technique virtual renders only the pages the camera's \
+pub const VIRTUAL_NO_ATLAS: &str = "technique virtual renders only the pages the camera's \
      samples need, into a page pool instead of an atlas, so it runs in frames (render, \
      compare, bench virtual) but not where atlas tiles are generated or benchmarked on their \
      own (bench layered, bench omni, atlas read-back)";

@@ -419,8 +419,8 @@ impl VirtualShadows {
             .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION)
         {
             return Err(RenderError::Unsupported(format!(
-                "--technique virtual allocates and draws its pages with indirect dispatches \
-                 and draws, and {} lacks them; use --technique traditional",
+                "technique virtual allocates and draws its pages with indirect dispatches \
+                 and draws, and {} lacks them; use technique traditional",
                 crate::context::describe_adapter(&ctx.info)
             )));
         }

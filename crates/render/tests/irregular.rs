@@ -233,7 +233,7 @@ fn refuses_atlas_paths_and_paraboloids() {
     let err = Renderer::new(&ctx, &scene, s)
         .err()
         .expect("paraboloids refused");
-    assert!(err.to_string().contains("--point-shadows cube"), "{err}");
+    assert!(err.to_string().contains("cube point shadows"), "{err}");
 }
 
 /// One grid texel for a whole frame: every sample in one list. On llvmpipe (which ends an

@@ -254,7 +254,7 @@ fn bad_point_shadow_configurations_are_clear_errors() {
         };
         match Renderer::new(&ctx, &scene, s) {
             Err(RenderError::Unsupported(why)) => assert!(
-                why.contains("point-shadows") || why.contains("MULTIVIEW"),
+                why.contains("cube point shadows") || why.contains("MULTIVIEW"),
                 "{t}: {why}"
             ),
             Err(e) => panic!("{t}: unexpected error {e}"),

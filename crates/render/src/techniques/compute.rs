@@ -154,7 +154,7 @@ impl Compute {
             / 4;
         if max_texels < 64 * 64 {
             return Err(RenderError::Unsupported(format!(
-                "--technique compute needs storage buffers of at least 16 KiB, and {} allows {} \
+                "technique compute needs storage buffers of at least 16 KiB, and {} allows {} \
                  bytes",
                 crate::context::describe_adapter(&ctx.info),
                 limits.max_storage_buffer_binding_size

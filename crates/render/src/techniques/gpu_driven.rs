@@ -132,8 +132,8 @@ impl GpuDriven {
             .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION)
         {
             return Err(RenderError::Unsupported(format!(
-                "--technique gpu-driven needs indirect draws, and {} lacks them; use \
-                 --technique layered",
+                "technique gpu-driven needs indirect draws, and {} lacks them; use \
+                 technique layered",
                 crate::context::describe_adapter(&ctx.info)
             )));
         }

@@ -23,8 +23,8 @@ pub(crate) fn require_clip_distances(ctx: &GpuContext, technique: &str) -> Resul
         Ok(())
     } else {
         Err(RenderError::Unsupported(format!(
-            "--technique {technique} needs the CLIP_DISTANCES feature to keep each view inside \
-             its atlas tile, and {} lacks it; use --technique traditional",
+            "technique {technique} needs the CLIP_DISTANCES feature to keep each view inside \
+             its atlas tile, and {} lacks it; use technique traditional",
             crate::context::describe_adapter(&ctx.info)
         )))
     }

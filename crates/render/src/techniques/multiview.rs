@@ -103,8 +103,8 @@ impl Multiview {
         let mut max_views = ctx.limits().max_multiview_view_count.min(32);
         if !ctx.has(wgpu::Features::MULTIVIEW) || max_views == 0 {
             return Err(RenderError::Unsupported(format!(
-                "--technique multiview needs the MULTIVIEW feature (one render pass per group \
-                 of up to 6-32 equal-size shadow views), and {} lacks it; use --technique \
+                "technique multiview needs the MULTIVIEW feature (one render pass per group \
+                 of up to 6-32 equal-size shadow views), and {} lacks it; use technique \
                  layered, which fills the same atlas with one instanced draw",
                 crate::context::describe_adapter(&ctx.info)
             )));
