@@ -343,8 +343,8 @@ fn behind_the_light_and_across_the_near_plane() {
     );
     // Depth rises steeply just beyond the near plane; the hardware interpolates from corners
     // it clipped there, this path from the unclipped plane: up to 2.6e-6 apart (measured),
-    // coverage identical.
-    check(&ctx, "behind and across the near plane", &s, 32, 5e-6);
+    // coverage identical (0 texels on lavapipe and llvmpipe GL).
+    check(&ctx, "behind and across the near plane", &s, 2, 5e-6);
 
     let mut room = primitives::cuboid(Vec3::new(6.0, 4.0, 5.0));
     // Inward-facing walls, as a room is modelled.
@@ -355,7 +355,8 @@ fn behind_the_light_and_across_the_near_plane() {
         vec![room, triangles("crossing", &tris)],
         vec![point(Vec3::new(0.5, 0.3, -0.2), 128)],
     );
-    let full = check(&ctx, "point light in a room", &s, 64, 1e-5);
+    // Measured: 0 texels differ in coverage (lavapipe, llvmpipe GL).
+    let full = check(&ctx, "point light in a room", &s, 2, 1e-5);
     // The walls are large triangles: with a chunk list of 8 records most chunks overflow and
     // are rasterized by their setup thread, giving the very same atlas.
     let mut small = Compute::new(&ctx)
@@ -393,7 +394,8 @@ fn more_work_than_one_dispatch_and_every_fallback() {
     );
     let threads = 720_000u64 * 6;
     assert!(threads > 65535 * 64);
-    let full = check(&ctx, "720k triangles x 6 views", &s, 64, 1e-5);
+    // Measured: 0 texels differ in coverage (lavapipe, llvmpipe GL).
+    let full = check(&ctx, "720k triangles x 6 views", &s, 2, 1e-5);
 
     // Rounds of one band of 40 rows each (12 rounds), 16 workgroups along x.
     let mut split = Compute::new(&ctx)

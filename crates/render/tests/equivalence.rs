@@ -116,15 +116,16 @@ fn check(ctx: &GpuContext, label: &str, scene: &Scene, technique: Technique, bud
 fn layered_matches_traditional() {
     let ctx = common::context();
     // Spot, point (cube faces) and directional (cascades) lights over closed boxes and an
-    // open floor: the budget is a handful of edge texels per view.
+    // open floor. Measured on lavapipe and llvmpipe GL (every cull mode): cubes 2 differing
+    // texels, plane-point, plane-directional and dragon 0; the budgets are those plus 2.
     let cubes = scene("cubes", Some(6), LightMix::All, 256);
-    check(&ctx, "cubes", &cubes, Technique::Layered, 64);
+    check(&ctx, "cubes", &cubes, Technique::Layered, 4);
     let point = scene("plane-point", None, LightMix::All, 256);
-    check(&ctx, "plane-point", &point, Technique::Layered, 16);
+    check(&ctx, "plane-point", &point, Technique::Layered, 2);
     let sun = scene("plane-directional", None, LightMix::All, 512);
-    check(&ctx, "plane-directional", &sun, Technique::Layered, 16);
+    check(&ctx, "plane-directional", &sun, Technique::Layered, 2);
     let dragon = scene("dragon", Some(4), LightMix::Spot, 256);
-    check(&ctx, "dragon", &dragon, Technique::Layered, 64);
+    check(&ctx, "dragon", &dragon, Technique::Layered, 2);
 }
 
 #[test]
@@ -157,16 +158,17 @@ fn multiview_matches_traditional_or_says_unsupported() {
     // primitive of a multiview pass into view 0's layer (whole cube faces came out as the union
     // of six views, hundreds of thousands of texels), so the technique runs one view per pass
     // there (`clips_into_layer_zero`) and this test then checks the scratch/copy path and the
-    // culling, not multi-view routing.
+    // culling, not multi-view routing. Measured on lavapipe: cubes 1, the rest 0; layered's
+    // budgets.
     eprintln!("multiview: up to {per_pass} views per pass on this adapter");
     let cubes = scene("cubes", Some(6), LightMix::All, 256);
-    check(&ctx, "cubes", &cubes, Technique::Multiview, 64);
+    check(&ctx, "cubes", &cubes, Technique::Multiview, 4);
     let point = scene("plane-point", None, LightMix::All, 256);
-    check(&ctx, "plane-point", &point, Technique::Multiview, 16);
+    check(&ctx, "plane-point", &point, Technique::Multiview, 2);
     let sun = scene("plane-directional", None, LightMix::All, 512);
-    check(&ctx, "plane-directional", &sun, Technique::Multiview, 16);
+    check(&ctx, "plane-directional", &sun, Technique::Multiview, 2);
     let dragon = scene("dragon", Some(4), LightMix::Spot, 256);
-    check(&ctx, "dragon", &dragon, Technique::Multiview, 64);
+    check(&ctx, "dragon", &dragon, Technique::Multiview, 2);
 }
 
 #[test]
@@ -174,15 +176,16 @@ fn gpu_driven_matches_traditional() {
     let ctx = common::context();
     // Cluster culling drops only clusters that cannot touch a view (sphere outside the
     // frustum) or whose every triangle faces away (normal cone), and the vertex shader maps
-    // into tiles as layered does: layered's budgets.
+    // into tiles as layered does. Measured on lavapipe and llvmpipe GL, every round size:
+    // cubes 2, the rest 0; layered's budgets.
     let cubes = scene("cubes", Some(6), LightMix::All, 256);
-    check(&ctx, "cubes", &cubes, Technique::GpuDriven, 64);
+    check(&ctx, "cubes", &cubes, Technique::GpuDriven, 4);
     let point = scene("plane-point", None, LightMix::All, 256);
-    check(&ctx, "plane-point", &point, Technique::GpuDriven, 16);
+    check(&ctx, "plane-point", &point, Technique::GpuDriven, 2);
     let sun = scene("plane-directional", None, LightMix::All, 512);
-    check(&ctx, "plane-directional", &sun, Technique::GpuDriven, 16);
+    check(&ctx, "plane-directional", &sun, Technique::GpuDriven, 2);
     let dragon = scene("dragon", Some(4), LightMix::Spot, 256);
-    check(&ctx, "dragon", &dragon, Technique::GpuDriven, 64);
+    check(&ctx, "dragon", &dragon, Technique::GpuDriven, 2);
 }
 
 #[test]
@@ -194,15 +197,15 @@ fn compute_matches_traditional() {
     // llvmpipe GL (every cull mode): cubes 5 and 8 differing texels, plane-point 0 and 0,
     // plane-directional 4 and 4, dragon 0 and 0 (edge texels and depths a few ULPs beyond
     // the tolerance where the hardware interpolates from corners it clipped). The budgets are
-    // layered's, with room to spare.
+    // the larger measurement plus 2–4.
     let cubes = scene("cubes", Some(6), LightMix::All, 256);
-    check(&ctx, "cubes", &cubes, Technique::Compute, 64);
+    check(&ctx, "cubes", &cubes, Technique::Compute, 12);
     let point = scene("plane-point", None, LightMix::All, 256);
-    check(&ctx, "plane-point", &point, Technique::Compute, 16);
+    check(&ctx, "plane-point", &point, Technique::Compute, 2);
     let sun = scene("plane-directional", None, LightMix::All, 512);
-    check(&ctx, "plane-directional", &sun, Technique::Compute, 16);
+    check(&ctx, "plane-directional", &sun, Technique::Compute, 6);
     let dragon = scene("dragon", Some(4), LightMix::Spot, 256);
-    check(&ctx, "dragon", &dragon, Technique::Compute, 64);
+    check(&ctx, "dragon", &dragon, Technique::Compute, 2);
 }
 
 /// Runs `technique` directly on `scene`'s views with the given draw list into `atlas`.
@@ -298,7 +301,8 @@ fn gpu_driven_splits_views_and_clusters_into_rounds() {
                 d.differing,
                 d.covered
             );
-            assert!(d.differing <= 64, "{} texels differ", d.differing);
+            // Measured: 2 (as the single-round run), every round size and cull mode.
+            assert!(d.differing <= 4, "{} texels differ", d.differing);
         }
     }
 }
