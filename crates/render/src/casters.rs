@@ -293,12 +293,6 @@ pub(crate) fn morton_order(mesh: &Mesh) -> Vec<u32> {
         .collect()
 }
 
-fn dispatch_2d(items: u32) -> (u32, u32) {
-    let groups = items.div_ceil(64).max(1);
-    let x = groups.min(65535);
-    (x, groups.div_ceil(x))
-}
-
 /// How one caster instance's triangles are laid out: what back-face culling may do with them.
 /// Recomputed whenever lights or instances move ([`CasterGeometry::refresh`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -689,7 +683,7 @@ impl CasterGeometry {
         }
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.set_pipeline(&self.transform);
-        let (x, y) = dispatch_2d(self.vertices);
+        let (x, y) = crate::dispatch_2d(u64::from(self.vertices), 65535);
         pass.dispatch_workgroups(x, y, 1);
         if bounds && !self.clusters.is_empty() {
             pass.set_pipeline(&self.bounds);

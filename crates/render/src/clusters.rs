@@ -166,12 +166,6 @@ fn slot_words(lights: usize) -> (u32, u32) {
     (words.div_ceil(32).max(1), words)
 }
 
-fn dispatch_2d(items: u32) -> (u32, u32) {
-    let groups = items.div_ceil(64).max(1);
-    let x = groups.min(65535);
-    (x, groups.div_ceil(x))
-}
-
 impl LightClusters {
     /// Builds the grid for `width`×`height` frames and `lights` lights. `enabled = false`
     /// ([`LightLoop::All`]) records nothing and makes shading loop over every light.
@@ -462,14 +456,14 @@ impl LightClusters {
             pass.set_bind_group(0, bind_group, &[]);
             pass.set_pipeline(&self.mark);
             pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
-            let (x, y) = dispatch_2d(self.data.counts[2]);
+            let (x, y) = crate::dispatch_2d(u64::from(self.data.counts[2]), 65535);
             pass.set_pipeline(&self.compact);
             pass.dispatch_workgroups(x, y, 1);
             if self.data.counts[1] > 0 {
                 pass.set_pipeline(&self.assign);
                 pass.dispatch_workgroups(self.data.counts[1].div_ceil(64), 1, self.data.grid[2]);
             }
-            let (x, y) = dispatch_2d(self.data.counts[0]);
+            let (x, y) = crate::dispatch_2d(u64::from(self.data.counts[0]), 65535);
             pass.set_pipeline(&self.stats);
             pass.dispatch_workgroups(x, y, 1);
         }

@@ -202,12 +202,6 @@ pub struct IrregularShadows {
     last: IrregularStats,
 }
 
-fn dispatch_2d(items: u64) -> (u32, u32) {
-    let groups = items.div_ceil(64).max(1);
-    let x = groups.min(65535);
-    (x as u32, groups.div_ceil(x) as u32)
-}
-
 /// Everything the passes read that the renderer owns.
 pub struct IrregularInputs<'a> {
     /// `FrameUniforms`.
@@ -533,7 +527,7 @@ impl IrregularShadows {
     ) {
         encoder.clear_buffer(&self.control, 0, None);
         encoder.clear_buffer(&self.heads, self.cut_index * 4, Some(4));
-        let pixel_groups = dispatch_2d(self.width as u64 * self.height as u64);
+        let pixel_groups = crate::dispatch_2d(self.width as u64 * self.height as u64, 65535);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("irregular.init"),
@@ -581,7 +575,7 @@ impl IrregularShadows {
                 &|p| p.dispatch_workgroups(pixel_groups.0, pixel_groups.1, 1),
             );
             if has_triangles {
-                let (x, y) = dispatch_2d(self.triangles as u64 * views);
+                let (x, y) = crate::dispatch_2d(self.triangles as u64 * views, 65535);
                 step(
                     encoder,
                     "irregular.triangles",

@@ -110,6 +110,16 @@ pub enum RenderError {
     Readback(String),
 }
 
+/// A 1D workload of `items` threads, 64 per workgroup, as a 2D dispatch with at most
+/// `max_groups` workgroups along x (65535 is every adapter's floor). Shaders recover the item
+/// index as `(y · num_workgroups.x + x) · 64 + local`; trailing threads test it against the
+/// count.
+pub(crate) fn dispatch_2d(items: u64, max_groups: u32) -> (u32, u32) {
+    let groups = items.div_ceil(64).max(1);
+    let x = groups.min(u64::from(max_groups.max(1)));
+    (x as u32, groups.div_ceil(x) as u32)
+}
+
 /// Makes `buffer` hold at least `needed` bytes: a buffer too small is replaced by one with room
 /// for twice as much (so a growing scene reallocates rarely), capped at the device's limit for
 /// its usage (`max_buffer_size`; storage buffers also `max_storage_buffer_binding_size`, since

@@ -115,13 +115,6 @@ fn texels(round: &[Entry], tile_size: impl Fn(u32) -> u32) -> u64 {
         .sum()
 }
 
-/// A 1D workload of `items` threads (64 per workgroup) as a 2D dispatch.
-fn dispatch_2d(items: u64, max_groups: u32) -> (u32, u32) {
-    let groups = items.div_ceil(64).max(1);
-    let x = groups.min(max_groups as u64);
-    (x as u32, groups.div_ceil(x) as u32)
-}
-
 /// The compute rasterizer's pipelines and buffers.
 pub struct Compute {
     setup: wgpu::ComputePipeline,
@@ -469,7 +462,7 @@ impl ShadowTechnique for Compute {
                     pass.set_pipeline(&self.setup);
                     pass.set_bind_group(0, &bind_group, &[]);
                     let threads = casters.triangles as u64 * round.len() as u64;
-                    let (x, y) = dispatch_2d(threads, self.max_groups);
+                    let (x, y) = crate::dispatch_2d(threads, self.max_groups);
                     pass.dispatch_workgroups(x, y, 1);
                     pass.set_pipeline(&self.finalize);
                     pass.set_bind_group(1, &self.args_bind_group, &[]);
@@ -596,9 +589,9 @@ mod tests {
     #[test]
     fn dispatches_stay_within_the_dimension_limit() {
         let items = 64 * 65535 * 3 + 1;
-        let (x, y) = dispatch_2d(items, 65535);
+        let (x, y) = crate::dispatch_2d(items, 65535);
         assert!(x <= 65535 && y <= 65535);
         assert!(x as u64 * y as u64 * 64 >= items);
-        assert_eq!(dispatch_2d(10, 65535), (1, 1));
+        assert_eq!(crate::dispatch_2d(10, 65535), (1, 1));
     }
 }
