@@ -411,7 +411,7 @@ impl VirtualShadows {
         shadow: ShadowOptions,
         casters: &CasterGeometry,
     ) -> Result<Self, RenderError> {
-        crate::techniques::layered::require_clip_distances(ctx, "virtual")?;
+        crate::techniques::require_clip_distances(ctx, "virtual")?;
         if !ctx
             .adapter
             .get_downlevel_capabilities()

@@ -24,8 +24,7 @@
 //! split too if even one view's commands would not fit.
 
 use crate::shadow::{ShadowInput, ShadowStats, ShadowTechnique};
-use crate::techniques::layered::{depth_pipeline, require_clip_distances};
-use crate::techniques::{atlas_attachment, TileClear};
+use crate::techniques::{atlas_attachment, depth_pipeline, require_clip_distances, TileClear};
 use crate::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 

@@ -13,22 +13,9 @@
 //! Without culling the draw is indexed, so post-transform vertex reuse still applies.
 
 use crate::shadow::{ShadowInput, ShadowStats, ShadowTechnique};
-use crate::techniques::{atlas_attachment, TileClear};
+use crate::techniques::{atlas_attachment, depth_pipeline, require_clip_distances, TileClear};
 use crate::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
-
-/// Error text when the adapter cannot clip to tiles.
-pub(crate) fn require_clip_distances(ctx: &GpuContext, technique: &str) -> Result<(), RenderError> {
-    if ctx.has(wgpu::Features::CLIP_DISTANCES) {
-        Ok(())
-    } else {
-        Err(RenderError::Unsupported(format!(
-            "technique {technique} needs the CLIP_DISTANCES feature to keep each view inside \
-             its atlas tile, and {} lacks it; use technique traditional",
-            crate::context::describe_adapter(&ctx.info)
-        )))
-    }
-}
 
 /// The layered technique's pipelines.
 pub struct Layered {
@@ -70,8 +57,6 @@ impl Layered {
         })
     }
 }
-
-pub(crate) use crate::techniques::depth_pipeline;
 
 impl ShadowTechnique for Layered {
     fn name(&self) -> &'static str {

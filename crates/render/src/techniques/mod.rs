@@ -8,7 +8,7 @@ pub mod multiview;
 pub mod traditional;
 
 use crate::shadow::{ShadowInput, ATLAS_FORMAT};
-use crate::GpuContext;
+use crate::{GpuContext, RenderError};
 
 /// Clears only the tiles of the views in [`ShadowInput::draw_list`] (to depth 1), for
 /// generations that must keep the other, cached tiles.
@@ -184,5 +184,19 @@ pub(crate) fn atlas_attachment<'a>(
             store: wgpu::StoreOp::Store,
         }),
         stencil_ops: None,
+    }
+}
+
+/// Refuses a technique that keeps its draws inside atlas tiles with clip distances when the
+/// adapter lacks them.
+pub(crate) fn require_clip_distances(ctx: &GpuContext, technique: &str) -> Result<(), RenderError> {
+    if ctx.has(wgpu::Features::CLIP_DISTANCES) {
+        Ok(())
+    } else {
+        Err(RenderError::Unsupported(format!(
+            "technique {technique} needs the CLIP_DISTANCES feature to keep each view inside \
+             its atlas tile, and {} lacks it; use technique traditional",
+            crate::context::describe_adapter(&ctx.info)
+        )))
     }
 }
