@@ -32,7 +32,7 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::shadow::{ShadowInput, ShadowStats, ShadowTechnique, ATLAS_FORMAT};
+use crate::shadow::{ShadowInput, ShadowStats, ShadowTechnique};
 use crate::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
@@ -214,34 +214,14 @@ impl Compute {
             bind_group_layouts: &[Some(&copy_layout)],
             immediate_size: 0,
         });
-        let copy = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("compute.copy"),
-            layout: Some(&copy_pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &copy_module,
-                entry_point: Some("vs_copy"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: ATLAS_FORMAT,
-                depth_write_enabled: Some(true),
-                // A copy: every texel of the band is replaced.
-                depth_compare: Some(wgpu::CompareFunction::Always),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &copy_module,
-                entry_point: Some("fs_copy"),
-                compilation_options: Default::default(),
-                targets: &[],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        // A copy: every texel of the band or tile is replaced.
+        let copy = crate::techniques::overwrite_pipeline(
+            device,
+            &copy_pipeline_layout,
+            &copy_module,
+            "vs_copy",
+            Some("fs_copy"),
+        );
 
         let counters = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("compute.counters"),

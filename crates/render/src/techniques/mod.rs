@@ -104,12 +104,26 @@ pub(crate) fn clear_pipeline(
     module: &wgpu::ShaderModule,
     entry: &str,
 ) -> wgpu::RenderPipeline {
+    overwrite_pipeline(device, layout, module, entry, None)
+}
+
+/// A pipeline that replaces every atlas texel it covers (compare `Always`): the tile and
+/// page clears (depth from the vertex stage, no fragment stage) and the copies of depth
+/// rendered elsewhere into the atlas (`fragment` writes `frag_depth`: the compute rasterizer's
+/// depth buffer, multiview's scratch layers).
+pub(crate) fn overwrite_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    vertex: &str,
+    fragment: Option<&str>,
+) -> wgpu::RenderPipeline {
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(entry),
+        label: Some(fragment.unwrap_or(vertex)),
         layout: Some(layout),
         vertex: wgpu::VertexState {
             module,
-            entry_point: Some(entry),
+            entry_point: Some(vertex),
             compilation_options: Default::default(),
             buffers: &[],
         },
@@ -122,7 +136,12 @@ pub(crate) fn clear_pipeline(
             bias: Default::default(),
         }),
         multisample: Default::default(),
-        fragment: None,
+        fragment: fragment.map(|entry| wgpu::FragmentState {
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            targets: &[],
+        }),
         multiview_mask: None,
         cache: None,
     })
