@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
-use glam::{Mat4, Quat, Vec3};
+use glam::{Mat4, Vec3};
 use manyshadows::scene::light_space::PointShadows;
 use manyshadows::scene::{Camera, Scene};
 use manyshadows::{wgpu, GpuContext, Pcf, RenderSettings, Renderer, Technique};
@@ -53,7 +53,8 @@ pub(crate) struct ViewArgs {
     /// Keep the shadow maps (pages) of views that saw no change between frames.
     #[arg(long)]
     cache: bool,
-    /// Move things: the smallest caster circles and the lights sway, so caching has work.
+    /// Move the smallest caster in a circle: with --cache, only the shadow maps that see it
+    /// are redrawn (the panel counts them).
     #[arg(long)]
     animate: bool,
     /// Camera to start from, `PX,PY,PZ,TX,TY,TZ` (default: the scene's camera).
@@ -197,6 +198,8 @@ struct State {
     frame_ms: f64,
     message: Option<String>,
     overlays: Overlays,
+    /// Shadow views drawn by the last frame (fewer than planned when caching keeps maps).
+    views_drawn: u64,
 }
 
 /// The panel's pictures: the shadow atlas and one light's visibility, read back at most
@@ -328,6 +331,7 @@ impl App {
             gpu_ms: Vec::new(),
             frame_ms: 0.0,
             message: None,
+            views_drawn: 0,
             overlays: Overlays {
                 atlas: self.args.show_atlas,
                 light: self.args.show_visibility.or(self.args.follow).unwrap_or(0),
@@ -429,18 +433,6 @@ impl State {
                     Mat4::from_translation(offset) * app_scene.instances[k].transform,
                 );
             }
-            let lights: Vec<_> = app_scene
-                .lights
-                .iter()
-                .enumerate()
-                .map(|(i, l)| {
-                    let mut l = *l;
-                    let a = 0.3 * (t + i as f32).sin();
-                    l.kind = sway(l.kind, a);
-                    l
-                })
-                .collect();
-            let _ = self.renderer.set_lights(lights);
         }
         let texture = match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
@@ -453,7 +445,8 @@ impl State {
         };
         let t0 = Instant::now();
         match self.renderer.render_to(&texture.texture) {
-            Ok(_) => {
+            Ok(submitted) => {
+                self.views_drawn = u64::from(submitted.shadow_stats.views_drawn);
                 self.gpu_ms = self.renderer.read_gpu_timings().unwrap_or_default();
             }
             Err(e) => self.message = Some(format!("frame: {e}")),
@@ -535,6 +528,8 @@ impl State {
         let features = self.ctx.device.features();
         let gpu_ms = self.gpu_ms.clone();
         let frame_ms = self.frame_ms;
+        let views_drawn = self.views_drawn;
+        let technique = self.choice.technique;
         let message = self.message.clone();
         let mut light_count = self.light_count;
         let overlays = &mut self.overlays;
@@ -585,6 +580,15 @@ impl State {
                         "{lights} lights, {views} shadow views, atlas {atlas}² ({:.1} MiB)",
                         (atlas as f64).powi(2) * 4.0 / (1 << 20) as f64
                     ));
+                    if matches!(technique, Technique::Irregular | Technique::Virtual) {
+                        ui.label(format!(
+                            "{technique}: no atlas (views are planned per frame)"
+                        ));
+                    } else {
+                        ui.label(format!(
+                            "shadow views drawn this frame: {views_drawn} of {views}"
+                        ));
+                    }
                     ui.label(format!("frame (render + GPU wait) {frame_ms:.1} ms"));
                     if gpu_ms.is_empty() {
                         ui.label("GPU time per stage: no timestamp queries on this device");
@@ -711,30 +715,6 @@ fn shrink_rgb(side: u32, rgb: &[u8], max: u32) -> (usize, Vec<u8>) {
         }
     }
     (w, out)
-}
-
-/// A light turned by `angle` radians about the vertical through the scene's origin.
-fn sway(kind: manyshadows::scene::LightKind, angle: f32) -> manyshadows::scene::LightKind {
-    use manyshadows::scene::LightKind;
-    let q = Quat::from_rotation_y(angle * 0.1);
-    match kind {
-        LightKind::Spot {
-            position,
-            direction,
-            cutoff_deg,
-            range,
-        } => LightKind::Spot {
-            position,
-            direction: (q * direction).normalize(),
-            cutoff_deg,
-            range,
-        },
-        LightKind::Point { position, range } => LightKind::Point {
-            position: position + Vec3::new(angle * 0.2, 0.0, 0.0),
-            range,
-        },
-        other => other,
-    }
 }
 
 impl ApplicationHandler for App {
