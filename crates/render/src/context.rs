@@ -360,13 +360,22 @@ impl GpuContext {
         what: &str,
         f: impl FnOnce() -> Result<T, RenderError>,
     ) -> Result<T, RenderError> {
-        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        // In a browser the scopes' promises settle only after control returns to its event
+        // loop, so they could not be waited for here: there no scope is pushed, and errors
+        // reach the uncaptured-error handler (logged, and reported by a later call).
+        #[cfg(not(target_arch = "wasm32"))]
+        let (oom, validation) = (
+            self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory),
+            self.device.push_error_scope(wgpu::ErrorFilter::Validation),
+        );
         let out = f();
-        let v = pollster::block_on(validation.pop());
-        let o = pollster::block_on(oom.pop());
-        if let Some(e) = v.or(o) {
-            return Err(RenderError::Gpu(format!("{what}: {e}")));
+        #[cfg(not(target_arch = "wasm32"))]
+        {
+            let v = pollster::block_on(validation.pop());
+            let o = pollster::block_on(oom.pop());
+            if let Some(e) = v.or(o) {
+                return Err(RenderError::Gpu(format!("{what}: {e}")));
+            }
         }
         if let Some(e) = self.take_uncaptured() {
             return Err(RenderError::Gpu(format!("{what}: {e}")));

@@ -8,7 +8,8 @@
 //! With [`Technique::Irregular`] step 2 computes the visibility mask itself
 //! ([`crate::irregular`]; no atlas), step 3 shades with that mask, and step 4 reads it back.
 
-use std::time::Instant;
+// `std::time::Instant` panics in a browser; web-time is std's on native targets.
+use web_time::Instant;
 
 use glam::Vec3;
 use manyshadows_scene::atlas::FitPolicy;
