@@ -10,8 +10,8 @@
 //! `MANYSHADOWS_FUZZ_CASES` sets the cases per batch (default 300: the bounded run of `cargo
 //! test`, under a second); `MANYSHADOWS_FUZZ_SECONDS` repeats batches until that long has
 //! passed. The long run in the README: `MANYSHADOWS_FUZZ_SECONDS=3600
-//! MANYSHADOWS_FUZZ_CASES=10000 cargo test --release -p manyshadows-scene --test fuzz --
-//! --nocapture`.
+//! MANYSHADOWS_FUZZ_CASES=1000 cargo test --release -p manyshadows-scene --test fuzz --
+//! --nocapture --test-threads 5` (five threads, so every format gets its hour at once).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
