@@ -20,8 +20,8 @@ pub async fn render_builtin(scene: String, width: u32, height: u32) -> Result<Ve
         .request_adapter(&wgpu::RequestAdapterOptions::default())
         .await
         .map_err(err)?;
-    let features = adapter.features()
-        & (wgpu::Features::CLIP_DISTANCES | wgpu::Features::TIMESTAMP_QUERY);
+    let features =
+        adapter.features() & (wgpu::Features::CLIP_DISTANCES | wgpu::Features::TIMESTAMP_QUERY);
     let (device, queue) = adapter
         .request_device(&wgpu::DeviceDescriptor {
             required_features: features,
@@ -32,11 +32,19 @@ pub async fn render_builtin(scene: String, width: u32, height: u32) -> Result<Ve
         .map_err(err)?;
     let ctx = GpuContext::from_parts(instance, adapter, device, queue).map_err(err)?;
     let scene = builtin::build(&scene, &Default::default()).map_err(err)?;
-    let settings = RenderSettings { width, height, ..Default::default() };
+    let settings = RenderSettings {
+        width,
+        height,
+        ..Default::default()
+    };
     let mut renderer = Renderer::new(&ctx, &scene, settings).map_err(err)?;
     let target = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("web.frame"),
-        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
@@ -81,7 +89,10 @@ pub async fn render_builtin(scene: String, width: u32, height: u32) -> Result<Ve
 }
 
 /// A one-shot channel as a JS promise (no extra crate): resolved by the map callback.
-fn futures_channel() -> (impl FnOnce(bool) + 'static, impl std::future::Future<Output = bool>) {
+fn futures_channel() -> (
+    impl FnOnce(bool) + 'static,
+    impl std::future::Future<Output = bool>,
+) {
     let mut resolve_fn = None;
     let promise = js_sys::Promise::new(&mut |resolve, _| resolve_fn = Some(resolve));
     let resolve = resolve_fn.expect("Promise::new runs its executor at once");
