@@ -4,7 +4,9 @@ class H(http.server.SimpleHTTPRequestHandler):
     extensions_map = {**http.server.SimpleHTTPRequestHandler.extensions_map, '.wasm': 'application/wasm', '.js': 'text/javascript'}
     def do_POST(self):
         n = int(self.headers.get('Content-Length', 0)); body = self.rfile.read(n)
-        open(os.path.join(out, self.path.strip('/')), 'wb').write(body)
+        # Only a bare file name (frame, error): nothing outside the output directory.
+        name = os.path.basename(self.path.split('?')[0]) or 'post'
+        open(os.path.join(out, name), 'wb').write(body)
         self.send_response(200); self.end_headers()
     def log_message(self, *a): pass
 os.chdir(os.path.dirname(os.path.abspath(__file__)))

@@ -121,7 +121,19 @@ pub(crate) fn run(args: &ViewArgs) -> Result<()> {
         )?),
         None => None,
     };
-    let scene = load(args, args.lights)?;
+    let scene = load(args)?;
+    for (flag, k) in [
+        ("--show-visibility", args.show_visibility),
+        ("--follow", args.follow),
+    ] {
+        if let Some(k) = k.filter(|&k| k >= scene.lights.len()) {
+            bail!(
+                "{flag} {k}: the scene has {} lights (0 to {})",
+                scene.lights.len(),
+                scene.lights.len().saturating_sub(1)
+            );
+        }
+    }
     let event_loop = EventLoop::new().context(
         "opening a window needs a display: run it on a desktop, or under Xvfb \
          (`Xvfb :99 & DISPLAY=:99 manyshadows view`)",
@@ -140,11 +152,11 @@ pub(crate) fn run(args: &ViewArgs) -> Result<()> {
     }
 }
 
-fn load(args: &ViewArgs, lights: Option<usize>) -> Result<Scene> {
+fn load(args: &ViewArgs) -> Result<Scene> {
     let render = RenderArgs {
         scene: args.scene.clone(),
         mesh: args.mesh.clone(),
-        lights,
+        lights: args.lights,
         seed: args.seed,
         camera: args.camera,
         ..RenderArgs::default()
@@ -178,8 +190,9 @@ struct State {
     ctx: GpuContext,
     renderer: Renderer,
     choice: Choice,
-    /// The panel's light count (applied with its button).
+    /// The panel's light count (applied with its button) and the layout's seed.
     light_count: usize,
+    seed: u64,
     egui_ctx: egui::Context,
     egui_state: egui_winit::State,
     egui_renderer: egui_wgpu::Renderer,
@@ -314,6 +327,7 @@ impl App {
             renderer,
             choice,
             light_count: self.scene.lights.len(),
+            seed: self.args.seed,
             egui_ctx,
             egui_state,
             egui_renderer,
@@ -690,7 +704,7 @@ impl State {
             app_scene.lights = manyshadows::scene::builtin::scatter_lights(
                 app_scene,
                 light_count,
-                1,
+                self.seed,
                 manyshadows::scene::builtin::LightMix::All,
                 None,
             );

@@ -257,6 +257,26 @@ fn the_viewer_without_a_display_says_what_to_do() {
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("Xvfb"), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
+    // Bad arguments are refused before any window opens.
+    for (args, needle) in [
+        (&["--follow", "9"][..], "--follow 9: the scene has 3 lights"),
+        (&["--show-visibility", "3"][..], "--show-visibility 3"),
+        (
+            &["--script", "no-such-script.txt"][..],
+            "no-such-script.txt",
+        ),
+        (&["--width", "0"][..], "at least 1"),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
+            .args(["view", "--scene", "cubes"])
+            .args(args)
+            .env_remove("DISPLAY")
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(stderr.contains(needle), "{args:?}: {stderr}");
+    }
 }
 
 /// With the panel, the atlas picture and light 1's visibility: the panel covers its corner

@@ -203,7 +203,9 @@ pub struct SubmittedFrame {
 
 /// A scene uploaded and ready to render frames.
 pub struct Renderer {
-    ctx: GpuContext,
+    /// Shared so a frame can hold it while it mutates the renderer (one reference-count
+    /// increment per frame, no copy of the adapter's description).
+    ctx: std::sync::Arc<GpuContext>,
     settings: RenderSettings,
     scene: GpuScene,
     shadows: ShadowGenerator,
@@ -404,7 +406,7 @@ impl Renderer {
                 None
             };
             Ok(Self {
-                ctx: ctx.clone(),
+                ctx: std::sync::Arc::new(ctx.clone()),
                 settings,
                 scene: gpu_scene,
                 shadows,
@@ -549,7 +551,7 @@ impl Renderer {
         if !self.dirty {
             return Ok(());
         }
-        let ctx = &self.ctx.clone();
+        let ctx = &*self.ctx.clone();
         let scene = &self.current;
         let settings = &self.settings;
         let aspect = settings.width as f32 / settings.height as f32;
@@ -714,7 +716,7 @@ impl Renderer {
     /// With [`Technique::Irregular`] this waits for the frame's overflow check (an overflowed
     /// frame is an error, never a wrong image).
     pub fn render_to(&mut self, target: &wgpu::Texture) -> Result<SubmittedFrame, RenderError> {
-        let ctx = &self.ctx.clone();
+        let ctx = &*self.ctx.clone();
         ctx.scoped("rendering a frame into the caller's texture", || {
             let start = Instant::now();
             let mut encoder = ctx
@@ -739,7 +741,7 @@ impl Renderer {
     /// GPU milliseconds per stage of the last frame [`Renderer::render_to`] submitted (empty
     /// without timestamp queries). Waits for that frame to finish.
     pub fn read_gpu_timings(&mut self) -> Result<Vec<(String, f64)>, RenderError> {
-        let ctx = &self.ctx.clone();
+        let ctx = &*self.ctx.clone();
         ctx.scoped("reading the frame's GPU times", || {
             let mut encoder = ctx
                 .device
@@ -754,7 +756,7 @@ impl Renderer {
 
     /// Renders one frame and reads it back.
     pub fn render(&mut self) -> Result<Frame, RenderError> {
-        let ctx = &self.ctx.clone();
+        let ctx = &*self.ctx.clone();
         ctx.scoped("rendering a frame", || {
             let start = Instant::now();
             let mut encoder = ctx
