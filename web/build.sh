@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
-# Builds the web page's module: the renderer for wasm32 and its JavaScript bindings in web/pkg.
+# Builds the web page's module: the renderer for wasm32 and its JavaScript bindings, into
+# web/pkg (or the folder given as the first argument).
 # Needs `rustup target add wasm32-unknown-unknown` and
 # `cargo install wasm-bindgen-cli --version 0.2.130` (the version of the wasm-bindgen crate).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+out="${1:-web/pkg}"
 cargo build --release -p manyshadows-web --target wasm32-unknown-unknown
-wasm-bindgen --target web --out-dir web/pkg \
-    target/wasm32-unknown-unknown/release/manyshadows_web.wasm
-echo "built web/pkg; serve it with: python3 web/serve.py 8000 /tmp  (then open http://127.0.0.1:8000/)"
+wasm-bindgen --target web --out-dir "$out" \
+    "${CARGO_TARGET_DIR:-target}/wasm32-unknown-unknown/release/manyshadows_web.wasm"
+echo "built $out; serve web/ with: python3 -m http.server --directory web 8000  (then open http://127.0.0.1:8000/)"

@@ -1,60 +1,302 @@
-//! The renderer in a web page: WebGPU through wgpu, the atrium rendered into a texture and
-//! read back (an offscreen frame: headless browsers do not present canvases).
+//! The renderer in a web page: WebGPU through wgpu. A [`WebRenderer`] keeps one scene and
+//! renderer alive; each frame is rendered into a texture and read back (an offscreen frame:
+//! headless browsers do not present canvases, and the page draws the pixels into a 2D canvas).
+//!
+//! Settings travel as a query string (`scene=atrium&technique=layered&lights=64&pcf=3x3`), the
+//! same text the page's URL and its controls use; see [`WebSettings`].
 #![cfg(target_arch = "wasm32")]
 
-use manyshadows::scene::builtin;
-use manyshadows::{wgpu, GpuContext, RenderSettings, Renderer};
+use manyshadows::clusters::LightLoop;
+use manyshadows::scene::builtin::{self, BuiltinOptions};
+use manyshadows::scene::light_space::PointShadows;
+use manyshadows::scene::Camera;
+use manyshadows::{wgpu, GpuContext, Pcf, RenderSettings, Renderer, Technique};
 use wasm_bindgen::prelude::*;
 
 fn err(e: impl std::fmt::Display) -> JsValue {
     JsValue::from_str(&e.to_string())
 }
 
-/// Renders `scene` (a built-in name) at `width`×`height` and returns the RGBA8 pixels.
-#[wasm_bindgen]
-pub async fn render_builtin(scene: String, width: u32, height: u32) -> Result<Vec<u8>, JsValue> {
-    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-    desc.backends = wgpu::Backends::BROWSER_WEBGPU;
-    let instance = wgpu::Instance::new(desc);
-    let adapter = instance
-        .request_adapter(&wgpu::RequestAdapterOptions::default())
-        .await
-        .map_err(err)?;
-    let features =
-        adapter.features() & (wgpu::Features::CLIP_DISTANCES | wgpu::Features::TIMESTAMP_QUERY);
-    let (device, queue) = adapter
-        .request_device(&wgpu::DeviceDescriptor {
-            required_features: features,
-            required_limits: adapter.limits(),
+/// What the page can change. Unknown keys and bad values are errors (named), not ignored.
+#[derive(Clone, Debug, PartialEq)]
+struct WebSettings {
+    scene: String,
+    width: u32,
+    height: u32,
+    technique: Technique,
+    point_shadows: PointShadows,
+    pcf: Pcf,
+    lights: Option<usize>,
+    seed: u64,
+    light_loop: LightLoop,
+    /// Camera turned about the scene's target by this many degrees (the page's orbit slider).
+    orbit_deg: f32,
+}
+
+impl Default for WebSettings {
+    fn default() -> Self {
+        Self {
+            scene: "atrium".into(),
+            width: 480,
+            height: 270,
+            technique: Technique::default(),
+            point_shadows: PointShadows::default(),
+            pcf: Pcf::default(),
+            lights: None,
+            seed: 1,
+            light_loop: LightLoop::default(),
+            orbit_deg: 0.0,
+        }
+    }
+}
+
+/// The largest frame side the page asks for (the renderer checks the device's own limit too).
+const MAX_SIDE: u32 = 2048;
+
+impl WebSettings {
+    fn parse(query: &str) -> Result<Self, String> {
+        let mut s = Self::default();
+        for pair in query
+            .trim_start_matches('?')
+            .split('&')
+            .filter(|p| !p.is_empty())
+        {
+            let (k, v) = pair.split_once('=').unwrap_or((pair, ""));
+            let num = |what: &str| -> Result<u64, String> {
+                v.parse::<u64>()
+                    .map_err(|_| format!("{what} '{v}' is not a whole number"))
+            };
+            match k {
+                "scene" => s.scene = v.to_string(),
+                "w" | "width" => s.width = num("width")? as u32,
+                "h" | "height" => s.height = num("height")? as u32,
+                "technique" => s.technique = v.parse()?,
+                "point" | "point_shadows" => {
+                    s.point_shadows = v.parse().map_err(|e| format!("{e}"))?
+                }
+                "pcf" => s.pcf = v.parse()?,
+                "lights" => {
+                    s.lights = if v.is_empty() || v == "default" {
+                        None
+                    } else {
+                        Some(num("lights")? as usize)
+                    }
+                }
+                "seed" => s.seed = num("seed")?,
+                "loop" | "light_loop" => s.light_loop = v.parse()?,
+                "orbit" => {
+                    s.orbit_deg = v
+                        .parse::<f32>()
+                        .ok()
+                        .filter(|d| d.is_finite())
+                        .ok_or_else(|| format!("orbit '{v}' is not a number of degrees"))?
+                }
+                // Keys the page itself uses.
+                "report" | "auto" => {}
+                _ => return Err(format!("unknown setting '{k}'")),
+            }
+        }
+        for (name, side) in [("width", s.width), ("height", s.height)] {
+            if !(1..=MAX_SIDE).contains(&side) {
+                return Err(format!(
+                    "{name} {side} must be between 1 and {MAX_SIDE} pixels"
+                ));
+            }
+        }
+        Ok(s)
+    }
+
+    fn render_settings(&self) -> RenderSettings {
+        RenderSettings {
+            width: self.width,
+            height: self.height,
+            technique: self.technique,
+            point_shadows: self.point_shadows,
+            pcf: self.pcf,
+            light_loop: self.light_loop,
             ..Default::default()
+        }
+    }
+}
+
+/// The camera of `base` turned `deg` degrees about its target's vertical axis.
+fn orbit(base: &Camera, deg: f32) -> Camera {
+    let mut c = base.clone();
+    let rot = glam::Mat3::from_rotation_y(deg.to_radians());
+    c.position = base.target + rot * (base.position - base.target);
+    c
+}
+
+/// One scene on the browser's WebGPU device, rendered on demand.
+#[wasm_bindgen]
+pub struct WebRenderer {
+    ctx: GpuContext,
+    settings: WebSettings,
+    base_camera: Camera,
+    renderer: Renderer,
+    target: wgpu::Texture,
+}
+
+#[wasm_bindgen]
+impl WebRenderer {
+    /// Opens the browser's WebGPU adapter and builds the scene `query` describes.
+    pub async fn create(query: String) -> Result<WebRenderer, JsValue> {
+        let settings = WebSettings::parse(&query).map_err(err)?;
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = wgpu::Backends::BROWSER_WEBGPU;
+        let instance = wgpu::Instance::new(desc);
+        let adapter = instance
+            .request_adapter(&wgpu::RequestAdapterOptions::default())
+            .await
+            .map_err(|e| err(format!("no WebGPU adapter: {e}")))?;
+        // The optional features the renderer uses when present; MULTIVIEW and pipeline
+        // statistics do not exist in WebGPU, so those techniques are refused by name.
+        let features =
+            adapter.features() & (wgpu::Features::CLIP_DISTANCES | wgpu::Features::TIMESTAMP_QUERY);
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                required_features: features,
+                required_limits: adapter.limits(),
+                ..Default::default()
+            })
+            .await
+            .map_err(err)?;
+        let ctx = GpuContext::from_parts(instance, adapter, device, queue).map_err(err)?;
+        let (renderer, base_camera, target) = Self::build(&ctx, &settings)?;
+        Ok(WebRenderer {
+            ctx,
+            settings,
+            base_camera,
+            renderer,
+            target,
         })
-        .await
-        .map_err(err)?;
-    let ctx = GpuContext::from_parts(instance, adapter, device, queue).map_err(err)?;
-    let scene = builtin::build(&scene, &Default::default()).map_err(err)?;
-    let settings = RenderSettings {
-        width,
-        height,
-        ..Default::default()
-    };
-    let mut renderer = Renderer::new(&ctx, &scene, settings).map_err(err)?;
-    let target = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("web.frame"),
-        size: wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8UnormSrgb,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
-    renderer.render_to(&target).map_err(err)?;
-    // Read back: rows padded to 256 bytes, mapped asynchronously.
-    let row = (width * 4).next_multiple_of(256);
+    }
+
+    fn build(
+        ctx: &GpuContext,
+        s: &WebSettings,
+    ) -> Result<(Renderer, Camera, wgpu::Texture), JsValue> {
+        let opts = BuiltinOptions {
+            lights: s.lights,
+            seed: s.seed,
+            ..Default::default()
+        };
+        let mut scene = builtin::build(&s.scene, &opts).map_err(err)?;
+        let base_camera = scene.camera.clone();
+        scene.camera = orbit(&base_camera, s.orbit_deg);
+        let renderer = Renderer::new(ctx, &scene, s.render_settings()).map_err(err)?;
+        let target = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("web.frame"),
+            size: wgpu::Extent3d {
+                width: s.width,
+                height: s.height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8UnormSrgb,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        Ok((renderer, base_camera, target))
+    }
+
+    /// Applies new settings. Only the camera changed: the renderer is kept (its shadow plan
+    /// follows the camera); anything else rebuilds it. On an error (a technique the device
+    /// cannot run, a bad value) the old renderer and settings stay.
+    pub fn configure(&mut self, query: String) -> Result<(), JsValue> {
+        let next = WebSettings::parse(&query).map_err(err)?;
+        let camera_only = WebSettings {
+            orbit_deg: self.settings.orbit_deg,
+            ..next.clone()
+        } == self.settings;
+        if camera_only {
+            self.renderer
+                .set_camera(orbit(&self.base_camera, next.orbit_deg))
+                .map_err(err)?;
+        } else {
+            let (renderer, base_camera, target) = Self::build(&self.ctx, &next)?;
+            self.renderer = renderer;
+            self.base_camera = base_camera;
+            self.target = target;
+        }
+        self.settings = next;
+        Ok(())
+    }
+
+    /// Renders a frame and returns its RGBA8 (sRGB) pixels, row-major from the top-left.
+    pub async fn render(&mut self) -> Result<Vec<u8>, JsValue> {
+        self.renderer.render_to(&self.target).map_err(err)?;
+        let pixels = read_back(&self.ctx, &self.target).await?;
+        // Errors the browser reported while the frame ran (none are expected).
+        if let Some(e) = self.ctx.take_uncaptured() {
+            return Err(err(format!("WebGPU error: {e}")));
+        }
+        Ok(pixels)
+    }
+
+    /// Frame width in pixels.
+    pub fn width(&self) -> u32 {
+        self.settings.width
+    }
+
+    /// Frame height in pixels.
+    pub fn height(&self) -> u32 {
+        self.settings.height
+    }
+
+    /// A few lines for the page: adapter, lights, shadow views, atlas and what the device lacks.
+    pub fn info(&self) -> String {
+        let plan = self.renderer.plan();
+        let lacks: Vec<&str> = [
+            (wgpu::Features::MULTIVIEW, "MULTIVIEW (technique multiview)"),
+            (
+                wgpu::Features::PIPELINE_STATISTICS_QUERY,
+                "pipeline statistics (primitive counters)",
+            ),
+            (
+                wgpu::Features::TIMESTAMP_QUERY,
+                "timestamp queries (GPU times)",
+            ),
+        ]
+        .iter()
+        .filter(|(f, _)| !self.ctx.has(*f))
+        .map(|&(_, s)| s)
+        .collect();
+        // Browsers hide the adapter's name from wgpu; the page prints what it may know.
+        let adapter = manyshadows::context::describe_adapter(&self.ctx.info);
+        format!(
+            "adapter: {}\nscene {}: {} lights, {} shadow views, atlas {}² ({:.0} % filled)\n\
+             technique {}, {} point shadows, PCF {}, {} light loop\nthis device lacks: {}",
+            if self.ctx.info.name.is_empty() {
+                "the browser's WebGPU (see above)".to_string()
+            } else {
+                adapter
+            },
+            self.settings.scene,
+            self.renderer.scene().lights.len(),
+            plan.views.len(),
+            plan.layout.size,
+            plan.fill() * 100.0,
+            self.settings.technique.name(),
+            self.settings.point_shadows.name(),
+            self.settings.pcf.name(),
+            self.settings.light_loop.name(),
+            if lacks.is_empty() {
+                "nothing the renderer uses".into()
+            } else {
+                lacks.join(", ")
+            }
+        )
+    }
+}
+
+/// Copies `target` into a mappable buffer and waits (asynchronously) for its pixels.
+async fn read_back(ctx: &GpuContext, target: &wgpu::Texture) -> Result<Vec<u8>, JsValue> {
+    let (width, height) = (target.width(), target.height());
+    // Rows padded to 256 bytes, as copies require.
+    let row = (width * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
     let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("web.readback"),
         size: row as u64 * height as u64,
@@ -75,7 +317,7 @@ pub async fn render_builtin(scene: String, width: u32, height: u32) -> Result<Ve
         target.size(),
     );
     ctx.queue.submit([encoder.finish()]);
-    let (tx, rx) = futures_channel();
+    let (tx, rx) = one_shot();
     buffer.map_async(wgpu::MapMode::Read, .., move |r| tx(r.is_ok()));
     if !rx.await {
         return Err(err("mapping the frame for reading failed"));
@@ -89,7 +331,7 @@ pub async fn render_builtin(scene: String, width: u32, height: u32) -> Result<Ve
 }
 
 /// A one-shot channel as a JS promise (no extra crate): resolved by the map callback.
-fn futures_channel() -> (
+fn one_shot() -> (
     impl FnOnce(bool) + 'static,
     impl std::future::Future<Output = bool>,
 ) {
