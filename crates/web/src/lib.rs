@@ -71,9 +71,7 @@ impl WebSettings {
                 "w" | "width" => s.width = num("width")? as u32,
                 "h" | "height" => s.height = num("height")? as u32,
                 "technique" => s.technique = v.parse()?,
-                "point" | "point_shadows" => {
-                    s.point_shadows = v.parse().map_err(|e| format!("{e}"))?
-                }
+                "point" | "point_shadows" => s.point_shadows = v.parse()?,
                 "pcf" => s.pcf = v.parse()?,
                 "lights" => {
                     s.lights = if v.is_empty() || v == "default" {
@@ -121,7 +119,7 @@ impl WebSettings {
 
 /// The camera of `base` turned `deg` degrees about its target's vertical axis.
 fn orbit(base: &Camera, deg: f32) -> Camera {
-    let mut c = base.clone();
+    let mut c = *base;
     let rot = glam::Mat3::from_rotation_y(deg.to_radians());
     c.position = base.target + rot * (base.position - base.target);
     c
