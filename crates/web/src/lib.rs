@@ -180,7 +180,7 @@ impl WebRenderer {
             ..Default::default()
         };
         let mut scene = builtin::build(&s.scene, &opts).map_err(err)?;
-        let base_camera = scene.camera.clone();
+        let base_camera = scene.camera;
         scene.camera = orbit(&base_camera, s.orbit_deg);
         let renderer = Renderer::new(ctx, &scene, s.render_settings()).map_err(err)?;
         let target = ctx.device.create_texture(&wgpu::TextureDescriptor {
