@@ -55,53 +55,13 @@ fn wrong_pixels_with(
     let frame = r.render().expect("frame");
     let vis = frame.visibility.as_ref().expect("visibility mask");
     let truth = common::analytic_truth(&scene, SIZE);
-    let at = |x: i32, y: i32| truth[(y as u32 * SIZE + x as u32) as usize];
-    let (mut compared, mut wrong, mut shadowed, mut lit) = (0, 0, 0, 0);
-    let mut diff = vec![0u8; (SIZE * SIZE * 3) as usize];
-    for y in 0..SIZE as i32 {
-        for x in 0..SIZE as i32 {
-            let Some(expected) = at(x, y) else { continue };
-            let near_edge = (-EDGE_BAND_PX..=EDGE_BAND_PX).any(|dy| {
-                (-EDGE_BAND_PX..=EDGE_BAND_PX).any(|dx| {
-                    let (nx, ny) = (x + dx, y + dy);
-                    nx < 0
-                        || ny < 0
-                        || nx >= SIZE as i32
-                        || ny >= SIZE as i32
-                        || at(nx, ny) != Some(expected)
-                })
-            });
-            let got = vis.lit(x as u32, y as u32, 0);
-            let i = ((y as u32 * SIZE + x as u32) * 3) as usize;
-            diff[i..i + 3].copy_from_slice(&match (expected, got) {
-                (true, true) => [200, 200, 200],
-                (false, false) => [40, 40, 40],
-                (true, false) => [255, 0, 0],
-                (false, true) => [0, 255, 0],
-            });
-            if near_edge {
-                continue;
-            }
-            compared += 1;
-            if expected {
-                lit += 1
-            } else {
-                shadowed += 1
-            }
-            if got != expected {
-                wrong += 1;
-            }
-        }
-    }
     let path = common::artifacts_dir().join(format!(
         "analytic-{name}-{technique}-{}-sub{subdivide}{tag}.png",
         points.name()
     ));
-    image::save_buffer(&path, &diff, SIZE, SIZE, image::ExtendedColorType::Rgb8).unwrap();
-    assert!(
-        shadowed > 200 && lit > 200,
-        "{name}: degenerate test ({shadowed} shadowed, {lit} lit pixels)"
-    );
+    let common::TruthAgreement {
+        compared, wrong, ..
+    } = common::agree_with_truth(vis, &truth, SIZE, EDGE_BAND_PX, &path);
     eprintln!(
         "{name} {technique} {} subdivided {subdivide}x: {wrong} of {compared} pixels away from \
          edges disagree with the exact shadow (red = false shadow, green = false light: {})",

@@ -48,12 +48,7 @@ fn triangle_scene(p: [Vec3; 3]) -> Scene {
         name: "tri".into(),
         meshes: vec![mesh],
         materials: vec![Material::default()],
-        instances: vec![Instance {
-            mesh: 0,
-            material: 0,
-            transform: Mat4::IDENTITY,
-            casts_shadows: true,
-        }],
+        instances: vec![Instance::caster(0, 0, Mat4::IDENTITY)],
         lights: vec![spot(0)],
         ..Default::default()
     }

@@ -39,12 +39,7 @@ fn scene() -> Scene {
         meshes: vec![floor, quad],
         materials: vec![Material::default()],
         instances: vec![
-            Instance {
-                mesh: 0,
-                material: 0,
-                transform: Mat4::IDENTITY,
-                casts_shadows: true,
-            },
+            Instance::caster(0, 0, Mat4::IDENTITY),
             Instance {
                 mesh: 1,
                 material: 0,

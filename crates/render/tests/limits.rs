@@ -142,12 +142,11 @@ fn grid_scene(n: u32) -> Scene {
     let mut scene = builtin::build("cubes", &BuiltinOptions::default()).unwrap();
     scene.meshes.push(mesh);
     scene.materials.push(Material::default());
-    scene.instances.push(Instance {
-        mesh: scene.meshes.len() - 1,
-        material: scene.materials.len() - 1,
-        transform: Mat4::from_translation(Vec3::new(0.0, 2.0, 0.0)),
-        casts_shadows: true,
-    });
+    scene.instances.push(Instance::caster(
+        scene.meshes.len() - 1,
+        scene.materials.len() - 1,
+        Mat4::from_translation(Vec3::new(0.0, 2.0, 0.0)),
+    ));
     scene
 }
 

@@ -183,18 +183,8 @@ fn light_inside_geometry_lights_nothing_outside() {
         ],
         materials: vec![Material::default()],
         instances: vec![
-            Instance {
-                mesh: 0,
-                material: 0,
-                transform: Mat4::IDENTITY,
-                casts_shadows: true,
-            },
-            Instance {
-                mesh: 1,
-                material: 0,
-                transform: Mat4::from_translation(Vec3::new(0.0, 1.0, 0.0)),
-                casts_shadows: true,
-            },
+            Instance::caster(0, 0, Mat4::IDENTITY),
+            Instance::caster(1, 0, Mat4::from_translation(Vec3::new(0.0, 1.0, 0.0))),
         ],
         lights: vec![light],
         // Looking at the floor beside the box (the box's own outside is "unoccluded" by

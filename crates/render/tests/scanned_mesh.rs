@@ -57,18 +57,8 @@ fn scene(sphere: Mesh) -> Scene {
         meshes: vec![primitives::plane(8.0, 8.0, 1), sphere],
         materials: vec![Material::default()],
         instances: vec![
-            Instance {
-                mesh: 0,
-                material: 0,
-                transform: Mat4::IDENTITY,
-                casts_shadows: true,
-            },
-            Instance {
-                mesh: 1,
-                material: 0,
-                transform: Mat4::from_translation(Vec3::new(0.0, 1.2, 0.0)),
-                casts_shadows: true,
-            },
+            Instance::caster(0, 0, Mat4::IDENTITY),
+            Instance::caster(1, 0, Mat4::from_translation(Vec3::new(0.0, 1.2, 0.0))),
         ],
         lights: vec![
             light(Vec3::new(2.5, 4.0, 3.0), 12.0),

@@ -169,6 +169,18 @@ pub struct Instance {
     pub casts_shadows: bool,
 }
 
+impl Instance {
+    /// Mesh `mesh` with material `material` placed by `transform`, casting shadows.
+    pub fn caster(mesh: usize, material: usize, transform: Mat4) -> Self {
+        Self {
+            mesh,
+            material,
+            transform,
+            casts_shadows: true,
+        }
+    }
+}
+
 /// Distance attenuation `1 / (constant + linear·d + quadratic·d²)` (seed 004).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -43,6 +43,87 @@ pub fn ray_box(o: Vec3, d: Vec3, lo: Vec3, hi: Vec3) -> Option<f32> {
     (tmax >= tmin.max(0.0)).then_some(tmin.max(0.0))
 }
 
+/// How a visibility mask (light 0) agrees with an analytic scene's exact shadow.
+#[allow(dead_code)]
+pub struct TruthAgreement {
+    /// Pixels more than the edge band from any edge, compared.
+    pub compared: usize,
+    /// Of those, pixels that disagree.
+    pub wrong: usize,
+    /// Disagreeing pixels anywhere, edges included.
+    pub wrong_anywhere: usize,
+    /// Compared pixels the truth calls shadowed / lit.
+    pub shadowed: usize,
+    /// See `shadowed`.
+    pub lit: usize,
+}
+
+/// Compares light 0 of `vis` with `truth` (from [`analytic_truth`], `size`²) away from edges:
+/// a pixel counts when every pixel within `edge_band` of it has the same truth. Writes a
+/// difference image to `path` (grey = agree, red = false shadow, green = false light) and
+/// fails a degenerate test (fewer than 200 shadowed or lit pixels compared).
+#[allow(dead_code)]
+pub fn agree_with_truth(
+    vis: &manyshadows::VisibilityMask,
+    truth: &[Option<bool>],
+    size: u32,
+    edge_band: i32,
+    path: &std::path::Path,
+) -> TruthAgreement {
+    let at = |x: i32, y: i32| truth[(y as u32 * size + x as u32) as usize];
+    let mut a = TruthAgreement {
+        compared: 0,
+        wrong: 0,
+        wrong_anywhere: 0,
+        shadowed: 0,
+        lit: 0,
+    };
+    let mut diff = vec![0u8; (size * size * 3) as usize];
+    for y in 0..size as i32 {
+        for x in 0..size as i32 {
+            let Some(expected) = at(x, y) else { continue };
+            let near_edge = (-edge_band..=edge_band).any(|dy| {
+                (-edge_band..=edge_band).any(|dx| {
+                    let (nx, ny) = (x + dx, y + dy);
+                    nx < 0
+                        || ny < 0
+                        || nx >= size as i32
+                        || ny >= size as i32
+                        || at(nx, ny) != Some(expected)
+                })
+            });
+            let got = vis.lit(x as u32, y as u32, 0);
+            let i = ((y as u32 * size + x as u32) * 3) as usize;
+            diff[i..i + 3].copy_from_slice(&match (expected, got) {
+                (true, true) => [200, 200, 200],
+                (false, false) => [40, 40, 40],
+                (true, false) => [255, 0, 0],
+                (false, true) => [0, 255, 0],
+            });
+            a.wrong_anywhere += usize::from(got != expected);
+            if near_edge {
+                continue;
+            }
+            a.compared += 1;
+            if expected {
+                a.lit += 1
+            } else {
+                a.shadowed += 1
+            }
+            a.wrong += usize::from(got != expected);
+        }
+    }
+    image::save_buffer(path, &diff, size, size, image::ExtendedColorType::Rgb8).unwrap();
+    assert!(
+        a.shadowed > 200 && a.lit > 200,
+        "{}: degenerate test ({} shadowed, {} lit pixels)",
+        path.display(),
+        a.shadowed,
+        a.lit
+    );
+    a
+}
+
 /// The exact shadow of an analytic scene (`plane-*`: one light over the square occluder) for a
 /// `size`² frame of its camera: ray from the camera to the first surface, then a segment from
 /// that point to the light against the occluder box.

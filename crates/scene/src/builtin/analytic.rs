@@ -178,18 +178,12 @@ pub(crate) fn build(which: AnalyticLight, opts: &BuiltinOptions) -> Scene {
             Material::matte(Vec3::new(0.75, 0.3, 0.2)),
         ],
         instances: vec![
-            Instance {
-                mesh: FLOOR_MESH,
-                material: 0,
-                transform: glam::Mat4::IDENTITY,
-                casts_shadows: true,
-            },
-            Instance {
-                mesh: OCCLUDER_MESH,
-                material: 1,
-                transform: glam::Mat4::from_translation(OCCLUDER_CENTER),
-                casts_shadows: true,
-            },
+            Instance::caster(FLOOR_MESH, 0, glam::Mat4::IDENTITY),
+            Instance::caster(
+                OCCLUDER_MESH,
+                1,
+                glam::Mat4::from_translation(OCCLUDER_CENTER),
+            ),
         ],
         lights: vec![which.light(opts.shadow_resolution)],
         camera: analytic_camera(),

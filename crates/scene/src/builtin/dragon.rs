@@ -198,12 +198,7 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Result<Scene, SceneError> {
     camera.far = 60.0;
     let obstacles = lights::instance_boxes(
         std::slice::from_ref(&model),
-        &[Instance {
-            mesh: 0,
-            material: 0,
-            transform,
-            casts_shadows: true,
-        }],
+        &[Instance::caster(0, 0, transform)],
     );
     Ok(Scene {
         name: "dragon".into(),
@@ -217,18 +212,8 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Result<Scene, SceneError> {
             },
         ],
         instances: vec![
-            Instance {
-                mesh: 0,
-                material: 0,
-                transform: Mat4::IDENTITY,
-                casts_shadows: true,
-            },
-            Instance {
-                mesh: 1,
-                material: 1,
-                transform,
-                casts_shadows: true,
-            },
+            Instance::caster(0, 0, Mat4::IDENTITY),
+            Instance::caster(1, 1, transform),
         ],
         lights: dragon_lights(n, opts.seed, opts.mix, opts.shadow_resolution, &obstacles),
         camera,

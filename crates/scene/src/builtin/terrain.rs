@@ -303,12 +303,7 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
         Material::matte(Vec3::new(0.5, 0.48, 0.45)),
         Material::matte(Vec3::new(0.55, 0.65, 0.25)),
     ];
-    let mut instances = vec![Instance {
-        mesh: TERRAIN_MESH,
-        material: 0,
-        transform: Mat4::IDENTITY,
-        casts_shadows: true,
-    }];
+    let mut instances = vec![Instance::caster(TERRAIN_MESH, 0, Mat4::IDENTITY)];
     let mut rng = Rand::new(TERRAIN_SEED, 0x0b1e);
     let half = 0.5 * TERRAIN_SIZE - 2.0;
     let kinds = [
