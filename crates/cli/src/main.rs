@@ -567,7 +567,7 @@ fn render(args: &RenderArgs) -> Result<()> {
             scene.instances.len()
         ),
         Some(k) => Some(k),
-        None => smallest_caster(&scene),
+        None => scene.smallest_caster(),
     };
     let mut frame = None;
     for f in 0..args.frames {
@@ -637,22 +637,6 @@ fn render(args: &RenderArgs) -> Result<()> {
             .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
-}
-
-/// The shadow caster with the smallest mesh: moving it changes few views.
-pub(crate) fn smallest_caster(scene: &Scene) -> Option<usize> {
-    scene
-        .instances
-        .iter()
-        .enumerate()
-        .filter(|(_, i)| i.casts_shadows)
-        .filter_map(|(k, i)| {
-            let (lo, hi) = scene.meshes.get(i.mesh)?.bounds()?;
-            let scale = i.transform.to_scale_rotation_translation().0.max_element();
-            Some((k, (hi - lo).length() * scale))
-        })
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .map(|(k, _)| k)
 }
 
 fn write_rgba_png(path: &Path, w: u32, h: u32, rgba: &[u8]) -> Result<()> {

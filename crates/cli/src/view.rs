@@ -440,7 +440,7 @@ impl State {
         }
         if animate {
             let t = (now - self.started).as_secs_f32();
-            if let Some(k) = crate::smallest_caster(app_scene) {
+            if let Some(k) = app_scene.smallest_caster() {
                 let offset = Vec3::new(0.4 * t.cos() - 0.4, 0.0, 0.4 * t.sin());
                 let _ = self.renderer.set_instance_transform(
                     k,

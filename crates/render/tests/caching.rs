@@ -45,17 +45,7 @@ fn cached_generation_equals_a_full_one_after_a_move() {
     )
     .expect("scene");
     // The smallest shadow caster moves 0.4 m sideways.
-    let (k, _) = scene
-        .instances
-        .iter()
-        .enumerate()
-        .filter(|(_, i)| i.casts_shadows)
-        .map(|(k, i)| {
-            let (lo, hi) = scene.meshes[i.mesh].bounds().expect("bounds");
-            (k, (hi - lo).length())
-        })
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .expect("a caster");
+    let k = scene.smallest_caster().expect("a caster");
     let moved = Mat4::from_translation(Vec3::new(0.4, 0.0, 0.0)) * scene.instances[k].transform;
     let mut moved_scene = scene.clone();
     moved_scene.instances[k].transform = moved;
@@ -188,17 +178,7 @@ fn cached_virtual_pages_equal_a_full_regeneration() {
     assert_eq!(differing(&first, &second), (0, 0, 0));
 
     // The smallest caster moves: the faces that see its old or new place redraw.
-    let (k, _) = scene
-        .instances
-        .iter()
-        .enumerate()
-        .filter(|(_, i)| i.casts_shadows)
-        .map(|(k, i)| {
-            let (lo, hi) = scene.meshes[i.mesh].bounds().expect("bounds");
-            (k, (hi - lo).length())
-        })
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .expect("a caster");
+    let k = scene.smallest_caster().expect("a caster");
     let moved = Mat4::from_translation(Vec3::new(0.4, 0.0, 0.0)) * scene.instances[k].transform;
     r.set_instance_transform(k, moved).unwrap();
     let third = r.render().expect("frame 3");

@@ -44,25 +44,8 @@ fn render(ctx: &GpuContext, scene: &Scene, light_loop: LightLoop, pool: Option<u
 }
 
 fn assert_same(name: &str, a: &Frame, b: &Frame) {
-    let differing = a
-        .rgba
-        .chunks(4)
-        .zip(b.rgba.chunks(4))
-        .filter(|(x, y)| x != y)
-        .count();
-    if differing > 0 {
-        let dir = common::artifacts_dir();
-        for (f, tag) in [(a, "clustered"), (b, "all")] {
-            image::save_buffer(
-                dir.join(format!("clusters_{name}_{tag}.png")),
-                &f.rgba,
-                f.width,
-                f.height,
-                image::ExtendedColorType::Rgba8,
-            )
-            .expect("write artifact");
-        }
-    }
+    let differing =
+        common::differing_pixels(a, b, &format!("clusters_{name}"), ["clustered", "all"]);
     assert_eq!(
         differing, 0,
         "{name}: {differing} pixels differ (images in target/test-artifacts)"

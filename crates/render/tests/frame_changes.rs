@@ -102,25 +102,12 @@ fn assert_like_fresh(ctx: &GpuContext, step: &str, changed: &mut Renderer) -> Fr
         .expect("fresh renderer")
         .render()
         .expect("fresh frame");
-    let differing = frame
-        .rgba
-        .chunks(4)
-        .zip(fresh.rgba.chunks(4))
-        .filter(|(a, b)| a != b)
-        .count();
-    if differing > 0 {
-        let dir = common::artifacts_dir();
-        for (f, tag) in [(&frame, "changed"), (&fresh, "fresh")] {
-            image::save_buffer(
-                dir.join(format!("frame_changes_{technique}_{step}_{tag}.png")),
-                &f.rgba,
-                f.width,
-                f.height,
-                image::ExtendedColorType::Rgba8,
-            )
-            .expect("write artifact");
-        }
-    }
+    let differing = common::differing_pixels(
+        &frame,
+        &fresh,
+        &format!("frame_changes_{technique}_{step}"),
+        ["changed", "fresh"],
+    );
     assert_eq!(
         differing, 0,
         "{technique}, after {step}: {differing} pixels differ from a fresh renderer"

@@ -424,6 +424,22 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// The shadow caster with the smallest mesh (bounding-box diagonal times the instance's
+    /// largest scale): moving it changes the fewest shadow views. `None` without casters.
+    pub fn smallest_caster(&self) -> Option<usize> {
+        self.instances
+            .iter()
+            .enumerate()
+            .filter(|(_, i)| i.casts_shadows)
+            .filter_map(|(k, i)| {
+                let (lo, hi) = self.meshes.get(i.mesh)?.bounds()?;
+                let scale = i.transform.to_scale_rotation_translation().0.max_element();
+                Some((k, (hi - lo).length() * scale))
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(k, _)| k)
+    }
+
     /// Splits every mesh's triangles `levels` times ([`crate::primitives::subdivide`]: 4^levels
     /// as many triangles). Fails past 20 million triangles over all instances.
     pub fn subdivide(&mut self, levels: u32) -> Result<(), crate::SceneError> {

@@ -271,3 +271,33 @@ pub fn reference_errors(
     }
     e
 }
+
+/// Pixels whose RGBA differs between two frames; when any do, both frames go to
+/// target/test-artifacts as `{stem}_{tag}.png`.
+#[allow(dead_code)]
+pub fn differing_pixels(
+    a: &manyshadows::Frame,
+    b: &manyshadows::Frame,
+    stem: &str,
+    tags: [&str; 2],
+) -> usize {
+    let differing = a
+        .rgba
+        .chunks(4)
+        .zip(b.rgba.chunks(4))
+        .filter(|(x, y)| x != y)
+        .count();
+    if differing > 0 {
+        for (f, tag) in [(a, tags[0]), (b, tags[1])] {
+            image::save_buffer(
+                artifacts_dir().join(format!("{stem}_{tag}.png")),
+                &f.rgba,
+                f.width,
+                f.height,
+                image::ExtendedColorType::Rgba8,
+            )
+            .expect("write artifact");
+        }
+    }
+    differing
+}
