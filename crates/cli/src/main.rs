@@ -71,7 +71,9 @@ enum Command {
     /// Score every shadow technique against an exact CPU ray-traced reference.
     #[command(long_about = compare::LONG_ABOUT)]
     Compare(Box<compare::CompareArgs>),
-    /// Benchmarks with tables, JSON and plots (`bench layered`: seed 000's experiments).
+    /// Benchmarks with tables, JSON and plots (`bench layered`: seed 000's experiments). Each
+    /// comparison runs its methods round-robin after a warm-up and reports medians and ratios
+    /// from the same runs.
     #[command(subcommand)]
     Bench(BenchCommand),
     /// Fly through a scene in a window: switch technique, point shadows, PCF, light count and
