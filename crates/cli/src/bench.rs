@@ -12,16 +12,14 @@
 //! one run's pipeline statistics where the adapter has them.
 
 use std::path::PathBuf;
-use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::{Mat4, Quat, Vec3};
-use indicatif::{ProgressBar, ProgressStyle};
 use manyshadows::casters::{CasterOptions, Skin, MAX_BONES};
 use manyshadows::scene::atlas::FitPolicy;
 use manyshadows::scene::{Attenuation, Camera, Instance, Light, LightKind, Material, Mesh, Scene};
-use manyshadows::timing::{GpuTimer, PipelineCounts};
+use manyshadows::timing::PipelineCounts;
 use manyshadows::wgpu;
 use manyshadows::{
     CullMode, GpuContext, GpuScene, RenderError, ShadowGenerator, ShadowOptions, ShadowPlan,
@@ -29,7 +27,10 @@ use manyshadows::{
 };
 use serde::Serialize;
 
-use crate::GpuArgs;
+use crate::harness::{
+    check_counts, Contender, Figure, Harness, Run, RunArgs, ShadowSubject, Subject,
+};
+use crate::plot::{PlotPoint, CPU_TIME};
 
 /// Arguments of `manyshadows bench layered`.
 #[derive(Args, Debug, Clone)]
@@ -65,23 +66,14 @@ pub struct LayeredArgs {
         value_delimiter = ','
     )]
     pub methods: Vec<String>,
-    /// Timed runs per configuration and method (medians are reported).
-    #[arg(long, default_value_t = 5)]
-    pub repeats: usize,
-    /// Untimed runs first.
-    #[arg(long, default_value_t = 1)]
-    pub warmup: usize,
     /// Rasterize in every variant (the seed turned rasterization off after `simple`).
     #[arg(long)]
     pub raster: bool,
     /// Draw the plots from an earlier run's results.json instead of measuring.
     #[arg(long)]
     pub replot: Option<PathBuf>,
-    /// Directory for results.json, results.txt and the plots.
-    #[arg(long, default_value = "bench-layered")]
-    pub out_dir: PathBuf,
     #[command(flatten)]
-    pub gpu: GpuArgs,
+    pub run: RunArgs,
 }
 
 /// One of the seed's experiments.
@@ -247,46 +239,12 @@ pub struct Record {
     pipeline: Option<PipelineCounts>,
 }
 
-/// What the JSON file holds.
+/// The bench's own fields of results.json.
 #[derive(Serialize)]
-struct Report<'a> {
-    adapter: String,
-    backend: String,
-    mesh: String,
+struct Fields<'a> {
+    mesh: &'a str,
     mesh_triangles: usize,
-    repeats: usize,
-    warmup: usize,
-    notes: &'a [String],
     records: &'a [Record],
-}
-
-/// Median GPU milliseconds of `stage` over `frames` (`None` without timestamp queries).
-pub(crate) fn stage(frames: &[manyshadows::Frame], stage: &str) -> Option<f64> {
-    let v: Vec<f64> = frames
-        .iter()
-        .flat_map(|f| f.timings.gpu_ms.iter())
-        .filter(|(k, _)| k == stage)
-        .map(|(_, v)| *v)
-        .collect();
-    (!v.is_empty()).then(|| median(&v))
-}
-
-/// Milliseconds for a table cell, `n/a` when not measured.
-pub(crate) fn ms(v: Option<f64>) -> String {
-    v.map_or("n/a".into(), |v| format!("{v:.1}"))
-}
-
-pub(crate) fn median(v: &[f64]) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let n = s.len();
-    if n == 0 {
-        f64::NAN
-    } else if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    }
 }
 
 /// `n` unit directions spread evenly over the sphere (Fibonacci lattice).
@@ -402,66 +360,36 @@ fn bones_at(pivots: &[f32], t: f32) -> Vec<Mat4> {
         .collect()
 }
 
-pub(crate) struct Timed {
-    pub(crate) gpu_ms: Option<f64>,
-    pub(crate) cpu_ms: f64,
-    pub(crate) wall_ms: f64,
-    pub(crate) stats: ShadowStats,
+/// A method's generator; in the skinned variants it poses the bones before each run (the
+/// same sequence of poses for every method).
+struct Posed<'a> {
+    method: Method,
+    shadows: ShadowSubject<'a>,
+    gpu: &'a GpuScene,
+    pivots: &'a [f32],
+    clock: f32,
 }
 
-/// One generation, timed; any GPU validation error fails the benchmark (numbers from an
-/// invalid pipeline would be meaningless).
-pub(crate) fn run_once(
-    ctx: &GpuContext,
-    gen: &mut ShadowGenerator,
-    gpu: &GpuScene,
-    timer: &mut GpuTimer,
-) -> Result<(Timed, Option<PipelineCounts>), RenderError> {
-    ctx.scoped(&format!("benchmarking {}", gen.technique()), || {
-        run_unscoped(ctx, gen, gpu, timer)
-    })
-}
+impl Subject for Posed<'_> {
+    type Counters = ShadowStats;
 
-fn run_unscoped(
-    ctx: &GpuContext,
-    gen: &mut ShadowGenerator,
-    gpu: &GpuScene,
-    timer: &mut GpuTimer,
-) -> Result<(Timed, Option<PipelineCounts>), RenderError> {
-    timer.reset();
-    let span = timer.span("shadows");
-    let start = Instant::now();
-    let mut encoder = ctx
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("bench.encoder"),
-        });
-    let stats = gen.generate(ctx, gpu, &mut encoder, timer, span);
-    timer.resolve(&mut encoder);
-    ctx.queue.submit([encoder.finish()]);
-    let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
-    ctx.wait_idle()?;
-    let wall_ms = start.elapsed().as_secs_f64() * 1e3;
-    let gpu_ms = timer.read(ctx)?.first().map(|s| s.1);
-    let counts = timer.read_statistics(ctx)?;
-    Ok((
-        Timed {
-            gpu_ms,
-            cpu_ms,
-            wall_ms,
-            stats,
-        },
-        counts,
-    ))
+    fn weight(&self) -> u64 {
+        self.shadows.weight()
+    }
+
+    fn run(&mut self, ctx: &GpuContext) -> Result<Run<ShadowStats>> {
+        if let Some(skin) = &self.gpu.skin {
+            self.clock += 0.1;
+            skin.set_bones(&ctx.queue, &bones_at(self.pivots, self.clock));
+        }
+        self.shadows.run(ctx)
+    }
 }
 
 /// Runs `manyshadows bench layered`.
 pub fn layered(args: &LayeredArgs) -> Result<()> {
     if let Some(path) = &args.replot {
-        return replot(path, &args.out_dir);
-    }
-    if args.repeats == 0 {
-        bail!("--repeats must be at least 1");
+        return replot(path, &args.run.output.out_dir);
     }
     let variants: Vec<&Variant> = args
         .variants
@@ -479,9 +407,7 @@ pub fn layered(args: &LayeredArgs) -> Result<()> {
             })
         })
         .collect::<Result<_>>()?;
-    if let Some(&m) = args.maps.iter().find(|&&m| m == 0 || m > 4096) {
-        bail!("--maps {m}: each count must be 1..=4096");
-    }
+    check_counts("--maps", &args.maps, 4096, "")?;
     if let Some(&r) = args
         .resolutions
         .iter()
@@ -507,24 +433,28 @@ pub fn layered(args: &LayeredArgs) -> Result<()> {
         }
         None => manyshadows::scene::builtin::dragon::dragon_stand_in(),
     };
-    std::fs::create_dir_all(&args.out_dir)
-        .with_context(|| format!("creating {}", args.out_dir.display()))?;
-    let ctx = GpuContext::new(&args.gpu.request())?;
-    let adapter = manyshadows::context::describe_adapter(&ctx.info);
+    let h = Harness::start(&args.run)?;
+    let ctx = &h.ctx;
     let max_atlas =
         manyshadows::shadow::DEFAULT_MAX_ATLAS_SIZE.min(ctx.limits().max_texture_dimension_2d);
-    let stats_on = ctx.has(wgpu::Features::PIPELINE_STATISTICS_QUERY);
-    let timestamps = ctx.has(wgpu::Features::TIMESTAMP_QUERY);
-    eprintln!("adapter: {adapter}");
     eprintln!(
         "mesh: {} ({} triangles); timestamps {}, pipeline statistics {}",
         mesh.name,
         mesh.triangle_count(),
-        if timestamps { "on" } else { "unavailable" },
-        if stats_on { "on" } else { "unavailable" }
+        if ctx.has(wgpu::Features::TIMESTAMP_QUERY) {
+            "on"
+        } else {
+            "unavailable"
+        },
+        if ctx.has(wgpu::Features::PIPELINE_STATISTICS_QUERY) {
+            "on"
+        } else {
+            "unavailable"
+        }
     );
 
-    // Plan the work first, for an honest progress bar.
+    // Plan the work first, for an honest progress bar: every method's timed runs, plus one
+    // run with pipeline statistics.
     let mut plan: Vec<(&Variant, u32, usize, Vec<Method>)> = Vec::new();
     for &v in &variants {
         let methods = methods_for(&args.methods, v)?;
@@ -534,48 +464,41 @@ pub fn layered(args: &LayeredArgs) -> Result<()> {
             }
         }
     }
-    let total: u64 = plan
-        .iter()
-        .map(|(_, _, maps, m)| (m.len() * (args.repeats + args.warmup + 1) * maps) as u64)
-        .sum();
-    let pb = ProgressBar::new(total);
-    pb.set_style(
-        ProgressStyle::with_template(
-            "{bar:40} {percent:>3}% {msg} [{elapsed} elapsed, ~{eta} left]",
-        )
-        .expect("valid template"),
+    let work =
+        |methods: usize, maps: usize| h.units(methods, maps as u64) + (methods * maps) as u64;
+    h.plan(
+        plan.iter()
+            .map(|(_, _, maps, m)| work(m.len(), *maps))
+            .sum(),
     );
-    let mut notes: Vec<String> = Vec::new();
     let mut records: Vec<Record> = Vec::new();
     let mut unsupported: Vec<Technique> = Vec::new();
     for (variant, res, maps, methods) in &plan {
         let (variant, res, maps) = (*variant, *res, *maps);
-        pb.set_message(format!("{} {}² ×{}", variant.name, res, maps));
-        let work = (methods.len() * (args.repeats + args.warmup + 1) * maps) as u64;
+        h.message(format!("{} {}² ×{}", variant.name, res, maps));
         let scene = bench_scene(&mesh, maps, res, variant.instances)?;
         let shadow_plan = match ShadowPlan::new(&scene, 1.0, max_atlas, FitPolicy::Strict) {
             Ok(p) => p,
             Err(e) => {
-                let note = format!(
+                h.note(format!(
                     "{} {res}² ×{maps}: skipped, the maps do not fit one atlas ({e})",
                     variant.name
-                );
-                pb.suspend(|| eprintln!("{note}"));
-                notes.push(note);
-                pb.inc(work);
+                ));
+                h.advance(work(methods.len(), maps));
                 continue;
             }
         };
-        let mut gpu = GpuScene::new(&ctx, &scene)?;
+        let mut gpu = GpuScene::new(ctx, &scene)?;
         let pivots = if variant.skinned {
             let (skin, pivots) = make_skin(&mesh);
-            gpu.attach_skin(&ctx, &scene, &skin)?;
+            gpu.attach_skin(ctx, &scene, &skin)?;
             pivots
         } else {
             Vec::new()
         };
+        let gpu = &gpu;
         // Build every method's generator (skipping unsupported techniques, said once).
-        let mut gens: Vec<(Method, ShadowGenerator, GpuTimer)> = Vec::new();
+        let mut contenders = Vec::new();
         for &m in methods {
             if unsupported.contains(&m.technique) {
                 continue;
@@ -588,130 +511,90 @@ pub fn layered(args: &LayeredArgs) -> Result<()> {
                 discard_raster: variant.discard && !args.raster,
             };
             let created = ctx.scoped(&format!("building {}", m.technique), || {
-                ShadowGenerator::new(
-                    &ctx,
-                    &scene,
-                    &gpu,
-                    shadow_plan.clone(),
-                    m.technique,
-                    options,
-                )
+                ShadowGenerator::new(ctx, &scene, gpu, shadow_plan.clone(), m.technique, options)
             });
             match created {
-                Ok(g) => gens.push((m, g, GpuTimer::new(&ctx))),
+                Ok(g) => contenders.push(Contender {
+                    label: m.label(),
+                    subject: Posed {
+                        method: m,
+                        shadows: ShadowSubject::new(ctx, g, gpu, maps as u64),
+                        gpu,
+                        pivots: &pivots,
+                        clock: 0.0,
+                    },
+                }),
                 Err(RenderError::Unsupported(why)) => {
-                    let note = format!("{} skipped: {why}", m.technique);
-                    pb.suspend(|| eprintln!("{note}"));
-                    notes.push(note);
+                    h.note(format!("{} skipped: {why}", m.technique));
                     unsupported.push(m.technique);
                 }
                 Err(e) => return Err(e.into()),
             }
         }
-        let mut runs: Vec<Vec<Timed>> = gens.iter().map(|_| Vec::new()).collect();
-        let mut clock = 0.0f32;
-        for rep in 0..args.warmup + args.repeats {
-            for (k, (_, gen, timer)) in gens.iter_mut().enumerate() {
-                if let Some(skin) = &gpu.skin {
-                    clock += 0.1;
-                    skin.set_bones(&ctx.queue, &bones_at(&pivots, clock));
-                }
-                let (t, _) = run_once(&ctx, gen, &gpu, timer)?;
-                if rep >= args.warmup {
-                    runs[k].push(t);
-                }
-                pb.inc(maps as u64);
-            }
-        }
-        // One more run per method with pipeline statistics (kept out of the timings).
-        let mut counts: Vec<Option<PipelineCounts>> = Vec::new();
-        for (_, gen, _) in gens.iter_mut() {
-            let mut timer = GpuTimer::new(&ctx);
-            let on = timer.enable_statistics(&ctx, 2 * maps as u32 + 16);
-            let (_, c) = run_once(&ctx, gen, &gpu, &mut timer)?;
-            counts.push(if on { c } else { None });
-            pb.inc(maps as u64);
-        }
-        let skipped = (methods.len() - gens.len()) * (args.repeats + args.warmup + 1) * maps;
-        pb.inc(skipped as u64);
-        let med = |k: usize, f: &dyn Fn(&Timed) -> Option<f64>| -> Option<f64> {
-            let v: Vec<f64> = runs[k].iter().filter_map(f).collect();
-            (!v.is_empty()).then(|| median(&v))
-        };
-        let base = gens
-            .iter()
-            .position(|(m, _, _)| m.technique == Technique::Traditional);
-        let base_gpu = base.and_then(|b| med(b, &|t| t.gpu_ms));
-        let base_cpu = base.and_then(|b| med(b, &|t| Some(t.cpu_ms)));
-        let base_wall = base.and_then(|b| med(b, &|t| Some(t.wall_ms)));
-        for (k, (m, gen, _)) in gens.iter().enumerate() {
-            let gpu_ms = med(k, &|t| t.gpu_ms);
-            let cpu_ms = med(k, &|t| Some(t.cpu_ms)).unwrap_or(f64::NAN);
-            let wall_ms = med(k, &|t| Some(t.wall_ms)).unwrap_or(f64::NAN);
+        h.advance(work(methods.len() - contenders.len(), maps));
+        for mut o in h.compare(contenders, Some("traditional"))? {
+            // One more run per method with pipeline statistics (kept out of the timings).
+            let pipeline = o
+                .subject
+                .shadows
+                .pipeline_statistics(ctx, 2 * maps as u32 + 16)?;
+            h.advance(maps as u64);
+            let m = o.subject.method;
             records.push(Record {
                 variant: variant.name.into(),
                 resolution: res,
                 maps,
-                method: m.label(),
+                method: o.label,
                 technique: m.technique.name().into(),
                 cull: m.cull.name().into(),
                 triangles_per_map: (mesh.triangle_count() * variant.instances) as u64,
-                atlas_size: gen.atlas.size,
-                gpu_ms,
-                cpu_ms,
-                wall_ms,
-                gpu_ms_runs: runs[k].iter().filter_map(|t| t.gpu_ms).collect(),
-                cpu_ms_runs: runs[k].iter().map(|t| t.cpu_ms).collect(),
-                wall_ms_runs: runs[k].iter().map(|t| t.wall_ms).collect(),
-                gpu_ratio_vs_traditional: gpu_ms.zip(base_gpu).map(|(a, b)| a / b),
-                cpu_ratio_vs_traditional: base_cpu.map(|b| cpu_ms / b),
-                wall_ratio_vs_traditional: base_wall.map(|b| wall_ms / b),
-                stats: runs[k].last().map(|t| t.stats).unwrap_or_default(),
-                pipeline: counts[k],
+                atlas_size: o.subject.shadows.gen.atlas.size,
+                gpu_ms: o.runs.gpu_ms(),
+                cpu_ms: o.runs.cpu_ms(),
+                wall_ms: o.runs.wall_ms(),
+                gpu_ms_runs: o.runs.gpu_runs(),
+                cpu_ms_runs: o.runs.cpu_runs(),
+                wall_ms_runs: o.runs.wall_runs(),
+                gpu_ratio_vs_traditional: o.gpu_ratio,
+                cpu_ratio_vs_traditional: o.cpu_ratio,
+                wall_ratio_vs_traditional: o.wall_ratio,
+                stats: o.runs.counters(),
+                pipeline,
             });
         }
     }
-    pb.finish_and_clear();
-
-    let backend = format!("{:?}", ctx.info.backend);
-    let text = table(&records, &adapter);
-    print!("{text}");
-    std::fs::write(args.out_dir.join("results.txt"), &text)?;
-    let report = Report {
-        adapter: adapter.clone(),
-        backend,
-        mesh: mesh.name.clone(),
+    let table = table(&records, &h.adapter);
+    let points = records
+        .iter()
+        .map(|r| PlotPoint {
+            variant: r.variant.clone(),
+            resolution: r.resolution,
+            maps: r.maps,
+            method: r.method.clone(),
+            gpu_ms: r.gpu_ms,
+            cpu_ms: r.cpu_ms,
+        })
+        .collect();
+    let fields = Fields {
+        mesh: &mesh.name,
         mesh_triangles: mesh.triangle_count(),
-        repeats: args.repeats,
-        warmup: args.warmup,
-        notes: &notes,
         records: &records,
     };
-    let json_path = args.out_dir.join("results.json");
-    std::fs::write(&json_path, serde_json::to_string_pretty(&report)?)?;
-    let plots = crate::plot::layered_plots(&records_view(&records), &adapter, &args.out_dir)?;
-    eprintln!("wrote {}", json_path.display());
-    for p in plots {
-        eprintln!("wrote {}", p.display());
-    }
-    Ok(())
+    h.finish(
+        table,
+        fields,
+        vec![Figure::ByMethod {
+            prefix: PLOT_PREFIX,
+            x_name: PLOT_X,
+            second: CPU_TIME,
+            points,
+        }],
+    )
 }
 
-/// The fields the plots need.
-pub struct PlotPoint {
-    /// Experiment.
-    pub variant: String,
-    /// Resolution.
-    pub resolution: u32,
-    /// Map count.
-    pub maps: usize,
-    /// Method label.
-    pub method: String,
-    /// Median GPU ms.
-    pub gpu_ms: Option<f64>,
-    /// Median CPU ms (`bench irregular`: the shadow stage's GPU ms; the plots name it).
-    pub cpu_ms: f64,
-}
+/// The plots' file-name prefix and x axis.
+const PLOT_PREFIX: &str = "layered";
+const PLOT_X: &str = "shadow maps";
 
 /// Plots an earlier run's JSON again (e.g. after a change to the plot style).
 fn replot(path: &std::path::Path, out_dir: &std::path::Path) -> Result<()> {
@@ -738,24 +621,10 @@ fn replot(path: &std::path::Path, out_dir: &std::path::Path) -> Result<()> {
         .with_context(|| format!("{}: a record lacks a field", path.display()))?;
     std::fs::create_dir_all(out_dir)?;
     let adapter = json["adapter"].as_str().unwrap_or("unknown adapter");
-    for p in crate::plot::layered_plots(&points, adapter, out_dir)? {
+    for p in crate::plot::plots(&points, adapter, out_dir, PLOT_PREFIX, PLOT_X, CPU_TIME)? {
         eprintln!("wrote {}", p.display());
     }
     Ok(())
-}
-
-fn records_view(records: &[Record]) -> Vec<PlotPoint> {
-    records
-        .iter()
-        .map(|r| PlotPoint {
-            variant: r.variant.clone(),
-            resolution: r.resolution,
-            maps: r.maps,
-            method: r.method.clone(),
-            gpu_ms: r.gpu_ms,
-            cpu_ms: r.cpu_ms,
-        })
-        .collect()
 }
 
 /// The table for people: one block per variant and resolution.

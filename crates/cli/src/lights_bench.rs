@@ -5,21 +5,22 @@
 //! assignment, shadow generation, lighting), the lights per occupied cluster (mean and
 //! maximum), how the shadow maps were fitted (full, reduced, unshadowed, off screen) and the
 //! memory of the atlas and the cluster lists. Up to `--reference-up-to` lights it also times
-//! the lighting pass looping over every light (`--light-loop all`) in the same run, so the
-//! ratio clustered / all is measured, not inferred.
+//! the lighting pass looping over every light (`--light-loop all`) in the same run, frame by
+//! frame interleaved with the clustered one (see [`crate::harness`]), so the ratio clustered /
+//! all is measured, not inferred.
 
-use std::path::PathBuf;
-
-use anyhow::{bail, Context, Result};
+use anyhow::Result;
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
 use manyshadows::clusters::LightLoop;
-use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
-use manyshadows::{GpuContext, RenderSettings, Renderer, Technique};
+use manyshadows::scene::builtin::{self, LightMix};
+use manyshadows::{RenderSettings, Renderer, Technique};
 use serde::Serialize;
 
-use crate::bench::{ms, stage};
-use crate::GpuArgs;
+use crate::harness::{
+    check_counts, check_scene, ms, parse_screen, seeded_scene, Contender, Figure, FrameSubject,
+    Harness, RunArgs,
+};
+use crate::plot::series;
 
 /// Arguments of `manyshadows bench lights`.
 #[derive(Args, Debug, Clone)]
@@ -49,17 +50,8 @@ pub struct LightsArgs {
     /// Also time the lighting pass looping over every light, for counts up to this (0: never).
     #[arg(long, default_value_t = 1024)]
     pub reference_up_to: usize,
-    /// Timed frames per configuration (medians are reported).
-    #[arg(long, default_value_t = 3)]
-    pub repeats: usize,
-    /// Untimed frames first.
-    #[arg(long, default_value_t = 1)]
-    pub warmup: usize,
-    /// Directory for results.json, results.txt and the plots.
-    #[arg(long, default_value = "bench-lights")]
-    pub out_dir: PathBuf,
     #[command(flatten)]
-    pub gpu: GpuArgs,
+    pub run: RunArgs,
 }
 
 #[derive(Serialize, Default)]
@@ -83,47 +75,15 @@ struct Record {
     atlas_side: u32,
     atlas_mib: f64,
     cluster_lists_kib: f64,
+    /// Median wall ms of a clustered frame, until its image is back on the CPU.
     wall_ms: f64,
-}
-
-fn parse_screen(s: &str) -> Result<(u32, u32)> {
-    let (w, h) = s
-        .split_once('x')
-        .with_context(|| format!("--screens '{s}': expected WIDTHxHEIGHT, e.g. 1280x720"))?;
-    let w: u32 = w
-        .parse()
-        .with_context(|| format!("--screens '{s}': bad width"))?;
-    let h: u32 = h
-        .parse()
-        .with_context(|| format!("--screens '{s}': bad height"))?;
-    if w == 0 || h == 0 || w > 8192 || h > 8192 {
-        bail!("--screens '{s}': width and height must be 1..=8192");
-    }
-    Ok((w, h))
 }
 
 /// Runs `manyshadows bench lights`.
 pub fn lights(args: &LightsArgs) -> Result<()> {
-    if args.repeats == 0 {
-        bail!("--repeats must be at least 1");
-    }
-    if let Some(&n) = args
-        .lights
-        .iter()
-        .find(|&&n| n == 0 || n > builtin::MAX_LIGHTS)
-    {
-        bail!(
-            "--lights {n}: each count must be 1..={}",
-            builtin::MAX_LIGHTS
-        );
-    }
+    check_counts("--lights", &args.lights, builtin::MAX_LIGHTS, "")?;
     for s in &args.scenes {
-        if !builtin::SCENE_NAMES.contains(&s.as_str()) {
-            bail!(
-                "--scenes {s}: not a built-in scene ({})",
-                builtin::SCENE_NAMES.join(", ")
-            );
-        }
+        check_scene("--scenes", s)?;
     }
     let screens: Vec<(String, (u32, u32))> = args
         .screens
@@ -131,87 +91,60 @@ pub fn lights(args: &LightsArgs) -> Result<()> {
         .map(|s| parse_screen(s).map(|d| (s.clone(), d)))
         .collect::<Result<_>>()?;
     let mix: LightMix = args.light_types.parse().map_err(anyhow::Error::msg)?;
-    std::fs::create_dir_all(&args.out_dir)
-        .with_context(|| format!("creating {}", args.out_dir.display()))?;
-    let ctx = GpuContext::new(&args.gpu.request())?;
-    let adapter = manyshadows::context::describe_adapter(&ctx.info);
-    eprintln!("adapter: {adapter}");
-    let frames = (args.warmup + args.repeats) as u64;
-    let total: u64 = args
+    let h = Harness::start(&args.run)?;
+    // Each count renders clustered, and up to --reference-up-to also with every light.
+    let loops = |n: usize| -> &'static [(&'static str, LightLoop)] {
+        if n <= args.reference_up_to {
+            &[("clustered", LightLoop::Clustered), ("all", LightLoop::All)]
+        } else {
+            &[("clustered", LightLoop::Clustered)]
+        }
+    };
+    let per_group: u64 = args
         .lights
         .iter()
-        .map(|&n| {
-            if n <= args.reference_up_to {
-                2 * frames
-            } else {
-                frames
-            }
-        })
-        .sum::<u64>()
-        * (args.scenes.len() * screens.len()) as u64;
-    let pb = ProgressBar::new(total);
-    pb.set_style(
-        ProgressStyle::with_template("{bar:40} {percent:>3}% {msg} [{elapsed}, ~{eta} left]")
-            .expect("valid template"),
-    );
+        .map(|&n| h.units(loops(n).len(), 1))
+        .sum();
+    h.plan(per_group * (args.scenes.len() * screens.len()) as u64);
     let mut records = Vec::new();
     for scene_name in &args.scenes {
-        for (screen, (w, h)) in &screens {
+        for (screen, (w, h_px)) in &screens {
             for &n in &args.lights {
-                pb.set_message(format!("{scene_name}, {screen}, {n} lights"));
-                let scene = builtin::build(
-                    scene_name,
-                    &BuiltinOptions {
-                        lights: Some(n),
-                        seed: 1,
-                        mix,
-                        shadow_resolution: args.shadow_resolution,
-                        ..Default::default()
-                    },
-                )?;
-                let settings = RenderSettings {
-                    width: *w,
-                    height: *h,
-                    technique: args.technique,
-                    ..Default::default()
-                };
-                let run = |light_loop: LightLoop| -> Result<(Vec<manyshadows::Frame>, f64, _)> {
-                    let started = std::time::Instant::now();
-                    let mut r = Renderer::new(
-                        &ctx,
-                        &scene,
-                        RenderSettings {
+                h.message(format!("{scene_name}, {screen}, {n} lights"));
+                let scene = seeded_scene(scene_name, n, mix, args.shadow_resolution)?;
+                let contenders = loops(n)
+                    .iter()
+                    .map(|&(label, light_loop)| {
+                        let settings = RenderSettings {
+                            width: *w,
+                            height: *h_px,
+                            technique: args.technique,
                             light_loop,
-                            ..settings.clone()
-                        },
-                    )?;
-                    let mut timed = Vec::new();
-                    for rep in 0..args.warmup + args.repeats {
-                        let f = r.render()?;
-                        if rep >= args.warmup {
-                            timed.push(f);
-                        }
-                        pb.inc(1);
-                    }
-                    let plan = r.plan().clone();
-                    Ok((timed, started.elapsed().as_secs_f64() * 1e3, plan))
-                };
-                let (timed, wall_ms, plan) = run(LightLoop::Clustered)?;
-                let lighting_all_ms = if n <= args.reference_up_to {
-                    stage(&run(LightLoop::All)?.0, "lighting")
-                } else {
-                    None
-                };
-                let c = timed.last().and_then(|f| f.clusters).unwrap_or_default();
+                            ..Default::default()
+                        };
+                        Ok(Contender {
+                            label: label.into(),
+                            subject: FrameSubject {
+                                renderer: Renderer::new(&h.ctx, &scene, settings)?,
+                            },
+                        })
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                let out = h.compare(contenders, None)?;
+                let lighting_all_ms = out.get(1).and_then(|o| o.runs.stage("lighting"));
+                let clustered = &out[0];
+                let runs = &clustered.runs;
+                let c = runs.counters().clusters.unwrap_or_default();
+                let plan = clustered.subject.renderer.plan();
                 let side = plan.layout.size;
                 records.push(Record {
                     scene: scene_name.clone(),
                     screen: screen.clone(),
                     lights: n,
-                    gbuffer_ms: stage(&timed, "gbuffer"),
-                    clusters_ms: stage(&timed, "clusters"),
-                    shadows_ms: stage(&timed, "shadows"),
-                    lighting_ms: stage(&timed, "lighting"),
+                    gbuffer_ms: runs.stage("gbuffer"),
+                    clusters_ms: runs.stage("clusters"),
+                    shadows_ms: runs.stage("shadows"),
+                    lighting_ms: runs.stage("lighting"),
                     lighting_all_ms,
                     lights_in_view: c.lights_in_view,
                     occupied_clusters: c.occupied,
@@ -223,31 +156,19 @@ pub fn lights(args: &LightsArgs) -> Result<()> {
                     atlas_side: side,
                     atlas_mib: (side as f64).powi(2) * 4.0 / (1024.0 * 1024.0),
                     cluster_lists_kib: c.pool_bytes as f64 / 1024.0,
-                    wall_ms,
+                    wall_ms: runs.wall_ms(),
                 });
             }
         }
     }
-    pb.finish_and_clear();
-    let text = table(&records, &adapter, args);
-    print!("{text}");
-    std::fs::write(args.out_dir.join("results.txt"), &text)?;
-    let json = serde_json::json!({
-        "adapter": adapter,
+    let table = table(&records, &h.adapter, args);
+    let figures = figures(&records, args);
+    let fields = serde_json::json!({
         "light_types": args.light_types,
         "technique": args.technique.name(),
-        "repeats": args.repeats,
-        "warmup": args.warmup,
         "records": records,
     });
-    std::fs::write(
-        args.out_dir.join("results.json"),
-        serde_json::to_string_pretty(&json)?,
-    )?;
-    for path in plots(&records, &adapter, args)? {
-        eprintln!("wrote {}", path.display());
-    }
-    Ok(())
+    h.finish(table, fields, figures)
 }
 
 fn table(records: &[Record], adapter: &str, args: &LightsArgs) -> String {
@@ -256,7 +177,7 @@ fn table(records: &[Record], adapter: &str, args: &LightsArgs) -> String {
     let _ = writeln!(
         t,
         "== bench lights: median GPU ms per stage over {} frames, technique {}, light types {}\n   adapter: {adapter}",
-        args.repeats,
+        args.run.repeats,
         args.technique.name(),
         args.light_types
     );
@@ -299,8 +220,8 @@ fn table(records: &[Record], adapter: &str, args: &LightsArgs) -> String {
     t
 }
 
-fn plots(records: &[Record], adapter: &str, args: &LightsArgs) -> Result<Vec<PathBuf>> {
-    let mut written = Vec::new();
+fn figures(records: &[Record], args: &LightsArgs) -> Vec<Figure> {
+    let mut figures = Vec::new();
     for scene in &args.scenes {
         for screen in &args.screens {
             let rows: Vec<&Record> = records
@@ -308,14 +229,9 @@ fn plots(records: &[Record], adapter: &str, args: &LightsArgs) -> Result<Vec<Pat
                 .filter(|r| &r.scene == scene && &r.screen == screen)
                 .collect();
             let series = |name: &str, f: &dyn Fn(&Record) -> Option<f64>| {
-                (
-                    name.to_string(),
-                    rows.iter()
-                        .filter_map(|r| f(r).map(|v| (r.lights as f64, v)))
-                        .collect::<Vec<_>>(),
-                )
+                series(name, &rows, |r| r.lights, f)
             };
-            let specs = vec![
+            let panels = vec![
                 (
                     "GPU ms per stage".to_string(),
                     "ms".to_string(),
@@ -353,15 +269,13 @@ fn plots(records: &[Record], adapter: &str, args: &LightsArgs) -> Result<Vec<Pat
                     ],
                 ),
             ];
-            let path = args.out_dir.join(format!("lights-{scene}-{screen}.png"));
-            crate::plot::panels(
-                &path,
-                &format!("bench lights: {scene}, {screen} — {adapter}"),
-                "lights",
-                &specs,
-            )?;
-            written.push(path);
+            figures.push(Figure::Panels {
+                file: format!("lights-{scene}-{screen}.png"),
+                title: format!("bench lights: {scene}, {screen}"),
+                x_name: "lights",
+                panels,
+            });
         }
     }
-    Ok(written)
+    figures
 }

@@ -20,6 +20,7 @@ use manyshadows::{
 
 mod bench;
 mod compare;
+mod harness;
 mod irregular_bench;
 mod lights_bench;
 mod omni;
@@ -70,7 +71,9 @@ enum Command {
     /// Score every shadow technique against an exact CPU ray-traced reference.
     #[command(long_about = compare::LONG_ABOUT)]
     Compare(Box<compare::CompareArgs>),
-    /// Benchmarks with tables, JSON and plots (`bench layered`: seed 000's experiments).
+    /// Benchmarks with tables, JSON and plots (`bench layered`: seed 000's experiments). Each
+    /// comparison runs its methods round-robin after a warm-up and reports medians and ratios
+    /// from the same runs.
     #[command(subcommand)]
     Bench(BenchCommand),
     /// Fly through a scene in a window: switch technique, point shadows, PCF, light count and
@@ -85,26 +88,36 @@ enum BenchCommand {
     /// Shadow-map generation time against the number of maps, for every technique and the
     /// seed's variants (simple, no-raster, skinned, instances, backface, combined). Writes
     /// results.txt, results.json and one plot per variant and resolution into --out-dir.
+    #[command(mut_arg("repeats", |a| a.default_value("5")))]
+    #[command(mut_arg("out_dir", |a| a.default_value("bench-layered").required(false)))]
     Layered(Box<bench::LayeredArgs>),
     /// Point-light shadows in the atrium: cube maps (six passes, or one) against dual
     /// paraboloids (two passes, or one), for 1..N lights: GPU and CPU time per light and
     /// atlas memory per light, as a table, results.json and plots (seed 003's comparison).
+    #[command(mut_arg("repeats", |a| a.default_value("5")))]
+    #[command(mut_arg("out_dir", |a| a.default_value("bench-omni").required(false)))]
     Omni(Box<omni::OmniArgs>),
     /// Alias-free irregular shadows against traditional shadow maps: frame GPU time by number
     /// of lights and screen resolution, as a table, results.json and plots.
+    #[command(mut_arg("out_dir", |a| a.default_value("bench-irregular").required(false)))]
     Irregular(Box<irregular_bench::IrregularArgs>),
     /// Whole frames from 16 to 16,384 lights with clustered shading: GPU time per stage
     /// (G-buffer, clusters, shadows, lighting; lighting also over every light up to
     /// --reference-up-to), lights per cluster, shadow-map fit and memory; table, results.json
     /// and one plot per scene and screen.
+    #[command(mut_arg("out_dir", |a| a.default_value("bench-lights").required(false)))]
     Lights(Box<lights_bench::LightsArgs>),
     /// Virtual shadow maps against the atlas path, 16 to 4,096 lights, interleaved in the same
     /// run: GPU time per stage, shadow memory kept, pages needed / rendered / denied; table,
     /// results.json and a plot.
+    #[command(mut_arg("out_dir", |a| a.default_value("bench-virtual").required(false)))]
     Virtual(Box<virtual_bench::VirtualArgs>),
     /// Thousands of frames in which the camera, a caster, a light and the light count change:
     /// resident memory after a warm-up against its baseline (fails past --max-growth-mib),
     /// frame times per interval, any failed frame; table and results.json.
+    #[command(mut_arg("out_dir", |a| a.default_value("bench-soak")
+        .required(false)
+        .help("Directory for results.json and results.txt")))]
     Soak(Box<soak::SoakArgs>),
 }
 

@@ -7,7 +7,22 @@ use anyhow::{anyhow, Result};
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 
-use crate::bench::PlotPoint;
+/// One record's medians, as [`plots`] draws them.
+pub struct PlotPoint {
+    /// Experiment (one picture per variant and resolution).
+    pub variant: String,
+    /// Resolution (0: none in the file name and title).
+    pub resolution: u32,
+    /// The count on the x axis (maps, lights).
+    pub maps: usize,
+    /// Method label (one line each).
+    pub method: String,
+    /// Median GPU ms.
+    pub gpu_ms: Option<f64>,
+    /// Median CPU ms, or what the plots' `second` names (`bench irregular`: the shadow stage's
+    /// GPU ms).
+    pub cpu_ms: f64,
+}
 
 /// What [`PlotPoint::cpu_ms`] holds in the benchmarks of shadow generation.
 pub const CPU_TIME: &str = "CPU ms (record + submit)";
@@ -33,14 +48,25 @@ const COLOURS: &[RGBColor] = &[
     RGBColor(23, 190, 207),
 ];
 
-type Series = (String, Vec<(f64, f64)>);
+/// A named line: `(name, [(x, y)])`.
+pub type Series = (String, Vec<(f64, f64)>);
 
 /// One panel of [`panels`]: caption, y unit and its series.
 pub type Panel = (String, String, Vec<Series>);
 
-/// Writes one PNG per (variant, resolution) into `dir` and returns their paths.
-pub fn layered_plots(points: &[PlotPoint], adapter: &str, dir: &Path) -> Result<Vec<PathBuf>> {
-    plots(points, adapter, dir, "layered", "shadow maps", CPU_TIME)
+/// A series of [`panels`]: `y` of every row that has one, against its count `x`.
+pub fn series<R>(
+    name: &str,
+    rows: &[&R],
+    x: impl Fn(&R) -> usize,
+    y: impl Fn(&R) -> Option<f64>,
+) -> Series {
+    (
+        name.to_string(),
+        rows.iter()
+            .filter_map(|r| y(r).map(|v| (x(r) as f64, v)))
+            .collect(),
+    )
 }
 
 /// Plots of any benchmark whose x axis is a count (`x_name`), files `<prefix>-<variant>-<res>.png`.

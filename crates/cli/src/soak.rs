@@ -8,20 +8,17 @@
 //! first frames allocate pipelines, caches and the largest light count's buffers), and the
 //! verdict compares the last sample with that baseline.
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::{Mat4, Quat, Vec3};
-use indicatif::{ProgressBar, ProgressStyle};
 use manyshadows::scene::builtin::{self, BuiltinOptions};
 use manyshadows::scene::LightKind;
-use manyshadows::{GpuContext, RenderSettings, Renderer, Technique};
+use manyshadows::{RenderSettings, Renderer, Technique};
 use serde::Serialize;
 
-use crate::bench::median;
-use crate::GpuArgs;
+use crate::harness::{median, Harness, OutputArgs};
 
 /// Arguments of `manyshadows bench soak`.
 #[derive(Args, Debug, Clone)]
@@ -53,11 +50,8 @@ pub struct SoakArgs {
     /// Resident-memory growth over the baseline that fails the run, MiB.
     #[arg(long, default_value_t = 64.0)]
     pub max_growth_mib: f64,
-    /// Directory for results.json and results.txt.
-    #[arg(long, default_value = "bench-soak")]
-    pub out_dir: PathBuf,
     #[command(flatten)]
-    pub gpu: GpuArgs,
+    pub output: OutputArgs,
 }
 
 #[derive(Serialize)]
@@ -105,13 +99,9 @@ pub fn soak(args: &SoakArgs) -> Result<()> {
         },
     )?
     .lights;
-    std::fs::create_dir_all(&args.out_dir)
-        .with_context(|| format!("creating {}", args.out_dir.display()))?;
-    let ctx = GpuContext::new(&args.gpu.request())?;
-    let adapter = manyshadows::context::describe_adapter(&ctx.info);
-    eprintln!("adapter: {adapter}");
+    let h = Harness::start_unscheduled(&args.output)?;
     let mut r = Renderer::new(
-        &ctx,
+        &h.ctx,
         &scene,
         RenderSettings {
             width: args.width,
@@ -136,11 +126,7 @@ pub fn soak(args: &SoakArgs) -> Result<()> {
             size(a.1).total_cmp(&size(b.1))
         })
         .map(|(k, _)| k);
-    let pb = ProgressBar::new(u64::from(args.frames));
-    pb.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} frames {msg} [{elapsed}, ~{eta} left]")
-            .expect("valid template"),
-    );
+    h.plan(u64::from(args.frames));
     let every = (args.frames / 20).max(1);
     let mut samples = Vec::new();
     let (mut walls, mut gpus) = (Vec::new(), Vec::new());
@@ -183,7 +169,7 @@ pub fn soak(args: &SoakArgs) -> Result<()> {
         if !frame.timings.gpu_ms.is_empty() {
             gpus.push(frame.timings.gpu_ms.iter().map(|(_, v)| v).sum::<f64>());
         }
-        pb.inc(1);
+        h.advance(1);
         if f + 1 == args.warmup {
             baseline = resident_mib();
             walls.clear();
@@ -191,7 +177,7 @@ pub fn soak(args: &SoakArgs) -> Result<()> {
         }
         if f + 1 > args.warmup && ((f + 1) % every == 0 || f + 1 == args.frames) {
             let rss = resident_mib().unwrap_or(0.0);
-            pb.set_message(format!("{rss:.0} MiB resident"));
+            h.message(format!("frame {}, {rss:.0} MiB resident", f + 1));
             samples.push(Sample {
                 frame: f + 1,
                 resident_mib: rss,
@@ -203,7 +189,6 @@ pub fn soak(args: &SoakArgs) -> Result<()> {
             gpus.clear();
         }
     }
-    pb.finish_and_clear();
     let baseline = baseline.unwrap_or(0.0);
     let last = samples.last().map_or(baseline, |s| s.resident_mib);
     let peak = samples
@@ -216,14 +201,15 @@ pub fn soak(args: &SoakArgs) -> Result<()> {
         .iter()
         .fold((f64::MAX, 0.0f64), |(lo, hi), &v| (lo.min(v), hi.max(v)));
     let mut text = format!(
-        "== bench soak: {} frames of {} ({} lights, half of them 50 frames in 250), {} at {}x{}{}; camera, a caster and a light move every frame\n   adapter: {adapter}\n",
+        "== bench soak: {} frames of {} ({} lights, half of them 50 frames in 250), {} at {}x{}{}; camera, a caster and a light move every frame\n   adapter: {}\n",
         args.frames,
         args.scene,
         args.lights,
         args.technique,
         args.width,
         args.height,
-        if args.cache { ", caching" } else { "" }
+        if args.cache { ", caching" } else { "" },
+        h.adapter
     );
     text += &format!(
         "{:>7} {:>12} {:>10} {:>10} {:>7}\n",
@@ -246,10 +232,7 @@ pub fn soak(args: &SoakArgs) -> Result<()> {
     text += &format!(
         "   resident memory: baseline {baseline:.1} MiB, peak {peak:.1}, last {last:.1} ({growth:+.1} MiB); median wall ms per sample interval {fastest:.2}..{slowest:.2}\n"
     );
-    print!("{text}");
-    std::fs::write(args.out_dir.join("results.txt"), &text)?;
-    let json = serde_json::json!({
-        "adapter": adapter,
+    let fields = serde_json::json!({
         "scene": args.scene,
         "technique": args.technique.name(),
         "cache": args.cache,
@@ -260,10 +243,7 @@ pub fn soak(args: &SoakArgs) -> Result<()> {
         "growth_mib": growth,
         "samples": samples,
     });
-    std::fs::write(
-        args.out_dir.join("results.json"),
-        serde_json::to_string_pretty(&json)?,
-    )?;
+    h.finish(text, fields, Vec::new())?;
     if growth > args.max_growth_mib {
         bail!(
             "resident memory grew {growth:.1} MiB over the soak (more than --max-growth-mib {})",

@@ -8,18 +8,18 @@
 //! or page pool plus page table), and for the virtual maps the pages needed, rendered and
 //! denied, and the faces; for the atlas the views and how they were fitted.
 
-use std::path::PathBuf;
-
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
-use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
+use manyshadows::scene::builtin::{self, LightMix};
 use manyshadows::vsm::{VirtualOptions, VirtualStats};
-use manyshadows::{GpuContext, RenderSettings, Renderer, Technique};
+use manyshadows::{RenderSettings, Renderer, Technique};
 use serde::Serialize;
 
-use crate::bench::{ms, stage};
-use crate::GpuArgs;
+use crate::harness::{
+    check_counts, check_scene, ms, seeded_scene, Contender, Figure, FrameCounters, FrameSubject,
+    Harness, RunArgs, Runs,
+};
+use crate::plot::series;
 
 /// Arguments of `manyshadows bench virtual`.
 #[derive(Args, Debug, Clone)]
@@ -45,17 +45,8 @@ pub struct VirtualArgs {
     /// Page pool of the virtual maps, MiB.
     #[arg(long, default_value_t = (manyshadows::vsm::DEFAULT_POOL_BYTES >> 20) as u32)]
     pub page_pool: u32,
-    /// Timed frames per configuration (medians are reported).
-    #[arg(long, default_value_t = 3)]
-    pub repeats: usize,
-    /// Untimed frames first.
-    #[arg(long, default_value_t = 1)]
-    pub warmup: usize,
-    /// Directory for results.json, results.txt and the plot.
-    #[arg(long, default_value = "bench-virtual")]
-    pub out_dir: PathBuf,
     #[command(flatten)]
-    pub gpu: GpuArgs,
+    pub run: RunArgs,
 }
 
 #[derive(Serialize, Default, Clone)]
@@ -66,7 +57,7 @@ struct Side {
     pages_ms: Option<f64>,
     shadows_ms: Option<f64>,
     lighting_ms: Option<f64>,
-    /// Sum of the stages' medians.
+    /// Median over the frames of the stages' sum.
     frame_ms: Option<f64>,
     /// Shadow memory kept by the technique: the atlas, or the pool plus the page table.
     shadow_mib: f64,
@@ -80,49 +71,28 @@ struct Record {
     atlas_fit: manyshadows::shadow::FitReport,
     atlas_side: u32,
     virtual_maps: Side,
+    /// Median frame GPU time of the virtual maps over the atlas's, from the same run.
+    frame_ratio_virtual_vs_atlas: Option<f64>,
     stats: VirtualStats,
 }
 
-fn side(frames: &[manyshadows::Frame], shadow_mib: f64) -> Side {
-    let mut s = Side {
-        gbuffer_ms: stage(frames, "gbuffer"),
-        clusters_ms: stage(frames, "clusters"),
-        pages_ms: stage(frames, "pages"),
-        shadows_ms: stage(frames, "shadows"),
-        lighting_ms: stage(frames, "lighting"),
-        frame_ms: None,
+fn side(runs: &Runs<FrameCounters>, shadow_mib: f64) -> Side {
+    Side {
+        gbuffer_ms: runs.stage("gbuffer"),
+        clusters_ms: runs.stage("clusters"),
+        pages_ms: runs.stage("pages"),
+        shadows_ms: runs.stage("shadows"),
+        lighting_ms: runs.stage("lighting"),
+        frame_ms: runs.gpu_ms(),
         shadow_mib,
-    };
-    let parts = [
-        s.gbuffer_ms,
-        s.clusters_ms,
-        s.pages_ms,
-        s.shadows_ms,
-        s.lighting_ms,
-    ];
-    if s.gbuffer_ms.is_some() {
-        s.frame_ms = Some(parts.iter().flatten().sum());
     }
-    s
 }
 
 const MIB: f64 = 1024.0 * 1024.0;
 
 /// Runs `manyshadows bench virtual`.
 pub fn virtual_maps(args: &VirtualArgs) -> Result<()> {
-    if args.repeats == 0 {
-        bail!("--repeats must be at least 1");
-    }
-    if let Some(&n) = args
-        .lights
-        .iter()
-        .find(|&&n| n == 0 || n > builtin::MAX_LIGHTS)
-    {
-        bail!(
-            "--lights {n}: each count must be 1..={}",
-            builtin::MAX_LIGHTS
-        );
-    }
+    check_counts("--lights", &args.lights, builtin::MAX_LIGHTS, "")?;
     if matches!(
         args.atlas_technique,
         Technique::Virtual | Technique::Irregular
@@ -133,116 +103,75 @@ pub fn virtual_maps(args: &VirtualArgs) -> Result<()> {
             args.atlas_technique
         );
     }
-    if !builtin::SCENE_NAMES.contains(&args.scene.as_str()) {
-        bail!(
-            "--scene {}: not a built-in scene ({})",
-            args.scene,
-            builtin::SCENE_NAMES.join(", ")
-        );
-    }
+    check_scene("--scene", &args.scene)?;
     if args.page_pool == 0 {
         bail!("--page-pool must be at least 1 MiB");
     }
     let mix: LightMix = args.light_types.parse().map_err(anyhow::Error::msg)?;
-    std::fs::create_dir_all(&args.out_dir)
-        .with_context(|| format!("creating {}", args.out_dir.display()))?;
-    let ctx = GpuContext::new(&args.gpu.request())?;
-    let adapter = manyshadows::context::describe_adapter(&ctx.info);
-    eprintln!("adapter: {adapter}");
-    let frames = (args.warmup + args.repeats) as u64;
-    let pb = ProgressBar::new(2 * frames * args.lights.len() as u64);
-    pb.set_style(
-        ProgressStyle::with_template("{bar:40} {percent:>3}% {msg} [{elapsed}, ~{eta} left]")
-            .expect("valid template"),
-    );
+    let h = Harness::start(&args.run)?;
+    h.plan(h.units(2 * args.lights.len(), 1));
     let mut records = Vec::new();
     for &n in &args.lights {
-        pb.set_message(format!("{}, {n} lights", args.scene));
-        let scene = builtin::build(
-            &args.scene,
-            &BuiltinOptions {
-                lights: Some(n),
-                seed: 1,
-                mix,
-                ..Default::default()
-            },
-        )?;
+        h.message(format!("{}, {n} lights", args.scene));
+        let scene = seeded_scene(&args.scene, n, mix, None)?;
         let base = RenderSettings {
             width: args.width,
             height: args.height,
             ..Default::default()
         };
-        let mut atlas = Renderer::new(
-            &ctx,
-            &scene,
-            RenderSettings {
-                technique: args.atlas_technique,
-                ..base.clone()
+        let atlas = RenderSettings {
+            technique: args.atlas_technique,
+            ..base.clone()
+        };
+        let virt = RenderSettings {
+            technique: Technique::Virtual,
+            virtual_maps: VirtualOptions {
+                pool_bytes: u64::from(args.page_pool) << 20,
+                ..Default::default()
             },
-        )?;
-        let mut virt = Renderer::new(
-            &ctx,
-            &scene,
-            RenderSettings {
-                technique: Technique::Virtual,
-                virtual_maps: VirtualOptions {
-                    pool_bytes: u64::from(args.page_pool) << 20,
-                    ..Default::default()
+            ..base
+        };
+        let mut contenders = Vec::new();
+        for (label, settings) in [("atlas", atlas), ("virtual", virt)] {
+            contenders.push(Contender {
+                label: label.into(),
+                subject: FrameSubject {
+                    renderer: Renderer::new(&h.ctx, &scene, settings)?,
                 },
-                ..base
-            },
-        )?;
-        let (mut a_frames, mut v_frames) = (Vec::new(), Vec::new());
-        for rep in 0..args.warmup + args.repeats {
-            let a = atlas.render()?;
-            pb.inc(1);
-            let v = virt.render()?;
-            pb.inc(1);
-            if rep >= args.warmup {
-                a_frames.push(a);
-                v_frames.push(v);
-            }
+            });
         }
-        let stats = v_frames
-            .last()
-            .and_then(|f| f.virtual_maps)
+        let [a, v]: [_; 2] = h
+            .compare(contenders, Some("atlas"))?
+            .try_into()
+            .map_err(|_| anyhow::anyhow!("two contenders, two outcomes"))?;
+        let stats = v
+            .runs
+            .counters()
+            .virtual_maps
             .context("the virtual renderer reported no page counters")?;
-        let plan = atlas.plan();
+        let plan = a.subject.renderer.plan();
         let atlas_bytes = (plan.layout.size as f64).powi(2) * 4.0;
         records.push(Record {
             lights: n,
-            atlas: side(&a_frames, atlas_bytes / MIB),
+            atlas: side(&a.runs, atlas_bytes / MIB),
             atlas_views: plan.views.len(),
             atlas_fit: plan.fit,
             atlas_side: plan.layout.size,
-            virtual_maps: side(
-                &v_frames,
-                (stats.pool_bytes + stats.table_bytes) as f64 / MIB,
-            ),
+            virtual_maps: side(&v.runs, (stats.pool_bytes + stats.table_bytes) as f64 / MIB),
+            frame_ratio_virtual_vs_atlas: v.gpu_ratio,
             stats,
         });
     }
-    pb.finish_and_clear();
-    let text = table(&records, &adapter, args);
-    print!("{text}");
-    std::fs::write(args.out_dir.join("results.txt"), &text)?;
-    let json = serde_json::json!({
-        "adapter": adapter,
+    let table = table(&records, &h.adapter, args);
+    let figure = figure(&records, args);
+    let fields = serde_json::json!({
         "scene": args.scene,
         "screen": [args.width, args.height],
         "light_types": args.light_types,
         "atlas_technique": args.atlas_technique.name(),
-        "repeats": args.repeats,
-        "warmup": args.warmup,
         "records": records,
     });
-    std::fs::write(
-        args.out_dir.join("results.json"),
-        serde_json::to_string_pretty(&json)?,
-    )?;
-    let path = plot(&records, &adapter, args)?;
-    eprintln!("wrote {}", path.display());
-    Ok(())
+    h.finish(table, fields, vec![figure])
 }
 
 fn table(records: &[Record], adapter: &str, args: &VirtualArgs) -> String {
@@ -251,7 +180,7 @@ fn table(records: &[Record], adapter: &str, args: &VirtualArgs) -> String {
     let _ = writeln!(
         t,
         "== bench virtual: {} at {}x{}, light types {}; median GPU ms over {} frames, {} vs virtual in the same run\n   adapter: {adapter}",
-        args.scene, args.width, args.height, args.light_types, args.repeats, args.atlas_technique
+        args.scene, args.width, args.height, args.light_types, args.run.repeats, args.atlas_technique
     );
     let _ = writeln!(
         t,
@@ -270,10 +199,9 @@ fn table(records: &[Record], adapter: &str, args: &VirtualArgs) -> String {
         "frame"
     );
     for r in records {
-        let ratio = match (r.virtual_maps.frame_ms, r.atlas.frame_ms) {
-            (Some(v), Some(a)) if a > 0.0 => format!("{:.2}", v / a),
-            _ => "n/a".into(),
-        };
+        let ratio = r
+            .frame_ratio_virtual_vs_atlas
+            .map_or("n/a".into(), |v| format!("{v:.2}"));
         let _ = writeln!(
             t,
             "{:>6} | {:>9} {:>9} {:>8} {:>7.0} | {:>8} {:>9} {:>9} {:>8} {:>7.0} | {:>6} | {:>6} {:>7} {:>6} {:>6}",
@@ -303,17 +231,11 @@ fn table(records: &[Record], adapter: &str, args: &VirtualArgs) -> String {
     t
 }
 
-fn plot(records: &[Record], adapter: &str, args: &VirtualArgs) -> Result<PathBuf> {
-    let series = |name: &str, f: &dyn Fn(&Record) -> Option<f64>| {
-        (
-            name.to_string(),
-            records
-                .iter()
-                .filter_map(|r| f(r).map(|v| (r.lights as f64, v)))
-                .collect::<Vec<_>>(),
-        )
-    };
-    let specs = vec![
+fn figure(records: &[Record], args: &VirtualArgs) -> Figure {
+    let rows: Vec<&Record> = records.iter().collect();
+    let series =
+        |name: &str, f: &dyn Fn(&Record) -> Option<f64>| series(name, &rows, |r| r.lights, f);
+    let panels = vec![
         (
             "GPU ms per frame".to_string(),
             "ms".to_string(),
@@ -350,18 +272,13 @@ fn plot(records: &[Record], adapter: &str, args: &VirtualArgs) -> Result<PathBuf
             ],
         ),
     ];
-    let path = args.out_dir.join(format!(
-        "virtual-{}-{}x{}.png",
-        args.scene, args.width, args.height
-    ));
-    crate::plot::panels(
-        &path,
-        &format!(
-            "bench virtual: {}, {}x{} — {adapter}",
+    Figure::Panels {
+        file: format!("virtual-{}-{}x{}.png", args.scene, args.width, args.height),
+        title: format!(
+            "bench virtual: {}, {}x{}",
             args.scene, args.width, args.height
         ),
-        "lights",
-        &specs,
-    )?;
-    Ok(path)
+        x_name: "lights",
+        panels,
+    }
 }
