@@ -16,7 +16,7 @@ use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use glam::{Mat4, Vec3};
 use manyshadows::scene::light_space::PointShadows;
-use manyshadows::scene::{Camera, Scene};
+use manyshadows::scene::{Camera, LightKind, Scene};
 use manyshadows::{wgpu, GpuContext, Pcf, RenderSettings, Renderer, Technique};
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
@@ -53,8 +53,9 @@ pub(crate) struct ViewArgs {
     /// Keep the shadow maps (pages) of views that saw no change between frames.
     #[arg(long)]
     cache: bool,
-    /// Move the smallest caster in a circle: with --cache, only the shadow maps that see it
-    /// are redrawn (the panel counts them).
+    /// Move the smallest caster in a circle and sway the first spot or point light (of two
+    /// or more): with --cache, only the shadow maps that see the caster or belong to that
+    /// light are redrawn (the panel counts them).
     #[arg(long)]
     animate: bool,
     /// Camera to start from, `PX,PY,PZ,TX,TY,TZ` (default: the scene's camera).
@@ -416,7 +417,6 @@ impl State {
         }
         if let Some(k) = self.overlays.follow {
             if let Some(l) = self.renderer.scene().lights.get(k) {
-                use manyshadows::scene::LightKind;
                 let forward = (self.camera.target - self.camera.position).normalize_or_zero();
                 match l.kind {
                     LightKind::Spot {
@@ -447,6 +447,24 @@ impl State {
                     Mat4::from_translation(offset) * app_scene.instances[k].transform,
                 );
             }
+            // One local light sways 0.3 m left and right (the others keep their maps).
+            let lights = &self.renderer.scene().lights;
+            if lights.len() >= 2 {
+                let local = lights.iter().position(|l| {
+                    matches!(l.kind, LightKind::Spot { .. } | LightKind::Point { .. })
+                });
+                if let Some(i) = local {
+                    let mut light = app_scene.lights[i];
+                    let sway = Vec3::new(0.3 * (0.7 * t).sin(), 0.0, 0.0);
+                    match &mut light.kind {
+                        LightKind::Spot { position, .. } | LightKind::Point { position, .. } => {
+                            *position += sway
+                        }
+                        LightKind::Directional { .. } => {}
+                    }
+                    let _ = self.renderer.set_light(i, light);
+                }
+            }
         }
         let texture = match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
@@ -473,7 +491,12 @@ impl State {
         self.ctx.queue.present(texture);
         self.frames += 1;
         // A line per frame on stdout: scripts and tests follow the run by it.
-        println!("presented frame {}", self.frames);
+        println!(
+            "presented frame {}: {} of {} shadow views drawn",
+            self.frames,
+            self.views_drawn,
+            self.renderer.plan().views.len()
+        );
     }
 
     fn refresh_overlays(&mut self) {

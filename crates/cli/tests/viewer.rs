@@ -134,7 +134,11 @@ fn view(display: &str, args: &[&str], frames: u64, size: (u32, u32)) -> Vec<[u8;
     while shown < frames {
         match lines.next() {
             Some(Ok(l)) if l.starts_with("presented frame ") => {
-                shown = l["presented frame ".len()..].parse().unwrap();
+                // "presented frame N: K of V shadow views drawn"
+                let rest = &l["presented frame ".len()..];
+                shown = rest[..rest.find(':').unwrap_or(rest.len())]
+                    .parse()
+                    .unwrap();
             }
             Some(Ok(_)) => {}
             _ => {
