@@ -342,3 +342,55 @@ fn the_panel_draws_over_the_frame() {
         "the frame under the panel is not render's ({frame:.3})"
     );
 }
+
+/// `--animate --cache`: after the first frame only the maps that see the moving caster or
+/// belong to the swaying light are redrawn, so every later frame draws some views but not all;
+/// without `--animate` a still scene redraws none.
+#[test]
+fn animation_with_caching_redraws_only_what_moved() {
+    let (_server, display) = xvfb();
+    let drawn = |extra: &[&str]| -> Vec<(u64, u64)> {
+        let out = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
+            .args([
+                "view", "--scene", "cubes", "--width", "160", "--height", "120",
+            ])
+            .args(["--cache", "--hide-panel", "--exit-after", "5"])
+            .args(extra)
+            .env("DISPLAY", &display)
+            .output()
+            .expect("run the viewer");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{stdout}{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        // "presented frame N: K of V shadow views drawn"
+        stdout
+            .lines()
+            .filter_map(|l| {
+                let (_, rest) = l.split_once(": ")?;
+                let mut w = rest.split_whitespace();
+                let k = w.next()?.parse().ok()?;
+                let v = w.nth(1)?.parse().ok()?;
+                Some((k, v))
+            })
+            .collect()
+    };
+    let animated = drawn(&["--animate"]);
+    let still = drawn(&[]);
+    eprintln!("animated {animated:?}, still {still:?}");
+    assert_eq!(animated.len(), 5, "{animated:?}");
+    assert_eq!(
+        animated[0].0, animated[0].1,
+        "the first frame draws every view"
+    );
+    for &(k, v) in &animated[1..] {
+        assert!(k > 0 && k < v, "animated frame drew {k} of {v} views");
+    }
+    assert_eq!(still.len(), 5, "{still:?}");
+    assert!(
+        still[1..].iter().all(|&(k, _)| k == 0),
+        "a still scene redrew views: {still:?}"
+    );
+}
