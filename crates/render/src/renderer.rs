@@ -265,14 +265,13 @@ impl Renderer {
                     contents: bytemuck::cast_slice(&light_data),
                     usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                 });
-            let shadow_side = source.output().depth_side();
-            let frame_buffer = ctx
-                .device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("frame.uniforms"),
-                    contents: bytemuck::bytes_of(&frame_uniforms(scene, &settings, shadow_side)),
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                });
+            // Written once the source is bound and its output (the shadow texture's side) known.
+            let frame_buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("frame.uniforms"),
+                size: std::mem::size_of::<FrameUniforms>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
             let gbuffer = GBuffer::new(
                 ctx,
                 &gpu_scene,
@@ -300,6 +299,12 @@ impl Renderer {
                     instances: &gpu_scene.instances,
                 },
             )?;
+            let shadow_side = source.output().depth_side();
+            ctx.queue.write_buffer(
+                &frame_buffer,
+                0,
+                bytemuck::bytes_of(&frame_uniforms(scene, &settings, shadow_side)),
+            );
             let inputs = LightingInputs {
                 frame: &frame_buffer,
                 lights: &lights,
@@ -458,15 +463,6 @@ impl Renderer {
         let bytes: &[u8] = bytemuck::cast_slice(&light_data);
         crate::grow_buffer(ctx, &mut self.lights, bytes.len() as u64, "lights")?;
         ctx.queue.write_buffer(&self.lights, 0, bytes);
-        ctx.queue.write_buffer(
-            &self.frame_buffer,
-            0,
-            bytemuck::bytes_of(&frame_uniforms(
-                scene,
-                settings,
-                self.source.output().depth_side(),
-            )),
-        );
         self.clusters.update(ctx, scene)?;
         self.clusters
             .bind(ctx, &self.frame_buffer, &self.lights, &self.gbuffer);
@@ -481,6 +477,15 @@ impl Renderer {
                 instances: &self.scene.instances,
             },
         )?;
+        ctx.queue.write_buffer(
+            &self.frame_buffer,
+            0,
+            bytemuck::bytes_of(&frame_uniforms(
+                scene,
+                settings,
+                self.source.output().depth_side(),
+            )),
+        );
         self.lighting.rebind(
             ctx,
             &LightingInputs {

@@ -185,7 +185,7 @@ pub trait ShadowSource {
         Ok(())
     }
 
-    /// What the lighting and visibility passes read.
+    /// What the lighting and visibility passes read (valid once the source is bound).
     fn output(&self) -> ShadowOutput<'_>;
 
     /// Reads the depth atlas back (`size`² floats, row-major);
