@@ -17,6 +17,8 @@ pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrg
 pub struct LightingPass {
     /// The shaded frame.
     pub color: wgpu::Texture,
+    /// Render-target view of `color`, made once.
+    color_view: wgpu::TextureView,
     pipeline: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
@@ -199,6 +201,7 @@ impl LightingPass {
             cache: None,
         });
         Self {
+            color_view: color.create_view(&Default::default()),
             color,
             pipeline,
             layout,
@@ -214,11 +217,10 @@ impl LightingPass {
 
     /// Records the pass.
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: &GpuTimer, span: Option<Span>) {
-        let view = self.color.create_view(&Default::default());
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("lighting.pass"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &view,
+                view: &self.color_view,
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations {
