@@ -30,8 +30,9 @@
 //! exceed the adapter's storage-binding limit, the draw list is split into rounds, each cleared,
 //! rasterized and copied in turn; a single tile over the limit is split into bands of rows.
 
+use wgpu::util::DeviceExt;
+
 use crate::shadow::{ShadowInput, ShadowStats, ShadowTechnique};
-use crate::techniques::{CachedGroup, UniformRecords};
 use crate::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
@@ -132,43 +133,6 @@ pub struct Compute {
     max_groups: u32,
     chunk_capacity: Option<u32>,
     pending_read: bool,
-    /// One `ComputeParams` per round, rewritten each generation.
-    params: UniformRecords,
-    /// Every round's entries, round `r` at `entry_offsets[r]`; each round binds the
-    /// [`ENTRIES_BYTES`] from its offset (the next rounds' entries past its own are ignored).
-    entries: wgpu::Buffer,
-    entry_offsets: Vec<u32>,
-    entry_bytes: Vec<u8>,
-    /// Alignment of the entries' dynamic offsets (uniform and storage).
-    entry_align: u64,
-    /// The atlas side (`vec4<f32>`) for the copy, rewritten when it changes.
-    copy_params: wgpu::Buffer,
-    copy_written: Option<u32>,
-    group: CachedGroup,
-    copy_group: CachedGroup,
-}
-
-/// Bytes of `ComputeParams`.
-const PARAMS_BYTES: u64 = std::mem::size_of::<crate::gpu_types::ComputeParams>() as u64;
-/// Bytes of one round's entry array as the shader declares it (64 KiB).
-const ENTRIES_BYTES: u64 = MAX_ROUND_ENTRIES * std::mem::size_of::<Entry>() as u64;
-
-fn dynamic_entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-    ty: wgpu::BufferBindingType,
-    size: u64,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Buffer {
-            ty,
-            has_dynamic_offset: true,
-            min_binding_size: wgpu::BufferSize::new(size),
-        },
-        count: None,
-    }
 }
 
 impl Compute {
@@ -194,12 +158,12 @@ impl Compute {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("compute.layout"),
             entries: &[
-                dynamic_entry(0, cs, wgpu::BufferBindingType::Uniform, PARAMS_BYTES),
+                crate::uniform_entry(0, cs),
                 crate::storage_entry(1, cs),
                 crate::storage_entry(2, cs),
                 crate::storage_entry(3, cs),
                 crate::storage_entry(4, cs),
-                dynamic_entry(5, cs, wgpu::BufferBindingType::Uniform, ENTRIES_BYTES),
+                crate::uniform_entry(5, cs),
                 crate::storage_rw_entry(6, cs),
                 crate::storage_rw_entry(7, cs),
                 crate::storage_rw_entry(8, cs),
@@ -236,12 +200,7 @@ impl Compute {
             entries: &[
                 crate::uniform_entry(0, vf),
                 crate::storage_entry(1, vf),
-                dynamic_entry(
-                    2,
-                    vf,
-                    wgpu::BufferBindingType::Storage { read_only: true },
-                    ENTRIES_BYTES,
-                ),
+                crate::storage_entry(2, vf),
                 crate::storage_entry(3, wgpu::ShaderStages::FRAGMENT),
             ],
         });
@@ -309,28 +268,6 @@ impl Compute {
             max_groups: limits.max_compute_workgroups_per_dimension.min(MAX_GROUPS),
             chunk_capacity: None,
             pending_read: false,
-            params: UniformRecords::new(ctx, "compute.params", PARAMS_BYTES),
-            entries: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("compute.entries"),
-                size: ENTRIES_BYTES,
-                usage: wgpu::BufferUsages::UNIFORM
-                    | wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }),
-            entry_offsets: Vec::new(),
-            entry_bytes: Vec::new(),
-            entry_align: (limits.min_uniform_buffer_offset_alignment as u64)
-                .max(limits.min_storage_buffer_offset_alignment as u64),
-            copy_params: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("compute.copy_params"),
-                size: 16,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }),
-            copy_written: None,
-            group: CachedGroup::default(),
-            copy_group: CachedGroup::default(),
         })
     }
 
@@ -355,37 +292,6 @@ impl Compute {
         let bytes = crate::readback::map_read(ctx, &self.counters_read, 0..16)?;
         let words: &[u32] = bytemuck::cast_slice(&bytes);
         Ok(Some((words[0], words[1])))
-    }
-
-    /// Writes every round's entries into [`Compute::entries`] (grown if needed) and notes
-    /// where each round starts.
-    fn write_entries(&mut self, ctx: &GpuContext, rounds: &[Vec<Entry>]) {
-        self.entry_offsets.clear();
-        self.entry_bytes.clear();
-        for round in rounds {
-            let at = (self.entry_bytes.len() as u64).next_multiple_of(self.entry_align);
-            self.entry_bytes.resize(at as usize, 0);
-            self.entry_offsets.push(at as u32);
-            self.entry_bytes
-                .extend_from_slice(bytemuck::cast_slice(round));
-        }
-        // The last round's window reaches a whole array past its offset.
-        let last = self.entry_offsets.last().copied().unwrap_or(0) as u64;
-        let needed = (last + ENTRIES_BYTES).max(self.entry_bytes.len() as u64);
-        if let Err(e) = crate::grow_buffer(ctx, &mut self.entries, needed, "compute entries") {
-            // Over the device's limit (more rounds than one buffer holds): a GPU error the
-            // frame reports, as a per-round buffer over the limit would be.
-            log::error!("{e}");
-            self.entries = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("compute.entries"),
-                size: needed.next_multiple_of(16),
-                usage: self.entries.usage(),
-                mapped_at_creation: false,
-            });
-        }
-        if !self.entry_bytes.is_empty() {
-            ctx.queue.write_buffer(&self.entries, 0, &self.entry_bytes);
-        }
     }
 
     fn ensure_buffers(&mut self, ctx: &GpuContext, texels: u64, chunks_wanted: u32) {
@@ -454,13 +360,15 @@ impl ShadowTechnique for Compute {
         let chunks_wanted = ((most_texels / 256) as u32).max(MIN_CHUNKS);
         self.pending_read = false;
         self.ensure_buffers(ctx, most_texels, chunks_wanted);
-        let (_, capacity) = self.chunks.as_ref().expect("chunk list");
-        let capacity = *capacity;
+        let (depth, _) = self.depth.as_ref().expect("depth buffer");
+        let (chunks, capacity) = self.chunks.as_ref().expect("chunk list");
         let discard = input.options.discard_raster;
-        // Every round's parameters and entries, written once for the frame.
-        let records: Vec<crate::gpu_types::ComputeParams> = rounds
-            .iter()
-            .map(|round| crate::gpu_types::ComputeParams {
+
+        encoder.push_debug_group("compute");
+        let last_round = rounds.len() - 1;
+        for (r, round) in rounds.iter().enumerate() {
+            let round_texels = texels(round, tile_size);
+            let params = crate::gpu_types::ComputeParams {
                 counts: [
                     casters.triangles,
                     casters.cullable_triangles,
@@ -468,95 +376,50 @@ impl ShadowTechnique for Compute {
                     round.len() as u32,
                 ],
                 sizes: [
-                    texels(round, tile_size) as u32,
-                    capacity,
+                    round_texels as u32,
+                    *capacity,
                     self.max_groups,
                     u32::from(discard),
                 ],
-            })
-            .collect();
-        self.params.write(ctx, &records);
-        self.write_entries(ctx, &rounds);
-        if self.copy_written != Some(input.atlas.size) {
-            let size = [input.atlas.size as f32, 0.0, 0.0, 0.0];
-            ctx.queue
-                .write_buffer(&self.copy_params, 0, bytemuck::cast_slice(&size));
-            self.copy_written = Some(input.atlas.size);
-        }
-        let (depth, _) = self.depth.as_ref().expect("depth buffer");
-        let (chunks, _) = self.chunks.as_ref().expect("chunk list");
-        let params = &self.params;
-        let entries = &self.entries;
-        let window = |buffer| {
-            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer,
-                offset: 0,
-                size: wgpu::BufferSize::new(ENTRIES_BYTES),
-            })
-        };
-        let buffers = [
-            params.buffer(),
-            &input.atlas.views_buffer,
-            &input.atlas.eyes,
-            &casters.world,
-            &casters.corners,
-            entries,
-            depth,
-            chunks,
-            &self.counters,
-        ];
-        let layout = &self.layout;
-        let bind_group = self.group.get(&buffers, || {
+            };
+            let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("compute.params"),
+                contents: bytemuck::bytes_of(&params),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            // The uniform binding is the whole fixed-size array; the copy pass reads the same
+            // buffer as storage.
+            let mut list = round.clone();
+            list.resize(MAX_ROUND_ENTRIES as usize, bytemuck::Zeroable::zeroed());
+            let entries = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("compute.entries"),
+                contents: bytemuck::cast_slice(&list),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::STORAGE,
+            });
+            let buffers = [
+                &params,
+                &input.atlas.views_buffer,
+                &input.atlas.eyes,
+                &casters.world,
+                &casters.corners,
+                &entries,
+                depth,
+                chunks,
+                &self.counters,
+            ];
             let bind_entries: Vec<wgpu::BindGroupEntry> = buffers
                 .iter()
                 .enumerate()
                 .map(|(i, b)| wgpu::BindGroupEntry {
                     binding: i as u32,
-                    resource: match i {
-                        0 => params.binding(),
-                        5 => window(entries),
-                        _ => b.as_entire_binding(),
-                    },
+                    resource: b.as_entire_binding(),
                 })
                 .collect();
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("compute.bind_group"),
-                layout,
+                layout: &self.layout,
                 entries: &bind_entries,
-            })
-        });
-        let copy_buffers = [&self.copy_params, &input.atlas.views_buffer, entries, depth];
-        let copy_layout = &self.copy_layout;
-        let copy_bind_group = self.copy_group.get(&copy_buffers, || {
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("compute.copy_bind_group"),
-                layout: copy_layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: copy_buffers[0].as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: input.atlas.views_buffer.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: window(entries),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 3,
-                        resource: depth.as_entire_binding(),
-                    },
-                ],
-            })
-        });
-
-        encoder.push_debug_group("compute");
-        let last_round = rounds.len() - 1;
-        for (r, round) in rounds.iter().enumerate() {
-            let round_texels = texels(round, tile_size);
-            let offsets = [params.offset(r), self.entry_offsets[r]];
+            });
             if r == 0 {
                 // The first pass opens the timer span (a fill records no timestamps).
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -578,7 +441,7 @@ impl ShadowTechnique for Compute {
                     });
                     let s = timer.begin_compute_stats(&mut pass);
                     pass.set_pipeline(&self.setup);
-                    pass.set_bind_group(0, bind_group, &offsets);
+                    pass.set_bind_group(0, &bind_group, &[]);
                     let threads = casters.triangles as u64 * round.len() as u64;
                     let (x, y) = crate::dispatch_2d(threads, self.max_groups);
                     pass.dispatch_workgroups(x, y, 1);
@@ -595,7 +458,7 @@ impl ShadowTechnique for Compute {
                     });
                     let s = timer.begin_compute_stats(&mut pass);
                     pass.set_pipeline(&self.large);
-                    pass.set_bind_group(0, bind_group, &offsets);
+                    pass.set_bind_group(0, &bind_group, &[]);
                     pass.dispatch_workgroups_indirect(&self.args, 0);
                     timer.end_compute_stats(&mut pass, s);
                     stats.passes += 1;
@@ -605,6 +468,33 @@ impl ShadowTechnique for Compute {
                 encoder.copy_buffer_to_buffer(&self.counters, 0, &self.counters_read, 0, 16);
             }
 
+            let atlas_size = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("compute.copy_params"),
+                contents: bytemuck::cast_slice(&[input.atlas.size as f32, 0.0, 0.0, 0.0]),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let copy_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("compute.copy_bind_group"),
+                layout: &self.copy_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: atlas_size.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: input.atlas.views_buffer.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: entries.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: depth.as_entire_binding(),
+                    },
+                ],
+            });
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("compute.copy"),
                 color_attachments: &[],
@@ -620,7 +510,7 @@ impl ShadowTechnique for Compute {
             });
             let s = timer.begin_render_stats(&mut pass);
             pass.set_pipeline(&self.copy);
-            pass.set_bind_group(0, copy_bind_group, &[self.entry_offsets[r]]);
+            pass.set_bind_group(0, &copy_bind_group, &[]);
             pass.draw(0..6, 0..round.len() as u32);
             timer.end_render_stats(&mut pass, s);
             stats.passes += 1;
