@@ -20,7 +20,8 @@ pub struct GBuffer {
     pub position: wgpu::Texture,
     /// Normals and material indices.
     pub normal: wgpu::Texture,
-    depth: wgpu::Texture,
+    /// Render-target views of position, normal and depth, made once.
+    views: [wgpu::TextureView; 3],
     pipeline: wgpu::RenderPipeline,
     bind_group: wgpu::BindGroup,
 }
@@ -123,10 +124,11 @@ impl GBuffer {
             multiview_mask: None,
             cache: None,
         });
+        let views = [&position, &normal, &depth].map(|t| t.create_view(&Default::default()));
         Self {
             position,
             normal,
-            depth,
+            views,
             pipeline,
             bind_group,
         }
@@ -141,9 +143,7 @@ impl GBuffer {
         timer: &GpuTimer,
         span: Option<Span>,
     ) {
-        let pv = self.position.create_view(&Default::default());
-        let nv = self.normal.create_view(&Default::default());
-        let dv = self.depth.create_view(&Default::default());
+        let [pv, nv, dv] = &self.views;
         let clear = |view| {
             Some(wgpu::RenderPassColorAttachment {
                 view,
@@ -157,9 +157,9 @@ impl GBuffer {
         };
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("gbuffer.pass"),
-            color_attachments: &[clear(&pv), clear(&nv)],
+            color_attachments: &[clear(pv), clear(nv)],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &dv,
+                view: dv,
                 depth_ops: Some(wgpu::Operations {
                     load: wgpu::LoadOp::Clear(1.0),
                     store: wgpu::StoreOp::Discard,

@@ -29,8 +29,7 @@ pub struct ShadowGenerator {
     pub casters: CasterGeometry,
     /// Options in use.
     pub options: ShadowOptions,
-    /// `None` for `irregular`, which fills no atlas ([`ShadowGenerator::views_only`]).
-    technique: Option<Box<dyn ShadowTechnique>>,
+    technique: Box<dyn ShadowTechnique>,
     kind: Technique,
     caching: bool,
     valid: Vec<bool>,
@@ -78,7 +77,7 @@ impl ShadowGenerator {
         let casters = CasterGeometry::new(ctx, scene, gpu, options.casters)?;
         let valid = vec![false; plan.views.len()];
         Ok(Self {
-            technique: Some(technique.create(ctx, &options)?),
+            technique: technique.create(ctx, &options)?,
             kind: technique,
             plan,
             atlas,
@@ -86,32 +85,6 @@ impl ShadowGenerator {
             options,
             caching: false,
             valid,
-            moves: Vec::new(),
-        })
-    }
-
-    /// The plan's view buffers and the caster geometry without an atlas or a technique:
-    /// what `irregular` and `virtual` shadow maps (`kind`) use. [`ShadowGenerator::generate`]
-    /// then draws nothing.
-    pub fn views_only(
-        ctx: &GpuContext,
-        scene: &Scene,
-        gpu: &GpuScene,
-        plan: ShadowPlan,
-        options: ShadowOptions,
-        kind: Technique,
-    ) -> Result<Self, RenderError> {
-        let atlas = ShadowAtlas::views_only(ctx, &plan)?;
-        let casters = CasterGeometry::new(ctx, scene, gpu, options.casters)?;
-        Ok(Self {
-            technique: None,
-            kind,
-            valid: vec![true; plan.views.len()],
-            plan,
-            atlas,
-            casters,
-            options,
-            caching: false,
             moves: Vec::new(),
         })
     }
@@ -144,29 +117,25 @@ impl ShadowGenerator {
         casters_changed: bool,
     ) -> Result<bool, RenderError> {
         let replaced = self.atlas.update(ctx, &plan)?;
-        if self.technique.is_none() {
-            self.valid = vec![true; plan.views.len()];
-        } else {
-            let old: std::collections::HashMap<_, _> = self
-                .plan
-                .views
-                .iter()
-                .zip(&self.plan.layout.tiles)
-                .zip(&self.valid)
-                .filter(|(_, &valid)| valid)
-                .map(|((v, t), _)| ((v.light, v.kind), (v.view_proj, *t)))
-                .collect();
-            self.valid = plan
-                .views
-                .iter()
-                .zip(&plan.layout.tiles)
-                .map(|(v, t)| {
-                    !casters_changed
-                        && !replaced
-                        && old.get(&(v.light, v.kind)) == Some(&(v.view_proj, *t))
-                })
-                .collect();
-        }
+        let old: std::collections::HashMap<_, _> = self
+            .plan
+            .views
+            .iter()
+            .zip(&self.plan.layout.tiles)
+            .zip(&self.valid)
+            .filter(|(_, &valid)| valid)
+            .map(|((v, t), _)| ((v.light, v.kind), (v.view_proj, *t)))
+            .collect();
+        self.valid = plan
+            .views
+            .iter()
+            .zip(&plan.layout.tiles)
+            .map(|(v, t)| {
+                !casters_changed
+                    && !replaced
+                    && old.get(&(v.light, v.kind)) == Some(&(v.view_proj, *t))
+            })
+            .collect();
         self.plan = plan;
         Ok(replaced)
     }
@@ -203,9 +172,6 @@ impl ShadowGenerator {
         timer: &GpuTimer,
         span: Option<Span>,
     ) -> ShadowStats {
-        if self.technique.is_none() {
-            return ShadowStats::default();
-        }
         let list = self.draw_list(gpu);
         if !list.is_empty() {
             ctx.queue
@@ -220,8 +186,7 @@ impl ShadowGenerator {
             options: &self.options,
             draw_list: &list,
         };
-        let technique = self.technique.as_mut().expect("checked above");
-        let mut stats = technique.generate(&input, encoder, timer, span);
+        let mut stats = self.technique.generate(&input, encoder, timer, span);
         stats.views_drawn = list.len() as u32;
         stats
     }

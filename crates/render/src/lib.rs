@@ -2,9 +2,11 @@
 //!
 //! Many shadow-casting lights on wgpu. The flow of one frame:
 //!
-//! `Scene` → [`ShadowPlan`] (every shadow view and its atlas tile) → [`GpuScene`] (buffers) →
-//! a [`ShadowTechnique`] fills the [`ShadowAtlas`] → the lighting pass reads it → image,
-//! visibility mask and timings ([`Frame`]).
+//! `Scene` → [`GpuScene`] (buffers) → the frame's [`ShadowSource`]: an atlas technique
+//! ([`ShadowPlan`]: every shadow view and its atlas tile; a [`ShadowTechnique`] fills the
+//! [`ShadowAtlas`]), virtual shadow maps (a page pool) or irregular shadow maps (a visibility
+//! mask) → the lighting pass reads its [`ShadowOutput`] → image, visibility mask and timings
+//! ([`Frame`]).
 //!
 //! ```no_run
 //! use manyshadows::{AdapterRequest, GpuContext, Renderer, RenderSettings};
@@ -32,6 +34,7 @@ pub mod readback;
 pub mod renderer;
 pub mod shaders;
 pub mod shadow;
+pub mod source;
 pub mod techniques;
 pub mod timing;
 pub mod visibility;
@@ -47,6 +50,7 @@ pub use renderer::{
 pub use shadow::{
     CullMode, ShadowAtlas, ShadowOptions, ShadowPlan, ShadowStats, ShadowTechnique, Technique,
 };
+pub use source::{ShadowOutput, ShadowSource};
 pub use visibility::VisibilityMask;
 
 pub use manyshadows_scene as scene;

@@ -3,7 +3,7 @@
 //! buffer so a clustered (per-tile) list can replace it without touching the shading.
 
 use crate::gbuffer::GBuffer;
-use crate::shadow::ShadowAtlas;
+use crate::source::ShadowOutput;
 use crate::timing::{GpuTimer, Span};
 use crate::GpuContext;
 
@@ -17,6 +17,8 @@ pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrg
 pub struct LightingPass {
     /// The shaded frame.
     pub color: wgpu::Texture,
+    /// Render-target view of `color`, made once.
+    color_view: wgpu::TextureView,
     pipeline: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
@@ -33,29 +35,22 @@ pub struct LightingInputs<'a> {
     pub materials: &'a wgpu::Buffer,
     /// G-buffer.
     pub gbuffer: &'a GBuffer,
-    /// Shadow atlas and its views.
-    pub atlas: &'a ShadowAtlas,
-    /// A per-pixel visibility mask to shade with instead of the atlas (irregular shadow maps:
-    /// `fs_mask`); `None` = the atlas (`fs_main`).
-    pub mask: Option<&'a wgpu::Buffer>,
     /// The clustered light lists.
     pub clusters: &'a crate::clusters::LightClusters,
-    /// Virtual shadow maps to read shadows from instead of the atlas.
-    pub vsm: Option<&'a crate::vsm::VirtualShadows>,
+    /// What the frame's shadow source produced: an atlas, a page pool (both read with the
+    /// shadow test, `fs_main`) or a visibility mask (shaded with directly, `fs_mask`).
+    pub shadows: ShadowOutput<'a>,
 }
 
 impl LightingInputs<'_> {
     /// The depth texture shadows are read from: the virtual maps' page pool or the atlas.
     pub fn shadow_texture(&self) -> &wgpu::TextureView {
-        match self.vsm {
-            Some(v) => &v.pool_view,
-            None => &self.atlas.view,
-        }
+        self.shadows.depth()
     }
 
     /// The shader's shadow source, its page-table declarations starting at binding `first`.
     pub(crate) fn source(&self, first: u32) -> crate::shaders::ShadowSource {
-        match self.vsm {
+        match self.shadows.pages() {
             Some(_) => crate::shaders::ShadowSource::Virtual { first },
             None => crate::shaders::ShadowSource::Atlas,
         }
@@ -64,19 +59,19 @@ impl LightingInputs<'_> {
     /// Bind-group entries of the page-table declarations at `first`, `first + 1`,
     /// `first + 2` (none for the atlas).
     pub(crate) fn vsm_entries(&self, first: u32) -> Vec<wgpu::BindGroupEntry<'_>> {
-        match self.vsm {
-            Some(v) => vec![
+        match self.shadows.pages() {
+            Some(p) => vec![
                 wgpu::BindGroupEntry {
                     binding: first,
-                    resource: v.uniforms().as_entire_binding(),
+                    resource: p.uniforms.as_entire_binding(),
                 },
                 wgpu::BindGroupEntry {
                     binding: first + 1,
-                    resource: v.faces().as_entire_binding(),
+                    resource: p.faces.as_entire_binding(),
                 },
                 wgpu::BindGroupEntry {
                     binding: first + 2,
-                    resource: v.table().as_entire_binding(),
+                    resource: p.table.as_entire_binding(),
                 },
             ],
             None => Vec::new(),
@@ -155,7 +150,7 @@ impl LightingPass {
             crate::storage_entry(10, frag),
             crate::storage_entry(11, frag),
         ];
-        if inputs.vsm.is_some() {
+        if inputs.shadows.pages().is_some() {
             entries.extend(vsm_layout_entries(VSM_FIRST_BINDING, frag));
         }
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -194,7 +189,7 @@ impl LightingPass {
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &module,
-                entry_point: Some(if inputs.mask.is_some() {
+                entry_point: Some(if inputs.shadows.mask().is_some() {
                     "fs_mask"
                 } else {
                     "fs_main"
@@ -206,6 +201,7 @@ impl LightingPass {
             cache: None,
         });
         Self {
+            color_view: color.create_view(&Default::default()),
             color,
             pipeline,
             layout,
@@ -221,11 +217,10 @@ impl LightingPass {
 
     /// Records the pass.
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: &GpuTimer, span: Option<Span>) {
-        let view = self.color.create_view(&Default::default());
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("lighting.pass"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &view,
+                view: &self.color_view,
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations {
@@ -253,7 +248,7 @@ fn bind(
     let device = &ctx.device;
     // `fs_main` never reads the mask, but one layout serves both entry points.
     let dummy_mask;
-    let mask = match inputs.mask {
+    let mask = match inputs.shadows.mask() {
         Some(m) => m,
         None => {
             dummy_mask = device.create_buffer(&wgpu::BufferDescriptor {
@@ -278,7 +273,7 @@ fn bind(
         },
         wgpu::BindGroupEntry {
             binding: 2,
-            resource: inputs.atlas.views_buffer.as_entire_binding(),
+            resource: inputs.shadows.view_table().as_entire_binding(),
         },
         wgpu::BindGroupEntry {
             binding: 3,

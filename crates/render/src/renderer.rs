@@ -1,12 +1,14 @@
 //! The frame, assembled from its passes in the order of the algorithm:
 //!
 //! 1. G-buffer (world position, normal, material per pixel),
-//! 2. shadow generation (the chosen technique fills the atlas),
-//! 3. deferred Phong lighting with the shadow test,
-//! 4. optionally, the hard visibility mask.
+//! 2. shadows: the frame's [`ShadowSource`] (made from the technique by
+//!    [`crate::source::create`]) fills an atlas, a virtual page pool or a visibility mask,
+//! 3. deferred Phong lighting with the shadow test (or the mask),
+//! 4. optionally, the hard visibility mask (computed from the atlas or pool; a source whose
+//!    output is the mask reads it back).
 //!
-//! With [`Technique::Irregular`] step 2 computes the visibility mask itself
-//! ([`crate::irregular`]; no atlas), step 3 shades with that mask, and step 4 reads it back.
+//! Nothing here depends on the technique: the source's [`crate::source::ShadowOutput`] says
+//! what the lighting and visibility passes read.
 
 // `std::time::Instant` panics in a browser; web-time is std's on native targets.
 use web_time::Instant;
@@ -18,17 +20,17 @@ use wgpu::util::DeviceExt;
 
 use crate::clusters::{ClusterOptions, ClusterStats, LightClusters, LightLoop};
 use crate::gbuffer::GBuffer;
-use crate::generator::ShadowGenerator;
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::FrameUniforms;
-use crate::irregular::{IrregularInputs, IrregularOptions, IrregularShadows};
+use crate::gpu_types::{FrameUniforms, LightData};
+use crate::irregular::IrregularOptions;
 use crate::lighting::{LightingInputs, LightingPass};
 use crate::shadow::{
     ShadowAtlas, ShadowOptions, ShadowPlan, ShadowStats, Technique, DEFAULT_MAX_ATLAS_SIZE,
 };
+use crate::source::{ShadowSource, SourceInputs};
 use crate::timing::GpuTimer;
 use crate::visibility::{VisibilityMask, VisibilityPass};
-use crate::vsm::{VirtualOptions, VirtualShadows, VirtualStats, VsmInputs};
+use crate::vsm::{VirtualOptions, VirtualStats};
 use crate::{GpuContext, RenderError};
 
 /// Percentage-closer filtering of the shadow test.
@@ -208,15 +210,15 @@ pub struct Renderer {
     ctx: std::sync::Arc<GpuContext>,
     settings: RenderSettings,
     scene: GpuScene,
-    shadows: ShadowGenerator,
+    /// Where the frame's shadows come from (atlas, page pool or visibility mask).
+    source: Box<dyn ShadowSource>,
     frame_buffer: wgpu::Buffer,
     lights: wgpu::Buffer,
     pub(crate) gbuffer: GBuffer,
     lighting: LightingPass,
     clusters: LightClusters,
+    /// The visibility pass, when asked for and the source's output is not the mask itself.
     visibility: Option<VisibilityPass>,
-    irregular: Option<IrregularShadows>,
-    vsm: Option<VirtualShadows>,
     /// Copies frames into callers' textures ([`Renderer::render_to`]); built on first use.
     blit: Option<crate::blit::Blit>,
     timer: GpuTimer,
@@ -224,7 +226,6 @@ pub struct Renderer {
     current: Scene,
     /// True when `current` changed since the GPU state was last derived from it.
     dirty: bool,
-    max_atlas: u32,
 }
 
 impl Renderer {
@@ -254,73 +255,9 @@ impl Renderer {
             .unwrap_or(DEFAULT_MAX_ATLAS_SIZE)
             .min(max_dim);
         ctx.scoped("creating the renderer", || {
-            let aspect = settings.width as f32 / settings.height as f32;
-            let is_virtual = settings.technique == Technique::Virtual;
-            if is_virtual && settings.point_shadows != Default::default() {
-                return Err(RenderError::Unsupported(
-                    "technique virtual pages cube-map point shadows only; use cube point \
-                     shadows"
-                        .into(),
-                ));
-            }
-            let plan = if is_virtual {
-                ShadowPlan::none(scene.lights.len())
-            } else {
-                ShadowPlan::with_points(
-                    scene,
-                    aspect,
-                    max_atlas,
-                    settings.fit,
-                    settings.point_shadows,
-                )?
-            };
             let gpu_scene = GpuScene::new(ctx, scene)?;
-            let irregular = settings.technique == Technique::Irregular;
-            let mut shadows = if irregular || is_virtual {
-                ShadowGenerator::views_only(
-                    ctx,
-                    scene,
-                    &gpu_scene,
-                    plan,
-                    settings.shadow,
-                    settings.technique,
-                )?
-            } else {
-                ShadowGenerator::new(
-                    ctx,
-                    scene,
-                    &gpu_scene,
-                    plan,
-                    settings.technique,
-                    settings.shadow,
-                )?
-            };
-            shadows.set_caching(settings.cache_shadows);
-            let mut vsm = if is_virtual {
-                let options = VirtualOptions {
-                    back_facing: settings.visibility,
-                    ..settings.virtual_maps
-                };
-                Some(VirtualShadows::new(
-                    ctx,
-                    scene,
-                    (settings.width, settings.height),
-                    options,
-                    settings.shadow,
-                    &shadows.casters,
-                )?)
-            } else {
-                None
-            };
-            let mut light_data = match &vsm {
-                Some(v) => v.light_data(scene),
-                None => shadows.plan.light_data(scene),
-            };
-            let atlas = &shadows.atlas;
-            let shadow_side = vsm.as_ref().map_or(atlas.size, |v| v.pool_side());
-            if light_data.is_empty() {
-                light_data.push(bytemuck::Zeroable::zeroed());
-            }
+            let mut source = crate::source::create(ctx, scene, &gpu_scene, &settings, max_atlas)?;
+            let light_data = lights_or_placeholder(source.light_data(scene));
             let lights = ctx
                 .device
                 .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -328,13 +265,13 @@ impl Renderer {
                     contents: bytemuck::cast_slice(&light_data),
                     usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                 });
-            let frame_buffer = ctx
-                .device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("frame.uniforms"),
-                    contents: bytemuck::bytes_of(&frame_uniforms(scene, &settings, shadow_side)),
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                });
+            // Written once the source is bound and its output (the shadow texture's side) known.
+            let frame_buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("frame.uniforms"),
+                size: std::mem::size_of::<FrameUniforms>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
             let gbuffer = GBuffer::new(
                 ctx,
                 &gpu_scene,
@@ -342,24 +279,6 @@ impl Renderer {
                 settings.width,
                 settings.height,
             );
-            let irregular = if irregular {
-                Some(IrregularShadows::new(
-                    ctx,
-                    scene,
-                    &shadows.plan,
-                    &IrregularInputs {
-                        frame: &frame_buffer,
-                        lights: &lights,
-                        views: &atlas.views_buffer,
-                        gbuffer: &gbuffer,
-                        casters: &shadows.casters,
-                    },
-                    (settings.width, settings.height),
-                    settings.irregular,
-                )?)
-            } else {
-                None
-            };
             let mut clusters = LightClusters::new(
                 ctx,
                 (settings.width, settings.height),
@@ -369,72 +288,60 @@ impl Renderer {
             )?;
             clusters.update(ctx, scene)?;
             clusters.bind(ctx, &frame_buffer, &lights, &gbuffer);
-            if let Some(v) = vsm.as_mut() {
-                v.bind(
-                    ctx,
-                    &VsmInputs {
-                        frame: &frame_buffer,
-                        lights: &lights,
-                        gbuffer: &gbuffer,
-                        clusters: &clusters,
-                        instances: &gpu_scene.instances,
-                        casters: &shadows.casters,
-                    },
-                );
-            }
+            source.bind(
+                ctx,
+                &SourceInputs {
+                    scene,
+                    frame: &frame_buffer,
+                    lights: &lights,
+                    gbuffer: &gbuffer,
+                    clusters: &clusters,
+                    instances: &gpu_scene.instances,
+                },
+            )?;
+            let shadow_side = source.output().depth_side();
+            ctx.queue.write_buffer(
+                &frame_buffer,
+                0,
+                bytemuck::bytes_of(&frame_uniforms(scene, &settings, shadow_side)),
+            );
             let inputs = LightingInputs {
                 frame: &frame_buffer,
                 lights: &lights,
                 materials: &gpu_scene.materials,
                 gbuffer: &gbuffer,
-                atlas,
-                mask: irregular.as_ref().map(|i| i.mask()),
                 clusters: &clusters,
-                vsm: vsm.as_ref(),
+                shadows: source.output(),
             };
             let lighting = LightingPass::new(ctx, &inputs, settings.width, settings.height);
-            // Irregular shadows read their own mask back instead.
-            let visibility = if settings.visibility && irregular.is_none() {
-                Some(VisibilityPass::new(
-                    ctx,
-                    settings.width,
-                    settings.height,
-                    scene.lights.len() as u32,
-                    is_virtual,
-                )?)
-            } else {
-                None
-            };
+            let visibility = visibility_pass(ctx, &settings, scene, &*source)?;
             Ok(Self {
                 ctx: std::sync::Arc::new(ctx.clone()),
                 settings,
                 scene: gpu_scene,
-                shadows,
+                source,
                 frame_buffer,
                 lights,
                 gbuffer,
                 lighting,
                 clusters,
                 visibility,
-                irregular,
-                vsm,
                 blit: None,
                 timer: GpuTimer::new(ctx),
                 current: scene.clone(),
                 dirty: false,
-                max_atlas,
             })
         })
     }
 
     /// The shadow views and atlas layout.
     pub fn plan(&self) -> &ShadowPlan {
-        &self.shadows.plan
+        self.source.plan()
     }
 
     /// The faces of [`Technique::Virtual`] (`None` for other techniques).
     pub fn virtual_plan(&self) -> Option<&crate::vsm::VirtualPlan> {
-        self.vsm.as_ref().map(|v| &v.plan)
+        self.source.virtual_plan()
     }
 
     /// The settings in use.
@@ -454,12 +361,12 @@ impl Renderer {
 
     /// The world-space shadow-caster geometry (its back-face culling decisions included).
     pub fn casters(&self) -> &crate::casters::CasterGeometry {
-        &self.shadows.casters
+        self.source.casters()
     }
 
     /// The shadow atlas.
     pub fn atlas(&self) -> &ShadowAtlas {
-        &self.shadows.atlas
+        self.source.atlas()
     }
 
     /// The scene as the next frame will render it (camera, lights and instance transforms as
@@ -535,10 +442,7 @@ impl Renderer {
         self.current.instances[instance].transform = transform;
         if old.casts_shadows {
             let new = self.scene.draws[instance].sphere;
-            self.shadows.note_moved(old.sphere, new);
-            if let Some(v) = self.vsm.as_mut() {
-                v.note_moved(old.sphere, new);
-            }
+            self.source.note_moved(old.sphere, new);
         }
         self.dirty = true;
         Ok(())
@@ -554,82 +458,34 @@ impl Renderer {
         let ctx = &*self.ctx.clone();
         let scene = &self.current;
         let settings = &self.settings;
-        let aspect = settings.width as f32 / settings.height as f32;
-        let plan = if self.vsm.is_some() {
-            ShadowPlan::none(scene.lights.len())
-        } else {
-            ShadowPlan::with_points(
-                scene,
-                aspect,
-                self.max_atlas,
-                settings.fit,
-                settings.point_shadows,
-            )?
-        };
-        let casters_changed = self.shadows.casters.refresh(ctx, scene);
-        if casters_changed {
-            if let Some(v) = self.vsm.as_mut() {
-                v.forget_pages();
-            }
-        }
-        self.shadows.set_plan(ctx, plan, casters_changed)?;
-        let mut light_data = match self.vsm.as_mut() {
-            Some(v) => {
-                v.update(ctx, scene, (settings.width, settings.height))?;
-                v.light_data(scene)
-            }
-            None => self.shadows.plan.light_data(scene),
-        };
-        if light_data.is_empty() {
-            light_data.push(bytemuck::Zeroable::zeroed());
-        }
+        self.source.update(ctx, scene)?;
+        let light_data = lights_or_placeholder(self.source.light_data(scene));
         let bytes: &[u8] = bytemuck::cast_slice(&light_data);
         crate::grow_buffer(ctx, &mut self.lights, bytes.len() as u64, "lights")?;
         ctx.queue.write_buffer(&self.lights, 0, bytes);
+        self.clusters.update(ctx, scene)?;
+        self.clusters
+            .bind(ctx, &self.frame_buffer, &self.lights, &self.gbuffer);
+        self.source.bind(
+            ctx,
+            &SourceInputs {
+                scene,
+                frame: &self.frame_buffer,
+                lights: &self.lights,
+                gbuffer: &self.gbuffer,
+                clusters: &self.clusters,
+                instances: &self.scene.instances,
+            },
+        )?;
         ctx.queue.write_buffer(
             &self.frame_buffer,
             0,
             bytemuck::bytes_of(&frame_uniforms(
                 scene,
                 settings,
-                self.vsm
-                    .as_ref()
-                    .map_or(self.shadows.atlas.size, |v| v.pool_side()),
+                self.source.output().depth_side(),
             )),
         );
-        self.clusters.update(ctx, scene)?;
-        self.clusters
-            .bind(ctx, &self.frame_buffer, &self.lights, &self.gbuffer);
-        if let Some(v) = self.vsm.as_mut() {
-            v.bind(
-                ctx,
-                &VsmInputs {
-                    frame: &self.frame_buffer,
-                    lights: &self.lights,
-                    gbuffer: &self.gbuffer,
-                    clusters: &self.clusters,
-                    instances: &self.scene.instances,
-                    casters: &self.shadows.casters,
-                },
-            );
-        }
-        if self.irregular.is_some() {
-            // Irregular shadow maps size their light-space grids by the plan: rebuild them.
-            self.irregular = Some(IrregularShadows::new(
-                ctx,
-                scene,
-                &self.shadows.plan,
-                &IrregularInputs {
-                    frame: &self.frame_buffer,
-                    lights: &self.lights,
-                    views: &self.shadows.atlas.views_buffer,
-                    gbuffer: &self.gbuffer,
-                    casters: &self.shadows.casters,
-                },
-                (settings.width, settings.height),
-                settings.irregular,
-            )?);
-        }
         self.lighting.rebind(
             ctx,
             &LightingInputs {
@@ -637,10 +493,8 @@ impl Renderer {
                 lights: &self.lights,
                 materials: &self.scene.materials,
                 gbuffer: &self.gbuffer,
-                atlas: &self.shadows.atlas,
-                mask: self.irregular.as_ref().map(|i| i.mask()),
                 clusters: &self.clusters,
-                vsm: self.vsm.as_ref(),
+                shadows: self.source.output(),
             },
         );
         let lights = scene.lights.len() as u32;
@@ -649,13 +503,7 @@ impl Renderer {
             .as_ref()
             .is_some_and(|v| v.lights() != lights)
         {
-            self.visibility = Some(VisibilityPass::new(
-                ctx,
-                settings.width,
-                settings.height,
-                lights,
-                self.vsm.is_some(),
-            )?);
+            self.visibility = visibility_pass(ctx, settings, scene, &*self.source)?;
         }
         self.dirty = false;
         Ok(())
@@ -676,33 +524,9 @@ impl Renderer {
             let span = self.timer.span("clusters");
             self.clusters.record(encoder, &self.timer, span);
         }
-        let pages_span = if self.vsm.is_some() {
-            self.timer.span("pages")
-        } else {
-            None
-        };
-        let span = self.timer.span("shadows");
-        let shadow_stats = match (&self.irregular, self.vsm.as_mut()) {
-            (Some(irr), _) => {
-                irr.record(encoder, &self.shadows.casters, &self.timer, span);
-                ShadowStats::default()
-            }
-            (_, Some(vsm)) => {
-                vsm.record(
-                    ctx,
-                    encoder,
-                    &self.shadows.casters,
-                    &self.timer,
-                    pages_span,
-                    span,
-                    self.settings.cache_shadows,
-                );
-                ShadowStats::default()
-            }
-            _ => self
-                .shadows
-                .generate(ctx, &self.scene, encoder, &self.timer, span),
-        };
+        let shadow_stats = self
+            .source
+            .record(ctx, &self.scene, encoder, &mut self.timer);
         let span = self.timer.span("lighting");
         self.lighting.record(encoder, &self.timer, span);
         Ok(shadow_stats)
@@ -728,9 +552,7 @@ impl Renderer {
             let blit = self.blit.get_or_insert_with(|| crate::blit::Blit::new(ctx));
             blit.record(ctx, &mut encoder, &self.lighting.color, target)?;
             ctx.queue.submit([encoder.finish()]);
-            if let Some(irr) = self.irregular.as_mut() {
-                irr.finish(ctx)?;
-            }
+            self.source.finish(ctx)?;
             Ok(SubmittedFrame {
                 shadow_stats,
                 cpu_record_ms: start.elapsed().as_secs_f64() * 1e3,
@@ -774,31 +596,26 @@ impl Renderer {
             } else {
                 None
             };
-            if let Some(irr) = self.irregular.as_mut() {
-                // A full node pool makes the frame an error, never a wrong image.
-                irr.finish(ctx)?;
-            }
-            let virtual_maps = match &self.vsm {
-                Some(v) => Some(v.read_stats(ctx)?),
-                None => None,
-            };
-            let visibility = match (&self.visibility, &self.irregular) {
-                (_, Some(irr)) if self.settings.visibility => Some(irr.read_mask(ctx)?),
-                (Some(pass), _) => {
+            // A source whose frame went wrong (irregular's full node pool) makes it an error,
+            // never a wrong image.
+            self.source.finish(ctx)?;
+            let virtual_maps = self.source.read_virtual_stats(ctx)?;
+            let visibility = match &self.visibility {
+                Some(pass) => {
                     let span = self.timer.span("visibility");
                     let inputs = LightingInputs {
                         frame: &self.frame_buffer,
                         lights: &self.lights,
                         materials: &self.scene.materials,
                         gbuffer: &self.gbuffer,
-                        atlas: &self.shadows.atlas,
-                        mask: None,
                         clusters: &self.clusters,
-                        vsm: self.vsm.as_ref(),
+                        shadows: self.source.output(),
                     };
                     Some(pass.run(ctx, &inputs, &self.timer, span)?)
                 }
-                _ => None,
+                // The source's output is the mask itself.
+                None if self.settings.visibility => self.source.read_mask(ctx)?,
+                None => None,
             };
             let mut encoder = ctx
                 .device
@@ -830,24 +647,45 @@ impl Renderer {
 
     /// Counters of the last frame of [`Technique::Irregular`] (`None` for other techniques).
     pub fn irregular_stats(&self) -> Option<crate::irregular::IrregularStats> {
-        self.irregular.as_ref().map(|i| i.stats())
+        self.source.irregular_stats()
     }
 
-    /// Reads the depth atlas back (`size`² floats, row-major); `irregular` has no atlas and
-    /// answers [`RenderError::Unsupported`].
+    /// Reads the depth atlas back (`size`² floats, row-major); techniques that fill no atlas
+    /// (`irregular`, `virtual`) answer [`RenderError::Unsupported`].
     pub fn read_atlas(&self) -> Result<Vec<f32>, RenderError> {
-        if self.irregular.is_some() {
-            return Err(RenderError::Unsupported(
-                crate::shadow::IRREGULAR_NO_ATLAS.into(),
-            ));
-        }
-        if self.vsm.is_some() {
-            return Err(RenderError::Unsupported(
-                crate::shadow::VIRTUAL_NO_ATLAS.into(),
-            ));
-        }
-        self.shadows.read_atlas(&self.ctx)
+        self.source.read_atlas(&self.ctx)
     }
+}
+
+/// The lights buffer's records, one placeholder when there are no lights (a binding is never
+/// empty).
+fn lights_or_placeholder(mut data: Vec<LightData>) -> Vec<LightData> {
+    if data.is_empty() {
+        data.push(bytemuck::Zeroable::zeroed());
+    }
+    data
+}
+
+/// The visibility pass of `scene`'s lights when the settings ask for the mask and the source
+/// does not produce it itself.
+fn visibility_pass(
+    ctx: &GpuContext,
+    settings: &RenderSettings,
+    scene: &Scene,
+    source: &dyn ShadowSource,
+) -> Result<Option<VisibilityPass>, RenderError> {
+    let shadows = source.output();
+    if !settings.visibility || shadows.mask().is_some() {
+        return Ok(None);
+    }
+    VisibilityPass::new(
+        ctx,
+        settings.width,
+        settings.height,
+        scene.lights.len() as u32,
+        &shadows,
+    )
+    .map(Some)
 }
 
 /// The frame's uniforms; `atlas_size` is the side of the texture shadows are read from (the

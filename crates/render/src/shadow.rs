@@ -651,6 +651,9 @@ pub trait ShadowTechnique {
     /// The technique's stable CLI name.
     fn name(&self) -> &'static str;
     /// Records the generation into `encoder`; `span` is the timer span for its passes.
+    /// Techniques keep their uniform buffers and bind groups across generations and rewrite
+    /// the uniforms with `Queue::write_buffer`, so submit each generation before recording
+    /// the next one.
     fn generate(
         &mut self,
         input: &ShadowInput<'_>,

@@ -129,13 +129,13 @@ const VSM_FIRST_BINDING: u32 = 11;
 
 impl VisibilityPass {
     /// Plans the pass; fails if even one word per pixel exceeds the storage-binding limit.
-    /// `virtual_maps`: read shadows through the virtual shadow maps' page table.
+    /// Shadows are read from `shadows` (an atlas, or a page pool through its page table).
     pub fn new(
         ctx: &GpuContext,
         w: u32,
         h: u32,
         lights: u32,
-        virtual_maps: bool,
+        shadows: &crate::source::ShadowOutput<'_>,
     ) -> Result<Self, RenderError> {
         let device = &ctx.device;
         let limit = ctx.limits().max_storage_buffer_binding_size;
@@ -167,7 +167,7 @@ impl VisibilityPass {
             crate::storage_entry(9, comp),
             crate::storage_entry(10, comp),
         ];
-        let source = if virtual_maps {
+        let source = if shadows.pages().is_some() {
             entries.extend(crate::lighting::vsm_layout_entries(VSM_FIRST_BINDING, comp));
             crate::shaders::ShadowSource::Virtual {
                 first: VSM_FIRST_BINDING,
@@ -265,7 +265,7 @@ impl VisibilityPass {
                 },
                 wgpu::BindGroupEntry {
                     binding: 2,
-                    resource: inputs.atlas.views_buffer.as_entire_binding(),
+                    resource: inputs.shadows.view_table().as_entire_binding(),
                 },
                 wgpu::BindGroupEntry {
                     binding: 3,

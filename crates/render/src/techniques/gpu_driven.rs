@@ -24,7 +24,10 @@
 //! split too if even one view's commands would not fit.
 
 use crate::shadow::{ShadowInput, ShadowStats, ShadowTechnique};
-use crate::techniques::{atlas_attachment, depth_pipeline, require_clip_distances, TileClear};
+use crate::techniques::{
+    atlas_attachment, depth_pipeline, require_clip_distances, CachedGroup, TileClear,
+    UniformRecords,
+};
 use crate::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
@@ -101,6 +104,10 @@ pub struct GpuDriven {
     max_round_commands: u64,
     commands: Option<(wgpu::Buffer, u64)>,
     counter: wgpu::Buffer,
+    /// One `GpuParams` per round, rewritten each generation.
+    params: UniformRecords,
+    cull_group: CachedGroup,
+    draw_group: CachedGroup,
 }
 
 fn dynamic_uniform_entry(
@@ -206,6 +213,9 @@ impl GpuDriven {
             max_round_commands,
             commands: None,
             counter,
+            params: UniformRecords::new(ctx, "gpu_driven.params", PARAMS_SIZE),
+            cull_group: CachedGroup::default(),
+            draw_group: CachedGroup::default(),
         })
     }
 
@@ -272,12 +282,10 @@ impl ShadowTechnique for GpuDriven {
         self.command_buffer(ctx, capacity);
         let commands = &self.commands.as_ref().expect("command buffer").0;
 
-        let stride =
-            PARAMS_SIZE.next_multiple_of(ctx.limits().min_uniform_buffer_offset_alignment as u64);
-        let mut bytes = vec![0u8; stride as usize * rounds.len().max(1)];
         let atlas = input.atlas.size as f32;
-        for (k, r) in rounds.iter().enumerate() {
-            let record = crate::gpu_types::GpuParams {
+        let records: Vec<crate::gpu_types::GpuParams> = rounds
+            .iter()
+            .map(|r| crate::gpu_types::GpuParams {
                 counts: [
                     casters.vertices,
                     casters.cullable_triangles,
@@ -291,55 +299,64 @@ impl ShadowTechnique for GpuDriven {
                     u32::from(self.compact),
                 ],
                 atlas: [atlas, 1.0 / atlas, 0.0, 0.0],
-            };
-            let at = k * stride as usize;
-            bytes[at..at + PARAMS_SIZE as usize].copy_from_slice(bytemuck::bytes_of(&record));
-        }
-        let params = wgpu::util::DeviceExt::create_buffer_init(
-            &ctx.device,
-            &wgpu::util::BufferInitDescriptor {
-                label: Some("gpu_driven.params"),
-                contents: &bytes,
-                usage: wgpu::BufferUsages::UNIFORM,
-            },
-        );
-        let params_binding = || {
-            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer: &params,
-                offset: 0,
-                size: wgpu::BufferSize::new(PARAMS_SIZE),
             })
-        };
-        let cull_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("gpu_driven.cull_group"),
-            layout: &self.cull_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: params_binding(),
-                },
-                entry(1, &input.atlas.views_buffer),
-                entry(2, &input.atlas.draw_list),
-                entry(3, &input.atlas.eyes),
-                entry(4, &casters.cluster_buffer),
-                entry(5, &casters.cluster_bounds),
-                entry(6, &input.scene.instances),
-                entry(7, commands),
-                entry(8, &self.counter),
-            ],
+            .collect();
+        self.params.write(ctx, &records);
+        let params = &self.params;
+        let device = &ctx.device;
+        let cull_buffers = [
+            params.buffer(),
+            &input.atlas.views_buffer,
+            &input.atlas.draw_list,
+            &input.atlas.eyes,
+            &casters.cluster_buffer,
+            &casters.cluster_bounds,
+            &input.scene.instances,
+            commands,
+            &self.counter,
+        ];
+        let cull_layout = &self.cull_layout;
+        let cull_group = self.cull_group.get(&cull_buffers, || {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("gpu_driven.cull_group"),
+                layout: cull_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: params.binding(),
+                    },
+                    entry(1, &input.atlas.views_buffer),
+                    entry(2, &input.atlas.draw_list),
+                    entry(3, &input.atlas.eyes),
+                    entry(4, &casters.cluster_buffer),
+                    entry(5, &casters.cluster_bounds),
+                    entry(6, &input.scene.instances),
+                    entry(7, commands),
+                    entry(8, &self.counter),
+                ],
+            })
         });
-        let draw_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("gpu_driven.draw_group"),
-            layout: &self.draw_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: params_binding(),
-                },
-                entry(1, &input.atlas.views_buffer),
-                entry(2, &input.atlas.draw_list),
-                entry(9, &casters.world),
-            ],
+        let draw_buffers = [
+            params.buffer(),
+            &input.atlas.views_buffer,
+            &input.atlas.draw_list,
+            &casters.world,
+        ];
+        let draw_layout = &self.draw_layout;
+        let draw_group = self.draw_group.get(&draw_buffers, || {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("gpu_driven.draw_group"),
+                layout: draw_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: params.binding(),
+                    },
+                    entry(1, &input.atlas.views_buffer),
+                    entry(2, &input.atlas.draw_list),
+                    entry(9, &casters.world),
+                ],
+            })
         });
 
         encoder.push_debug_group("gpu-driven");
@@ -372,7 +389,7 @@ impl ShadowTechnique for GpuDriven {
         }
         let corners = casters.corners.slice(..);
         for (k, r) in rounds.iter().enumerate() {
-            let offset = [(k as u64 * stride) as u32];
+            let offset = [params.offset(k)];
             let first = k == 0;
             let last = k + 1 == rounds.len();
             if self.compact {
@@ -389,7 +406,7 @@ impl ShadowTechnique for GpuDriven {
                     casters.record(&mut pass, true);
                 }
                 pass.set_pipeline(&self.cull);
-                pass.set_bind_group(0, &cull_group, &offset);
+                pass.set_bind_group(0, cull_group, &offset);
                 pass.dispatch_workgroups(r.clusters.div_ceil(64), r.views, 1);
                 timer.end_compute_stats(&mut pass, s);
                 stats.passes += 1;
@@ -410,7 +427,7 @@ impl ShadowTechnique for GpuDriven {
                 pass.set_scissor_rect(0, 0, 0, 0);
             }
             pass.set_pipeline(&self.draw);
-            pass.set_bind_group(0, &draw_group, &offset);
+            pass.set_bind_group(0, draw_group, &offset);
             pass.set_index_buffer(corners, wgpu::IndexFormat::Uint32);
             let max = r.commands() as u32;
             if self.compact {

@@ -13,7 +13,9 @@
 //! Without culling the draw is indexed, so post-transform vertex reuse still applies.
 
 use crate::shadow::{ShadowInput, ShadowStats, ShadowTechnique};
-use crate::techniques::{atlas_attachment, depth_pipeline, require_clip_distances, TileClear};
+use crate::techniques::{
+    atlas_attachment, depth_pipeline, require_clip_distances, CachedGroup, TileClear,
+};
 use crate::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
@@ -23,6 +25,9 @@ pub struct Layered {
     pulled: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     clear: TileClear,
+    /// `LayeredParams`, rewritten each generation.
+    params: wgpu::Buffer,
+    group: CachedGroup,
 }
 
 impl Layered {
@@ -54,6 +59,13 @@ impl Layered {
             pulled: pipeline("vs_pulled"),
             layout,
             clear: TileClear::new(ctx),
+            params: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("layered.params"),
+                size: std::mem::size_of::<crate::gpu_types::LayeredParams>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            group: CachedGroup::default(),
         })
     }
 }
@@ -83,24 +95,20 @@ impl ShadowTechnique for Layered {
             counts: [casters.cullable_triangles, cull.bits(), 0, 0],
             atlas: [atlas, 1.0 / atlas, 0.0, 0.0],
         };
-        let params = wgpu::util::DeviceExt::create_buffer_init(
-            &ctx.device,
-            &wgpu::util::BufferInitDescriptor {
-                label: Some("layered.params"),
-                contents: bytemuck::bytes_of(&params),
-                usage: wgpu::BufferUsages::UNIFORM,
-            },
-        );
+        ctx.queue
+            .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let buffers = [
-            &params,
+            &self.params,
             &input.atlas.views_buffer,
             &input.atlas.eyes,
             &casters.world,
             &casters.corners,
             &input.atlas.draw_list,
         ];
-        let bind_group =
-            crate::buffer_bind_group(&ctx.device, "layered.bind_group", &self.layout, &buffers);
+        let (device, layout) = (&ctx.device, &self.layout);
+        let bind_group = self.group.get(&buffers, || {
+            crate::buffer_bind_group(device, "layered.bind_group", layout, &buffers)
+        });
 
         encoder.push_debug_group("layered");
         {
@@ -126,7 +134,7 @@ impl ShadowTechnique for Layered {
         if input.options.discard_raster {
             pass.set_scissor_rect(0, 0, 0, 0);
         }
-        pass.set_bind_group(0, &bind_group, &[]);
+        pass.set_bind_group(0, bind_group, &[]);
         let corners = 3 * casters.triangles;
         if cull == crate::shadow::CullMode::None {
             pass.set_pipeline(&self.indexed);

@@ -15,6 +15,10 @@ use crate::{GpuContext, RenderError};
 pub struct TileClear {
     pipeline: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
+    /// The atlas side (`vec4<f32>`), rewritten when it changes.
+    size: wgpu::Buffer,
+    written: Option<u32>,
+    group: CachedGroup,
 }
 
 impl TileClear {
@@ -38,13 +42,25 @@ impl TileClear {
             immediate_size: 0,
         });
         let pipeline = clear_pipeline(device, &pipeline_layout, &module, "vs_clear");
-        Self { pipeline, layout }
+        let size = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tile_clear.atlas"),
+            size: 16,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self {
+            pipeline,
+            layout,
+            size,
+            written: None,
+            group: CachedGroup::default(),
+        }
     }
 
     /// Records the clear of every listed view's tile into `pass` (whose viewport must be the
     /// whole atlas). Does nothing when every view is drawn: that pass clears on load instead.
     pub fn record(
-        &self,
+        &mut self,
         ctx: &GpuContext,
         input: &ShadowInput<'_>,
         pass: &mut wgpu::RenderPass<'_>,
@@ -52,34 +68,23 @@ impl TileClear {
         if input.full() || input.draw_list.is_empty() {
             return;
         }
-        let size = wgpu::util::DeviceExt::create_buffer_init(
-            &ctx.device,
-            &wgpu::util::BufferInitDescriptor {
-                label: Some("tile_clear.atlas"),
-                contents: bytemuck::cast_slice(&[input.atlas.size as f32, 0.0, 0.0, 0.0]),
-                usage: wgpu::BufferUsages::UNIFORM,
-            },
-        );
-        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("tile_clear.bind_group"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: input.atlas.views_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: input.atlas.draw_list.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: size.as_entire_binding(),
-                },
-            ],
+        if self.written != Some(input.atlas.size) {
+            let size = [input.atlas.size as f32, 0.0, 0.0, 0.0];
+            ctx.queue
+                .write_buffer(&self.size, 0, bytemuck::cast_slice(&size));
+            self.written = Some(input.atlas.size);
+        }
+        let buffers = [
+            &input.atlas.views_buffer,
+            &input.atlas.draw_list,
+            &self.size,
+        ];
+        let (device, layout) = (&ctx.device, &self.layout);
+        let bind_group = self.group.get(&buffers, || {
+            crate::buffer_bind_group(device, "tile_clear.bind_group", layout, &buffers)
         });
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
+        pass.set_bind_group(0, bind_group, &[]);
         pass.draw(0..6, 0..input.draw_list.len() as u32);
     }
 }
@@ -92,6 +97,113 @@ impl TileClear {
     /// clip distances before the pass ends disables them. Harmless elsewhere.
     pub fn reset_clip_distances(&self, pass: &mut wgpu::RenderPass<'_>) {
         pass.set_pipeline(&self.pipeline);
+    }
+}
+
+/// A bind group kept across frames: rebuilt only when one of the buffers it binds was replaced
+/// (or after [`CachedGroup::invalidate`], for bound textures). Holds handles of the bound
+/// buffers, so a replaced buffer is never mistaken for a new one at the same address.
+#[derive(Default)]
+pub(crate) struct CachedGroup {
+    buffers: Vec<wgpu::Buffer>,
+    group: Option<wgpu::BindGroup>,
+}
+
+impl CachedGroup {
+    /// The bind group of `buffers`, made by `make` if they are not the ones last bound.
+    pub fn get(
+        &mut self,
+        buffers: &[&wgpu::Buffer],
+        make: impl FnOnce() -> wgpu::BindGroup,
+    ) -> &wgpu::BindGroup {
+        let same = self.buffers.len() == buffers.len()
+            && self.buffers.iter().zip(buffers).all(|(a, b)| a == *b);
+        if !same || self.group.is_none() {
+            self.buffers = buffers.iter().map(|&b| b.clone()).collect();
+            self.group = Some(make());
+        }
+        self.group.as_ref().expect("bind group just made")
+    }
+
+    /// Forgets the bind group (a bound texture was replaced).
+    pub fn invalidate(&mut self) {
+        self.group = None;
+    }
+}
+
+/// Uniform records at the device's dynamic-offset alignment in one buffer kept across frames:
+/// rewritten with `write_buffer` each generation, replaced (twice the need) only when a
+/// generation needs more records than it holds. Techniques record one generation per
+/// submission, so a write never overtakes commands that read the previous records.
+pub(crate) struct UniformRecords {
+    buffer: wgpu::Buffer,
+    record: u64,
+    stride: u64,
+    bytes: Vec<u8>,
+    what: &'static str,
+}
+
+impl UniformRecords {
+    /// Room for one record of `record` bytes.
+    pub fn new(ctx: &GpuContext, what: &'static str, record: u64) -> Self {
+        let stride =
+            record.next_multiple_of(ctx.limits().min_uniform_buffer_offset_alignment as u64);
+        Self {
+            buffer: ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(what),
+                size: stride,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            record,
+            stride,
+            bytes: Vec::new(),
+            what,
+        }
+    }
+
+    /// Writes `records`, record `k` at [`UniformRecords::offset`]`(k)`.
+    pub fn write<T: bytemuck::Pod>(&mut self, ctx: &GpuContext, records: &[T]) {
+        debug_assert_eq!(std::mem::size_of::<T>() as u64, self.record);
+        let stride = self.stride as usize;
+        self.bytes.clear();
+        self.bytes.resize(stride * records.len().max(1), 0);
+        for (k, r) in records.iter().enumerate() {
+            self.bytes[k * stride..k * stride + self.record as usize]
+                .copy_from_slice(bytemuck::bytes_of(r));
+        }
+        let needed = self.bytes.len() as u64;
+        if let Err(e) = crate::grow_buffer(ctx, &mut self.buffer, needed, self.what) {
+            // Over the device's buffer limit: what a per-frame buffer of this size did before
+            // (a GPU error the frame reports), not a silent truncation.
+            log::error!("{e}");
+            self.buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(self.what),
+                size: needed,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+        }
+        ctx.queue.write_buffer(&self.buffer, 0, &self.bytes);
+    }
+
+    /// The buffer (compare it to see whether bind groups must be rebuilt).
+    pub fn buffer(&self) -> &wgpu::Buffer {
+        &self.buffer
+    }
+
+    /// One record's binding at offset 0 (the dynamic offset selects the record).
+    pub fn binding(&self) -> wgpu::BindingResource<'_> {
+        wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &self.buffer,
+            offset: 0,
+            size: wgpu::BufferSize::new(self.record),
+        })
+    }
+
+    /// The dynamic offset of record `k`.
+    pub fn offset(&self, k: usize) -> u32 {
+        (k as u64 * self.stride) as u32
     }
 }
 

@@ -23,7 +23,7 @@ use std::collections::HashMap;
 use std::num::NonZeroU32;
 
 use crate::shadow::{CullMode, ShadowInput, ShadowStats, ShadowTechnique, ATLAS_FORMAT};
-use crate::techniques::{atlas_attachment, TileClear};
+use crate::techniques::{atlas_attachment, CachedGroup, TileClear, UniformRecords};
 use crate::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
@@ -68,6 +68,11 @@ pub struct Multiview {
     scratch: Option<Scratch>,
     clear: TileClear,
     max_views: u32,
+    /// One `MultiviewParams` per group, rewritten each generation.
+    params: UniformRecords,
+    group: CachedGroup,
+    /// Also binds the scratch array: invalidated when the scratch is replaced.
+    copy_group: CachedGroup,
 }
 
 /// The scratch depth array a group renders into.
@@ -189,6 +194,9 @@ impl Multiview {
             scratch: None,
             clear: TileClear::new(ctx),
             max_views,
+            params: UniformRecords::new(ctx, "multiview.params", PARAMS_SIZE),
+            group: CachedGroup::default(),
+            copy_group: CachedGroup::default(),
         })
     }
 
@@ -265,6 +273,7 @@ impl Multiview {
             dimension: Some(wgpu::TextureViewDimension::D2Array),
             ..Default::default()
         });
+        self.copy_group.invalidate();
         self.scratch = Some(Scratch {
             texture,
             side,
@@ -321,84 +330,80 @@ impl ShadowTechnique for Multiview {
         let layers = groups.iter().map(|g| g.1).max().unwrap_or(1);
         self.ensure_scratch(ctx, side, layers);
 
+        let pulled = cull != CullMode::None;
+        for &(_, n) in &groups {
+            self.pipeline(ctx, n, pulled);
+        }
+
         // One parameter record per group, at the uniform-offset alignment.
-        let stride =
-            PARAMS_SIZE.next_multiple_of(ctx.limits().min_uniform_buffer_offset_alignment as u64);
-        let mut bytes = vec![0u8; stride as usize * groups.len()];
-        for (g, &(first, _)) in groups.iter().enumerate() {
-            let record = crate::gpu_types::MultiviewParams {
+        let records: Vec<crate::gpu_types::MultiviewParams> = groups
+            .iter()
+            .map(|&(first, _)| crate::gpu_types::MultiviewParams {
                 counts: [first, casters.cullable_triangles, cull.bits(), 0],
                 atlas: [input.atlas.size as f32, 0.0, 0.0, 0.0],
-            };
-            let at = g * stride as usize;
-            bytes[at..at + PARAMS_SIZE as usize].copy_from_slice(bytemuck::bytes_of(&record));
-        }
-        let params = wgpu::util::DeviceExt::create_buffer_init(
-            &ctx.device,
-            &wgpu::util::BufferInitDescriptor {
-                label: Some("multiview.params"),
-                contents: &bytes,
-                usage: wgpu::BufferUsages::UNIFORM,
-            },
-        );
-        let params_binding = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-            buffer: &params,
-            offset: 0,
-            size: wgpu::BufferSize::new(PARAMS_SIZE),
-        });
+            })
+            .collect();
+        self.params.write(ctx, &records);
+        let params = &self.params;
+        let device = &ctx.device;
         let buffers = [
+            params.buffer(),
             &input.atlas.views_buffer,
             &input.atlas.eyes,
             &casters.world,
             &casters.corners,
             &input.atlas.draw_list,
         ];
-        let mut entries = vec![wgpu::BindGroupEntry {
-            binding: 0,
-            resource: params_binding.clone(),
-        }];
-        entries.extend(
-            buffers
-                .iter()
-                .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry {
-                    binding: i as u32 + 1,
-                    resource: b.as_entire_binding(),
-                }),
-        );
-        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("multiview.bind_group"),
-            layout: &self.layout,
-            entries: &entries,
-        });
-        let copy_bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("multiview.copy_bind_group"),
-            layout: &self.copy_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
+        let layout = &self.layout;
+        let bind_group =
+            self.group.get(&buffers, || {
+                let mut entries = vec![wgpu::BindGroupEntry {
                     binding: 0,
-                    resource: params_binding,
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: input.atlas.views_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: input.atlas.draw_list.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::TextureView(
-                        &self.scratch.as_ref().expect("scratch").all,
-                    ),
-                },
-            ],
+                    resource: params.binding(),
+                }];
+                entries.extend(buffers[1..].iter().enumerate().map(|(i, b)| {
+                    wgpu::BindGroupEntry {
+                        binding: i as u32 + 1,
+                        resource: b.as_entire_binding(),
+                    }
+                }));
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("multiview.bind_group"),
+                    layout,
+                    entries: &entries,
+                })
+            });
+        let copy_buffers = [
+            params.buffer(),
+            &input.atlas.views_buffer,
+            &input.atlas.draw_list,
+        ];
+        let copy_layout = &self.copy_layout;
+        let all = &self.scratch.as_ref().expect("scratch").all;
+        let copy_bind_group = self.copy_group.get(&copy_buffers, || {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("multiview.copy_bind_group"),
+                layout: copy_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: params.binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: input.atlas.views_buffer.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: input.atlas.draw_list.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: wgpu::BindingResource::TextureView(all),
+                    },
+                ],
+            })
         });
-        let pulled = cull != CullMode::None;
-        for &(_, n) in &groups {
-            self.pipeline(ctx, n, pulled);
-        }
 
         encoder.push_debug_group("multiview");
         {
@@ -413,7 +418,7 @@ impl ShadowTechnique for Multiview {
         }
         let corners = 3 * casters.triangles;
         for (g, &(first, n)) in groups.iter().enumerate() {
-            let offset = [(g as u64 * stride) as u32];
+            let offset = [params.offset(g)];
             let size = tiles[input.draw_list[first as usize] as usize].size;
             let pipeline = &self.pipelines[&(n, pulled)];
             let scratch = self.scratch.as_mut().expect("scratch");
@@ -441,7 +446,7 @@ impl ShadowTechnique for Multiview {
                     pass.set_scissor_rect(0, 0, size, size);
                 }
                 pass.set_pipeline(pipeline);
-                pass.set_bind_group(0, &bind_group, &offset);
+                pass.set_bind_group(0, bind_group, &offset);
                 if pulled {
                     pass.draw(0..corners, 0..1);
                 } else {
@@ -469,7 +474,7 @@ impl ShadowTechnique for Multiview {
                 pass.set_scissor_rect(0, 0, 0, 0);
             }
             pass.set_pipeline(&self.copy_pipeline);
-            pass.set_bind_group(0, &copy_bind_group, &offset);
+            pass.set_bind_group(0, copy_bind_group, &offset);
             pass.draw(0..6 * n, 0..1);
             timer.end_render_stats(&mut pass, s);
             stats.passes += 1;

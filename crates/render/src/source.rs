@@ -1,0 +1,388 @@
+//! Where a frame's shadows come from: one [`ShadowSource`] per renderer, whatever the
+//! technique.
+//!
+//! A source is told about the frame's changes ([`ShadowSource::update`] after the camera,
+//! lights or instances changed, [`ShadowSource::note_moved`] for a moved caster), is handed the
+//! renderer's buffers ([`ShadowSource::bind`]), records its work after the G-buffer and the
+//! light clusters ([`ShadowSource::record`]) and checks it after submission
+//! ([`ShadowSource::finish`]). What it leaves for the lighting and visibility passes is a
+//! [`ShadowOutput`]:
+//!
+//! - [`ShadowOutput::Atlas`]: a depth atlas with every view's tile and the view table
+//!   (`traditional`, `layered`, `multiview`, `gpu-driven`, `compute`: [`AtlasSource`]);
+//! - [`ShadowOutput::Pages`]: a virtual page pool and its page table (`virtual`:
+//!   [`crate::vsm::VirtualSource`]);
+//! - [`ShadowOutput::Mask`]: the per-pixel, per-light visibility bits themselves
+//!   (`irregular`: [`crate::irregular::IrregularSource`]).
+//!
+//! [`create`] is the one place a [`Technique`] becomes a source.
+
+use glam::Vec3;
+use manyshadows_scene::atlas::FitPolicy;
+use manyshadows_scene::light_space::PointShadows;
+use manyshadows_scene::Scene;
+
+use crate::casters::CasterGeometry;
+use crate::clusters::LightClusters;
+use crate::gbuffer::GBuffer;
+use crate::generator::ShadowGenerator;
+use crate::gpu_scene::GpuScene;
+use crate::gpu_types::LightData;
+use crate::renderer::RenderSettings;
+use crate::shadow::{ShadowAtlas, ShadowPlan, ShadowStats, Technique};
+use crate::timing::GpuTimer;
+use crate::visibility::VisibilityMask;
+use crate::{GpuContext, RenderError};
+
+/// The renderer's buffers a source may read (bound by [`ShadowSource::bind`]).
+pub struct SourceInputs<'a> {
+    /// The scene as this frame renders it.
+    pub scene: &'a Scene,
+    /// `FrameUniforms`.
+    pub frame: &'a wgpu::Buffer,
+    /// `array<LightData>` (what [`ShadowSource::light_data`] returned).
+    pub lights: &'a wgpu::Buffer,
+    /// The G-buffer (the camera's samples: irregular inserts them, virtual maps mark pages).
+    pub gbuffer: &'a GBuffer,
+    /// The light clusters (virtual maps mark pages of the lights a pixel's cluster lists).
+    pub clusters: &'a LightClusters,
+    /// Scene instances (`array<InstanceData>`).
+    pub instances: &'a wgpu::Buffer,
+}
+
+/// A virtual page pool and its page table.
+#[derive(Clone, Copy)]
+pub struct PagePool<'a> {
+    /// Depth view of the pool.
+    pub pool: &'a wgpu::TextureView,
+    /// Side of the pool in texels.
+    pub side: u32,
+    /// `VsmUniforms`.
+    pub uniforms: &'a wgpu::Buffer,
+    /// `array<VirtualFace>`.
+    pub faces: &'a wgpu::Buffer,
+    /// The page table.
+    pub table: &'a wgpu::Buffer,
+}
+
+/// What a source leaves for the lighting and visibility passes. Every kind carries a view
+/// table (`array<ShadowViewData>`, empty for virtual maps, whose faces are in the page table)
+/// and a depth texture to bind (a 1×1 placeholder where shadows are not read from one).
+#[derive(Clone, Copy)]
+pub enum ShadowOutput<'a> {
+    /// A depth atlas: every view's tile, found through the atlas's view table.
+    Atlas(&'a ShadowAtlas),
+    /// Virtual shadow maps: resident pages in a pool; `views` holds the view table.
+    Pages {
+        /// Pool and page table.
+        pages: PagePool<'a>,
+        /// View table and placeholder texture.
+        views: &'a ShadowAtlas,
+    },
+    /// The visibility of every (pixel, light) pair: `counts.w` words of light bits per pixel.
+    Mask {
+        /// The mask.
+        mask: &'a wgpu::Buffer,
+        /// View table and placeholder texture.
+        views: &'a ShadowAtlas,
+    },
+}
+
+impl<'a> ShadowOutput<'a> {
+    /// The atlas, or the view table with its placeholder texture.
+    fn views(&self) -> &'a ShadowAtlas {
+        match *self {
+            ShadowOutput::Atlas(a) => a,
+            ShadowOutput::Pages { views, .. } | ShadowOutput::Mask { views, .. } => views,
+        }
+    }
+
+    /// `array<ShadowViewData>`.
+    pub fn view_table(&self) -> &'a wgpu::Buffer {
+        &self.views().views_buffer
+    }
+
+    /// The depth texture shadows are read from: the atlas or the page pool (a placeholder for
+    /// a mask).
+    pub fn depth(&self) -> &'a wgpu::TextureView {
+        match *self {
+            ShadowOutput::Pages { pages, .. } => pages.pool,
+            _ => &self.views().view,
+        }
+    }
+
+    /// Side of [`ShadowOutput::depth`] in texels (the frame uniforms' `counts.z`).
+    pub fn depth_side(&self) -> u32 {
+        match *self {
+            ShadowOutput::Pages { pages, .. } => pages.side,
+            _ => self.views().size,
+        }
+    }
+
+    /// The page pool and table, if shadows are read through one.
+    pub fn pages(&self) -> Option<PagePool<'a>> {
+        match *self {
+            ShadowOutput::Pages { pages, .. } => Some(pages),
+            _ => None,
+        }
+    }
+
+    /// The visibility mask, if the source computed it.
+    pub fn mask(&self) -> Option<&'a wgpu::Buffer> {
+        match *self {
+            ShadowOutput::Mask { mask, .. } => Some(mask),
+            _ => None,
+        }
+    }
+}
+
+/// Makes a frame's shadows: fills an atlas, a page pool or a visibility mask. The renderer
+/// drives every source the same way; see the [module](self) for the order of calls.
+pub trait ShadowSource {
+    /// The technique this source implements.
+    fn technique(&self) -> Technique;
+
+    /// The shadow views and atlas layout (no views for virtual maps, whose faces are in
+    /// [`ShadowSource::virtual_plan`]).
+    fn plan(&self) -> &ShadowPlan;
+
+    /// The atlas, or for sources that fill none the view table with a 1×1 placeholder
+    /// texture.
+    fn atlas(&self) -> &ShadowAtlas;
+
+    /// The world-space shadow-caster geometry.
+    fn casters(&self) -> &CasterGeometry;
+
+    /// The per-light records of the lights buffer, as this source's shadows are read.
+    fn light_data(&self, scene: &Scene) -> Vec<LightData>;
+
+    /// Re-plans for `scene` after its camera, lights or instances changed: new views, caster
+    /// culling re-decided, buffers rewritten in place (grown when needed). Followed by
+    /// [`ShadowSource::bind`].
+    fn update(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), RenderError>;
+
+    /// Takes the renderer's buffers (after creation and after every update, since the
+    /// renderer may have replaced one).
+    fn bind(&mut self, ctx: &GpuContext, inputs: &SourceInputs<'_>) -> Result<(), RenderError>;
+
+    /// A shadow caster's bounding sphere went from `old` to `new` (centre, radius): what it
+    /// shadowed must be redrawn by the next frame (sources that keep work between frames).
+    fn note_moved(&mut self, _old: (Vec3, f32), _new: (Vec3, f32)) {}
+
+    /// Records the frame's shadow work after the G-buffer and clusters, opening its own timer
+    /// spans (`shadows`, and `pages` before it for virtual maps).
+    fn record(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+    ) -> ShadowStats;
+
+    /// After the frame's submission: checks the work (irregular's node pool; waits for the
+    /// frame). A frame whose shadows went wrong is an error here.
+    fn finish(&mut self, _ctx: &GpuContext) -> Result<(), RenderError> {
+        Ok(())
+    }
+
+    /// What the lighting and visibility passes read (valid once the source is bound).
+    fn output(&self) -> ShadowOutput<'_>;
+
+    /// Reads the depth atlas back (`size`² floats, row-major);
+    /// [`RenderError::Unsupported`] for sources that fill no atlas.
+    fn read_atlas(&self, ctx: &GpuContext) -> Result<Vec<f32>, RenderError>;
+
+    /// Reads the visibility mask back, for a source whose output is the mask (`None`
+    /// otherwise: the visibility pass computes it from the output).
+    fn read_mask(&self, _ctx: &GpuContext) -> Result<Option<VisibilityMask>, RenderError> {
+        Ok(None)
+    }
+
+    /// Counters of the last finished frame of irregular shadow maps.
+    fn irregular_stats(&self) -> Option<crate::irregular::IrregularStats> {
+        None
+    }
+
+    /// The faces of virtual shadow maps.
+    fn virtual_plan(&self) -> Option<&crate::vsm::VirtualPlan> {
+        None
+    }
+
+    /// Reads the counters of the last submitted frame of virtual shadow maps.
+    fn read_virtual_stats(
+        &self,
+        _ctx: &GpuContext,
+    ) -> Result<Option<crate::vsm::VirtualStats>, RenderError> {
+        Ok(None)
+    }
+}
+
+/// How shadow views are planned for a frame (what [`ShadowPlan::with_points`] needs beside the
+/// scene).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PlanParams {
+    pub aspect: f32,
+    pub max_atlas: u32,
+    pub fit: FitPolicy,
+    pub point_shadows: PointShadows,
+}
+
+impl PlanParams {
+    pub fn new(settings: &RenderSettings, max_atlas: u32) -> Self {
+        Self {
+            aspect: settings.width as f32 / settings.height as f32,
+            max_atlas,
+            fit: settings.fit,
+            point_shadows: settings.point_shadows,
+        }
+    }
+
+    /// The views and atlas layout of `scene`.
+    pub fn plan(&self, scene: &Scene) -> Result<ShadowPlan, RenderError> {
+        ShadowPlan::with_points(
+            scene,
+            self.aspect,
+            self.max_atlas,
+            self.fit,
+            self.point_shadows,
+        )
+    }
+}
+
+/// The one mapping from a technique to its source.
+pub(crate) fn create(
+    ctx: &GpuContext,
+    scene: &Scene,
+    gpu: &GpuScene,
+    settings: &RenderSettings,
+    max_atlas: u32,
+) -> Result<Box<dyn ShadowSource>, RenderError> {
+    let params = PlanParams::new(settings, max_atlas);
+    Ok(match settings.technique {
+        Technique::Irregular => Box::new(crate::irregular::IrregularSource::new(
+            ctx, scene, gpu, params, settings,
+        )?),
+        Technique::Virtual => Box::new(crate::vsm::VirtualSource::new(ctx, scene, gpu, settings)?),
+        technique => Box::new(AtlasSource::new(
+            ctx, scene, gpu, params, technique, settings,
+        )?),
+    })
+}
+
+/// An atlas-filling technique ([`ShadowGenerator`]) as a frame's shadow source.
+pub struct AtlasSource {
+    generator: ShadowGenerator,
+    params: PlanParams,
+}
+
+impl AtlasSource {
+    fn new(
+        ctx: &GpuContext,
+        scene: &Scene,
+        gpu: &GpuScene,
+        params: PlanParams,
+        technique: Technique,
+        settings: &RenderSettings,
+    ) -> Result<Self, RenderError> {
+        let plan = params.plan(scene)?;
+        let mut generator =
+            ShadowGenerator::new(ctx, scene, gpu, plan, technique, settings.shadow)?;
+        generator.set_caching(settings.cache_shadows);
+        Ok(Self { generator, params })
+    }
+}
+
+impl ShadowSource for AtlasSource {
+    fn technique(&self) -> Technique {
+        self.generator.technique()
+    }
+
+    fn plan(&self) -> &ShadowPlan {
+        &self.generator.plan
+    }
+
+    fn atlas(&self) -> &ShadowAtlas {
+        &self.generator.atlas
+    }
+
+    fn casters(&self) -> &CasterGeometry {
+        &self.generator.casters
+    }
+
+    fn light_data(&self, scene: &Scene) -> Vec<LightData> {
+        self.generator.plan.light_data(scene)
+    }
+
+    fn update(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), RenderError> {
+        let plan = self.params.plan(scene)?;
+        let casters_changed = self.generator.casters.refresh(ctx, scene);
+        self.generator.set_plan(ctx, plan, casters_changed)?;
+        Ok(())
+    }
+
+    fn bind(&mut self, _ctx: &GpuContext, _inputs: &SourceInputs<'_>) -> Result<(), RenderError> {
+        // The techniques read only the atlas, the scene and the caster geometry.
+        Ok(())
+    }
+
+    fn note_moved(&mut self, old: (Vec3, f32), new: (Vec3, f32)) {
+        self.generator.note_moved(old, new);
+    }
+
+    fn record(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+    ) -> ShadowStats {
+        let span = timer.span("shadows");
+        self.generator.generate(ctx, scene, encoder, timer, span)
+    }
+
+    fn output(&self) -> ShadowOutput<'_> {
+        ShadowOutput::Atlas(&self.generator.atlas)
+    }
+
+    fn read_atlas(&self, ctx: &GpuContext) -> Result<Vec<f32>, RenderError> {
+        self.generator.read_atlas(ctx)
+    }
+}
+
+/// The plan's view table and the caster geometry without an atlas to fill: what the sources
+/// that read views but fill no atlas (irregular, virtual) keep.
+pub(crate) struct ViewTable {
+    pub plan: ShadowPlan,
+    pub views: ShadowAtlas,
+    pub casters: CasterGeometry,
+}
+
+impl ViewTable {
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &Scene,
+        gpu: &GpuScene,
+        plan: ShadowPlan,
+        settings: &RenderSettings,
+    ) -> Result<Self, RenderError> {
+        Ok(Self {
+            views: ShadowAtlas::views_only(ctx, &plan)?,
+            casters: CasterGeometry::new(ctx, scene, gpu, settings.shadow.casters)?,
+            plan,
+        })
+    }
+
+    /// Takes a new frame's plan and re-decides caster culling; true if the caster geometry
+    /// changed.
+    pub fn update(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        plan: ShadowPlan,
+    ) -> Result<bool, RenderError> {
+        let casters_changed = self.casters.refresh(ctx, scene);
+        self.views.update(ctx, &plan)?;
+        self.plan = plan;
+        Ok(casters_changed)
+    }
+}
