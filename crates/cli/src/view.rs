@@ -507,13 +507,23 @@ impl State {
         }
         o.refreshed = Some(Instant::now());
         if o.atlas {
-            match self.renderer.read_atlas() {
-                Ok(depth) => {
-                    let (side, rgb) = manyshadows::atlas_image::atlas_picture(
-                        &depth,
-                        self.renderer.atlas().size,
-                        self.renderer.plan(),
-                    );
+            // The atlas, or the virtual maps' page pool; irregular has neither.
+            let picture = if self.renderer.settings().technique == Technique::Virtual {
+                self.renderer.read_page_pool().map(|(side, depth)| {
+                    let (shown, rgb) = manyshadows::atlas_image::pool_picture(&depth, side);
+                    let pages = (side / manyshadows::vsm::PAGE_SIZE).pow(2);
+                    (shown, rgb, format!("{side}² page pool ({pages} pages)"))
+                })
+            } else {
+                self.renderer.read_atlas().map(|depth| {
+                    let size = self.renderer.atlas().size;
+                    let (shown, rgb) =
+                        manyshadows::atlas_image::atlas_picture(&depth, size, self.renderer.plan());
+                    (shown, rgb, format!("{size}² atlas"))
+                })
+            };
+            match picture {
+                Ok((side, rgb, what)) => {
                     let (w, small) = shrink_rgb(side, &rgb, 256);
                     let image = egui::ColorImage::from_rgb([w, w], &small);
                     o.atlas_texture = Some(self.egui_ctx.load_texture(
@@ -521,7 +531,7 @@ impl State {
                         image,
                         Default::default(),
                     ));
-                    o.atlas_note = format!("{side}² atlas, shown at {w}²");
+                    o.atlas_note = format!("{what}, shown at {w}²");
                 }
                 Err(e) => {
                     o.atlas_texture = None;
@@ -559,8 +569,17 @@ impl State {
         let mut choice = self.choice;
         let mut apply_lights = false;
         let plan = self.renderer.plan();
-        let views = plan.views.len();
         let atlas = plan.layout.size;
+        let pool_side = self.renderer.virtual_plan().map(|_| {
+            manyshadows::vsm::pool_side(
+                self.renderer.settings().virtual_maps.pool_bytes,
+                self.ctx.limits().max_texture_dimension_2d,
+            )
+        });
+        let views = match self.renderer.virtual_plan() {
+            Some(p) => p.faces.len(),
+            None => plan.views.len(),
+        };
         let lights = self.renderer.scene().lights.len();
         let features = self.ctx.device.features();
         let gpu_ms = self.gpu_ms.clone();
@@ -613,13 +632,21 @@ impl State {
                         apply_lights = ui.button("apply").clicked();
                     });
                     ui.separator();
+                    let (what, side) = match pool_side {
+                        Some(p) => ("page pool", p),
+                        None => ("atlas", atlas),
+                    };
                     ui.label(format!(
-                        "{lights} lights, {views} shadow views, atlas {atlas}² ({:.1} MiB)",
-                        (atlas as f64).powi(2) * 4.0 / (1 << 20) as f64
+                        "{lights} lights, {views} shadow views, {what} {side}² ({:.1} MiB)",
+                        (side as f64).powi(2) * 4.0 / (1 << 20) as f64
                     ));
-                    if matches!(technique, Technique::Irregular | Technique::Virtual) {
+                    if technique == Technique::Irregular {
                         ui.label(format!(
-                            "{technique}: no atlas (views are planned per frame)"
+                            "{technique}: no atlas (exact tests per camera sample)"
+                        ));
+                    } else if technique == Technique::Virtual {
+                        ui.label(format!(
+                            "{technique}: pages in a pool, no atlas (faces planned per frame)"
                         ));
                     } else {
                         ui.label(format!(
@@ -637,7 +664,7 @@ impl State {
                         ui.colored_label(egui::Color32::from_rgb(255, 120, 80), m);
                     }
                     ui.separator();
-                    ui.checkbox(&mut overlays.atlas, "show the shadow atlas");
+                    ui.checkbox(&mut overlays.atlas, "show the shadow atlas (page pool)");
                     ui.checkbox(&mut choice.visibility, "show one light's visibility");
                     ui.horizontal(|ui| {
                         ui.add(
@@ -658,14 +685,18 @@ impl State {
                     }
                 });
             if overlays.atlas {
-                egui::Window::new("shadow atlas")
-                    .anchor(egui::Align2::RIGHT_TOP, [-8.0, 8.0])
-                    .show(ctx, |ui| {
-                        ui.label(&overlays.atlas_note);
-                        if let Some(t) = &overlays.atlas_texture {
-                            ui.image(t);
-                        }
-                    });
+                egui::Window::new(if technique == Technique::Virtual {
+                    "page pool"
+                } else {
+                    "shadow atlas"
+                })
+                .anchor(egui::Align2::RIGHT_TOP, [-8.0, 8.0])
+                .show(ctx, |ui| {
+                    ui.label(&overlays.atlas_note);
+                    if let Some(t) = &overlays.atlas_texture {
+                        ui.image(t);
+                    }
+                });
             }
             if choice.visibility {
                 egui::Window::new("visibility")

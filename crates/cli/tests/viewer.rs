@@ -394,3 +394,46 @@ fn animation_with_caching_redraws_only_what_moved() {
         "a still scene redrew views: {still:?}"
     );
 }
+
+/// Virtual shadow maps have no atlas: the same window shows their page pool — pages in use
+/// (grey and black) at the top of the picture, the rest of the pool unused (dark blue).
+#[test]
+fn the_virtual_maps_page_pool_is_shown() {
+    let (_server, display) = xvfb();
+    let size = (960, 640);
+    let shot = view(
+        &display,
+        &[
+            "--scene",
+            "cubes",
+            "--technique",
+            "virtual",
+            "--width",
+            "960",
+            "--height",
+            "640",
+            "--show-atlas",
+        ],
+        3,
+        size,
+    );
+    save(&shot, size, "viewer-page-pool.png");
+    // The picture's window is anchored top right (measured: a 256² picture at x 619–875,
+    // y 67–323 on Xvfb). Its lower part is the unused pool: dark blue (10, 12, 40).
+    let px = |x: u32, y: u32| shot[(y * size.0 + x) as usize];
+    let unused = (200..300)
+        .flat_map(|y| (640..860).map(move |x| (x, y)))
+        .filter(|&(x, y)| {
+            let p = px(x, y);
+            p[0].abs_diff(10) <= 2 && p[1].abs_diff(12) <= 2 && p[2].abs_diff(40) <= 2
+        })
+        .count();
+    // Its first rows hold the pages in use: not all dark blue.
+    let used = (70..78)
+        .flat_map(|y| (630..860).map(move |x| (x, y)))
+        .filter(|&(x, y)| px(x, y)[2] != 40)
+        .count();
+    eprintln!("page pool picture: {unused} unused-blue pixels below, {used} in the first rows");
+    assert!(unused > 20_000, "no unused pool shown ({unused} of 22,000)");
+    assert!(used > 500, "no pages in use shown ({used})");
+}

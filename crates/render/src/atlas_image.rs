@@ -20,8 +20,17 @@ struct CopyParams {
 /// the depth texture is loaded as an unfilterable float texture by a compute shader, in bands
 /// of rows that fit the storage-binding limit.
 pub fn read_depth(ctx: &GpuContext, atlas: &ShadowAtlas) -> Result<Vec<f32>, RenderError> {
+    read_depth_view(ctx, &atlas.view, atlas.size)
+}
+
+/// Reads any `size`² `Depth32Float` texture through its depth view (the atlas, the virtual
+/// maps' page pool), as [`read_depth`] does.
+pub fn read_depth_view(
+    ctx: &GpuContext,
+    view: &wgpu::TextureView,
+    size: u32,
+) -> Result<Vec<f32>, RenderError> {
     let device = &ctx.device;
-    let size = atlas.size;
     let limit = ctx.limits().max_storage_buffer_binding_size.min(64 << 20);
     let rows_per_band = ((limit / (size as u64 * 4)) as u32).clamp(1, size);
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -83,7 +92,7 @@ pub fn read_depth(ctx: &GpuContext, atlas: &ShadowAtlas) -> Result<Vec<f32>, Ren
             entries: &[
                 wgpu::BindGroupEntry {
                     binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&atlas.view),
+                    resource: wgpu::BindingResource::TextureView(view),
                 },
                 wgpu::BindGroupEntry {
                     binding: 1,
@@ -163,6 +172,33 @@ pub fn atlas_picture(depth: &[f32], atlas_size: u32, plan: &ShadowPlan) -> (u32,
                 let i = (ay as usize * side as usize + ax as usize) * 3;
                 rgb[i..i + 3].copy_from_slice(&if border { outline } else { [g, g, g] });
             }
+        }
+    }
+    (side, rgb)
+}
+
+/// An RGB picture of the virtual maps' page pool (`side`² texels): drawn depth as grey (near
+/// = white), pages cleared but empty black, pool texels never used since the pool was made
+/// dark blue (pages fill the pool from the top-left, in page-table order). Returns `(side, rgb
+/// bytes)`, scaled down like [`atlas_picture`].
+pub fn pool_picture(depth: &[f32], pool_side: u32) -> (u32, Vec<u8>) {
+    let scale = pool_side.div_ceil(MAX_ATLAS_IMAGE).max(1);
+    let side = pool_side / scale;
+    let mut rgb = vec![0u8; side as usize * side as usize * 3];
+    for y in 0..side {
+        for x in 0..side {
+            let d = depth[((y * scale) * pool_side + x * scale) as usize];
+            let px = if d == 0.0 {
+                // A new texture reads 0; a page in use was cleared to 1 before drawing.
+                [10, 12, 40]
+            } else if d >= 1.0 {
+                [0, 0, 0]
+            } else {
+                let g = (255.0 * (1.0 - d).clamp(0.0, 1.0).powf(0.25)) as u8;
+                [g, g, g]
+            };
+            let i = (y as usize * side as usize + x as usize) * 3;
+            rgb[i..i + 3].copy_from_slice(&px);
         }
     }
     (side, rgb)

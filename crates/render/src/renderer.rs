@@ -655,6 +655,21 @@ impl Renderer {
     pub fn read_atlas(&self) -> Result<Vec<f32>, RenderError> {
         self.source.read_atlas(&self.ctx)
     }
+
+    /// Reads the virtual maps' page pool back: `(side, side² depths)`, row-major from the
+    /// top-left texel, as the last frame left it. Only [`Technique::Virtual`] has one.
+    pub fn read_page_pool(&self) -> Result<(u32, Vec<f32>), RenderError> {
+        match self.source.output() {
+            crate::source::ShadowOutput::Pages { pages, .. } => Ok((
+                pages.side,
+                crate::atlas_image::read_depth_view(&self.ctx, pages.pool, pages.side)?,
+            )),
+            _ => Err(RenderError::Unsupported(format!(
+                "technique {} has no page pool (only virtual does)",
+                self.settings.technique.name()
+            ))),
+        }
+    }
 }
 
 /// The lights buffer's records, one placeholder when there are no lights (a binding is never
