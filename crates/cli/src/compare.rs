@@ -457,7 +457,7 @@ struct VariantResult {
     shrink_steps: u32,
     /// Shadow memory the variant keeps: the atlas, or the page pool plus the page table.
     shadow_bytes: u64,
-    gpu_ms: Vec<(String, f64)>,
+    gpu_ms: manyshadows::timing::GpuTimes,
     score: score::Score,
     footprints: Vec<Footprints>,
     diff_image: PathBuf,
@@ -757,7 +757,7 @@ fn report(
                 "shadow_resolution": v.resolution,
                 "atlas": { "size": v.atlas, "shrink_steps": v.shrink_steps },
                 "shadow_bytes": v.shadow_bytes,
-                "gpu_ms": v.gpu_ms.iter().map(|(k, ms)| (k.clone(), json!(ms))).collect::<serde_json::Map<_, _>>(),
+                "gpu_ms": v.gpu_ms,
                 "difference_image": v.diff_image,
                 "by_type": by_type,
                 "per_light": per_light,

@@ -27,7 +27,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use manyshadows::clusters::ClusterStats;
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::scene::Scene;
-use manyshadows::timing::{GpuTimer, PipelineCounts};
+use manyshadows::timing::{GpuTimer, GpuTimes, PipelineCounts, Stage};
 use manyshadows::vsm::VirtualStats;
 use manyshadows::wgpu;
 use manyshadows::{GpuContext, GpuScene, Renderer, ShadowGenerator, ShadowStats};
@@ -80,7 +80,7 @@ impl Schedule {
 #[derive(Clone, Debug)]
 pub(crate) struct Run<C> {
     /// GPU milliseconds per stage (timestamp queries); empty without them.
-    pub stages: Vec<(String, f64)>,
+    pub stages: GpuTimes,
     /// CPU milliseconds to record and submit.
     pub cpu_ms: f64,
     /// Wall milliseconds until the results are back (the GPU is idle).
@@ -117,11 +117,7 @@ pub(crate) struct Runs<C>(pub Vec<Run<C>>);
 impl<C: Clone + Default> Runs<C> {
     /// Per run, the GPU milliseconds summed over its stages (runs without timestamps left out).
     pub fn gpu_runs(&self) -> Vec<f64> {
-        self.0
-            .iter()
-            .filter(|r| !r.stages.is_empty())
-            .map(|r| r.stages.iter().map(|(_, v)| v).sum())
-            .collect()
+        self.0.iter().filter_map(|r| r.stages.total()).collect()
     }
 
     /// Median of [`Runs::gpu_runs`]; `None` without timestamp queries.
@@ -130,14 +126,8 @@ impl<C: Clone + Default> Runs<C> {
     }
 
     /// Median GPU milliseconds of one stage; `None` if no run timed it.
-    pub fn stage(&self, name: &str) -> Option<f64> {
-        let v: Vec<f64> = self
-            .0
-            .iter()
-            .flat_map(|r| r.stages.iter())
-            .filter(|(k, _)| k == name)
-            .map(|(_, v)| *v)
-            .collect();
+    pub fn stage(&self, stage: Stage) -> Option<f64> {
+        let v: Vec<f64> = self.0.iter().filter_map(|r| r.stages.get(stage)).collect();
         median_of(&v)
     }
 
@@ -547,7 +537,7 @@ fn generate(
 ) -> Result<(Run<ShadowStats>, Option<PipelineCounts>)> {
     let out = ctx.scoped(&format!("benchmarking {}", gen.technique()), || {
         timer.reset();
-        let span = timer.span("shadows");
+        let span = timer.span(Stage::Shadows);
         let start = Instant::now();
         let mut encoder = ctx
             .device

@@ -12,6 +12,7 @@
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use manyshadows::scene::builtin::LightMix;
+use manyshadows::timing::Stage;
 use manyshadows::{RenderSettings, Renderer, Technique};
 use serde::Serialize;
 
@@ -116,7 +117,7 @@ pub fn irregular(args: &IrregularArgs) -> Result<()> {
                     lights: n,
                     method: o.label,
                     frame_gpu_ms: o.runs.gpu_ms(),
-                    shadow_gpu_ms: o.runs.stage("shadows"),
+                    shadow_gpu_ms: o.runs.stage(Stage::Shadows),
                     frame_ms_runs: o.runs.gpu_runs(),
                     ratio_vs_traditional_512: o.gpu_ratio,
                     shadow_maps_shrunk: o.subject.renderer.plan().layout.shrink_steps,

@@ -13,6 +13,7 @@ use anyhow::Result;
 use clap::Args;
 use manyshadows::clusters::LightLoop;
 use manyshadows::scene::builtin::{self, LightMix};
+use manyshadows::timing::Stage;
 use manyshadows::{RenderSettings, Renderer, Technique};
 use serde::Serialize;
 
@@ -131,7 +132,7 @@ pub fn lights(args: &LightsArgs) -> Result<()> {
                     })
                     .collect::<Result<Vec<_>>>()?;
                 let out = h.compare(contenders, None)?;
-                let lighting_all_ms = out.get(1).and_then(|o| o.runs.stage("lighting"));
+                let lighting_all_ms = out.get(1).and_then(|o| o.runs.stage(Stage::Lighting));
                 let clustered = &out[0];
                 let runs = &clustered.runs;
                 let c = runs.counters().clusters.unwrap_or_default();
@@ -141,10 +142,10 @@ pub fn lights(args: &LightsArgs) -> Result<()> {
                     scene: scene_name.clone(),
                     screen: screen.clone(),
                     lights: n,
-                    gbuffer_ms: runs.stage("gbuffer"),
-                    clusters_ms: runs.stage("clusters"),
-                    shadows_ms: runs.stage("shadows"),
-                    lighting_ms: runs.stage("lighting"),
+                    gbuffer_ms: runs.stage(Stage::GBuffer),
+                    clusters_ms: runs.stage(Stage::Clusters),
+                    shadows_ms: runs.stage(Stage::Shadows),
+                    lighting_ms: runs.stage(Stage::Lighting),
                     lighting_all_ms,
                     lights_in_view: c.lights_in_view,
                     occupied_clusters: c.occupied,

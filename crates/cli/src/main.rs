@@ -607,9 +607,8 @@ fn render(args: &RenderArgs) -> Result<()> {
             let shadow_ms = fr
                 .timings
                 .gpu_ms
-                .iter()
-                .find(|(k, _)| k == "shadows")
-                .map_or("n/a".to_string(), |(_, v)| format!("{v:.2} ms"));
+                .get(manyshadows::timing::Stage::Shadows)
+                .map_or("n/a".to_string(), |v| format!("{v:.2} ms"));
             let line = match &fr.virtual_maps {
                 Some(v) => format!(
                     "frame {:>3}: {:>4} of {} resident pages drawn ({} kept), shadow GPU time {shadow_ms}",
@@ -707,7 +706,7 @@ fn summary(
         "light_loop": r.settings().light_loop.name(),
         "clusters": frame.clusters,
         "virtual": frame.virtual_maps,
-        "gpu_ms": frame.timings.gpu_ms.iter().map(|(k, v)| (k.clone(), serde_json::json!(v))).collect::<serde_json::Map<_, _>>(),
+        "gpu_ms": frame.timings.gpu_ms,
         "cpu_record_ms": frame.timings.cpu_record_ms,
         "frame_wall_ms": frame.timings.wall_ms,
         "total_wall_ms": total.as_secs_f64() * 1e3,

@@ -208,7 +208,7 @@ struct State {
     last_frame: Instant,
     started: Instant,
     frames: u64,
-    gpu_ms: Vec<(String, f64)>,
+    gpu_ms: manyshadows::timing::GpuTimes,
     frame_ms: f64,
     message: Option<String>,
     overlays: Overlays,
@@ -343,7 +343,7 @@ impl App {
             last_frame: Instant::now(),
             started: Instant::now(),
             frames: 0,
-            gpu_ms: Vec::new(),
+            gpu_ms: Default::default(),
             frame_ms: 0.0,
             message: None,
             views_drawn: 0,
@@ -657,7 +657,7 @@ impl State {
                     if gpu_ms.is_empty() {
                         ui.label("GPU time per stage: no timestamp queries on this device");
                     }
-                    for (stage, ms) in &gpu_ms {
+                    for (stage, ms) in gpu_ms.iter() {
                         ui.label(format!("GPU {stage}: {ms:.2} ms"));
                     }
                     if let Some(m) = &message {

@@ -11,6 +11,7 @@
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use manyshadows::scene::builtin::{self, LightMix};
+use manyshadows::timing::Stage;
 use manyshadows::vsm::{VirtualOptions, VirtualStats};
 use manyshadows::{RenderSettings, Renderer, Technique};
 use serde::Serialize;
@@ -78,11 +79,11 @@ struct Record {
 
 fn side(runs: &Runs<FrameCounters>, shadow_mib: f64) -> Side {
     Side {
-        gbuffer_ms: runs.stage("gbuffer"),
-        clusters_ms: runs.stage("clusters"),
-        pages_ms: runs.stage("pages"),
-        shadows_ms: runs.stage("shadows"),
-        lighting_ms: runs.stage("lighting"),
+        gbuffer_ms: runs.stage(Stage::GBuffer),
+        clusters_ms: runs.stage(Stage::Clusters),
+        pages_ms: runs.stage(Stage::Pages),
+        shadows_ms: runs.stage(Stage::Shadows),
+        lighting_ms: runs.stage(Stage::Lighting),
         frame_ms: runs.gpu_ms(),
         shadow_mib,
     }

@@ -784,7 +784,7 @@ impl ShadowSource for IrregularSource {
         encoder: &mut wgpu::CommandEncoder,
         timer: &mut GpuTimer,
     ) -> ShadowStats {
-        let span = timer.span("shadows");
+        let span = timer.span(crate::timing::Stage::Shadows);
         self.passes()
             .record(encoder, &self.table.casters, timer, span);
         ShadowStats::default()

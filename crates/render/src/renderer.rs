@@ -28,7 +28,7 @@ use crate::shadow::{
     ShadowAtlas, ShadowOptions, ShadowPlan, ShadowStats, Technique, DEFAULT_MAX_ATLAS_SIZE,
 };
 use crate::source::{ShadowSource, SourceInputs};
-use crate::timing::GpuTimer;
+use crate::timing::{GpuTimer, GpuTimes, Stage};
 use crate::visibility::{VisibilityMask, VisibilityPass};
 use crate::vsm::{VirtualOptions, VirtualStats};
 use crate::{GpuContext, RenderError};
@@ -164,9 +164,9 @@ impl Default for RenderSettings {
 /// Times of one frame.
 #[derive(Clone, Debug, Default)]
 pub struct FrameTimings {
-    /// GPU milliseconds per stage (`gbuffer`, `shadows`, `lighting`, `visibility`), empty if
-    /// the adapter has no timestamp queries.
-    pub gpu_ms: Vec<(String, f64)>,
+    /// GPU milliseconds per [`Stage`] in the order they ran, empty if the adapter has no
+    /// timestamp queries.
+    pub gpu_ms: GpuTimes,
     /// CPU milliseconds to record and submit the frame's commands.
     pub cpu_record_ms: f64,
     /// Wall milliseconds from the start of recording until the image is back on the CPU.
@@ -518,16 +518,16 @@ impl Renderer {
     ) -> Result<ShadowStats, RenderError> {
         self.prepare()?;
         self.timer.reset();
-        let span = self.timer.span("gbuffer");
+        let span = self.timer.span(Stage::GBuffer);
         self.gbuffer.record(encoder, &self.scene, &self.timer, span);
         if self.clusters.enabled() {
-            let span = self.timer.span("clusters");
+            let span = self.timer.span(Stage::Clusters);
             self.clusters.record(encoder, &self.timer, span);
         }
         let shadow_stats = self
             .source
             .record(ctx, &self.scene, encoder, &mut self.timer);
-        let span = self.timer.span("lighting");
+        let span = self.timer.span(Stage::Lighting);
         self.lighting.record(encoder, &self.timer, span);
         Ok(shadow_stats)
     }
@@ -562,7 +562,7 @@ impl Renderer {
 
     /// GPU milliseconds per stage of the last frame [`Renderer::render_to`] submitted (empty
     /// without timestamp queries). Waits for that frame to finish.
-    pub fn read_gpu_timings(&mut self) -> Result<Vec<(String, f64)>, RenderError> {
+    pub fn read_gpu_timings(&mut self) -> Result<GpuTimes, RenderError> {
         let ctx = &*self.ctx.clone();
         ctx.scoped("reading the frame's GPU times", || {
             let mut encoder = ctx
@@ -602,7 +602,7 @@ impl Renderer {
             let virtual_maps = self.source.read_virtual_stats(ctx)?;
             let visibility = match &self.visibility {
                 Some(pass) => {
-                    let span = self.timer.span("visibility");
+                    let span = self.timer.span(Stage::Visibility);
                     let inputs = LightingInputs {
                         frame: &self.frame_buffer,
                         lights: &self.lights,

@@ -336,7 +336,7 @@ impl ShadowSource for AtlasSource {
         encoder: &mut wgpu::CommandEncoder,
         timer: &mut GpuTimer,
     ) -> ShadowStats {
-        let span = timer.span("shadows");
+        let span = timer.span(crate::timing::Stage::Shadows);
         self.generator.generate(ctx, scene, encoder, timer, span)
     }
 

@@ -39,6 +39,101 @@ struct StatQueries {
     overflow: Cell<bool>,
 }
 
+/// A stage of a frame whose GPU time is measured, in the order a frame runs them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Stage {
+    /// The camera's G-buffer.
+    GBuffer,
+    /// Assigning lights to clusters.
+    Clusters,
+    /// Virtual shadow maps: marking, allocating and clearing pages.
+    Pages,
+    /// Shadow generation: the atlas, the virtual pages, or irregular shadow maps' mask.
+    Shadows,
+    /// Deferred lighting.
+    Lighting,
+    /// The hard visibility mask.
+    Visibility,
+}
+
+impl Stage {
+    /// Every stage, in frame order.
+    pub const ALL: &'static [Stage] = &[
+        Stage::GBuffer,
+        Stage::Clusters,
+        Stage::Pages,
+        Stage::Shadows,
+        Stage::Lighting,
+        Stage::Visibility,
+    ];
+
+    /// The stage's name in reports and JSON (`gbuffer`, `clusters`, `pages`, `shadows`,
+    /// `lighting`, `visibility`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::GBuffer => "gbuffer",
+            Stage::Clusters => "clusters",
+            Stage::Pages => "pages",
+            Stage::Shadows => "shadows",
+            Stage::Lighting => "lighting",
+            Stage::Visibility => "visibility",
+        }
+    }
+}
+
+impl std::fmt::Display for Stage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// GPU milliseconds per stage of one frame, in the order the stages ran; empty when the
+/// device has no timestamp queries.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GpuTimes(Vec<(Stage, f64)>);
+
+impl GpuTimes {
+    /// Times from `(stage, milliseconds)` pairs.
+    pub fn new(stages: Vec<(Stage, f64)>) -> Self {
+        Self(stages)
+    }
+
+    /// Milliseconds of `stage` (summed if it ran more than once), `None` if it did not run or
+    /// nothing was timed.
+    pub fn get(&self, stage: Stage) -> Option<f64> {
+        let mut it = self.0.iter().filter(|(s, _)| *s == stage).peekable();
+        it.peek()?;
+        Some(it.map(|(_, ms)| ms).sum())
+    }
+
+    /// Milliseconds of every stage together, `None` if nothing was timed.
+    pub fn total(&self) -> Option<f64> {
+        (!self.0.is_empty()).then(|| self.0.iter().map(|(_, ms)| ms).sum())
+    }
+
+    /// `(stage, milliseconds)` in the order the stages ran.
+    pub fn iter(&self) -> impl Iterator<Item = (Stage, f64)> + '_ {
+        self.0.iter().copied()
+    }
+
+    /// True when nothing was timed (no timestamp queries on the device).
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+}
+
+/// A map from stage name to milliseconds (`{"gbuffer": 1.2, "shadows": 3.4, …}`).
+impl serde::Serialize for GpuTimes {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for (stage, ms) in &self.0 {
+            map.serialize_entry(stage.name(), ms)?;
+        }
+        map.end()
+    }
+}
+
 /// Most spans per frame.
 const MAX_SPANS: u32 = 32;
 
@@ -52,7 +147,7 @@ pub struct Span {
 /// Timestamp queries for one frame.
 pub struct GpuTimer {
     queries: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
-    labels: Vec<(String, Span)>,
+    labels: Vec<(Stage, Span)>,
     period_ns: f32,
     stats: Option<StatQueries>,
 }
@@ -209,8 +304,8 @@ impl GpuTimer {
         }
     }
 
-    /// Starts a named span; `None` if timing is off or the span budget is spent.
-    pub fn span(&mut self, label: &str) -> Option<Span> {
+    /// Starts a span timing `stage`; `None` if timing is off or the span budget is spent.
+    pub fn span(&mut self, stage: Stage) -> Option<Span> {
         self.queries.as_ref()?;
         let n = self.labels.len() as u32;
         if n >= MAX_SPANS {
@@ -220,7 +315,7 @@ impl GpuTimer {
             begin: 2 * n,
             end: 2 * n + 1,
         };
-        self.labels.push((label.to_string(), span));
+        self.labels.push((stage, span));
         Some(span)
     }
 
@@ -288,24 +383,59 @@ impl GpuTimer {
         encoder.copy_buffer_to_buffer(resolve, 0, readback, 0, n as u64 * 8);
     }
 
-    /// Reads the resolved spans back (after the frame's submission): `(label, milliseconds)`.
-    pub fn read(&self, ctx: &GpuContext) -> Result<Vec<(String, f64)>, RenderError> {
+    /// Reads the resolved spans back (after the frame's submission).
+    pub fn read(&self, ctx: &GpuContext) -> Result<GpuTimes, RenderError> {
         let Some((_, _, readback)) = self.queries.as_ref() else {
-            return Ok(Vec::new());
+            return Ok(GpuTimes::default());
         };
         let n = self.labels.len() as u64 * 2;
         if n == 0 {
-            return Ok(Vec::new());
+            return Ok(GpuTimes::default());
         }
         let bytes = crate::readback::map_read(ctx, readback, 0..n * 8)?;
         let ticks: &[u64] = bytemuck::cast_slice(&bytes);
-        Ok(self
-            .labels
-            .iter()
-            .map(|(label, s)| {
-                let dt = ticks[s.end as usize].saturating_sub(ticks[s.begin as usize]);
-                (label.clone(), dt as f64 * self.period_ns as f64 / 1e6)
-            })
-            .collect())
+        Ok(GpuTimes(
+            self.labels
+                .iter()
+                .map(|&(stage, s)| {
+                    let dt = ticks[s.end as usize].saturating_sub(ticks[s.begin as usize]);
+                    (stage, dt as f64 * self.period_ns as f64 / 1e6)
+                })
+                .collect(),
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gpu_times_by_stage_total_and_json() {
+        let t = GpuTimes::new(vec![
+            (Stage::GBuffer, 1.0),
+            (Stage::Shadows, 2.0),
+            (Stage::Lighting, 4.0),
+            (Stage::Shadows, 0.5),
+        ]);
+        assert_eq!(t.get(Stage::Shadows), Some(2.5));
+        assert_eq!(t.get(Stage::Pages), None);
+        assert_eq!(t.total(), Some(7.5));
+        let json = serde_json::to_value(GpuTimes::new(vec![(Stage::Clusters, 1.5)])).unwrap();
+        assert_eq!(json, serde_json::json!({"clusters": 1.5}));
+        let none = GpuTimes::default();
+        assert!(none.is_empty() && none.total().is_none() && none.get(Stage::GBuffer).is_none());
+        let names: Vec<_> = Stage::ALL.iter().map(|s| s.name()).collect();
+        assert_eq!(
+            names,
+            [
+                "gbuffer",
+                "clusters",
+                "pages",
+                "shadows",
+                "lighting",
+                "visibility"
+            ]
+        );
     }
 }

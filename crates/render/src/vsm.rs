@@ -1231,8 +1231,8 @@ impl ShadowSource for VirtualSource {
         encoder: &mut wgpu::CommandEncoder,
         timer: &mut GpuTimer,
     ) -> ShadowStats {
-        let pages_span = timer.span("pages");
-        let span = timer.span("shadows");
+        let pages_span = timer.span(crate::timing::Stage::Pages);
+        let span = timer.span(crate::timing::Stage::Shadows);
         self.maps.record(
             ctx,
             encoder,
