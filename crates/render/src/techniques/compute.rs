@@ -32,8 +32,7 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::shadow::{ShadowInput, ShadowStats, ShadowTechnique};
-use crate::timing::{GpuTimer, Span};
+use crate::shadow::{Generation, ShadowStats, ShadowTechnique};
 use crate::{GpuContext, RenderError};
 
 /// Most bounding-box texels a setup thread rasterizes itself (must match compute.wgsl).
@@ -323,21 +322,14 @@ impl Compute {
 }
 
 impl ShadowTechnique for Compute {
-    fn name(&self) -> &'static str {
-        "compute"
-    }
-
-    fn generate(
-        &mut self,
-        input: &ShadowInput<'_>,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: &GpuTimer,
-        span: Option<Span>,
-    ) -> ShadowStats {
+    fn record(&mut self, g: Generation<'_>) -> ShadowStats {
+        let Generation {
+            input,
+            encoder,
+            timer,
+            span,
+        } = g;
         let mut stats = ShadowStats::default();
-        if input.draw_list.is_empty() {
-            return stats;
-        }
         let ctx = input.ctx;
         let device = &ctx.device;
         let casters = input.casters;

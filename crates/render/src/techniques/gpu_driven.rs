@@ -23,12 +23,11 @@
 //! scenes with many views run several cull + draw rounds instead of truncating. Clusters are
 //! split too if even one view's commands would not fit.
 
-use crate::shadow::{ShadowInput, ShadowStats, ShadowTechnique};
+use crate::shadow::{Generation, ShadowStats, ShadowTechnique};
 use crate::techniques::{
     atlas_attachment, depth_pipeline, require_clip_distances, CachedGroup, TileClear,
     UniformRecords,
 };
-use crate::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
 /// Bytes of one indexed-indirect command (`wgpu::util::DrawIndexedIndirectArgs`).
@@ -254,22 +253,15 @@ fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
 }
 
 impl ShadowTechnique for GpuDriven {
-    fn name(&self) -> &'static str {
-        "gpu-driven"
-    }
-
-    fn generate(
-        &mut self,
-        input: &ShadowInput<'_>,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: &GpuTimer,
-        span: Option<Span>,
-    ) -> ShadowStats {
+    fn record(&mut self, g: Generation<'_>) -> ShadowStats {
+        let Generation {
+            input,
+            encoder,
+            timer,
+            span,
+        } = g;
         let mut stats = ShadowStats::default();
         let views = input.draw_list.len() as u32;
-        if views == 0 {
-            return stats;
-        }
         let ctx = input.ctx;
         let casters = input.casters;
         let rounds = plan_rounds(

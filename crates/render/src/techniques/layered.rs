@@ -12,11 +12,10 @@
 //! three corners, tests them, and emits a degenerate triangle when the triangle is dropped.
 //! Without culling the draw is indexed, so post-transform vertex reuse still applies.
 
-use crate::shadow::{ShadowInput, ShadowStats, ShadowTechnique};
+use crate::shadow::{Generation, ShadowStats, ShadowTechnique};
 use crate::techniques::{
     atlas_attachment, depth_pipeline, require_clip_distances, CachedGroup, TileClear,
 };
-use crate::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
 /// The layered technique's pipelines.
@@ -71,23 +70,16 @@ impl Layered {
 }
 
 impl ShadowTechnique for Layered {
-    fn name(&self) -> &'static str {
-        "layered"
-    }
-
-    fn generate(
-        &mut self,
-        input: &ShadowInput<'_>,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: &GpuTimer,
-        span: Option<Span>,
-    ) -> ShadowStats {
+    fn record(&mut self, g: Generation<'_>) -> ShadowStats {
+        let Generation {
+            input,
+            encoder,
+            timer,
+            span,
+        } = g;
         let mut stats = ShadowStats::default();
         let views = input.draw_list.len() as u32;
         let casters = input.casters;
-        if views == 0 {
-            return stats;
-        }
         let ctx = input.ctx;
         let cull = input.options.cull;
         let atlas = input.atlas.size as f32;

@@ -22,9 +22,8 @@
 use std::collections::HashMap;
 use std::num::NonZeroU32;
 
-use crate::shadow::{CullMode, ShadowInput, ShadowStats, ShadowTechnique, ATLAS_FORMAT};
+use crate::shadow::{CullMode, Generation, ShadowStats, ShadowTechnique, ATLAS_FORMAT};
 use crate::techniques::{atlas_attachment, CachedGroup, TileClear, UniformRecords};
-use crate::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
 /// Bytes of one group's parameters (`MultiviewParams` in multiview.wgsl).
@@ -301,21 +300,14 @@ impl Scratch {
 }
 
 impl ShadowTechnique for Multiview {
-    fn name(&self) -> &'static str {
-        "multiview"
-    }
-
-    fn generate(
-        &mut self,
-        input: &ShadowInput<'_>,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: &GpuTimer,
-        span: Option<Span>,
-    ) -> ShadowStats {
+    fn record(&mut self, g: Generation<'_>) -> ShadowStats {
+        let Generation {
+            input,
+            encoder,
+            timer,
+            span,
+        } = g;
         let mut stats = ShadowStats::default();
-        if input.draw_list.is_empty() {
-            return stats;
-        }
         let ctx = input.ctx;
         let casters = input.casters;
         let cull = input.options.cull;

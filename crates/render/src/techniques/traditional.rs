@@ -10,9 +10,8 @@ use manyshadows_scene::light_space::ViewKind;
 const VIEW_BINDING: u64 = 80;
 use crate::gpu_scene::{GpuScene, POSITION_LAYOUT};
 use crate::gpu_types::VIEW_UNIFORM_STRIDE;
-use crate::shadow::{visible_casters, ShadowInput, ShadowStats, ShadowTechnique};
+use crate::shadow::{visible_casters, Generation, ShadowInput, ShadowStats, ShadowTechnique};
 use crate::techniques::{atlas_attachment, TileClear};
-use crate::timing::{GpuTimer, Span};
 use crate::GpuContext;
 
 /// The traditional technique's pipelines and layout.
@@ -147,23 +146,16 @@ fn draw_casters(
 }
 
 impl ShadowTechnique for Traditional {
-    fn name(&self) -> &'static str {
-        "traditional"
-    }
-
-    fn generate(
-        &mut self,
-        input: &ShadowInput<'_>,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: &GpuTimer,
-        span: Option<Span>,
-    ) -> ShadowStats {
+    fn record(&mut self, g: Generation<'_>) -> ShadowStats {
+        let Generation {
+            input,
+            encoder,
+            timer,
+            span,
+        } = g;
         let bind_group = self.bind_group(input.ctx, input);
         let mut stats = ShadowStats::default();
         let n = input.draw_list.len();
-        if n == 0 {
-            return stats;
-        }
         let (pipeline, vertices) = match &input.scene.skin {
             Some(skin) => (&self.skinned, &skin.vertices),
             None => (&self.pipeline, &input.scene.positions),
