@@ -504,20 +504,7 @@ fn data_bytes<T>(v: &[T]) -> u64 {
 
 /// A `size`² depth atlas texture and its view.
 fn atlas_texture(ctx: &GpuContext, size: u32) -> (wgpu::Texture, wgpu::TextureView) {
-    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("shadow.atlas"),
-        size: wgpu::Extent3d {
-            width: size,
-            height: size,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: ATLAS_FORMAT,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
-    });
+    let texture = crate::pipelines::depth_texture(&ctx.device, "shadow.atlas", size, 1);
     let view = texture.create_view(&wgpu::TextureViewDescriptor {
         label: Some("shadow.atlas.view"),
         dimension: Some(wgpu::TextureViewDimension::D2),
