@@ -33,9 +33,10 @@ pub fn read_depth_view(
     let device = &ctx.device;
     let limit = ctx.limits().max_storage_buffer_binding_size.min(64 << 20);
     let rows_per_band = ((limit / (size as u64 * 4)) as u32).clamp(1, size);
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("atlas_copy.layout"),
-        entries: &[
+    let layout = crate::pipelines::bind_group_layout(
+        device,
+        "atlas_copy.layout",
+        &[
             crate::lighting::texture_entry(
                 0,
                 wgpu::TextureSampleType::Float { filterable: false },
@@ -44,21 +45,17 @@ pub fn read_depth_view(
             crate::storage_rw_entry(1, wgpu::ShaderStages::COMPUTE),
             crate::uniform_entry(2, wgpu::ShaderStages::COMPUTE),
         ],
-    });
+    );
     let module = crate::shaders::module(device, "atlas_copy.shader", &crate::shaders::atlas_copy());
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("atlas_copy.pipeline_layout"),
-        bind_group_layouts: &[Some(&layout)],
-        immediate_size: 0,
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("atlas_copy.pipeline"),
-        layout: Some(&pipeline_layout),
-        module: &module,
-        entry_point: Some("cs_main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
+    let pipeline_layout =
+        crate::pipelines::pipeline_layout(device, "atlas_copy.pipeline_layout", &[&layout]);
+    let pipeline = crate::pipelines::compute_pipeline(
+        device,
+        "atlas_copy.pipeline",
+        &pipeline_layout,
+        &module,
+        "cs_main",
+    );
     let mut out = Vec::with_capacity(size as usize * size as usize);
     let mut first_row = 0;
     while first_row < size {

@@ -22,9 +22,10 @@ impl Blit {
         let device = &ctx.device;
         let module = crate::shaders::module(device, "blit.shader", &crate::shaders::blit());
         let fs = wgpu::ShaderStages::FRAGMENT;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("blit.layout"),
-            entries: &[
+        let layout = crate::pipelines::bind_group_layout(
+            device,
+            "blit.layout",
+            &[
                 wgpu::BindGroupLayoutEntry {
                     binding: 0,
                     visibility: fs,
@@ -37,12 +38,9 @@ impl Blit {
                 },
                 crate::uniform_entry(1, fs),
             ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("blit.pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        );
+        let pipeline_layout =
+            crate::pipelines::pipeline_layout(device, "blit.pipeline_layout", &[&layout]);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("blit.params"),
             size: 16,

@@ -578,9 +578,10 @@ impl CasterGeometry {
 
         let module = crate::shaders::module(device, "casters.shader", &crate::shaders::casters());
         let cs = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("casters.layout"),
-            entries: &[
+        let layout = crate::pipelines::bind_group_layout(
+            device,
+            "casters.layout",
+            &[
                 crate::uniform_entry(0, cs),
                 crate::storage_entry(1, cs),
                 crate::storage_entry(2, cs),
@@ -592,7 +593,7 @@ impl CasterGeometry {
                 crate::storage_entry(8, cs),
                 crate::storage_rw_entry(9, cs),
             ],
-        });
+        );
         let buffers = [
             &params,
             &gpu.positions,
@@ -606,20 +607,10 @@ impl CasterGeometry {
             &cluster_bounds,
         ];
         let bind_group = crate::buffer_bind_group(device, "casters.bind_group", &layout, &buffers);
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("casters.pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        let pipeline_layout =
+            crate::pipelines::pipeline_layout(device, "casters.pipeline_layout", &[&layout]);
         let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
+            crate::pipelines::compute_pipeline(device, entry, &pipeline_layout, &module, entry)
         };
         Ok(Self {
             vertices,

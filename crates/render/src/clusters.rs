@@ -228,9 +228,10 @@ impl LightClusters {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
         let cs = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("clusters.layout"),
-            entries: &[
+        let layout = crate::pipelines::bind_group_layout(
+            device,
+            "clusters.layout",
+            &[
                 crate::uniform_entry(0, cs),
                 crate::uniform_entry(1, cs),
                 crate::lighting::texture_entry(2, wgpu::TextureSampleType::Uint, cs),
@@ -242,22 +243,12 @@ impl LightClusters {
                 crate::storage_entry(8, cs),
                 crate::storage_rw_entry(9, cs),
             ],
-        });
+        );
         let module = crate::shaders::module(device, "clusters.shader", &crate::shaders::clusters());
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("clusters.pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        let pipeline_layout =
+            crate::pipelines::pipeline_layout(device, "clusters.pipeline_layout", &[&layout]);
         let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
+            crate::pipelines::compute_pipeline(device, entry, &pipeline_layout, &module, entry)
         };
         let mut me = Self {
             uniforms,

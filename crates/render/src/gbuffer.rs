@@ -67,13 +67,14 @@ impl GBuffer {
         );
         let device = &ctx.device;
         let module = crate::shaders::module(device, "gbuffer.shader", &crate::shaders::gbuffer());
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gbuffer.layout"),
-            entries: &[
+        let layout = crate::pipelines::bind_group_layout(
+            device,
+            "gbuffer.layout",
+            &[
                 crate::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
                 crate::storage_entry(1, wgpu::ShaderStages::VERTEX),
             ],
-        });
+        );
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("gbuffer.bind_group"),
             layout: &layout,
@@ -88,11 +89,8 @@ impl GBuffer {
                 },
             ],
         });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("gbuffer.pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        let pipeline_layout =
+            crate::pipelines::pipeline_layout(device, "gbuffer.pipeline_layout", &[&layout]);
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("gbuffer.pipeline"),
             layout: Some(&pipeline_layout),

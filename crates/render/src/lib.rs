@@ -30,6 +30,7 @@ pub mod gpu_scene;
 pub mod gpu_types;
 pub mod irregular;
 pub mod lighting;
+mod pipelines;
 pub mod readback;
 pub mod renderer;
 pub mod shaders;

@@ -8,7 +8,7 @@ use crate::timing::{GpuTimer, Span};
 use crate::GpuContext;
 
 /// First binding of the virtual maps' page-table declarations in the lighting pass.
-const VSM_FIRST_BINDING: u32 = 12;
+pub(crate) const VSM_FIRST_BINDING: u32 = 12;
 
 /// Output colour format (sRGB-encoded on write).
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -54,6 +54,42 @@ impl LightingInputs<'_> {
             Some(_) => crate::shaders::ShadowSource::Virtual { first },
             None => crate::shaders::ShadowSource::Atlas,
         }
+    }
+
+    /// The bind-group entries the lighting and the visibility pass both declare, at the same
+    /// bindings: frame 0, lights 1, shadow views 2, G-buffer position 4 (`position`) and
+    /// normal 5 (`normal`), the shadow texture 6, the visibility mask 8 (`mask`), the light
+    /// clusters 9–11 and the virtual maps' page table from [`VSM_FIRST_BINDING`]. Bindings 3
+    /// and 7 are each pass's own.
+    pub(crate) fn shared_entries<'s>(
+        &'s self,
+        position: &'s wgpu::TextureView,
+        normal: &'s wgpu::TextureView,
+        mask: &'s wgpu::Buffer,
+    ) -> Vec<wgpu::BindGroupEntry<'s>> {
+        let mut entries = vec![
+            crate::pipelines::whole_entry(0, self.frame),
+            crate::pipelines::whole_entry(1, self.lights),
+            crate::pipelines::whole_entry(2, self.shadows.view_table()),
+            wgpu::BindGroupEntry {
+                binding: 4,
+                resource: wgpu::BindingResource::TextureView(position),
+            },
+            wgpu::BindGroupEntry {
+                binding: 5,
+                resource: wgpu::BindingResource::TextureView(normal),
+            },
+            wgpu::BindGroupEntry {
+                binding: 6,
+                resource: wgpu::BindingResource::TextureView(self.shadow_texture()),
+            },
+            crate::pipelines::whole_entry(8, mask),
+            crate::pipelines::whole_entry(9, &self.clusters.uniforms),
+            crate::pipelines::whole_entry(10, &self.clusters.slots),
+            crate::pipelines::whole_entry(11, &self.clusters.masks),
+        ];
+        entries.extend(self.vsm_entries(VSM_FIRST_BINDING));
+        entries
     }
 
     /// Bind-group entries of the page-table declarations at `first`, `first + 1`,
@@ -153,10 +189,7 @@ impl LightingPass {
         if inputs.shadows.pages().is_some() {
             entries.extend(vsm_layout_entries(VSM_FIRST_BINDING, frag));
         }
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("lighting.layout"),
-            entries: &entries,
-        });
+        let layout = crate::pipelines::bind_group_layout(device, "lighting.layout", &entries);
         let linear = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("lighting.cmp_linear"),
             mag_filter: wgpu::FilterMode::Linear,
@@ -170,11 +203,8 @@ impl LightingPass {
             "lighting.shader",
             &crate::shaders::lighting(inputs.source(VSM_FIRST_BINDING)),
         );
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("lighting.pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        let pipeline_layout =
+            crate::pipelines::pipeline_layout(device, "lighting.pipeline_layout", &[&layout]);
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("lighting.pipeline"),
             layout: Some(&pipeline_layout),
@@ -262,57 +292,17 @@ fn bind(
     };
     let pv = inputs.gbuffer.position.create_view(&Default::default());
     let nv = inputs.gbuffer.normal.create_view(&Default::default());
-    let mut entries = vec![
-        wgpu::BindGroupEntry {
-            binding: 0,
-            resource: inputs.frame.as_entire_binding(),
-        },
-        wgpu::BindGroupEntry {
-            binding: 1,
-            resource: inputs.lights.as_entire_binding(),
-        },
-        wgpu::BindGroupEntry {
-            binding: 2,
-            resource: inputs.shadows.view_table().as_entire_binding(),
-        },
+    let mut entries = inputs.shared_entries(&pv, &nv, mask);
+    entries.extend([
         wgpu::BindGroupEntry {
             binding: 3,
             resource: inputs.materials.as_entire_binding(),
         },
         wgpu::BindGroupEntry {
-            binding: 4,
-            resource: wgpu::BindingResource::TextureView(&pv),
-        },
-        wgpu::BindGroupEntry {
-            binding: 5,
-            resource: wgpu::BindingResource::TextureView(&nv),
-        },
-        wgpu::BindGroupEntry {
-            binding: 6,
-            resource: wgpu::BindingResource::TextureView(inputs.shadow_texture()),
-        },
-        wgpu::BindGroupEntry {
             binding: 7,
             resource: wgpu::BindingResource::Sampler(sampler),
         },
-        wgpu::BindGroupEntry {
-            binding: 8,
-            resource: mask.as_entire_binding(),
-        },
-        wgpu::BindGroupEntry {
-            binding: 9,
-            resource: inputs.clusters.uniforms.as_entire_binding(),
-        },
-        wgpu::BindGroupEntry {
-            binding: 10,
-            resource: inputs.clusters.slots.as_entire_binding(),
-        },
-        wgpu::BindGroupEntry {
-            binding: 11,
-            resource: inputs.clusters.masks.as_entire_binding(),
-        },
-    ];
-    entries.extend(inputs.vsm_entries(VSM_FIRST_BINDING));
+    ]);
     device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("lighting.bind_group"),
         layout,

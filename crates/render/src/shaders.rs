@@ -57,13 +57,19 @@ pub fn gbuffer() -> String {
 
 /// Deferred lighting pass, shadows from `source` (bindings 12–14 for virtual maps).
 pub fn lighting(source: ShadowSource) -> String {
+    reading_shadows(source, include_str!("shaders/lighting.wgsl"))
+}
+
+/// The common parts, the shadow lookup from `source`, then `pass`: the lighting and
+/// visibility passes, which declare the same bindings.
+fn reading_shadows(source: ShadowSource, pass: &str) -> String {
     let mut parts = vec![
         COMMON.to_string(),
         PARABOLOID.to_string(),
         SHADOW_LOOKUP.to_string(),
     ];
     parts.extend(shadow_source(source));
-    parts.push(include_str!("shaders/lighting.wgsl").to_string());
+    parts.push(pass.to_string());
     parts.join("\n")
 }
 
@@ -72,16 +78,10 @@ pub fn clusters() -> String {
     compose(&[COMMON, include_str!("shaders/clusters.wgsl")])
 }
 
-/// Hard visibility mask, shadows from `source` (bindings 11–13 for virtual maps).
+/// Hard visibility mask, shadows from `source` (bindings 12–14 for virtual maps, as in
+/// [`lighting`]).
 pub fn visibility(source: ShadowSource) -> String {
-    let mut parts = vec![
-        COMMON.to_string(),
-        PARABOLOID.to_string(),
-        SHADOW_LOOKUP.to_string(),
-    ];
-    parts.extend(shadow_source(source));
-    parts.push(include_str!("shaders/visibility.wgsl").to_string());
-    parts.join("\n")
+    reading_shadows(source, include_str!("shaders/visibility.wgsl"))
 }
 
 /// Virtual shadow maps: page marking, allocation and indirect arguments.
@@ -220,7 +220,7 @@ pub fn all() -> Vec<(&'static str, String)> {
         ("visibility", visibility(ShadowSource::Atlas)),
         (
             "visibility_vsm",
-            visibility(ShadowSource::Virtual { first: 11 }),
+            visibility(ShadowSource::Virtual { first: 12 }),
         ),
         ("vsm", vsm()),
         ("vsm_draw", vsm_draw()),

@@ -504,20 +504,7 @@ fn data_bytes<T>(v: &[T]) -> u64 {
 
 /// A `size`² depth atlas texture and its view.
 fn atlas_texture(ctx: &GpuContext, size: u32) -> (wgpu::Texture, wgpu::TextureView) {
-    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("shadow.atlas"),
-        size: wgpu::Extent3d {
-            width: size,
-            height: size,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: ATLAS_FORMAT,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
-    });
+    let texture = crate::pipelines::depth_texture(&ctx.device, "shadow.atlas", size, 1);
     let view = texture.create_view(&wgpu::TextureViewDescriptor {
         label: Some("shadow.atlas.view"),
         dimension: Some(wgpu::TextureViewDimension::D2),
@@ -646,21 +633,46 @@ pub struct ShadowStats {
     pub views_drawn: u32,
 }
 
-/// A shadow-generation technique: fills every view's tile of the atlas with depth.
+/// One generation as a technique records it: what to draw and where to record it.
+pub struct Generation<'a> {
+    /// The views, atlas and geometry; `input.draw_list` is never empty here.
+    pub input: &'a ShadowInput<'a>,
+    /// The encoder the passes are recorded into.
+    pub encoder: &'a mut wgpu::CommandEncoder,
+    /// Timestamp and pipeline-statistics queries.
+    pub timer: &'a GpuTimer,
+    /// The timer span of the generation's passes.
+    pub span: Option<Span>,
+}
+
+/// A shadow-generation technique: fills every view's tile of the atlas with depth. Its name
+/// is [`Technique::name`] of the [`Technique`] that created it.
 pub trait ShadowTechnique {
-    /// The technique's stable CLI name.
-    fn name(&self) -> &'static str;
-    /// Records the generation into `encoder`; `span` is the timer span for its passes.
-    /// Techniques keep their uniform buffers and bind groups across generations and rewrite
-    /// the uniforms with `Queue::write_buffer`, so submit each generation before recording
-    /// the next one.
+    /// Records the generation of a non-empty draw list (see [`ShadowTechnique::generate`],
+    /// which calls it).
+    fn record(&mut self, generation: Generation<'_>) -> ShadowStats;
+
+    /// Records the generation into `encoder`; `span` is the timer span for its passes. An
+    /// empty draw list records nothing. Techniques keep their uniform buffers and bind groups
+    /// across generations and rewrite the uniforms with `Queue::write_buffer`, so submit each
+    /// generation before recording the next one.
     fn generate(
         &mut self,
         input: &ShadowInput<'_>,
         encoder: &mut wgpu::CommandEncoder,
         timer: &GpuTimer,
         span: Option<Span>,
-    ) -> ShadowStats;
+    ) -> ShadowStats {
+        if input.draw_list.is_empty() {
+            return ShadowStats::default();
+        }
+        self.record(Generation {
+            input,
+            encoder,
+            timer,
+            span,
+        })
+    }
 }
 
 /// Why `irregular` cannot stand where an atlas-filling technique is expected.

@@ -124,8 +124,8 @@ pub struct VisibilityPass {
     chunk_words: u32,
 }
 
-/// First binding of the virtual maps' page-table declarations in the visibility pass.
-const VSM_FIRST_BINDING: u32 = 11;
+// The virtual maps' page-table declarations start where the lighting pass's do.
+use crate::lighting::VSM_FIRST_BINDING;
 
 impl VisibilityPass {
     /// Plans the pass; fails if even one word per pixel exceeds the storage-binding limit.
@@ -150,22 +150,24 @@ impl VisibilityPass {
         }
         let chunk_words = ((limit / per_word) as u32).clamp(1, words);
         let comp = wgpu::ShaderStages::COMPUTE;
+        // The lighting pass's bindings (`LightingInputs::shared_entries`); 7 is this pass's
+        // parameters, 3 is unused.
         let mut entries = vec![
             crate::uniform_entry(0, comp),
             crate::storage_entry(1, comp),
             crate::storage_entry(2, comp),
-            texture_entry(3, wgpu::TextureSampleType::Uint, comp),
             texture_entry(4, wgpu::TextureSampleType::Uint, comp),
+            texture_entry(5, wgpu::TextureSampleType::Uint, comp),
             texture_entry(
-                5,
+                6,
                 wgpu::TextureSampleType::Float { filterable: false },
                 comp,
             ),
-            crate::storage_rw_entry(6, comp),
             crate::uniform_entry(7, comp),
-            crate::uniform_entry(8, comp),
-            crate::storage_entry(9, comp),
+            crate::storage_rw_entry(8, comp),
+            crate::uniform_entry(9, comp),
             crate::storage_entry(10, comp),
+            crate::storage_entry(11, comp),
         ];
         let source = if shadows.pages().is_some() {
             entries.extend(crate::lighting::vsm_layout_entries(VSM_FIRST_BINDING, comp));
@@ -175,28 +177,21 @@ impl VisibilityPass {
         } else {
             crate::shaders::ShadowSource::Atlas
         };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("visibility.layout"),
-            entries: &entries,
-        });
+        let layout = crate::pipelines::bind_group_layout(device, "visibility.layout", &entries);
         let module = crate::shaders::module(
             device,
             "visibility.shader",
             &crate::shaders::visibility(source),
         );
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("visibility.pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("visibility.pipeline"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("cs_main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipeline_layout =
+            crate::pipelines::pipeline_layout(device, "visibility.pipeline_layout", &[&layout]);
+        let pipeline = crate::pipelines::compute_pipeline(
+            device,
+            "visibility.pipeline",
+            &pipeline_layout,
+            &module,
+            "cs_main",
+        );
         Ok(Self {
             pipeline,
             layout,
@@ -254,53 +249,8 @@ impl VisibilityPass {
                     usage: wgpu::BufferUsages::UNIFORM,
                 },
             );
-            let mut entries = vec![
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: inputs.frame.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: inputs.lights.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: inputs.shadows.view_table().as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::TextureView(&pv),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: wgpu::BindingResource::TextureView(&nv),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: wgpu::BindingResource::TextureView(inputs.shadow_texture()),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 6,
-                    resource: mask.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 7,
-                    resource: params.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 8,
-                    resource: inputs.clusters.uniforms.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 9,
-                    resource: inputs.clusters.slots.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 10,
-                    resource: inputs.clusters.masks.as_entire_binding(),
-                },
-            ];
-            entries.extend(inputs.vsm_entries(VSM_FIRST_BINDING));
+            let mut entries = inputs.shared_entries(&pv, &nv, &mask);
+            entries.push(crate::pipelines::whole_entry(7, &params));
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("visibility.bind_group"),
                 layout: &self.layout,

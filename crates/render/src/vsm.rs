@@ -42,8 +42,9 @@ use crate::clusters::LightClusters;
 use crate::gbuffer::GBuffer;
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{LightData, ShadowViewData, VirtualFace, VsmRound, VsmUniforms};
+use crate::pipelines::whole_entry;
 use crate::renderer::RenderSettings;
-use crate::shadow::{ShadowAtlas, ShadowOptions, ShadowPlan, ShadowStats, Technique, ATLAS_FORMAT};
+use crate::shadow::{ShadowAtlas, ShadowOptions, ShadowPlan, ShadowStats, Technique};
 use crate::source::{PagePool, ShadowOutput, ShadowSource, SourceInputs, ViewTable};
 use crate::techniques::gpu_driven::{plan_rounds, Round, COMMAND_SIZE};
 use crate::timing::{GpuTimer, Span};
@@ -373,25 +374,7 @@ struct Groups {
     clear: wgpu::BindGroup,
 }
 
-fn dynamic_uniform(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: true,
-            min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<VsmRound>() as u64),
-        },
-        count: None,
-    }
-}
-
-fn whole(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry {
-        binding,
-        resource: buffer.as_entire_binding(),
-    }
-}
+const ROUND_SIZE: u64 = std::mem::size_of::<VsmRound>() as u64;
 
 fn buffer(ctx: &GpuContext, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
     ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -439,20 +422,7 @@ impl VirtualShadows {
         let pool_side = pool_side(options.pool_bytes, limits.max_texture_dimension_2d);
         let per_row = pool_side / PAGE_SIZE;
         let pool_pages = per_row * per_row;
-        let pool = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("vsm.pool"),
-            size: wgpu::Extent3d {
-                width: pool_side,
-                height: pool_side,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: ATLAS_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
+        let pool = crate::pipelines::depth_texture(device, "vsm.pool", pool_side, 1);
         let pool_view = pool.create_view(&wgpu::TextureViewDescriptor {
             label: Some("vsm.pool.view"),
             dimension: Some(wgpu::TextureViewDimension::D2),
@@ -547,9 +517,10 @@ impl VirtualShadows {
         let cs = wgpu::ShaderStages::COMPUTE;
         let tex =
             |binding| crate::lighting::texture_entry(binding, wgpu::TextureSampleType::Uint, cs);
-        let mark_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("vsm.mark_layout"),
-            entries: &[
+        let mark_layout = crate::pipelines::bind_group_layout(
+            device,
+            "vsm.mark_layout",
+            &[
                 crate::uniform_entry(0, cs),
                 crate::storage_entry(1, cs),
                 tex(2),
@@ -561,11 +532,12 @@ impl VirtualShadows {
                 crate::storage_entry(8, cs),
                 crate::storage_rw_entry(9, cs),
             ],
-        });
+        );
         // The allocation passes: eight storage buffers, WebGPU's default per-stage limit.
-        let alloc_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("vsm.alloc_layout"),
-            entries: &[
+        let alloc_layout = crate::pipelines::bind_group_layout(
+            device,
+            "vsm.alloc_layout",
+            &[
                 crate::uniform_entry(7, cs),
                 crate::storage_entry(8, cs),
                 crate::storage_rw_entry(9, cs),
@@ -576,11 +548,12 @@ impl VirtualShadows {
                 crate::storage_entry(14, cs),
                 crate::storage_rw_entry(15, cs),
             ],
-        });
-        let cull_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("vsm.cull_layout"),
-            entries: &[
-                dynamic_uniform(0, cs),
+        );
+        let cull_layout = crate::pipelines::bind_group_layout(
+            device,
+            "vsm.cull_layout",
+            &[
+                crate::pipelines::dynamic_uniform_entry(0, cs, ROUND_SIZE),
                 crate::uniform_entry(1, cs),
                 crate::storage_entry(2, cs),
                 crate::storage_entry(4, cs),
@@ -591,27 +564,25 @@ impl VirtualShadows {
                 crate::storage_rw_entry(9, cs),
                 crate::storage_entry(10, cs),
             ],
-        });
+        );
         let vs = wgpu::ShaderStages::VERTEX;
-        let draw_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("vsm.draw_layout"),
-            entries: &[
-                dynamic_uniform(0, vs),
+        let draw_layout = crate::pipelines::bind_group_layout(
+            device,
+            "vsm.draw_layout",
+            &[
+                crate::pipelines::dynamic_uniform_entry(0, vs, ROUND_SIZE),
                 crate::uniform_entry(1, vs),
                 crate::storage_entry(2, vs),
                 crate::storage_entry(11, vs),
             ],
-        });
-        let clear_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("vsm.clear_layout"),
-            entries: &[crate::uniform_entry(1, vs), crate::storage_entry(2, vs)],
-        });
+        );
+        let clear_layout = crate::pipelines::bind_group_layout(
+            device,
+            "vsm.clear_layout",
+            &[crate::uniform_entry(1, vs), crate::storage_entry(2, vs)],
+        );
         let pipeline_layout = |label: &str, layout: &wgpu::BindGroupLayout| {
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(label),
-                bind_group_layouts: &[Some(layout)],
-                immediate_size: 0,
-            })
+            crate::pipelines::pipeline_layout(device, label, &[layout])
         };
         let mark_module = crate::shaders::module(device, "vsm.shader", &crate::shaders::vsm());
         let draw_module =
@@ -619,14 +590,7 @@ impl VirtualShadows {
         let mark_pl = pipeline_layout("vsm.mark_pipeline_layout", &mark_layout);
         let compute =
             |label: &str, module: &wgpu::ShaderModule, pl: &wgpu::PipelineLayout, entry| {
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(label),
-                    layout: Some(pl),
-                    module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    cache: None,
-                })
+                crate::pipelines::compute_pipeline(device, label, pl, module, entry)
             };
         let mark = compute("vsm.mark", &mark_module, &mark_pl, "cs_mark");
         let alloc_pl = pipeline_layout("vsm.alloc_pipeline_layout", &alloc_layout);
@@ -814,8 +778,8 @@ impl VirtualShadows {
             label: Some("vsm.mark_group"),
             layout: &self.mark_layout,
             entries: &[
-                whole(0, inputs.frame),
-                whole(1, inputs.lights),
+                whole_entry(0, inputs.frame),
+                whole_entry(1, inputs.lights),
                 wgpu::BindGroupEntry {
                     binding: 2,
                     resource: wgpu::BindingResource::TextureView(&pv),
@@ -824,27 +788,27 @@ impl VirtualShadows {
                     binding: 3,
                     resource: wgpu::BindingResource::TextureView(&nv),
                 },
-                whole(4, &inputs.clusters.uniforms),
-                whole(5, &inputs.clusters.slots),
-                whole(6, &inputs.clusters.masks),
-                whole(7, &self.uniforms),
-                whole(8, &self.faces),
-                whole(9, &self.table),
+                whole_entry(4, &inputs.clusters.uniforms),
+                whole_entry(5, &inputs.clusters.slots),
+                whole_entry(6, &inputs.clusters.masks),
+                whole_entry(7, &self.uniforms),
+                whole_entry(8, &self.faces),
+                whole_entry(9, &self.table),
             ],
         });
         let alloc = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("vsm.alloc_group"),
             layout: &self.alloc_layout,
             entries: &[
-                whole(7, &self.uniforms),
-                whole(8, &self.faces),
-                whole(9, &self.table),
-                whole(10, &self.counters),
-                whole(11, &self.page_views),
-                whole(12, &self.rounds_storage),
-                whole(13, &self.args),
-                whole(14, &self.prev_table),
-                whole(15, &self.scratch),
+                whole_entry(7, &self.uniforms),
+                whole_entry(8, &self.faces),
+                whole_entry(9, &self.table),
+                whole_entry(10, &self.counters),
+                whole_entry(11, &self.page_views),
+                whole_entry(12, &self.rounds_storage),
+                whole_entry(13, &self.args),
+                whole_entry(14, &self.prev_table),
+                whole_entry(15, &self.scratch),
             ],
         });
         let casters = inputs.casters;
@@ -853,15 +817,15 @@ impl VirtualShadows {
             layout: &self.cull_layout,
             entries: &[
                 round(0),
-                whole(1, &self.uniforms),
-                whole(2, &self.page_views),
-                whole(4, &self.faces),
-                whole(5, &casters.cluster_buffer),
-                whole(6, &casters.cluster_bounds),
-                whole(7, inputs.instances),
-                whole(8, &self.commands),
-                whole(9, &self.command_count),
-                whole(10, &self.counters),
+                whole_entry(1, &self.uniforms),
+                whole_entry(2, &self.page_views),
+                whole_entry(4, &self.faces),
+                whole_entry(5, &casters.cluster_buffer),
+                whole_entry(6, &casters.cluster_bounds),
+                whole_entry(7, inputs.instances),
+                whole_entry(8, &self.commands),
+                whole_entry(9, &self.command_count),
+                whole_entry(10, &self.counters),
             ],
         });
         let draw = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -869,15 +833,18 @@ impl VirtualShadows {
             layout: &self.draw_layout,
             entries: &[
                 round(0),
-                whole(1, &self.uniforms),
-                whole(2, &self.page_views),
-                whole(11, &casters.world),
+                whole_entry(1, &self.uniforms),
+                whole_entry(2, &self.page_views),
+                whole_entry(11, &casters.world),
             ],
         });
         let clear = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("vsm.clear_group"),
             layout: &self.clear_layout,
-            entries: &[whole(1, &self.uniforms), whole(2, &self.page_views)],
+            entries: &[
+                whole_entry(1, &self.uniforms),
+                whole_entry(2, &self.page_views),
+            ],
         });
         self.groups = Some(Groups {
             mark,

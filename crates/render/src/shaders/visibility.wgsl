@@ -13,16 +13,17 @@ struct VisibilityParams {
 @group(0) @binding(0) var<uniform> frame: FrameUniforms;
 @group(0) @binding(1) var<storage, read> lights: array<LightData>;
 @group(0) @binding(2) var<storage, read> shadow_views: array<ShadowViewData>;
-@group(0) @binding(3) var gbuf_position: texture_2d<u32>;
-@group(0) @binding(4) var gbuf_normal: texture_2d<u32>;
+// Bindings as in the lighting pass (one entry list serves both); 3 is unused here.
+@group(0) @binding(4) var gbuf_position: texture_2d<u32>;
+@group(0) @binding(5) var gbuf_normal: texture_2d<u32>;
 // The depth atlas read as plain floats: compute shaders on GL cannot load depth textures.
-@group(0) @binding(5) var atlas: texture_2d<f32>;
-@group(0) @binding(6) var<storage, read_write> mask: array<u32>;
+@group(0) @binding(6) var atlas: texture_2d<f32>;
 @group(0) @binding(7) var<uniform> params: VisibilityParams;
+@group(0) @binding(8) var<storage, read_write> mask: array<u32>;
 // The clustered light lists (clusters.rs), as in the lighting pass.
-@group(0) @binding(8) var<uniform> clusters: ClusterUniforms;
-@group(0) @binding(9) var<storage, read> cluster_slots: array<u32>;
-@group(0) @binding(10) var<storage, read> cluster_masks: array<u32>;
+@group(0) @binding(9) var<uniform> clusters: ClusterUniforms;
+@group(0) @binding(10) var<storage, read> cluster_slots: array<u32>;
+@group(0) @binding(11) var<storage, read> cluster_masks: array<u32>;
 
 // Bit b set = light 32·word + b is lit at the point (in reach, and the atlas says unoccluded),
 // for the lights whose bits are set in `candidates`.

@@ -32,8 +32,7 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::shadow::{ShadowInput, ShadowStats, ShadowTechnique};
-use crate::timing::{GpuTimer, Span};
+use crate::shadow::{Generation, ShadowStats, ShadowTechnique};
 use crate::{GpuContext, RenderError};
 
 /// Most bounding-box texels a setup thread rasterizes itself (must match compute.wgsl).
@@ -155,9 +154,10 @@ impl Compute {
         }
         let module = crate::shaders::module(device, "compute.shader", &crate::shaders::compute());
         let cs = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("compute.layout"),
-            entries: &[
+        let layout = crate::pipelines::bind_group_layout(
+            device,
+            "compute.layout",
+            &[
                 crate::uniform_entry(0, cs),
                 crate::storage_entry(1, cs),
                 crate::storage_entry(2, cs),
@@ -168,52 +168,44 @@ impl Compute {
                 crate::storage_rw_entry(7, cs),
                 crate::storage_rw_entry(8, cs),
             ],
-        });
-        let args_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("compute.args_layout"),
-            entries: &[crate::storage_rw_entry(0, cs)],
-        });
-        let main_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("compute.pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let finalize_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("compute.finalize_layout"),
-            bind_group_layouts: &[Some(&layout), Some(&args_layout)],
-            immediate_size: 0,
-        });
+        );
+        let args_layout = crate::pipelines::bind_group_layout(
+            device,
+            "compute.args_layout",
+            &[crate::storage_rw_entry(0, cs)],
+        );
+        let main_layout =
+            crate::pipelines::pipeline_layout(device, "compute.pipeline_layout", &[&layout]);
+        let finalize_layout = crate::pipelines::pipeline_layout(
+            device,
+            "compute.finalize_layout",
+            &[&layout, &args_layout],
+        );
         let pipeline = |entry: &str, layout: &wgpu::PipelineLayout| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
+            crate::pipelines::compute_pipeline(device, entry, layout, &module, entry)
         };
 
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
-        let copy_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("compute.copy_layout"),
-            entries: &[
+        let copy_layout = crate::pipelines::bind_group_layout(
+            device,
+            "compute.copy_layout",
+            &[
                 crate::uniform_entry(0, vf),
                 crate::storage_entry(1, vf),
                 crate::storage_entry(2, vf),
                 crate::storage_entry(3, wgpu::ShaderStages::FRAGMENT),
             ],
-        });
+        );
         let copy_module = crate::shaders::module(
             device,
             "compute_copy.shader",
             &crate::shaders::compute_copy(),
         );
-        let copy_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("compute.copy_pipeline_layout"),
-            bind_group_layouts: &[Some(&copy_layout)],
-            immediate_size: 0,
-        });
+        let copy_pipeline_layout = crate::pipelines::pipeline_layout(
+            device,
+            "compute.copy_pipeline_layout",
+            &[&copy_layout],
+        );
         // A copy: every texel of the band or tile is replaced.
         let copy = crate::techniques::overwrite_pipeline(
             device,
@@ -323,21 +315,9 @@ impl Compute {
 }
 
 impl ShadowTechnique for Compute {
-    fn name(&self) -> &'static str {
-        "compute"
-    }
-
-    fn generate(
-        &mut self,
-        input: &ShadowInput<'_>,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: &GpuTimer,
-        span: Option<Span>,
-    ) -> ShadowStats {
+    fn record(&mut self, g: Generation<'_>) -> ShadowStats {
+        let input = g.input;
         let mut stats = ShadowStats::default();
-        if input.draw_list.is_empty() {
-            return stats;
-        }
         let ctx = input.ctx;
         let device = &ctx.device;
         let casters = input.casters;
@@ -364,7 +344,7 @@ impl ShadowTechnique for Compute {
         let (chunks, capacity) = self.chunks.as_ref().expect("chunk list");
         let discard = input.options.discard_raster;
 
-        encoder.push_debug_group("compute");
+        g.encoder.push_debug_group("compute");
         let last_round = rounds.len() - 1;
         for (r, round) in rounds.iter().enumerate() {
             let round_texels = texels(round, tile_size);
@@ -422,24 +402,24 @@ impl ShadowTechnique for Compute {
             });
             if r == 0 {
                 // The first pass opens the timer span (a fill records no timestamps).
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("compute.transform"),
-                    timestamp_writes: timer.compute_writes(span, true, false),
+                    timestamp_writes: g.timer.compute_writes(g.span, true, false),
                 });
-                let s = timer.begin_compute_stats(&mut pass);
+                let s = g.timer.begin_compute_stats(&mut pass);
                 casters.record(&mut pass, false);
-                timer.end_compute_stats(&mut pass, s);
+                g.timer.end_compute_stats(&mut pass, s);
                 stats.passes += 1;
             }
-            encoder.clear_buffer(&self.counters, 0, None);
-            encoder.clear_buffer(depth, 0, Some(round_texels * 4));
+            g.encoder.clear_buffer(&self.counters, 0, None);
+            g.encoder.clear_buffer(depth, 0, Some(round_texels * 4));
             if casters.triangles > 0 {
                 {
-                    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                         label: Some("compute.setup"),
                         timestamp_writes: None,
                     });
-                    let s = timer.begin_compute_stats(&mut pass);
+                    let s = g.timer.begin_compute_stats(&mut pass);
                     pass.set_pipeline(&self.setup);
                     pass.set_bind_group(0, &bind_group, &[]);
                     let threads = casters.triangles as u64 * round.len() as u64;
@@ -448,24 +428,25 @@ impl ShadowTechnique for Compute {
                     pass.set_pipeline(&self.finalize);
                     pass.set_bind_group(1, &self.args_bind_group, &[]);
                     pass.dispatch_workgroups(1, 1, 1);
-                    timer.end_compute_stats(&mut pass, s);
+                    g.timer.end_compute_stats(&mut pass, s);
                     stats.passes += 1;
                 }
                 if !discard {
-                    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                         label: Some("compute.large"),
                         timestamp_writes: None,
                     });
-                    let s = timer.begin_compute_stats(&mut pass);
+                    let s = g.timer.begin_compute_stats(&mut pass);
                     pass.set_pipeline(&self.large);
                     pass.set_bind_group(0, &bind_group, &[]);
                     pass.dispatch_workgroups_indirect(&self.args, 0);
-                    timer.end_compute_stats(&mut pass, s);
+                    g.timer.end_compute_stats(&mut pass, s);
                     stats.passes += 1;
                 }
             }
             if r == last_round {
-                encoder.copy_buffer_to_buffer(&self.counters, 0, &self.counters_read, 0, 16);
+                g.encoder
+                    .copy_buffer_to_buffer(&self.counters, 0, &self.counters_read, 0, 16);
             }
 
             let atlas_size = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -495,7 +476,7 @@ impl ShadowTechnique for Compute {
                     },
                 ],
             });
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            let mut pass = g.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("compute.copy"),
                 color_attachments: &[],
                 // Every view redrawn: the first copy may clear the whole atlas; otherwise only
@@ -504,20 +485,20 @@ impl ShadowTechnique for Compute {
                     input,
                     r == 0 && input.full(),
                 )),
-                timestamp_writes: timer.render_writes(span, false, r == last_round),
+                timestamp_writes: g.timer.render_writes(g.span, false, r == last_round),
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            let s = timer.begin_render_stats(&mut pass);
+            let s = g.timer.begin_render_stats(&mut pass);
             pass.set_pipeline(&self.copy);
             pass.set_bind_group(0, &copy_bind_group, &[]);
             pass.draw(0..6, 0..round.len() as u32);
-            timer.end_render_stats(&mut pass, s);
+            g.timer.end_render_stats(&mut pass, s);
             stats.passes += 1;
             stats.draws += 1;
             stats.triangles += casters.triangles as u64 * round.len() as u64;
         }
-        encoder.pop_debug_group();
+        g.encoder.pop_debug_group();
         self.pending_read = true;
         stats
     }

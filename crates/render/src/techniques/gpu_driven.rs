@@ -23,12 +23,12 @@
 //! scenes with many views run several cull + draw rounds instead of truncating. Clusters are
 //! split too if even one view's commands would not fit.
 
-use crate::shadow::{ShadowInput, ShadowStats, ShadowTechnique};
+use crate::pipelines::{dynamic_uniform_entry, whole_entry};
+use crate::shadow::{Generation, ShadowStats, ShadowTechnique};
 use crate::techniques::{
     atlas_attachment, depth_pipeline, require_clip_distances, CachedGroup, TileClear,
     UniformRecords,
 };
-use crate::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
 /// Bytes of one indexed-indirect command (`wgpu::util::DrawIndexedIndirectArgs`).
@@ -110,22 +110,6 @@ pub struct GpuDriven {
     draw_group: CachedGroup,
 }
 
-fn dynamic_uniform_entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: true,
-            min_binding_size: wgpu::BufferSize::new(PARAMS_SIZE),
-        },
-        count: None,
-    }
-}
-
 impl GpuDriven {
     /// Builds the pipelines; needs `CLIP_DISTANCES`. Uses the compacted count draw where the
     /// adapter has `MULTI_DRAW_INDIRECT_COUNT`.
@@ -147,10 +131,11 @@ impl GpuDriven {
         let module =
             crate::shaders::module(device, "gpu_driven.shader", &crate::shaders::gpu_driven());
         let cs = wgpu::ShaderStages::COMPUTE;
-        let cull_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gpu_driven.cull_layout"),
-            entries: &[
-                dynamic_uniform_entry(0, cs),
+        let cull_layout = crate::pipelines::bind_group_layout(
+            device,
+            "gpu_driven.cull_layout",
+            &[
+                dynamic_uniform_entry(0, cs, PARAMS_SIZE),
                 crate::storage_entry(1, cs),
                 crate::storage_entry(2, cs),
                 crate::storage_entry(3, cs),
@@ -160,35 +145,35 @@ impl GpuDriven {
                 crate::storage_rw_entry(7, cs),
                 crate::storage_rw_entry(8, cs),
             ],
-        });
+        );
         let vs = wgpu::ShaderStages::VERTEX;
-        let draw_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gpu_driven.draw_layout"),
-            entries: &[
-                dynamic_uniform_entry(0, vs),
+        let draw_layout = crate::pipelines::bind_group_layout(
+            device,
+            "gpu_driven.draw_layout",
+            &[
+                dynamic_uniform_entry(0, vs, PARAMS_SIZE),
                 crate::storage_entry(1, vs),
                 crate::storage_entry(2, vs),
                 crate::storage_entry(9, vs),
             ],
-        });
-        let cull_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("gpu_driven.cull_pipeline_layout"),
-            bind_group_layouts: &[Some(&cull_layout)],
-            immediate_size: 0,
-        });
-        let draw_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("gpu_driven.draw_pipeline_layout"),
-            bind_group_layouts: &[Some(&draw_layout)],
-            immediate_size: 0,
-        });
-        let cull = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("gpu_driven.cull"),
-            layout: Some(&cull_pipeline_layout),
-            module: &module,
-            entry_point: Some("cs_cull"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        );
+        let cull_pipeline_layout = crate::pipelines::pipeline_layout(
+            device,
+            "gpu_driven.cull_pipeline_layout",
+            &[&cull_layout],
+        );
+        let draw_pipeline_layout = crate::pipelines::pipeline_layout(
+            device,
+            "gpu_driven.draw_pipeline_layout",
+            &[&draw_layout],
+        );
+        let cull = crate::pipelines::compute_pipeline(
+            device,
+            "gpu_driven.cull",
+            &cull_pipeline_layout,
+            &module,
+            "cs_cull",
+        );
         let draw = depth_pipeline(device, &draw_pipeline_layout, &module, "vs_draw", &[]);
         let counter = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("gpu_driven.count"),
@@ -246,30 +231,11 @@ impl GpuDriven {
     }
 }
 
-fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry {
-        binding,
-        resource: buffer.as_entire_binding(),
-    }
-}
-
 impl ShadowTechnique for GpuDriven {
-    fn name(&self) -> &'static str {
-        "gpu-driven"
-    }
-
-    fn generate(
-        &mut self,
-        input: &ShadowInput<'_>,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: &GpuTimer,
-        span: Option<Span>,
-    ) -> ShadowStats {
+    fn record(&mut self, g: Generation<'_>) -> ShadowStats {
+        let input = g.input;
         let mut stats = ShadowStats::default();
         let views = input.draw_list.len() as u32;
-        if views == 0 {
-            return stats;
-        }
         let ctx = input.ctx;
         let casters = input.casters;
         let rounds = plan_rounds(
@@ -325,14 +291,14 @@ impl ShadowTechnique for GpuDriven {
                         binding: 0,
                         resource: params.binding(),
                     },
-                    entry(1, &input.atlas.views_buffer),
-                    entry(2, &input.atlas.draw_list),
-                    entry(3, &input.atlas.eyes),
-                    entry(4, &casters.cluster_buffer),
-                    entry(5, &casters.cluster_bounds),
-                    entry(6, &input.scene.instances),
-                    entry(7, commands),
-                    entry(8, &self.counter),
+                    whole_entry(1, &input.atlas.views_buffer),
+                    whole_entry(2, &input.atlas.draw_list),
+                    whole_entry(3, &input.atlas.eyes),
+                    whole_entry(4, &casters.cluster_buffer),
+                    whole_entry(5, &casters.cluster_bounds),
+                    whole_entry(6, &input.scene.instances),
+                    whole_entry(7, commands),
+                    whole_entry(8, &self.counter),
                 ],
             })
         });
@@ -352,38 +318,38 @@ impl ShadowTechnique for GpuDriven {
                         binding: 0,
                         resource: params.binding(),
                     },
-                    entry(1, &input.atlas.views_buffer),
-                    entry(2, &input.atlas.draw_list),
-                    entry(9, &casters.world),
+                    whole_entry(1, &input.atlas.views_buffer),
+                    whole_entry(2, &input.atlas.draw_list),
+                    whole_entry(9, &casters.world),
                 ],
             })
         });
 
-        encoder.push_debug_group("gpu-driven");
+        g.encoder.push_debug_group("gpu-driven");
         if rounds.is_empty() {
             // No casters: the transform (a no-op) and a pass that clears the listed tiles.
             {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("gpu_driven.transform"),
-                    timestamp_writes: timer.compute_writes(span, true, false),
+                    timestamp_writes: g.timer.compute_writes(g.span, true, false),
                 });
-                let s = timer.begin_compute_stats(&mut pass);
+                let s = g.timer.begin_compute_stats(&mut pass);
                 casters.record(&mut pass, true);
-                timer.end_compute_stats(&mut pass, s);
+                g.timer.end_compute_stats(&mut pass, s);
             }
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            let mut pass = g.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("gpu_driven.draw"),
                 color_attachments: &[],
                 depth_stencil_attachment: Some(atlas_attachment(input, input.full())),
-                timestamp_writes: timer.render_writes(span, false, true),
+                timestamp_writes: g.timer.render_writes(g.span, false, true),
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            let s = timer.begin_render_stats(&mut pass);
+            let s = g.timer.begin_render_stats(&mut pass);
             self.clear.record(ctx, input, &mut pass);
-            timer.end_render_stats(&mut pass, s);
+            g.timer.end_render_stats(&mut pass, s);
             drop(pass);
-            encoder.pop_debug_group();
+            g.encoder.pop_debug_group();
             stats.passes += 2;
             return stats;
         }
@@ -393,14 +359,14 @@ impl ShadowTechnique for GpuDriven {
             let first = k == 0;
             let last = k + 1 == rounds.len();
             if self.compact {
-                encoder.clear_buffer(&self.counter, 0, None);
+                g.encoder.clear_buffer(&self.counter, 0, None);
             }
             {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("gpu_driven.cull"),
-                    timestamp_writes: timer.compute_writes(span, first, false),
+                    timestamp_writes: g.timer.compute_writes(g.span, first, false),
                 });
-                let s = timer.begin_compute_stats(&mut pass);
+                let s = g.timer.begin_compute_stats(&mut pass);
                 if first {
                     // The per-frame transform and cluster spheres, once for every round.
                     casters.record(&mut pass, true);
@@ -408,18 +374,18 @@ impl ShadowTechnique for GpuDriven {
                 pass.set_pipeline(&self.cull);
                 pass.set_bind_group(0, cull_group, &offset);
                 pass.dispatch_workgroups(r.clusters.div_ceil(64), r.views, 1);
-                timer.end_compute_stats(&mut pass, s);
+                g.timer.end_compute_stats(&mut pass, s);
                 stats.passes += 1;
             }
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            let mut pass = g.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("gpu_driven.draw"),
                 color_attachments: &[],
                 depth_stencil_attachment: Some(atlas_attachment(input, first && input.full())),
-                timestamp_writes: timer.render_writes(span, false, last),
+                timestamp_writes: g.timer.render_writes(g.span, false, last),
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            let s = timer.begin_render_stats(&mut pass);
+            let s = g.timer.begin_render_stats(&mut pass);
             if first {
                 self.clear.record(ctx, input, &mut pass);
             }
@@ -436,11 +402,11 @@ impl ShadowTechnique for GpuDriven {
                 pass.multi_draw_indexed_indirect(commands, 0, max);
             }
             self.clear.reset_clip_distances(&mut pass);
-            timer.end_render_stats(&mut pass, s);
+            g.timer.end_render_stats(&mut pass, s);
             stats.passes += 1;
             stats.draws += r.commands();
         }
-        encoder.pop_debug_group();
+        g.encoder.pop_debug_group();
         // Triangles offered to culling (what a draw without culling would submit); how many
         // survive is known only on the GPU.
         stats.triangles += casters.triangles as u64 * views as u64;

@@ -12,11 +12,10 @@
 //! three corners, tests them, and emits a degenerate triangle when the triangle is dropped.
 //! Without culling the draw is indexed, so post-transform vertex reuse still applies.
 
-use crate::shadow::{ShadowInput, ShadowStats, ShadowTechnique};
+use crate::shadow::{Generation, ShadowStats, ShadowTechnique};
 use crate::techniques::{
     atlas_attachment, depth_pipeline, require_clip_distances, CachedGroup, TileClear,
 };
-use crate::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
 /// The layered technique's pipelines.
@@ -37,9 +36,10 @@ impl Layered {
         let device = &ctx.device;
         let module = crate::shaders::module(device, "layered.shader", &crate::shaders::layered());
         let vs = wgpu::ShaderStages::VERTEX;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("layered.layout"),
-            entries: &[
+        let layout = crate::pipelines::bind_group_layout(
+            device,
+            "layered.layout",
+            &[
                 crate::uniform_entry(0, vs),
                 crate::storage_entry(1, vs),
                 crate::storage_entry(2, vs),
@@ -47,12 +47,9 @@ impl Layered {
                 crate::storage_entry(4, vs),
                 crate::storage_entry(5, vs),
             ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("layered.pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        );
+        let pipeline_layout =
+            crate::pipelines::pipeline_layout(device, "layered.pipeline_layout", &[&layout]);
         let pipeline = |entry: &str| depth_pipeline(device, &pipeline_layout, &module, entry, &[]);
         Ok(Self {
             indexed: pipeline("vs_indexed"),
@@ -71,23 +68,11 @@ impl Layered {
 }
 
 impl ShadowTechnique for Layered {
-    fn name(&self) -> &'static str {
-        "layered"
-    }
-
-    fn generate(
-        &mut self,
-        input: &ShadowInput<'_>,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: &GpuTimer,
-        span: Option<Span>,
-    ) -> ShadowStats {
+    fn record(&mut self, g: Generation<'_>) -> ShadowStats {
+        let input = g.input;
         let mut stats = ShadowStats::default();
         let views = input.draw_list.len() as u32;
         let casters = input.casters;
-        if views == 0 {
-            return stats;
-        }
         let ctx = input.ctx;
         let cull = input.options.cull;
         let atlas = input.atlas.size as f32;
@@ -110,26 +95,26 @@ impl ShadowTechnique for Layered {
             crate::buffer_bind_group(device, "layered.bind_group", layout, &buffers)
         });
 
-        encoder.push_debug_group("layered");
+        g.encoder.push_debug_group("layered");
         {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("layered.transform"),
-                timestamp_writes: timer.compute_writes(span, true, false),
+                timestamp_writes: g.timer.compute_writes(g.span, true, false),
             });
-            let s = timer.begin_compute_stats(&mut pass);
+            let s = g.timer.begin_compute_stats(&mut pass);
             casters.record(&mut pass, false);
-            timer.end_compute_stats(&mut pass, s);
+            g.timer.end_compute_stats(&mut pass, s);
             stats.passes += 1;
         }
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        let mut pass = g.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("layered.draw"),
             color_attachments: &[],
             depth_stencil_attachment: Some(atlas_attachment(input, input.full())),
-            timestamp_writes: timer.render_writes(span, false, true),
+            timestamp_writes: g.timer.render_writes(g.span, false, true),
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        let s = timer.begin_render_stats(&mut pass);
+        let s = g.timer.begin_render_stats(&mut pass);
         self.clear.record(ctx, input, &mut pass);
         if input.options.discard_raster {
             pass.set_scissor_rect(0, 0, 0, 0);
@@ -145,9 +130,9 @@ impl ShadowTechnique for Layered {
             pass.draw(0..corners, 0..views);
         }
         self.clear.reset_clip_distances(&mut pass);
-        timer.end_render_stats(&mut pass, s);
+        g.timer.end_render_stats(&mut pass, s);
         drop(pass);
-        encoder.pop_debug_group();
+        g.encoder.pop_debug_group();
         stats.passes += 1;
         stats.draws += 1;
         stats.triangles += casters.triangles as u64 * views as u64;

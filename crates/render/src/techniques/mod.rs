@@ -28,19 +28,17 @@ impl TileClear {
         let module =
             crate::shaders::module(device, "tile_clear.shader", &crate::shaders::tile_clear());
         let vs = wgpu::ShaderStages::VERTEX;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("tile_clear.layout"),
-            entries: &[
+        let layout = crate::pipelines::bind_group_layout(
+            device,
+            "tile_clear.layout",
+            &[
                 crate::storage_entry(0, vs),
                 crate::storage_entry(1, vs),
                 crate::uniform_entry(2, vs),
             ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("tile_clear.pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        );
+        let pipeline_layout =
+            crate::pipelines::pipeline_layout(device, "tile_clear.pipeline_layout", &[&layout]);
         let pipeline = clear_pipeline(device, &pipeline_layout, &module, "vs_clear");
         let size = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tile_clear.atlas"),
@@ -270,6 +268,19 @@ pub(crate) fn depth_pipeline(
     entry: &str,
     buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
 ) -> wgpu::RenderPipeline {
+    layered_depth_pipeline(device, layout, module, entry, buffers, None)
+}
+
+/// [`depth_pipeline`] rendering into the array layers `multiview_mask` selects (`None`: a
+/// plain 2D target).
+pub(crate) fn layered_depth_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+    multiview_mask: Option<std::num::NonZeroU32>,
+) -> wgpu::RenderPipeline {
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(entry),
         layout: Some(layout),
@@ -294,7 +305,7 @@ pub(crate) fn depth_pipeline(
         }),
         multisample: Default::default(),
         fragment: None,
-        multiview_mask: None,
+        multiview_mask,
         cache: None,
     })
 }

@@ -22,9 +22,11 @@
 use std::collections::HashMap;
 use std::num::NonZeroU32;
 
-use crate::shadow::{CullMode, ShadowInput, ShadowStats, ShadowTechnique, ATLAS_FORMAT};
-use crate::techniques::{atlas_attachment, CachedGroup, TileClear, UniformRecords};
-use crate::timing::{GpuTimer, Span};
+use crate::pipelines::dynamic_uniform_entry;
+use crate::shadow::{CullMode, Generation, ShadowStats, ShadowTechnique};
+use crate::techniques::{
+    atlas_attachment, layered_depth_pipeline, CachedGroup, TileClear, UniformRecords,
+};
 use crate::{GpuContext, RenderError};
 
 /// Bytes of one group's parameters (`MultiviewParams` in multiview.wgsl).
@@ -86,22 +88,6 @@ struct Scratch {
     all: wgpu::TextureView,
 }
 
-fn dynamic_uniform_entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: true,
-            min_binding_size: wgpu::BufferSize::new(PARAMS_SIZE),
-        },
-        count: None,
-    }
-}
-
 impl Multiview {
     /// Builds the pipelines; fails with [`RenderError::Unsupported`] without `MULTIVIEW`.
     pub fn new(ctx: &GpuContext) -> Result<Self, RenderError> {
@@ -130,28 +116,27 @@ impl Multiview {
         let module =
             crate::shaders::module(device, "multiview.shader", &crate::shaders::multiview());
         let vs = wgpu::ShaderStages::VERTEX;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("multiview.layout"),
-            entries: &[
-                dynamic_uniform_entry(0, vs),
+        let layout = crate::pipelines::bind_group_layout(
+            device,
+            "multiview.layout",
+            &[
+                dynamic_uniform_entry(0, vs, PARAMS_SIZE),
                 crate::storage_entry(1, vs),
                 crate::storage_entry(2, vs),
                 crate::storage_entry(3, vs),
                 crate::storage_entry(4, vs),
                 crate::storage_entry(5, vs),
             ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("multiview.pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        );
+        let pipeline_layout =
+            crate::pipelines::pipeline_layout(device, "multiview.pipeline_layout", &[&layout]);
 
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
-        let copy_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("multiview.copy_layout"),
-            entries: &[
-                dynamic_uniform_entry(0, vf),
+        let copy_layout = crate::pipelines::bind_group_layout(
+            device,
+            "multiview.copy_layout",
+            &[
+                dynamic_uniform_entry(0, vf, PARAMS_SIZE),
                 crate::storage_entry(1, vf),
                 crate::storage_entry(2, vf),
                 wgpu::BindGroupLayoutEntry {
@@ -165,17 +150,17 @@ impl Multiview {
                     count: None,
                 },
             ],
-        });
+        );
         let copy_module = crate::shaders::module(
             device,
             "multiview_copy.shader",
             &crate::shaders::multiview_copy(),
         );
-        let copy_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("multiview.copy_pipeline_layout"),
-            bind_group_layouts: &[Some(&copy_layout)],
-            immediate_size: 0,
-        });
+        let copy_pipeline_layout = crate::pipelines::pipeline_layout(
+            device,
+            "multiview.copy_pipeline_layout",
+            &[&copy_layout],
+        );
         // A copy: every texel of the tile is replaced.
         let copy_pipeline = crate::techniques::overwrite_pipeline(
             device,
@@ -211,35 +196,15 @@ impl Multiview {
         self.pipelines.entry((n, pulled)).or_insert_with(|| {
             let mask = if n >= 32 { u32::MAX } else { (1u32 << n) - 1 };
             let entry = if pulled { "vs_pulled" } else { "vs_indexed" };
-            ctx.device
-                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(entry),
-                    layout: Some(layout),
-                    vertex: wgpu::VertexState {
-                        module,
-                        entry_point: Some(entry),
-                        compilation_options: Default::default(),
-                        buffers: &[],
-                    },
-                    primitive: wgpu::PrimitiveState {
-                        topology: wgpu::PrimitiveTopology::TriangleList,
-                        front_face: wgpu::FrontFace::Ccw,
-                        // Culling is per view in the shader; survivors cast from both sides.
-                        cull_mode: None,
-                        ..Default::default()
-                    },
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: ATLAS_FORMAT,
-                        depth_write_enabled: Some(true),
-                        depth_compare: Some(wgpu::CompareFunction::Less),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
-                    multisample: Default::default(),
-                    fragment: None,
-                    multiview_mask: NonZeroU32::new(mask),
-                    cache: None,
-                })
+            // Culling is per view in the shader; survivors cast from both sides.
+            layered_depth_pipeline(
+                &ctx.device,
+                layout,
+                module,
+                entry,
+                &[],
+                NonZeroU32::new(mask),
+            )
         })
     }
 
@@ -254,20 +219,8 @@ impl Multiview {
             Some(s) => (side.max(s.side), layers.max(s.layers)),
             None => (side, layers),
         };
-        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("multiview.scratch"),
-            size: wgpu::Extent3d {
-                width: side,
-                height: side,
-                depth_or_array_layers: layers,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: ATLAS_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
+        let texture =
+            crate::pipelines::depth_texture(&ctx.device, "multiview.scratch", side, layers);
         let all = texture.create_view(&wgpu::TextureViewDescriptor {
             label: Some("multiview.scratch.all"),
             dimension: Some(wgpu::TextureViewDimension::D2Array),
@@ -301,21 +254,9 @@ impl Scratch {
 }
 
 impl ShadowTechnique for Multiview {
-    fn name(&self) -> &'static str {
-        "multiview"
-    }
-
-    fn generate(
-        &mut self,
-        input: &ShadowInput<'_>,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: &GpuTimer,
-        span: Option<Span>,
-    ) -> ShadowStats {
+    fn record(&mut self, g: Generation<'_>) -> ShadowStats {
+        let input = g.input;
         let mut stats = ShadowStats::default();
-        if input.draw_list.is_empty() {
-            return stats;
-        }
         let ctx = input.ctx;
         let casters = input.casters;
         let cull = input.options.cull;
@@ -405,25 +346,25 @@ impl ShadowTechnique for Multiview {
             })
         });
 
-        encoder.push_debug_group("multiview");
+        g.encoder.push_debug_group("multiview");
         {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("multiview.transform"),
-                timestamp_writes: timer.compute_writes(span, true, false),
+                timestamp_writes: g.timer.compute_writes(g.span, true, false),
             });
-            let s = timer.begin_compute_stats(&mut pass);
+            let s = g.timer.begin_compute_stats(&mut pass);
             casters.record(&mut pass, false);
-            timer.end_compute_stats(&mut pass, s);
+            g.timer.end_compute_stats(&mut pass, s);
             stats.passes += 1;
         }
         let corners = 3 * casters.triangles;
-        for (g, &(first, n)) in groups.iter().enumerate() {
-            let offset = [params.offset(g)];
+        for (group, &(first, n)) in groups.iter().enumerate() {
+            let offset = [params.offset(group)];
             let size = tiles[input.draw_list[first as usize] as usize].size;
             let pipeline = &self.pipelines[&(n, pulled)];
             let scratch = self.scratch.as_mut().expect("scratch");
             {
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                let mut pass = g.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("multiview.group"),
                     color_attachments: &[],
                     depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
@@ -438,7 +379,7 @@ impl ShadowTechnique for Multiview {
                     occlusion_query_set: None,
                     multiview_mask: NonZeroU32::new(if n >= 32 { u32::MAX } else { (1 << n) - 1 }),
                 });
-                let s = timer.begin_render_stats(&mut pass);
+                let s = g.timer.begin_render_stats(&mut pass);
                 pass.set_viewport(0.0, 0.0, size as f32, size as f32, 0.0, 1.0);
                 if input.options.discard_raster {
                     pass.set_scissor_rect(0, 0, 0, 0);
@@ -453,21 +394,21 @@ impl ShadowTechnique for Multiview {
                     pass.set_index_buffer(casters.corners.slice(..), wgpu::IndexFormat::Uint32);
                     pass.draw_indexed(0..corners, 0, 0..1);
                 }
-                timer.end_render_stats(&mut pass, s);
+                g.timer.end_render_stats(&mut pass, s);
                 stats.passes += 1;
                 stats.draws += 1;
             }
-            let last = g + 1 == groups.len();
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            let last = group + 1 == groups.len();
+            let mut pass = g.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("multiview.copy"),
                 color_attachments: &[],
-                depth_stencil_attachment: Some(atlas_attachment(input, g == 0 && input.full())),
-                timestamp_writes: timer.render_writes(span, false, last),
+                depth_stencil_attachment: Some(atlas_attachment(input, group == 0 && input.full())),
+                timestamp_writes: g.timer.render_writes(g.span, false, last),
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            let s = timer.begin_render_stats(&mut pass);
-            if g == 0 {
+            let s = g.timer.begin_render_stats(&mut pass);
+            if group == 0 {
                 self.clear.record(ctx, input, &mut pass);
             }
             if input.options.discard_raster {
@@ -476,11 +417,11 @@ impl ShadowTechnique for Multiview {
             pass.set_pipeline(&self.copy_pipeline);
             pass.set_bind_group(0, copy_bind_group, &offset);
             pass.draw(0..6 * n, 0..1);
-            timer.end_render_stats(&mut pass, s);
+            g.timer.end_render_stats(&mut pass, s);
             stats.passes += 1;
             stats.draws += 1;
         }
-        encoder.pop_debug_group();
+        g.encoder.pop_debug_group();
         stats.triangles += casters.triangles as u64 * input.draw_list.len() as u64;
         stats
     }

@@ -10,9 +10,8 @@ use manyshadows_scene::light_space::ViewKind;
 const VIEW_BINDING: u64 = 80;
 use crate::gpu_scene::{GpuScene, POSITION_LAYOUT};
 use crate::gpu_types::VIEW_UNIFORM_STRIDE;
-use crate::shadow::{visible_casters, ShadowInput, ShadowStats, ShadowTechnique};
+use crate::shadow::{visible_casters, Generation, ShadowInput, ShadowStats, ShadowTechnique};
 use crate::techniques::{atlas_attachment, TileClear};
-use crate::timing::{GpuTimer, Span};
 use crate::GpuContext;
 
 /// The traditional technique's pipelines and layout.
@@ -32,28 +31,21 @@ impl Traditional {
         let device = &ctx.device;
         let module =
             crate::shaders::module(device, "traditional.shader", &crate::shaders::traditional());
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("traditional.layout"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: true,
-                        min_binding_size: wgpu::BufferSize::new(VIEW_BINDING),
-                    },
-                    count: None,
-                },
+        let layout = crate::pipelines::bind_group_layout(
+            device,
+            "traditional.layout",
+            &[
+                crate::pipelines::dynamic_uniform_entry(
+                    0,
+                    wgpu::ShaderStages::VERTEX,
+                    VIEW_BINDING,
+                ),
                 crate::storage_entry(1, wgpu::ShaderStages::VERTEX),
                 crate::uniform_entry(2, wgpu::ShaderStages::VERTEX),
             ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("traditional.pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        );
+        let pipeline_layout =
+            crate::pipelines::pipeline_layout(device, "traditional.pipeline_layout", &[&layout]);
         let dp_module = ctx.has(wgpu::Features::CLIP_DISTANCES).then(|| {
             crate::shaders::module(
                 device,
@@ -147,43 +139,31 @@ fn draw_casters(
 }
 
 impl ShadowTechnique for Traditional {
-    fn name(&self) -> &'static str {
-        "traditional"
-    }
-
-    fn generate(
-        &mut self,
-        input: &ShadowInput<'_>,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: &GpuTimer,
-        span: Option<Span>,
-    ) -> ShadowStats {
+    fn record(&mut self, g: Generation<'_>) -> ShadowStats {
+        let input = g.input;
         let bind_group = self.bind_group(input.ctx, input);
         let mut stats = ShadowStats::default();
         let n = input.draw_list.len();
-        if n == 0 {
-            return stats;
-        }
         let (pipeline, vertices) = match &input.scene.skin {
             Some(skin) => (&self.skinned, &skin.vertices),
             None => (&self.pipeline, &input.scene.positions),
         };
-        encoder.push_debug_group("traditional");
+        g.encoder.push_debug_group("traditional");
         for (k, &i) in input.draw_list.iter().enumerate() {
             let i = i as usize;
             let (view, tile) = (&input.views[i], &input.atlas.tiles[i]);
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            let mut pass = g.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("traditional.view"),
                 color_attachments: &[],
                 // The first pass clears the whole atlas when every view is redrawn (or only
                 // the listed tiles, when caching keeps the others); later passes keep what
                 // earlier ones wrote into other tiles.
                 depth_stencil_attachment: Some(atlas_attachment(input, k == 0 && input.full())),
-                timestamp_writes: timer.render_writes(span, k == 0, k + 1 == n),
+                timestamp_writes: g.timer.render_writes(g.span, k == 0, k + 1 == n),
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            let s = timer.begin_render_stats(&mut pass);
+            let s = g.timer.begin_render_stats(&mut pass);
             if k == 0 {
                 self.clear.record(input.ctx, input, &mut pass);
             }
@@ -205,7 +185,7 @@ impl ShadowTechnique for Traditional {
                     (Some(p), None) => pass.set_pipeline(p),
                     // Refused up front by `ShadowGenerator`; draw nothing if it ever happens.
                     _ => {
-                        timer.end_render_stats(&mut pass, s);
+                        g.timer.end_render_stats(&mut pass, s);
                         continue;
                     }
                 }
@@ -219,10 +199,10 @@ impl ShadowTechnique for Traditional {
             if matches!(view.kind, ViewKind::Paraboloid(_)) {
                 self.clear.reset_clip_distances(&mut pass);
             }
-            timer.end_render_stats(&mut pass, s);
+            g.timer.end_render_stats(&mut pass, s);
             stats.passes += 1;
         }
-        encoder.pop_debug_group();
+        g.encoder.pop_debug_group();
         stats
     }
 }

@@ -1,0 +1,102 @@
+//! Constructors for the wgpu objects every pass builds the same way: bind-group layouts from a
+//! list of entries, pipeline layouts from a list of bind-group layouts, compute pipelines from
+//! a module's entry point, and depth textures in the atlas format. Shared by the techniques,
+//! the virtual and irregular maps and the frame passes, so none of them spells out the
+//! descriptors; layout entries themselves are the crate root's `storage_entry` and friends.
+
+use crate::shadow::ATLAS_FORMAT;
+
+/// A bind-group layout of `entries`.
+pub(crate) fn bind_group_layout(
+    device: &wgpu::Device,
+    label: &str,
+    entries: &[wgpu::BindGroupLayoutEntry],
+) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries,
+    })
+}
+
+/// A pipeline layout of `groups` (group `i` is `groups[i]`), no immediates.
+pub(crate) fn pipeline_layout(
+    device: &wgpu::Device,
+    label: &str,
+    groups: &[&wgpu::BindGroupLayout],
+) -> wgpu::PipelineLayout {
+    let groups: Vec<Option<&wgpu::BindGroupLayout>> = groups.iter().map(|&g| Some(g)).collect();
+    device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &groups,
+        immediate_size: 0,
+    })
+}
+
+/// A compute pipeline running `entry` of `module` with `layout`.
+pub(crate) fn compute_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+) -> wgpu::ComputePipeline {
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(label),
+        layout: Some(layout),
+        module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
+/// Bind-group layout entry of a uniform buffer bound with a dynamic offset, `size` bytes a
+/// record (per-view, per-round or per-group parameters in one buffer).
+pub(crate) fn dynamic_uniform_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    size: u64,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: true,
+            min_binding_size: wgpu::BufferSize::new(size),
+        },
+        count: None,
+    }
+}
+
+/// A `side`² depth texture of `layers` layers in the atlas format, rendered to and sampled
+/// (the atlas, the virtual maps' page pool, multiview's scratch array).
+pub(crate) fn depth_texture(
+    device: &wgpu::Device,
+    label: &str,
+    side: u32,
+    layers: u32,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: side,
+            height: side,
+            depth_or_array_layers: layers,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: ATLAS_FORMAT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    })
+}
+
+/// A bind-group entry binding all of `buffer`.
+pub(crate) fn whole_entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: buffer.as_entire_binding(),
+    }
+}
