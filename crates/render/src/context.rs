@@ -127,6 +127,10 @@ impl std::fmt::Debug for GpuContext {
     }
 }
 
+/// The longest [`GpuContext::wait_idle`] waits for submitted work before it reports an error
+/// (a frame on a CPU adapter can take tens of seconds; a hang must not be endless).
+pub const GPU_WAIT_LIMIT: std::time::Duration = std::time::Duration::from_secs(600);
+
 /// A one-line description of an adapter: name, backend, type and driver.
 pub fn describe_adapter(info: &wgpu::AdapterInfo) -> String {
     let driver = [info.driver.as_str(), info.driver_info.as_str()]
@@ -391,14 +395,28 @@ impl GpuContext {
         first
     }
 
-    /// Blocks until the GPU has finished all submitted work.
+    /// Blocks until the GPU has finished all submitted work, at most [`GPU_WAIT_LIMIT`].
+    ///
+    /// One wait of wgpu's OpenGL backend ends after about 2.1 s whatever timeout is asked for
+    /// (`glClientWaitSync` takes a 32-bit count of nanoseconds), and a frame of thousands of
+    /// lights on llvmpipe under load takes longer; so the wait is repeated while it times out,
+    /// up to the limit, and only then becomes an error.
     pub fn wait_idle(&self) -> Result<(), RenderError> {
-        self.device
-            .poll(wgpu::PollType::Wait {
+        let start = web_time::Instant::now();
+        loop {
+            match self.device.poll(wgpu::PollType::Wait {
                 submission_index: None,
-                timeout: None,
-            })
-            .map(|_| ())
-            .map_err(|e| RenderError::Gpu(format!("waiting for the GPU: {e}")))
+                timeout: Some(GPU_WAIT_LIMIT),
+            }) {
+                Ok(_) => return Ok(()),
+                Err(wgpu::PollError::Timeout) if start.elapsed() < GPU_WAIT_LIMIT => continue,
+                Err(e) => {
+                    return Err(RenderError::Gpu(format!(
+                        "waiting for the GPU ({:.0} s): {e}",
+                        start.elapsed().as_secs_f64()
+                    )))
+                }
+            }
+        }
     }
 }

@@ -149,7 +149,7 @@ pub(crate) fn grow_buffer(
     let limit = limit - limit % 16;
     if needed > limit {
         return Err(RenderError::SceneTooLarge(format!(
-            "the {what} buffer would be {needed} bytes, over this device's limit of {limit}              bytes"
+            "the {what} buffer would be {needed} bytes, over this device's limit of {limit} bytes"
         )));
     }
     *buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
