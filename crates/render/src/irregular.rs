@@ -65,7 +65,7 @@
 //! lights needs at most `k · width · height` nodes (20 bytes each). Lights are split into
 //! batches so that this worst case fits the node pool (at most the storage-binding limit)
 //! and the batch's grids fit one binding. A frame that still runs out (only with a pool forced
-//! smaller than one light's worst case, [`IrregularOptions::node_capacity`], or frames above
+//! smaller than one light's worst case, as a test does, or frames above
 //! ~6.7 M pixels, where one light's worst case exceeds a 128 MiB binding) is reported as
 //! [`RenderError::NodePoolOverflow`] after the frame, never used.
 //!
@@ -135,8 +135,9 @@ pub struct IrregularOptions {
     /// (lists get longer on average; samples of other texels in a bucket are tested too, which
     /// the exact test makes harmless). `None` or 1: one list per texel.
     pub hash: Option<u32>,
-    /// Test only: force the node pool to this many nodes (to exercise overflow reporting).
-    #[doc(hidden)]
+    /// Test only (feature `test-hooks`): force the node pool to this many nodes, to exercise
+    /// overflow reporting.
+    #[cfg(feature = "test-hooks")]
     pub node_capacity: Option<u32>,
 }
 
@@ -280,7 +281,11 @@ impl IrregularShadows {
         // Batches: runs of lights whose worst-case node count and grids fit one binding.
         let node_limit = (limit / NODE_BYTES).min(u32::MAX as u64 / 4);
         let shadowed = plan.light_views.iter().filter(|v| v.1 > 0).count() as u64;
-        let capacity = match options.node_capacity {
+        #[cfg(feature = "test-hooks")]
+        let forced = options.node_capacity;
+        #[cfg(not(feature = "test-hooks"))]
+        let forced: Option<u32> = None;
+        let capacity = match forced {
             Some(c) => c.max(1) as u64,
             None => (shadowed.max(1) * pixels).min(node_limit).max(1),
         };

@@ -11,7 +11,6 @@ mod common;
 use std::time::Instant;
 
 use manyshadows::wgpu;
-use manyshadows::wgpu::util::DeviceExt;
 
 // Each dispatch runs 32,768 turns of a hash per invocation on the buffer's value: llvmpipe
 // stops a shader's loops after 65,535 iterations in all (gallivm's guard against endless

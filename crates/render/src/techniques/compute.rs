@@ -265,7 +265,7 @@ impl Compute {
 
     /// Test knobs: at most `max_texels` texels per round, exactly `chunks` chunk records, at
     /// most `max_groups` workgroups along x of a dispatch (the rest goes along y).
-    #[doc(hidden)]
+    #[cfg(feature = "test-hooks")]
     pub fn with_limits(mut self, max_texels: u64, chunks: u32, max_groups: u32) -> Self {
         self.max_texels = max_texels.clamp(1, self.max_texels);
         self.chunk_capacity = Some(chunks.max(1));

@@ -204,8 +204,9 @@ impl GpuDriven {
         })
     }
 
-    /// Caps the commands of one cull + draw round below what the adapter allows (smaller
-    /// command buffers, more rounds). For tests of the batching path and memory-tight setups.
+    /// Test only (feature `test-hooks`): caps the commands of one cull + draw round below
+    /// what the adapter allows (smaller command buffers, more rounds), to exercise batching.
+    #[cfg(feature = "test-hooks")]
     pub fn with_max_round_commands(mut self, commands: u64) -> Self {
         self.max_round_commands = self.max_round_commands.min(commands.max(1));
         self
