@@ -22,8 +22,8 @@ use manyshadows::scene::{Attenuation, Camera, Instance, Light, LightKind, Materi
 use manyshadows::timing::PipelineCounts;
 use manyshadows::wgpu;
 use manyshadows::{
-    CullMode, GpuContext, GpuScene, RenderError, ShadowGenerator, ShadowOptions, ShadowPlan,
-    ShadowStats, Technique,
+    CullMode, GpuContext, GpuScene, ShadowGenerator, ShadowOptions, ShadowPlan, ShadowStats,
+    Technique,
 };
 use serde::Serialize;
 
@@ -524,8 +524,8 @@ pub fn layered(args: &LayeredArgs) -> Result<()> {
                         clock: 0.0,
                     },
                 }),
-                Err(RenderError::Unsupported(why)) => {
-                    h.note(format!("{} skipped: {why}", m.technique));
+                Err(e) if e.is_unsupported() => {
+                    h.note(format!("{} skipped: {e}", m.technique));
                     unsupported.push(m.technique);
                 }
                 Err(e) => return Err(e.into()),

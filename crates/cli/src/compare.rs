@@ -287,8 +287,8 @@ fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
         let mut renderer = match Renderer::new(&ctx, &scene_v, settings(args, v.technique)) {
             Ok(r) => r,
             // Asked for every technique: run those this adapter can, say which it cannot.
-            Err(manyshadows::RenderError::Unsupported(why)) if args.techniques.is_empty() => {
-                skipped.push((v.label(), why));
+            Err(e) if e.is_unsupported() && args.techniques.is_empty() => {
+                skipped.push((v.label(), e.to_string()));
                 bar.inc(1);
                 continue;
             }

@@ -135,7 +135,7 @@ pub fn omni(args: &OmniArgs) -> Result<()> {
                     label: name,
                     subject: ShadowSubject::new(ctx, g, &gpu, n as u64),
                 }),
-                Err(e @ (RenderError::Unsupported(_) | RenderError::Atlas(_))) => {
+                Err(e) if e.is_unsupported() || matches!(e, RenderError::Atlas(_)) => {
                     h.note(format!("{n} lights: {name} skipped: {e}"));
                     h.advance(h.units(1, n as u64));
                 }

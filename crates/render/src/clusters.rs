@@ -177,7 +177,7 @@ impl LightClusters {
         enabled: bool,
     ) -> Result<Self, RenderError> {
         if options.tile == 0 || !(1..=256).contains(&options.slices) {
-            return Err(RenderError::Unsupported(format!(
+            return Err(RenderError::InvalidOption(format!(
                 "cluster grid of {}-pixel tiles and {} slices: tiles must be at least 1 pixel \
                  and slices 1 to 256",
                 options.tile, options.slices

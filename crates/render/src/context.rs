@@ -289,11 +289,11 @@ impl GpuContext {
         };
         let short = limit_shortfalls(&limits, &required_limits());
         if !short.is_empty() {
-            return Err(RenderError::Unsupported(format!(
-                "{} has smaller limits than manyshadows needs (WebGPU's defaults): {}",
-                describe_adapter(&info),
-                short.join("; ")
-            )));
+            return Err(RenderError::LimitsTooSmall {
+                adapter: describe_adapter(&info),
+                needs: "manyshadows (WebGPU's defaults)".into(),
+                shortfalls: short,
+            });
         }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("manyshadows.device"),
@@ -323,11 +323,11 @@ impl GpuContext {
         let info = adapter.get_info();
         let short = limit_shortfalls(&device.limits(), &required_limits());
         if !short.is_empty() {
-            return Err(RenderError::Unsupported(format!(
-                "the device on {} has smaller limits than manyshadows needs: {}",
-                describe_adapter(&info),
-                short.join("; ")
-            )));
+            return Err(RenderError::LimitsTooSmall {
+                adapter: format!("the device on {}", describe_adapter(&info)),
+                needs: "manyshadows".into(),
+                shortfalls: short,
+            });
         }
         let uncaptured = Arc::new(Mutex::new(Vec::new()));
         let sink = uncaptured.clone();

@@ -60,11 +60,13 @@ impl ShadowGenerator {
             )));
         }
         if paraboloid && !ctx.has(wgpu::Features::CLIP_DISTANCES) {
-            return Err(RenderError::Unsupported(format!(
-                "dual-paraboloid shadows clip triangles at the hemisphere's base with the \
-                 CLIP_DISTANCES feature, which {} lacks; use cube point shadows",
-                crate::context::describe_adapter(&ctx.info)
-            )));
+            return Err(RenderError::MissingFeature {
+                needs: "dual-paraboloid shadows".into(),
+                feature: "the CLIP_DISTANCES feature (to clip triangles at the hemisphere's base)"
+                    .into(),
+                adapter: crate::context::describe_adapter(&ctx.info),
+                instead: "use cube point shadows".into(),
+            });
         }
         if paraboloid && gpu.skin.is_some() {
             return Err(RenderError::Unsupported(

@@ -243,7 +243,7 @@ impl IrregularShadows {
             ));
         }
         if let Some(g) = options.grid.filter(|g| !(1..=GRID_LIMIT).contains(g)) {
-            return Err(RenderError::Unsupported(format!(
+            return Err(RenderError::InvalidOption(format!(
                 "irregular grid side {g}: must be 1..={GRID_LIMIT} texels"
             )));
         }
@@ -811,9 +811,10 @@ impl ShadowSource for IrregularSource {
     }
 
     fn read_atlas(&self, _ctx: &GpuContext) -> Result<Vec<f32>, RenderError> {
-        Err(RenderError::Unsupported(
-            crate::shadow::IRREGULAR_NO_ATLAS.into(),
-        ))
+        Err(RenderError::NoAtlas {
+            technique: crate::shadow::Technique::Irregular,
+            detail: crate::shadow::IRREGULAR_NO_ATLAS.into(),
+        })
     }
 
     fn read_mask(&self, ctx: &GpuContext) -> Result<Option<VisibilityMask>, RenderError> {

@@ -93,9 +93,45 @@ pub enum RenderError {
     /// The GPU reported a validation or out-of-memory error.
     #[error("GPU error while {0}")]
     Gpu(String),
-    /// The adapter lacks a feature the chosen path needs.
+    /// The chosen combination is not possible (a point-shadow mode a technique does not
+    /// render, a target texture `render_to` cannot draw into).
     #[error("{0}")]
     Unsupported(String),
+    /// The device lacks a feature a technique or mode needs; `instead` says what works.
+    #[error("{needs} needs {feature}, which {adapter} lacks; {instead}")]
+    MissingFeature {
+        /// What needs it ("technique multiview").
+        needs: String,
+        /// The feature, and what it is used for.
+        feature: String,
+        /// The adapter ([`context::describe_adapter`]).
+        adapter: String,
+        /// What to use instead.
+        instead: String,
+    },
+    /// The device's limits are below what the renderer or a technique needs.
+    #[error("{adapter} has smaller limits than {needs} needs: {}", shortfalls.join("; "))]
+    LimitsTooSmall {
+        /// The adapter ([`context::describe_adapter`]).
+        adapter: String,
+        /// Who needs more ("manyshadows (WebGPU's defaults)", "technique compute").
+        needs: String,
+        /// One line per limit: "max_storage_buffers_per_shader_stage: the device allows 4,
+        /// the renderer needs 8".
+        shortfalls: Vec<String>,
+    },
+    /// The technique keeps no shadow atlas (or page pool) to read back or to generate on its
+    /// own; `detail` says where it does run.
+    #[error("{detail}")]
+    NoAtlas {
+        /// The technique.
+        technique: Technique,
+        /// Why, and where the technique does run.
+        detail: String,
+    },
+    /// An option's value is out of its range.
+    #[error("{0}")]
+    InvalidOption(String),
     /// Irregular shadow maps ran out of list nodes; the frame's visibility would be wrong.
     #[error("irregular shadow maps: the node pool of {capacity} samples overflowed ({dropped} samples dropped, {needed} needed by one batch of lights); the frame was discarded. Lower the resolution or use fewer lights")]
     NodePoolOverflow {
@@ -113,6 +149,21 @@ pub enum RenderError {
     /// Reading results back failed.
     #[error("reading results back from the GPU failed: {0}")]
     Readback(String),
+}
+
+impl RenderError {
+    /// True when the error says this technique, mode or option cannot run here (on this
+    /// device, or at all) rather than that something failed: callers that try every
+    /// technique skip these.
+    pub fn is_unsupported(&self) -> bool {
+        matches!(
+            self,
+            RenderError::Unsupported(_)
+                | RenderError::MissingFeature { .. }
+                | RenderError::LimitsTooSmall { .. }
+                | RenderError::NoAtlas { .. }
+        )
+    }
 }
 
 /// A 1D workload of `items` threads, 64 per workgroup, as a 2D dispatch with at most

@@ -664,10 +664,13 @@ impl Renderer {
                 pages.side,
                 crate::atlas_image::read_depth_view(&self.ctx, pages.pool, pages.side)?,
             )),
-            _ => Err(RenderError::Unsupported(format!(
-                "technique {} has no page pool (only virtual does)",
-                self.settings.technique.name()
-            ))),
+            _ => Err(RenderError::NoAtlas {
+                technique: self.settings.technique,
+                detail: format!(
+                    "technique {} has no page pool (only virtual does)",
+                    self.settings.technique.name()
+                ),
+            }),
         }
     }
 }

@@ -784,9 +784,17 @@ impl Technique {
             Technique::GpuDriven => Box::new(crate::techniques::gpu_driven::GpuDriven::new(ctx)?),
             Technique::Compute => Box::new(crate::techniques::compute::Compute::new(ctx)?),
             Technique::Irregular => {
-                return Err(RenderError::Unsupported(IRREGULAR_NO_ATLAS.into()))
+                return Err(RenderError::NoAtlas {
+                    technique: Technique::Irregular,
+                    detail: IRREGULAR_NO_ATLAS.into(),
+                })
             }
-            Technique::Virtual => return Err(RenderError::Unsupported(VIRTUAL_NO_ATLAS.into())),
+            Technique::Virtual => {
+                return Err(RenderError::NoAtlas {
+                    technique: Technique::Virtual,
+                    detail: VIRTUAL_NO_ATLAS.into(),
+                })
+            }
         })
     }
 }

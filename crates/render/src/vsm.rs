@@ -404,14 +404,15 @@ impl VirtualShadows {
             .flags
             .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION)
         {
-            return Err(RenderError::Unsupported(format!(
-                "technique virtual allocates and draws its pages with indirect dispatches \
-                 and draws, and {} lacks them; use technique traditional",
-                crate::context::describe_adapter(&ctx.info)
-            )));
+            return Err(RenderError::MissingFeature {
+                needs: "technique virtual".into(),
+                feature: "indirect dispatches and draws (to allocate and draw its pages)".into(),
+                adapter: crate::context::describe_adapter(&ctx.info),
+                instead: "use technique traditional".into(),
+            });
         }
         if !(options.lod.is_finite() && options.lod > 0.0) {
-            return Err(RenderError::Unsupported(format!(
+            return Err(RenderError::InvalidOption(format!(
                 "the virtual maps' level-of-detail scale must be a positive number, not {}",
                 options.lod
             )));
@@ -1226,9 +1227,10 @@ impl ShadowSource for VirtualSource {
     }
 
     fn read_atlas(&self, _ctx: &GpuContext) -> Result<Vec<f32>, RenderError> {
-        Err(RenderError::Unsupported(
-            crate::shadow::VIRTUAL_NO_ATLAS.into(),
-        ))
+        Err(RenderError::NoAtlas {
+            technique: crate::shadow::Technique::Virtual,
+            detail: crate::shadow::VIRTUAL_NO_ATLAS.into(),
+        })
     }
 
     fn virtual_plan(&self) -> Option<&VirtualPlan> {

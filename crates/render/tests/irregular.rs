@@ -185,9 +185,24 @@ fn refuses_atlas_paths_and_paraboloids() {
     )
     .err()
     .expect("no atlas generator for irregular");
-    assert!(matches!(err, RenderError::Unsupported(_)), "{err}");
+    assert!(
+        matches!(
+            err,
+            RenderError::NoAtlas {
+                technique: Technique::Irregular,
+                ..
+            }
+        ),
+        "{err}"
+    );
     let r = Renderer::new(&ctx, &scene, settings(32, 32)).expect("renderer");
-    assert!(matches!(r.read_atlas(), Err(RenderError::Unsupported(_))));
+    assert!(matches!(
+        r.read_atlas(),
+        Err(RenderError::NoAtlas {
+            technique: Technique::Irregular,
+            ..
+        })
+    ));
     let mut s = settings(32, 32);
     s.point_shadows = PointShadows::DualParaboloid;
     let err = Renderer::new(&ctx, &scene, s)

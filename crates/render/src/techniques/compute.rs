@@ -145,12 +145,15 @@ impl Compute {
             .min(MAX_DEPTH_BYTES)
             / 4;
         if max_texels < 64 * 64 {
-            return Err(RenderError::Unsupported(format!(
-                "technique compute needs storage buffers of at least 16 KiB, and {} allows {} \
-                 bytes",
-                crate::context::describe_adapter(&ctx.info),
-                limits.max_storage_buffer_binding_size
-            )));
+            return Err(RenderError::LimitsTooSmall {
+                adapter: crate::context::describe_adapter(&ctx.info),
+                needs: "technique compute".into(),
+                shortfalls: vec![format!(
+                    "max_storage_buffer_binding_size: the device allows {}, the technique \
+                     needs 16384",
+                    limits.max_storage_buffer_binding_size
+                )],
+            });
         }
         let module = crate::shaders::module(device, "compute.shader", &crate::shaders::compute());
         let cs = wgpu::ShaderStages::COMPUTE;

@@ -121,11 +121,12 @@ impl GpuDriven {
             .flags
             .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION)
         {
-            return Err(RenderError::Unsupported(format!(
-                "technique gpu-driven needs indirect draws, and {} lacks them; use \
-                 technique layered",
-                crate::context::describe_adapter(&ctx.info)
-            )));
+            return Err(RenderError::MissingFeature {
+                needs: "technique gpu-driven".into(),
+                feature: "indirect draws".into(),
+                adapter: crate::context::describe_adapter(&ctx.info),
+                instead: "use technique layered".into(),
+            });
         }
         let device = &ctx.device;
         let module =

@@ -335,10 +335,11 @@ pub(crate) fn require_clip_distances(ctx: &GpuContext, technique: &str) -> Resul
     if ctx.has(wgpu::Features::CLIP_DISTANCES) {
         Ok(())
     } else {
-        Err(RenderError::Unsupported(format!(
-            "technique {technique} needs the CLIP_DISTANCES feature to keep each view inside \
-             its atlas tile, and {} lacks it; use technique traditional",
-            crate::context::describe_adapter(&ctx.info)
-        )))
+        Err(RenderError::MissingFeature {
+            needs: format!("technique {technique}"),
+            feature: "the CLIP_DISTANCES feature (to keep each view inside its atlas tile)".into(),
+            adapter: crate::context::describe_adapter(&ctx.info),
+            instead: "use technique traditional".into(),
+        })
     }
 }
