@@ -30,8 +30,6 @@
 //! exceed the adapter's storage-binding limit, the draw list is split into rounds, each cleared,
 //! rasterized and copied in turn; a single tile over the limit is split into bands of rows.
 
-use wgpu::util::DeviceExt;
-
 use crate::shadow::{Generation, ShadowStats, ShadowTechnique};
 use crate::{GpuContext, RenderError};
 
@@ -132,6 +130,21 @@ pub struct Compute {
     max_groups: u32,
     chunk_capacity: Option<u32>,
     pending_read: bool,
+    /// `[atlas side, 0, 0, 0]` for the copy pass, written each frame.
+    copy_params: wgpu::Buffer,
+    /// One slot per round, kept across frames and rewritten with `write_buffer`.
+    slots: Vec<RoundSlot>,
+    /// The buffers the slots' bind groups were made with; a replaced one rebuilds them.
+    bound: Vec<wgpu::Buffer>,
+}
+
+/// A round's uniforms and bind groups, made once: each round of a frame has its own, so the
+/// frame's writes never overwrite what an earlier round of the same submission reads.
+struct RoundSlot {
+    params: wgpu::Buffer,
+    entries: wgpu::Buffer,
+    bind_group: Option<wgpu::BindGroup>,
+    copy_bind_group: Option<wgpu::BindGroup>,
 }
 
 impl Compute {
@@ -195,7 +208,7 @@ impl Compute {
             &[
                 crate::uniform_entry(0, vf),
                 crate::storage_entry(1, vf),
-                crate::storage_entry(2, vf),
+                crate::uniform_entry(2, vf),
                 crate::storage_entry(3, wgpu::ShaderStages::FRAGMENT),
             ],
         );
@@ -263,7 +276,86 @@ impl Compute {
             max_groups: limits.max_compute_workgroups_per_dimension.min(MAX_GROUPS),
             chunk_capacity: None,
             pending_read: false,
+            copy_params: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("compute.copy_params"),
+                size: 16,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            slots: Vec::new(),
+            bound: Vec::new(),
         })
+    }
+
+    /// Slot `r`, made on first use; its bind groups are (re)made when missing.
+    fn slot(&mut self, ctx: &GpuContext, r: usize, bound: &[&wgpu::Buffer]) -> &RoundSlot {
+        let device = &ctx.device;
+        while self.slots.len() <= r {
+            self.slots.push(RoundSlot {
+                params: device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("compute.params"),
+                    size: std::mem::size_of::<crate::gpu_types::ComputeParams>() as u64,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }),
+                // The uniform binding is the whole fixed-size array (the raster and copy
+                // passes read it as a uniform).
+                entries: device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("compute.entries"),
+                    size: MAX_ROUND_ENTRIES as u64 * std::mem::size_of::<Entry>() as u64,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }),
+                bind_group: None,
+                copy_bind_group: None,
+            });
+        }
+        let slot = &mut self.slots[r];
+        if slot.bind_group.is_none() {
+            // params, views, eyes, world, corners, entries, depth, chunks, counters
+            let [views, eyes, world, corners, depth, chunks] = bound else {
+                unreachable!("six bound buffers")
+            };
+            let buffers = [
+                &slot.params,
+                *views,
+                *eyes,
+                *world,
+                *corners,
+                &slot.entries,
+                *depth,
+                *chunks,
+                &self.counters,
+            ];
+            let entries: Vec<wgpu::BindGroupEntry> = buffers
+                .iter()
+                .enumerate()
+                .map(|(i, b)| wgpu::BindGroupEntry {
+                    binding: i as u32,
+                    resource: b.as_entire_binding(),
+                })
+                .collect();
+            slot.bind_group = Some(device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("compute.bind_group"),
+                layout: &self.layout,
+                entries: &entries,
+            }));
+            let copy = [&self.copy_params, *views, &slot.entries, *depth];
+            let entries: Vec<wgpu::BindGroupEntry> = copy
+                .iter()
+                .enumerate()
+                .map(|(i, b)| wgpu::BindGroupEntry {
+                    binding: i as u32,
+                    resource: b.as_entire_binding(),
+                })
+                .collect();
+            slot.copy_bind_group = Some(device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("compute.copy_bind_group"),
+                layout: &self.copy_layout,
+                entries: &entries,
+            }));
+        }
+        &self.slots[r]
     }
 
     /// Test knobs: at most `max_texels` texels per round, exactly `chunks` chunk records, at
@@ -322,7 +414,6 @@ impl ShadowTechnique for Compute {
         let input = g.input;
         let mut stats = ShadowStats::default();
         let ctx = input.ctx;
-        let device = &ctx.device;
         let casters = input.casters;
         let tiles = &input.atlas.tiles;
         let tile_size = |v: u32| tiles[v as usize].size;
@@ -343,9 +434,31 @@ impl ShadowTechnique for Compute {
         let chunks_wanted = ((most_texels / 256) as u32).max(MIN_CHUNKS);
         self.pending_read = false;
         self.ensure_buffers(ctx, most_texels, chunks_wanted);
-        let (depth, _) = self.depth.as_ref().expect("depth buffer");
-        let (chunks, capacity) = self.chunks.as_ref().expect("chunk list");
+        let depth = self.depth.as_ref().expect("depth buffer").0.clone();
+        let (chunks, capacity) = self.chunks.clone().expect("chunk list");
         let discard = input.options.discard_raster;
+        // The slots' bind groups hold these; any replaced (a grown depth buffer, a re-planned
+        // atlas) makes them again.
+        let bound = [
+            &input.atlas.views_buffer,
+            &input.atlas.eyes,
+            &casters.world,
+            &casters.corners,
+            &depth,
+            &chunks,
+        ];
+        if self.bound.len() != bound.len() || self.bound.iter().zip(bound).any(|(a, b)| a != b) {
+            for slot in &mut self.slots {
+                slot.bind_group = None;
+                slot.copy_bind_group = None;
+            }
+            self.bound = bound.iter().map(|b| (*b).clone()).collect();
+        }
+        ctx.queue.write_buffer(
+            &self.copy_params,
+            0,
+            bytemuck::cast_slice(&[input.atlas.size as f32, 0.0, 0.0, 0.0]),
+        );
 
         g.encoder.push_debug_group("compute");
         let last_round = rounds.len() - 1;
@@ -360,49 +473,18 @@ impl ShadowTechnique for Compute {
                 ],
                 sizes: [
                     round_texels as u32,
-                    *capacity,
+                    capacity,
                     self.max_groups,
                     u32::from(discard),
                 ],
             };
-            let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("compute.params"),
-                contents: bytemuck::bytes_of(&params),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-            // The uniform binding is the whole fixed-size array; the copy pass reads the same
-            // buffer as storage.
-            let mut list = round.clone();
-            list.resize(MAX_ROUND_ENTRIES as usize, bytemuck::Zeroable::zeroed());
-            let entries = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("compute.entries"),
-                contents: bytemuck::cast_slice(&list),
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::STORAGE,
-            });
-            let buffers = [
-                &params,
-                &input.atlas.views_buffer,
-                &input.atlas.eyes,
-                &casters.world,
-                &casters.corners,
-                &entries,
-                depth,
-                chunks,
-                &self.counters,
-            ];
-            let bind_entries: Vec<wgpu::BindGroupEntry> = buffers
-                .iter()
-                .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry {
-                    binding: i as u32,
-                    resource: b.as_entire_binding(),
-                })
-                .collect();
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("compute.bind_group"),
-                layout: &self.layout,
-                entries: &bind_entries,
-            });
+            let slot = self.slot(ctx, r, &bound);
+            ctx.queue
+                .write_buffer(&slot.params, 0, bytemuck::bytes_of(&params));
+            ctx.queue
+                .write_buffer(&slot.entries, 0, bytemuck::cast_slice(round));
+            let bind_group = slot.bind_group.clone().expect("made by slot()");
+            let copy_bind_group = slot.copy_bind_group.clone().expect("made by slot()");
             if r == 0 {
                 // The first pass opens the timer span (a fill records no timestamps).
                 let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -415,7 +497,7 @@ impl ShadowTechnique for Compute {
                 stats.passes += 1;
             }
             g.encoder.clear_buffer(&self.counters, 0, None);
-            g.encoder.clear_buffer(depth, 0, Some(round_texels * 4));
+            g.encoder.clear_buffer(&depth, 0, Some(round_texels * 4));
             if casters.triangles > 0 {
                 {
                     let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -452,33 +534,6 @@ impl ShadowTechnique for Compute {
                     .copy_buffer_to_buffer(&self.counters, 0, &self.counters_read, 0, 16);
             }
 
-            let atlas_size = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("compute.copy_params"),
-                contents: bytemuck::cast_slice(&[input.atlas.size as f32, 0.0, 0.0, 0.0]),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-            let copy_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("compute.copy_bind_group"),
-                layout: &self.copy_layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: atlas_size.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: input.atlas.views_buffer.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: entries.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 3,
-                        resource: depth.as_entire_binding(),
-                    },
-                ],
-            });
             let mut pass = g.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("compute.copy"),
                 color_attachments: &[],
