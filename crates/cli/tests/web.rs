@@ -362,7 +362,7 @@ fn the_page_renders_the_native_frame_and_its_controls_work() {
     let chromium_dir = tmp("chromium");
     let pkg = tmp("pkg");
     build_page(&pkg);
-    let port = serve(pkg);
+    let port = serve(pkg.clone());
     let mut browser = Browser::start(&chromium_dir);
     let dir = tmp("native");
 
@@ -472,4 +472,8 @@ fn the_page_renders_the_native_frame_and_its_controls_work() {
         browser.frame() == cubes,
         "orbit back to 0° gives another frame"
     );
+    drop(browser);
+    for d in [chromium_dir, pkg, dir] {
+        let _ = std::fs::remove_dir_all(d);
+    }
 }

@@ -316,6 +316,9 @@ impl Renderer {
             let lighting = LightingPass::new(ctx, &inputs, settings.width, settings.height);
             let visibility = visibility_pass(ctx, &settings, scene, &*source)?;
             Ok(Self {
+                // In a browser wgpu's handles are not Send; the Arc only shares, never crosses
+                // threads there.
+                #[allow(clippy::arc_with_non_send_sync)]
                 ctx: std::sync::Arc::new(ctx.clone()),
                 settings,
                 scene: gpu_scene,

@@ -302,7 +302,7 @@ impl Compute {
                 // passes read it as a uniform).
                 entries: device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("compute.entries"),
-                    size: MAX_ROUND_ENTRIES as u64 * std::mem::size_of::<Entry>() as u64,
+                    size: MAX_ROUND_ENTRIES * std::mem::size_of::<Entry>() as u64,
                     usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 }),
