@@ -60,13 +60,12 @@ impl ShadowGenerator {
             )));
         }
         if paraboloid && !ctx.has(wgpu::Features::CLIP_DISTANCES) {
-            return Err(RenderError::MissingFeature {
-                needs: "dual-paraboloid shadows".into(),
-                feature: "the CLIP_DISTANCES feature (to clip triangles at the hemisphere's base)"
-                    .into(),
-                adapter: crate::context::describe_adapter(&ctx.info),
-                instead: "use cube point shadows".into(),
-            });
+            return Err(RenderError::missing_feature(
+                ctx,
+                "dual-paraboloid shadows",
+                "the CLIP_DISTANCES feature (to clip triangles at the hemisphere's base)",
+                "use cube point shadows",
+            ));
         }
         if paraboloid && gpu.skin.is_some() {
             return Err(RenderError::Unsupported(

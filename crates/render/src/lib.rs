@@ -152,6 +152,21 @@ pub enum RenderError {
 }
 
 impl RenderError {
+    /// [`RenderError::MissingFeature`] for `ctx`'s adapter.
+    pub(crate) fn missing_feature(
+        ctx: &GpuContext,
+        needs: impl Into<String>,
+        feature: impl Into<String>,
+        instead: impl Into<String>,
+    ) -> Self {
+        RenderError::MissingFeature {
+            needs: needs.into(),
+            feature: feature.into(),
+            adapter: context::describe_adapter(&ctx.info),
+            instead: instead.into(),
+        }
+    }
+
     /// True when the error says this technique, mode or option cannot run here (on this
     /// device, or at all) rather than that something failed: callers that try every
     /// technique skip these.

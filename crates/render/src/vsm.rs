@@ -398,19 +398,12 @@ impl VirtualShadows {
         casters: &CasterGeometry,
     ) -> Result<Self, RenderError> {
         crate::techniques::require_clip_distances(ctx, "virtual")?;
-        if !ctx
-            .adapter
-            .get_downlevel_capabilities()
-            .flags
-            .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION)
-        {
-            return Err(RenderError::MissingFeature {
-                needs: "technique virtual".into(),
-                feature: "indirect dispatches and draws (to allocate and draw its pages)".into(),
-                adapter: crate::context::describe_adapter(&ctx.info),
-                instead: "use technique traditional".into(),
-            });
-        }
+        crate::techniques::require_indirect(
+            ctx,
+            "virtual",
+            "indirect dispatches and draws (to allocate and draw its pages)",
+            "use technique traditional",
+        )?;
         if !(options.lod.is_finite() && options.lod > 0.0) {
             return Err(RenderError::InvalidOption(format!(
                 "the virtual maps' level-of-detail scale must be a positive number, not {}",

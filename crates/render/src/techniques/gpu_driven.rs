@@ -115,19 +115,12 @@ impl GpuDriven {
     /// adapter has `MULTI_DRAW_INDIRECT_COUNT`.
     pub fn new(ctx: &GpuContext) -> Result<Self, RenderError> {
         require_clip_distances(ctx, "gpu-driven")?;
-        if !ctx
-            .adapter
-            .get_downlevel_capabilities()
-            .flags
-            .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION)
-        {
-            return Err(RenderError::MissingFeature {
-                needs: "technique gpu-driven".into(),
-                feature: "indirect draws".into(),
-                adapter: crate::context::describe_adapter(&ctx.info),
-                instead: "use technique layered".into(),
-            });
-        }
+        crate::techniques::require_indirect(
+            ctx,
+            "gpu-driven",
+            "indirect draws",
+            "use technique layered",
+        )?;
         let device = &ctx.device;
         let module =
             crate::shaders::module(device, "gpu_driven.shader", &crate::shaders::gpu_driven());

@@ -329,17 +329,38 @@ pub(crate) fn atlas_attachment<'a>(
     }
 }
 
+/// Refuses `technique` on an adapter without indirect execution (`what` it draws or
+/// dispatches indirectly, and what to use `instead`).
+pub(crate) fn require_indirect(
+    ctx: &GpuContext,
+    technique: &str,
+    what: &str,
+    instead: &str,
+) -> Result<(), RenderError> {
+    let flags = ctx.adapter.get_downlevel_capabilities().flags;
+    if flags.contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION) {
+        Ok(())
+    } else {
+        Err(RenderError::missing_feature(
+            ctx,
+            format!("technique {technique}"),
+            what,
+            instead,
+        ))
+    }
+}
+
 /// Refuses a technique that keeps its draws inside atlas tiles with clip distances when the
 /// adapter lacks them.
 pub(crate) fn require_clip_distances(ctx: &GpuContext, technique: &str) -> Result<(), RenderError> {
     if ctx.has(wgpu::Features::CLIP_DISTANCES) {
         Ok(())
     } else {
-        Err(RenderError::MissingFeature {
-            needs: format!("technique {technique}"),
-            feature: "the CLIP_DISTANCES feature (to keep each view inside its atlas tile)".into(),
-            adapter: crate::context::describe_adapter(&ctx.info),
-            instead: "use technique traditional".into(),
-        })
+        Err(RenderError::missing_feature(
+            ctx,
+            format!("technique {technique}"),
+            "the CLIP_DISTANCES feature (to keep each view inside its atlas tile)",
+            "use technique traditional",
+        ))
     }
 }

@@ -93,16 +93,14 @@ impl Multiview {
     pub fn new(ctx: &GpuContext) -> Result<Self, RenderError> {
         let mut max_views = ctx.limits().max_multiview_view_count.min(32);
         if !ctx.has(wgpu::Features::MULTIVIEW) || max_views == 0 {
-            return Err(RenderError::MissingFeature {
-                needs: "technique multiview".into(),
-                feature: "the MULTIVIEW feature (one render pass per group of up to 6-32 \
-                          equal-size shadow views)"
-                    .into(),
-                adapter: crate::context::describe_adapter(&ctx.info),
-                instead: "use technique layered, which fills the same atlas with one instanced \
-                          draw"
-                    .into(),
-            });
+            return Err(RenderError::missing_feature(
+                ctx,
+                "technique multiview",
+                "the MULTIVIEW feature (one render pass per group of up to 6-32 \
+                          equal-size shadow views)",
+                "use technique layered, which fills the same atlas with one instanced \
+                          draw",
+            ));
         }
         if clips_into_layer_zero(&ctx.info) {
             static WARNED: std::sync::Once = std::sync::Once::new();
