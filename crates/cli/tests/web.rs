@@ -276,6 +276,8 @@ impl Browser {
 
     /// Opens `url` and waits for the page's script to have started.
     fn open(&mut self, url: &str) {
+        // The old page's handle must not answer for the new one.
+        self.eval("delete window.manyshadows", 30);
         self.call("Page.navigate", json!({"url": url}), 30);
         let start = Instant::now();
         while self.eval("typeof window.manyshadows", 30) != "object" {
@@ -436,11 +438,22 @@ fn the_page_renders_the_native_frame_and_its_controls_work() {
         browser.frame() == first,
         "a refused setting changed the frame"
     );
+    // A bad value is refused with the renderer's message and the frame stays. (A number
+    // field turns text into "" itself, so only a number out of range gets this far.)
+    for (set, needle) in [("{technique: 'compute', lights: '100000'}", "16384")] {
+        let status = browser.eval(&format!("window.manyshadows.set({set})"), 600);
+        let status = status.as_str().unwrap_or("");
+        assert!(
+            status.starts_with("not applied") && status.contains(needle),
+            "{set}: {status}"
+        );
+        assert!(browser.frame() == first, "{set} changed the frame");
+    }
 
     // The controls rebuild the renderer: another scene, technique and filter, as `render`
     // makes them.
     let status = browser.eval(
-        "window.manyshadows.set({scene: 'cubes', technique: 'traditional', pcf: '3x3'})",
+        "window.manyshadows.set({scene: 'cubes', technique: 'traditional', pcf: '3x3', lights: ''})",
         600,
     );
     assert!(
@@ -472,6 +485,20 @@ fn the_page_renders_the_native_frame_and_its_controls_work() {
         browser.frame() == cubes,
         "orbit back to 0° gives another frame"
     );
+
+    // Bad sizes in the URL: the page says why instead of rendering.
+    for (query, needle) in [
+        ("w=abc", "width 'abc' is not a whole number"),
+        ("w=320&h=5000", "height 5000 must be between 1 and 2048"),
+    ] {
+        browser.open(&format!("http://127.0.0.1:{port}/?{query}"));
+        let status = browser.eval("window.manyshadows.ready", 600);
+        let status = status.as_str().unwrap_or("");
+        assert!(
+            status.starts_with("not applied") && status.contains(needle),
+            "?{query}: {status}"
+        );
+    }
     drop(browser);
     for d in [chromium_dir, pkg, dir] {
         let _ = std::fs::remove_dir_all(d);

@@ -197,6 +197,13 @@ fn refuses_atlas_paths_and_paraboloids() {
     );
     let r = Renderer::new(&ctx, &scene, settings(32, 32)).expect("renderer");
     assert!(matches!(
+        r.read_page_pool(),
+        Err(RenderError::NoAtlas {
+            technique: Technique::Irregular,
+            ..
+        })
+    ));
+    assert!(matches!(
         r.read_atlas(),
         Err(RenderError::NoAtlas {
             technique: Technique::Irregular,

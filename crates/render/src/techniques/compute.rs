@@ -327,33 +327,18 @@ impl Compute {
                 *chunks,
                 &self.counters,
             ];
-            let entries: Vec<wgpu::BindGroupEntry> = buffers
-                .iter()
-                .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry {
-                    binding: i as u32,
-                    resource: b.as_entire_binding(),
-                })
-                .collect();
-            slot.bind_group = Some(device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("compute.bind_group"),
-                layout: &self.layout,
-                entries: &entries,
-            }));
-            let copy = [&self.copy_params, *views, &slot.entries, *depth];
-            let entries: Vec<wgpu::BindGroupEntry> = copy
-                .iter()
-                .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry {
-                    binding: i as u32,
-                    resource: b.as_entire_binding(),
-                })
-                .collect();
-            slot.copy_bind_group = Some(device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("compute.copy_bind_group"),
-                layout: &self.copy_layout,
-                entries: &entries,
-            }));
+            slot.bind_group = Some(crate::buffer_bind_group(
+                device,
+                "compute.bind_group",
+                &self.layout,
+                &buffers,
+            ));
+            slot.copy_bind_group = Some(crate::buffer_bind_group(
+                device,
+                "compute.copy_bind_group",
+                &self.copy_layout,
+                &[&self.copy_params, *views, &slot.entries, *depth],
+            ));
         }
         &self.slots[r]
     }
