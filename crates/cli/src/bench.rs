@@ -303,6 +303,7 @@ fn bench_scene(mesh: &Mesh, maps: usize, resolution: u32, instances: usize) -> R
         Vec3::new(0.0, 0.0, far),
     ];
     let scene = Scene {
+        textures: Vec::new(),
         name: "bench-layered".into(),
         meshes: vec![mesh.clone()],
         materials: vec![Material::default()],
@@ -507,6 +508,7 @@ pub fn layered(args: &LayeredArgs) -> Result<()> {
                 cull: m.cull,
                 casters: CasterOptions {
                     assume_closed: variant.assume_closed,
+                    ..Default::default()
                 },
                 discard_raster: variant.discard && !args.raster,
             };

@@ -9,7 +9,8 @@
 
 use std::time::Duration;
 
-use glam::{Vec3, Vec3A};
+use glam::{Vec2, Vec3, Vec3A};
+use manyshadows_scene::masks::MaskSet;
 use manyshadows_scene::Scene;
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::{builder::build_cwbvh, CwBvh};
@@ -22,12 +23,31 @@ use crate::ReferenceError;
 /// (about 10 ulps of an `f32`).
 const BOX_PAD_RELATIVE: f32 = 1e-6;
 
+/// Marks a triangle without an alpha test in [`Tracer`]'s per-triangle table.
+const OPAQUE: u32 = u32::MAX;
+
+/// An alpha-tested triangle: its corners' texture coordinates and its material.
+#[derive(Clone, Copy)]
+struct MaskedTriangle {
+    uvs: [Vec2; 3],
+    material: usize,
+}
+
 /// World-space triangles of the shadow casters in a BVH.
+///
+/// Alpha-tested casters (materials with a coverage mask, `manyshadows_scene::masks`) block a
+/// ray only where their mask is solid at the hit: the hit's barycentric weights interpolate
+/// the corners' texture coordinates and [`MaskSet::covered`] answers, with the same nearest-
+/// texel rule the renderer's shadow passes use. A rejected hit lets the ray go on.
 pub struct Tracer {
     /// `None` when the scene casts no shadow at all.
     bvh: Option<CwBvh>,
     /// Triangles in BVH primitive order (so a leaf's primitive id indexes this directly).
     triangles: Vec<[Vec3; 3]>,
+    /// Per triangle (BVH order): an index into `masked`, or [`OPAQUE`].
+    alpha: Vec<u32>,
+    masked: Vec<MaskedTriangle>,
+    masks: MaskSet,
 }
 
 impl Tracer {
@@ -36,9 +56,13 @@ impl Tracer {
     /// left out: they rasterize to nothing, so they cast no shadow in any technique either.
     pub fn new(scene: &Scene) -> Result<Self, ReferenceError> {
         scene.validate()?;
+        let masks = MaskSet::new(scene);
         let mut triangles = Vec::with_capacity(scene.triangle_count());
+        let mut alpha = Vec::with_capacity(scene.triangle_count());
+        let mut masked = Vec::new();
         for inst in scene.instances.iter().filter(|i| i.casts_shadows) {
             let mesh = &scene.meshes[inst.mesh];
+            let tested = masks.is_masked(inst.material);
             let world: Vec<Vec3> = mesh
                 .positions
                 .iter()
@@ -52,18 +76,42 @@ impl Tracer {
                 ];
                 if (tri[1] - tri[0]).cross(tri[2] - tri[0]).length_squared() > 0.0 {
                     triangles.push(tri);
+                    if tested {
+                        let uv = |k: usize| mesh.uvs.get(t[k] as usize).copied().unwrap_or_default();
+                        alpha.push(masked.len() as u32);
+                        masked.push(MaskedTriangle {
+                            uvs: [uv(0), uv(1), uv(2)],
+                            material: inst.material,
+                        });
+                    } else {
+                        alpha.push(OPAQUE);
+                    }
                 }
             }
         }
-        Ok(Self::from_triangles(triangles))
+        let mut tracer = Self::from_triangles(triangles);
+        if let Some(bvh) = &tracer.bvh {
+            tracer.alpha = bvh
+                .primitive_indices
+                .iter()
+                .map(|&i| alpha[i as usize])
+                .collect();
+        }
+        tracer.masked = masked;
+        tracer.masks = masks;
+        Ok(tracer)
     }
 
-    /// A tracer over the given world-space triangles.
+    /// A tracer over the given world-space triangles (all opaque).
     pub fn from_triangles(triangles: Vec<[Vec3; 3]>) -> Self {
+        let alpha = vec![OPAQUE; triangles.len()];
         if triangles.is_empty() {
             return Self {
                 bvh: None,
                 triangles,
+                alpha,
+                masked: Vec::new(),
+                masks: MaskSet::default(),
             };
         }
         // Boxes padded a little: the slab test treats a zero direction component as a huge
@@ -94,7 +142,15 @@ impl Tracer {
         Self {
             bvh: Some(bvh),
             triangles: ordered,
+            alpha,
+            masked: Vec::new(),
+            masks: MaskSet::default(),
         }
+    }
+
+    /// Number of alpha-tested triangles.
+    pub fn masked_triangle_count(&self) -> usize {
+        self.masked.len()
     }
 
     /// Number of triangles in the BVH.
@@ -110,7 +166,22 @@ impl Tracer {
         };
         let shear = Shear::new(origin, dir);
         let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, t_max);
-        !bvh.ray_traverse_miss(ray, |r, id| shear.hit(&self.triangles[id], r.tmax))
+        !bvh.ray_traverse_miss(ray, |r, id| {
+            let (t, b) = shear.hit(&self.triangles[id], r.tmax);
+            match self.alpha[id] {
+                OPAQUE => t,
+                _ if t == f32::INFINITY => t,
+                k => {
+                    let m = &self.masked[k as usize];
+                    let uv = m.uvs[0] * b.x + m.uvs[1] * b.y + m.uvs[2] * b.z;
+                    if self.masks.covered(m.material, uv) {
+                        t
+                    } else {
+                        f32::INFINITY
+                    }
+                }
+            }
+        })
     }
 }
 
@@ -154,8 +225,9 @@ impl Shear {
     }
 
     /// Distance along the ray to the triangle (either side), or infinity when it misses or
-    /// the hit is not in `(0, t_max)`.
-    fn hit(&self, tri: &[Vec3; 3], t_max: f32) -> f32 {
+    /// the hit is not in `(0, t_max)`; with the hit's barycentric weights of the corners.
+    fn hit(&self, tri: &[Vec3; 3], t_max: f32) -> (f32, Vec3) {
+        const MISS: (f32, Vec3) = (f32::INFINITY, Vec3::ZERO);
         let (kx, ky, kz) = (self.kx, self.ky, self.kz);
         let a = tri[0] - self.origin;
         let b = tri[1] - self.origin;
@@ -174,17 +246,17 @@ impl Shear {
             w = d(bx, ay, by, ax) as f32;
         }
         if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
-            return f32::INFINITY;
+            return MISS;
         }
         let det = u + v + w;
         if det == 0.0 {
-            return f32::INFINITY;
+            return MISS;
         }
         let t = (u * self.sz * a[kz] + v * self.sz * b[kz] + w * self.sz * c[kz]) / det;
         if t > 0.0 && t < t_max {
-            t
+            (t, Vec3::new(u, v, w) / det)
         } else {
-            f32::INFINITY
+            MISS
         }
     }
 }

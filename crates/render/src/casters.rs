@@ -16,6 +16,18 @@
 //! - *clusters*: runs of at most [`CLUSTER_TRIANGLES`] triangles of one instance, with an
 //!   object-space normal cone; their world bounding spheres are recomputed per frame.
 //!
+//! Alpha-tested casters (materials with a coverage mask, [`manyshadows_scene::masks`]) come
+//! last, in their own class: their triangles after every opaque one
+//! ([`CasterGeometry::first_masked_triangle`]), their clusters after every opaque cluster
+//! (flag [`CLUSTER_MASKED`]) and their caster vertices after every opaque one. So a technique
+//! draws the opaque range with its depth-only pipeline exactly as before and the masked range
+//! with an alpha-testing one; opaque casters never run an alpha test. What the alpha test
+//! needs travels at the end of the corner buffer (the *mask tail*, read by
+//! `alpha_mask.wgsl`, so no technique needs another binding): per masked caster vertex its
+//! texture coordinate and material, per material its mask record, the coverage bits, and a
+//! four-word header in the last four words. Masked and double-sided casters are never
+//! back-face culled: a hole in a closed mesh lets a ray reach its back faces.
+//!
 //! Back-face culling is only exact for closed meshes seen from outside: the nearest surface
 //! along a ray entering a closed mesh always faces the ray's origin. So a triangle is
 //! *cullable* only if its mesh is closed (checked on welded positions) and no spot or point
@@ -25,6 +37,7 @@
 use std::collections::HashMap;
 
 use glam::{Mat4, Vec3};
+use manyshadows_scene::masks::MaskSet;
 use manyshadows_scene::{LightKind, Mesh, Scene};
 use wgpu::util::DeviceExt;
 
@@ -128,8 +141,13 @@ impl GpuSkin {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct CasterOptions {
     /// Treat every mesh as closed and outward-facing for back-face culling, as seed 000 did.
-    /// Faster on open meshes, but their back sides then cast no shadow.
+    /// Faster on open meshes, but their back sides then cast no shadow. Never applied to
+    /// double-sided materials.
     pub assume_closed: bool,
+    /// Cast shadows as if no material were alpha-tested (the camera still sees the holes):
+    /// what a renderer that ignores alpha in its shadow passes draws. For comparisons
+    /// (`compare --shadow-alpha off`), not for pictures.
+    pub ignore_masks: bool,
 }
 
 /// CPU record of a cluster.
@@ -151,6 +169,9 @@ pub struct ClusterData {
 /// Half angle stored for clusters that must never be back-face culled.
 pub const NO_CONE: f32 = 4.0;
 
+/// [`ClusterData::flags`] bit: the cluster's triangles are alpha-tested.
+pub const CLUSTER_MASKED: u32 = 1;
+
 /// World-space caster geometry, recomputed once per frame by [`CasterGeometry::record`].
 pub struct CasterGeometry {
     /// Caster vertices.
@@ -159,11 +180,16 @@ pub struct CasterGeometry {
     pub triangles: u32,
     /// The first `cullable_triangles` triangles may be back-face culled.
     pub cullable_triangles: u32,
+    /// Triangles from here on are alpha-tested (`triangles` when none are).
+    pub first_masked_triangle: u32,
+    /// Clusters from here on are alpha-tested (`clusters.len()` when none are).
+    pub first_masked_cluster: u32,
     /// Clusters.
     pub clusters: Vec<ClusterData>,
     /// `array<vec4<f32>>` world positions (w = 1), one per caster vertex.
     pub world: wgpu::Buffer,
-    /// `u32` caster-vertex indices, three per triangle (STORAGE | INDEX).
+    /// `u32` caster-vertex indices, three per triangle (STORAGE | INDEX), followed by the mask
+    /// tail (see the module docs).
     pub corners: wgpu::Buffer,
     /// `array<Cluster>`.
     pub cluster_buffer: wgpu::Buffer,
@@ -171,6 +197,7 @@ pub struct CasterGeometry {
     pub cluster_bounds: wgpu::Buffer,
     skinned: bool,
     options: CasterOptions,
+    masks: MaskSet,
     cache: MeshCache,
     decisions: Vec<Decision>,
     transform: wgpu::ComputePipeline,
@@ -306,6 +333,8 @@ struct Decision {
     mirrored: bool,
     /// Normal cones are valid (cullable, rigid, a similarity transform).
     cone_ok: bool,
+    /// Its material is alpha-tested.
+    masked: bool,
 }
 
 /// The CPU side of the caster buffers.
@@ -314,6 +343,9 @@ struct Layout {
     corners: Vec<u32>,
     clusters: Vec<ClusterData>,
     cullable_triangles: u32,
+    first_masked_triangle: u32,
+    first_masked_cluster: u32,
+    first_masked_vertex: u32,
 }
 
 /// Per-mesh facts that never change: closure and Morton order, computed on first use.
@@ -365,7 +397,13 @@ impl MeshCache {
     }
 
     /// The decision of every instance of `scene` (non-casters get the default).
-    fn decisions(&mut self, scene: &Scene, options: CasterOptions, skinned: bool) -> Vec<Decision> {
+    fn decisions(
+        &mut self,
+        scene: &Scene,
+        masks: &MaskSet,
+        options: CasterOptions,
+        skinned: bool,
+    ) -> Vec<Decision> {
         let points = light_points(scene);
         scene
             .instances
@@ -375,18 +413,25 @@ impl MeshCache {
                     return Decision::default();
                 }
                 let mesh = &scene.meshes[inst.mesh];
-                let closure = if options.assume_closed {
+                let masked = masks.is_masked(inst.material);
+                // Seed 000's "every mesh is closed" never applies to double-sided materials:
+                // they are culled only where culling is exact.
+                let assume_closed = options.assume_closed
+                    && !scene.materials.get(inst.material).is_some_and(|m| m.double_sided);
+                let closure = if assume_closed {
                     Closure::Outward
                 } else {
                     *self.closures[inst.mesh].get_or_insert_with(|| closure(mesh))
                 };
-                let cullable = closure != Closure::Open
-                    && (options.assume_closed || !light_inside(mesh, inst.transform, &points));
+                let cullable = !masked
+                    && closure != Closure::Open
+                    && (assume_closed || !light_inside(mesh, inst.transform, &points));
                 Decision {
                     cullable,
                     flip: cullable && closure == Closure::Inward,
                     mirrored: inst.transform.determinant() < 0.0,
                     cone_ok: cullable && !skinned && is_similarity(inst.transform),
+                    masked,
                 }
             })
             .collect()
@@ -401,21 +446,32 @@ impl MeshCache {
             acc += m.positions.len() as u32;
         }
         let mut sources: Vec<[u32; 2]> = Vec::new();
-        // (corners, cluster cones) per class: 0 = cullable, 1 = not.
-        let mut corners: [Vec<u32>; 2] = [Vec::new(), Vec::new()];
-        let mut clusters: [Vec<ClusterData>; 2] = [Vec::new(), Vec::new()];
-        for (i, inst) in scene.instances.iter().enumerate() {
-            if !inst.casts_shadows {
-                continue;
-            }
+        // (corners, cluster cones) per class: 0 = cullable, 1 = opaque and not cullable,
+        // 2 = alpha-tested.
+        let mut corners: [Vec<u32>; 3] = Default::default();
+        let mut clusters: [Vec<ClusterData>; 3] = Default::default();
+        // Opaque instances' caster vertices first, then the alpha-tested ones'.
+        let casters = |masked: bool| {
+            scene
+                .instances
+                .iter()
+                .enumerate()
+                .filter(move |(i, inst)| inst.casts_shadows && decisions[*i].masked == masked)
+        };
+        let mut first_masked_vertex = 0;
+        for (i, inst) in casters(false).chain(casters(true)) {
             let mesh = &scene.meshes[inst.mesh];
             let Decision {
                 cullable,
                 flip,
                 mirrored,
                 cone_ok,
+                masked,
             } = decisions[i];
-            let class = usize::from(!cullable);
+            if !masked {
+                first_masked_vertex = sources.len() as u32 + mesh.positions.len() as u32;
+            }
+            let class = if masked { 2 } else { usize::from(!cullable) };
             let first_vertex = sources.len() as u32;
             let bv = base_vertex[inst.mesh];
             sources.extend((0..mesh.positions.len() as u32).map(|v| [bv + v, i as u32]));
@@ -448,17 +504,24 @@ impl MeshCache {
                     first_triangle,
                     triangles: (chunk.len() / 3) as u32,
                     instance: i as u32,
-                    flags: 0,
+                    flags: if masked { CLUSTER_MASKED } else { 0 },
                     cone,
                 });
             }
         }
         let cullable_triangles = (corners[0].len() / 3) as u32;
-        let [mut all_corners, rest] = corners;
-        let [mut all_clusters, rest_clusters] = clusters;
-        all_corners.extend(rest);
-        all_clusters.extend(rest_clusters.into_iter().map(|mut c| {
+        let first_masked_triangle = cullable_triangles + (corners[1].len() / 3) as u32;
+        let [mut all_corners, open, masked] = corners;
+        let [mut all_clusters, open_clusters, masked_clusters] = clusters;
+        all_corners.extend(open);
+        all_corners.extend(masked);
+        all_clusters.extend(open_clusters.into_iter().map(|mut c| {
             c.first_triangle += cullable_triangles;
+            c
+        }));
+        let first_masked_cluster = all_clusters.len() as u32;
+        all_clusters.extend(masked_clusters.into_iter().map(|mut c| {
+            c.first_triangle += first_masked_triangle;
             c
         }));
         Layout {
@@ -466,8 +529,54 @@ impl MeshCache {
             corners: all_corners,
             clusters: all_clusters,
             cullable_triangles,
+            first_masked_triangle,
+            first_masked_cluster,
+            first_masked_vertex,
         }
     }
+}
+
+/// The mask tail appended to `corners` (whose length is its own start): per masked caster
+/// vertex (u bits, v bits, material), per material its [`MaskRecord`] with `first_word` made
+/// absolute, the coverage bits, and the header `[first masked triangle, first masked caster
+/// vertex, start of the vertex table, start of the record table]` in the last four words.
+///
+/// [`MaskRecord`]: manyshadows_scene::masks::MaskRecord
+fn mask_tail(scene: &Scene, masks: &MaskSet, layout: &Layout) -> Vec<u32> {
+    let start = layout.corners.len() as u32;
+    let mut base_vertex = Vec::with_capacity(scene.meshes.len());
+    let mut acc = 0u32;
+    for m in &scene.meshes {
+        base_vertex.push(acc);
+        acc += m.positions.len() as u32;
+    }
+    let mut tail = Vec::new();
+    for &[vertex, instance] in &layout.sources[layout.first_masked_vertex as usize..] {
+        let inst = &scene.instances[instance as usize];
+        let mesh = &scene.meshes[inst.mesh];
+        let uv = mesh
+            .uvs
+            .get((vertex - base_vertex[inst.mesh]) as usize)
+            .copied()
+            .unwrap_or_default();
+        tail.extend([uv.x.to_bits(), uv.y.to_bits(), inst.material as u32]);
+    }
+    let records = start + tail.len() as u32;
+    let bits = records + 4 * masks.records.len().max(1) as u32;
+    for r in &masks.records {
+        tail.extend([r.first_word + bits, r.width, r.height, r.flags]);
+    }
+    if masks.records.is_empty() {
+        tail.extend([0; 4]);
+    }
+    tail.extend_from_slice(&masks.bits);
+    tail.extend([
+        layout.first_masked_triangle,
+        layout.first_masked_vertex,
+        start,
+        records,
+    ]);
+    tail
 }
 
 impl CasterGeometry {
@@ -479,16 +588,34 @@ impl CasterGeometry {
         options: CasterOptions,
     ) -> Result<Self, RenderError> {
         let skinned = gpu.skin.is_some();
+        let masks = if options.ignore_masks {
+            MaskSet::default()
+        } else {
+            gpu.masks.clone()
+        };
         let mut cache = MeshCache::new(scene.meshes.len());
-        let decisions = cache.decisions(scene, options, skinned);
+        let decisions = cache.decisions(scene, &masks, options, skinned);
+        let layout = cache.layout(scene, &decisions);
+        if gpu.skin.is_some() && layout.first_masked_vertex < layout.sources.len() as u32 {
+            return Err(RenderError::Unsupported(
+                "alpha-tested shadow casters cannot be skinned (skinning is a benchmark \
+                 workload for opaque meshes)"
+                    .into(),
+            ));
+        }
+        let tail = mask_tail(scene, &masks, &layout);
         let Layout {
             mut sources,
             corners: mut all_corners,
             clusters: mut all_clusters,
             cullable_triangles,
-        } = cache.layout(scene, &decisions);
+            first_masked_triangle,
+            first_masked_cluster,
+            ..
+        } = layout;
         let vertices = sources.len() as u32;
         let triangles = (all_corners.len() / 3) as u32;
+        all_corners.extend(tail);
 
         let limits = ctx.limits();
         for (what, bytes) in [
@@ -504,12 +631,10 @@ impl CasterGeometry {
             }
         }
 
-        // Zero-sized buffers are invalid: keep one dummy element.
+        // Zero-sized buffers are invalid: keep one dummy element (the corner buffer always
+        // holds at least the mask tail's header).
         if sources.is_empty() {
             sources.push([0, 0]);
-        }
-        if all_corners.is_empty() {
-            all_corners.extend([0, 0, 0]);
         }
         let cluster_list = all_clusters.clone();
         if all_clusters.is_empty() {
@@ -616,6 +741,9 @@ impl CasterGeometry {
             vertices,
             triangles,
             cullable_triangles,
+            first_masked_triangle,
+            first_masked_cluster,
+            masks,
             clusters: cluster_list,
             transform: pipeline("cs_transform"),
             bounds: pipeline("cs_bounds"),
@@ -637,12 +765,16 @@ impl CasterGeometry {
     /// and cluster buffers in place when a decision changed: the same triangles and clusters,
     /// regrouped. Returns true if anything was rewritten.
     pub fn refresh(&mut self, ctx: &GpuContext, scene: &Scene) -> bool {
-        let decisions = self.cache.decisions(scene, self.options, self.skinned);
+        let decisions = self
+            .cache
+            .decisions(scene, &self.masks, self.options, self.skinned);
         if decisions == self.decisions {
             return false;
         }
         let layout = self.cache.layout(scene, &decisions);
         debug_assert_eq!(layout.corners.len() as u32, 3 * self.triangles);
+        // Masked instances keep their class, so the mask tail after the corners stays valid.
+        debug_assert_eq!(layout.first_masked_triangle, self.first_masked_triangle);
         debug_assert_eq!(layout.clusters.len(), self.clusters.len());
         if !layout.corners.is_empty() {
             ctx.queue
@@ -659,6 +791,11 @@ impl CasterGeometry {
         self.clusters = layout.clusters;
         self.decisions = decisions;
         true
+    }
+
+    /// True if `material`'s casters are alpha-tested in the shadow passes.
+    pub fn is_masked(&self, material: u32) -> bool {
+        self.masks.is_masked(material as usize)
     }
 
     /// True if world positions come from the skin.

@@ -2,12 +2,15 @@
 //! surface. Positions are stored directly (not reconstructed from depth) so the quality
 //! reference can ray-trace from exactly the points the frame shades.
 
-use crate::gpu_scene::{GpuScene, NORMAL_LAYOUT, POSITION_LAYOUT};
+use crate::gpu_scene::{GpuScene, NORMAL_LAYOUT, POSITION_LAYOUT, UV_LAYOUT};
 use crate::timing::{GpuTimer, Span};
 use crate::GpuContext;
 
-/// xyz world position, w = 1 on geometry: `f32` bits in a `u32` target, because OpenGL ES and
-/// WebGL cannot render to `Rgba32Float` but can to `Rgba32Uint`, and positions must be exact.
+/// xyz world position (`f32` bits in a `u32` target, because OpenGL ES and WebGL cannot render
+/// to `Rgba32Float` but can to `Rgba32Uint`, and positions must be exact); w = the surface's
+/// albedo as four sRGB-encoded bytes, alpha byte 255 (0 where no geometry was drawn; all ones
+/// for untextured surfaces). Packing the albedo into the spare channel keeps the G-buffer
+/// within WebGPU's 32 bytes of colour attachments per sample.
 pub const POSITION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
 /// xyz normal (`f32` bits), w = material index.
 pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
@@ -23,6 +26,8 @@ pub struct GBuffer {
     /// Render-target views of position, normal and depth, made once.
     views: [wgpu::TextureView; 3],
     pipeline: wgpu::RenderPipeline,
+    /// The same with the alpha test (`fs_masked`), for alpha-tested materials.
+    masked_pipeline: wgpu::RenderPipeline,
     bind_group: wgpu::BindGroup,
 }
 
@@ -50,6 +55,20 @@ fn target(
     })
 }
 
+/// A fragment-stage binding of a filterable 2D texture array.
+fn array_texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: true },
+            view_dimension: wgpu::TextureViewDimension::D2Array,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
 impl GBuffer {
     /// Creates `w`×`h` targets; `frame` is the frame-uniform buffer.
     pub fn new(ctx: &GpuContext, scene: &GpuScene, frame: &wgpu::Buffer, w: u32, h: u32) -> Self {
@@ -73,6 +92,15 @@ impl GBuffer {
             &[
                 crate::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
                 crate::storage_entry(1, wgpu::ShaderStages::VERTEX),
+                crate::storage_entry(2, wgpu::ShaderStages::FRAGMENT),
+                array_texture_entry(3),
+                array_texture_entry(4),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 5,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
             ],
         );
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -87,47 +115,67 @@ impl GBuffer {
                     binding: 1,
                     resource: scene.instances.as_entire_binding(),
                 },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: scene.materials.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(&scene.textures.colour),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::TextureView(&scene.textures.normal),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::Sampler(&scene.textures.sampler),
+                },
             ],
         });
         let pipeline_layout =
             crate::pipelines::pipeline_layout(device, "gbuffer.pipeline_layout", &[&layout]);
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("gbuffer.pipeline"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(POSITION_LAYOUT), Some(NORMAL_LAYOUT)],
-            },
-            primitive: wgpu::PrimitiveState {
-                front_face: wgpu::FrontFace::Ccw,
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(POSITION_FORMAT.into()), Some(NORMAL_FORMAT.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = |fragment: &str| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(fragment),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(POSITION_LAYOUT), Some(NORMAL_LAYOUT), Some(UV_LAYOUT)],
+                },
+                primitive: wgpu::PrimitiveState {
+                    front_face: wgpu::FrontFace::Ccw,
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fragment),
+                    compilation_options: Default::default(),
+                    targets: &[Some(POSITION_FORMAT.into()), Some(NORMAL_FORMAT.into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let (masked_pipeline, pipeline) = (pipeline("fs_masked"), pipeline("fs_main"));
         let views = [&position, &normal, &depth].map(|t| t.create_view(&Default::default()));
         Self {
             position,
             normal,
             views,
             pipeline,
+            masked_pipeline,
             bind_group,
         }
     }
@@ -168,18 +216,30 @@ impl GBuffer {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.set_vertex_buffer(0, scene.positions.slice(..));
         pass.set_vertex_buffer(1, scene.normals.slice(..));
+        pass.set_vertex_buffer(2, scene.uvs.slice(..));
         pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-        for d in &scene.draws {
-            let m = d.mesh;
-            pass.draw_indexed(
-                m.first_index..m.first_index + m.index_count,
-                m.base_vertex,
-                d.instance..d.instance + 1,
-            );
+        // Opaque surfaces first (early depth testing), then the alpha-tested ones.
+        for masked in [false, true] {
+            let mut set = false;
+            for d in scene.draws.iter().filter(|d| d.masked == masked) {
+                if !set {
+                    pass.set_pipeline(if masked {
+                        &self.masked_pipeline
+                    } else {
+                        &self.pipeline
+                    });
+                    set = true;
+                }
+                let m = d.mesh;
+                pass.draw_indexed(
+                    m.first_index..m.first_index + m.index_count,
+                    m.base_vertex,
+                    d.instance..d.instance + 1,
+                );
+            }
         }
     }
 }

@@ -25,6 +25,9 @@ pub struct GBufferData {
     pub material: Vec<u32>,
     /// Whether the pixel saw geometry.
     pub covered: Vec<bool>,
+    /// The surface's albedo per pixel: sRGB-encoded red, green, blue and 255 (white for
+    /// untextured surfaces).
+    pub albedo: Vec<[u8; 4]>,
 }
 
 /// Bytes per texel of the G-buffer targets (four 32-bit channels).
@@ -67,11 +70,14 @@ impl Renderer {
                 normal: Vec::with_capacity(pixels),
                 material: Vec::with_capacity(pixels),
                 covered: Vec::with_capacity(pixels),
+                albedo: Vec::with_capacity(pixels),
             };
             for (p, n) in texels(&position).zip(texels(&normal)) {
                 out.position.push(Vec3::new(f(p[0]), f(p[1]), f(p[2])));
-                // w is 1.0 on geometry and the clear value 0 elsewhere (gbuffer.wgsl).
-                out.covered.push(f(p[3]) >= 0.5);
+                // w is the packed albedo on geometry, the clear value 0 elsewhere
+                // (`has_geometry` in common.wgsl).
+                out.covered.push(p[3] != 0);
+                out.albedo.push(p[3].to_le_bytes());
                 out.normal
                     .push(Vec3::new(f(n[0]), f(n[1]), f(n[2])).normalize_or_zero());
                 out.material.push(n[3]);

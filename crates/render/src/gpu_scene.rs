@@ -3,6 +3,7 @@
 //! drawn with its index as `instance_index`, so shaders fetch its transform from storage.
 
 use glam::{Mat4, Vec3, Vec4};
+use manyshadows_scene::masks::MaskSet;
 use manyshadows_scene::Scene;
 use wgpu::util::DeviceExt;
 
@@ -35,6 +36,8 @@ pub struct DrawItem {
     pub object_sphere: (Vec3, f32),
     /// Material index.
     pub material: u32,
+    /// Its material is alpha-tested (drawn with the alpha-testing pipelines).
+    pub masked: bool,
 }
 
 /// Scene buffers on the GPU.
@@ -43,6 +46,8 @@ pub struct GpuScene {
     pub positions: wgpu::Buffer,
     /// Vertex normals (`vec3<f32>`, 12-byte stride).
     pub normals: wgpu::Buffer,
+    /// Vertex texture coordinates (`vec2<f32>`, 8-byte stride; zeros for meshes without).
+    pub uvs: wgpu::Buffer,
     /// `u32` triangle indices.
     pub indices: wgpu::Buffer,
     /// `array<InstanceData>`.
@@ -55,6 +60,11 @@ pub struct GpuScene {
     pub triangles: u64,
     /// Skinning, if attached with [`GpuScene::attach_skin`] (benchmarks).
     pub skin: Option<crate::casters::GpuSkin>,
+    /// The coverage bits of alpha-tested materials (read by shadow passes through the caster
+    /// geometry, [`crate::casters`]).
+    pub masks: MaskSet,
+    /// The materials' images for the camera's view.
+    pub textures: crate::textures::SceneTextures,
 }
 
 /// Bytes per vertex position.
@@ -74,12 +84,27 @@ pub const NORMAL_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferL
     attributes: &wgpu::vertex_attr_array![1 => Float32x3],
 };
 
+/// Vertex layout of the texture-coordinate buffer (location 2).
+pub const UV_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: 8,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &wgpu::vertex_attr_array![2 => Float32x2],
+};
+
+/// [`UV_LAYOUT`] at location 1 (depth-only passes with positions at 0).
+pub const UV_LAYOUT_1: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: 8,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &wgpu::vertex_attr_array![1 => Float32x2],
+};
+
 impl GpuScene {
     /// Uploads a validated scene. Fails if a buffer would exceed the device's limits.
     pub fn new(ctx: &GpuContext, scene: &Scene) -> Result<Self, RenderError> {
         let limits = ctx.limits();
         let mut positions: Vec<[f32; 3]> = Vec::new();
         let mut normals: Vec<[f32; 3]> = Vec::new();
+        let mut uvs: Vec<[f32; 2]> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
         let mut ranges = Vec::with_capacity(scene.meshes.len());
         let mut spheres = Vec::with_capacity(scene.meshes.len());
@@ -91,6 +116,11 @@ impl GpuScene {
             });
             positions.extend(mesh.positions.iter().map(|p| p.to_array()));
             normals.extend(mesh.normals.iter().map(|n| n.to_array()));
+            if mesh.uvs.len() == mesh.positions.len() {
+                uvs.extend(mesh.uvs.iter().map(|t| t.to_array()));
+            } else {
+                uvs.resize(positions.len(), [0.0; 2]);
+            }
             // Morton-ordered triangles: better vertex reuse in every pass (same image).
             indices.extend(crate::casters::morton_order(mesh));
             let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
@@ -132,6 +162,7 @@ impl GpuScene {
         if positions.is_empty() {
             positions.push([0.0; 3]);
             normals.push([0.0, 1.0, 0.0]);
+            uvs.push([0.0; 2]);
         }
         if indices.is_empty() {
             indices.extend([0, 0, 0]);
@@ -145,8 +176,24 @@ impl GpuScene {
                 .map(|i| InstanceData::new(i.transform, i.material as u32))
                 .collect()
         };
-        let mut material_data: Vec<MaterialData> =
-            scene.materials.iter().map(MaterialData::from).collect();
+        let masks = MaskSet::new(scene);
+        let textures = crate::textures::SceneTextures::new(ctx, scene)?;
+        let layer = |layers: &[Option<u32>], t: Option<manyshadows_scene::TextureRef>| {
+            t.and_then(|t| layers.get(t.texture).copied().flatten())
+        };
+        let mut material_data: Vec<MaterialData> = scene
+            .materials
+            .iter()
+            .enumerate()
+            .map(|(i, m)| {
+                MaterialData::new(
+                    m,
+                    layer(&textures.colour_layers, m.base_color_texture),
+                    layer(&textures.normal_layers, m.normal_texture),
+                    masks.is_masked(i),
+                )
+            })
+            .collect();
         if material_data.is_empty() {
             material_data.push(MaterialData::from(&manyshadows_scene::Material::default()));
         }
@@ -165,6 +212,7 @@ impl GpuScene {
                     mesh: ranges[inst.mesh],
                     sphere: (m.transform_point3(c), r * scale),
                     casts_shadows: inst.casts_shadows,
+                    masked: masks.is_masked(inst.material),
                 }
             })
             .collect();
@@ -187,6 +235,11 @@ impl GpuScene {
                 bytemuck::cast_slice(&normals),
                 wgpu::BufferUsages::VERTEX,
             ),
+            uvs: buf(
+                "scene.uvs",
+                bytemuck::cast_slice(&uvs),
+                wgpu::BufferUsages::VERTEX,
+            ),
             indices: buf(
                 "scene.indices",
                 bytemuck::cast_slice(&indices),
@@ -205,6 +258,8 @@ impl GpuScene {
             draws,
             triangles: scene.triangle_count() as u64,
             skin: None,
+            masks,
+            textures,
         })
     }
 

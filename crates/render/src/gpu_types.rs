@@ -63,19 +63,51 @@ impl InstanceData {
 pub struct MaterialData {
     /// rgb ambient, a: shininess.
     pub ambient: [f32; 4],
-    /// rgb diffuse.
+    /// rgb diffuse, a: alpha of the base colour.
     pub diffuse: [f32; 4],
     /// rgb specular.
     pub specular: [f32; 4],
+    /// 1 + base-colour layer (0: none), 1 + normal-map layer (0: none), flags
+    /// (`MATERIAL_*` in common.wgsl: wrap modes, alpha test), alpha cutoff (`f32` bits).
+    pub texture: [u32; 4],
+}
+
+/// Material flag: the G-buffer alpha-tests the material (its coverage mask is not all solid).
+pub const MATERIAL_ALPHA_TEST: u32 = 1 << 8;
+
+impl MaterialData {
+    /// Packs `m` whose base-colour and normal textures sit in those layers of the scene's
+    /// texture arrays (`None`: untextured), alpha-tested if `alpha_test`.
+    pub fn new(
+        m: &Material,
+        base_layer: Option<u32>,
+        normal_layer: Option<u32>,
+        alpha_test: bool,
+    ) -> Self {
+        let wrap = |t: Option<manyshadows_scene::TextureRef>| {
+            t.map_or(0, |t| t.wrap_s.code() | (t.wrap_t.code() << 2))
+        };
+        let flags = wrap(m.base_color_texture)
+            | (wrap(m.normal_texture) << 4)
+            | if alpha_test { MATERIAL_ALPHA_TEST } else { 0 };
+        Self {
+            ambient: m.ambient.extend(m.shininess).to_array(),
+            diffuse: m.diffuse.extend(m.base_alpha).to_array(),
+            specular: m.specular.extend(0.0).to_array(),
+            texture: [
+                base_layer.map_or(0, |l| l + 1),
+                normal_layer.map_or(0, |l| l + 1),
+                flags,
+                m.effective_cutoff().unwrap_or(0.0).to_bits(),
+            ],
+        }
+    }
 }
 
 impl From<&Material> for MaterialData {
+    /// An untextured, opaque material.
     fn from(m: &Material) -> Self {
-        Self {
-            ambient: m.ambient.extend(m.shininess).to_array(),
-            diffuse: m.diffuse.extend(0.0).to_array(),
-            specular: m.specular.extend(0.0).to_array(),
-        }
+        Self::new(m, None, None, false)
     }
 }
 
@@ -322,7 +354,7 @@ mod tests {
             sky
         );
         same_layout!(InstanceData, model, normal, material);
-        same_layout!(MaterialData, ambient, diffuse, specular);
+        same_layout!(MaterialData, ambient, diffuse, specular, texture);
         same_layout!(
             LightData,
             position,

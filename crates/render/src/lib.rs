@@ -37,6 +37,7 @@ pub mod shaders;
 pub mod shadow;
 pub mod source;
 pub mod techniques;
+pub mod textures;
 pub mod timing;
 pub mod visibility;
 pub mod vsm;

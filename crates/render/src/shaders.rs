@@ -103,6 +103,8 @@ pub fn vsm_draw() -> String {
         CULL,
         TILE,
         CLUSTER_CULL,
+        ALPHA_MASK,
+        TILE_MASK,
         include_str!("shaders/vsm_draw.wgsl"),
     ])
 }
@@ -113,6 +115,7 @@ pub fn irregular() -> String {
         COMMON,
         PARABOLOID,
         SHADOW_LOOKUP,
+        ALPHA_MASK,
         include_str!("shaders/irregular.wgsl"),
     ])
 }
@@ -129,7 +132,11 @@ pub fn atlas_copy() -> String {
 
 /// Depth-only pass of the traditional technique.
 pub fn traditional() -> String {
-    compose(&[COMMON, include_str!("techniques/traditional.wgsl")])
+    compose(&[
+        COMMON,
+        ALPHA_MASK,
+        include_str!("techniques/traditional.wgsl"),
+    ])
 }
 
 /// Per-frame world transform of shadow casters.
@@ -146,9 +153,16 @@ pub fn traditional_dp() -> String {
         "enable clip_distances;",
         COMMON,
         PARABOLOID,
+        ALPHA_MASK,
         include_str!("techniques/traditional_dp.wgsl"),
     ])
 }
+
+/// Alpha-tested casters: the mask tail of the corner buffer (needs a `corners` binding).
+pub const ALPHA_MASK: &str = include_str!("shaders/alpha_mask.wgsl");
+
+/// Alpha-tested casters drawn into tiles: outputs and the discarding fragment stage.
+pub const TILE_MASK: &str = include_str!("techniques/tile_mask.wgsl");
 
 /// Per-view triangle culling (frustum, back-face).
 pub const CULL: &str = include_str!("techniques/cull.wgsl");
@@ -172,13 +186,20 @@ pub fn layered() -> String {
         CULL,
         TILE,
         PARABOLOID,
+        ALPHA_MASK,
+        TILE_MASK,
         include_str!("techniques/layered.wgsl"),
     ])
 }
 
 /// The `multiview` technique's vertex shaders (one view per `view_index`).
 pub fn multiview() -> String {
-    compose(&[COMMON, CULL, include_str!("techniques/multiview.wgsl")])
+    compose(&[
+        COMMON,
+        CULL,
+        ALPHA_MASK,
+        include_str!("techniques/multiview.wgsl"),
+    ])
 }
 
 /// The `multiview` technique's copy of scratch layers into atlas tiles.
@@ -194,13 +215,20 @@ pub fn gpu_driven() -> String {
         CULL,
         TILE,
         CLUSTER_CULL,
+        ALPHA_MASK,
+        TILE_MASK,
         include_str!("techniques/gpu_driven.wgsl"),
     ])
 }
 
 /// The `compute` technique's software rasterizer (clear, setup, large triangles).
 pub fn compute() -> String {
-    compose(&[COMMON, CULL, include_str!("techniques/compute.wgsl")])
+    compose(&[
+        COMMON,
+        CULL,
+        ALPHA_MASK,
+        include_str!("techniques/compute.wgsl"),
+    ])
 }
 
 /// The `compute` technique's copy of its depth buffer into atlas tiles.

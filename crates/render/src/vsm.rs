@@ -349,6 +349,8 @@ pub struct VirtualShadows {
     args_pipeline: wgpu::ComputePipeline,
     cull: wgpu::ComputePipeline,
     draw: wgpu::RenderPipeline,
+    /// Rounds of alpha-tested clusters (`fs_alpha`).
+    draw_masked: wgpu::RenderPipeline,
     clear: wgpu::RenderPipeline,
     mark_layout: wgpu::BindGroupLayout,
     alloc_layout: wgpu::BindGroupLayout,
@@ -431,6 +433,7 @@ impl VirtualShadows {
         let rounds = plan_rounds(
             pool_pages,
             casters.clusters.len() as u32,
+            casters.first_masked_cluster,
             casters.vertices,
             max_commands,
         );
@@ -568,6 +571,7 @@ impl VirtualShadows {
                 crate::uniform_entry(1, vs),
                 crate::storage_entry(2, vs),
                 crate::storage_entry(11, vs),
+                crate::storage_entry(13, wgpu::ShaderStages::VERTEX_FRAGMENT),
             ],
         );
         let clear_layout = crate::pipelines::bind_group_layout(
@@ -601,6 +605,14 @@ impl VirtualShadows {
         let draw_pl = pipeline_layout("vsm.draw_pipeline_layout", &draw_layout);
         let draw =
             crate::techniques::depth_pipeline(device, &draw_pl, &draw_module, "vs_draw", &[]);
+        let draw_masked = crate::techniques::masked_depth_pipeline(
+            device,
+            &draw_pl,
+            &draw_module,
+            "vs_draw_masked",
+            &[],
+            None,
+        );
         let clear_pl = pipeline_layout("vsm.clear_pipeline_layout", &clear_layout);
         let clear = crate::techniques::clear_pipeline(device, &clear_pl, &draw_module, "vs_clear");
         let mut this = Self {
@@ -647,6 +659,7 @@ impl VirtualShadows {
             args_pipeline,
             cull,
             draw,
+            draw_masked,
             clear,
             mark_layout,
             alloc_layout,
@@ -830,6 +843,7 @@ impl VirtualShadows {
                 whole_entry(1, &self.uniforms),
                 whole_entry(2, &self.page_views),
                 whole_entry(11, &casters.world),
+                whole_entry(13, &casters.corners),
             ],
         });
         let clear = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -1019,7 +1033,11 @@ impl VirtualShadows {
             if self.shadow.discard_raster {
                 pass.set_scissor_rect(0, 0, 0, 0);
             }
-            pass.set_pipeline(&self.draw);
+            pass.set_pipeline(if r.masked {
+                &self.draw_masked
+            } else {
+                &self.draw
+            });
             pass.set_bind_group(0, &g.draw, &offset);
             pass.set_index_buffer(corners, wgpu::IndexFormat::Uint32);
             let max = r.commands() as u32;

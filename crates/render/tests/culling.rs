@@ -97,6 +97,7 @@ fn backface_culling_removes_back_faces_only_where_that_is_exact() {
         cull: CullMode::Backface,
         casters: CasterOptions {
             assume_closed: true,
+            ..Default::default()
         },
         ..Default::default()
     };

@@ -15,11 +15,14 @@ pub mod atlas;
 pub mod builtin;
 pub mod light_space;
 pub mod loaders;
+pub mod masks;
 mod model;
 pub mod primitives;
 pub mod scene_file;
+pub mod texture;
 
 pub use model::*;
+pub use texture::{AlphaMode, Texture, TextureRef, Wrap};
 
 use std::path::PathBuf;
 
@@ -86,6 +89,14 @@ pub enum SceneError {
     #[error("light {index} is invalid: {reason}")]
     InvalidLight {
         /// Light index.
+        index: usize,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A texture has no pixels, too many, or a data length that does not match its size.
+    #[error("texture {index} is invalid: {reason}")]
+    InvalidTexture {
+        /// Texture index.
         index: usize,
         /// What is wrong.
         reason: String,

@@ -689,6 +689,7 @@ mod tests {
             positions: box_corners(lo, hi).to_vec(),
             normals: vec![Vec3::Y; 8],
             indices: vec![],
+            uvs: vec![],
         }
     }
 
@@ -702,6 +703,7 @@ mod tests {
             casts_shadows,
         };
         Scene {
+            textures: Vec::new(),
             name: "test".into(),
             meshes: vec![
                 box_mesh(Vec3::new(-50.0, -0.1, -50.0), Vec3::new(50.0, 0.0, 50.0)),

@@ -3,7 +3,9 @@
 //! Everything here is plain data with no GPU types, so loaders, built-in scenes, the light-space
 //! maths and the CPU reference can all be used (and tested) without a graphics device.
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec2, Vec3};
+
+use crate::texture::{AlphaMode, Texture, TextureRef};
 
 use crate::SceneError;
 
@@ -16,6 +18,10 @@ pub struct Mesh {
     pub positions: Vec<Vec3>,
     /// Per-vertex unit normals, one per position.
     pub normals: Vec<Vec3>,
+    /// Texture coordinates, one per position, or empty when the mesh has none (then every
+    /// vertex reads texel (0, 0) of its material's textures). glTF's convention: (0, 0) is the
+    /// top-left corner of the image, v grows downwards (OBJ's v is flipped on load).
+    pub uvs: Vec<Vec2>,
     /// Triangle list: three indices per triangle into `positions`.
     pub indices: Vec<u32>,
 }
@@ -97,12 +103,30 @@ impl Mesh {
         if let Some(i) = self.normals.iter().position(|n| !n.is_finite()) {
             return Err(bad(format!("vertex {i} has a non-finite normal")));
         }
+        if !self.uvs.is_empty() && self.uvs.len() != self.positions.len() {
+            return Err(bad(format!(
+                "{} texture coordinates for {} positions",
+                self.uvs.len(),
+                self.positions.len()
+            )));
+        }
+        if let Some(i) = self.uvs.iter().position(|t| !t.is_finite()) {
+            return Err(bad(format!(
+                "vertex {i} has non-finite texture coordinates"
+            )));
+        }
         Ok(())
     }
 }
 
 /// A Phong material (seed 004): colours of the ambient, diffuse and specular terms and the
-/// specular exponent.
+/// specular exponent, optionally textured, alpha-masked and double-sided.
+///
+/// A base-colour texture multiplies the ambient and diffuse colours (the lighting stays
+/// Phong: the texture is the diffuse reflectance's pattern). Its alpha times
+/// [`Material::base_alpha`] decides coverage when [`Material::alpha_mode`] is `Mask` (or
+/// `Blend`, treated as a mask at 0.5): uncovered texels are holes for the camera *and* for
+/// every shadow technique (see [`crate::masks`]).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Material {
@@ -118,6 +142,28 @@ pub struct Material {
     /// Specular exponent (higher = tighter highlight).
     #[serde(default = "Material::default_shininess")]
     pub shininess: f32,
+    /// Base-colour texture (sRGB colour, linear alpha): multiplies `ambient` and `diffuse`.
+    /// Not part of the TOML format (textures come from glTF and OBJ files and built-in scenes).
+    #[serde(skip)]
+    pub base_color_texture: Option<TextureRef>,
+    /// Tangent-space normal map (glTF convention: +Y up in the image's green channel).
+    #[serde(skip)]
+    pub normal_texture: Option<TextureRef>,
+    /// Alpha of the base colour (glTF `baseColorFactor.a`): multiplies the texture's alpha.
+    #[serde(default = "Material::default_alpha")]
+    pub base_alpha: f32,
+    /// How alpha is used: `opaque` (ignored), `mask` (holes where alpha < `alpha_cutoff`),
+    /// `blend` (treated as `mask` at 0.5: deferred shading and shadow maps hold one surface per
+    /// pixel or texel).
+    #[serde(default)]
+    pub alpha_mode: AlphaMode,
+    /// Coverage threshold of `mask` materials (glTF `alphaCutoff`, default 0.5).
+    #[serde(default = "Material::default_cutoff")]
+    pub alpha_cutoff: f32,
+    /// glTF `doubleSided`. Shading is two-sided for every material; for shadows it means the
+    /// caster is never back-face culled, whatever its mesh's closure.
+    #[serde(default)]
+    pub double_sided: bool,
 }
 
 impl Material {
@@ -133,6 +179,22 @@ impl Material {
     fn default_shininess() -> f32 {
         16.0
     }
+    fn default_alpha() -> f32 {
+        1.0
+    }
+    fn default_cutoff() -> f32 {
+        0.5
+    }
+
+    /// The coverage threshold alpha is compared with, or `None` for opaque materials:
+    /// `alpha_cutoff` for `mask`, 0.5 for `blend`.
+    pub fn effective_cutoff(&self) -> Option<f32> {
+        match self.alpha_mode {
+            AlphaMode::Opaque => None,
+            AlphaMode::Mask => Some(self.alpha_cutoff),
+            AlphaMode::Blend => Some(0.5),
+        }
+    }
 
     /// A matte material of one colour (ambient = diffuse = `color`, faint white specular).
     pub fn matte(color: Vec3) -> Self {
@@ -141,7 +203,22 @@ impl Material {
             diffuse: color,
             specular: Vec3::splat(0.1),
             shininess: 8.0,
+            ..Self::default()
         }
+    }
+
+    /// This material with `texture` as its base colour (repeat wrapping).
+    pub fn with_texture(mut self, texture: usize) -> Self {
+        self.base_color_texture = Some(TextureRef::repeat(texture));
+        self
+    }
+
+    /// This material alpha-masked at `cutoff` (double-sided, as foliage cards are).
+    pub fn masked(mut self, cutoff: f32) -> Self {
+        self.alpha_mode = AlphaMode::Mask;
+        self.alpha_cutoff = cutoff;
+        self.double_sided = true;
+        self
     }
 }
 
@@ -152,6 +229,12 @@ impl Default for Material {
             diffuse: Self::default_diffuse(),
             specular: Self::default_specular(),
             shininess: Self::default_shininess(),
+            base_color_texture: None,
+            normal_texture: None,
+            base_alpha: Self::default_alpha(),
+            alpha_mode: AlphaMode::Opaque,
+            alpha_cutoff: Self::default_cutoff(),
+            double_sided: false,
         }
     }
 }
@@ -415,6 +498,8 @@ pub struct Scene {
     pub meshes: Vec<Mesh>,
     /// Materials, referenced by instances.
     pub materials: Vec<Material>,
+    /// Images, referenced by materials.
+    pub textures: Vec<Texture>,
     /// Mesh placements.
     pub instances: Vec<Instance>,
     /// Lights.
@@ -531,12 +616,29 @@ impl Scene {
                 && m.specular.is_finite()
                 && m.shininess.is_finite()
                 && m.shininess >= 0.0;
+            let bad = |reason: String| SceneError::InvalidMaterial { index: i, reason };
             if !ok {
-                return Err(SceneError::InvalidMaterial {
-                    index: i,
-                    reason: "colours must be finite and shininess >= 0".into(),
-                });
+                return Err(bad("colours must be finite and shininess >= 0".into()));
             }
+            if !(m.base_alpha.is_finite() && m.alpha_cutoff.is_finite()) {
+                return Err(bad("base_alpha and alpha_cutoff must be finite".into()));
+            }
+            for (what, t) in [
+                ("base-colour", m.base_color_texture),
+                ("normal", m.normal_texture),
+            ] {
+                if let Some(t) = t.filter(|t| t.texture >= self.textures.len()) {
+                    return Err(bad(format!(
+                        "its {what} texture {} does not exist ({} textures)",
+                        t.texture,
+                        self.textures.len()
+                    )));
+                }
+            }
+        }
+        for (i, t) in self.textures.iter().enumerate() {
+            t.validate()
+                .map_err(|reason| SceneError::InvalidTexture { index: i, reason })?;
         }
         for (i, l) in self.lights.iter().enumerate() {
             validate_light(l).map_err(|reason| SceneError::InvalidLight { index: i, reason })?;

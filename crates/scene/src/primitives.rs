@@ -81,6 +81,7 @@ impl Builder {
     /// direction.
     fn flat_quad(&mut self, corners: [Vec3; 4], normal: Vec3) {
         let i: Vec<u32> = corners.iter().map(|&p| self.vertex(p, normal)).collect();
+
         self.tri_facing(i[0], i[1], i[2], normal);
         self.tri_facing(i[0], i[2], i[3], normal);
     }
@@ -123,6 +124,9 @@ pub fn heightfield(
         for j in 0..n {
             let z = -0.5 * size_z + size_z * j as f32 / s as f32;
             b.vertex(Vec3::new(x, height(x, z), z), Vec3::Y);
+            b.mesh
+                .uvs
+                .push(Vec2::new(i as f32 / s as f32, j as f32 / s as f32));
         }
     }
     b.mesh.indices.reserve((s * s * 6) as usize);
@@ -193,7 +197,46 @@ pub fn cuboid(size: Vec3) -> Mesh {
             );
         }
     }
-    b.finish()
+    let mut mesh = b.finish();
+    // Four vertices per face, in `flat_quad`'s corner order: each face spans the texture.
+    let corner = [
+        Vec2::new(0.0, 1.0),
+        Vec2::new(1.0, 1.0),
+        Vec2::new(1.0, 0.0),
+        Vec2::new(0.0, 0.0),
+    ];
+    mesh.uvs = (0..mesh.positions.len()).map(|k| corner[k % 4]).collect();
+    mesh
+}
+
+/// A flat card: a `width` × `height` rectangle standing in the XY plane on the X axis
+/// (x from −width/2 to width/2, y from 0 to height), facing +Z, one quad of two triangles.
+/// Texture coordinates span `uv_scale` copies of the texture: (0, 0) at the top-left corner
+/// (glTF's convention: v runs down the image), (uv_scale.x, uv_scale.y) at the bottom-right.
+/// Foliage, banners and lattices of the built-in scenes are cards with alpha-masked textures.
+pub fn card(width: f32, height: f32, uv_scale: Vec2) -> Mesh {
+    let h = 0.5 * width;
+    let mut mesh = Mesh {
+        name: "card".into(),
+        positions: vec![
+            Vec3::new(-h, height, 0.0),
+            Vec3::new(h, height, 0.0),
+            Vec3::new(h, 0.0, 0.0),
+            Vec3::new(-h, 0.0, 0.0),
+        ],
+        normals: vec![Vec3::Z; 4],
+        uvs: vec![
+            Vec2::ZERO,
+            Vec2::new(uv_scale.x, 0.0),
+            uv_scale,
+            Vec2::new(0.0, uv_scale.y),
+        ],
+        indices: vec![0, 2, 1, 0, 3, 2],
+    };
+    if width <= 0.0 || height <= 0.0 {
+        mesh.indices.clear();
+    }
+    mesh
 }
 
 /// A UV sphere centred at the origin: `segments` around the Y axis (≥ 3), `rings` from pole to
@@ -644,8 +687,16 @@ pub fn merge(meshes: &[(Mesh, Mat4)]) -> Mesh {
         name: "merged".into(),
         ..Mesh::default()
     };
+    let any_uvs = meshes.iter().any(|(m, _)| !m.uvs.is_empty());
     for (mesh, transform) in meshes {
         let base = out.positions.len() as u32;
+        if any_uvs {
+            if mesh.uvs.len() == mesh.positions.len() {
+                out.uvs.extend_from_slice(&mesh.uvs);
+            } else {
+                out.uvs.resize(out.uvs.len() + mesh.positions.len(), Vec2::ZERO);
+            }
+        }
         let linear = Mat3::from_mat4(*transform);
         let normal_matrix = linear.inverse().transpose();
         let normal_matrix = if normal_matrix.is_finite() {
@@ -696,6 +747,10 @@ pub fn subdivide(mesh: &Mesh, levels: u32) -> Mesh {
                     let n = (m.normals[a as usize] + m.normals[b as usize]).normalize_or_zero();
                     m.positions.push(p);
                     m.normals.push(n);
+                    if !m.uvs.is_empty() {
+                        let uv = (m.uvs[a as usize] + m.uvs[b as usize]) * 0.5;
+                        m.uvs.push(uv);
+                    }
                     (m.positions.len() - 1) as u32
                 })
             };

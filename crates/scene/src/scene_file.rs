@@ -314,6 +314,7 @@ fn parse(
             diffuse: m.diffuse.unwrap_or(d.diffuse),
             specular: m.specular.unwrap_or(d.specular),
             shininess: m.shininess.unwrap_or(d.shininess),
+            ..d
         });
     }
 
@@ -408,6 +409,7 @@ fn parse(
     }
 
     let scene = Scene {
+        textures: Vec::new(),
         name: doc.name.unwrap_or_else(|| default_name.to_string()),
         meshes,
         materials,
@@ -689,6 +691,14 @@ fn load_merged(cx: &Ctx<'_>, file: &str, name: &str) -> Result<Mesh, SceneError>
                 path: path.clone(),
                 reason: "too many vertices for 32-bit indices once its meshes are merged".into(),
             })?;
+        if !p.uvs.is_empty() || !out.uvs.is_empty() {
+            out.uvs.resize(out.positions.len(), glam::Vec2::ZERO);
+            if p.uvs.is_empty() {
+                out.uvs.resize(out.positions.len() + p.positions.len(), glam::Vec2::ZERO);
+            } else {
+                out.uvs.extend_from_slice(&p.uvs);
+            }
+        }
         out.positions.extend_from_slice(&p.positions);
         out.normals.extend_from_slice(&p.normals);
         out.indices.extend(p.indices.iter().map(|i| i + offset));

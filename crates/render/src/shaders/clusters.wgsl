@@ -35,8 +35,9 @@ fn cs_mark(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (gid.x >= w || gid.y >= h) {
         return;
     }
-    let pos = bitcast<vec4<f32>>(textureLoad(gbuf_position, vec2<i32>(gid.xy), 0));
-    if (pos.w < 0.5) {
+    let gpos = textureLoad(gbuf_position, vec2<i32>(gid.xy), 0);
+    let pos = bitcast<vec4<f32>>(gpos);
+    if (!has_geometry(gpos)) {
         return;
     }
     let view_depth = -(frame.view * vec4<f32>(pos.xyz, 1.0)).z;

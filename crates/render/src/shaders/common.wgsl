@@ -37,8 +37,58 @@ struct InstanceData {
 struct MaterialData {
     // rgb ambient, a: shininess.
     ambient: vec4<f32>,
+    // rgb diffuse, a: alpha of the base colour.
     diffuse: vec4<f32>,
     specular: vec4<f32>,
+    // 1 + base-colour layer (0: none), 1 + normal-map layer (0: none), flags (wrap modes of
+    // the base colour in bits 0-3, of the normal map in bits 4-7, MATERIAL_ALPHA_TEST), alpha
+    // cutoff (f32 bits).
+    texture: vec4<u32>,
+}
+
+const MATERIAL_ALPHA_TEST: u32 = 256u;
+
+// Wrap codes of textures (manyshadows_scene::Wrap::code).
+const WRAP_REPEAT: u32 = 0u;
+const WRAP_MIRROR: u32 = 1u;
+const WRAP_CLAMP: u32 = 2u;
+
+// A texture coordinate mapped into 0..1 by a wrap mode (manyshadows_scene::Wrap::apply).
+fn wrap_coord(t: f32, mode: u32) -> f32 {
+    if (mode == WRAP_MIRROR) {
+        let m = t - 2.0 * floor(t * 0.5);
+        return select(m, 2.0 - m, m > 1.0);
+    }
+    if (mode == WRAP_CLAMP) {
+        return clamp(t, 0.0, 1.0);
+    }
+    return t - floor(t);
+}
+
+// The G-buffer's position target: xyz = world position (f32 bits), w = the surface's albedo
+// (linear colour encoded as sRGB bytes by pack4x8unorm, alpha byte 255). The clear value 0
+// marks pixels without geometry.
+fn has_geometry(texel: vec4<u32>) -> bool {
+    return texel.w != 0u;
+}
+
+fn linear_from_srgb(c: vec3<f32>) -> vec3<f32> {
+    return select(pow((c + vec3<f32>(0.055)) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
+}
+
+fn srgb_from_linear(c: vec3<f32>) -> vec3<f32> {
+    let x = clamp(c, vec3<f32>(0.0), vec3<f32>(1.0));
+    return select(1.055 * pow(x, vec3<f32>(1.0 / 2.4)) - vec3<f32>(0.055), x * 12.92, x <= vec3<f32>(0.0031308));
+}
+
+// The albedo a G-buffer position texel holds (white for untextured surfaces).
+fn gbuffer_albedo(texel: vec4<u32>) -> vec3<f32> {
+    // Exactly white for untextured surfaces, so their shading is bit for bit what it was
+    // before textures existed.
+    if (texel.w == 0xffffffffu) {
+        return vec3<f32>(1.0);
+    }
+    return linear_from_srgb(unpack4x8unorm(texel.w).rgb);
 }
 
 struct LightData {

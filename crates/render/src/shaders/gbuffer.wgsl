@@ -2,18 +2,26 @@
 
 @group(0) @binding(0) var<uniform> frame: FrameUniforms;
 @group(0) @binding(1) var<storage, read> instances: array<InstanceData>;
+@group(0) @binding(2) var<storage, read> materials: array<MaterialData>;
+// The scene's images (textures.rs): base colours (sRGB, so samples are linear) and normal maps,
+// one layer each, every layer the same side; wrap modes are applied here, not by the sampler.
+@group(0) @binding(3) var colour_tex: texture_2d_array<f32>;
+@group(0) @binding(4) var normal_tex: texture_2d_array<f32>;
+@group(0) @binding(5) var tex_sampler: sampler;
 
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) @interpolate(flat) material: u32,
+    @location(3) uv: vec2<f32>,
 }
 
 @vertex
 fn vs_main(
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
     @builtin(instance_index) instance: u32,
 ) -> VsOut {
     let inst = instances[instance];
@@ -23,12 +31,72 @@ fn vs_main(
     out.world = world.xyz;
     out.normal = (inst.normal * vec4<f32>(normal, 0.0)).xyz;
     out.material = inst.material.x;
+    out.uv = uv;
     return out;
+}
+
+// Screen-space derivatives of the fragment's texture coordinate and position, taken where
+// control flow is uniform; sampling then uses them explicitly (wrapping in the shader would
+// otherwise break the mip selection at every seam).
+struct Derivs {
+    uv_dx: vec2<f32>,
+    uv_dy: vec2<f32>,
+    p_dx: vec3<f32>,
+    p_dy: vec3<f32>,
+}
+
+fn derivs(in: VsOut) -> Derivs {
+    var d: Derivs;
+    d.uv_dx = dpdx(in.uv);
+    d.uv_dy = dpdy(in.uv);
+    d.p_dx = dpdx(in.world);
+    d.p_dy = dpdy(in.world);
+    return d;
+}
+
+// Layer `layer1 - 1` of `tex` at `uv` wrapped by the two modes in `wrap` (bits 0-1: u, 2-3: v).
+fn sample_layer(tex: texture_2d_array<f32>, layer1: u32, wrap: u32, uv: vec2<f32>, d: Derivs) -> vec4<f32> {
+    let t = vec2<f32>(wrap_coord(uv.x, wrap & 3u), wrap_coord(uv.y, (wrap >> 2u) & 3u));
+    return textureSampleGrad(tex, tex_sampler, t, layer1 - 1u, d.uv_dx, d.uv_dy);
+}
+
+// Base colour (linear rgb) and alpha of the material at the fragment.
+fn base_colour(mat: MaterialData, uv: vec2<f32>, d: Derivs) -> vec4<f32> {
+    if (mat.texture.x == 0u) {
+        return vec4<f32>(1.0, 1.0, 1.0, mat.diffuse.a);
+    }
+    let c = sample_layer(colour_tex, mat.texture.x, mat.texture.z & 15u, uv, d);
+    return vec4<f32>(c.rgb, c.a * mat.diffuse.a);
+}
+
+// The shading normal `n` (unit, facing the camera) bent by the material's tangent-space normal
+// map, with the tangent frame taken from the derivatives of position and texture coordinate
+// (no tangent attribute needed; Schüler, "Normal mapping without precomputed tangents", 2006).
+// glTF's normal maps have +Y up while its v runs down the image, hence the flipped green.
+fn bent_normal(mat: MaterialData, n: vec3<f32>, uv: vec2<f32>, d: Derivs) -> vec3<f32> {
+    if (mat.texture.y == 0u) {
+        return n;
+    }
+    let s = sample_layer(normal_tex, mat.texture.y, (mat.texture.z >> 4u) & 15u, uv, d).xyz;
+    let m = vec3<f32>(s.x * 2.0 - 1.0, 1.0 - s.y * 2.0, s.z * 2.0 - 1.0);
+    let dp2perp = cross(d.p_dy, n);
+    let dp1perp = cross(n, d.p_dx);
+    let t = dp2perp * d.uv_dx.x + dp1perp * d.uv_dy.x;
+    let b = dp2perp * d.uv_dx.y + dp1perp * d.uv_dy.y;
+    let len2 = max(dot(t, t), dot(b, b));
+    if (!(len2 > 0.0)) {
+        return n;
+    }
+    let scale = inverseSqrt(len2);
+    let bent = normalize(t * scale * m.x + b * scale * m.y + n * m.z);
+    // Keep the bent normal on the camera's side of the surface.
+    return select(n, bent, dot(bent, n) > 0.0);
 }
 
 // Both targets hold f32 bit patterns in u32 channels (exact, and renderable on every backend).
 struct GBufferOut {
-    // xyz world position, w = 1.0 where there is geometry (the clear value 0 reads as 0.0).
+    // xyz world position, w = albedo (see has_geometry in common.wgsl; the clear value 0 means
+    // no geometry).
     @location(0) position: vec4<u32>,
     // xyz unit normal facing the camera, w = material index (as u32, not bits).
     @location(1) normal_material: vec4<u32>,
@@ -36,13 +104,32 @@ struct GBufferOut {
 
 @fragment
 fn fs_main(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOut {
+    let d = derivs(in);
+    let mat = materials[in.material];
+    return surface(in, front, mat, base_colour(mat, in.uv, d), d);
+}
+
+// Alpha-tested materials: texels whose alpha is below the cutoff are holes. A separate entry
+// point (and pipeline) so that opaque surfaces keep early depth testing.
+@fragment
+fn fs_masked(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOut {
+    let d = derivs(in);
+    let mat = materials[in.material];
+    let base = base_colour(mat, in.uv, d);
+    if ((mat.texture.z & MATERIAL_ALPHA_TEST) != 0u && base.a < bitcast<f32>(mat.texture.w)) {
+        discard;
+    }
+    return surface(in, front, mat, base, d);
+}
+
+fn surface(in: VsOut, front: bool, mat: MaterialData, base: vec4<f32>, d: Derivs) -> GBufferOut {
     // Surfaces are two-sided: the shading normal is turned to the side of the triangle the
     // camera sees. The side comes from the triangle's own plane (position derivatives), not
     // from its winding: scanned meshes have triangles wound against their neighbours whose
     // vertex normals still point outwards, and flipping those by winding shaded them as seen
     // from inside (black speckles). Winding decides only where the plane is degenerate.
     let to_eye = frame.camera_pos.xyz - in.world;
-    var ng = cross(dpdx(in.world), dpdy(in.world));
+    var ng = cross(d.p_dx, d.p_dy);
     var facing = select(-1.0, 1.0, front);
     let ng_len = length(ng);
     if (ng_len > 0.0) {
@@ -63,8 +150,14 @@ fn fs_main(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOut {
         // Normals that cancel (opposite faces on one vertex): the plane's normal.
         n = select(vec3<f32>(0.0, 1.0, 0.0), ng, ng_len > 0.0);
     }
+    n = bent_normal(mat, n, in.uv, d);
     var out: GBufferOut;
-    out.position = bitcast<vec4<u32>>(vec4<f32>(in.world, 1.0));
+    // w: the albedo (see has_geometry in common.wgsl); all ones, exactly, when untextured.
+    var albedo = 0xffffffffu;
+    if (mat.texture.x != 0u) {
+        albedo = pack4x8unorm(vec4<f32>(srgb_from_linear(base.rgb), 1.0)) | 0xff000000u;
+    }
+    out.position = vec4<u32>(bitcast<vec3<u32>>(in.world), albedo);
     out.normal_material = vec4<u32>(bitcast<vec3<u32>>(n), in.material);
     return out;
 }

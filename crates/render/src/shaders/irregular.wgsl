@@ -102,10 +102,11 @@ fn cs_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroup
         return;
     }
     let words = frame.counts.w;
-    let pos = bitcast<vec4<f32>>(textureLoad(gbuf_position, vec2<i32>(vec2<u32>(pixel % w, pixel / w)), 0));
+    let gpos = textureLoad(gbuf_position, vec2<i32>(vec2<u32>(pixel % w, pixel / w)), 0);
+    let pos = bitcast<vec4<f32>>(gpos);
     for (var wi = 0u; wi < words; wi++) {
         var bits = 0u;
-        if (pos.w >= 0.5) {
+        if (has_geometry(gpos)) {
             for (var b = 0u; b < 32u; b++) {
                 let li = wi * 32u + b;
                 if (li >= frame.counts.x) {
@@ -160,8 +161,9 @@ fn cs_insert(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         return;
     }
     let px = vec2<i32>(vec2<u32>(pixel % w, pixel / w));
-    let pos = bitcast<vec4<f32>>(textureLoad(gbuf_position, px, 0));
-    if (pos.w < 0.5) {
+    let gpos = textureLoad(gbuf_position, px, 0);
+    let pos = bitcast<vec4<f32>>(gpos);
+    if (!has_geometry(gpos)) {
         return;
     }
     let p = pos.xyz;
@@ -224,8 +226,9 @@ fn cs_insert(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
 
 // Does the open segment o + t·dir, 0 < t < tmax, cross triangle (a, b, c) from either side?
 // The watertight test of Woop, Benthin and Wald (JCGT 2013), as the CPU reference (without
-// its double-precision re-evaluation of exact zeros, which WGSL cannot express).
-fn segment_hits(o: vec3<f32>, dir: vec3<f32>, tmax: f32, p0: vec3<f32>, p1: vec3<f32>, p2: vec3<f32>) -> bool {
+// its double-precision re-evaluation of exact zeros, which WGSL cannot express). Returns the
+// hit's barycentric weights of a, b, c in xyz and w = 1 on a hit, w = 0 otherwise.
+fn segment_hit(o: vec3<f32>, dir: vec3<f32>, tmax: f32, p0: vec3<f32>, p1: vec3<f32>, p2: vec3<f32>) -> vec4<f32> {
     let ad = abs(dir);
     var kz = 2u;
     if (ad.x >= ad.y && ad.x >= ad.z) {
@@ -256,18 +259,20 @@ fn segment_hits(o: vec3<f32>, dir: vec3<f32>, tmax: f32, p0: vec3<f32>, p1: vec3
     let v = ax * cy - ay * cx;
     let w = bx * ay - by * ax;
     if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) {
-        return false;
+        return vec4<f32>(0.0);
     }
     let det = u + v + w;
     if (det == 0.0) {
-        return false;
+        return vec4<f32>(0.0);
     }
     let t = (u * sz * a[kz] + v * sz * b[kz] + w * sz * c[kz]) / det;
-    return t > 0.0 && t < tmax;
+    return vec4<f32>(vec3<f32>(u, v, w) / det, select(0.0, 1.0, t > 0.0 && t < tmax));
 }
 
 // A caster triangle in one view: world corners and its conservative grid footprint.
 struct Footprint {
+    // The caster triangle (alpha-tested ones test their mask at each hit).
+    tri: u32,
     p0: vec3<f32>,
     p1: vec3<f32>,
     p2: vec3<f32>,
@@ -296,6 +301,7 @@ fn edge(a: vec2<f32>, b: vec2<f32>, s: f32) -> vec3<f32> {
 
 fn footprint(tri: u32, v: IView) -> Footprint {
     var f: Footprint;
+    f.tri = tri;
     f.p0 = world[corners[3u * tri]].xyz;
     f.p1 = world[corners[3u * tri + 1u]].xyz;
     f.p2 = world[corners[3u * tri + 2u]].xyz;
@@ -386,6 +392,7 @@ fn walk(f: Footprint, v: IView, t: vec2<i32>) {
     let word = li / 32u;
     let bit = 1u << (li % 32u);
     let directional = v.light.w < 0.5;
+    let masked_from = corners[arrayLength(&corners) - 4u];
     var n = atomicLoad(&heads[bucket(v, vec2<u32>(t))]);
     loop {
         if (n == 0u) {
@@ -409,7 +416,9 @@ fn walk(f: Footprint, v: IView, t: vec2<i32>) {
             }
             dir = to / tmax;
         }
-        if (segment_hits(o, dir, tmax, f.p0, f.p1, f.p2)) {
+        let hit = segment_hit(o, dir, tmax, f.p0, f.p1, f.p2);
+        // An alpha-tested triangle blocks only where its mask is solid at the hit.
+        if (hit.w > 0.0 && (f.tri < masked_from || triangle_covered(mask_tail(), f.tri, hit.xyz))) {
             atomicAnd(&mask[m], ~bit);
         }
     }

@@ -121,8 +121,9 @@ fn add_light(color: vec3<f32>, i: u32, s: Surface) -> vec3<f32> {
 }
 
 fn shade(px: vec2<i32>, from_mask: bool) -> vec4<f32> {
-    let pos = bitcast<vec4<f32>>(textureLoad(gbuf_position, px, 0));
-    if (pos.w < 0.5) {
+    let gpos = textureLoad(gbuf_position, px, 0);
+    let pos = bitcast<vec4<f32>>(gpos);
+    if (!has_geometry(gpos)) {
         return vec4<f32>(frame.sky.rgb, 1.0);
     }
     let nm = textureLoad(gbuf_normal, px, 0);
@@ -130,6 +131,11 @@ fn shade(px: vec2<i32>, from_mask: bool) -> vec4<f32> {
     s.p = pos.xyz;
     s.n = normalize(bitcast<vec3<f32>>(nm.xyz));
     s.mat = materials[nm.w];
+    // The texture's colour multiplies the material's ambient and diffuse reflectance (exactly
+    // 1 for untextured surfaces, so their numbers do not change).
+    let albedo = gbuffer_albedo(gpos);
+    s.mat.ambient = vec4<f32>(s.mat.ambient.rgb * albedo, s.mat.ambient.w);
+    s.mat.diffuse = vec4<f32>(s.mat.diffuse.rgb * albedo, s.mat.diffuse.w);
     s.v = normalize(frame.camera_pos.xyz - s.p);
     s.view_depth = -(frame.view * vec4<f32>(s.p, 1.0)).z;
     s.px = px;

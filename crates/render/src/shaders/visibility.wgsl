@@ -57,14 +57,15 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let pixel = gid.y * w + gid.x;
-    let pos = bitcast<vec4<f32>>(textureLoad(gbuf_position, vec2<i32>(gid.xy), 0));
-    let has_geometry = pos.w >= 0.5;
+    let gpos = textureLoad(gbuf_position, vec2<i32>(gid.xy), 0);
+    let pos = bitcast<vec4<f32>>(gpos);
+    let covered = has_geometry(gpos);
     let p = pos.xyz;
     let n = normalize(bitcast<vec3<f32>>(textureLoad(gbuf_normal, vec2<i32>(gid.xy), 0).xyz));
     let view_depth = -(frame.view * vec4<f32>(p, 1.0)).z;
     let count = frame.counts.x;
     var slot = CLUSTER_OVERFLOW;
-    if (has_geometry && clusters.words.w != 0u) {
+    if (covered && clusters.words.w != 0u) {
         slot = cluster_slots[cluster_index(clusters, gid.xy, view_depth)];
     }
     let clustered = slot >= CLUSTER_FIRST_SLOT && slot != CLUSTER_OVERFLOW;
@@ -72,7 +73,7 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     for (var wi = 0u; wi < params.word_count; wi = wi + 1u) {
         let word = params.first_word + wi;
         var bits = 0u;
-        if (has_geometry) {
+        if (covered) {
             // The lights of this word to test: the cluster's, or every light.
             var candidates = 0xffffffffu;
             if (word * 32u + 32u > count) {

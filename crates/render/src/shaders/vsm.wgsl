@@ -103,8 +103,9 @@ fn cs_mark(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (gid.x >= u32(frame.viewport.x) || gid.y >= u32(frame.viewport.y)) {
         return;
     }
-    let pos = bitcast<vec4<f32>>(textureLoad(gbuf_position, vec2<i32>(gid.xy), 0));
-    if (pos.w < 0.5) {
+    let gpos = textureLoad(gbuf_position, vec2<i32>(gid.xy), 0);
+    let pos = bitcast<vec4<f32>>(gpos);
+    if (!has_geometry(gpos)) {
         return;
     }
     let p = pos.xyz;

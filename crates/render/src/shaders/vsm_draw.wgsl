@@ -62,13 +62,26 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
 // ---- draw and clear (vertex) ----
 
 @group(0) @binding(11) var<storage, read> world: array<vec4<f32>>;
+// The corner buffer, read for its mask tail by the alpha-tested rounds (alpha_mask.wgsl).
+@group(0) @binding(13) var<storage, read> corners: array<u32>;
 
 @vertex
 fn vs_draw(@builtin(vertex_index) v: u32) -> TileOut {
     let slot = v / round.counts.x;
-    let vertex = v - slot * round.counts.x;
+    return draw(slot, v - slot * round.counts.x);
+}
+
+fn draw(slot: u32, vertex: u32) -> TileOut {
     let view = page_views[round.round.x + slot];
     return into_tile_of(view.view_proj * world[vertex], view.tile, 1.0 / f32(vsm.pool.x));
+}
+
+// Rounds of alpha-tested clusters, drawn with `fs_alpha`.
+@vertex
+fn vs_draw_masked(@builtin(vertex_index) v: u32) -> MaskedTileOut {
+    let slot = v / round.counts.x;
+    let vertex = v - slot * round.counts.x;
+    return masked_tile_out(draw(slot, vertex), mask_tail(), vertex);
 }
 
 // Covers drawn page `i`'s tile at depth 1 (far), before its casters are drawn.

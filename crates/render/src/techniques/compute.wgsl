@@ -28,6 +28,9 @@ struct ComputeParams {
     sizes: vec4<u32>,
 }
 
+// Alpha-tested triangles (casters.rs puts them last) test each covered texel's centre against
+// their coverage mask (alpha_mask.wgsl) before writing depth; opaque ones skip the test.
+
 // A chunk of a large triangle: its snapped corners (fixed point, positive orientation), its
 // depth plane and the texels of the chunk.
 struct Chunk {
@@ -38,7 +41,7 @@ struct Chunk {
     // x0, y0, z0: the depth plane's origin (the tile centre) and depth there, unused
     plane: vec4<f32>,
     // first texel x | y << 16, last texel x | y << 16 (atlas texels, inclusive), round entry,
-    // unused
+    // 1 + the triangle if it is alpha-tested (0: opaque)
     rect: vec4<u32>,
 }
 
@@ -72,6 +75,27 @@ struct RoundEntries {
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>, 4>;
 
 @group(1) @binding(0) var<storage, read_write> args: array<u32, 4>;
+
+const NO_MASK: u32 = 0xffffffffu;
+// The alpha-tested triangle this invocation rasterizes (NO_MASK: opaque) and its clip-space
+// corners before near-plane clipping.
+var<private> masked_tri: u32 = NO_MASK;
+var<private> mask_clip: array<vec4<f32>, 3>;
+
+// Whether texel (x, y) of `tile` is solid: always for opaque triangles; for an alpha-tested
+// one, the mask at the point of the triangle seen through the texel's centre.
+fn texel_solid(tile: vec4<f32>, x: u32, y: u32) -> bool {
+    if (masked_tri == NO_MASK) {
+        return true;
+    }
+    let half = 0.5 * tile.z;
+    let ndc = vec2<f32>(
+        (f32(x) + 0.5 - (tile.x + half)) / half,
+        (tile.y + half - (f32(y) + 0.5)) / half,
+    );
+    let b = clip_barycentrics(mask_clip[0], mask_clip[1], mask_clip[2], ndc);
+    return triangle_covered(mask_tail(), masked_tri, b);
+}
 
 // The rows of the atlas a round entry covers, as texel bounds (inclusive).
 struct Band {
@@ -145,7 +169,7 @@ fn raster_chunk_serial(ch: Chunk, entry: vec4<u32>, tile: vec4<f32>) {
     let hi = unpack_texel(ch.rect.y);
     for (var y = lo.y; y <= hi.y; y++) {
         for (var x = lo.x; x <= hi.x; x++) {
-            if (chunk_covers(ch, x, y)) {
+            if (chunk_covers(ch, x, y) && texel_solid(tile, x, y)) {
                 write_depth(texel_index(entry, tile, x, y), chunk_depth(ch, x, y));
             }
         }
@@ -221,8 +245,8 @@ fn raster_triangle(c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, plane: vec3<f32>
             let y = y0 + j;
             let zy = z_c + dzdy * (f32(y) + 0.5 - centre.y);
             for (var i = 0u; i < span.x; i++) {
-                if (all(ev >= vec3<i32>(0))) {
-                    let x = x0 + i;
+                let x = x0 + i;
+                if (all(ev >= vec3<i32>(0)) && texel_solid(tile, x, y)) {
                     write_depth(texel_index(entry, tile, x, y), zy + dzdx * (f32(x) + 0.5 - centre.x));
                 }
                 ev += step_x;
@@ -260,7 +284,7 @@ fn raster_triangle(c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, plane: vec3<f32>
         let cx = k - cy * nx;
         let x = fx + cx * CHUNK;
         let y = fy + cy * CHUNK;
-        ch.rect = vec4<u32>(x | (y << 16u), min(x + CHUNK - 1u, lx) | (min(y + CHUNK - 1u, ly) << 16u), e, 0u);
+        ch.rect = vec4<u32>(x | (y << 16u), min(x + CHUNK - 1u, lx) | (min(y + CHUNK - 1u, ly) << 16u), e, masked_tri + 1u);
         if (base + k < capacity && base + k >= base) {
             chunks[base + k] = ch;
         } else {
@@ -313,6 +337,10 @@ fn cs_setup(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     let c2 = view.view_proj * p2;
     if ((bits & CULL_FRUSTUM) != 0u && outside_frustum(c0, c1, c2)) {
         return;
+    }
+    if (tri >= corners[arrayLength(&corners) - 4u]) {
+        masked_tri = tri;
+        mask_clip = array<vec4<f32>, 3>(c0, c1, c2);
     }
     // The triangle's plane in clip space, A·x + B·y + C·z + D·w = 0 (the 4D cross product of
     // its corners), gives z/w as an affine function of NDC x, y that needs neither the
@@ -385,12 +413,22 @@ fn cs_large(
     }
     let ch = chunks[k];
     let entry = entries.list[ch.rect.z];
-    let tile = views[entry.x].tile;
+    let view = views[entry.x];
+    let tile = view.tile;
+    if (ch.rect.w != 0u) {
+        let tri = ch.rect.w - 1u;
+        masked_tri = tri;
+        mask_clip = array<vec4<f32>, 3>(
+            view.view_proj * world[corners[3u * tri]],
+            view.view_proj * world[corners[3u * tri + 1u]],
+            view.view_proj * world[corners[3u * tri + 2u]],
+        );
+    }
     let lo = unpack_texel(ch.rect.x);
     let hi = unpack_texel(ch.rect.y);
     for (var y = lo.y + lid.y; y <= hi.y; y += 8u) {
         for (var x = lo.x + lid.x; x <= hi.x; x += 8u) {
-            if (chunk_covers(ch, x, y)) {
+            if (chunk_covers(ch, x, y) && texel_solid(tile, x, y)) {
                 write_depth(texel_index(entry, tile, x, y), chunk_depth(ch, x, y));
             }
         }

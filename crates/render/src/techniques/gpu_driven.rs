@@ -51,6 +51,9 @@ pub struct Round {
     pub first_cluster: u32,
     /// Clusters.
     pub clusters: u32,
+    /// The clusters are alpha-tested ones (a round never mixes them with opaque clusters, so
+    /// it is drawn with one pipeline).
+    pub masked: bool,
 }
 
 impl Round {
@@ -61,8 +64,15 @@ impl Round {
 }
 
 /// Splits `views` listed views × `clusters` clusters into rounds of at most `max_commands`
-/// commands whose slots keep `slot · vertices` below 2³¹ (and within dispatch limits).
-pub fn plan_rounds(views: u32, clusters: u32, vertices: u32, max_commands: u64) -> Vec<Round> {
+/// commands whose slots keep `slot · vertices` below 2³¹ (and within dispatch limits). No
+/// round straddles `first_masked` (the first alpha-tested cluster).
+pub fn plan_rounds(
+    views: u32,
+    clusters: u32,
+    first_masked: u32,
+    vertices: u32,
+    max_commands: u64,
+) -> Vec<Round> {
     if views == 0 || clusters == 0 {
         return Vec::new();
     }
@@ -73,20 +83,24 @@ pub fn plan_rounds(views: u32, clusters: u32, vertices: u32, max_commands: u64) 
     let batch = (max_commands / chunk as u64)
         .min(by_vertex)
         .clamp(1, MAX_GROUPS) as u32;
+    let split = first_masked.min(clusters);
     let mut rounds = Vec::new();
     let mut first_view = 0;
     while first_view < views {
         let n = batch.min(views - first_view);
-        let mut first_cluster = 0;
-        while first_cluster < clusters {
-            let c = chunk.min(clusters - first_cluster);
-            rounds.push(Round {
-                first_view,
-                views: n,
-                first_cluster,
-                clusters: c,
-            });
-            first_cluster += c;
+        for (lo, hi) in [(0, split), (split, clusters)] {
+            let mut first_cluster = lo;
+            while first_cluster < hi {
+                let c = chunk.min(hi - first_cluster);
+                rounds.push(Round {
+                    first_view,
+                    views: n,
+                    first_cluster,
+                    clusters: c,
+                    masked: first_cluster >= split,
+                });
+                first_cluster += c;
+            }
         }
         first_view += n;
     }
@@ -97,6 +111,8 @@ pub fn plan_rounds(views: u32, clusters: u32, vertices: u32, max_commands: u64) 
 pub struct GpuDriven {
     cull: wgpu::ComputePipeline,
     draw: wgpu::RenderPipeline,
+    /// Rounds of alpha-tested clusters (`fs_alpha`).
+    draw_masked: wgpu::RenderPipeline,
     cull_layout: wgpu::BindGroupLayout,
     draw_layout: wgpu::BindGroupLayout,
     clear: TileClear,
@@ -149,6 +165,7 @@ impl GpuDriven {
                 crate::storage_entry(1, vs),
                 crate::storage_entry(2, vs),
                 crate::storage_entry(9, vs),
+                crate::storage_entry(10, wgpu::ShaderStages::VERTEX_FRAGMENT),
             ],
         );
         let cull_pipeline_layout = crate::pipelines::pipeline_layout(
@@ -169,6 +186,14 @@ impl GpuDriven {
             "cs_cull",
         );
         let draw = depth_pipeline(device, &draw_pipeline_layout, &module, "vs_draw", &[]);
+        let draw_masked = crate::techniques::masked_depth_pipeline(
+            device,
+            &draw_pipeline_layout,
+            &module,
+            "vs_draw_masked",
+            &[],
+            None,
+        );
         let counter = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("gpu_driven.count"),
             size: 4,
@@ -185,6 +210,7 @@ impl GpuDriven {
         Ok(Self {
             cull,
             draw,
+            draw_masked,
             cull_layout,
             draw_layout,
             clear: TileClear::new(ctx),
@@ -236,6 +262,7 @@ impl ShadowTechnique for GpuDriven {
         let rounds = plan_rounds(
             views,
             casters.clusters.len() as u32,
+            casters.first_masked_cluster,
             casters.vertices,
             self.max_round_commands,
         );
@@ -302,6 +329,7 @@ impl ShadowTechnique for GpuDriven {
             &input.atlas.views_buffer,
             &input.atlas.draw_list,
             &casters.world,
+            &casters.corners,
         ];
         let draw_layout = &self.draw_layout;
         let draw_group = self.draw_group.get(&draw_buffers, || {
@@ -316,6 +344,7 @@ impl ShadowTechnique for GpuDriven {
                     whole_entry(1, &input.atlas.views_buffer),
                     whole_entry(2, &input.atlas.draw_list),
                     whole_entry(9, &casters.world),
+                    whole_entry(10, &casters.corners),
                 ],
             })
         });
@@ -387,7 +416,11 @@ impl ShadowTechnique for GpuDriven {
             if input.options.discard_raster {
                 pass.set_scissor_rect(0, 0, 0, 0);
             }
-            pass.set_pipeline(&self.draw);
+            pass.set_pipeline(if r.masked {
+                &self.draw_masked
+            } else {
+                &self.draw
+            });
             pass.set_bind_group(0, draw_group, &offset);
             pass.set_index_buffer(corners, wgpu::IndexFormat::Uint32);
             let max = r.commands() as u32;
@@ -434,19 +467,25 @@ mod tests {
             (7, 5, 1 << 29, u64::MAX),
             (1, 1, 1, 1),
         ] {
-            let rounds = plan_rounds(views, clusters, vertices, max);
-            assert!(
-                covered(&rounds, views, clusters),
-                "{views} {clusters} {vertices} {max}"
-            );
-            for r in &rounds {
-                assert!(r.commands() <= max);
-                assert!((r.views as u64) * (vertices as u64) <= 1 << 31);
+            for split in [0, clusters / 3, clusters] {
+                let rounds = plan_rounds(views, clusters, split, vertices, max);
+                assert!(
+                    covered(&rounds, views, clusters),
+                    "{views} {clusters} {vertices} {max}"
+                );
+                for r in &rounds {
+                    assert!(r.commands() <= max);
+                    assert!((r.views as u64) * (vertices as u64) <= 1 << 31);
+                    // Alpha-tested clusters never share a round with opaque ones.
+                    assert_eq!(r.masked, r.first_cluster >= split);
+                    assert!(r.masked || r.first_cluster + r.clusters <= split);
+                }
             }
         }
         // One round when everything fits; 2^29 vertices allow four slots per round.
-        assert_eq!(plan_rounds(24, 374, 30_000, u64::MAX).len(), 1);
-        assert_eq!(plan_rounds(7, 5, 1 << 29, u64::MAX).len(), 2);
-        assert!(plan_rounds(0, 5, 10, 10).is_empty());
+        assert_eq!(plan_rounds(24, 374, 374, 30_000, u64::MAX).len(), 1);
+        assert_eq!(plan_rounds(24, 374, 100, 30_000, u64::MAX).len(), 2);
+        assert_eq!(plan_rounds(7, 5, 5, 1 << 29, u64::MAX).len(), 2);
+        assert!(plan_rounds(0, 5, 5, 10, 10).is_empty());
     }
 }

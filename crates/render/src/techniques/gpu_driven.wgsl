@@ -69,11 +69,25 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
 // ---- draw (vertex) ----
 
 @group(0) @binding(9) var<storage, read> world: array<vec4<f32>>;
+// The corner buffer, read for its mask tail by the alpha-tested rounds (alpha_mask.wgsl).
+@group(0) @binding(10) var<storage, read> corners: array<u32>;
 
 @vertex
 fn vs_draw(@builtin(vertex_index) v: u32) -> TileOut {
     let slot = v / gparams.counts.x;
-    let vertex = v - slot * gparams.counts.x;
+    return draw(slot, v - slot * gparams.counts.x);
+}
+
+fn draw(slot: u32, vertex: u32) -> TileOut {
     let view = views[draw_list[gparams.round.x + slot]];
     return into_tile_of(view.view_proj * world[vertex], view.tile, gparams.atlas.y);
+}
+
+// Rounds of alpha-tested clusters (they never share a round with opaque ones), drawn with
+// `fs_alpha`.
+@vertex
+fn vs_draw_masked(@builtin(vertex_index) v: u32) -> MaskedTileOut {
+    let slot = v / gparams.counts.x;
+    let vertex = v - slot * gparams.counts.x;
+    return masked_tile_out(draw(slot, vertex), mask_tail(), vertex);
 }

@@ -14,7 +14,8 @@
 
 use crate::shadow::{Generation, ShadowStats, ShadowTechnique};
 use crate::techniques::{
-    atlas_attachment, depth_pipeline, require_clip_distances, CachedGroup, TileClear,
+    atlas_attachment, depth_pipeline, masked_depth_pipeline, require_clip_distances, CachedGroup,
+    TileClear,
 };
 use crate::{GpuContext, RenderError};
 
@@ -22,6 +23,9 @@ use crate::{GpuContext, RenderError};
 pub struct Layered {
     indexed: wgpu::RenderPipeline,
     pulled: wgpu::RenderPipeline,
+    /// The same for the alpha-tested range of the casters (`fs_alpha`).
+    indexed_masked: wgpu::RenderPipeline,
+    pulled_masked: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     clear: TileClear,
     /// `LayeredParams`, rewritten each generation.
@@ -44,16 +48,20 @@ impl Layered {
                 crate::storage_entry(1, vs),
                 crate::storage_entry(2, vs),
                 crate::storage_entry(3, vs),
-                crate::storage_entry(4, vs),
+                crate::storage_entry(4, wgpu::ShaderStages::VERTEX_FRAGMENT),
                 crate::storage_entry(5, vs),
             ],
         );
         let pipeline_layout =
             crate::pipelines::pipeline_layout(device, "layered.pipeline_layout", &[&layout]);
         let pipeline = |entry: &str| depth_pipeline(device, &pipeline_layout, &module, entry, &[]);
+        let masked =
+            |entry: &str| masked_depth_pipeline(device, &pipeline_layout, &module, entry, &[], None);
         Ok(Self {
             indexed: pipeline("vs_indexed"),
             pulled: pipeline("vs_pulled"),
+            indexed_masked: masked("vs_indexed_masked"),
+            pulled_masked: masked("vs_pulled_masked"),
             layout,
             clear: TileClear::new(ctx),
             params: device.create_buffer(&wgpu::BufferDescriptor {
@@ -120,21 +128,32 @@ impl ShadowTechnique for Layered {
             pass.set_scissor_rect(0, 0, 0, 0);
         }
         pass.set_bind_group(0, bind_group, &[]);
+        // Opaque casters, then the alpha-tested ones (casters.rs puts them last).
+        let opaque = 3 * casters.first_masked_triangle;
         let corners = 3 * casters.triangles;
-        if cull == crate::shadow::CullMode::None {
-            pass.set_pipeline(&self.indexed);
-            pass.set_index_buffer(casters.corners.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..corners, 0, 0..views);
-        } else {
-            pass.set_pipeline(&self.pulled);
-            pass.draw(0..corners, 0..views);
+        let ranges = [
+            (0..opaque, &self.indexed, &self.pulled),
+            (opaque..corners, &self.indexed_masked, &self.pulled_masked),
+        ];
+        for (range, indexed, pulled) in ranges {
+            if range.is_empty() {
+                continue;
+            }
+            if cull == crate::shadow::CullMode::None {
+                pass.set_pipeline(indexed);
+                pass.set_index_buffer(casters.corners.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(range, 0, 0..views);
+            } else {
+                pass.set_pipeline(pulled);
+                pass.draw(range, 0..views);
+            }
+            stats.draws += 1;
         }
         self.clear.reset_clip_distances(&mut pass);
         g.timer.end_render_stats(&mut pass, s);
         drop(pass);
         g.encoder.pop_debug_group();
         stats.passes += 1;
-        stats.draws += 1;
         stats.triangles += casters.triangles as u64 * views as u64;
         stats
     }

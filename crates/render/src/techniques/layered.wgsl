@@ -49,6 +49,10 @@ fn cull_clip(view: ShadowViewData, p: vec4<f32>) -> vec4<f32> {
 
 @vertex
 fn vs_indexed(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> TileOut {
+    return indexed(v, i);
+}
+
+fn indexed(v: u32, i: u32) -> TileOut {
     let view = views[draw_list[i]];
     return project_into_tile(view, world[v]);
 }
@@ -57,6 +61,21 @@ fn vs_indexed(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) ->
 // to decide, per view, whether it survives.
 @vertex
 fn vs_pulled(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> TileOut {
+    return pulled(v, i);
+}
+
+// The alpha-tested range of the caster triangles (casters.rs), drawn with `fs_alpha`.
+@vertex
+fn vs_indexed_masked(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> MaskedTileOut {
+    return masked_tile_out(indexed(v, i), mask_tail(), v);
+}
+
+@vertex
+fn vs_pulled_masked(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> MaskedTileOut {
+    return masked_tile_out(pulled(v, i), mask_tail(), corners[v]);
+}
+
+fn pulled(v: u32, i: u32) -> TileOut {
     let view_id = draw_list[i];
     let view = views[view_id];
     let tri = v / 3u;

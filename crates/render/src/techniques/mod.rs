@@ -281,6 +281,40 @@ pub(crate) fn layered_depth_pipeline(
     buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
     multiview_mask: Option<std::num::NonZeroU32>,
 ) -> wgpu::RenderPipeline {
+    depth_pipeline_with(device, layout, module, entry, None, buffers, multiview_mask)
+}
+
+/// [`depth_pipeline`] for alpha-tested casters: the vertex entry `entry` passes the texture
+/// coordinate and material on, and the fragment entry `fs_alpha` (alpha_mask.wgsl) discards
+/// uncovered texels. Only the masked range of the casters is drawn with it.
+pub(crate) fn masked_depth_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+    multiview_mask: Option<std::num::NonZeroU32>,
+) -> wgpu::RenderPipeline {
+    depth_pipeline_with(
+        device,
+        layout,
+        module,
+        entry,
+        Some("fs_alpha"),
+        buffers,
+        multiview_mask,
+    )
+}
+
+fn depth_pipeline_with(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    fragment: Option<&str>,
+    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+    multiview_mask: Option<std::num::NonZeroU32>,
+) -> wgpu::RenderPipeline {
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(entry),
         layout: Some(layout),
@@ -304,7 +338,12 @@ pub(crate) fn layered_depth_pipeline(
             bias: Default::default(),
         }),
         multisample: Default::default(),
-        fragment: None,
+        fragment: fragment.map(|entry| wgpu::FragmentState {
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            targets: &[],
+        }),
         multiview_mask,
         cache: None,
     })

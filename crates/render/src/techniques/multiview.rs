@@ -25,7 +25,8 @@ use std::num::NonZeroU32;
 use crate::pipelines::dynamic_uniform_entry;
 use crate::shadow::{CullMode, Generation, ShadowStats, ShadowTechnique};
 use crate::techniques::{
-    atlas_attachment, layered_depth_pipeline, CachedGroup, TileClear, UniformRecords,
+    atlas_attachment, layered_depth_pipeline, masked_depth_pipeline, CachedGroup, TileClear,
+    UniformRecords,
 };
 use crate::{GpuContext, RenderError};
 
@@ -62,9 +63,9 @@ pub struct Multiview {
     module: wgpu::ShaderModule,
     layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
-    /// Geometry pipelines by (views in the group, pulled vertices): a pipeline's multiview
-    /// mask must equal its pass's.
-    pipelines: HashMap<(u32, bool), wgpu::RenderPipeline>,
+    /// Geometry pipelines by (views in the group, pulled vertices, alpha-tested): a
+    /// pipeline's multiview mask must equal its pass's.
+    pipelines: HashMap<(u32, bool, bool), wgpu::RenderPipeline>,
     copy_pipeline: wgpu::RenderPipeline,
     copy_layout: wgpu::BindGroupLayout,
     scratch: Option<Scratch>,
@@ -126,7 +127,7 @@ impl Multiview {
                 crate::storage_entry(1, vs),
                 crate::storage_entry(2, vs),
                 crate::storage_entry(3, vs),
-                crate::storage_entry(4, vs),
+                crate::storage_entry(4, wgpu::ShaderStages::VERTEX_FRAGMENT),
                 crate::storage_entry(5, vs),
             ],
         );
@@ -192,21 +193,29 @@ impl Multiview {
         self.max_views
     }
 
-    /// The geometry pipeline for groups of `n` views.
-    fn pipeline(&mut self, ctx: &GpuContext, n: u32, pulled: bool) -> &wgpu::RenderPipeline {
+    /// The geometry pipeline for groups of `n` views (alpha-tested casters: `masked`).
+    fn pipeline(
+        &mut self,
+        ctx: &GpuContext,
+        n: u32,
+        pulled: bool,
+        masked: bool,
+    ) -> &wgpu::RenderPipeline {
         let (module, layout) = (&self.module, &self.pipeline_layout);
-        self.pipelines.entry((n, pulled)).or_insert_with(|| {
-            let mask = if n >= 32 { u32::MAX } else { (1u32 << n) - 1 };
-            let entry = if pulled { "vs_pulled" } else { "vs_indexed" };
+        self.pipelines.entry((n, pulled, masked)).or_insert_with(|| {
+            let mask = NonZeroU32::new(if n >= 32 { u32::MAX } else { (1u32 << n) - 1 });
+            let entry = match (pulled, masked) {
+                (true, false) => "vs_pulled",
+                (false, false) => "vs_indexed",
+                (true, true) => "vs_pulled_masked",
+                (false, true) => "vs_indexed_masked",
+            };
             // Culling is per view in the shader; survivors cast from both sides.
-            layered_depth_pipeline(
-                &ctx.device,
-                layout,
-                module,
-                entry,
-                &[],
-                NonZeroU32::new(mask),
-            )
+            if masked {
+                masked_depth_pipeline(&ctx.device, layout, module, entry, &[], mask)
+            } else {
+                layered_depth_pipeline(&ctx.device, layout, module, entry, &[], mask)
+            }
         })
     }
 
@@ -274,8 +283,12 @@ impl ShadowTechnique for Multiview {
         self.ensure_scratch(ctx, side, layers);
 
         let pulled = cull != CullMode::None;
+        let any_masked = casters.first_masked_triangle < casters.triangles;
         for &(_, n) in &groups {
-            self.pipeline(ctx, n, pulled);
+            self.pipeline(ctx, n, pulled, false);
+            if any_masked {
+                self.pipeline(ctx, n, pulled, true);
+            }
         }
 
         // One parameter record per group, at the uniform-offset alignment.
@@ -359,11 +372,16 @@ impl ShadowTechnique for Multiview {
             g.timer.end_compute_stats(&mut pass, s);
             stats.passes += 1;
         }
+        // Opaque casters, then the alpha-tested ones (casters.rs puts them last).
+        let opaque = 3 * casters.first_masked_triangle;
         let corners = 3 * casters.triangles;
         for (group, &(first, n)) in groups.iter().enumerate() {
             let offset = [params.offset(group)];
             let size = tiles[input.draw_list[first as usize] as usize].size;
-            let pipeline = &self.pipelines[&(n, pulled)];
+            let ranges = [
+                (0..opaque, self.pipelines.get(&(n, pulled, false))),
+                (opaque..corners, self.pipelines.get(&(n, pulled, true))),
+            ];
             let scratch = self.scratch.as_mut().expect("scratch");
             {
                 let mut pass = g.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -388,17 +406,22 @@ impl ShadowTechnique for Multiview {
                 } else {
                     pass.set_scissor_rect(0, 0, size, size);
                 }
-                pass.set_pipeline(pipeline);
                 pass.set_bind_group(0, bind_group, &offset);
-                if pulled {
-                    pass.draw(0..corners, 0..1);
-                } else {
-                    pass.set_index_buffer(casters.corners.slice(..), wgpu::IndexFormat::Uint32);
-                    pass.draw_indexed(0..corners, 0, 0..1);
+                pass.set_index_buffer(casters.corners.slice(..), wgpu::IndexFormat::Uint32);
+                for (range, pipeline) in ranges {
+                    let Some(pipeline) = pipeline.filter(|_| !range.is_empty()) else {
+                        continue;
+                    };
+                    pass.set_pipeline(pipeline);
+                    if pulled {
+                        pass.draw(range, 0..1);
+                    } else {
+                        pass.draw_indexed(range, 0, 0..1);
+                    }
+                    stats.draws += 1;
                 }
                 g.timer.end_render_stats(&mut pass, s);
                 stats.passes += 1;
-                stats.draws += 1;
             }
             let last = group + 1 == groups.len();
             let mut pass = g.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {

@@ -26,6 +26,10 @@ const MV_CULLED: vec4<f32> = vec4<f32>(0.0, 0.0, 0.5, 1.0);
 // No culling: an indexed draw of the caster corners (post-transform vertex reuse applies).
 @vertex
 fn vs_indexed(@builtin(vertex_index) v: u32, @builtin(view_index) layer: u32) -> @builtin(position) vec4<f32> {
+    return indexed(v, layer);
+}
+
+fn indexed(v: u32, layer: u32) -> vec4<f32> {
     let view = views[draw_list[mparams.counts.x + layer]];
     return view.view_proj * world[v];
 }
@@ -33,6 +37,33 @@ fn vs_indexed(@builtin(vertex_index) v: u32, @builtin(view_index) layer: u32) ->
 // Culling: a non-indexed draw, three invocations per triangle, each pulling the triangle.
 @vertex
 fn vs_pulled(@builtin(vertex_index) v: u32, @builtin(view_index) layer: u32) -> @builtin(position) vec4<f32> {
+    return pulled(v, layer);
+}
+
+// The alpha-tested range of the caster triangles (casters.rs), drawn with `fs_alpha`.
+struct MaskedOut {
+    @builtin(position) position: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+    @location(1) @interpolate(flat) material: u32,
+}
+
+fn masked_out(position: vec4<f32>, v: u32) -> MaskedOut {
+    let t = mask_tail();
+    return MaskedOut(position, caster_uv(t, v), caster_material(t, v));
+}
+
+@vertex
+fn vs_indexed_masked(@builtin(vertex_index) v: u32, @builtin(view_index) layer: u32) -> MaskedOut {
+    return masked_out(indexed(v, layer), v);
+}
+
+@vertex
+fn vs_pulled_masked(@builtin(vertex_index) v: u32, @builtin(view_index) layer: u32) -> MaskedOut {
+    return masked_out(pulled(v, layer), corners[v]);
+}
+
+
+fn pulled(v: u32, layer: u32) -> vec4<f32> {
     let view_id = draw_list[mparams.counts.x + layer];
     let view = views[view_id];
     let tri = v / 3u;

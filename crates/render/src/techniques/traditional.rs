@@ -8,7 +8,7 @@ use manyshadows_scene::light_space::ViewKind;
 
 /// Bytes of the per-view uniform the shaders read: view-projection and params.
 const VIEW_BINDING: u64 = 80;
-use crate::gpu_scene::{GpuScene, POSITION_LAYOUT};
+use crate::gpu_scene::{POSITION_LAYOUT, UV_LAYOUT_1};
 use crate::gpu_types::VIEW_UNIFORM_STRIDE;
 use crate::shadow::{visible_casters, Generation, ShadowInput, ShadowStats, ShadowTechnique};
 use crate::techniques::{atlas_attachment, TileClear};
@@ -17,8 +17,11 @@ use crate::GpuContext;
 /// The traditional technique's pipelines and layout.
 pub struct Traditional {
     pipeline: wgpu::RenderPipeline,
-    /// Dual-paraboloid views (needs `CLIP_DISTANCES`; `None` without it).
-    paraboloid: Option<wgpu::RenderPipeline>,
+    /// Alpha-tested instances (positions and texture coordinates, `fs_alpha`).
+    masked: wgpu::RenderPipeline,
+    /// Dual-paraboloid views (needs `CLIP_DISTANCES`; `None` without it), opaque and
+    /// alpha-tested.
+    paraboloid: Option<(wgpu::RenderPipeline, wgpu::RenderPipeline)>,
     skinned: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     clear: TileClear,
@@ -42,6 +45,7 @@ impl Traditional {
                 ),
                 crate::storage_entry(1, wgpu::ShaderStages::VERTEX),
                 crate::uniform_entry(2, wgpu::ShaderStages::VERTEX),
+                crate::storage_entry(3, wgpu::ShaderStages::FRAGMENT),
             ],
         );
         let pipeline_layout =
@@ -72,12 +76,26 @@ impl Traditional {
                 usage: wgpu::BufferUsages::UNIFORM,
             },
         );
+        let masked = |module: &wgpu::ShaderModule, entry: &str| {
+            crate::techniques::masked_depth_pipeline(
+                device,
+                &pipeline_layout,
+                module,
+                entry,
+                &[Some(POSITION_LAYOUT), Some(UV_LAYOUT_1)],
+                None,
+            )
+        };
         Self {
             pipeline: pipeline(&module, "vs_depth", POSITION_LAYOUT),
+            masked: masked(&module, "vs_depth_masked"),
             skinned: pipeline(&module, "vs_skinned", SKIN_LAYOUT),
-            paraboloid: dp_module
-                .as_ref()
-                .map(|m| pipeline(m, "vs_paraboloid", POSITION_LAYOUT)),
+            paraboloid: dp_module.as_ref().map(|m| {
+                (
+                    pipeline(m, "vs_paraboloid", POSITION_LAYOUT),
+                    masked(m, "vs_paraboloid_masked"),
+                )
+            }),
             layout,
             clear: TileClear::new(ctx),
             no_bones,
@@ -110,20 +128,28 @@ impl Traditional {
                     binding: 2,
                     resource: bones.as_entire_binding(),
                 },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: input.casters.corners.as_entire_binding(),
+                },
             ],
         })
     }
 }
 
-/// Records one draw per visible caster of `view` (shared with other instance-drawing paths).
+/// Records one draw per visible caster of `view` whose material is (`masked`) or is not
+/// alpha-tested; the culled count goes with the opaque call.
 fn draw_casters(
     pass: &mut wgpu::RenderPass<'_>,
-    scene: &GpuScene,
+    input: &ShadowInput<'_>,
     view: &manyshadows_scene::light_space::ShadowView,
+    masked: bool,
     stats: &mut ShadowStats,
 ) {
+    let scene = input.scene;
+    let is_masked = |d: &&crate::gpu_scene::DrawItem| input.casters.is_masked(d.material) == masked;
     let mut drawn = 0u64;
-    for d in visible_casters(scene, view) {
+    for d in visible_casters(scene, view).filter(is_masked) {
         let m = d.mesh;
         pass.draw_indexed(
             m.first_index..m.first_index + m.index_count,
@@ -134,7 +160,12 @@ fn draw_casters(
         stats.triangles += m.index_count as u64 / 3;
         drawn += 1;
     }
-    let casters = scene.draws.iter().filter(|d| d.casts_shadows).count() as u64;
+    let casters = scene
+        .draws
+        .iter()
+        .filter(|d| d.casts_shadows)
+        .filter(is_masked)
+        .count() as u64;
     stats.culled += casters - drawn;
 }
 
@@ -180,9 +211,10 @@ impl ShadowTechnique for Traditional {
             } else {
                 pass.set_scissor_rect(tile.x, tile.y, tile.size, tile.size);
             }
-            if matches!(view.kind, ViewKind::Paraboloid(_)) {
+            let paraboloid = matches!(view.kind, ViewKind::Paraboloid(_));
+            let (opaque, masked) = if paraboloid {
                 match (&self.paraboloid, &input.scene.skin) {
-                    (Some(p), None) => pass.set_pipeline(p),
+                    (Some((p, m)), None) => (p, m),
                     // Refused up front by `ShadowGenerator`; draw nothing if it ever happens.
                     _ => {
                         g.timer.end_render_stats(&mut pass, s);
@@ -190,13 +222,20 @@ impl ShadowTechnique for Traditional {
                     }
                 }
             } else {
-                pass.set_pipeline(pipeline);
-            }
+                (pipeline, &self.masked)
+            };
+            pass.set_pipeline(opaque);
             pass.set_bind_group(0, &bind_group, &[(i as u64 * VIEW_UNIFORM_STRIDE) as u32]);
             pass.set_vertex_buffer(0, vertices.slice(..));
             pass.set_index_buffer(input.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-            draw_casters(&mut pass, input.scene, view, &mut stats);
-            if matches!(view.kind, ViewKind::Paraboloid(_)) {
+            draw_casters(&mut pass, input, view, false, &mut stats);
+            if input.casters.first_masked_triangle < input.casters.triangles {
+                // Alpha-tested casters (never skinned: CasterGeometry refuses that).
+                pass.set_pipeline(masked);
+                pass.set_vertex_buffer(1, input.scene.uvs.slice(..));
+                draw_casters(&mut pass, input, view, true, &mut stats);
+            }
+            if paraboloid {
                 self.clear.reset_clip_distances(&mut pass);
             }
             g.timer.end_render_stats(&mut pass, s);

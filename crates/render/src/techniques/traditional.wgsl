@@ -13,6 +13,28 @@ fn vs_depth(@location(0) position: vec3<f32>, @builtin(instance_index) instance:
     return shadow_view.view_proj * (instances[instance].model * vec4<f32>(position, 1.0));
 }
 
+// The caster corner buffer, read for its mask tail (alpha_mask.wgsl): the records and bits of
+// alpha-tested materials.
+@group(0) @binding(3) var<storage, read> corners: array<u32>;
+
+// Alpha-tested instances: the texture coordinate travels to `fs_alpha`.
+struct MaskedOut {
+    @builtin(position) position: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+    @location(1) @interpolate(flat) material: u32,
+}
+
+@vertex
+fn vs_depth_masked(
+    @location(0) position: vec3<f32>,
+    @location(1) uv: vec2<f32>,
+    @builtin(instance_index) instance: u32,
+) -> MaskedOut {
+    let inst = instances[instance];
+    return MaskedOut(shadow_view.view_proj * (inst.model * vec4<f32>(position, 1.0)), uv, inst.material.x);
+}
+
+
 struct Bones {
     m: array<mat4x4<f32>, 64>,
 }

@@ -25,3 +25,31 @@ fn vs_paraboloid(@location(0) position: vec3<f32>, @builtin(instance_index) inst
     out.clip[0] = pc.front;
     return out;
 }
+
+// The caster corner buffer, read for its mask tail (alpha_mask.wgsl).
+@group(0) @binding(3) var<storage, read> corners: array<u32>;
+
+// Alpha-tested instances into paraboloid views.
+struct MaskedParaboloidOut {
+    @builtin(position) position: vec4<f32>,
+    @builtin(clip_distances) clip: array<f32, 1>,
+    @location(0) uv: vec2<f32>,
+    @location(1) @interpolate(flat) material: u32,
+}
+
+@vertex
+fn vs_paraboloid_masked(
+    @location(0) position: vec3<f32>,
+    @location(1) uv: vec2<f32>,
+    @builtin(instance_index) instance: u32,
+) -> MaskedParaboloidOut {
+    let inst = instances[instance];
+    let pc = paraboloid_clip(shadow_view.view, shadow_view.params, inst.model * vec4<f32>(position, 1.0));
+    var out: MaskedParaboloidOut;
+    out.position = pc.clip;
+    out.clip[0] = pc.front;
+    out.uv = uv;
+    out.material = inst.material.x;
+    return out;
+}
+

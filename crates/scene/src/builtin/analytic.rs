@@ -171,6 +171,7 @@ pub(crate) fn build(which: AnalyticLight, opts: &BuiltinOptions) -> Scene {
     let mut occluder = occluder;
     occluder.name = "occluder".into();
     Scene {
+        textures: Vec::new(),
         name: which.scene_name().into(),
         meshes: vec![floor, occluder],
         materials: vec![

@@ -709,6 +709,7 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
     let mut camera = Camera::look_at(ATRIUM_CAMERA_POSITION, ATRIUM_CAMERA_TARGET);
     camera.far = 80.0;
     Scene {
+        textures: Vec::new(),
         name: "atrium".into(),
         lights: layout_lights(
             n,

@@ -125,6 +125,7 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
         ),
     ];
     let mut scene = Scene {
+        textures: Vec::new(),
         name: "cubes".into(),
         meshes: vec![floor, cube, sphere],
         materials,

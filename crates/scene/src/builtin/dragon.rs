@@ -201,6 +201,7 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Result<Scene, SceneError> {
         &[Instance::caster(0, 0, transform)],
     );
     Ok(Scene {
+        textures: Vec::new(),
         name: "dragon".into(),
         meshes: vec![floor, model],
         materials: vec![

@@ -11,6 +11,8 @@
 //! | `dragon` | seed 000's benchmark: a ~35k-triangle model on a floor ringed by spots | 8 | the seed's layered-rendering measurements |
 //! | `plane-spot`, `plane-point`, `plane-directional` | a square occluder over a floor, one light | 1 | analytic tests: the shadow's outline is known exactly ([`analytic`]) |
 //! | `cubes` | a floor, a few boxes and a sphere, one light of each type | 3 | small golden images |
+//! | `courtyard` | textured floor and walls, a lattice roof, banners, shrubs and a wire fence (alpha-masked cards), a few solids | 8 | real-content features: textures and alpha-masked casters in every technique ([`courtyard`]) |
+//! | `courtyard-opaque` | `courtyard` with every material opaque | 8 | the same geometry without masks: what masks change |
 //!
 //! Light layouts are **seeded and deterministic**: the same [`BuiltinOptions`] always give the
 //! same scene. Geometry does not depend on the seed (so benchmarks with different light
@@ -26,6 +28,7 @@
 
 pub mod analytic;
 pub mod atrium;
+pub mod courtyard;
 pub mod cubes;
 pub mod dragon;
 mod lights;
@@ -52,6 +55,8 @@ pub const SCENE_NAMES: &[&str] = &[
     "plane-point",
     "plane-directional",
     "cubes",
+    "courtyard",
+    "courtyard-opaque",
 ];
 
 /// The most lights a built-in scene or [`scatter_lights`] layout may ask for; more is a
@@ -116,7 +121,7 @@ impl FromStr for LightMix {
 #[derive(Clone, Debug)]
 pub struct BuiltinOptions {
     /// Number of lights; `None` means the scene's default (atrium 32, terrain 8, dragon 8,
-    /// `plane-*` 1, cubes 3). The `plane-*` scenes always have exactly their one light.
+    /// `plane-*` 1, cubes 3, courtyard 8). The `plane-*` scenes always have exactly their one light.
     pub lights: Option<usize>,
     /// Seed of the light layout (positions, directions, colours).
     pub seed: u64,
@@ -174,6 +179,8 @@ pub fn build(name: &str, opts: &BuiltinOptions) -> Result<Scene, SceneError> {
         "plane-point" => analytic::build(analytic::AnalyticLight::Point, opts),
         "plane-directional" => analytic::build(analytic::AnalyticLight::Directional, opts),
         "cubes" => cubes::build(opts),
+        "courtyard" => courtyard::build(opts, true),
+        "courtyard-opaque" => courtyard::build(opts, false),
         _ => unreachable!("checked against SCENE_NAMES above"),
     };
     scene.validate()?;

@@ -336,6 +336,7 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
     camera.near = 0.5;
     camera.far = 300.0;
     Scene {
+        textures: Vec::new(),
         name: "terrain".into(),
         meshes,
         materials,

@@ -239,6 +239,7 @@ fn set_normals(mesh: &mut Mesh, normals: Option<Vec<Vec3>>) {
                         name: String::new(),
                         positions: mesh.positions.clone(),
                         normals: Vec::new(),
+                        uvs: Vec::new(),
                         indices: mesh.indices.clone(),
                     };
                     tmp.compute_normals();

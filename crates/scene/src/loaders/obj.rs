@@ -45,6 +45,7 @@ pub(super) fn load(path: &Path) -> Result<Vec<Mesh>, SceneError> {
             name: mesh_name(path, Some(&model.name)),
             positions,
             normals: Vec::new(),
+            uvs: Vec::new(),
             indices: m.indices,
         };
         // Check indices before computing normals so the error is InvalidMesh, not a silent skip.
