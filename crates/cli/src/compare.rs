@@ -87,6 +87,12 @@ pub struct CompareArgs {
     /// Receiver offset along the surface normal, texels.
     #[arg(long, default_value_t = ShadowBias::default().normal_offset, allow_negative_numbers = true)]
     bias_normal: f32,
+    /// Alpha-tested casters in the shadow passes: on (holes in foliage, lattices and banners
+    /// let light through, as in the reference) or off (they cast as solid cards, what a
+    /// renderer that ignores alpha would draw; the reference keeps its holes, so this scores
+    /// that mistake).
+    #[arg(long, default_value = "on", value_parser = crate::parse_on_off)]
+    shadow_alpha: bool,
     /// Largest shadow-atlas side in texels (clamped to the adapter's limit).
     #[arg(long, default_value_t = manyshadows::shadow::DEFAULT_MAX_ATLAS_SIZE)]
     atlas_max: u32,
@@ -554,6 +560,13 @@ fn settings(args: &CompareArgs, technique: Technique) -> RenderSettings {
         },
         visibility: true,
         point_shadows: args.point_shadows,
+        shadow: manyshadows::ShadowOptions {
+            casters: manyshadows::casters::CasterOptions {
+                ignore_masks: !args.shadow_alpha,
+                ..Default::default()
+            },
+            ..Default::default()
+        },
         virtual_maps: manyshadows::vsm::VirtualOptions {
             pool_bytes: u64::from(args.page_pool) << 20,
             lod: args.virtual_lod,

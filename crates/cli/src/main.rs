@@ -168,14 +168,27 @@ impl GpuArgs {
     }
 }
 
+/// `on` / `off` (also yes/no, true/false, 1/0).
+pub(crate) fn parse_on_off(s: &str) -> Result<bool, String> {
+    match s.trim().to_ascii_lowercase().as_str() {
+        "on" | "yes" | "true" | "1" => Ok(true),
+        "off" | "no" | "false" | "0" => Ok(false),
+        _ => Err(format!("'{s}' is neither on nor off")),
+    }
+}
+
 fn wgpu_backends(name: &str) -> manyshadows::context::Backends {
     manyshadows::context::Backends::from_comma_list(name)
 }
 
 #[derive(Args, Debug, Clone)]
 pub(crate) struct RenderArgs {
-    /// Built-in scene name or a TOML scene file (see docs/SCENE_FORMAT.md). Built-ins: atrium,
-    /// terrain, dragon, cubes, plane-spot, plane-point, plane-directional.
+    /// Built-in scene name, a TOML scene file (see docs/SCENE_FORMAT.md), or a model file
+    /// (.gltf/.glb with its materials, textures, KHR_lights_punctual lights and camera; .obj
+    /// with its MTL; .ply/.ply.gz), rendered with its own lights and camera (8 seeded lights
+    /// and a framing camera when it has none). Built-ins: atrium, terrain, dragon, cubes,
+    /// courtyard (textures and alpha-masked foliage, lattice, banners), courtyard-opaque,
+    /// plane-spot, plane-point, plane-directional.
     #[arg(long, default_value = "atrium")]
     scene: String,
     /// Shadow generation technique: traditional (one depth pass per shadow view), layered
@@ -257,6 +270,11 @@ pub(crate) struct RenderArgs {
     /// Receiver offset along the surface normal, texels.
     #[arg(long, default_value_t = ShadowBias::default().normal_offset)]
     bias_normal: f32,
+    /// Alpha-tested casters in the shadow passes: on (holes in foliage, lattices and banners
+    /// let light through) or off (they cast as solid cards, as a renderer that ignores alpha
+    /// would draw them; the camera still sees the holes).
+    #[arg(long, default_value = "on", value_parser = parse_on_off)]
+    shadow_alpha: bool,
     /// Largest shadow-atlas side in texels (clamped to the adapter's limit).
     #[arg(long, default_value_t = manyshadows::shadow::DEFAULT_MAX_ATLAS_SIZE)]
     atlas_max: u32,
@@ -433,11 +451,26 @@ pub(crate) fn load_scene(args: &RenderArgs) -> Result<Scene> {
 fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
     let mix: LightMix = args.light_types.parse()?;
     let path = Path::new(&args.scene);
-    // A built-in name wins over a same-named directory in the working directory.
-    let is_file = args.scene.ends_with(".toml")
+    let lower = args.scene.to_ascii_lowercase();
+    let model = [".obj", ".gltf", ".glb", ".ply", ".ply.gz"]
+        .iter()
+        .any(|ext| lower.ends_with(ext));
+    // A built-in name wins over a same-named file in the working directory.
+    let is_file = lower.ends_with(".toml")
+        || model
         || (path.is_file() && !builtin::SCENE_NAMES.contains(&args.scene.as_str()));
     if is_file {
-        let mut scene = manyshadows::scene::scene_file::load_scene_file(path)?;
+        let mut scene = if model {
+            // A model file is a scene of its own: its materials, textures, lights and camera
+            // (defaults added where it has none, and said).
+            let loaded = manyshadows::scene::loaders::load_scene(path)?;
+            for note in &loaded.notes {
+                eprintln!("note: {}: {note}", path.display());
+            }
+            loaded.scene
+        } else {
+            manyshadows::scene::scene_file::load_scene_file(path)?
+        };
         if let Some(n) = args.lights {
             if n > builtin::MAX_LIGHTS {
                 bail!(
@@ -526,6 +559,10 @@ pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettin
         technique: args.technique,
         shadow: ShadowOptions {
             cull: args.cull,
+            casters: manyshadows::casters::CasterOptions {
+                ignore_masks: !args.shadow_alpha,
+                ..Default::default()
+            },
             ..Default::default()
         },
         cache_shadows: args.cache,

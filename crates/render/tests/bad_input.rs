@@ -39,6 +39,7 @@ fn triangle_scene(p: [Vec3; 3]) -> Scene {
         name: "tri".into(),
         positions: p.to_vec(),
         normals: vec![Vec3::Y; 3],
+        uvs: Vec::new(),
         indices: vec![0, 1, 2],
     };
     if mesh.positions.iter().all(|p| p.is_finite()) {

@@ -64,11 +64,13 @@ fn triangles(name: &str, tris: &[[Vec3; 3]]) -> Mesh {
         indices: (0..positions.len() as u32).collect(),
         positions,
         normals,
+        uvs: Vec::new(),
     }
 }
 
 fn scene(meshes: Vec<Mesh>, lights: Vec<Light>) -> Scene {
     Scene {
+        textures: Vec::new(),
         name: "compute raster test".into(),
         instances: (0..meshes.len())
             .map(|mesh| Instance {

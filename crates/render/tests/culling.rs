@@ -35,6 +35,7 @@ fn scene() -> Scene {
         shadow_resolution: 256,
     };
     Scene {
+        textures: Vec::new(),
         name: "upside-down quad".into(),
         meshes: vec![floor, quad],
         materials: vec![Material::default()],

@@ -277,7 +277,13 @@ fn gpu_driven_splits_views_and_clusters_into_rounds() {
     let list: Vec<u32> = (0..views).collect();
     // Two views per round, then rounds that also split the clusters.
     for max in [2 * clusters, clusters / 3 + 1] {
-        let rounds = plan_rounds(views, clusters as u32, p.casters.vertices, max);
+        let rounds = plan_rounds(
+            views,
+            clusters as u32,
+            p.casters.first_masked_cluster,
+            p.casters.vertices,
+            max,
+        );
         assert!(
             rounds.len() > 1,
             "{views} views, {clusters} clusters: one round only"

@@ -37,6 +37,7 @@ fn scene() -> Scene {
         casts_shadows: true,
     };
     Scene {
+        textures: Vec::new(),
         name: "frame-changes".into(),
         meshes: vec![
             primitives::plane(20.0, 20.0, 1),

@@ -173,6 +173,7 @@ fn light_inside_geometry_lights_nothing_outside() {
         shadow_resolution: 128,
     };
     let scene = Scene {
+        textures: Vec::new(),
         name: "lamp in a box".into(),
         // The box is subdivided (3 times: 768 triangles): a dual-paraboloid map of the bare
         // 12-triangle box leaks light where its walls cross the hemispheres' rim (5,815

@@ -53,6 +53,7 @@ fn scene(sphere: Mesh) -> Scene {
         shadow_resolution: 1024,
     };
     Scene {
+        textures: Vec::new(),
         name: "scanned".into(),
         meshes: vec![primitives::plane(8.0, 8.0, 1), sphere],
         materials: vec![Material::default()],
@@ -155,6 +156,7 @@ fn roof_winding_changes_nothing() {
                 Vec3::new(-1.5, 1.0, -1.0),
             ],
             normals: vec![south, south, south, south, north, north, north, north],
+            uvs: Vec::new(),
             indices: vec![0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7],
         };
         if inward {

@@ -63,6 +63,20 @@ impl Mesh {
             .collect();
     }
 
+    /// Replaces the normals with crease-angle normals, splitting vertices where needed:
+    /// positions are welded, each triangle corner averages (area-weighted) the triangles
+    /// around its position whose normals are within `crease_deg` of its own triangle's, and
+    /// each distinct (vertex, normal) pair becomes one vertex (texture coordinates carried
+    /// along; the first keeps the vertex's index). Edges sharper than the angle stay sharp (a
+    /// box with shared corners gets flat faces), gentler ones smooth (a finely tessellated
+    /// cylinder). The loaders use it at
+    /// [`CREASE_ANGLE_DEG`](crate::loaders::CREASE_ANGLE_DEG) for files without normals.
+    /// Meshes whose indices are out of range get [`Mesh::compute_normals`] instead (and fail
+    /// [`Mesh::validate`]).
+    pub fn compute_normals_with_crease(&mut self, crease_deg: f32) {
+        crate::loaders::normals::crease_normals(self, crease_deg);
+    }
+
     /// Checks the mesh is usable: indices in range, a multiple of three, one normal per
     /// position, every coordinate finite. Degenerate (zero-area) triangles are allowed: they
     /// rasterize to nothing and cast no shadow.

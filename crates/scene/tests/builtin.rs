@@ -641,6 +641,7 @@ fn dragon_normalises_a_user_mesh_and_rejects_a_broken_one() {
     );
 
     let broken = Mesh {
+        uvs: Vec::new(),
         name: "broken".into(),
         positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
         normals: vec![Vec3::Z; 3],

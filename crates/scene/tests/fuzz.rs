@@ -2,6 +2,9 @@
 //! every mesh format (OBJ, glTF, GLB, PLY ascii and binary, `.ply.gz`) and the TOML scene
 //! format get generated and mutated inputs, and every input must end in a scene or mesh, or in
 //! a clear error — no panic, no hang, no allocation driven by a count the file merely claims.
+//! Whole-scene loading (`load_scene`) gets its own inputs: glTF and GLB files written by
+//! `write_gltf` with an embedded PNG texture, an alpha mask, every light type and a camera, and
+//! OBJ material libraries (texture statements, a PNG beside them).
 //!
 //! The inputs are valid seed files (built here) put through 1–8 mutations each: bytes flipped
 //! or overwritten, "interesting" tokens inserted (huge and negative counts, NaN, infinities,
@@ -17,9 +20,13 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use manyshadows_scene::loaders::{load_mesh, write_obj, write_ply_ascii};
+use glam::{Mat4, Vec2, Vec3};
+use manyshadows_scene::loaders::{load_mesh, load_scene, write_gltf, write_obj, write_ply_ascii};
 use manyshadows_scene::scene_file::load_scene_file;
-use manyshadows_scene::{primitives, SceneError};
+use manyshadows_scene::{
+    primitives, Attenuation, Camera, Instance, Light, LightKind, Material, Scene, SceneError,
+    Texture, TextureRef, Wrap,
+};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 
@@ -209,6 +216,92 @@ fn meshes(path: &Path) -> Result<usize, SceneError> {
     load_mesh(path).map(|m| m.len())
 }
 
+fn scenes(path: &Path) -> Result<usize, SceneError> {
+    load_scene(path).map(|s| s.scene.meshes.len())
+}
+
+/// A small scene with a texture, an alpha-masked material, every light type and a camera.
+fn textured_scene() -> Scene {
+    let texture = Texture::from_fn("t", 4, 4, |x, y| {
+        [
+            x as u8 * 60,
+            y as u8 * 60,
+            128,
+            if x == y { 0 } else { 255 },
+        ]
+    });
+    let light = |kind| Light {
+        kind,
+        ambient: Vec3::ZERO,
+        diffuse: Vec3::new(1.0, 0.8, 0.6),
+        specular: Vec3::new(1.0, 0.8, 0.6),
+        attenuation: Attenuation::NONE,
+        casts_shadows: true,
+        shadow_resolution: 256,
+    };
+    Scene {
+        name: "fuzz".into(),
+        meshes: vec![
+            primitives::card(1.0, 1.0, Vec2::ONE),
+            primitives::cuboid(Vec3::ONE),
+        ],
+        materials: vec![
+            Material {
+                base_color_texture: Some(TextureRef {
+                    texture: 0,
+                    wrap_s: Wrap::ClampToEdge,
+                    wrap_t: Wrap::MirroredRepeat,
+                }),
+                ..Material::default().masked(0.5)
+            },
+            Material::default(),
+        ],
+        textures: vec![texture],
+        instances: vec![
+            Instance::caster(0, 0, Mat4::IDENTITY),
+            Instance::caster(1, 1, Mat4::from_translation(Vec3::X * 2.0)),
+        ],
+        lights: vec![
+            light(LightKind::Spot {
+                position: Vec3::new(0.0, 3.0, 0.0),
+                direction: Vec3::NEG_Y,
+                cutoff_deg: 30.0,
+                range: 10.0,
+            }),
+            light(LightKind::Point {
+                position: Vec3::new(1.0, 2.0, 1.0),
+                range: 5.0,
+            }),
+            light(LightKind::Directional {
+                direction: Vec3::new(0.3, -1.0, 0.2),
+                cascades: 2,
+                split_lambda: 0.5,
+                cascade_resolution_scale: 1.0,
+            }),
+        ],
+        camera: Camera::look_at(Vec3::new(3.0, 2.0, 4.0), Vec3::ZERO),
+    }
+}
+
+/// [`textured_scene`] written as `name` (`.gltf` or `.glb`), as bytes.
+fn written(name: &str) -> Vec<u8> {
+    let d = dir(&format!("written-{name}"));
+    let path = d.join(name);
+    write_gltf(&textured_scene(), &path).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let _ = std::fs::remove_dir_all(&d);
+    bytes
+}
+
+fn png(t: &Texture) -> Vec<u8> {
+    let mut out = Vec::new();
+    image::RgbaImage::from_raw(t.width, t.height, t.rgba.to_vec())
+        .unwrap()
+        .write_to(&mut std::io::Cursor::new(&mut out), image::ImageFormat::Png)
+        .unwrap();
+    out
+}
+
 fn obj_seeds() -> Vec<Vec<u8>> {
     let mut cube = Vec::new();
     write_obj(&primitives::cuboid(glam::Vec3::ONE), &mut cube).unwrap();
@@ -375,6 +468,48 @@ fn gltf_and_glb_inputs_load_or_fail_cleanly() {
         &meshes,
     );
     fuzz("glb", "m.glb", vec![glb()], b"glTF\x02\0\0\0", &meshes);
+}
+
+#[test]
+fn whole_gltf_scenes_load_or_fail_cleanly() {
+    let (embedded, _) = gltf_parts();
+    fuzz(
+        "scene-gltf",
+        "s.gltf",
+        vec![written("s.gltf"), embedded.into_bytes()],
+        b"{\"asset\":{\"version\":\"2.0\"},",
+        &scenes,
+    );
+    fuzz(
+        "scene-glb",
+        "s.glb",
+        vec![written("s.glb"), glb()],
+        b"glTF\x02\0\0\0",
+        &scenes,
+    );
+}
+
+#[test]
+fn obj_material_libraries_load_or_fail_cleanly() {
+    // The OBJ and its textures stay; the material library is mutated.
+    let d = dir("mtl");
+    let texture = textured_scene().textures[0].clone();
+    std::fs::create_dir_all(d.join("tex")).unwrap();
+    std::fs::write(d.join("tex/leaf.png"), png(&texture)).unwrap();
+    std::fs::write(
+        d.join("m.obj"),
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n\
+         usemtl leaf\nf 1/1 2/2 3/3\nusemtl stone\nf 2/2 4/1 3/3\n",
+    )
+    .unwrap();
+    let mtl = b"newmtl leaf\nKa 0 0 0\nKd 0.5 0.6 0.7\nKs 0.1 0.1 0.1\nNs 20\n\
+        map_Kd -bm 1.0 tex\\leaf.png\nmap_d -clamp on tex/leaf.png\n\
+        newmtl stone\nKd 0.4 0.4 0.4\nmap_Bump -bm 0.5 tex/leaf.png\nnorm tex/leaf.png\n"
+        .to_vec();
+    let obj = d.join("m.obj");
+    fuzz("mtl", "m.mtl", vec![mtl], b"newmtl ", &|_| scenes(&obj));
+    // And OBJ files loaded as scenes (materials missing: defaults).
+    fuzz("obj-scene", "m.obj", obj_seeds(), b"v ", &scenes);
 }
 
 #[test]

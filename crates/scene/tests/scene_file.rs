@@ -320,6 +320,7 @@ fn mesh_files_are_loaded_relative_and_merged() {
     let dir = temp_dir("mesh_file");
     std::fs::create_dir_all(dir.join("models")).unwrap();
     let tri = |z: f32| Mesh {
+        uvs: Vec::new(),
         name: "t".into(),
         positions: vec![
             Vec3::new(0.0, 0.0, z),

@@ -70,6 +70,18 @@ pub fn agree_with_truth(
     edge_band: i32,
     path: &std::path::Path,
 ) -> TruthAgreement {
+    agree_with_truth_of(vis, 0, truth, size, edge_band, path)
+}
+
+/// [`agree_with_truth`] for light `light` of the mask.
+pub fn agree_with_truth_of(
+    vis: &manyshadows::VisibilityMask,
+    light: u32,
+    truth: &[Option<bool>],
+    size: u32,
+    edge_band: i32,
+    path: &std::path::Path,
+) -> TruthAgreement {
     let at = |x: i32, y: i32| truth[(y as u32 * size + x as u32) as usize];
     let mut a = TruthAgreement {
         compared: 0,
@@ -92,7 +104,7 @@ pub fn agree_with_truth(
                         || at(nx, ny) != Some(expected)
                 })
             });
-            let got = vis.lit(x as u32, y as u32, 0);
+            let got = vis.lit(x as u32, y as u32, light);
             let i = ((y as u32 * size + x as u32) * 3) as usize;
             diff[i..i + 3].copy_from_slice(&match (expected, got) {
                 (true, true) => [200, 200, 200],

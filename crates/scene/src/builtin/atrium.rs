@@ -17,6 +17,10 @@
 //! sun slants in. The end walls have round-headed doorways; urns, planters, crates and a
 //! fountain stand on the floors.
 //!
+//! Like Crytek Sponza's drapes, alpha-masked **banners** hang from the gallery's edge in every
+//! other bay on both sides (textured cards, [`super::courtyard::banner_texture`]: a
+//! swallow-tailed cloth with a ring of holes, double-sided); their shadows show the holes.
+//!
 //! Lights ([`atrium_lights`]) are placed on **slots** along the arcades: spots under every
 //! arch (both storeys, both sides) pointing down and into the nave, points in the middle of
 //! every aisle bay (both storeys), and directional suns through the open roof. A layout
@@ -70,6 +74,7 @@ mod mat {
     pub const FOLIAGE: usize = 5;
     pub const WOOD: usize = 6;
     pub const MARBLE: usize = 7;
+    pub const BANNER: usize = 8;
 }
 
 fn materials() -> Vec<Material> {
@@ -87,8 +92,12 @@ fn materials() -> Vec<Material> {
         Material::matte(Vec3::new(0.22, 0.45, 0.18)),
         Material::matte(Vec3::new(0.45, 0.3, 0.18)),
         shiny(Vec3::new(0.9, 0.89, 0.86), 0.5, 64.0),
+        Material::matte(Vec3::ONE).with_texture(0).masked(0.5),
     ]
 }
+
+/// Banner cards: 1.4 m wide, 2.6 m long.
+const BANNER_SIZE: Vec2 = Vec2::new(1.4, 2.6);
 
 /// x of column `k` (0-based) of a row.
 fn column_x(k: usize) -> f32 {
@@ -466,6 +475,10 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
     let urn = h.mesh(urn());
     let fountain = h.mesh(fountain());
     let bush = h.mesh(named(primitives::uv_sphere(0.5, 20, 10), "bush"));
+    let banner = h.mesh(named(
+        primitives::card(BANNER_SIZE.x, BANNER_SIZE.y, Vec2::ONE),
+        "banner",
+    ));
     let ball = h.mesh(named(primitives::uv_sphere(0.3, 24, 12), "ball"));
 
     let (hx, hz) = (0.5 * HALL_LENGTH, 0.5 * HALL_WIDTH);
@@ -536,6 +549,20 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
                 mat::STONE,
                 Vec3::new(column_x(b) + 0.36, upper_base + 0.85, z - 0.08),
                 Vec3::new(column_x(b + 1) - 0.36, upper_base + 0.97, z + 0.08),
+            );
+        }
+        // Banners from the gallery's edge in every other bay, on the nave side of the arches,
+        // facing the nave (the card faces +Z; turned half round on the +Z side).
+        for b in (1..COLUMNS_PER_ROW - 1).step_by(2) {
+            let top = GALLERY_Y - 0.15;
+            h.put(
+                banner,
+                mat::BANNER,
+                Mat4::from_translation(Vec3::new(
+                    bay_x(b),
+                    top - BANNER_SIZE.y,
+                    side * (arch_z0 - 0.1),
+                )) * Mat4::from_rotation_y(if side > 0.0 { std::f32::consts::PI } else { 0.0 }),
             );
         }
         // Spandrels between the end columns and the end walls.
@@ -709,7 +736,7 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
     let mut camera = Camera::look_at(ATRIUM_CAMERA_POSITION, ATRIUM_CAMERA_TARGET);
     camera.far = 80.0;
     Scene {
-        textures: Vec::new(),
+        textures: vec![super::courtyard::banner_texture()],
         name: "atrium".into(),
         lights: layout_lights(
             n,

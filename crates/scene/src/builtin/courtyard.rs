@@ -70,6 +70,35 @@ pub fn lattice_solid(x: u32, y: u32) -> bool {
     x % PERIOD < BAR || y % PERIOD < BAR
 }
 
+/// The banner: red with blue stripes and a gold emblem, a swallow-tailed bottom and a ring
+/// of eight round holes (alpha 0), 256 × 512 texels. Also hung in the atrium.
+pub fn banner_texture() -> Texture {
+    Texture::from_fn("banner", 256, 512, |x, y| {
+        let (u, v) = ((x as f32 + 0.5) / 256.0, (y as f32 + 0.5) / 512.0);
+        // Swallow tail: a V cut into the bottom fifth.
+        let tail = v > 0.8 && (v - 0.8) / 0.2 > 1.0 - (2.0 * u - 1.0).abs();
+        // A ring of eight round holes around the emblem.
+        let centre = Vec2::new(0.5, 0.4);
+        let mut hole = false;
+        for k in 0..8 {
+            let a = TAU * k as f32 / 8.0;
+            let c = centre + Vec2::new(a.cos() * 0.3, a.sin() * 0.15);
+            if (Vec2::new(u, v * 0.5) - Vec2::new(c.x, c.y * 0.5)).length() < 0.05 {
+                hole = true;
+            }
+        }
+        let emblem = (Vec2::new(u, v * 0.5) - Vec2::new(0.5, 0.2)).length() < 0.12;
+        let c = if emblem {
+            Vec3::new(0.95, 0.8, 0.2)
+        } else if (x / 16) % 4 == 0 {
+            Vec3::new(0.2, 0.25, 0.7)
+        } else {
+            Vec3::new(0.7, 0.1, 0.12)
+        };
+        rgba(c, if tail || hole { 0 } else { 255 })
+    })
+}
+
 /// The seven procedural textures of the scene (see [`tex`]).
 pub fn courtyard_textures() -> Vec<Texture> {
     let stone = Texture::from_fn("stone", 256, 256, |x, y| {
@@ -114,30 +143,7 @@ pub fn courtyard_textures() -> Vec<Texture> {
         let wood = Vec3::new(0.55, 0.38, 0.22) * (0.85 + 0.15 * hash(x / 4, y, 5));
         rgba(wood, if lattice_solid(x, y) { 255 } else { 0 })
     });
-    let banner = Texture::from_fn("banner", 256, 512, |x, y| {
-        let (u, v) = ((x as f32 + 0.5) / 256.0, (y as f32 + 0.5) / 512.0);
-        // Swallow tail: a V cut into the bottom fifth.
-        let tail = v > 0.8 && (v - 0.8) / 0.2 > 1.0 - (2.0 * u - 1.0).abs();
-        // A ring of eight round holes around the emblem.
-        let centre = Vec2::new(0.5, 0.4);
-        let mut hole = false;
-        for k in 0..8 {
-            let a = TAU * k as f32 / 8.0;
-            let c = centre + Vec2::new(a.cos() * 0.3, a.sin() * 0.15);
-            if (Vec2::new(u, v * 0.5) - Vec2::new(c.x, c.y * 0.5)).length() < 0.05 {
-                hole = true;
-            }
-        }
-        let emblem = (Vec2::new(u, v * 0.5) - Vec2::new(0.5, 0.2)).length() < 0.12;
-        let c = if emblem {
-            Vec3::new(0.95, 0.8, 0.2)
-        } else if (x / 16) % 4 == 0 {
-            Vec3::new(0.2, 0.25, 0.7)
-        } else {
-            Vec3::new(0.7, 0.1, 0.12)
-        };
-        rgba(c, if tail || hole { 0 } else { 255 })
-    });
+    let banner = banner_texture();
     // Leaves: ellipses scattered over the texture, each its own green.
     let mut rng = Rand::new(7, 0x1eaf);
     let leaves: Vec<(Vec2, Vec2, f32, Vec3)> = (0..140)

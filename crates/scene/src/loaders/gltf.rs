@@ -34,8 +34,8 @@ use glam::{Mat3, Mat4, Vec2, Vec3};
 use serde_json::Value;
 
 use super::{
-    check_triangles, io_error, mesh_name, parse_error, read_limited, set_normals, too_large,
-    Parts, MAX_FILE_BYTES, PHONG_PER_LUX,
+    check_triangles, io_error, mesh_name, parse_error, read_limited, set_normals, too_large, Parts,
+    MAX_FILE_BYTES, PHONG_PER_LUX,
 };
 use crate::builtin::{
     DIRECTIONAL_CASCADES, DIRECTIONAL_SHADOW_RESOLUTION, DIRECTIONAL_SPLIT_LAMBDA,
@@ -70,19 +70,19 @@ fn open(path: &Path) -> Result<Opened, SceneError> {
         if bytes.get(4..8) == Some(&1u32.to_le_bytes()[..]) {
             return Err(gltf1_error(path));
         }
-        let glb = ::gltf::Glb::from_slice(&bytes)
-            .map_err(|e| parse_error(path, format!("glTF: {e}")))?;
+        let glb =
+            ::gltf::Glb::from_slice(&bytes).map_err(|e| parse_error(path, format!("glTF: {e}")))?;
         (glb.json.into_owned(), glb.bin.map(|b| b.into_owned()))
     } else {
         (bytes, None)
     };
-    let json: Value = serde_json::from_slice(&json_bytes)
-        .map_err(|e| parse_error(path, format!("glTF: {e}")))?;
+    let json: Value =
+        serde_json::from_slice(&json_bytes).map_err(|e| parse_error(path, format!("glTF: {e}")))?;
     if is_gltf1(&json) {
         return Err(gltf1_error(path));
     }
-    let mut root: ::gltf::json::Root = serde_json::from_slice(&json_bytes)
-        .map_err(|e| parse_error(path, format!("glTF: {e}")))?;
+    let mut root: ::gltf::json::Root =
+        serde_json::from_slice(&json_bytes).map_err(|e| parse_error(path, format!("glTF: {e}")))?;
     drop(json_bytes);
 
     // gltf-json 1.4.1's validation looks up a primitive's POSITION accessor before checking
@@ -108,10 +108,11 @@ fn open(path: &Path) -> Result<Opened, SceneError> {
     // Required extensions: the ignorable ones are dropped from the list (with a note) so that
     // validation accepts the file; any other is refused here, by name.
     let mut notes = Vec::new();
-    let (ignored, unsupported): (Vec<String>, Vec<String>) = std::mem::take(&mut root.extensions_required)
-        .into_iter()
-        .filter(|e| !::gltf::json::extensions::ENABLED_EXTENSIONS.contains(&e.as_str()))
-        .partition(|e| ignorable_requirement(e));
+    let (ignored, unsupported): (Vec<String>, Vec<String>) =
+        std::mem::take(&mut root.extensions_required)
+            .into_iter()
+            .filter(|e| !::gltf::json::extensions::ENABLED_EXTENSIONS.contains(&e.as_str()))
+            .partition(|e| ignorable_requirement(e));
     if !unsupported.is_empty() {
         return Err(parse_error(
             path,
@@ -128,7 +129,8 @@ fn open(path: &Path) -> Result<Opened, SceneError> {
             ignored.join(", ")
         ));
     }
-    let document = Document::from_json(root).map_err(|e| parse_error(path, format!("glTF: {e}")))?;
+    let document =
+        Document::from_json(root).map_err(|e| parse_error(path, format!("glTF: {e}")))?;
     let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     check_buffer_sources(path, &document, &base)?;
     let buffers = ::gltf::import_buffers(&document, Some(&base), blob)
@@ -407,9 +409,8 @@ fn check_accessor(
 
 /// Texture coordinates: `Vec2` of floats, or of normalized unsigned bytes or shorts.
 fn check_texcoord_accessor(path: &Path, label: &str, a: &Accessor<'_>) -> Result<(), SceneError> {
-    let bad = |reason: String| {
-        parse_error(path, format!("glTF primitive {label}: TEXCOORD_0 {reason}"))
-    };
+    let bad =
+        |reason: String| parse_error(path, format!("glTF primitive {label}: TEXCOORD_0 {reason}"));
     let ok = a.dimensions() == Dimensions::Vec2
         && match a.data_type() {
             DataType::F32 => !a.normalized(),
@@ -448,15 +449,15 @@ pub(crate) fn fan_to_list(v: &[u32]) -> Vec<u32> {
     out
 }
 
-fn read_primitive<'a, 's, F>(
+fn read_primitive<'p, 's, F>(
     path: &Path,
     label: &str,
-    prim: &'a ::gltf::Primitive<'a>,
+    prim: &'p ::gltf::Primitive<'p>,
     get: &F,
     world: Mat4,
 ) -> Result<Mesh, SceneError>
 where
-    F: Clone + Fn(::gltf::Buffer<'a>) -> Option<&'s [u8]>,
+    F: Clone + Fn(::gltf::Buffer<'p>) -> Option<&'s [u8]>,
 {
     let name = mesh_name(path, Some(label));
     let mode = prim.mode();
@@ -699,7 +700,11 @@ impl<'o> Images<'o> {
             let end = start.checked_add(view.byte_length.0 as usize);
             match end.and_then(|end| data.0.get(start..end)) {
                 Some(b) => b.to_vec(),
-                None => return Err(format!("image '{name}': its buffer view is outside the buffer")),
+                None => {
+                    return Err(format!(
+                        "image '{name}': its buffer view is outside the buffer"
+                    ))
+                }
             }
         } else if let Some(uri) = &image.uri {
             if let Some(rest) = uri.strip_prefix("data:") {
@@ -731,7 +736,9 @@ impl<'o> Images<'o> {
                 read_limited(&file).map_err(|e| e.to_string())?
             }
         } else {
-            return Err(format!("image '{name}' has neither a buffer view nor a URI"));
+            return Err(format!(
+                "image '{name}' has neither a buffer view nor a URI"
+            ));
         };
         Texture::decode(&name, &bytes)
     }
@@ -850,9 +857,7 @@ pub(crate) fn shininess_from_roughness(roughness: f32) -> f32 {
 
 /// The direction a node's local −Z points in world space (lights and cameras look down −Z).
 fn forward_of(world: &Mat4) -> Option<Vec3> {
-    world
-        .transform_vector3(Vec3::NEG_Z)
-        .try_normalize()
+    world.transform_vector3(Vec3::NEG_Z).try_normalize()
 }
 
 fn read_lights(
@@ -887,20 +892,20 @@ fn read_lights(
         let Some(def) = defs.get(index) else {
             continue;
         };
-        let name = def
-            .name
-            .clone()
-            .unwrap_or_else(|| format!("light {index}"));
-        let colour =
-            Vec3::from(def.color).max(Vec3::ZERO) * def.intensity.max(0.0) * PHONG_PER_LUX;
+        let name = def.name.clone().unwrap_or_else(|| format!("light {index}"));
+        let colour = Vec3::from(def.color).max(Vec3::ZERO) * def.intensity.max(0.0) * PHONG_PER_LUX;
         if !colour.is_finite() {
             return Err(parse_error(
                 path,
                 format!("glTF light '{name}': colour × intensity is not a finite number"),
             ));
         }
+        let Checked::Valid(ty) = def.type_ else {
+            continue; // validation refuses unknown types; nothing to do
+        };
         let position = world.w_axis.truncate();
-        let range = || match def.range {
+        let range = match def.range {
+            _ if ty == Type::Directional => 0.0, // unused
             Some(r) if r.is_finite() && r > 0.0 => r,
             Some(r) => {
                 notes.push(format!(
@@ -911,14 +916,8 @@ fn read_lights(
             }
             None => super::light_range(colour, diagonal),
         };
-        let Checked::Valid(ty) = def.type_ else {
-            continue; // validation refuses unknown types; nothing to do
-        };
         let kind = match ty {
-            Type::Point => LightKind::Point {
-                position,
-                range: range(),
-            },
+            Type::Point => LightKind::Point { position, range },
             Type::Spot | Type::Directional => {
                 let Some(direction) = forward_of(world) else {
                     notes.push(format!(
@@ -943,7 +942,7 @@ fn read_lights(
                         position,
                         direction,
                         cutoff_deg: super::spot_cutoff_deg(outer),
-                        range: range(),
+                        range,
                     }
                 }
             }
@@ -1076,7 +1075,10 @@ mod tests {
 
     #[test]
     fn strips_and_fans_follow_the_specification() {
-        assert_eq!(strip_to_list(&[0, 1, 2, 3, 4]), vec![0, 1, 2, 1, 3, 2, 2, 3, 4]);
+        assert_eq!(
+            strip_to_list(&[0, 1, 2, 3, 4]),
+            vec![0, 1, 2, 1, 3, 2, 2, 3, 4]
+        );
         assert_eq!(fan_to_list(&[0, 1, 2, 3]), vec![1, 2, 0, 2, 3, 0]);
         assert!(strip_to_list(&[0, 1]).is_empty());
         assert!(fan_to_list(&[]).is_empty());

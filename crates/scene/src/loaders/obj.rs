@@ -1,21 +1,159 @@
 //! Wavefront OBJ via `tobj`, and a small OBJ writer.
 //!
-//! Why: OBJ is the lowest-common-denominator interchange format (most test models ship as OBJ).
-//! `tobj` does the parsing; here it is told to triangulate (fan) and to build a single index so
-//! normals line up with positions the way [`Mesh`] needs. Materials (`mtllib`) are not opened:
-//! the scene format assigns materials itself, and skipping them means a model never makes the
-//! loader touch other files.
+//! Why: OBJ is the lowest-common-denominator interchange format (most test models ship as OBJ,
+//! Sponza included). `tobj` does the parsing; here it is told to triangulate (fan) and to build
+//! a single index so normals and texture coordinates line up with positions the way [`Mesh`]
+//! needs. tobj starts a new model whenever the material changes, so every mesh has one
+//! material. Texture coordinates are flipped to glTF's convention (`v = 1 − v_obj`: OBJ's
+//! `v = 0` is the bottom of the image, ours the top).
+//!
+//! [`load`] (behind [`load_mesh`](super::load_mesh)) reads geometry only and never opens
+//! another file. [`load_scene`] also opens the material libraries (`mtllib`, relative to the
+//! OBJ, at most [`MAX_MTL_BYTES`] each) and their textures ([`super::mtl`]). A library that is
+//! missing, unreadable or empty is not an error: the meshes get a default material and the
+//! scene a note (and the log a warning), since geometry without its materials is still worth
+//! rendering.
 
-use std::io::{BufReader, Write};
-use std::path::Path;
+use std::cell::RefCell;
+use std::io::{BufReader, Read, Write};
+use std::path::{Path, PathBuf};
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
-use super::{mesh_name, open_limited, parse_error, set_normals};
-use crate::{Mesh, SceneError};
+use super::{mesh_name, open_limited, parse_error, set_normals, Parts};
+use crate::{Material, Mesh, SceneError};
 
-/// Loads every object / group with faces as one mesh.
+/// Largest material library (`.mtl`) read, in bytes (64 MiB; real ones are kilobytes).
+pub const MAX_MTL_BYTES: u64 = 64 << 20;
+
+/// A material library named by the OBJ, and what became of it.
+pub(super) struct Library {
+    /// The name as the OBJ gives it.
+    pub name: String,
+    /// The directory its texture paths are relative to.
+    pub dir: PathBuf,
+    /// How many materials it defined, or why it could not be used.
+    pub outcome: Result<usize, String>,
+}
+
+/// What [`read`] returns.
+struct ObjRead {
+    meshes: Vec<Mesh>,
+    /// Each mesh's index into `materials` (tobj's, in library order), if any.
+    material_ids: Vec<Option<usize>>,
+    materials: Vec<tobj::Material>,
+    libraries: Vec<Library>,
+}
+
+/// Loads every object / group (per material) with faces as one mesh.
 pub(super) fn load(path: &Path) -> Result<Vec<Mesh>, SceneError> {
+    Ok(read(path, false)?.meshes)
+}
+
+/// Loads the meshes with their materials and textures.
+pub(super) fn load_scene(path: &Path) -> Result<Parts, SceneError> {
+    let read = read(path, true)?;
+    let mut notes = Vec::new();
+    for lib in &read.libraries {
+        let note = match &lib.outcome {
+            Err(reason) => format!(
+                "the OBJ's material library '{}' could not be read ({reason}): default materials",
+                lib.name
+            ),
+            Ok(0) => format!(
+                "the OBJ's material library '{}' is empty (it defines no materials): default \
+                 materials",
+                lib.name
+            ),
+            Ok(_) => continue,
+        };
+        log::warn!("{}: {note}", path.display());
+        notes.push(note);
+    }
+    // tobj appends each library's materials in turn: the directory of material `i`.
+    let mut dirs = Vec::with_capacity(read.materials.len());
+    for lib in &read.libraries {
+        if let Ok(n) = lib.outcome {
+            dirs.extend(std::iter::repeat_n(lib.dir.clone(), n));
+        }
+    }
+    let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    dirs.resize(read.materials.len(), base);
+    let (mut materials, textures) = super::mtl::convert(&read.materials, &dirs, &mut notes);
+    let default_material = materials.len();
+    let mut needs_default = false;
+    let mesh_material = read
+        .material_ids
+        .iter()
+        .map(|id| match id {
+            Some(i) if *i < default_material => *i,
+            _ => {
+                needs_default = true;
+                default_material
+            }
+        })
+        .collect();
+    if needs_default {
+        materials.push(Material::default());
+    }
+    Ok(Parts {
+        meshes: read.meshes,
+        mesh_material,
+        materials,
+        textures,
+        lights: Vec::new(),
+        camera: None,
+        notes,
+    })
+}
+
+/// Reads a material library, held to [`MAX_MTL_BYTES`]; the error is the reason in words.
+fn read_mtl(file: &Path) -> Result<Vec<u8>, String> {
+    let len = std::fs::metadata(file).map_err(|e| e.to_string())?.len();
+    if len > MAX_MTL_BYTES {
+        return Err(format!(
+            "it is {len} bytes; the limit is {MAX_MTL_BYTES} bytes"
+        ));
+    }
+    let mut bytes = Vec::new();
+    std::fs::File::open(file)
+        .map_err(|e| e.to_string())?
+        .take(MAX_MTL_BYTES)
+        .read_to_end(&mut bytes)
+        .map_err(|e| e.to_string())?;
+    Ok(bytes)
+}
+
+/// Rewrites colour statements tobj 4.0.5 would panic on: it unwraps three numbers after `Ka`,
+/// `Kd`, `Ks` and `Ke` (found by fuzzing). The MTL specification lets green and blue default to
+/// red (`Kd 0.5` is grey), so one or two numbers are completed that way; a colour statement
+/// with no number is dropped (the material keeps its default). Invalid UTF-8 is replaced.
+fn sanitize_mtl(bytes: &[u8]) -> Vec<u8> {
+    let text = String::from_utf8_lossy(bytes);
+    let mut out = String::with_capacity(text.len());
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        let keyword = words.next();
+        if matches!(keyword, Some("Ka" | "Kd" | "Ks" | "Ke")) {
+            let values: Vec<&str> = words.take(3).collect();
+            match values.len() {
+                0 => continue,
+                1 | 2 => {
+                    let r = values[0];
+                    let g = values.get(1).copied().unwrap_or(r);
+                    out.push_str(&format!("{} {r} {g} {r}\n", keyword.unwrap_or_default()));
+                    continue;
+                }
+                _ => {}
+            }
+        }
+        out.push_str(line);
+        out.push('\n');
+    }
+    out.into_bytes()
+}
+
+fn read(path: &Path, with_materials: bool) -> Result<ObjRead, SceneError> {
     let mut reader = BufReader::new(open_limited(path)?);
     // `..Default::default()` covers fields that only exist with some of tobj's optional features.
     #[allow(clippy::needless_update)]
@@ -26,13 +164,34 @@ pub(super) fn load(path: &Path) -> Result<Vec<Mesh>, SceneError> {
         ignore_lines: true,
         ..Default::default()
     };
-    // Material libraries are deliberately not opened (see the module docs).
-    let (models, _materials) = tobj::load_obj_buf(&mut reader, &options, |_| {
-        Err(tobj::LoadError::OpenFileFailed)
-    })
-    .map_err(|e| parse_error(path, format!("OBJ: {e}")))?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let libraries = RefCell::new(Vec::new());
+    let load_library = |name: &Path| -> tobj::MTLLoadResult {
+        if !with_materials {
+            // Geometry only: never open another file.
+            return Err(tobj::LoadError::OpenFileFailed);
+        }
+        let name = name.to_string_lossy().replace('\\', "/");
+        let file = base.join(&name);
+        let dir = file.parent().unwrap_or(base).to_path_buf();
+        let (outcome, result) = match read_mtl(&file) {
+            Ok(bytes) => {
+                match tobj::load_mtl_buf(&mut std::io::Cursor::new(sanitize_mtl(&bytes))) {
+                    Ok((materials, map)) => (Ok(materials.len()), Ok((materials, map))),
+                    Err(e) => (Err(format!("{e}")), Err(e)),
+                }
+            }
+            Err(reason) => (Err(reason), Err(tobj::LoadError::OpenFileFailed)),
+        };
+        libraries.borrow_mut().push(Library { name, dir, outcome });
+        result
+    };
+    let (models, materials) = tobj::load_obj_buf(&mut reader, &options, load_library)
+        .map_err(|e| parse_error(path, format!("OBJ: {e}")))?;
+    let materials = materials.unwrap_or_default();
 
     let mut meshes = Vec::with_capacity(models.len());
+    let mut material_ids = Vec::with_capacity(models.len());
     for model in models {
         let m = model.mesh;
         if m.indices.is_empty() {
@@ -41,19 +200,33 @@ pub(super) fn load(path: &Path) -> Result<Vec<Mesh>, SceneError> {
         super::check_triangles(path, m.indices.len() / 3)?;
         let positions = to_vec3(&m.positions);
         let normals = (m.normals.len() == m.positions.len()).then(|| to_vec3(&m.normals));
+        let uvs = if m.texcoords.len() / 2 == positions.len() && m.texcoords.len() % 2 == 0 {
+            m.texcoords
+                .chunks_exact(2)
+                .map(|t| Vec2::new(t[0], 1.0 - t[1]))
+                .collect()
+        } else {
+            Vec::new()
+        };
         let mut mesh = Mesh {
             name: mesh_name(path, Some(&model.name)),
             positions,
             normals: Vec::new(),
-            uvs: Vec::new(),
+            uvs,
             indices: m.indices,
         };
         // Check indices before computing normals so the error is InvalidMesh, not a silent skip.
         super::check_indices(&mesh)?;
         set_normals(&mut mesh, normals);
         meshes.push(mesh);
+        material_ids.push(m.material_id);
     }
-    Ok(meshes)
+    Ok(ObjRead {
+        meshes,
+        material_ids,
+        materials,
+        libraries: libraries.into_inner(),
+    })
 }
 
 fn to_vec3(flat: &[f32]) -> Vec<Vec3> {

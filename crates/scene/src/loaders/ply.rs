@@ -332,6 +332,7 @@ mod tests {
             positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
             normals: vec![Vec3::Z; 3],
             indices: vec![0, 1, 2],
+            ..Mesh::default()
         };
         let mut out = Vec::new();
         write_ply_ascii(&mesh, &mut out).unwrap();
