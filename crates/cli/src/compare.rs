@@ -91,7 +91,7 @@ pub struct CompareArgs {
     /// let light through, as in the reference) or off (they cast as solid cards, what a
     /// renderer that ignores alpha would draw; the reference keeps its holes, so this scores
     /// that mistake).
-    #[arg(long, default_value = "on", value_parser = crate::parse_on_off)]
+    #[arg(long, default_value = "on", value_parser = crate::parse_on_off, action = clap::ArgAction::Set)]
     shadow_alpha: bool,
     /// Largest shadow-atlas side in texels (clamped to the adapter's limit).
     #[arg(long, default_value_t = manyshadows::shadow::DEFAULT_MAX_ATLAS_SIZE)]

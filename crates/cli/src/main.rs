@@ -273,7 +273,7 @@ pub(crate) struct RenderArgs {
     /// Alpha-tested casters in the shadow passes: on (holes in foliage, lattices and banners
     /// let light through) or off (they cast as solid cards, as a renderer that ignores alpha
     /// would draw them; the camera still sees the holes).
-    #[arg(long, default_value = "on", value_parser = parse_on_off)]
+    #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     shadow_alpha: bool,
     /// Largest shadow-atlas side in texels (clamped to the adapter's limit).
     #[arg(long, default_value_t = manyshadows::shadow::DEFAULT_MAX_ATLAS_SIZE)]
