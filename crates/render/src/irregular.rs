@@ -420,15 +420,15 @@ impl IrregularShadows {
 
         let module =
             crate::shaders::module(device, "irregular.shader", &crate::shaders::irregular());
+        // A scene without alpha-tested casters gets pipelines compiled without the mask test.
+        let masked = inputs.casters.first_masked_triangle < inputs.casters.triangles;
+        let constants: &[(&str, f64)] = if masked {
+            &[("ALPHA_TESTED", 1.0)]
+        } else {
+            &[]
+        };
         let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
+            crate::pipelines::compute_pipeline_with(device, entry, None, &module, entry, constants)
         };
         let pv = inputs.gbuffer.position.create_view(&Default::default());
         let nv = inputs.gbuffer.normal.create_view(&Default::default());

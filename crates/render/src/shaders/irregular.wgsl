@@ -54,6 +54,10 @@ const C_ARGS: u32 = 8u;          // x, y, z workgroups of cs_tiles
 // Tiles are TILE x TILE texels; footprints up to INLINE_TEXELS texels are walked in place.
 const TILE: u32 = 8u;
 const INLINE_TEXELS: u32 = 16u;
+// Scenes with alpha-tested casters (casters.rs puts them last) compile this with true: a hit
+// on such a triangle counts only where its mask is solid. Without, no mask code is compiled.
+override ALPHA_TESTED: bool = false;
+
 // Conservative margin of the texel square in the coverage test, texels (covers the rounding
 // of both projections by a wide margin).
 const MARGIN: f32 = 0.05;
@@ -227,7 +231,8 @@ fn cs_insert(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
 // Does the open segment o + t·dir, 0 < t < tmax, cross triangle (a, b, c) from either side?
 // The watertight test of Woop, Benthin and Wald (JCGT 2013), as the CPU reference (without
 // its double-precision re-evaluation of exact zeros, which WGSL cannot express). Returns the
-// hit's barycentric weights of a, b, c in xyz and w = 1 on a hit, w = 0 otherwise.
+// hit's unnormalised barycentric weights of a, b, c in xyz and their sum in w on a hit (the
+// weights are xyz / w), w = 0 otherwise.
 fn segment_hit(o: vec3<f32>, dir: vec3<f32>, tmax: f32, p0: vec3<f32>, p1: vec3<f32>, p2: vec3<f32>) -> vec4<f32> {
     let ad = abs(dir);
     var kz = 2u;
@@ -266,7 +271,7 @@ fn segment_hit(o: vec3<f32>, dir: vec3<f32>, tmax: f32, p0: vec3<f32>, p1: vec3<
         return vec4<f32>(0.0);
     }
     let t = (u * sz * a[kz] + v * sz * b[kz] + w * sz * c[kz]) / det;
-    return vec4<f32>(vec3<f32>(u, v, w) / det, select(0.0, 1.0, t > 0.0 && t < tmax));
+    return vec4<f32>(u, v, w, select(0.0, det, t > 0.0 && t < tmax));
 }
 
 // A caster triangle in one view: world corners and its conservative grid footprint.
@@ -392,7 +397,10 @@ fn walk(f: Footprint, v: IView, t: vec2<i32>) {
     let word = li / 32u;
     let bit = 1u << (li % 32u);
     let directional = v.light.w < 0.5;
-    let masked_from = corners[arrayLength(&corners) - 4u];
+    var masked_from = 0u;
+    if (ALPHA_TESTED) {
+        masked_from = corners[arrayLength(&corners) - 4u];
+    }
     var n = atomicLoad(&heads[bucket(v, vec2<u32>(t))]);
     loop {
         if (n == 0u) {
@@ -418,7 +426,8 @@ fn walk(f: Footprint, v: IView, t: vec2<i32>) {
         }
         let hit = segment_hit(o, dir, tmax, f.p0, f.p1, f.p2);
         // An alpha-tested triangle blocks only where its mask is solid at the hit.
-        if (hit.w > 0.0 && (f.tri < masked_from || triangle_covered(mask_tail(), f.tri, hit.xyz))) {
+        if (hit.w != 0.0 && (!ALPHA_TESTED || f.tri < masked_from
+            || triangle_covered(mask_tail(), f.tri, hit.xyz / hit.w))) {
             atomicAnd(&mask[m], ~bit);
         }
     }

@@ -115,8 +115,11 @@ fn texels(round: &[Entry], tile_size: impl Fn(u32) -> u32) -> u64 {
 /// The compute rasterizer's pipelines and buffers.
 pub struct Compute {
     setup: wgpu::ComputePipeline,
+    /// `cs_setup` and `cs_large` compiled with `ALPHA_TESTED`: the alpha-tested triangles.
+    setup_masked: wgpu::ComputePipeline,
     finalize: wgpu::ComputePipeline,
     large: wgpu::ComputePipeline,
+    large_masked: wgpu::ComputePipeline,
     copy: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     copy_layout: wgpu::BindGroupLayout,
@@ -200,6 +203,16 @@ impl Compute {
         let pipeline = |entry: &str, layout: &wgpu::PipelineLayout| {
             crate::pipelines::compute_pipeline(device, entry, layout, &module, entry)
         };
+        let alpha_tested = |entry: &str, layout: &wgpu::PipelineLayout| {
+            crate::pipelines::compute_pipeline_with(
+                device,
+                entry,
+                Some(layout),
+                &module,
+                entry,
+                &[("ALPHA_TESTED", 1.0)],
+            )
+        };
 
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let copy_layout = crate::pipelines::bind_group_layout(
@@ -261,8 +274,10 @@ impl Compute {
         });
         Ok(Self {
             setup: pipeline("cs_setup", &main_layout),
+            setup_masked: alpha_tested("cs_setup", &main_layout),
             finalize: pipeline("cs_finalize", &finalize_layout),
             large: pipeline("cs_large", &main_layout),
+            large_masked: alpha_tested("cs_large", &main_layout),
             copy,
             layout,
             copy_layout,
@@ -490,11 +505,21 @@ impl ShadowTechnique for Compute {
                         timestamp_writes: None,
                     });
                     let s = g.timer.begin_compute_stats(&mut pass);
-                    pass.set_pipeline(&self.setup);
                     pass.set_bind_group(0, &bind_group, &[]);
-                    let threads = casters.triangles as u64 * round.len() as u64;
-                    let (x, y) = crate::dispatch_2d(threads, self.max_groups);
-                    pass.dispatch_workgroups(x, y, 1);
+                    // Opaque triangles, then the alpha-tested ones, each with its pipeline.
+                    let opaque = casters.first_masked_triangle;
+                    for (pipeline, tris) in [
+                        (&self.setup, opaque),
+                        (&self.setup_masked, casters.triangles - opaque),
+                    ] {
+                        if tris == 0 {
+                            continue;
+                        }
+                        pass.set_pipeline(pipeline);
+                        let threads = tris as u64 * round.len() as u64;
+                        let (x, y) = crate::dispatch_2d(threads, self.max_groups);
+                        pass.dispatch_workgroups(x, y, 1);
+                    }
                     pass.set_pipeline(&self.finalize);
                     pass.set_bind_group(1, &self.args_bind_group, &[]);
                     pass.dispatch_workgroups(1, 1, 1);
@@ -507,7 +532,13 @@ impl ShadowTechnique for Compute {
                         timestamp_writes: None,
                     });
                     let s = g.timer.begin_compute_stats(&mut pass);
-                    pass.set_pipeline(&self.large);
+                    // Chunks of alpha-tested triangles say so; only a scene with some needs the
+                    // pipeline that looks.
+                    pass.set_pipeline(if casters.first_masked_triangle < casters.triangles {
+                        &self.large_masked
+                    } else {
+                        &self.large
+                    });
                     pass.set_bind_group(0, &bind_group, &[]);
                     pass.dispatch_workgroups_indirect(&self.args, 0);
                     g.timer.end_compute_stats(&mut pass, s);

@@ -76,6 +76,11 @@ struct RoundEntries {
 
 @group(1) @binding(0) var<storage, read_write> args: array<u32, 4>;
 
+// The pipeline for alpha-tested triangles (casters.rs puts them last): its cs_setup threads
+// cover only those, and it tests masks. The opaque pipeline (false) compiles without any
+// alpha test, so opaque casters rasterize exactly as before masks existed.
+override ALPHA_TESTED: bool = false;
+
 const NO_MASK: u32 = 0xffffffffu;
 // The alpha-tested triangle this invocation rasterizes (NO_MASK: opaque) and its clip-space
 // corners before near-plane clipping.
@@ -85,7 +90,7 @@ var<private> mask_clip: array<vec4<f32>, 3>;
 // Whether texel (x, y) of `tile` is solid: always for opaque triangles; for an alpha-tested
 // one, the mask at the point of the triangle seen through the texel's centre.
 fn texel_solid(tile: vec4<f32>, x: u32, y: u32) -> bool {
-    if (masked_tri == NO_MASK) {
+    if (!ALPHA_TESTED || masked_tri == NO_MASK) {
         return true;
     }
     let half = 0.5 * tile.z;
@@ -316,12 +321,20 @@ fn near_crossing(a: vec4<f32>, b: vec4<f32>) -> vec4<f32> {
 @compute @workgroup_size(64, 1, 1)
 fn cs_setup(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let g = gid.x + gid.y * groups.x * 64u;
-    let tris = params.counts.x;
-    let e = g / tris;
+    // This pipeline's triangles: the opaque ones before the first alpha-tested one, or the
+    // alpha-tested ones after it (the mask tail's header, alpha_mask.wgsl).
+    let first_masked = corners[arrayLength(&corners) - 4u];
+    var first = 0u;
+    var tris = first_masked;
+    if (ALPHA_TESTED) {
+        first = first_masked;
+        tris = params.counts.x - first_masked;
+    }
+    let e = g / max(tris, 1u);
     if (e >= params.counts.w) {
         return;
     }
-    let tri = g - e * tris;
+    let tri = first + g - e * tris;
     let entry = entries.list[e];
     let view = views[entry.x];
     let p0 = world[corners[3u * tri]];
@@ -338,7 +351,7 @@ fn cs_setup(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     if ((bits & CULL_FRUSTUM) != 0u && outside_frustum(c0, c1, c2)) {
         return;
     }
-    if (tri >= corners[arrayLength(&corners) - 4u]) {
+    if (ALPHA_TESTED) {
         masked_tri = tri;
         mask_clip = array<vec4<f32>, 3>(c0, c1, c2);
     }
@@ -415,7 +428,7 @@ fn cs_large(
     let entry = entries.list[ch.rect.z];
     let view = views[entry.x];
     let tile = view.tile;
-    if (ch.rect.w != 0u) {
+    if (ALPHA_TESTED && ch.rect.w != 0u) {
         let tri = ch.rect.w - 1u;
         masked_tri = tri;
         mask_clip = array<vec4<f32>, 3>(
