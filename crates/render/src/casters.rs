@@ -25,8 +25,9 @@
 //! needs travels at the end of the corner buffer (the *mask tail*, read by
 //! `alpha_mask.wgsl`, so no technique needs another binding): per masked caster vertex its
 //! texture coordinate and material, per material its mask record, the coverage bits, and a
-//! four-word header in the last four words. Masked and double-sided casters are never
-//! back-face culled: a hole in a closed mesh lets a ray reach its back faces.
+//! four-word header in the last four words. Masked casters are never back-face culled (a
+//! hole in a closed mesh lets a ray reach its back faces); double-sided ones only where
+//! culling is exact, never under [`CasterOptions::assume_closed`].
 //!
 //! Back-face culling is only exact for closed meshes seen from outside: the nearest surface
 //! along a ray entering a closed mesh always faces the ray's origin. So a triangle is

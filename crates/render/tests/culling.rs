@@ -114,3 +114,37 @@ fn backface_culling_removes_back_faces_only_where_that_is_exact() {
         "forced back-face culling must drop the upside-down quad ({culled} texels differ)"
     );
 }
+
+/// A double-sided material is never back-face culled, not even when seed 000's "every mesh
+/// is closed" is forced: the same upside-down quad, its material marked double-sided, keeps
+/// its shadow in every single-pass technique (the test above shows the same forcing drops it
+/// when the material is single-sided).
+#[test]
+fn double_sided_casters_keep_their_shadow_under_forced_culling() {
+    let ctx = common::context();
+    let mut scene = scene();
+    scene.materials.push(Material {
+        double_sided: true,
+        ..Material::default()
+    });
+    scene.instances[1].material = 1;
+    let reference = atlas(
+        &ctx,
+        &scene,
+        Technique::Traditional,
+        ShadowOptions::default(),
+    );
+    let forced = ShadowOptions {
+        cull: CullMode::All,
+        casters: CasterOptions {
+            assume_closed: true,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    for technique in [Technique::Layered, Technique::GpuDriven, Technique::Compute] {
+        let d = differing(&reference, &atlas(&ctx, &scene, technique, forced));
+        eprintln!("double-sided quad, culling forced, {technique}: {d} texels differ");
+        assert!(d <= 4, "{technique} culled a double-sided caster ({d} texels differ)");
+    }
+}
