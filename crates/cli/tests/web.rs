@@ -342,9 +342,31 @@ fn render_native(dir: &Path, name: &str, args: &[&str]) -> image::RgbImage {
     image::open(&png).unwrap().to_rgb8()
 }
 
-/// Pixels more than 2 levels apart in any channel.
+/// Pixels more than 2 levels apart in any channel; when any are, the page's frame and a
+/// difference image (white = differs) go to target/test-artifacts.
 fn differing(rgba: &[u8], native: &image::RgbImage) -> usize {
     assert_eq!(rgba.len(), (W * H * 4) as usize, "the page's frame size");
+    let off = differing_pixels(rgba, native);
+    if off > 0 {
+        let artifacts = repo().join("target/test-artifacts");
+        std::fs::create_dir_all(&artifacts).unwrap();
+        let page = image::RgbImage::from_fn(W, H, |x, y| {
+            let i = ((y * W + x) * 4) as usize;
+            image::Rgb([rgba[i], rgba[i + 1], rgba[i + 2]])
+        });
+        let diff = image::RgbImage::from_fn(W, H, |x, y| {
+            let (a, b) = (page.get_pixel(x, y), native.get_pixel(x, y));
+            let d = (0..3).any(|c| a.0[c].abs_diff(b.0[c]) > 2);
+            image::Rgb(if d { [255; 3] } else { [0; 3] })
+        });
+        page.save(artifacts.join("web-frame-page.png")).unwrap();
+        native.save(artifacts.join("web-frame-native.png")).unwrap();
+        diff.save(artifacts.join("web-frame-diff.png")).unwrap();
+    }
+    off
+}
+
+fn differing_pixels(rgba: &[u8], native: &image::RgbImage) -> usize {
     rgba.chunks(4)
         .zip(native.pixels())
         .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b.0[c]) > 2))

@@ -430,8 +430,12 @@ impl ShadowTechnique for Compute {
             .map(|r| texels(r, tile_size))
             .max()
             .unwrap_or(1);
-        // Room for every texel of the round to be covered by large triangles 4 times over.
-        let chunks_wanted = ((most_texels / 256) as u32).max(MIN_CHUNKS);
+        // Room for every texel of the round to be covered by large triangles 16 times over
+        // (chunks are rarely full). The atrium's 84 views at 32 lights ask for 102k chunks,
+        // 8 for each of its 12.6 M texels: at 4 times over, a third fell back to their setup
+        // threads, whose loops over many chunks llvmpipe cuts short (its 65,535-iteration budget
+        // per invocation), and large casters lost texels. 64 bytes a chunk: 12.6 MiB there.
+        let chunks_wanted = ((most_texels / 64) as u32).max(MIN_CHUNKS);
         self.pending_read = false;
         self.ensure_buffers(ctx, most_texels, chunks_wanted);
         let depth = self.depth.as_ref().expect("depth buffer").0.clone();
@@ -506,11 +510,14 @@ impl ShadowTechnique for Compute {
                     });
                     let s = g.timer.begin_compute_stats(&mut pass);
                     pass.set_bind_group(0, &bind_group, &[]);
-                    // Opaque triangles, then the alpha-tested ones, each with its pipeline.
+                    // Alpha-tested triangles, then the opaque ones, each with its pipeline (the
+                    // few masked ones first: their chunks find room in the list before a
+                    // crowded frame fills it, and their texels are the costlier to rasterize
+                    // on a setup thread).
                     let opaque = casters.first_masked_triangle;
                     for (pipeline, tris) in [
-                        (&self.setup, opaque),
                         (&self.setup_masked, casters.triangles - opaque),
+                        (&self.setup, opaque),
                     ] {
                         if tris == 0 {
                             continue;
