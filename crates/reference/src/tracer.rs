@@ -77,7 +77,8 @@ impl Tracer {
                 if (tri[1] - tri[0]).cross(tri[2] - tri[0]).length_squared() > 0.0 {
                     triangles.push(tri);
                     if tested {
-                        let uv = |k: usize| mesh.uvs.get(t[k] as usize).copied().unwrap_or_default();
+                        let uv =
+                            |k: usize| mesh.uvs.get(t[k] as usize).copied().unwrap_or_default();
                         alpha.push(masked.len() as u32);
                         masked.push(MaskedTriangle {
                             uvs: [uv(0), uv(1), uv(2)],

@@ -418,7 +418,10 @@ impl MeshCache {
                 // Seed 000's "every mesh is closed" never applies to double-sided materials:
                 // they are culled only where culling is exact.
                 let assume_closed = options.assume_closed
-                    && !scene.materials.get(inst.material).is_some_and(|m| m.double_sided);
+                    && !scene
+                        .materials
+                        .get(inst.material)
+                        .is_some_and(|m| m.double_sided);
                 let closure = if assume_closed {
                     Closure::Outward
                 } else {

@@ -253,7 +253,7 @@ impl SceneTextures {
         // and never a multiple of six: wgpu's OpenGL backend takes those for cube maps.
         let layer_count = |layers: u32| {
             let n = layers.max(2);
-            if n % 6 == 0 {
+            if n.is_multiple_of(6) {
                 n + 1
             } else {
                 n
@@ -354,19 +354,30 @@ mod tests {
         assert_eq!(layer_side(&[], 0, 8192), 1);
         let big = t(4096, 4096);
         assert_eq!(layer_side(&[&big], 1, 8192), MAX_LAYER_SIDE);
-        assert_eq!(layer_side(&[&big], 1, 1000), 512, "a power of two within the device");
+        assert_eq!(
+            layer_side(&[&big], 1, 1000),
+            512,
+            "a power of two within the device"
+        );
         // 100 layers of 2048² with mips would be 2.2 GiB: halved until under 256 MiB.
         let side = layer_side(&[&big], 100, 8192);
-        assert!(array_bytes(side, 100) <= TEXTURE_BUDGET_BYTES && side == 512, "{side}");
+        assert!(
+            array_bytes(side, 100) <= TEXTURE_BUDGET_BYTES && side == 512,
+            "{side}"
+        );
     }
 
     #[test]
     fn mips_keep_alpha_coverage() {
         // Thin wires: one texel in four solid. Plain averaging gives alpha 0.25 everywhere at
         // level 2 (below the 0.5 cutoff: the wires vanish); the kept coverage is 25 %.
-        let t = Texture::from_fn("wires", 16, 16, |x, _| [0, 0, 0, if x % 4 == 0 { 255 } else { 0 }]);
+        let t = Texture::from_fn("wires", 16, 16, |x, _| {
+            [0, 0, 0, if x % 4 == 0 { 255 } else { 0 }]
+        });
         let levels = colour_mips(&t, 16);
-        let solid = |l: &Vec<u8>| l.chunks_exact(4).filter(|p| p[3] >= 128).count() as f32 / (l.len() / 4) as f32;
+        let solid = |l: &Vec<u8>| {
+            l.chunks_exact(4).filter(|p| p[3] >= 128).count() as f32 / (l.len() / 4) as f32
+        };
         assert_eq!(solid(&levels[0]), 0.25);
         for l in &levels[1..4] {
             assert!(solid(l) >= 0.24, "{}", solid(l));

@@ -26,7 +26,7 @@ const CELLS: u32 = 4;
 const TEXELS: u32 = 64;
 
 fn solid_cell(cx: u32, cy: u32) -> bool {
-    (cx + cy) % 2 == 0
+    (cx + cy).is_multiple_of(2)
 }
 
 /// The card's transform: the unit card (x −0.5..0.5, y 0..1, facing +Z) centred, laid flat
@@ -34,7 +34,11 @@ fn solid_cell(cx: u32, cy: u32) -> bool {
 fn card_transform() -> Mat4 {
     Mat4::from_translation(OCCLUDER_CENTER)
         * Mat4::from_rotation_x(-std::f32::consts::FRAC_PI_2)
-        * Mat4::from_scale(Vec3::new(2.0 * OCCLUDER_HALF_SIZE, 2.0 * OCCLUDER_HALF_SIZE, 1.0))
+        * Mat4::from_scale(Vec3::new(
+            2.0 * OCCLUDER_HALF_SIZE,
+            2.0 * OCCLUDER_HALF_SIZE,
+            1.0,
+        ))
         * Mat4::from_translation(Vec3::new(0.0, -0.5, 0.0))
 }
 
@@ -103,7 +107,7 @@ fn checker_truth(scene: &Scene) -> Vec<Option<bool>> {
             }
             let t = -o.y / d.y;
             let p = o + d * t;
-            if !(d.y < 0.0) || p.x.abs() > 10.0 || p.z.abs() > 10.0 {
+            if d.y >= 0.0 || d.y.is_nan() || p.x.abs() > 10.0 || p.z.abs() > 10.0 {
                 out.push(None);
                 continue;
             }
@@ -230,7 +234,13 @@ fn a_checker_texture_shades_each_cell_as_its_colour() {
         Material::matte(Vec3::ONE).with_texture(0),
         vec![texture.clone()],
     );
-    let lin = |c: [u8; 3]| Vec3::new(srgb_to_linear(c[0]), srgb_to_linear(c[1]), srgb_to_linear(c[2]));
+    let lin = |c: [u8; 3]| {
+        Vec3::new(
+            srgb_to_linear(c[0]),
+            srgb_to_linear(c[1]),
+            srgb_to_linear(c[2]),
+        )
+    };
     let plain = colours.map(|c| render(&floor_scene(Material::matte(lin(c)), Vec::new())));
     let got = render(&textured);
     // The floor plane (20 m, uv 0..1) under the analytic camera: the pixel's floor point.
@@ -302,7 +312,10 @@ fn a_flat_normal_map_changes_nothing() {
     );
     assert_eq!(flat_off, 0, "a flat normal map changed the shading");
     // A map tilting every normal by ~30° must show (the sun is straight-ish down).
-    assert!(tilt_off > 10_000, "a tilted normal map changed only {tilt_off} pixels");
+    assert!(
+        tilt_off > 10_000,
+        "a tilted normal map changed only {tilt_off} pixels"
+    );
 }
 
 /// A glTF file written with one light of each type (KHR_lights_punctual) and a camera renders
@@ -313,9 +326,13 @@ fn a_gltf_file_renders_with_its_own_lights_and_camera() {
     use manyshadows::scene::builtin::AnalyticLight;
     let ctx = common::context();
     let mut scene = builtin::build("plane-spot", &BuiltinOptions::default()).unwrap();
-    scene.lights = [AnalyticLight::Spot, AnalyticLight::Point, AnalyticLight::Directional]
-        .map(|l| l.light(None))
-        .to_vec();
+    scene.lights = [
+        AnalyticLight::Spot,
+        AnalyticLight::Point,
+        AnalyticLight::Directional,
+    ]
+    .map(|l| l.light(None))
+    .to_vec();
     let dir = common::artifacts_dir().join("gltf-lights");
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("three-lights.gltf");
@@ -363,6 +380,11 @@ fn a_gltf_file_renders_with_its_own_lights_and_camera() {
             a.shadowed,
             a.lit
         );
-        assert_eq!(a.wrong, 0, "light {k} ({}) of the glTF file", light.type_name());
+        assert_eq!(
+            a.wrong,
+            0,
+            "light {k} ({}) of the glTF file",
+            light.type_name()
+        );
     }
 }

@@ -498,7 +498,10 @@ fn the_atrium_fits_the_default_chunk_list() {
     let (requested, fell_back) = c.overflowed(&ctx).unwrap().expect("counters");
     let d = diff(&reference, &got);
     eprintln!("atrium: {requested} chunks, {fell_back} fell back; {d:?}");
-    assert!(requested > 50_000, "{requested}: the test no longer fills a list");
+    assert!(
+        requested > 50_000,
+        "{requested}: the test no longer fills a list"
+    );
     assert_eq!(fell_back, 0, "chunks fell back to their setup threads");
     assert!(d.coverage <= 200, "{d:?}");
 }

@@ -145,6 +145,9 @@ fn double_sided_casters_keep_their_shadow_under_forced_culling() {
     for technique in [Technique::Layered, Technique::GpuDriven, Technique::Compute] {
         let d = differing(&reference, &atlas(&ctx, &scene, technique, forced));
         eprintln!("double-sided quad, culling forced, {technique}: {d} texels differ");
-        assert!(d <= 4, "{technique} culled a double-sided caster ({d} texels differ)");
+        assert!(
+            d <= 4,
+            "{technique} culled a double-sided caster ({d} texels differ)"
+        );
     }
 }

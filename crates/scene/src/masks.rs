@@ -122,8 +122,9 @@ impl MaskSet {
         let full: Vec<(u32, u32)> = keys
             .iter()
             .map(|k| {
-                k.texture
-                    .map_or((1, 1), |t| (scene.textures[t].width, scene.textures[t].height))
+                k.texture.map_or((1, 1), |t| {
+                    (scene.textures[t].width, scene.textures[t].height)
+                })
             })
             .collect();
         let mut levels = vec![0u32; keys.len()];
@@ -168,7 +169,11 @@ impl MaskSet {
                                 n += 1;
                             }
                         }
-                        let a = if n == 0 { 0.0 } else { sum as f32 / (255.0 * n as f32) };
+                        let a = if n == 0 {
+                            0.0
+                        } else {
+                            sum as f32 / (255.0 * n as f32)
+                        };
                         if a * alpha >= cutoff {
                             let i = (y * w + x) as usize;
                             bits[first_word as usize + i / 32] |= 1 << (i % 32);
@@ -245,13 +250,18 @@ mod tests {
     #[test]
     fn coverage_follows_alpha_and_cutoff() {
         // Left half transparent, right half solid; 4x2 texels.
-        let t = Texture::from_fn("half", 4, 2, |x, _| [255, 255, 255, if x < 2 { 0 } else { 255 }]);
+        let t = Texture::from_fn("half", 4, 2, |x, _| {
+            [255, 255, 255, if x < 2 { 0 } else { 255 }]
+        });
         let masked = Material::default().with_texture(0).masked(0.5);
         let scene = scene_with(t, vec![Material::default(), masked]);
         let set = MaskSet::new(&scene);
         assert!(!set.is_masked(0));
         assert!(set.is_masked(1));
-        assert!(set.covered(0, Vec2::new(0.1, 0.1)), "opaque materials are always covered");
+        assert!(
+            set.covered(0, Vec2::new(0.1, 0.1)),
+            "opaque materials are always covered"
+        );
         assert!(!set.covered(1, Vec2::new(0.1, 0.5)));
         assert!(set.covered(1, Vec2::new(0.9, 0.5)));
         // Repeat wrapping: u = 1.1 is u = 0.1.
@@ -277,7 +287,9 @@ mod tests {
 
     #[test]
     fn shared_masks_and_clamp_wrapping() {
-        let t = Texture::from_fn("stripe", 2, 1, |x, _| [0, 0, 0, if x == 0 { 0 } else { 255 }]);
+        let t = Texture::from_fn("stripe", 2, 1, |x, _| {
+            [0, 0, 0, if x == 0 { 0 } else { 255 }]
+        });
         let mut a = Material::default().with_texture(0).masked(0.5);
         let mut b = a;
         b.base_color_texture = Some(TextureRef {
@@ -288,20 +300,32 @@ mod tests {
         a.diffuse = glam::Vec3::X;
         let set = MaskSet::new(&scene_with(t, vec![a, b]));
         assert_eq!(set.bits.len(), 1, "one mask for both materials");
-        assert!(!set.covered(0, Vec2::new(1.25, 0.0)), "repeat: 1.25 is 0.25");
-        assert!(set.covered(1, Vec2::new(1.25, 0.0)), "clamp: 1.25 is the last texel");
+        assert!(
+            !set.covered(0, Vec2::new(1.25, 0.0)),
+            "repeat: 1.25 is 0.25"
+        );
+        assert!(
+            set.covered(1, Vec2::new(1.25, 0.0)),
+            "clamp: 1.25 is the last texel"
+        );
     }
 
     #[test]
     fn masks_over_the_budget_are_halved() {
         // 4096 x 4096 texels = 2 MiB of bits each; three of them must shrink to fit 4 MiB.
-        let big = || Texture::from_fn("big", 4096, 4096, |x, _| [0, 0, 0, if x % 2 == 0 { 255 } else { 0 }]);
+        let big = || {
+            Texture::from_fn("big", 4096, 4096, |x, _| {
+                [0, 0, 0, if x % 2 == 0 { 255 } else { 0 }]
+            })
+        };
         let mut scene = Scene {
             textures: vec![big(), big(), big()],
             ..Scene::default()
         };
         for t in 0..3 {
-            scene.materials.push(Material::default().with_texture(t).masked(0.5));
+            scene
+                .materials
+                .push(Material::default().with_texture(t).masked(0.5));
         }
         let set = MaskSet::new(&scene);
         assert!(set.bytes() <= MASK_BUDGET_BYTES);

@@ -694,7 +694,8 @@ pub fn merge(meshes: &[(Mesh, Mat4)]) -> Mesh {
             if mesh.uvs.len() == mesh.positions.len() {
                 out.uvs.extend_from_slice(&mesh.uvs);
             } else {
-                out.uvs.resize(out.uvs.len() + mesh.positions.len(), Vec2::ZERO);
+                out.uvs
+                    .resize(out.uvs.len() + mesh.positions.len(), Vec2::ZERO);
             }
         }
         let linear = Mat3::from_mat4(*transform);

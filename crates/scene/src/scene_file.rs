@@ -694,7 +694,8 @@ fn load_merged(cx: &Ctx<'_>, file: &str, name: &str) -> Result<Mesh, SceneError>
         if !p.uvs.is_empty() || !out.uvs.is_empty() {
             out.uvs.resize(out.positions.len(), glam::Vec2::ZERO);
             if p.uvs.is_empty() {
-                out.uvs.resize(out.positions.len() + p.positions.len(), glam::Vec2::ZERO);
+                out.uvs
+                    .resize(out.positions.len() + p.positions.len(), glam::Vec2::ZERO);
             } else {
                 out.uvs.extend_from_slice(&p.uvs);
             }

@@ -115,7 +115,10 @@ impl Texture {
     /// Checks the size and the data length.
     pub fn validate(&self) -> Result<(), String> {
         if self.width == 0 || self.height == 0 {
-            return Err(format!("'{}' has no texels ({}x{})", self.name, self.width, self.height));
+            return Err(format!(
+                "'{}' has no texels ({}x{})",
+                self.name, self.width, self.height
+            ));
         }
         if self.width > MAX_TEXTURE_SIDE || self.height > MAX_TEXTURE_SIDE {
             return Err(format!(
@@ -141,7 +144,12 @@ impl Texture {
         let x = x.min(self.width - 1) as usize;
         let y = y.min(self.height - 1) as usize;
         let i = 4 * (y * self.width as usize + x);
-        [self.rgba[i], self.rgba[i + 1], self.rgba[i + 2], self.rgba[i + 3]]
+        [
+            self.rgba[i],
+            self.rgba[i + 1],
+            self.rgba[i + 2],
+            self.rgba[i + 3],
+        ]
     }
 
     /// This image resampled to `width`×`height` (a triangle filter; colour in linear light,
@@ -165,7 +173,8 @@ impl Texture {
             .collect();
         let src = image::Rgba32FImage::from_raw(self.width, self.height, linear)
             .expect("the buffer holds width·height texels");
-        let out = image::imageops::resize(&src, width, height, image::imageops::FilterType::Triangle);
+        let out =
+            image::imageops::resize(&src, width, height, image::imageops::FilterType::Triangle);
         let rgba: Vec<u8> = out
             .into_raw()
             .chunks_exact(4)
@@ -282,7 +291,9 @@ impl TextureRef {
 }
 
 /// How a material's alpha is used (glTF `alphaMode`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum AlphaMode {
     /// Alpha is ignored: the surface is solid.

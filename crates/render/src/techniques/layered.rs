@@ -55,8 +55,9 @@ impl Layered {
         let pipeline_layout =
             crate::pipelines::pipeline_layout(device, "layered.pipeline_layout", &[&layout]);
         let pipeline = |entry: &str| depth_pipeline(device, &pipeline_layout, &module, entry, &[]);
-        let masked =
-            |entry: &str| masked_depth_pipeline(device, &pipeline_layout, &module, entry, &[], None);
+        let masked = |entry: &str| {
+            masked_depth_pipeline(device, &pipeline_layout, &module, entry, &[], None)
+        };
         Ok(Self {
             indexed: pipeline("vs_indexed"),
             pulled: pipeline("vs_pulled"),

@@ -202,21 +202,23 @@ impl Multiview {
         masked: bool,
     ) -> &wgpu::RenderPipeline {
         let (module, layout) = (&self.module, &self.pipeline_layout);
-        self.pipelines.entry((n, pulled, masked)).or_insert_with(|| {
-            let mask = NonZeroU32::new(if n >= 32 { u32::MAX } else { (1u32 << n) - 1 });
-            let entry = match (pulled, masked) {
-                (true, false) => "vs_pulled",
-                (false, false) => "vs_indexed",
-                (true, true) => "vs_pulled_masked",
-                (false, true) => "vs_indexed_masked",
-            };
-            // Culling is per view in the shader; survivors cast from both sides.
-            if masked {
-                masked_depth_pipeline(&ctx.device, layout, module, entry, &[], mask)
-            } else {
-                layered_depth_pipeline(&ctx.device, layout, module, entry, &[], mask)
-            }
-        })
+        self.pipelines
+            .entry((n, pulled, masked))
+            .or_insert_with(|| {
+                let mask = NonZeroU32::new(if n >= 32 { u32::MAX } else { (1u32 << n) - 1 });
+                let entry = match (pulled, masked) {
+                    (true, false) => "vs_pulled",
+                    (false, false) => "vs_indexed",
+                    (true, true) => "vs_pulled_masked",
+                    (false, true) => "vs_indexed_masked",
+                };
+                // Culling is per view in the shader; survivors cast from both sides.
+                if masked {
+                    masked_depth_pipeline(&ctx.device, layout, module, entry, &[], mask)
+                } else {
+                    layered_depth_pipeline(&ctx.device, layout, module, entry, &[], mask)
+                }
+            })
     }
 
     /// Makes sure the scratch array holds `layers` layers of `side`² texels.

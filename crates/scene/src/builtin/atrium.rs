@@ -562,7 +562,11 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
                     bay_x(b),
                     top - BANNER_SIZE.y,
                     side * (arch_z0 - 0.1),
-                )) * Mat4::from_rotation_y(if side > 0.0 { std::f32::consts::PI } else { 0.0 }),
+                )) * Mat4::from_rotation_y(if side > 0.0 {
+                    std::f32::consts::PI
+                } else {
+                    0.0
+                }),
             );
         }
         // Spandrels between the end columns and the end walls.

@@ -56,7 +56,8 @@ fn rgba(c: Vec3, a: u8) -> [u8; 4] {
 
 /// A cheap deterministic hash noise in 0..1 of integer coordinates.
 fn hash(x: u32, y: u32, seed: u32) -> f32 {
-    let mut h = x.wrapping_mul(0x27d4_eb2d) ^ y.wrapping_mul(0x1656_67b1) ^ seed.wrapping_mul(0x9e37_79b9);
+    let mut h =
+        x.wrapping_mul(0x27d4_eb2d) ^ y.wrapping_mul(0x1656_67b1) ^ seed.wrapping_mul(0x9e37_79b9);
     h ^= h >> 15;
     h = h.wrapping_mul(0x2c1b_3c6d);
     h ^= h >> 12;
@@ -131,7 +132,13 @@ pub fn courtyard_textures() -> Vec<Texture> {
         rgba(c, 255)
     });
     // Mortar joints are 4 texels deep grooves: the normal tilts across each groove's walls.
-    let height = |x: u32, y: u32| if brick_at(x % 256, y % 256).0 { 0.0 } else { 1.0 };
+    let height = |x: u32, y: u32| {
+        if brick_at(x % 256, y % 256).0 {
+            0.0
+        } else {
+            1.0
+        }
+    };
     let brick_normal = Texture::from_fn("brick-normal", 256, 256, |x, y| {
         let dx = height(x + 1, y) - height(x + 255, y);
         let dy = height(x, y + 1) - height(x, y + 255);
@@ -151,7 +158,11 @@ pub fn courtyard_textures() -> Vec<Texture> {
             let centre = Vec2::new(rng.range(0.05, 0.95), rng.range(0.1, 1.0));
             let angle = rng.range(0.0, TAU);
             let size = Vec2::new(rng.range(0.04, 0.07), rng.range(0.015, 0.03));
-            let green = Vec3::new(rng.range(0.1, 0.3), rng.range(0.4, 0.7), rng.range(0.1, 0.25));
+            let green = Vec3::new(
+                rng.range(0.1, 0.3),
+                rng.range(0.4, 0.7),
+                rng.range(0.1, 0.25),
+            );
             (centre, size, angle, green)
         })
         .collect();
@@ -206,45 +217,66 @@ pub fn courtyard_default_lights(shadow_resolution: Option<u32>) -> Vec<Light> {
             Vec3::new(0.0, 7.0, 0.5),
             Vec3::new(0.0, 0.0, -0.5),
             40.0,
-            Tone { color: warm, brightness: 0.7 },
+            Tone {
+                color: warm,
+                brightness: 0.7,
+            },
         ),
         spot(
             Vec3::new(-6.0, 5.0, 4.0),
             Vec3::new(-5.0, 2.0, -6.0),
             30.0,
-            Tone { color: cool, brightness: 0.6 },
+            Tone {
+                color: cool,
+                brightness: 0.6,
+            },
         ),
         spot(
             Vec3::new(5.5, 4.0, 5.0),
             Vec3::new(5.5, 0.5, 0.0),
             35.0,
-            Tone { color: warm, brightness: 0.6 },
+            Tone {
+                color: warm,
+                brightness: 0.6,
+            },
         ),
         spot(
             Vec3::new(-2.0, 4.5, 7.0),
             Vec3::new(-3.0, 0.8, 3.0),
             30.0,
-            Tone { color: Vec3::new(1.0, 0.95, 0.9), brightness: 0.6 },
+            Tone {
+                color: Vec3::new(1.0, 0.95, 0.9),
+                brightness: 0.6,
+            },
         ),
         lights::point(
             Vec3::new(3.0, 1.8, -3.5),
             9.0,
             2.0,
-            Tone { color: warm, brightness: 0.45 },
+            Tone {
+                color: warm,
+                brightness: 0.45,
+            },
             shadow_resolution,
         ),
         lights::point(
             Vec3::new(-4.0, 1.5, 0.5),
             8.0,
             2.0,
-            Tone { color: cool, brightness: 0.4 },
+            Tone {
+                color: cool,
+                brightness: 0.4,
+            },
             shadow_resolution,
         ),
         lights::point(
             Vec3::new(1.5, 2.6, 4.5),
             8.0,
             2.0,
-            Tone { color: Vec3::new(1.0, 0.75, 0.5), brightness: 0.4 },
+            Tone {
+                color: Vec3::new(1.0, 0.75, 0.5),
+                brightness: 0.4,
+            },
             shadow_resolution,
         ),
     ]
@@ -264,7 +296,10 @@ pub(crate) fn build(opts: &BuiltinOptions, masks: bool) -> Scene {
         if masks {
             m.masked(0.5)
         } else {
-            Material { double_sided: true, ..m }
+            Material {
+                double_sided: true,
+                ..m
+            }
         }
     };
     let clamp_u = |t: usize| {
@@ -355,7 +390,11 @@ pub(crate) fn build(opts: &BuiltinOptions, masks: bool) -> Scene {
     // Two brick walls (back and left).
     for (mesh, size, pos) in [
         (M_WALL, Vec3::new(20.0, 4.0, 0.5), Vec3::new(0.0, 2.0, -8.0)),
-        (M_SIDE_WALL, Vec3::new(0.5, 4.0, 16.0), Vec3::new(-10.0, 2.0, 0.0)),
+        (
+            M_SIDE_WALL,
+            Vec3::new(0.5, 4.0, 16.0),
+            Vec3::new(-10.0, 2.0, 0.0),
+        ),
     ] {
         instances.push(Instance::caster(
             mesh,
@@ -398,13 +437,20 @@ pub(crate) fn build(opts: &BuiltinOptions, masks: bool) -> Scene {
         instances.push(Instance::caster(
             M_BANNER,
             BANNER,
-            Mat4::from_translation(Vec3::new(x, 0.85, 1.0)) * Mat4::from_scale(Vec3::new(1.1, 1.0, 1.0)),
+            Mat4::from_translation(Vec3::new(x, 0.85, 1.0))
+                * Mat4::from_scale(Vec3::new(1.1, 1.0, 1.0)),
         ));
     }
     // Five shrubs of three crossed leaf cards each.
-    for (k, (x, z)) in [(-6.0, -5.0), (-5.0, 3.0), (5.5, 0.0), (6.5, -5.5), (-2.5, 4.5)]
-        .into_iter()
-        .enumerate()
+    for (k, (x, z)) in [
+        (-6.0, -5.0),
+        (-5.0, 3.0),
+        (5.5, 0.0),
+        (6.5, -5.5),
+        (-2.5, 4.5),
+    ]
+    .into_iter()
+    .enumerate()
     {
         for c in 0..3 {
             let yaw = TAU / 6.0 * c as f32 + 0.4 * k as f32;
@@ -425,19 +471,40 @@ pub(crate) fn build(opts: &BuiltinOptions, masks: bool) -> Scene {
     ));
     // Opaque objects.
     let boxed = |size: Vec3, pos: Vec3, yaw_deg: f32| {
-        Mat4::from_scale_rotation_translation(size, Quat::from_rotation_y(yaw_deg.to_radians()), pos)
+        Mat4::from_scale_rotation_translation(
+            size,
+            Quat::from_rotation_y(yaw_deg.to_radians()),
+            pos,
+        )
     };
-    instances.push(Instance::caster(M_POST, RED, boxed(Vec3::splat(1.0), Vec3::new(0.5, 0.5, -3.5), 20.0)));
-    instances.push(Instance::caster(M_POST, BLUE, boxed(Vec3::new(1.5, 0.8, 1.0), Vec3::new(3.5, 0.4, 4.0), -30.0)));
+    instances.push(Instance::caster(
+        M_POST,
+        RED,
+        boxed(Vec3::splat(1.0), Vec3::new(0.5, 0.5, -3.5), 20.0),
+    ));
+    instances.push(Instance::caster(
+        M_POST,
+        BLUE,
+        boxed(Vec3::new(1.5, 0.8, 1.0), Vec3::new(3.5, 0.4, 4.0), -30.0),
+    ));
     instances.push(Instance::caster(
         M_SPHERE,
         WHITE,
-        Mat4::from_scale_rotation_translation(Vec3::splat(0.7), Quat::IDENTITY, Vec3::new(-1.5, 0.7, -1.5)),
+        Mat4::from_scale_rotation_translation(
+            Vec3::splat(0.7),
+            Quat::IDENTITY,
+            Vec3::new(-1.5, 0.7, -1.5),
+        ),
     ));
 
     let mut scene = Scene {
         textures,
-        name: if masks { "courtyard" } else { "courtyard-opaque" }.into(),
+        name: if masks {
+            "courtyard"
+        } else {
+            "courtyard-opaque"
+        }
+        .into(),
         meshes,
         materials,
         instances,
