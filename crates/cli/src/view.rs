@@ -271,11 +271,18 @@ impl App {
         let ctx = GpuContext::with_instance(instance, &req, Some(&surface))?;
         let size = window.inner_size();
         let caps = surface.get_capabilities(&ctx.adapter);
+        // egui draws in gamma space and warns on sRGB targets ("egui prefers Rgba8Unorm or
+        // Bgra8Unorm"); the frame's copy (`render_to`) encodes for raw 8-bit targets itself.
         let format = caps
             .formats
             .iter()
             .copied()
-            .find(|f| f.is_srgb())
+            .find(|f| {
+                matches!(
+                    f,
+                    wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Rgba8Unorm
+                )
+            })
             .or_else(|| caps.formats.first().copied())
             .context("the surface offers no format")?;
         let config = wgpu::SurfaceConfiguration {

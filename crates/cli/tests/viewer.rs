@@ -195,6 +195,7 @@ fn save(shot: &[[u8; 3]], (w, h): (u32, u32), name: &str) {
 }
 
 #[test]
+#[ignore = "needs Xvfb and xwd: run `cargo xtask test`, which installs them"]
 fn the_window_shows_the_frame_render_makes() {
     let (_server, display) = xvfb();
     let dir = tmp("script");
@@ -286,6 +287,7 @@ fn the_viewer_without_a_display_says_what_to_do() {
 /// With the panel, the atlas picture and light 1's visibility: the panel covers its corner
 /// (differs from the frame) and the frame between the windows is `render`'s.
 #[test]
+#[ignore = "needs Xvfb and xwd: run `cargo xtask test`, which installs them"]
 fn the_panel_draws_over_the_frame() {
     let (_server, display) = xvfb();
     let dir = tmp("panel");
@@ -347,6 +349,7 @@ fn the_panel_draws_over_the_frame() {
 /// belong to the swaying light are redrawn, so every later frame draws some views but not all;
 /// without `--animate` a still scene redraws none.
 #[test]
+#[ignore = "needs Xvfb and xwd: run `cargo xtask test`, which installs them"]
 fn animation_with_caching_redraws_only_what_moved() {
     let (_server, display) = xvfb();
     let drawn = |extra: &[&str]| -> Vec<(u64, u64)> {
@@ -398,6 +401,7 @@ fn animation_with_caching_redraws_only_what_moved() {
 /// Virtual shadow maps have no atlas: the same window shows their page pool — pages in use
 /// (grey and black) at the top of the picture, the rest of the pool unused (dark blue).
 #[test]
+#[ignore = "needs Xvfb and xwd: run `cargo xtask test`, which installs them"]
 fn the_virtual_maps_page_pool_is_shown() {
     let (_server, display) = xvfb();
     let size = (960, 640);

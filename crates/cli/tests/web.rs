@@ -382,6 +382,7 @@ fn mean_level(rgba: &[u8]) -> f64 {
 }
 
 #[test]
+#[ignore = "needs Chromium, the wasm32 target and wasm-bindgen-cli: run `cargo xtask test`, which installs them"]
 fn the_page_renders_the_native_frame_and_its_controls_work() {
     let chromium_dir = tmp("chromium");
     let pkg = tmp("pkg");

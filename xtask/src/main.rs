@@ -1,0 +1,507 @@
+//! `cargo xtask test`: the project's one test command on a fresh machine.
+//!
+//! It checks what the tests need beyond Rust itself — Vulkan on the CPU (Mesa's lavapipe), an
+//! X server and screenshot tool for the viewer's tests, Chromium, the wasm32 target and
+//! `wasm-bindgen-cli` at the version `Cargo.lock` pins for the web page's test — installs
+//! what is missing where it can (`apt-get` as root, `rustup`, `cargo install`) and says
+//! exactly what it could not. Then it runs the whole suite once per GPU backend
+//! (`WGPU_BACKEND=vulkan`, then `gl`) with `--no-fail-fast`, the tests that need those tools
+//! included (`--include-ignored`; plain `cargo test` reports them as ignored, with the
+//! reason), and ends with one summary: passed, failed, ignored per backend, and every test
+//! skipped by name because a tool could not be had.
+//!
+//! Why a Rust program and not a shell script: it is what `cargo` runs on every platform the
+//! project builds on, it reads `Cargo.lock` for the wasm-bindgen version itself, and it can
+//! count test results instead of scrolling them past. It has no dependencies, so it builds in
+//! seconds before anything else.
+
+use std::collections::BTreeMap;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode, Stdio};
+
+const USAGE: &str = "\
+cargo xtask test [--no-install] [--backend vulkan|gl|both] [-- <extra test arguments>]
+
+  Installs what the tests need (as root: apt-get; rustup; cargo install), then runs
+  `cargo test --release --workspace --no-fail-fast -- --include-ignored` once with
+  WGPU_BACKEND=vulkan and once with WGPU_BACKEND=gl, and prints one summary.
+
+  --no-install    only check: tests whose tools are missing are skipped by name
+  --backend B     run only Vulkan or only OpenGL (default: both; Vulkan is skipped, and
+                  said so, where lavapipe cannot be had)";
+
+/// A tool the tests need, how to tell it is there and how to get it.
+struct Prerequisite {
+    what: &'static str,
+    /// Which tests need it (for messages).
+    needed_by: &'static str,
+    install: Install,
+    /// Tests to skip (libtest `--skip` filters, matched exactly) when it is missing.
+    skip: &'static [&'static str],
+}
+
+enum Install {
+    /// Debian packages; present when every one is installed.
+    Apt(&'static [&'static str]),
+    /// A rustup target.
+    RustupTarget(&'static str),
+    /// `wasm-bindgen-cli` at the version of the `wasm-bindgen` crate in Cargo.lock.
+    WasmBindgen,
+}
+
+const VIEWER_TESTS: &[&str] = &[
+    "the_window_shows_the_frame_render_makes",
+    "the_panel_draws_over_the_frame",
+    "animation_with_caching_redraws_only_what_moved",
+    "the_virtual_maps_page_pool_is_shown",
+];
+const WEB_TESTS: &[&str] = &["the_page_renders_the_native_frame_and_its_controls_work"];
+
+fn prerequisites() -> Vec<Prerequisite> {
+    vec![
+        Prerequisite {
+            what: "Vulkan on the CPU (Mesa lavapipe)",
+            needed_by: "the Vulkan run of the suite",
+            install: Install::Apt(&["mesa-vulkan-drivers"]),
+            skip: &[],
+        },
+        Prerequisite {
+            what: "an X server and screenshots (Xvfb, xwd, X client libraries)",
+            needed_by: "the viewer's window tests",
+            install: Install::Apt(&[
+                "xvfb",
+                "x11-apps",
+                "libxkbcommon-x11-0",
+                "libx11-xcb1",
+                "libxcursor1",
+                "libxrandr2",
+                "libxi6",
+            ]),
+            skip: VIEWER_TESTS,
+        },
+        Prerequisite {
+            what: "Chromium",
+            needed_by: "the web page's test",
+            install: Install::Apt(&["chromium"]),
+            skip: WEB_TESTS,
+        },
+        Prerequisite {
+            what: "the wasm32-unknown-unknown target",
+            needed_by: "the web page's test",
+            install: Install::RustupTarget("wasm32-unknown-unknown"),
+            skip: WEB_TESTS,
+        },
+        Prerequisite {
+            what: "wasm-bindgen-cli",
+            needed_by: "the web page's test",
+            install: Install::WasmBindgen,
+            skip: WEB_TESTS,
+        },
+    ]
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let (ours, extra) = match args.iter().position(|a| a == "--") {
+        Some(i) => (&args[..i], args[i + 1..].to_vec()),
+        None => (&args[..], Vec::new()),
+    };
+    let mut no_install = false;
+    let mut backends = vec!["vulkan", "gl"];
+    let mut it = ours.iter();
+    match it.next().map(String::as_str) {
+        Some("test") => {}
+        Some("-h" | "--help" | "help") => {
+            println!("{USAGE}");
+            return ExitCode::SUCCESS;
+        }
+        other => {
+            eprintln!(
+                "unknown task {}\n\n{USAGE}",
+                other.map_or("(none)".into(), |o| format!("'{o}'"))
+            );
+            return ExitCode::from(2);
+        }
+    }
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--no-install" => no_install = true,
+            "--backend" => match it.next().map(String::as_str) {
+                Some("vulkan") => backends = vec!["vulkan"],
+                Some("gl") => backends = vec!["gl"],
+                Some("both") => {}
+                other => {
+                    eprintln!("--backend takes vulkan, gl or both, not {other:?}\n\n{USAGE}");
+                    return ExitCode::from(2);
+                }
+            },
+            "-h" | "--help" => {
+                println!("{USAGE}");
+                return ExitCode::SUCCESS;
+            }
+            other => {
+                eprintln!("unknown option '{other}'\n\n{USAGE}");
+                return ExitCode::from(2);
+            }
+        }
+    }
+    let root = workspace_root();
+    let started = std::time::Instant::now();
+
+    // 1. What the tests need.
+    let mut setup = Setup::new(&root, no_install);
+    let mut report = Vec::new();
+    let mut skip: Vec<&str> = Vec::new();
+    let mut lavapipe = true;
+    for p in prerequisites() {
+        let outcome = setup.ensure(&p.install);
+        let line = match &outcome {
+            Outcome::Present => format!("  ok       {}", p.what),
+            Outcome::Installed => format!("  installed {}", p.what),
+            Outcome::Missing(why) => {
+                skip.extend(p.skip);
+                if matches!(p.install, Install::Apt(pkgs) if pkgs == ["mesa-vulkan-drivers"]) {
+                    lavapipe = false;
+                }
+                format!("  MISSING  {} ({why}); skipped: {}", p.what, p.needed_by)
+            }
+        };
+        println!("{line}");
+        report.push(line);
+    }
+    skip.sort_unstable();
+    skip.dedup();
+
+    // 2. Quiet runs: libwayland prints an error per GL adapter probe without a runtime
+    // directory; a private one silences it.
+    let xdg = std::env::var_os("XDG_RUNTIME_DIR")
+        .map(PathBuf::from)
+        .filter(|p| p.is_absolute())
+        .unwrap_or_else(|| {
+            let dir = std::env::temp_dir().join(format!("manyshadows-xdg-{}", std::process::id()));
+            let _ = std::fs::create_dir_all(&dir);
+            dir
+        });
+
+    // 3. The suite, once per backend.
+    let mut results: BTreeMap<&str, Counts> = BTreeMap::new();
+    for backend in backends {
+        if backend == "vulkan" && !lavapipe {
+            println!("\n=== not running the suite on Vulkan: no Vulkan driver (see above) ===");
+            continue;
+        }
+        println!("\n=== cargo test --release --workspace with WGPU_BACKEND={backend} ===");
+        let mut cmd = Command::new(cargo());
+        cmd.current_dir(&root)
+            .args(["test", "--release", "--workspace", "--no-fail-fast", "--"])
+            .arg("--include-ignored")
+            .env("WGPU_BACKEND", backend)
+            .env("XDG_RUNTIME_DIR", &xdg);
+        for name in &skip {
+            cmd.args(["--skip", name, "--exact"]);
+        }
+        cmd.args(&extra);
+        results.insert(backend, run_counting(cmd));
+    }
+
+    // 4. One summary.
+    let minutes = started.elapsed().as_secs_f64() / 60.0;
+    println!("\n=== summary ({minutes:.1} min) ===");
+    for line in &report {
+        println!("{line}");
+    }
+    let mut ok = !results.is_empty();
+    for (backend, c) in &results {
+        println!(
+            "  {backend:6}  {} passed, {} failed, {} ignored{}",
+            c.passed,
+            c.failed,
+            c.ignored,
+            if c.exit_ok { "" } else { " (cargo test failed)" }
+        );
+        for f in &c.failures {
+            println!("          FAILED {f}");
+        }
+        ok &= c.failed == 0 && c.exit_ok;
+    }
+    for name in &skip {
+        println!("  skipped by name: {name}");
+    }
+    if results.is_empty() {
+        println!("  no backend ran");
+    }
+    if ok {
+        println!("  result: every test that ran passed");
+        ExitCode::SUCCESS
+    } else {
+        println!("  result: FAILED");
+        ExitCode::FAILURE
+    }
+}
+
+fn cargo() -> String {
+    std::env::var("CARGO").unwrap_or_else(|_| "cargo".into())
+}
+
+/// The workspace root: the directory above this crate.
+fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("xtask lives in the workspace")
+        .to_path_buf()
+}
+
+enum Outcome {
+    Present,
+    Installed,
+    Missing(String),
+}
+
+/// Installs prerequisites, remembering what it learnt (root or not, apt updated).
+struct Setup {
+    root: PathBuf,
+    no_install: bool,
+    apt_updated: bool,
+}
+
+impl Setup {
+    fn new(root: &Path, no_install: bool) -> Self {
+        Self {
+            root: root.to_path_buf(),
+            no_install,
+            apt_updated: false,
+        }
+    }
+
+    fn ensure(&mut self, install: &Install) -> Outcome {
+        match install {
+            Install::Apt(pkgs) => {
+                let missing: Vec<&str> = pkgs
+                    .iter()
+                    .copied()
+                    .filter(|p| !dpkg_installed(p))
+                    .collect();
+                if missing.is_empty() {
+                    return Outcome::Present;
+                }
+                if self.no_install {
+                    return Outcome::Missing(format!(
+                        "not installed: {}; --no-install",
+                        missing.join(" ")
+                    ));
+                }
+                if !is_root() {
+                    return Outcome::Missing(format!(
+                        "not installed: {}; run as root, or `sudo apt-get install -y {}`",
+                        missing.join(" "),
+                        missing.join(" ")
+                    ));
+                }
+                if !on_path("apt-get") {
+                    return Outcome::Missing(format!(
+                        "not installed: {}; this machine has no apt-get",
+                        missing.join(" ")
+                    ));
+                }
+                if !self.apt_updated {
+                    self.apt_updated = true;
+                    if let Err(e) = quiet("apt-get", &["update"], &[]) {
+                        return Outcome::Missing(format!("apt-get update failed: {e}"));
+                    }
+                }
+                let mut args = vec!["install", "-y"];
+                args.extend(&missing);
+                match quiet(
+                    "apt-get",
+                    &args,
+                    &[("DEBIAN_FRONTEND", "noninteractive")],
+                ) {
+                    Ok(()) if missing.iter().all(|p| dpkg_installed(p)) => Outcome::Installed,
+                    Ok(()) => Outcome::Missing("apt-get ran but the packages are not there".into()),
+                    Err(e) => Outcome::Missing(format!("apt-get install failed: {e}")),
+                }
+            }
+            Install::RustupTarget(target) => {
+                let installed = output("rustup", &["target", "list", "--installed"])
+                    .is_some_and(|o| o.lines().any(|l| l.trim() == *target));
+                if installed {
+                    return Outcome::Present;
+                }
+                if self.no_install {
+                    return Outcome::Missing(format!("`rustup target add {target}`; --no-install"));
+                }
+                match quiet("rustup", &["target", "add", target], &[]) {
+                    Ok(()) => Outcome::Installed,
+                    Err(e) => Outcome::Missing(format!("`rustup target add {target}` failed: {e}")),
+                }
+            }
+            Install::WasmBindgen => {
+                let Some(version) = locked_version(&self.root, "wasm-bindgen") else {
+                    return Outcome::Missing("no wasm-bindgen in Cargo.lock".into());
+                };
+                let want = format!("wasm-bindgen {version}");
+                let have =
+                    || output("wasm-bindgen", &["--version"]).is_some_and(|o| o.trim() == want);
+                if have() {
+                    return Outcome::Present;
+                }
+                if self.no_install {
+                    return Outcome::Missing(format!(
+                        "`cargo install wasm-bindgen-cli --version {version}`; --no-install"
+                    ));
+                }
+                println!(
+                    "  installing wasm-bindgen-cli {version} (cargo install: a few minutes) ..."
+                );
+                match quiet(
+                    &cargo(),
+                    &["install", "wasm-bindgen-cli", "--version", &version],
+                    &[],
+                ) {
+                    Ok(()) if have() => Outcome::Installed,
+                    Ok(()) => Outcome::Missing(format!(
+                        "installed, but `wasm-bindgen --version` is not {version}: is ~/.cargo/bin on PATH?"
+                    )),
+                    Err(e) => Outcome::Missing(format!("cargo install failed: {e}")),
+                }
+            }
+        }
+    }
+}
+
+/// The version of `crate_name` in the workspace's Cargo.lock.
+fn locked_version(root: &Path, crate_name: &str) -> Option<String> {
+    let lock = std::fs::read_to_string(root.join("Cargo.lock")).ok()?;
+    let mut lines = lock.lines();
+    while let Some(line) = lines.next() {
+        if line.trim() == format!("name = \"{crate_name}\"") {
+            let v = lines.next()?.trim();
+            return v
+                .strip_prefix("version = \"")
+                .and_then(|v| v.strip_suffix('"'))
+                .map(str::to_string);
+        }
+    }
+    None
+}
+
+fn dpkg_installed(pkg: &str) -> bool {
+    output("dpkg-query", &["-W", "-f=${Status}", pkg])
+        .is_some_and(|s| s.contains("install ok installed"))
+}
+
+fn is_root() -> bool {
+    output("id", &["-u"]).is_some_and(|s| s.trim() == "0")
+}
+
+fn on_path(tool: &str) -> bool {
+    std::env::var_os("PATH").is_some_and(|paths| {
+        std::env::split_paths(&paths).any(|d| d.join(tool).is_file())
+    })
+}
+
+/// A command's stdout when it runs and succeeds.
+fn output(program: &str, args: &[&str]) -> Option<String> {
+    let out = Command::new(program).args(args).output().ok()?;
+    out.status
+        .success()
+        .then(|| String::from_utf8_lossy(&out.stdout).into_owned())
+}
+
+/// Runs a set-up command with its output hidden unless it fails (then its last lines are the
+/// error).
+fn quiet(program: &str, args: &[&str], env: &[(&str, &str)]) -> Result<(), String> {
+    let out = Command::new(program)
+        .args(args)
+        .envs(env.iter().copied())
+        .output()
+        .map_err(|e| format!("cannot run {program}: {e}"))?;
+    if out.status.success() {
+        return Ok(());
+    }
+    let err = String::from_utf8_lossy(&out.stderr);
+    let tail: Vec<&str> = err.lines().rev().take(5).collect();
+    Err(tail.into_iter().rev().collect::<Vec<_>>().join(" / "))
+}
+
+/// Test counts of one run.
+#[derive(Default)]
+struct Counts {
+    passed: u64,
+    failed: u64,
+    ignored: u64,
+    failures: Vec<String>,
+    exit_ok: bool,
+}
+
+/// Runs `cmd`, passing its output through, and adds up libtest's result lines.
+fn run_counting(mut cmd: Command) -> Counts {
+    let mut c = Counts::default();
+    cmd.stdout(Stdio::piped());
+    let mut child = match cmd.spawn() {
+        Ok(child) => child,
+        Err(e) => {
+            println!("cannot run cargo: {e}");
+            return c;
+        }
+    };
+    let stdout = child.stdout.take().expect("piped");
+    for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+        println!("{line}");
+        if let Some(rest) = line.strip_prefix("test result: ") {
+            let number = |key: &str| {
+                rest.split(';')
+                    .find_map(|part| part.trim().strip_suffix(key))
+                    .and_then(|n| n.trim().rsplit(' ').next()?.parse::<u64>().ok())
+                    .unwrap_or(0)
+            };
+            c.passed += number(" passed");
+            c.failed += number(" failed");
+            c.ignored += number(" ignored");
+        } else if let Some(name) = line
+            .strip_prefix("test ")
+            .and_then(|l| l.strip_suffix(" ... FAILED"))
+        {
+            c.failures.push(name.to_string());
+        }
+    }
+    c.exit_ok = child.wait().is_ok_and(|s| s.success());
+    c
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_the_locked_wasm_bindgen_version() {
+        let v = locked_version(&workspace_root(), "wasm-bindgen").expect("in Cargo.lock");
+        assert!(v.starts_with("0.2."), "{v}");
+        assert_eq!(locked_version(&workspace_root(), "no-such-crate-here"), None);
+    }
+
+    #[test]
+    fn every_skippable_test_exists_and_is_ignored_by_default() {
+        // The names xtask skips must be real tests marked #[ignore = "..."], or a renamed
+        // test would silently run without its tools (or never be skipped).
+        let root = workspace_root();
+        for (file, names) in [
+            ("crates/cli/tests/viewer.rs", VIEWER_TESTS),
+            ("crates/cli/tests/web.rs", WEB_TESTS),
+        ] {
+            let text = std::fs::read_to_string(root.join(file)).unwrap();
+            for name in names {
+                let at = text
+                    .find(&format!("fn {name}()"))
+                    .unwrap_or_else(|| panic!("{file} has no test {name}"));
+                let before = &text[..at];
+                let attrs = &before[before.rfind("#[test]").expect("a #[test]")..];
+                assert!(
+                    attrs.contains("#[ignore = \""),
+                    "{file}: {name} must be #[ignore = \"needs ...\"]"
+                );
+            }
+        }
+    }
+}
