@@ -487,7 +487,7 @@ mod tests {
         // test would silently run without its tools (or never be skipped).
         let root = workspace_root();
         for (file, names) in [
-            ("crates/cli/tests/viewer.rs", VIEWER_TESTS),
+            ("crates/viewer/tests/viewer.rs", VIEWER_TESTS),
             ("crates/cli/tests/web.rs", WEB_TESTS),
         ] {
             let text = std::fs::read_to_string(root.join(file)).unwrap();

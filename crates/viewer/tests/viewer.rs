@@ -117,8 +117,7 @@ fn screenshot(display: &str, (w, h): (u32, u32)) -> Vec<[u8; 3]> {
 /// takes a screenshot of the top-left `size` pixels and closes it.
 fn view(display: &str, args: &[&str], frames: u64, size: (u32, u32)) -> Vec<[u8; 3]> {
     let mut viewer = Killed(
-        Command::new(env!("CARGO_BIN_EXE_manyshadows"))
-            .arg("view")
+        Command::new(env!("CARGO_BIN_EXE_manyshadows-view"))
             .args(args)
             .args(["--exit-after", "100000"])
             .env("DISPLAY", display)
@@ -159,28 +158,24 @@ fn view(display: &str, args: &[&str], frames: u64, size: (u32, u32)) -> Vec<[u8;
 }
 
 fn render(dir: &Path, camera: &str, (w, h): (u32, u32)) -> image::RgbImage {
+    // `manyshadows render`, run in this process through the CLI's library (the same code as
+    // the program).
     let png = dir.join("render.png");
-    let out = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
-        .args([
-            "render",
-            "--scene",
-            "cubes",
-            "--camera",
-            camera,
-            "--width",
-            &w.to_string(),
-            "--height",
-            &h.to_string(),
-            "--out",
-            png.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let args = [
+        "manyshadows",
+        "render",
+        "--scene",
+        "cubes",
+        "--camera",
+        camera,
+        "--width",
+        &w.to_string(),
+        "--height",
+        &h.to_string(),
+        "--out",
+        png.to_str().unwrap(),
+    ];
+    manyshadows_cli::run(args.map(std::ffi::OsString::from)).expect("manyshadows render");
     image::open(&png).unwrap().to_rgb8()
 }
 
@@ -252,8 +247,8 @@ fn the_window_shows_the_frame_render_makes() {
 
 #[test]
 fn the_viewer_without_a_display_says_what_to_do() {
-    let out = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
-        .args(["view", "--scene", "cubes", "--exit-after", "1"])
+    let out = Command::new(env!("CARGO_BIN_EXE_manyshadows-view"))
+        .args(["--scene", "cubes", "--exit-after", "1"])
         .env_remove("DISPLAY")
         .env_remove("WAYLAND_DISPLAY")
         .output()
@@ -272,8 +267,8 @@ fn the_viewer_without_a_display_says_what_to_do() {
         ),
         (&["--width", "0"][..], "at least 1"),
     ] {
-        let out = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
-            .args(["view", "--scene", "cubes"])
+        let out = Command::new(env!("CARGO_BIN_EXE_manyshadows-view"))
+            .args(["--scene", "cubes"])
             .args(args)
             .env_remove("DISPLAY")
             .output()
@@ -353,10 +348,8 @@ fn the_panel_draws_over_the_frame() {
 fn animation_with_caching_redraws_only_what_moved() {
     let (_server, display) = xvfb();
     let drawn = |extra: &[&str]| -> Vec<(u64, u64)> {
-        let out = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
-            .args([
-                "view", "--scene", "cubes", "--width", "160", "--height", "120",
-            ])
+        let out = Command::new(env!("CARGO_BIN_EXE_manyshadows-view"))
+            .args(["--scene", "cubes", "--width", "160", "--height", "120"])
             .args(["--cache", "--hide-panel", "--exit-after", "5"])
             .args(extra)
             .env("DISPLAY", &display)

@@ -1,4 +1,4 @@
-//! `manyshadows view`: the renderer in a window (winit + a wgpu surface), with a fly camera
+//! The viewer: the renderer in a window (winit + a wgpu surface), with a fly camera
 //! and an on-screen panel (egui) to switch technique, point-shadow mode, PCF, light count and
 //! caching at run time and to read the frame's GPU time per stage, lights, shadow views and
 //! shadow memory.
@@ -24,10 +24,8 @@ use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
-use crate::RenderArgs;
-
 #[derive(Args, Debug, Clone)]
-pub(crate) struct ViewArgs {
+pub struct ViewArgs {
     /// Built-in scene name or a TOML scene file (as for `render`).
     #[arg(long, default_value = "atrium")]
     scene: String,
@@ -42,13 +40,13 @@ pub(crate) struct ViewArgs {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Shadow technique to start with (as for `render`; the panel switches it).
-    #[arg(long, default_value = "traditional", value_parser = crate::parse_technique)]
+    #[arg(long, default_value = "traditional", value_parser = manyshadows_cli::parse_technique)]
     technique: Technique,
     /// Point-light shadows to start with: cube or dual-paraboloid.
-    #[arg(long, default_value = "cube", value_parser = crate::parse_point_shadows)]
+    #[arg(long, default_value = "cube", value_parser = manyshadows_cli::parse_point_shadows)]
     point_shadows: PointShadows,
     /// Filtering to start with: off, 2x2 or 3x3.
-    #[arg(long, default_value = "2x2", value_parser = crate::parse_pcf)]
+    #[arg(long, default_value = "2x2", value_parser = manyshadows_cli::parse_pcf)]
     pcf: Pcf,
     /// Keep the shadow maps (pages) of views that saw no change between frames.
     #[arg(long)]
@@ -59,7 +57,7 @@ pub(crate) struct ViewArgs {
     #[arg(long)]
     animate: bool,
     /// Camera to start from, `PX,PY,PZ,TX,TY,TZ` (default: the scene's camera).
-    #[arg(long, value_parser = crate::parse_camera, allow_hyphen_values = true)]
+    #[arg(long, value_parser = manyshadows_cli::parse_camera, allow_hyphen_values = true)]
     camera: Option<[f32; 6]>,
     /// Window width (the frame is rendered at the window's size).
     #[arg(long, default_value_t = 960)]
@@ -87,7 +85,7 @@ pub(crate) struct ViewArgs {
     #[arg(long)]
     follow: Option<usize>,
     #[command(flatten)]
-    gpu: crate::GpuArgs,
+    gpu: manyshadows_cli::GpuArgs,
 }
 
 /// Help shown in the panel and by `--help`.
@@ -102,7 +100,7 @@ fn parse_script(text: &str) -> Result<Vec<[f32; 6]>> {
             continue;
         }
         out.push(
-            crate::parse_camera(line).map_err(|e| anyhow::anyhow!("script line {}: {e}", i + 1))?,
+            manyshadows_cli::parse_camera(line).map_err(|e| anyhow::anyhow!("script line {}: {e}", i + 1))?,
         );
     }
     if out.is_empty() {
@@ -154,15 +152,13 @@ pub(crate) fn run(args: &ViewArgs) -> Result<()> {
 }
 
 fn load(args: &ViewArgs) -> Result<Scene> {
-    let render = RenderArgs {
-        scene: args.scene.clone(),
-        mesh: args.mesh.clone(),
-        lights: args.lights,
-        seed: args.seed,
-        camera: args.camera,
-        ..RenderArgs::default()
-    };
-    crate::load_scene(&render)
+    manyshadows_cli::load_scene_for_view(
+        &args.scene,
+        args.mesh.clone(),
+        args.lights,
+        args.seed,
+        args.camera,
+    )
 }
 
 struct App {
