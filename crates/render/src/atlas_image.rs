@@ -33,23 +33,23 @@ pub fn read_depth_view(
     let device = &ctx.device;
     let limit = ctx.limits().max_storage_buffer_binding_size.min(64 << 20);
     let rows_per_band = ((limit / (size as u64 * 4)) as u32).clamp(1, size);
-    let layout = crate::pipelines::bind_group_layout(
+    let layout = crate::gpu::pipelines::bind_group_layout(
         device,
         "atlas_copy.layout",
         &[
-            crate::lighting::texture_entry(
+            crate::gpu::pipelines::texture_entry(
                 0,
                 wgpu::TextureSampleType::Float { filterable: false },
                 wgpu::ShaderStages::COMPUTE,
             ),
-            crate::storage_rw_entry(1, wgpu::ShaderStages::COMPUTE),
-            crate::uniform_entry(2, wgpu::ShaderStages::COMPUTE),
+            crate::gpu::pipelines::storage_rw_entry(1, wgpu::ShaderStages::COMPUTE),
+            crate::gpu::pipelines::uniform_entry(2, wgpu::ShaderStages::COMPUTE),
         ],
     );
-    let module = crate::shaders::module(device, "atlas_copy.shader", &crate::shaders::atlas_copy());
+    let module = crate::gpu::shaders::module(device, "atlas_copy.shader", &crate::gpu::shaders::atlas_copy());
     let pipeline_layout =
-        crate::pipelines::pipeline_layout(device, "atlas_copy.pipeline_layout", &[&layout]);
-    let pipeline = crate::pipelines::compute_pipeline(
+        crate::gpu::pipelines::pipeline_layout(device, "atlas_copy.pipeline_layout", &[&layout]);
+    let pipeline = crate::gpu::pipelines::compute_pipeline(
         device,
         "atlas_copy.pipeline",
         &pipeline_layout,
@@ -115,7 +115,7 @@ pub fn read_depth_view(
         }
         encoder.copy_buffer_to_buffer(&storage, 0, &readback, 0, bytes);
         ctx.queue.submit([encoder.finish()]);
-        let data = crate::readback::map_read(ctx, &readback, 0..bytes)?;
+        let data = crate::gpu::readback::map_read(ctx, &readback, 0..bytes)?;
         out.extend_from_slice(bytemuck::cast_slice::<u8, f32>(&data));
         first_row += rows;
     }

@@ -20,9 +20,9 @@ pub(crate) struct Blit {
 impl Blit {
     pub(crate) fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let module = crate::shaders::module(device, "blit.shader", &crate::shaders::blit());
+        let module = crate::gpu::shaders::module(device, "blit.shader", &crate::gpu::shaders::blit());
         let fs = wgpu::ShaderStages::FRAGMENT;
-        let layout = crate::pipelines::bind_group_layout(
+        let layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "blit.layout",
             &[
@@ -36,11 +36,11 @@ impl Blit {
                     },
                     count: None,
                 },
-                crate::uniform_entry(1, fs),
+                crate::gpu::pipelines::uniform_entry(1, fs),
             ],
         );
         let pipeline_layout =
-            crate::pipelines::pipeline_layout(device, "blit.pipeline_layout", &[&layout]);
+            crate::gpu::pipelines::pipeline_layout(device, "blit.pipeline_layout", &[&layout]);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("blit.params"),
             size: 16,

@@ -705,22 +705,22 @@ impl CasterGeometry {
             }
         };
 
-        let module = crate::shaders::module(device, "casters.shader", &crate::shaders::casters());
+        let module = crate::gpu::shaders::module(device, "casters.shader", &crate::gpu::shaders::casters());
         let cs = wgpu::ShaderStages::COMPUTE;
-        let layout = crate::pipelines::bind_group_layout(
+        let layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "casters.layout",
             &[
-                crate::uniform_entry(0, cs),
-                crate::storage_entry(1, cs),
-                crate::storage_entry(2, cs),
-                crate::storage_entry(3, cs),
-                crate::storage_rw_entry(4, cs),
-                crate::uniform_entry(5, cs),
-                crate::storage_entry(6, cs),
-                crate::storage_entry(7, cs),
-                crate::storage_entry(8, cs),
-                crate::storage_rw_entry(9, cs),
+                crate::gpu::pipelines::uniform_entry(0, cs),
+                crate::gpu::pipelines::storage_entry(1, cs),
+                crate::gpu::pipelines::storage_entry(2, cs),
+                crate::gpu::pipelines::storage_entry(3, cs),
+                crate::gpu::pipelines::storage_rw_entry(4, cs),
+                crate::gpu::pipelines::uniform_entry(5, cs),
+                crate::gpu::pipelines::storage_entry(6, cs),
+                crate::gpu::pipelines::storage_entry(7, cs),
+                crate::gpu::pipelines::storage_entry(8, cs),
+                crate::gpu::pipelines::storage_rw_entry(9, cs),
             ],
         );
         let buffers = [
@@ -735,11 +735,11 @@ impl CasterGeometry {
             &corners_buf,
             &cluster_bounds,
         ];
-        let bind_group = crate::buffer_bind_group(device, "casters.bind_group", &layout, &buffers);
+        let bind_group = crate::gpu::pipelines::buffer_bind_group(device, "casters.bind_group", &layout, &buffers);
         let pipeline_layout =
-            crate::pipelines::pipeline_layout(device, "casters.pipeline_layout", &[&layout]);
+            crate::gpu::pipelines::pipeline_layout(device, "casters.pipeline_layout", &[&layout]);
         let pipeline = |entry: &str| {
-            crate::pipelines::compute_pipeline(device, entry, &pipeline_layout, &module, entry)
+            crate::gpu::pipelines::compute_pipeline(device, entry, &pipeline_layout, &module, entry)
         };
         Ok(Self {
             vertices,
@@ -815,7 +815,7 @@ impl CasterGeometry {
         }
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.set_pipeline(&self.transform);
-        let (x, y) = crate::dispatch_2d(u64::from(self.vertices), 65535);
+        let (x, y) = crate::gpu::pipelines::dispatch_2d(u64::from(self.vertices), 65535);
         pass.dispatch_workgroups(x, y, 1);
         if bounds && !self.clusters.is_empty() {
             pass.set_pipeline(&self.bounds);

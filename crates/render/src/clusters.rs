@@ -40,8 +40,8 @@ use manyshadows_scene::Scene;
 use wgpu::util::DeviceExt;
 
 use crate::gbuffer::GBuffer;
-use crate::gpu_types::ClusterUniforms;
-use crate::timing::{GpuTimer, Span};
+use crate::gpu::types::ClusterUniforms;
+use crate::gpu::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
 /// Default tile side in pixels.
@@ -228,27 +228,27 @@ impl LightClusters {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
         let cs = wgpu::ShaderStages::COMPUTE;
-        let layout = crate::pipelines::bind_group_layout(
+        let layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "clusters.layout",
             &[
-                crate::uniform_entry(0, cs),
-                crate::uniform_entry(1, cs),
-                crate::lighting::texture_entry(2, wgpu::TextureSampleType::Uint, cs),
-                crate::storage_rw_entry(3, cs),
-                crate::storage_rw_entry(4, cs),
-                crate::storage_entry(5, cs),
-                crate::storage_entry(6, cs),
-                crate::storage_entry(7, cs),
-                crate::storage_entry(8, cs),
-                crate::storage_rw_entry(9, cs),
+                crate::gpu::pipelines::uniform_entry(0, cs),
+                crate::gpu::pipelines::uniform_entry(1, cs),
+                crate::gpu::pipelines::texture_entry(2, wgpu::TextureSampleType::Uint, cs),
+                crate::gpu::pipelines::storage_rw_entry(3, cs),
+                crate::gpu::pipelines::storage_rw_entry(4, cs),
+                crate::gpu::pipelines::storage_entry(5, cs),
+                crate::gpu::pipelines::storage_entry(6, cs),
+                crate::gpu::pipelines::storage_entry(7, cs),
+                crate::gpu::pipelines::storage_entry(8, cs),
+                crate::gpu::pipelines::storage_rw_entry(9, cs),
             ],
         );
-        let module = crate::shaders::module(device, "clusters.shader", &crate::shaders::clusters());
+        let module = crate::gpu::shaders::module(device, "clusters.shader", &crate::gpu::shaders::clusters());
         let pipeline_layout =
-            crate::pipelines::pipeline_layout(device, "clusters.pipeline_layout", &[&layout]);
+            crate::gpu::pipelines::pipeline_layout(device, "clusters.pipeline_layout", &[&layout]);
         let pipeline = |entry: &str| {
-            crate::pipelines::compute_pipeline(device, entry, &pipeline_layout, &module, entry)
+            crate::gpu::pipelines::compute_pipeline(device, entry, &pipeline_layout, &module, entry)
         };
         let mut me = Self {
             uniforms,
@@ -447,14 +447,14 @@ impl LightClusters {
             pass.set_bind_group(0, bind_group, &[]);
             pass.set_pipeline(&self.mark);
             pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
-            let (x, y) = crate::dispatch_2d(u64::from(self.data.counts[2]), 65535);
+            let (x, y) = crate::gpu::pipelines::dispatch_2d(u64::from(self.data.counts[2]), 65535);
             pass.set_pipeline(&self.compact);
             pass.dispatch_workgroups(x, y, 1);
             if self.data.counts[1] > 0 {
                 pass.set_pipeline(&self.assign);
                 pass.dispatch_workgroups(self.data.counts[1].div_ceil(64), 1, self.data.grid[2]);
             }
-            let (x, y) = crate::dispatch_2d(u64::from(self.data.counts[0]), 65535);
+            let (x, y) = crate::gpu::pipelines::dispatch_2d(u64::from(self.data.counts[0]), 65535);
             pass.set_pipeline(&self.stats);
             pass.dispatch_workgroups(x, y, 1);
         }
@@ -476,7 +476,7 @@ impl LightClusters {
         if !self.enabled {
             return Ok(stats);
         }
-        let bytes = crate::readback::map_read(ctx, &self.readback, 0..16)?;
+        let bytes = crate::gpu::readback::map_read(ctx, &self.readback, 0..16)?;
         let c: &[u32] = bytemuck::cast_slice(&bytes);
         stats.occupied = c[0];
         stats.overflowed = c[1];

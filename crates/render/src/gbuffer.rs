@@ -3,7 +3,7 @@
 //! reference can ray-trace from exactly the points the frame shades.
 
 use crate::gpu_scene::{GpuScene, NORMAL_LAYOUT, POSITION_LAYOUT, UV_LAYOUT};
-use crate::timing::{GpuTimer, Span};
+use crate::gpu::timing::{GpuTimer, Span};
 use crate::GpuContext;
 
 /// xyz world position (`f32` bits in a `u32` target, because OpenGL ES and WebGL cannot render
@@ -85,14 +85,14 @@ impl GBuffer {
             U::RENDER_ATTACHMENT,
         );
         let device = &ctx.device;
-        let module = crate::shaders::module(device, "gbuffer.shader", &crate::shaders::gbuffer());
-        let layout = crate::pipelines::bind_group_layout(
+        let module = crate::gpu::shaders::module(device, "gbuffer.shader", &crate::gpu::shaders::gbuffer());
+        let layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "gbuffer.layout",
             &[
-                crate::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
-                crate::storage_entry(1, wgpu::ShaderStages::VERTEX),
-                crate::storage_entry(2, wgpu::ShaderStages::FRAGMENT),
+                crate::gpu::pipelines::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
+                crate::gpu::pipelines::storage_entry(1, wgpu::ShaderStages::VERTEX),
+                crate::gpu::pipelines::storage_entry(2, wgpu::ShaderStages::FRAGMENT),
                 array_texture_entry(3),
                 array_texture_entry(4),
                 wgpu::BindGroupLayoutEntry {
@@ -134,7 +134,7 @@ impl GBuffer {
             ],
         });
         let pipeline_layout =
-            crate::pipelines::pipeline_layout(device, "gbuffer.pipeline_layout", &[&layout]);
+            crate::gpu::pipelines::pipeline_layout(device, "gbuffer.pipeline_layout", &[&layout]);
         let pipeline = |fragment: &str| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(fragment),

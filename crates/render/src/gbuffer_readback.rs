@@ -46,8 +46,8 @@ impl Renderer {
     pub fn read_gbuffer(&self) -> Result<GBufferData, RenderError> {
         let ctx = self.context();
         ctx.scoped("reading the G-buffer", || {
-            let position = crate::readback::read_texture(ctx, &self.gbuffer.position, TEXEL_BYTES)?;
-            let normal = crate::readback::read_texture(ctx, &self.gbuffer.normal, TEXEL_BYTES)?;
+            let position = crate::gpu::readback::read_texture(ctx, &self.gbuffer.position, TEXEL_BYTES)?;
+            let normal = crate::gpu::readback::read_texture(ctx, &self.gbuffer.normal, TEXEL_BYTES)?;
             let (width, height) = (
                 self.gbuffer.position.width(),
                 self.gbuffer.position.height(),

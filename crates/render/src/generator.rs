@@ -16,7 +16,7 @@ use crate::gpu_scene::GpuScene;
 use crate::shadow::{
     ShadowAtlas, ShadowInput, ShadowOptions, ShadowPlan, ShadowStats, ShadowTechnique, Technique,
 };
-use crate::timing::{GpuTimer, Span};
+use crate::gpu::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
 /// Everything needed to fill the atlas, frame after frame.

@@ -7,7 +7,7 @@ use manyshadows_scene::masks::MaskSet;
 use manyshadows_scene::Scene;
 use wgpu::util::DeviceExt;
 
-use crate::gpu_types::{InstanceData, MaterialData};
+use crate::gpu::types::{InstanceData, MaterialData};
 use crate::{GpuContext, RenderError};
 
 /// Where one mesh lives in the shared buffers.

@@ -81,11 +81,11 @@ use wgpu::util::DeviceExt;
 use crate::casters::CasterGeometry;
 use crate::gbuffer::GBuffer;
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::LightData;
+use crate::gpu::types::LightData;
 use crate::renderer::RenderSettings;
 use crate::shadow::{ShadowAtlas, ShadowPlan, ShadowStats, Technique};
 use crate::source::{PlanParams, ShadowOutput, ShadowSource, SourceInputs, ViewTable};
-use crate::timing::{GpuTimer, Span};
+use crate::gpu::timing::{GpuTimer, Span};
 use crate::visibility::VisibilityMask;
 use crate::{GpuContext, RenderError};
 
@@ -419,7 +419,7 @@ impl IrregularShadows {
         let tiles = buffer("irregular.tiles", (tile_queue + 1) * 16, storage);
 
         let module =
-            crate::shaders::module(device, "irregular.shader", &crate::shaders::irregular());
+            crate::gpu::shaders::module(device, "irregular.shader", &crate::gpu::shaders::irregular());
         // A scene without alpha-tested casters gets pipelines compiled without the mask test.
         let masked = inputs.casters.first_masked_triangle < inputs.casters.triangles;
         let constants: &[(&str, f64)] = if masked {
@@ -428,7 +428,7 @@ impl IrregularShadows {
             &[]
         };
         let pipeline = |entry: &str| {
-            crate::pipelines::compute_pipeline_with(device, entry, None, &module, entry, constants)
+            crate::gpu::pipelines::compute_pipeline_with(device, entry, None, &module, entry, constants)
         };
         let pv = inputs.gbuffer.position.create_view(&Default::default());
         let nv = inputs.gbuffer.normal.create_view(&Default::default());
@@ -536,7 +536,7 @@ impl IrregularShadows {
     ) {
         encoder.clear_buffer(&self.control, 0, None);
         encoder.clear_buffer(&self.heads, self.cut_index * 4, Some(4));
-        let pixel_groups = crate::dispatch_2d(self.width as u64 * self.height as u64, 65535);
+        let pixel_groups = crate::gpu::pipelines::dispatch_2d(self.width as u64 * self.height as u64, 65535);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("irregular.init"),
@@ -584,7 +584,7 @@ impl IrregularShadows {
                 &|p| p.dispatch_workgroups(pixel_groups.0, pixel_groups.1, 1),
             );
             if has_triangles {
-                let (x, y) = crate::dispatch_2d(self.triangles as u64 * views, 65535);
+                let (x, y) = crate::gpu::pipelines::dispatch_2d(self.triangles as u64 * views, 65535);
                 step(
                     encoder,
                     "irregular.triangles",
@@ -631,7 +631,7 @@ impl IrregularShadows {
 
     /// After the frame's submission: reads the counters; a full node pool is an error.
     pub fn finish(&mut self, ctx: &GpuContext) -> Result<IrregularStats, RenderError> {
-        let bytes = crate::readback::map_read(ctx, &self.control_readback, 0..READBACK_WORDS * 4)?;
+        let bytes = crate::gpu::readback::map_read(ctx, &self.control_readback, 0..READBACK_WORDS * 4)?;
         let c: &[u32] = bytemuck::cast_slice(&bytes);
         self.last = IrregularStats {
             batches: self.batches.len() as u32,
@@ -688,7 +688,7 @@ impl IrregularShadows {
             });
         encoder.copy_buffer_to_buffer(&self.mask, 0, &readback, 0, size);
         ctx.queue.submit([encoder.finish()]);
-        let bytes = crate::readback::map_read(ctx, &readback, 0..size)?;
+        let bytes = crate::gpu::readback::map_read(ctx, &readback, 0..size)?;
         Ok(VisibilityMask {
             width: self.width,
             height: self.height,
@@ -789,7 +789,7 @@ impl ShadowSource for IrregularSource {
         encoder: &mut wgpu::CommandEncoder,
         timer: &mut GpuTimer,
     ) -> ShadowStats {
-        let span = timer.span(crate::timing::Stage::Shadows);
+        let span = timer.span(crate::gpu::timing::Stage::Shadows);
         self.passes()
             .record(encoder, &self.table.casters, timer, span);
         ShadowStats::default()

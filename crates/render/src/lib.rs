@@ -22,27 +22,22 @@ pub mod atlas_image;
 mod blit;
 pub mod casters;
 pub mod clusters;
-pub mod context;
 pub mod gbuffer;
 pub mod gbuffer_readback;
 pub mod generator;
+pub mod gpu;
 pub mod gpu_scene;
-pub mod gpu_types;
 pub mod irregular;
 pub mod lighting;
-mod pipelines;
-pub mod readback;
 pub mod renderer;
-pub mod shaders;
 pub mod shadow;
 pub mod source;
 pub mod techniques;
 pub mod textures;
-pub mod timing;
 pub mod visibility;
 pub mod vsm;
 
-pub use context::{AdapterRequest, GpuContext};
+pub use gpu::context::{AdapterRequest, GpuContext};
 pub use gbuffer_readback::GBufferData;
 pub use generator::ShadowGenerator;
 pub use gpu_scene::GpuScene;
@@ -57,6 +52,14 @@ pub use visibility::VisibilityMask;
 
 pub use manyshadows_scene as scene;
 pub use wgpu;
+
+// ------------------------------------------------------------------------------------------
+// Paths kept for the CLI, the web crate, examples and tests; the embedding facade (issue 25
+// part 3) will replace them. The modules moved into floors (issue 25 part 1); these are the
+// old paths that code outside `src/` still names. Nothing inside `src/` uses them (the import
+// check in `tests/import_floors.rs` reads them as the modules they re-export).
+// ------------------------------------------------------------------------------------------
+pub use gpu::{context, readback, timing};
 
 /// Everything that can go wrong in the renderer. Each message says what to do.
 #[derive(Debug, thiserror::Error)]
@@ -105,7 +108,7 @@ pub enum RenderError {
         needs: String,
         /// The feature, and what it is used for.
         feature: String,
-        /// The adapter ([`context::describe_adapter`]).
+        /// The adapter ([`gpu::context::describe_adapter`]).
         adapter: String,
         /// What to use instead.
         instead: String,
@@ -113,7 +116,7 @@ pub enum RenderError {
     /// The device's limits are below what the renderer or a technique needs.
     #[error("{adapter} has smaller limits than {needs} needs: {}", shortfalls.join("; "))]
     LimitsTooSmall {
-        /// The adapter ([`context::describe_adapter`]).
+        /// The adapter ([`gpu::context::describe_adapter`]).
         adapter: String,
         /// Who needs more ("manyshadows (WebGPU's defaults)", "technique compute").
         needs: String,
@@ -163,7 +166,7 @@ impl RenderError {
         RenderError::MissingFeature {
             needs: needs.into(),
             feature: feature.into(),
-            adapter: context::describe_adapter(&ctx.info),
+            adapter: gpu::context::describe_adapter(&ctx.info),
             instead: instead.into(),
         }
     }
@@ -179,122 +182,5 @@ impl RenderError {
                 | RenderError::LimitsTooSmall { .. }
                 | RenderError::NoAtlas { .. }
         )
-    }
-}
-
-/// A 1D workload of `items` threads, 64 per workgroup, as a 2D dispatch with at most
-/// `max_groups` workgroups along x (65535 is every adapter's floor). Shaders recover the item
-/// index as `(y · num_workgroups.x + x) · 64 + local`; trailing threads test it against the
-/// count.
-pub(crate) fn dispatch_2d(items: u64, max_groups: u32) -> (u32, u32) {
-    let groups = items.div_ceil(64).max(1);
-    let x = groups.min(u64::from(max_groups.max(1)));
-    (x as u32, groups.div_ceil(x) as u32)
-}
-
-/// Makes `buffer` hold at least `needed` bytes: a buffer too small is replaced by one with room
-/// for twice as much (so a growing scene reallocates rarely), capped at the device's limit for
-/// its usage (`max_buffer_size`; storage buffers also `max_storage_buffer_binding_size`, since
-/// they are bound whole). Returns true if the buffer was replaced; `needed` over the limit is a
-/// [`RenderError::SceneTooLarge`] naming `what`, never a GPU error.
-pub(crate) fn grow_buffer(
-    ctx: &GpuContext,
-    buffer: &mut wgpu::Buffer,
-    needed: u64,
-    what: &str,
-) -> Result<bool, RenderError> {
-    if buffer.size() >= needed {
-        return Ok(false);
-    }
-    let limits = ctx.limits();
-    let usage = buffer.usage();
-    let mut limit = limits.max_buffer_size;
-    if usage.contains(wgpu::BufferUsages::STORAGE) {
-        limit = limit.min(limits.max_storage_buffer_binding_size);
-    }
-    // Binding sizes must stay multiples of 4 (16 keeps arrays of vec4 whole).
-    let limit = limit - limit % 16;
-    if needed > limit {
-        return Err(RenderError::SceneTooLarge(format!(
-            "the {what} buffer would be {needed} bytes, over this device's limit of {limit} bytes"
-        )));
-    }
-    *buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(&format!("manyshadows.{}", what.replace(' ', "_"))),
-        size: (2 * needed).next_multiple_of(16).min(limit).max(needed),
-        usage,
-        mapped_at_creation: false,
-    });
-    Ok(true)
-}
-
-/// A bind group of whole buffers at bindings 0, 1, 2, … in order.
-pub(crate) fn buffer_bind_group(
-    device: &wgpu::Device,
-    label: &str,
-    layout: &wgpu::BindGroupLayout,
-    buffers: &[&wgpu::Buffer],
-) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry> = buffers
-        .iter()
-        .enumerate()
-        .map(|(i, b)| wgpu::BindGroupEntry {
-            binding: i as u32,
-            resource: b.as_entire_binding(),
-        })
-        .collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some(label),
-        layout,
-        entries: &entries,
-    })
-}
-
-/// Bind-group layout entry of a read-only storage buffer.
-pub(crate) fn storage_entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-) -> wgpu::BindGroupLayoutEntry {
-    buffer_entry(
-        binding,
-        visibility,
-        wgpu::BufferBindingType::Storage { read_only: true },
-    )
-}
-
-/// Bind-group layout entry of a read-write storage buffer.
-pub(crate) fn storage_rw_entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-) -> wgpu::BindGroupLayoutEntry {
-    buffer_entry(
-        binding,
-        visibility,
-        wgpu::BufferBindingType::Storage { read_only: false },
-    )
-}
-
-/// Bind-group layout entry of a uniform buffer.
-pub(crate) fn uniform_entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-) -> wgpu::BindGroupLayoutEntry {
-    buffer_entry(binding, visibility, wgpu::BufferBindingType::Uniform)
-}
-
-fn buffer_entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-    ty: wgpu::BufferBindingType,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Buffer {
-            ty,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
     }
 }

@@ -4,7 +4,7 @@
 
 use crate::gbuffer::GBuffer;
 use crate::source::ShadowOutput;
-use crate::timing::{GpuTimer, Span};
+use crate::gpu::timing::{GpuTimer, Span};
 use crate::GpuContext;
 
 /// First binding of the virtual maps' page-table declarations in the lighting pass.
@@ -49,10 +49,10 @@ impl LightingInputs<'_> {
     }
 
     /// The shader's shadow source, its page-table declarations starting at binding `first`.
-    pub(crate) fn source(&self, first: u32) -> crate::shaders::ShadowSource {
+    pub(crate) fn source(&self, first: u32) -> crate::gpu::shaders::ShadowSource {
         match self.shadows.pages() {
-            Some(_) => crate::shaders::ShadowSource::Virtual { first },
-            None => crate::shaders::ShadowSource::Atlas,
+            Some(_) => crate::gpu::shaders::ShadowSource::Virtual { first },
+            None => crate::gpu::shaders::ShadowSource::Atlas,
         }
     }
 
@@ -68,9 +68,9 @@ impl LightingInputs<'_> {
         mask: &'s wgpu::Buffer,
     ) -> Vec<wgpu::BindGroupEntry<'s>> {
         let mut entries = vec![
-            crate::pipelines::whole_entry(0, self.frame),
-            crate::pipelines::whole_entry(1, self.lights),
-            crate::pipelines::whole_entry(2, self.shadows.view_table()),
+            crate::gpu::pipelines::whole_entry(0, self.frame),
+            crate::gpu::pipelines::whole_entry(1, self.lights),
+            crate::gpu::pipelines::whole_entry(2, self.shadows.view_table()),
             wgpu::BindGroupEntry {
                 binding: 4,
                 resource: wgpu::BindingResource::TextureView(position),
@@ -83,10 +83,10 @@ impl LightingInputs<'_> {
                 binding: 6,
                 resource: wgpu::BindingResource::TextureView(self.shadow_texture()),
             },
-            crate::pipelines::whole_entry(8, mask),
-            crate::pipelines::whole_entry(9, &self.clusters.uniforms),
-            crate::pipelines::whole_entry(10, &self.clusters.slots),
-            crate::pipelines::whole_entry(11, &self.clusters.masks),
+            crate::gpu::pipelines::whole_entry(8, mask),
+            crate::gpu::pipelines::whole_entry(9, &self.clusters.uniforms),
+            crate::gpu::pipelines::whole_entry(10, &self.clusters.slots),
+            crate::gpu::pipelines::whole_entry(11, &self.clusters.masks),
         ];
         entries.extend(self.vsm_entries(VSM_FIRST_BINDING));
         entries
@@ -121,28 +121,10 @@ pub(crate) fn vsm_layout_entries(
     visibility: wgpu::ShaderStages,
 ) -> [wgpu::BindGroupLayoutEntry; 3] {
     [
-        crate::uniform_entry(first, visibility),
-        crate::storage_entry(first + 1, visibility),
-        crate::storage_entry(first + 2, visibility),
+        crate::gpu::pipelines::uniform_entry(first, visibility),
+        crate::gpu::pipelines::storage_entry(first + 1, visibility),
+        crate::gpu::pipelines::storage_entry(first + 2, visibility),
     ]
-}
-
-/// A bind-group layout entry for a non-multisampled 2D texture.
-pub(crate) fn texture_entry(
-    binding: u32,
-    sample_type: wgpu::TextureSampleType,
-    visibility: wgpu::ShaderStages,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Texture {
-            sample_type,
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
-        count: None,
-    }
 }
 
 impl LightingPass {
@@ -173,23 +155,23 @@ impl LightingPass {
             count: None,
         };
         let mut entries = vec![
-            crate::uniform_entry(0, frag),
-            crate::storage_entry(1, frag),
-            crate::storage_entry(2, frag),
-            crate::storage_entry(3, frag),
-            texture_entry(4, wgpu::TextureSampleType::Uint, frag),
-            texture_entry(5, wgpu::TextureSampleType::Uint, frag),
-            texture_entry(6, wgpu::TextureSampleType::Depth, frag),
+            crate::gpu::pipelines::uniform_entry(0, frag),
+            crate::gpu::pipelines::storage_entry(1, frag),
+            crate::gpu::pipelines::storage_entry(2, frag),
+            crate::gpu::pipelines::storage_entry(3, frag),
+            crate::gpu::pipelines::texture_entry(4, wgpu::TextureSampleType::Uint, frag),
+            crate::gpu::pipelines::texture_entry(5, wgpu::TextureSampleType::Uint, frag),
+            crate::gpu::pipelines::texture_entry(6, wgpu::TextureSampleType::Depth, frag),
             cmp(7),
-            crate::storage_entry(8, frag),
-            crate::uniform_entry(9, frag),
-            crate::storage_entry(10, frag),
-            crate::storage_entry(11, frag),
+            crate::gpu::pipelines::storage_entry(8, frag),
+            crate::gpu::pipelines::uniform_entry(9, frag),
+            crate::gpu::pipelines::storage_entry(10, frag),
+            crate::gpu::pipelines::storage_entry(11, frag),
         ];
         if inputs.shadows.pages().is_some() {
             entries.extend(vsm_layout_entries(VSM_FIRST_BINDING, frag));
         }
-        let layout = crate::pipelines::bind_group_layout(device, "lighting.layout", &entries);
+        let layout = crate::gpu::pipelines::bind_group_layout(device, "lighting.layout", &entries);
         let linear = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("lighting.cmp_linear"),
             mag_filter: wgpu::FilterMode::Linear,
@@ -198,13 +180,13 @@ impl LightingPass {
             ..Default::default()
         });
         let bind_group = bind(ctx, &layout, &linear, inputs);
-        let module = crate::shaders::module(
+        let module = crate::gpu::shaders::module(
             device,
             "lighting.shader",
-            &crate::shaders::lighting(inputs.source(VSM_FIRST_BINDING)),
+            &crate::gpu::shaders::lighting(inputs.source(VSM_FIRST_BINDING)),
         );
         let pipeline_layout =
-            crate::pipelines::pipeline_layout(device, "lighting.pipeline_layout", &[&layout]);
+            crate::gpu::pipelines::pipeline_layout(device, "lighting.pipeline_layout", &[&layout]);
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("lighting.pipeline"),
             layout: Some(&pipeline_layout),

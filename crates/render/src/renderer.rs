@@ -21,14 +21,14 @@ use wgpu::util::DeviceExt;
 use crate::clusters::{ClusterOptions, ClusterStats, LightClusters, LightLoop};
 use crate::gbuffer::GBuffer;
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::{FrameUniforms, LightData};
+use crate::gpu::types::{FrameUniforms, LightData};
 use crate::irregular::IrregularOptions;
 use crate::lighting::{LightingInputs, LightingPass};
 use crate::shadow::{
     ShadowAtlas, ShadowOptions, ShadowPlan, ShadowStats, Technique, DEFAULT_MAX_ATLAS_SIZE,
 };
 use crate::source::{ShadowSource, SourceInputs};
-use crate::timing::{GpuTimer, GpuTimes, Stage};
+use crate::gpu::timing::{GpuTimer, GpuTimes, Stage};
 use crate::visibility::{VisibilityMask, VisibilityPass};
 use crate::vsm::{VirtualOptions, VirtualStats};
 use crate::{GpuContext, RenderError};
@@ -464,7 +464,7 @@ impl Renderer {
         self.source.update(ctx, scene)?;
         let light_data = lights_or_placeholder(self.source.light_data(scene));
         let bytes: &[u8] = bytemuck::cast_slice(&light_data);
-        crate::grow_buffer(ctx, &mut self.lights, bytes.len() as u64, "lights")?;
+        crate::gpu::buffers::grow_buffer(ctx, &mut self.lights, bytes.len() as u64, "lights")?;
         ctx.queue.write_buffer(&self.lights, 0, bytes);
         self.clusters.update(ctx, scene)?;
         self.clusters
@@ -592,7 +592,7 @@ impl Renderer {
             let shadow_stats = self.record_frame(ctx, &mut encoder)?;
             ctx.queue.submit([encoder.finish()]);
             let cpu_record_ms = start.elapsed().as_secs_f64() * 1e3;
-            let rgba = crate::readback::read_texture(ctx, &self.lighting.color, 4)?;
+            let rgba = crate::gpu::readback::read_texture(ctx, &self.lighting.color, 4)?;
             let wall_ms = start.elapsed().as_secs_f64() * 1e3;
             let clusters = if self.clusters.enabled() {
                 Some(self.clusters.read_stats(ctx)?)

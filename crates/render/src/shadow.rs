@@ -11,12 +11,9 @@ use manyshadows_scene::Scene;
 
 use crate::casters::{CasterGeometry, CasterOptions};
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::{LightData, ShadowViewData, ViewUniform, VIEW_UNIFORM_STRIDE};
-use crate::timing::{GpuTimer, Span};
+use crate::gpu::types::{LightData, ShadowViewData, ViewUniform, VIEW_UNIFORM_STRIDE};
+use crate::gpu::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
-
-/// Depth format of the atlas.
-pub const ATLAS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 /// Largest atlas side the renderer uses by default (256 MiB of depth), further clamped to the
 /// adapter's `max_texture_dimension_2d`.
@@ -466,20 +463,20 @@ impl ShadowAtlas {
         let mut eyes: Vec<[f32; 4]> = plan.views.iter().map(|v| view_eye(v).to_array()).collect();
         eyes.resize(eyes.len().max(1), [0.0; 4]);
         let all: Vec<u32> = (0..plan.views.len().max(1) as u32).collect();
-        let mut grew = crate::grow_buffer(
+        let mut grew = crate::gpu::buffers::grow_buffer(
             ctx,
             &mut self.views_buffer,
             data_bytes(&data),
             "shadow views",
         )?;
-        grew |= crate::grow_buffer(
+        grew |= crate::gpu::buffers::grow_buffer(
             ctx,
             &mut self.view_uniforms,
             uniform_bytes.len() as u64,
             "shadow view uniforms",
         )?;
-        grew |= crate::grow_buffer(ctx, &mut self.eyes, data_bytes(&eyes), "shadow view eyes")?;
-        grew |= crate::grow_buffer(
+        grew |= crate::gpu::buffers::grow_buffer(ctx, &mut self.eyes, data_bytes(&eyes), "shadow view eyes")?;
+        grew |= crate::gpu::buffers::grow_buffer(
             ctx,
             &mut self.draw_list,
             data_bytes(&all),
@@ -504,7 +501,7 @@ fn data_bytes<T>(v: &[T]) -> u64 {
 
 /// A `size`² depth atlas texture and its view.
 fn atlas_texture(ctx: &GpuContext, size: u32) -> (wgpu::Texture, wgpu::TextureView) {
-    let texture = crate::pipelines::depth_texture(&ctx.device, "shadow.atlas", size, 1);
+    let texture = crate::gpu::pipelines::depth_texture(&ctx.device, "shadow.atlas", size, 1);
     let view = texture.create_view(&wgpu::TextureViewDescriptor {
         label: Some("shadow.atlas.view"),
         dimension: Some(wgpu::TextureViewDimension::D2),

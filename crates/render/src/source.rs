@@ -27,10 +27,10 @@ use crate::clusters::LightClusters;
 use crate::gbuffer::GBuffer;
 use crate::generator::ShadowGenerator;
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::LightData;
+use crate::gpu::types::LightData;
 use crate::renderer::RenderSettings;
 use crate::shadow::{ShadowAtlas, ShadowPlan, ShadowStats, Technique};
-use crate::timing::GpuTimer;
+use crate::gpu::timing::GpuTimer;
 use crate::visibility::VisibilityMask;
 use crate::{GpuContext, RenderError};
 
@@ -336,7 +336,7 @@ impl ShadowSource for AtlasSource {
         encoder: &mut wgpu::CommandEncoder,
         timer: &mut GpuTimer,
     ) -> ShadowStats {
-        let span = timer.span(crate::timing::Stage::Shadows);
+        let span = timer.span(crate::gpu::timing::Stage::Shadows);
         self.generator.generate(ctx, scene, encoder, timer, span)
     }
 

@@ -9,8 +9,9 @@
 
 use std::io::Write;
 
-use crate::lighting::{texture_entry, LightingInputs};
-use crate::timing::{GpuTimer, Span};
+use crate::gpu::pipelines::texture_entry;
+use crate::lighting::LightingInputs;
+use crate::gpu::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
 /// Per-pixel light bits read back from the GPU.
@@ -153,9 +154,9 @@ impl VisibilityPass {
         // The lighting pass's bindings (`LightingInputs::shared_entries`); 7 is this pass's
         // parameters, 3 is unused.
         let mut entries = vec![
-            crate::uniform_entry(0, comp),
-            crate::storage_entry(1, comp),
-            crate::storage_entry(2, comp),
+            crate::gpu::pipelines::uniform_entry(0, comp),
+            crate::gpu::pipelines::storage_entry(1, comp),
+            crate::gpu::pipelines::storage_entry(2, comp),
             texture_entry(4, wgpu::TextureSampleType::Uint, comp),
             texture_entry(5, wgpu::TextureSampleType::Uint, comp),
             texture_entry(
@@ -163,29 +164,29 @@ impl VisibilityPass {
                 wgpu::TextureSampleType::Float { filterable: false },
                 comp,
             ),
-            crate::uniform_entry(7, comp),
-            crate::storage_rw_entry(8, comp),
-            crate::uniform_entry(9, comp),
-            crate::storage_entry(10, comp),
-            crate::storage_entry(11, comp),
+            crate::gpu::pipelines::uniform_entry(7, comp),
+            crate::gpu::pipelines::storage_rw_entry(8, comp),
+            crate::gpu::pipelines::uniform_entry(9, comp),
+            crate::gpu::pipelines::storage_entry(10, comp),
+            crate::gpu::pipelines::storage_entry(11, comp),
         ];
         let source = if shadows.pages().is_some() {
             entries.extend(crate::lighting::vsm_layout_entries(VSM_FIRST_BINDING, comp));
-            crate::shaders::ShadowSource::Virtual {
+            crate::gpu::shaders::ShadowSource::Virtual {
                 first: VSM_FIRST_BINDING,
             }
         } else {
-            crate::shaders::ShadowSource::Atlas
+            crate::gpu::shaders::ShadowSource::Atlas
         };
-        let layout = crate::pipelines::bind_group_layout(device, "visibility.layout", &entries);
-        let module = crate::shaders::module(
+        let layout = crate::gpu::pipelines::bind_group_layout(device, "visibility.layout", &entries);
+        let module = crate::gpu::shaders::module(
             device,
             "visibility.shader",
-            &crate::shaders::visibility(source),
+            &crate::gpu::shaders::visibility(source),
         );
         let pipeline_layout =
-            crate::pipelines::pipeline_layout(device, "visibility.pipeline_layout", &[&layout]);
-        let pipeline = crate::pipelines::compute_pipeline(
+            crate::gpu::pipelines::pipeline_layout(device, "visibility.pipeline_layout", &[&layout]);
+        let pipeline = crate::gpu::pipelines::compute_pipeline(
             device,
             "visibility.pipeline",
             &pipeline_layout,
@@ -250,7 +251,7 @@ impl VisibilityPass {
                 },
             );
             let mut entries = inputs.shared_entries(&pv, &nv, &mask);
-            entries.push(crate::pipelines::whole_entry(7, &params));
+            entries.push(crate::gpu::pipelines::whole_entry(7, &params));
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("visibility.bind_group"),
                 layout: &self.layout,
@@ -271,7 +272,7 @@ impl VisibilityPass {
             }
             encoder.copy_buffer_to_buffer(&mask, 0, &readback, 0, size);
             ctx.queue.submit([encoder.finish()]);
-            let bytes = crate::readback::map_read(ctx, &readback, 0..size)?;
+            let bytes = crate::gpu::readback::map_read(ctx, &readback, 0..size)?;
             let chunk: &[u32] = bytemuck::cast_slice(&bytes);
             for px in 0..pixels as usize {
                 let dst = px * self.words as usize + first as usize;

@@ -41,13 +41,13 @@ use crate::casters::CasterGeometry;
 use crate::clusters::LightClusters;
 use crate::gbuffer::GBuffer;
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::{LightData, ShadowViewData, VirtualFace, VsmRound, VsmUniforms};
-use crate::pipelines::whole_entry;
+use crate::gpu::types::{LightData, ShadowViewData, VirtualFace, VsmRound, VsmUniforms};
+use crate::gpu::pipelines::whole_entry;
 use crate::renderer::RenderSettings;
 use crate::shadow::{ShadowAtlas, ShadowOptions, ShadowPlan, ShadowStats, Technique};
 use crate::source::{PagePool, ShadowOutput, ShadowSource, SourceInputs, ViewTable};
 use crate::techniques::gpu_driven::{plan_rounds, Round, COMMAND_SIZE};
-use crate::timing::{GpuTimer, Span};
+use crate::gpu::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
 /// Side of a page in texels.
@@ -418,7 +418,7 @@ impl VirtualShadows {
         let pool_side = pool_side(options.pool_bytes, limits.max_texture_dimension_2d);
         let per_row = pool_side / PAGE_SIZE;
         let pool_pages = per_row * per_row;
-        let pool = crate::pipelines::depth_texture(device, "vsm.pool", pool_side, 1);
+        let pool = crate::gpu::pipelines::depth_texture(device, "vsm.pool", pool_side, 1);
         let pool_view = pool.create_view(&wgpu::TextureViewDescriptor {
             label: Some("vsm.pool.view"),
             dimension: Some(wgpu::TextureViewDimension::D2),
@@ -513,82 +513,82 @@ impl VirtualShadows {
 
         let cs = wgpu::ShaderStages::COMPUTE;
         let tex =
-            |binding| crate::lighting::texture_entry(binding, wgpu::TextureSampleType::Uint, cs);
-        let mark_layout = crate::pipelines::bind_group_layout(
+            |binding| crate::gpu::pipelines::texture_entry(binding, wgpu::TextureSampleType::Uint, cs);
+        let mark_layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "vsm.mark_layout",
             &[
-                crate::uniform_entry(0, cs),
-                crate::storage_entry(1, cs),
+                crate::gpu::pipelines::uniform_entry(0, cs),
+                crate::gpu::pipelines::storage_entry(1, cs),
                 tex(2),
                 tex(3),
-                crate::uniform_entry(4, cs),
-                crate::storage_entry(5, cs),
-                crate::storage_entry(6, cs),
-                crate::uniform_entry(7, cs),
-                crate::storage_entry(8, cs),
-                crate::storage_rw_entry(9, cs),
+                crate::gpu::pipelines::uniform_entry(4, cs),
+                crate::gpu::pipelines::storage_entry(5, cs),
+                crate::gpu::pipelines::storage_entry(6, cs),
+                crate::gpu::pipelines::uniform_entry(7, cs),
+                crate::gpu::pipelines::storage_entry(8, cs),
+                crate::gpu::pipelines::storage_rw_entry(9, cs),
             ],
         );
         // The allocation passes: eight storage buffers, WebGPU's default per-stage limit.
-        let alloc_layout = crate::pipelines::bind_group_layout(
+        let alloc_layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "vsm.alloc_layout",
             &[
-                crate::uniform_entry(7, cs),
-                crate::storage_entry(8, cs),
-                crate::storage_rw_entry(9, cs),
-                crate::storage_rw_entry(10, cs),
-                crate::storage_rw_entry(11, cs),
-                crate::storage_entry(12, cs),
-                crate::storage_rw_entry(13, cs),
-                crate::storage_entry(14, cs),
-                crate::storage_rw_entry(15, cs),
+                crate::gpu::pipelines::uniform_entry(7, cs),
+                crate::gpu::pipelines::storage_entry(8, cs),
+                crate::gpu::pipelines::storage_rw_entry(9, cs),
+                crate::gpu::pipelines::storage_rw_entry(10, cs),
+                crate::gpu::pipelines::storage_rw_entry(11, cs),
+                crate::gpu::pipelines::storage_entry(12, cs),
+                crate::gpu::pipelines::storage_rw_entry(13, cs),
+                crate::gpu::pipelines::storage_entry(14, cs),
+                crate::gpu::pipelines::storage_rw_entry(15, cs),
             ],
         );
-        let cull_layout = crate::pipelines::bind_group_layout(
+        let cull_layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "vsm.cull_layout",
             &[
-                crate::pipelines::dynamic_uniform_entry(0, cs, ROUND_SIZE),
-                crate::uniform_entry(1, cs),
-                crate::storage_entry(2, cs),
-                crate::storage_entry(4, cs),
-                crate::storage_entry(5, cs),
-                crate::storage_entry(6, cs),
-                crate::storage_entry(7, cs),
-                crate::storage_rw_entry(8, cs),
-                crate::storage_rw_entry(9, cs),
-                crate::storage_entry(10, cs),
+                crate::gpu::pipelines::dynamic_uniform_entry(0, cs, ROUND_SIZE),
+                crate::gpu::pipelines::uniform_entry(1, cs),
+                crate::gpu::pipelines::storage_entry(2, cs),
+                crate::gpu::pipelines::storage_entry(4, cs),
+                crate::gpu::pipelines::storage_entry(5, cs),
+                crate::gpu::pipelines::storage_entry(6, cs),
+                crate::gpu::pipelines::storage_entry(7, cs),
+                crate::gpu::pipelines::storage_rw_entry(8, cs),
+                crate::gpu::pipelines::storage_rw_entry(9, cs),
+                crate::gpu::pipelines::storage_entry(10, cs),
             ],
         );
         let vs = wgpu::ShaderStages::VERTEX;
-        let draw_layout = crate::pipelines::bind_group_layout(
+        let draw_layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "vsm.draw_layout",
             &[
-                crate::pipelines::dynamic_uniform_entry(0, vs, ROUND_SIZE),
-                crate::uniform_entry(1, vs),
-                crate::storage_entry(2, vs),
-                crate::storage_entry(11, vs),
-                crate::storage_entry(13, wgpu::ShaderStages::VERTEX_FRAGMENT),
+                crate::gpu::pipelines::dynamic_uniform_entry(0, vs, ROUND_SIZE),
+                crate::gpu::pipelines::uniform_entry(1, vs),
+                crate::gpu::pipelines::storage_entry(2, vs),
+                crate::gpu::pipelines::storage_entry(11, vs),
+                crate::gpu::pipelines::storage_entry(13, wgpu::ShaderStages::VERTEX_FRAGMENT),
             ],
         );
-        let clear_layout = crate::pipelines::bind_group_layout(
+        let clear_layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "vsm.clear_layout",
-            &[crate::uniform_entry(1, vs), crate::storage_entry(2, vs)],
+            &[crate::gpu::pipelines::uniform_entry(1, vs), crate::gpu::pipelines::storage_entry(2, vs)],
         );
         let pipeline_layout = |label: &str, layout: &wgpu::BindGroupLayout| {
-            crate::pipelines::pipeline_layout(device, label, &[layout])
+            crate::gpu::pipelines::pipeline_layout(device, label, &[layout])
         };
-        let mark_module = crate::shaders::module(device, "vsm.shader", &crate::shaders::vsm());
+        let mark_module = crate::gpu::shaders::module(device, "vsm.shader", &crate::gpu::shaders::vsm());
         let draw_module =
-            crate::shaders::module(device, "vsm_draw.shader", &crate::shaders::vsm_draw());
+            crate::gpu::shaders::module(device, "vsm_draw.shader", &crate::gpu::shaders::vsm_draw());
         let mark_pl = pipeline_layout("vsm.mark_pipeline_layout", &mark_layout);
         let compute =
             |label: &str, module: &wgpu::ShaderModule, pl: &wgpu::PipelineLayout, entry| {
-                crate::pipelines::compute_pipeline(device, label, pl, module, entry)
+                crate::gpu::pipelines::compute_pipeline(device, label, pl, module, entry)
             };
         let mark = compute("vsm.mark", &mark_module, &mark_pl, "cs_mark");
         let alloc_pl = pipeline_layout("vsm.alloc_pipeline_layout", &alloc_layout);
@@ -718,27 +718,27 @@ impl VirtualShadows {
         let face_bytes: &[u8] = bytemuck::cast_slice(&self.plan.faces);
         // At least one record: shaders declare the array with a minimum of one element.
         let face_size = std::mem::size_of::<VirtualFace>() as u64;
-        let mut replaced = crate::grow_buffer(
+        let mut replaced = crate::gpu::buffers::grow_buffer(
             ctx,
             &mut self.faces,
             (face_bytes.len() as u64).max(face_size),
             "virtual faces",
         )?;
         let entries = self.plan.fit.table_entries.max(1) as u64;
-        if crate::grow_buffer(ctx, &mut self.table, entries * 4, "virtual page table")? {
+        if crate::gpu::buffers::grow_buffer(ctx, &mut self.table, entries * 4, "virtual page table")? {
             // Last frame's table went with the old buffer: keep no pages this time.
             self.last.clear();
             replaced = true;
         }
         let table_size = self.table.size();
-        replaced |= crate::grow_buffer(
+        replaced |= crate::gpu::buffers::grow_buffer(
             ctx,
             &mut self.prev_table,
             table_size,
             "virtual previous page table",
         )?;
         let blocks = entries.div_ceil(ALLOC_BLOCK);
-        replaced |= crate::grow_buffer(
+        replaced |= crate::gpu::buffers::grow_buffer(
             ctx,
             &mut self.scratch,
             (2 * self.pool_pages as u64 + (1 + MAX_LEVELS as u64) * blocks) * 4,
@@ -1084,7 +1084,7 @@ impl VirtualShadows {
 
     /// The counters of the last recorded frame (after its submission).
     pub fn read_stats(&self, ctx: &GpuContext) -> Result<VirtualStats, RenderError> {
-        let bytes = crate::readback::map_read(ctx, &self.readback, 0..COUNTERS as u64 * 4)?;
+        let bytes = crate::gpu::readback::map_read(ctx, &self.readback, 0..COUNTERS as u64 * 4)?;
         let c: &[u32] = bytemuck::cast_slice(&bytes);
         let mut needed = [0u32; MAX_LEVELS as usize];
         needed.copy_from_slice(&c[..MAX_LEVELS as usize]);
@@ -1210,8 +1210,8 @@ impl ShadowSource for VirtualSource {
         encoder: &mut wgpu::CommandEncoder,
         timer: &mut GpuTimer,
     ) -> ShadowStats {
-        let pages_span = timer.span(crate::timing::Stage::Pages);
-        let span = timer.span(crate::timing::Stage::Shadows);
+        let pages_span = timer.span(crate::gpu::timing::Stage::Pages);
+        let span = timer.span(crate::gpu::timing::Stage::Shadows);
         self.maps.record(
             ctx,
             encoder,

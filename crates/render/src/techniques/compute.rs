@@ -162,7 +162,7 @@ impl Compute {
             / 4;
         if max_texels < 64 * 64 {
             return Err(RenderError::LimitsTooSmall {
-                adapter: crate::context::describe_adapter(&ctx.info),
+                adapter: crate::gpu::context::describe_adapter(&ctx.info),
                 needs: "technique compute".into(),
                 shortfalls: vec![format!(
                     "max_storage_buffer_binding_size: the device allows {}, the technique \
@@ -171,40 +171,40 @@ impl Compute {
                 )],
             });
         }
-        let module = crate::shaders::module(device, "compute.shader", &crate::shaders::compute());
+        let module = crate::gpu::shaders::module(device, "compute.shader", &crate::gpu::shaders::compute());
         let cs = wgpu::ShaderStages::COMPUTE;
-        let layout = crate::pipelines::bind_group_layout(
+        let layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "compute.layout",
             &[
-                crate::uniform_entry(0, cs),
-                crate::storage_entry(1, cs),
-                crate::storage_entry(2, cs),
-                crate::storage_entry(3, cs),
-                crate::storage_entry(4, cs),
-                crate::uniform_entry(5, cs),
-                crate::storage_rw_entry(6, cs),
-                crate::storage_rw_entry(7, cs),
-                crate::storage_rw_entry(8, cs),
+                crate::gpu::pipelines::uniform_entry(0, cs),
+                crate::gpu::pipelines::storage_entry(1, cs),
+                crate::gpu::pipelines::storage_entry(2, cs),
+                crate::gpu::pipelines::storage_entry(3, cs),
+                crate::gpu::pipelines::storage_entry(4, cs),
+                crate::gpu::pipelines::uniform_entry(5, cs),
+                crate::gpu::pipelines::storage_rw_entry(6, cs),
+                crate::gpu::pipelines::storage_rw_entry(7, cs),
+                crate::gpu::pipelines::storage_rw_entry(8, cs),
             ],
         );
-        let args_layout = crate::pipelines::bind_group_layout(
+        let args_layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "compute.args_layout",
-            &[crate::storage_rw_entry(0, cs)],
+            &[crate::gpu::pipelines::storage_rw_entry(0, cs)],
         );
         let main_layout =
-            crate::pipelines::pipeline_layout(device, "compute.pipeline_layout", &[&layout]);
-        let finalize_layout = crate::pipelines::pipeline_layout(
+            crate::gpu::pipelines::pipeline_layout(device, "compute.pipeline_layout", &[&layout]);
+        let finalize_layout = crate::gpu::pipelines::pipeline_layout(
             device,
             "compute.finalize_layout",
             &[&layout, &args_layout],
         );
         let pipeline = |entry: &str, layout: &wgpu::PipelineLayout| {
-            crate::pipelines::compute_pipeline(device, entry, layout, &module, entry)
+            crate::gpu::pipelines::compute_pipeline(device, entry, layout, &module, entry)
         };
         let alpha_tested = |entry: &str, layout: &wgpu::PipelineLayout| {
-            crate::pipelines::compute_pipeline_with(
+            crate::gpu::pipelines::compute_pipeline_with(
                 device,
                 entry,
                 Some(layout),
@@ -215,22 +215,22 @@ impl Compute {
         };
 
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
-        let copy_layout = crate::pipelines::bind_group_layout(
+        let copy_layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "compute.copy_layout",
             &[
-                crate::uniform_entry(0, vf),
-                crate::storage_entry(1, vf),
-                crate::uniform_entry(2, vf),
-                crate::storage_entry(3, wgpu::ShaderStages::FRAGMENT),
+                crate::gpu::pipelines::uniform_entry(0, vf),
+                crate::gpu::pipelines::storage_entry(1, vf),
+                crate::gpu::pipelines::uniform_entry(2, vf),
+                crate::gpu::pipelines::storage_entry(3, wgpu::ShaderStages::FRAGMENT),
             ],
         );
-        let copy_module = crate::shaders::module(
+        let copy_module = crate::gpu::shaders::module(
             device,
             "compute_copy.shader",
-            &crate::shaders::compute_copy(),
+            &crate::gpu::shaders::compute_copy(),
         );
-        let copy_pipeline_layout = crate::pipelines::pipeline_layout(
+        let copy_pipeline_layout = crate::gpu::pipelines::pipeline_layout(
             device,
             "compute.copy_pipeline_layout",
             &[&copy_layout],
@@ -309,7 +309,7 @@ impl Compute {
             self.slots.push(RoundSlot {
                 params: device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("compute.params"),
-                    size: std::mem::size_of::<crate::gpu_types::ComputeParams>() as u64,
+                    size: std::mem::size_of::<crate::gpu::types::ComputeParams>() as u64,
                     usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 }),
@@ -342,13 +342,13 @@ impl Compute {
                 *chunks,
                 &self.counters,
             ];
-            slot.bind_group = Some(crate::buffer_bind_group(
+            slot.bind_group = Some(crate::gpu::pipelines::buffer_bind_group(
                 device,
                 "compute.bind_group",
                 &self.layout,
                 &buffers,
             ));
-            slot.copy_bind_group = Some(crate::buffer_bind_group(
+            slot.copy_bind_group = Some(crate::gpu::pipelines::buffer_bind_group(
                 device,
                 "compute.copy_bind_group",
                 &self.copy_layout,
@@ -376,7 +376,7 @@ impl Compute {
             return Ok(None);
         }
         self.pending_read = false;
-        let bytes = crate::readback::map_read(ctx, &self.counters_read, 0..16)?;
+        let bytes = crate::gpu::readback::map_read(ctx, &self.counters_read, 0..16)?;
         let words: &[u32] = bytemuck::cast_slice(&bytes);
         Ok(Some((words[0], words[1])))
     }
@@ -468,7 +468,7 @@ impl ShadowTechnique for Compute {
         let last_round = rounds.len() - 1;
         for (r, round) in rounds.iter().enumerate() {
             let round_texels = texels(round, tile_size);
-            let params = crate::gpu_types::ComputeParams {
+            let params = crate::gpu::types::ComputeParams {
                 counts: [
                     casters.triangles,
                     casters.cullable_triangles,
@@ -524,7 +524,7 @@ impl ShadowTechnique for Compute {
                         }
                         pass.set_pipeline(pipeline);
                         let threads = tris as u64 * round.len() as u64;
-                        let (x, y) = crate::dispatch_2d(threads, self.max_groups);
+                        let (x, y) = crate::gpu::pipelines::dispatch_2d(threads, self.max_groups);
                         pass.dispatch_workgroups(x, y, 1);
                     }
                     pass.set_pipeline(&self.finalize);
@@ -617,7 +617,7 @@ mod tests {
         let r = plan_rounds(&many, |_| 16, 1, 1 << 30, 1 << 31);
         assert!(r.iter().all(|r| r.len() as u64 <= MAX_ROUND_ENTRIES));
         assert_eq!(r.iter().map(|r| r.len()).sum::<usize>(), 10_000);
-        let wgsl = crate::shaders::compute();
+        let wgsl = crate::gpu::shaders::compute();
         assert!(wgsl.contains(&format!(
             "const MAX_ROUND_ENTRIES: u32 = {MAX_ROUND_ENTRIES}u;"
         )));
@@ -625,16 +625,16 @@ mod tests {
 
     #[test]
     fn small_area_matches_the_shader() {
-        let wgsl = crate::shaders::compute();
+        let wgsl = crate::gpu::shaders::compute();
         assert!(wgsl.contains(&format!("const SMALL_AREA: u32 = {SMALL_AREA}u;")));
     }
 
     #[test]
     fn dispatches_stay_within_the_dimension_limit() {
         let items = 64 * 65535 * 3 + 1;
-        let (x, y) = crate::dispatch_2d(items, 65535);
+        let (x, y) = crate::gpu::pipelines::dispatch_2d(items, 65535);
         assert!(x <= 65535 && y <= 65535);
         assert!(x as u64 * y as u64 * 64 >= items);
-        assert_eq!(crate::dispatch_2d(10, 65535), (1, 1));
+        assert_eq!(crate::gpu::pipelines::dispatch_2d(10, 65535), (1, 1));
     }
 }

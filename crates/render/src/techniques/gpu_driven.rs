@@ -23,7 +23,7 @@
 //! scenes with many views run several cull + draw rounds instead of truncating. Clusters are
 //! split too if even one view's commands would not fit.
 
-use crate::pipelines::{dynamic_uniform_entry, whole_entry};
+use crate::gpu::pipelines::{dynamic_uniform_entry, whole_entry};
 use crate::shadow::{Generation, ShadowStats, ShadowTechnique};
 use crate::techniques::{
     atlas_attachment, depth_pipeline, require_clip_distances, CachedGroup, TileClear,
@@ -35,7 +35,7 @@ use crate::{GpuContext, RenderError};
 pub const COMMAND_SIZE: u64 = std::mem::size_of::<wgpu::util::DrawIndexedIndirectArgs>() as u64;
 
 /// Bytes of one round's parameters (`GpuParams` in gpu_driven.wgsl).
-const PARAMS_SIZE: u64 = std::mem::size_of::<crate::gpu_types::GpuParams>() as u64;
+const PARAMS_SIZE: u64 = std::mem::size_of::<crate::gpu::types::GpuParams>() as u64;
 
 /// Largest workgroup count per dispatch dimension WebGPU guarantees.
 const MAX_GROUPS: u64 = 65535;
@@ -139,46 +139,46 @@ impl GpuDriven {
         )?;
         let device = &ctx.device;
         let module =
-            crate::shaders::module(device, "gpu_driven.shader", &crate::shaders::gpu_driven());
+            crate::gpu::shaders::module(device, "gpu_driven.shader", &crate::gpu::shaders::gpu_driven());
         let cs = wgpu::ShaderStages::COMPUTE;
-        let cull_layout = crate::pipelines::bind_group_layout(
+        let cull_layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "gpu_driven.cull_layout",
             &[
                 dynamic_uniform_entry(0, cs, PARAMS_SIZE),
-                crate::storage_entry(1, cs),
-                crate::storage_entry(2, cs),
-                crate::storage_entry(3, cs),
-                crate::storage_entry(4, cs),
-                crate::storage_entry(5, cs),
-                crate::storage_entry(6, cs),
-                crate::storage_rw_entry(7, cs),
-                crate::storage_rw_entry(8, cs),
+                crate::gpu::pipelines::storage_entry(1, cs),
+                crate::gpu::pipelines::storage_entry(2, cs),
+                crate::gpu::pipelines::storage_entry(3, cs),
+                crate::gpu::pipelines::storage_entry(4, cs),
+                crate::gpu::pipelines::storage_entry(5, cs),
+                crate::gpu::pipelines::storage_entry(6, cs),
+                crate::gpu::pipelines::storage_rw_entry(7, cs),
+                crate::gpu::pipelines::storage_rw_entry(8, cs),
             ],
         );
         let vs = wgpu::ShaderStages::VERTEX;
-        let draw_layout = crate::pipelines::bind_group_layout(
+        let draw_layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "gpu_driven.draw_layout",
             &[
                 dynamic_uniform_entry(0, vs, PARAMS_SIZE),
-                crate::storage_entry(1, vs),
-                crate::storage_entry(2, vs),
-                crate::storage_entry(9, vs),
-                crate::storage_entry(10, wgpu::ShaderStages::VERTEX_FRAGMENT),
+                crate::gpu::pipelines::storage_entry(1, vs),
+                crate::gpu::pipelines::storage_entry(2, vs),
+                crate::gpu::pipelines::storage_entry(9, vs),
+                crate::gpu::pipelines::storage_entry(10, wgpu::ShaderStages::VERTEX_FRAGMENT),
             ],
         );
-        let cull_pipeline_layout = crate::pipelines::pipeline_layout(
+        let cull_pipeline_layout = crate::gpu::pipelines::pipeline_layout(
             device,
             "gpu_driven.cull_pipeline_layout",
             &[&cull_layout],
         );
-        let draw_pipeline_layout = crate::pipelines::pipeline_layout(
+        let draw_pipeline_layout = crate::gpu::pipelines::pipeline_layout(
             device,
             "gpu_driven.draw_pipeline_layout",
             &[&draw_layout],
         );
-        let cull = crate::pipelines::compute_pipeline(
+        let cull = crate::gpu::pipelines::compute_pipeline(
             device,
             "gpu_driven.cull",
             &cull_pipeline_layout,
@@ -271,9 +271,9 @@ impl ShadowTechnique for GpuDriven {
         let commands = &self.commands.as_ref().expect("command buffer").0;
 
         let atlas = input.atlas.size as f32;
-        let records: Vec<crate::gpu_types::GpuParams> = rounds
+        let records: Vec<crate::gpu::types::GpuParams> = rounds
             .iter()
-            .map(|r| crate::gpu_types::GpuParams {
+            .map(|r| crate::gpu::types::GpuParams {
                 counts: [
                     casters.vertices,
                     casters.cullable_triangles,

@@ -38,22 +38,22 @@ impl Layered {
     pub fn new(ctx: &GpuContext) -> Result<Self, RenderError> {
         require_clip_distances(ctx, "layered")?;
         let device = &ctx.device;
-        let module = crate::shaders::module(device, "layered.shader", &crate::shaders::layered());
+        let module = crate::gpu::shaders::module(device, "layered.shader", &crate::gpu::shaders::layered());
         let vs = wgpu::ShaderStages::VERTEX;
-        let layout = crate::pipelines::bind_group_layout(
+        let layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "layered.layout",
             &[
-                crate::uniform_entry(0, vs),
-                crate::storage_entry(1, vs),
-                crate::storage_entry(2, vs),
-                crate::storage_entry(3, vs),
-                crate::storage_entry(4, wgpu::ShaderStages::VERTEX_FRAGMENT),
-                crate::storage_entry(5, vs),
+                crate::gpu::pipelines::uniform_entry(0, vs),
+                crate::gpu::pipelines::storage_entry(1, vs),
+                crate::gpu::pipelines::storage_entry(2, vs),
+                crate::gpu::pipelines::storage_entry(3, vs),
+                crate::gpu::pipelines::storage_entry(4, wgpu::ShaderStages::VERTEX_FRAGMENT),
+                crate::gpu::pipelines::storage_entry(5, vs),
             ],
         );
         let pipeline_layout =
-            crate::pipelines::pipeline_layout(device, "layered.pipeline_layout", &[&layout]);
+            crate::gpu::pipelines::pipeline_layout(device, "layered.pipeline_layout", &[&layout]);
         let pipeline = |entry: &str| depth_pipeline(device, &pipeline_layout, &module, entry, &[]);
         let masked = |entry: &str| {
             masked_depth_pipeline(device, &pipeline_layout, &module, entry, &[], None)
@@ -67,7 +67,7 @@ impl Layered {
             clear: TileClear::new(ctx),
             params: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("layered.params"),
-                size: std::mem::size_of::<crate::gpu_types::LayeredParams>() as u64,
+                size: std::mem::size_of::<crate::gpu::types::LayeredParams>() as u64,
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
@@ -85,7 +85,7 @@ impl ShadowTechnique for Layered {
         let ctx = input.ctx;
         let cull = input.options.cull;
         let atlas = input.atlas.size as f32;
-        let params = crate::gpu_types::LayeredParams {
+        let params = crate::gpu::types::LayeredParams {
             counts: [casters.cullable_triangles, cull.bits(), 0, 0],
             atlas: [atlas, 1.0 / atlas, 0.0, 0.0],
         };
@@ -101,7 +101,7 @@ impl ShadowTechnique for Layered {
         ];
         let (device, layout) = (&ctx.device, &self.layout);
         let bind_group = self.group.get(&buffers, || {
-            crate::buffer_bind_group(device, "layered.bind_group", layout, &buffers)
+            crate::gpu::pipelines::buffer_bind_group(device, "layered.bind_group", layout, &buffers)
         });
 
         g.encoder.push_debug_group("layered");

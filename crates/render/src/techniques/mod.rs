@@ -7,7 +7,8 @@ pub mod layered;
 pub mod multiview;
 pub mod traditional;
 
-use crate::shadow::{ShadowInput, ATLAS_FORMAT};
+use crate::gpu::pipelines::ATLAS_FORMAT;
+use crate::shadow::ShadowInput;
 use crate::{GpuContext, RenderError};
 
 /// Clears only the tiles of the views in [`ShadowInput::draw_list`] (to depth 1), for
@@ -26,19 +27,19 @@ impl TileClear {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
         let module =
-            crate::shaders::module(device, "tile_clear.shader", &crate::shaders::tile_clear());
+            crate::gpu::shaders::module(device, "tile_clear.shader", &crate::gpu::shaders::tile_clear());
         let vs = wgpu::ShaderStages::VERTEX;
-        let layout = crate::pipelines::bind_group_layout(
+        let layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "tile_clear.layout",
             &[
-                crate::storage_entry(0, vs),
-                crate::storage_entry(1, vs),
-                crate::uniform_entry(2, vs),
+                crate::gpu::pipelines::storage_entry(0, vs),
+                crate::gpu::pipelines::storage_entry(1, vs),
+                crate::gpu::pipelines::uniform_entry(2, vs),
             ],
         );
         let pipeline_layout =
-            crate::pipelines::pipeline_layout(device, "tile_clear.pipeline_layout", &[&layout]);
+            crate::gpu::pipelines::pipeline_layout(device, "tile_clear.pipeline_layout", &[&layout]);
         let pipeline = clear_pipeline(device, &pipeline_layout, &module, "vs_clear");
         let size = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tile_clear.atlas"),
@@ -79,7 +80,7 @@ impl TileClear {
         ];
         let (device, layout) = (&ctx.device, &self.layout);
         let bind_group = self.group.get(&buffers, || {
-            crate::buffer_bind_group(device, "tile_clear.bind_group", layout, &buffers)
+            crate::gpu::pipelines::buffer_bind_group(device, "tile_clear.bind_group", layout, &buffers)
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bind_group, &[]);
@@ -171,7 +172,7 @@ impl UniformRecords {
                 .copy_from_slice(bytemuck::bytes_of(r));
         }
         let needed = self.bytes.len() as u64;
-        if let Err(e) = crate::grow_buffer(ctx, &mut self.buffer, needed, self.what) {
+        if let Err(e) = crate::gpu::buffers::grow_buffer(ctx, &mut self.buffer, needed, self.what) {
             // Over the device's buffer limit: what a per-frame buffer of this size did before
             // (a GPU error the frame reports), not a silent truncation.
             log::error!("{e}");

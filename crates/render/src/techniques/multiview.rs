@@ -22,7 +22,7 @@
 use std::collections::HashMap;
 use std::num::NonZeroU32;
 
-use crate::pipelines::dynamic_uniform_entry;
+use crate::gpu::pipelines::dynamic_uniform_entry;
 use crate::shadow::{CullMode, Generation, ShadowStats, ShadowTechnique};
 use crate::techniques::{
     atlas_attachment, layered_depth_pipeline, masked_depth_pipeline, CachedGroup, TileClear,
@@ -31,7 +31,7 @@ use crate::techniques::{
 use crate::{GpuContext, RenderError};
 
 /// Bytes of one group's parameters (`MultiviewParams` in multiview.wgsl).
-const PARAMS_SIZE: u64 = std::mem::size_of::<crate::gpu_types::MultiviewParams>() as u64;
+const PARAMS_SIZE: u64 = std::mem::size_of::<crate::gpu::types::MultiviewParams>() as u64;
 
 /// Splits `draw_list` into runs of consecutive views whose tiles have the same side, at most
 /// `max` views each: `(first position in the list, views)`.
@@ -110,38 +110,38 @@ impl Multiview {
                 "multiview: {} renders every primitive that needs clipping into view 0's layer \
                  (Mesa lavapipe's clipper drops the view index), so each multiview pass holds \
                  one view here; expect no multiview speed-up on this adapter",
-                crate::context::describe_adapter(&ctx.info)
+                crate::gpu::context::describe_adapter(&ctx.info)
             )
             });
             max_views = 1;
         }
         let device = &ctx.device;
         let module =
-            crate::shaders::module(device, "multiview.shader", &crate::shaders::multiview());
+            crate::gpu::shaders::module(device, "multiview.shader", &crate::gpu::shaders::multiview());
         let vs = wgpu::ShaderStages::VERTEX;
-        let layout = crate::pipelines::bind_group_layout(
+        let layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "multiview.layout",
             &[
                 dynamic_uniform_entry(0, vs, PARAMS_SIZE),
-                crate::storage_entry(1, vs),
-                crate::storage_entry(2, vs),
-                crate::storage_entry(3, vs),
-                crate::storage_entry(4, wgpu::ShaderStages::VERTEX_FRAGMENT),
-                crate::storage_entry(5, vs),
+                crate::gpu::pipelines::storage_entry(1, vs),
+                crate::gpu::pipelines::storage_entry(2, vs),
+                crate::gpu::pipelines::storage_entry(3, vs),
+                crate::gpu::pipelines::storage_entry(4, wgpu::ShaderStages::VERTEX_FRAGMENT),
+                crate::gpu::pipelines::storage_entry(5, vs),
             ],
         );
         let pipeline_layout =
-            crate::pipelines::pipeline_layout(device, "multiview.pipeline_layout", &[&layout]);
+            crate::gpu::pipelines::pipeline_layout(device, "multiview.pipeline_layout", &[&layout]);
 
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
-        let copy_layout = crate::pipelines::bind_group_layout(
+        let copy_layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "multiview.copy_layout",
             &[
                 dynamic_uniform_entry(0, vf, PARAMS_SIZE),
-                crate::storage_entry(1, vf),
-                crate::storage_entry(2, vf),
+                crate::gpu::pipelines::storage_entry(1, vf),
+                crate::gpu::pipelines::storage_entry(2, vf),
                 wgpu::BindGroupLayoutEntry {
                     binding: 3,
                     visibility: wgpu::ShaderStages::FRAGMENT,
@@ -154,12 +154,12 @@ impl Multiview {
                 },
             ],
         );
-        let copy_module = crate::shaders::module(
+        let copy_module = crate::gpu::shaders::module(
             device,
             "multiview_copy.shader",
-            &crate::shaders::multiview_copy(),
+            &crate::gpu::shaders::multiview_copy(),
         );
-        let copy_pipeline_layout = crate::pipelines::pipeline_layout(
+        let copy_pipeline_layout = crate::gpu::pipelines::pipeline_layout(
             device,
             "multiview.copy_pipeline_layout",
             &[&copy_layout],
@@ -233,7 +233,7 @@ impl Multiview {
             None => (side, layers),
         };
         let texture =
-            crate::pipelines::depth_texture(&ctx.device, "multiview.scratch", side, layers);
+            crate::gpu::pipelines::depth_texture(&ctx.device, "multiview.scratch", side, layers);
         let all = texture.create_view(&wgpu::TextureViewDescriptor {
             label: Some("multiview.scratch.all"),
             dimension: Some(wgpu::TextureViewDimension::D2Array),
@@ -294,9 +294,9 @@ impl ShadowTechnique for Multiview {
         }
 
         // One parameter record per group, at the uniform-offset alignment.
-        let records: Vec<crate::gpu_types::MultiviewParams> = groups
+        let records: Vec<crate::gpu::types::MultiviewParams> = groups
             .iter()
-            .map(|&(first, _)| crate::gpu_types::MultiviewParams {
+            .map(|&(first, _)| crate::gpu::types::MultiviewParams {
                 counts: [first, casters.cullable_triangles, cull.bits(), 0],
                 atlas: [input.atlas.size as f32, 0.0, 0.0, 0.0],
             })

@@ -9,7 +9,7 @@ use manyshadows_scene::light_space::ViewKind;
 /// Bytes of the per-view uniform the shaders read: view-projection and params.
 const VIEW_BINDING: u64 = 80;
 use crate::gpu_scene::{POSITION_LAYOUT, UV_LAYOUT_1};
-use crate::gpu_types::VIEW_UNIFORM_STRIDE;
+use crate::gpu::types::VIEW_UNIFORM_STRIDE;
 use crate::shadow::{visible_casters, Generation, ShadowInput, ShadowStats, ShadowTechnique};
 use crate::techniques::{atlas_attachment, TileClear};
 use crate::GpuContext;
@@ -33,28 +33,28 @@ impl Traditional {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
         let module =
-            crate::shaders::module(device, "traditional.shader", &crate::shaders::traditional());
-        let layout = crate::pipelines::bind_group_layout(
+            crate::gpu::shaders::module(device, "traditional.shader", &crate::gpu::shaders::traditional());
+        let layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "traditional.layout",
             &[
-                crate::pipelines::dynamic_uniform_entry(
+                crate::gpu::pipelines::dynamic_uniform_entry(
                     0,
                     wgpu::ShaderStages::VERTEX,
                     VIEW_BINDING,
                 ),
-                crate::storage_entry(1, wgpu::ShaderStages::VERTEX),
-                crate::uniform_entry(2, wgpu::ShaderStages::VERTEX),
-                crate::storage_entry(3, wgpu::ShaderStages::FRAGMENT),
+                crate::gpu::pipelines::storage_entry(1, wgpu::ShaderStages::VERTEX),
+                crate::gpu::pipelines::uniform_entry(2, wgpu::ShaderStages::VERTEX),
+                crate::gpu::pipelines::storage_entry(3, wgpu::ShaderStages::FRAGMENT),
             ],
         );
         let pipeline_layout =
-            crate::pipelines::pipeline_layout(device, "traditional.pipeline_layout", &[&layout]);
+            crate::gpu::pipelines::pipeline_layout(device, "traditional.pipeline_layout", &[&layout]);
         let dp_module = ctx.has(wgpu::Features::CLIP_DISTANCES).then(|| {
-            crate::shaders::module(
+            crate::gpu::shaders::module(
                 device,
                 "traditional_dp.shader",
-                &crate::shaders::traditional_dp(),
+                &crate::gpu::shaders::traditional_dp(),
             )
         });
         let pipeline = |module: &wgpu::ShaderModule,

@@ -277,7 +277,7 @@ impl GpuTimer {
         if n == 0 {
             return Ok(Some(PipelineCounts::default()));
         }
-        let bytes = crate::readback::map_read(ctx, &q.readback, 0..n * STAT_WORDS * 8)?;
+        let bytes = crate::gpu::readback::map_read(ctx, &q.readback, 0..n * STAT_WORDS * 8)?;
         let words: &[u64] = bytemuck::cast_slice(&bytes);
         let mut c = PipelineCounts::default();
         for q in words.chunks_exact(STAT_WORDS as usize) {
@@ -392,7 +392,7 @@ impl GpuTimer {
         if n == 0 {
             return Ok(GpuTimes::default());
         }
-        let bytes = crate::readback::map_read(ctx, readback, 0..n * 8)?;
+        let bytes = crate::gpu::readback::map_read(ctx, readback, 0..n * 8)?;
         let ticks: &[u64] = bytemuck::cast_slice(&bytes);
         Ok(GpuTimes(
             self.labels

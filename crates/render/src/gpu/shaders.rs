@@ -4,14 +4,14 @@
 //! naga in a test, so broken WGSL fails `cargo test` without a GPU.
 
 /// Struct declarations shared by all shaders.
-pub const COMMON: &str = include_str!("shaders/common.wgsl");
+pub const COMMON: &str = include_str!("common.wgsl");
 /// Shadow-view selection, receiver bias and atlas addressing.
-pub const SHADOW_LOOKUP: &str = include_str!("shaders/shadow_lookup.wgsl");
+pub const SHADOW_LOOKUP: &str = include_str!("../shaders/shadow_lookup.wgsl");
 /// The lighting and visibility passes' `shadow_coord` when shadows come from the atlas.
 pub const ATLAS_COORD: &str = "fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, \
      view_depth: f32) -> ShadowCoord {\n    return atlas_coord(light, p, n, view_depth);\n}";
 /// Virtual shadow maps: level and page selection shared by marking and lookups.
-pub const VSM_COMMON: &str = include_str!("shaders/vsm_common.wgsl");
+pub const VSM_COMMON: &str = include_str!("../shaders/vsm_common.wgsl");
 
 /// Where the lighting and visibility passes find shadows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,7 +40,7 @@ fn shadow_source(source: ShadowSource) -> Vec<String> {
                 first + 1,
                 first + 2
             ),
-            include_str!("shaders/vsm_lookup.wgsl").to_string(),
+            include_str!("../shaders/vsm_lookup.wgsl").to_string(),
         ],
     }
 }
@@ -52,12 +52,12 @@ pub fn compose(parts: &[&str]) -> String {
 
 /// G-buffer pass.
 pub fn gbuffer() -> String {
-    compose(&[COMMON, include_str!("shaders/gbuffer.wgsl")])
+    compose(&[COMMON, include_str!("../shaders/gbuffer.wgsl")])
 }
 
 /// Deferred lighting pass, shadows from `source` (bindings 12–14 for virtual maps).
 pub fn lighting(source: ShadowSource) -> String {
-    reading_shadows(source, include_str!("shaders/lighting.wgsl"))
+    reading_shadows(source, include_str!("../shaders/lighting.wgsl"))
 }
 
 /// The common parts, the shadow lookup from `source`, then `pass`: the lighting and
@@ -75,13 +75,13 @@ fn reading_shadows(source: ShadowSource, pass: &str) -> String {
 
 /// Clustered light assignment (mark, compact, assign, statistics).
 pub fn clusters() -> String {
-    compose(&[COMMON, include_str!("shaders/clusters.wgsl")])
+    compose(&[COMMON, include_str!("../shaders/clusters.wgsl")])
 }
 
 /// Hard visibility mask, shadows from `source` (bindings 12–14 for virtual maps, as in
 /// [`lighting`]).
 pub fn visibility(source: ShadowSource) -> String {
-    reading_shadows(source, include_str!("shaders/visibility.wgsl"))
+    reading_shadows(source, include_str!("../shaders/visibility.wgsl"))
 }
 
 /// Virtual shadow maps: page marking, allocation and indirect arguments.
@@ -91,7 +91,7 @@ pub fn vsm() -> String {
         PARABOLOID,
         SHADOW_LOOKUP,
         VSM_COMMON,
-        include_str!("shaders/vsm.wgsl"),
+        include_str!("../shaders/vsm.wgsl"),
     ])
 }
 
@@ -105,7 +105,7 @@ pub fn vsm_draw() -> String {
         CLUSTER_CULL,
         ALPHA_MASK,
         TILE_MASK,
-        include_str!("shaders/vsm_draw.wgsl"),
+        include_str!("../shaders/vsm_draw.wgsl"),
     ])
 }
 
@@ -116,18 +116,18 @@ pub fn irregular() -> String {
         PARABOLOID,
         SHADOW_LOOKUP,
         ALPHA_MASK,
-        include_str!("shaders/irregular.wgsl"),
+        include_str!("../shaders/irregular.wgsl"),
     ])
 }
 
 /// Copy of the lit frame into a caller's texture (`Renderer::render_to`).
 pub fn blit() -> String {
-    compose(&[include_str!("shaders/blit.wgsl")])
+    compose(&[include_str!("../shaders/blit.wgsl")])
 }
 
 /// Atlas read-back copy.
 pub fn atlas_copy() -> String {
-    compose(&[include_str!("shaders/atlas_copy.wgsl")])
+    compose(&[include_str!("../shaders/atlas_copy.wgsl")])
 }
 
 /// Depth-only pass of the traditional technique.
@@ -135,17 +135,17 @@ pub fn traditional() -> String {
     compose(&[
         COMMON,
         ALPHA_MASK,
-        include_str!("techniques/traditional.wgsl"),
+        include_str!("../techniques/traditional.wgsl"),
     ])
 }
 
 /// Per-frame world transform of shadow casters.
 pub fn casters() -> String {
-    compose(&[COMMON, include_str!("shaders/casters.wgsl")])
+    compose(&[COMMON, include_str!("../shaders/casters.wgsl")])
 }
 
 /// The dual-paraboloid warp.
-pub const PARABOLOID: &str = include_str!("shaders/paraboloid.wgsl");
+pub const PARABOLOID: &str = include_str!("../shaders/paraboloid.wgsl");
 
 /// `traditional` into dual-paraboloid views.
 pub fn traditional_dp() -> String {
@@ -154,29 +154,29 @@ pub fn traditional_dp() -> String {
         COMMON,
         PARABOLOID,
         ALPHA_MASK,
-        include_str!("techniques/traditional_dp.wgsl"),
+        include_str!("../techniques/traditional_dp.wgsl"),
     ])
 }
 
 /// Alpha-tested casters: the mask tail of the corner buffer (needs a `corners` binding).
-pub const ALPHA_MASK: &str = include_str!("shaders/alpha_mask.wgsl");
+pub const ALPHA_MASK: &str = include_str!("../shaders/alpha_mask.wgsl");
 
 /// Alpha-tested casters drawn into tiles: outputs and the discarding fragment stage.
-pub const TILE_MASK: &str = include_str!("techniques/tile_mask.wgsl");
+pub const TILE_MASK: &str = include_str!("../techniques/tile_mask.wgsl");
 
 /// Per-view triangle culling (frustum, back-face).
-pub const CULL: &str = include_str!("techniques/cull.wgsl");
+pub const CULL: &str = include_str!("../techniques/cull.wgsl");
 
 /// Clearing single tiles of the atlas.
 pub fn tile_clear() -> String {
-    compose(&[COMMON, include_str!("techniques/tile_clear.wgsl")])
+    compose(&[COMMON, include_str!("../techniques/tile_clear.wgsl")])
 }
 
 /// Culling whole caster clusters by bounding sphere and normal cone (`gpu-driven`, virtual).
-pub const CLUSTER_CULL: &str = include_str!("techniques/cluster_cull.wgsl");
+pub const CLUSTER_CULL: &str = include_str!("../techniques/cluster_cull.wgsl");
 
 /// Mapping clip positions into atlas tiles with clip distances (`layered`, `gpu-driven`).
-pub const TILE: &str = include_str!("techniques/tile.wgsl");
+pub const TILE: &str = include_str!("../techniques/tile.wgsl");
 
 /// The `layered` technique's vertex shaders.
 pub fn layered() -> String {
@@ -188,7 +188,7 @@ pub fn layered() -> String {
         PARABOLOID,
         ALPHA_MASK,
         TILE_MASK,
-        include_str!("techniques/layered.wgsl"),
+        include_str!("../techniques/layered.wgsl"),
     ])
 }
 
@@ -198,13 +198,13 @@ pub fn multiview() -> String {
         COMMON,
         CULL,
         ALPHA_MASK,
-        include_str!("techniques/multiview.wgsl"),
+        include_str!("../techniques/multiview.wgsl"),
     ])
 }
 
 /// The `multiview` technique's copy of scratch layers into atlas tiles.
 pub fn multiview_copy() -> String {
-    compose(&[COMMON, include_str!("techniques/multiview_copy.wgsl")])
+    compose(&[COMMON, include_str!("../techniques/multiview_copy.wgsl")])
 }
 
 /// The `gpu-driven` technique's cluster culling (compute) and draw (vertex) shaders.
@@ -217,7 +217,7 @@ pub fn gpu_driven() -> String {
         CLUSTER_CULL,
         ALPHA_MASK,
         TILE_MASK,
-        include_str!("techniques/gpu_driven.wgsl"),
+        include_str!("../techniques/gpu_driven.wgsl"),
     ])
 }
 
@@ -227,13 +227,13 @@ pub fn compute() -> String {
         COMMON,
         CULL,
         ALPHA_MASK,
-        include_str!("techniques/compute.wgsl"),
+        include_str!("../techniques/compute.wgsl"),
     ])
 }
 
 /// The `compute` technique's copy of its depth buffer into atlas tiles.
 pub fn compute_copy() -> String {
-    compose(&[COMMON, include_str!("techniques/compute_copy.wgsl")])
+    compose(&[COMMON, include_str!("../techniques/compute_copy.wgsl")])
 }
 
 /// Every composed shader with its name (for validation).

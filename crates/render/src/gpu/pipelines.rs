@@ -1,10 +1,13 @@
 //! Constructors for the wgpu objects every pass builds the same way: bind-group layouts from a
-//! list of entries, pipeline layouts from a list of bind-group layouts, compute pipelines from
-//! a module's entry point, and depth textures in the atlas format. Shared by the techniques,
-//! the virtual and irregular maps and the frame passes, so none of them spells out the
-//! descriptors; layout entries themselves are the crate root's `storage_entry` and friends.
+//! list of entries, the entries themselves ([`storage_entry`] and friends), pipeline layouts
+//! from a list of bind-group layouts, compute pipelines from a module's entry point, bind
+//! groups of whole buffers, depth textures in the atlas format, and 1D workloads as 2D
+//! dispatches. Shared by the techniques, the virtual and irregular maps and the frame passes,
+//! so none of them spells out the descriptors.
 
-use crate::shadow::ATLAS_FORMAT;
+/// Depth format of the atlas (and of every shadow depth texture [`depth_texture`] makes: the
+/// virtual maps' page pool, multiview's scratch layers).
+pub const ATLAS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 /// A bind-group layout of `entries`.
 pub(crate) fn bind_group_layout(
@@ -114,5 +117,104 @@ pub(crate) fn whole_entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGrou
     wgpu::BindGroupEntry {
         binding,
         resource: buffer.as_entire_binding(),
+    }
+}
+
+/// A bind group of whole buffers at bindings 0, 1, 2, … in order.
+pub(crate) fn buffer_bind_group(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry> = buffers
+        .iter()
+        .enumerate()
+        .map(|(i, b)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}
+
+/// Bind-group layout entry of a read-only storage buffer.
+pub(crate) fn storage_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
+    buffer_entry(
+        binding,
+        visibility,
+        wgpu::BufferBindingType::Storage { read_only: true },
+    )
+}
+
+/// Bind-group layout entry of a read-write storage buffer.
+pub(crate) fn storage_rw_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
+    buffer_entry(
+        binding,
+        visibility,
+        wgpu::BufferBindingType::Storage { read_only: false },
+    )
+}
+
+/// Bind-group layout entry of a uniform buffer.
+pub(crate) fn uniform_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
+    buffer_entry(binding, visibility, wgpu::BufferBindingType::Uniform)
+}
+
+fn buffer_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    ty: wgpu::BufferBindingType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// A 1D workload of `items` threads, 64 per workgroup, as a 2D dispatch with at most
+/// `max_groups` workgroups along x (65535 is every adapter's floor). Shaders recover the item
+/// index as `(y · num_workgroups.x + x) · 64 + local`; trailing threads test it against the
+/// count.
+pub(crate) fn dispatch_2d(items: u64, max_groups: u32) -> (u32, u32) {
+    let groups = items.div_ceil(64).max(1);
+    let x = groups.min(u64::from(max_groups.max(1)));
+    (x as u32, groups.div_ceil(x) as u32)
+}
+
+/// A bind-group layout entry for a non-multisampled 2D texture.
+pub(crate) fn texture_entry(
+    binding: u32,
+    sample_type: wgpu::TextureSampleType,
+    visibility: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
     }
 }

@@ -331,7 +331,7 @@ mod tests {
 
     macro_rules! same_layout {
         ($ty:ty, $($field:ident),+) => {{
-            same_layout!(in crate::shaders::COMMON, $ty, $($field),+)
+            same_layout!(in crate::gpu::shaders::COMMON, $ty, $($field),+)
         }};
         (in $src:expr, $ty:ty, $($field:ident),+) => {{
             let (size, fields) = wgsl_layout_in(&$src, stringify!($ty));
@@ -373,10 +373,10 @@ mod tests {
         same_layout!(VsmRound, round, counts);
         assert_eq!(VIEW_UNIFORM_STRIDE, 256);
         // Technique parameters.
-        same_layout!(in crate::shaders::layered(), LayeredParams, counts, atlas);
-        same_layout!(in crate::shaders::multiview(), MultiviewParams, counts, atlas);
-        same_layout!(in crate::shaders::multiview_copy(), MultiviewParams, counts, atlas);
-        same_layout!(in crate::shaders::gpu_driven(), GpuParams, counts, round, atlas);
-        same_layout!(in crate::shaders::compute(), ComputeParams, counts, sizes);
+        same_layout!(in crate::gpu::shaders::layered(), LayeredParams, counts, atlas);
+        same_layout!(in crate::gpu::shaders::multiview(), MultiviewParams, counts, atlas);
+        same_layout!(in crate::gpu::shaders::multiview_copy(), MultiviewParams, counts, atlas);
+        same_layout!(in crate::gpu::shaders::gpu_driven(), GpuParams, counts, round, atlas);
+        same_layout!(in crate::gpu::shaders::compute(), ComputeParams, counts, sizes);
     }
 }
