@@ -2,7 +2,7 @@
 //! surface. Positions are stored directly (not reconstructed from depth) so the quality
 //! reference can ray-trace from exactly the points the frame shades.
 
-use crate::gpu_scene::{GpuScene, NORMAL_LAYOUT, POSITION_LAYOUT, UV_LAYOUT};
+use crate::gpu_scene::instances::{GpuScene, NORMAL_LAYOUT, POSITION_LAYOUT, UV_LAYOUT};
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::GpuContext;
 

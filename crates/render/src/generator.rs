@@ -11,8 +11,8 @@
 use glam::Vec3;
 use manyshadows_scene::Scene;
 
-use crate::casters::CasterGeometry;
-use crate::gpu_scene::GpuScene;
+use crate::gpu_scene::casters::CasterGeometry;
+use crate::gpu_scene::instances::GpuScene;
 use crate::shadow::{
     ShadowAtlas, ShadowInput, ShadowOptions, ShadowPlan, ShadowStats, ShadowTechnique, Technique,
 };

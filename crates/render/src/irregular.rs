@@ -9,7 +9,7 @@
 //!
 //! One frame, after the G-buffer (all compute, `shaders/irregular.wgsl`):
 //!
-//! 1. the caster transform ([`crate::casters`]) writes every caster vertex in world space;
+//! 1. the caster transform ([`crate::gpu_scene::casters`]) writes every caster vertex in world space;
 //! 2. `cs_init`: every pixel's mask word gets the bits of the lights that reach it;
 //! 3. per batch of lights (see **Memory**): the batch's grids are emptied; `cs_insert` projects each
 //!    pixel's ray origin (the G-buffer point moved `1e-4·max(1, |p|∞)` along its normal, the
@@ -78,9 +78,9 @@ use manyshadows_scene::light_space::ViewKind;
 use manyshadows_scene::{LightKind, Scene};
 use wgpu::util::DeviceExt;
 
-use crate::casters::CasterGeometry;
+use crate::gpu_scene::casters::CasterGeometry;
 use crate::gbuffer::GBuffer;
-use crate::gpu_scene::GpuScene;
+use crate::gpu_scene::instances::GpuScene;
 use crate::gpu::types::LightData;
 use crate::renderer::RenderSettings;
 use crate::shadow::{ShadowAtlas, ShadowPlan, ShadowStats, Technique};

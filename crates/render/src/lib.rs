@@ -20,7 +20,6 @@
 
 pub mod atlas_image;
 mod blit;
-pub mod casters;
 pub mod clusters;
 pub mod gbuffer;
 pub mod gbuffer_readback;
@@ -33,14 +32,13 @@ pub mod renderer;
 pub mod shadow;
 pub mod source;
 pub mod techniques;
-pub mod textures;
 pub mod visibility;
 pub mod vsm;
 
 pub use gpu::context::{AdapterRequest, GpuContext};
 pub use gbuffer_readback::GBufferData;
 pub use generator::ShadowGenerator;
-pub use gpu_scene::GpuScene;
+pub use gpu_scene::instances::GpuScene;
 pub use renderer::{
     Frame, FrameTimings, Pcf, RenderSettings, Renderer, ShadowBias, SubmittedFrame,
 };
@@ -60,6 +58,13 @@ pub use wgpu;
 // check in `tests/import_floors.rs` reads them as the modules they re-export).
 // ------------------------------------------------------------------------------------------
 pub use gpu::{context, readback, timing};
+
+/// Old path of the caster geometry and skinning ([`gpu_scene::casters`],
+/// [`gpu_scene::skinning`]).
+pub mod casters {
+    pub use crate::gpu_scene::casters::{CasterGeometry, CasterOptions};
+    pub use crate::gpu_scene::skinning::{Skin, MAX_BONES};
+}
 
 /// Everything that can go wrong in the renderer. Each message says what to do.
 #[derive(Debug, thiserror::Error)]

@@ -20,7 +20,7 @@ use wgpu::util::DeviceExt;
 
 use crate::clusters::{ClusterOptions, ClusterStats, LightClusters, LightLoop};
 use crate::gbuffer::GBuffer;
-use crate::gpu_scene::GpuScene;
+use crate::gpu_scene::instances::GpuScene;
 use crate::gpu::types::{FrameUniforms, LightData};
 use crate::irregular::IrregularOptions;
 use crate::lighting::{LightingInputs, LightingPass};
@@ -363,7 +363,7 @@ impl Renderer {
     }
 
     /// The world-space shadow-caster geometry (its back-face culling decisions included).
-    pub fn casters(&self) -> &crate::casters::CasterGeometry {
+    pub fn casters(&self) -> &crate::gpu_scene::casters::CasterGeometry {
         self.source.casters()
     }
 

@@ -9,8 +9,8 @@ use manyshadows_scene::atlas::{self, AtlasLayout, FitPolicy, Tile};
 use manyshadows_scene::light_space::{self, PointShadows, ShadowView, ViewKind};
 use manyshadows_scene::Scene;
 
-use crate::casters::{CasterGeometry, CasterOptions};
-use crate::gpu_scene::GpuScene;
+use crate::gpu_scene::casters::{CasterGeometry, CasterOptions};
+use crate::gpu_scene::instances::GpuScene;
 use crate::gpu::types::{LightData, ShadowViewData, ViewUniform, VIEW_UNIFORM_STRIDE};
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
@@ -546,7 +546,7 @@ pub enum CullMode {
     /// Triangles wholly outside a view's frustum are dropped for that view.
     Frustum,
     /// Triangles facing away from the light are dropped (closed meshes only; see
-    /// [`crate::casters`]).
+    /// [`crate::gpu_scene::casters`]).
     Backface,
     /// Both.
     #[default]
@@ -827,7 +827,7 @@ impl std::fmt::Display for Technique {
 pub fn visible_casters<'a>(
     scene: &'a GpuScene,
     view: &ShadowView,
-) -> impl Iterator<Item = &'a crate::gpu_scene::DrawItem> + 'a {
+) -> impl Iterator<Item = &'a crate::gpu_scene::instances::DrawItem> + 'a {
     let view = *view;
     scene
         .draws

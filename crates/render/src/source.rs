@@ -22,11 +22,11 @@ use manyshadows_scene::atlas::FitPolicy;
 use manyshadows_scene::light_space::PointShadows;
 use manyshadows_scene::Scene;
 
-use crate::casters::CasterGeometry;
+use crate::gpu_scene::casters::CasterGeometry;
 use crate::clusters::LightClusters;
 use crate::gbuffer::GBuffer;
 use crate::generator::ShadowGenerator;
-use crate::gpu_scene::GpuScene;
+use crate::gpu_scene::instances::GpuScene;
 use crate::gpu::types::LightData;
 use crate::renderer::RenderSettings;
 use crate::shadow::{ShadowAtlas, ShadowPlan, ShadowStats, Technique};

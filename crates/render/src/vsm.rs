@@ -37,10 +37,10 @@ use glam::Vec3;
 use manyshadows_scene::light_space::{self, PointShadows, ShadowView, ViewKind};
 use manyshadows_scene::Scene;
 
-use crate::casters::CasterGeometry;
+use crate::gpu_scene::casters::CasterGeometry;
 use crate::clusters::LightClusters;
 use crate::gbuffer::GBuffer;
-use crate::gpu_scene::GpuScene;
+use crate::gpu_scene::instances::GpuScene;
 use crate::gpu::types::{LightData, ShadowViewData, VirtualFace, VsmRound, VsmUniforms};
 use crate::gpu::pipelines::whole_entry;
 use crate::renderer::RenderSettings;

@@ -141,7 +141,7 @@ pub fn traditional() -> String {
 
 /// Per-frame world transform of shadow casters.
 pub fn casters() -> String {
-    compose(&[COMMON, include_str!("../shaders/casters.wgsl")])
+    compose(&[COMMON, include_str!("../gpu_scene/casters.wgsl")])
 }
 
 /// The dual-paraboloid warp.
@@ -159,7 +159,7 @@ pub fn traditional_dp() -> String {
 }
 
 /// Alpha-tested casters: the mask tail of the corner buffer (needs a `corners` binding).
-pub const ALPHA_MASK: &str = include_str!("../shaders/alpha_mask.wgsl");
+pub const ALPHA_MASK: &str = include_str!("../gpu_scene/alpha_mask.wgsl");
 
 /// Alpha-tested casters drawn into tiles: outputs and the discarding fragment stage.
 pub const TILE_MASK: &str = include_str!("../techniques/tile_mask.wgsl");

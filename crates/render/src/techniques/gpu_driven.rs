@@ -2,7 +2,7 @@
 //! 002's route, the one meant to scale to thousands of views).
 //!
 //! After the per-frame caster transform (which also writes each cluster's world bounding
-//! sphere, [`crate::casters`]), a compute pass runs one thread per (cluster, listed view)
+//! sphere, [`crate::gpu_scene::casters`]), a compute pass runs one thread per (cluster, listed view)
 //! (views along the dispatch's y). A cluster survives a view unless its sphere is wholly
 //! outside the view frustum (frustum culling on) or its normal cone proves that every triangle
 //! faces away from the light from every point of the sphere (back-face culling on; only

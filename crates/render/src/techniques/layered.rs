@@ -5,7 +5,7 @@
 //! `draw_list[i]`, and the vertex shader moves clip-space xy into that view's tile while four
 //! clip distances keep the triangle inside it. The per-vertex work that does not depend on the
 //! view (model transform, skinning) runs once per frame in the caster transform
-//! ([`crate::casters`]); per view only the view-projection remains.
+//! ([`crate::gpu_scene::casters`]); per view only the view-projection remains.
 //!
 //! Culling (seed 000 Listings 19.9 and 19.10) happens per triangle and view in the vertex
 //! shader: with culling on, the draw is non-indexed and each invocation pulls its triangle's

@@ -12,7 +12,7 @@
 //! `copy_texture_to_texture`). Rasterizing at the tile size from the origin gives the same
 //! texels as `traditional`'s viewport at the tile's integer offset.
 //!
-//! World positions come from the per-frame caster transform ([`crate::casters`]); per-triangle
+//! World positions come from the per-frame caster transform ([`crate::gpu_scene::casters`]); per-triangle
 //! culling pulls each triangle's corners as `layered` does and emits a degenerate triangle when
 //! the triangle is dropped for that view.
 //!

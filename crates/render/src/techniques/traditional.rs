@@ -3,12 +3,12 @@
 //! beat). Position-only vertex input and no fragment stage, as seed 004 recommends: the only
 //! output is depth.
 
-use crate::casters::{MAX_BONES, SKIN_LAYOUT};
+use crate::gpu_scene::skinning::{MAX_BONES, SKIN_LAYOUT};
 use manyshadows_scene::light_space::ViewKind;
 
 /// Bytes of the per-view uniform the shaders read: view-projection and params.
 const VIEW_BINDING: u64 = 80;
-use crate::gpu_scene::{POSITION_LAYOUT, UV_LAYOUT_1};
+use crate::gpu_scene::instances::{POSITION_LAYOUT, UV_LAYOUT_1};
 use crate::gpu::types::VIEW_UNIFORM_STRIDE;
 use crate::shadow::{visible_casters, Generation, ShadowInput, ShadowStats, ShadowTechnique};
 use crate::techniques::{atlas_attachment, TileClear};
@@ -147,7 +147,7 @@ fn draw_casters(
     stats: &mut ShadowStats,
 ) {
     let scene = input.scene;
-    let is_masked = |d: &&crate::gpu_scene::DrawItem| input.casters.is_masked(d.material) == masked;
+    let is_masked = |d: &&crate::gpu_scene::instances::DrawItem| input.casters.is_masked(d.material) == masked;
     let mut drawn = 0u64;
     for d in visible_casters(scene, view).filter(is_masked) {
         let m = d.mesh;

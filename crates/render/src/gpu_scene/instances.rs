@@ -4,7 +4,7 @@
 
 use glam::{Mat4, Vec3, Vec4};
 use manyshadows_scene::masks::MaskSet;
-use manyshadows_scene::Scene;
+use manyshadows_scene::{Mesh, Scene};
 use wgpu::util::DeviceExt;
 
 use crate::gpu::types::{InstanceData, MaterialData};
@@ -59,12 +59,12 @@ pub struct GpuScene {
     /// Triangles over all instances.
     pub triangles: u64,
     /// Skinning, if attached with [`GpuScene::attach_skin`] (benchmarks).
-    pub skin: Option<crate::casters::GpuSkin>,
+    pub skin: Option<crate::gpu_scene::skinning::GpuSkin>,
     /// The coverage bits of alpha-tested materials (read by shadow passes through the caster
-    /// geometry, [`crate::casters`]).
+    /// geometry, [`crate::gpu_scene::casters`]).
     pub masks: MaskSet,
     /// The materials' images for the camera's view.
-    pub textures: crate::textures::SceneTextures,
+    pub textures: crate::gpu_scene::textures::SceneTextures,
 }
 
 /// Bytes per vertex position.
@@ -122,7 +122,7 @@ impl GpuScene {
                 uvs.resize(positions.len(), [0.0; 2]);
             }
             // Morton-ordered triangles: better vertex reuse in every pass (same image).
-            indices.extend(crate::casters::morton_order(mesh));
+            indices.extend(morton_order(mesh));
             let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
             let c = (lo + hi) * 0.5;
             let r = mesh
@@ -177,7 +177,7 @@ impl GpuScene {
                 .collect()
         };
         let masks = MaskSet::new(scene);
-        let textures = crate::textures::SceneTextures::new(ctx, scene)?;
+        let textures = crate::gpu_scene::textures::SceneTextures::new(ctx, scene)?;
         let layer = |layers: &[Option<u32>], t: Option<manyshadows_scene::TextureRef>| {
             t.and_then(|t| layers.get(t.texture).copied().flatten())
         };
@@ -269,9 +269,9 @@ impl GpuScene {
         &mut self,
         ctx: &GpuContext,
         scene: &Scene,
-        skin: &crate::casters::Skin,
+        skin: &crate::gpu_scene::skinning::Skin,
     ) -> Result<(), RenderError> {
-        self.skin = Some(crate::casters::GpuSkin::new(ctx, scene, skin)?);
+        self.skin = Some(crate::gpu_scene::skinning::GpuSkin::new(ctx, scene, skin)?);
         Ok(())
     }
 
@@ -298,6 +298,45 @@ fn max_axis_scale(m: Mat4) -> f32 {
         .iter()
         .map(|a| Vec4::truncate(*a).length())
         .fold(0.0f32, f32::max)
+}
+
+/// The mesh's triangles (as index triples) sorted along a Morton curve through their
+/// centroids, so consecutive runs — the clusters — are spatially compact: tight bounding
+/// spheres for frustum culling, narrow normal cones for back-face culling. Depth-only
+/// rendering with a `Less` test does not depend on triangle order.
+pub(crate) fn morton_order(mesh: &Mesh) -> Vec<u32> {
+    let Some((lo, hi)) = mesh.bounds() else {
+        return mesh.indices.clone();
+    };
+    let extent = (hi - lo).max(Vec3::splat(1e-12));
+    let spread = |v: u32| -> u32 {
+        // 10 bits → every third bit of 30.
+        let mut x = v & 0x3ff;
+        x = (x | (x << 16)) & 0x0300_00ff;
+        x = (x | (x << 8)) & 0x0300_f00f;
+        x = (x | (x << 4)) & 0x030c_30c3;
+        (x | (x << 2)) & 0x0924_9249
+    };
+    let mut keyed: Vec<(u32, usize)> = mesh
+        .indices
+        .chunks_exact(3)
+        .enumerate()
+        .map(|(t, tri)| {
+            let c = tri
+                .iter()
+                .map(|&v| mesh.positions[v as usize])
+                .sum::<Vec3>()
+                / 3.0;
+            let q = ((c - lo) / extent * 1023.0).clamp(Vec3::ZERO, Vec3::splat(1023.0));
+            let key = spread(q.x as u32) | (spread(q.y as u32) << 1) | (spread(q.z as u32) << 2);
+            (key, t)
+        })
+        .collect();
+    keyed.sort_by_key(|&(k, t)| (k, t));
+    keyed
+        .iter()
+        .flat_map(|&(_, t)| mesh.indices[3 * t..3 * t + 3].iter().copied())
+        .collect()
 }
 
 pub use manyshadows_scene::light_space::{frustum_planes, sphere_in_planes as sphere_visible};

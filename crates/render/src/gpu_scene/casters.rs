@@ -42,101 +42,12 @@ use manyshadows_scene::masks::MaskSet;
 use manyshadows_scene::{LightKind, Mesh, Scene};
 use wgpu::util::DeviceExt;
 
-use crate::gpu_scene::GpuScene;
+use crate::gpu_scene::instances::{morton_order, GpuScene};
+use crate::gpu_scene::skinning::{MAX_BONES, SKIN_VERTEX_STRIDE};
 use crate::{GpuContext, RenderError};
 
 /// Most triangles per cluster.
 pub const CLUSTER_TRIANGLES: u32 = 128;
-
-/// Bone matrices of a skinned scene (seed 000 Listing 19.7).
-pub const MAX_BONES: usize = 64;
-
-/// Bytes per skinned vertex: position, 4 joint bytes, 4 weights.
-pub const SKIN_VERTEX_STRIDE: u64 = 32;
-
-/// Skinning of every vertex of a scene (in the order of [`GpuScene`]'s vertex buffer: meshes
-/// concatenated), up to four bones per vertex out of [`MAX_BONES`].
-#[derive(Clone, Debug)]
-pub struct Skin {
-    /// Bone indices per vertex.
-    pub joints: Vec<[u8; 4]>,
-    /// Bone weights per vertex (summing to 1).
-    pub weights: Vec<[f32; 4]>,
-}
-
-/// A skin on the GPU.
-pub struct GpuSkin {
-    /// Interleaved 32-byte vertices (vertex buffer and storage).
-    pub vertices: wgpu::Buffer,
-    /// `array<mat4x4<f32>, 64>` (uniform).
-    pub bones: wgpu::Buffer,
-}
-
-/// Vertex layout of skinned vertices (locations 0, 1, 2).
-pub const SKIN_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
-    array_stride: SKIN_VERTEX_STRIDE,
-    step_mode: wgpu::VertexStepMode::Vertex,
-    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32, 2 => Float32x4],
-};
-
-impl GpuSkin {
-    /// Uploads a skin for `scene`; every bone starts as the identity.
-    pub fn new(ctx: &GpuContext, scene: &Scene, skin: &Skin) -> Result<Self, RenderError> {
-        let n: usize = scene.meshes.iter().map(|m| m.positions.len()).sum();
-        if skin.joints.len() != n || skin.weights.len() != n {
-            return Err(RenderError::SceneTooLarge(format!(
-                "the skin has {} joint and {} weight entries but the scene has {n} vertices",
-                skin.joints.len(),
-                skin.weights.len()
-            )));
-        }
-        if let Some(j) = skin
-            .joints
-            .iter()
-            .flatten()
-            .find(|&&j| j as usize >= MAX_BONES)
-        {
-            return Err(RenderError::SceneTooLarge(format!(
-                "joint index {j} is out of range (at most {MAX_BONES} bones)"
-            )));
-        }
-        let mut bytes = Vec::with_capacity(n * SKIN_VERTEX_STRIDE as usize);
-        let positions = scene.meshes.iter().flat_map(|m| m.positions.iter());
-        for ((p, j), w) in positions.zip(&skin.joints).zip(&skin.weights) {
-            bytes.extend_from_slice(bytemuck::cast_slice(&p.to_array()));
-            bytes.extend_from_slice(j);
-            bytes.extend_from_slice(bytemuck::cast_slice(w));
-        }
-        if bytes.is_empty() {
-            bytes.resize(SKIN_VERTEX_STRIDE as usize, 0);
-        }
-        let vertices = ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("skin.vertices"),
-                contents: &bytes,
-                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
-            });
-        let bones = ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("skin.bones"),
-                contents: bytemuck::cast_slice(&[Mat4::IDENTITY.to_cols_array(); MAX_BONES]),
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            });
-        Ok(Self { vertices, bones })
-    }
-
-    /// Replaces the bone matrices (at most [`MAX_BONES`]; missing ones keep their value).
-    pub fn set_bones(&self, queue: &wgpu::Queue, bones: &[Mat4]) {
-        let m: Vec<[f32; 16]> = bones
-            .iter()
-            .take(MAX_BONES)
-            .map(|b| b.to_cols_array())
-            .collect();
-        queue.write_buffer(&self.bones, 0, bytemuck::cast_slice(&m));
-    }
-}
 
 /// How caster geometry is prepared.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -280,45 +191,6 @@ fn normal_cone(normals: &[Vec3]) -> [f32; 4] {
     // Round the angle up a little: the cone must contain every normal.
     let angle = min_dot.clamp(-1.0, 1.0).acos() + 1e-3;
     [axis.x, axis.y, axis.z, angle]
-}
-
-/// The mesh's triangles (as index triples) sorted along a Morton curve through their
-/// centroids, so consecutive runs — the clusters — are spatially compact: tight bounding
-/// spheres for frustum culling, narrow normal cones for back-face culling. Depth-only
-/// rendering with a `Less` test does not depend on triangle order.
-pub(crate) fn morton_order(mesh: &Mesh) -> Vec<u32> {
-    let Some((lo, hi)) = mesh.bounds() else {
-        return mesh.indices.clone();
-    };
-    let extent = (hi - lo).max(Vec3::splat(1e-12));
-    let spread = |v: u32| -> u32 {
-        // 10 bits → every third bit of 30.
-        let mut x = v & 0x3ff;
-        x = (x | (x << 16)) & 0x0300_00ff;
-        x = (x | (x << 8)) & 0x0300_f00f;
-        x = (x | (x << 4)) & 0x030c_30c3;
-        (x | (x << 2)) & 0x0924_9249
-    };
-    let mut keyed: Vec<(u32, usize)> = mesh
-        .indices
-        .chunks_exact(3)
-        .enumerate()
-        .map(|(t, tri)| {
-            let c = tri
-                .iter()
-                .map(|&v| mesh.positions[v as usize])
-                .sum::<Vec3>()
-                / 3.0;
-            let q = ((c - lo) / extent * 1023.0).clamp(Vec3::ZERO, Vec3::splat(1023.0));
-            let key = spread(q.x as u32) | (spread(q.y as u32) << 1) | (spread(q.z as u32) << 2);
-            (key, t)
-        })
-        .collect();
-    keyed.sort_by_key(|&(k, t)| (k, t));
-    keyed
-        .iter()
-        .flat_map(|&(_, t)| mesh.indices[3 * t..3 * t + 3].iter().copied())
-        .collect()
 }
 
 /// How one caster instance's triangles are laid out: what back-face culling may do with them.
