@@ -13,9 +13,8 @@ use manyshadows_scene::Scene;
 
 use crate::gpu_scene::casters::CasterGeometry;
 use crate::gpu_scene::instances::GpuScene;
-use crate::shadow::{
-    ShadowAtlas, ShadowInput, ShadowOptions, ShadowPlan, ShadowStats, ShadowTechnique, Technique,
-};
+use crate::settings::{ShadowOptions, Technique};
+use crate::shadow::{ShadowAtlas, ShadowInput, ShadowPlan, ShadowStats, ShadowTechnique};
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 

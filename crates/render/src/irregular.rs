@@ -79,14 +79,15 @@ use manyshadows_scene::{LightKind, Scene};
 use wgpu::util::DeviceExt;
 
 use crate::gpu_scene::casters::CasterGeometry;
-use crate::gbuffer::GBuffer;
+use crate::frame::gbuffer::GBuffer;
 use crate::gpu_scene::instances::GpuScene;
 use crate::gpu::types::LightData;
-use crate::renderer::RenderSettings;
-use crate::shadow::{ShadowAtlas, ShadowPlan, ShadowStats, Technique};
+use crate::settings::RenderSettings;
+use crate::settings::Technique;
+use crate::shadow::{ShadowAtlas, ShadowPlan, ShadowStats};
 use crate::source::{PlanParams, ShadowOutput, ShadowSource, SourceInputs, ViewTable};
 use crate::gpu::timing::{GpuTimer, Span};
-use crate::visibility::VisibilityMask;
+use crate::frame::visibility_mask::VisibilityMask;
 use crate::{GpuContext, RenderError};
 
 /// Default cap of the grid side (texels) of one view.
@@ -812,8 +813,8 @@ impl ShadowSource for IrregularSource {
 
     fn read_atlas(&self, _ctx: &GpuContext) -> Result<Vec<f32>, RenderError> {
         Err(RenderError::NoAtlas {
-            technique: crate::shadow::Technique::Irregular,
-            detail: crate::shadow::IRREGULAR_NO_ATLAS.into(),
+            technique: crate::settings::Technique::Irregular,
+            detail: crate::settings::IRREGULAR_NO_ATLAS.into(),
         })
     }
 

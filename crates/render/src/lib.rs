@@ -19,34 +19,27 @@
 //! ```
 
 pub mod atlas_image;
-mod blit;
-pub mod clusters;
-pub mod gbuffer;
-pub mod gbuffer_readback;
+pub mod frame;
 pub mod generator;
 pub mod gpu;
 pub mod gpu_scene;
 pub mod irregular;
-pub mod lighting;
 pub mod renderer;
+pub mod settings;
 pub mod shadow;
 pub mod source;
 pub mod techniques;
-pub mod visibility;
 pub mod vsm;
 
 pub use gpu::context::{AdapterRequest, GpuContext};
-pub use gbuffer_readback::GBufferData;
+pub use frame::gbuffer_readback::GBufferData;
 pub use generator::ShadowGenerator;
 pub use gpu_scene::instances::GpuScene;
-pub use renderer::{
-    Frame, FrameTimings, Pcf, RenderSettings, Renderer, ShadowBias, SubmittedFrame,
-};
-pub use shadow::{
-    CullMode, ShadowAtlas, ShadowOptions, ShadowPlan, ShadowStats, ShadowTechnique, Technique,
-};
+pub use renderer::{Frame, FrameTimings, Renderer, SubmittedFrame};
+pub use settings::{CullMode, Pcf, RenderSettings, ShadowBias, ShadowOptions, Technique};
+pub use shadow::{ShadowAtlas, ShadowPlan, ShadowStats, ShadowTechnique};
 pub use source::{ShadowOutput, ShadowSource};
-pub use visibility::VisibilityMask;
+pub use frame::visibility_mask::VisibilityMask;
 
 pub use manyshadows_scene as scene;
 pub use wgpu;
@@ -57,6 +50,7 @@ pub use wgpu;
 // old paths that code outside `src/` still names. Nothing inside `src/` uses them (the import
 // check in `tests/import_floors.rs` reads them as the modules they re-export).
 // ------------------------------------------------------------------------------------------
+pub use frame::clusters;
 pub use gpu::{context, readback, timing};
 
 /// Old path of the caster geometry and skinning ([`gpu_scene::casters`],

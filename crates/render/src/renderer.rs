@@ -14,152 +14,23 @@
 use web_time::Instant;
 
 use glam::Vec3;
-use manyshadows_scene::atlas::FitPolicy;
 use manyshadows_scene::{Camera, Light, Scene, SceneError};
 use wgpu::util::DeviceExt;
 
-use crate::clusters::{ClusterOptions, ClusterStats, LightClusters, LightLoop};
-use crate::gbuffer::GBuffer;
+use crate::frame::clusters::{ClusterStats, LightClusters, LightLoop};
+use crate::frame::gbuffer::GBuffer;
+use crate::frame::gbuffer_readback::GBufferData;
 use crate::gpu_scene::instances::GpuScene;
 use crate::gpu::types::{FrameUniforms, LightData};
-use crate::irregular::IrregularOptions;
-use crate::lighting::{LightingInputs, LightingPass};
-use crate::shadow::{
-    ShadowAtlas, ShadowOptions, ShadowPlan, ShadowStats, Technique, DEFAULT_MAX_ATLAS_SIZE,
-};
+use crate::frame::lighting::{LightingInputs, LightingPass};
+use crate::settings::RenderSettings;
+use crate::shadow::{DEFAULT_MAX_ATLAS_SIZE, ShadowAtlas, ShadowPlan, ShadowStats};
 use crate::source::{ShadowSource, SourceInputs};
 use crate::gpu::timing::{GpuTimer, GpuTimes, Stage};
-use crate::visibility::{VisibilityMask, VisibilityPass};
-use crate::vsm::{VirtualOptions, VirtualStats};
+use crate::frame::visibility::VisibilityPass;
+use crate::frame::visibility_mask::VisibilityMask;
+use crate::vsm::VirtualStats;
 use crate::{GpuContext, RenderError};
-
-/// Percentage-closer filtering of the shadow test.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Pcf {
-    /// One comparison at the nearest texel: hard edges.
-    Off,
-    /// Bilinearly weighted comparison of the 2×2 nearest texels (one hardware lookup).
-    #[default]
-    Pcf2x2,
-    /// Mean of the 3×3 texels around the nearest one.
-    Pcf3x3,
-}
-
-impl Pcf {
-    /// Every mode.
-    pub const ALL: &'static [Pcf] = &[Pcf::Off, Pcf::Pcf2x2, Pcf::Pcf3x3];
-
-    /// CLI name: `off`, `2x2`, `3x3`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Pcf::Off => "off",
-            Pcf::Pcf2x2 => "2x2",
-            Pcf::Pcf3x3 => "3x3",
-        }
-    }
-
-    fn code(self) -> u32 {
-        match self {
-            Pcf::Off => 0,
-            Pcf::Pcf2x2 => 1,
-            Pcf::Pcf3x3 => 2,
-        }
-    }
-}
-
-impl std::str::FromStr for Pcf {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        Pcf::ALL
-            .iter()
-            .copied()
-            .find(|p| p.name() == s)
-            .ok_or_else(|| format!("unknown PCF mode '{s}' (expected off, 2x2 or 3x3)"))
-    }
-}
-
-/// Receiver-side shadow bias, in shadow-map texels at the receiving point.
-///
-/// Before the depth comparison the point is moved `normal_offset` texels along its normal and
-/// `constant + slope·tan θ` texels towards the light (θ = angle between normal and light
-/// direction). Texel-relative bias scales with each view's resolution and distance, so one
-/// setting fits spot, point and cascade views alike.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ShadowBias {
-    /// Constant offset towards the light, texels.
-    pub constant: f32,
-    /// Offset towards the light per unit of tan θ, texels (clamped at tan θ = 10).
-    pub slope: f32,
-    /// Offset along the surface normal, texels.
-    pub normal_offset: f32,
-}
-
-impl Default for ShadowBias {
-    fn default() -> Self {
-        Self {
-            constant: 1.0,
-            slope: 1.0,
-            normal_offset: 1.0,
-        }
-    }
-}
-
-/// How a frame is rendered.
-#[derive(Clone, Debug)]
-pub struct RenderSettings {
-    /// Image width in pixels.
-    pub width: u32,
-    /// Image height in pixels.
-    pub height: u32,
-    /// Shadow generation technique.
-    pub technique: Technique,
-    /// Culling and caster options of the technique.
-    pub shadow: ShadowOptions,
-    /// Keep the tiles of unchanged views between frames (see [`crate::generator`]).
-    pub cache_shadows: bool,
-    /// Point-light shadows: six cube faces or two paraboloid hemispheres.
-    pub point_shadows: manyshadows_scene::light_space::PointShadows,
-    /// Shadow filtering.
-    pub pcf: Pcf,
-    /// Receiver bias.
-    pub bias: ShadowBias,
-    /// Largest atlas side (clamped to the adapter's limit); `None` = [`DEFAULT_MAX_ATLAS_SIZE`].
-    pub max_atlas_size: Option<u32>,
-    /// What to do when the shadow maps do not fit the atlas.
-    pub fit: FitPolicy,
-    /// Also compute the hard visibility mask.
-    pub visibility: bool,
-    /// Knobs of [`Technique::Irregular`] (ignored by the other techniques).
-    pub irregular: IrregularOptions,
-    /// Knobs of [`Technique::Virtual`] (ignored by the other techniques).
-    pub virtual_maps: VirtualOptions,
-    /// Which lights each pixel visits: its cluster's (default) or every light (reference).
-    pub light_loop: LightLoop,
-    /// The cluster grid.
-    pub clusters: ClusterOptions,
-}
-
-impl Default for RenderSettings {
-    fn default() -> Self {
-        Self {
-            width: 1280,
-            height: 720,
-            technique: Technique::default(),
-            shadow: ShadowOptions::default(),
-            cache_shadows: false,
-            point_shadows: Default::default(),
-            pcf: Pcf::default(),
-            bias: ShadowBias::default(),
-            max_atlas_size: None,
-            fit: FitPolicy::default(),
-            visibility: false,
-            irregular: IrregularOptions::default(),
-            virtual_maps: VirtualOptions::default(),
-            light_loop: LightLoop::default(),
-            clusters: ClusterOptions::default(),
-        }
-    }
-}
 
 /// Times of one frame.
 #[derive(Clone, Debug, Default)]
@@ -214,13 +85,13 @@ pub struct Renderer {
     source: Box<dyn ShadowSource>,
     frame_buffer: wgpu::Buffer,
     lights: wgpu::Buffer,
-    pub(crate) gbuffer: GBuffer,
+    gbuffer: GBuffer,
     lighting: LightingPass,
     clusters: LightClusters,
     /// The visibility pass, when asked for and the source's output is not the mask itself.
     visibility: Option<VisibilityPass>,
     /// Copies frames into callers' textures ([`Renderer::render_to`]); built on first use.
-    blit: Option<crate::blit::Blit>,
+    blit: Option<crate::frame::blit::Blit>,
     timer: GpuTimer,
     /// The frame's state (camera, lights, instance transforms) as last set.
     current: Scene,
@@ -552,7 +423,7 @@ impl Renderer {
                     label: Some("frame.encoder"),
                 });
             let shadow_stats = self.record_frame(ctx, &mut encoder)?;
-            let blit = self.blit.get_or_insert_with(|| crate::blit::Blit::new(ctx));
+            let blit = self.blit.get_or_insert_with(|| crate::frame::blit::Blit::new(ctx));
             blit.record(ctx, &mut encoder, &self.lighting.color, target)?;
             ctx.queue.submit([encoder.finish()]);
             self.source.finish(ctx)?;
@@ -651,6 +522,12 @@ impl Renderer {
     /// Counters of the last frame of [`Technique::Irregular`] (`None` for other techniques).
     pub fn irregular_stats(&self) -> Option<crate::irregular::IrregularStats> {
         self.source.irregular_stats()
+    }
+
+    /// Reads the G-buffer of the last frame [`Renderer::render`] produced (before the first
+    /// frame every pixel reads as uncovered).
+    pub fn read_gbuffer(&self) -> Result<GBufferData, RenderError> {
+        GBufferData::read(self.context(), &self.gbuffer)
     }
 
     /// Reads the depth atlas back (`size`² floats, row-major); techniques that fill no atlas

@@ -9,10 +9,11 @@ use manyshadows_scene::atlas::{self, AtlasLayout, FitPolicy, Tile};
 use manyshadows_scene::light_space::{self, PointShadows, ShadowView, ViewKind};
 use manyshadows_scene::Scene;
 
-use crate::gpu_scene::casters::{CasterGeometry, CasterOptions};
+use crate::gpu_scene::casters::CasterGeometry;
 use crate::gpu_scene::instances::GpuScene;
 use crate::gpu::types::{LightData, ShadowViewData, ViewUniform, VIEW_UNIFORM_STRIDE};
 use crate::gpu::timing::{GpuTimer, Span};
+use crate::settings::{ShadowOptions, Technique, IRREGULAR_NO_ATLAS, VIRTUAL_NO_ATLAS};
 use crate::{GpuContext, RenderError};
 
 /// Largest atlas side the renderer uses by default (256 MiB of depth), further clamped to the
@@ -537,84 +538,6 @@ impl ShadowInput<'_> {
     }
 }
 
-/// Which triangles single-pass techniques drop per view before rasterization (seed 000
-/// Listings 19.9 and 19.10).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum CullMode {
-    /// Every triangle goes to every view.
-    None,
-    /// Triangles wholly outside a view's frustum are dropped for that view.
-    Frustum,
-    /// Triangles facing away from the light are dropped (closed meshes only; see
-    /// [`crate::gpu_scene::casters`]).
-    Backface,
-    /// Both.
-    #[default]
-    All,
-}
-
-impl CullMode {
-    /// Every mode.
-    pub const ALL: &'static [CullMode] = &[
-        CullMode::None,
-        CullMode::Frustum,
-        CullMode::Backface,
-        CullMode::All,
-    ];
-
-    /// CLI name.
-    pub fn name(self) -> &'static str {
-        match self {
-            CullMode::None => "none",
-            CullMode::Frustum => "frustum",
-            CullMode::Backface => "backface",
-            CullMode::All => "all",
-        }
-    }
-
-    /// Frustum culling on.
-    pub fn frustum(self) -> bool {
-        matches!(self, CullMode::Frustum | CullMode::All)
-    }
-
-    /// Back-face culling on.
-    pub fn backface(self) -> bool {
-        matches!(self, CullMode::Backface | CullMode::All)
-    }
-
-    /// Bit flags for shaders: 1 = frustum, 2 = back-face.
-    pub fn bits(self) -> u32 {
-        u32::from(self.frustum()) | (u32::from(self.backface()) << 1)
-    }
-}
-
-impl std::str::FromStr for CullMode {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        CullMode::ALL
-            .iter()
-            .copied()
-            .find(|m| m.name() == s)
-            .ok_or_else(|| {
-                format!("unknown cull mode '{s}' (expected none, frustum, backface or all)")
-            })
-    }
-}
-
-/// Options every technique honours.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct ShadowOptions {
-    /// Per-view triangle culling of the single-pass techniques (`traditional` always culls
-    /// whole instances by their bounding sphere on the CPU, and nothing else).
-    pub cull: CullMode,
-    /// How caster geometry is prepared.
-    pub casters: CasterOptions,
-    /// Benchmark only: a zero-sized scissor rectangle, so geometry is transformed, culled,
-    /// clipped and set up but no fragment is produced. The closest wgpu gets to seed 000's
-    /// `GL_RASTERIZER_DISCARD`; the atlas is left cleared.
-    pub discard_raster: bool,
-}
-
 /// Work counters of one shadow generation.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct ShadowStats {
@@ -672,98 +595,20 @@ pub trait ShadowTechnique {
     }
 }
 
-/// Why `irregular` cannot stand where an atlas-filling technique is expected.
-pub const IRREGULAR_NO_ATLAS: &str = "technique irregular computes the visibility mask \
-     directly and fills no shadow atlas, so it runs in frames (render, compare) but not where \
-     atlas tiles are generated or benchmarked on their own (bench layered, bench omni, atlas \
-     read-back)";
-
-/// Why `virtual` cannot stand where an atlas-filling technique is expected.
-pub const VIRTUAL_NO_ATLAS: &str = "technique virtual renders only the pages the camera's \
-     samples need, into a page pool instead of an atlas, so it runs in frames (render, \
-     compare, bench virtual) but not where atlas tiles are generated or benchmarked on their \
-     own (bench layered, bench omni, atlas read-back)";
-
-/// The techniques that exist, by CLI name.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Technique {
-    /// One depth-only pass per shadow view (seed 004, seed 000 §19.2).
-    #[default]
-    Traditional,
-    /// One instanced draw fills every view's tile (seed 000 §19.3).
-    Layered,
-    /// One multiview pass per group of equal-size views (seed 000 §19.5); needs `MULTIVIEW`.
-    Multiview,
-    /// Clusters culled per view in compute, one indirect multi-draw (seed 002).
-    GpuDriven,
-    /// A compute-shader rasterizer: every view in one set of dispatches, depth by atomicMin.
-    Compute,
-    /// Irregular shadow maps (seed 001): camera samples in per-texel lists of each light
-    /// view, exact tests per triangle; produces the visibility mask, not atlas tiles
-    /// ([`crate::irregular`]), so it runs in the [`crate::Renderer`] only.
-    Irregular,
-    /// Virtual shadow maps (seed 002): a paged virtual map per light face, only the pages
-    /// visible samples need, rendered into a page pool ([`crate::vsm`]); fills no atlas, so it
-    /// runs in the [`crate::Renderer`] only.
-    Virtual,
+/// Per-view CPU culling shared by techniques that draw instance by instance: the shadow
+/// casters whose bounding sphere touches the view's frustum.
+pub fn visible_casters<'a>(
+    scene: &'a GpuScene,
+    view: &ShadowView,
+) -> impl Iterator<Item = &'a crate::gpu_scene::instances::DrawItem> + 'a {
+    let view = *view;
+    scene
+        .draws
+        .iter()
+        .filter(move |d| d.casts_shadows && view.sphere_visible(d.sphere.0, d.sphere.1))
 }
 
 impl Technique {
-    /// Every technique.
-    pub const ALL: &'static [Technique] = &[
-        Technique::Traditional,
-        Technique::Layered,
-        Technique::Multiview,
-        Technique::GpuDriven,
-        Technique::Compute,
-        Technique::Irregular,
-        Technique::Virtual,
-    ];
-
-    /// The CLI name.
-    pub fn name(self) -> &'static str {
-        match self {
-            Technique::Traditional => "traditional",
-            Technique::Layered => "layered",
-            Technique::Multiview => "multiview",
-            Technique::GpuDriven => "gpu-driven",
-            Technique::Compute => "compute",
-            Technique::Irregular => "irregular",
-            Technique::Virtual => "virtual",
-        }
-    }
-
-    /// One line for `--help` and tables.
-    pub fn summary(self) -> &'static str {
-        match self {
-            Technique::Traditional => "one depth pass per shadow view, instances culled on the CPU",
-            Technique::Layered => {
-                "one instanced draw into every tile; per-view triangle culling in the vertex shader"
-            }
-            Technique::Multiview => {
-                "one multiview pass per group of equal-size views (cube faces, cascades), then \
-                 a copy into the tiles; needs MULTIVIEW"
-            }
-            Technique::GpuDriven => {
-                "compute culls triangle clusters per view and writes indirect draws; one \
-                 multi-draw fills every tile"
-            }
-            Technique::Compute => {
-                "compute-shader rasterizer: per-view culling, clipping and binning in compute, \
-                 depth by atomicMin into a buffer, then copied into the tiles"
-            }
-            Technique::Irregular => {
-                "irregular shadow maps: camera samples in per-texel lists of each light view, \
-                 every caster triangle tested exactly against the samples under it; \
-                 alias-free, fills no atlas"
-            }
-            Technique::Virtual => {
-                "virtual shadow maps: a 16k² paged map per light face, only the pages the \
-                 camera's samples need, at the resolution they need, rendered into a page pool"
-            }
-        }
-    }
-
     /// Builds the technique's pipelines; fails with a clear message where the adapter lacks
     /// a feature the technique needs.
     pub fn create(
@@ -794,43 +639,4 @@ impl Technique {
             }
         })
     }
-}
-
-impl std::str::FromStr for Technique {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        Technique::ALL
-            .iter()
-            .copied()
-            .find(|t| t.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "unknown technique '{s}' (techniques: {})",
-                    Technique::ALL
-                        .iter()
-                        .map(|t| t.name())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )
-            })
-    }
-}
-
-impl std::fmt::Display for Technique {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// Per-view CPU culling shared by techniques that draw instance by instance: the shadow
-/// casters whose bounding sphere touches the view's frustum.
-pub fn visible_casters<'a>(
-    scene: &'a GpuScene,
-    view: &ShadowView,
-) -> impl Iterator<Item = &'a crate::gpu_scene::instances::DrawItem> + 'a {
-    let view = *view;
-    scene
-        .draws
-        .iter()
-        .filter(move |d| d.casts_shadows && view.sphere_visible(d.sphere.0, d.sphere.1))
 }

@@ -23,15 +23,16 @@ use manyshadows_scene::light_space::PointShadows;
 use manyshadows_scene::Scene;
 
 use crate::gpu_scene::casters::CasterGeometry;
-use crate::clusters::LightClusters;
-use crate::gbuffer::GBuffer;
+use crate::frame::clusters::LightClusters;
+use crate::frame::gbuffer::GBuffer;
 use crate::generator::ShadowGenerator;
 use crate::gpu_scene::instances::GpuScene;
 use crate::gpu::types::LightData;
-use crate::renderer::RenderSettings;
-use crate::shadow::{ShadowAtlas, ShadowPlan, ShadowStats, Technique};
+use crate::settings::RenderSettings;
+use crate::settings::Technique;
+use crate::shadow::{ShadowAtlas, ShadowPlan, ShadowStats};
 use crate::gpu::timing::GpuTimer;
-use crate::visibility::VisibilityMask;
+use crate::frame::visibility_mask::VisibilityMask;
 use crate::{GpuContext, RenderError};
 
 /// The renderer's buffers a source may read (bound by [`ShadowSource::bind`]).

@@ -38,13 +38,14 @@ use manyshadows_scene::light_space::{self, PointShadows, ShadowView, ViewKind};
 use manyshadows_scene::Scene;
 
 use crate::gpu_scene::casters::CasterGeometry;
-use crate::clusters::LightClusters;
-use crate::gbuffer::GBuffer;
+use crate::frame::clusters::LightClusters;
+use crate::frame::gbuffer::GBuffer;
 use crate::gpu_scene::instances::GpuScene;
 use crate::gpu::types::{LightData, ShadowViewData, VirtualFace, VsmRound, VsmUniforms};
 use crate::gpu::pipelines::whole_entry;
-use crate::renderer::RenderSettings;
-use crate::shadow::{ShadowAtlas, ShadowOptions, ShadowPlan, ShadowStats, Technique};
+use crate::settings::RenderSettings;
+use crate::settings::{ShadowOptions, Technique};
+use crate::shadow::{ShadowAtlas, ShadowPlan, ShadowStats};
 use crate::source::{PagePool, ShadowOutput, ShadowSource, SourceInputs, ViewTable};
 use crate::techniques::gpu_driven::{plan_rounds, Round, COMMAND_SIZE};
 use crate::gpu::timing::{GpuTimer, Span};
@@ -1239,8 +1240,8 @@ impl ShadowSource for VirtualSource {
 
     fn read_atlas(&self, _ctx: &GpuContext) -> Result<Vec<f32>, RenderError> {
         Err(RenderError::NoAtlas {
-            technique: crate::shadow::Technique::Virtual,
-            detail: crate::shadow::VIRTUAL_NO_ATLAS.into(),
+            technique: crate::settings::Technique::Virtual,
+            detail: crate::settings::VIRTUAL_NO_ATLAS.into(),
         })
     }
 

@@ -52,12 +52,12 @@ pub fn compose(parts: &[&str]) -> String {
 
 /// G-buffer pass.
 pub fn gbuffer() -> String {
-    compose(&[COMMON, include_str!("../shaders/gbuffer.wgsl")])
+    compose(&[COMMON, include_str!("../frame/gbuffer.wgsl")])
 }
 
 /// Deferred lighting pass, shadows from `source` (bindings 12–14 for virtual maps).
 pub fn lighting(source: ShadowSource) -> String {
-    reading_shadows(source, include_str!("../shaders/lighting.wgsl"))
+    reading_shadows(source, include_str!("../frame/lighting.wgsl"))
 }
 
 /// The common parts, the shadow lookup from `source`, then `pass`: the lighting and
@@ -75,13 +75,13 @@ fn reading_shadows(source: ShadowSource, pass: &str) -> String {
 
 /// Clustered light assignment (mark, compact, assign, statistics).
 pub fn clusters() -> String {
-    compose(&[COMMON, include_str!("../shaders/clusters.wgsl")])
+    compose(&[COMMON, include_str!("../frame/clusters.wgsl")])
 }
 
 /// Hard visibility mask, shadows from `source` (bindings 12–14 for virtual maps, as in
 /// [`lighting`]).
 pub fn visibility(source: ShadowSource) -> String {
-    reading_shadows(source, include_str!("../shaders/visibility.wgsl"))
+    reading_shadows(source, include_str!("../frame/visibility.wgsl"))
 }
 
 /// Virtual shadow maps: page marking, allocation and indirect arguments.
@@ -122,7 +122,7 @@ pub fn irregular() -> String {
 
 /// Copy of the lit frame into a caller's texture (`Renderer::render_to`).
 pub fn blit() -> String {
-    compose(&[include_str!("../shaders/blit.wgsl")])
+    compose(&[include_str!("../frame/blit.wgsl")])
 }
 
 /// Atlas read-back copy.

@@ -180,7 +180,7 @@ impl LightData {
 }
 
 /// Grid and list layout of the clustered light lists (`ClusterUniforms`, see
-/// [`crate::clusters`]).
+/// [`crate::frame::clusters`]).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct ClusterUniforms {

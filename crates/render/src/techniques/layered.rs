@@ -140,7 +140,7 @@ impl ShadowTechnique for Layered {
             if range.is_empty() {
                 continue;
             }
-            if cull == crate::shadow::CullMode::None {
+            if cull == crate::settings::CullMode::None {
                 pass.set_pipeline(indexed);
                 pass.set_index_buffer(casters.corners.slice(..), wgpu::IndexFormat::Uint32);
                 pass.draw_indexed(range, 0, 0..views);

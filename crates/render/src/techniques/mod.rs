@@ -1,5 +1,5 @@
 //! Shadow-generation techniques, one module each with its WGSL beside it. Adding a technique
-//! means a module here and one line in [`crate::shadow::Technique`].
+//! means a module here and one line in [`crate::settings::Technique`].
 
 pub mod compute;
 pub mod gpu_driven;

@@ -23,7 +23,8 @@ use std::collections::HashMap;
 use std::num::NonZeroU32;
 
 use crate::gpu::pipelines::dynamic_uniform_entry;
-use crate::shadow::{CullMode, Generation, ShadowStats, ShadowTechnique};
+use crate::settings::CullMode;
+use crate::shadow::{Generation, ShadowStats, ShadowTechnique};
 use crate::techniques::{
     atlas_attachment, layered_depth_pipeline, masked_depth_pipeline, CachedGroup, TileClear,
     UniformRecords,

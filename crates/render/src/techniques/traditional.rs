@@ -10,7 +10,7 @@ use manyshadows_scene::light_space::ViewKind;
 const VIEW_BINDING: u64 = 80;
 use crate::gpu_scene::instances::{POSITION_LAYOUT, UV_LAYOUT_1};
 use crate::gpu::types::VIEW_UNIFORM_STRIDE;
-use crate::shadow::{visible_casters, Generation, ShadowInput, ShadowStats, ShadowTechnique};
+use crate::shadow::{Generation, ShadowInput, ShadowStats, ShadowTechnique, visible_casters};
 use crate::techniques::{atlas_attachment, TileClear};
 use crate::GpuContext;
 

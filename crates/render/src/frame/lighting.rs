@@ -2,7 +2,7 @@
 //! the final colour. Every light is visited per pixel for now; the light list is one storage
 //! buffer so a clustered (per-tile) list can replace it without touching the shading.
 
-use crate::gbuffer::GBuffer;
+use crate::frame::gbuffer::GBuffer;
 use crate::source::ShadowOutput;
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::GpuContext;
@@ -36,7 +36,7 @@ pub struct LightingInputs<'a> {
     /// G-buffer.
     pub gbuffer: &'a GBuffer,
     /// The clustered light lists.
-    pub clusters: &'a crate::clusters::LightClusters,
+    pub clusters: &'a crate::frame::clusters::LightClusters,
     /// What the frame's shadow source produced: an atlas, a page pool (both read with the
     /// shadow test, `fs_main`) or a visibility mask (shaded with directly, `fs_mask`).
     pub shadows: ShadowOutput<'a>,

@@ -2,12 +2,13 @@
 //!
 //! The exact CPU reference (`manyshadows-reference`) casts its shadow rays from these points,
 //! so the reference and every technique judge the very same surface samples. The targets hold
-//! `f32` bit patterns in `Rgba32Uint` texels (see [`crate::gbuffer`]); they are read back as
+//! `f32` bit patterns in `Rgba32Uint` texels (see [`crate::frame::gbuffer`]); they are read back as
 //! bits and reinterpreted, so nothing is rounded on the way.
 
 use glam::Vec3;
 
-use crate::{RenderError, Renderer};
+use crate::frame::gbuffer::GBuffer;
+use crate::{GpuContext, RenderError};
 
 /// The G-buffer of the last rendered frame on the CPU, row-major from the top-left pixel.
 #[derive(Clone, Debug, PartialEq)]
@@ -40,17 +41,15 @@ fn texels(bytes: &[u8]) -> impl Iterator<Item = [u32; 4]> + '_ {
     })
 }
 
-impl Renderer {
-    /// Reads the G-buffer of the last frame [`Renderer::render`] produced (before the first
-    /// frame every pixel reads as uncovered).
-    pub fn read_gbuffer(&self) -> Result<GBufferData, RenderError> {
-        let ctx = self.context();
+impl GBufferData {
+    /// Reads `gbuffer` back ([`crate::Renderer::read_gbuffer`]).
+    pub(crate) fn read(ctx: &GpuContext, gbuffer: &GBuffer) -> Result<Self, RenderError> {
         ctx.scoped("reading the G-buffer", || {
-            let position = crate::gpu::readback::read_texture(ctx, &self.gbuffer.position, TEXEL_BYTES)?;
-            let normal = crate::gpu::readback::read_texture(ctx, &self.gbuffer.normal, TEXEL_BYTES)?;
+            let position = crate::gpu::readback::read_texture(ctx, &gbuffer.position, TEXEL_BYTES)?;
+            let normal = crate::gpu::readback::read_texture(ctx, &gbuffer.normal, TEXEL_BYTES)?;
             let (width, height) = (
-                self.gbuffer.position.width(),
-                self.gbuffer.position.height(),
+                gbuffer.position.width(),
+                gbuffer.position.height(),
             );
             let pixels = width as usize * height as usize;
             if position.len() != pixels * TEXEL_BYTES as usize

@@ -1,107 +1,13 @@
 //! The visibility mask: one bit per light and pixel, the hard (unfiltered) shadow test. It is
 //! what shadow quality is measured on, so it reads the atlas with the same coordinates and
-//! bias as the lighting pass but without filtering.
-//!
-//! File format written by [`VisibilityMask::write_raw`] (`.msvis`, little-endian):
-//! the 8 bytes `MSVIS001`, then `u32` width, height, light count, words per pixel, then
-//! `width·height·words` `u32` words row-major from the top-left pixel; bit `b` of word `w` of a
-//! pixel is light `32·w + b`; set = lit (within the light's reach and unoccluded).
+//! bias as the lighting pass but without filtering. Its result is a
+//! [`VisibilityMask`] ([`crate::frame::visibility_mask`]).
 
-use std::io::Write;
-
+use crate::frame::visibility_mask::VisibilityMask;
 use crate::gpu::pipelines::texture_entry;
-use crate::lighting::LightingInputs;
+use crate::frame::lighting::LightingInputs;
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
-
-/// Per-pixel light bits read back from the GPU.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct VisibilityMask {
-    /// Image width.
-    pub width: u32,
-    /// Image height.
-    pub height: u32,
-    /// Number of lights.
-    pub lights: u32,
-    /// `ceil(lights / 32)` (at least 1).
-    pub words_per_pixel: u32,
-    /// `width · height · words_per_pixel` words.
-    pub words: Vec<u32>,
-}
-
-impl VisibilityMask {
-    /// Whether `light` reaches pixel `(x, y)` unoccluded.
-    pub fn lit(&self, x: u32, y: u32, light: u32) -> bool {
-        let pixel = y as usize * self.width as usize + x as usize;
-        let i = pixel * self.words_per_pixel as usize + (light / 32) as usize;
-        self.words[i] >> (light % 32) & 1 == 1
-    }
-
-    /// Writes the `.msvis` format described in the module docs.
-    pub fn write_raw(&self, mut w: impl Write) -> std::io::Result<()> {
-        w.write_all(b"MSVIS001")?;
-        for v in [self.width, self.height, self.lights, self.words_per_pixel] {
-            w.write_all(&v.to_le_bytes())?;
-        }
-        for v in &self.words {
-            w.write_all(&v.to_le_bytes())?;
-        }
-        Ok(())
-    }
-
-    /// Reads the `.msvis` format.
-    pub fn read_raw(bytes: &[u8]) -> Result<Self, String> {
-        if bytes.len() < 24 || &bytes[..8] != b"MSVIS001" {
-            return Err("not a .msvis file (bad header)".into());
-        }
-        let u = |i: usize| u32::from_le_bytes(bytes[8 + 4 * i..12 + 4 * i].try_into().unwrap());
-        let (width, height, lights, words_per_pixel) = (u(0), u(1), u(2), u(3));
-        if words_per_pixel != lights.div_ceil(32).max(1) {
-            return Err(format!(
-                "{lights} lights need {} words per pixel, the header says {words_per_pixel}",
-                lights.div_ceil(32).max(1)
-            ));
-        }
-        // The header's sizes are checked against the bytes present before anything is
-        // allocated: a header claiming 2^32 × 2^32 pixels is an error, not an allocation.
-        let n = (width as u64)
-            .checked_mul(height as u64)
-            .and_then(|p| p.checked_mul(words_per_pixel as u64))
-            .and_then(|n| n.checked_mul(4))
-            .ok_or_else(|| {
-                format!("{width}x{height} pixels of {words_per_pixel} words overflow")
-            })?;
-        if bytes.len() as u64 - 24 != n {
-            return Err(format!(
-                "{width}x{height} pixels of {words_per_pixel} words need {n} bytes of words, \
-                 found {}",
-                bytes.len() - 24
-            ));
-        }
-        let words = bytes[24..]
-            .chunks_exact(4)
-            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
-            .collect();
-        Ok(Self {
-            width,
-            height,
-            lights,
-            words_per_pixel,
-            words,
-        })
-    }
-
-    /// A greyscale image of one light's bits (white = lit), 8 bits per pixel.
-    pub fn light_image(&self, light: u32) -> Vec<u8> {
-        let mut out = Vec::with_capacity(self.width as usize * self.height as usize);
-        for y in 0..self.height {
-            for x in 0..self.width {
-                out.push(if self.lit(x, y, light) { 255 } else { 0 });
-            }
-        }
-        out
-    }
-}
 
 /// Layout of `VisibilityParams` in `visibility.wgsl`.
 #[repr(C)]
@@ -126,7 +32,7 @@ pub struct VisibilityPass {
 }
 
 // The virtual maps' page-table declarations start where the lighting pass's do.
-use crate::lighting::VSM_FIRST_BINDING;
+use crate::frame::lighting::VSM_FIRST_BINDING;
 
 impl VisibilityPass {
     /// Plans the pass; fails if even one word per pixel exceeds the storage-binding limit.
@@ -171,7 +77,7 @@ impl VisibilityPass {
             crate::gpu::pipelines::storage_entry(11, comp),
         ];
         let source = if shadows.pages().is_some() {
-            entries.extend(crate::lighting::vsm_layout_entries(VSM_FIRST_BINDING, comp));
+            entries.extend(crate::frame::lighting::vsm_layout_entries(VSM_FIRST_BINDING, comp));
             crate::gpu::shaders::ShadowSource::Virtual {
                 first: VSM_FIRST_BINDING,
             }
@@ -288,52 +194,5 @@ impl VisibilityPass {
             words_per_pixel: self.words,
             words,
         })
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::VisibilityMask;
-
-    fn header(w: u32, h: u32, lights: u32, words: u32) -> Vec<u8> {
-        let mut b = b"MSVIS001".to_vec();
-        for v in [w, h, lights, words] {
-            b.extend_from_slice(&v.to_le_bytes());
-        }
-        b
-    }
-
-    #[test]
-    fn round_trip() {
-        let m = VisibilityMask {
-            width: 3,
-            height: 2,
-            lights: 40,
-            words_per_pixel: 2,
-            words: (0..12).map(|i| i * 0x0101_0101).collect(),
-        };
-        let mut bytes = Vec::new();
-        m.write_raw(&mut bytes).unwrap();
-        assert_eq!(VisibilityMask::read_raw(&bytes).unwrap(), m);
-    }
-
-    #[test]
-    fn lying_headers_are_errors_not_allocations() {
-        // Sizes whose product overflows u64, and ones that merely exceed the bytes present.
-        for (w, h, lights, words) in [
-            (u32::MAX, u32::MAX, u32::MAX, u32::MAX.div_ceil(32)),
-            (1 << 20, 1 << 20, 64, 2),
-            (2, 2, 1, 1),
-        ] {
-            let err = VisibilityMask::read_raw(&header(w, h, lights, words)).unwrap_err();
-            assert!(err.contains("overflow") || err.contains("need"), "{err}");
-        }
-        // Words per pixel that do not match the light count (lit() would read out of range).
-        let mut b = header(1, 1, 64, 1);
-        b.extend_from_slice(&[0; 4]);
-        let err = VisibilityMask::read_raw(&b).unwrap_err();
-        assert!(err.contains("64 lights need 2 words"), "{err}");
-        assert!(VisibilityMask::read_raw(b"MSVIS00").is_err());
-        assert!(VisibilityMask::read_raw(b"NOTMSVIS0000000000000000").is_err());
     }
 }

@@ -39,7 +39,7 @@ use manyshadows_scene::light_space;
 use manyshadows_scene::Scene;
 use wgpu::util::DeviceExt;
 
-use crate::gbuffer::GBuffer;
+use crate::frame::gbuffer::GBuffer;
 use crate::gpu::types::ClusterUniforms;
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
