@@ -18,40 +18,43 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-pub mod atlas_image;
 pub mod frame;
-pub mod generator;
 pub mod gpu;
 pub mod gpu_scene;
-pub mod irregular;
 pub mod renderer;
 pub mod settings;
-pub mod shadow;
-pub mod source;
-pub mod techniques;
-pub mod vsm;
-
-pub use gpu::context::{AdapterRequest, GpuContext};
-pub use frame::gbuffer_readback::GBufferData;
-pub use generator::ShadowGenerator;
-pub use gpu_scene::instances::GpuScene;
-pub use renderer::{Frame, FrameTimings, Renderer, SubmittedFrame};
-pub use settings::{CullMode, Pcf, RenderSettings, ShadowBias, ShadowOptions, Technique};
-pub use shadow::{ShadowAtlas, ShadowPlan, ShadowStats, ShadowTechnique};
-pub use source::{ShadowOutput, ShadowSource};
-pub use frame::visibility_mask::VisibilityMask;
+pub mod shadows;
 
 pub use manyshadows_scene as scene;
 pub use wgpu;
 
 // ------------------------------------------------------------------------------------------
 // Paths kept for the CLI, the web crate, examples and tests; the embedding facade (issue 25
-// part 3) will replace them. The modules moved into floors (issue 25 part 1); these are the
-// old paths that code outside `src/` still names. Nothing inside `src/` uses them (the import
-// check in `tests/import_floors.rs` reads them as the modules they re-export).
+// part 3) will replace them. The modules now lie in floors (issue 25 part 1: gpu, gpu_scene,
+// frame, shadows, settings, renderer); these re-exports keep the names code outside `src/`
+// uses: the crate-root types, and the old module paths (`manyshadows::shadow::…`,
+// `manyshadows::vsm::…`). Nothing inside `src/` goes through them; the import check
+// (`tests/import_floors.rs`) reads each as the module it re-exports.
 // ------------------------------------------------------------------------------------------
+pub use frame::gbuffer_readback::GBufferData;
+pub use frame::visibility_mask::VisibilityMask;
+pub use gpu::context::{AdapterRequest, GpuContext};
+pub use gpu_scene::instances::GpuScene;
+pub use renderer::{Frame, FrameTimings, Renderer, SubmittedFrame};
+pub use settings::{CullMode, Pcf, RenderSettings, ShadowBias, ShadowOptions, Technique};
+pub use shadows::atlas::generator::ShadowGenerator;
+pub use shadows::atlas::storage::ShadowAtlas;
+pub use shadows::atlas::technique::ShadowTechnique;
+pub use shadows::plan::ShadowPlan;
+pub use shadows::source::{ShadowOutput, ShadowSource, ShadowStats};
+
 pub use frame::clusters;
 pub use gpu::{context, readback, timing};
+
+/// Old path of the atlas and page-pool pictures ([`shadows::image`]).
+pub mod atlas_image {
+    pub use crate::shadows::image::{atlas_picture, pool_picture, read_depth};
+}
 
 /// Old path of the caster geometry and skinning ([`gpu_scene::casters`],
 /// [`gpu_scene::skinning`]).
@@ -59,6 +62,45 @@ pub mod casters {
     pub use crate::gpu_scene::casters::{CasterGeometry, CasterOptions};
     pub use crate::gpu_scene::skinning::{Skin, MAX_BONES};
 }
+
+/// Old path of irregular shadow maps' options ([`shadows::irregular`]).
+pub mod irregular {
+    pub use crate::shadows::irregular::maps::IrregularOptions;
+}
+
+/// Old path of the shadow plan and the technique interface ([`shadows::plan`],
+/// [`shadows::atlas::technique`], [`settings`]).
+pub mod shadow {
+    pub use crate::settings::IRREGULAR_NO_ATLAS;
+    pub use crate::shadows::atlas::technique::ShadowInput;
+    pub use crate::shadows::plan::{FitReport, DEFAULT_MAX_ATLAS_SIZE};
+}
+
+/// Old paths of the atlas techniques ([`shadows::atlas`]).
+pub mod techniques {
+    /// Old path of [`crate::shadows::atlas::compute`].
+    pub mod compute {
+        pub use crate::shadows::atlas::compute::Compute;
+    }
+    /// Old path of [`crate::shadows::atlas::gpu_driven`] and the rounds it shares with the
+    /// virtual maps ([`crate::shadows::cluster_draw`]).
+    pub mod gpu_driven {
+        pub use crate::shadows::atlas::gpu_driven::GpuDriven;
+        pub use crate::shadows::cluster_draw::plan_rounds;
+    }
+    /// Old path of [`crate::shadows::atlas::multiview`].
+    pub mod multiview {
+        pub use crate::shadows::atlas::multiview::Multiview;
+    }
+}
+
+/// Old path of virtual shadow maps' options, sizes and counters ([`shadows::vsm::plan`]).
+pub mod vsm {
+    pub use crate::shadows::vsm::plan::{
+        pool_side, VirtualOptions, VirtualStats, DEFAULT_POOL_BYTES, MAX_SIDE, PAGE_SIZE,
+    };
+}
+// ------------------------------------------------------------------------------------------
 
 /// Everything that can go wrong in the renderer. Each message says what to do.
 #[derive(Debug, thiserror::Error)]

@@ -2,12 +2,12 @@
 //!
 //! 1. G-buffer (world position, normal, material per pixel),
 //! 2. shadows: the frame's [`ShadowSource`] (made from the technique by
-//!    [`crate::source::create`]) fills an atlas, a virtual page pool or a visibility mask,
+//!    [`crate::shadows::create`]) fills an atlas, a virtual page pool or a visibility mask,
 //! 3. deferred Phong lighting with the shadow test (or the mask),
 //! 4. optionally, the hard visibility mask (computed from the atlas or pool; a source whose
 //!    output is the mask reads it back).
 //!
-//! Nothing here depends on the technique: the source's [`crate::source::ShadowOutput`] says
+//! Nothing here depends on the technique: the source's [`crate::shadows::source::ShadowOutput`] says
 //! what the lighting and visibility passes read.
 
 // `std::time::Instant` panics in a browser; web-time is std's on native targets.
@@ -24,12 +24,14 @@ use crate::gpu_scene::instances::GpuScene;
 use crate::gpu::types::{FrameUniforms, LightData};
 use crate::frame::lighting::{LightingInputs, LightingPass};
 use crate::settings::RenderSettings;
-use crate::shadow::{DEFAULT_MAX_ATLAS_SIZE, ShadowAtlas, ShadowPlan, ShadowStats};
-use crate::source::{ShadowSource, SourceInputs};
+use crate::shadows::atlas::storage::ShadowAtlas;
+use crate::shadows::plan::{DEFAULT_MAX_ATLAS_SIZE, ShadowPlan};
+use crate::shadows::source::ShadowStats;
+use crate::shadows::source::{ShadowSource, SourceInputs};
 use crate::gpu::timing::{GpuTimer, GpuTimes, Stage};
 use crate::frame::visibility::VisibilityPass;
 use crate::frame::visibility_mask::VisibilityMask;
-use crate::vsm::VirtualStats;
+use crate::shadows::vsm::plan::VirtualStats;
 use crate::{GpuContext, RenderError};
 
 /// Times of one frame.
@@ -127,7 +129,7 @@ impl Renderer {
             .min(max_dim);
         ctx.scoped("creating the renderer", || {
             let gpu_scene = GpuScene::new(ctx, scene)?;
-            let mut source = crate::source::create(ctx, scene, &gpu_scene, &settings, max_atlas)?;
+            let mut source = crate::shadows::create(ctx, scene, &gpu_scene, &settings, max_atlas)?;
             let light_data = lights_or_placeholder(source.light_data(scene));
             let lights = ctx
                 .device
@@ -214,7 +216,7 @@ impl Renderer {
     }
 
     /// The faces of [`Technique::Virtual`] (`None` for other techniques).
-    pub fn virtual_plan(&self) -> Option<&crate::vsm::VirtualPlan> {
+    pub fn virtual_plan(&self) -> Option<&crate::shadows::vsm::plan::VirtualPlan> {
         self.source.virtual_plan()
     }
 
@@ -520,7 +522,7 @@ impl Renderer {
     }
 
     /// Counters of the last frame of [`Technique::Irregular`] (`None` for other techniques).
-    pub fn irregular_stats(&self) -> Option<crate::irregular::IrregularStats> {
+    pub fn irregular_stats(&self) -> Option<crate::shadows::irregular::maps::IrregularStats> {
         self.source.irregular_stats()
     }
 
@@ -540,9 +542,9 @@ impl Renderer {
     /// top-left texel, as the last frame left it. Only [`Technique::Virtual`] has one.
     pub fn read_page_pool(&self) -> Result<(u32, Vec<f32>), RenderError> {
         match self.source.output() {
-            crate::source::ShadowOutput::Pages { pages, .. } => Ok((
+            crate::shadows::source::ShadowOutput::Pages { pages, .. } => Ok((
                 pages.side,
-                crate::atlas_image::read_depth_view(&self.ctx, pages.pool, pages.side)?,
+                crate::shadows::image::read_depth_view(&self.ctx, pages.pool, pages.side)?,
             )),
             _ => Err(RenderError::NoAtlas {
                 technique: self.settings.technique,

@@ -9,8 +9,8 @@ use manyshadows_scene::atlas::FitPolicy;
 
 use crate::frame::clusters::{ClusterOptions, LightLoop};
 use crate::gpu_scene::casters::CasterOptions;
-use crate::irregular::IrregularOptions;
-use crate::vsm::VirtualOptions;
+use crate::shadows::irregular::maps::IrregularOptions;
+use crate::shadows::vsm::plan::VirtualOptions;
 
 /// Why `irregular` cannot stand where an atlas-filling technique is expected.
 pub const IRREGULAR_NO_ATLAS: &str = "technique irregular computes the visibility mask \
@@ -40,10 +40,10 @@ pub enum Technique {
     Compute,
     /// Irregular shadow maps (seed 001): camera samples in per-texel lists of each light
     /// view, exact tests per triangle; produces the visibility mask, not atlas tiles
-    /// ([`crate::irregular`]), so it runs in the [`crate::Renderer`] only.
+    /// ([`crate::shadows::irregular`]), so it runs in the [`crate::Renderer`] only.
     Irregular,
     /// Virtual shadow maps (seed 002): a paged virtual map per light face, only the pages
-    /// visible samples need, rendered into a page pool ([`crate::vsm`]); fills no atlas, so it
+    /// visible samples need, rendered into a page pool ([`crate::shadows::vsm`]); fills no atlas, so it
     /// runs in the [`crate::Renderer`] only.
     Virtual,
 }
@@ -292,7 +292,7 @@ pub struct RenderSettings {
     pub technique: Technique,
     /// Culling and caster options of the technique.
     pub shadow: ShadowOptions,
-    /// Keep the tiles of unchanged views between frames (see [`crate::generator`]).
+    /// Keep the tiles of unchanged views between frames (see [`crate::shadows::atlas::generator`]).
     pub cache_shadows: bool,
     /// Point-light shadows: six cube faces or two paraboloid hemispheres.
     pub point_shadows: manyshadows_scene::light_space::PointShadows,

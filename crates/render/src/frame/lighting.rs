@@ -3,7 +3,7 @@
 //! buffer so a clustered (per-tile) list can replace it without touching the shading.
 
 use crate::frame::gbuffer::GBuffer;
-use crate::source::ShadowOutput;
+use crate::shadows::source::ShadowOutput;
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::GpuContext;
 

@@ -42,7 +42,7 @@ impl VisibilityPass {
         w: u32,
         h: u32,
         lights: u32,
-        shadows: &crate::source::ShadowOutput<'_>,
+        shadows: &crate::shadows::source::ShadowOutput<'_>,
     ) -> Result<Self, RenderError> {
         let device = &ctx.device;
         let limit = ctx.limits().max_storage_buffer_binding_size;

@@ -37,3 +37,19 @@ pub(crate) fn grow_buffer(
     });
     Ok(true)
 }
+
+/// A buffer of at least `size` bytes, rounded up to a multiple of 16 (at least 16: bindings of
+/// arrays of `vec4` stay whole and no binding is empty).
+pub(crate) fn buffer(
+    ctx: &GpuContext,
+    label: &str,
+    size: u64,
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(16).next_multiple_of(16),
+        usage,
+        mapped_at_creation: false,
+    })
+}

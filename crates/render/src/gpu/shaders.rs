@@ -6,12 +6,12 @@
 /// Struct declarations shared by all shaders.
 pub const COMMON: &str = include_str!("common.wgsl");
 /// Shadow-view selection, receiver bias and atlas addressing.
-pub const SHADOW_LOOKUP: &str = include_str!("../shaders/shadow_lookup.wgsl");
+pub const SHADOW_LOOKUP: &str = include_str!("../shadows/shadow_lookup.wgsl");
 /// The lighting and visibility passes' `shadow_coord` when shadows come from the atlas.
 pub const ATLAS_COORD: &str = "fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, \
      view_depth: f32) -> ShadowCoord {\n    return atlas_coord(light, p, n, view_depth);\n}";
 /// Virtual shadow maps: level and page selection shared by marking and lookups.
-pub const VSM_COMMON: &str = include_str!("../shaders/vsm_common.wgsl");
+pub const VSM_COMMON: &str = include_str!("../shadows/vsm/vsm_common.wgsl");
 
 /// Where the lighting and visibility passes find shadows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,7 +40,7 @@ fn shadow_source(source: ShadowSource) -> Vec<String> {
                 first + 1,
                 first + 2
             ),
-            include_str!("../shaders/vsm_lookup.wgsl").to_string(),
+            include_str!("../shadows/vsm/vsm_lookup.wgsl").to_string(),
         ],
     }
 }
@@ -91,7 +91,7 @@ pub fn vsm() -> String {
         PARABOLOID,
         SHADOW_LOOKUP,
         VSM_COMMON,
-        include_str!("../shaders/vsm.wgsl"),
+        include_str!("../shadows/vsm/vsm.wgsl"),
     ])
 }
 
@@ -105,7 +105,7 @@ pub fn vsm_draw() -> String {
         CLUSTER_CULL,
         ALPHA_MASK,
         TILE_MASK,
-        include_str!("../shaders/vsm_draw.wgsl"),
+        include_str!("../shadows/vsm/vsm_draw.wgsl"),
     ])
 }
 
@@ -116,7 +116,7 @@ pub fn irregular() -> String {
         PARABOLOID,
         SHADOW_LOOKUP,
         ALPHA_MASK,
-        include_str!("../shaders/irregular.wgsl"),
+        include_str!("../shadows/irregular/irregular.wgsl"),
     ])
 }
 
@@ -127,7 +127,7 @@ pub fn blit() -> String {
 
 /// Atlas read-back copy.
 pub fn atlas_copy() -> String {
-    compose(&[include_str!("../shaders/atlas_copy.wgsl")])
+    compose(&[include_str!("../shadows/atlas_copy.wgsl")])
 }
 
 /// Depth-only pass of the traditional technique.
@@ -135,7 +135,7 @@ pub fn traditional() -> String {
     compose(&[
         COMMON,
         ALPHA_MASK,
-        include_str!("../techniques/traditional.wgsl"),
+        include_str!("../shadows/atlas/traditional.wgsl"),
     ])
 }
 
@@ -145,7 +145,7 @@ pub fn casters() -> String {
 }
 
 /// The dual-paraboloid warp.
-pub const PARABOLOID: &str = include_str!("../shaders/paraboloid.wgsl");
+pub const PARABOLOID: &str = include_str!("../shadows/paraboloid.wgsl");
 
 /// `traditional` into dual-paraboloid views.
 pub fn traditional_dp() -> String {
@@ -154,7 +154,7 @@ pub fn traditional_dp() -> String {
         COMMON,
         PARABOLOID,
         ALPHA_MASK,
-        include_str!("../techniques/traditional_dp.wgsl"),
+        include_str!("../shadows/atlas/traditional_dp.wgsl"),
     ])
 }
 
@@ -162,21 +162,21 @@ pub fn traditional_dp() -> String {
 pub const ALPHA_MASK: &str = include_str!("../gpu_scene/alpha_mask.wgsl");
 
 /// Alpha-tested casters drawn into tiles: outputs and the discarding fragment stage.
-pub const TILE_MASK: &str = include_str!("../techniques/tile_mask.wgsl");
+pub const TILE_MASK: &str = include_str!("../shadows/tile_mask.wgsl");
 
 /// Per-view triangle culling (frustum, back-face).
-pub const CULL: &str = include_str!("../techniques/cull.wgsl");
+pub const CULL: &str = include_str!("../shadows/cull.wgsl");
 
 /// Clearing single tiles of the atlas.
 pub fn tile_clear() -> String {
-    compose(&[COMMON, include_str!("../techniques/tile_clear.wgsl")])
+    compose(&[COMMON, include_str!("../shadows/atlas/tile_clear.wgsl")])
 }
 
 /// Culling whole caster clusters by bounding sphere and normal cone (`gpu-driven`, virtual).
-pub const CLUSTER_CULL: &str = include_str!("../techniques/cluster_cull.wgsl");
+pub const CLUSTER_CULL: &str = include_str!("../shadows/cluster_cull.wgsl");
 
 /// Mapping clip positions into atlas tiles with clip distances (`layered`, `gpu-driven`).
-pub const TILE: &str = include_str!("../techniques/tile.wgsl");
+pub const TILE: &str = include_str!("../shadows/tile.wgsl");
 
 /// The `layered` technique's vertex shaders.
 pub fn layered() -> String {
@@ -188,7 +188,7 @@ pub fn layered() -> String {
         PARABOLOID,
         ALPHA_MASK,
         TILE_MASK,
-        include_str!("../techniques/layered.wgsl"),
+        include_str!("../shadows/atlas/layered.wgsl"),
     ])
 }
 
@@ -198,13 +198,13 @@ pub fn multiview() -> String {
         COMMON,
         CULL,
         ALPHA_MASK,
-        include_str!("../techniques/multiview.wgsl"),
+        include_str!("../shadows/atlas/multiview.wgsl"),
     ])
 }
 
 /// The `multiview` technique's copy of scratch layers into atlas tiles.
 pub fn multiview_copy() -> String {
-    compose(&[COMMON, include_str!("../techniques/multiview_copy.wgsl")])
+    compose(&[COMMON, include_str!("../shadows/atlas/multiview_copy.wgsl")])
 }
 
 /// The `gpu-driven` technique's cluster culling (compute) and draw (vertex) shaders.
@@ -217,7 +217,7 @@ pub fn gpu_driven() -> String {
         CLUSTER_CULL,
         ALPHA_MASK,
         TILE_MASK,
-        include_str!("../techniques/gpu_driven.wgsl"),
+        include_str!("../shadows/atlas/gpu_driven.wgsl"),
     ])
 }
 
@@ -227,13 +227,13 @@ pub fn compute() -> String {
         COMMON,
         CULL,
         ALPHA_MASK,
-        include_str!("../techniques/compute.wgsl"),
+        include_str!("../shadows/atlas/compute.wgsl"),
     ])
 }
 
 /// The `compute` technique's copy of its depth buffer into atlas tiles.
 pub fn compute_copy() -> String {
-    compose(&[COMMON, include_str!("../techniques/compute_copy.wgsl")])
+    compose(&[COMMON, include_str!("../shadows/atlas/compute_copy.wgsl")])
 }
 
 /// Every composed shader with its name (for validation).

@@ -208,7 +208,7 @@ pub struct ShadowViewData {
     pub params: [f32; 4],
 }
 
-/// A face of a virtual shadow map (`VirtualFace`, see [`crate::vsm`]).
+/// A face of a virtual shadow map (`VirtualFace`, see [`crate::shadows::vsm`]).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct VirtualFace {

@@ -12,11 +12,10 @@
 //! three corners, tests them, and emits a degenerate triangle when the triangle is dropped.
 //! Without culling the draw is indexed, so post-transform vertex reuse still applies.
 
-use crate::shadow::{Generation, ShadowStats, ShadowTechnique};
-use crate::techniques::{
-    atlas_attachment, depth_pipeline, masked_depth_pipeline, require_clip_distances, CachedGroup,
-    TileClear,
-};
+use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
+use crate::shadows::source::ShadowStats;
+use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear};
+use crate::shadows::depth::{depth_pipeline, masked_depth_pipeline, require_clip_distances};
 use crate::{GpuContext, RenderError};
 
 /// The layered technique's pipelines.

@@ -4,7 +4,8 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::shadow::{ShadowAtlas, ShadowPlan};
+use crate::shadows::atlas::storage::ShadowAtlas;
+use crate::shadows::plan::ShadowPlan;
 use crate::{GpuContext, RenderError};
 
 #[repr(C)]

@@ -24,11 +24,10 @@ use std::num::NonZeroU32;
 
 use crate::gpu::pipelines::dynamic_uniform_entry;
 use crate::settings::CullMode;
-use crate::shadow::{Generation, ShadowStats, ShadowTechnique};
-use crate::techniques::{
-    atlas_attachment, layered_depth_pipeline, masked_depth_pipeline, CachedGroup, TileClear,
-    UniformRecords,
-};
+use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
+use crate::shadows::source::ShadowStats;
+use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear, UniformRecords};
+use crate::shadows::depth::{layered_depth_pipeline, masked_depth_pipeline};
 use crate::{GpuContext, RenderError};
 
 /// Bytes of one group's parameters (`MultiviewParams` in multiview.wgsl).
@@ -166,7 +165,7 @@ impl Multiview {
             &[&copy_layout],
         );
         // A copy: every texel of the tile is replaced.
-        let copy_pipeline = crate::techniques::overwrite_pipeline(
+        let copy_pipeline = crate::shadows::depth::overwrite_pipeline(
             device,
             &copy_pipeline_layout,
             &copy_module,

@@ -1,20 +1,18 @@
-//! Shadow storage and the interface every shadow-generation technique implements.
+//! The shadow plan: every shadow view of a frame and its tile of the atlas, and the priority
+//! fit that decides which lights keep full-size maps when they do not all fit
+//! ([`FitPolicy::Prioritize`]: tile sides by importance, then unshadowed lights).
 //!
 //! The unit of work is a *shadow view*: a view-projection plus a square tile of one depth
 //! atlas ([`manyshadows_scene::light_space::ShadowView`] + [`manyshadows_scene::atlas::Tile`]).
 //! Tiles may differ in size per light (the remedy seed 000 §19.6 names for the equal-size
 //! limit of texture arrays). A technique fills every view's tile; the lighting pass reads them.
 
-use manyshadows_scene::atlas::{self, AtlasLayout, FitPolicy, Tile};
+use manyshadows_scene::atlas::{self, AtlasLayout, FitPolicy};
 use manyshadows_scene::light_space::{self, PointShadows, ShadowView, ViewKind};
 use manyshadows_scene::Scene;
 
-use crate::gpu_scene::casters::CasterGeometry;
-use crate::gpu_scene::instances::GpuScene;
-use crate::gpu::types::{LightData, ShadowViewData, ViewUniform, VIEW_UNIFORM_STRIDE};
-use crate::gpu::timing::{GpuTimer, Span};
-use crate::settings::{ShadowOptions, Technique, IRREGULAR_NO_ATLAS, VIRTUAL_NO_ATLAS};
-use crate::{GpuContext, RenderError};
+use crate::gpu::types::{LightData, ShadowViewData};
+use crate::RenderError;
 
 /// Largest atlas side the renderer uses by default (256 MiB of depth), further clamped to the
 /// adapter's `max_texture_dimension_2d`.
@@ -359,27 +357,6 @@ impl ShadowPlan {
     }
 }
 
-/// The depth atlas and the per-view data techniques read.
-pub struct ShadowAtlas {
-    /// Depth32Float, `size`².
-    pub texture: wgpu::Texture,
-    /// Depth view of the whole atlas.
-    pub view: wgpu::TextureView,
-    /// Side in texels.
-    pub size: u32,
-    /// `array<ShadowViewData>` (storage; at least one element).
-    pub views_buffer: wgpu::Buffer,
-    /// One [`ViewUniform`] per view at [`VIEW_UNIFORM_STRIDE`] (dynamic uniform offsets).
-    pub view_uniforms: wgpu::Buffer,
-    /// Tiles in view order.
-    pub tiles: Vec<Tile>,
-    /// `array<vec4<f32>>` per view, what back-face culling faces: the light's position
-    /// (w = 1) or, for orthographic views, the direction light travels (w = 0).
-    pub eyes: wgpu::Buffer,
-    /// `array<u32>`: the views a generation draws (see [`ShadowInput::draw_list`]).
-    pub draw_list: wgpu::Buffer,
-}
-
 /// What back-face culling of `view` faces: `(position, 1)` or `(direction of travel, 0)`.
 pub fn view_eye(view: &ShadowView) -> glam::Vec4 {
     let inv = view.view.inverse();
@@ -389,254 +366,5 @@ pub fn view_eye(view: &ShadowView) -> glam::Vec4 {
             .extend(0.0)
     } else {
         inv.w_axis.truncate().extend(1.0)
-    }
-}
-
-impl ShadowAtlas {
-    /// Creates the atlas texture and view buffers for `plan`.
-    pub fn new(ctx: &GpuContext, plan: &ShadowPlan) -> Result<Self, RenderError> {
-        Self::with_size(ctx, plan, plan.layout.size)
-    }
-
-    /// The view buffers of `plan` with a 1×1 placeholder texture: for `irregular`, which
-    /// reads the views but fills no tiles.
-    pub fn views_only(ctx: &GpuContext, plan: &ShadowPlan) -> Result<Self, RenderError> {
-        Self::with_size(ctx, plan, 1)
-    }
-
-    fn with_size(ctx: &GpuContext, plan: &ShadowPlan, size: u32) -> Result<Self, RenderError> {
-        let (texture, view) = atlas_texture(ctx, size);
-        let placeholder = |label: &str, usage: wgpu::BufferUsages| {
-            ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: 16,
-                usage: usage | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            })
-        };
-        let mut atlas = Self {
-            texture,
-            view,
-            size,
-            views_buffer: placeholder("shadow.views", wgpu::BufferUsages::STORAGE),
-            view_uniforms: placeholder("shadow.view_uniforms", wgpu::BufferUsages::UNIFORM),
-            tiles: Vec::new(),
-            eyes: placeholder("shadow.eyes", wgpu::BufferUsages::STORAGE),
-            draw_list: placeholder("shadow.draw_list", wgpu::BufferUsages::STORAGE),
-        };
-        atlas.write_views(ctx, plan)?;
-        Ok(atlas)
-    }
-
-    /// Makes the atlas hold `plan` (a new frame's views): view buffers are rewritten in place
-    /// (replaced only when the plan has more views than they hold), the texture only when the
-    /// atlas side changed. Returns true if a buffer or the texture was replaced, so bind groups
-    /// that hold them must be rebuilt.
-    pub fn update(&mut self, ctx: &GpuContext, plan: &ShadowPlan) -> Result<bool, RenderError> {
-        let mut replaced = false;
-        // A views-only atlas keeps its 1×1 placeholder.
-        if self.size != 1 && self.size != plan.layout.size {
-            (self.texture, self.view) = atlas_texture(ctx, plan.layout.size);
-            self.size = plan.layout.size;
-            replaced = true;
-        }
-        Ok(replaced | self.write_views(ctx, plan)?)
-    }
-
-    /// Writes the per-view buffers of `plan`, growing them if needed (true if any grew).
-    fn write_views(&mut self, ctx: &GpuContext, plan: &ShadowPlan) -> Result<bool, RenderError> {
-        let mut data = plan.view_data();
-        let uniforms: Vec<ViewUniform> = data
-            .iter()
-            .map(|d| ViewUniform {
-                view_proj: d.view_proj,
-                params: d.params,
-                _pad: [[0.0; 4]; 11],
-            })
-            .collect();
-        if data.is_empty() {
-            data.push(bytemuck::Zeroable::zeroed());
-        }
-        let mut uniform_bytes: Vec<u8> = bytemuck::cast_slice(&uniforms).to_vec();
-        if uniform_bytes.is_empty() {
-            uniform_bytes.resize(VIEW_UNIFORM_STRIDE as usize, 0);
-        }
-        let mut eyes: Vec<[f32; 4]> = plan.views.iter().map(|v| view_eye(v).to_array()).collect();
-        eyes.resize(eyes.len().max(1), [0.0; 4]);
-        let all: Vec<u32> = (0..plan.views.len().max(1) as u32).collect();
-        let mut grew = crate::gpu::buffers::grow_buffer(
-            ctx,
-            &mut self.views_buffer,
-            data_bytes(&data),
-            "shadow views",
-        )?;
-        grew |= crate::gpu::buffers::grow_buffer(
-            ctx,
-            &mut self.view_uniforms,
-            uniform_bytes.len() as u64,
-            "shadow view uniforms",
-        )?;
-        grew |= crate::gpu::buffers::grow_buffer(ctx, &mut self.eyes, data_bytes(&eyes), "shadow view eyes")?;
-        grew |= crate::gpu::buffers::grow_buffer(
-            ctx,
-            &mut self.draw_list,
-            data_bytes(&all),
-            "shadow draw list",
-        )?;
-        ctx.queue
-            .write_buffer(&self.views_buffer, 0, bytemuck::cast_slice(&data));
-        ctx.queue
-            .write_buffer(&self.view_uniforms, 0, &uniform_bytes);
-        ctx.queue
-            .write_buffer(&self.eyes, 0, bytemuck::cast_slice(&eyes));
-        ctx.queue
-            .write_buffer(&self.draw_list, 0, bytemuck::cast_slice(&all));
-        self.tiles = plan.layout.tiles.clone();
-        Ok(grew)
-    }
-}
-
-fn data_bytes<T>(v: &[T]) -> u64 {
-    std::mem::size_of_val(v) as u64
-}
-
-/// A `size`² depth atlas texture and its view.
-fn atlas_texture(ctx: &GpuContext, size: u32) -> (wgpu::Texture, wgpu::TextureView) {
-    let texture = crate::gpu::pipelines::depth_texture(&ctx.device, "shadow.atlas", size, 1);
-    let view = texture.create_view(&wgpu::TextureViewDescriptor {
-        label: Some("shadow.atlas.view"),
-        dimension: Some(wgpu::TextureViewDimension::D2),
-        ..Default::default()
-    });
-    (texture, view)
-}
-
-/// What a technique is given to fill the atlas.
-pub struct ShadowInput<'a> {
-    /// GPU context.
-    pub ctx: &'a GpuContext,
-    /// Scene buffers.
-    pub scene: &'a GpuScene,
-    /// Views to fill (same order as the atlas tiles).
-    pub views: &'a [ShadowView],
-    /// The atlas to fill.
-    pub atlas: &'a ShadowAtlas,
-    /// World-space caster geometry (techniques that use it record its transform).
-    pub casters: &'a CasterGeometry,
-    /// Culling and raster options.
-    pub options: &'a ShadowOptions,
-    /// The views to draw this time, ascending (all of them unless caching kept some);
-    /// also uploaded to [`ShadowAtlas::draw_list`].
-    pub draw_list: &'a [u32],
-}
-
-impl ShadowInput<'_> {
-    /// True if every view is drawn: the whole atlas may be cleared at once. Otherwise only the
-    /// listed views' tiles may be touched.
-    pub fn full(&self) -> bool {
-        self.draw_list.len() == self.views.len()
-    }
-}
-
-/// Work counters of one shadow generation.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
-pub struct ShadowStats {
-    /// Render or compute passes recorded.
-    pub passes: u32,
-    /// Draw calls recorded.
-    pub draws: u64,
-    /// (view, instance) pairs skipped by CPU frustum culling.
-    pub culled: u64,
-    /// Triangles submitted over all draws.
-    pub triangles: u64,
-    /// Views drawn (fewer than all when caching kept some tiles).
-    pub views_drawn: u32,
-}
-
-/// One generation as a technique records it: what to draw and where to record it.
-pub struct Generation<'a> {
-    /// The views, atlas and geometry; `input.draw_list` is never empty here.
-    pub input: &'a ShadowInput<'a>,
-    /// The encoder the passes are recorded into.
-    pub encoder: &'a mut wgpu::CommandEncoder,
-    /// Timestamp and pipeline-statistics queries.
-    pub timer: &'a GpuTimer,
-    /// The timer span of the generation's passes.
-    pub span: Option<Span>,
-}
-
-/// A shadow-generation technique: fills every view's tile of the atlas with depth. Its name
-/// is [`Technique::name`] of the [`Technique`] that created it.
-pub trait ShadowTechnique {
-    /// Records the generation of a non-empty draw list (see [`ShadowTechnique::generate`],
-    /// which calls it).
-    fn record(&mut self, generation: Generation<'_>) -> ShadowStats;
-
-    /// Records the generation into `encoder`; `span` is the timer span for its passes. An
-    /// empty draw list records nothing. Techniques keep their uniform buffers and bind groups
-    /// across generations and rewrite the uniforms with `Queue::write_buffer`, so submit each
-    /// generation before recording the next one.
-    fn generate(
-        &mut self,
-        input: &ShadowInput<'_>,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: &GpuTimer,
-        span: Option<Span>,
-    ) -> ShadowStats {
-        if input.draw_list.is_empty() {
-            return ShadowStats::default();
-        }
-        self.record(Generation {
-            input,
-            encoder,
-            timer,
-            span,
-        })
-    }
-}
-
-/// Per-view CPU culling shared by techniques that draw instance by instance: the shadow
-/// casters whose bounding sphere touches the view's frustum.
-pub fn visible_casters<'a>(
-    scene: &'a GpuScene,
-    view: &ShadowView,
-) -> impl Iterator<Item = &'a crate::gpu_scene::instances::DrawItem> + 'a {
-    let view = *view;
-    scene
-        .draws
-        .iter()
-        .filter(move |d| d.casts_shadows && view.sphere_visible(d.sphere.0, d.sphere.1))
-}
-
-impl Technique {
-    /// Builds the technique's pipelines; fails with a clear message where the adapter lacks
-    /// a feature the technique needs.
-    pub fn create(
-        self,
-        ctx: &GpuContext,
-        options: &ShadowOptions,
-    ) -> Result<Box<dyn ShadowTechnique>, RenderError> {
-        let _ = options;
-        Ok(match self {
-            Technique::Traditional => {
-                Box::new(crate::techniques::traditional::Traditional::new(ctx))
-            }
-            Technique::Layered => Box::new(crate::techniques::layered::Layered::new(ctx)?),
-            Technique::Multiview => Box::new(crate::techniques::multiview::Multiview::new(ctx)?),
-            Technique::GpuDriven => Box::new(crate::techniques::gpu_driven::GpuDriven::new(ctx)?),
-            Technique::Compute => Box::new(crate::techniques::compute::Compute::new(ctx)?),
-            Technique::Irregular => {
-                return Err(RenderError::NoAtlas {
-                    technique: Technique::Irregular,
-                    detail: IRREGULAR_NO_ATLAS.into(),
-                })
-            }
-            Technique::Virtual => {
-                return Err(RenderError::NoAtlas {
-                    technique: Technique::Virtual,
-                    detail: VIRTUAL_NO_ATLAS.into(),
-                })
-            }
-        })
     }
 }

@@ -30,7 +30,8 @@
 //! exceed the adapter's storage-binding limit, the draw list is split into rounds, each cleared,
 //! rasterized and copied in turn; a single tile over the limit is split into bands of rows.
 
-use crate::shadow::{Generation, ShadowStats, ShadowTechnique};
+use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
+use crate::shadows::source::ShadowStats;
 use crate::{GpuContext, RenderError};
 
 /// Most bounding-box texels a setup thread rasterizes itself (must match compute.wgsl).
@@ -236,7 +237,7 @@ impl Compute {
             &[&copy_layout],
         );
         // A copy: every texel of the band or tile is replaced.
-        let copy = crate::techniques::overwrite_pipeline(
+        let copy = crate::shadows::depth::overwrite_pipeline(
             device,
             &copy_pipeline_layout,
             &copy_module,
@@ -562,7 +563,7 @@ impl ShadowTechnique for Compute {
                 color_attachments: &[],
                 // Every view redrawn: the first copy may clear the whole atlas; otherwise only
                 // the listed tiles are written.
-                depth_stencil_attachment: Some(crate::techniques::atlas_attachment(
+                depth_stencil_attachment: Some(crate::shadows::atlas::shared::atlas_attachment(
                     input,
                     r == 0 && input.full(),
                 )),

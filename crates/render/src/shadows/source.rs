@@ -9,13 +9,14 @@
 //! [`ShadowOutput`]:
 //!
 //! - [`ShadowOutput::Atlas`]: a depth atlas with every view's tile and the view table
-//!   (`traditional`, `layered`, `multiview`, `gpu-driven`, `compute`: [`AtlasSource`]);
+//!   (`traditional`, `layered`, `multiview`, `gpu-driven`, `compute`:
+//!   [`crate::shadows::atlas::source::AtlasSource`]);
 //! - [`ShadowOutput::Pages`]: a virtual page pool and its page table (`virtual`:
-//!   [`crate::vsm::VirtualSource`]);
+//!   [`crate::shadows::vsm::source::VirtualSource`]);
 //! - [`ShadowOutput::Mask`]: the per-pixel, per-light visibility bits themselves
-//!   (`irregular`: [`crate::irregular::IrregularSource`]).
+//!   (`irregular`: [`crate::shadows::irregular::source::IrregularSource`]).
 //!
-//! [`create`] is the one place a [`Technique`] becomes a source.
+//! [`crate::shadows::create`] is the one place a [`Technique`] becomes a source.
 
 use glam::Vec3;
 use manyshadows_scene::atlas::FitPolicy;
@@ -25,15 +26,29 @@ use manyshadows_scene::Scene;
 use crate::gpu_scene::casters::CasterGeometry;
 use crate::frame::clusters::LightClusters;
 use crate::frame::gbuffer::GBuffer;
-use crate::generator::ShadowGenerator;
 use crate::gpu_scene::instances::GpuScene;
 use crate::gpu::types::LightData;
-use crate::settings::RenderSettings;
-use crate::settings::Technique;
-use crate::shadow::{ShadowAtlas, ShadowPlan, ShadowStats};
+use crate::settings::{RenderSettings, Technique};
+use crate::shadows::atlas::storage::ShadowAtlas;
+use crate::shadows::plan::ShadowPlan;
 use crate::gpu::timing::GpuTimer;
 use crate::frame::visibility_mask::VisibilityMask;
 use crate::{GpuContext, RenderError};
+
+/// Work counters of one shadow generation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct ShadowStats {
+    /// Render or compute passes recorded.
+    pub passes: u32,
+    /// Draw calls recorded.
+    pub draws: u64,
+    /// (view, instance) pairs skipped by CPU frustum culling.
+    pub culled: u64,
+    /// Triangles submitted over all draws.
+    pub triangles: u64,
+    /// Views drawn (fewer than all when caching kept some tiles).
+    pub views_drawn: u32,
+}
 
 /// The renderer's buffers a source may read (bound by [`ShadowSource::bind`]).
 pub struct SourceInputs<'a> {
@@ -200,12 +215,12 @@ pub trait ShadowSource {
     }
 
     /// Counters of the last finished frame of irregular shadow maps.
-    fn irregular_stats(&self) -> Option<crate::irregular::IrregularStats> {
+    fn irregular_stats(&self) -> Option<crate::shadows::irregular::maps::IrregularStats> {
         None
     }
 
     /// The faces of virtual shadow maps.
-    fn virtual_plan(&self) -> Option<&crate::vsm::VirtualPlan> {
+    fn virtual_plan(&self) -> Option<&crate::shadows::vsm::plan::VirtualPlan> {
         None
     }
 
@@ -213,7 +228,7 @@ pub trait ShadowSource {
     fn read_virtual_stats(
         &self,
         _ctx: &GpuContext,
-    ) -> Result<Option<crate::vsm::VirtualStats>, RenderError> {
+    ) -> Result<Option<crate::shadows::vsm::plan::VirtualStats>, RenderError> {
         Ok(None)
     }
 }
@@ -247,106 +262,6 @@ impl PlanParams {
             self.fit,
             self.point_shadows,
         )
-    }
-}
-
-/// The one mapping from a technique to its source.
-pub(crate) fn create(
-    ctx: &GpuContext,
-    scene: &Scene,
-    gpu: &GpuScene,
-    settings: &RenderSettings,
-    max_atlas: u32,
-) -> Result<Box<dyn ShadowSource>, RenderError> {
-    let params = PlanParams::new(settings, max_atlas);
-    Ok(match settings.technique {
-        Technique::Irregular => Box::new(crate::irregular::IrregularSource::new(
-            ctx, scene, gpu, params, settings,
-        )?),
-        Technique::Virtual => Box::new(crate::vsm::VirtualSource::new(ctx, scene, gpu, settings)?),
-        technique => Box::new(AtlasSource::new(
-            ctx, scene, gpu, params, technique, settings,
-        )?),
-    })
-}
-
-/// An atlas-filling technique ([`ShadowGenerator`]) as a frame's shadow source.
-pub struct AtlasSource {
-    generator: ShadowGenerator,
-    params: PlanParams,
-}
-
-impl AtlasSource {
-    fn new(
-        ctx: &GpuContext,
-        scene: &Scene,
-        gpu: &GpuScene,
-        params: PlanParams,
-        technique: Technique,
-        settings: &RenderSettings,
-    ) -> Result<Self, RenderError> {
-        let plan = params.plan(scene)?;
-        let mut generator =
-            ShadowGenerator::new(ctx, scene, gpu, plan, technique, settings.shadow)?;
-        generator.set_caching(settings.cache_shadows);
-        Ok(Self { generator, params })
-    }
-}
-
-impl ShadowSource for AtlasSource {
-    fn technique(&self) -> Technique {
-        self.generator.technique()
-    }
-
-    fn plan(&self) -> &ShadowPlan {
-        &self.generator.plan
-    }
-
-    fn atlas(&self) -> &ShadowAtlas {
-        &self.generator.atlas
-    }
-
-    fn casters(&self) -> &CasterGeometry {
-        &self.generator.casters
-    }
-
-    fn light_data(&self, scene: &Scene) -> Vec<LightData> {
-        self.generator.plan.light_data(scene)
-    }
-
-    fn update(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), RenderError> {
-        let plan = self.params.plan(scene)?;
-        let casters_changed = self.generator.casters.refresh(ctx, scene);
-        self.generator.set_plan(ctx, plan, casters_changed)?;
-        Ok(())
-    }
-
-    fn bind(&mut self, _ctx: &GpuContext, _inputs: &SourceInputs<'_>) -> Result<(), RenderError> {
-        // The techniques read only the atlas, the scene and the caster geometry.
-        Ok(())
-    }
-
-    fn note_moved(&mut self, old: (Vec3, f32), new: (Vec3, f32)) {
-        self.generator.note_moved(old, new);
-    }
-
-    fn record(
-        &mut self,
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: &mut GpuTimer,
-    ) -> ShadowStats {
-        let span = timer.span(crate::gpu::timing::Stage::Shadows);
-        self.generator.generate(ctx, scene, encoder, timer, span)
-    }
-
-    fn output(&self) -> ShadowOutput<'_> {
-        ShadowOutput::Atlas(&self.generator.atlas)
-    }
-
-    fn read_atlas(&self, ctx: &GpuContext) -> Result<Vec<f32>, RenderError> {
-        self.generator.read_atlas(ctx)
     }
 }
 

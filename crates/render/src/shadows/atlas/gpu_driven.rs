@@ -24,88 +24,15 @@
 //! split too if even one view's commands would not fit.
 
 use crate::gpu::pipelines::{dynamic_uniform_entry, whole_entry};
-use crate::shadow::{Generation, ShadowStats, ShadowTechnique};
-use crate::techniques::{
-    atlas_attachment, depth_pipeline, require_clip_distances, CachedGroup, TileClear,
-    UniformRecords,
-};
+use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
+use crate::shadows::source::ShadowStats;
+use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear, UniformRecords};
+use crate::shadows::depth::{depth_pipeline, require_clip_distances};
+use crate::shadows::cluster_draw::{plan_rounds, Round, COMMAND_SIZE};
 use crate::{GpuContext, RenderError};
-
-/// Bytes of one indexed-indirect command (`wgpu::util::DrawIndexedIndirectArgs`).
-pub const COMMAND_SIZE: u64 = std::mem::size_of::<wgpu::util::DrawIndexedIndirectArgs>() as u64;
 
 /// Bytes of one round's parameters (`GpuParams` in gpu_driven.wgsl).
 const PARAMS_SIZE: u64 = std::mem::size_of::<crate::gpu::types::GpuParams>() as u64;
-
-/// Largest workgroup count per dispatch dimension WebGPU guarantees.
-const MAX_GROUPS: u64 = 65535;
-
-/// One cull + draw round: a run of the draw list and a run of the clusters.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Round {
-    /// First position in the draw list.
-    pub first_view: u32,
-    /// Views (batch slots) in the round.
-    pub views: u32,
-    /// First cluster.
-    pub first_cluster: u32,
-    /// Clusters.
-    pub clusters: u32,
-    /// The clusters are alpha-tested ones (a round never mixes them with opaque clusters, so
-    /// it is drawn with one pipeline).
-    pub masked: bool,
-}
-
-impl Round {
-    /// Command slots of the round.
-    pub fn commands(&self) -> u64 {
-        self.views as u64 * self.clusters as u64
-    }
-}
-
-/// Splits `views` listed views × `clusters` clusters into rounds of at most `max_commands`
-/// commands whose slots keep `slot · vertices` below 2³¹ (and within dispatch limits). No
-/// round straddles `first_masked` (the first alpha-tested cluster).
-pub fn plan_rounds(
-    views: u32,
-    clusters: u32,
-    first_masked: u32,
-    vertices: u32,
-    max_commands: u64,
-) -> Vec<Round> {
-    if views == 0 || clusters == 0 {
-        return Vec::new();
-    }
-    let max_commands = max_commands.max(1);
-    let chunk = (clusters as u64).min(max_commands).min(MAX_GROUPS * 64) as u32;
-    // slot · V + (V − 1) must fit an i32 (base_vertex) and the u32 vertex index.
-    let by_vertex = (1u64 << 31) / vertices.max(1) as u64;
-    let batch = (max_commands / chunk as u64)
-        .min(by_vertex)
-        .clamp(1, MAX_GROUPS) as u32;
-    let split = first_masked.min(clusters);
-    let mut rounds = Vec::new();
-    let mut first_view = 0;
-    while first_view < views {
-        let n = batch.min(views - first_view);
-        for (lo, hi) in [(0, split), (split, clusters)] {
-            let mut first_cluster = lo;
-            while first_cluster < hi {
-                let c = chunk.min(hi - first_cluster);
-                rounds.push(Round {
-                    first_view,
-                    views: n,
-                    first_cluster,
-                    clusters: c,
-                    masked: first_cluster >= split,
-                });
-                first_cluster += c;
-            }
-        }
-        first_view += n;
-    }
-    rounds
-}
 
 /// The gpu-driven technique's pipelines and command buffers.
 pub struct GpuDriven {
@@ -131,7 +58,7 @@ impl GpuDriven {
     /// adapter has `MULTI_DRAW_INDIRECT_COUNT`.
     pub fn new(ctx: &GpuContext) -> Result<Self, RenderError> {
         require_clip_distances(ctx, "gpu-driven")?;
-        crate::techniques::require_indirect(
+        crate::shadows::depth::require_indirect(
             ctx,
             "gpu-driven",
             "indirect draws",
@@ -186,7 +113,7 @@ impl GpuDriven {
             "cs_cull",
         );
         let draw = depth_pipeline(device, &draw_pipeline_layout, &module, "vs_draw", &[]);
-        let draw_masked = crate::techniques::masked_depth_pipeline(
+        let draw_masked = crate::shadows::depth::masked_depth_pipeline(
             device,
             &draw_pipeline_layout,
             &module,
@@ -439,53 +366,5 @@ impl ShadowTechnique for GpuDriven {
         // survive is known only on the GPU.
         stats.triangles += casters.triangles as u64 * views as u64;
         stats
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn covered(rounds: &[Round], views: u32, clusters: u32) -> bool {
-        let mut seen = vec![0u32; (views * clusters) as usize];
-        for r in rounds {
-            for v in r.first_view..r.first_view + r.views {
-                for c in r.first_cluster..r.first_cluster + r.clusters {
-                    seen[(v * clusters + c) as usize] += 1;
-                }
-            }
-        }
-        seen.iter().all(|&n| n == 1)
-    }
-
-    #[test]
-    fn rounds_cover_every_pair_once_within_limits() {
-        for &(views, clusters, vertices, max) in &[
-            (24u32, 374u32, 30_000u32, u64::MAX),
-            (24, 374, 30_000, 1000),
-            (24, 374, 30_000, 100),
-            (7, 5, 1 << 29, u64::MAX),
-            (1, 1, 1, 1),
-        ] {
-            for split in [0, clusters / 3, clusters] {
-                let rounds = plan_rounds(views, clusters, split, vertices, max);
-                assert!(
-                    covered(&rounds, views, clusters),
-                    "{views} {clusters} {vertices} {max}"
-                );
-                for r in &rounds {
-                    assert!(r.commands() <= max);
-                    assert!((r.views as u64) * (vertices as u64) <= 1 << 31);
-                    // Alpha-tested clusters never share a round with opaque ones.
-                    assert_eq!(r.masked, r.first_cluster >= split);
-                    assert!(r.masked || r.first_cluster + r.clusters <= split);
-                }
-            }
-        }
-        // One round when everything fits; 2^29 vertices allow four slots per round.
-        assert_eq!(plan_rounds(24, 374, 374, 30_000, u64::MAX).len(), 1);
-        assert_eq!(plan_rounds(24, 374, 100, 30_000, u64::MAX).len(), 2);
-        assert_eq!(plan_rounds(7, 5, 5, 1 << 29, u64::MAX).len(), 2);
-        assert!(plan_rounds(0, 5, 5, 10, 10).is_empty());
     }
 }

@@ -10,8 +10,9 @@ use manyshadows_scene::light_space::ViewKind;
 const VIEW_BINDING: u64 = 80;
 use crate::gpu_scene::instances::{POSITION_LAYOUT, UV_LAYOUT_1};
 use crate::gpu::types::VIEW_UNIFORM_STRIDE;
-use crate::shadow::{Generation, ShadowInput, ShadowStats, ShadowTechnique, visible_casters};
-use crate::techniques::{atlas_attachment, TileClear};
+use crate::shadows::atlas::technique::{Generation, ShadowInput, ShadowTechnique, visible_casters};
+use crate::shadows::source::ShadowStats;
+use crate::shadows::atlas::shared::{atlas_attachment, TileClear};
 use crate::GpuContext;
 
 /// The traditional technique's pipelines and layout.
@@ -60,7 +61,7 @@ impl Traditional {
         let pipeline = |module: &wgpu::ShaderModule,
                         entry: &str,
                         vertex: wgpu::VertexBufferLayout<'static>| {
-            crate::techniques::depth_pipeline(
+            crate::shadows::depth::depth_pipeline(
                 device,
                 &pipeline_layout,
                 module,
@@ -77,7 +78,7 @@ impl Traditional {
             },
         );
         let masked = |module: &wgpu::ShaderModule, entry: &str| {
-            crate::techniques::masked_depth_pipeline(
+            crate::shadows::depth::masked_depth_pipeline(
                 device,
                 &pipeline_layout,
                 module,

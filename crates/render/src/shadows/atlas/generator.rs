@@ -14,7 +14,10 @@ use manyshadows_scene::Scene;
 use crate::gpu_scene::casters::CasterGeometry;
 use crate::gpu_scene::instances::GpuScene;
 use crate::settings::{ShadowOptions, Technique};
-use crate::shadow::{ShadowAtlas, ShadowInput, ShadowPlan, ShadowStats, ShadowTechnique};
+use crate::shadows::atlas::storage::ShadowAtlas;
+use crate::shadows::atlas::technique::{ShadowInput, ShadowTechnique};
+use crate::shadows::plan::ShadowPlan;
+use crate::shadows::source::ShadowStats;
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
@@ -194,7 +197,7 @@ impl ShadowGenerator {
     /// Reads the depth atlas back (`size`² floats, row-major).
     pub fn read_atlas(&self, ctx: &GpuContext) -> Result<Vec<f32>, RenderError> {
         ctx.scoped("reading the shadow atlas", || {
-            crate::atlas_image::read_depth(ctx, &self.atlas)
+            crate::shadows::image::read_depth(ctx, &self.atlas)
         })
     }
 }

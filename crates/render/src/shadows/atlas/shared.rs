@@ -1,15 +1,12 @@
-//! Shadow-generation techniques, one module each with its WGSL beside it. Adding a technique
-//! means a module here and one line in [`crate::settings::Technique`].
+//! What the atlas techniques share, so that none imports another: the clear of single cached
+//! tiles ([`TileClear`], `tile_clear.wgsl`), bind groups kept across frames ([`CachedGroup`]),
+//! per-record uniforms at dynamic offsets ([`UniformRecords`]) and the atlas as a depth
+//! attachment. The depth pipelines they draw with are [`crate::shadows::depth`]'s (virtual
+//! pages use them too).
 
-pub mod compute;
-pub mod gpu_driven;
-pub mod layered;
-pub mod multiview;
-pub mod traditional;
-
-use crate::gpu::pipelines::ATLAS_FORMAT;
-use crate::shadow::ShadowInput;
-use crate::{GpuContext, RenderError};
+use crate::shadows::atlas::technique::ShadowInput;
+use crate::shadows::depth::clear_pipeline;
+use crate::GpuContext;
 
 /// Clears only the tiles of the views in [`ShadowInput::draw_list`] (to depth 1), for
 /// generations that must keep the other, cached tiles.
@@ -206,149 +203,6 @@ impl UniformRecords {
     }
 }
 
-/// A pipeline that writes depth 1 wherever `entry`'s triangles land (compare `Always`, no
-/// fragment stage): clearing single tiles or pages of a depth texture that must otherwise
-/// be kept.
-pub(crate) fn clear_pipeline(
-    device: &wgpu::Device,
-    layout: &wgpu::PipelineLayout,
-    module: &wgpu::ShaderModule,
-    entry: &str,
-) -> wgpu::RenderPipeline {
-    overwrite_pipeline(device, layout, module, entry, None)
-}
-
-/// A pipeline that replaces every atlas texel it covers (compare `Always`): the tile and
-/// page clears (depth from the vertex stage, no fragment stage) and the copies of depth
-/// rendered elsewhere into the atlas (`fragment` writes `frag_depth`: the compute rasterizer's
-/// depth buffer, multiview's scratch layers).
-pub(crate) fn overwrite_pipeline(
-    device: &wgpu::Device,
-    layout: &wgpu::PipelineLayout,
-    module: &wgpu::ShaderModule,
-    vertex: &str,
-    fragment: Option<&str>,
-) -> wgpu::RenderPipeline {
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(fragment.unwrap_or(vertex)),
-        layout: Some(layout),
-        vertex: wgpu::VertexState {
-            module,
-            entry_point: Some(vertex),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: Default::default(),
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: ATLAS_FORMAT,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Always),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: Default::default(),
-        fragment: fragment.map(|entry| wgpu::FragmentState {
-            module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            targets: &[],
-        }),
-        multiview_mask: None,
-        cache: None,
-    })
-}
-
-/// A depth-only, two-sided pipeline writing the atlas with the given vertex entry point and
-/// vertex buffers (none for vertex-pulling shaders): `Depth32Float`, compare `Less`, no
-/// depth bias (bias is applied by the receiver), no fragment stage, no culling (what survives
-/// per-view culling casts from both sides, as open meshes must).
-pub(crate) fn depth_pipeline(
-    device: &wgpu::Device,
-    layout: &wgpu::PipelineLayout,
-    module: &wgpu::ShaderModule,
-    entry: &str,
-    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
-) -> wgpu::RenderPipeline {
-    layered_depth_pipeline(device, layout, module, entry, buffers, None)
-}
-
-/// [`depth_pipeline`] rendering into the array layers `multiview_mask` selects (`None`: a
-/// plain 2D target).
-pub(crate) fn layered_depth_pipeline(
-    device: &wgpu::Device,
-    layout: &wgpu::PipelineLayout,
-    module: &wgpu::ShaderModule,
-    entry: &str,
-    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
-    multiview_mask: Option<std::num::NonZeroU32>,
-) -> wgpu::RenderPipeline {
-    depth_pipeline_with(device, layout, module, entry, None, buffers, multiview_mask)
-}
-
-/// [`depth_pipeline`] for alpha-tested casters: the vertex entry `entry` passes the texture
-/// coordinate and material on, and the fragment entry `fs_alpha` (alpha_mask.wgsl) discards
-/// uncovered texels. Only the masked range of the casters is drawn with it.
-pub(crate) fn masked_depth_pipeline(
-    device: &wgpu::Device,
-    layout: &wgpu::PipelineLayout,
-    module: &wgpu::ShaderModule,
-    entry: &str,
-    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
-    multiview_mask: Option<std::num::NonZeroU32>,
-) -> wgpu::RenderPipeline {
-    depth_pipeline_with(
-        device,
-        layout,
-        module,
-        entry,
-        Some("fs_alpha"),
-        buffers,
-        multiview_mask,
-    )
-}
-
-fn depth_pipeline_with(
-    device: &wgpu::Device,
-    layout: &wgpu::PipelineLayout,
-    module: &wgpu::ShaderModule,
-    entry: &str,
-    fragment: Option<&str>,
-    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
-    multiview_mask: Option<std::num::NonZeroU32>,
-) -> wgpu::RenderPipeline {
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(entry),
-        layout: Some(layout),
-        vertex: wgpu::VertexState {
-            module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            buffers,
-        },
-        primitive: wgpu::PrimitiveState {
-            topology: wgpu::PrimitiveTopology::TriangleList,
-            front_face: wgpu::FrontFace::Ccw,
-            cull_mode: None,
-            ..Default::default()
-        },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: ATLAS_FORMAT,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: Default::default(),
-        fragment: fragment.map(|entry| wgpu::FragmentState {
-            module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            targets: &[],
-        }),
-        multiview_mask,
-        cache: None,
-    })
-}
 
 /// The atlas as a depth attachment, cleared on load when every view is redrawn.
 pub(crate) fn atlas_attachment<'a>(
@@ -366,41 +220,5 @@ pub(crate) fn atlas_attachment<'a>(
             store: wgpu::StoreOp::Store,
         }),
         stencil_ops: None,
-    }
-}
-
-/// Refuses `technique` on an adapter without indirect execution (`what` it draws or
-/// dispatches indirectly, and what to use `instead`).
-pub(crate) fn require_indirect(
-    ctx: &GpuContext,
-    technique: &str,
-    what: &str,
-    instead: &str,
-) -> Result<(), RenderError> {
-    let flags = ctx.adapter.get_downlevel_capabilities().flags;
-    if flags.contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION) {
-        Ok(())
-    } else {
-        Err(RenderError::missing_feature(
-            ctx,
-            format!("technique {technique}"),
-            what,
-            instead,
-        ))
-    }
-}
-
-/// Refuses a technique that keeps its draws inside atlas tiles with clip distances when the
-/// adapter lacks them.
-pub(crate) fn require_clip_distances(ctx: &GpuContext, technique: &str) -> Result<(), RenderError> {
-    if ctx.has(wgpu::Features::CLIP_DISTANCES) {
-        Ok(())
-    } else {
-        Err(RenderError::missing_feature(
-            ctx,
-            format!("technique {technique}"),
-            "the CLIP_DISTANCES feature (to keep each view inside its atlas tile)",
-            "use technique traditional",
-        ))
     }
 }

@@ -1,0 +1,96 @@
+//! An atlas technique as a frame's [`ShadowSource`]: the [`ShadowGenerator`] (plan, atlas,
+//! caster geometry, the technique, caching) re-planned when the frame changes.
+
+use glam::Vec3;
+use manyshadows_scene::Scene;
+
+use crate::gpu::timing::GpuTimer;
+use crate::gpu::types::LightData;
+use crate::gpu_scene::casters::CasterGeometry;
+use crate::gpu_scene::instances::GpuScene;
+use crate::settings::{RenderSettings, Technique};
+use crate::shadows::atlas::generator::ShadowGenerator;
+use crate::shadows::atlas::storage::ShadowAtlas;
+use crate::shadows::plan::ShadowPlan;
+use crate::shadows::source::{PlanParams, ShadowOutput, ShadowSource, ShadowStats, SourceInputs};
+use crate::{GpuContext, RenderError};
+
+/// An atlas-filling technique ([`ShadowGenerator`]) as a frame's shadow source.
+pub struct AtlasSource {
+    generator: ShadowGenerator,
+    params: PlanParams,
+}
+
+impl AtlasSource {
+    pub(crate) fn new(
+        ctx: &GpuContext,
+        scene: &Scene,
+        gpu: &GpuScene,
+        params: PlanParams,
+        technique: Technique,
+        settings: &RenderSettings,
+    ) -> Result<Self, RenderError> {
+        let plan = params.plan(scene)?;
+        let mut generator =
+            ShadowGenerator::new(ctx, scene, gpu, plan, technique, settings.shadow)?;
+        generator.set_caching(settings.cache_shadows);
+        Ok(Self { generator, params })
+    }
+}
+
+impl ShadowSource for AtlasSource {
+    fn technique(&self) -> Technique {
+        self.generator.technique()
+    }
+
+    fn plan(&self) -> &ShadowPlan {
+        &self.generator.plan
+    }
+
+    fn atlas(&self) -> &ShadowAtlas {
+        &self.generator.atlas
+    }
+
+    fn casters(&self) -> &CasterGeometry {
+        &self.generator.casters
+    }
+
+    fn light_data(&self, scene: &Scene) -> Vec<LightData> {
+        self.generator.plan.light_data(scene)
+    }
+
+    fn update(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), RenderError> {
+        let plan = self.params.plan(scene)?;
+        let casters_changed = self.generator.casters.refresh(ctx, scene);
+        self.generator.set_plan(ctx, plan, casters_changed)?;
+        Ok(())
+    }
+
+    fn bind(&mut self, _ctx: &GpuContext, _inputs: &SourceInputs<'_>) -> Result<(), RenderError> {
+        // The techniques read only the atlas, the scene and the caster geometry.
+        Ok(())
+    }
+
+    fn note_moved(&mut self, old: (Vec3, f32), new: (Vec3, f32)) {
+        self.generator.note_moved(old, new);
+    }
+
+    fn record(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+    ) -> ShadowStats {
+        let span = timer.span(crate::gpu::timing::Stage::Shadows);
+        self.generator.generate(ctx, scene, encoder, timer, span)
+    }
+
+    fn output(&self) -> ShadowOutput<'_> {
+        ShadowOutput::Atlas(&self.generator.atlas)
+    }
+
+    fn read_atlas(&self, ctx: &GpuContext) -> Result<Vec<f32>, RenderError> {
+        self.generator.read_atlas(ctx)
+    }
+}

@@ -1,0 +1,147 @@
+//! Irregular shadow maps as a frame's shadow source: the plan's views in a view table (no
+//! atlas) and the passes of [`crate::shadows::irregular::maps`]; the output is the mask.
+
+use manyshadows_scene::Scene;
+
+use crate::frame::visibility_mask::VisibilityMask;
+use crate::gpu::timing::GpuTimer;
+use crate::gpu::types::LightData;
+use crate::gpu_scene::casters::CasterGeometry;
+use crate::gpu_scene::instances::GpuScene;
+use crate::settings::{RenderSettings, Technique};
+use crate::shadows::atlas::storage::ShadowAtlas;
+use crate::shadows::irregular::maps::{
+    IrregularInputs, IrregularOptions, IrregularShadows, IrregularStats,
+};
+use crate::shadows::plan::ShadowPlan;
+use crate::shadows::source::{
+    PlanParams, ShadowOutput, ShadowSource, ShadowStats, SourceInputs, ViewTable,
+};
+use crate::{GpuContext, RenderError};
+
+/// Irregular shadow maps as a frame's [`ShadowSource`]: the plan's views (a view table, no
+/// atlas) and the passes, rebuilt at every [`ShadowSource::bind`] (their light-space grids
+/// and batches are sized by the plan). Its output is the visibility mask itself.
+pub struct IrregularSource {
+    table: ViewTable,
+    params: PlanParams,
+    size: (u32, u32),
+    options: IrregularOptions,
+    /// Built by the first [`ShadowSource::bind`].
+    passes: Option<IrregularShadows>,
+}
+
+impl IrregularSource {
+    pub(crate) fn new(
+        ctx: &GpuContext,
+        scene: &Scene,
+        gpu: &GpuScene,
+        params: PlanParams,
+        settings: &RenderSettings,
+    ) -> Result<Self, RenderError> {
+        let plan = params.plan(scene)?;
+        Ok(Self {
+            table: ViewTable::new(ctx, scene, gpu, plan, settings)?,
+            params,
+            size: (settings.width, settings.height),
+            options: settings.irregular,
+            passes: None,
+        })
+    }
+
+    fn passes(&self) -> &IrregularShadows {
+        self.passes
+            .as_ref()
+            .expect("the renderer binds a shadow source before using it")
+    }
+}
+
+impl ShadowSource for IrregularSource {
+    fn technique(&self) -> Technique {
+        Technique::Irregular
+    }
+
+    fn plan(&self) -> &ShadowPlan {
+        &self.table.plan
+    }
+
+    fn atlas(&self) -> &ShadowAtlas {
+        &self.table.views
+    }
+
+    fn casters(&self) -> &CasterGeometry {
+        &self.table.casters
+    }
+
+    fn light_data(&self, scene: &Scene) -> Vec<LightData> {
+        self.table.plan.light_data(scene)
+    }
+
+    fn update(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), RenderError> {
+        let plan = self.params.plan(scene)?;
+        self.table.update(ctx, scene, plan)?;
+        Ok(())
+    }
+
+    fn bind(&mut self, ctx: &GpuContext, inputs: &SourceInputs<'_>) -> Result<(), RenderError> {
+        // The grids are sized by the plan: rebuild the passes.
+        self.passes = Some(IrregularShadows::new(
+            ctx,
+            inputs.scene,
+            &self.table.plan,
+            &IrregularInputs {
+                frame: inputs.frame,
+                lights: inputs.lights,
+                views: &self.table.views.views_buffer,
+                gbuffer: inputs.gbuffer,
+                casters: &self.table.casters,
+            },
+            self.size,
+            self.options,
+        )?);
+        Ok(())
+    }
+
+    fn record(
+        &mut self,
+        _ctx: &GpuContext,
+        _scene: &GpuScene,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+    ) -> ShadowStats {
+        let span = timer.span(crate::gpu::timing::Stage::Shadows);
+        self.passes()
+            .record(encoder, &self.table.casters, timer, span);
+        ShadowStats::default()
+    }
+
+    fn finish(&mut self, ctx: &GpuContext) -> Result<(), RenderError> {
+        // A full node pool makes the frame an error, never a wrong image.
+        match self.passes.as_mut() {
+            Some(p) => p.finish(ctx).map(|_| ()),
+            None => Ok(()),
+        }
+    }
+
+    fn output(&self) -> ShadowOutput<'_> {
+        ShadowOutput::Mask {
+            mask: self.passes().mask(),
+            views: &self.table.views,
+        }
+    }
+
+    fn read_atlas(&self, _ctx: &GpuContext) -> Result<Vec<f32>, RenderError> {
+        Err(RenderError::NoAtlas {
+            technique: crate::settings::Technique::Irregular,
+            detail: crate::settings::IRREGULAR_NO_ATLAS.into(),
+        })
+    }
+
+    fn read_mask(&self, ctx: &GpuContext) -> Result<Option<VisibilityMask>, RenderError> {
+        self.passes().read_mask(ctx).map(Some)
+    }
+
+    fn irregular_stats(&self) -> Option<IrregularStats> {
+        self.passes.as_ref().map(|p| p.stats())
+    }
+}

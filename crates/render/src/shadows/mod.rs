@@ -1,0 +1,55 @@
+//! Shadows, between the frame's passes that feed them (G-buffer, clusters) and those that read
+//! them (lighting, visibility). From the bottom up:
+//!
+//! - [`plan`]: every shadow view of a frame and its atlas tile, and the priority fit;
+//! - [`depth`] and [`cluster_draw`]: the depth-only pipelines every shadow map is drawn with,
+//!   and the cluster culling + indirect multi-draw rounds `gpu-driven` and the virtual maps
+//!   share (with their WGSL); [`image`]: depth read-back and pictures;
+//! - [`source`]: the [`ShadowSource`](source::ShadowSource) trait the renderer drives, its
+//!   output, and the view table of the sources that fill no atlas;
+//! - one folder per kind of source: [`atlas`] (the atlas, its techniques, their registry and
+//!   generator), [`irregular`] (a visibility mask), [`vsm`] (virtual shadow maps: a page pool);
+//! - [`create`]: the one place a technique becomes a source.
+//!
+//! `shadow_lookup.wgsl` (view selection, bias, atlas addressing) and `paraboloid.wgsl` (the
+//! dual-paraboloid warp) lie here too: every pass that reads shadows composes them
+//! ([`crate::gpu::shaders`]).
+
+pub mod atlas;
+pub mod cluster_draw;
+pub mod depth;
+pub mod image;
+pub mod irregular;
+pub mod plan;
+pub mod source;
+pub mod vsm;
+
+use manyshadows_scene::Scene;
+
+use crate::gpu_scene::instances::GpuScene;
+use crate::settings::{RenderSettings, Technique};
+use crate::shadows::atlas::source::AtlasSource;
+use crate::shadows::irregular::source::IrregularSource;
+use crate::shadows::source::{PlanParams, ShadowSource};
+use crate::shadows::vsm::source::VirtualSource;
+use crate::{GpuContext, RenderError};
+
+/// The one mapping from a technique to its source.
+pub(crate) fn create(
+    ctx: &GpuContext,
+    scene: &Scene,
+    gpu: &GpuScene,
+    settings: &RenderSettings,
+    max_atlas: u32,
+) -> Result<Box<dyn ShadowSource>, RenderError> {
+    let params = PlanParams::new(settings, max_atlas);
+    Ok(match settings.technique {
+        Technique::Irregular => Box::new(IrregularSource::new(
+            ctx, scene, gpu, params, settings,
+        )?),
+        Technique::Virtual => Box::new(VirtualSource::new(ctx, scene, gpu, settings)?),
+        technique => Box::new(AtlasSource::new(
+            ctx, scene, gpu, params, technique, settings,
+        )?),
+    })
+}

@@ -1,0 +1,383 @@
+//! Rendering the pages the allocation made resident (step 3 of [`crate::shadows::vsm`]): each
+//! drawn page is an ordinary shadow view, the face's projection cropped to the page, filled
+//! the `gpu-driven` way. Per round ([`crate::shadows::cluster_draw`]) compute culls caster
+//! clusters against each page's frustum slice (and by normal cone) and one indirect multi-draw
+//! draws the survivors, clipped to the page's tile of the pool (`vsm_draw.wgsl`). The page
+//! clears and the indirect arguments come from the allocation passes ([`super::pages`]).
+
+use crate::gpu::buffers::buffer;
+use crate::gpu::pipelines::whole_entry;
+use crate::gpu::timing::{GpuTimer, Span};
+use crate::gpu::types::VsmRound;
+use crate::gpu_scene::casters::CasterGeometry;
+use crate::settings::ShadowOptions;
+use crate::shadows::cluster_draw::{plan_rounds, Round, COMMAND_SIZE};
+use crate::GpuContext;
+
+/// Largest command buffer of one page-render round.
+const MAX_ROUND_BYTES: u64 = 64 << 20;
+
+const ROUND_SIZE: u64 = std::mem::size_of::<VsmRound>() as u64;
+
+/// The page tables' buffers the page rendering reads (owned by [`super::pages`]).
+pub(crate) struct PageBuffers<'a> {
+    /// `VsmUniforms`.
+    pub uniforms: &'a wgpu::Buffer,
+    /// The shadow view of every pool page drawn this frame.
+    pub page_views: &'a wgpu::Buffer,
+    /// `array<VirtualFace>`.
+    pub faces: &'a wgpu::Buffer,
+    /// The frame's counters.
+    pub counters: &'a wgpu::Buffer,
+    /// World-space caster geometry.
+    pub casters: &'a CasterGeometry,
+    /// Scene instances (`array<InstanceData>`).
+    pub instances: &'a wgpu::Buffer,
+}
+
+/// The page-render rounds, their command buffers and pipelines.
+pub(crate) struct PageDraw {
+    shadow: ShadowOptions,
+    compact: bool,
+    rounds: Vec<Round>,
+    rounds_storage: wgpu::Buffer,
+    round_uniforms: wgpu::Buffer,
+    round_stride: u64,
+    commands: wgpu::Buffer,
+    command_count: wgpu::Buffer,
+    cull: wgpu::ComputePipeline,
+    draw: wgpu::RenderPipeline,
+    /// Rounds of alpha-tested clusters (`fs_alpha`).
+    draw_masked: wgpu::RenderPipeline,
+    clear: wgpu::RenderPipeline,
+    cull_layout: wgpu::BindGroupLayout,
+    draw_layout: wgpu::BindGroupLayout,
+    clear_layout: wgpu::BindGroupLayout,
+    groups: Option<Groups>,
+}
+
+struct Groups {
+    cull: wgpu::BindGroup,
+    draw: wgpu::BindGroup,
+    clear: wgpu::BindGroup,
+}
+
+impl PageDraw {
+    /// Plans the rounds over every page of a pool of `pool_pages` and builds their buffers and
+    /// pipelines. Compacts the commands where `MULTI_DRAW_INDIRECT_COUNT` exists.
+    pub fn new(
+        ctx: &GpuContext,
+        pool_pages: u32,
+        casters: &CasterGeometry,
+        shadow: ShadowOptions,
+    ) -> Self {
+        let device = &ctx.device;
+        let limits = ctx.limits();
+        let compact = ctx.has(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT);
+        let max_commands = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size)
+            .min(MAX_ROUND_BYTES)
+            / COMMAND_SIZE;
+        let rounds = plan_rounds(
+            pool_pages,
+            casters.clusters.len() as u32,
+            casters.first_masked_cluster,
+            casters.vertices,
+            max_commands,
+        );
+        let round_stride = (std::mem::size_of::<VsmRound>() as u64)
+            .next_multiple_of(limits.min_uniform_buffer_offset_alignment as u64);
+        let capacity = rounds.iter().map(Round::commands).max().unwrap_or(1);
+        use wgpu::BufferUsages as U;
+        let storage = U::STORAGE | U::COPY_DST;
+        let rounds_storage = buffer(
+            ctx,
+            "vsm.rounds",
+            rounds.len().max(1) as u64 * std::mem::size_of::<VsmRound>() as u64,
+            storage,
+        );
+        let round_uniforms = buffer(
+            ctx,
+            "vsm.round_uniforms",
+            rounds.len().max(1) as u64 * round_stride,
+            U::UNIFORM | U::COPY_DST,
+        );
+        let commands = buffer(
+            ctx,
+            "vsm.commands",
+            capacity * COMMAND_SIZE,
+            U::STORAGE | U::INDIRECT,
+        );
+        let command_count = buffer(ctx, "vsm.command_count", 4, storage | U::INDIRECT);
+        // Round records (the same for every frame: rounds cover every pool page).
+        let records: Vec<VsmRound> = rounds
+            .iter()
+            .map(|r| VsmRound {
+                round: [r.first_view, r.views, r.first_cluster, r.clusters],
+                counts: [
+                    casters.vertices,
+                    casters.cullable_triangles,
+                    shadow.cull.bits(),
+                    u32::from(compact),
+                ],
+            })
+            .collect();
+        if !records.is_empty() {
+            ctx.queue
+                .write_buffer(&rounds_storage, 0, bytemuck::cast_slice(&records));
+            let mut bytes = vec![0u8; (records.len() as u64 * round_stride) as usize];
+            for (k, r) in records.iter().enumerate() {
+                let at = k * round_stride as usize;
+                bytes[at..at + std::mem::size_of::<VsmRound>()]
+                    .copy_from_slice(bytemuck::bytes_of(r));
+            }
+            ctx.queue.write_buffer(&round_uniforms, 0, &bytes);
+        }
+
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let cull_layout = crate::gpu::pipelines::bind_group_layout(
+            device,
+            "vsm.cull_layout",
+            &[
+                crate::gpu::pipelines::dynamic_uniform_entry(0, cs, ROUND_SIZE),
+                crate::gpu::pipelines::uniform_entry(1, cs),
+                crate::gpu::pipelines::storage_entry(2, cs),
+                crate::gpu::pipelines::storage_entry(4, cs),
+                crate::gpu::pipelines::storage_entry(5, cs),
+                crate::gpu::pipelines::storage_entry(6, cs),
+                crate::gpu::pipelines::storage_entry(7, cs),
+                crate::gpu::pipelines::storage_rw_entry(8, cs),
+                crate::gpu::pipelines::storage_rw_entry(9, cs),
+                crate::gpu::pipelines::storage_entry(10, cs),
+            ],
+        );
+        let vs = wgpu::ShaderStages::VERTEX;
+        let draw_layout = crate::gpu::pipelines::bind_group_layout(
+            device,
+            "vsm.draw_layout",
+            &[
+                crate::gpu::pipelines::dynamic_uniform_entry(0, vs, ROUND_SIZE),
+                crate::gpu::pipelines::uniform_entry(1, vs),
+                crate::gpu::pipelines::storage_entry(2, vs),
+                crate::gpu::pipelines::storage_entry(11, vs),
+                crate::gpu::pipelines::storage_entry(13, wgpu::ShaderStages::VERTEX_FRAGMENT),
+            ],
+        );
+        let clear_layout = crate::gpu::pipelines::bind_group_layout(
+            device,
+            "vsm.clear_layout",
+            &[
+                crate::gpu::pipelines::uniform_entry(1, vs),
+                crate::gpu::pipelines::storage_entry(2, vs),
+            ],
+        );
+        let pipeline_layout = |label: &str, layout: &wgpu::BindGroupLayout| {
+            crate::gpu::pipelines::pipeline_layout(device, label, &[layout])
+        };
+        let draw_module =
+            crate::gpu::shaders::module(device, "vsm_draw.shader", &crate::gpu::shaders::vsm_draw());
+        let cull_pl = pipeline_layout("vsm.cull_pipeline_layout", &cull_layout);
+        let cull = crate::gpu::pipelines::compute_pipeline(
+            device,
+            "vsm.cull",
+            &cull_pl,
+            &draw_module,
+            "cs_cull",
+        );
+        let draw_pl = pipeline_layout("vsm.draw_pipeline_layout", &draw_layout);
+        let draw =
+            crate::shadows::depth::depth_pipeline(device, &draw_pl, &draw_module, "vs_draw", &[]);
+        let draw_masked = crate::shadows::depth::masked_depth_pipeline(
+            device,
+            &draw_pl,
+            &draw_module,
+            "vs_draw_masked",
+            &[],
+            None,
+        );
+        let clear_pl = pipeline_layout("vsm.clear_pipeline_layout", &clear_layout);
+        let clear =
+            crate::shadows::depth::clear_pipeline(device, &clear_pl, &draw_module, "vs_clear");
+        Self {
+            shadow,
+            compact,
+            rounds,
+            rounds_storage,
+            round_uniforms,
+            round_stride,
+            commands,
+            command_count,
+            cull,
+            draw,
+            draw_masked,
+            clear,
+            cull_layout,
+            draw_layout,
+            clear_layout,
+            groups: None,
+        }
+    }
+
+    /// The rounds (every frame the same: they cover every pool page).
+    pub fn rounds(&self) -> &[Round] {
+        &self.rounds
+    }
+
+    /// `array<VsmRound>`, which the allocation's argument pass reads.
+    pub fn rounds_storage(&self) -> &wgpu::Buffer {
+        &self.rounds_storage
+    }
+
+    /// Builds the bind groups for `pages` (with the allocation's, whenever a buffer they hold
+    /// was replaced).
+    pub fn bind(&mut self, ctx: &GpuContext, pages: &PageBuffers<'_>) {
+        let device = &ctx.device;
+        let round = |binding: u32| wgpu::BindGroupEntry {
+            binding,
+            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &self.round_uniforms,
+                offset: 0,
+                size: wgpu::BufferSize::new(std::mem::size_of::<VsmRound>() as u64),
+            }),
+        };
+        let casters = pages.casters;
+        let cull = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("vsm.cull_group"),
+            layout: &self.cull_layout,
+            entries: &[
+                round(0),
+                whole_entry(1, pages.uniforms),
+                whole_entry(2, pages.page_views),
+                whole_entry(4, pages.faces),
+                whole_entry(5, &casters.cluster_buffer),
+                whole_entry(6, &casters.cluster_bounds),
+                whole_entry(7, pages.instances),
+                whole_entry(8, &self.commands),
+                whole_entry(9, &self.command_count),
+                whole_entry(10, pages.counters),
+            ],
+        });
+        let draw = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("vsm.draw_group"),
+            layout: &self.draw_layout,
+            entries: &[
+                round(0),
+                whole_entry(1, pages.uniforms),
+                whole_entry(2, pages.page_views),
+                whole_entry(11, &casters.world),
+                whole_entry(13, &casters.corners),
+            ],
+        });
+        let clear = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("vsm.clear_group"),
+            layout: &self.clear_layout,
+            entries: &[
+                whole_entry(1, pages.uniforms),
+                whole_entry(2, pages.page_views),
+            ],
+        });
+        self.groups = Some(Groups { cull, draw, clear });
+    }
+
+    /// Records the page clear and the render rounds into `pool` (`span` times them), with the
+    /// indirect arguments the allocation wrote into `args`.
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        casters: &CasterGeometry,
+        timer: &GpuTimer,
+        span: Option<Span>,
+        args: &wgpu::Buffer,
+        pool: &wgpu::TextureView,
+    ) {
+        let Some(g) = &self.groups else {
+            return;
+        };
+        let clear_args = 3 * self.rounds.len() as u64 * 4;
+        if self.rounds.is_empty() {
+            // No casters: the drawn pages are cleared and stay empty.
+            let mut pass = pool_pass(encoder, pool, timer.render_writes(span, true, true));
+            pass.set_pipeline(&self.clear);
+            pass.set_bind_group(0, &g.clear, &[]);
+            pass.draw_indirect(args, clear_args);
+        }
+        let corners = casters.corners.slice(..);
+        for (k, r) in self.rounds.iter().enumerate() {
+            let offset = [(k as u64 * self.round_stride) as u32];
+            let first = k == 0;
+            let last = k + 1 == self.rounds.len();
+            if self.compact {
+                encoder.clear_buffer(&self.command_count, 0, None);
+            }
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("vsm.cull"),
+                    timestamp_writes: timer.compute_writes(span, first, false),
+                });
+                pass.set_pipeline(&self.cull);
+                pass.set_bind_group(0, &g.cull, &offset);
+                if self.compact {
+                    pass.dispatch_workgroups_indirect(args, 3 * k as u64 * 4);
+                } else {
+                    // Every slot's command is written (zero for slots past the last page).
+                    pass.dispatch_workgroups(r.clusters.div_ceil(64), r.views, 1);
+                }
+            }
+            let mut pass = pool_pass(encoder, pool, timer.render_writes(span, false, last));
+            if first {
+                pass.set_pipeline(&self.clear);
+                pass.set_bind_group(0, &g.clear, &[]);
+                pass.draw_indirect(args, clear_args);
+            }
+            if self.shadow.discard_raster {
+                pass.set_scissor_rect(0, 0, 0, 0);
+            }
+            pass.set_pipeline(if r.masked {
+                &self.draw_masked
+            } else {
+                &self.draw
+            });
+            pass.set_bind_group(0, &g.draw, &offset);
+            pass.set_index_buffer(corners, wgpu::IndexFormat::Uint32);
+            let max = r.commands() as u32;
+            if self.compact {
+                pass.multi_draw_indexed_indirect_count(
+                    &self.commands,
+                    0,
+                    &self.command_count,
+                    0,
+                    max,
+                );
+            } else {
+                pass.multi_draw_indexed_indirect(&self.commands, 0, max);
+            }
+            // See TileClear::reset_clip_distances: the OpenGL backend leaks clip-distance
+            // enables past the pass unless a pipeline without them is set last.
+            pass.set_pipeline(&self.clear);
+        }
+    }
+}
+
+/// A render pass into the page pool, keeping its depth.
+fn pool_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    pool: &wgpu::TextureView,
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("vsm.draw"),
+        color_attachments: &[],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: pool,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
+}

@@ -1,0 +1,577 @@
+//! The page table and pool of virtual shadow maps and their per-frame passes (steps 1 and 2 of
+//! [`crate::shadows::vsm`], `vsm.wgsl`): marking the pages the samples need, allocating pool
+//! pages (keeping last frame's where the face did not change), writing the indirect arguments,
+//! then the page rendering of [`super::draw`].
+
+use glam::Vec3;
+use manyshadows_scene::light_space::ViewKind;
+use manyshadows_scene::Scene;
+
+use crate::frame::clusters::LightClusters;
+use crate::frame::gbuffer::GBuffer;
+use crate::gpu::buffers::buffer;
+use crate::gpu::pipelines::whole_entry;
+use crate::gpu::timing::{GpuTimer, Span};
+use crate::gpu::types::{LightData, ShadowViewData, VirtualFace, VsmUniforms};
+use crate::gpu_scene::casters::CasterGeometry;
+use crate::settings::ShadowOptions;
+use crate::shadows::vsm::draw::{PageBuffers, PageDraw};
+use crate::shadows::vsm::plan::{
+    pool_side, VirtualOptions, VirtualPlan, VirtualStats, MAX_LEVELS, PAGE_SIZE,
+};
+use crate::{GpuContext, RenderError};
+
+/// Page-table entries per allocation workgroup (`BLOCK` in `vsm.wgsl`).
+const ALLOC_BLOCK: u64 = 32;
+/// Words of the counters buffer (see `vsm.wgsl`).
+const COUNTERS: usize = 20;
+
+/// What the virtual shadow maps read from the rest of the frame.
+pub struct VsmInputs<'a> {
+    /// `FrameUniforms`.
+    pub frame: &'a wgpu::Buffer,
+    /// `array<LightData>`.
+    pub lights: &'a wgpu::Buffer,
+    /// G-buffer.
+    pub gbuffer: &'a GBuffer,
+    /// Light clusters.
+    pub clusters: &'a LightClusters,
+    /// Scene instances (`array<InstanceData>`).
+    pub instances: &'a wgpu::Buffer,
+    /// World-space caster geometry.
+    pub casters: &'a CasterGeometry,
+}
+
+/// The virtual shadow maps' plan, pool, page table and pipelines.
+pub struct VirtualShadows {
+    /// This frame's faces.
+    pub plan: VirtualPlan,
+    options: VirtualOptions,
+    /// The page pool: `Depth32Float`, `pool_side`².
+    pub pool: wgpu::Texture,
+    /// Depth view of the pool.
+    pub pool_view: wgpu::TextureView,
+    pool_side: u32,
+    pool_pages: u32,
+    viewport: (u32, u32),
+    uniforms: wgpu::Buffer,
+    faces: wgpu::Buffer,
+    table: wgpu::Buffer,
+    prev_table: wgpu::Buffer,
+    scratch: wgpu::Buffer,
+    counters: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    page_views: wgpu::Buffer,
+    /// Page-table entries of the last recorded frame (what `prev_table` receives).
+    prev_entries: u32,
+    /// The faces of the last recorded frame; empty when nothing may be kept.
+    last: std::collections::HashMap<(usize, ViewKind), LastFace>,
+    /// Caster bounding spheres moved since the last frame (old and new).
+    moves: Vec<[(Vec3, f32); 2]>,
+    args: wgpu::Buffer,
+    mark: wgpu::ComputePipeline,
+    count: wgpu::ComputePipeline,
+    scan: wgpu::ComputePipeline,
+    retain: wgpu::ComputePipeline,
+    free: wgpu::ComputePipeline,
+    count_new: wgpu::ComputePipeline,
+    scan_new: wgpu::ComputePipeline,
+    alloc_new: wgpu::ComputePipeline,
+    args_pipeline: wgpu::ComputePipeline,
+    mark_layout: wgpu::BindGroupLayout,
+    alloc_layout: wgpu::BindGroupLayout,
+    groups: Option<Groups>,
+    /// The page rendering: rounds, command buffers, pipelines.
+    draw: PageDraw,
+}
+
+/// A face of the last recorded frame, by (light, view kind).
+#[derive(Clone, Copy, Debug)]
+struct LastFace {
+    view_proj: [[f32; 4]; 4],
+    side: u32,
+    first: u32,
+}
+
+struct Groups {
+    mark: wgpu::BindGroup,
+    alloc: wgpu::BindGroup,
+}
+
+impl VirtualShadows {
+    /// Plans the faces of `scene` and builds the pool and pipelines. Needs `CLIP_DISTANCES`
+    /// and indirect execution (every adapter the project targets has both); compacts the
+    /// page-render commands where `MULTI_DRAW_INDIRECT_COUNT` exists.
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &Scene,
+        (width, height): (u32, u32),
+        options: VirtualOptions,
+        shadow: ShadowOptions,
+        casters: &CasterGeometry,
+    ) -> Result<Self, RenderError> {
+        crate::shadows::depth::require_clip_distances(ctx, "virtual")?;
+        crate::shadows::depth::require_indirect(
+            ctx,
+            "virtual",
+            "indirect dispatches and draws (to allocate and draw its pages)",
+            "use technique traditional",
+        )?;
+        if !(options.lod.is_finite() && options.lod > 0.0) {
+            return Err(RenderError::InvalidOption(format!(
+                "the virtual maps' level-of-detail scale must be a positive number, not {}",
+                options.lod
+            )));
+        }
+        let device = &ctx.device;
+        let limits = ctx.limits();
+        let plan = VirtualPlan::new(scene, width as f32 / height as f32, height, &options);
+        let pool_side = pool_side(options.pool_bytes, limits.max_texture_dimension_2d);
+        let per_row = pool_side / PAGE_SIZE;
+        let pool_pages = per_row * per_row;
+        let pool = crate::gpu::pipelines::depth_texture(device, "vsm.pool", pool_side, 1);
+        let pool_view = pool.create_view(&wgpu::TextureViewDescriptor {
+            label: Some("vsm.pool.view"),
+            dimension: Some(wgpu::TextureViewDimension::D2),
+            ..Default::default()
+        });
+        let draw = PageDraw::new(ctx, pool_pages, casters, shadow);
+        use wgpu::BufferUsages as U;
+        let storage = U::STORAGE | U::COPY_DST;
+        let uniforms = buffer(ctx, "vsm.uniforms", 48, U::UNIFORM | U::COPY_DST);
+        let counters = buffer(
+            ctx,
+            "vsm.counters",
+            COUNTERS as u64 * 4,
+            storage | U::COPY_SRC,
+        );
+        let readback = buffer(
+            ctx,
+            "vsm.counters.readback",
+            COUNTERS as u64 * 4,
+            U::MAP_READ | U::COPY_DST,
+        );
+        let page_views = buffer(
+            ctx,
+            "vsm.page_views",
+            pool_pages as u64 * std::mem::size_of::<ShadowViewData>() as u64,
+            storage,
+        );
+        let args = buffer(
+            ctx,
+            "vsm.args",
+            (3 * draw.rounds().len() as u64 + 4) * 4,
+            storage | U::INDIRECT,
+        );
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let tex =
+            |binding| crate::gpu::pipelines::texture_entry(binding, wgpu::TextureSampleType::Uint, cs);
+        let mark_layout = crate::gpu::pipelines::bind_group_layout(
+            device,
+            "vsm.mark_layout",
+            &[
+                crate::gpu::pipelines::uniform_entry(0, cs),
+                crate::gpu::pipelines::storage_entry(1, cs),
+                tex(2),
+                tex(3),
+                crate::gpu::pipelines::uniform_entry(4, cs),
+                crate::gpu::pipelines::storage_entry(5, cs),
+                crate::gpu::pipelines::storage_entry(6, cs),
+                crate::gpu::pipelines::uniform_entry(7, cs),
+                crate::gpu::pipelines::storage_entry(8, cs),
+                crate::gpu::pipelines::storage_rw_entry(9, cs),
+            ],
+        );
+        // The allocation passes: eight storage buffers, WebGPU's default per-stage limit.
+        let alloc_layout = crate::gpu::pipelines::bind_group_layout(
+            device,
+            "vsm.alloc_layout",
+            &[
+                crate::gpu::pipelines::uniform_entry(7, cs),
+                crate::gpu::pipelines::storage_entry(8, cs),
+                crate::gpu::pipelines::storage_rw_entry(9, cs),
+                crate::gpu::pipelines::storage_rw_entry(10, cs),
+                crate::gpu::pipelines::storage_rw_entry(11, cs),
+                crate::gpu::pipelines::storage_entry(12, cs),
+                crate::gpu::pipelines::storage_rw_entry(13, cs),
+                crate::gpu::pipelines::storage_entry(14, cs),
+                crate::gpu::pipelines::storage_rw_entry(15, cs),
+            ],
+        );
+        let pipeline_layout = |label: &str, layout: &wgpu::BindGroupLayout| {
+            crate::gpu::pipelines::pipeline_layout(device, label, &[layout])
+        };
+        let mark_module = crate::gpu::shaders::module(device, "vsm.shader", &crate::gpu::shaders::vsm());
+        let mark_pl = pipeline_layout("vsm.mark_pipeline_layout", &mark_layout);
+        let compute =
+            |label: &str, module: &wgpu::ShaderModule, pl: &wgpu::PipelineLayout, entry| {
+                crate::gpu::pipelines::compute_pipeline(device, label, pl, module, entry)
+            };
+        let mark = compute("vsm.mark", &mark_module, &mark_pl, "cs_mark");
+        let alloc_pl = pipeline_layout("vsm.alloc_pipeline_layout", &alloc_layout);
+        let count = compute("vsm.count", &mark_module, &alloc_pl, "cs_count");
+        let scan = compute("vsm.scan", &mark_module, &alloc_pl, "cs_scan");
+        let retain = compute("vsm.retain", &mark_module, &alloc_pl, "cs_retain");
+        let free = compute("vsm.free", &mark_module, &alloc_pl, "cs_free");
+        let count_new = compute("vsm.count_new", &mark_module, &alloc_pl, "cs_count_new");
+        let scan_new = compute("vsm.scan_new", &mark_module, &alloc_pl, "cs_scan_new");
+        let alloc_new = compute("vsm.alloc_new", &mark_module, &alloc_pl, "cs_alloc_new");
+        let args_pipeline = compute("vsm.args", &mark_module, &alloc_pl, "cs_args");
+        let mut this = Self {
+            plan,
+            options,
+            pool,
+            pool_view,
+            pool_side,
+            pool_pages,
+            viewport: (width, height),
+            uniforms,
+            faces: buffer(
+                ctx,
+                "vsm.faces",
+                std::mem::size_of::<VirtualFace>() as u64,
+                storage,
+            ),
+            table: buffer(ctx, "vsm.table", 16, storage | U::COPY_SRC),
+            prev_table: buffer(ctx, "vsm.prev_table", 16, storage),
+            scratch: buffer(ctx, "vsm.scratch", 16, storage),
+            counters,
+            readback,
+            page_views,
+            prev_entries: 0,
+            last: Default::default(),
+            moves: Vec::new(),
+            args,
+            mark,
+            count,
+            scan,
+            retain,
+            free,
+            count_new,
+            scan_new,
+            alloc_new,
+            args_pipeline,
+            mark_layout,
+            alloc_layout,
+            groups: None,
+            draw,
+        };
+        this.write_plan(ctx)?;
+        Ok(this)
+    }
+
+    /// Side of the pool texture in texels.
+    pub fn pool_side(&self) -> u32 {
+        self.pool_side
+    }
+
+    /// The options in use.
+    pub fn options(&self) -> &VirtualOptions {
+        &self.options
+    }
+
+    /// The uniform buffer (`VsmUniforms`) the lookups bind.
+    pub fn uniforms(&self) -> &wgpu::Buffer {
+        &self.uniforms
+    }
+
+    /// The faces (`array<VirtualFace>`) the lookups bind.
+    pub fn faces(&self) -> &wgpu::Buffer {
+        &self.faces
+    }
+
+    /// The page table (`array<u32>`) the lookups bind.
+    pub fn table(&self) -> &wgpu::Buffer {
+        &self.table
+    }
+
+    /// Re-plans the faces for a changed frame (camera, lights); buffers are rewritten in
+    /// place and replaced only when they must grow. Returns true if a buffer the lookups bind
+    /// was replaced.
+    pub fn update(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        (width, height): (u32, u32),
+    ) -> Result<bool, RenderError> {
+        self.plan = VirtualPlan::new(scene, width as f32 / height as f32, height, &self.options);
+        let replaced = self.write_plan(ctx)?;
+        if replaced {
+            self.groups = None;
+        }
+        Ok(replaced)
+    }
+
+    fn write_plan(&mut self, ctx: &GpuContext) -> Result<bool, RenderError> {
+        let face_bytes: &[u8] = bytemuck::cast_slice(&self.plan.faces);
+        // At least one record: shaders declare the array with a minimum of one element.
+        let face_size = std::mem::size_of::<VirtualFace>() as u64;
+        let mut replaced = crate::gpu::buffers::grow_buffer(
+            ctx,
+            &mut self.faces,
+            (face_bytes.len() as u64).max(face_size),
+            "virtual faces",
+        )?;
+        let entries = self.plan.fit.table_entries.max(1) as u64;
+        if crate::gpu::buffers::grow_buffer(ctx, &mut self.table, entries * 4, "virtual page table")? {
+            // Last frame's table went with the old buffer: keep no pages this time.
+            self.last.clear();
+            replaced = true;
+        }
+        let table_size = self.table.size();
+        replaced |= crate::gpu::buffers::grow_buffer(
+            ctx,
+            &mut self.prev_table,
+            table_size,
+            "virtual previous page table",
+        )?;
+        let blocks = entries.div_ceil(ALLOC_BLOCK);
+        replaced |= crate::gpu::buffers::grow_buffer(
+            ctx,
+            &mut self.scratch,
+            (2 * self.pool_pages as u64 + (1 + MAX_LEVELS as u64) * blocks) * 4,
+            "virtual allocation scratch",
+        )?;
+        if !face_bytes.is_empty() {
+            ctx.queue.write_buffer(&self.faces, 0, face_bytes);
+        }
+        let data = VsmUniforms {
+            pool: [
+                self.pool_side,
+                self.pool_side / PAGE_SIZE,
+                PAGE_SIZE,
+                self.pool_pages,
+            ],
+            counts: [
+                self.plan.faces.len() as u32,
+                self.plan.fit.table_entries,
+                u32::from(self.options.back_facing),
+                0,
+            ],
+            lod: [self.options.lod, 0.0, 0.0, 0.0],
+        };
+        ctx.queue
+            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&data));
+        Ok(replaced)
+    }
+
+    /// Builds the bind groups for `inputs` (after creation or whenever a buffer they hold was
+    /// replaced).
+    pub fn bind(&mut self, ctx: &GpuContext, inputs: &VsmInputs<'_>) {
+        let device = &ctx.device;
+        let pv = inputs.gbuffer.position.create_view(&Default::default());
+        let nv = inputs.gbuffer.normal.create_view(&Default::default());
+        let mark = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("vsm.mark_group"),
+            layout: &self.mark_layout,
+            entries: &[
+                whole_entry(0, inputs.frame),
+                whole_entry(1, inputs.lights),
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(&pv),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(&nv),
+                },
+                whole_entry(4, &inputs.clusters.uniforms),
+                whole_entry(5, &inputs.clusters.slots),
+                whole_entry(6, &inputs.clusters.masks),
+                whole_entry(7, &self.uniforms),
+                whole_entry(8, &self.faces),
+                whole_entry(9, &self.table),
+            ],
+        });
+        let alloc = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("vsm.alloc_group"),
+            layout: &self.alloc_layout,
+            entries: &[
+                whole_entry(7, &self.uniforms),
+                whole_entry(8, &self.faces),
+                whole_entry(9, &self.table),
+                whole_entry(10, &self.counters),
+                whole_entry(11, &self.page_views),
+                whole_entry(12, self.draw.rounds_storage()),
+                whole_entry(13, &self.args),
+                whole_entry(14, &self.prev_table),
+                whole_entry(15, &self.scratch),
+            ],
+        });
+        self.draw.bind(
+            ctx,
+            &PageBuffers {
+                uniforms: &self.uniforms,
+                page_views: &self.page_views,
+                faces: &self.faces,
+                counters: &self.counters,
+                casters: inputs.casters,
+                instances: inputs.instances,
+            },
+        );
+        self.groups = Some(Groups { mark, alloc });
+    }
+
+    /// True once [`VirtualShadows::bind`] has run since the last buffer replacement.
+    pub fn bound(&self) -> bool {
+        self.groups.is_some()
+    }
+
+    /// Notes that a shadow caster's bounding sphere moved from `old` to `new`: pages of faces
+    /// that see either are not kept at the next frame.
+    pub fn note_moved(&mut self, old: (Vec3, f32), new: (Vec3, f32)) {
+        self.moves.push([old, new]);
+    }
+
+    /// Keeps no page at the next frame (caster geometry or culling decisions changed).
+    pub fn forget_pages(&mut self) {
+        self.last.clear();
+    }
+
+    /// Records one frame: the caster transform, page marking and allocation (`pages_span`),
+    /// then the page clear and render rounds (`span`). Needs the G-buffer and the clusters of
+    /// this frame recorded before it. With `keep`, pages resident last frame in faces whose
+    /// view, virtual side and casters did not change keep their depth and are not redrawn.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        casters: &CasterGeometry,
+        timer: &GpuTimer,
+        pages_span: Option<Span>,
+        span: Option<Span>,
+        keep: bool,
+    ) {
+        if self.groups.is_none() {
+            return;
+        }
+        // Which faces may keep last frame's pages: `table.w` = their first entry then + 1.
+        let keep = keep && !casters.skinned();
+        let mut faces = self.plan.faces.clone();
+        for (face, view) in faces.iter_mut().zip(&self.plan.views) {
+            face.table[3] = 0;
+            let Some(last) = self.last.get(&(view.light, view.kind)) else {
+                continue;
+            };
+            let touched = self
+                .moves
+                .iter()
+                .flatten()
+                .any(|&(c, r)| view.sphere_visible(c, r));
+            if keep && last.view_proj == face.view_proj && last.side == face.table[2] && !touched {
+                face.table[3] = last.first + 1;
+            }
+        }
+        if !faces.is_empty() {
+            ctx.queue
+                .write_buffer(&self.faces, 0, bytemuck::cast_slice(&faces));
+        }
+        self.last = faces
+            .iter()
+            .zip(&self.plan.views)
+            .map(|(f, v)| {
+                let last = LastFace {
+                    view_proj: f.view_proj,
+                    side: f.table[2],
+                    first: f.table[0],
+                };
+                ((v.light, v.kind), last)
+            })
+            .collect();
+        self.moves.clear();
+        self.record_passes(encoder, casters, timer, pages_span, span);
+        self.prev_entries = self.plan.fit.table_entries;
+    }
+
+    fn record_passes(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        casters: &CasterGeometry,
+        timer: &GpuTimer,
+        pages_span: Option<Span>,
+        span: Option<Span>,
+    ) {
+        let Some(g) = &self.groups else {
+            return;
+        };
+        let (w, h) = self.viewport;
+        encoder.push_debug_group("virtual shadow maps");
+        if self.prev_entries > 0 {
+            // Last frame's table, for the pages this frame keeps.
+            encoder.copy_buffer_to_buffer(
+                &self.table,
+                0,
+                &self.prev_table,
+                0,
+                self.prev_entries as u64 * 4,
+            );
+        }
+        encoder.clear_buffer(&self.table, 0, None);
+        encoder.clear_buffer(&self.counters, 0, None);
+        encoder.clear_buffer(&self.scratch, 0, None);
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("vsm.pages"),
+                timestamp_writes: timer.compute_writes(pages_span, true, true),
+            });
+            casters.record(&mut pass, true);
+            // One workgroup per block of page-table entries (2D past 65,535 blocks).
+            let groups_2d = |n: u64| (n.min(65535) as u32, n.div_ceil(65535) as u32);
+            let entries = self.plan.fit.table_entries as u64;
+            let (bx, by) = groups_2d(entries.div_ceil(ALLOC_BLOCK));
+            let (ex, ey) = groups_2d(entries.div_ceil(64));
+            if !self.plan.faces.is_empty() {
+                pass.set_bind_group(0, &g.mark, &[]);
+                pass.set_pipeline(&self.mark);
+                pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+                pass.set_bind_group(0, &g.alloc, &[]);
+                for (pipeline, (x, y)) in [
+                    (&self.count, (bx, by)),
+                    (&self.scan, (1, 1)),
+                    (&self.retain, (ex, ey)),
+                    (&self.free, (1, 1)),
+                    (&self.count_new, (bx, by)),
+                    (&self.scan_new, (1, 1)),
+                    (&self.alloc_new, (bx, by)),
+                ] {
+                    pass.set_pipeline(pipeline);
+                    pass.dispatch_workgroups(x, y, 1);
+                }
+            }
+            pass.set_bind_group(0, &g.alloc, &[]);
+            pass.set_pipeline(&self.args_pipeline);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+        self.draw
+            .record(encoder, casters, timer, span, &self.args, &self.pool_view);
+        encoder.copy_buffer_to_buffer(&self.counters, 0, &self.readback, 0, COUNTERS as u64 * 4);
+        encoder.pop_debug_group();
+    }
+
+    /// The counters of the last recorded frame (after its submission).
+    pub fn read_stats(&self, ctx: &GpuContext) -> Result<VirtualStats, RenderError> {
+        let bytes = crate::gpu::readback::map_read(ctx, &self.readback, 0..COUNTERS as u64 * 4)?;
+        let c: &[u32] = bytemuck::cast_slice(&bytes);
+        let mut needed = [0u32; MAX_LEVELS as usize];
+        needed.copy_from_slice(&c[..MAX_LEVELS as usize]);
+        Ok(VirtualStats {
+            fit: self.plan.fit,
+            needed,
+            resident: c[9] + c[17],
+            kept: c[9],
+            drawn: c[17],
+            denied: c[16],
+            unshadowed_faces: c[18],
+            pool_pages: self.pool_pages,
+            pool_side: self.pool_side,
+            pool_bytes: self.pool_side as u64 * self.pool_side as u64 * 4,
+            table_bytes: self.plan.fit.table_entries as u64 * 4,
+        })
+    }
+
+    /// The plan's per-light records for the lights buffer.
+    pub fn light_data(&self, scene: &Scene) -> Vec<LightData> {
+        self.plan.light_data(scene)
+    }
+}

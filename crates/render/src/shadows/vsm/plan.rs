@@ -1,0 +1,262 @@
+//! The faces of virtual shadow maps and their page-table layout ([`VirtualPlan`]), the knobs
+//! ([`VirtualOptions`]), the pool's size and the counters of a frame ([`VirtualStats`]).
+
+use manyshadows_scene::light_space::{self, PointShadows, ShadowView};
+use manyshadows_scene::Scene;
+
+use crate::gpu::types::{LightData, VirtualFace};
+
+/// Side of a page in texels.
+pub const PAGE_SIZE: u32 = 128;
+/// Levels a face can have (level 7 of 128² pages is 16,384² texels).
+pub const MAX_LEVELS: u32 = 8;
+/// Largest virtual side of a face.
+pub const MAX_SIDE: u32 = PAGE_SIZE << (MAX_LEVELS - 1);
+/// Default page-pool budget: 256 MiB of 32-bit depth (an 8192² pool of 4096 pages).
+pub const DEFAULT_POOL_BYTES: u64 = 256 << 20;
+/// Default cap on page-table entries (4 bytes each).
+pub const DEFAULT_TABLE_ENTRIES: u32 = 4 << 20;
+/// Knobs of the virtual shadow maps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VirtualOptions {
+    /// Page-pool budget in bytes (rounded down to a square power-of-two pool, within the
+    /// adapter's texture limit).
+    pub pool_bytes: u64,
+    /// Largest virtual side of a face (a power of two, 128 to 16,384).
+    pub max_side: u32,
+    /// Shadow texels wanted per screen pixel (1 = texel footprint ≈ pixel footprint).
+    pub lod: f32,
+    /// Cap on page-table entries: when the faces' tables would exceed it, the largest
+    /// virtual sides are halved until they fit (reported in [`VirtualFit::capped_side`]).
+    pub max_table_entries: u32,
+    /// Mark pages for samples that face away from a light too (what the visibility mask
+    /// reads; the lighting pass does not need them).
+    pub back_facing: bool,
+}
+
+impl Default for VirtualOptions {
+    fn default() -> Self {
+        Self {
+            pool_bytes: DEFAULT_POOL_BYTES,
+            max_side: MAX_SIDE,
+            lod: 1.0,
+            max_table_entries: DEFAULT_TABLE_ENTRIES,
+            back_facing: false,
+        }
+    }
+}
+
+/// How the faces of a [`VirtualPlan`] were laid out.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct VirtualFit {
+    /// Shadow-casting lights with faces.
+    pub lights: usize,
+    /// Faces (spot views, cube faces, cascades).
+    pub faces: usize,
+    /// Shadow-casting lights that reach nothing the camera sees (no faces).
+    pub off_screen: usize,
+    /// Page-table entries over all faces.
+    pub table_entries: u32,
+    /// The virtual side every face was capped to so the page table fits
+    /// [`VirtualOptions::max_table_entries`]; 0 if none was.
+    pub capped_side: u32,
+}
+
+/// The faces of a frame and their page-table layout.
+#[derive(Clone, Debug)]
+pub struct VirtualPlan {
+    /// Every face's shadow view, grouped by light in light order.
+    pub views: Vec<ShadowView>,
+    /// Per light: `(first face, face count)`; count 0 without shadows or off screen.
+    pub light_views: Vec<(u32, u32)>,
+    /// GPU records of the faces.
+    pub faces: Vec<VirtualFace>,
+    /// Layout summary.
+    pub fit: VirtualFit,
+}
+
+/// Page-table entries of a face of virtual side `side`: `(4^(L+1) − 1) / 3` for
+/// `L = log2(side / PAGE_SIZE)`.
+pub fn table_entries(side: u32) -> u32 {
+    let levels = (side / PAGE_SIZE).max(1).trailing_zeros() + 1;
+    ((1u32 << (2 * levels)) - 1) / 3
+}
+
+impl VirtualPlan {
+    /// Faces for every shadow-casting light that reaches the camera's view of `scene`
+    /// (`aspect` = width / height, `height` in pixels).
+    pub fn new(scene: &Scene, aspect: f32, height: u32, options: &VirtualOptions) -> Self {
+        let max_side = options
+            .max_side
+            .clamp(PAGE_SIZE, MAX_SIDE)
+            .next_power_of_two()
+            .min(MAX_SIDE);
+        let all = light_space::shadow_views_with(scene, aspect, PointShadows::Cube);
+        let cam = &scene.camera;
+        let proj = cam.projection(aspect);
+        let planes = light_space::frustum_planes(proj * cam.view());
+        let p11 = proj.y_axis.y;
+        let mut fit = VirtualFit::default();
+        let mut views = Vec::new();
+        let mut sides = Vec::new();
+        let mut light_views = vec![(0u32, 0u32); scene.lights.len()];
+        let mut i = 0;
+        while i < all.len() {
+            let light = all[i].light;
+            let n = all[i..].iter().take_while(|v| v.light == light).count();
+            let group = &all[i..i + n];
+            i += n;
+            if let Some((c, r)) = scene.lights[light].bounding_sphere() {
+                if !light_space::sphere_in_planes(&planes, c, r * 1.001 + 1e-4) {
+                    fit.off_screen += 1;
+                    continue;
+                }
+            }
+            let importance = crate::shadows::plan::light_importance(scene, light);
+            light_views[light] = (views.len() as u32, n as u32);
+            fit.lights += 1;
+            for v in group {
+                // A texel at distance r from the light spans 2·tan(half angle)·r / side; a
+                // pixel at camera distance D spans 2·D / (P11·height). Points in reach have
+                // r / D <= importance, so this side gives every one a texel no larger than
+                // its pixel (times the level-of-detail scale).
+                let side = if v.orthographic || !importance.is_finite() {
+                    max_side
+                } else {
+                    let tan_half = 1.0 / v.proj.x_axis.x.abs().max(1e-6);
+                    let want = tan_half * p11 * height as f32 * options.lod * importance;
+                    if want.is_finite() && want < max_side as f32 {
+                        (want.ceil().max(1.0) as u32)
+                            .next_power_of_two()
+                            .clamp(PAGE_SIZE, max_side)
+                    } else {
+                        max_side
+                    }
+                };
+                views.push(*v);
+                sides.push(side);
+            }
+        }
+        // Keep the page table within its cap: halve the largest sides first.
+        let mut total: u64 = sides.iter().map(|&s| table_entries(s) as u64).sum();
+        while total > options.max_table_entries as u64 {
+            let cap = sides.iter().copied().max().unwrap_or(PAGE_SIZE);
+            if cap <= PAGE_SIZE {
+                break;
+            }
+            for s in sides.iter_mut().filter(|s| **s == cap) {
+                *s = cap / 2;
+            }
+            fit.capped_side = cap / 2;
+            total = sides.iter().map(|&s| table_entries(s) as u64).sum();
+        }
+        let mut faces = Vec::with_capacity(views.len());
+        let mut first = 0u32;
+        for (v, &side) in views.iter().zip(&sides) {
+            let finest = (side / PAGE_SIZE).trailing_zeros();
+            faces.push(VirtualFace {
+                view_proj: v.view_proj.to_cols_array_2d(),
+                eye: crate::shadows::plan::view_eye(v).to_array(),
+                params: [
+                    v.near,
+                    v.far,
+                    v.texel_world * v.resolution as f32 / side as f32,
+                    if v.orthographic { 1.0 } else { 0.0 },
+                ],
+                // w: last frame's first entry + 1 when its pages may be kept (set per frame).
+                table: [first, finest, side, 0],
+            });
+            first = first.saturating_add(table_entries(side));
+        }
+        fit.faces = faces.len();
+        fit.table_entries = first;
+        Self {
+            views,
+            light_views,
+            faces,
+            fit,
+        }
+    }
+
+    /// GPU records of the scene's lights, their shadow views pointing at the faces.
+    pub fn light_data(&self, scene: &Scene) -> Vec<LightData> {
+        scene
+            .lights
+            .iter()
+            .zip(&self.light_views)
+            .map(|(l, &(first, n))| {
+                LightData::new(l, first, &self.views[first as usize..(first + n) as usize])
+            })
+            .collect()
+    }
+}
+
+/// Counters of one frame of virtual shadow maps.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct VirtualStats {
+    /// The plan's layout.
+    pub fit: VirtualFit,
+    /// Pages needed per level (level 0 = one page per face).
+    pub needed: [u32; MAX_LEVELS as usize],
+    /// Pages resident this frame (kept + drawn).
+    pub resident: u32,
+    /// Resident pages kept, with their depth, from the last frame (caching).
+    pub kept: u32,
+    /// Pages drawn this frame.
+    pub drawn: u32,
+    /// Needed pages that did not fit the pool (their samples used a coarser level).
+    pub denied: u32,
+    /// Faces left without shadows because not even their level-0 page fitted (only when the
+    /// pool has fewer pages than faces in use; the faces of the lowest-numbered lights get
+    /// the pool's pages).
+    pub unshadowed_faces: u32,
+    /// Pages the pool holds.
+    pub pool_pages: u32,
+    /// Pool side in texels.
+    pub pool_side: u32,
+    /// Bytes of the pool texture.
+    pub pool_bytes: u64,
+    /// Bytes of the page table.
+    pub table_bytes: u64,
+}
+
+impl VirtualStats {
+    /// Pages needed over all levels.
+    pub fn needed_total(&self) -> u32 {
+        self.needed.iter().sum()
+    }
+}
+
+/// The pool side for a byte budget: the largest power of two whose square of 4-byte texels
+/// fits, at least one page, at most `max_dim`.
+pub fn pool_side(bytes: u64, max_dim: u32) -> u32 {
+    let texels = (bytes / 4).max(PAGE_SIZE as u64 * PAGE_SIZE as u64);
+    let side = 1u64 << ((64 - texels.leading_zeros() - 1) / 2);
+    let max = 1u64 << (31 - max_dim.max(PAGE_SIZE).leading_zeros());
+    side.clamp(PAGE_SIZE as u64, max) as u32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn table_entries_count_every_level() {
+        assert_eq!(table_entries(128), 1);
+        assert_eq!(table_entries(256), 1 + 4);
+        assert_eq!(table_entries(512), 1 + 4 + 16);
+        assert_eq!(
+            table_entries(16384),
+            (0..8).map(|l| 1u32 << (2 * l)).sum::<u32>()
+        );
+    }
+
+    #[test]
+    fn pool_side_is_the_largest_square_within_budget() {
+        assert_eq!(pool_side(256 << 20, 16384), 8192);
+        assert_eq!(pool_side((256 << 20) - 1, 16384), 4096);
+        assert_eq!(pool_side(1 << 30, 8192), 8192);
+        assert_eq!(pool_side(0, 16384), PAGE_SIZE);
+        assert_eq!(pool_side(64 << 20, 16384), 4096);
+    }
+}

@@ -1,0 +1,164 @@
+//! Virtual shadow maps as a frame's shadow source: an empty shadow plan, a view table, the
+//! caster geometry and [`VirtualShadows`]; the output is the page pool with its table.
+
+use glam::Vec3;
+use manyshadows_scene::light_space::PointShadows;
+use manyshadows_scene::Scene;
+
+use crate::gpu::timing::GpuTimer;
+use crate::gpu::types::LightData;
+use crate::gpu_scene::casters::CasterGeometry;
+use crate::gpu_scene::instances::GpuScene;
+use crate::settings::{RenderSettings, Technique};
+use crate::shadows::atlas::storage::ShadowAtlas;
+use crate::shadows::plan::ShadowPlan;
+use crate::shadows::source::{
+    PagePool, ShadowOutput, ShadowSource, ShadowStats, SourceInputs, ViewTable,
+};
+use crate::shadows::vsm::pages::{VirtualShadows, VsmInputs};
+use crate::shadows::vsm::plan::{VirtualOptions, VirtualPlan, VirtualStats};
+use crate::{GpuContext, RenderError};
+
+/// Virtual shadow maps as a frame's [`ShadowSource`]: an empty shadow plan (the faces are in
+/// [`VirtualPlan`]), the caster geometry and the page pool, which is the output.
+pub struct VirtualSource {
+    table: ViewTable,
+    maps: VirtualShadows,
+    size: (u32, u32),
+    /// Keep the pages of unchanged faces between frames.
+    cache: bool,
+}
+
+impl VirtualSource {
+    pub(crate) fn new(
+        ctx: &GpuContext,
+        scene: &Scene,
+        gpu: &GpuScene,
+        settings: &RenderSettings,
+    ) -> Result<Self, RenderError> {
+        if settings.point_shadows != PointShadows::default() {
+            return Err(RenderError::Unsupported(
+                "technique virtual pages cube-map point shadows only; use cube point shadows"
+                    .into(),
+            ));
+        }
+        let table = ViewTable::new(
+            ctx,
+            scene,
+            gpu,
+            ShadowPlan::none(scene.lights.len()),
+            settings,
+        )?;
+        let options = VirtualOptions {
+            back_facing: settings.visibility,
+            ..settings.virtual_maps
+        };
+        let size = (settings.width, settings.height);
+        let maps = VirtualShadows::new(ctx, scene, size, options, settings.shadow, &table.casters)?;
+        Ok(Self {
+            table,
+            maps,
+            size,
+            cache: settings.cache_shadows,
+        })
+    }
+}
+
+impl ShadowSource for VirtualSource {
+    fn technique(&self) -> Technique {
+        Technique::Virtual
+    }
+
+    fn plan(&self) -> &ShadowPlan {
+        &self.table.plan
+    }
+
+    fn atlas(&self) -> &ShadowAtlas {
+        &self.table.views
+    }
+
+    fn casters(&self) -> &CasterGeometry {
+        &self.table.casters
+    }
+
+    fn light_data(&self, scene: &Scene) -> Vec<LightData> {
+        self.maps.light_data(scene)
+    }
+
+    fn update(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), RenderError> {
+        let plan = ShadowPlan::none(scene.lights.len());
+        if self.table.update(ctx, scene, plan)? {
+            self.maps.forget_pages();
+        }
+        self.maps.update(ctx, scene, self.size)?;
+        Ok(())
+    }
+
+    fn bind(&mut self, ctx: &GpuContext, inputs: &SourceInputs<'_>) -> Result<(), RenderError> {
+        self.maps.bind(
+            ctx,
+            &VsmInputs {
+                frame: inputs.frame,
+                lights: inputs.lights,
+                gbuffer: inputs.gbuffer,
+                clusters: inputs.clusters,
+                instances: inputs.instances,
+                casters: &self.table.casters,
+            },
+        );
+        Ok(())
+    }
+
+    fn note_moved(&mut self, old: (Vec3, f32), new: (Vec3, f32)) {
+        self.maps.note_moved(old, new);
+    }
+
+    fn record(
+        &mut self,
+        ctx: &GpuContext,
+        _scene: &GpuScene,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+    ) -> ShadowStats {
+        let pages_span = timer.span(crate::gpu::timing::Stage::Pages);
+        let span = timer.span(crate::gpu::timing::Stage::Shadows);
+        self.maps.record(
+            ctx,
+            encoder,
+            &self.table.casters,
+            timer,
+            pages_span,
+            span,
+            self.cache,
+        );
+        ShadowStats::default()
+    }
+
+    fn output(&self) -> ShadowOutput<'_> {
+        ShadowOutput::Pages {
+            pages: PagePool {
+                pool: &self.maps.pool_view,
+                side: self.maps.pool_side(),
+                uniforms: self.maps.uniforms(),
+                faces: self.maps.faces(),
+                table: self.maps.table(),
+            },
+            views: &self.table.views,
+        }
+    }
+
+    fn read_atlas(&self, _ctx: &GpuContext) -> Result<Vec<f32>, RenderError> {
+        Err(RenderError::NoAtlas {
+            technique: crate::settings::Technique::Virtual,
+            detail: crate::settings::VIRTUAL_NO_ATLAS.into(),
+        })
+    }
+
+    fn virtual_plan(&self) -> Option<&VirtualPlan> {
+        Some(&self.maps.plan)
+    }
+
+    fn read_virtual_stats(&self, ctx: &GpuContext) -> Result<Option<VirtualStats>, RenderError> {
+        self.maps.read_stats(ctx).map(Some)
+    }
+}
