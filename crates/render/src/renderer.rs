@@ -2,13 +2,13 @@
 //!
 //! 1. G-buffer (world position, normal, material per pixel),
 //! 2. shadows: the frame's [`ShadowSource`] (made from the technique by
-//!    [`crate::shadows::create`]) fills an atlas, a virtual page pool or a visibility mask,
+//!    `shadows::create`) fills an atlas, a virtual page pool or a visibility mask,
 //! 3. deferred Phong lighting with the shadow test (or the mask),
 //! 4. optionally, the hard visibility mask (computed from the atlas or pool; a source whose
 //!    output is the mask reads it back).
 //!
-//! Nothing here depends on the technique: the source's [`crate::shadows::source::ShadowOutput`] says
-//! what the lighting and visibility passes read.
+//! Nothing here depends on the technique: the source's [`crate::shadows::source::ShadowOutput`]
+//! says what the lighting and visibility passes read.
 
 // `std::time::Instant` panics in a browser; web-time is std's on native targets.
 use web_time::Instant;
@@ -20,17 +20,16 @@ use wgpu::util::DeviceExt;
 use crate::frame::clusters::{ClusterStats, LightClusters, LightLoop};
 use crate::frame::gbuffer::GBuffer;
 use crate::frame::gbuffer_readback::GBufferData;
-use crate::gpu_scene::instances::GpuScene;
-use crate::gpu::types::{FrameUniforms, LightData};
 use crate::frame::lighting::{LightingInputs, LightingPass};
-use crate::settings::RenderSettings;
-use crate::shadows::atlas::storage::ShadowAtlas;
-use crate::shadows::plan::{DEFAULT_MAX_ATLAS_SIZE, ShadowPlan};
-use crate::shadows::source::ShadowStats;
-use crate::shadows::source::{ShadowSource, SourceInputs};
-use crate::gpu::timing::{GpuTimer, GpuTimes, Stage};
 use crate::frame::visibility::VisibilityPass;
 use crate::frame::visibility_mask::VisibilityMask;
+use crate::gpu::timing::{GpuTimer, GpuTimes, Stage};
+use crate::gpu::types::{FrameUniforms, LightData};
+use crate::gpu_scene::instances::GpuScene;
+use crate::settings::RenderSettings;
+use crate::shadows::atlas::storage::ShadowAtlas;
+use crate::shadows::plan::{ShadowPlan, DEFAULT_MAX_ATLAS_SIZE};
+use crate::shadows::source::{ShadowSource, ShadowStats, SourceInputs};
 use crate::shadows::vsm::plan::VirtualStats;
 use crate::{GpuContext, RenderError};
 
@@ -215,7 +214,8 @@ impl Renderer {
         self.source.plan()
     }
 
-    /// The faces of [`Technique::Virtual`] (`None` for other techniques).
+    /// The faces of [`Technique::Virtual`](crate::settings::Technique::Virtual) (`None` for
+    /// other techniques).
     pub fn virtual_plan(&self) -> Option<&crate::shadows::vsm::plan::VirtualPlan> {
         self.source.virtual_plan()
     }
@@ -413,8 +413,8 @@ impl Renderer {
     /// any normalized or float colour format, sRGB or not: a window's surface texture, say),
     /// and submits it without reading anything back. The caller presents or samples the
     /// texture after this returns; [`Renderer::render`] is the same frame read back to the CPU.
-    /// With [`Technique::Irregular`] this waits for the frame's overflow check (an overflowed
-    /// frame is an error, never a wrong image).
+    /// With [`Technique::Irregular`](crate::settings::Technique::Irregular) this waits for the
+    /// frame's overflow check (an overflowed frame is an error, never a wrong image).
     pub fn render_to(&mut self, target: &wgpu::Texture) -> Result<SubmittedFrame, RenderError> {
         let ctx = &*self.ctx.clone();
         ctx.scoped("rendering a frame into the caller's texture", || {
@@ -425,7 +425,9 @@ impl Renderer {
                     label: Some("frame.encoder"),
                 });
             let shadow_stats = self.record_frame(ctx, &mut encoder)?;
-            let blit = self.blit.get_or_insert_with(|| crate::frame::blit::Blit::new(ctx));
+            let blit = self
+                .blit
+                .get_or_insert_with(|| crate::frame::blit::Blit::new(ctx));
             blit.record(ctx, &mut encoder, &self.lighting.color, target)?;
             ctx.queue.submit([encoder.finish()]);
             self.source.finish(ctx)?;
@@ -521,7 +523,9 @@ impl Renderer {
         })
     }
 
-    /// Counters of the last frame of [`Technique::Irregular`] (`None` for other techniques).
+    /// Counters of the last frame of irregular shadow maps
+    /// ([`Technique::Irregular`](crate::settings::Technique::Irregular); `None` for other
+    /// techniques).
     pub fn irregular_stats(&self) -> Option<crate::shadows::irregular::maps::IrregularStats> {
         self.source.irregular_stats()
     }
@@ -539,7 +543,8 @@ impl Renderer {
     }
 
     /// Reads the virtual maps' page pool back: `(side, side² depths)`, row-major from the
-    /// top-left texel, as the last frame left it. Only [`Technique::Virtual`] has one.
+    /// top-left texel, as the last frame left it. Only
+    /// [`Technique::Virtual`](crate::settings::Technique::Virtual) has one.
     pub fn read_page_pool(&self) -> Result<(u32, Vec<f32>), RenderError> {
         match self.source.output() {
             crate::shadows::source::ShadowOutput::Pages { pages, .. } => Ok((

@@ -42,8 +42,8 @@ pub enum Technique {
     /// view, exact tests per triangle; produces the visibility mask, not atlas tiles
     /// ([`crate::shadows::irregular`]), so it runs in the [`crate::Renderer`] only.
     Irregular,
-    /// Virtual shadow maps (seed 002): a paged virtual map per light face, only the pages
-    /// visible samples need, rendered into a page pool ([`crate::shadows::vsm`]); fills no atlas, so it
+    /// Virtual shadow maps (seed 002): a paged virtual map per light face, only the pages visible
+    /// samples need, rendered into a page pool ([`crate::shadows::vsm`]); fills no atlas, so it
     /// runs in the [`crate::Renderer`] only.
     Virtual,
 }
@@ -104,7 +104,6 @@ impl Technique {
         }
     }
 }
-
 
 impl std::str::FromStr for Technique {
     type Err = String;
@@ -300,7 +299,8 @@ pub struct RenderSettings {
     pub pcf: Pcf,
     /// Receiver bias.
     pub bias: ShadowBias,
-    /// Largest atlas side (clamped to the adapter's limit); `None` = [`DEFAULT_MAX_ATLAS_SIZE`].
+    /// Largest atlas side (clamped to the adapter's limit); `None` =
+    /// [`DEFAULT_MAX_ATLAS_SIZE`](crate::shadows::plan::DEFAULT_MAX_ATLAS_SIZE).
     pub max_atlas_size: Option<u32>,
     /// What to do when the shadow maps do not fit the atlas.
     pub fit: FitPolicy,

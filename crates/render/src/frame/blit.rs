@@ -20,7 +20,8 @@ pub(crate) struct Blit {
 impl Blit {
     pub(crate) fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let module = crate::gpu::shaders::module(device, "blit.shader", &crate::gpu::shaders::blit());
+        let module =
+            crate::gpu::shaders::module(device, "blit.shader", &crate::gpu::shaders::blit());
         let fs = wgpu::ShaderStages::FRAGMENT;
         let layout = crate::gpu::pipelines::bind_group_layout(
             device,

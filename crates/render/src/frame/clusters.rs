@@ -40,8 +40,8 @@ use manyshadows_scene::Scene;
 use wgpu::util::DeviceExt;
 
 use crate::frame::gbuffer::GBuffer;
-use crate::gpu::types::ClusterUniforms;
 use crate::gpu::timing::{GpuTimer, Span};
+use crate::gpu::types::ClusterUniforms;
 use crate::{GpuContext, RenderError};
 
 /// Default tile side in pixels.
@@ -244,7 +244,11 @@ impl LightClusters {
                 crate::gpu::pipelines::storage_rw_entry(9, cs),
             ],
         );
-        let module = crate::gpu::shaders::module(device, "clusters.shader", &crate::gpu::shaders::clusters());
+        let module = crate::gpu::shaders::module(
+            device,
+            "clusters.shader",
+            &crate::gpu::shaders::clusters(),
+        );
         let pipeline_layout =
             crate::gpu::pipelines::pipeline_layout(device, "clusters.pipeline_layout", &[&layout]);
         let pipeline = |entry: &str| {

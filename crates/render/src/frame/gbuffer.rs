@@ -2,8 +2,8 @@
 //! surface. Positions are stored directly (not reconstructed from depth) so the quality
 //! reference can ray-trace from exactly the points the frame shades.
 
-use crate::gpu_scene::instances::{GpuScene, NORMAL_LAYOUT, POSITION_LAYOUT, UV_LAYOUT};
 use crate::gpu::timing::{GpuTimer, Span};
+use crate::gpu_scene::instances::{GpuScene, NORMAL_LAYOUT, POSITION_LAYOUT, UV_LAYOUT};
 use crate::GpuContext;
 
 /// xyz world position (`f32` bits in a `u32` target, because OpenGL ES and WebGL cannot render
@@ -85,7 +85,8 @@ impl GBuffer {
             U::RENDER_ATTACHMENT,
         );
         let device = &ctx.device;
-        let module = crate::gpu::shaders::module(device, "gbuffer.shader", &crate::gpu::shaders::gbuffer());
+        let module =
+            crate::gpu::shaders::module(device, "gbuffer.shader", &crate::gpu::shaders::gbuffer());
         let layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "gbuffer.layout",

@@ -47,10 +47,7 @@ impl GBufferData {
         ctx.scoped("reading the G-buffer", || {
             let position = crate::gpu::readback::read_texture(ctx, &gbuffer.position, TEXEL_BYTES)?;
             let normal = crate::gpu::readback::read_texture(ctx, &gbuffer.normal, TEXEL_BYTES)?;
-            let (width, height) = (
-                gbuffer.position.width(),
-                gbuffer.position.height(),
-            );
+            let (width, height) = (gbuffer.position.width(), gbuffer.position.height());
             let pixels = width as usize * height as usize;
             if position.len() != pixels * TEXEL_BYTES as usize
                 || normal.len() != pixels * TEXEL_BYTES as usize

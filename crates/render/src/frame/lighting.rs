@@ -3,8 +3,8 @@
 //! buffer so a clustered (per-tile) list can replace it without touching the shading.
 
 use crate::frame::gbuffer::GBuffer;
-use crate::shadows::source::ShadowOutput;
 use crate::gpu::timing::{GpuTimer, Span};
+use crate::shadows::source::ShadowOutput;
 use crate::GpuContext;
 
 /// First binding of the virtual maps' page-table declarations in the lighting pass.

@@ -3,9 +3,9 @@
 //! bias as the lighting pass but without filtering. Its result is a
 //! [`VisibilityMask`] ([`crate::frame::visibility_mask`]).
 
+use crate::frame::lighting::{LightingInputs, VSM_FIRST_BINDING};
 use crate::frame::visibility_mask::VisibilityMask;
 use crate::gpu::pipelines::texture_entry;
-use crate::frame::lighting::LightingInputs;
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
@@ -32,7 +32,6 @@ pub struct VisibilityPass {
 }
 
 // The virtual maps' page-table declarations start where the lighting pass's do.
-use crate::frame::lighting::VSM_FIRST_BINDING;
 
 impl VisibilityPass {
     /// Plans the pass; fails if even one word per pixel exceeds the storage-binding limit.
@@ -77,21 +76,28 @@ impl VisibilityPass {
             crate::gpu::pipelines::storage_entry(11, comp),
         ];
         let source = if shadows.pages().is_some() {
-            entries.extend(crate::frame::lighting::vsm_layout_entries(VSM_FIRST_BINDING, comp));
+            entries.extend(crate::frame::lighting::vsm_layout_entries(
+                VSM_FIRST_BINDING,
+                comp,
+            ));
             crate::gpu::shaders::ShadowSource::Virtual {
                 first: VSM_FIRST_BINDING,
             }
         } else {
             crate::gpu::shaders::ShadowSource::Atlas
         };
-        let layout = crate::gpu::pipelines::bind_group_layout(device, "visibility.layout", &entries);
+        let layout =
+            crate::gpu::pipelines::bind_group_layout(device, "visibility.layout", &entries);
         let module = crate::gpu::shaders::module(
             device,
             "visibility.shader",
             &crate::gpu::shaders::visibility(source),
         );
-        let pipeline_layout =
-            crate::gpu::pipelines::pipeline_layout(device, "visibility.pipeline_layout", &[&layout]);
+        let pipeline_layout = crate::gpu::pipelines::pipeline_layout(
+            device,
+            "visibility.pipeline_layout",
+            &[&layout],
+        );
         let pipeline = crate::gpu::pipelines::compute_pipeline(
             device,
             "visibility.pipeline",

@@ -1,6 +1,6 @@
 //! The lowest floor: what every pass builds on, knowing nothing of the scene or of shadows.
 //! The adapter and device ([`context`]), the wgpu objects every pass builds the same way
-//! ([`pipelines`]), buffers that grow ([`buffers`]), read-back ([`readback`]), timer and
+//! (`pipelines`), buffers that grow (`buffers`), read-back ([`readback`]), timer and
 //! statistics queries ([`timing`]), the `#[repr(C)]` mirrors of WGSL structs ([`types`], with
 //! their WGSL declarations in `common.wgsl` beside it) and the composition of every shader from
 //! the WGSL files beside the modules that own them ([`shaders`]).

@@ -1,7 +1,10 @@
-//! WGSL sources and the one way they share code: `common.wgsl` (struct declarations, kept in
-//! sync with `gpu_types.rs`) and `shadow_lookup.wgsl` (where a point falls in the atlas) are
-//! prepended to the shaders that need them. Every composed shader is parsed and validated by
-//! naga in a test, so broken WGSL fails `cargo test` without a GPU.
+//! WGSL sources and the one way they share code: `common.wgsl` (struct declarations beside
+//! this module, kept in sync with [`crate::gpu::types`]) and `shadow_lookup.wgsl` (where a
+//! point falls in the atlas, `shadows/`) are prepended to the shaders that need them. Each
+//! WGSL file lies beside the module that owns it (`frame/`, `gpu_scene/`, `shadows/`,
+//! `shadows/atlas/`, `shadows/irregular/`, `shadows/vsm/`); this module only composes them,
+//! so it imports nothing of the crate. Every composed shader is parsed and validated by naga
+//! in a test, so broken WGSL fails `cargo test` without a GPU.
 
 /// Struct declarations shared by all shaders.
 pub const COMMON: &str = include_str!("common.wgsl");

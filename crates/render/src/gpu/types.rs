@@ -1,6 +1,6 @@
-//! Rust mirrors of the structs in `shaders/common.wgsl`.
+//! Rust mirrors of the structs in `common.wgsl` (beside this module).
 //!
-//! Keep in sync with `shaders/common.wgsl`: the test at the bottom asks naga for the WGSL
+//! Keep in sync with `common.wgsl`: the test at the bottom asks naga for the WGSL
 //! layout of each struct and compares it with the Rust size, so a drifted field fails the test.
 
 use bytemuck::{Pod, Zeroable};

@@ -577,7 +577,8 @@ impl CasterGeometry {
             }
         };
 
-        let module = crate::gpu::shaders::module(device, "casters.shader", &crate::gpu::shaders::casters());
+        let module =
+            crate::gpu::shaders::module(device, "casters.shader", &crate::gpu::shaders::casters());
         let cs = wgpu::ShaderStages::COMPUTE;
         let layout = crate::gpu::pipelines::bind_group_layout(
             device,
@@ -607,7 +608,12 @@ impl CasterGeometry {
             &corners_buf,
             &cluster_bounds,
         ];
-        let bind_group = crate::gpu::pipelines::buffer_bind_group(device, "casters.bind_group", &layout, &buffers);
+        let bind_group = crate::gpu::pipelines::buffer_bind_group(
+            device,
+            "casters.bind_group",
+            &layout,
+            &buffers,
+        );
         let pipeline_layout =
             crate::gpu::pipelines::pipeline_layout(device, "casters.pipeline_layout", &[&layout]);
         let pipeline = |entry: &str| {

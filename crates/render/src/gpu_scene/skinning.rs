@@ -14,8 +14,9 @@ pub const MAX_BONES: usize = 64;
 /// Bytes per skinned vertex: position, 4 joint bytes, 4 weights.
 pub const SKIN_VERTEX_STRIDE: u64 = 32;
 
-/// Skinning of every vertex of a scene (in the order of [`GpuScene`](crate::gpu_scene::instances::GpuScene)'s vertex buffer: meshes
-/// concatenated), up to four bones per vertex out of [`MAX_BONES`].
+/// Skinning of every vertex of a scene (in the order of
+/// [`GpuScene`](crate::gpu_scene::instances::GpuScene)'s vertex buffer: meshes concatenated), up to
+/// four bones per vertex out of [`MAX_BONES`].
 #[derive(Clone, Debug)]
 pub struct Skin {
     /// Bone indices per vertex.

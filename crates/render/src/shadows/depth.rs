@@ -151,7 +151,6 @@ fn depth_pipeline_with(
     })
 }
 
-
 /// Refuses `technique` on an adapter without indirect execution (`what` it draws or
 /// dispatches indirectly, and what to use `instead`).
 pub(crate) fn require_indirect(

@@ -47,7 +47,11 @@ pub fn read_depth_view(
             crate::gpu::pipelines::uniform_entry(2, wgpu::ShaderStages::COMPUTE),
         ],
     );
-    let module = crate::gpu::shaders::module(device, "atlas_copy.shader", &crate::gpu::shaders::atlas_copy());
+    let module = crate::gpu::shaders::module(
+        device,
+        "atlas_copy.shader",
+        &crate::gpu::shaders::atlas_copy(),
+    );
     let pipeline_layout =
         crate::gpu::pipelines::pipeline_layout(device, "atlas_copy.pipeline_layout", &[&layout]);
     let pipeline = crate::gpu::pipelines::compute_pipeline(

@@ -5,11 +5,11 @@
 //! - [`depth`] and [`cluster_draw`]: the depth-only pipelines every shadow map is drawn with,
 //!   and the cluster culling + indirect multi-draw rounds `gpu-driven` and the virtual maps
 //!   share (with their WGSL); [`image`]: depth read-back and pictures;
-//! - [`source`]: the [`ShadowSource`](source::ShadowSource) trait the renderer drives, its
+//! - [`source`]: the [`ShadowSource`] trait the renderer drives, its
 //!   output, and the view table of the sources that fill no atlas;
 //! - one folder per kind of source: [`atlas`] (the atlas, its techniques, their registry and
 //!   generator), [`irregular`] (a visibility mask), [`vsm`] (virtual shadow maps: a page pool);
-//! - [`create`]: the one place a technique becomes a source.
+//! - `create`: the one place a technique becomes a source.
 //!
 //! `shadow_lookup.wgsl` (view selection, bias, atlas addressing) and `paraboloid.wgsl` (the
 //! dual-paraboloid warp) lie here too: every pass that reads shadows composes them
@@ -44,9 +44,7 @@ pub(crate) fn create(
 ) -> Result<Box<dyn ShadowSource>, RenderError> {
     let params = PlanParams::new(settings, max_atlas);
     Ok(match settings.technique {
-        Technique::Irregular => Box::new(IrregularSource::new(
-            ctx, scene, gpu, params, settings,
-        )?),
+        Technique::Irregular => Box::new(IrregularSource::new(ctx, scene, gpu, params, settings)?),
         Technique::Virtual => Box::new(VirtualSource::new(ctx, scene, gpu, settings)?),
         technique => Box::new(AtlasSource::new(
             ctx, scene, gpu, params, technique, settings,

@@ -16,23 +16,23 @@
 //! - [`ShadowOutput::Mask`]: the per-pixel, per-light visibility bits themselves
 //!   (`irregular`: [`crate::shadows::irregular::source::IrregularSource`]).
 //!
-//! [`crate::shadows::create`] is the one place a [`Technique`] becomes a source.
+//! `shadows::create` is the one place a [`Technique`] becomes a source.
 
 use glam::Vec3;
 use manyshadows_scene::atlas::FitPolicy;
 use manyshadows_scene::light_space::PointShadows;
 use manyshadows_scene::Scene;
 
-use crate::gpu_scene::casters::CasterGeometry;
 use crate::frame::clusters::LightClusters;
 use crate::frame::gbuffer::GBuffer;
-use crate::gpu_scene::instances::GpuScene;
+use crate::frame::visibility_mask::VisibilityMask;
+use crate::gpu::timing::GpuTimer;
 use crate::gpu::types::LightData;
+use crate::gpu_scene::casters::CasterGeometry;
+use crate::gpu_scene::instances::GpuScene;
 use crate::settings::{RenderSettings, Technique};
 use crate::shadows::atlas::storage::ShadowAtlas;
 use crate::shadows::plan::ShadowPlan;
-use crate::gpu::timing::GpuTimer;
-use crate::frame::visibility_mask::VisibilityMask;
 use crate::{GpuContext, RenderError};
 
 /// Work counters of one shadow generation.

@@ -172,7 +172,8 @@ impl Compute {
                 )],
             });
         }
-        let module = crate::gpu::shaders::module(device, "compute.shader", &crate::gpu::shaders::compute());
+        let module =
+            crate::gpu::shaders::module(device, "compute.shader", &crate::gpu::shaders::compute());
         let cs = wgpu::ShaderStages::COMPUTE;
         let layout = crate::gpu::pipelines::bind_group_layout(
             device,

@@ -11,6 +11,7 @@
 use glam::Vec3;
 use manyshadows_scene::Scene;
 
+use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu_scene::casters::CasterGeometry;
 use crate::gpu_scene::instances::GpuScene;
 use crate::settings::{ShadowOptions, Technique};
@@ -18,7 +19,6 @@ use crate::shadows::atlas::storage::ShadowAtlas;
 use crate::shadows::atlas::technique::{ShadowInput, ShadowTechnique};
 use crate::shadows::plan::ShadowPlan;
 use crate::shadows::source::ShadowStats;
-use crate::gpu::timing::{GpuTimer, Span};
 use crate::{GpuContext, RenderError};
 
 /// Everything needed to fill the atlas, frame after frame.
@@ -80,7 +80,7 @@ impl ShadowGenerator {
         let casters = CasterGeometry::new(ctx, scene, gpu, options.casters)?;
         let valid = vec![false; plan.views.len()];
         Ok(Self {
-            technique: technique.create(ctx, &options)?,
+            technique: crate::shadows::atlas::registry::create(technique, ctx, &options)?,
             kind: technique,
             plan,
             atlas,

@@ -1,13 +1,12 @@
 //! `gpu-driven`: clusters culled per view in compute, drawn by one indirect multi-draw (seed
 //! 002's route, the one meant to scale to thousands of views).
 //!
-//! After the per-frame caster transform (which also writes each cluster's world bounding
-//! sphere, [`crate::gpu_scene::casters`]), a compute pass runs one thread per (cluster, listed view)
-//! (views along the dispatch's y). A cluster survives a view unless its sphere is wholly
-//! outside the view frustum (frustum culling on) or its normal cone proves that every triangle
-//! faces away from the light from every point of the sphere (back-face culling on; only
-//! clusters of cullable triangles). Survivors become indexed-indirect commands over the caster
-//! corner buffer.
+//! After the per-frame caster transform (which also writes each cluster's world bounding sphere,
+//! [`crate::gpu_scene::casters`]), a compute pass runs one thread per (cluster, listed view) (views
+//! along the dispatch's y). A cluster survives a view unless its sphere is wholly outside the view
+//! frustum (frustum culling on) or its normal cone proves that every triangle faces away from the
+//! light from every point of the sphere (back-face culling on; only clusters of cullable
+//! triangles). Survivors become indexed-indirect commands over the caster corner buffer.
 //!
 //! The view is not passed through `first_instance` (OpenGL's support for it is shaky): a
 //! command for the view in batch slot `s` has `base_vertex = s · V` (V = caster vertices), so
@@ -24,11 +23,11 @@
 //! split too if even one view's commands would not fit.
 
 use crate::gpu::pipelines::{dynamic_uniform_entry, whole_entry};
-use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
-use crate::shadows::source::ShadowStats;
 use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear, UniformRecords};
-use crate::shadows::depth::{depth_pipeline, require_clip_distances};
+use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
 use crate::shadows::cluster_draw::{plan_rounds, Round, COMMAND_SIZE};
+use crate::shadows::depth::{depth_pipeline, require_clip_distances};
+use crate::shadows::source::ShadowStats;
 use crate::{GpuContext, RenderError};
 
 /// Bytes of one round's parameters (`GpuParams` in gpu_driven.wgsl).
@@ -65,8 +64,11 @@ impl GpuDriven {
             "use technique layered",
         )?;
         let device = &ctx.device;
-        let module =
-            crate::gpu::shaders::module(device, "gpu_driven.shader", &crate::gpu::shaders::gpu_driven());
+        let module = crate::gpu::shaders::module(
+            device,
+            "gpu_driven.shader",
+            &crate::gpu::shaders::gpu_driven(),
+        );
         let cs = wgpu::ShaderStages::COMPUTE;
         let cull_layout = crate::gpu::pipelines::bind_group_layout(
             device,

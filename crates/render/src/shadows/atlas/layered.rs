@@ -12,10 +12,10 @@
 //! three corners, tests them, and emits a degenerate triangle when the triangle is dropped.
 //! Without culling the draw is indexed, so post-transform vertex reuse still applies.
 
-use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
-use crate::shadows::source::ShadowStats;
 use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear};
+use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
 use crate::shadows::depth::{depth_pipeline, masked_depth_pipeline, require_clip_distances};
+use crate::shadows::source::ShadowStats;
 use crate::{GpuContext, RenderError};
 
 /// The layered technique's pipelines.
@@ -37,7 +37,8 @@ impl Layered {
     pub fn new(ctx: &GpuContext) -> Result<Self, RenderError> {
         require_clip_distances(ctx, "layered")?;
         let device = &ctx.device;
-        let module = crate::gpu::shaders::module(device, "layered.shader", &crate::gpu::shaders::layered());
+        let module =
+            crate::gpu::shaders::module(device, "layered.shader", &crate::gpu::shaders::layered());
         let vs = wgpu::ShaderStages::VERTEX;
         let layout = crate::gpu::pipelines::bind_group_layout(
             device,

@@ -1,7 +1,7 @@
 //! Shadow maps in one depth atlas: the atlas and its per-view buffers ([`storage`]), the
 //! interface every technique implements ([`technique`]), one module per technique with its
 //! WGSL beside it ([`traditional`], [`layered`], [`multiview`], [`gpu_driven`], [`compute`]),
-//! what they share without importing each other ([`shared`]), the [`registry`] that creates
+//! what they share without importing each other (`shared`), the [`registry`] that creates
 //! them, the [`generator`] that drives one frame after frame (caching), and the frame's
 //! [`source`] made of it.
 

@@ -12,9 +12,9 @@
 //! `copy_texture_to_texture`). Rasterizing at the tile size from the origin gives the same
 //! texels as `traditional`'s viewport at the tile's integer offset.
 //!
-//! World positions come from the per-frame caster transform ([`crate::gpu_scene::casters`]); per-triangle
-//! culling pulls each triangle's corners as `layered` does and emits a degenerate triangle when
-//! the triangle is dropped for that view.
+//! World positions come from the per-frame caster transform ([`crate::gpu_scene::casters`]);
+//! per-triangle culling pulls each triangle's corners as `layered` does and emits a degenerate
+//! triangle when the triangle is dropped for that view.
 //!
 //! Without `MULTIVIEW` (OpenGL) the technique refuses to start and names `layered`, which
 //! produces the same atlas in one instanced draw.
@@ -24,10 +24,10 @@ use std::num::NonZeroU32;
 
 use crate::gpu::pipelines::dynamic_uniform_entry;
 use crate::settings::CullMode;
-use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
-use crate::shadows::source::ShadowStats;
 use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear, UniformRecords};
+use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
 use crate::shadows::depth::{layered_depth_pipeline, masked_depth_pipeline};
+use crate::shadows::source::ShadowStats;
 use crate::{GpuContext, RenderError};
 
 /// Bytes of one group's parameters (`MultiviewParams` in multiview.wgsl).
@@ -116,8 +116,11 @@ impl Multiview {
             max_views = 1;
         }
         let device = &ctx.device;
-        let module =
-            crate::gpu::shaders::module(device, "multiview.shader", &crate::gpu::shaders::multiview());
+        let module = crate::gpu::shaders::module(
+            device,
+            "multiview.shader",
+            &crate::gpu::shaders::multiview(),
+        );
         let vs = wgpu::ShaderStages::VERTEX;
         let layout = crate::gpu::pipelines::bind_group_layout(
             device,

@@ -23,8 +23,11 @@ impl TileClear {
     /// Builds the clear pipeline.
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let module =
-            crate::gpu::shaders::module(device, "tile_clear.shader", &crate::gpu::shaders::tile_clear());
+        let module = crate::gpu::shaders::module(
+            device,
+            "tile_clear.shader",
+            &crate::gpu::shaders::tile_clear(),
+        );
         let vs = wgpu::ShaderStages::VERTEX;
         let layout = crate::gpu::pipelines::bind_group_layout(
             device,
@@ -35,8 +38,11 @@ impl TileClear {
                 crate::gpu::pipelines::uniform_entry(2, vs),
             ],
         );
-        let pipeline_layout =
-            crate::gpu::pipelines::pipeline_layout(device, "tile_clear.pipeline_layout", &[&layout]);
+        let pipeline_layout = crate::gpu::pipelines::pipeline_layout(
+            device,
+            "tile_clear.pipeline_layout",
+            &[&layout],
+        );
         let pipeline = clear_pipeline(device, &pipeline_layout, &module, "vs_clear");
         let size = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tile_clear.atlas"),
@@ -77,7 +83,12 @@ impl TileClear {
         ];
         let (device, layout) = (&ctx.device, &self.layout);
         let bind_group = self.group.get(&buffers, || {
-            crate::gpu::pipelines::buffer_bind_group(device, "tile_clear.bind_group", layout, &buffers)
+            crate::gpu::pipelines::buffer_bind_group(
+                device,
+                "tile_clear.bind_group",
+                layout,
+                &buffers,
+            )
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bind_group, &[]);
@@ -202,7 +213,6 @@ impl UniformRecords {
         (k as u64 * self.stride) as u32
     }
 }
-
 
 /// The atlas as a depth attachment, cleared on load when every view is redrawn.
 pub(crate) fn atlas_attachment<'a>(

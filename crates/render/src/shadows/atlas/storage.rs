@@ -25,7 +25,8 @@ pub struct ShadowAtlas {
     /// `array<vec4<f32>>` per view, what back-face culling faces: the light's position
     /// (w = 1) or, for orthographic views, the direction light travels (w = 0).
     pub eyes: wgpu::Buffer,
-    /// `array<u32>`: the views a generation draws (see [`ShadowInput::draw_list`]).
+    /// `array<u32>`: the views a generation draws (see
+    /// [`ShadowInput::draw_list`](crate::shadows::atlas::technique::ShadowInput::draw_list)).
     pub draw_list: wgpu::Buffer,
 }
 
@@ -113,7 +114,12 @@ impl ShadowAtlas {
             uniform_bytes.len() as u64,
             "shadow view uniforms",
         )?;
-        grew |= crate::gpu::buffers::grow_buffer(ctx, &mut self.eyes, data_bytes(&eyes), "shadow view eyes")?;
+        grew |= crate::gpu::buffers::grow_buffer(
+            ctx,
+            &mut self.eyes,
+            data_bytes(&eyes),
+            "shadow view eyes",
+        )?;
         grew |= crate::gpu::buffers::grow_buffer(
             ctx,
             &mut self.draw_list,

@@ -5,12 +5,12 @@
 use manyshadows_scene::light_space::ShadowView;
 
 use crate::gpu::timing::{GpuTimer, Span};
-use crate::GpuContext;
 use crate::gpu_scene::casters::CasterGeometry;
 use crate::gpu_scene::instances::{DrawItem, GpuScene};
 use crate::settings::ShadowOptions;
 use crate::shadows::atlas::storage::ShadowAtlas;
 use crate::shadows::source::ShadowStats;
+use crate::GpuContext;
 
 /// What a technique is given to fill the atlas.
 pub struct ShadowInput<'a> {

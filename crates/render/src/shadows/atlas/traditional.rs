@@ -8,11 +8,11 @@ use manyshadows_scene::light_space::ViewKind;
 
 /// Bytes of the per-view uniform the shaders read: view-projection and params.
 const VIEW_BINDING: u64 = 80;
-use crate::gpu_scene::instances::{POSITION_LAYOUT, UV_LAYOUT_1};
 use crate::gpu::types::VIEW_UNIFORM_STRIDE;
-use crate::shadows::atlas::technique::{Generation, ShadowInput, ShadowTechnique, visible_casters};
-use crate::shadows::source::ShadowStats;
+use crate::gpu_scene::instances::{POSITION_LAYOUT, UV_LAYOUT_1};
 use crate::shadows::atlas::shared::{atlas_attachment, TileClear};
+use crate::shadows::atlas::technique::{visible_casters, Generation, ShadowInput, ShadowTechnique};
+use crate::shadows::source::ShadowStats;
 use crate::GpuContext;
 
 /// The traditional technique's pipelines and layout.
@@ -33,8 +33,11 @@ impl Traditional {
     /// Builds the depth-only pipeline.
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let module =
-            crate::gpu::shaders::module(device, "traditional.shader", &crate::gpu::shaders::traditional());
+        let module = crate::gpu::shaders::module(
+            device,
+            "traditional.shader",
+            &crate::gpu::shaders::traditional(),
+        );
         let layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "traditional.layout",
@@ -49,8 +52,11 @@ impl Traditional {
                 crate::gpu::pipelines::storage_entry(3, wgpu::ShaderStages::FRAGMENT),
             ],
         );
-        let pipeline_layout =
-            crate::gpu::pipelines::pipeline_layout(device, "traditional.pipeline_layout", &[&layout]);
+        let pipeline_layout = crate::gpu::pipelines::pipeline_layout(
+            device,
+            "traditional.pipeline_layout",
+            &[&layout],
+        );
         let dp_module = ctx.has(wgpu::Features::CLIP_DISTANCES).then(|| {
             crate::gpu::shaders::module(
                 device,
@@ -148,7 +154,8 @@ fn draw_casters(
     stats: &mut ShadowStats,
 ) {
     let scene = input.scene;
-    let is_masked = |d: &&crate::gpu_scene::instances::DrawItem| input.casters.is_masked(d.material) == masked;
+    let is_masked =
+        |d: &&crate::gpu_scene::instances::DrawItem| input.casters.is_masked(d.material) == masked;
     let mut drawn = 0u64;
     for d in visible_casters(scene, view).filter(is_masked) {
         let m = d.mesh;

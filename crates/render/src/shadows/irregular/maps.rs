@@ -7,9 +7,10 @@
 //! exact answer for its own point. No depth atlas is filled; the result is the per-pixel
 //! visibility mask itself, which the lighting pass reads instead of a shadow map.
 //!
-//! One frame, after the G-buffer (all compute, `shaders/irregular.wgsl`):
+//! One frame, after the G-buffer (all compute, `irregular.wgsl` beside this module):
 //!
-//! 1. the caster transform ([`crate::gpu_scene::casters`]) writes every caster vertex in world space;
+//! 1. the caster transform ([`crate::gpu_scene::casters`]) writes every caster vertex in world
+//!    space;
 //! 2. `cs_init`: every pixel's mask word gets the bits of the lights that reach it;
 //! 3. per batch of lights (see **Memory**): the batch's grids are emptied; `cs_insert` projects each
 //!    pixel's ray origin (the G-buffer point moved `1e-4·max(1, |p|∞)` along its normal, the
@@ -78,11 +79,11 @@ use manyshadows_scene::light_space::ViewKind;
 use manyshadows_scene::{LightKind, Scene};
 use wgpu::util::DeviceExt;
 
-use crate::gpu_scene::casters::CasterGeometry;
 use crate::frame::gbuffer::GBuffer;
-use crate::shadows::plan::ShadowPlan;
-use crate::gpu::timing::{GpuTimer, Span};
 use crate::frame::visibility_mask::VisibilityMask;
+use crate::gpu::timing::{GpuTimer, Span};
+use crate::gpu_scene::casters::CasterGeometry;
+use crate::shadows::plan::ShadowPlan;
 use crate::{GpuContext, RenderError};
 
 /// Default cap of the grid side (texels) of one view.
@@ -414,8 +415,11 @@ impl IrregularShadows {
         );
         let tiles = buffer("irregular.tiles", (tile_queue + 1) * 16, storage);
 
-        let module =
-            crate::gpu::shaders::module(device, "irregular.shader", &crate::gpu::shaders::irregular());
+        let module = crate::gpu::shaders::module(
+            device,
+            "irregular.shader",
+            &crate::gpu::shaders::irregular(),
+        );
         // A scene without alpha-tested casters gets pipelines compiled without the mask test.
         let masked = inputs.casters.first_masked_triangle < inputs.casters.triangles;
         let constants: &[(&str, f64)] = if masked {
@@ -424,7 +428,9 @@ impl IrregularShadows {
             &[]
         };
         let pipeline = |entry: &str| {
-            crate::gpu::pipelines::compute_pipeline_with(device, entry, None, &module, entry, constants)
+            crate::gpu::pipelines::compute_pipeline_with(
+                device, entry, None, &module, entry, constants,
+            )
         };
         let pv = inputs.gbuffer.position.create_view(&Default::default());
         let nv = inputs.gbuffer.normal.create_view(&Default::default());
@@ -532,7 +538,8 @@ impl IrregularShadows {
     ) {
         encoder.clear_buffer(&self.control, 0, None);
         encoder.clear_buffer(&self.heads, self.cut_index * 4, Some(4));
-        let pixel_groups = crate::gpu::pipelines::dispatch_2d(self.width as u64 * self.height as u64, 65535);
+        let pixel_groups =
+            crate::gpu::pipelines::dispatch_2d(self.width as u64 * self.height as u64, 65535);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("irregular.init"),
@@ -580,7 +587,8 @@ impl IrregularShadows {
                 &|p| p.dispatch_workgroups(pixel_groups.0, pixel_groups.1, 1),
             );
             if has_triangles {
-                let (x, y) = crate::gpu::pipelines::dispatch_2d(self.triangles as u64 * views, 65535);
+                let (x, y) =
+                    crate::gpu::pipelines::dispatch_2d(self.triangles as u64 * views, 65535);
                 step(
                     encoder,
                     "irregular.triangles",
@@ -627,7 +635,8 @@ impl IrregularShadows {
 
     /// After the frame's submission: reads the counters; a full node pool is an error.
     pub fn finish(&mut self, ctx: &GpuContext) -> Result<IrregularStats, RenderError> {
-        let bytes = crate::gpu::readback::map_read(ctx, &self.control_readback, 0..READBACK_WORDS * 4)?;
+        let bytes =
+            crate::gpu::readback::map_read(ctx, &self.control_readback, 0..READBACK_WORDS * 4)?;
         let c: &[u32] = bytemuck::cast_slice(&bytes);
         self.last = IrregularStats {
             batches: self.batches.len() as u32,

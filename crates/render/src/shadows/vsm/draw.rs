@@ -175,8 +175,11 @@ impl PageDraw {
         let pipeline_layout = |label: &str, layout: &wgpu::BindGroupLayout| {
             crate::gpu::pipelines::pipeline_layout(device, label, &[layout])
         };
-        let draw_module =
-            crate::gpu::shaders::module(device, "vsm_draw.shader", &crate::gpu::shaders::vsm_draw());
+        let draw_module = crate::gpu::shaders::module(
+            device,
+            "vsm_draw.shader",
+            &crate::gpu::shaders::vsm_draw(),
+        );
         let cull_pl = pipeline_layout("vsm.cull_pipeline_layout", &cull_layout);
         let cull = crate::gpu::pipelines::compute_pipeline(
             device,

@@ -2,40 +2,43 @@
 //! Lights", I3D 2014; the page pool and page table as Unreal Engine 5 builds them, since wgpu
 //! has no sparse textures).
 //!
-//! **Faces.** Every shadow view of the plan — a spot's frustum, each of a point light's six
-//! cube faces, each cascade — is a *face* with a virtual map of up to 16,384² texels, cut into
-//! [`PAGE_SIZE`](plan::PAGE_SIZE)² pages. A face is a mip chain of page grids: level `l` has `2^l × 2^l` pages,
-//! level 0 covers the whole face with one page, the finest level has `side / PAGE_SIZE` pages
-//! per side. The CPU picks each face's virtual side from the light's importance (the largest
-//! texel density any visible point in its reach can ask for; directional lights and lights
-//! around the camera get the maximum) and lays out one page-table entry per page of every
-//! level ([`VirtualPlan`](plan::VirtualPlan), [`plan`]); lights that reach nothing the camera sees get no faces.
+//! **Faces** ([`plan`]). Every shadow view of the plan — a spot's frustum, each of a point
+//! light's six cube faces, each cascade — is a *face* with a virtual map of up to 16,384²
+//! texels, cut into [`PAGE_SIZE`](plan::PAGE_SIZE)² pages. A face is a mip chain of page grids:
+//! level `l` has `2^l × 2^l` pages, level 0 covers the whole face with one page, the finest
+//! level has `side / PAGE_SIZE` pages per side. The CPU picks each face's virtual side from the
+//! light's importance (the largest texel density any visible point in its reach can ask for;
+//! directional lights and lights around the camera get the maximum) and lays out one
+//! page-table entry per page of every level ([`VirtualPlan`](plan::VirtualPlan)); lights that
+//! reach nothing the camera sees get no faces.
 //!
-//! **Pages on the GPU, every frame** (`vsm.wgsl`, [`pages`], after the G-buffer and the light
+//! **Pages on the GPU, every frame** ([`pages`], `vsm.wgsl`, after the G-buffer and the light
 //! clusters):
 //! 1. *mark*: each pixel visits its cluster's lights; for each light that reaches it (and
 //!    faces it), the sample asks for the level whose texel matches its pixel footprint
-//!    ([`VirtualOptions::lod`](plan::VirtualOptions::lod) texels per pixel) and marks that page and its ancestors needed;
+//!    ([`VirtualOptions::lod`](plan::VirtualOptions::lod) texels per pixel) and marks that
+//!    page and its ancestors needed;
 //! 2. *allocate*: needed pages get pool pages in page-table order (ranks from per-block counts
 //!    and a prefix sum, so the frame never depends on thread order), coarsest level first, a
-//!    level admitted whole or not at all while the pool lasts; pages of levels that do not fit are *denied*, and
-//!    lookups fall back to their nearest resident ancestor — a coarser shadow, never a wrong
-//!    or missing one — and the frame's [`VirtualStats`](plan::VirtualStats) count them (a pool smaller than one
-//!    page per face in use leaves the faces beyond it unshadowed, counted too). With caching
-//!    ([`crate::settings::RenderSettings::cache_shadows`]) a page resident last frame in a face whose
-//!    view and casters did not change keeps its pool page and its depth; only the other pages
-//!    get free pool pages and are drawn;
-//! 3. *render*: every page drawn this frame is an ordinary shadow view (the face's projection
-//!    cropped to the page, one tile of the pool), drawn the `gpu-driven` way: compute culls caster
-//!    clusters against each page's frustum slice (and by normal cone), one indirect multi-draw
-//!    per round draws the survivors, clipped to the page's tile ([`draw`], `vsm_draw.wgsl`, the rounds of
-//!    [`crate::shadows::cluster_draw`]).
+//!    level admitted whole or not at all while the pool lasts; pages of levels that do not fit
+//!    are *denied*, and lookups fall back to their nearest resident ancestor — a coarser
+//!    shadow, never a wrong or missing one — and the frame's
+//!    [`VirtualStats`](plan::VirtualStats) count them (a pool smaller than one page per face in
+//!    use leaves the faces beyond it unshadowed, counted too). With caching
+//!    ([`crate::settings::RenderSettings::cache_shadows`]) a page resident last frame in a face
+//!    whose view and casters did not change keeps its pool page and its depth; only the other
+//!    pages get free pool pages and are drawn;
+//! 3. *render* ([`draw`], `vsm_draw.wgsl`): every page drawn this frame is an ordinary shadow
+//!    view (the face's projection cropped to the page, one tile of the pool), drawn the
+//!    `gpu-driven` way: compute culls caster clusters against each page's frustum slice (and by
+//!    normal cone), one indirect multi-draw per round ([`crate::shadows::cluster_draw`]) draws
+//!    the survivors, clipped to the page's tile.
 //!
 //! **Lookups** (`vsm_lookup.wgsl` after `vsm_common.wgsl`, composed into the lighting and
-//! visibility passes) repeat the marking's level and page choice with the
-//! same code, read the page table and sample the pool; PCF taps are clamped to the page.
+//! visibility passes) repeat the marking's level and page choice with the same code, read the
+//! page table and sample the pool; PCF taps are clamped to the page.
 //!
-//! [`source`] is the frame's shadow source made of them (output: the pool and its table).
+//! [`source`] is the frame's shadow source made of them (its output: the pool and its table).
 
 pub mod draw;
 pub mod pages;

@@ -164,8 +164,9 @@ impl VirtualShadows {
             storage | U::INDIRECT,
         );
         let cs = wgpu::ShaderStages::COMPUTE;
-        let tex =
-            |binding| crate::gpu::pipelines::texture_entry(binding, wgpu::TextureSampleType::Uint, cs);
+        let tex = |binding| {
+            crate::gpu::pipelines::texture_entry(binding, wgpu::TextureSampleType::Uint, cs)
+        };
         let mark_layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "vsm.mark_layout",
@@ -201,7 +202,8 @@ impl VirtualShadows {
         let pipeline_layout = |label: &str, layout: &wgpu::BindGroupLayout| {
             crate::gpu::pipelines::pipeline_layout(device, label, &[layout])
         };
-        let mark_module = crate::gpu::shaders::module(device, "vsm.shader", &crate::gpu::shaders::vsm());
+        let mark_module =
+            crate::gpu::shaders::module(device, "vsm.shader", &crate::gpu::shaders::vsm());
         let mark_pl = pipeline_layout("vsm.mark_pipeline_layout", &mark_layout);
         let compute =
             |label: &str, module: &wgpu::ShaderModule, pl: &wgpu::PipelineLayout, entry| {
@@ -313,7 +315,12 @@ impl VirtualShadows {
             "virtual faces",
         )?;
         let entries = self.plan.fit.table_entries.max(1) as u64;
-        if crate::gpu::buffers::grow_buffer(ctx, &mut self.table, entries * 4, "virtual page table")? {
+        if crate::gpu::buffers::grow_buffer(
+            ctx,
+            &mut self.table,
+            entries * 4,
+            "virtual page table",
+        )? {
             // Last frame's table went with the old buffer: keep no pages this time.
             self.last.clear();
             replaced = true;
