@@ -605,6 +605,33 @@ fn describe(circle: &[String], graph: &Graph) -> String {
     )
 }
 
+/// The modules of an acyclic graph by floor: a module's floor is one above the highest floor
+/// it imports (0 for modules that import none).
+fn floors(graph: &Graph) -> Vec<Vec<String>> {
+    fn floor(m: &str, graph: &Graph, memo: &mut BTreeMap<String, usize>) -> usize {
+        if let Some(&f) = memo.get(m) {
+            return f;
+        }
+        memo.insert(m.to_string(), 0); // a circle (reported elsewhere) ends here
+        let f = graph
+            .get(m)
+            .map(|e| e.iter().map(|t| floor(t, graph, memo) + 1).max().unwrap_or(0))
+            .unwrap_or(0);
+        memo.insert(m.to_string(), f);
+        f
+    }
+    let mut memo = BTreeMap::new();
+    let mut out: Vec<Vec<String>> = Vec::new();
+    for m in graph.keys() {
+        let f = floor(m, graph, &mut memo);
+        if out.len() <= f {
+            out.resize(f + 1, Vec::new());
+        }
+        out[f].push(m.clone());
+    }
+    out
+}
+
 /// Modules under `shadows::atlas` that import an atlas technique they may not: a technique
 /// importing another technique, or anything but the registry importing a technique.
 fn technique_imports(graph: &Graph) -> Vec<String> {
@@ -693,6 +720,11 @@ fn no_import_circles_in_any_crate() {
         );
         for c in &found {
             failures.push(format!("crate {name}: {}", describe(c, graph)));
+        }
+        if enforced && with_relative.is_empty() {
+            for (f, modules) in floors(relative).iter().enumerate() {
+                println!("  floor {f}: {}", modules.join(", "));
+            }
         }
         if enforced {
             for c in with_relative.iter().filter(|c| !found.contains(c)) {
@@ -845,4 +877,14 @@ fn checker_catches_a_technique_importing_another() {
         technique_imports(&g),
         ["shadows::atlas::layered imports shadows::atlas::traditional"]
     );
+}
+
+#[test]
+fn checker_orders_floors() {
+    let mut g = Graph::new();
+    g.insert("top".into(), ["mid".to_string(), "low".to_string()].into());
+    g.insert("mid".into(), ["low".to_string()].into());
+    g.insert("low".into(), BTreeSet::new());
+    g.insert("side".into(), ["low".to_string()].into());
+    assert_eq!(floors(&g), [vec!["low"], vec!["mid", "side"], vec!["top"]]);
 }
