@@ -218,7 +218,11 @@ fn main() -> ExitCode {
             c.passed,
             c.failed,
             c.ignored,
-            if c.exit_ok { "" } else { " (cargo test failed)" }
+            if c.exit_ok {
+                ""
+            } else {
+                " (cargo test failed)"
+            }
         );
         for f in &c.failures {
             println!("          FAILED {f}");
@@ -312,11 +316,7 @@ impl Setup {
                 }
                 let mut args = vec!["install", "-y"];
                 args.extend(&missing);
-                match quiet(
-                    "apt-get",
-                    &args,
-                    &[("DEBIAN_FRONTEND", "noninteractive")],
-                ) {
+                match quiet("apt-get", &args, &[("DEBIAN_FRONTEND", "noninteractive")]) {
                     Ok(()) if missing.iter().all(|p| dpkg_installed(p)) => Outcome::Installed,
                     Ok(()) => Outcome::Missing("apt-get ran but the packages are not there".into()),
                     Err(e) => Outcome::Missing(format!("apt-get install failed: {e}")),
@@ -396,9 +396,8 @@ fn is_root() -> bool {
 }
 
 fn on_path(tool: &str) -> bool {
-    std::env::var_os("PATH").is_some_and(|paths| {
-        std::env::split_paths(&paths).any(|d| d.join(tool).is_file())
-    })
+    std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|d| d.join(tool).is_file()))
 }
 
 /// A command's stdout when it runs and succeeds.
@@ -478,7 +477,10 @@ mod tests {
     fn reads_the_locked_wasm_bindgen_version() {
         let v = locked_version(&workspace_root(), "wasm-bindgen").expect("in Cargo.lock");
         assert!(v.starts_with("0.2."), "{v}");
-        assert_eq!(locked_version(&workspace_root(), "no-such-crate-here"), None);
+        assert_eq!(
+            locked_version(&workspace_root(), "no-such-crate-here"),
+            None
+        );
     }
 
     #[test]

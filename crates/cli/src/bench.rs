@@ -16,15 +16,16 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::{Mat4, Quat, Vec3};
-use manyshadows::casters::{CasterOptions, Skin, MAX_BONES};
+use manyshadows::gpu::timing::PipelineCounts;
+use manyshadows::gpu_scene::instances::GpuScene;
+use manyshadows::gpu_scene::skinning::{Skin, MAX_BONES};
 use manyshadows::scene::atlas::FitPolicy;
 use manyshadows::scene::{Attenuation, Camera, Instance, Light, LightKind, Material, Mesh, Scene};
-use manyshadows::timing::PipelineCounts;
+use manyshadows::shadows::atlas::generator::ShadowGenerator;
+use manyshadows::shadows::plan::ShadowPlan;
 use manyshadows::wgpu;
-use manyshadows::{
-    CullMode, GpuContext, GpuScene, ShadowGenerator, ShadowOptions, ShadowPlan, ShadowStats,
-    Technique,
-};
+use manyshadows::CasterOptions;
+use manyshadows::{CullMode, GpuContext, ShadowOptions, ShadowStats, Technique};
 use serde::Serialize;
 
 use crate::harness::{
@@ -57,12 +58,13 @@ pub struct LayeredArgs {
         value_delimiter = ','
     )]
     pub variants: Vec<String>,
-    /// Methods, comma-separated: a technique (traditional, layered, multiview, gpu-driven,
-    /// compute), optionally with a cull mode (`layered:frustum`). A bare single-pass technique
-    /// runs with each of the variant's cull modes (none, plus the culling the variant is about).
+    /// Methods, comma-separated: a technique that fills the atlas (default: every one), optionally
+    /// with a cull mode (`TECHNIQUE:frustum`). A technique that culls per triangle runs with
+    /// each of the variant's cull modes when none is given (none, plus the culling the variant
+    /// is about); the default technique, the baseline of every ratio, always runs.
     #[arg(
         long,
-        default_value = "traditional,layered,multiview,gpu-driven,compute",
+        default_values_t = crate::techniques::atlas_names(),
         value_delimiter = ','
     )]
     pub methods: Vec<String>,
@@ -155,8 +157,8 @@ struct Method {
 
 impl Method {
     fn label(&self) -> String {
-        if self.technique == Technique::Traditional {
-            "traditional".into()
+        if !self.technique.info().culls_triangles {
+            self.technique.name().into()
         } else {
             format!("{}:{}", self.technique.name(), self.cull.name())
         }
@@ -177,13 +179,8 @@ fn methods_for(specs: &[String], variant: &Variant) -> Result<Vec<Method>> {
             None => (spec.as_str(), None),
         };
         let technique: Technique = t.parse().map_err(anyhow::Error::msg)?;
-        if technique == Technique::Irregular {
-            anyhow::bail!(
-                "method '{spec}': {}",
-                manyshadows::shadow::IRREGULAR_NO_ATLAS
-            );
-        }
-        if technique == Technique::Traditional {
+        crate::techniques::require_atlas(&format!("method '{spec}'"), technique)?;
+        if !technique.info().culls_triangles {
             push(Method {
                 technique,
                 cull: CullMode::None,
@@ -202,12 +199,12 @@ fn methods_for(specs: &[String], variant: &Variant) -> Result<Vec<Method>> {
             }
         }
     }
-    if !out.iter().any(|m| m.technique == Technique::Traditional) {
-        // Ratios need the baseline.
+    if !out.iter().any(|m| m.technique == Technique::default()) {
+        // Ratios need the baseline: the default technique, one pass per view.
         out.insert(
             0,
             Method {
-                technique: Technique::Traditional,
+                technique: Technique::default(),
                 cull: CullMode::None,
             },
         );
@@ -436,8 +433,7 @@ pub fn layered(args: &LayeredArgs) -> Result<()> {
     };
     let h = Harness::start(&args.run)?;
     let ctx = &h.ctx;
-    let max_atlas =
-        manyshadows::shadow::DEFAULT_MAX_ATLAS_SIZE.min(ctx.limits().max_texture_dimension_2d);
+    let max_atlas = manyshadows::DEFAULT_MAX_ATLAS_SIZE.min(ctx.limits().max_texture_dimension_2d);
     eprintln!(
         "mesh: {} ({} triangles); timestamps {}, pipeline statistics {}",
         mesh.name,
@@ -504,14 +500,10 @@ pub fn layered(args: &LayeredArgs) -> Result<()> {
             if unsupported.contains(&m.technique) {
                 continue;
             }
-            let options = ShadowOptions {
-                cull: m.cull,
-                casters: CasterOptions {
-                    assume_closed: variant.assume_closed,
-                    ..Default::default()
-                },
-                discard_raster: variant.discard && !args.raster,
-            };
+            let options = ShadowOptions::default()
+                .with_cull(m.cull)
+                .with_casters(CasterOptions::default().with_assume_closed(variant.assume_closed))
+                .with_discard_raster(variant.discard && !args.raster);
             let created = ctx.scoped(&format!("building {}", m.technique), || {
                 ShadowGenerator::new(ctx, &scene, gpu, shadow_plan.clone(), m.technique, options)
             });
@@ -534,7 +526,7 @@ pub fn layered(args: &LayeredArgs) -> Result<()> {
             }
         }
         h.advance(work(methods.len() - contenders.len(), maps));
-        for mut o in h.compare(contenders, Some("traditional"))? {
+        for mut o in h.compare(contenders, Some(Technique::default().name()))? {
             // One more run per method with pipeline statistics (kept out of the timings).
             let pipeline = o
                 .subject

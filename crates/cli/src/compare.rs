@@ -15,7 +15,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
-use manyshadows::context::describe_adapter;
+use manyshadows::gpu::context::describe_adapter;
 use manyshadows::scene::atlas::FitPolicy;
 use manyshadows::scene::Scene;
 use manyshadows::{GpuContext, Pcf, RenderSettings, Renderer, ShadowBias, Technique};
@@ -94,14 +94,14 @@ pub struct CompareArgs {
     #[arg(long, default_value = "on", value_parser = crate::parse_on_off, action = clap::ArgAction::Set)]
     shadow_alpha: bool,
     /// Largest shadow-atlas side in texels (clamped to the adapter's limit).
-    #[arg(long, default_value_t = manyshadows::shadow::DEFAULT_MAX_ATLAS_SIZE)]
+    #[arg(long, default_value_t = manyshadows::DEFAULT_MAX_ATLAS_SIZE)]
     atlas_max: u32,
     /// Fail when the shadow maps don't fit the atlas, instead of shrinking them.
     #[arg(long)]
     strict_atlas: bool,
     /// Page pool of --techniques virtual, MiB (compare at equal memory by setting it to the
     /// atlas size the other variants report).
-    #[arg(long, default_value_t = (manyshadows::vsm::DEFAULT_POOL_BYTES >> 20) as u32)]
+    #[arg(long, default_value_t = (manyshadows::shadows::vsm::plan::DEFAULT_POOL_BYTES >> 20) as u32)]
     page_pool: u32,
     /// Shadow texels per screen pixel that --techniques virtual aims for.
     #[arg(long, default_value_t = 1.0)]
@@ -241,11 +241,12 @@ fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
         );
     }
     let mut techniques: Vec<Technique> = Vec::new();
-    for &t in if args.techniques.is_empty() {
-        Technique::ALL
+    let asked = if args.techniques.is_empty() {
+        Technique::all()
     } else {
-        &args.techniques
-    } {
+        args.techniques.clone()
+    };
+    for t in asked {
         if !techniques.contains(&t) {
             techniques.push(t);
         }
@@ -463,7 +464,7 @@ struct VariantResult {
     shrink_steps: u32,
     /// Shadow memory the variant keeps: the atlas, or the page pool plus the page table.
     shadow_bytes: u64,
-    gpu_ms: manyshadows::timing::GpuTimes,
+    gpu_ms: manyshadows::GpuTimes,
     score: score::Score,
     footprints: Vec<Footprints>,
     diff_image: PathBuf,
@@ -540,40 +541,34 @@ fn with_resolution(scene: &Scene, resolution: Option<u32>) -> Scene {
 }
 
 fn settings(args: &CompareArgs, technique: Technique) -> RenderSettings {
-    RenderSettings {
-        width: args.width,
-        height: args.height,
-        technique,
-        // The score reads the hard visibility mask, which PCF does not touch; the frame under
-        // the difference images shows the hard edges that are being scored.
-        pcf: Pcf::Off,
-        bias: ShadowBias {
-            constant: args.bias_constant,
-            slope: args.bias_slope,
-            normal_offset: args.bias_normal,
-        },
-        max_atlas_size: Some(args.atlas_max),
-        fit: if args.strict_atlas {
+    // The score reads the hard visibility mask, which PCF does not touch; the frame under
+    // the difference images shows the hard edges that are being scored.
+    RenderSettings::default()
+        .with_width(args.width)
+        .with_height(args.height)
+        .with_technique(technique)
+        .with_pcf(Pcf::Off)
+        .with_bias(ShadowBias::new(
+            args.bias_constant,
+            args.bias_slope,
+            args.bias_normal,
+        ))
+        .with_max_atlas_size(Some(args.atlas_max))
+        .with_fit(if args.strict_atlas {
             FitPolicy::Strict
         } else {
             FitPolicy::Shrink
-        },
-        visibility: true,
-        point_shadows: args.point_shadows,
-        shadow: manyshadows::ShadowOptions {
-            casters: manyshadows::casters::CasterOptions {
-                ignore_masks: !args.shadow_alpha,
-                ..Default::default()
-            },
-            ..Default::default()
-        },
-        virtual_maps: manyshadows::vsm::VirtualOptions {
-            pool_bytes: u64::from(args.page_pool) << 20,
-            lod: args.virtual_lod,
-            ..Default::default()
-        },
-        ..Default::default()
-    }
+        })
+        .with_visibility(true)
+        .with_point_shadows(args.point_shadows)
+        .with_shadow(manyshadows::ShadowOptions::default().with_casters(
+            manyshadows::CasterOptions::default().with_ignore_masks(!args.shadow_alpha),
+        ))
+        .with_virtual_maps(
+            manyshadows::VirtualOptions::default()
+                .with_pool_bytes(u64::from(args.page_pool) << 20)
+                .with_lod(args.virtual_lod),
+        )
 }
 
 fn trace_reference(

@@ -24,13 +24,15 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use manyshadows::clusters::ClusterStats;
+use manyshadows::gpu::timing::{GpuTimer, GpuTimes, PipelineCounts, Stage};
+use manyshadows::gpu_scene::instances::GpuScene;
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::scene::Scene;
-use manyshadows::timing::{GpuTimer, GpuTimes, PipelineCounts, Stage};
-use manyshadows::vsm::VirtualStats;
+use manyshadows::shadows::atlas::generator::ShadowGenerator;
 use manyshadows::wgpu;
-use manyshadows::{GpuContext, GpuScene, Renderer, ShadowGenerator, ShadowStats};
+use manyshadows::ClusterStats;
+use manyshadows::VirtualStats;
+use manyshadows::{GpuContext, Renderer, ShadowStats};
 use serde::Serialize;
 
 use crate::plot::{Panel, PlotPoint};
@@ -252,7 +254,7 @@ impl Harness {
         std::fs::create_dir_all(out_dir)
             .with_context(|| format!("creating {}", out_dir.display()))?;
         let ctx = GpuContext::new(&gpu.request())?;
-        let adapter = manyshadows::context::describe_adapter(&ctx.info);
+        let adapter = manyshadows::gpu::context::describe_adapter(&ctx.info);
         eprintln!("adapter: {adapter}");
         let pb = ProgressBar::hidden();
         pb.set_style(

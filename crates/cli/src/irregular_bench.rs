@@ -12,7 +12,7 @@
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use manyshadows::scene::builtin::LightMix;
-use manyshadows::timing::Stage;
+use manyshadows::Stage;
 use manyshadows::{RenderSettings, Renderer, Technique};
 use serde::Serialize;
 
@@ -36,10 +36,12 @@ pub struct IrregularArgs {
     /// Screen resolutions WxH, comma-separated.
     #[arg(long, default_value = "1280x720,1920x1080", value_delimiter = ',')]
     pub screens: Vec<String>,
-    /// Methods, comma-separated: `irregular` or `traditional@RES` (shadow-map side per view).
+    /// Methods, comma-separated: a technique that fills no atlas by name, or an atlas technique
+    /// at a shadow-map side per view (`TECHNIQUE@RES`). Default: the exact techniques, and the
+    /// default technique at 512 and 2048 (the first of these is every ratio's baseline).
     #[arg(
         long,
-        default_value = "irregular,traditional@512,traditional@2048",
+        default_values_t = crate::techniques::exact_methods(),
         value_delimiter = ','
     )]
     pub methods: Vec<String>,
@@ -60,18 +62,27 @@ struct Record {
 }
 
 fn parse_method(s: &str) -> Result<(Technique, Option<u32>)> {
-    match s.split_once('@') {
-        None if s == "irregular" => Ok((Technique::Irregular, None)),
-        Some(("traditional", r)) => {
+    let (name, res) = match s.split_once('@') {
+        Some((n, r)) => (n, Some(r)),
+        None => (s, None),
+    };
+    let technique: Technique = name.parse().map_err(anyhow::Error::msg)?;
+    let atlas = technique.info().fills == manyshadows::Fills::Atlas;
+    match (atlas, res) {
+        (false, None) => Ok((technique, None)),
+        (true, Some(r)) => {
             let r: u32 = r
                 .parse()
                 .with_context(|| format!("method '{s}': bad resolution"))?;
             if !(16..=8192).contains(&r) {
                 bail!("method '{s}': resolution must be 16..=8192");
             }
-            Ok((Technique::Traditional, Some(r)))
+            Ok((technique, Some(r)))
         }
-        _ => bail!("unknown method '{s}' (irregular or traditional@RES, e.g. traditional@512)"),
+        (true, None) => bail!("method '{s}': an atlas technique needs a resolution, e.g. {s}@512"),
+        (false, Some(_)) => {
+            bail!("method '{s}': {technique} has no shadow-map resolution; name it alone")
+        }
     }
 }
 
@@ -98,12 +109,10 @@ pub fn irregular(args: &IrregularArgs) -> Result<()> {
             let mut contenders = Vec::new();
             for (name, (technique, res)) in &methods {
                 let scene = seeded_scene(&args.scene, n, mix, *res)?;
-                let settings = RenderSettings {
-                    width: *w,
-                    height: *h_px,
-                    technique: *technique,
-                    ..Default::default()
-                };
+                let settings = RenderSettings::default()
+                    .with_width(*w)
+                    .with_height(*h_px)
+                    .with_technique(*technique);
                 contenders.push(Contender {
                     label: name.clone(),
                     subject: FrameSubject {
@@ -111,7 +120,7 @@ pub fn irregular(args: &IrregularArgs) -> Result<()> {
                     },
                 });
             }
-            for o in h.compare(contenders, Some("traditional@512"))? {
+            for o in h.compare(contenders, Some(&format!("{}@512", Technique::default())))? {
                 records.push(Record {
                     screen: screen.clone(),
                     lights: n,

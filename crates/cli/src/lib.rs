@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use manyshadows::context::{describe_adapter, feature_use, list_adapters, requested_backends};
+use manyshadows::gpu::context::{describe_adapter, feature_use, list_adapters, requested_backends};
 use manyshadows::scene::atlas::FitPolicy;
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::scene::light_space::PointShadows;
@@ -31,6 +31,7 @@ mod lights_bench;
 mod omni;
 mod plot;
 mod soak;
+mod techniques;
 mod viewer;
 mod virtual_bench;
 
@@ -162,18 +163,17 @@ enum Backend {
 impl GpuArgs {
     /// The adapter request these options describe.
     pub fn request(&self) -> AdapterRequest {
-        AdapterRequest {
-            backends: self.backend.map(|b| match b {
+        AdapterRequest::default()
+            .with_backends(self.backend.map(|b| match b {
                 Backend::Vulkan => wgpu_backends("vulkan"),
                 Backend::Gl => wgpu_backends("gl"),
                 Backend::Metal => wgpu_backends("metal"),
                 Backend::Dx12 => wgpu_backends("dx12"),
-            }),
-            name: self.adapter.clone(),
-            limits: self.limits.map(|l| match l {
-                Limits::Webgpu => manyshadows::context::webgpu_default_limits(),
-            }),
-        }
+            }))
+            .with_name(self.adapter.clone())
+            .with_limits(self.limits.map(|l| match l {
+                Limits::Webgpu => manyshadows::webgpu_default_limits(),
+            }))
     }
 }
 
@@ -186,8 +186,8 @@ pub(crate) fn parse_on_off(s: &str) -> Result<bool, String> {
     }
 }
 
-fn wgpu_backends(name: &str) -> manyshadows::context::Backends {
-    manyshadows::context::Backends::from_comma_list(name)
+fn wgpu_backends(name: &str) -> manyshadows::wgpu::Backends {
+    manyshadows::wgpu::Backends::from_comma_list(name)
 }
 
 #[derive(Args, Debug, Clone)]
@@ -200,24 +200,17 @@ pub(crate) struct RenderArgs {
     /// plane-spot, plane-point, plane-directional.
     #[arg(long, default_value = "atrium")]
     scene: String,
-    /// Shadow generation technique: traditional (one depth pass per shadow view), layered
-    /// (one instanced draw into every view's tile), multiview (one pass per group of views via
-    /// the MULTIVIEW feature, Vulkan), gpu-driven (compute culls triangle clusters per view,
-    /// then one multi-draw-indirect), compute (a compute-shader rasterizer: every view in one
-    /// dispatch, atomicMin on depth). All fill the same atlas. irregular (irregular shadow
-    /// maps: camera samples in light-space lists, exact per-triangle tests, alias-free) computes
-    /// the visibility mask instead and fills no atlas. virtual (virtual shadow maps: a paged
-    /// map of up to 16k² per light face, only the pages the camera's samples need, at the
-    /// resolution they need, rendered into a page pool; see --page-pool).
-    #[arg(long, default_value = "traditional", value_parser = parse_technique)]
+    /// Shadow technique (--help lists them all, with what each fills and needs).
+    #[arg(long, default_value_t = Technique::default(), value_parser = parse_technique, long_help = techniques::help())]
     technique: Technique,
     /// Per-view triangle culling of the single-pass techniques: none, frustum, backface
-    /// (closed meshes only, so shadows never change) or all. `traditional` ignores it.
+    /// (closed meshes only, so shadows never change) or all. The default technique, one pass
+    /// per view, culls whole instances on the CPU and ignores it.
     #[arg(long, default_value = "all", value_parser = parse_cull)]
     cull: CullMode,
     /// Point-light shadows: cube (six 90° faces) or dual-paraboloid (two hemispheres, each
     /// map twice the per-face resolution; needs finely tessellated geometry, see --subdivide).
-    /// Supported by traditional and layered.
+    /// `--help` under --technique says which techniques render which.
     #[arg(long, default_value = "cube", value_parser = parse_point_shadows)]
     point_shadows: PointShadows,
     /// Split every triangle into four this many times before rendering (4^N triangles), e.g.
@@ -285,7 +278,7 @@ pub(crate) struct RenderArgs {
     #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     shadow_alpha: bool,
     /// Largest shadow-atlas side in texels (clamped to the adapter's limit).
-    #[arg(long, default_value_t = manyshadows::shadow::DEFAULT_MAX_ATLAS_SIZE)]
+    #[arg(long, default_value_t = manyshadows::DEFAULT_MAX_ATLAS_SIZE)]
     atlas_max: u32,
     /// Fail when the shadow maps don't fit the atlas. By default maps that don't fit degrade by
     /// importance: lights that reach nothing on screen get no maps, the least important lights
@@ -304,11 +297,11 @@ pub(crate) struct RenderArgs {
     /// Page pool of --technique virtual, MiB of 32-bit depth (rounded down to a square
     /// power-of-two pool of 128² pages; 256 = an 8192² pool of 4096 pages). Pages that do not
     /// fit fall back to coarser levels, counted in the summary.
-    #[arg(long, default_value_t = (manyshadows::vsm::DEFAULT_POOL_BYTES >> 20) as u32)]
+    #[arg(long, default_value_t = (manyshadows::shadows::vsm::plan::DEFAULT_POOL_BYTES >> 20) as u32)]
     page_pool: u32,
     /// Largest virtual side of a face for --technique virtual (rounded to a power of two and
     /// clamped to 128..=16384 texels).
-    #[arg(long, default_value_t = manyshadows::vsm::MAX_SIDE)]
+    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::MAX_SIDE)]
     virtual_side: u32,
     /// Shadow texels per screen pixel that --technique virtual aims for (1 = texel footprint
     /// about the pixel footprint; 2 = twice as fine, four times the pages).
@@ -318,12 +311,12 @@ pub(crate) struct RenderArgs {
     /// tiles x depth-slices grid, built on the GPU each frame) or all (every light: the
     /// reference the clustered image must equal, and slow past a few hundred lights).
     #[arg(long, default_value = "clustered", value_parser = parse_light_loop)]
-    light_loop: manyshadows::clusters::LightLoop,
+    light_loop: manyshadows::LightLoop,
     /// Cluster tile side in pixels.
-    #[arg(long, default_value_t = manyshadows::clusters::ClusterOptions::default().tile)]
+    #[arg(long, default_value_t = manyshadows::ClusterOptions::default().tile)]
     cluster_tile: u32,
     /// Exponential depth slices of the cluster grid (1 to 256).
-    #[arg(long, default_value_t = manyshadows::clusters::ClusterOptions::default().slices)]
+    #[arg(long, default_value_t = manyshadows::ClusterOptions::default().slices)]
     cluster_slices: u32,
     /// Output image.
     #[arg(long, short, default_value = "frame.png")]
@@ -391,7 +384,7 @@ pub fn parse_pcf(s: &str) -> Result<Pcf, String> {
     s.parse()
 }
 
-fn parse_light_loop(s: &str) -> Result<manyshadows::clusters::LightLoop, String> {
+fn parse_light_loop(s: &str) -> Result<manyshadows::LightLoop, String> {
     s.parse()
 }
 
@@ -419,9 +412,27 @@ pub fn main() {
     quiet_wayland_probe();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     if let Err(e) = run(std::env::args_os()) {
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", report(&e));
         std::process::exit(1);
     }
+}
+
+/// An error and its causes on one line, each cause once: a cause whose text the message
+/// already holds (errors that print their source, as `cannot read x: <os error>` does) is not
+/// repeated.
+pub fn report(e: &anyhow::Error) -> String {
+    let mut msg = String::new();
+    for cause in e.chain() {
+        let c = cause.to_string();
+        if msg.contains(&c) {
+            continue;
+        }
+        if !msg.is_empty() {
+            msg.push_str(": ");
+        }
+        msg.push_str(&c);
+    }
+    msg
 }
 
 /// Runs the program with `args` (the program name first, as `std::env::args_os` gives):
@@ -553,20 +564,36 @@ fn check_render_args(args: &RenderArgs) -> Result<()> {
     if args.frames == 0 {
         bail!("--frames must be at least 1");
     }
-    if args.page_pool == 0 {
-        bail!("--page-pool must be at least 1 MiB");
+    // The renderer checks every option's range itself; asking it here refuses a bad value
+    // before anything is loaded, and names the flag that set it.
+    render_settings(args, args.atlas_max)
+        .validate()
+        .map_err(flag_error)
+}
+
+/// A renderer error about an option, with the CLI flag that sets the option in front.
+pub(crate) fn flag_error(e: manyshadows::RenderError) -> anyhow::Error {
+    const FLAGS: &[(&str, &str)] = &[
+        ("width", "--width"),
+        ("height", "--height"),
+        ("max_atlas_size", "--atlas-max"),
+        ("bias.constant", "--bias-constant"),
+        ("bias.slope", "--bias-slope"),
+        ("bias.normal_offset", "--bias-normal"),
+        ("clusters.tile", "--cluster-tile"),
+        ("clusters.slices", "--cluster-slices"),
+        ("irregular.grid", "--irregular-grid"),
+        ("irregular.hash", "--irregular-hash"),
+        ("virtual_maps.pool_bytes", "--page-pool (MiB)"),
+        ("virtual_maps.lod", "--virtual-lod"),
+        ("virtual_maps.max_side", "--virtual-side"),
+    ];
+    if let manyshadows::RenderError::InvalidOption { option, .. } = &e {
+        if let Some((_, flag)) = FLAGS.iter().find(|(o, _)| o == option) {
+            return anyhow::anyhow!("{flag}: {e}");
+        }
     }
-    if args.atlas_max < manyshadows::scene::atlas::MIN_TILE {
-        bail!(
-            "--atlas-max {}: the atlas must hold at least one {}-texel tile",
-            args.atlas_max,
-            manyshadows::scene::atlas::MIN_TILE
-        );
-    }
-    if args.irregular_hash == Some(0) {
-        bail!("--irregular-hash must be at least 1 (1 = one list per texel, no hashing)");
-    }
-    Ok(())
+    e.into()
 }
 
 /// The atlas side `--atlas-max` really allows on this adapter (a power of two, at most the
@@ -591,51 +618,45 @@ pub(crate) fn effective_atlas_max(ctx: &GpuContext, requested: u32) -> u32 {
 /// The renderer settings `args` ask for, with the atlas cap already checked against the
 /// adapter.
 pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettings {
-    RenderSettings {
-        width: args.width,
-        height: args.height,
-        technique: args.technique,
-        shadow: ShadowOptions {
-            cull: args.cull,
-            casters: manyshadows::casters::CasterOptions {
-                ignore_masks: !args.shadow_alpha,
-                ..Default::default()
-            },
-            ..Default::default()
-        },
-        cache_shadows: args.cache,
-        point_shadows: args.point_shadows,
-        pcf: args.pcf,
-        bias: ShadowBias {
-            constant: args.bias_constant,
-            slope: args.bias_slope,
-            normal_offset: args.bias_normal,
-        },
-        max_atlas_size: Some(atlas_max),
-        fit: if args.strict_atlas {
+    RenderSettings::default()
+        .with_width(args.width)
+        .with_height(args.height)
+        .with_technique(args.technique)
+        .with_shadow(ShadowOptions::default().with_cull(args.cull).with_casters(
+            manyshadows::CasterOptions::default().with_ignore_masks(!args.shadow_alpha),
+        ))
+        .with_cache_shadows(args.cache)
+        .with_point_shadows(args.point_shadows)
+        .with_pcf(args.pcf)
+        .with_bias(ShadowBias::new(
+            args.bias_constant,
+            args.bias_slope,
+            args.bias_normal,
+        ))
+        .with_max_atlas_size(Some(atlas_max))
+        .with_fit(if args.strict_atlas {
             FitPolicy::Strict
         } else {
             FitPolicy::Prioritize
-        },
-        visibility: args.visibility_out.is_some(),
-        irregular: manyshadows::irregular::IrregularOptions {
-            grid: args.irregular_grid,
-            hash: args.irregular_hash,
-            ..Default::default()
-        },
-        virtual_maps: manyshadows::vsm::VirtualOptions {
-            pool_bytes: u64::from(args.page_pool) << 20,
-            max_side: args.virtual_side,
-            lod: args.virtual_lod,
-            ..Default::default()
-        },
-        light_loop: args.light_loop,
-        clusters: manyshadows::clusters::ClusterOptions {
-            tile: args.cluster_tile,
-            slices: args.cluster_slices,
-            ..Default::default()
-        },
-    }
+        })
+        .with_visibility(args.visibility_out.is_some())
+        .with_irregular(
+            manyshadows::IrregularOptions::default()
+                .with_grid(args.irregular_grid)
+                .with_hash(args.irregular_hash),
+        )
+        .with_virtual_maps(
+            manyshadows::VirtualOptions::default()
+                .with_pool_bytes(u64::from(args.page_pool) << 20)
+                .with_max_side(args.virtual_side)
+                .with_lod(args.virtual_lod),
+        )
+        .with_light_loop(args.light_loop)
+        .with_clusters(
+            manyshadows::ClusterOptions::default()
+                .with_tile(args.cluster_tile)
+                .with_slices(args.cluster_slices),
+        )
 }
 
 fn render(args: &RenderArgs) -> Result<()> {
@@ -682,7 +703,7 @@ fn render(args: &RenderArgs) -> Result<()> {
             let shadow_ms = fr
                 .timings
                 .gpu_ms
-                .get(manyshadows::timing::Stage::Shadows)
+                .get(manyshadows::Stage::Shadows)
                 .map_or("n/a".to_string(), |v| format!("{v:.2} ms"));
             let line = match &fr.virtual_maps {
                 Some(v) => format!(
@@ -708,8 +729,11 @@ fn render(args: &RenderArgs) -> Result<()> {
     write_rgba_png(&args.out, frame.width, frame.height, &frame.rgba)?;
     if let Some(path) = &args.atlas_out {
         let depth = renderer.read_atlas()?;
-        let (side, rgb) =
-            manyshadows::atlas_image::atlas_picture(&depth, renderer.atlas().size, renderer.plan());
+        let (side, rgb) = manyshadows::shadows::image::atlas_picture(
+            &depth,
+            renderer.atlas().size,
+            renderer.plan(),
+        );
         image::save_buffer(path, &rgb, side, side, image::ExtendedColorType::Rgb8)
             .with_context(|| format!("writing {}", path.display()))?;
     }
@@ -967,8 +991,8 @@ fn info(args: &GpuArgs) -> Result<()> {
     println!(
         "shadow atlas: up to {0}x{0} (default cap {1})",
         l.max_texture_dimension_2d
-            .min(manyshadows::shadow::DEFAULT_MAX_ATLAS_SIZE),
-        manyshadows::shadow::DEFAULT_MAX_ATLAS_SIZE
+            .min(manyshadows::DEFAULT_MAX_ATLAS_SIZE),
+        manyshadows::DEFAULT_MAX_ATLAS_SIZE
     );
     Ok(())
 }

@@ -11,9 +11,9 @@
 
 use anyhow::Result;
 use clap::Args;
-use manyshadows::clusters::LightLoop;
 use manyshadows::scene::builtin::{self, LightMix};
-use manyshadows::timing::Stage;
+use manyshadows::LightLoop;
+use manyshadows::Stage;
 use manyshadows::{RenderSettings, Renderer, Technique};
 use serde::Serialize;
 
@@ -43,7 +43,7 @@ pub struct LightsArgs {
     #[arg(long, default_value = "all")]
     pub light_types: String,
     /// Shadow technique.
-    #[arg(long, default_value = "traditional", value_parser = |s: &str| s.parse::<Technique>())]
+    #[arg(long, default_value_t = Technique::default(), value_parser = |s: &str| s.parse::<Technique>())]
     pub technique: Technique,
     /// Shadow-map side per view for every light (default: the layout's own).
     #[arg(long)]
@@ -72,7 +72,7 @@ struct Record {
     max_lights_per_cluster: u32,
     overflowed_clusters: u32,
     shadow_views: usize,
-    fit: manyshadows::shadow::FitReport,
+    fit: manyshadows::shadows::plan::FitReport,
     atlas_side: u32,
     atlas_mib: f64,
     cluster_lists_kib: f64,
@@ -116,13 +116,11 @@ pub fn lights(args: &LightsArgs) -> Result<()> {
                 let contenders = loops(n)
                     .iter()
                     .map(|&(label, light_loop)| {
-                        let settings = RenderSettings {
-                            width: *w,
-                            height: *h_px,
-                            technique: args.technique,
-                            light_loop,
-                            ..Default::default()
-                        };
+                        let settings = RenderSettings::default()
+                            .with_width(*w)
+                            .with_height(*h_px)
+                            .with_technique(args.technique)
+                            .with_light_loop(light_loop);
                         Ok(Contender {
                             label: label.into(),
                             subject: FrameSubject {

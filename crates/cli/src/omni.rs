@@ -9,10 +9,13 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
+use manyshadows::gpu_scene::instances::GpuScene;
 use manyshadows::scene::atlas::FitPolicy;
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::scene::light_space::PointShadows;
-use manyshadows::{GpuScene, RenderError, ShadowGenerator, ShadowOptions, ShadowPlan, Technique};
+use manyshadows::shadows::atlas::generator::ShadowGenerator;
+use manyshadows::shadows::plan::ShadowPlan;
+use manyshadows::{RenderError, ShadowOptions, Technique};
 use serde::Serialize;
 
 use crate::harness::{
@@ -32,7 +35,7 @@ pub struct OmniArgs {
     /// Methods, comma-separated `MODE:TECHNIQUE` (MODE: cube or dp).
     #[arg(
         long,
-        default_value = "cube:traditional,cube:layered,cube:multiview,cube:gpu-driven,dp:traditional,dp:layered",
+        default_values_t = crate::techniques::omni_methods(),
         value_delimiter = ','
     )]
     pub methods: Vec<String>,
@@ -70,9 +73,7 @@ fn parse_method(s: &str) -> Result<(PointShadows, Technique)> {
         other => bail!("method '{s}': unknown mode '{other}' (cube or dp)"),
     };
     let technique: Technique = t.parse().map_err(anyhow::Error::msg)?;
-    if technique == Technique::Irregular {
-        bail!("method '{s}': {}", manyshadows::shadow::IRREGULAR_NO_ATLAS);
-    }
+    crate::techniques::require_atlas(&format!("method '{s}'"), technique)?;
     Ok((mode, technique))
 }
 
@@ -103,8 +104,7 @@ pub fn omni(args: &OmniArgs) -> Result<()> {
         .collect::<Result<_>>()?;
     let h = Harness::start(&args.run)?;
     let ctx = &h.ctx;
-    let max_atlas =
-        manyshadows::shadow::DEFAULT_MAX_ATLAS_SIZE.min(ctx.limits().max_texture_dimension_2d);
+    let max_atlas = manyshadows::DEFAULT_MAX_ATLAS_SIZE.min(ctx.limits().max_texture_dimension_2d);
     h.plan(
         args.lights
             .iter()
@@ -142,7 +142,7 @@ pub fn omni(args: &OmniArgs) -> Result<()> {
                 Err(e) => return Err(e.into()),
             }
         }
-        for o in h.compare(contenders, Some("cube:traditional"))? {
+        for o in h.compare(contenders, Some(&format!("cube:{}", Technique::default())))? {
             let g = &o.subject.gen;
             let texels: u64 = g
                 .plan

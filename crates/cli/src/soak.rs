@@ -32,8 +32,9 @@ pub struct SoakArgs {
     /// Lights (every 250 frames the count drops to half for 50 frames, then comes back).
     #[arg(long, default_value_t = 64)]
     pub lights: usize,
-    /// Shadow technique.
-    #[arg(long, default_value = "virtual", value_parser = |s: &str| s.parse::<Technique>())]
+    /// Shadow technique (default: the first that fills a page pool, virtual maps, whose page
+    /// caching the soak exercises).
+    #[arg(long, default_value_t = crate::techniques::first_filling(manyshadows::Fills::Pages), value_parser = |s: &str| s.parse::<Technique>())]
     pub technique: Technique,
     /// Keep unchanged shadow tiles / pages between frames.
     #[arg(long)]
@@ -103,13 +104,11 @@ pub fn soak(args: &SoakArgs) -> Result<()> {
     let mut r = Renderer::new(
         &h.ctx,
         &scene,
-        RenderSettings {
-            width: args.width,
-            height: args.height,
-            technique: args.technique,
-            cache_shadows: args.cache,
-            ..Default::default()
-        },
+        RenderSettings::default()
+            .with_width(args.width)
+            .with_height(args.height)
+            .with_technique(args.technique)
+            .with_cache_shadows(args.cache),
     )?;
     // The smallest shadow caster circles; light 0 circles if it has a position.
     let mover = scene

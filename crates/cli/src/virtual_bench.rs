@@ -11,9 +11,9 @@
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use manyshadows::scene::builtin::{self, LightMix};
-use manyshadows::timing::Stage;
-use manyshadows::vsm::{VirtualOptions, VirtualStats};
+use manyshadows::Stage;
 use manyshadows::{RenderSettings, Renderer, Technique};
+use manyshadows::{VirtualOptions, VirtualStats};
 use serde::Serialize;
 
 use crate::harness::{
@@ -41,10 +41,13 @@ pub struct VirtualArgs {
     #[arg(long, default_value_t = 720)]
     pub height: u32,
     /// The atlas technique to compare with.
-    #[arg(long, default_value = "traditional", value_parser = |s: &str| s.parse::<Technique>())]
+    #[arg(long, default_value_t = Technique::default(), value_parser = |s: &str| s.parse::<Technique>())]
     pub atlas_technique: Technique,
+    /// The paged technique to measure against it.
+    #[arg(long, default_value_t = crate::techniques::first_filling(manyshadows::Fills::Pages), value_parser = |s: &str| s.parse::<Technique>())]
+    pub technique: Technique,
     /// Page pool of the virtual maps, MiB.
-    #[arg(long, default_value_t = (manyshadows::vsm::DEFAULT_POOL_BYTES >> 20) as u32)]
+    #[arg(long, default_value_t = (manyshadows::shadows::vsm::plan::DEFAULT_POOL_BYTES >> 20) as u32)]
     pub page_pool: u32,
     #[command(flatten)]
     pub run: RunArgs,
@@ -69,7 +72,7 @@ struct Record {
     lights: usize,
     atlas: Side,
     atlas_views: usize,
-    atlas_fit: manyshadows::shadow::FitReport,
+    atlas_fit: manyshadows::shadows::plan::FitReport,
     atlas_side: u32,
     virtual_maps: Side,
     /// Median frame GPU time of the virtual maps over the atlas's, from the same run.
@@ -94,20 +97,15 @@ const MIB: f64 = 1024.0 * 1024.0;
 /// Runs `manyshadows bench virtual`.
 pub fn virtual_maps(args: &VirtualArgs) -> Result<()> {
     check_counts("--lights", &args.lights, builtin::MAX_LIGHTS, "")?;
-    if matches!(
-        args.atlas_technique,
-        Technique::Virtual | Technique::Irregular
-    ) {
+    crate::techniques::require_atlas("--atlas-technique", args.atlas_technique)?;
+    if args.technique.info().fills != manyshadows::Fills::Pages {
         bail!(
-            "--atlas-technique {}: pick a technique that fills the atlas (traditional, \
-             layered, multiview, gpu-driven, compute)",
-            args.atlas_technique
+            "--technique {}: pick a technique that fills a page pool ({})",
+            args.technique,
+            crate::techniques::names(&crate::techniques::filling(manyshadows::Fills::Pages))
         );
     }
     check_scene("--scene", &args.scene)?;
-    if args.page_pool == 0 {
-        bail!("--page-pool must be at least 1 MiB");
-    }
     let mix: LightMix = args.light_types.parse().map_err(anyhow::Error::msg)?;
     let h = Harness::start(&args.run)?;
     h.plan(h.units(2 * args.lights.len(), 1));
@@ -115,23 +113,13 @@ pub fn virtual_maps(args: &VirtualArgs) -> Result<()> {
     for &n in &args.lights {
         h.message(format!("{}, {n} lights", args.scene));
         let scene = seeded_scene(&args.scene, n, mix, None)?;
-        let base = RenderSettings {
-            width: args.width,
-            height: args.height,
-            ..Default::default()
-        };
-        let atlas = RenderSettings {
-            technique: args.atlas_technique,
-            ..base.clone()
-        };
-        let virt = RenderSettings {
-            technique: Technique::Virtual,
-            virtual_maps: VirtualOptions {
-                pool_bytes: u64::from(args.page_pool) << 20,
-                ..Default::default()
-            },
-            ..base
-        };
+        let base = RenderSettings::default()
+            .with_width(args.width)
+            .with_height(args.height);
+        let atlas = base.clone().with_technique(args.atlas_technique);
+        let virt = base.with_technique(args.technique).with_virtual_maps(
+            VirtualOptions::default().with_pool_bytes(u64::from(args.page_pool) << 20),
+        );
         let mut contenders = Vec::new();
         for (label, settings) in [("atlas", atlas), ("virtual", virt)] {
             contenders.push(Contender {

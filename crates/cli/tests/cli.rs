@@ -209,10 +209,18 @@ fn silently_changed_values_are_refused_or_announced() {
         (
             "--irregular-hash",
             "0",
-            "--irregular-hash must be at least 1",
+            "--irregular-hash: irregular.hash 0 is out of range: at least 1",
         ),
-        ("--page-pool", "0", "--page-pool must be at least 1"),
-        ("--atlas-max", "8", "--atlas-max 8"),
+        (
+            "--page-pool",
+            "0",
+            "--page-pool (MiB): virtual_maps.pool_bytes 0 is out of range",
+        ),
+        (
+            "--atlas-max",
+            "8",
+            "--atlas-max: max_atlas_size 8 is out of range",
+        ),
     ] {
         assert_clean_failure(
             &run(&["render", "--scene", missing, flag, value]),
@@ -281,4 +289,19 @@ fn webgpu_limits_are_enough_for_every_pass() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     assert!(!stderr.contains("GPU error"), "{stderr}");
+}
+
+#[test]
+fn each_cause_is_printed_once() {
+    let out = run(&["render", "--scene", "no-such-scene-file.toml"]);
+    assert_clean_failure(&out, 1, "no-such-scene-file.toml");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    // The operating system's reason, once (it was printed twice, by the error and its source).
+    let reason = std::io::Error::from(std::io::ErrorKind::NotFound).to_string();
+    let os = "(os error 2)";
+    assert_eq!(
+        stderr.matches(os).count(),
+        1,
+        "the cause '{reason}' should appear once: {stderr}"
+    );
 }

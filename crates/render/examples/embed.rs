@@ -23,11 +23,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let scene = builtin::build("atrium", &Default::default())?;
     let (w, h) = (640, 360);
-    let settings = RenderSettings {
-        width: w,
-        height: h,
-        ..Default::default()
-    };
+    let settings = RenderSettings::default().with_width(w).with_height(h);
     let app = App {
         renderer: Renderer::new(&ctx, &scene, settings)?,
         target: ctx.device.create_texture(&wgpu::TextureDescriptor {
@@ -52,7 +48,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         submitted.cpu_record_ms, submitted.shadow_stats.passes
     );
     // The application would present or sample `app.target` now; here it is saved.
-    let rgba = manyshadows::readback::read_texture(&ctx, &app.target, 4)?;
+    let rgba = manyshadows::gpu::readback::read_texture(&ctx, &app.target, 4)?;
     image::save_buffer("embedded.png", &rgba, w, h, image::ColorType::Rgba8)?;
     println!("wrote embedded.png");
     Ok(())

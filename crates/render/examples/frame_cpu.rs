@@ -29,18 +29,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         scene.lights = builtin::scatter_lights(&scene, n, 1, Default::default(), Some(128));
         for t in techniques.split(',') {
             let technique: Technique = t.parse()?;
-            let settings = RenderSettings {
-                width: w,
-                height: h,
-                technique,
-                // Rasterization skipped (scissor 0): the same commands are recorded, and
-                // software adapters finish a frame in reasonable time.
-                shadow: manyshadows::ShadowOptions {
-                    discard_raster: true,
-                    ..Default::default()
-                },
-                ..Default::default()
-            };
+            // Rasterization skipped (scissor 0): the same commands are recorded, and
+            // software adapters finish a frame in reasonable time.
+            let settings = RenderSettings::default()
+                .with_width(w)
+                .with_height(h)
+                .with_technique(technique)
+                .with_shadow(manyshadows::ShadowOptions::default().with_discard_raster(true));
             let mut renderer = match Renderer::new(&ctx, &scene, settings) {
                 Ok(r) => r,
                 Err(e) => {

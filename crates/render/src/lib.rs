@@ -18,91 +18,73 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+/// Builder-style setters for a `#[non_exhaustive]` options struct, one per field:
+/// `RenderSettings::default().with_width(640).with_technique(Technique::VIRTUAL)`. Declared
+/// before the modules so every floor's options use it without importing anything.
+macro_rules! with_setters {
+    ($ty:ident { $($setter:ident: $field:ident: $fty:ty),+ $(,)? }) => {
+        impl $ty {
+            $(
+                #[doc = concat!("Sets [`", stringify!($ty), "::", stringify!($field), "`].")]
+                #[must_use]
+                pub fn $setter(mut self, $field: $fty) -> Self {
+                    self.$field = $field;
+                    self
+                }
+            )+
+        }
+    };
+}
+
+// The floors, bottom up (ARCHITECTURE.md; `tests/import_floors.rs` holds them to it). They are
+// the crate's inside: public only with the `internals` feature, which the project's own CLI,
+// benchmarks and tests turn on and which promises no stability. An embedder uses the facade
+// below.
+#[cfg(feature = "internals")]
 pub mod frame;
+#[cfg(not(feature = "internals"))]
+pub(crate) mod frame;
+#[cfg(feature = "internals")]
 pub mod gpu;
+#[cfg(not(feature = "internals"))]
+pub(crate) mod gpu;
+#[cfg(feature = "internals")]
 pub mod gpu_scene;
-pub mod renderer;
-pub mod settings;
+#[cfg(not(feature = "internals"))]
+pub(crate) mod gpu_scene;
+mod renderer;
+mod settings;
+#[cfg(feature = "internals")]
 pub mod shadows;
+#[cfg(not(feature = "internals"))]
+pub(crate) mod shadows;
 
 pub use manyshadows_scene as scene;
 pub use wgpu;
 
 // ------------------------------------------------------------------------------------------
-// Paths kept for the CLI, the web crate, examples and tests; the embedding facade (issue 25
-// part 3) will replace them. The modules now lie in floors (issue 25 part 1: gpu, gpu_scene,
-// frame, shadows, settings, renderer); these re-exports keep the names code outside `src/`
-// uses: the crate-root types, and the old module paths (`manyshadows::shadow::…`,
-// `manyshadows::vsm::…`). Nothing inside `src/` goes through them; the import check
-// (`tests/import_floors.rs`) reads each as the module it re-exports.
+// The facade: what an application embedding the renderer uses.
 // ------------------------------------------------------------------------------------------
+pub use frame::clusters::{ClusterOptions, ClusterStats, LightLoop};
 pub use frame::gbuffer_readback::GBufferData;
-pub use frame::visibility_mask::VisibilityMask;
-pub use gpu::context::{AdapterRequest, GpuContext};
-pub use gpu_scene::instances::GpuScene;
-pub use renderer::{Frame, FrameTimings, Renderer, SubmittedFrame};
+pub use frame::visibility_mask::{MaskFileError, VisibilityMask};
+pub use gpu::context::{
+    feature_use, list_adapters, required_limits, webgpu_default_limits, AdapterRequest, FeatureUse,
+    GpuContext,
+};
+pub use gpu::timing::{GpuTimes, Stage};
+pub use gpu_scene::casters::CasterOptions;
+pub use renderer::{Frame, FrameTimings, Renderer, ShadowLayout, ShadowPicture, SubmittedFrame};
 pub use settings::{CullMode, Pcf, RenderSettings, ShadowBias, ShadowOptions, Technique};
-pub use shadows::atlas::generator::ShadowGenerator;
-pub use shadows::atlas::storage::ShadowAtlas;
-pub use shadows::atlas::technique::ShadowTechnique;
-pub use shadows::plan::ShadowPlan;
-pub use shadows::source::{ShadowOutput, ShadowSource, ShadowStats};
+pub use shadows::descriptor::{Fills, Need, Requirement, TechniqueInfo};
+pub use shadows::irregular::maps::{IrregularOptions, IrregularStats};
+pub use shadows::plan::DEFAULT_MAX_ATLAS_SIZE;
+pub use shadows::source::ShadowStats;
+pub use shadows::vsm::plan::{VirtualOptions, VirtualStats};
 
-pub use frame::clusters;
-pub use gpu::{context, readback, timing};
-
-/// Old path of the atlas and page-pool pictures ([`shadows::image`]).
-pub mod atlas_image {
-    pub use crate::shadows::image::{atlas_picture, pool_picture, read_depth};
-}
-
-/// Old path of the caster geometry and skinning ([`gpu_scene::casters`],
-/// [`gpu_scene::skinning`]).
-pub mod casters {
-    pub use crate::gpu_scene::casters::{CasterGeometry, CasterOptions};
-    pub use crate::gpu_scene::skinning::{Skin, MAX_BONES};
-}
-
-/// Old path of irregular shadow maps' options ([`shadows::irregular`]).
-pub mod irregular {
-    pub use crate::shadows::irregular::maps::IrregularOptions;
-}
-
-/// Old path of the shadow plan and the technique interface ([`shadows::plan`],
-/// [`shadows::atlas::technique`], [`settings`]).
-pub mod shadow {
-    pub use crate::settings::IRREGULAR_NO_ATLAS;
-    pub use crate::shadows::atlas::technique::ShadowInput;
-    pub use crate::shadows::plan::{FitReport, DEFAULT_MAX_ATLAS_SIZE};
-}
-
-/// Old paths of the atlas techniques ([`shadows::atlas`]).
-pub mod techniques {
-    /// Old path of [`crate::shadows::atlas::compute`].
-    pub mod compute {
-        pub use crate::shadows::atlas::compute::Compute;
-    }
-    /// Old path of [`crate::shadows::atlas::gpu_driven`] and the rounds it shares with the
-    /// virtual maps ([`crate::shadows::cluster_draw`]).
-    pub mod gpu_driven {
-        pub use crate::shadows::atlas::gpu_driven::GpuDriven;
-        pub use crate::shadows::cluster_draw::plan_rounds;
-    }
-    /// Old path of [`crate::shadows::atlas::multiview`].
-    pub mod multiview {
-        pub use crate::shadows::atlas::multiview::Multiview;
-    }
-}
-
-/// Old path of virtual shadow maps' options, sizes and counters ([`shadows::vsm::plan`]).
-pub mod vsm {
-    pub use crate::shadows::vsm::plan::{
-        pool_side, VirtualOptions, VirtualStats, DEFAULT_POOL_BYTES, MAX_SIDE, PAGE_SIZE,
-    };
-}
-// ------------------------------------------------------------------------------------------
-
-/// Everything that can go wrong in the renderer. Each message says what to do.
+/// Everything that can go wrong in the renderer. Each message says what to do; each variant
+/// carries what a caller may act on as typed fields.
+#[non_exhaustive]
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
     /// No graphics adapter matched.
@@ -114,8 +96,21 @@ pub enum RenderError {
         detail: String,
     },
     /// The adapter refused to create a device.
-    #[error("could not create a device on {0}")]
-    Device(String),
+    #[error("could not create a device on {adapter}: {reason}")]
+    Device {
+        /// The adapter ([`gpu::context::describe_adapter`]).
+        adapter: String,
+        /// wgpu's reason.
+        reason: wgpu::RequestDeviceError,
+    },
+    /// Limits asked of the adapter exceed what it has.
+    #[error("{adapter} cannot give the requested limits: {}", over.join("; "))]
+    LimitsUnavailable {
+        /// The adapter.
+        adapter: String,
+        /// One line per limit asked above the adapter's.
+        over: Vec<String>,
+    },
     /// The scene is invalid.
     #[error(transparent)]
     Scene(#[from] manyshadows_scene::SceneError),
@@ -123,25 +118,83 @@ pub enum RenderError {
     #[error(transparent)]
     Atlas(#[from] manyshadows_scene::atlas::AtlasError),
     /// The image size is not possible on this adapter.
-    #[error("resolution {width}x{height} is not possible: {reason}")]
+    #[error("resolution {width}x{height} is not possible: width and height must be 1..={max} on this adapter")]
     ResolutionTooLarge {
         /// Requested width.
         width: u32,
         /// Requested height.
         height: u32,
-        /// Which limit.
-        reason: String,
+        /// The adapter's largest 2D texture side.
+        max: u32,
     },
-    /// A scene buffer would exceed the adapter's limits.
-    #[error("scene too large for this adapter: {0}")]
-    SceneTooLarge(String),
-    /// The GPU reported a validation or out-of-memory error.
-    #[error("GPU error while {0}")]
-    Gpu(String),
-    /// The chosen combination is not possible (a point-shadow mode a technique does not
-    /// render, a target texture `render_to` cannot draw into).
-    #[error("{0}")]
-    Unsupported(String),
+    /// Something the scene needs would exceed one of the adapter's limits.
+    #[error("too large for this adapter: {what} would need {needed} {unit}, over its {limit_name} of {limit}")]
+    TooLarge {
+        /// What would not fit ("the caster world-position buffer").
+        what: String,
+        /// How much it needs.
+        needed: u64,
+        /// The limit.
+        limit: u64,
+        /// Unit of both ("bytes", "texture layers", "texels").
+        unit: &'static str,
+        /// The limit's name ("max_storage_buffer_binding_size").
+        limit_name: &'static str,
+    },
+    /// The skin's per-vertex data does not match the scene's vertices.
+    #[error("the skin has {joints} joint and {weights} weight entries but the scene has {vertices} vertices")]
+    SkinMismatch {
+        /// Joint entries.
+        joints: usize,
+        /// Weight entries.
+        weights: usize,
+        /// Vertices in the scene.
+        vertices: usize,
+    },
+    /// A skin joint index past the bones the shaders hold.
+    #[error("joint index {joint} is out of range (at most {bones} bones)")]
+    SkinJointOutOfRange {
+        /// The index.
+        joint: u32,
+        /// The most bones.
+        bones: u32,
+    },
+    /// The GPU reported a validation or out-of-memory error, or stopped answering.
+    #[error("GPU error while {during}: {message}")]
+    Gpu {
+        /// What the renderer was doing.
+        during: String,
+        /// wgpu's message.
+        message: String,
+    },
+    /// A technique does not render this value of an option; `supported` lists what it does.
+    #[error("technique {technique} does not render {option} {value}; it renders {}", supported.join(", "))]
+    UnsupportedCombination {
+        /// The technique.
+        technique: Technique,
+        /// The option ("point shadows").
+        option: &'static str,
+        /// The value asked for.
+        value: &'static str,
+        /// The values it renders.
+        supported: Vec<&'static str>,
+    },
+    /// A combination no device can render (yet).
+    #[error("{what} is not implemented; {instead}")]
+    NotImplemented {
+        /// The combination.
+        what: &'static str,
+        /// What to do instead.
+        instead: &'static str,
+    },
+    /// A texture [`Renderer::render_to`] cannot draw into.
+    #[error("render_to cannot draw into this {format:?} texture: it needs {needs}")]
+    UnsupportedTarget {
+        /// The texture's format.
+        format: wgpu::TextureFormat,
+        /// What the target must be.
+        needs: &'static str,
+    },
     /// The device lacks a feature a technique or mode needs; `instead` says what works.
     #[error("{needs} needs {feature}, which {adapter} lacks; {instead}")]
     MissingFeature {
@@ -165,18 +218,33 @@ pub enum RenderError {
         /// the renderer needs 8".
         shortfalls: Vec<String>,
     },
-    /// The technique keeps no shadow atlas (or page pool) to read back or to generate on its
-    /// own; `detail` says where it does run.
-    #[error("{detail}")]
+    /// The technique keeps no shadow atlas to read back or to generate on its own: it fills
+    /// something else (`fills`) and runs only in whole frames ([`Renderer`]).
+    #[error("technique {technique} fills {} instead of a shadow atlas, so it renders whole frames (Renderer) but has no atlas to generate or read on its own", fills.describe())]
     NoAtlas {
         /// The technique.
         technique: Technique,
-        /// Why, and where the technique does run.
-        detail: String,
+        /// What it fills instead.
+        fills: shadows::descriptor::Fills,
+    },
+    /// A technique has no page pool to read ([`Renderer::read_page_pool`]).
+    #[error("technique {technique} has no page pool (techniques that fill one: {})", with_pool.join(", "))]
+    NoPagePool {
+        /// The technique.
+        technique: Technique,
+        /// The techniques that do.
+        with_pool: Vec<&'static str>,
     },
     /// An option's value is out of its range.
-    #[error("{0}")]
-    InvalidOption(String),
+    #[error("{option} {value} is out of range: {expected}")]
+    InvalidOption {
+        /// The option, as [`RenderSettings`] names it ("irregular.grid").
+        option: &'static str,
+        /// The value given.
+        value: String,
+        /// What it must be.
+        expected: &'static str,
+    },
     /// Irregular shadow maps ran out of list nodes; the frame's visibility would be wrong.
     #[error("irregular shadow maps: the node pool of {capacity} samples overflowed ({dropped} samples dropped, {needed} needed by one batch of lights); the frame was discarded. Lower the resolution or use fewer lights")]
     NodePoolOverflow {
@@ -187,13 +255,29 @@ pub enum RenderError {
         /// The pool's capacity.
         capacity: u64,
     },
-    /// Irregular shadow maps could not finish a frame exactly (a work queue or a driver limit);
-    /// the frame was discarded.
-    #[error("irregular shadow maps: {0}")]
-    Irregular(String),
+    /// Irregular shadow maps' tile queue was full; the frame was discarded.
+    #[error("irregular shadow maps: {tiles} tiles of samples found the tile queue ({capacity} tiles) full; the frame was discarded. Use a coarser grid or fewer lights")]
+    TileQueueFull {
+        /// Tiles that found the queue full.
+        tiles: u32,
+        /// The queue's capacity.
+        capacity: u64,
+    },
+    /// Shader loops were cut short by the driver (llvmpipe ends a loop after 65,535
+    /// iterations); the frame was discarded.
+    #[error("irregular shadow maps: {walks} sample-list walks hit the driver's loop limit (llvmpipe ends loops after 65535 iterations per invocation); the frame was discarded. Use a finer grid (IrregularOptions::grid) so lists are shorter")]
+    LoopLimit {
+        /// Walks cut short.
+        walks: u32,
+    },
     /// Reading results back failed.
-    #[error("reading results back from the GPU failed: {0}")]
-    Readback(String),
+    #[error("reading {what} back from the GPU failed: {reason}")]
+    Readback {
+        /// What was read.
+        what: &'static str,
+        /// Why.
+        reason: String,
+    },
 }
 
 impl RenderError {
@@ -218,10 +302,13 @@ impl RenderError {
     pub fn is_unsupported(&self) -> bool {
         matches!(
             self,
-            RenderError::Unsupported(_)
+            RenderError::UnsupportedCombination { .. }
+                | RenderError::NotImplemented { .. }
+                | RenderError::UnsupportedTarget { .. }
                 | RenderError::MissingFeature { .. }
                 | RenderError::LimitsTooSmall { .. }
                 | RenderError::NoAtlas { .. }
+                | RenderError::NoPagePool { .. }
         )
     }
 }

@@ -27,14 +27,14 @@ use crate::gpu::timing::{GpuTimer, GpuTimes, Stage};
 use crate::gpu::types::{FrameUniforms, LightData};
 use crate::gpu_scene::instances::GpuScene;
 use crate::settings::RenderSettings;
-use crate::shadows::atlas::storage::ShadowAtlas;
-use crate::shadows::plan::{ShadowPlan, DEFAULT_MAX_ATLAS_SIZE};
+use crate::shadows::plan::DEFAULT_MAX_ATLAS_SIZE;
 use crate::shadows::source::{ShadowSource, ShadowStats, SourceInputs};
 use crate::shadows::vsm::plan::VirtualStats;
 use crate::{GpuContext, RenderError};
 
 /// Times of one frame.
 #[derive(Clone, Debug, Default)]
+#[non_exhaustive]
 pub struct FrameTimings {
     /// GPU milliseconds per [`Stage`] in the order they ran, empty if the adapter has no
     /// timestamp queries.
@@ -47,6 +47,7 @@ pub struct FrameTimings {
 
 /// A rendered frame.
 #[derive(Clone, Debug)]
+#[non_exhaustive]
 pub struct Frame {
     /// Width.
     pub width: u32,
@@ -68,11 +69,39 @@ pub struct Frame {
 
 /// What [`Renderer::render_to`] reports: the frame is submitted, not read back.
 #[derive(Clone, Debug)]
+#[non_exhaustive]
 pub struct SubmittedFrame {
     /// Shadow-generation work counters.
     pub shadow_stats: ShadowStats,
     /// CPU milliseconds to record and submit the frame's commands.
     pub cpu_record_ms: f64,
+}
+
+/// Where a renderer's shadows are ([`Renderer::shadow_layout`]).
+#[non_exhaustive]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowLayout {
+    /// What the technique fills.
+    pub fills: crate::shadows::descriptor::Fills,
+    /// Shadow views: atlas tiles, or virtual faces.
+    pub views: usize,
+    /// Side of the depth texture shadows are read from (the atlas or the page pool; 1 for a
+    /// mask).
+    pub side: u32,
+    /// Fraction of the atlas the views' tiles cover (atlas techniques only).
+    pub atlas_fill: Option<f32>,
+}
+
+/// A picture of a renderer's shadow maps ([`Renderer::shadow_picture`]).
+#[non_exhaustive]
+#[derive(Clone, Debug)]
+pub struct ShadowPicture {
+    /// Side of the square picture in pixels.
+    pub side: u32,
+    /// RGB8 pixels, row-major from the top-left.
+    pub rgb: Vec<u8>,
+    /// What it shows ("4096² atlas, 97 views").
+    pub description: String,
 }
 
 /// A scene uploaded and ready to render frames.
@@ -108,18 +137,15 @@ impl Renderer {
         scene: &Scene,
         settings: RenderSettings,
     ) -> Result<Self, RenderError> {
+        settings.validate()?;
         scene.validate()?;
         let limits = ctx.limits();
         let max_dim = limits.max_texture_dimension_2d;
-        if settings.width == 0
-            || settings.height == 0
-            || settings.width > max_dim
-            || settings.height > max_dim
-        {
+        if settings.width > max_dim || settings.height > max_dim {
             return Err(RenderError::ResolutionTooLarge {
                 width: settings.width,
                 height: settings.height,
-                reason: format!("width and height must be 1..={max_dim} on this adapter"),
+                max: max_dim,
             });
         }
         let max_atlas = settings
@@ -210,14 +236,77 @@ impl Renderer {
     }
 
     /// The shadow views and atlas layout.
-    pub fn plan(&self) -> &ShadowPlan {
+    #[cfg(feature = "internals")]
+    pub fn plan(&self) -> &crate::shadows::plan::ShadowPlan {
         self.source.plan()
     }
 
-    /// The faces of [`Technique::Virtual`](crate::settings::Technique::Virtual) (`None` for
+    /// The faces of [`Technique::VIRTUAL`](crate::settings::Technique::VIRTUAL) (`None` for
     /// other techniques).
+    #[cfg(feature = "internals")]
     pub fn virtual_plan(&self) -> Option<&crate::shadows::vsm::plan::VirtualPlan> {
         self.source.virtual_plan()
+    }
+
+    /// Shadow views of the current plan: every atlas tile, or every virtual face (a spot
+    /// light's frustum, a cube face, a cascade).
+    pub fn shadow_views(&self) -> usize {
+        match self.source.virtual_plan() {
+            Some(p) => p.faces.len(),
+            None => self.source.plan().views.len(),
+        }
+    }
+
+    /// What holds the shadows: the kind, how many views, and the side of the texture they
+    /// are read from.
+    pub fn shadow_layout(&self) -> ShadowLayout {
+        let fills = self.settings.technique.info().fills;
+        let plan = self.source.plan();
+        ShadowLayout {
+            fills,
+            views: self.shadow_views(),
+            side: self.source.output().depth_side(),
+            atlas_fill: (fills == crate::shadows::descriptor::Fills::Atlas)
+                .then(|| plan.fill() as f32),
+        }
+    }
+
+    /// A picture of the shadow maps as the last frame left them: the atlas with each view's
+    /// tile outlined by light type, or the virtual maps' page pool (pages in use, unused pool
+    /// dark blue), at most 2048² (larger ones are shown every n-th texel). A technique that
+    /// keeps neither answers [`RenderError::NoAtlas`].
+    pub fn shadow_picture(&self) -> Result<ShadowPicture, RenderError> {
+        use crate::shadows::source::ShadowOutput;
+        match self.source.output() {
+            ShadowOutput::Atlas(atlas) => {
+                let depth = self.source.read_atlas(&self.ctx)?;
+                let (side, rgb) =
+                    crate::shadows::image::atlas_picture(&depth, atlas.size, self.source.plan());
+                Ok(ShadowPicture {
+                    side,
+                    rgb,
+                    description: format!(
+                        "{}² atlas, {} views",
+                        atlas.size,
+                        self.source.plan().views.len()
+                    ),
+                })
+            }
+            ShadowOutput::Pages { .. } => {
+                let (pool, depth) = self.read_page_pool()?;
+                let (side, rgb) = crate::shadows::image::pool_picture(&depth, pool);
+                let pages = (pool / crate::shadows::vsm::plan::PAGE_SIZE).pow(2);
+                Ok(ShadowPicture {
+                    side,
+                    rgb,
+                    description: format!("{pool}² page pool ({pages} pages)"),
+                })
+            }
+            ShadowOutput::Mask { .. } => Err(RenderError::NoAtlas {
+                technique: self.settings.technique,
+                fills: self.settings.technique.info().fills,
+            }),
+        }
     }
 
     /// The settings in use.
@@ -236,12 +325,14 @@ impl Renderer {
     }
 
     /// The world-space shadow-caster geometry (its back-face culling decisions included).
+    #[cfg(feature = "internals")]
     pub fn casters(&self) -> &crate::gpu_scene::casters::CasterGeometry {
         self.source.casters()
     }
 
     /// The shadow atlas.
-    pub fn atlas(&self) -> &ShadowAtlas {
+    #[cfg(feature = "internals")]
+    pub fn atlas(&self) -> &crate::shadows::atlas::storage::ShadowAtlas {
         self.source.atlas()
     }
 
@@ -413,7 +504,7 @@ impl Renderer {
     /// any normalized or float colour format, sRGB or not: a window's surface texture, say),
     /// and submits it without reading anything back. The caller presents or samples the
     /// texture after this returns; [`Renderer::render`] is the same frame read back to the CPU.
-    /// With [`Technique::Irregular`](crate::settings::Technique::Irregular) this waits for the
+    /// With [`Technique::IRREGULAR`](crate::settings::Technique::IRREGULAR) this waits for the
     /// frame's overflow check (an overflowed frame is an error, never a wrong image).
     pub fn render_to(&mut self, target: &wgpu::Texture) -> Result<SubmittedFrame, RenderError> {
         let ctx = &*self.ctx.clone();
@@ -524,7 +615,7 @@ impl Renderer {
     }
 
     /// Counters of the last frame of irregular shadow maps
-    /// ([`Technique::Irregular`](crate::settings::Technique::Irregular); `None` for other
+    /// ([`Technique::IRREGULAR`](crate::settings::Technique::IRREGULAR); `None` for other
     /// techniques).
     pub fn irregular_stats(&self) -> Option<crate::shadows::irregular::maps::IrregularStats> {
         self.source.irregular_stats()
@@ -544,19 +635,20 @@ impl Renderer {
 
     /// Reads the virtual maps' page pool back: `(side, side² depths)`, row-major from the
     /// top-left texel, as the last frame left it. Only
-    /// [`Technique::Virtual`](crate::settings::Technique::Virtual) has one.
+    /// [`Technique::VIRTUAL`](crate::settings::Technique::VIRTUAL) has one.
     pub fn read_page_pool(&self) -> Result<(u32, Vec<f32>), RenderError> {
         match self.source.output() {
             crate::shadows::source::ShadowOutput::Pages { pages, .. } => Ok((
                 pages.side,
                 crate::shadows::image::read_depth_view(&self.ctx, pages.pool, pages.side)?,
             )),
-            _ => Err(RenderError::NoAtlas {
+            _ => Err(RenderError::NoPagePool {
                 technique: self.settings.technique,
-                detail: format!(
-                    "technique {} has no page pool (only virtual does)",
-                    self.settings.technique.name()
-                ),
+                with_pool: crate::shadows::registry::TECHNIQUES
+                    .iter()
+                    .filter(|i| i.fills == crate::shadows::descriptor::Fills::Pages)
+                    .map(|i| i.technique.name())
+                    .collect(),
             }),
         }
     }

@@ -9,131 +9,48 @@ use manyshadows_scene::atlas::FitPolicy;
 
 use crate::frame::clusters::{ClusterOptions, LightLoop};
 use crate::gpu_scene::casters::CasterOptions;
-use crate::shadows::irregular::maps::IrregularOptions;
-use crate::shadows::vsm::plan::VirtualOptions;
+use crate::shadows::irregular::maps::{IrregularOptions, GRID_LIMIT};
+use crate::shadows::vsm::plan::{VirtualOptions, PAGE_SIZE};
+use crate::RenderError;
 
-/// Why `irregular` cannot stand where an atlas-filling technique is expected.
-pub const IRREGULAR_NO_ATLAS: &str = "technique irregular computes the visibility mask \
-     directly and fills no shadow atlas, so it runs in frames (render, compare) but not where \
-     atlas tiles are generated or benchmarked on their own (bench layered, bench omni, atlas \
-     read-back)";
-
-/// Why `virtual` cannot stand where an atlas-filling technique is expected.
-pub const VIRTUAL_NO_ATLAS: &str = "technique virtual renders only the pages the camera's \
-     samples need, into a page pool instead of an atlas, so it runs in frames (render, \
-     compare, bench virtual) but not where atlas tiles are generated or benchmarked on their \
-     own (bench layered, bench omni, atlas read-back)";
-
-/// The techniques that exist, by CLI name.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Technique {
-    /// One depth-only pass per shadow view (seed 004, seed 000 §19.2).
-    #[default]
-    Traditional,
-    /// One instanced draw fills every view's tile (seed 000 §19.3).
-    Layered,
-    /// One multiview pass per group of equal-size views (seed 000 §19.5); needs `MULTIVIEW`.
-    Multiview,
-    /// Clusters culled per view in compute, one indirect multi-draw (seed 002).
-    GpuDriven,
-    /// A compute-shader rasterizer: every view in one set of dispatches, depth by atomicMin.
-    Compute,
-    /// Irregular shadow maps (seed 001): camera samples in per-texel lists of each light
-    /// view, exact tests per triangle; produces the visibility mask, not atlas tiles
-    /// ([`crate::shadows::irregular`]), so it runs in the [`crate::Renderer`] only.
-    Irregular,
-    /// Virtual shadow maps (seed 002): a paged virtual map per light face, only the pages visible
-    /// samples need, rendered into a page pool ([`crate::shadows::vsm`]); fills no atlas, so it
-    /// runs in the [`crate::Renderer`] only.
-    Virtual,
-}
+/// A shadow technique, by its name. Every technique declares itself once, in its own module,
+/// with a [`TechniqueInfo`](crate::shadows::descriptor::TechniqueInfo) (name, summary, what it
+/// fills, point-shadow modes, the features it needs, its constructor and its WGSL) and a
+/// constant here (`Technique::LAYERED`…); the registry ([`Technique::all`]) lists them, and
+/// everything that offers a choice of technique (the CLI's `--technique` and its help, the
+/// benchmarks' defaults, the viewer's and the web page's menus) reads it.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Technique(&'static str);
 
 impl Technique {
-    /// Every technique.
-    pub const ALL: &'static [Technique] = &[
-        Technique::Traditional,
-        Technique::Layered,
-        Technique::Multiview,
-        Technique::GpuDriven,
-        Technique::Compute,
-        Technique::Irregular,
-        Technique::Virtual,
-    ];
+    /// The technique called `name` (its module's constant; only the registry makes them
+    /// reachable by name).
+    pub(crate) const fn named(name: &'static str) -> Self {
+        Technique(name)
+    }
 
-    /// The CLI name.
+    /// The name (`--technique`'s value).
     pub fn name(self) -> &'static str {
-        match self {
-            Technique::Traditional => "traditional",
-            Technique::Layered => "layered",
-            Technique::Multiview => "multiview",
-            Technique::GpuDriven => "gpu-driven",
-            Technique::Compute => "compute",
-            Technique::Irregular => "irregular",
-            Technique::Virtual => "virtual",
-        }
-    }
-
-    /// One line for `--help` and tables.
-    pub fn summary(self) -> &'static str {
-        match self {
-            Technique::Traditional => "one depth pass per shadow view, instances culled on the CPU",
-            Technique::Layered => {
-                "one instanced draw into every tile; per-view triangle culling in the vertex shader"
-            }
-            Technique::Multiview => {
-                "one multiview pass per group of equal-size views (cube faces, cascades), then \
-                 a copy into the tiles; needs MULTIVIEW"
-            }
-            Technique::GpuDriven => {
-                "compute culls triangle clusters per view and writes indirect draws; one \
-                 multi-draw fills every tile"
-            }
-            Technique::Compute => {
-                "compute-shader rasterizer: per-view culling, clipping and binning in compute, \
-                 depth by atomicMin into a buffer, then copied into the tiles"
-            }
-            Technique::Irregular => {
-                "irregular shadow maps: camera samples in per-texel lists of each light view, \
-                 every caster triangle tested exactly against the samples under it; \
-                 alias-free, fills no atlas"
-            }
-            Technique::Virtual => {
-                "virtual shadow maps: a 16k² paged map per light face, only the pages the \
-                 camera's samples need, at the resolution they need, rendered into a page pool"
-            }
-        }
-    }
-}
-
-impl std::str::FromStr for Technique {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        Technique::ALL
-            .iter()
-            .copied()
-            .find(|t| t.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "unknown technique '{s}' (techniques: {})",
-                    Technique::ALL
-                        .iter()
-                        .map(|t| t.name())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )
-            })
+        self.0
     }
 }
 
 impl std::fmt::Display for Technique {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
+        f.write_str(self.0)
+    }
+}
+
+impl std::fmt::Debug for Technique {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Technique({})", self.0)
     }
 }
 
 /// Which triangles single-pass techniques drop per view before rasterization (seed 000
 /// Listings 19.9 and 19.10).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum CullMode {
     /// Every triangle goes to every view.
     None,
@@ -197,6 +114,7 @@ impl std::str::FromStr for CullMode {
 
 /// Options every technique honours.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
 pub struct ShadowOptions {
     /// Per-view triangle culling of the single-pass techniques (`traditional` always culls
     /// whole instances by their bounding sphere on the CPU, and nothing else).
@@ -211,6 +129,7 @@ pub struct ShadowOptions {
 
 /// Percentage-closer filtering of the shadow test.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Pcf {
     /// One comparison at the nearest texel: hard edges.
     Off,
@@ -261,6 +180,7 @@ impl std::str::FromStr for Pcf {
 /// direction). Texel-relative bias scales with each view's resolution and distance, so one
 /// setting fits spot, point and cascade views alike.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct ShadowBias {
     /// Constant offset towards the light, texels.
     pub constant: f32,
@@ -282,6 +202,7 @@ impl Default for ShadowBias {
 
 /// How a frame is rendered.
 #[derive(Clone, Debug)]
+#[non_exhaustive]
 pub struct RenderSettings {
     /// Image width in pixels.
     pub width: u32,
@@ -306,9 +227,9 @@ pub struct RenderSettings {
     pub fit: FitPolicy,
     /// Also compute the hard visibility mask.
     pub visibility: bool,
-    /// Knobs of [`Technique::Irregular`] (ignored by the other techniques).
+    /// Knobs of [`Technique::IRREGULAR`] (ignored by the other techniques).
     pub irregular: IrregularOptions,
-    /// Knobs of [`Technique::Virtual`] (ignored by the other techniques).
+    /// Knobs of [`Technique::VIRTUAL`] (ignored by the other techniques).
     pub virtual_maps: VirtualOptions,
     /// Which lights each pixel visits: its cluster's (default) or every light (reference).
     pub light_loop: LightLoop,
@@ -334,6 +255,153 @@ impl Default for RenderSettings {
             virtual_maps: VirtualOptions::default(),
             light_loop: LightLoop::default(),
             clusters: ClusterOptions::default(),
+        }
+    }
+}
+
+impl RenderSettings {
+    /// Checks every value that has a range of its own, before anything is built: the first
+    /// one out of range is [`RenderError::InvalidOption`] naming the field as this struct
+    /// does (`irregular.hash`). Limits that depend on the device (the largest image, atlas or
+    /// pool) are checked, or clamped with a note in the frame's statistics, by
+    /// [`crate::Renderer::new`]. Nothing is clamped silently here.
+    pub fn validate(&self) -> Result<(), RenderError> {
+        fn bad(
+            option: &'static str,
+            value: impl std::fmt::Display,
+            expected: &'static str,
+        ) -> RenderError {
+            RenderError::InvalidOption {
+                option,
+                value: value.to_string(),
+                expected,
+            }
+        }
+        if self.width == 0 {
+            return Err(bad("width", self.width, "at least 1 pixel"));
+        }
+        if self.height == 0 {
+            return Err(bad("height", self.height, "at least 1 pixel"));
+        }
+        if let Some(m) = self
+            .max_atlas_size
+            .filter(|&m| m < manyshadows_scene::atlas::MIN_TILE)
+        {
+            return Err(bad(
+                "max_atlas_size",
+                m,
+                "the atlas must hold at least one tile of the smallest size (16 texels)",
+            ));
+        }
+        for (option, v) in [
+            ("bias.constant", self.bias.constant),
+            ("bias.slope", self.bias.slope),
+            ("bias.normal_offset", self.bias.normal_offset),
+        ] {
+            if !v.is_finite() {
+                return Err(bad(option, v, "a finite number of texels"));
+            }
+        }
+        if self.clusters.tile == 0 {
+            return Err(bad("clusters.tile", self.clusters.tile, "at least 1 pixel"));
+        }
+        if !(1..=256).contains(&self.clusters.slices) {
+            return Err(bad(
+                "clusters.slices",
+                self.clusters.slices,
+                "1 to 256 depth slices",
+            ));
+        }
+        if self.clusters.pool_bytes == Some(0) {
+            return Err(bad(
+                "clusters.pool_bytes",
+                0,
+                "at least 1 byte, or None for the default",
+            ));
+        }
+        if let Some(g) = self
+            .irregular
+            .grid
+            .filter(|g| !(1..=GRID_LIMIT).contains(g))
+        {
+            return Err(bad(
+                "irregular.grid",
+                g,
+                "1 to 1024 texels per side (GRID_LIMIT)",
+            ));
+        }
+        if self.irregular.hash == Some(0) {
+            return Err(bad(
+                "irregular.hash",
+                0,
+                "at least 1 (1 = one list per texel, no hashing)",
+            ));
+        }
+        let page_bytes = u64::from(PAGE_SIZE) * u64::from(PAGE_SIZE) * 4;
+        if self.virtual_maps.pool_bytes < page_bytes {
+            return Err(bad(
+                "virtual_maps.pool_bytes",
+                self.virtual_maps.pool_bytes,
+                "at least one 128x128 page of 32-bit depth (65,536 bytes)",
+            ));
+        }
+        if !(self.virtual_maps.lod.is_finite() && self.virtual_maps.lod > 0.0) {
+            return Err(bad(
+                "virtual_maps.lod",
+                self.virtual_maps.lod,
+                "a positive number of shadow texels per pixel",
+            ));
+        }
+        if self.virtual_maps.max_side == 0 {
+            return Err(bad(
+                "virtual_maps.max_side",
+                0,
+                "a virtual side of 128 to 16,384 texels (rounded to a power of two)",
+            ));
+        }
+        Ok(())
+    }
+}
+
+with_setters!(RenderSettings {
+    with_width: width: u32,
+    with_height: height: u32,
+    with_technique: technique: Technique,
+    with_shadow: shadow: ShadowOptions,
+    with_cache_shadows: cache_shadows: bool,
+    with_point_shadows: point_shadows: manyshadows_scene::light_space::PointShadows,
+    with_pcf: pcf: Pcf,
+    with_bias: bias: ShadowBias,
+    with_max_atlas_size: max_atlas_size: Option<u32>,
+    with_fit: fit: FitPolicy,
+    with_visibility: visibility: bool,
+    with_irregular: irregular: IrregularOptions,
+    with_virtual_maps: virtual_maps: VirtualOptions,
+    with_light_loop: light_loop: LightLoop,
+    with_clusters: clusters: ClusterOptions,
+});
+
+impl RenderSettings {
+    /// Default settings at `width`×`height`.
+    pub fn new(width: u32, height: u32) -> Self {
+        Self::default().with_width(width).with_height(height)
+    }
+}
+
+with_setters!(ShadowOptions {
+    with_cull: cull: CullMode,
+    with_casters: casters: CasterOptions,
+    with_discard_raster: discard_raster: bool,
+});
+
+impl ShadowBias {
+    /// A bias of `constant` and `slope` texels towards the light and `normal_offset` texels
+    /// along the normal.
+    pub fn new(constant: f32, slope: f32, normal_offset: f32) -> Self {
+        Self {
+            constant,
+            slope,
+            normal_offset,
         }
     }
 }

@@ -143,15 +143,13 @@ fn check_all_techniques(name: &str) {
     let scene = checker_scene(name);
     let truth = checker_truth(&scene);
     let mut ran = 0;
-    for &technique in Technique::ALL {
-        let settings = RenderSettings {
-            width: SIZE,
-            height: SIZE,
-            technique,
-            pcf: Pcf::Off,
-            visibility: true,
-            ..Default::default()
-        };
+    for technique in Technique::all() {
+        let settings = RenderSettings::default()
+            .with_width(SIZE)
+            .with_height(SIZE)
+            .with_technique(technique)
+            .with_pcf(Pcf::Off)
+            .with_visibility(true);
         let mut r = match Renderer::new(&ctx, &scene, settings) {
             Ok(r) => r,
             Err(e) if e.is_unsupported() => {
@@ -210,11 +208,7 @@ fn floor_scene(material: Material, textures: Vec<Texture>) -> Scene {
 
 fn render(scene: &Scene) -> manyshadows::Frame {
     let ctx = common::context();
-    let settings = RenderSettings {
-        width: SIZE,
-        height: SIZE,
-        ..Default::default()
-    };
+    let settings = RenderSettings::default().with_width(SIZE).with_height(SIZE);
     Renderer::new(&ctx, scene, settings)
         .expect("renderer")
         .render()
@@ -353,13 +347,11 @@ fn a_gltf_file_renders_with_its_own_lights_and_camera() {
             && (c.fov_y_deg - d.fov_y_deg).abs() < 1e-3,
         "the file's camera {c:?} is not the one written {d:?}"
     );
-    let settings = RenderSettings {
-        width: SIZE,
-        height: SIZE,
-        pcf: Pcf::Off,
-        visibility: true,
-        ..Default::default()
-    };
+    let settings = RenderSettings::default()
+        .with_width(SIZE)
+        .with_height(SIZE)
+        .with_pcf(Pcf::Off)
+        .with_visibility(true);
     let mut r = Renderer::new(&ctx, &file, settings).expect("renderer");
     let frame = r.render().expect("frame");
     let vis = frame.visibility.as_ref().expect("visibility");

@@ -14,7 +14,7 @@ const SIZE: u32 = 256;
 const EDGE_BAND_PX: i32 = 2;
 
 fn check(name: &str) {
-    let wrong = wrong_pixels(name, Technique::Traditional, PointShadows::Cube, 0);
+    let wrong = wrong_pixels(name, Technique::TRADITIONAL, PointShadows::Cube, 0);
     assert_eq!(
         wrong, 0,
         "{name}: {wrong} pixels away from edges disagree with the exact shadow"
@@ -24,11 +24,9 @@ fn check(name: &str) {
 /// Pixels more than [`EDGE_BAND_PX`] from an edge whose visibility disagrees with the exact
 /// shadow (a difference image goes to target/test-artifacts).
 fn wrong_pixels(name: &str, technique: Technique, points: PointShadows, subdivide: u32) -> usize {
-    let settings = RenderSettings {
-        technique,
-        point_shadows: points,
-        ..Default::default()
-    };
+    let settings = RenderSettings::default()
+        .with_technique(technique)
+        .with_point_shadows(points);
     wrong_pixels_with(name, settings, subdivide, "").0
 }
 
@@ -44,13 +42,11 @@ fn wrong_pixels_with(
     let mut scene = builtin::build(name, &BuiltinOptions::default()).expect("builtin scene");
     scene.subdivide(subdivide).expect("subdivide");
     let (technique, points) = (settings.technique, settings.point_shadows);
-    let settings = RenderSettings {
-        width: SIZE,
-        height: SIZE,
-        pcf: Pcf::Off,
-        visibility: true,
-        ..settings
-    };
+    let settings = settings
+        .with_width(SIZE)
+        .with_height(SIZE)
+        .with_pcf(Pcf::Off)
+        .with_visibility(true);
     let mut r = Renderer::new(&ctx, &scene, settings).expect("renderer");
     let frame = r.render().expect("frame");
     let vis = frame.visibility.as_ref().expect("visibility mask");
@@ -92,7 +88,7 @@ fn directional_light_shadow_matches_exact_outline() {
 /// from edges, with both techniques that support the mode.
 #[test]
 fn point_light_dual_paraboloid_matches_exact_outline_on_fine_geometry() {
-    for t in [Technique::Traditional, Technique::Layered] {
+    for t in [Technique::TRADITIONAL, Technique::LAYERED] {
         let wrong = wrong_pixels("plane-point", t, PointShadows::DualParaboloid, 4);
         assert_eq!(
             wrong, 0,
@@ -109,7 +105,7 @@ fn point_light_dual_paraboloid_matches_exact_outline_on_fine_geometry() {
 fn dual_paraboloid_bends_outlines_of_coarse_geometry() {
     let wrong = wrong_pixels(
         "plane-point",
-        Technique::Traditional,
+        Technique::TRADITIONAL,
         PointShadows::DualParaboloid,
         0,
     );
@@ -117,7 +113,7 @@ fn dual_paraboloid_bends_outlines_of_coarse_geometry() {
         wrong > 20,
         "coarse geometry should show the paraboloid's error ({wrong} pixels)"
     );
-    let cube = wrong_pixels("plane-point", Technique::Traditional, PointShadows::Cube, 0);
+    let cube = wrong_pixels("plane-point", Technique::TRADITIONAL, PointShadows::Cube, 0);
     assert_eq!(
         cube, 0,
         "cube maps are exact on the same coarse geometry ({cube} pixels)"
@@ -130,10 +126,7 @@ fn dual_paraboloid_bends_outlines_of_coarse_geometry() {
 #[test]
 fn virtual_maps_match_exact_outlines_through_the_page_table() {
     for name in ["plane-spot", "plane-point", "plane-directional"] {
-        let settings = RenderSettings {
-            technique: Technique::Virtual,
-            ..Default::default()
-        };
+        let settings = RenderSettings::default().with_technique(Technique::VIRTUAL);
         let (wrong, frame) = wrong_pixels_with(name, settings, 0, "");
         let stats = frame.virtual_maps.expect("virtual stats");
         eprintln!("{name}: {stats:?}");
@@ -160,14 +153,9 @@ fn virtual_maps_match_exact_outlines_through_the_page_table() {
 /// straight, so even 128² texels over the face place it within the band).
 #[test]
 fn a_full_page_pool_is_reported_and_falls_back_to_coarser_levels() {
-    let settings = RenderSettings {
-        technique: Technique::Virtual,
-        virtual_maps: manyshadows::vsm::VirtualOptions {
-            pool_bytes: 128 * 128 * 4,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let settings = RenderSettings::default()
+        .with_technique(Technique::VIRTUAL)
+        .with_virtual_maps(manyshadows::VirtualOptions::default().with_pool_bytes(128 * 128 * 4));
     let (wrong, frame) = wrong_pixels_with("plane-spot", settings, 0, "-pool1");
     let stats = frame.virtual_maps.expect("virtual stats");
     eprintln!("one-page pool: {stats:?}");

@@ -9,12 +9,10 @@ use manyshadows::scene::{Attenuation, Instance, Light, LightKind, Material, Mesh
 use manyshadows::{RenderError, RenderSettings, Renderer};
 
 fn small() -> RenderSettings {
-    RenderSettings {
-        width: 64,
-        height: 48,
-        visibility: true,
-        ..Default::default()
-    }
+    RenderSettings::default()
+        .with_width(64)
+        .with_height(48)
+        .with_visibility(true)
 }
 
 fn spot(i: usize) -> Light {
@@ -82,10 +80,7 @@ fn maps_that_do_not_fit_degrade_by_importance_and_are_counted() {
     scene.lights = (0..5000).map(spot).collect();
     scene.camera.position = Vec3::new(-5.0, 5.0, 0.0);
     scene.camera.target = Vec3::new(10.0, 0.0, 0.0);
-    let settings = RenderSettings {
-        max_atlas_size: Some(512),
-        ..small()
-    };
+    let settings = small().with_max_atlas_size(Some(512));
     let mut renderer = Renderer::new(&ctx, &scene, settings).expect("5000 lights plan");
     let plan = renderer.plan();
     let fit = plan.fit;
@@ -133,19 +128,18 @@ fn resolution_over_the_adapter_limit_is_refused() {
     let ctx = common::context();
     let scene = triangle_scene([Vec3::ZERO, Vec3::X, Vec3::Z]);
     let max = ctx.limits().max_texture_dimension_2d;
-    for (w, h) in [(max + 1, 16), (16, max + 1), (0, 16)] {
-        let err = Renderer::new(
-            &ctx,
-            &scene,
-            RenderSettings {
-                width: w,
-                height: h,
-                ..Default::default()
-            },
-        )
-        .err();
+    for (w, h) in [(max + 1, 16), (16, max + 1)] {
+        let err = Renderer::new(&ctx, &scene, RenderSettings::new(w, h)).err();
         assert!(
-            matches!(err, Some(RenderError::ResolutionTooLarge { .. })),
+            matches!(err, Some(RenderError::ResolutionTooLarge { max: m, .. }) if m == max),
+            "{w}x{h}: {err:?}"
+        );
+    }
+    // A zero side is out of every device's range: the settings' own check names it.
+    for (w, h, option) in [(0, 16, "width"), (16, 0, "height")] {
+        let err = Renderer::new(&ctx, &scene, RenderSettings::new(w, h)).err();
+        assert!(
+            matches!(&err, Some(RenderError::InvalidOption { option: o, .. }) if *o == option),
             "{w}x{h}: {err:?}"
         );
     }
@@ -181,35 +175,23 @@ fn full_atlas_in_strict_mode_is_a_clear_error_and_shrinks_otherwise() {
             ..spot(i)
         })
         .collect();
-    let strict = RenderSettings {
-        max_atlas_size: Some(2048),
-        fit: FitPolicy::Strict,
-        ..small()
-    };
+    let strict = small()
+        .with_max_atlas_size(Some(2048))
+        .with_fit(FitPolicy::Strict);
     let err = Renderer::new(&ctx, &scene, strict)
         .err()
         .expect("8 maps of 2048² in a 2048² atlas");
     assert!(matches!(err, RenderError::Atlas(_)), "{err}");
-    let shrink = RenderSettings {
-        max_atlas_size: Some(2048),
-        fit: FitPolicy::Shrink,
-        ..small()
-    };
+    let shrink = small()
+        .with_max_atlas_size(Some(2048))
+        .with_fit(FitPolicy::Shrink);
     let r = Renderer::new(&ctx, &scene, shrink).unwrap();
     assert!(r.plan().layout.shrink_steps >= 1);
     assert_eq!(r.plan().layout.size, 2048);
     // The default gives no light a smaller map than shrinking all would, and fills the atlas
     // at least as well.
     let shrunk: Vec<u32> = r.plan().layout.tiles.iter().map(|t| t.size).collect();
-    let r = Renderer::new(
-        &ctx,
-        &scene,
-        RenderSettings {
-            max_atlas_size: Some(2048),
-            ..small()
-        },
-    )
-    .unwrap();
+    let r = Renderer::new(&ctx, &scene, small().with_max_atlas_size(Some(2048))).unwrap();
     let fit = r.plan().fit;
     assert_eq!((fit.full + fit.reduced, fit.unshadowed), (8, 0), "{fit:?}");
     let tiles = &r.plan().layout.tiles;

@@ -5,15 +5,16 @@
 mod common;
 
 use glam::{Mat4, Vec3};
+use manyshadows::gpu_scene::instances::GpuScene;
 use manyshadows::scene::atlas::FitPolicy;
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::scene::Scene;
-use manyshadows::{
-    GpuContext, GpuScene, RenderError, ShadowGenerator, ShadowOptions, ShadowPlan, Technique,
-};
+use manyshadows::shadows::atlas::generator::ShadowGenerator;
+use manyshadows::shadows::plan::ShadowPlan;
+use manyshadows::{GpuContext, RenderError, ShadowOptions, Technique};
 
 fn generate(ctx: &GpuContext, g: &mut ShadowGenerator, gpu: &GpuScene) -> u32 {
-    let timer = manyshadows::timing::GpuTimer::new(ctx);
+    let timer = manyshadows::gpu::timing::GpuTimer::new(ctx);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     let stats = g.generate(ctx, gpu, &mut encoder, &timer, None);
     ctx.queue.submit([encoder.finish()]);
@@ -51,7 +52,7 @@ fn cached_generation_equals_a_full_one_after_a_move() {
     moved_scene.instances[k].transform = moved;
 
     let mut ran = Vec::new();
-    for &t in Technique::ALL {
+    for t in Technique::all() {
         let mut gpu = GpuScene::new(&ctx, &scene).expect("upload");
         let mut cached = match generator(&ctx, &scene, &gpu, t) {
             Ok(g) => g,
@@ -101,7 +102,7 @@ fn cached_generation_equals_a_full_one_after_a_move() {
         );
         ran.push(t);
     }
-    assert!(ran.contains(&Technique::Traditional) && ran.contains(&Technique::Layered));
+    assert!(ran.contains(&Technique::TRADITIONAL) && ran.contains(&Technique::LAYERED));
 }
 
 /// Virtual shadow maps with caching: a page resident last frame, in a face whose view and
@@ -124,13 +125,13 @@ fn cached_virtual_pages_equal_a_full_regeneration() {
         },
     )
     .expect("scene");
-    let settings = |cache| RenderSettings {
-        width: 320,
-        height: 180,
-        technique: Technique::Virtual,
-        cache_shadows: cache,
-        visibility: true,
-        ..Default::default()
+    let settings = |cache| {
+        RenderSettings::default()
+            .with_width(320)
+            .with_height(180)
+            .with_technique(Technique::VIRTUAL)
+            .with_cache_shadows(cache)
+            .with_visibility(true)
     };
     let mut r = Renderer::new(&ctx, &scene, settings(true)).expect("renderer");
     // (pixels that differ, largest channel difference, visibility bits that differ).

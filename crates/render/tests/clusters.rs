@@ -6,9 +6,9 @@
 
 mod common;
 
-use manyshadows::clusters::{ClusterOptions, LightLoop};
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::scene::Scene;
+use manyshadows::{ClusterOptions, LightLoop};
 use manyshadows::{Frame, GpuContext, RenderSettings, Renderer};
 
 fn scene(name: &str, lights: usize) -> Scene {
@@ -26,17 +26,12 @@ fn scene(name: &str, lights: usize) -> Scene {
 }
 
 fn render(ctx: &GpuContext, scene: &Scene, light_loop: LightLoop, pool: Option<u64>) -> Frame {
-    let settings = RenderSettings {
-        width: 320,
-        height: 180,
-        visibility: true,
-        light_loop,
-        clusters: ClusterOptions {
-            pool_bytes: pool,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let settings = RenderSettings::default()
+        .with_width(320)
+        .with_height(180)
+        .with_visibility(true)
+        .with_light_loop(light_loop)
+        .with_clusters(ClusterOptions::default().with_pool_bytes(pool));
     Renderer::new(ctx, scene, settings)
         .expect("renderer")
         .render()
@@ -116,12 +111,10 @@ fn sixteen_thousand_lights_render() {
     )
     .expect("builtin scene");
     assert_eq!(scene.lights.len(), 16384);
-    let settings = RenderSettings {
-        width: 96,
-        height: 54,
-        max_atlas_size: Some(1024),
-        ..Default::default()
-    };
+    let settings = RenderSettings::default()
+        .with_width(96)
+        .with_height(54)
+        .with_max_atlas_size(Some(1024));
     let mut renderer = Renderer::new(&ctx, &scene, settings).expect("renderer");
     let fit = renderer.plan().fit;
     let shadowed = scene.lights.iter().filter(|l| l.casts_shadows).count();

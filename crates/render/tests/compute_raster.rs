@@ -8,16 +8,17 @@
 mod common;
 
 use glam::{Mat4, Vec3, Vec4};
-use manyshadows::casters::CasterGeometry;
+use manyshadows::gpu_scene::casters::CasterGeometry;
+use manyshadows::gpu_scene::instances::GpuScene;
 use manyshadows::scene::atlas::FitPolicy;
 use manyshadows::scene::{
     primitives, Attenuation, Camera, Instance, Light, LightKind, Material, Mesh, Scene,
 };
-use manyshadows::techniques::compute::Compute;
-use manyshadows::{
-    CullMode, GpuContext, GpuScene, ShadowAtlas, ShadowOptions, ShadowPlan, ShadowTechnique,
-    Technique,
-};
+use manyshadows::shadows::atlas::compute::Compute;
+use manyshadows::shadows::atlas::storage::ShadowAtlas;
+use manyshadows::shadows::atlas::technique::ShadowTechnique;
+use manyshadows::shadows::plan::ShadowPlan;
+use manyshadows::{CullMode, GpuContext, ShadowOptions, Technique};
 
 /// Depth difference that counts as a different texel (as in the equivalence tests).
 const DEPTH_TOL: f32 = 2e-6;
@@ -103,7 +104,7 @@ fn run(
     let atlas = ShadowAtlas::new(ctx, &plan).expect("atlas");
     let casters = CasterGeometry::new(ctx, scene, &gpu, options.casters).expect("casters");
     let list: Vec<u32> = (0..plan.views.len() as u32).collect();
-    let input = manyshadows::shadow::ShadowInput {
+    let input = manyshadows::shadows::atlas::technique::ShadowInput {
         ctx,
         scene: &gpu,
         views: &plan.views,
@@ -112,19 +113,17 @@ fn run(
         options: &options,
         draw_list: &list,
     };
-    let timer = manyshadows::timing::GpuTimer::new(ctx);
+    let timer = manyshadows::gpu::timing::GpuTimer::new(ctx);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     technique.generate(&input, &mut encoder, &timer, None);
     ctx.queue.submit([encoder.finish()]);
-    let depth = manyshadows::atlas_image::read_depth(ctx, &atlas).expect("read atlas");
+    let depth = manyshadows::shadows::image::read_depth(ctx, &atlas).expect("read atlas");
     assert_eq!(ctx.take_uncaptured(), None, "GPU errors");
     depth
 }
 
 fn traditional(ctx: &GpuContext, scene: &Scene) -> Vec<f32> {
-    let mut t = Technique::Traditional
-        .create(ctx, &ShadowOptions::default())
-        .expect("traditional");
+    let mut t = Technique::TRADITIONAL.create(ctx).expect("traditional");
     run(ctx, scene, t.as_mut(), ShadowOptions::default())
 }
 
@@ -186,10 +185,7 @@ fn check(
     );
     let mut last = Vec::new();
     for &cull in CullMode::ALL {
-        let options = ShadowOptions {
-            cull,
-            ..Default::default()
-        };
+        let options = ShadowOptions::default().with_cull(cull);
         let mut c = Compute::new(ctx).expect("compute");
         let got = run(ctx, scene, &mut c, options);
         let d = diff(&reference, &got);
@@ -430,7 +426,7 @@ fn partial_draw_lists_touch_only_listed_tiles() {
     let mut generate = |list: &[u32], options: ShadowOptions| {
         ctx.queue
             .write_buffer(&atlas.draw_list, 0, bytemuck::cast_slice(list));
-        let input = manyshadows::shadow::ShadowInput {
+        let input = manyshadows::shadows::atlas::technique::ShadowInput {
             ctx: &ctx,
             scene: &gpu,
             views: &plan.views,
@@ -439,23 +435,17 @@ fn partial_draw_lists_touch_only_listed_tiles() {
             options: &options,
             draw_list: list,
         };
-        let timer = manyshadows::timing::GpuTimer::new(&ctx);
+        let timer = manyshadows::gpu::timing::GpuTimer::new(&ctx);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         technique.generate(&input, &mut encoder, &timer, None);
         ctx.queue.submit([encoder.finish()]);
-        manyshadows::atlas_image::read_depth(&ctx, &atlas).expect("read")
+        manyshadows::shadows::image::read_depth(&ctx, &atlas).expect("read")
     };
     let views = plan.views.len() as u32;
     let all: Vec<u32> = (0..views).collect();
     let odd: Vec<u32> = (1..views).step_by(2).collect();
     let full = generate(&all, ShadowOptions::default());
-    let partial = generate(
-        &odd,
-        ShadowOptions {
-            discard_raster: true,
-            ..Default::default()
-        },
-    );
+    let partial = generate(&odd, ShadowOptions::default().with_discard_raster(true));
     let size = atlas.size as usize;
     let mut in_tiles = vec![false; full.len()];
     let mut odd_covered = 0;

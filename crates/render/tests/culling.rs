@@ -6,14 +6,15 @@
 mod common;
 
 use glam::{Mat4, Vec3};
-use manyshadows::casters::CasterOptions;
+use manyshadows::gpu_scene::instances::GpuScene;
 use manyshadows::scene::atlas::FitPolicy;
 use manyshadows::scene::{
     primitives, Attenuation, Camera, Instance, Light, LightKind, Material, Scene,
 };
-use manyshadows::{
-    CullMode, GpuContext, GpuScene, ShadowGenerator, ShadowOptions, ShadowPlan, Technique,
-};
+use manyshadows::shadows::atlas::generator::ShadowGenerator;
+use manyshadows::shadows::plan::ShadowPlan;
+use manyshadows::CasterOptions;
+use manyshadows::{CullMode, GpuContext, ShadowOptions, Technique};
 
 /// A floor, an open quad 1 m above it turned upside down (its front faces the floor), and a
 /// spot light above both looking down at the quad's back.
@@ -64,7 +65,7 @@ fn atlas(
     let gpu = GpuScene::new(ctx, scene).expect("upload");
     let mut g = ShadowGenerator::new(ctx, scene, &gpu, plan, technique, options)
         .unwrap_or_else(|e| panic!("{technique}: {e}"));
-    let timer = manyshadows::timing::GpuTimer::new(ctx);
+    let timer = manyshadows::gpu::timing::GpuTimer::new(ctx);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     g.generate(ctx, &gpu, &mut encoder, &timer, None);
     ctx.queue.submit([encoder.finish()]);
@@ -85,25 +86,17 @@ fn backface_culling_removes_back_faces_only_where_that_is_exact() {
     let reference = atlas(
         &ctx,
         &scene,
-        Technique::Traditional,
+        Technique::TRADITIONAL,
         ShadowOptions::default(),
     );
     // The quad covers a square of roughly (1 m / (2·2 m·tan 45°))² of the 256² map: ~4000
     // texels nearer than the floor.
-    let safe = ShadowOptions {
-        cull: CullMode::All,
-        ..Default::default()
-    };
-    let forced = ShadowOptions {
-        cull: CullMode::Backface,
-        casters: CasterOptions {
-            assume_closed: true,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
-    let kept = differing(&reference, &atlas(&ctx, &scene, Technique::Layered, safe));
-    let culled = differing(&reference, &atlas(&ctx, &scene, Technique::Layered, forced));
+    let safe = ShadowOptions::default().with_cull(CullMode::All);
+    let forced = ShadowOptions::default()
+        .with_cull(CullMode::Backface)
+        .with_casters(CasterOptions::default().with_assume_closed(true));
+    let kept = differing(&reference, &atlas(&ctx, &scene, Technique::LAYERED, safe));
+    let culled = differing(&reference, &atlas(&ctx, &scene, Technique::LAYERED, forced));
     eprintln!("open quad kept: {kept} texels differ; culling forced: {culled} texels differ");
     assert!(
         kept <= 4,
@@ -131,18 +124,17 @@ fn double_sided_casters_keep_their_shadow_under_forced_culling() {
     let reference = atlas(
         &ctx,
         &scene,
-        Technique::Traditional,
+        Technique::TRADITIONAL,
         ShadowOptions::default(),
     );
-    let forced = ShadowOptions {
-        cull: CullMode::All,
-        casters: CasterOptions {
-            assume_closed: true,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
-    for technique in [Technique::Layered, Technique::GpuDriven, Technique::Compute] {
+    let forced = ShadowOptions::default()
+        .with_cull(CullMode::All)
+        .with_casters(CasterOptions::default().with_assume_closed(true));
+    for technique in [
+        Technique::LAYERED,
+        Technique::GPU_DRIVEN,
+        Technique::COMPUTE,
+    ] {
         let d = differing(&reference, &atlas(&ctx, &scene, technique, forced));
         eprintln!("double-sided quad, culling forced, {technique}: {d} texels differ");
         assert!(

@@ -59,11 +59,7 @@ fn texture(ctx: &GpuContext, w: u32, h: u32, format: wgpu::TextureFormat) -> wgp
 fn render_to_a_callers_texture_gives_the_frame_render_reads_back() {
     let ctx = callers_device();
     let scene = builtin::build("cubes", &BuiltinOptions::default()).unwrap();
-    let settings = RenderSettings {
-        width: 96,
-        height: 64,
-        ..Default::default()
-    };
+    let settings = RenderSettings::default().with_width(96).with_height(64);
     let mut app = App {
         renderer: Renderer::new(&ctx, &scene, settings).unwrap(),
         target: texture(&ctx, 96, 64, wgpu::TextureFormat::Rgba8UnormSrgb),
@@ -74,7 +70,7 @@ fn render_to_a_callers_texture_gives_the_frame_render_reads_back() {
     // Same size, sRGB: the very same bytes.
     let stats = app.renderer.render_to(&app.target).unwrap();
     assert!(stats.shadow_stats.passes > 0);
-    let got = manyshadows::readback::read_texture(&ctx, &app.target, 4).unwrap();
+    let got = manyshadows::gpu::readback::read_texture(&ctx, &app.target, 4).unwrap();
     assert!(
         got == frame.rgba,
         "sRGB target differs from the read-back frame"
@@ -84,7 +80,7 @@ fn render_to_a_callers_texture_gives_the_frame_render_reads_back() {
     // itself; measured: every channel equal (Vulkan and OpenGL).
     let bgra = texture(&ctx, 96, 64, wgpu::TextureFormat::Bgra8Unorm);
     app.renderer.render_to(&bgra).unwrap();
-    let got = manyshadows::readback::read_texture(&ctx, &bgra, 4).unwrap();
+    let got = manyshadows::gpu::readback::read_texture(&ctx, &bgra, 4).unwrap();
     let worst = got
         .chunks_exact(4)
         .zip(frame.rgba.chunks_exact(4))
@@ -97,7 +93,7 @@ fn render_to_a_callers_texture_gives_the_frame_render_reads_back() {
     // Twice the size: every 2×2 block is the frame's pixel (nearest texel).
     let big = texture(&ctx, 192, 128, wgpu::TextureFormat::Rgba8UnormSrgb);
     app.renderer.render_to(&big).unwrap();
-    let got = manyshadows::readback::read_texture(&ctx, &big, 4).unwrap();
+    let got = manyshadows::gpu::readback::read_texture(&ctx, &big, 4).unwrap();
     let mut off = 0;
     for y in 0..128usize {
         for x in 0..192usize {
@@ -118,11 +114,7 @@ fn render_to_refuses_a_texture_it_cannot_draw_into() {
     let mut r = Renderer::new(
         &ctx,
         &scene,
-        RenderSettings {
-            width: 32,
-            height: 32,
-            ..Default::default()
-        },
+        RenderSettings::default().with_width(32).with_height(32),
     )
     .unwrap();
     let copy_only = ctx.device.create_texture(&wgpu::TextureDescriptor {
@@ -143,12 +135,22 @@ fn render_to_refuses_a_texture_it_cannot_draw_into() {
         .render_to(&copy_only)
         .expect_err("no RENDER_ATTACHMENT usage");
     assert!(
-        matches!(err, RenderError::Unsupported(_)) && err.to_string().contains("RENDER_ATTACHMENT"),
+        matches!(err, RenderError::UnsupportedTarget { .. })
+            && err.to_string().contains("RENDER_ATTACHMENT"),
         "{err}"
     );
     let depth = texture(&ctx, 32, 32, wgpu::TextureFormat::Depth32Float);
     let err = r.render_to(&depth).expect_err("a depth target");
-    assert!(matches!(err, RenderError::Unsupported(_)), "{err}");
+    assert!(
+        matches!(
+            err,
+            RenderError::UnsupportedTarget {
+                format: wgpu::TextureFormat::Depth32Float,
+                ..
+            }
+        ),
+        "{err}"
+    );
     // The renderer still works afterwards.
     r.render_to(&texture(&ctx, 32, 32, wgpu::TextureFormat::Rgba8Unorm))
         .unwrap();

@@ -8,12 +8,13 @@
 
 mod common;
 
+use manyshadows::gpu_scene::instances::GpuScene;
 use manyshadows::scene::atlas::FitPolicy;
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::scene::Scene;
-use manyshadows::{
-    CullMode, GpuContext, GpuScene, ShadowGenerator, ShadowOptions, ShadowPlan, Technique,
-};
+use manyshadows::shadows::atlas::generator::ShadowGenerator;
+use manyshadows::shadows::plan::ShadowPlan;
+use manyshadows::{CullMode, GpuContext, ShadowOptions, Technique};
 
 /// Depth difference that counts as a different texel: a few ULPs of depth near 1 (the model
 /// transform runs in a compute pass instead of the vertex shader, so fused multiply-adds may
@@ -36,7 +37,7 @@ fn atlas(
     let gpu = GpuScene::new(ctx, scene).expect("upload");
     let mut generator = ShadowGenerator::new(ctx, scene, &gpu, plan, technique, options)
         .unwrap_or_else(|e| panic!("{technique} cannot run on this adapter: {e}"));
-    let timer = manyshadows::timing::GpuTimer::new(ctx);
+    let timer = manyshadows::gpu::timing::GpuTimer::new(ctx);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     let stats = generator.generate(ctx, &gpu, &mut encoder, &timer, None);
     ctx.queue.submit([encoder.finish()]);
@@ -82,17 +83,14 @@ fn scene(name: &str, lights: Option<usize>, mix: LightMix, res: u32) -> Scene {
 /// Checks `technique` with every cull mode against `traditional` on `scene`, allowing
 /// `budget` differing texels.
 fn check(ctx: &GpuContext, label: &str, scene: &Scene, technique: Technique, budget: usize) {
-    let reference = atlas(ctx, scene, Technique::Traditional, ShadowOptions::default());
+    let reference = atlas(ctx, scene, Technique::TRADITIONAL, ShadowOptions::default());
     let covered = reference.iter().filter(|&&d| d < 1.0).count();
     assert!(
         covered > 1000,
         "{label}: the traditional atlas is nearly empty ({covered} texels)"
     );
     for &cull in CullMode::ALL {
-        let options = ShadowOptions {
-            cull,
-            ..Default::default()
-        };
+        let options = ShadowOptions::default().with_cull(cull);
         let got = atlas(ctx, scene, technique, options);
         let d = diff(&reference, &got);
         eprintln!(
@@ -119,18 +117,18 @@ fn layered_matches_traditional() {
     // open floor. Measured on lavapipe and llvmpipe GL (every cull mode): cubes 2 differing
     // texels, plane-point, plane-directional and dragon 0; the budgets are those plus 2.
     let cubes = scene("cubes", Some(6), LightMix::All, 256);
-    check(&ctx, "cubes", &cubes, Technique::Layered, 4);
+    check(&ctx, "cubes", &cubes, Technique::LAYERED, 4);
     let point = scene("plane-point", None, LightMix::All, 256);
-    check(&ctx, "plane-point", &point, Technique::Layered, 2);
+    check(&ctx, "plane-point", &point, Technique::LAYERED, 2);
     let sun = scene("plane-directional", None, LightMix::All, 512);
-    check(&ctx, "plane-directional", &sun, Technique::Layered, 2);
+    check(&ctx, "plane-directional", &sun, Technique::LAYERED, 2);
     let dragon = scene("dragon", Some(4), LightMix::Spot, 256);
     // Alpha-tested cards (lattice, banners, leaves, fence): the masked casters' texels too.
     // Measured 18 (lavapipe) and 13 (llvmpipe GL) of 995,261 covered texels, every cull mode: mask edges where the texture
     // coordinate interpolates a hair differently; the budget is that plus a margin.
     let courtyard = scene("courtyard", None, LightMix::All, 256);
-    check(&ctx, "courtyard", &courtyard, Technique::Layered, 24);
-    check(&ctx, "dragon", &dragon, Technique::Layered, 2);
+    check(&ctx, "courtyard", &courtyard, Technique::LAYERED, 24);
+    check(&ctx, "dragon", &dragon, Technique::LAYERED, 2);
 }
 
 #[test]
@@ -138,8 +136,8 @@ fn multiview_matches_traditional_or_says_unsupported() {
     let ctx = common::context();
     if !ctx.has(manyshadows::wgpu::Features::MULTIVIEW) {
         // OpenGL (llvmpipe) has no multiview: the technique must refuse clearly, not fall back.
-        let err = Technique::Multiview
-            .create(&ctx, &ShadowOptions::default())
+        let err = Technique::MULTIVIEW
+            .create(&ctx)
             .err()
             .expect("multiview must refuse to start without the MULTIVIEW feature");
         let msg = err.to_string();
@@ -157,7 +155,7 @@ fn multiview_matches_traditional_or_says_unsupported() {
         );
         return;
     }
-    let per_pass = manyshadows::techniques::multiview::Multiview::new(&ctx)
+    let per_pass = manyshadows::shadows::atlas::multiview::Multiview::new(&ctx)
         .expect("multiview")
         .views_per_pass();
     // Rendering a group at the tile size from the scratch origin hits the same texels as
@@ -170,18 +168,18 @@ fn multiview_matches_traditional_or_says_unsupported() {
     // budgets.
     eprintln!("multiview: up to {per_pass} views per pass on this adapter");
     let cubes = scene("cubes", Some(6), LightMix::All, 256);
-    check(&ctx, "cubes", &cubes, Technique::Multiview, 4);
+    check(&ctx, "cubes", &cubes, Technique::MULTIVIEW, 4);
     let point = scene("plane-point", None, LightMix::All, 256);
-    check(&ctx, "plane-point", &point, Technique::Multiview, 2);
+    check(&ctx, "plane-point", &point, Technique::MULTIVIEW, 2);
     let sun = scene("plane-directional", None, LightMix::All, 512);
-    check(&ctx, "plane-directional", &sun, Technique::Multiview, 2);
+    check(&ctx, "plane-directional", &sun, Technique::MULTIVIEW, 2);
     let dragon = scene("dragon", Some(4), LightMix::Spot, 256);
     // Alpha-tested cards (lattice, banners, leaves, fence): the masked casters' texels too.
     // Measured 9 (lavapipe) of 995,261 covered texels, every cull mode: mask edges where the texture
     // coordinate interpolates a hair differently; the budget is that plus a margin.
     let courtyard = scene("courtyard", None, LightMix::All, 256);
-    check(&ctx, "courtyard", &courtyard, Technique::Multiview, 15);
-    check(&ctx, "dragon", &dragon, Technique::Multiview, 2);
+    check(&ctx, "courtyard", &courtyard, Technique::MULTIVIEW, 15);
+    check(&ctx, "dragon", &dragon, Technique::MULTIVIEW, 2);
 }
 
 #[test]
@@ -192,18 +190,18 @@ fn gpu_driven_matches_traditional() {
     // into tiles as layered does. Measured on lavapipe and llvmpipe GL, every round size:
     // cubes 2, the rest 0; layered's budgets.
     let cubes = scene("cubes", Some(6), LightMix::All, 256);
-    check(&ctx, "cubes", &cubes, Technique::GpuDriven, 4);
+    check(&ctx, "cubes", &cubes, Technique::GPU_DRIVEN, 4);
     let point = scene("plane-point", None, LightMix::All, 256);
-    check(&ctx, "plane-point", &point, Technique::GpuDriven, 2);
+    check(&ctx, "plane-point", &point, Technique::GPU_DRIVEN, 2);
     let sun = scene("plane-directional", None, LightMix::All, 512);
-    check(&ctx, "plane-directional", &sun, Technique::GpuDriven, 2);
+    check(&ctx, "plane-directional", &sun, Technique::GPU_DRIVEN, 2);
     let dragon = scene("dragon", Some(4), LightMix::Spot, 256);
     // Alpha-tested cards (lattice, banners, leaves, fence): the masked casters' texels too.
     // Measured 18 (lavapipe) and 13 (llvmpipe GL) of 995,261 covered texels, every cull mode: mask edges where the texture
     // coordinate interpolates a hair differently; the budget is that plus a margin.
     let courtyard = scene("courtyard", None, LightMix::All, 256);
-    check(&ctx, "courtyard", &courtyard, Technique::GpuDriven, 24);
-    check(&ctx, "dragon", &dragon, Technique::GpuDriven, 2);
+    check(&ctx, "courtyard", &courtyard, Technique::GPU_DRIVEN, 24);
+    check(&ctx, "dragon", &dragon, Technique::GPU_DRIVEN, 2);
 }
 
 #[test]
@@ -217,31 +215,31 @@ fn compute_matches_traditional() {
     // the tolerance where the hardware interpolates from corners it clipped). The budgets are
     // the larger measurement plus 2–4.
     let cubes = scene("cubes", Some(6), LightMix::All, 256);
-    check(&ctx, "cubes", &cubes, Technique::Compute, 12);
+    check(&ctx, "cubes", &cubes, Technique::COMPUTE, 12);
     let point = scene("plane-point", None, LightMix::All, 256);
-    check(&ctx, "plane-point", &point, Technique::Compute, 2);
+    check(&ctx, "plane-point", &point, Technique::COMPUTE, 2);
     let sun = scene("plane-directional", None, LightMix::All, 512);
-    check(&ctx, "plane-directional", &sun, Technique::Compute, 6);
+    check(&ctx, "plane-directional", &sun, Technique::COMPUTE, 6);
     let dragon = scene("dragon", Some(4), LightMix::Spot, 256);
     // Alpha-tested cards (lattice, banners, leaves, fence): the masked casters' texels too.
     // Measured 18 (lavapipe) and 22 (llvmpipe GL) of 995,261 covered texels, every cull mode: mask edges where the texture
     // coordinate interpolates a hair differently; the budget is that plus a margin.
     let courtyard = scene("courtyard", None, LightMix::All, 256);
-    check(&ctx, "courtyard", &courtyard, Technique::Compute, 30);
-    check(&ctx, "dragon", &dragon, Technique::Compute, 2);
+    check(&ctx, "courtyard", &courtyard, Technique::COMPUTE, 30);
+    check(&ctx, "dragon", &dragon, Technique::COMPUTE, 2);
 }
 
 /// Runs `technique` directly on `scene`'s views with the given draw list into `atlas`.
 fn generate_into(
     ctx: &GpuContext,
-    technique: &mut dyn manyshadows::ShadowTechnique,
+    technique: &mut dyn manyshadows::shadows::atlas::technique::ShadowTechnique,
     parts: &Parts,
     options: &ShadowOptions,
     draw_list: &[u32],
 ) -> manyshadows::ShadowStats {
     ctx.queue
         .write_buffer(&parts.atlas.draw_list, 0, bytemuck::cast_slice(draw_list));
-    let input = manyshadows::shadow::ShadowInput {
+    let input = manyshadows::shadows::atlas::technique::ShadowInput {
         ctx,
         scene: &parts.gpu,
         views: &parts.plan.views,
@@ -250,7 +248,7 @@ fn generate_into(
         options,
         draw_list,
     };
-    let timer = manyshadows::timing::GpuTimer::new(ctx);
+    let timer = manyshadows::gpu::timing::GpuTimer::new(ctx);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     let stats = technique.generate(&input, &mut encoder, &timer, None);
     ctx.queue.submit([encoder.finish()]);
@@ -261,16 +259,17 @@ fn generate_into(
 struct Parts {
     plan: ShadowPlan,
     gpu: GpuScene,
-    atlas: manyshadows::ShadowAtlas,
-    casters: manyshadows::casters::CasterGeometry,
+    atlas: manyshadows::shadows::atlas::storage::ShadowAtlas,
+    casters: manyshadows::gpu_scene::casters::CasterGeometry,
 }
 
 fn parts(ctx: &GpuContext, scene: &Scene) -> Parts {
     let plan = ShadowPlan::new(scene, 16.0 / 9.0, 4096, FitPolicy::Shrink).expect("plan");
     let gpu = GpuScene::new(ctx, scene).expect("upload");
-    let atlas = manyshadows::ShadowAtlas::new(ctx, &plan).expect("atlas");
-    let casters = manyshadows::casters::CasterGeometry::new(ctx, scene, &gpu, Default::default())
-        .expect("casters");
+    let atlas = manyshadows::shadows::atlas::storage::ShadowAtlas::new(ctx, &plan).expect("atlas");
+    let casters =
+        manyshadows::gpu_scene::casters::CasterGeometry::new(ctx, scene, &gpu, Default::default())
+            .expect("casters");
     Parts {
         plan,
         gpu,
@@ -281,14 +280,15 @@ fn parts(ctx: &GpuContext, scene: &Scene) -> Parts {
 
 #[test]
 fn gpu_driven_splits_views_and_clusters_into_rounds() {
-    use manyshadows::techniques::gpu_driven::{plan_rounds, GpuDriven};
+    use manyshadows::shadows::atlas::gpu_driven::GpuDriven;
+    use manyshadows::shadows::cluster_draw::plan_rounds;
     let ctx = common::context();
     // 6 lights of every kind: spot, point (6 faces) and directional (cascades) views.
     let scene = scene("cubes", Some(6), LightMix::All, 256);
     let reference = atlas(
         &ctx,
         &scene,
-        Technique::Traditional,
+        Technique::TRADITIONAL,
         ShadowOptions::default(),
     );
     let p = parts(&ctx, &scene);
@@ -312,14 +312,11 @@ fn gpu_driven_splits_views_and_clusters_into_rounds() {
             let mut technique = GpuDriven::new(&ctx)
                 .expect("gpu-driven")
                 .with_max_round_commands(max);
-            let options = ShadowOptions {
-                cull,
-                ..Default::default()
-            };
+            let options = ShadowOptions::default().with_cull(cull);
             let stats = generate_into(&ctx, &mut technique, &p, &options, &list);
             assert_eq!(stats.passes as usize, 2 * rounds.len());
             assert_eq!(stats.draws, views as u64 * clusters);
-            let got = manyshadows::atlas_image::read_depth(&ctx, &p.atlas).expect("read");
+            let got = manyshadows::shadows::image::read_depth(&ctx, &p.atlas).expect("read");
             assert_eq!(ctx.take_uncaptured(), None, "GPU errors");
             let d = diff(&reference, &got);
             eprintln!(
@@ -347,22 +344,17 @@ fn partial_draw_lists_clear_only_listed_tiles() {
     let views = p.plan.views.len() as u32;
     let all: Vec<u32> = (0..views).collect();
     let odd: Vec<u32> = (1..views).step_by(2).collect();
-    let mut techniques = vec![Technique::GpuDriven];
+    let mut techniques = vec![Technique::GPU_DRIVEN];
     if ctx.has(manyshadows::wgpu::Features::MULTIVIEW) {
-        techniques.push(Technique::Multiview);
+        techniques.push(Technique::MULTIVIEW);
     }
     for technique in techniques {
-        let mut t = technique
-            .create(&ctx, &ShadowOptions::default())
-            .expect("technique");
+        let mut t = technique.create(&ctx).expect("technique");
         generate_into(&ctx, t.as_mut(), &p, &ShadowOptions::default(), &all);
-        let full = manyshadows::atlas_image::read_depth(&ctx, &p.atlas).expect("read");
-        let discard = ShadowOptions {
-            discard_raster: true,
-            ..Default::default()
-        };
+        let full = manyshadows::shadows::image::read_depth(&ctx, &p.atlas).expect("read");
+        let discard = ShadowOptions::default().with_discard_raster(true);
         generate_into(&ctx, t.as_mut(), &p, &discard, &odd);
-        let partial = manyshadows::atlas_image::read_depth(&ctx, &p.atlas).expect("read");
+        let partial = manyshadows::shadows::image::read_depth(&ctx, &p.atlas).expect("read");
         let size = p.atlas.size as usize;
         let mut odd_covered = 0;
         for (v, tile) in p.atlas.tiles.iter().enumerate() {

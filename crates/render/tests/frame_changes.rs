@@ -82,18 +82,13 @@ fn scene() -> Scene {
 }
 
 fn settings(technique: Technique, cache: bool) -> RenderSettings {
-    RenderSettings {
-        width: 160,
-        height: 90,
-        technique,
-        shadow: ShadowOptions {
-            cull: CullMode::All,
-            ..Default::default()
-        },
-        cache_shadows: cache,
-        visibility: true,
-        ..Default::default()
-    }
+    RenderSettings::default()
+        .with_width(160)
+        .with_height(90)
+        .with_technique(technique)
+        .with_shadow(ShadowOptions::default().with_cull(CullMode::All))
+        .with_cache_shadows(cache)
+        .with_visibility(true)
 }
 
 fn assert_like_fresh(ctx: &GpuContext, step: &str, changed: &mut Renderer) -> Frame {
@@ -130,14 +125,14 @@ fn views(r: &Renderer) -> Vec<manyshadows::scene::light_space::ShadowView> {
 
 #[test]
 fn changed_frames_equal_a_renderer_built_on_the_new_state() {
-    changes_equal_fresh(Technique::Layered);
+    changes_equal_fresh(Technique::LAYERED);
 }
 
 /// The same changes with virtual shadow maps: faces re-planned, page table and pages rebuilt
 /// from the new state every frame.
 #[test]
 fn changed_virtual_frames_equal_a_renderer_built_on_the_new_state() {
-    changes_equal_fresh(Technique::Virtual);
+    changes_equal_fresh(Technique::VIRTUAL);
 }
 
 fn changes_equal_fresh(technique: Technique) {
@@ -215,7 +210,7 @@ fn changes_equal_fresh(technique: Technique) {
 fn bad_indices_and_values_are_errors() {
     let ctx = common::context();
     let scene = scene();
-    let mut r = Renderer::new(&ctx, &scene, settings(Technique::Layered, false)).expect("renderer");
+    let mut r = Renderer::new(&ctx, &scene, settings(Technique::LAYERED, false)).expect("renderer");
     let err = r.set_light(3, scene.lights[0]).unwrap_err();
     assert!(err.to_string().contains("light 3"), "{err}");
     let err = r.set_instance_transform(7, Mat4::IDENTITY).unwrap_err();
@@ -248,7 +243,7 @@ fn virtual_frames_of_a_static_scene_are_identical() {
         },
     )
     .unwrap();
-    let mut r = Renderer::new(&ctx, &scene, settings(Technique::Virtual, false)).unwrap();
+    let mut r = Renderer::new(&ctx, &scene, settings(Technique::VIRTUAL, false)).unwrap();
     let a = r.render().unwrap();
     let b = r.render().unwrap();
     let stats = a.virtual_maps.unwrap();

@@ -19,12 +19,10 @@ fn golden(scene: &str, pcf: Pcf, file: &str) {
     let ctx = common::context();
     let scene = builtin::build(scene, &BuiltinOptions::default()).expect("scene");
     let (w, h) = (240, 160);
-    let settings = RenderSettings {
-        width: w,
-        height: h,
-        pcf,
-        ..Default::default()
-    };
+    let settings = RenderSettings::default()
+        .with_width(w)
+        .with_height(h)
+        .with_pcf(pcf);
     let frame = Renderer::new(&ctx, &scene, settings)
         .expect("renderer")
         .render()

@@ -89,7 +89,7 @@ fn run(ctx: &manyshadows::GpuContext, dispatches: u32) -> (f64, Vec<u32>) {
     encoder.copy_buffer_to_buffer(&out, 0, &readback, 0, size);
     let start = Instant::now();
     ctx.queue.submit([encoder.finish()]);
-    let bytes = manyshadows::readback::map_read(ctx, &readback, 0..size).unwrap_or_else(|e| {
+    let bytes = manyshadows::gpu::readback::map_read(ctx, &readback, 0..size).unwrap_or_else(|e| {
         panic!(
             "read-back after {:.1} s: {e}",
             start.elapsed().as_secs_f64()

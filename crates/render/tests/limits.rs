@@ -7,18 +7,15 @@
 mod common;
 
 use glam::{Mat4, Vec3};
-use manyshadows::context::{required_limits, webgpu_default_limits};
+use manyshadows::gpu::context::{required_limits, webgpu_default_limits};
 use manyshadows::scene::builtin::{self, BuiltinOptions};
 use manyshadows::scene::{Instance, Material, Mesh, Scene};
-use manyshadows::vsm::VirtualOptions;
 use manyshadows::wgpu;
+use manyshadows::VirtualOptions;
 use manyshadows::{AdapterRequest, GpuContext, RenderError, RenderSettings, Renderer, Technique};
 
 fn context_with(limits: wgpu::Limits) -> Result<GpuContext, RenderError> {
-    GpuContext::new(&AdapterRequest {
-        limits: Some(limits),
-        ..Default::default()
-    })
+    GpuContext::new(&AdapterRequest::default().with_limits(Some(limits)))
 }
 
 fn small_device() -> GpuContext {
@@ -26,19 +23,14 @@ fn small_device() -> GpuContext {
 }
 
 fn settings(technique: Technique) -> RenderSettings {
-    RenderSettings {
-        width: 96,
-        height: 64,
-        technique,
-        visibility: true,
-        // The same atlas and pool on both devices, so the plans are the same.
-        max_atlas_size: Some(2048),
-        virtual_maps: VirtualOptions {
-            pool_bytes: 2048 * 2048 * 4,
-            ..Default::default()
-        },
-        ..Default::default()
-    }
+    // The same atlas and pool on both devices, so the plans are the same.
+    RenderSettings::default()
+        .with_width(96)
+        .with_height(64)
+        .with_technique(technique)
+        .with_visibility(true)
+        .with_max_atlas_size(Some(2048))
+        .with_virtual_maps(VirtualOptions::default().with_pool_bytes(2048 * 2048 * 4))
 }
 
 /// Every technique renders on the minimum device, and its image and visibility equal the full
@@ -50,9 +42,9 @@ fn every_technique_renders_on_the_minimum_limits_as_on_the_full_adapter() {
     let small = small_device();
     assert_eq!(small.limits().max_storage_buffers_per_shader_stage, 8);
     let scene = builtin::build("cubes", &BuiltinOptions::default()).unwrap();
-    for &t in Technique::ALL {
+    for t in Technique::all() {
         let on_small = Renderer::new(&small, &scene, settings(t)).and_then(|mut r| r.render());
-        if t == Technique::Multiview {
+        if t == Technique::MULTIVIEW {
             let err = on_small.expect_err("multiview on WebGPU limits must be refused");
             assert!(
                 matches!(err, RenderError::MissingFeature { .. })
@@ -111,7 +103,10 @@ fn limits_beyond_the_adapter_are_refused_naming_the_limit() {
         ..have
     })
     .expect_err("a texture limit above the adapter's");
-    assert!(matches!(err, RenderError::Device(_)), "{err:?}");
+    assert!(
+        matches!(err, RenderError::LimitsUnavailable { .. }),
+        "{err:?}"
+    );
     assert!(
         err.to_string().contains("max_texture_dimension_2d"),
         "{err}"
@@ -168,8 +163,8 @@ fn casters_beyond_one_storage_binding_are_a_clear_error() {
     .expect("64 MiB buffers");
     let small = small_device();
     let scene = grid_scene(547); // 548² = 300,304 vertices, 598,418 triangles
-    for &t in Technique::ALL {
-        if t == Technique::Multiview {
+    for t in Technique::all() {
+        if t == Technique::MULTIVIEW {
             continue;
         }
         for (ctx, needle) in [
@@ -181,22 +176,22 @@ fn casters_beyond_one_storage_binding_are_a_clear_error() {
                 .err()
                 .unwrap_or_else(|| panic!("{t:?}: 300k caster vertices on a 4 MiB binding"));
             assert!(
-                matches!(err, RenderError::SceneTooLarge(_)),
+                matches!(err, RenderError::TooLarge { .. }),
                 "{t:?}: {err:?}"
             );
             let msg = err.to_string();
             assert!(
-                msg.contains(needle) && msg.contains("limit"),
+                msg.contains(needle) && msg.contains("over its max_"),
                 "{t:?}: {msg}"
             );
-            if t == Technique::Traditional {
+            if t == Technique::TRADITIONAL {
                 eprintln!("{msg}");
             }
         }
     }
     // A grid under the limits renders on the same devices.
     for ctx in [&big_buffers, &small] {
-        Renderer::new(ctx, &grid_scene(300), settings(Technique::Traditional))
+        Renderer::new(ctx, &grid_scene(300), settings(Technique::TRADITIONAL))
             .and_then(|mut r| r.render())
             .expect("90,601 vertices fit a 4 MiB binding");
     }
@@ -208,11 +203,11 @@ fn casters_beyond_one_storage_binding_are_a_clear_error() {
 fn frames_and_atlases_at_the_texture_limit() {
     let small = small_device();
     let scene = builtin::build("cubes", &BuiltinOptions::default()).unwrap();
-    let wide = |width: u32, height: u32| RenderSettings {
-        width,
-        height,
-        max_atlas_size: Some(8192),
-        ..Default::default()
+    let wide = |width: u32, height: u32| {
+        RenderSettings::default()
+            .with_width(width)
+            .with_height(height)
+            .with_max_atlas_size(Some(8192))
     };
     let Err(err) = Renderer::new(&small, &scene, wide(2049, 8)) else {
         panic!("2049 pixels wide on a 2048 device");
@@ -243,7 +238,7 @@ fn thousands_of_lights_on_the_minimum_limits() {
         },
     )
     .unwrap();
-    for t in [Technique::Traditional, Technique::Virtual] {
+    for t in [Technique::TRADITIONAL, Technique::VIRTUAL] {
         match Renderer::new(&small, &scene, settings(t)).and_then(|mut r| r.render()) {
             Ok(frame) => {
                 eprintln!("{t:?}: 4096 lights rendered");
@@ -252,7 +247,7 @@ fn thousands_of_lights_on_the_minimum_limits() {
             Err(e) => {
                 eprintln!("{t:?}: 4096 lights refused: {e}");
                 assert!(
-                    !matches!(e, RenderError::Gpu(_)),
+                    !matches!(e, RenderError::Gpu { .. }),
                     "{t:?}: 4096 lights gave a GPU error: {e}"
                 )
             }

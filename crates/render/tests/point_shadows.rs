@@ -5,15 +5,17 @@
 mod common;
 
 use glam::{Mat4, Vec3};
+use manyshadows::gpu_scene::instances::GpuScene;
 use manyshadows::scene::atlas::FitPolicy;
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::scene::light_space::PointShadows;
 use manyshadows::scene::{
     primitives, Attenuation, Camera, Instance, Light, LightKind, Material, Scene,
 };
+use manyshadows::shadows::atlas::generator::ShadowGenerator;
+use manyshadows::shadows::plan::ShadowPlan;
 use manyshadows::{
-    CullMode, GpuContext, GpuScene, Pcf, RenderError, RenderSettings, Renderer, ShadowGenerator,
-    ShadowOptions, ShadowPlan, Technique,
+    CullMode, GpuContext, Pcf, RenderError, RenderSettings, Renderer, ShadowOptions, Technique,
 };
 
 /// Depth tolerance of the paraboloid comparison. Triangles that cross a hemisphere's base are
@@ -35,12 +37,9 @@ fn atlas(ctx: &GpuContext, scene: &Scene, t: Technique, cull: CullMode) -> Vec<f
     )
     .expect("plan");
     let gpu = GpuScene::new(ctx, scene).expect("upload");
-    let options = ShadowOptions {
-        cull,
-        ..Default::default()
-    };
+    let options = ShadowOptions::default().with_cull(cull);
     let mut g = ShadowGenerator::new(ctx, scene, &gpu, plan, t, options).expect("generator");
-    let timer = manyshadows::timing::GpuTimer::new(ctx);
+    let timer = manyshadows::gpu::timing::GpuTimer::new(ctx);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     g.generate(ctx, &gpu, &mut encoder, &timer, None);
     ctx.queue.submit([encoder.finish()]);
@@ -76,11 +75,11 @@ fn layered_dual_paraboloid_atlas_matches_traditional() {
         ("plane-point", plane),
         ("cubes, 3 point lights", point_scene(1)),
     ] {
-        let reference = atlas(&ctx, &scene, Technique::Traditional, CullMode::None);
+        let reference = atlas(&ctx, &scene, Technique::TRADITIONAL, CullMode::None);
         let covered = reference.iter().filter(|&&d| d < 1.0).count();
         assert!(covered > 1000, "{label}: nearly empty atlas ({covered})");
         for &cull in CullMode::ALL {
-            let got = atlas(&ctx, &scene, Technique::Layered, cull);
+            let got = atlas(&ctx, &scene, Technique::LAYERED, cull);
             let differing = reference
                 .iter()
                 .zip(&got)
@@ -115,14 +114,12 @@ fn visibility(
     scene: &Scene,
     points: PointShadows,
 ) -> manyshadows::VisibilityMask {
-    let settings = RenderSettings {
-        width: 256,
-        height: 256,
-        pcf: Pcf::Off,
-        visibility: true,
-        point_shadows: points,
-        ..Default::default()
-    };
+    let settings = RenderSettings::default()
+        .with_width(256)
+        .with_height(256)
+        .with_pcf(Pcf::Off)
+        .with_visibility(true)
+        .with_point_shadows(points);
     let mut r = Renderer::new(ctx, scene, settings).expect("renderer");
     r.render().expect("frame").visibility.expect("mask")
 }
@@ -193,15 +190,13 @@ fn light_inside_geometry_lights_nothing_outside() {
         camera: Camera::look_at(Vec3::new(7.0, 4.0, 3.0), Vec3::new(7.0, 0.0, -1.0)),
     };
     for points in PointShadows::ALL {
-        for technique in [Technique::Traditional, Technique::Layered] {
-            let settings = RenderSettings {
-                width: 128,
-                height: 128,
-                visibility: true,
-                technique,
-                point_shadows: *points,
-                ..Default::default()
-            };
+        for technique in [Technique::TRADITIONAL, Technique::LAYERED] {
+            let settings = RenderSettings::default()
+                .with_width(128)
+                .with_height(128)
+                .with_visibility(true)
+                .with_technique(technique)
+                .with_point_shadows(*points);
             let mut r = Renderer::new(&ctx, &scene, settings.clone()).expect("renderer");
             let vis = r.render().expect("frame").visibility.expect("mask");
             let lit = (0..128)
@@ -241,12 +236,10 @@ fn bad_point_shadow_configurations_are_clear_errors() {
     if let LightKind::Point { range, .. } = &mut scene.lights[0].kind {
         *range = 0.0;
     }
-    let settings = RenderSettings {
-        width: 64,
-        height: 64,
-        point_shadows: PointShadows::DualParaboloid,
-        ..Default::default()
-    };
+    let settings = RenderSettings::default()
+        .with_width(64)
+        .with_height(64)
+        .with_point_shadows(PointShadows::DualParaboloid);
     let err = Renderer::new(&ctx, &scene, settings.clone())
         .err()
         .expect("zero range must fail");
@@ -254,16 +247,19 @@ fn bad_point_shadow_configurations_are_clear_errors() {
 
     // Techniques without a paraboloid path refuse instead of drawing cube-shaped nonsense.
     let scene = point_scene(0);
-    for t in [Technique::GpuDriven, Technique::Multiview] {
-        let s = RenderSettings {
-            technique: t,
-            ..settings.clone()
-        };
+    for t in [Technique::GPU_DRIVEN, Technique::MULTIVIEW] {
+        let s = settings.clone().with_technique(t);
         match Renderer::new(&ctx, &scene, s) {
-            Err(e @ (RenderError::Unsupported(_) | RenderError::MissingFeature { .. })) => {
+            Err(
+                e @ (RenderError::UnsupportedCombination {
+                    option: "point shadows",
+                    ..
+                }
+                | RenderError::MissingFeature { .. }),
+            ) => {
                 let why = e.to_string();
                 assert!(
-                    why.contains("cube point shadows") || why.contains("MULTIVIEW"),
+                    why.contains("renders cube") || why.contains("MULTIVIEW"),
                     "{t}: {why}"
                 )
             }

@@ -79,11 +79,7 @@ fn render(sphere: Mesh) -> (Vec<u8>, manyshadows::GBufferData) {
     let mut r = Renderer::new(
         &ctx,
         &s,
-        RenderSettings {
-            width: 200,
-            height: 150,
-            ..Default::default()
-        },
+        RenderSettings::default().with_width(200).with_height(150),
     )
     .unwrap();
     let frame = r.render().unwrap();
@@ -189,12 +185,10 @@ fn roof_winding_changes_nothing() {
         let mut r = Renderer::new(
             &ctx,
             &s,
-            RenderSettings {
-                width: 200,
-                height: 150,
-                visibility: true,
-                ..Default::default()
-            },
+            RenderSettings::default()
+                .with_width(200)
+                .with_height(150)
+                .with_visibility(true),
         )
         .unwrap();
         let frame = r.render().unwrap();

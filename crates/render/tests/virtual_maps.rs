@@ -21,14 +21,12 @@ fn misclassified(technique: Technique) -> (f64, common::ReferenceErrors) {
         },
     )
     .expect("atrium");
-    let settings = RenderSettings {
-        width: 320,
-        height: 180,
-        pcf: Pcf::Off,
-        visibility: true,
-        technique,
-        ..Default::default()
-    };
+    let settings = RenderSettings::default()
+        .with_width(320)
+        .with_height(180)
+        .with_pcf(Pcf::Off)
+        .with_visibility(true)
+        .with_technique(technique);
     let mut r = Renderer::new(&ctx, &scene, settings).expect("renderer");
     let frame = r.render().expect("frame");
     if let Some(stats) = frame.virtual_maps {
@@ -54,8 +52,8 @@ fn misclassified(technique: Technique) -> (f64, common::ReferenceErrors) {
 /// wider).
 #[test]
 fn virtual_mask_matches_the_reference_better_than_the_atlas() {
-    let (virt, _) = misclassified(Technique::Virtual);
-    let (atlas, _) = misclassified(Technique::Traditional);
+    let (virt, _) = misclassified(Technique::VIRTUAL);
+    let (atlas, _) = misclassified(Technique::TRADITIONAL);
     assert!(
         virt <= 0.002,
         "virtual: {:.4} % misclassified",

@@ -28,7 +28,7 @@ fn main() {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = Cli::parse();
     if let Err(e) = view::run(&cli.view) {
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", manyshadows_cli::report(&e));
         std::process::exit(1);
     }
 }

@@ -17,7 +17,7 @@ use clap::Args;
 use glam::{Mat4, Vec3};
 use manyshadows::scene::light_space::PointShadows;
 use manyshadows::scene::{Camera, LightKind, Scene};
-use manyshadows::{wgpu, GpuContext, Pcf, RenderSettings, Renderer, Technique};
+use manyshadows::{wgpu, Fills, GpuContext, Pcf, RenderSettings, Renderer, Technique};
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
@@ -40,7 +40,7 @@ pub struct ViewArgs {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Shadow technique to start with (as for `render`; the panel switches it).
-    #[arg(long, default_value = "traditional", value_parser = manyshadows_cli::parse_technique)]
+    #[arg(long, default_value_t = Technique::default(), value_parser = manyshadows_cli::parse_technique)]
     technique: Technique,
     /// Point-light shadows to start with: cube or dual-paraboloid.
     #[arg(long, default_value = "cube", value_parser = manyshadows_cli::parse_point_shadows)]
@@ -100,7 +100,8 @@ fn parse_script(text: &str) -> Result<Vec<[f32; 6]>> {
             continue;
         }
         out.push(
-            manyshadows_cli::parse_camera(line).map_err(|e| anyhow::anyhow!("script line {}: {e}", i + 1))?,
+            manyshadows_cli::parse_camera(line)
+                .map_err(|e| anyhow::anyhow!("script line {}: {e}", i + 1))?,
         );
     }
     if out.is_empty() {
@@ -204,7 +205,7 @@ struct State {
     last_frame: Instant,
     started: Instant,
     frames: u64,
-    gpu_ms: manyshadows::timing::GpuTimes,
+    gpu_ms: manyshadows::GpuTimes,
     frame_ms: f64,
     message: Option<String>,
     overlays: Overlays,
@@ -228,16 +229,14 @@ struct Overlays {
 }
 
 fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
-    RenderSettings {
-        width,
-        height,
-        technique: c.technique,
-        point_shadows: c.point_shadows,
-        pcf: c.pcf,
-        cache_shadows: c.cache,
-        visibility: c.visibility,
-        ..Default::default()
-    }
+    RenderSettings::default()
+        .with_width(width)
+        .with_height(height)
+        .with_technique(c.technique)
+        .with_point_shadows(c.point_shadows)
+        .with_pcf(c.pcf)
+        .with_cache_shadows(c.cache)
+        .with_visibility(c.visibility)
 }
 
 impl App {
@@ -259,7 +258,7 @@ impl App {
             event_loop.owned_display_handle(),
         ))
         .with_env();
-        desc.backends = manyshadows::context::requested_backends(&req);
+        desc.backends = req.resolved_backends();
         let instance = wgpu::Instance::new(desc);
         let surface = instance
             .create_surface(window.clone())
@@ -318,11 +317,7 @@ impl App {
             egui_wgpu::Renderer::new(&ctx.device, format, egui_wgpu::RendererOptions::default());
         let camera = self.scene.camera;
         let dir = (camera.target - camera.position).normalize();
-        log::info!(
-            "viewer: {} on {}",
-            self.args.scene,
-            manyshadows::context::describe_adapter(&ctx.info)
-        );
+        log::info!("viewer: {} on {}", self.args.scene, ctx.describe());
         Ok(State {
             window,
             surface,
@@ -498,7 +493,7 @@ impl State {
             "presented frame {}: {} of {} shadow views drawn",
             self.frames,
             self.views_drawn,
-            self.renderer.plan().views.len()
+            self.renderer.shadow_views()
         );
     }
 
@@ -510,23 +505,10 @@ impl State {
         }
         o.refreshed = Some(Instant::now());
         if o.atlas {
-            // The atlas, or the virtual maps' page pool; irregular has neither.
-            let picture = if self.renderer.settings().technique == Technique::Virtual {
-                self.renderer.read_page_pool().map(|(side, depth)| {
-                    let (shown, rgb) = manyshadows::atlas_image::pool_picture(&depth, side);
-                    let pages = (side / manyshadows::vsm::PAGE_SIZE).pow(2);
-                    (shown, rgb, format!("{side}² page pool ({pages} pages)"))
-                })
-            } else {
-                self.renderer.read_atlas().map(|depth| {
-                    let size = self.renderer.atlas().size;
-                    let (shown, rgb) =
-                        manyshadows::atlas_image::atlas_picture(&depth, size, self.renderer.plan());
-                    (shown, rgb, format!("{size}² atlas"))
-                })
-            };
-            match picture {
-                Ok((side, rgb, what)) => {
+            // The atlas, or the page pool; a technique that fills the mask has neither.
+            match self.renderer.shadow_picture() {
+                Ok(p) => {
+                    let (side, rgb, what) = (p.side, p.rgb, p.description);
                     let (w, small) = shrink_rgb(side, &rgb, 256);
                     let image = egui::ColorImage::from_rgb([w, w], &small);
                     o.atlas_texture = Some(self.egui_ctx.load_texture(
@@ -571,20 +553,20 @@ impl State {
         let raw = self.egui_state.take_egui_input(&self.window);
         let mut choice = self.choice;
         let mut apply_lights = false;
-        let plan = self.renderer.plan();
-        let atlas = plan.layout.size;
-        let pool_side = self.renderer.virtual_plan().map(|_| {
-            manyshadows::vsm::pool_side(
-                self.renderer.settings().virtual_maps.pool_bytes,
-                self.ctx.limits().max_texture_dimension_2d,
-            )
-        });
-        let views = match self.renderer.virtual_plan() {
-            Some(p) => p.faces.len(),
-            None => plan.views.len(),
-        };
+        let layout = self.renderer.shadow_layout();
+        let views = layout.views;
         let lights = self.renderer.scene().lights.len();
         let features = self.ctx.device.features();
+        // Each technique of the registry with what this device lacks for it.
+        let menu: Vec<(Technique, Vec<String>)> = Technique::all()
+            .into_iter()
+            .map(|t| {
+                (
+                    t,
+                    t.info().unmet(&self.ctx).iter().map(|n| n.name()).collect(),
+                )
+            })
+            .collect();
         let gpu_ms = self.gpu_ms.clone();
         let frame_ms = self.frame_ms;
         let views_drawn = self.views_drawn;
@@ -601,14 +583,15 @@ impl State {
                     egui::ComboBox::from_label("technique")
                         .selected_text(choice.technique.to_string())
                         .show_ui(ui, |ui| {
-                            for &t in Technique::ALL {
+                            for (t, unmet) in &menu {
                                 let mut label = t.to_string();
-                                if t == Technique::Multiview
-                                    && !features.contains(wgpu::Features::MULTIVIEW)
-                                {
-                                    label.push_str(" (needs MULTIVIEW; this device lacks it)");
+                                if !unmet.is_empty() {
+                                    label.push_str(&format!(
+                                        " (needs {}; this device lacks it)",
+                                        unmet.join(", ")
+                                    ));
                                 }
-                                ui.selectable_value(&mut choice.technique, t, label);
+                                ui.selectable_value(&mut choice.technique, *t, label);
                             }
                         });
                     egui::ComboBox::from_label("point shadows")
@@ -635,19 +618,18 @@ impl State {
                         apply_lights = ui.button("apply").clicked();
                     });
                     ui.separator();
-                    let (what, side) = match pool_side {
-                        Some(p) => ("page pool", p),
-                        None => ("atlas", atlas),
-                    };
+                    let side = layout.side;
                     ui.label(format!(
-                        "{lights} lights, {views} shadow views, {what} {side}² ({:.1} MiB)",
+                        "{lights} lights, {views} shadow views, {} {side}² ({:.1} MiB)",
+                        layout.fills.describe(),
                         (side as f64).powi(2) * 4.0 / (1 << 20) as f64
                     ));
-                    if technique == Technique::Irregular {
+                    if layout.fills == Fills::Mask {
                         ui.label(format!(
-                            "{technique}: no atlas (exact tests per camera sample)"
+                            "{technique}: fills {} (exact tests per camera sample)",
+                            layout.fills.describe()
                         ));
-                    } else if technique == Technique::Virtual {
+                    } else if layout.fills == Fills::Pages {
                         ui.label(format!(
                             "{technique}: pages in a pool, no atlas (faces planned per frame)"
                         ));
@@ -688,7 +670,7 @@ impl State {
                     }
                 });
             if overlays.atlas {
-                egui::Window::new(if technique == Technique::Virtual {
+                egui::Window::new(if layout.fills == Fills::Pages {
                     "page pool"
                 } else {
                     "shadow atlas"

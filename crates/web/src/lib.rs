@@ -6,10 +6,10 @@
 //! same text the page's URL and its controls use; see [`WebSettings`].
 #![cfg(target_arch = "wasm32")]
 
-use manyshadows::clusters::LightLoop;
 use manyshadows::scene::builtin::{self, BuiltinOptions};
 use manyshadows::scene::light_space::PointShadows;
 use manyshadows::scene::Camera;
+use manyshadows::LightLoop;
 use manyshadows::{wgpu, GpuContext, Pcf, RenderSettings, Renderer, Technique};
 use wasm_bindgen::prelude::*;
 
@@ -105,15 +105,13 @@ impl WebSettings {
     }
 
     fn render_settings(&self) -> RenderSettings {
-        RenderSettings {
-            width: self.width,
-            height: self.height,
-            technique: self.technique,
-            point_shadows: self.point_shadows,
-            pcf: self.pcf,
-            light_loop: self.light_loop,
-            ..Default::default()
-        }
+        RenderSettings::default()
+            .with_width(self.width)
+            .with_height(self.height)
+            .with_technique(self.technique)
+            .with_point_shadows(self.point_shadows)
+            .with_pcf(self.pcf)
+            .with_light_loop(self.light_loop)
     }
 }
 
@@ -123,6 +121,17 @@ fn orbit(base: &Camera, deg: f32) -> Camera {
     let rot = glam::Mat3::from_rotation_y(deg.to_radians());
     c.position = base.target + rot * (base.position - base.target);
     c
+}
+
+/// The registry's technique names, one per line, the default first: the page's technique menu
+/// is made of them.
+#[wasm_bindgen]
+pub fn technique_names() -> String {
+    Technique::all()
+        .iter()
+        .map(|t| t.name())
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 /// One scene on the browser's WebGPU device, rendered on demand.
@@ -147,10 +156,14 @@ impl WebRenderer {
             .request_adapter(&wgpu::RequestAdapterOptions::default())
             .await
             .map_err(|e| err(format!("no WebGPU adapter: {e}")))?;
-        // The optional features the renderer uses when present; MULTIVIEW and pipeline
-        // statistics do not exist in WebGPU, so those techniques are refused by name.
-        let features =
-            adapter.features() & (wgpu::Features::CLIP_DISTANCES | wgpu::Features::TIMESTAMP_QUERY);
+        // The optional features the techniques need (from their declarations) and GPU times,
+        // where the browser has them; a technique whose needs are missing is refused by name.
+        let wanted = Technique::all()
+            .iter()
+            .fold(wgpu::Features::TIMESTAMP_QUERY, |f, t| {
+                f | t.info().features()
+            });
+        let features = adapter.features() & wanted;
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 required_features: features,
@@ -160,6 +173,9 @@ impl WebRenderer {
             .await
             .map_err(err)?;
         let ctx = GpuContext::from_parts(instance, adapter, device, queue).map_err(err)?;
+        // This page is the host: GPU errors outside the renderer's calls are reported through
+        // `render`, not thrown by wgpu's default handler.
+        ctx.capture_uncaptured_errors();
         let (renderer, base_camera, target) = Self::build(&ctx, &settings)?;
         Ok(WebRenderer {
             ctx,
@@ -244,9 +260,23 @@ impl WebRenderer {
         self.settings.height
     }
 
+    /// One line per technique of the registry: its name, a tab, and what this device lacks
+    /// for it (empty where it runs). The page disables the ones it cannot run.
+    pub fn technique_status(&self) -> String {
+        Technique::all()
+            .iter()
+            .map(|t| {
+                let unmet: Vec<String> =
+                    t.info().unmet(&self.ctx).iter().map(|n| n.name()).collect();
+                format!("{}\t{}", t.name(), unmet.join(", "))
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+    }
+
     /// A few lines for the page: adapter, lights, shadow views, atlas and what the device lacks.
     pub fn info(&self) -> String {
-        let plan = self.renderer.plan();
+        let layout = self.renderer.shadow_layout();
         let lacks: Vec<&str> = [
             (wgpu::Features::MULTIVIEW, "MULTIVIEW (technique multiview)"),
             (
@@ -263,9 +293,9 @@ impl WebRenderer {
         .map(|&(_, s)| s)
         .collect();
         // Browsers hide the adapter's name from wgpu; the page prints what it may know.
-        let adapter = manyshadows::context::describe_adapter(&self.ctx.info);
+        let adapter = self.ctx.describe();
         format!(
-            "adapter: {}\nscene {}: {} lights, {} shadow views, atlas {}² ({:.0} % filled)\n\
+            "adapter: {}\nscene {}: {} lights, {} shadow views, {} {}²{}\n\
              technique {}, {} point shadows, PCF {}, {} light loop\nthis device lacks: {}",
             if self.ctx.info.name.is_empty() {
                 "the browser's WebGPU (see above)".to_string()
@@ -274,9 +304,13 @@ impl WebRenderer {
             },
             self.settings.scene,
             self.renderer.scene().lights.len(),
-            plan.views.len(),
-            plan.layout.size,
-            plan.fill() * 100.0,
+            layout.views,
+            layout.fills.describe(),
+            layout.side,
+            layout
+                .atlas_fill
+                .map(|f| format!(" ({:.0} % filled)", f * 100.0))
+                .unwrap_or_default(),
             self.settings.technique.name(),
             self.settings.point_shadows.name(),
             self.settings.pcf.name(),

@@ -70,14 +70,16 @@ impl Blit {
             .usage()
             .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
         {
-            return Err(RenderError::Unsupported(
-                "render_to needs a target texture created with RENDER_ATTACHMENT usage".into(),
-            ));
+            return Err(RenderError::UnsupportedTarget {
+                format: target.format(),
+                needs: "RENDER_ATTACHMENT usage",
+            });
         }
         if target.dimension() != wgpu::TextureDimension::D2 || target.sample_count() != 1 {
-            return Err(RenderError::Unsupported(
-                "render_to needs a single-sampled 2D target texture".into(),
-            ));
+            return Err(RenderError::UnsupportedTarget {
+                format: target.format(),
+                needs: "to be a single-sampled 2D texture",
+            });
         }
         let format = target.format();
         if format.is_depth_stencil_format()
@@ -86,10 +88,10 @@ impl Blit {
                 Some(wgpu::TextureSampleType::Float { .. })
             )
         {
-            return Err(RenderError::Unsupported(format!(
-                "render_to writes colour; {format:?} is not a floating-point or normalized \
-                 colour format"
-            )));
+            return Err(RenderError::UnsupportedTarget {
+                format,
+                needs: "a floating-point or normalized colour format",
+            });
         }
         let device = &ctx.device;
         let pipeline = self.pipelines.entry(format).or_insert_with(|| {

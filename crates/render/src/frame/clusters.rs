@@ -34,7 +34,6 @@
 //! *overflowed* and their pixels loop over every light: slower, never wrong, and counted in
 //! [`ClusterStats::overflowed`].
 
-use glam::{Mat4, Vec3, Vec4};
 use manyshadows_scene::light_space;
 use manyshadows_scene::Scene;
 use wgpu::util::DeviceExt;
@@ -53,6 +52,7 @@ pub const DEFAULT_POOL_BYTES: u64 = 128 << 20;
 
 /// Which lights each pixel's shading visits.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum LightLoop {
     /// Only the lights of the pixel's cluster (the default).
     #[default]
@@ -87,6 +87,7 @@ impl std::str::FromStr for LightLoop {
 
 /// Shape of the cluster grid.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub struct ClusterOptions {
     /// Tile side in pixels (at least 1).
     pub tile: u32,
@@ -109,6 +110,7 @@ impl Default for ClusterOptions {
 
 /// What the last frame's clustering did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[non_exhaustive]
 pub struct ClusterStats {
     /// Tiles across and down.
     pub tiles: [u32; 2],
@@ -176,26 +178,23 @@ impl LightClusters {
         options: ClusterOptions,
         enabled: bool,
     ) -> Result<Self, RenderError> {
-        if options.tile == 0 || !(1..=256).contains(&options.slices) {
-            return Err(RenderError::InvalidOption(format!(
-                "cluster grid of {}-pixel tiles and {} slices: tiles must be at least 1 pixel \
-                 and slices 1 to 256",
-                options.tile, options.slices
-            )));
-        }
+        // The grid's ranges are checked by `RenderSettings::validate`.
+        debug_assert!(options.tile > 0 && (1..=256).contains(&options.slices));
         let device = &ctx.device;
         let limit = ctx.limits().max_storage_buffer_binding_size;
         let pool_limit = options.pool_bytes.unwrap_or(DEFAULT_POOL_BYTES).min(limit);
         let tiles = [width.div_ceil(options.tile), height.div_ceil(options.tile)];
         let clusters = tiles[0] as u64 * tiles[1] as u64 * options.slices as u64;
         if clusters * 4 > limit {
-            return Err(RenderError::ResolutionTooLarge {
-                width,
-                height,
-                reason: format!(
-                    "{clusters} light clusters need more than this adapter's storage-binding \
-                     limit of {limit} bytes; use larger cluster tiles"
+            return Err(RenderError::TooLarge {
+                what: format!(
+                    "the {clusters} light clusters of a {width}x{height} frame (use larger \
+                     cluster tiles)"
                 ),
+                needed: clusters * 4,
+                limit,
+                unit: "bytes",
+                limit_name: "max_storage_buffer_binding_size",
             });
         }
         let storage = wgpu::BufferUsages::STORAGE;
@@ -427,11 +426,6 @@ impl LightClusters {
         }));
     }
 
-    /// True when [`Self::bind`] must run before the next [`Self::record`].
-    pub fn needs_bind(&self) -> bool {
-        self.bind_group.is_none()
-    }
-
     /// Records marking, slot allocation, assignment and statistics (nothing when disabled).
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: &GpuTimer, span: Option<Span>) {
         if !self.enabled {
@@ -495,17 +489,6 @@ impl LightClusters {
     }
 }
 
-/// The camera's view-projection for `scene` at `aspect` (width / height).
-pub fn camera_view_proj(scene: &Scene, aspect: f32) -> Mat4 {
-    scene.camera.projection(aspect) * scene.camera.view()
-}
-
-/// True if the sphere `(centre, radius)` meets the frustum of `view_proj` (conservative).
-pub fn sphere_in_view(view_proj: Mat4, centre: Vec3, radius: f32) -> bool {
-    let planes: [Vec4; 6] = light_space::frustum_planes(view_proj);
-    light_space::sphere_in_planes(&planes, centre, radius)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -520,3 +503,9 @@ mod tests {
         assert_eq!(slot_words(16384), (16, 512));
     }
 }
+
+with_setters!(ClusterOptions {
+    with_tile: tile: u32,
+    with_slices: slices: u32,
+    with_pool_bytes: pool_bytes: Option<u64>,
+});

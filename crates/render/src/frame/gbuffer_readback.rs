@@ -52,11 +52,14 @@ impl GBufferData {
             if position.len() != pixels * TEXEL_BYTES as usize
                 || normal.len() != pixels * TEXEL_BYTES as usize
             {
-                return Err(RenderError::Readback(format!(
-                    "G-buffer read-back returned {} and {} bytes for {width}x{height} pixels",
-                    position.len(),
-                    normal.len()
-                )));
+                return Err(RenderError::Readback {
+                    what: "the G-buffer",
+                    reason: format!(
+                        "{} and {} bytes came back for {width}x{height} pixels",
+                        position.len(),
+                        normal.len()
+                    ),
+                });
             }
             let f = f32::from_bits;
             let mut out = GBufferData {

@@ -48,10 +48,12 @@ impl VisibilityPass {
         let words = lights.div_ceil(32).max(1);
         let per_word = w as u64 * h as u64 * 4;
         if per_word > limit {
-            return Err(RenderError::ResolutionTooLarge {
-                width: w,
-                height: h,
-                reason: format!("the visibility mask needs {per_word} bytes per 32 lights, over this adapter's storage-buffer binding limit of {limit} bytes"),
+            return Err(RenderError::TooLarge {
+                what: format!("the visibility mask of a {w}x{h} frame, per 32 lights,"),
+                needed: per_word,
+                limit,
+                unit: "bytes",
+                limit_name: "max_storage_buffer_binding_size",
             });
         }
         let chunk_words = ((limit / per_word) as u32).clamp(1, words);

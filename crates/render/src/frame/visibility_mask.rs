@@ -8,6 +8,49 @@
 
 use std::io::Write;
 
+/// Why bytes are not a `.msvis` file.
+#[non_exhaustive]
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum MaskFileError {
+    /// The first 24 bytes are not the header.
+    #[error("not a .msvis file (bad header)")]
+    BadHeader,
+    /// The header's words per pixel do not match its light count.
+    #[error("{lights} lights need {expected} words per pixel, the header says {found}")]
+    WordsPerPixel {
+        /// Lights in the header.
+        lights: u32,
+        /// Words per pixel those lights need.
+        expected: u32,
+        /// Words per pixel in the header.
+        found: u32,
+    },
+    /// The header's sizes overflow 64 bits.
+    #[error("{width}x{height} pixels of {words_per_pixel} words overflow")]
+    Overflow {
+        /// Width in the header.
+        width: u32,
+        /// Height in the header.
+        height: u32,
+        /// Words per pixel in the header.
+        words_per_pixel: u32,
+    },
+    /// The words after the header are not as many as the header says.
+    #[error("{width}x{height} pixels of {words_per_pixel} words need {needed} bytes of words, found {found}")]
+    Length {
+        /// Width in the header.
+        width: u32,
+        /// Height in the header.
+        height: u32,
+        /// Words per pixel in the header.
+        words_per_pixel: u32,
+        /// Bytes of words the header asks for.
+        needed: u64,
+        /// Bytes of words present.
+        found: u64,
+    },
+}
+
 /// Per-pixel light bits read back from the GPU.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct VisibilityMask {
@@ -44,17 +87,19 @@ impl VisibilityMask {
     }
 
     /// Reads the `.msvis` format.
-    pub fn read_raw(bytes: &[u8]) -> Result<Self, String> {
+    pub fn read_raw(bytes: &[u8]) -> Result<Self, MaskFileError> {
         if bytes.len() < 24 || &bytes[..8] != b"MSVIS001" {
-            return Err("not a .msvis file (bad header)".into());
+            return Err(MaskFileError::BadHeader);
         }
         let u = |i: usize| u32::from_le_bytes(bytes[8 + 4 * i..12 + 4 * i].try_into().unwrap());
         let (width, height, lights, words_per_pixel) = (u(0), u(1), u(2), u(3));
-        if words_per_pixel != lights.div_ceil(32).max(1) {
-            return Err(format!(
-                "{lights} lights need {} words per pixel, the header says {words_per_pixel}",
-                lights.div_ceil(32).max(1)
-            ));
+        let expected = lights.div_ceil(32).max(1);
+        if words_per_pixel != expected {
+            return Err(MaskFileError::WordsPerPixel {
+                lights,
+                expected,
+                found: words_per_pixel,
+            });
         }
         // The header's sizes are checked against the bytes present before anything is
         // allocated: a header claiming 2^32 × 2^32 pixels is an error, not an allocation.
@@ -62,15 +107,19 @@ impl VisibilityMask {
             .checked_mul(height as u64)
             .and_then(|p| p.checked_mul(words_per_pixel as u64))
             .and_then(|n| n.checked_mul(4))
-            .ok_or_else(|| {
-                format!("{width}x{height} pixels of {words_per_pixel} words overflow")
+            .ok_or(MaskFileError::Overflow {
+                width,
+                height,
+                words_per_pixel,
             })?;
         if bytes.len() as u64 - 24 != n {
-            return Err(format!(
-                "{width}x{height} pixels of {words_per_pixel} words need {n} bytes of words, \
-                 found {}",
-                bytes.len() - 24
-            ));
+            return Err(MaskFileError::Length {
+                width,
+                height,
+                words_per_pixel,
+                needed: n,
+                found: bytes.len() as u64 - 24,
+            });
         }
         let words = bytes[24..]
             .chunks_exact(4)
@@ -131,14 +180,24 @@ mod tests {
             (1 << 20, 1 << 20, 64, 2),
             (2, 2, 1, 1),
         ] {
-            let err = VisibilityMask::read_raw(&header(w, h, lights, words)).unwrap_err();
+            let err = VisibilityMask::read_raw(&header(w, h, lights, words))
+                .unwrap_err()
+                .to_string();
             assert!(err.contains("overflow") || err.contains("need"), "{err}");
         }
         // Words per pixel that do not match the light count (lit() would read out of range).
         let mut b = header(1, 1, 64, 1);
         b.extend_from_slice(&[0; 4]);
         let err = VisibilityMask::read_raw(&b).unwrap_err();
-        assert!(err.contains("64 lights need 2 words"), "{err}");
+        assert_eq!(
+            err,
+            super::MaskFileError::WordsPerPixel {
+                lights: 64,
+                expected: 2,
+                found: 1
+            }
+        );
+        assert!(err.to_string().contains("64 lights need 2 words"), "{err}");
         assert!(VisibilityMask::read_raw(b"MSVIS00").is_err());
         assert!(VisibilityMask::read_raw(b"NOTMSVIS0000000000000000").is_err());
     }

@@ -6,7 +6,7 @@ use crate::{GpuContext, RenderError};
 /// for twice as much (so a growing scene reallocates rarely), capped at the device's limit for
 /// its usage (`max_buffer_size`; storage buffers also `max_storage_buffer_binding_size`, since
 /// they are bound whole). Returns true if the buffer was replaced; `needed` over the limit is a
-/// [`RenderError::SceneTooLarge`] naming `what`, never a GPU error.
+/// [`RenderError::TooLarge`] naming `what`, never a GPU error.
 pub(crate) fn grow_buffer(
     ctx: &GpuContext,
     buffer: &mut wgpu::Buffer,
@@ -19,15 +19,22 @@ pub(crate) fn grow_buffer(
     let limits = ctx.limits();
     let usage = buffer.usage();
     let mut limit = limits.max_buffer_size;
-    if usage.contains(wgpu::BufferUsages::STORAGE) {
-        limit = limit.min(limits.max_storage_buffer_binding_size);
+    let mut limit_name = "max_buffer_size";
+    if usage.contains(wgpu::BufferUsages::STORAGE) && limits.max_storage_buffer_binding_size < limit
+    {
+        limit = limits.max_storage_buffer_binding_size;
+        limit_name = "max_storage_buffer_binding_size";
     }
     // Binding sizes must stay multiples of 4 (16 keeps arrays of vec4 whole).
     let limit = limit - limit % 16;
     if needed > limit {
-        return Err(RenderError::SceneTooLarge(format!(
-            "the {what} buffer would be {needed} bytes, over this device's limit of {limit} bytes"
-        )));
+        return Err(RenderError::TooLarge {
+            what: format!("the {what} buffer"),
+            needed,
+            limit,
+            unit: "bytes",
+            limit_name,
+        });
     }
     *buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(&format!("manyshadows.{}", what.replace(' ', "_"))),

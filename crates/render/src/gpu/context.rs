@@ -8,12 +8,11 @@
 
 use std::sync::{Arc, Mutex};
 
-pub use wgpu::Backends;
-
 use crate::RenderError;
 
 /// What the caller asks of the adapter choice.
 #[derive(Clone, Debug, Default)]
+#[non_exhaustive]
 pub struct AdapterRequest {
     /// Backends to consider; `None` = `WGPU_BACKEND` if set, otherwise all.
     pub backends: Option<wgpu::Backends>,
@@ -37,7 +36,7 @@ pub fn webgpu_default_limits() -> wgpu::Limits {
 /// (2048² textures, 4 MiB storage bindings and buffers). Capacities scale with the device: the
 /// shadow atlas and page pool are capped at the texture limit, the priority fit shrinks or
 /// drops maps that do not fit, and a scene or frame whose buffers would pass a limit is
-/// refused with [`RenderError::SceneTooLarge`] or [`RenderError::ResolutionTooLarge`].
+/// refused with [`RenderError::TooLarge`] or [`RenderError::ResolutionTooLarge`].
 /// [`GpuContext::new`] refuses a device below these, naming each limit
 /// (`crates/render/tests/limits.rs` renders every technique on exactly these limits).
 pub fn required_limits() -> wgpu::Limits {
@@ -172,6 +171,14 @@ fn rank(info: &wgpu::AdapterInfo) -> u32 {
     hw * 10 + backend
 }
 
+impl AdapterRequest {
+    /// The backends this request considers: [`AdapterRequest::backends`], else
+    /// `WGPU_BACKEND`, else every native backend.
+    pub fn resolved_backends(&self) -> wgpu::Backends {
+        requested_backends(self)
+    }
+}
+
 /// Which backends a request considers.
 pub fn requested_backends(req: &AdapterRequest) -> wgpu::Backends {
     req.backends.or_else(wgpu::Backends::from_env).unwrap_or(
@@ -278,11 +285,10 @@ impl GpuContext {
             Some(wanted) => {
                 let over = limit_shortfalls(&adapter_limits, wanted);
                 if !over.is_empty() {
-                    return Err(RenderError::Device(format!(
-                        "{}: the requested limits exceed the adapter's: {}",
-                        describe_adapter(&info),
-                        over.join("; ")
-                    )));
+                    return Err(RenderError::LimitsUnavailable {
+                        adapter: describe_adapter(&info),
+                        over,
+                    });
                 }
                 wanted.clone()
             }
@@ -303,17 +309,26 @@ impl GpuContext {
             memory_hints: wgpu::MemoryHints::Performance,
             trace: wgpu::Trace::Off,
         }))
-        .map_err(|e| RenderError::Device(format!("{}: {e}", describe_adapter(&info))))?;
+        .map_err(|reason| RenderError::Device {
+            adapter: describe_adapter(&info),
+            reason,
+        })?;
         log::info!("adapter: {}", describe_adapter(&info));
-        Self::from_parts(instance, adapter, device, queue)
+        let ctx = Self::from_parts(instance, adapter, device, queue)?;
+        // The device is ours: its errors outside every error scope are recorded, not thrown.
+        ctx.capture_uncaptured_errors();
+        Ok(ctx)
     }
 
     /// Wraps a device the caller made (to render into the caller's own textures, beside the
     /// caller's own passes). The renderer uses the optional features the device has
     /// ([`feature_use`]) and its limits, which must reach [`required_limits`]; techniques that
-    /// need a feature the device lacks are refused when chosen. Replaces the device's
-    /// uncaptured-error handler with one that logs and records errors, so
-    /// [`GpuContext::take_uncaptured`] and every renderer call can report them.
+    /// need a feature the device lacks are refused when chosen.
+    ///
+    /// The device's uncaptured-error handler stays the host's: the renderer catches the errors
+    /// of its own calls in error scopes (natively; a browser cannot wait for scopes). A host
+    /// that wants errors outside every scope reported by the renderer's calls instead calls
+    /// [`GpuContext::capture_uncaptured_errors`].
     pub fn from_parts(
         instance: wgpu::Instance,
         adapter: wgpu::Adapter,
@@ -330,13 +345,6 @@ impl GpuContext {
             });
         }
         let uncaptured = Arc::new(Mutex::new(Vec::new()));
-        let sink = uncaptured.clone();
-        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
-            log::error!("uncaptured GPU error: {e}");
-            if let Ok(mut v) = sink.lock() {
-                v.push(e.to_string());
-            }
-        }));
         Ok(Self {
             instance,
             adapter,
@@ -345,6 +353,11 @@ impl GpuContext {
             info,
             uncaptured,
         })
+    }
+
+    /// One line naming the adapter: name, backend, type and driver.
+    pub fn describe(&self) -> String {
+        describe_adapter(&self.info)
     }
 
     /// True if the device has every feature in `f`.
@@ -378,16 +391,39 @@ impl GpuContext {
             let v = pollster::block_on(validation.pop());
             let o = pollster::block_on(oom.pop());
             if let Some(e) = v.or(o) {
-                return Err(RenderError::Gpu(format!("{what}: {e}")));
+                return Err(RenderError::Gpu {
+                    during: what.into(),
+                    message: e.to_string(),
+                });
             }
         }
-        if let Some(e) = self.take_uncaptured() {
-            return Err(RenderError::Gpu(format!("{what}: {e}")));
+        if let Some(message) = self.take_uncaptured() {
+            return Err(RenderError::Gpu {
+                during: what.into(),
+                message,
+            });
         }
         out
     }
 
-    /// The first GPU error that escaped every error scope since the last call, if any.
+    /// Replaces the device's uncaptured-error handler with one that logs errors and records
+    /// them, so [`GpuContext::take_uncaptured`] and the renderer's next call report them
+    /// (as [`RenderError::Gpu`]) instead of wgpu's default handler panicking.
+    /// [`GpuContext::new`] does this for the device it creates; a device from
+    /// [`GpuContext::from_parts`] keeps its host's handler unless the host calls this.
+    pub fn capture_uncaptured_errors(&self) {
+        let sink = self.uncaptured.clone();
+        self.device
+            .on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+                log::error!("uncaptured GPU error: {e}");
+                if let Ok(mut v) = sink.lock() {
+                    v.push(e.to_string());
+                }
+            }));
+    }
+
+    /// The first GPU error that escaped every error scope since the last call, if any (only
+    /// recorded after [`GpuContext::capture_uncaptured_errors`]).
     pub fn take_uncaptured(&self) -> Option<String> {
         let mut v = self.uncaptured.lock().ok()?;
         let first = v.first().cloned();
@@ -411,12 +447,21 @@ impl GpuContext {
                 Ok(_) => return Ok(()),
                 Err(wgpu::PollError::Timeout) if start.elapsed() < GPU_WAIT_LIMIT => continue,
                 Err(e) => {
-                    return Err(RenderError::Gpu(format!(
-                        "waiting for the GPU ({:.0} s): {e}",
-                        start.elapsed().as_secs_f64()
-                    )))
+                    return Err(RenderError::Gpu {
+                        during: format!(
+                            "waiting for the GPU ({:.0} s)",
+                            start.elapsed().as_secs_f64()
+                        ),
+                        message: e.to_string(),
+                    })
                 }
             }
         }
     }
 }
+
+with_setters!(AdapterRequest {
+    with_backends: backends: Option<wgpu::Backends>,
+    with_name: name: Option<String>,
+    with_limits: limits: Option<wgpu::Limits>,
+});

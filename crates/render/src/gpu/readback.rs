@@ -16,11 +16,20 @@ pub fn map_read(
     });
     ctx.wait_idle()?;
     rx.recv()
-        .map_err(|_| RenderError::Readback("the map callback never ran".into()))?
-        .map_err(|e| RenderError::Readback(format!("mapping a read-back buffer: {e}")))?;
+        .map_err(|_| RenderError::Readback {
+            what: "a buffer",
+            reason: "the map callback never ran".into(),
+        })?
+        .map_err(|e| RenderError::Readback {
+            what: "a buffer",
+            reason: format!("mapping it: {e}"),
+        })?;
     let bytes = buffer
         .get_mapped_range(range)
-        .map_err(|e| RenderError::Readback(format!("{e}")))?
+        .map_err(|e| RenderError::Readback {
+            what: "a buffer",
+            reason: e.to_string(),
+        })?
         .to_vec();
     buffer.unmap();
     Ok(bytes)

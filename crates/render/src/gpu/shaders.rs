@@ -87,42 +87,6 @@ pub fn visibility(source: ShadowSource) -> String {
     reading_shadows(source, include_str!("../frame/visibility.wgsl"))
 }
 
-/// Virtual shadow maps: page marking, allocation and indirect arguments.
-pub fn vsm() -> String {
-    compose(&[
-        COMMON,
-        PARABOLOID,
-        SHADOW_LOOKUP,
-        VSM_COMMON,
-        include_str!("../shadows/vsm/vsm.wgsl"),
-    ])
-}
-
-/// Virtual shadow maps: page culling, drawing and clearing.
-pub fn vsm_draw() -> String {
-    compose(&[
-        "enable clip_distances;",
-        COMMON,
-        CULL,
-        TILE,
-        CLUSTER_CULL,
-        ALPHA_MASK,
-        TILE_MASK,
-        include_str!("../shadows/vsm/vsm_draw.wgsl"),
-    ])
-}
-
-/// Irregular shadow maps: sample lists per light-space texel, exact per-triangle tests.
-pub fn irregular() -> String {
-    compose(&[
-        COMMON,
-        PARABOLOID,
-        SHADOW_LOOKUP,
-        ALPHA_MASK,
-        include_str!("../shadows/irregular/irregular.wgsl"),
-    ])
-}
-
 /// Copy of the lit frame into a caller's texture (`Renderer::render_to`).
 pub fn blit() -> String {
     compose(&[include_str!("../frame/blit.wgsl")])
@@ -133,15 +97,6 @@ pub fn atlas_copy() -> String {
     compose(&[include_str!("../shadows/atlas_copy.wgsl")])
 }
 
-/// Depth-only pass of the traditional technique.
-pub fn traditional() -> String {
-    compose(&[
-        COMMON,
-        ALPHA_MASK,
-        include_str!("../shadows/atlas/traditional.wgsl"),
-    ])
-}
-
 /// Per-frame world transform of shadow casters.
 pub fn casters() -> String {
     compose(&[COMMON, include_str!("../gpu_scene/casters.wgsl")])
@@ -149,17 +104,6 @@ pub fn casters() -> String {
 
 /// The dual-paraboloid warp.
 pub const PARABOLOID: &str = include_str!("../shadows/paraboloid.wgsl");
-
-/// `traditional` into dual-paraboloid views.
-pub fn traditional_dp() -> String {
-    compose(&[
-        "enable clip_distances;",
-        COMMON,
-        PARABOLOID,
-        ALPHA_MASK,
-        include_str!("../shadows/atlas/traditional_dp.wgsl"),
-    ])
-}
 
 /// Alpha-tested casters: the mask tail of the corner buffer (needs a `corners` binding).
 pub const ALPHA_MASK: &str = include_str!("../gpu_scene/alpha_mask.wgsl");
@@ -181,65 +125,9 @@ pub const CLUSTER_CULL: &str = include_str!("../shadows/cluster_cull.wgsl");
 /// Mapping clip positions into atlas tiles with clip distances (`layered`, `gpu-driven`).
 pub const TILE: &str = include_str!("../shadows/tile.wgsl");
 
-/// The `layered` technique's vertex shaders.
-pub fn layered() -> String {
-    compose(&[
-        "enable clip_distances;",
-        COMMON,
-        CULL,
-        TILE,
-        PARABOLOID,
-        ALPHA_MASK,
-        TILE_MASK,
-        include_str!("../shadows/atlas/layered.wgsl"),
-    ])
-}
-
-/// The `multiview` technique's vertex shaders (one view per `view_index`).
-pub fn multiview() -> String {
-    compose(&[
-        COMMON,
-        CULL,
-        ALPHA_MASK,
-        include_str!("../shadows/atlas/multiview.wgsl"),
-    ])
-}
-
-/// The `multiview` technique's copy of scratch layers into atlas tiles.
-pub fn multiview_copy() -> String {
-    compose(&[COMMON, include_str!("../shadows/atlas/multiview_copy.wgsl")])
-}
-
-/// The `gpu-driven` technique's cluster culling (compute) and draw (vertex) shaders.
-pub fn gpu_driven() -> String {
-    compose(&[
-        "enable clip_distances;",
-        COMMON,
-        CULL,
-        TILE,
-        CLUSTER_CULL,
-        ALPHA_MASK,
-        TILE_MASK,
-        include_str!("../shadows/atlas/gpu_driven.wgsl"),
-    ])
-}
-
-/// The `compute` technique's software rasterizer (clear, setup, large triangles).
-pub fn compute() -> String {
-    compose(&[
-        COMMON,
-        CULL,
-        ALPHA_MASK,
-        include_str!("../shadows/atlas/compute.wgsl"),
-    ])
-}
-
-/// The `compute` technique's copy of its depth buffer into atlas tiles.
-pub fn compute_copy() -> String {
-    compose(&[COMMON, include_str!("../shadows/atlas/compute_copy.wgsl")])
-}
-
-/// Every composed shader with its name (for validation).
+#[cfg(test)]
+/// Every composed shader no technique owns, with its name (for validation; each technique
+/// lists its own in its `TechniqueInfo`).
 pub fn all() -> Vec<(&'static str, String)> {
     vec![
         ("gbuffer", gbuffer()),
@@ -253,21 +141,10 @@ pub fn all() -> Vec<(&'static str, String)> {
             "visibility_vsm",
             visibility(ShadowSource::Virtual { first: 12 }),
         ),
-        ("vsm", vsm()),
-        ("vsm_draw", vsm_draw()),
         ("clusters", clusters()),
-        ("irregular", irregular()),
         ("atlas_copy", atlas_copy()),
-        ("traditional", traditional()),
         ("casters", casters()),
         ("tile_clear", tile_clear()),
-        ("layered", layered()),
-        ("traditional_dp", traditional_dp()),
-        ("multiview", multiview()),
-        ("multiview_copy", multiview_copy()),
-        ("gpu_driven", gpu_driven()),
-        ("compute", compute()),
-        ("compute_copy", compute_copy()),
         ("blit", blit()),
     ]
 }
@@ -280,21 +157,48 @@ pub fn module(device: &wgpu::Device, label: &str, source: &str) -> wgpu::ShaderM
     })
 }
 
+/// Parses and validates `source` as a WebGPU device with `features` would: naga's
+/// capabilities from WebGPU's core (a fully compliant downlevel, no optional feature) plus
+/// those `features` bring, as wgpu maps them. A shader that relies on more fails here, not in
+/// a browser.
+#[cfg(test)]
+pub(crate) fn validate_for_webgpu(
+    name: &str,
+    source: &str,
+    features: wgpu::Features,
+) -> Result<(), String> {
+    use wgpu::naga;
+    let module = naga::front::wgsl::parse_str(source)
+        .map_err(|e| format!("{name}: {}", e.emit_to_string(source)))?;
+    let caps = wgpu_naga_bridge::features_to_naga_capabilities(
+        features,
+        wgpu::DownlevelFlags::compliant(),
+    );
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
+        .validate(&module)
+        .map(|_| ())
+        .map_err(|e| {
+            format!("{name} does not validate with WebGPU's capabilities + {features:?}: {e:?}")
+        })
+}
+
 #[cfg(test)]
 mod tests {
-    use wgpu::naga;
-
     #[test]
-    fn every_shader_parses_and_validates() {
+    fn every_shared_shader_validates_for_webgpu() {
         for (name, src) in super::all() {
-            let module = naga::front::wgsl::parse_str(&src)
-                .unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(&src)));
-            naga::valid::Validator::new(
-                naga::valid::ValidationFlags::all(),
-                naga::valid::Capabilities::all(),
-            )
-            .validate(&module)
-            .unwrap_or_else(|e| panic!("{name}.wgsl does not validate: {e:?}"));
+            super::validate_for_webgpu(name, &src, wgpu::Features::empty())
+                .unwrap_or_else(|e| panic!("{e}"));
         }
+    }
+
+    /// The check above can fail: a shader that enables clip distances is refused without the
+    /// feature and accepted with it.
+    #[test]
+    fn webgpu_validation_refuses_a_feature_the_shader_was_not_given() {
+        let src = "enable clip_distances;\nstruct O { @builtin(position) p: vec4<f32>, @builtin(clip_distances) c: array<f32, 1> }\n@vertex fn vs() -> O { return O(vec4<f32>(0.0), array<f32, 1>(1.0)); }";
+        assert!(super::validate_for_webgpu("probe", src, wgpu::Features::empty()).is_err());
+        super::validate_for_webgpu("probe", src, wgpu::Features::CLIP_DISTANCES)
+            .unwrap_or_else(|e| panic!("{e}"));
     }
 }

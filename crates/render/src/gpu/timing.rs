@@ -41,6 +41,7 @@ struct StatQueries {
 
 /// A stage of a frame whose GPU time is measured, in the order a frame runs them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum Stage {
     /// The camera's G-buffer.
     GBuffer,

@@ -262,55 +262,15 @@ pub struct ViewUniform {
 /// Byte stride between consecutive [`ViewUniform`]s (the common `min_uniform_buffer_offset_alignment`).
 pub const VIEW_UNIFORM_STRIDE: u64 = std::mem::size_of::<ViewUniform>() as u64;
 
-/// `LayeredParams` of `layered.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct LayeredParams {
-    /// Cullable triangles, cull bits, unused, unused.
-    pub counts: [u32; 4],
-    /// Atlas side in texels, its reciprocal, unused, unused.
-    pub atlas: [f32; 4],
-}
-
-/// `MultiviewParams` of `multiview.wgsl` (and `multiview_copy.wgsl`), one per view group.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct MultiviewParams {
-    /// First draw-list entry of the group, cullable triangles, cull bits, unused.
-    pub counts: [u32; 4],
-    /// Atlas side in texels, unused ×3.
-    pub atlas: [f32; 4],
-}
-
-/// `GpuParams` of `gpu_driven.wgsl`, one per round.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GpuParams {
-    /// Caster vertices, cullable triangles, cull bits, clusters in this round.
-    pub counts: [u32; 4],
-    /// First draw-list entry of the round, views in it, first cluster, 1 = compact commands.
-    pub round: [u32; 4],
-    /// Atlas side in texels, its reciprocal, unused, unused.
-    pub atlas: [f32; 4],
-}
-
-/// `ComputeParams` of `compute.wgsl`, one per round.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ComputeParams {
-    /// Triangles, cullable triangles, cull bits, entries in this round.
-    pub counts: [u32; 4],
-    /// Texels in this round, chunk capacity, most workgroups along x, flags (1 = discard).
-    pub sizes: [u32; 4],
-}
-
+/// The layout check every `#[repr(C)]` mirror of a WGSL struct is held to: naga's size and
+/// member offsets of the struct in the composed shader against Rust's. Each module that owns a
+/// mirror tests it beside its WGSL (`same_layout!(in SOURCE, Type, field, …)`).
 #[cfg(test)]
-mod tests {
-    use super::*;
+pub(crate) mod layout {
     use wgpu::naga;
 
     /// naga's (size, [(member, offset)]) of the WGSL struct `name` in `source`.
-    fn wgsl_layout_in(source: &str, name: &str) -> (u32, Vec<(String, u32)>) {
+    pub(crate) fn wgsl_layout_in(source: &str, name: &str) -> (u32, Vec<(String, u32)>) {
         let module = naga::front::wgsl::parse_str(source).expect("the shader parses");
         let mut layouter = naga::proc::Layouter::default();
         layouter.update(module.to_ctx()).expect("layout");
@@ -329,17 +289,26 @@ mod tests {
         (layouter[handle].size, fields)
     }
 
+    /// Asserts that the Rust struct and the WGSL struct of the same name have the same fields
+    /// at the same offsets and the same size.
     macro_rules! same_layout {
         ($ty:ty, $($field:ident),+) => {{
-            same_layout!(in crate::gpu::shaders::COMMON, $ty, $($field),+)
+            $crate::gpu::types::layout::same_layout!(in $crate::gpu::shaders::COMMON, $ty, $($field),+)
         }};
         (in $src:expr, $ty:ty, $($field:ident),+) => {{
-            let (size, fields) = wgsl_layout_in(&$src, stringify!($ty));
+            let (size, fields) = $crate::gpu::types::layout::wgsl_layout_in(&$src, stringify!($ty));
             let rust: Vec<(String, u32)> = vec![$((stringify!($field).to_string(), std::mem::offset_of!($ty, $field) as u32)),+];
             assert_eq!(fields, rust, "{} fields/offsets differ between WGSL and Rust", stringify!($ty));
             assert_eq!(size as usize, std::mem::size_of::<$ty>(), "{} size differs", stringify!($ty));
         }};
     }
+    pub(crate) use same_layout;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::layout::same_layout;
+    use super::*;
 
     #[test]
     fn rust_structs_match_wgsl_layouts() {
@@ -372,11 +341,5 @@ mod tests {
         same_layout!(VsmUniforms, pool, counts, lod);
         same_layout!(VsmRound, round, counts);
         assert_eq!(VIEW_UNIFORM_STRIDE, 256);
-        // Technique parameters.
-        same_layout!(in crate::gpu::shaders::layered(), LayeredParams, counts, atlas);
-        same_layout!(in crate::gpu::shaders::multiview(), MultiviewParams, counts, atlas);
-        same_layout!(in crate::gpu::shaders::multiview_copy(), MultiviewParams, counts, atlas);
-        same_layout!(in crate::gpu::shaders::gpu_driven(), GpuParams, counts, round, atlas);
-        same_layout!(in crate::gpu::shaders::compute(), ComputeParams, counts, sizes);
     }
 }

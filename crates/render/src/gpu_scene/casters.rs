@@ -51,6 +51,7 @@ pub const CLUSTER_TRIANGLES: u32 = 128;
 
 /// How caster geometry is prepared.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
 pub struct CasterOptions {
     /// Treat every mesh as closed and outward-facing for back-face culling, as seed 000 did.
     /// Faster on open meshes, but their back sides then cast no shadow. Never applied to
@@ -473,11 +474,11 @@ impl CasterGeometry {
         let decisions = cache.decisions(scene, &masks, options, skinned);
         let layout = cache.layout(scene, &decisions);
         if gpu.skin.is_some() && layout.first_masked_vertex < layout.sources.len() as u32 {
-            return Err(RenderError::Unsupported(
-                "alpha-tested shadow casters cannot be skinned (skinning is a benchmark \
-                 workload for opaque meshes)"
-                    .into(),
-            ));
+            return Err(RenderError::NotImplemented {
+                what: "skinning alpha-tested shadow casters",
+                instead: "skinning is a benchmark workload for opaque meshes: turn the masks \
+                          off or leave the skin out",
+            });
         }
         let tail = mask_tail(scene, &masks, &layout);
         let Layout {
@@ -499,11 +500,13 @@ impl CasterGeometry {
             ("caster corner", all_corners.len() as u64 * 4),
         ] {
             if bytes > limits.max_storage_buffer_binding_size {
-                return Err(RenderError::SceneTooLarge(format!(
-                    "the {what} buffer would be {bytes} bytes, over this adapter's \
-                     storage-binding limit of {} bytes",
-                    limits.max_storage_buffer_binding_size
-                )));
+                return Err(RenderError::TooLarge {
+                    what: format!("the {what} buffer"),
+                    needed: bytes,
+                    limit: limits.max_storage_buffer_binding_size,
+                    unit: "bytes",
+                    limit_name: "max_storage_buffer_binding_size",
+                });
             }
         }
 
@@ -744,3 +747,8 @@ mod tests {
         assert!(!is_similarity(Mat4::from_scale(Vec3::new(1.0, 2.0, 1.0))));
     }
 }
+
+with_setters!(CasterOptions {
+    with_assume_closed: assume_closed: bool,
+    with_ignore_masks: ignore_masks: bool,
+});

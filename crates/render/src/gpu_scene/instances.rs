@@ -141,21 +141,24 @@ impl GpuScene {
             ),
         ];
         for (what, size) in bytes {
-            let (limit, name) = if what == "instances" {
+            let (limit, limit_name) = if what == "instances" {
                 (
                     limits
                         .max_buffer_size
                         .min(limits.max_storage_buffer_binding_size),
-                    "storage-binding",
+                    "max_storage_buffer_binding_size",
                 )
             } else {
-                (limits.max_buffer_size, "buffer-size")
+                (limits.max_buffer_size, "max_buffer_size")
             };
             if size > limit {
-                return Err(RenderError::SceneTooLarge(format!(
-                    "the {what} buffer would be {size} bytes, over this adapter's {name} limit \
-                     of {limit} bytes"
-                )));
+                return Err(RenderError::TooLarge {
+                    what: format!("the {what} buffer"),
+                    needed: size,
+                    limit,
+                    unit: "bytes",
+                    limit_name,
+                });
             }
         }
         // Zero-sized buffers are invalid; keep one dummy element so an empty scene still renders.
@@ -339,11 +342,10 @@ pub(crate) fn morton_order(mesh: &Mesh) -> Vec<u32> {
         .collect()
 }
 
-pub use manyshadows_scene::light_space::{frustum_planes, sphere_in_planes as sphere_visible};
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use manyshadows_scene::light_space::{frustum_planes, sphere_in_planes as sphere_visible};
 
     #[test]
     fn frustum_culling_of_spheres() {

@@ -45,11 +45,11 @@ impl GpuSkin {
     pub fn new(ctx: &GpuContext, scene: &Scene, skin: &Skin) -> Result<Self, RenderError> {
         let n: usize = scene.meshes.iter().map(|m| m.positions.len()).sum();
         if skin.joints.len() != n || skin.weights.len() != n {
-            return Err(RenderError::SceneTooLarge(format!(
-                "the skin has {} joint and {} weight entries but the scene has {n} vertices",
-                skin.joints.len(),
-                skin.weights.len()
-            )));
+            return Err(RenderError::SkinMismatch {
+                joints: skin.joints.len(),
+                weights: skin.weights.len(),
+                vertices: n,
+            });
         }
         if let Some(j) = skin
             .joints
@@ -57,9 +57,10 @@ impl GpuSkin {
             .flatten()
             .find(|&&j| j as usize >= MAX_BONES)
         {
-            return Err(RenderError::SceneTooLarge(format!(
-                "joint index {j} is out of range (at most {MAX_BONES} bones)"
-            )));
+            return Err(RenderError::SkinJointOutOfRange {
+                joint: u32::from(*j),
+                bones: MAX_BONES as u32,
+            });
         }
         let mut bytes = Vec::with_capacity(n * SKIN_VERTEX_STRIDE as usize);
         let positions = scene.meshes.iter().flat_map(|m| m.positions.iter());

@@ -236,10 +236,15 @@ impl SceneTextures {
         let limits = ctx.limits();
         let max_layers = limits.max_texture_array_layers;
         if colours.max(normals) > max_layers {
-            return Err(RenderError::SceneTooLarge(format!(
-                "the scene's materials use {colours} base-colour and {normals} normal-map \
-                 textures; this adapter holds at most {max_layers} in a texture array"
-            )));
+            return Err(RenderError::TooLarge {
+                what: format!(
+                    "the materials' {colours} base-colour and {normals} normal-map textures"
+                ),
+                needed: u64::from(colours.max(normals)),
+                limit: u64::from(max_layers),
+                unit: "texture-array layers",
+                limit_name: "max_texture_array_layers",
+            });
         }
         let used: Vec<&Texture> = scene
             .textures

@@ -5,7 +5,6 @@
 //! outputs and discarding fragment stage (`tile_mask.wgsl`).
 
 use crate::gpu::pipelines::ATLAS_FORMAT;
-use crate::{GpuContext, RenderError};
 
 /// A pipeline that writes depth 1 wherever `entry`'s triangles land (compare `Always`, no
 /// fragment stage): clearing single tiles or pages of a depth texture that must otherwise
@@ -149,40 +148,4 @@ fn depth_pipeline_with(
         multiview_mask,
         cache: None,
     })
-}
-
-/// Refuses `technique` on an adapter without indirect execution (`what` it draws or
-/// dispatches indirectly, and what to use `instead`).
-pub(crate) fn require_indirect(
-    ctx: &GpuContext,
-    technique: &str,
-    what: &str,
-    instead: &str,
-) -> Result<(), RenderError> {
-    let flags = ctx.adapter.get_downlevel_capabilities().flags;
-    if flags.contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION) {
-        Ok(())
-    } else {
-        Err(RenderError::missing_feature(
-            ctx,
-            format!("technique {technique}"),
-            what,
-            instead,
-        ))
-    }
-}
-
-/// Refuses a technique that keeps its draws inside atlas tiles with clip distances when the
-/// adapter lacks them.
-pub(crate) fn require_clip_distances(ctx: &GpuContext, technique: &str) -> Result<(), RenderError> {
-    if ctx.has(wgpu::Features::CLIP_DISTANCES) {
-        Ok(())
-    } else {
-        Err(RenderError::missing_feature(
-            ctx,
-            format!("technique {technique}"),
-            "the CLIP_DISTANCES feature (to keep each view inside its atlas tile)",
-            "use technique traditional",
-        ))
-    }
 }

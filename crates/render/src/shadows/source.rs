@@ -30,13 +30,14 @@ use crate::gpu::timing::GpuTimer;
 use crate::gpu::types::LightData;
 use crate::gpu_scene::casters::CasterGeometry;
 use crate::gpu_scene::instances::GpuScene;
-use crate::settings::{RenderSettings, Technique};
+use crate::settings::RenderSettings;
 use crate::shadows::atlas::storage::ShadowAtlas;
 use crate::shadows::plan::ShadowPlan;
 use crate::{GpuContext, RenderError};
 
 /// Work counters of one shadow generation.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[non_exhaustive]
 pub struct ShadowStats {
     /// Render or compute passes recorded.
     pub passes: u32,
@@ -155,18 +156,17 @@ impl<'a> ShadowOutput<'a> {
 /// Makes a frame's shadows: fills an atlas, a page pool or a visibility mask. The renderer
 /// drives every source the same way; see the [module](self) for the order of calls.
 pub trait ShadowSource {
-    /// The technique this source implements.
-    fn technique(&self) -> Technique;
-
     /// The shadow views and atlas layout (no views for virtual maps, whose faces are in
     /// [`ShadowSource::virtual_plan`]).
     fn plan(&self) -> &ShadowPlan;
 
     /// The atlas, or for sources that fill none the view table with a 1×1 placeholder
     /// texture.
+    #[cfg_attr(not(feature = "internals"), allow(dead_code))] // Renderer::atlas, internals only
     fn atlas(&self) -> &ShadowAtlas;
 
     /// The world-space shadow-caster geometry.
+    #[cfg_attr(not(feature = "internals"), allow(dead_code))] // Renderer::casters, internals only
     fn casters(&self) -> &CasterGeometry;
 
     /// The per-light records of the lights buffer, as this source's shadows are read.

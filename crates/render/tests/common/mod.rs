@@ -14,7 +14,7 @@ pub fn context() -> GpuContext {
         Ok(ctx) => {
             eprintln!(
                 "GPU test adapter: {}",
-                manyshadows::context::describe_adapter(&ctx.info)
+                manyshadows::gpu::context::describe_adapter(&ctx.info)
             );
             ctx
         }

@@ -30,11 +30,62 @@
 //! exceed the adapter's storage-binding limit, the draw list is split into rounds, each cleared,
 //! rasterized and copied in turn; a single tile over the limit is split into bands of rows.
 
+use manyshadows_scene::light_space::PointShadows;
+
+use crate::gpu::shaders::{compose, ALPHA_MASK, COMMON, CULL};
+use crate::settings::Technique;
 use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
+use crate::shadows::descriptor::{Build, Fills, TechniqueInfo, Wgsl};
 use crate::shadows::source::ShadowStats;
 use crate::{GpuContext, RenderError};
 
+impl Technique {
+    /// A rasterizer in compute shaders ([`crate::shadows::atlas::compute`]).
+    pub const COMPUTE: Technique = Technique::named("compute");
+}
+
+/// `compute`'s declaration.
+pub const INFO: TechniqueInfo = TechniqueInfo {
+    technique: Technique::COMPUTE,
+    summary: "compute-shader rasterizer: per-view culling, clipping and binning in compute, \
+              depth by atomicMin into a buffer, then copied into the tiles",
+    origin: "beyond the seeds: a software rasterizer as in UE5's Nanite",
+    fills: Fills::Atlas,
+    culls_triangles: true,
+    point_shadows: &[PointShadows::Cube],
+    needs: &[],
+    instead: "",
+    build: Build::Atlas(|ctx| Ok(Box::new(Compute::new(ctx)?))),
+    shaders: || {
+        vec![
+            Wgsl::core("compute", shader()),
+            Wgsl::core("compute_copy", copy_shader()),
+        ]
+    },
+};
+
+/// `ComputeParams` of `compute.wgsl`, one per round.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct ComputeParams {
+    /// Triangles, cullable triangles, cull bits, entries in this round.
+    pub(crate) counts: [u32; 4],
+    /// Texels in this round, chunk capacity, most workgroups along x, flags (1 = discard).
+    pub(crate) sizes: [u32; 4],
+}
+
+/// Clear, setup and large-triangle rasterization.
+fn shader() -> String {
+    compose(&[COMMON, CULL, ALPHA_MASK, include_str!("compute.wgsl")])
+}
+
+/// The copy of the depth buffer into the atlas tiles.
+fn copy_shader() -> String {
+    compose(&[COMMON, include_str!("compute_copy.wgsl")])
+}
+
 /// Most bounding-box texels a setup thread rasterizes itself (must match compute.wgsl).
+#[cfg_attr(not(feature = "internals"), allow(dead_code))] // benchmarks and tests
 pub const SMALL_AREA: u32 = 512;
 /// Bytes of one chunk record (`Chunk` in compute.wgsl).
 const CHUNK_BYTES: u64 = 64;
@@ -172,8 +223,7 @@ impl Compute {
                 )],
             });
         }
-        let module =
-            crate::gpu::shaders::module(device, "compute.shader", &crate::gpu::shaders::compute());
+        let module = crate::gpu::shaders::module(device, "compute.shader", &shader());
         let cs = wgpu::ShaderStages::COMPUTE;
         let layout = crate::gpu::pipelines::bind_group_layout(
             device,
@@ -227,11 +277,8 @@ impl Compute {
                 crate::gpu::pipelines::storage_entry(3, wgpu::ShaderStages::FRAGMENT),
             ],
         );
-        let copy_module = crate::gpu::shaders::module(
-            device,
-            "compute_copy.shader",
-            &crate::gpu::shaders::compute_copy(),
-        );
+        let copy_module =
+            crate::gpu::shaders::module(device, "compute_copy.shader", &copy_shader());
         let copy_pipeline_layout = crate::gpu::pipelines::pipeline_layout(
             device,
             "compute.copy_pipeline_layout",
@@ -311,7 +358,7 @@ impl Compute {
             self.slots.push(RoundSlot {
                 params: device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("compute.params"),
-                    size: std::mem::size_of::<crate::gpu::types::ComputeParams>() as u64,
+                    size: std::mem::size_of::<ComputeParams>() as u64,
                     usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 }),
@@ -373,6 +420,7 @@ impl Compute {
     /// `(chunks requested, chunks that did not fit the list and were rasterized by their setup
     /// thread)` in the last generation's final round (waits for the GPU; call after submitting
     /// it). `None` before the first generation or when already read.
+    #[cfg_attr(not(feature = "internals"), allow(dead_code))] // benchmarks and tests
     pub fn overflowed(&mut self, ctx: &GpuContext) -> Result<Option<(u32, u32)>, RenderError> {
         if !self.pending_read {
             return Ok(None);
@@ -470,7 +518,7 @@ impl ShadowTechnique for Compute {
         let last_round = rounds.len() - 1;
         for (r, round) in rounds.iter().enumerate() {
             let round_texels = texels(round, tile_size);
-            let params = crate::gpu::types::ComputeParams {
+            let params = ComputeParams {
                 counts: [
                     casters.triangles,
                     casters.cullable_triangles,
@@ -619,15 +667,28 @@ mod tests {
         let r = plan_rounds(&many, |_| 16, 1, 1 << 30, 1 << 31);
         assert!(r.iter().all(|r| r.len() as u64 <= MAX_ROUND_ENTRIES));
         assert_eq!(r.iter().map(|r| r.len()).sum::<usize>(), 10_000);
-        let wgsl = crate::gpu::shaders::compute();
+        let wgsl = shader();
         assert!(wgsl.contains(&format!(
             "const MAX_ROUND_ENTRIES: u32 = {MAX_ROUND_ENTRIES}u;"
         )));
     }
 
     #[test]
+    fn records_match_the_wgsl() {
+        use crate::gpu::types::layout::{same_layout, wgsl_layout_in};
+        same_layout!(in shader(), ComputeParams, counts, sizes);
+        // A round entry is one vec4<u32> of the uniform array `RoundEntries`.
+        let (size, _) = wgsl_layout_in(&shader(), "RoundEntries");
+        assert_eq!(
+            size as u64,
+            MAX_ROUND_ENTRIES * std::mem::size_of::<Entry>() as u64
+        );
+        assert_eq!(std::mem::size_of::<Entry>(), 16);
+    }
+
+    #[test]
     fn small_area_matches_the_shader() {
-        let wgsl = crate::gpu::shaders::compute();
+        let wgsl = shader();
         assert!(wgsl.contains(&format!("const SMALL_AREA: u32 = {SMALL_AREA}u;")));
     }
 

@@ -9,6 +9,7 @@
 //! tiles. Skinned scenes redraw everything (every vertex may move).
 
 use glam::Vec3;
+use manyshadows_scene::light_space::PointShadows;
 use manyshadows_scene::Scene;
 
 use crate::gpu::timing::{GpuTimer, Span};
@@ -32,6 +33,7 @@ pub struct ShadowGenerator {
     /// Options in use.
     pub options: ShadowOptions,
     technique: Box<dyn ShadowTechnique>,
+    #[cfg_attr(not(feature = "internals"), allow(dead_code))] // benchmarks and tests
     kind: Technique,
     caching: bool,
     valid: Vec<bool>,
@@ -54,12 +56,10 @@ impl ShadowGenerator {
                 manyshadows_scene::light_space::ViewKind::Paraboloid(_)
             )
         });
-        if paraboloid && !matches!(technique, Technique::Traditional | Technique::Layered) {
-            return Err(RenderError::Unsupported(format!(
-                "technique {technique} renders cube-map point shadows only; use \
-                 cube point shadows, or technique traditional or layered for \
-                 dual-paraboloid maps"
-            )));
+        if paraboloid {
+            technique
+                .info()
+                .check_point_shadows(PointShadows::DualParaboloid)?;
         }
         if paraboloid && !ctx.has(wgpu::Features::CLIP_DISTANCES) {
             return Err(RenderError::missing_feature(
@@ -70,17 +70,16 @@ impl ShadowGenerator {
             ));
         }
         if paraboloid && gpu.skin.is_some() {
-            return Err(RenderError::Unsupported(
-                "dual-paraboloid shadows of skinned scenes are not implemented; use cube \
-                 point shadows"
-                    .into(),
-            ));
+            return Err(RenderError::NotImplemented {
+                what: "dual-paraboloid shadows of skinned scenes",
+                instead: "use cube point shadows",
+            });
         }
         let atlas = ShadowAtlas::new(ctx, &plan)?;
         let casters = CasterGeometry::new(ctx, scene, gpu, options.casters)?;
         let valid = vec![false; plan.views.len()];
         Ok(Self {
-            technique: crate::shadows::atlas::registry::create(technique, ctx, &options)?,
+            technique: technique.create(ctx)?,
             kind: technique,
             plan,
             atlas,
@@ -93,6 +92,7 @@ impl ShadowGenerator {
     }
 
     /// The technique.
+    #[cfg_attr(not(feature = "internals"), allow(dead_code))] // benchmarks and tests
     pub fn technique(&self) -> Technique {
         self.kind
     }

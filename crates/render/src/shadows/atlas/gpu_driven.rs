@@ -22,16 +22,80 @@
 //! scenes with many views run several cull + draw rounds instead of truncating. Clusters are
 //! split too if even one view's commands would not fit.
 
+use manyshadows_scene::light_space::PointShadows;
+
 use crate::gpu::pipelines::{dynamic_uniform_entry, whole_entry};
+use crate::gpu::shaders::{compose, ALPHA_MASK, CLUSTER_CULL, COMMON, CULL, TILE, TILE_MASK};
+use crate::settings::Technique;
 use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear, UniformRecords};
 use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
 use crate::shadows::cluster_draw::{plan_rounds, Round, COMMAND_SIZE};
-use crate::shadows::depth::{depth_pipeline, require_clip_distances};
+use crate::shadows::depth::depth_pipeline;
+use crate::shadows::descriptor::{Build, Fills, Need, TechniqueInfo, Wgsl};
 use crate::shadows::source::ShadowStats;
 use crate::{GpuContext, RenderError};
 
+impl Technique {
+    /// Clusters culled per view in compute, one indirect multi-draw
+    /// ([`crate::shadows::atlas::gpu_driven`]).
+    pub const GPU_DRIVEN: Technique = Technique::named("gpu-driven");
+}
+
+/// `gpu-driven`'s declaration.
+pub const INFO: TechniqueInfo = TechniqueInfo {
+    technique: Technique::GPU_DRIVEN,
+    summary: "compute culls triangle clusters per view and writes indirect draws; one \
+              multi-draw fills every tile",
+    origin: "seed 002 (GPU culling of shadow casters, multi-draw-indirect)",
+    fills: Fills::Atlas,
+    culls_triangles: true,
+    point_shadows: &[PointShadows::Cube],
+    needs: &[
+        Need::feature(
+            wgpu::Features::CLIP_DISTANCES,
+            "to keep each view inside its atlas tile",
+        ),
+        Need::indirect("indirect draws"),
+    ],
+    instead: "use technique layered",
+    build: Build::Atlas(|ctx| Ok(Box::new(GpuDriven::new(ctx)?))),
+    shaders: || {
+        vec![Wgsl::with(
+            "gpu_driven",
+            shader(),
+            wgpu::Features::CLIP_DISTANCES,
+        )]
+    },
+};
+
+/// `GpuParams` of `gpu_driven.wgsl`, one per round.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct GpuParams {
+    /// Caster vertices, cullable triangles, cull bits, clusters in this round.
+    pub(crate) counts: [u32; 4],
+    /// First draw-list entry of the round, views in it, first cluster, 1 = compact commands.
+    pub(crate) round: [u32; 4],
+    /// Atlas side in texels, its reciprocal, unused, unused.
+    pub(crate) atlas: [f32; 4],
+}
+
 /// Bytes of one round's parameters (`GpuParams` in gpu_driven.wgsl).
-const PARAMS_SIZE: u64 = std::mem::size_of::<crate::gpu::types::GpuParams>() as u64;
+const PARAMS_SIZE: u64 = std::mem::size_of::<GpuParams>() as u64;
+
+/// Cluster culling (compute) and the draw (vertex, fragment for masks).
+fn shader() -> String {
+    compose(&[
+        "enable clip_distances;",
+        COMMON,
+        CULL,
+        TILE,
+        CLUSTER_CULL,
+        ALPHA_MASK,
+        TILE_MASK,
+        include_str!("gpu_driven.wgsl"),
+    ])
+}
 
 /// The gpu-driven technique's pipelines and command buffers.
 pub struct GpuDriven {
@@ -56,19 +120,8 @@ impl GpuDriven {
     /// Builds the pipelines; needs `CLIP_DISTANCES`. Uses the compacted count draw where the
     /// adapter has `MULTI_DRAW_INDIRECT_COUNT`.
     pub fn new(ctx: &GpuContext) -> Result<Self, RenderError> {
-        require_clip_distances(ctx, "gpu-driven")?;
-        crate::shadows::depth::require_indirect(
-            ctx,
-            "gpu-driven",
-            "indirect draws",
-            "use technique layered",
-        )?;
         let device = &ctx.device;
-        let module = crate::gpu::shaders::module(
-            device,
-            "gpu_driven.shader",
-            &crate::gpu::shaders::gpu_driven(),
-        );
+        let module = crate::gpu::shaders::module(device, "gpu_driven.shader", &shader());
         let cs = wgpu::ShaderStages::COMPUTE;
         let cull_layout = crate::gpu::pipelines::bind_group_layout(
             device,
@@ -161,11 +214,6 @@ impl GpuDriven {
         self
     }
 
-    /// True if commands are compacted and drawn with `multi_draw_indexed_indirect_count`.
-    pub fn compacts(&self) -> bool {
-        self.compact
-    }
-
     /// The command buffer, holding at least `commands` commands.
     fn command_buffer(&mut self, ctx: &GpuContext, commands: u64) -> &wgpu::Buffer {
         if self.commands.as_ref().is_none_or(|(_, n)| *n < commands) {
@@ -200,9 +248,9 @@ impl ShadowTechnique for GpuDriven {
         let commands = &self.commands.as_ref().expect("command buffer").0;
 
         let atlas = input.atlas.size as f32;
-        let records: Vec<crate::gpu::types::GpuParams> = rounds
+        let records: Vec<GpuParams> = rounds
             .iter()
-            .map(|r| crate::gpu::types::GpuParams {
+            .map(|r| GpuParams {
                 counts: [
                     casters.vertices,
                     casters.cullable_triangles,
@@ -368,5 +416,16 @@ impl ShadowTechnique for GpuDriven {
         // survive is known only on the GPU.
         stats.triangles += casters.triangles as u64 * views as u64;
         stats
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::types::layout::same_layout;
+
+    #[test]
+    fn params_match_the_wgsl() {
+        same_layout!(in shader(), GpuParams, counts, round, atlas);
     }
 }

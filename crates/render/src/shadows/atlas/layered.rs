@@ -12,11 +12,68 @@
 //! three corners, tests them, and emits a degenerate triangle when the triangle is dropped.
 //! Without culling the draw is indexed, so post-transform vertex reuse still applies.
 
+use manyshadows_scene::light_space::PointShadows;
+
+use crate::gpu::shaders::{compose, ALPHA_MASK, COMMON, CULL, PARABOLOID, TILE, TILE_MASK};
+use crate::settings::Technique;
 use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear};
 use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
-use crate::shadows::depth::{depth_pipeline, masked_depth_pipeline, require_clip_distances};
+use crate::shadows::depth::{depth_pipeline, masked_depth_pipeline};
+use crate::shadows::descriptor::{Build, Fills, Need, TechniqueInfo, Wgsl};
 use crate::shadows::source::ShadowStats;
 use crate::{GpuContext, RenderError};
+
+impl Technique {
+    /// Every view in one instanced draw ([`crate::shadows::atlas::layered`]).
+    pub const LAYERED: Technique = Technique::named("layered");
+}
+
+/// `layered`'s declaration.
+pub const INFO: TechniqueInfo = TechniqueInfo {
+    technique: Technique::LAYERED,
+    summary: "one instanced draw into every tile; per-view triangle culling in the vertex shader",
+    origin: "seed 000 section 19.3 (layered rendering), Listings 19.9 and 19.10 (culling)",
+    fills: Fills::Atlas,
+    culls_triangles: true,
+    point_shadows: &[PointShadows::Cube, PointShadows::DualParaboloid],
+    needs: &[Need::feature(
+        wgpu::Features::CLIP_DISTANCES,
+        "to keep each view inside its atlas tile",
+    )],
+    instead: "use technique traditional",
+    build: Build::Atlas(|ctx| Ok(Box::new(Layered::new(ctx)?))),
+    shaders: || {
+        vec![Wgsl::with(
+            "layered",
+            shader(),
+            wgpu::Features::CLIP_DISTANCES,
+        )]
+    },
+};
+
+/// `LayeredParams` of `layered.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct LayeredParams {
+    /// Cullable triangles, cull bits, unused, unused.
+    pub(crate) counts: [u32; 4],
+    /// Atlas side in texels, its reciprocal, unused, unused.
+    pub(crate) atlas: [f32; 4],
+}
+
+/// The vertex shaders (indexed and pulling, opaque and alpha-tested).
+fn shader() -> String {
+    compose(&[
+        "enable clip_distances;",
+        COMMON,
+        CULL,
+        TILE,
+        PARABOLOID,
+        ALPHA_MASK,
+        TILE_MASK,
+        include_str!("layered.wgsl"),
+    ])
+}
 
 /// The layered technique's pipelines.
 pub struct Layered {
@@ -35,10 +92,8 @@ pub struct Layered {
 impl Layered {
     /// Builds the pipelines; needs `CLIP_DISTANCES`.
     pub fn new(ctx: &GpuContext) -> Result<Self, RenderError> {
-        require_clip_distances(ctx, "layered")?;
         let device = &ctx.device;
-        let module =
-            crate::gpu::shaders::module(device, "layered.shader", &crate::gpu::shaders::layered());
+        let module = crate::gpu::shaders::module(device, "layered.shader", &shader());
         let vs = wgpu::ShaderStages::VERTEX;
         let layout = crate::gpu::pipelines::bind_group_layout(
             device,
@@ -67,7 +122,7 @@ impl Layered {
             clear: TileClear::new(ctx),
             params: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("layered.params"),
-                size: std::mem::size_of::<crate::gpu::types::LayeredParams>() as u64,
+                size: std::mem::size_of::<LayeredParams>() as u64,
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
@@ -85,7 +140,7 @@ impl ShadowTechnique for Layered {
         let ctx = input.ctx;
         let cull = input.options.cull;
         let atlas = input.atlas.size as f32;
-        let params = crate::gpu::types::LayeredParams {
+        let params = LayeredParams {
             counts: [casters.cullable_triangles, cull.bits(), 0, 0],
             atlas: [atlas, 1.0 / atlas, 0.0, 0.0],
         };
@@ -157,5 +212,16 @@ impl ShadowTechnique for Layered {
         stats.passes += 1;
         stats.triangles += casters.triangles as u64 * views as u64;
         stats
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::types::layout::same_layout;
+
+    #[test]
+    fn params_match_the_wgsl() {
+        same_layout!(in shader(), LayeredParams, counts, atlas);
     }
 }

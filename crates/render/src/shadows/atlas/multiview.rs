@@ -22,16 +22,68 @@
 use std::collections::HashMap;
 use std::num::NonZeroU32;
 
+use manyshadows_scene::light_space::PointShadows;
+
 use crate::gpu::pipelines::dynamic_uniform_entry;
-use crate::settings::CullMode;
+use crate::gpu::shaders::{compose, ALPHA_MASK, COMMON, CULL};
+use crate::settings::{CullMode, Technique};
 use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear, UniformRecords};
 use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
 use crate::shadows::depth::{layered_depth_pipeline, masked_depth_pipeline};
+use crate::shadows::descriptor::{Build, Fills, Need, TechniqueInfo, Wgsl};
 use crate::shadows::source::ShadowStats;
 use crate::{GpuContext, RenderError};
 
+impl Technique {
+    /// Groups of equal-size views per multiview pass ([`crate::shadows::atlas::multiview`]).
+    pub const MULTIVIEW: Technique = Technique::named("multiview");
+}
+
+/// `multiview`'s declaration.
+pub const INFO: TechniqueInfo = TechniqueInfo {
+    technique: Technique::MULTIVIEW,
+    summary: "one multiview pass per group of equal-size views (cube faces, cascades), then a \
+              copy into the tiles",
+    origin: "seed 000 section 19.5; seed 003's cube map in one pass",
+    fills: Fills::Atlas,
+    culls_triangles: true,
+    point_shadows: &[PointShadows::Cube],
+    needs: &[Need::feature(
+        wgpu::Features::MULTIVIEW,
+        "one render pass per group of up to 6-32 equal-size shadow views",
+    )],
+    instead: "use technique layered, which fills the same atlas with one instanced draw",
+    build: Build::Atlas(|ctx| Ok(Box::new(Multiview::new(ctx)?))),
+    shaders: || {
+        vec![
+            Wgsl::with("multiview", shader(), wgpu::Features::MULTIVIEW),
+            Wgsl::core("multiview_copy", copy_shader()),
+        ]
+    },
+};
+
+/// `MultiviewParams` of `multiview.wgsl` (and `multiview_copy.wgsl`), one per view group.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct MultiviewParams {
+    /// First draw-list entry of the group, cullable triangles, cull bits, unused.
+    pub(crate) counts: [u32; 4],
+    /// Atlas side in texels, unused ×3.
+    pub(crate) atlas: [f32; 4],
+}
+
 /// Bytes of one group's parameters (`MultiviewParams` in multiview.wgsl).
-const PARAMS_SIZE: u64 = std::mem::size_of::<crate::gpu::types::MultiviewParams>() as u64;
+const PARAMS_SIZE: u64 = std::mem::size_of::<MultiviewParams>() as u64;
+
+/// The vertex shaders (one view per `view_index`).
+fn shader() -> String {
+    compose(&[COMMON, CULL, ALPHA_MASK, include_str!("multiview.wgsl")])
+}
+
+/// The copy of scratch layers into atlas tiles.
+fn copy_shader() -> String {
+    compose(&[COMMON, include_str!("multiview_copy.wgsl")])
+}
 
 /// Splits `draw_list` into runs of consecutive views whose tiles have the same side, at most
 /// `max` views each: `(first position in the list, views)`.
@@ -90,17 +142,17 @@ struct Scratch {
 }
 
 impl Multiview {
-    /// Builds the pipelines; fails with [`RenderError::Unsupported`] without `MULTIVIEW`.
+    /// Builds the pipelines; the registry has checked `MULTIVIEW`. A device that has the
+    /// feature but allows no view is refused the same way.
     pub fn new(ctx: &GpuContext) -> Result<Self, RenderError> {
         let mut max_views = ctx.limits().max_multiview_view_count.min(32);
-        if !ctx.has(wgpu::Features::MULTIVIEW) || max_views == 0 {
+        if max_views == 0 {
             return Err(RenderError::missing_feature(
                 ctx,
                 "technique multiview",
-                "the MULTIVIEW feature (one render pass per group of up to 6-32 \
-                          equal-size shadow views)",
-                "use technique layered, which fills the same atlas with one instanced \
-                          draw",
+                "a max_multiview_view_count above 0 (the MULTIVIEW feature is there, but \
+                 allows no view)",
+                INFO.instead,
             ));
         }
         if clips_into_layer_zero(&ctx.info) {
@@ -116,11 +168,7 @@ impl Multiview {
             max_views = 1;
         }
         let device = &ctx.device;
-        let module = crate::gpu::shaders::module(
-            device,
-            "multiview.shader",
-            &crate::gpu::shaders::multiview(),
-        );
+        let module = crate::gpu::shaders::module(device, "multiview.shader", &shader());
         let vs = wgpu::ShaderStages::VERTEX;
         let layout = crate::gpu::pipelines::bind_group_layout(
             device,
@@ -157,11 +205,8 @@ impl Multiview {
                 },
             ],
         );
-        let copy_module = crate::gpu::shaders::module(
-            device,
-            "multiview_copy.shader",
-            &crate::gpu::shaders::multiview_copy(),
-        );
+        let copy_module =
+            crate::gpu::shaders::module(device, "multiview_copy.shader", &copy_shader());
         let copy_pipeline_layout = crate::gpu::pipelines::pipeline_layout(
             device,
             "multiview.copy_pipeline_layout",
@@ -192,6 +237,7 @@ impl Multiview {
     }
 
     /// Most views one multiview pass renders on this adapter.
+    #[cfg_attr(not(feature = "internals"), allow(dead_code))] // benchmarks and tests
     pub fn views_per_pass(&self) -> u32 {
         self.max_views
     }
@@ -297,9 +343,9 @@ impl ShadowTechnique for Multiview {
         }
 
         // One parameter record per group, at the uniform-offset alignment.
-        let records: Vec<crate::gpu::types::MultiviewParams> = groups
+        let records: Vec<MultiviewParams> = groups
             .iter()
-            .map(|&(first, _)| crate::gpu::types::MultiviewParams {
+            .map(|&(first, _)| MultiviewParams {
                 counts: [first, casters.cullable_triangles, cull.bits(), 0],
                 atlas: [input.atlas.size as f32, 0.0, 0.0, 0.0],
             })
@@ -459,7 +505,14 @@ impl ShadowTechnique for Multiview {
 
 #[cfg(test)]
 mod tests {
-    use super::groups;
+    use super::{copy_shader, groups, shader, MultiviewParams};
+    use crate::gpu::types::layout::same_layout;
+
+    #[test]
+    fn params_match_the_wgsl() {
+        same_layout!(in shader(), MultiviewParams, counts, atlas);
+        same_layout!(in copy_shader(), MultiviewParams, counts, atlas);
+    }
 
     #[test]
     fn groups_split_on_size_and_count() {

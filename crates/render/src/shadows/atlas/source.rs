@@ -39,10 +39,6 @@ impl AtlasSource {
 }
 
 impl ShadowSource for AtlasSource {
-    fn technique(&self) -> Technique {
-        self.generator.technique()
-    }
-
     fn plan(&self) -> &ShadowPlan {
         &self.generator.plan
     }

@@ -1,6 +1,7 @@
 //! The interface every atlas technique implements: what it is given ([`ShadowInput`]), one
 //! generation as it records it ([`Generation`]), and the trait ([`ShadowTechnique`]). The
-//! techniques are created by [`crate::shadows::atlas::registry`].
+//! techniques are created through their declarations ([`crate::shadows::descriptor`],
+//! [`crate::shadows::registry`]).
 
 use manyshadows_scene::light_space::ShadowView;
 

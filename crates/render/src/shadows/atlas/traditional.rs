@@ -3,17 +3,67 @@
 //! beat). Position-only vertex input and no fragment stage, as seed 004 recommends: the only
 //! output is depth.
 
+use manyshadows_scene::light_space::{PointShadows, ViewKind};
+
+use crate::gpu::shaders::{compose, ALPHA_MASK, COMMON, PARABOLOID};
+use crate::gpu::types::VIEW_UNIFORM_STRIDE;
+use crate::gpu_scene::instances::{POSITION_LAYOUT, UV_LAYOUT_1};
 use crate::gpu_scene::skinning::{MAX_BONES, SKIN_LAYOUT};
-use manyshadows_scene::light_space::ViewKind;
+use crate::settings::Technique;
+use crate::shadows::atlas::shared::{atlas_attachment, TileClear};
+use crate::shadows::atlas::technique::{visible_casters, Generation, ShadowInput, ShadowTechnique};
+use crate::shadows::descriptor::{Build, Fills, TechniqueInfo, Wgsl};
+use crate::shadows::source::ShadowStats;
+use crate::GpuContext;
+
+impl Technique {
+    /// One depth pass per shadow view ([`crate::shadows::atlas::traditional`]).
+    pub const TRADITIONAL: Technique = Technique::named("traditional");
+}
+
+/// `traditional`'s declaration.
+pub const INFO: TechniqueInfo = TechniqueInfo {
+    technique: Technique::TRADITIONAL,
+    summary: "one depth pass per shadow view, instances culled on the CPU",
+    origin: "seed 004's shadow pass; seed 000 section 19.2 (the baseline)",
+    fills: Fills::Atlas,
+    culls_triangles: false,
+    point_shadows: &[PointShadows::Cube, PointShadows::DualParaboloid],
+    needs: &[],
+    instead: "",
+    build: Build::Atlas(|ctx| Ok(Box::new(Traditional::new(ctx)))),
+    shaders,
+};
 
 /// Bytes of the per-view uniform the shaders read: view-projection and params.
 const VIEW_BINDING: u64 = 80;
-use crate::gpu::types::VIEW_UNIFORM_STRIDE;
-use crate::gpu_scene::instances::{POSITION_LAYOUT, UV_LAYOUT_1};
-use crate::shadows::atlas::shared::{atlas_attachment, TileClear};
-use crate::shadows::atlas::technique::{visible_casters, Generation, ShadowInput, ShadowTechnique};
-use crate::shadows::source::ShadowStats;
-use crate::GpuContext;
+
+/// The depth-only pass.
+fn shader() -> String {
+    compose(&[COMMON, ALPHA_MASK, include_str!("traditional.wgsl")])
+}
+
+/// The depth-only pass into dual-paraboloid views (clip distances cut the hemisphere).
+fn paraboloid_shader() -> String {
+    compose(&[
+        "enable clip_distances;",
+        COMMON,
+        PARABOLOID,
+        ALPHA_MASK,
+        include_str!("traditional_dp.wgsl"),
+    ])
+}
+
+fn shaders() -> Vec<Wgsl> {
+    vec![
+        Wgsl::core("traditional", shader()),
+        Wgsl::with(
+            "traditional_dp",
+            paraboloid_shader(),
+            wgpu::Features::CLIP_DISTANCES,
+        ),
+    ]
+}
 
 /// The traditional technique's pipelines and layout.
 pub struct Traditional {
@@ -33,11 +83,7 @@ impl Traditional {
     /// Builds the depth-only pipeline.
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let module = crate::gpu::shaders::module(
-            device,
-            "traditional.shader",
-            &crate::gpu::shaders::traditional(),
-        );
+        let module = crate::gpu::shaders::module(device, "traditional.shader", &shader());
         let layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "traditional.layout",
@@ -58,11 +104,7 @@ impl Traditional {
             &[&layout],
         );
         let dp_module = ctx.has(wgpu::Features::CLIP_DISTANCES).then(|| {
-            crate::gpu::shaders::module(
-                device,
-                "traditional_dp.shader",
-                &crate::gpu::shaders::traditional_dp(),
-            )
+            crate::gpu::shaders::module(device, "traditional_dp.shader", &paraboloid_shader())
         });
         let pipeline = |module: &wgpu::ShaderModule,
                         entry: &str,

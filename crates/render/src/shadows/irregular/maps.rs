@@ -81,10 +81,22 @@ use wgpu::util::DeviceExt;
 
 use crate::frame::gbuffer::GBuffer;
 use crate::frame::visibility_mask::VisibilityMask;
+use crate::gpu::shaders::{compose, ALPHA_MASK, COMMON, PARABOLOID, SHADOW_LOOKUP};
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu_scene::casters::CasterGeometry;
 use crate::shadows::plan::ShadowPlan;
 use crate::{GpuContext, RenderError};
+
+/// Sample lists per light-space texel, exact per-triangle tests.
+pub(crate) fn shader() -> String {
+    compose(&[
+        COMMON,
+        PARABOLOID,
+        SHADOW_LOOKUP,
+        ALPHA_MASK,
+        include_str!("irregular.wgsl"),
+    ])
+}
 
 /// Default cap of the grid side (texels) of one view.
 pub const DEFAULT_GRID_MAX: u32 = 512;
@@ -123,6 +135,7 @@ const ARGS_OFFSET: u64 = 8 * 4;
 
 /// Tuning knobs of `--technique irregular`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
 pub struct IrregularOptions {
     /// Grid side per view in texels; `None` = the view's tile size capped at
     /// [`DEFAULT_GRID_MAX`]. Changes the cost, not the result.
@@ -140,6 +153,7 @@ pub struct IrregularOptions {
 
 /// Work counters of the last frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
 pub struct IrregularStats {
     /// Batches of lights.
     pub batches: u32,
@@ -228,22 +242,14 @@ impl IrregularShadows {
         (w, h): (u32, u32),
         options: IrregularOptions,
     ) -> Result<Self, RenderError> {
-        if plan
+        // Paraboloid views are refused before (the technique's point-shadow modes): their
+        // warp would bend triangle edges and break the conservative bound.
+        debug_assert!(!plan
             .views
             .iter()
-            .any(|v| matches!(v.kind, ViewKind::Paraboloid(_)))
-        {
-            return Err(RenderError::Unsupported(
-                "technique irregular needs straight triangle edges in light space: use \
-                 cube point shadows (six perspective faces) with it"
-                    .into(),
-            ));
-        }
-        if let Some(g) = options.grid.filter(|g| !(1..=GRID_LIMIT).contains(g)) {
-            return Err(RenderError::InvalidOption(format!(
-                "irregular grid side {g}: must be 1..={GRID_LIMIT} texels"
-            )));
-        }
+            .any(|v| matches!(v.kind, ViewKind::Paraboloid(_))));
+        // `RenderSettings::validate` checked the options' ranges.
+        debug_assert!(options.grid.is_none_or(|g| (1..=GRID_LIMIT).contains(&g)));
         let device = &ctx.device;
         let limit = ctx.limits().max_storage_buffer_binding_size;
         let pixels = w as u64 * h as u64;
@@ -251,13 +257,12 @@ impl IrregularShadows {
         let words = lights.div_ceil(32).max(1);
         let mask_bytes = pixels * words as u64 * 4;
         if mask_bytes > limit {
-            return Err(RenderError::ResolutionTooLarge {
-                width: w,
-                height: h,
-                reason: format!(
-                    "the irregular visibility mask needs {mask_bytes} bytes, over this \
-                     adapter's storage-binding limit of {limit} bytes"
-                ),
+            return Err(RenderError::TooLarge {
+                what: format!("the irregular visibility mask of a {w}x{h} frame"),
+                needed: mask_bytes,
+                limit,
+                unit: "bytes",
+                limit_name: "max_storage_buffer_binding_size",
             });
         }
 
@@ -297,10 +302,13 @@ impl IrregularShadows {
                 .map(|v| view_words(sides[v as usize], hash))
                 .sum();
             if light_heads > head_limit {
-                return Err(RenderError::SceneTooLarge(format!(
-                    "light {li}'s irregular grids need {light_heads} texels, over the {head_limit} \
-                     one binding holds; lower the grid resolution"
-                )));
+                return Err(RenderError::TooLarge {
+                    what: format!("light {li}'s irregular grids (lower the grid resolution)"),
+                    needed: light_heads,
+                    limit: head_limit,
+                    unit: "texels",
+                    limit_name: "max_storage_buffer_binding_size / 4",
+                });
             }
             let needs = u64::from(n > 0);
             if li as u32 > l0
@@ -415,11 +423,7 @@ impl IrregularShadows {
         );
         let tiles = buffer("irregular.tiles", (tile_queue + 1) * 16, storage);
 
-        let module = crate::gpu::shaders::module(
-            device,
-            "irregular.shader",
-            &crate::gpu::shaders::irregular(),
-        );
+        let module = crate::gpu::shaders::module(device, "irregular.shader", &shader());
         // A scene without alpha-tested casters gets pipelines compiled without the mask test.
         let masked = inputs.casters.first_masked_triangle < inputs.casters.triangles;
         let constants: &[(&str, f64)] = if masked {
@@ -653,19 +657,13 @@ impl IrregularShadows {
             });
         }
         if c[7] > 0 {
-            return Err(RenderError::Irregular(format!(
-                "{} tiles of samples found the tile queue ({} tiles) full; the frame was \
-                 discarded. Use a coarser grid or fewer lights",
-                c[7], self.tile_queue
-            )));
+            return Err(RenderError::TileQueueFull {
+                tiles: c[7],
+                capacity: self.tile_queue,
+            });
         }
         if c[12] > 0 {
-            return Err(RenderError::Irregular(format!(
-                "{} sample-list walks hit the driver's loop limit (llvmpipe ends loops after \
-                 65535 iterations per invocation); the frame was discarded. Use a finer grid \
-                 (IrregularOptions::grid) so lists are shorter",
-                c[12]
-            )));
+            return Err(RenderError::LoopLimit { walks: c[12] });
         }
         if c[6] > 0 {
             log::warn!(
@@ -701,5 +699,20 @@ impl IrregularShadows {
             words_per_pixel: self.words,
             words: bytemuck::cast_slice(&bytes).to_vec(),
         })
+    }
+}
+
+with_setters!(IrregularOptions {
+    with_grid: grid: Option<u32>,
+    with_hash: hash: Option<u32>,
+});
+
+#[cfg(feature = "test-hooks")]
+impl IrregularOptions {
+    /// Test only: forces the node pool to `nodes` nodes ([`IrregularOptions::node_capacity`]).
+    #[must_use]
+    pub fn with_node_capacity(mut self, nodes: Option<u32>) -> Self {
+        self.node_capacity = nodes;
+        self
     }
 }

@@ -1,6 +1,7 @@
 //! Irregular shadow maps as a frame's shadow source: the plan's views in a view table (no
 //! atlas) and the passes of [`crate::shadows::irregular::maps`]; the output is the mask.
 
+use manyshadows_scene::light_space::PointShadows;
 use manyshadows_scene::Scene;
 
 use crate::frame::visibility_mask::VisibilityMask;
@@ -10,6 +11,7 @@ use crate::gpu_scene::casters::CasterGeometry;
 use crate::gpu_scene::instances::GpuScene;
 use crate::settings::{RenderSettings, Technique};
 use crate::shadows::atlas::storage::ShadowAtlas;
+use crate::shadows::descriptor::{Build, Fills, TechniqueInfo, Wgsl};
 use crate::shadows::irregular::maps::{
     IrregularInputs, IrregularOptions, IrregularShadows, IrregularStats,
 };
@@ -18,6 +20,35 @@ use crate::shadows::source::{
     PlanParams, ShadowOutput, ShadowSource, ShadowStats, SourceInputs, ViewTable,
 };
 use crate::{GpuContext, RenderError};
+
+impl Technique {
+    /// Irregular (alias-free) shadow maps ([`crate::shadows::irregular`]).
+    pub const IRREGULAR: Technique = Technique::named("irregular");
+}
+
+/// `irregular`'s declaration.
+pub const INFO: TechniqueInfo = TechniqueInfo {
+    technique: Technique::IRREGULAR,
+    summary: "irregular shadow maps: camera samples in per-texel lists of each light view, \
+              every caster triangle tested exactly against the samples under it; alias-free",
+    origin: "seed 001 (irregular shadow mapping)",
+    fills: Fills::Mask,
+    culls_triangles: false,
+    point_shadows: &[PointShadows::Cube],
+    needs: &[],
+    instead: "",
+    build: Build::Source(|a| {
+        Ok(Box::new(IrregularSource::new(
+            a.ctx, a.scene, a.gpu, a.params, a.settings,
+        )?))
+    }),
+    shaders: || {
+        vec![Wgsl::core(
+            "irregular",
+            crate::shadows::irregular::maps::shader(),
+        )]
+    },
+};
 
 /// Irregular shadow maps as a frame's [`ShadowSource`]: the plan's views (a view table, no
 /// atlas) and the passes, rebuilt at every [`ShadowSource::bind`] (their light-space grids
@@ -57,10 +88,6 @@ impl IrregularSource {
 }
 
 impl ShadowSource for IrregularSource {
-    fn technique(&self) -> Technique {
-        Technique::Irregular
-    }
-
     fn plan(&self) -> &ShadowPlan {
         &self.table.plan
     }
@@ -132,8 +159,8 @@ impl ShadowSource for IrregularSource {
 
     fn read_atlas(&self, _ctx: &GpuContext) -> Result<Vec<f32>, RenderError> {
         Err(RenderError::NoAtlas {
-            technique: crate::settings::Technique::Irregular,
-            detail: crate::settings::IRREGULAR_NO_ATLAS.into(),
+            technique: INFO.technique,
+            fills: INFO.fills,
         })
     }
 

@@ -7,12 +7,27 @@
 
 use crate::gpu::buffers::buffer;
 use crate::gpu::pipelines::whole_entry;
+use crate::gpu::shaders::{compose, ALPHA_MASK, CLUSTER_CULL, COMMON, CULL, TILE, TILE_MASK};
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu::types::VsmRound;
 use crate::gpu_scene::casters::CasterGeometry;
 use crate::settings::ShadowOptions;
 use crate::shadows::cluster_draw::{plan_rounds, Round, COMMAND_SIZE};
 use crate::GpuContext;
+
+/// Page culling, drawing and clearing.
+pub(crate) fn shader() -> String {
+    compose(&[
+        "enable clip_distances;",
+        COMMON,
+        CULL,
+        TILE,
+        CLUSTER_CULL,
+        ALPHA_MASK,
+        TILE_MASK,
+        include_str!("vsm_draw.wgsl"),
+    ])
+}
 
 /// Largest command buffer of one page-render round.
 const MAX_ROUND_BYTES: u64 = 64 << 20;
@@ -175,11 +190,7 @@ impl PageDraw {
         let pipeline_layout = |label: &str, layout: &wgpu::BindGroupLayout| {
             crate::gpu::pipelines::pipeline_layout(device, label, &[layout])
         };
-        let draw_module = crate::gpu::shaders::module(
-            device,
-            "vsm_draw.shader",
-            &crate::gpu::shaders::vsm_draw(),
-        );
+        let draw_module = crate::gpu::shaders::module(device, "vsm_draw.shader", &shader());
         let cull_pl = pipeline_layout("vsm.cull_pipeline_layout", &cull_layout);
         let cull = crate::gpu::pipelines::compute_pipeline(
             device,

@@ -11,6 +11,7 @@ use crate::frame::clusters::LightClusters;
 use crate::frame::gbuffer::GBuffer;
 use crate::gpu::buffers::buffer;
 use crate::gpu::pipelines::whole_entry;
+use crate::gpu::shaders::{compose, COMMON, PARABOLOID, SHADOW_LOOKUP, VSM_COMMON};
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu::types::{LightData, ShadowViewData, VirtualFace, VsmUniforms};
 use crate::gpu_scene::casters::CasterGeometry;
@@ -20,6 +21,17 @@ use crate::shadows::vsm::plan::{
     pool_side, VirtualOptions, VirtualPlan, VirtualStats, MAX_LEVELS, PAGE_SIZE,
 };
 use crate::{GpuContext, RenderError};
+
+/// Page marking, allocation and indirect arguments.
+pub(crate) fn shader() -> String {
+    compose(&[
+        COMMON,
+        PARABOLOID,
+        SHADOW_LOOKUP,
+        VSM_COMMON,
+        include_str!("vsm.wgsl"),
+    ])
+}
 
 /// Page-table entries per allocation workgroup (`BLOCK` in `vsm.wgsl`).
 const ALLOC_BLOCK: u64 = 32;
@@ -47,8 +59,6 @@ pub struct VirtualShadows {
     /// This frame's faces.
     pub plan: VirtualPlan,
     options: VirtualOptions,
-    /// The page pool: `Depth32Float`, `pool_side`².
-    pub pool: wgpu::Texture,
     /// Depth view of the pool.
     pub pool_view: wgpu::TextureView,
     pool_side: u32,
@@ -110,19 +120,8 @@ impl VirtualShadows {
         shadow: ShadowOptions,
         casters: &CasterGeometry,
     ) -> Result<Self, RenderError> {
-        crate::shadows::depth::require_clip_distances(ctx, "virtual")?;
-        crate::shadows::depth::require_indirect(
-            ctx,
-            "virtual",
-            "indirect dispatches and draws (to allocate and draw its pages)",
-            "use technique traditional",
-        )?;
-        if !(options.lod.is_finite() && options.lod > 0.0) {
-            return Err(RenderError::InvalidOption(format!(
-                "the virtual maps' level-of-detail scale must be a positive number, not {}",
-                options.lod
-            )));
-        }
+        // `RenderSettings::validate` checked the options' ranges.
+        debug_assert!(options.lod.is_finite() && options.lod > 0.0);
         let device = &ctx.device;
         let limits = ctx.limits();
         let plan = VirtualPlan::new(scene, width as f32 / height as f32, height, &options);
@@ -202,8 +201,7 @@ impl VirtualShadows {
         let pipeline_layout = |label: &str, layout: &wgpu::BindGroupLayout| {
             crate::gpu::pipelines::pipeline_layout(device, label, &[layout])
         };
-        let mark_module =
-            crate::gpu::shaders::module(device, "vsm.shader", &crate::gpu::shaders::vsm());
+        let mark_module = crate::gpu::shaders::module(device, "vsm.shader", &shader());
         let mark_pl = pipeline_layout("vsm.mark_pipeline_layout", &mark_layout);
         let compute =
             |label: &str, module: &wgpu::ShaderModule, pl: &wgpu::PipelineLayout, entry| {
@@ -222,7 +220,6 @@ impl VirtualShadows {
         let mut this = Self {
             plan,
             options,
-            pool,
             pool_view,
             pool_side,
             pool_pages,
@@ -265,11 +262,6 @@ impl VirtualShadows {
     /// Side of the pool texture in texels.
     pub fn pool_side(&self) -> u32 {
         self.pool_side
-    }
-
-    /// The options in use.
-    pub fn options(&self) -> &VirtualOptions {
-        &self.options
     }
 
     /// The uniform buffer (`VsmUniforms`) the lookups bind.
@@ -417,11 +409,6 @@ impl VirtualShadows {
             },
         );
         self.groups = Some(Groups { mark, alloc });
-    }
-
-    /// True once [`VirtualShadows::bind`] has run since the last buffer replacement.
-    pub fn bound(&self) -> bool {
-        self.groups.is_some()
     }
 
     /// Notes that a shadow caster's bounding sphere moved from `old` to `new`: pages of faces

@@ -18,6 +18,7 @@ pub const DEFAULT_POOL_BYTES: u64 = 256 << 20;
 pub const DEFAULT_TABLE_ENTRIES: u32 = 4 << 20;
 /// Knobs of the virtual shadow maps.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct VirtualOptions {
     /// Page-pool budget in bytes (rounded down to a square power-of-two pool, within the
     /// adapter's texture limit).
@@ -193,6 +194,7 @@ impl VirtualPlan {
 
 /// Counters of one frame of virtual shadow maps.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[non_exhaustive]
 pub struct VirtualStats {
     /// The plan's layout.
     pub fit: VirtualFit,
@@ -260,3 +262,11 @@ mod tests {
         assert_eq!(pool_side(64 << 20, 16384), 4096);
     }
 }
+
+with_setters!(VirtualOptions {
+    with_pool_bytes: pool_bytes: u64,
+    with_max_side: max_side: u32,
+    with_lod: lod: f32,
+    with_max_table_entries: max_table_entries: u32,
+    with_back_facing: back_facing: bool,
+});

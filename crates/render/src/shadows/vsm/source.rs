@@ -11,6 +11,7 @@ use crate::gpu_scene::casters::CasterGeometry;
 use crate::gpu_scene::instances::GpuScene;
 use crate::settings::{RenderSettings, Technique};
 use crate::shadows::atlas::storage::ShadowAtlas;
+use crate::shadows::descriptor::{Build, Fills, Need, TechniqueInfo, Wgsl};
 use crate::shadows::plan::ShadowPlan;
 use crate::shadows::source::{
     PagePool, ShadowOutput, ShadowSource, ShadowStats, SourceInputs, ViewTable,
@@ -18,6 +19,45 @@ use crate::shadows::source::{
 use crate::shadows::vsm::pages::{VirtualShadows, VsmInputs};
 use crate::shadows::vsm::plan::{VirtualOptions, VirtualPlan, VirtualStats};
 use crate::{GpuContext, RenderError};
+
+impl Technique {
+    /// Virtual shadow maps ([`crate::shadows::vsm`]).
+    pub const VIRTUAL: Technique = Technique::named("virtual");
+}
+
+/// `virtual`'s declaration.
+pub const INFO: TechniqueInfo = TechniqueInfo {
+    technique: Technique::VIRTUAL,
+    summary: "virtual shadow maps: a 16k² paged map per light face, only the pages the \
+              camera's samples need, at the resolution they need, rendered into a page pool",
+    origin: "seed 002 (Olsson et al., virtual shadow maps for many lights)",
+    fills: Fills::Pages,
+    culls_triangles: true,
+    point_shadows: &[PointShadows::Cube],
+    needs: &[
+        Need::feature(
+            wgpu::Features::CLIP_DISTANCES,
+            "to keep each page's draw inside its pool tile",
+        ),
+        Need::indirect("indirect dispatches and draws (to allocate and draw its pages)"),
+    ],
+    instead: "use technique traditional",
+    build: Build::Source(|a| {
+        Ok(Box::new(VirtualSource::new(
+            a.ctx, a.scene, a.gpu, a.settings,
+        )?))
+    }),
+    shaders: || {
+        vec![
+            Wgsl::core("vsm", crate::shadows::vsm::pages::shader()),
+            Wgsl::with(
+                "vsm_draw",
+                crate::shadows::vsm::draw::shader(),
+                wgpu::Features::CLIP_DISTANCES,
+            ),
+        ]
+    },
+};
 
 /// Virtual shadow maps as a frame's [`ShadowSource`]: an empty shadow plan (the faces are in
 /// [`VirtualPlan`]), the caster geometry and the page pool, which is the output.
@@ -36,12 +76,6 @@ impl VirtualSource {
         gpu: &GpuScene,
         settings: &RenderSettings,
     ) -> Result<Self, RenderError> {
-        if settings.point_shadows != PointShadows::default() {
-            return Err(RenderError::Unsupported(
-                "technique virtual pages cube-map point shadows only; use cube point shadows"
-                    .into(),
-            ));
-        }
         let table = ViewTable::new(
             ctx,
             scene,
@@ -65,10 +99,6 @@ impl VirtualSource {
 }
 
 impl ShadowSource for VirtualSource {
-    fn technique(&self) -> Technique {
-        Technique::Virtual
-    }
-
     fn plan(&self) -> &ShadowPlan {
         &self.table.plan
     }
@@ -149,8 +179,8 @@ impl ShadowSource for VirtualSource {
 
     fn read_atlas(&self, _ctx: &GpuContext) -> Result<Vec<f32>, RenderError> {
         Err(RenderError::NoAtlas {
-            technique: crate::settings::Technique::Virtual,
-            detail: crate::settings::VIRTUAL_NO_ATLAS.into(),
+            technique: INFO.technique,
+            fills: INFO.fills,
         })
     }
 

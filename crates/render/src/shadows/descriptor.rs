@@ -1,0 +1,233 @@
+//! How a technique declares itself: one [`TechniqueInfo`] in its own module says its name,
+//! what it is, what it fills, which point-shadow modes it renders, what it needs of the
+//! device, how it is built and which WGSL it compiles. The registry
+//! ([`crate::shadows::registry`]) is the list of them; nothing else names a technique.
+
+use manyshadows_scene::light_space::PointShadows;
+use manyshadows_scene::Scene;
+
+use crate::gpu_scene::instances::GpuScene;
+use crate::settings::{RenderSettings, Technique};
+use crate::shadows::atlas::technique::ShadowTechnique;
+use crate::shadows::source::{PlanParams, ShadowSource};
+use crate::{GpuContext, RenderError};
+
+/// What a technique leaves for the lighting pass.
+#[non_exhaustive]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fills {
+    /// A depth atlas: one tile per shadow view (the shadow-map techniques).
+    Atlas,
+    /// A pool of depth pages behind a page table (virtual shadow maps).
+    Pages,
+    /// The per-pixel, per-light visibility bits themselves (exact techniques).
+    Mask,
+}
+
+impl Fills {
+    /// A few words for messages and menus.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Fills::Atlas => "a shadow atlas",
+            Fills::Pages => "a virtual page pool",
+            Fills::Mask => "the visibility mask directly",
+        }
+    }
+}
+
+/// Something a technique needs of the device.
+#[non_exhaustive]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Requirement {
+    /// An optional wgpu feature.
+    Feature(wgpu::Features),
+    /// Indirect draws and dispatches (a downlevel flag: OpenGL ES and WebGL may lack it).
+    IndirectExecution,
+}
+
+/// A [`Requirement`] and what the technique uses it for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Need {
+    /// What the device must have.
+    pub requirement: Requirement,
+    /// What the technique does with it ("to keep each view inside its atlas tile").
+    pub purpose: &'static str,
+}
+
+impl Need {
+    /// Needs `feature` for `purpose`.
+    pub const fn feature(feature: wgpu::Features, purpose: &'static str) -> Self {
+        Need {
+            requirement: Requirement::Feature(feature),
+            purpose,
+        }
+    }
+
+    /// Needs indirect execution for `purpose`.
+    pub const fn indirect(purpose: &'static str) -> Self {
+        Need {
+            requirement: Requirement::IndirectExecution,
+            purpose,
+        }
+    }
+
+    /// The requirement's name as wgpu spells it.
+    pub fn name(&self) -> String {
+        match self.requirement {
+            Requirement::Feature(f) => format!("{f:?}"),
+            Requirement::IndirectExecution => "INDIRECT_EXECUTION".into(),
+        }
+    }
+
+    /// True if `ctx`'s device meets it.
+    pub fn met(&self, ctx: &GpuContext) -> bool {
+        match self.requirement {
+            Requirement::Feature(f) => ctx.has(f),
+            Requirement::IndirectExecution => ctx
+                .adapter
+                .get_downlevel_capabilities()
+                .flags
+                .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION),
+        }
+    }
+}
+
+/// Builds an atlas technique's pipelines (after its needs were checked).
+pub(crate) type BuildAtlas = fn(&GpuContext) -> Result<Box<dyn ShadowTechnique>, RenderError>;
+
+/// What a technique that fills no atlas is built from.
+pub(crate) struct SourceArgs<'a> {
+    pub ctx: &'a GpuContext,
+    pub scene: &'a Scene,
+    pub gpu: &'a GpuScene,
+    pub params: PlanParams,
+    pub settings: &'a RenderSettings,
+}
+
+/// Builds a technique's shadow source (after its needs were checked).
+pub(crate) type BuildSource = fn(SourceArgs<'_>) -> Result<Box<dyn ShadowSource>, RenderError>;
+
+/// How a technique is built: an atlas technique is driven by the shadow generator (caching,
+/// the atlas); any other kind is a whole shadow source of its own.
+#[derive(Clone, Copy)]
+pub(crate) enum Build {
+    Atlas(BuildAtlas),
+    Source(BuildSource),
+}
+
+/// One composed shader of a technique.
+#[derive(Clone, Debug)]
+pub struct Wgsl {
+    /// Its name (the module's label).
+    pub name: &'static str,
+    /// The composed source.
+    pub source: String,
+    /// The device features it is compiled only with (`enable clip_distances;`, multiview):
+    /// on a WebGPU device without them the technique, or this part of it, is not used.
+    pub features: wgpu::Features,
+}
+
+impl Wgsl {
+    /// A shader that needs no optional feature.
+    pub fn core(name: &'static str, source: String) -> Self {
+        Wgsl {
+            name,
+            source,
+            features: wgpu::Features::empty(),
+        }
+    }
+
+    /// A shader compiled only where the device has `features`.
+    pub fn with(name: &'static str, source: String, features: wgpu::Features) -> Self {
+        Wgsl {
+            name,
+            source,
+            features,
+        }
+    }
+}
+
+/// One technique, declared once in its module.
+pub struct TechniqueInfo {
+    /// The technique (its name is `--technique`'s value).
+    pub technique: Technique,
+    /// One line for `--help`, menus and tables.
+    pub summary: &'static str,
+    /// The seed or paper it implements.
+    pub origin: &'static str,
+    /// What it fills.
+    pub fills: Fills,
+    /// True if it culls triangles per view as [`crate::ShadowOptions::cull`] asks (the
+    /// single-pass techniques); false if it ignores the option.
+    pub culls_triangles: bool,
+    /// The point-light shadow modes it renders.
+    pub point_shadows: &'static [PointShadows],
+    /// What it needs of the device beyond the renderer's own minimum.
+    pub needs: &'static [Need],
+    /// What to use where it cannot run.
+    pub instead: &'static str,
+    pub(crate) build: Build,
+    /// Its composed WGSL (validated by naga in the tests).
+    pub(crate) shaders: fn() -> Vec<Wgsl>,
+}
+
+impl TechniqueInfo {
+    /// The needs `ctx`'s device does not meet.
+    pub fn unmet(&self, ctx: &GpuContext) -> Vec<Need> {
+        self.needs.iter().filter(|n| !n.met(ctx)).copied().collect()
+    }
+
+    /// Refuses the technique on `ctx`'s device with [`RenderError::MissingFeature`] when a
+    /// need is unmet.
+    pub fn check(&self, ctx: &GpuContext) -> Result<(), RenderError> {
+        match self.unmet(ctx).first() {
+            None => Ok(()),
+            Some(need) => Err(RenderError::missing_feature(
+                ctx,
+                format!("technique {}", self.technique),
+                format!("the {} feature ({})", need.name(), need.purpose),
+                self.instead,
+            )),
+        }
+    }
+
+    /// Refuses a point-shadow mode the technique does not render.
+    pub fn check_point_shadows(&self, mode: PointShadows) -> Result<(), RenderError> {
+        if self.point_shadows.contains(&mode) {
+            Ok(())
+        } else {
+            Err(RenderError::UnsupportedCombination {
+                technique: self.technique,
+                option: "point shadows",
+                value: mode.name(),
+                supported: self.point_shadows.iter().map(|m| m.name()).collect(),
+            })
+        }
+    }
+
+    /// The technique's composed WGSL.
+    pub fn shaders(&self) -> Vec<Wgsl> {
+        (self.shaders)()
+    }
+
+    /// The features its shaders may use (those of its needs).
+    pub fn features(&self) -> wgpu::Features {
+        self.needs
+            .iter()
+            .fold(wgpu::Features::empty(), |f, n| match n.requirement {
+                Requirement::Feature(x) => f | x,
+                Requirement::IndirectExecution => f,
+            })
+    }
+}
+
+impl std::fmt::Debug for TechniqueInfo {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("TechniqueInfo")
+            .field("technique", &self.technique)
+            .field("fills", &self.fills)
+            .field("point_shadows", &self.point_shadows)
+            .field("needs", &self.needs)
+            .finish_non_exhaustive()
+    }
+}
