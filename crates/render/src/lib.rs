@@ -1,22 +1,56 @@
 //! # manyshadows
 //!
-//! Many shadow-casting lights on wgpu. The flow of one frame:
+//! Scenes lit by many shadow-casting lights, on wgpu: spot, point and directional lights,
+//! deferred Phong lighting with PCF, and a choice of shadow techniques — shadow maps in one
+//! depth atlas (five ways to fill it), virtual shadow maps in a page pool, and exact irregular
+//! shadow maps — that all answer the same question, per pixel and light: lit or not.
 //!
-//! `Scene` → [`GpuScene`] (buffers) → the frame's [`ShadowSource`]: an atlas technique
-//! ([`ShadowPlan`]: every shadow view and its atlas tile; a [`ShadowTechnique`] fills the
-//! [`ShadowAtlas`]), virtual shadow maps (a page pool) or irregular shadow maps (a visibility
-//! mask) → the lighting pass reads its [`ShadowOutput`] → image, visibility mask and timings
-//! ([`Frame`]).
+//! ## A frame in five lines
 //!
-//! ```no_run
-//! use manyshadows::{AdapterRequest, GpuContext, Renderer, RenderSettings};
+//! ```
+//! use manyshadows::{AdapterRequest, GpuContext, RenderSettings, Renderer, Technique};
+//!
+//! // Any adapter: a GPU, or Vulkan/OpenGL on the CPU (Mesa lavapipe, llvmpipe).
 //! let ctx = GpuContext::new(&AdapterRequest::default())?;
-//! let scene = manyshadows_scene::builtin::build("cubes", &Default::default())?;
-//! let mut renderer = Renderer::new(&ctx, &scene, RenderSettings::default())?;
+//! // A built-in scene (or `scene::loaders::load_scene` for a glTF/OBJ/PLY file).
+//! let scene = manyshadows::scene::builtin::build("plane-spot", &Default::default())?;
+//! let settings = RenderSettings::new(64, 48)
+//!     .with_technique(Technique::LAYERED)
+//!     .with_visibility(true);
+//! let mut renderer = Renderer::new(&ctx, &scene, settings)?;
 //! let frame = renderer.render()?;
-//! assert_eq!(frame.rgba.len(), 1280 * 720 * 4);
+//! assert_eq!(frame.rgba.len(), 64 * 48 * 4);
+//! // One bit per pixel and light: the hard shadow test, what quality is measured on.
+//! let mask = frame.visibility.expect("asked for");
+//! let lit = (0..64).filter(|&x| mask.lit(x, 24, 0)).count();
+//! assert!(lit > 0);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+//!
+//! ## What to read
+//!
+//! - [`Renderer`]: a scene on the GPU. [`Renderer::render`] reads a [`Frame`] back (image,
+//!   optional [`VisibilityMask`], [`FrameTimings`] with [`GpuTimes`] per [`Stage`], work
+//!   counters); [`Renderer::render_to`] draws into a texture you own (a window's surface)
+//!   without a read-back. Between frames, [`Renderer::set_camera`], [`Renderer::set_lights`]
+//!   and [`Renderer::set_instance_transform`] change the scene; the next frame re-plans.
+//! - [`RenderSettings`]: size, [`Technique`], culling ([`ShadowOptions`], [`CullMode`]),
+//!   filtering ([`Pcf`]), [`ShadowBias`], and each technique's own knobs
+//!   ([`IrregularOptions`], [`VirtualOptions`], [`ClusterOptions`]). Build it with the
+//!   `with_*` setters; [`RenderSettings::validate`] names any value out of range.
+//! - [`Technique`]: every technique declares itself once ([`TechniqueInfo`]: what it fills,
+//!   the point-light shadows it renders, the device features it [`Need`]s);
+//!   [`Technique::all`] lists them. A technique the device cannot run is refused by name
+//!   ([`RenderError::MissingFeature`]; [`RenderError::is_unsupported`] groups such refusals).
+//! - [`GpuContext`]: the adapter and device. [`GpuContext::new`] picks one;
+//!   [`GpuContext::from_parts`] wraps a device your application made (it must reach
+//!   [`required_limits`]: WebGPU's defaults with 2048² textures).
+//! - [`RenderError`]: every failure, with typed fields; nothing panics on bad input.
+//! - [`scene`]: the scene model, loaders and built-in scenes (`manyshadows-scene`, no GPU).
+//!
+//! The crate's inside — the GPU plumbing, the per-technique passes, the shadow plan — is
+//! public only with the `internals` feature, for the project's own CLI, benchmarks and tests,
+//! with no stability promise.
 
 /// Builder-style setters for a `#[non_exhaustive]` options struct, one per field:
 /// `RenderSettings::default().with_width(640).with_technique(Technique::VIRTUAL)`. Declared
