@@ -649,7 +649,8 @@ fn table(records: &[Record], adapter: &str) -> String {
             .map_or("", |v| v.figure);
         let _ = writeln!(
             out,
-            "\n== {variant} (seed Fig. {fig}), {res}² maps: median GPU ms (ratio to traditional) | CPU ms (ratio)\n   adapter: {adapter}"
+            "\n== {variant} (seed Fig. {fig}), {res}² maps: median GPU ms (ratio to {}) | CPU ms (ratio)\n   adapter: {adapter}",
+            Technique::default()
         );
         let _ = write!(out, "{:>5}", "maps");
         for m in &methods {

@@ -143,7 +143,7 @@ dark green inside the edge band; over the dimmed frame) and reference.msvis to -
 Examples:
   manyshadows compare                                          # atrium, 8 lights, all techniques
   manyshadows compare --scene plane-spot --shadow-resolutions 256,1024,2048
-  manyshadows compare --scene atrium --lights 16 --techniques traditional --json q.json";
+  manyshadows compare --scene atrium --lights 16 --shadow-resolutions 512 --json q.json";
 
 /// Atrium lights when `--lights` is not given: a run of well under a minute on two cores.
 const ATRIUM_DEFAULT_LIGHTS: usize = 8;

@@ -138,8 +138,11 @@ pub fn irregular(args: &IrregularArgs) -> Result<()> {
     let mut text = String::new();
     let _ = writeln!(
         text,
-        "== bench irregular: scene {}, lights of type {}; median GPU ms per frame (ratio to traditional@512), shadow stage\n   adapter: {}",
-        args.scene, args.light_types, h.adapter
+        "== bench irregular: scene {}, lights of type {}; median GPU ms per frame (ratio to {}@512), shadow stage\n   adapter: {}",
+        args.scene,
+        args.light_types,
+        Technique::default(),
+        h.adapter
     );
     let _ = writeln!(
         text,

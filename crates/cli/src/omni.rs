@@ -64,9 +64,12 @@ struct Record {
 }
 
 fn parse_method(s: &str) -> Result<(PointShadows, Technique)> {
-    let (mode, t) = s
-        .split_once(':')
-        .with_context(|| format!("method '{s}': expected MODE:TECHNIQUE, e.g. dp:layered"))?;
+    let (mode, t) = s.split_once(':').with_context(|| {
+        format!(
+            "method '{s}': expected MODE:TECHNIQUE, e.g. {}",
+            crate::techniques::omni_methods().join(" or ")
+        )
+    })?;
     let mode = match mode {
         "cube" => PointShadows::Cube,
         "dp" | "dual-paraboloid" => PointShadows::DualParaboloid,

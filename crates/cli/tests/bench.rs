@@ -349,6 +349,9 @@ fn bench_soak_runs_changing_frames_and_samples_memory() {
         lights.contains(&4) && lights.contains(&8),
         "the count must change: {lights:?}"
     );
-    assert!(json["growth_mib"].as_f64().unwrap() < 64.0, "{json}");
+    // Measured over the 240 frames after warm-up: 0.0 MiB on lavapipe, 0.41 and 0.46 MiB on
+    // llvmpipe GL (two runs each). Bound 2 MiB: a frame's G-buffer and targets leaked every
+    // frame (about 23 KB at 32x18) would grow 5.5 MB over those frames and fail it.
+    assert!(json["growth_mib"].as_f64().unwrap() < 2.0, "{json}");
     rejects("soak --frames 10 --warmup 20", "--frames must be larger");
 }

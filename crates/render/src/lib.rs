@@ -132,7 +132,7 @@ pub enum RenderError {
     /// The adapter refused to create a device.
     #[error("could not create a device on {adapter}: {reason}")]
     Device {
-        /// The adapter ([`gpu::context::describe_adapter`]).
+        /// The adapter ([`GpuContext::describe`]).
         adapter: String,
         /// wgpu's reason.
         reason: wgpu::RequestDeviceError,
@@ -236,7 +236,7 @@ pub enum RenderError {
         needs: String,
         /// The feature, and what it is used for.
         feature: String,
-        /// The adapter ([`gpu::context::describe_adapter`]).
+        /// The adapter ([`GpuContext::describe`]).
         adapter: String,
         /// What to use instead.
         instead: String,
@@ -244,7 +244,7 @@ pub enum RenderError {
     /// The device's limits are below what the renderer or a technique needs.
     #[error("{adapter} has smaller limits than {needs} needs: {}", shortfalls.join("; "))]
     LimitsTooSmall {
-        /// The adapter ([`gpu::context::describe_adapter`]).
+        /// The adapter ([`GpuContext::describe`]).
         adapter: String,
         /// Who needs more ("manyshadows (WebGPU's defaults)", "technique compute").
         needs: String,

@@ -628,7 +628,7 @@ impl Renderer {
     }
 
     /// Reads the depth atlas back (`size`² floats, row-major); techniques that fill no atlas
-    /// (`irregular`, `virtual`) answer [`RenderError::Unsupported`].
+    /// (`irregular`, `virtual`) answer [`RenderError::NoAtlas`].
     pub fn read_atlas(&self) -> Result<Vec<f32>, RenderError> {
         self.source.read_atlas(&self.ctx)
     }

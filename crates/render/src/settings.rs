@@ -1,7 +1,7 @@
 //! What a caller chooses for a frame: [`RenderSettings`] and the choices it holds that belong
 //! to no one pass (the [`Technique`], culling and caster [`ShadowOptions`], filtering, bias).
 //! Knobs of one feature stay with it and are gathered here: the caster options
-//! ([`crate::gpu_scene::casters`]), the light loop and cluster grid ([`crate::frame::clusters`]),
+//! (`CasterOptions::assume_closed`), the light loop and cluster grid ([`crate::frame::clusters`]),
 //! irregular and virtual shadow maps ([`crate::shadows::irregular`], [`crate::shadows::vsm`]).
 //! Plain data: the sources and the renderer read it; nothing it names reads it.
 
@@ -57,7 +57,7 @@ pub enum CullMode {
     /// Triangles wholly outside a view's frustum are dropped for that view.
     Frustum,
     /// Triangles facing away from the light are dropped (closed meshes only; see
-    /// [`crate::gpu_scene::casters`]).
+    /// `CasterOptions::assume_closed`).
     Backface,
     /// Both.
     #[default]
@@ -212,7 +212,7 @@ pub struct RenderSettings {
     pub technique: Technique,
     /// Culling and caster options of the technique.
     pub shadow: ShadowOptions,
-    /// Keep the tiles of unchanged views between frames (see [`crate::shadows::atlas::generator`]).
+    /// Keep the tiles of unchanged views between frames (see the shadow generator).
     pub cache_shadows: bool,
     /// Point-light shadows: six cube faces or two paraboloid hemispheres.
     pub point_shadows: manyshadows_scene::light_space::PointShadows,

@@ -188,13 +188,14 @@ fn cached_virtual_pages_equal_a_full_regeneration() {
     assert!(s3.kept > 0 && s3.drawn > 0, "{s3:?}");
     // A kept page sits elsewhere in the pool than a fresh renderer puts it. The hard test
     // (visibility) reads whole texels and must agree bit for bit; the lighting's bilinear
-    // PCF weights come from pool coordinates and may round differently: measured (lavapipe)
-    // 0 pixels after the move, 2 pixels off by at most 1 level after the turn, of 57,600.
+    // PCF weights come from pool coordinates and may round differently: measured (lavapipe and
+    // llvmpipe GL) 0 pixels after the move, 2 pixels off by 1 level after the turn, of
+    // 57,600. Bound: twice the measurement, and never more than 1 level.
     let close = |(px, delta, bits): (usize, u8, u32), step: &str| {
         eprintln!("{step}: {px} pixels differ (by at most {delta}), {bits} visibility bits");
         assert_eq!(bits, 0, "{step}: the visibility masks differ");
         assert!(
-            px <= 8 && delta <= 2,
+            px <= 4 && delta <= 1,
             "{step}: {px} pixels differ, by up to {delta}"
         );
     };

@@ -175,3 +175,55 @@ fn a_callers_device_below_the_minimum_is_refused() {
         "{err}"
     );
 }
+
+/// `from_parts` leaves the host's uncaptured-error handler in place (an error outside every
+/// error scope reaches the host, not the renderer); `capture_uncaptured_errors` is how a host
+/// hands them to the renderer instead, which then reports them.
+#[test]
+fn the_hosts_error_handler_stays_unless_it_asks() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Arc;
+    let ctx = callers_device();
+    let seen = Arc::new(AtomicUsize::new(0));
+    let host = seen.clone();
+    // Installed by the host before the renderer ever sees the device (callers_device wrapped
+    // it with from_parts already; from_parts must not have replaced anything since).
+    ctx.device.on_uncaptured_error(Arc::new(move |_| {
+        host.fetch_add(1, Ordering::SeqCst);
+    }));
+    let bad = || {
+        // A buffer mapped at creation whose size is not a multiple of 4: a validation error,
+        // outside every error scope.
+        let _ = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("invalid on purpose"),
+            size: 3,
+            usage: wgpu::BufferUsages::MAP_WRITE,
+            mapped_at_creation: true,
+        });
+    };
+    let scene = builtin::build("plane-spot", &BuiltinOptions::default()).unwrap();
+    let mut r = Renderer::new(&ctx, &scene, RenderSettings::new(32, 32)).unwrap();
+    bad();
+    assert_eq!(
+        seen.load(Ordering::SeqCst),
+        1,
+        "the host's handler saw the error"
+    );
+    assert!(
+        ctx.take_uncaptured().is_none(),
+        "the renderer recorded nothing"
+    );
+    r.render().expect("a frame: the error was the host's");
+
+    ctx.capture_uncaptured_errors();
+    bad();
+    assert_eq!(
+        seen.load(Ordering::SeqCst),
+        1,
+        "now the renderer's handler has it"
+    );
+    let err = r
+        .render()
+        .expect_err("the renderer reports the captured error");
+    assert!(matches!(err, RenderError::Gpu { .. }), "{err:?}");
+}

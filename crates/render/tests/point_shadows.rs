@@ -64,8 +64,8 @@ fn point_scene(subdivide: u32) -> Scene {
 
 /// `layered` writes the same paraboloid depth as `traditional`: same warp, same clip
 /// distance, world positions from the caster transform instead of the vertex shader. Budget:
-/// 16 texels whose depth differs by more than [`DEPTH_TOL`] (measured: 1 edge texel on the
-/// plane, 0 on the cubes).
+/// 3 texels whose depth differs by more than [`DEPTH_TOL`]: measured 1 edge texel on the plane
+/// (of 1,584,802 covered), 0 on the cubes, on lavapipe and llvmpipe GL alike, plus 2.
 #[test]
 fn layered_dual_paraboloid_atlas_matches_traditional() {
     let ctx = common::context();
@@ -101,7 +101,7 @@ fn layered_dual_paraboloid_atlas_matches_traditional() {
                 cull.name()
             );
             assert!(
-                differing <= 16,
+                differing <= 3,
                 "{label} --cull {}: {differing} texels differ",
                 cull.name()
             );

@@ -277,8 +277,17 @@ impl WebRenderer {
     /// A few lines for the page: adapter, lights, shadow views, atlas and what the device lacks.
     pub fn info(&self) -> String {
         let layout = self.renderer.shadow_layout();
-        let lacks: Vec<&str> = [
-            (wgpu::Features::MULTIVIEW, "MULTIVIEW (technique multiview)"),
+        // What the techniques need that this device lacks (from their declarations), and the
+        // measurements the page could show.
+        let mut lacks: Vec<String> = Technique::all()
+            .iter()
+            .filter_map(|t| {
+                let unmet: Vec<String> =
+                    t.info().unmet(&self.ctx).iter().map(|n| n.name()).collect();
+                (!unmet.is_empty()).then(|| format!("{} (technique {t})", unmet.join(", ")))
+            })
+            .collect();
+        for (f, what) in [
             (
                 wgpu::Features::PIPELINE_STATISTICS_QUERY,
                 "pipeline statistics (primitive counters)",
@@ -287,11 +296,11 @@ impl WebRenderer {
                 wgpu::Features::TIMESTAMP_QUERY,
                 "timestamp queries (GPU times)",
             ),
-        ]
-        .iter()
-        .filter(|(f, _)| !self.ctx.has(*f))
-        .map(|&(_, s)| s)
-        .collect();
+        ] {
+            if !self.ctx.has(f) {
+                lacks.push(what.into());
+            }
+        }
         // Browsers hide the adapter's name from wgpu; the page prints what it may know.
         let adapter = self.ctx.describe();
         format!(

@@ -94,7 +94,7 @@ pub struct ClusterOptions {
     /// Depth slices (1..=256).
     pub slices: u32,
     /// Budget of the slot pool in bytes (capped by the adapter's storage-binding limit);
-    /// `None` = [`DEFAULT_POOL_BYTES`].
+    /// `None` = 128 MiB.
     pub pool_bytes: Option<u64>,
 }
 

@@ -15,7 +15,8 @@ use crate::{GpuContext, RenderError};
 struct VisibilityParams {
     first_word: u32,
     word_count: u32,
-    _pad: [u32; 2],
+    _pad0: u32,
+    _pad1: u32,
 }
 
 /// The visibility compute pass.
@@ -159,7 +160,8 @@ impl VisibilityPass {
                     contents: bytemuck::bytes_of(&VisibilityParams {
                         first_word: first,
                         word_count: count,
-                        _pad: [0; 2],
+                        _pad0: 0,
+                        _pad1: 0,
                     }),
                     usage: wgpu::BufferUsages::UNIFORM,
                 },
@@ -202,5 +204,17 @@ impl VisibilityPass {
             words_per_pixel: self.words,
             words,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::VisibilityParams;
+    use crate::gpu::shaders::{visibility, ShadowSource};
+    use crate::gpu::types::layout::same_layout;
+
+    #[test]
+    fn params_match_the_wgsl() {
+        same_layout!(in visibility(ShadowSource::Atlas), VisibilityParams, first_word, word_count, _pad0, _pad1);
     }
 }

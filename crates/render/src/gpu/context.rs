@@ -431,7 +431,7 @@ impl GpuContext {
         first
     }
 
-    /// Blocks until the GPU has finished all submitted work, at most [`GPU_WAIT_LIMIT`].
+    /// Blocks until the GPU has finished all submitted work, at most 600 s.
     ///
     /// One wait of wgpu's OpenGL backend ends after about 2.1 s whatever timeout is asked for
     /// (`glClientWaitSync` takes a 32-bit count of nanoseconds), and a frame of thousands of

@@ -295,6 +295,12 @@ pub(crate) mod layout {
         ($ty:ty, $($field:ident),+) => {{
             $crate::gpu::types::layout::same_layout!(in $crate::gpu::shaders::COMMON, $ty, $($field),+)
         }};
+        (in $src:expr, $ty:ty as $name:literal, $($field:ident),+) => {{
+            let (size, fields) = $crate::gpu::types::layout::wgsl_layout_in(&$src, $name);
+            let rust: Vec<(String, u32)> = vec![$((stringify!($field).to_string(), std::mem::offset_of!($ty, $field) as u32)),+];
+            assert_eq!(fields, rust, "{} fields/offsets differ between WGSL {} and Rust", stringify!($ty), $name);
+            assert_eq!(size as usize, std::mem::size_of::<$ty>(), "{} size differs", stringify!($ty));
+        }};
         (in $src:expr, $ty:ty, $($field:ident),+) => {{
             let (size, fields) = $crate::gpu::types::layout::wgsl_layout_in(&$src, stringify!($ty));
             let rust: Vec<(String, u32)> = vec![$((stringify!($field).to_string(), std::mem::offset_of!($ty, $field) as u32)),+];

@@ -707,6 +707,12 @@ impl CasterGeometry {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn cluster_record_matches_the_wgsl() {
+        use crate::gpu::types::layout::same_layout;
+        same_layout!(in crate::gpu::shaders::casters(), super::ClusterData as "Cluster", first_triangle, triangles, instance, flags, cone);
+    }
+
     use super::*;
     use manyshadows_scene::primitives;
 

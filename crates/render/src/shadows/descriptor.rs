@@ -74,7 +74,7 @@ impl Need {
     /// The requirement's name as wgpu spells it.
     pub fn name(&self) -> String {
         match self.requirement {
-            Requirement::Feature(f) => format!("{f:?}"),
+            Requirement::Feature(f) => f.to_string(),
             Requirement::IndirectExecution => "INDIRECT_EXECUTION".into(),
         }
     }

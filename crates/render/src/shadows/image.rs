@@ -205,3 +205,14 @@ pub fn pool_picture(depth: &[f32], pool_side: u32) -> (u32, Vec<u8>) {
     }
     (side, rgb)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::CopyParams;
+    use crate::gpu::types::layout::same_layout;
+
+    #[test]
+    fn params_match_the_wgsl() {
+        same_layout!(in crate::gpu::shaders::atlas_copy(), CopyParams, first_row, rows, width, _pad);
+    }
+}

@@ -101,4 +101,22 @@ mod tests {
         assert!("nonsense".parse::<Technique>().is_err());
         assert_eq!(Technique::default(), all[0]);
     }
+
+    /// Every technique's WGSL parses and validates as a WebGPU device with the features its
+    /// shader declares would (no more): what a browser would accept. A shader needing a
+    /// feature it does not declare fails here.
+    #[test]
+    fn every_technique_shader_validates_for_webgpu() {
+        let mut n = 0;
+        for info in TECHNIQUES {
+            let shaders = info.shaders();
+            assert!(!shaders.is_empty(), "{} declares no WGSL", info.technique);
+            for w in shaders {
+                crate::gpu::shaders::validate_for_webgpu(w.name, &w.source, w.features)
+                    .unwrap_or_else(|e| panic!("technique {}: {e}", info.technique));
+                n += 1;
+            }
+        }
+        assert!(n >= TECHNIQUES.len());
+    }
 }

@@ -40,7 +40,7 @@ use crate::shadows::source::ShadowStats;
 use crate::{GpuContext, RenderError};
 
 impl Technique {
-    /// A rasterizer in compute shaders ([`crate::shadows::atlas::compute`]).
+    /// A rasterizer in compute shaders (beyond the seeds).
     pub const COMPUTE: Technique = Technique::named("compute");
 }
 

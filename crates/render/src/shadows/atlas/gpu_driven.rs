@@ -37,7 +37,7 @@ use crate::{GpuContext, RenderError};
 
 impl Technique {
     /// Clusters culled per view in compute, one indirect multi-draw
-    /// ([`crate::shadows::atlas::gpu_driven`]).
+    /// (seed 002).
     pub const GPU_DRIVEN: Technique = Technique::named("gpu-driven");
 }
 

@@ -24,7 +24,7 @@ use crate::shadows::source::ShadowStats;
 use crate::{GpuContext, RenderError};
 
 impl Technique {
-    /// Every view in one instanced draw ([`crate::shadows::atlas::layered`]).
+    /// Every view in one instanced draw (seed 000).
     pub const LAYERED: Technique = Technique::named("layered");
 }
 

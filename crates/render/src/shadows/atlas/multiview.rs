@@ -35,7 +35,7 @@ use crate::shadows::source::ShadowStats;
 use crate::{GpuContext, RenderError};
 
 impl Technique {
-    /// Groups of equal-size views per multiview pass ([`crate::shadows::atlas::multiview`]).
+    /// Groups of equal-size views per multiview pass (seed 000).
     pub const MULTIVIEW: Technique = Technique::named("multiview");
 }
 

@@ -17,7 +17,7 @@ use crate::shadows::source::ShadowStats;
 use crate::GpuContext;
 
 impl Technique {
-    /// One depth pass per shadow view ([`crate::shadows::atlas::traditional`]).
+    /// One depth pass per shadow view (seed 004).
     pub const TRADITIONAL: Technique = Technique::named("traditional");
 }
 

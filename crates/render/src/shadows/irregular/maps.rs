@@ -138,7 +138,7 @@ const ARGS_OFFSET: u64 = 8 * 4;
 #[non_exhaustive]
 pub struct IrregularOptions {
     /// Grid side per view in texels; `None` = the view's tile size capped at
-    /// [`DEFAULT_GRID_MAX`]. Changes the cost, not the result.
+    /// 512. Changes the cost, not the result.
     pub grid: Option<u32>,
     /// Multimap shrink factor (seed 001's equalising hash): each view keeps `grid² / hash`
     /// list heads and texels are hashed into them, so crowded texels spread over buckets
@@ -714,5 +714,17 @@ impl IrregularOptions {
     pub fn with_node_capacity(mut self, nodes: Option<u32>) -> Self {
         self.node_capacity = nodes;
         self
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{shader, BatchData, IView};
+    use crate::gpu::types::layout::same_layout;
+
+    #[test]
+    fn records_match_the_wgsl() {
+        same_layout!(in shader(), IView, view_proj, light, grid, params, occ);
+        same_layout!(in shader(), BatchData as "Batch", lights_views, caps, extra);
     }
 }

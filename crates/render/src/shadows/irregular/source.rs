@@ -22,7 +22,7 @@ use crate::shadows::source::{
 use crate::{GpuContext, RenderError};
 
 impl Technique {
-    /// Irregular (alias-free) shadow maps ([`crate::shadows::irregular`]).
+    /// Irregular (alias-free) shadow maps (seed 001).
     pub const IRREGULAR: Technique = Technique::named("irregular");
 }
 

@@ -28,7 +28,7 @@ pub struct VirtualOptions {
     /// Shadow texels wanted per screen pixel (1 = texel footprint ≈ pixel footprint).
     pub lod: f32,
     /// Cap on page-table entries: when the faces' tables would exceed it, the largest
-    /// virtual sides are halved until they fit (reported in [`VirtualFit::capped_side`]).
+    /// virtual sides are halved until they fit (reported in `VirtualFit::capped_side`).
     pub max_table_entries: u32,
     /// Mark pages for samples that face away from a light too (what the visibility mask
     /// reads; the lighting pass does not need them).

@@ -21,7 +21,7 @@ use crate::shadows::vsm::plan::{VirtualOptions, VirtualPlan, VirtualStats};
 use crate::{GpuContext, RenderError};
 
 impl Technique {
-    /// Virtual shadow maps ([`crate::shadows::vsm`]).
+    /// Virtual shadow maps (seed 002).
     pub const VIRTUAL: Technique = Technique::named("virtual");
 }
 
