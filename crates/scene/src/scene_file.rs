@@ -703,7 +703,7 @@ fn load_merged(cx: &Ctx<'_>, file: &str, name: &str) -> Result<Mesh, SceneError>
         out.positions.extend_from_slice(&p.positions);
         out.normals.extend_from_slice(&p.normals);
         out.indices.extend(p.indices.iter().map(|i| i + offset));
-        loaders::check_triangles(&path, out.triangle_count())?;
+        loaders::common::check_triangles(&path, out.triangle_count())?;
     }
     Ok(out)
 }

@@ -16,7 +16,7 @@
 use glam::Vec3;
 
 use super::lights::{Tone, AMBIENT_FRACTION};
-use super::BuiltinOptions;
+use super::options::BuiltinOptions;
 use crate::{primitives, Attenuation, Camera, Instance, Light, LightKind, Material, Scene};
 
 /// Edge length of the square floor, centred at the origin at `y = 0`.

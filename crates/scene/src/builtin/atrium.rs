@@ -29,8 +29,9 @@
 
 use glam::{Mat4, Quat, Vec2, Vec3};
 
+use super::lights::LightCounts;
 use super::lights::{self, density_dim, slanted_direction, tint, Rand, Tone};
-use super::{BuiltinOptions, LightCounts, LightMix};
+use super::options::{BuiltinOptions, LightMix};
 use crate::{primitives, Camera, Instance, Light, Material, Mesh, Scene};
 
 /// Length of the hall along X (inner faces of the end walls at `x = ±20`).

@@ -23,7 +23,7 @@ use std::f32::consts::TAU;
 use glam::{Mat4, Quat, Vec2, Vec3};
 
 use super::lights::{self, Rand, Tone};
-use super::{BuiltinOptions, LightMix};
+use super::options::{BuiltinOptions, LightMix};
 use crate::{primitives, Camera, Instance, Light, Material, Scene, Texture, TextureRef, Wrap};
 
 /// Camera position of `courtyard`.

@@ -9,7 +9,7 @@
 use glam::{Mat4, Quat, Vec3};
 
 use super::lights::{self, Tone};
-use super::{BuiltinOptions, LightMix};
+use super::options::{BuiltinOptions, LightMix};
 use crate::{primitives, Camera, Instance, Light, Material, Scene};
 
 /// Camera position of `cubes`.

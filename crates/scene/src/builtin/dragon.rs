@@ -14,8 +14,9 @@ use std::f32::consts::{PI, TAU};
 
 use glam::{Mat4, Quat, Vec2, Vec3};
 
+use super::lights::LightCounts;
 use super::lights::{self, tint, Rand, Tone};
-use super::{BuiltinOptions, LightCounts, LightMix};
+use super::options::{BuiltinOptions, LightMix};
 use crate::{primitives, Camera, Instance, Light, Material, Mesh, Scene, SceneError};
 
 /// Height the model is scaled to (metres).

@@ -11,7 +11,7 @@ use glam::{Vec2, Vec3};
 use rand_core::{Rng, SeedableRng};
 use rand_pcg::Pcg32;
 
-use super::LightMix;
+use super::options::LightMix;
 use crate::{Attenuation, Light, LightKind, Scene};
 
 /// Default shadow-map resolution of spot lights (texels per side).

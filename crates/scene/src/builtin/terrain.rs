@@ -15,8 +15,9 @@ use std::f32::consts::TAU;
 
 use glam::{Mat4, Quat, Vec2, Vec3};
 
+use super::lights::LightCounts;
 use super::lights::{self, density_dim, r2, tint, Rand, Tone};
-use super::{BuiltinOptions, LightCounts};
+use super::options::BuiltinOptions;
 use crate::{primitives, Camera, Instance, Light, Material, Mesh, Scene};
 
 /// Edge length of the square terrain (metres), centred at the origin.
@@ -193,7 +194,7 @@ fn grass() -> Mesh {
 pub fn terrain_lights(
     n: usize,
     seed: u64,
-    mix: super::LightMix,
+    mix: super::options::LightMix,
     shadow_resolution: Option<u32>,
 ) -> Vec<Light> {
     let counts = LightCounts::split(n, mix);

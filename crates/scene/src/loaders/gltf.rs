@@ -33,7 +33,7 @@ use ::gltf::{Accessor, Document, Semantic};
 use glam::{Mat3, Mat4, Vec2, Vec3};
 use serde_json::Value;
 
-use super::{
+use super::common::{
     check_triangles, io_error, mesh_name, parse_error, read_limited, set_normals, too_large, Parts,
     MAX_FILE_BYTES, PHONG_PER_LUX,
 };
@@ -211,7 +211,7 @@ pub(super) fn load_scene(path: &Path) -> Result<Parts, SceneError> {
     if needs_default {
         materials.push(Material::default());
     }
-    let bounds = super::bounds_of(&geometry.meshes);
+    let bounds = super::common::bounds_of(&geometry.meshes);
     let lights = read_lights(path, &opened, &geometry.nodes, bounds, &mut notes)?;
     let camera = read_camera(&opened, &geometry.nodes, bounds, &mut notes);
     Ok(Parts {
@@ -620,7 +620,7 @@ where
         uvs,
         indices,
     };
-    super::check_indices(&mesh)?;
+    super::common::check_indices(&mesh)?;
     set_normals(&mut mesh, normals);
     Ok(mesh)
 }
@@ -912,9 +912,9 @@ fn read_lights(
                     "light '{name}': range {r} is not a positive number: computed from its \
                      intensity instead"
                 ));
-                super::light_range(colour, diagonal)
+                super::common::light_range(colour, diagonal)
             }
-            None => super::light_range(colour, diagonal),
+            None => super::common::light_range(colour, diagonal),
         };
         let kind = match ty {
             Type::Point => LightKind::Point { position, range },
@@ -941,7 +941,7 @@ fn read_lights(
                     LightKind::Spot {
                         position,
                         direction,
-                        cutoff_deg: super::spot_cutoff_deg(outer),
+                        cutoff_deg: super::common::spot_cutoff_deg(outer),
                         range,
                     }
                 }
@@ -955,8 +955,8 @@ fn read_lights(
         }
         let (attenuation, shadow_resolution) = match kind {
             LightKind::Directional { .. } => (Attenuation::NONE, DIRECTIONAL_SHADOW_RESOLUTION),
-            LightKind::Spot { .. } => (super::INVERSE_SQUARE, SPOT_SHADOW_RESOLUTION),
-            LightKind::Point { .. } => (super::INVERSE_SQUARE, POINT_SHADOW_RESOLUTION),
+            LightKind::Spot { .. } => (super::common::INVERSE_SQUARE, SPOT_SHADOW_RESOLUTION),
+            LightKind::Point { .. } => (super::common::INVERSE_SQUARE, POINT_SHADOW_RESOLUTION),
         };
         lights.push(Light {
             kind,
@@ -1036,7 +1036,7 @@ fn camera_from_node(
     if !position.is_finite() || forward.cross(up).length_squared() < 1e-6 {
         return Err("its node's transform is degenerate".into());
     }
-    let (centre, diagonal) = super::centre_and_diagonal(bounds);
+    let (centre, diagonal) = super::common::centre_and_diagonal(bounds);
     let distance = (centre - position)
         .length()
         .max(1.0)
@@ -1054,7 +1054,7 @@ fn camera_from_node(
         position,
         target: position + forward * distance,
         up,
-        fov_y_deg: super::clamp_fov(p.yfov.to_degrees()),
+        fov_y_deg: super::common::clamp_fov(p.yfov.to_degrees()),
         near,
         far,
     })

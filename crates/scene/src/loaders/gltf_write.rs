@@ -13,7 +13,7 @@ use glam::{Mat3, Mat4, Quat, Vec3};
 use serde_json::{json, Map, Value};
 
 use super::base64;
-use super::PHONG_PER_LUX;
+use super::common::PHONG_PER_LUX;
 use crate::texture::{AlphaMode, TextureRef, Wrap};
 use crate::{LightKind, Material, Scene, SceneError};
 

@@ -124,6 +124,7 @@
 //! [`POINT_SHADOW_RESOLUTION`]: crate::builtin::POINT_SHADOW_RESOLUTION
 
 mod base64;
+pub(crate) mod common;
 mod gltf;
 mod gltf_write;
 mod mtl;
@@ -131,56 +132,21 @@ pub(crate) mod normals;
 mod obj;
 mod ply;
 
-use std::fs::File;
 use std::path::Path;
 
-use glam::{Mat4, Vec3};
+use glam::Mat4;
 
 use crate::builtin::{scatter_lights, LightMix};
-use crate::{Attenuation, Camera, Instance, Light, Material, Mesh, Scene, SceneError, Texture};
+use crate::{Camera, Instance, Material, Mesh, Scene, SceneError};
 
+use common::{check_file_size, check_triangles, default_camera, parse_error, Parts};
+pub use common::{
+    CREASE_ANGLE_DEG, DEFAULT_LIGHT_COUNT, MAX_DECOMPRESSED_BYTES, MAX_FILE_BYTES, MAX_TRIANGLES,
+    PHONG_PER_LUX,
+};
 pub use gltf_write::write_gltf;
 pub use obj::{write_obj, MAX_MTL_BYTES};
 pub use ply::write_ply_ascii;
-
-/// Crease angle of computed normals, in degrees: where a file gives no normals, triangles
-/// meeting at more than this angle keep a sharp edge between them (see
-/// [`Mesh::compute_normals_with_crease`]). 60° keeps boxes flat and the 5.6° steps of a
-/// 64-segment cylinder smooth.
-pub const CREASE_ANGLE_DEG: f32 = 60.0;
-
-/// Phong light colour per lux of irradiance: glTF light intensities (candela for point and
-/// spot lights, lux for directional ones) times this are the renderer's diffuse and specular
-/// colours (one unit of light colour is 10 lux). See the module documentation.
-pub const PHONG_PER_LUX: f32 = 0.1;
-
-/// Number of seeded lights a scene without lights gets.
-pub const DEFAULT_LIGHT_COUNT: usize = 8;
-
-/// Largest spot cone half-angle a glTF spot light maps to: just under the 89° that
-/// [`Light::validate`] refuses.
-const MAX_SPOT_CUTOFF_DEG: f32 = 88.99;
-
-/// The attenuation of glTF point and spot lights: `1 / (1 + d²)`.
-pub(crate) const INVERSE_SQUARE: Attenuation = Attenuation {
-    constant: 1.0,
-    linear: 0.0,
-    quadratic: 1.0,
-};
-
-/// Largest mesh file accepted, in bytes (2 GiB). Checked with the file's metadata before anything
-/// is read, so an oversized file costs nothing. Also applies to external `.bin` buffers referenced
-/// by a `.gltf` file.
-pub const MAX_FILE_BYTES: u64 = 2 << 30;
-
-/// Largest decompressed size of a `.ply.gz` file, in bytes (4 GiB). A small gzip file can expand
-/// enormously ("zip bomb"), so decompression is read through `Read::take` and stops here.
-pub const MAX_DECOMPRESSED_BYTES: u64 = 4 << 30;
-
-/// Largest number of triangles in one loaded mesh (100 million, about 3.6 GB of vertex and index
-/// data before deduplication). Checked from headers / accessor counts before reading where the
-/// format allows it, and again on the result.
-pub const MAX_TRIANGLES: usize = 100_000_000;
 
 /// The file formats [`load_mesh`] understands, chosen by file extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -286,21 +252,6 @@ pub fn load_scene(path: &Path) -> Result<LoadedScene, SceneError> {
     })
 }
 
-/// What a format's scene loader produces, before [`assemble`] makes it a [`Scene`].
-pub(crate) struct Parts {
-    /// Meshes in world space (node transforms baked).
-    pub meshes: Vec<Mesh>,
-    /// The material of each mesh (an index into `materials`).
-    pub mesh_material: Vec<usize>,
-    pub materials: Vec<Material>,
-    pub textures: Vec<Texture>,
-    /// The file's lights; empty: seeded ones are added.
-    pub lights: Vec<Light>,
-    /// The file's camera; `None`: the default framing.
-    pub camera: Option<Camera>,
-    pub notes: Vec<String>,
-}
-
 /// Checks the meshes, places them, adds default lights and camera where the file has none,
 /// and validates the result.
 fn assemble(path: &Path, parts: Parts) -> Result<LoadedScene, SceneError> {
@@ -358,71 +309,6 @@ fn assemble(path: &Path, parts: Parts) -> Result<LoadedScene, SceneError> {
     Ok(LoadedScene { scene, notes })
 }
 
-/// The union of the meshes' bounds.
-pub(crate) fn bounds_of(meshes: &[Mesh]) -> Option<(Vec3, Vec3)> {
-    meshes
-        .iter()
-        .filter_map(Mesh::bounds)
-        .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
-}
-
-/// Centre and diagonal length of bounds (the origin and 0 without any).
-pub(crate) fn centre_and_diagonal(bounds: Option<(Vec3, Vec3)>) -> (Vec3, f32) {
-    bounds.map_or((Vec3::ZERO, 0.0), |(lo, hi)| {
-        ((lo + hi) * 0.5, (hi - lo).length())
-    })
-}
-
-/// The reach of a point or spot light of Phong colour `colour` under [`INVERSE_SQUARE`]: where
-/// `max(colour) / (1 + d²)` is 1/256, clamped to 0.1 ..= 4 × the scene's diagonal.
-pub(crate) fn light_range(colour: Vec3, diagonal: f32) -> f32 {
-    let d = (256.0 * colour.max_element() - 1.0).max(0.0).sqrt();
-    let most = (4.0 * diagonal).max(0.1);
-    if d.is_nan() {
-        most
-    } else {
-        d.clamp(0.1, most)
-    }
-}
-
-/// A glTF `outerConeAngle` (radians) as a spot cutoff in degrees, within (0°, 89°).
-pub(crate) fn spot_cutoff_deg(outer_rad: f32) -> f32 {
-    let deg = outer_rad.to_degrees();
-    if deg.is_nan() {
-        45.0
-    } else {
-        deg.clamp(0.01, MAX_SPOT_CUTOFF_DEG)
-    }
-}
-
-/// A vertical field of view clamped into what [`Camera::validate`] accepts (0.5°, 179°).
-pub(crate) fn clamp_fov(deg: f32) -> f32 {
-    if deg.is_nan() {
-        60.0
-    } else {
-        deg.clamp(0.501, 178.999)
-    }
-}
-
-/// The camera of a file without one: see the module documentation.
-pub(crate) fn default_camera(bounds: Option<(Vec3, Vec3)>) -> Camera {
-    let (centre, diagonal) = centre_and_diagonal(bounds);
-    // A floor on the size, relative to how far from the origin the scene is, so that a
-    // degenerate (flat or point-like) scene still gets distinct eye and target.
-    let size = diagonal.max(1e-3).max(centre.abs().max_element() * 1e-5);
-    let radius = 0.5 * size;
-    let distance = 1.1 * radius / 30f32.to_radians().sin();
-    let direction = Vec3::new(1.0, 0.6, 1.0).normalize();
-    Camera {
-        position: centre + direction * distance,
-        target: centre,
-        up: Vec3::Y,
-        fov_y_deg: 60.0,
-        near: size / 1000.0,
-        far: 4.0 * size + distance,
-    }
-}
-
 /// Runs a parser, turning a panic inside a third-party parser into [`SceneError::Parse`]. The
 /// loaders check what they can before calling the parsers; this is the last line of defence so
 /// a hostile file can never take the process down.
@@ -446,152 +332,11 @@ fn catch_parser_panic<T>(
     }
 }
 
-pub(crate) fn io_error(path: &Path, source: std::io::Error) -> SceneError {
-    SceneError::Io {
-        path: path.to_path_buf(),
-        source,
-    }
-}
-
-pub(crate) fn parse_error(path: &Path, reason: impl Into<String>) -> SceneError {
-    SceneError::Parse {
-        path: path.to_path_buf(),
-        reason: reason.into(),
-    }
-}
-
-pub(crate) fn too_large(path: &Path, reason: impl Into<String>) -> SceneError {
-    SceneError::TooLarge {
-        path: path.to_path_buf(),
-        reason: reason.into(),
-    }
-}
-
-/// Refuses files over [`MAX_FILE_BYTES`] from their metadata alone (also gives the `Io` error
-/// for a missing file).
-pub(crate) fn check_file_size(path: &Path) -> Result<u64, SceneError> {
-    let len = std::fs::metadata(path)
-        .map_err(|e| io_error(path, e))?
-        .len();
-    if len > MAX_FILE_BYTES {
-        return Err(too_large(
-            path,
-            format!("file is {len} bytes; the limit is {MAX_FILE_BYTES} bytes (2 GiB)"),
-        ));
-    }
-    Ok(len)
-}
-
-/// Opens a file for reading, never yielding more than [`MAX_FILE_BYTES`] + 1 bytes even if the
-/// file grows after [`check_file_size`].
-fn open_limited(path: &Path) -> Result<std::io::Take<File>, SceneError> {
-    use std::io::Read;
-    let file = File::open(path).map_err(|e| io_error(path, e))?;
-    Ok(file.take(MAX_FILE_BYTES + 1))
-}
-
-/// Reads a whole file (size-checked) into memory.
-fn read_limited(path: &Path) -> Result<Vec<u8>, SceneError> {
-    use std::io::Read;
-    let len = check_file_size(path)?;
-    let mut bytes = Vec::with_capacity(usize::try_from(len).unwrap_or(0));
-    open_limited(path)?
-        .read_to_end(&mut bytes)
-        .map_err(|e| io_error(path, e))?;
-    if bytes.len() as u64 > MAX_FILE_BYTES {
-        return Err(too_large(
-            path,
-            "file grew past the 2 GiB limit while being read",
-        ));
-    }
-    Ok(bytes)
-}
-
-/// Refuses a mesh of more than [`MAX_TRIANGLES`] triangles.
-pub(crate) fn check_triangles(path: &Path, triangles: usize) -> Result<(), SceneError> {
-    if triangles > MAX_TRIANGLES {
-        return Err(too_large(
-            path,
-            format!("{triangles} triangles; the limit is {MAX_TRIANGLES} per mesh"),
-        ));
-    }
-    Ok(())
-}
-
-/// Fails with [`SceneError::InvalidMesh`] if any index points past the vertices. Loaders call it
-/// before computing normals, so a bad index is reported rather than silently skipped.
-pub(crate) fn check_indices(mesh: &Mesh) -> Result<(), SceneError> {
-    match mesh
-        .indices
-        .iter()
-        .find(|&&i| i as usize >= mesh.positions.len())
-    {
-        Some(&i) => Err(SceneError::InvalidMesh {
-            mesh: mesh.name.clone(),
-            reason: format!(
-                "index {i} is out of range ({} vertices)",
-                mesh.positions.len()
-            ),
-        }),
-        None => Ok(()),
-    }
-}
-
-/// Installs per-vertex normals read from a file: each finite one is normalized (unless it already
-/// is unit length to within 1e-5, then it is kept as it is); zero-length ones
-/// are replaced by the computed (area-weighted) normal; non-finite ones are kept so that
-/// [`Mesh::validate`] reports them. `None` (or a count mismatch) computes all normals with
-/// the crease angle [`CREASE_ANGLE_DEG`] (which may split vertices: set texture coordinates
-/// first).
-fn set_normals(mesh: &mut Mesh, normals: Option<Vec<Vec3>>) {
-    let Some(mut normals) = normals.filter(|n| n.len() == mesh.positions.len()) else {
-        mesh.compute_normals_with_crease(CREASE_ANGLE_DEG);
-        return;
-    };
-    let mut computed: Option<Vec<Vec3>> = None;
-    for (i, n) in normals.iter_mut().enumerate() {
-        if !n.is_finite() {
-            continue;
-        }
-        if (n.length_squared() - 1.0).abs() <= 1e-5 {
-            continue; // already unit: kept bit-exact, so written files round-trip exactly
-        }
-        *n = match n.try_normalize() {
-            Some(unit) => unit,
-            None => {
-                let c = computed.get_or_insert_with(|| {
-                    let mut tmp = Mesh {
-                        name: String::new(),
-                        positions: mesh.positions.clone(),
-                        normals: Vec::new(),
-                        uvs: Vec::new(),
-                        indices: mesh.indices.clone(),
-                    };
-                    tmp.compute_normals();
-                    tmp.normals
-                });
-                c[i]
-            }
-        };
-    }
-    mesh.normals = normals;
-}
-
-/// A mesh name for messages: the file name, plus the object name inside it if there is one.
-fn mesh_name(path: &Path, inner: Option<&str>) -> String {
-    let file = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| path.display().to_string());
-    match inner {
-        Some(s) if !s.trim().is_empty() => format!("{file}/{}", s.trim()),
-        _ => file,
-    }
-}
-
 #[cfg(test)]
 mod tests {
+    use super::common::*;
     use super::*;
+    use glam::Vec3;
 
     #[test]
     fn format_dispatch_is_case_insensitive() {

@@ -111,7 +111,7 @@ impl Images {
         self.decoded
             .entry(file.to_path_buf())
             .or_insert_with(|| {
-                super::read_limited(file)
+                super::common::read_limited(file)
                     .map_err(|e| e.to_string())
                     .and_then(|bytes| Texture::decode(shown, &bytes))
             })

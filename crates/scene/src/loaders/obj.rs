@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
 
-use super::{mesh_name, open_limited, parse_error, set_normals, Parts};
+use super::common::{mesh_name, open_limited, parse_error, set_normals, Parts};
 use crate::{Material, Mesh, SceneError};
 
 /// Largest material library (`.mtl`) read, in bytes (64 MiB; real ones are kilobytes).
@@ -197,7 +197,7 @@ fn read(path: &Path, with_materials: bool) -> Result<ObjRead, SceneError> {
         if m.indices.is_empty() {
             continue;
         }
-        super::check_triangles(path, m.indices.len() / 3)?;
+        super::common::check_triangles(path, m.indices.len() / 3)?;
         let positions = to_vec3(&m.positions);
         let normals = (m.normals.len() == m.positions.len()).then(|| to_vec3(&m.normals));
         let uvs = if m.texcoords.len() / 2 == positions.len() && m.texcoords.len() % 2 == 0 {
@@ -216,7 +216,7 @@ fn read(path: &Path, with_materials: bool) -> Result<ObjRead, SceneError> {
             indices: m.indices,
         };
         // Check indices before computing normals so the error is InvalidMesh, not a silent skip.
-        super::check_indices(&mesh)?;
+        super::common::check_indices(&mesh)?;
         set_normals(&mut mesh, normals);
         meshes.push(mesh);
         material_ids.push(m.material_id);

@@ -20,7 +20,7 @@ use ply_rs_bw::ply::{
     ScalarType,
 };
 
-use super::{
+use super::common::{
     check_triangles, mesh_name, open_limited, parse_error, set_normals, too_large,
     MAX_DECOMPRESSED_BYTES, MAX_TRIANGLES,
 };
@@ -263,7 +263,7 @@ fn read_ply(path: &Path, source: impl BufRead) -> Result<Mesh, SceneError> {
             path.display()
         );
     }
-    super::check_indices(&mesh)?;
+    super::common::check_indices(&mesh)?;
     set_normals(&mut mesh, layout.has_normals.then_some(normals));
     Ok(mesh)
 }
