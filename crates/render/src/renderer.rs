@@ -499,6 +499,33 @@ impl Renderer {
         Ok(shadow_stats)
     }
 
+    /// Starts a frame: a new encoder with the frame recorded up to the lit image.
+    fn begin_frame(
+        &mut self,
+        ctx: &GpuContext,
+    ) -> Result<(Instant, wgpu::CommandEncoder, ShadowStats), RenderError> {
+        let start = Instant::now();
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("frame.encoder"),
+            });
+        let shadow_stats = self.record_frame(ctx, &mut encoder)?;
+        Ok((start, encoder, shadow_stats))
+    }
+
+    /// Resolves the timer queries of the last frame and reads them (waits for it).
+    fn resolve_timings(&self, ctx: &GpuContext) -> Result<GpuTimes, RenderError> {
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("timer.encoder"),
+            });
+        self.timer.resolve(&mut encoder);
+        ctx.queue.submit([encoder.finish()]);
+        self.timer.read(ctx)
+    }
+
     /// Renders one frame into `target`, a texture the caller owns (created with
     /// `RENDER_ATTACHMENT` usage; any size — the frame is scaled to it, nearest texel — and
     /// any normalized or float colour format, sRGB or not: a window's surface texture, say),
@@ -509,13 +536,7 @@ impl Renderer {
     pub fn render_to(&mut self, target: &wgpu::Texture) -> Result<SubmittedFrame, RenderError> {
         let ctx = &*self.ctx.clone();
         ctx.scoped("rendering a frame into the caller's texture", || {
-            let start = Instant::now();
-            let mut encoder = ctx
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("frame.encoder"),
-                });
-            let shadow_stats = self.record_frame(ctx, &mut encoder)?;
+            let (start, mut encoder, shadow_stats) = self.begin_frame(ctx)?;
             let blit = self
                 .blit
                 .get_or_insert_with(|| crate::frame::blit::Blit::new(ctx));
@@ -534,14 +555,7 @@ impl Renderer {
     pub fn read_gpu_timings(&mut self) -> Result<GpuTimes, RenderError> {
         let ctx = &*self.ctx.clone();
         ctx.scoped("reading the frame's GPU times", || {
-            let mut encoder = ctx
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("timer.encoder"),
-                });
-            self.timer.resolve(&mut encoder);
-            ctx.queue.submit([encoder.finish()]);
-            self.timer.read(ctx)
+            self.resolve_timings(ctx)
         })
     }
 
@@ -549,13 +563,7 @@ impl Renderer {
     pub fn render(&mut self) -> Result<Frame, RenderError> {
         let ctx = &*self.ctx.clone();
         ctx.scoped("rendering a frame", || {
-            let start = Instant::now();
-            let mut encoder = ctx
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("frame.encoder"),
-                });
-            let shadow_stats = self.record_frame(ctx, &mut encoder)?;
+            let (start, encoder, shadow_stats) = self.begin_frame(ctx)?;
             ctx.queue.submit([encoder.finish()]);
             let cpu_record_ms = start.elapsed().as_secs_f64() * 1e3;
             let rgba = crate::gpu::readback::read_texture(ctx, &self.lighting.color, 4)?;
@@ -586,14 +594,7 @@ impl Renderer {
                 None if self.settings.visibility => self.source.read_mask(ctx)?,
                 None => None,
             };
-            let mut encoder = ctx
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("timer.encoder"),
-                });
-            self.timer.resolve(&mut encoder);
-            ctx.queue.submit([encoder.finish()]);
-            let gpu_ms = self.timer.read(ctx)?;
+            let gpu_ms = self.resolve_timings(ctx)?;
             debug_assert!(visibility
                 .as_ref()
                 .is_none_or(|v: &VisibilityMask| v.lights as usize == self.current.lights.len()));

@@ -153,21 +153,42 @@ impl<'a> ShadowOutput<'a> {
     }
 }
 
+/// What every source keeps of the frame's views: the plan, the atlas (or a view table with a
+/// placeholder texture) and the world-space caster geometry.
+#[derive(Clone, Copy)]
+pub struct Views<'a> {
+    /// The shadow views and their layout.
+    pub plan: &'a ShadowPlan,
+    /// The atlas or view table.
+    pub atlas: &'a ShadowAtlas,
+    /// The caster geometry.
+    pub casters: &'a CasterGeometry,
+}
+
 /// Makes a frame's shadows: fills an atlas, a page pool or a visibility mask. The renderer
 /// drives every source the same way; see the [module](self) for the order of calls.
 pub trait ShadowSource {
+    /// The plan, the atlas (or view table) and the caster geometry the source keeps.
+    fn views(&self) -> Views<'_>;
+
     /// The shadow views and atlas layout (no views for virtual maps, whose faces are in
     /// [`ShadowSource::virtual_plan`]).
-    fn plan(&self) -> &ShadowPlan;
+    fn plan(&self) -> &ShadowPlan {
+        self.views().plan
+    }
 
     /// The atlas, or for sources that fill none the view table with a 1×1 placeholder
     /// texture.
     #[cfg_attr(not(feature = "internals"), allow(dead_code))] // Renderer::atlas, internals only
-    fn atlas(&self) -> &ShadowAtlas;
+    fn atlas(&self) -> &ShadowAtlas {
+        self.views().atlas
+    }
 
     /// The world-space shadow-caster geometry.
     #[cfg_attr(not(feature = "internals"), allow(dead_code))] // Renderer::casters, internals only
-    fn casters(&self) -> &CasterGeometry;
+    fn casters(&self) -> &CasterGeometry {
+        self.views().casters
+    }
 
     /// The per-light records of the lights buffer, as this source's shadows are read.
     fn light_data(&self, scene: &Scene) -> Vec<LightData>;
@@ -274,6 +295,15 @@ pub(crate) struct ViewTable {
 }
 
 impl ViewTable {
+    /// The table as a source's [`Views`].
+    pub fn views(&self) -> Views<'_> {
+        Views {
+            plan: &self.plan,
+            atlas: &self.views,
+            casters: &self.casters,
+        }
+    }
+
     pub fn new(
         ctx: &GpuContext,
         scene: &Scene,

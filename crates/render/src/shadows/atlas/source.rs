@@ -6,13 +6,12 @@ use manyshadows_scene::Scene;
 
 use crate::gpu::timing::GpuTimer;
 use crate::gpu::types::LightData;
-use crate::gpu_scene::casters::CasterGeometry;
 use crate::gpu_scene::instances::GpuScene;
 use crate::settings::{RenderSettings, Technique};
 use crate::shadows::atlas::generator::ShadowGenerator;
-use crate::shadows::atlas::storage::ShadowAtlas;
-use crate::shadows::plan::ShadowPlan;
-use crate::shadows::source::{PlanParams, ShadowOutput, ShadowSource, ShadowStats, SourceInputs};
+use crate::shadows::source::{
+    PlanParams, ShadowOutput, ShadowSource, ShadowStats, SourceInputs, Views,
+};
 use crate::{GpuContext, RenderError};
 
 /// An atlas-filling technique ([`ShadowGenerator`]) as a frame's shadow source.
@@ -39,16 +38,12 @@ impl AtlasSource {
 }
 
 impl ShadowSource for AtlasSource {
-    fn plan(&self) -> &ShadowPlan {
-        &self.generator.plan
-    }
-
-    fn atlas(&self) -> &ShadowAtlas {
-        &self.generator.atlas
-    }
-
-    fn casters(&self) -> &CasterGeometry {
-        &self.generator.casters
+    fn views(&self) -> Views<'_> {
+        Views {
+            plan: &self.generator.plan,
+            atlas: &self.generator.atlas,
+            casters: &self.generator.casters,
+        }
     }
 
     fn light_data(&self, scene: &Scene) -> Vec<LightData> {

@@ -7,17 +7,14 @@ use manyshadows_scene::Scene;
 use crate::frame::visibility_mask::VisibilityMask;
 use crate::gpu::timing::GpuTimer;
 use crate::gpu::types::LightData;
-use crate::gpu_scene::casters::CasterGeometry;
 use crate::gpu_scene::instances::GpuScene;
 use crate::settings::{RenderSettings, Technique};
-use crate::shadows::atlas::storage::ShadowAtlas;
 use crate::shadows::descriptor::{Build, Fills, TechniqueInfo, Wgsl};
 use crate::shadows::irregular::maps::{
     IrregularInputs, IrregularOptions, IrregularShadows, IrregularStats,
 };
-use crate::shadows::plan::ShadowPlan;
 use crate::shadows::source::{
-    PlanParams, ShadowOutput, ShadowSource, ShadowStats, SourceInputs, ViewTable,
+    PlanParams, ShadowOutput, ShadowSource, ShadowStats, SourceInputs, ViewTable, Views,
 };
 use crate::{GpuContext, RenderError};
 
@@ -88,16 +85,8 @@ impl IrregularSource {
 }
 
 impl ShadowSource for IrregularSource {
-    fn plan(&self) -> &ShadowPlan {
-        &self.table.plan
-    }
-
-    fn atlas(&self) -> &ShadowAtlas {
-        &self.table.views
-    }
-
-    fn casters(&self) -> &CasterGeometry {
-        &self.table.casters
+    fn views(&self) -> Views<'_> {
+        self.table.views()
     }
 
     fn light_data(&self, scene: &Scene) -> Vec<LightData> {

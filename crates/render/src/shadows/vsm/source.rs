@@ -7,14 +7,12 @@ use manyshadows_scene::Scene;
 
 use crate::gpu::timing::GpuTimer;
 use crate::gpu::types::LightData;
-use crate::gpu_scene::casters::CasterGeometry;
 use crate::gpu_scene::instances::GpuScene;
 use crate::settings::{RenderSettings, Technique};
-use crate::shadows::atlas::storage::ShadowAtlas;
 use crate::shadows::descriptor::{Build, Fills, Need, TechniqueInfo, Wgsl};
 use crate::shadows::plan::ShadowPlan;
 use crate::shadows::source::{
-    PagePool, ShadowOutput, ShadowSource, ShadowStats, SourceInputs, ViewTable,
+    PagePool, ShadowOutput, ShadowSource, ShadowStats, SourceInputs, ViewTable, Views,
 };
 use crate::shadows::vsm::pages::{VirtualShadows, VsmInputs};
 use crate::shadows::vsm::plan::{VirtualOptions, VirtualPlan, VirtualStats};
@@ -99,16 +97,8 @@ impl VirtualSource {
 }
 
 impl ShadowSource for VirtualSource {
-    fn plan(&self) -> &ShadowPlan {
-        &self.table.plan
-    }
-
-    fn atlas(&self) -> &ShadowAtlas {
-        &self.table.views
-    }
-
-    fn casters(&self) -> &CasterGeometry {
-        &self.table.casters
+    fn views(&self) -> Views<'_> {
+        self.table.views()
     }
 
     fn light_data(&self, scene: &Scene) -> Vec<LightData> {
