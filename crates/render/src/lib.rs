@@ -113,6 +113,7 @@ pub use settings::{CullMode, Pcf, RenderSettings, ShadowBias, ShadowOptions, Tec
 pub use shadows::descriptor::{Fills, Need, Requirement, TechniqueInfo};
 pub use shadows::irregular::maps::{IrregularOptions, IrregularStats};
 pub use shadows::plan::DEFAULT_MAX_ATLAS_SIZE;
+pub use shadows::raytraced::accel::RayOptions;
 pub use shadows::source::ShadowStats;
 pub use shadows::vsm::plan::{VirtualOptions, VirtualStats};
 

@@ -302,7 +302,7 @@ impl Renderer {
                     description: format!("{pool}² page pool ({pages} pages)"),
                 })
             }
-            ShadowOutput::Mask { .. } => Err(RenderError::NoAtlas {
+            ShadowOutput::Mask { .. } | ShadowOutput::Rays { .. } => Err(RenderError::NoAtlas {
                 technique: self.settings.technique,
                 fills: self.settings.technique.info().fills,
             }),

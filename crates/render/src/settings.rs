@@ -10,6 +10,7 @@ use manyshadows_scene::atlas::FitPolicy;
 use crate::frame::clusters::{ClusterOptions, LightLoop};
 use crate::gpu_scene::casters::CasterOptions;
 use crate::shadows::irregular::maps::{IrregularOptions, GRID_LIMIT};
+use crate::shadows::raytraced::accel::{RayOptions, MAX_LIGHT_SAMPLES};
 use crate::shadows::vsm::plan::{VirtualOptions, PAGE_SIZE};
 use crate::RenderError;
 
@@ -231,6 +232,8 @@ pub struct RenderSettings {
     pub irregular: IrregularOptions,
     /// Knobs of [`Technique::VIRTUAL`] (ignored by the other techniques).
     pub virtual_maps: VirtualOptions,
+    /// Knobs of [`Technique::RAYTRACED`] (ignored by the other techniques).
+    pub rays: RayOptions,
     /// Which lights each pixel visits: its cluster's (default) or every light (reference).
     pub light_loop: LightLoop,
     /// The cluster grid.
@@ -253,6 +256,7 @@ impl Default for RenderSettings {
             visibility: false,
             irregular: IrregularOptions::default(),
             virtual_maps: VirtualOptions::default(),
+            rays: RayOptions::default(),
             light_loop: LightLoop::default(),
             clusters: ClusterOptions::default(),
         }
@@ -352,6 +356,13 @@ impl RenderSettings {
                 "a positive number of shadow texels per pixel",
             ));
         }
+        if self.rays.light_samples > MAX_LIGHT_SAMPLES {
+            return Err(bad(
+                "rays.light_samples",
+                self.rays.light_samples,
+                "0 (every light) to 16 sampled lights per pixel",
+            ));
+        }
         if self.virtual_maps.max_side == 0 {
             return Err(bad(
                 "virtual_maps.max_side",
@@ -377,6 +388,7 @@ with_setters!(RenderSettings {
     with_visibility: visibility: bool,
     with_irregular: irregular: IrregularOptions,
     with_virtual_maps: virtual_maps: VirtualOptions,
+    with_rays: rays: RayOptions,
     with_light_loop: light_loop: LightLoop,
     with_clusters: clusters: ClusterOptions,
 });

@@ -134,7 +134,7 @@ fn layered_matches_traditional() {
 #[test]
 fn multiview_matches_traditional_or_says_unsupported() {
     let ctx = common::context();
-    if !ctx.has(manyshadows::wgpu::Features::MULTIVIEW) {
+    if !Technique::MULTIVIEW.info().unmet(&ctx).is_empty() {
         // OpenGL (llvmpipe) has no multiview: the technique must refuse clearly, not fall back.
         let err = Technique::MULTIVIEW
             .create(&ctx)
@@ -345,7 +345,7 @@ fn partial_draw_lists_clear_only_listed_tiles() {
     let all: Vec<u32> = (0..views).collect();
     let odd: Vec<u32> = (1..views).step_by(2).collect();
     let mut techniques = vec![Technique::GPU_DRIVEN];
-    if ctx.has(manyshadows::wgpu::Features::MULTIVIEW) {
+    if Technique::MULTIVIEW.info().unmet(&ctx).is_empty() {
         techniques.push(Technique::MULTIVIEW);
     }
     for technique in techniques {

@@ -7,8 +7,9 @@ use crate::gpu::timing::{GpuTimer, Span};
 use crate::shadows::source::ShadowOutput;
 use crate::GpuContext;
 
-/// First binding of the virtual maps' page-table declarations in the lighting pass.
-pub(crate) const VSM_FIRST_BINDING: u32 = 12;
+/// First binding of a shadow source's own declarations (the virtual maps' page table, the
+/// ray-traced scene) in the lighting and visibility passes.
+pub(crate) const SOURCE_FIRST_BINDING: u32 = 12;
 
 /// Output colour format (sRGB-encoded on write).
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -48,18 +49,10 @@ impl LightingInputs<'_> {
         self.shadows.depth()
     }
 
-    /// The shader's shadow source, its page-table declarations starting at binding `first`.
-    pub(crate) fn source(&self, first: u32) -> crate::gpu::shaders::ShadowSource {
-        match self.shadows.pages() {
-            Some(_) => crate::gpu::shaders::ShadowSource::Virtual { first },
-            None => crate::gpu::shaders::ShadowSource::Atlas,
-        }
-    }
-
     /// The bind-group entries the lighting and the visibility pass both declare, at the same
     /// bindings: frame 0, lights 1, shadow views 2, G-buffer position 4 (`position`) and
     /// normal 5 (`normal`), the shadow texture 6, the visibility mask 8 (`mask`), the light
-    /// clusters 9–11 and the virtual maps' page table from [`VSM_FIRST_BINDING`]. Bindings 3
+    /// clusters 9–11 and the shadow source's own declarations from [`SOURCE_FIRST_BINDING`]. Bindings 3
     /// and 7 are each pass's own.
     pub(crate) fn shared_entries<'s>(
         &'s self,
@@ -88,43 +81,9 @@ impl LightingInputs<'_> {
             crate::gpu::pipelines::whole_entry(10, &self.clusters.slots),
             crate::gpu::pipelines::whole_entry(11, &self.clusters.masks),
         ];
-        entries.extend(self.vsm_entries(VSM_FIRST_BINDING));
+        entries.extend(self.shadows.extra_entries(SOURCE_FIRST_BINDING));
         entries
     }
-
-    /// Bind-group entries of the page-table declarations at `first`, `first + 1`,
-    /// `first + 2` (none for the atlas).
-    pub(crate) fn vsm_entries(&self, first: u32) -> Vec<wgpu::BindGroupEntry<'_>> {
-        match self.shadows.pages() {
-            Some(p) => vec![
-                wgpu::BindGroupEntry {
-                    binding: first,
-                    resource: p.uniforms.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: first + 1,
-                    resource: p.faces.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: first + 2,
-                    resource: p.table.as_entire_binding(),
-                },
-            ],
-            None => Vec::new(),
-        }
-    }
-}
-
-/// Layout entries of the page-table declarations at `first` .. `first + 2`.
-pub(crate) fn vsm_layout_entries(
-    first: u32,
-    visibility: wgpu::ShaderStages,
-) -> [wgpu::BindGroupLayoutEntry; 3] {
-    [
-        crate::gpu::pipelines::uniform_entry(first, visibility),
-        crate::gpu::pipelines::storage_entry(first + 1, visibility),
-        crate::gpu::pipelines::storage_entry(first + 2, visibility),
-    ]
 }
 
 impl LightingPass {
@@ -168,9 +127,7 @@ impl LightingPass {
             crate::gpu::pipelines::storage_entry(10, frag),
             crate::gpu::pipelines::storage_entry(11, frag),
         ];
-        if inputs.shadows.pages().is_some() {
-            entries.extend(vsm_layout_entries(VSM_FIRST_BINDING, frag));
-        }
+        entries.extend(inputs.shadows.extra_layout(SOURCE_FIRST_BINDING, frag));
         let layout = crate::gpu::pipelines::bind_group_layout(device, "lighting.layout", &entries);
         let linear = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("lighting.cmp_linear"),
@@ -183,7 +140,7 @@ impl LightingPass {
         let module = crate::gpu::shaders::module(
             device,
             "lighting.shader",
-            &crate::gpu::shaders::lighting(inputs.source(VSM_FIRST_BINDING)),
+            &crate::gpu::shaders::lighting(inputs.shadows.shader_source(SOURCE_FIRST_BINDING)),
         );
         let pipeline_layout =
             crate::gpu::pipelines::pipeline_layout(device, "lighting.pipeline_layout", &[&layout]);

@@ -86,38 +86,141 @@ struct Surface {
     from_mask: bool,
 }
 
-// `color` plus light `i`'s contribution at `s` (nothing beyond the light's reach). Both light
-// loops below call exactly this, in ascending light order, so they add the same numbers in the
-// same order.
-fn add_light(color: vec3<f32>, i: u32, s: Surface) -> vec3<f32> {
+// Light `i`'s terms at `s` before its shadow: whether it reaches the point, whether the point
+// faces it, the ambient term (added whatever the shadow), the attenuation and the
+// unattenuated diffuse + specular terms (scaled by how lit the point is).
+struct Terms {
+    reaches: bool,
+    facing: bool,
+    ambient: vec3<f32>,
+    att: f32,
+    ds: vec3<f32>,
+}
+
+fn light_terms(i: u32, s: Surface) -> Terms {
+    var t: Terms;
     let light = lights[i];
-    if (!in_reach(light, s.p)) {
-        return color;
+    t.reaches = in_reach(light, s.p);
+    if (!t.reaches) {
+        return t;
     }
     let kind = light.shadow.z;
-    var att = 1.0;
+    t.att = 1.0;
     if (kind != LIGHT_DIRECTIONAL) {
         let d = distance(light.position.xyz, s.p);
         let a = light.attenuation;
-        att = 1.0 / max(a.x + a.y * d + a.z * d * d, 1e-6);
+        t.att = 1.0 / max(a.x + a.y * d + a.z * d * d, 1e-6);
     }
     let l = to_light(light, s.p);
-    let ambient = light.ambient.rgb * s.mat.ambient.rgb * att;
+    t.ambient = light.ambient.rgb * s.mat.ambient.rgb * t.att;
     let ndl = dot(s.n, l);
-    if (ndl <= 0.0) {
-        return color + ambient;
+    t.facing = ndl > 0.0;
+    if (!t.facing) {
+        return t;
     }
     let diffuse = light.diffuse.rgb * s.mat.diffuse.rgb * ndl;
     let r = reflect(-l, s.n);
     let spec = light.specular.rgb * s.mat.specular.rgb * pow(max(dot(r, s.v), 0.0), max(s.mat.ambient.w, 1.0));
-    var lit = 1.0;
+    t.ds = diffuse + spec;
+    return t;
+}
+
+// How much of light `i` reaches `s` past the casters, 0..1: from the visibility mask, a shadow
+// ray, or the shadow test of the atlas or page pool.
+fn light_lit(i: u32, s: Surface) -> f32 {
     if (s.from_mask) {
         let word = vis_mask[(u32(s.px.y) * u32(frame.viewport.x) + u32(s.px.x)) * frame.counts.w + i / 32u];
-        lit = f32((word >> (i % 32u)) & 1u);
-    } else {
-        lit = shadow_factor(shadow_coord(light, s.p, s.n, s.view_depth));
+        return f32((word >> (i % 32u)) & 1u);
     }
-    return color + ambient + lit * att * (diffuse + spec);
+    if (SHADOW_RAYS) {
+        return ray_lit(lights[i], s.p, s.n);
+    }
+    return shadow_factor(shadow_coord(lights[i], s.p, s.n, s.view_depth));
+}
+
+// `color` plus light `i`'s contribution at `s` (nothing beyond the light's reach). Both light
+// loops below call exactly this, in ascending light order, so they add the same numbers in the
+// same order.
+fn add_light(color: vec3<f32>, i: u32, s: Surface) -> vec3<f32> {
+    let t = light_terms(i, s);
+    if (!t.reaches) {
+        return color;
+    }
+    if (!t.facing) {
+        return color + t.ambient;
+    }
+    return color + t.ambient + light_lit(i, s) * t.att * t.ds;
+}
+
+// Most lights a pixel samples (RayOptions::light_samples).
+const MAX_SAMPLES: u32 = 16u;
+
+// What a pixel's light loop accumulates: the colour, and with sampled lights (`ray_samples()
+// > 0`) one weighted reservoir per sample over the lights' unshadowed direct terms.
+struct Acc {
+    color: vec3<f32>,
+    wsum: f32,
+    chosen: array<u32, MAX_SAMPLES>,
+    weight: array<f32, MAX_SAMPLES>,
+    rng: u32,
+}
+
+fn pcg(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// Uniform in [0, 1).
+fn random(acc: ptr<function, Acc>) -> f32 {
+    (*acc).rng = pcg((*acc).rng);
+    return f32((*acc).rng >> 8u) / 16777216.0;
+}
+
+// One light of the pixel's loop: all of it (every light traced or looked up), or its ambient
+// term plus a candidate for each sample's reservoir, with probability proportional to the
+// luminance of its unshadowed direct term (resampled importance sampling over the lights).
+fn visit(i: u32, s: Surface, acc: ptr<function, Acc>) {
+    let k = ray_samples();
+    if (k == 0u) {
+        (*acc).color = add_light((*acc).color, i, s);
+        return;
+    }
+    let t = light_terms(i, s);
+    if (!t.reaches) {
+        return;
+    }
+    (*acc).color = (*acc).color + t.ambient;
+    if (!t.facing) {
+        return;
+    }
+    let w = dot(t.att * t.ds, vec3<f32>(0.2126, 0.7152, 0.0722));
+    if (w <= 0.0) {
+        return;
+    }
+    (*acc).wsum = (*acc).wsum + w;
+    for (var j = 0u; j < k; j = j + 1u) {
+        if (random(acc) * (*acc).wsum < w) {
+            (*acc).chosen[j] = i;
+            (*acc).weight[j] = w;
+        }
+    }
+}
+
+// The sampled lights' shadowed direct terms, each weighted by the reservoir's total over its
+// own weight: an unbiased estimate of the sum over every light of the loop.
+fn resolve_samples(s: Surface, acc: ptr<function, Acc>) {
+    let k = ray_samples();
+    if (k == 0u || (*acc).wsum <= 0.0) {
+        return;
+    }
+    var direct = vec3<f32>(0.0);
+    for (var j = 0u; j < k; j = j + 1u) {
+        let i = (*acc).chosen[j];
+        let t = light_terms(i, s);
+        direct = direct + light_lit(i, s) * t.att * t.ds * ((*acc).wsum / (*acc).weight[j]);
+    }
+    (*acc).color = (*acc).color + direct / f32(k);
 }
 
 fn shade(px: vec2<i32>, from_mask: bool) -> vec4<f32> {
@@ -140,7 +243,10 @@ fn shade(px: vec2<i32>, from_mask: bool) -> vec4<f32> {
     s.view_depth = -(frame.view * vec4<f32>(s.p, 1.0)).z;
     s.px = px;
     s.from_mask = from_mask;
-    var color = vec3<f32>(0.0);
+    var acc: Acc;
+    acc.color = vec3<f32>(0.0);
+    acc.wsum = 0.0;
+    acc.rng = pcg(u32(px.x) + pcg(u32(px.y) + pcg(ray_seed())));
     var slot = CLUSTER_OVERFLOW;
     if (clusters.words.w != 0u) {
         slot = cluster_slots[cluster_index(clusters, vec2<u32>(px), s.view_depth)];
@@ -149,7 +255,7 @@ fn shade(px: vec2<i32>, from_mask: bool) -> vec4<f32> {
         // Every light: the reference loop, and the fallback of clusters without a slot.
         let count = frame.counts.x;
         for (var i = 0u; i < count; i = i + 1u) {
-            color = add_light(color, i, s);
+            visit(i, s, &acc);
         }
     } else {
         // The cluster's lights in ascending order: summary bits pick the non-empty words.
@@ -163,11 +269,12 @@ fn shade(px: vec2<i32>, from_mask: bool) -> vec4<f32> {
                 while (bits != 0u) {
                     let i = w * 32u + firstTrailingBit(bits);
                     bits = bits & (bits - 1u);
-                    color = add_light(color, i, s);
+                    visit(i, s, &acc);
                 }
             }
         }
     }
+    resolve_samples(s, &acc);
     // Exponential tone mapping: many overlapping lights add up past 1 without clipping to white.
-    return vec4<f32>(vec3<f32>(1.0) - exp(-color * EXPOSURE), 1.0);
+    return vec4<f32>(vec3<f32>(1.0) - exp(-acc.color * EXPOSURE), 1.0);
 }

@@ -3,7 +3,7 @@
 //! bias as the lighting pass but without filtering. Its result is a
 //! [`VisibilityMask`] ([`crate::frame::visibility_mask`]).
 
-use crate::frame::lighting::{LightingInputs, VSM_FIRST_BINDING};
+use crate::frame::lighting::{LightingInputs, SOURCE_FIRST_BINDING};
 use crate::frame::visibility_mask::VisibilityMask;
 use crate::gpu::pipelines::texture_entry;
 use crate::gpu::timing::{GpuTimer, Span};
@@ -78,17 +78,8 @@ impl VisibilityPass {
             crate::gpu::pipelines::storage_entry(10, comp),
             crate::gpu::pipelines::storage_entry(11, comp),
         ];
-        let source = if shadows.pages().is_some() {
-            entries.extend(crate::frame::lighting::vsm_layout_entries(
-                VSM_FIRST_BINDING,
-                comp,
-            ));
-            crate::gpu::shaders::ShadowSource::Virtual {
-                first: VSM_FIRST_BINDING,
-            }
-        } else {
-            crate::gpu::shaders::ShadowSource::Atlas
-        };
+        entries.extend(shadows.extra_layout(SOURCE_FIRST_BINDING, comp));
+        let source = shadows.shader_source(SOURCE_FIRST_BINDING);
         let layout =
             crate::gpu::pipelines::bind_group_layout(device, "visibility.layout", &entries);
         let module = crate::gpu::shaders::module(

@@ -37,10 +37,14 @@ fn word_bits(word: u32, candidates: u32, p: vec3<f32>, n: vec3<f32>, view_depth:
         if (!in_reach(light, p)) {
             continue;
         }
-        let c = shadow_coord(light, p, n, view_depth);
         var lit = true;
-        if (c.valid) {
-            lit = c.depth <= textureLoad(atlas, hard_texel(c), 0).r;
+        if (SHADOW_RAYS) {
+            lit = ray_lit(light, p, n) > 0.5;
+        } else {
+            let c = shadow_coord(light, p, n, view_depth);
+            if (c.valid) {
+                lit = c.depth <= textureLoad(atlas, hard_texel(c), 0).r;
+            }
         }
         if (lit) {
             bits = bits | (1u << b);

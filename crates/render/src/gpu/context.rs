@@ -98,7 +98,40 @@ const OPTIONAL_FEATURES: &[(wgpu::Features, &str, &str)] = &[
         "CLIP_DISTANCES",
         "keeping layered and gpu-driven draws inside their atlas tiles",
     ),
+    (
+        wgpu::Features::EXPERIMENTAL_RAY_QUERY,
+        "EXPERIMENTAL_RAY_QUERY",
+        "ray-traced shadows (technique raytraced, compare --reference gpu)",
+    ),
 ];
+
+/// Experimental features the adapter reports that the renderer does not use (listed by `info`
+/// so a user sees what the driver offers).
+#[cfg_attr(not(feature = "internals"), allow(dead_code))] // the CLI's `info`
+pub const UNUSED_EXPERIMENTAL: &[(wgpu::Features, &str)] = &[(
+    wgpu::Features::EXPERIMENTAL_MESH_SHADER,
+    "EXPERIMENTAL_MESH_SHADER",
+)];
+
+/// The token wgpu asks for before a device may enable a feature named `EXPERIMENTAL_…`:
+/// enabled exactly when `features` holds one (ray queries, for technique raytraced).
+///
+/// wgpu marks the token `unsafe` because its experimental APIs may still contain bugs that
+/// cause undefined behaviour; the renderer uses of them only acceleration-structure builds
+/// from its own validated buffers and ray queries that read them, and a device without the
+/// feature never gets the token. This is the project's one `unsafe` block.
+fn experimental_features(features: wgpu::Features) -> wgpu::ExperimentalFeatures {
+    if features.intersects(wgpu::Features::EXPERIMENTAL_RAY_QUERY) {
+        #[allow(unsafe_code)]
+        // SAFETY: see the function's documentation; wgpu's contract is an acknowledgement
+        // that experimental features may be buggy, not a precondition the caller must check.
+        unsafe {
+            wgpu::ExperimentalFeatures::enabled()
+        }
+    } else {
+        wgpu::ExperimentalFeatures::disabled()
+    }
+}
 
 /// An adapter and the device made on it. Cloning is cheap (wgpu handles are reference
 /// counted): a [`crate::Renderer`] keeps its own clone, so it borrows nothing from the caller.
@@ -305,7 +338,7 @@ impl GpuContext {
             label: Some("manyshadows.device"),
             required_features: features,
             required_limits: limits,
-            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            experimental_features: experimental_features(features),
             memory_hints: wgpu::MemoryHints::Performance,
             trace: wgpu::Trace::Off,
         }))

@@ -27,13 +27,42 @@ pub enum ShadowSource {
         /// First binding of the page-table declarations.
         first: u32,
     },
+    /// Shadow rays through an acceleration structure (technique raytraced); the three
+    /// declarations take bindings `first` .. `first + 2`.
+    Rays {
+        /// First binding of the ray declarations.
+        first: u32,
+    },
+}
+
+/// What the passes call where shadows do not come from rays: no ray is ever cast.
+const NO_RAYS: &str = "const SHADOW_RAYS: bool = false;\n\
+     fn ray_lit(light: LightData, p: vec3<f32>, n: vec3<f32>) -> f32 { return 1.0; }\n\
+     fn ray_samples() -> u32 { return 0u; }\n\
+     fn ray_seed() -> u32 { return 0u; }";
+
+/// `enable` directives `source` needs before everything else.
+fn enables(source: ShadowSource) -> &'static str {
+    match source {
+        ShadowSource::Rays { .. } => "enable wgpu_ray_query;",
+        _ => "",
+    }
 }
 
 /// The pieces that define `shadow_coord` for `source`.
 fn shadow_source(source: ShadowSource) -> Vec<String> {
     match source {
-        ShadowSource::Atlas => vec![ATLAS_COORD.to_string()],
+        ShadowSource::Atlas => vec![ATLAS_COORD.to_string(), NO_RAYS.to_string()],
+        ShadowSource::Rays { first } => vec![
+            ATLAS_COORD.to_string(),
+            ALPHA_MASK.to_string(),
+            include_str!("../shadows/raytraced/rays.wgsl")
+                .replace("RT_FIRST", &first.to_string())
+                .replace("RT_SECOND", &(first + 1).to_string())
+                .replace("RT_THIRD", &(first + 2).to_string()),
+        ],
         ShadowSource::Virtual { first } => vec![
+            NO_RAYS.to_string(),
             VSM_COMMON.to_string(),
             format!(
                 "@group(0) @binding({}) var<uniform> vsm: VsmUniforms;\n\
@@ -67,6 +96,7 @@ pub fn lighting(source: ShadowSource) -> String {
 /// visibility passes, which declare the same bindings.
 fn reading_shadows(source: ShadowSource, pass: &str) -> String {
     let mut parts = vec![
+        enables(source).to_string(),
         COMMON.to_string(),
         PARABOLOID.to_string(),
         SHADOW_LOOKUP.to_string(),

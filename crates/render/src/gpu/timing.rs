@@ -49,6 +49,8 @@ pub enum Stage {
     Clusters,
     /// Virtual shadow maps: marking, allocating and clearing pages.
     Pages,
+    /// Ray-traced shadows: building the frame's top-level acceleration structure.
+    Accel,
     /// Shadow generation: the atlas, the virtual pages, or irregular shadow maps' mask.
     Shadows,
     /// Deferred lighting.
@@ -63,18 +65,20 @@ impl Stage {
         Stage::GBuffer,
         Stage::Clusters,
         Stage::Pages,
+        Stage::Accel,
         Stage::Shadows,
         Stage::Lighting,
         Stage::Visibility,
     ];
 
-    /// The stage's name in reports and JSON (`gbuffer`, `clusters`, `pages`, `shadows`,
-    /// `lighting`, `visibility`).
+    /// The stage's name in reports and JSON (`gbuffer`, `clusters`, `pages`, `accel`,
+    /// `shadows`, `lighting`, `visibility`).
     pub fn name(self) -> &'static str {
         match self {
             Stage::GBuffer => "gbuffer",
             Stage::Clusters => "clusters",
             Stage::Pages => "pages",
+            Stage::Accel => "accel",
             Stage::Shadows => "shadows",
             Stage::Lighting => "lighting",
             Stage::Visibility => "visibility",

@@ -22,6 +22,8 @@ pub enum Fills {
     Pages,
     /// The per-pixel, per-light visibility bits themselves (exact techniques).
     Mask,
+    /// Nothing: the lighting pass casts shadow rays through an acceleration structure.
+    Rays,
 }
 
 impl Fills {
@@ -31,6 +33,7 @@ impl Fills {
             Fills::Atlas => "a shadow atlas",
             Fills::Pages => "a virtual page pool",
             Fills::Mask => "the visibility mask directly",
+            Fills::Rays => "no map (shadow rays through an acceleration structure)",
         }
     }
 }
@@ -43,6 +46,9 @@ pub enum Requirement {
     Feature(wgpu::Features),
     /// Indirect draws and dispatches (a downlevel flag: OpenGL ES and WebGL may lack it).
     IndirectExecution,
+    /// The `MULTIVIEW` feature with at least one view per pass (Mesa 25's OpenGL reports
+    /// the feature with a `max_multiview_view_count` of 0).
+    Multiview,
 }
 
 /// A [`Requirement`] and what the technique uses it for.
@@ -63,6 +69,14 @@ impl Need {
         }
     }
 
+    /// Needs multiview passes of at least one view for `purpose`.
+    pub const fn multiview(purpose: &'static str) -> Self {
+        Need {
+            requirement: Requirement::Multiview,
+            purpose,
+        }
+    }
+
     /// Needs indirect execution for `purpose`.
     pub const fn indirect(purpose: &'static str) -> Self {
         Need {
@@ -76,6 +90,7 @@ impl Need {
         match self.requirement {
             Requirement::Feature(f) => f.to_string(),
             Requirement::IndirectExecution => "INDIRECT_EXECUTION".into(),
+            Requirement::Multiview => "MULTIVIEW".into(),
         }
     }
 
@@ -88,6 +103,9 @@ impl Need {
                 .get_downlevel_capabilities()
                 .flags
                 .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION),
+            Requirement::Multiview => {
+                ctx.has(wgpu::Features::MULTIVIEW) && ctx.limits().max_multiview_view_count > 0
+            }
         }
     }
 }
@@ -216,6 +234,7 @@ impl TechniqueInfo {
             .iter()
             .fold(wgpu::Features::empty(), |f, n| match n.requirement {
                 Requirement::Feature(x) => f | x,
+                Requirement::Multiview => f | wgpu::Features::MULTIVIEW,
                 Requirement::IndirectExecution => f,
             })
     }

@@ -22,6 +22,7 @@ pub mod descriptor;
 pub mod image;
 pub mod irregular;
 pub mod plan;
+pub mod raytraced;
 pub mod registry;
 pub mod source;
 pub mod vsm;

@@ -6,7 +6,7 @@ use crate::settings::Technique;
 use crate::shadows::atlas::technique::ShadowTechnique;
 use crate::shadows::atlas::{compute, gpu_driven, layered, multiview, traditional};
 use crate::shadows::descriptor::{Build, TechniqueInfo};
-use crate::shadows::{irregular, vsm};
+use crate::shadows::{irregular, raytraced, vsm};
 use crate::{GpuContext, RenderError};
 
 /// Every technique, the default first.
@@ -18,6 +18,7 @@ pub const TECHNIQUES: &[&TechniqueInfo] = &[
     &compute::INFO,
     &irregular::source::INFO,
     &vsm::source::INFO,
+    &raytraced::source::INFO,
 ];
 
 impl Technique {

@@ -82,6 +82,17 @@ pub struct PagePool<'a> {
     pub table: &'a wgpu::Buffer,
 }
 
+/// The ray-traced scene the lighting and visibility passes cast shadow rays into.
+#[derive(Clone, Copy)]
+pub struct RayScene<'a> {
+    /// The top-level acceleration structure of the shadow casters.
+    pub tlas: &'a wgpu::Tlas,
+    /// Per instance and masked triangle what the alpha test reads, then the mask tail.
+    pub geometry: &'a wgpu::Buffer,
+    /// `RayParams` (samples per pixel, seed).
+    pub params: &'a wgpu::Buffer,
+}
+
 /// What a source leaves for the lighting and visibility passes. Every kind carries a view
 /// table (`array<ShadowViewData>`, empty for virtual maps, whose faces are in the page table)
 /// and a depth texture to bind (a 1×1 placeholder where shadows are not read from one).
@@ -93,6 +104,14 @@ pub enum ShadowOutput<'a> {
     Pages {
         /// Pool and page table.
         pages: PagePool<'a>,
+        /// View table and placeholder texture.
+        views: &'a ShadowAtlas,
+    },
+    /// Shadow rays through the scene's acceleration structure, cast by the lighting and
+    /// visibility passes themselves.
+    Rays {
+        /// The acceleration structure, its ray geometry and the sampling parameters.
+        rays: RayScene<'a>,
         /// View table and placeholder texture.
         views: &'a ShadowAtlas,
     },
@@ -110,7 +129,9 @@ impl<'a> ShadowOutput<'a> {
     fn views(&self) -> &'a ShadowAtlas {
         match *self {
             ShadowOutput::Atlas(a) => a,
-            ShadowOutput::Pages { views, .. } | ShadowOutput::Mask { views, .. } => views,
+            ShadowOutput::Pages { views, .. }
+            | ShadowOutput::Mask { views, .. }
+            | ShadowOutput::Rays { views, .. } => views,
         }
     }
 
@@ -136,11 +157,77 @@ impl<'a> ShadowOutput<'a> {
         }
     }
 
-    /// The page pool and table, if shadows are read through one.
-    pub fn pages(&self) -> Option<PagePool<'a>> {
+    /// How the lighting and visibility shaders find shadows, their extra declarations from
+    /// binding `first` on.
+    pub(crate) fn shader_source(&self, first: u32) -> crate::gpu::shaders::ShadowSource {
+        match self {
+            ShadowOutput::Pages { .. } => crate::gpu::shaders::ShadowSource::Virtual { first },
+            ShadowOutput::Rays { .. } => crate::gpu::shaders::ShadowSource::Rays { first },
+            _ => crate::gpu::shaders::ShadowSource::Atlas,
+        }
+    }
+
+    /// Layout entries of the extra declarations at `first` .. (the page table, or the rays).
+    pub(crate) fn extra_layout(
+        &self,
+        first: u32,
+        visibility: wgpu::ShaderStages,
+    ) -> Vec<wgpu::BindGroupLayoutEntry> {
+        use crate::gpu::pipelines::{storage_entry, uniform_entry};
+        match self {
+            ShadowOutput::Pages { .. } => vec![
+                uniform_entry(first, visibility),
+                storage_entry(first + 1, visibility),
+                storage_entry(first + 2, visibility),
+            ],
+            ShadowOutput::Rays { .. } => vec![
+                wgpu::BindGroupLayoutEntry {
+                    binding: first,
+                    visibility,
+                    ty: wgpu::BindingType::AccelerationStructure {
+                        vertex_return: false,
+                    },
+                    count: None,
+                },
+                storage_entry(first + 1, visibility),
+                uniform_entry(first + 2, visibility),
+            ],
+            _ => Vec::new(),
+        }
+    }
+
+    /// Bind-group entries of the extra declarations at `first` ...
+    pub(crate) fn extra_entries(&self, first: u32) -> Vec<wgpu::BindGroupEntry<'a>> {
         match *self {
-            ShadowOutput::Pages { pages, .. } => Some(pages),
-            _ => None,
+            ShadowOutput::Pages { pages, .. } => vec![
+                wgpu::BindGroupEntry {
+                    binding: first,
+                    resource: pages.uniforms.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: first + 1,
+                    resource: pages.faces.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: first + 2,
+                    resource: pages.table.as_entire_binding(),
+                },
+            ],
+            ShadowOutput::Rays { rays, .. } => vec![
+                wgpu::BindGroupEntry {
+                    binding: first,
+                    resource: rays.tlas.as_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: first + 1,
+                    resource: rays.geometry.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: first + 2,
+                    resource: rays.params.as_entire_binding(),
+                },
+            ],
+            _ => Vec::new(),
         }
     }
 

@@ -48,8 +48,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     fills: Fills::Atlas,
     culls_triangles: true,
     point_shadows: &[PointShadows::Cube],
-    needs: &[Need::feature(
-        wgpu::Features::MULTIVIEW,
+    needs: &[Need::multiview(
         "one render pass per group of up to 6-32 equal-size shadow views",
     )],
     instead: "use technique layered, which fills the same atlas with one instanced draw",
@@ -150,8 +149,7 @@ impl Multiview {
             return Err(RenderError::missing_feature(
                 ctx,
                 "technique multiview",
-                "a max_multiview_view_count above 0 (the MULTIVIEW feature is there, but \
-                 allows no view)",
+                "the MULTIVIEW feature with at least one view per pass",
                 INFO.instead,
             ));
         }

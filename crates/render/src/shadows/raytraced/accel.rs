@@ -1,0 +1,366 @@
+//! The ray-traced scene: one bottom-level acceleration structure (BLAS) per mesh and opacity,
+//! built once from the mesh's object-space triangles, and one top-level structure (TLAS) over
+//! the shadow-casting instances, rebuilt on the GPU whenever an instance moved (wgpu has no
+//! refit: a changed transform is a new TLAS build; the BLASes are reused as they are).
+//!
+//! Alpha-tested casters: a mesh drawn with a masked material gets a BLAS without the `OPAQUE`
+//! flag, so the shadow ray's candidate hits on it reach the shader, which tests the mask
+//! (`rays.wgsl`); every other BLAS is opaque and its hits are committed by the driver. The
+//! ray geometry buffer holds what that test reads: per TLAS instance the first word of its
+//! mesh's texture-coordinate triples and its material, per masked mesh three coordinates per
+//! triangle, then the coverage masks in the mask-tail layout `alpha_mask.wgsl` reads.
+//!
+//! Skinned casters exist only in the atlas benchmark's workloads (`GpuScene::attach_skin`),
+//! never in a [`crate::Renderer`] frame, so no BLAS here is ever deformed.
+
+use glam::Mat4;
+use manyshadows_scene::masks::MaskSet;
+use manyshadows_scene::Scene;
+use wgpu::util::DeviceExt;
+
+use crate::gpu_scene::instances::GpuScene;
+use crate::{GpuContext, RenderError};
+
+/// Most lights one pixel may sample (`MAX_SAMPLES` in lighting.wgsl).
+pub const MAX_LIGHT_SAMPLES: u32 = 16;
+
+/// Knobs of ray-traced shadows.
+#[non_exhaustive]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayOptions {
+    /// Lights a pixel traces a shadow ray to: 0 (default) traces every light of the pixel's
+    /// cluster, exactly; `K` in `1..=16` picks K of them by resampled importance sampling
+    /// (probability proportional to each light's unshadowed contribution) and weights them so
+    /// the image is unbiased: noisy, with a cost that does not grow with the light count.
+    pub light_samples: u32,
+    /// Seed of the sampling (the same seed gives the same image).
+    pub seed: u32,
+}
+
+with_setters!(RayOptions {
+    with_light_samples: light_samples: u32,
+    with_seed: seed: u32,
+});
+
+/// `RayParams` of rays.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct RayParams {
+    /// Samples per pixel, seed, unused, unused.
+    pub(crate) samples: [u32; 4],
+}
+
+/// One TLAS instance: the scene instance and its BLAS.
+#[derive(Clone, Copy, Debug)]
+struct Item {
+    instance: usize,
+    blas: usize,
+}
+
+/// The acceleration structures and the buffers the rays read.
+pub struct RayAccel {
+    blas: Vec<wgpu::Blas>,
+    items: Vec<Item>,
+    tlas: wgpu::Tlas,
+    /// Per item: first word of its mesh's masked texture coordinates, material; then the
+    /// coordinates and the mask tail.
+    pub geometry: wgpu::Buffer,
+    /// `RayParams`.
+    pub params: wgpu::Buffer,
+    /// The TLAS must be built before the next ray is cast.
+    dirty: bool,
+}
+
+/// Row-major 3×4 affine part of `m`, as a TLAS instance's transform.
+fn affine_rows(m: Mat4) -> [f32; 12] {
+    let r = m.transpose();
+    let (a, b, c) = (r.x_axis, r.y_axis, r.z_axis);
+    [a.x, a.y, a.z, a.w, b.x, b.y, b.z, b.w, c.x, c.y, c.z, c.w]
+}
+
+impl RayAccel {
+    /// Builds a BLAS per (mesh, opacity) the casting instances use, submits their build, and
+    /// prepares the TLAS (built by the first [`RayAccel::record`]).
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &Scene,
+        gpu: &GpuScene,
+        masks: &MaskSet,
+        options: RayOptions,
+    ) -> Result<Self, RenderError> {
+        let device = &ctx.device;
+        let limits = ctx.limits();
+        // (mesh, masked) → BLAS index.
+        let mut keys: Vec<(usize, bool)> = Vec::new();
+        let mut items = Vec::new();
+        for (i, inst) in scene.instances.iter().enumerate() {
+            if !inst.casts_shadows || scene.meshes[inst.mesh].indices.is_empty() {
+                continue;
+            }
+            let masked = masks.is_masked(inst.material);
+            let key = (inst.mesh, masked);
+            let blas = match keys.iter().position(|k| *k == key) {
+                Some(b) => b,
+                None => {
+                    keys.push(key);
+                    keys.len() - 1
+                }
+            };
+            items.push(Item { instance: i, blas });
+        }
+        let mut short = Vec::new();
+        let largest = keys
+            .iter()
+            .map(|&(m, _)| scene.meshes[m].indices.len() as u64 / 3)
+            .max()
+            .unwrap_or(0);
+        for (name, have, need) in [
+            (
+                "max_tlas_instance_count",
+                u64::from(limits.max_tlas_instance_count),
+                items.len().max(1) as u64,
+            ),
+            (
+                "max_blas_primitive_count",
+                u64::from(limits.max_blas_primitive_count),
+                largest,
+            ),
+            (
+                "max_blas_geometry_count",
+                u64::from(limits.max_blas_geometry_count),
+                1,
+            ),
+            (
+                "max_acceleration_structures_per_shader_stage",
+                u64::from(limits.max_acceleration_structures_per_shader_stage),
+                1,
+            ),
+        ] {
+            if have < need {
+                short.push(format!(
+                    "{name}: the device allows {have}, the scene needs {need}"
+                ));
+            }
+        }
+        if !short.is_empty() {
+            return Err(RenderError::LimitsTooSmall {
+                adapter: ctx.describe(),
+                needs: "technique raytraced".into(),
+                shortfalls: short,
+            });
+        }
+
+        // The BLASes, built from copies of the meshes' triangles (BLAS input buffers).
+        let sizes: Vec<wgpu::BlasTriangleGeometrySizeDescriptor> = keys
+            .iter()
+            .map(|&(m, masked)| {
+                let mesh = &scene.meshes[m];
+                wgpu::BlasTriangleGeometrySizeDescriptor {
+                    vertex_format: wgpu::VertexFormat::Float32x3,
+                    vertex_count: mesh.positions.len() as u32,
+                    index_format: Some(wgpu::IndexFormat::Uint32),
+                    index_count: Some(mesh.indices.len() as u32),
+                    flags: if masked {
+                        wgpu::AccelerationStructureGeometryFlags::empty()
+                    } else {
+                        wgpu::AccelerationStructureGeometryFlags::OPAQUE
+                    },
+                }
+            })
+            .collect();
+        let blas: Vec<wgpu::Blas> = sizes
+            .iter()
+            .map(|size| {
+                device.create_blas(
+                    &wgpu::CreateBlasDescriptor {
+                        label: Some("raytraced.blas"),
+                        flags: wgpu::AccelerationStructureFlags::PREFER_FAST_TRACE,
+                        update_mode: wgpu::AccelerationStructureUpdateMode::Build,
+                    },
+                    wgpu::BlasGeometrySizeDescriptors::Triangles {
+                        descriptors: vec![size.clone()],
+                    },
+                )
+            })
+            .collect();
+        let inputs: Vec<(wgpu::Buffer, wgpu::Buffer)> = keys
+            .iter()
+            .map(|&(m, _)| {
+                let mesh = &scene.meshes[m];
+                let positions: Vec<[f32; 3]> =
+                    mesh.positions.iter().map(|p| p.to_array()).collect();
+                let usage = wgpu::BufferUsages::BLAS_INPUT;
+                (
+                    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("raytraced.blas_vertices"),
+                        contents: bytemuck::cast_slice(&positions),
+                        usage,
+                    }),
+                    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("raytraced.blas_indices"),
+                        contents: bytemuck::cast_slice(&mesh.indices),
+                        usage,
+                    }),
+                )
+            })
+            .collect();
+        if !blas.is_empty() {
+            let entries: Vec<wgpu::BlasBuildEntry<'_>> = blas
+                .iter()
+                .zip(&sizes)
+                .zip(&inputs)
+                .map(|((b, size), (v, i))| wgpu::BlasBuildEntry {
+                    blas: b,
+                    geometry: wgpu::BlasGeometries::TriangleGeometries(vec![
+                        wgpu::BlasTriangleGeometry {
+                            size,
+                            vertex_buffer: v,
+                            first_vertex: 0,
+                            vertex_stride: 12,
+                            index_buffer: Some(i),
+                            first_index: Some(0),
+                            transform_buffer: None,
+                            transform_buffer_offset: None,
+                        },
+                    ]),
+                })
+                .collect();
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("raytraced.blas_build"),
+            });
+            encoder.build_acceleration_structures(entries.iter(), std::iter::empty());
+            ctx.queue.submit([encoder.finish()]);
+        }
+
+        // The ray geometry: per item (first uv word, material), the masked meshes' uv
+        // triples, then the mask tail (records with absolute first words, bits, header).
+        let mut words: Vec<u32> = vec![0; 2 * items.len().max(1)];
+        let mut uv_start: Vec<Option<u32>> = vec![None; scene.meshes.len()];
+        for (k, item) in items.iter().enumerate() {
+            let inst = &scene.instances[item.instance];
+            words[2 * k + 1] = inst.material as u32;
+            if !keys[item.blas].1 {
+                continue;
+            }
+            let start = *uv_start[inst.mesh].get_or_insert_with(|| {
+                let start = words.len() as u32;
+                let mesh = &scene.meshes[inst.mesh];
+                for &v in &mesh.indices {
+                    let uv = mesh.uvs.get(v as usize).copied().unwrap_or_default();
+                    words.extend([uv.x.to_bits(), uv.y.to_bits()]);
+                }
+                start
+            });
+            words[2 * k] = start;
+        }
+        let records = words.len() as u32;
+        let bits = records + 4 * masks.records.len().max(1) as u32;
+        for r in &masks.records {
+            words.extend([r.first_word + bits, r.width, r.height, r.flags]);
+        }
+        if masks.records.is_empty() {
+            words.extend([0; 4]);
+        }
+        words.extend_from_slice(&masks.bits);
+        words.extend([0, 0, 0, records]);
+        let binding_limit = limits.max_storage_buffer_binding_size;
+        if words.len() as u64 * 4 > binding_limit {
+            return Err(RenderError::TooLarge {
+                what: "the ray geometry (texture coordinates of masked casters and their masks)"
+                    .into(),
+                needed: words.len() as u64 * 4,
+                limit: binding_limit,
+                unit: "bytes",
+                limit_name: "max_storage_buffer_binding_size",
+            });
+        }
+        let geometry = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("raytraced.geometry"),
+            contents: bytemuck::cast_slice(&words),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("raytraced.params"),
+            contents: bytemuck::bytes_of(&RayParams {
+                samples: [options.light_samples, options.seed, 0, 0],
+            }),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        let mut tlas = device.create_tlas(&wgpu::CreateTlasDescriptor {
+            label: Some("raytraced.tlas"),
+            max_instances: items.len().max(1) as u32,
+            flags: wgpu::AccelerationStructureFlags::PREFER_FAST_TRACE,
+            update_mode: wgpu::AccelerationStructureUpdateMode::Build,
+        });
+        for (k, item) in items.iter().enumerate() {
+            tlas[k] = Some(wgpu::TlasInstance::new(
+                &blas[item.blas],
+                affine_rows(scene.instances[item.instance].transform),
+                k as u32,
+                0xff,
+            ));
+        }
+        let _ = gpu;
+        Ok(Self {
+            blas,
+            items,
+            tlas,
+            geometry,
+            params,
+            dirty: true,
+        })
+    }
+
+    /// Takes the instances' transforms of `scene`; the next [`RayAccel::record`] rebuilds the
+    /// TLAS if one changed.
+    pub fn update(&mut self, scene: &Scene) {
+        for (k, item) in self.items.iter().enumerate() {
+            let t = affine_rows(scene.instances[item.instance].transform);
+            let same = self.tlas[k].as_ref().is_some_and(|i| i.transform == t);
+            if !same {
+                self.tlas[k] = Some(wgpu::TlasInstance::new(
+                    &self.blas[item.blas],
+                    t,
+                    k as u32,
+                    0xff,
+                ));
+                self.dirty = true;
+            }
+        }
+    }
+
+    /// Records the TLAS build if an instance moved since the last one; true if it did.
+    pub fn record(&mut self, encoder: &mut wgpu::CommandEncoder) -> bool {
+        if !self.dirty {
+            return false;
+        }
+        encoder.build_acceleration_structures(std::iter::empty(), std::iter::once(&self.tlas));
+        self.dirty = false;
+        true
+    }
+
+    /// The TLAS.
+    pub fn tlas(&self) -> &wgpu::Tlas {
+        &self.tlas
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn affine_rows_are_the_matrix_rows() {
+        let m = Mat4::from_cols_array_2d(&[
+            [1.0, 2.0, 3.0, 0.0],
+            [4.0, 5.0, 6.0, 0.0],
+            [7.0, 8.0, 9.0, 0.0],
+            [10.0, 11.0, 12.0, 1.0],
+        ]);
+        // Row 0 = (x_axis.x, y_axis.x, z_axis.x, w_axis.x).
+        assert_eq!(
+            affine_rows(m),
+            [1.0, 4.0, 7.0, 10.0, 2.0, 5.0, 8.0, 11.0, 3.0, 6.0, 9.0, 12.0]
+        );
+    }
+}
