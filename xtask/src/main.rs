@@ -44,6 +44,12 @@ struct Prerequisite {
 enum Install {
     /// Debian packages; present when every one is installed.
     Apt(&'static [&'static str]),
+    /// Mesa's Vulkan (lavapipe) and OpenGL (llvmpipe) drivers at this major version or newer
+    /// (25: ray queries, mesh shaders, multiview in lavapipe); on Debian 12 (bookworm) from
+    /// its backports suite, which is added to apt's sources when missing. When only an older
+    /// Mesa can be had it is installed instead and said: the ray-traced technique is then
+    /// refused by name and its tests check that refusal.
+    Mesa(u32),
     /// A rustup target.
     RustupTarget(&'static str),
     /// `wasm-bindgen-cli` at the version of the `wasm-bindgen` crate in Cargo.lock.
@@ -61,9 +67,9 @@ const WEB_TESTS: &[&str] = &["the_page_renders_the_native_frame_and_its_controls
 fn prerequisites() -> Vec<Prerequisite> {
     vec![
         Prerequisite {
-            what: "Vulkan on the CPU (Mesa lavapipe)",
-            needed_by: "the Vulkan run of the suite",
-            install: Install::Apt(&["mesa-vulkan-drivers"]),
+            what: "Vulkan and OpenGL on the CPU (Mesa 25 lavapipe and llvmpipe, ray queries)",
+            needed_by: "the Vulkan run of the suite and its ray-traced tests",
+            install: Install::Mesa(25),
             skip: &[],
         },
         Prerequisite {
@@ -161,7 +167,7 @@ fn main() -> ExitCode {
             Outcome::Installed => format!("  installed {}", p.what),
             Outcome::Missing(why) => {
                 skip.extend(p.skip);
-                if matches!(p.install, Install::Apt(pkgs) if pkgs == ["mesa-vulkan-drivers"]) {
+                if matches!(p.install, Install::Mesa(_)) && !dpkg_installed("mesa-vulkan-drivers") {
                     lavapipe = false;
                 }
                 format!("  MISSING  {} ({why}); skipped: {}", p.what, p.needed_by)
@@ -322,6 +328,7 @@ impl Setup {
                     Err(e) => Outcome::Missing(format!("apt-get install failed: {e}")),
                 }
             }
+            Install::Mesa(major) => self.mesa(*major),
             Install::RustupTarget(target) => {
                 let installed = output("rustup", &["target", "list", "--installed"])
                     .is_some_and(|o| o.lines().any(|l| l.trim() == *target));
@@ -366,6 +373,119 @@ impl Setup {
                     Err(e) => Outcome::Missing(format!("cargo install failed: {e}")),
                 }
             }
+        }
+    }
+}
+
+/// Mesa's driver packages the suite uses (Vulkan lavapipe, OpenGL llvmpipe through EGL/GLX).
+const MESA_PACKAGES: &[&str] = &[
+    "mesa-vulkan-drivers",
+    "libgl1-mesa-dri",
+    "libegl-mesa0",
+    "libglx-mesa0",
+    "libgbm1",
+];
+
+/// The major version of an installed Debian package (`25` of `25.0.7-2~bpo12+1`).
+fn installed_major(pkg: &str) -> Option<u32> {
+    if !dpkg_installed(pkg) {
+        return None;
+    }
+    let v = output("dpkg-query", &["-W", "-f=${Version}", pkg])?;
+    let v = v.split_once(':').map_or(v.as_str(), |(_, v)| v);
+    v.split('.').next()?.trim().parse().ok()
+}
+
+impl Setup {
+    /// Mesa at `major` or newer; see [`Install::Mesa`].
+    fn mesa(&mut self, major: u32) -> Outcome {
+        let have = || {
+            ["mesa-vulkan-drivers", "libgl1-mesa-dri"]
+                .iter()
+                .map(|p| installed_major(p))
+                .min()
+                .flatten()
+        };
+        if have().is_some_and(|m| m >= major) {
+            return Outcome::Present;
+        }
+        let now = match have() {
+            Some(m) => format!("Mesa {m} is installed"),
+            None => "Mesa's drivers are not installed".into(),
+        };
+        if self.no_install {
+            return Outcome::Missing(format!("{now}; --no-install"));
+        }
+        if !is_root() || !on_path("apt-get") {
+            return Outcome::Missing(format!(
+                "{now}; run as root on Debian/Ubuntu, or install Mesa {major}+ yourself \
+                 (Debian 12: the bookworm-backports suite)"
+            ));
+        }
+        // Debian 12 has Mesa 25 in its backports suite only.
+        let codename = std::fs::read_to_string("/etc/os-release")
+            .ok()
+            .and_then(|s| {
+                s.lines()
+                    .find_map(|l| l.strip_prefix("VERSION_CODENAME=").map(str::to_string))
+            })
+            .unwrap_or_default();
+        let mut suite = None;
+        if codename == "bookworm" {
+            let list = Path::new("/etc/apt/sources.list.d/bookworm-backports.list");
+            let known = std::fs::read_dir("/etc/apt/sources.list.d")
+                .into_iter()
+                .flatten()
+                .flatten()
+                .any(|e| {
+                    std::fs::read_to_string(e.path())
+                        .is_ok_and(|s| s.contains("bookworm-backports"))
+                })
+                || std::fs::read_to_string("/etc/apt/sources.list")
+                    .is_ok_and(|s| s.contains("bookworm-backports"));
+            if !known {
+                if let Err(e) = std::fs::write(
+                    list,
+                    "deb http://deb.debian.org/debian bookworm-backports main\n",
+                ) {
+                    return Outcome::Missing(format!("{now}; cannot add bookworm-backports: {e}"));
+                }
+                self.apt_updated = false;
+            }
+            suite = Some("bookworm-backports");
+        }
+        if !self.apt_updated {
+            self.apt_updated = true;
+            if let Err(e) = quiet("apt-get", &["update"], &[]) {
+                return Outcome::Missing(format!("{now}; apt-get update failed: {e}"));
+            }
+        }
+        let mut args = vec!["install", "-y"];
+        if let Some(s) = suite {
+            args.extend(["-t", s]);
+        }
+        args.extend(MESA_PACKAGES);
+        let env = [("DEBIAN_FRONTEND", "noninteractive")];
+        if let Err(e) = quiet("apt-get", &args, &env) {
+            // The backports may be unreachable: the distribution's own Mesa still runs the
+            // suite (without ray queries).
+            let mut plain = vec!["install", "-y"];
+            plain.extend(MESA_PACKAGES);
+            let _ = quiet("apt-get", &plain, &env);
+            return Outcome::Missing(format!(
+                "apt-get could not install Mesa {major}+ ({e}); {}",
+                match have() {
+                    Some(m) => format!("Mesa {m} installed instead: no ray queries"),
+                    None => "no Mesa driver installed".into(),
+                }
+            ));
+        }
+        match have() {
+            Some(m) if m >= major => Outcome::Installed,
+            Some(m) => Outcome::Missing(format!(
+                "apt-get installed Mesa {m}, older than {major}: no ray queries"
+            )),
+            None => Outcome::Missing("apt-get ran but Mesa's drivers are not there".into()),
         }
     }
 }

@@ -28,6 +28,18 @@ use crate::{GpuArgs, RenderArgs};
 
 /// Most (pixel, light) pairs one comparison may trace: about a minute of rays on two cores.
 const MAX_RAYS: u64 = 200_000_000;
+/// Most (pixel, light) pairs the GPU reference traces: 1920×1080 × 2,048 lights.
+const MAX_GPU_RAYS: u64 = 1920 * 1080 * 2048;
+
+/// Who traces the reference.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ReferenceTracer {
+    /// The CPU (obvhs BVH, watertight triangle test): the default truth.
+    Cpu,
+    /// The GPU, with ray queries (the technique that fills rays, every light of every pixel):
+    /// the same rays from the same points, practical at 1080p × 1,024 lights.
+    Gpu,
+}
 /// Largest edge band accepted, pixels.
 const MAX_EDGE_BAND: u32 = 64;
 /// Brightness the frame keeps under the difference colours.
@@ -106,6 +118,11 @@ pub struct CompareArgs {
     /// Shadow texels per screen pixel that --techniques virtual aims for.
     #[arg(long, default_value_t = 1.0)]
     virtual_lod: f32,
+    /// Who traces the exact reference: cpu (default, the truth every technique is scored
+    /// against) or gpu (ray queries; needs EXPERIMENTAL_RAY_QUERY, for frames and light counts
+    /// the CPU would take too long for).
+    #[arg(long, value_enum, default_value_t = ReferenceTracer::Cpu)]
+    reference: ReferenceTracer,
     /// Directory for the frame, the difference images and reference.msvis.
     #[arg(long, default_value = "compare")]
     out_dir: PathBuf,
@@ -232,12 +249,22 @@ fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
     let pb = multi.add(crate::spinner("loading the scene"));
     let scene = load(args)?;
     let pixels = args.width as u64 * args.height as u64;
-    if pixels * scene.lights.len() as u64 > MAX_RAYS {
+    let max_rays = match args.reference {
+        ReferenceTracer::Cpu => MAX_RAYS,
+        ReferenceTracer::Gpu => MAX_GPU_RAYS,
+    };
+    if pixels * scene.lights.len() as u64 > max_rays {
         bail!(
-            "{}x{} pixels x {} lights is more than {MAX_RAYS} reference rays; use fewer lights or a smaller frame",
+            "{}x{} pixels x {} lights is more than {max_rays} reference rays; use fewer lights \
+             or a smaller frame{}",
             args.width,
             args.height,
-            scene.lights.len()
+            scene.lights.len(),
+            if args.reference == ReferenceTracer::Cpu {
+                ", or --reference gpu"
+            } else {
+                ""
+            }
         );
     }
     let mut techniques: Vec<Technique> = Vec::new();
@@ -304,7 +331,14 @@ fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
         let frame = renderer.render()?;
         if reference.is_none() {
             bar.set_message("ray tracing the reference");
-            let r = trace_reference(&multi, &renderer, &tracer, &scene, args.edge_band)?;
+            let r = match args.reference {
+                ReferenceTracer::Cpu => {
+                    trace_reference(&multi, &renderer, &tracer, &scene, args.edge_band)?
+                }
+                ReferenceTracer::Gpu => {
+                    gpu_reference(&ctx, &renderer, &scene, args, args.edge_band)?
+                }
+            };
             image_out(
                 &args.out_dir.join("frame.png"),
                 frame.width,
@@ -625,6 +659,67 @@ fn trace_reference(
     })
 }
 
+/// The reference traced on the GPU: the technique that casts rays, for every light of every
+/// pixel (no clusters), from the same G-buffer points with the same offsets and light
+/// segments as the CPU's; reach and facing are the CPU's own (no rays), and the GPU's bits
+/// count only where the CPU finds the light in reach.
+fn gpu_reference(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    scene: &Scene,
+    args: &CompareArgs,
+    edge_band: u32,
+) -> Result<Reference> {
+    let rays = crate::techniques::first_filling(manyshadows::Fills::Rays);
+    if rays.info().fills != manyshadows::Fills::Rays {
+        bail!("--reference gpu: no technique casts rays");
+    }
+    rays.info().check(ctx)?;
+    let g = renderer.read_gbuffer()?;
+    let points = (0..g.position.len())
+        .map(|i| {
+            g.covered[i].then(|| SurfacePoint {
+                position: g.position[i],
+                normal: g.normal[i],
+            })
+        })
+        .collect();
+    let surfaces = Surfaces::new(g.width, g.height, points)?;
+    let t = Instant::now();
+    let settings = settings(args, rays).with_light_loop(manyshadows::LightLoop::All);
+    let frame = Renderer::new(ctx, scene, settings)?.render()?;
+    let ms = t.elapsed().as_secs_f64() * 1e3;
+    let mask = frame
+        .visibility
+        .context("the ray-traced reference returned no mask")?;
+    let mut vis = manyshadows_reference::reach_and_facing(&scene.lights, &surfaces);
+    if (mask.width, mask.height, mask.words_per_pixel)
+        != (vis.lit.width, vis.lit.height, vis.lit.words_per_pixel)
+    {
+        bail!("the GPU reference's mask does not match the frame's size");
+    }
+    let shadowed: Vec<bool> = scene.lights.iter().map(|l| l.casts_shadows).collect();
+    let mut traced = 0u64;
+    for (i, (lit, reach)) in vis.lit.words.iter_mut().zip(&vis.reach.words).enumerate() {
+        *lit = mask.words[i] & reach;
+        let first = (i % vis.reach.words_per_pixel as usize) * 32;
+        let mut bits = *reach;
+        while bits != 0 {
+            let b = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            traced += shadowed.get(first + b).copied().unwrap_or(false) as u64;
+        }
+    }
+    let band = score::edge_band(&vis.lit, &surfaces.covered(), edge_band);
+    Ok(Reference {
+        surfaces,
+        vis,
+        band,
+        ms,
+        rays: traced,
+    })
+}
+
 fn image_out(path: &Path, w: u32, h: u32, rgba: &[u8]) -> Result<()> {
     image::save_buffer(path, rgba, w, h, image::ExtendedColorType::Rgba8)
         .with_context(|| format!("writing {}", path.display()))
@@ -793,6 +888,7 @@ fn report(
             "rays_per_second": if r.ms > 0.0 { r.rays as f64 / (r.ms / 1e3) } else { 0.0 },
             "threads": rayon::current_num_threads(),
             "ray_offset_relative": manyshadows_reference::visibility::RAY_OFFSET_RELATIVE,
+            "tracer": format!("{:?}", args.reference).to_lowercase(),
             "mask": args.out_dir.join("reference.msvis"),
         },
         "frame": args.out_dir.join("frame.png"),
@@ -816,15 +912,24 @@ fn print_table(report: &serde_json::Value, results: &[VariantResult], scene: &Sc
         scene.lights.len(),
         report["edge_band_px"]
     );
-    println!(
-        "reference  {} triangles, BVH {:.0} ms; {} rays in {:.0} ms ({:.2} M rays/s on {} threads)",
-        rf["triangles"],
-        rf["bvh_build_ms"].as_f64().unwrap_or(0.0),
-        rf["rays"],
-        rf["trace_ms"].as_f64().unwrap_or(0.0),
-        rf["rays_per_second"].as_f64().unwrap_or(0.0) / 1e6,
-        rf["threads"]
-    );
+    if rf["tracer"] == "gpu" {
+        println!(
+            "reference  traced on the GPU (ray queries): {} rays in {:.0} ms, acceleration \
+             structures and pipelines included",
+            rf["rays"],
+            rf["trace_ms"].as_f64().unwrap_or(0.0),
+        );
+    } else {
+        println!(
+            "reference  {} triangles, BVH {:.0} ms; {} rays in {:.0} ms ({:.2} M rays/s on {} threads)",
+            rf["triangles"],
+            rf["bvh_build_ms"].as_f64().unwrap_or(0.0),
+            rf["rays"],
+            rf["trace_ms"].as_f64().unwrap_or(0.0),
+            rf["rays_per_second"].as_f64().unwrap_or(0.0) / 1e6,
+            rf["threads"]
+        );
+    }
     println!();
     println!(
         "{:<24} {:<13} {:>11} {:>12} {:>12} {:>9} {:>10} | {:>6} {:>6} {:>6} {:>7} {:>7}",

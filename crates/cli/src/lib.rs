@@ -307,6 +307,15 @@ pub(crate) struct RenderArgs {
     /// about the pixel footprint; 2 = twice as fine, four times the pages).
     #[arg(long, default_value_t = 1.0)]
     virtual_lod: f32,
+    /// With shadow rays (a technique that casts them, see --technique): trace K lights per
+    /// pixel, picked among the pixel's cluster lights by importance (their unshadowed
+    /// contribution) and weighted so the image stays unbiased — noisy, at a cost that does
+    /// not grow with the light count. 0 (default) traces every cluster light: exact.
+    #[arg(long, default_value_t = 0)]
+    light_samples: u32,
+    /// Seed of --light-samples' choices (the same seed gives the same image).
+    #[arg(long, default_value_t = 0)]
+    ray_seed: u32,
     /// Which lights each pixel visits: clustered (the lights assigned to its cluster of a
     /// tiles x depth-slices grid, built on the GPU each frame) or all (every light: the
     /// reference the clustered image must equal, and slow past a few hundred lights).
@@ -587,6 +596,7 @@ pub(crate) fn flag_error(e: manyshadows::RenderError) -> anyhow::Error {
         ("virtual_maps.pool_bytes", "--page-pool (MiB)"),
         ("virtual_maps.lod", "--virtual-lod"),
         ("virtual_maps.max_side", "--virtual-side"),
+        ("rays.light_samples", "--light-samples"),
     ];
     if let manyshadows::RenderError::InvalidOption { option, .. } = &e {
         if let Some((_, flag)) = FLAGS.iter().find(|(o, _)| o == option) {
@@ -650,6 +660,11 @@ pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettin
                 .with_pool_bytes(u64::from(args.page_pool) << 20)
                 .with_max_side(args.virtual_side)
                 .with_lod(args.virtual_lod),
+        )
+        .with_rays(
+            manyshadows::RayOptions::default()
+                .with_light_samples(args.light_samples)
+                .with_seed(args.ray_seed),
         )
         .with_light_loop(args.light_loop)
         .with_clusters(

@@ -24,7 +24,9 @@ mod tracer;
 pub mod visibility;
 
 pub use tracer::Tracer;
-pub use visibility::{in_reach, ray_offset, reference_visibility, ReferenceVisibility};
+pub use visibility::{
+    in_reach, ray_offset, reach_and_facing, reference_visibility, ReferenceVisibility,
+};
 
 use glam::Vec3;
 

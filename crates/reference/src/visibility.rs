@@ -114,6 +114,32 @@ pub fn reference_visibility(
     on_row: &(dyn Fn() + Sync),
     cancel: &AtomicBool,
 ) -> Option<ReferenceVisibility> {
+    visibility_with(lights, surfaces, on_row, cancel, &|light, p, n| {
+        point_visible(tracer, light, p, n)
+    })
+}
+
+/// Which lights reach each pixel and which the pixel faces, without casting a ray (`lit` is
+/// left empty): the part of the reference another tracer (the GPU's, `compare --reference
+/// gpu`) completes.
+pub fn reach_and_facing(lights: &[Light], surfaces: &Surfaces) -> ReferenceVisibility {
+    visibility_with(
+        lights,
+        surfaces,
+        &|| {},
+        &AtomicBool::new(false),
+        &|_, _, _| false,
+    )
+    .expect("never cancelled")
+}
+
+fn visibility_with(
+    lights: &[Light],
+    surfaces: &Surfaces,
+    on_row: &(dyn Fn() + Sync),
+    cancel: &AtomicBool,
+    visible: &(dyn Fn(&Light, Vec3, Vec3) -> bool + Sync),
+) -> Option<ReferenceVisibility> {
     let (w, h) = (surfaces.width, surfaces.height);
     let mut lit = Mask::zeros(w, h, lights.len() as u32);
     let mut reach = Mask::zeros(w, h, lights.len() as u32);
@@ -144,7 +170,7 @@ pub fn reference_visibility(
                     }
                     if in_reach(light, sp.position) {
                         reach_row[word] |= bit;
-                        if point_visible(tracer, light, sp.position, sp.normal) {
+                        if visible(light, sp.position, sp.normal) {
                             lit_row[word] |= bit;
                         }
                     }

@@ -156,12 +156,16 @@ fn add_light(color: vec3<f32>, i: u32, s: Surface) -> vec3<f32> {
 const MAX_SAMPLES: u32 = 16u;
 
 // What a pixel's light loop accumulates: the colour, and with sampled lights (`ray_samples()
-// > 0`) one weighted reservoir per sample over the lights' unshadowed direct terms.
+// > 0`) one weighted reservoir per sample over the lights' unshadowed direct terms, and the
+// first `K` candidates themselves (a pixel with no more candidates than samples traces them
+// all: exact, and no dearer).
 struct Acc {
     color: vec3<f32>,
     wsum: f32,
     chosen: array<u32, MAX_SAMPLES>,
     weight: array<f32, MAX_SAMPLES>,
+    count: u32,
+    first: array<u32, MAX_SAMPLES>,
     rng: u32,
 }
 
@@ -199,6 +203,10 @@ fn visit(i: u32, s: Surface, acc: ptr<function, Acc>) {
         return;
     }
     (*acc).wsum = (*acc).wsum + w;
+    if ((*acc).count < k) {
+        (*acc).first[(*acc).count] = i;
+    }
+    (*acc).count = (*acc).count + 1u;
     for (var j = 0u; j < k; j = j + 1u) {
         if (random(acc) * (*acc).wsum < w) {
             (*acc).chosen[j] = i;
@@ -215,6 +223,15 @@ fn resolve_samples(s: Surface, acc: ptr<function, Acc>) {
         return;
     }
     var direct = vec3<f32>(0.0);
+    if ((*acc).count <= k) {
+        for (var j = 0u; j < (*acc).count; j = j + 1u) {
+            let i = (*acc).first[j];
+            let t = light_terms(i, s);
+            direct = direct + light_lit(i, s) * t.att * t.ds;
+        }
+        (*acc).color = (*acc).color + direct;
+        return;
+    }
     for (var j = 0u; j < k; j = j + 1u) {
         let i = (*acc).chosen[j];
         let t = light_terms(i, s);
@@ -246,6 +263,7 @@ fn shade(px: vec2<i32>, from_mask: bool) -> vec4<f32> {
     var acc: Acc;
     acc.color = vec3<f32>(0.0);
     acc.wsum = 0.0;
+    acc.count = 0u;
     acc.rng = pcg(u32(px.x) + pcg(u32(px.y) + pcg(ray_seed())));
     var slot = CLUSTER_OVERFLOW;
     if (clusters.words.w != 0u) {
