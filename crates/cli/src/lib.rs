@@ -30,6 +30,7 @@ mod irregular_bench;
 mod lights_bench;
 mod omni;
 mod plot;
+mod shadows_bench;
 mod soak;
 mod techniques;
 mod viewer;
@@ -119,6 +120,13 @@ enum BenchCommand {
     /// results.json and a plot.
     #[command(mut_arg("out_dir", |a| a.default_value("bench-virtual").required(false)))]
     Virtual(Box<virtual_bench::VirtualArgs>),
+    /// Every kind of shadow side by side from 64 to 16,384 lights, one caster moving: the
+    /// atlas, virtual pages, and shadow rays (every cluster light, and K sampled lights per
+    /// pixel) where the device has ray queries; GPU time per stage with the acceleration
+    /// structure's rebuild apart, renderer setup time; table, results.json and a plot.
+    #[command(mut_arg("repeats", |a| a.default_value("3")))]
+    #[command(mut_arg("out_dir", |a| a.default_value("bench-shadows").required(false)))]
+    Shadows(Box<shadows_bench::ShadowsArgs>),
     /// Thousands of frames in which the camera, a caster, a light and the light count change:
     /// resident memory after a warm-up against its baseline (fails past --max-growth-mib),
     /// frame times per interval, any failed frame; table and results.json.
@@ -459,6 +467,7 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
         Some(Command::Bench(BenchCommand::Lights(args))) => lights_bench::lights(&args),
         Some(Command::Bench(BenchCommand::Virtual(args))) => virtual_bench::virtual_maps(&args),
         Some(Command::Bench(BenchCommand::Soak(args))) => soak::soak(&args),
+        Some(Command::Bench(BenchCommand::Shadows(args))) => shadows_bench::shadows(&args),
         None => render(&cli.render),
     }
 }

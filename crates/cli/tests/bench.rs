@@ -355,3 +355,39 @@ fn bench_soak_runs_changing_frames_and_samples_memory() {
     assert!(json["growth_mib"].as_f64().unwrap() < 2.0, "{json}");
     rejects("soak --frames 10 --warmup 20", "--frames must be larger");
 }
+
+/// `bench shadows` on a tiny frame: the atlas, pages and (where the device has ray queries)
+/// rays with every light and with sampled lights, in one run; ratios from the same run's
+/// medians; the per-frame acceleration-structure rebuild timed apart.
+#[test]
+fn bench_shadows_puts_every_kind_of_shadow_side_by_side() {
+    let (dir, json) = bench_ok(
+        "shadows",
+        "--scene cubes --lights 4,40 --width 96 --height 54 --light-samples 2 --repeats 1 --warmup 0",
+    );
+    let ctx = manyshadows::GpuContext::new(&Default::default()).expect("adapter");
+    let rays_here = manyshadows::Technique::all()
+        .iter()
+        .any(|t| t.info().fills == manyshadows::Fills::Rays && t.info().unmet(&ctx).is_empty());
+    let records = records(&json);
+    assert_eq!(records.len(), 2, "{json}");
+    for r in records {
+        let sides = r["sides"].as_array().unwrap();
+        let labels: Vec<&str> = sides.iter().map(|s| s["label"].as_str().unwrap()).collect();
+        let want: &[&str] = if rays_here {
+            &["atlas", "pages", "rays", "rays K=2"]
+        } else {
+            &["atlas", "pages"]
+        };
+        assert_eq!(labels, want, "{r}");
+        let atlas = &sides[0];
+        for s in sides {
+            assert!(s["setup_ms"].as_f64().unwrap() > 0.0, "{s}");
+            assert_ratio(&s["ratio"], &s["frame_ms"], &atlas["frame_ms"], s);
+            let rays = s["label"].as_str().unwrap().starts_with("rays");
+            // Only the rays rebuild a top-level acceleration structure, every frame.
+            assert_eq!(s["accel_ms"].is_number(), rays, "{s}");
+        }
+    }
+    assert!(dir.join("shadows-cubes-96x54.png").exists());
+}
