@@ -1012,6 +1012,34 @@ fn info(args: &GpuArgs) -> Result<()> {
             f.purpose
         );
     }
+    for (f, name) in manyshadows::gpu::context::UNUSED_EXPERIMENTAL {
+        println!(
+            "  [{}] {:<28} offered by the driver, not used yet",
+            if ctx.adapter.features().contains(*f) {
+                "x"
+            } else {
+                " "
+            },
+            name
+        );
+    }
+    println!(
+        "  max_tlas_instance_count         {}",
+        l.max_tlas_instance_count
+    );
+    println!("techniques (what this device lacks for each):");
+    for t in Technique::all() {
+        let unmet: Vec<String> = t.info().unmet(&ctx).iter().map(|n| n.name()).collect();
+        println!(
+            "  {:<12} {}",
+            t.name(),
+            if unmet.is_empty() {
+                "runs here".to_string()
+            } else {
+                format!("needs {}", unmet.join(", "))
+            }
+        );
+    }
     println!(
         "shadow atlas: up to {0}x{0} (default cap {1})",
         l.max_texture_dimension_2d

@@ -61,7 +61,11 @@ impl Subject for Moving {
     fn run(&mut self, _ctx: &GpuContext) -> Result<Run<FrameCounters>> {
         if let Some((k, base)) = self.caster {
             self.frame += 1;
-            let dx = if self.frame.is_multiple_of(2) { 0.0 } else { 0.05 };
+            let dx = if self.frame.is_multiple_of(2) {
+                0.0
+            } else {
+                0.05
+            };
             self.renderer.set_instance_transform(
                 k,
                 Mat4::from_translation(Vec3::new(dx, 0.0, 0.0)) * base,
