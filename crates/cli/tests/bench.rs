@@ -169,7 +169,7 @@ fn bench_layered_rejects_bad_arguments() {
         ("--maps 5000", "--maps 5000"),
         ("--resolutions 3", "--resolutions 3"),
         ("--variants nope", "unknown variant"),
-        ("--methods raytraced", "unknown technique"),
+        ("--methods nope", "unknown technique"),
         ("--methods layered:sideways", "unknown cull mode"),
         ("--repeats 0", "--repeats"),
     ] {

@@ -437,6 +437,7 @@ mod tests {
                 "gbuffer",
                 "clusters",
                 "pages",
+                "accel",
                 "shadows",
                 "lighting",
                 "visibility"
