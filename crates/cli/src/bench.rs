@@ -157,7 +157,7 @@ struct Method {
 
 impl Method {
     fn label(&self) -> String {
-        if !self.technique.info().culls_triangles {
+        if !self.technique.info().culling.honours_cull_mode() {
             self.technique.name().into()
         } else {
             format!("{}:{}", self.technique.name(), self.cull.name())
@@ -180,7 +180,7 @@ fn methods_for(specs: &[String], variant: &Variant) -> Result<Vec<Method>> {
         };
         let technique: Technique = t.parse().map_err(anyhow::Error::msg)?;
         crate::techniques::require_atlas(&format!("method '{spec}'"), technique)?;
-        if !technique.info().culls_triangles {
+        if !technique.info().culling.honours_cull_mode() {
             push(Method {
                 technique,
                 cull: CullMode::None,

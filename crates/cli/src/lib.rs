@@ -235,6 +235,12 @@ pub(crate) struct RenderArgs {
     /// how many views (pages) each frame redraws.
     #[arg(long)]
     cache: bool,
+    /// Render even a frame whose shadow work is far beyond the rest (more than 2 G
+    /// triangle-view pairs, e.g. a technique that sends every triangle to each of thousands
+    /// of views): without it such a frame is refused with its estimate and the techniques that
+    /// scale, before anything is drawn.
+    #[arg(long)]
+    insist: bool,
     /// With --frames > 1, turn the camera this many degrees per frame around its target (about
     /// its up axis). The shadow plan follows: cascades refit, lights that leave the screen
     /// give up their maps and lights that enter it get them.
@@ -694,6 +700,9 @@ fn render(args: &RenderArgs) -> Result<()> {
     let settings = render_settings(args, atlas_max);
     pb.set_message("uploading the scene and building pipelines");
     let mut renderer = Renderer::new(&ctx, &scene, settings)?;
+    if !args.insist {
+        pb.suspend(|| check_shadow_work(&renderer))?;
+    }
     let mover = match args.move_instance {
         Some(k) if k >= scene.instances.len() => bail!(
             "--move-instance {k}: the scene has {} instances",
@@ -837,6 +846,52 @@ fn summary(
     })
 }
 
+/// Most (caster triangle, view) pairs a frame may take without `--insist`: 2 G. The layered
+/// technique with the atrium's 16,384 lights asks 9.4 G and ran past ten minutes on lavapipe;
+/// the default frame asks 21.6 M.
+const MAX_UNASKED_TRIANGLE_VIEWS: u64 = 2_000_000_000;
+
+/// Refuses, before any frame is drawn, a frame whose per-view shadow work passes
+/// [`MAX_UNASKED_TRIANGLE_VIEWS`], with the estimate and the techniques that scale.
+fn check_shadow_work(renderer: &Renderer) -> Result<()> {
+    let Some(work) = renderer.shadow_work() else {
+        return Ok(());
+    };
+    if work.triangle_views <= MAX_UNASKED_TRIANGLE_VIEWS {
+        return Ok(());
+    }
+    let technique = renderer.settings().technique;
+    let g = |n: u64| format!("{:.1} G", n as f64 / 1e9);
+    let culled: Vec<&str> = Technique::all()
+        .into_iter()
+        .filter(|t| {
+            matches!(
+                t.info().culling,
+                manyshadows::Culling::Instances | manyshadows::Culling::Clusters
+            ) && t.info().fills == manyshadows::Fills::Atlas
+        })
+        .map(|t| t.name())
+        .collect();
+    let viewless: Vec<&str> = Technique::all()
+        .into_iter()
+        .filter(|t| t.info().fills != manyshadows::Fills::Atlas)
+        .map(|t| t.name())
+        .collect();
+    bail!(
+        "technique {technique} would take {} (caster triangle, view) pairs this frame ({} \
+         views; it culls per view only after every triangle reached the view), more than the \
+         {} this command starts unasked. Techniques that cull whole instances or clusters per \
+         view first take at most {} here ({}); {} scale with pixels and lights instead of \
+         views. Pass --insist to render it anyway.",
+        g(work.triangle_views),
+        work.views,
+        g(MAX_UNASKED_TRIANGLE_VIEWS),
+        g(work.after_instance_culling),
+        culled.join(", "),
+        viewless.join(", ")
+    );
+}
+
 fn print_summary(s: &serde_json::Value) {
     let l = &s["lights"];
     let a = &s["atlas"];
@@ -916,8 +971,26 @@ fn print_summary(s: &serde_json::Value) {
             );
         }
     }
+    // What the triangle count is: drawn (after instance or cluster culling), or handed to a
+    // stage that culls each (triangle, view) itself.
+    let culling = s["technique"]
+        .as_str()
+        .and_then(|t| t.parse::<Technique>().ok())
+        .map(|t| t.info().culling);
+    let what = match culling {
+        Some(manyshadows::Culling::VertexStage) => {
+            "triangle-views submitted (each culled per view in the vertex stage)"
+        }
+        Some(manyshadows::Culling::Threads) => {
+            "triangle-views submitted (each culled per view by its setup thread)"
+        }
+        Some(manyshadows::Culling::Clusters) => {
+            "triangle-views submitted (clusters culled per view in compute before drawing)"
+        }
+        _ => "triangles drawn",
+    };
     println!(
-        "shadow work  {} passes, {} draws ({} culled), {} triangles",
+        "shadow work  {} passes, {} draws ({} instance-views culled on the CPU), {} {what}",
         w["passes"], w["draws"], w["culled_draws"], w["triangles"]
     );
     let c = &s["clusters"];

@@ -305,3 +305,28 @@ fn each_cause_is_printed_once() {
         "the cause '{reason}' should appear once: {stderr}"
     );
 }
+
+/// A frame far beyond the rest (every one of 257,596 triangles in each of 36,499 views, 9.4 G
+/// pairs) is refused before anything is drawn, with its estimate and the techniques that
+/// scale; `--insist` is the way past it (not run here: it takes minutes).
+#[test]
+fn a_ten_minute_frame_is_refused_with_its_estimate() {
+    let out = run(&[
+        "render",
+        "--lights",
+        "16384",
+        "--technique",
+        "layered",
+        "--width",
+        "64",
+        "--height",
+        "36",
+        "--out",
+        "/dev/null",
+    ]);
+    assert_clean_failure(&out, 1, "would take 9.4 G (caster triangle, view) pairs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    for needle in ["36499 views", "traditional, gpu-driven", "--insist"] {
+        assert!(stderr.contains(needle), "{needle}: {stderr}");
+    }
+}

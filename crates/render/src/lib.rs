@@ -108,9 +108,11 @@ pub use gpu::context::{
 };
 pub use gpu::timing::{GpuTimes, Stage};
 pub use gpu_scene::casters::CasterOptions;
-pub use renderer::{Frame, FrameTimings, Renderer, ShadowLayout, ShadowPicture, SubmittedFrame};
+pub use renderer::{
+    Frame, FrameTimings, Renderer, ShadowLayout, ShadowPicture, ShadowWork, SubmittedFrame,
+};
 pub use settings::{CullMode, Pcf, RenderSettings, ShadowBias, ShadowOptions, Technique};
-pub use shadows::descriptor::{Fills, Need, Requirement, TechniqueInfo};
+pub use shadows::descriptor::{Culling, Fills, Need, Requirement, TechniqueInfo};
 pub use shadows::irregular::maps::{IrregularOptions, IrregularStats};
 pub use shadows::plan::DEFAULT_MAX_ATLAS_SIZE;
 pub use shadows::raytraced::accel::RayOptions;

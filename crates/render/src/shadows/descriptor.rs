@@ -38,6 +38,34 @@ impl Fills {
     }
 }
 
+/// Where a technique drops the caster triangles a shadow view cannot see, which decides how its
+/// work grows with views × triangles.
+#[non_exhaustive]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Culling {
+    /// Whole instances per view by bounding sphere on the CPU; per-triangle culling is not
+    /// applied (`ShadowOptions::cull` is ignored).
+    Instances,
+    /// Clusters of triangles per view in a compute pass before drawing.
+    Clusters,
+    /// Every caster triangle reaches every view's vertex stage, which drops the culled ones.
+    VertexStage,
+    /// One compute thread per (caster triangle, view) sets up, culls and rasterizes.
+    Threads,
+    /// No per-view triangle work: the technique tests samples or casts rays.
+    NoViews,
+}
+
+impl Culling {
+    /// True if the technique applies `ShadowOptions::cull` to triangles.
+    pub fn honours_cull_mode(self) -> bool {
+        matches!(
+            self,
+            Culling::Clusters | Culling::VertexStage | Culling::Threads
+        )
+    }
+}
+
 /// Something a technique needs of the device.
 #[non_exhaustive]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -175,9 +203,9 @@ pub struct TechniqueInfo {
     pub origin: &'static str,
     /// What it fills.
     pub fills: Fills,
-    /// True if it culls triangles per view as [`crate::ShadowOptions::cull`] asks (the
-    /// single-pass techniques); false if it ignores the option.
-    pub culls_triangles: bool,
+    /// Where it culls casters per view (which also says whether it applies
+    /// [`crate::ShadowOptions::cull`]: [`Culling::honours_cull_mode`]).
+    pub culling: Culling,
     /// The point-light shadow modes it renders.
     pub point_shadows: &'static [PointShadows],
     /// What it needs of the device beyond the renderer's own minimum.

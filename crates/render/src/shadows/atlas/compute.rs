@@ -35,7 +35,7 @@ use manyshadows_scene::light_space::PointShadows;
 use crate::gpu::shaders::{compose, ALPHA_MASK, COMMON, CULL};
 use crate::settings::Technique;
 use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
-use crate::shadows::descriptor::{Build, Fills, TechniqueInfo, Wgsl};
+use crate::shadows::descriptor::{Build, Culling, Fills, TechniqueInfo, Wgsl};
 use crate::shadows::source::ShadowStats;
 use crate::{GpuContext, RenderError};
 
@@ -51,7 +51,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
               depth by atomicMin into a buffer, then copied into the tiles",
     origin: "beyond the seeds: a software rasterizer as in UE5's Nanite",
     fills: Fills::Atlas,
-    culls_triangles: true,
+    culling: Culling::Threads,
     point_shadows: &[PointShadows::Cube],
     needs: &[],
     instead: "",

@@ -31,7 +31,7 @@ use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear, Un
 use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
 use crate::shadows::cluster_draw::{plan_rounds, Round, COMMAND_SIZE};
 use crate::shadows::depth::depth_pipeline;
-use crate::shadows::descriptor::{Build, Fills, Need, TechniqueInfo, Wgsl};
+use crate::shadows::descriptor::{Build, Culling, Fills, Need, TechniqueInfo, Wgsl};
 use crate::shadows::source::ShadowStats;
 use crate::{GpuContext, RenderError};
 
@@ -48,7 +48,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
               multi-draw fills every tile",
     origin: "seed 002 (GPU culling of shadow casters, multi-draw-indirect)",
     fills: Fills::Atlas,
-    culls_triangles: true,
+    culling: Culling::Clusters,
     point_shadows: &[PointShadows::Cube],
     needs: &[
         Need::feature(

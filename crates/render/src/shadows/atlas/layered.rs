@@ -19,7 +19,7 @@ use crate::settings::Technique;
 use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear};
 use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
 use crate::shadows::depth::{depth_pipeline, masked_depth_pipeline};
-use crate::shadows::descriptor::{Build, Fills, Need, TechniqueInfo, Wgsl};
+use crate::shadows::descriptor::{Build, Culling, Fills, Need, TechniqueInfo, Wgsl};
 use crate::shadows::source::ShadowStats;
 use crate::{GpuContext, RenderError};
 
@@ -34,7 +34,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     summary: "one instanced draw into every tile; per-view triangle culling in the vertex shader",
     origin: "seed 000 section 19.3 (layered rendering), Listings 19.9 and 19.10 (culling)",
     fills: Fills::Atlas,
-    culls_triangles: true,
+    culling: Culling::VertexStage,
     point_shadows: &[PointShadows::Cube, PointShadows::DualParaboloid],
     needs: &[Need::feature(
         wgpu::Features::CLIP_DISTANCES,

@@ -30,7 +30,7 @@ use crate::settings::{CullMode, Technique};
 use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear, UniformRecords};
 use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
 use crate::shadows::depth::{layered_depth_pipeline, masked_depth_pipeline};
-use crate::shadows::descriptor::{Build, Fills, Need, TechniqueInfo, Wgsl};
+use crate::shadows::descriptor::{Build, Culling, Fills, Need, TechniqueInfo, Wgsl};
 use crate::shadows::source::ShadowStats;
 use crate::{GpuContext, RenderError};
 
@@ -46,7 +46,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
               copy into the tiles",
     origin: "seed 000 section 19.5; seed 003's cube map in one pass",
     fills: Fills::Atlas,
-    culls_triangles: true,
+    culling: Culling::VertexStage,
     point_shadows: &[PointShadows::Cube],
     needs: &[Need::multiview(
         "one render pass per group of up to 6-32 equal-size shadow views",

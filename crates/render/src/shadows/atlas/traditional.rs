@@ -12,7 +12,7 @@ use crate::gpu_scene::skinning::{MAX_BONES, SKIN_LAYOUT};
 use crate::settings::Technique;
 use crate::shadows::atlas::shared::{atlas_attachment, TileClear};
 use crate::shadows::atlas::technique::{visible_casters, Generation, ShadowInput, ShadowTechnique};
-use crate::shadows::descriptor::{Build, Fills, TechniqueInfo, Wgsl};
+use crate::shadows::descriptor::{Build, Culling, Fills, TechniqueInfo, Wgsl};
 use crate::shadows::source::ShadowStats;
 use crate::GpuContext;
 
@@ -27,7 +27,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     summary: "one depth pass per shadow view, instances culled on the CPU",
     origin: "seed 004's shadow pass; seed 000 section 19.2 (the baseline)",
     fills: Fills::Atlas,
-    culls_triangles: false,
+    culling: Culling::Instances,
     point_shadows: &[PointShadows::Cube, PointShadows::DualParaboloid],
     needs: &[],
     instead: "",

@@ -9,7 +9,7 @@ use crate::gpu::timing::GpuTimer;
 use crate::gpu::types::LightData;
 use crate::gpu_scene::instances::GpuScene;
 use crate::settings::{RenderSettings, Technique};
-use crate::shadows::descriptor::{Build, Fills, TechniqueInfo, Wgsl};
+use crate::shadows::descriptor::{Build, Culling, Fills, TechniqueInfo, Wgsl};
 use crate::shadows::irregular::maps::{
     IrregularInputs, IrregularOptions, IrregularShadows, IrregularStats,
 };
@@ -30,7 +30,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
               every caster triangle tested exactly against the samples under it; alias-free",
     origin: "seed 001 (irregular shadow mapping)",
     fills: Fills::Mask,
-    culls_triangles: false,
+    culling: Culling::NoViews,
     point_shadows: &[PointShadows::Cube],
     needs: &[],
     instead: "",

@@ -12,7 +12,7 @@ use crate::gpu::timing::{GpuTimer, Stage};
 use crate::gpu::types::LightData;
 use crate::gpu_scene::instances::GpuScene;
 use crate::settings::{RenderSettings, Technique};
-use crate::shadows::descriptor::{Build, Fills, Need, TechniqueInfo, Wgsl};
+use crate::shadows::descriptor::{Build, Culling, Fills, Need, TechniqueInfo, Wgsl};
 use crate::shadows::plan::ShadowPlan;
 use crate::shadows::raytraced::accel::RayAccel;
 use crate::shadows::source::{
@@ -33,7 +33,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
               importance); exact, no shadow map",
     origin: "beyond the seeds: what Unreal's MegaLights and ReSTIR do for many lights",
     fills: Fills::Rays,
-    culls_triangles: false,
+    culling: Culling::NoViews,
     point_shadows: &[PointShadows::Cube, PointShadows::DualParaboloid],
     needs: &[Need::feature(
         wgpu::Features::EXPERIMENTAL_RAY_QUERY,

@@ -9,7 +9,7 @@ use crate::gpu::timing::GpuTimer;
 use crate::gpu::types::LightData;
 use crate::gpu_scene::instances::GpuScene;
 use crate::settings::{RenderSettings, Technique};
-use crate::shadows::descriptor::{Build, Fills, Need, TechniqueInfo, Wgsl};
+use crate::shadows::descriptor::{Build, Culling, Fills, Need, TechniqueInfo, Wgsl};
 use crate::shadows::plan::ShadowPlan;
 use crate::shadows::source::{
     PagePool, ShadowOutput, ShadowSource, ShadowStats, SourceInputs, ViewTable, Views,
@@ -30,7 +30,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
               camera's samples need, at the resolution they need, rendered into a page pool",
     origin: "seed 002 (Olsson et al., virtual shadow maps for many lights)",
     fills: Fills::Pages,
-    culls_triangles: true,
+    culling: Culling::Clusters,
     point_shadows: &[PointShadows::Cube],
     needs: &[
         Need::feature(
