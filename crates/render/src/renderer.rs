@@ -110,6 +110,26 @@ pub struct ShadowWork {
     pub all_pairs: u64,
 }
 
+/// Timestamp copies of submitted frames on their way back: mapped asynchronously, decoded
+/// when the GPU has finished them, never waited for.
+#[derive(Default)]
+struct TimingsInFlight {
+    /// (staging buffer, spans, set when its mapping completed).
+    pending: std::collections::VecDeque<(
+        wgpu::Buffer,
+        Vec<(crate::gpu::timing::Stage, crate::gpu::timing::Span)>,
+        std::sync::Arc<std::sync::atomic::AtomicU8>,
+    )>,
+    /// Unmapped staging buffers to reuse.
+    free: Vec<wgpu::Buffer>,
+}
+
+/// Most frames whose timings may be in flight; a frame beyond them is not timed.
+const MAX_TIMINGS_IN_FLIGHT: usize = 3;
+const MAP_PENDING: u8 = 0;
+const MAP_DONE: u8 = 1;
+const MAP_FAILED: u8 = 2;
+
 /// A picture of a renderer's shadow maps ([`Renderer::shadow_picture`]).
 #[non_exhaustive]
 #[derive(Clone, Debug)]
@@ -140,6 +160,8 @@ pub struct Renderer {
     visibility: Option<VisibilityPass>,
     /// Copies frames into callers' textures ([`Renderer::render_to`]); built on first use.
     blit: Option<crate::frame::blit::Blit>,
+    /// GPU times of frames drawn by `render_to`, read back without waiting (oldest first).
+    timings: TimingsInFlight,
     timer: GpuTimer,
     /// The frame's state (camera, lights, instance transforms) as last set.
     current: Scene,
@@ -246,6 +268,7 @@ impl Renderer {
                 clusters,
                 visibility,
                 blit: None,
+                timings: TimingsInFlight::default(),
                 timer: GpuTimer::new(ctx),
                 current: scene.clone(),
                 dirty: false,
@@ -601,7 +624,35 @@ impl Renderer {
                 .blit
                 .get_or_insert_with(|| crate::frame::blit::Blit::new(ctx));
             blit.record(ctx, &mut encoder, &self.lighting.color, target)?;
+            // The frame's timestamps go to a staging buffer mapped without waiting
+            // (`poll_gpu_timings`); `read_gpu_timings` can still resolve them afterwards.
+            let bytes = self.timer.resolved_bytes();
+            let staged =
+                (bytes > 0 && self.timings.pending.len() < MAX_TIMINGS_IN_FLIGHT).then(|| {
+                    let staging = match self.timings.free.iter().position(|b| b.size() >= bytes) {
+                        Some(i) => self.timings.free.swap_remove(i),
+                        None => ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                            label: Some("renderer.timings"),
+                            size: bytes.max(256),
+                            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                            mapped_at_creation: false,
+                        }),
+                    };
+                    let spans = self.timer.resolve_to(&mut encoder, &staging);
+                    (staging, spans)
+                });
             ctx.queue.submit([encoder.finish()]);
+            if let Some((staging, spans)) = staged {
+                let state = std::sync::Arc::new(std::sync::atomic::AtomicU8::new(MAP_PENDING));
+                let done = state.clone();
+                staging.map_async(wgpu::MapMode::Read, .., move |r| {
+                    done.store(
+                        if r.is_ok() { MAP_DONE } else { MAP_FAILED },
+                        std::sync::atomic::Ordering::Release,
+                    );
+                });
+                self.timings.pending.push_back((staging, spans, state));
+            }
             self.source.finish(ctx)?;
             Ok(SubmittedFrame {
                 shadow_stats,
@@ -617,6 +668,35 @@ impl Renderer {
         ctx.scoped("reading the frame's GPU times", || {
             self.resolve_timings(ctx)
         })
+    }
+
+    /// GPU milliseconds per stage of the newest frame [`Renderer::render_to`] submitted whose
+    /// GPU work has finished, or `None` while none has since the last call. Never waits for
+    /// the GPU (it only polls the device): an interactive loop calls it every frame and shows
+    /// times a frame or two old, where [`Renderer::read_gpu_timings`] would wait for the frame
+    /// just submitted.
+    pub fn poll_gpu_timings(&mut self) -> Option<GpuTimes> {
+        use std::sync::atomic::Ordering;
+        let _ = self.ctx.device.poll(wgpu::PollType::Poll);
+        let mut newest = None;
+        while let Some((_, _, state)) = self.timings.pending.front() {
+            match state.load(Ordering::Acquire) {
+                MAP_PENDING => break,
+                s => {
+                    let (staging, spans, _) = self.timings.pending.pop_front().expect("front");
+                    if s == MAP_DONE {
+                        if let Ok(view) = staging.get_mapped_range(..) {
+                            let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&view);
+                            drop(view);
+                            newest = Some(self.timer.decode(&spans, &ticks));
+                        }
+                        staging.unmap();
+                        self.timings.free.push(staging);
+                    }
+                }
+            }
+        }
+        newest
     }
 
     /// Renders one frame and reads it back.

@@ -227,3 +227,37 @@ fn the_hosts_error_handler_stays_unless_it_asks() {
         .expect_err("the renderer reports the captured error");
     assert!(matches!(err, RenderError::Gpu { .. }), "{err:?}");
 }
+
+/// `poll_gpu_timings` hands back the GPU times of frames `render_to` submitted once the GPU
+/// has finished them, without waiting: the same stages `read_gpu_timings` reads.
+#[test]
+fn gpu_timings_come_back_without_a_wait() {
+    let ctx = common::context();
+    if !ctx.has(wgpu::Features::TIMESTAMP_QUERY) {
+        return;
+    }
+    let scene = builtin::build("cubes", &BuiltinOptions::default()).unwrap();
+    let mut r = Renderer::new(&ctx, &scene, RenderSettings::new(64, 48)).unwrap();
+    let target = texture(&ctx, 64, 48, wgpu::TextureFormat::Rgba8UnormSrgb);
+    let mut got = None;
+    for _ in 0..4 {
+        r.render_to(&target).unwrap();
+        if let Some(t) = r.poll_gpu_timings() {
+            got = Some(t);
+        }
+    }
+    // However far the GPU got, once it is idle the newest frame's times are there.
+    ctx.wait_idle().unwrap();
+    if let Some(t) = r.poll_gpu_timings() {
+        got = Some(t);
+    }
+    let polled = got.expect("times after the GPU finished");
+    assert!(
+        r.poll_gpu_timings().is_none(),
+        "each frame's times come back once"
+    );
+    let read = r.read_gpu_timings().unwrap();
+    let stages = |t: &manyshadows::GpuTimes| t.iter().map(|(s, _)| s).collect::<Vec<_>>();
+    assert_eq!(stages(&polled), stages(&read));
+    assert!(polled.total().unwrap() > 0.0);
+}

@@ -388,6 +388,48 @@ impl GpuTimer {
         encoder.copy_buffer_to_buffer(resolve, 0, readback, 0, n as u64 * 8);
     }
 
+    /// Bytes a copy of this frame's resolved timestamps takes (0 without timestamps or spans).
+    pub fn resolved_bytes(&self) -> u64 {
+        if self.queries.is_none() {
+            return 0;
+        }
+        self.labels.len() as u64 * 2 * 8
+    }
+
+    /// Records the resolve of this frame's queries and a copy of the timestamps into
+    /// `staging` (a `MAP_READ | COPY_DST` buffer of at least [`GpuTimer::resolved_bytes`]),
+    /// and returns the spans to decode them with once `staging` is mapped
+    /// ([`GpuTimer::decode`]): a read-back that never waits for the GPU.
+    pub fn resolve_to(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        staging: &wgpu::Buffer,
+    ) -> Vec<(Stage, Span)> {
+        let Some((set, resolve, _)) = self.queries.as_ref() else {
+            return Vec::new();
+        };
+        let n = self.labels.len() as u32 * 2;
+        if n == 0 {
+            return Vec::new();
+        }
+        encoder.resolve_query_set(set, 0..n, resolve, 0);
+        encoder.copy_buffer_to_buffer(resolve, 0, staging, 0, n as u64 * 8);
+        self.labels.clone()
+    }
+
+    /// GPU milliseconds of `spans` from their resolved `ticks`.
+    pub fn decode(&self, spans: &[(Stage, Span)], ticks: &[u64]) -> GpuTimes {
+        GpuTimes(
+            spans
+                .iter()
+                .map(|&(stage, s)| {
+                    let dt = ticks[s.end as usize].saturating_sub(ticks[s.begin as usize]);
+                    (stage, dt as f64 * self.period_ns as f64 / 1e6)
+                })
+                .collect(),
+        )
+    }
+
     /// Reads the resolved spans back (after the frame's submission).
     pub fn read(&self, ctx: &GpuContext) -> Result<GpuTimes, RenderError> {
         let Some((_, _, readback)) = self.queries.as_ref() else {
