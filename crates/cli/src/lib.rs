@@ -989,10 +989,27 @@ fn print_summary(s: &serde_json::Value) {
         }
         _ => "triangles drawn",
     };
-    println!(
-        "shadow work  {} passes, {} draws ({} instance-views culled on the CPU), {} {what}",
-        w["passes"], w["draws"], w["culled_draws"], w["triangles"]
-    );
+    let fills = s["technique"]
+        .as_str()
+        .and_then(|t| t.parse::<Technique>().ok())
+        .map(|t| t.info().fills);
+    match fills {
+        // Pages are chosen, culled and drawn on the GPU: their counts are the pages line's.
+        Some(manyshadows::Fills::Pages) => println!(
+            "shadow work  {} pages drawn by indirect multi-draws ({} kept from the last frame); \
+             their clusters are culled on the GPU",
+            s["virtual"]["drawn"], s["virtual"]["kept"]
+        ),
+        Some(manyshadows::Fills::Rays) => println!(
+            "shadow work  no shadow map: one ray per pixel and light of its cluster (or per \
+             sampled light) in the lighting pass; {} top-level structure build(s)",
+            w["passes"]
+        ),
+        _ => println!(
+            "shadow work  {} passes, {} draws ({} instance-views culled on the CPU), {} {what}",
+            w["passes"], w["draws"], w["culled_draws"], w["triangles"]
+        ),
+    }
     let c = &s["clusters"];
     if c.is_object() {
         let overflow = c["overflowed"].as_u64().unwrap_or(0);
