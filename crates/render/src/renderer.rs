@@ -114,15 +114,19 @@ pub struct ShadowWork {
 /// when the GPU has finished them, never waited for.
 #[derive(Default)]
 struct TimingsInFlight {
-    /// (staging buffer, spans, set when its mapping completed).
-    pending: std::collections::VecDeque<(
-        wgpu::Buffer,
-        Vec<(crate::gpu::timing::Stage, crate::gpu::timing::Span)>,
-        std::sync::Arc<std::sync::atomic::AtomicU8>,
-    )>,
+    /// Oldest first.
+    pending: std::collections::VecDeque<StagedTimes>,
     /// Unmapped staging buffers to reuse.
     free: Vec<wgpu::Buffer>,
 }
+
+/// One frame's timestamps on their way back: the staging buffer, the spans to decode it with,
+/// and the state of its mapping (`MAP_PENDING`, `MAP_DONE`, `MAP_FAILED`).
+type StagedTimes = (
+    wgpu::Buffer,
+    Vec<(crate::gpu::timing::Stage, crate::gpu::timing::Span)>,
+    std::sync::Arc<std::sync::atomic::AtomicU8>,
+);
 
 /// Most frames whose timings may be in flight; a frame beyond them is not timed.
 const MAX_TIMINGS_IN_FLIGHT: usize = 3;
