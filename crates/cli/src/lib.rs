@@ -308,9 +308,10 @@ pub(crate) struct RenderArgs {
     /// equalising hash; default: one list per texel). Changes speed, not the result.
     #[arg(long)]
     irregular_hash: Option<u32>,
-    /// Page pool of --technique virtual, MiB of 32-bit depth (rounded down to a square
-    /// power-of-two pool of 128² pages; 256 = an 8192² pool of 4096 pages). Pages that do not
-    /// fit fall back to coarser levels, counted in the summary.
+    /// Page pool of --technique virtual, MiB of 32-bit depth: the largest square of whole 128²
+    /// pages that fits (256 = an 8192² pool of 4,096 pages, 512 = 11520² of 8,100 pages), at
+    /// most the adapter's largest texture; the summary says when that is less than asked.
+    /// Pages that do not fit fall back to coarser levels, counted in the summary.
     #[arg(long, default_value_t = (manyshadows::shadows::vsm::plan::DEFAULT_POOL_BYTES >> 20) as u32)]
     page_pool: u32,
     /// Largest virtual side of a face for --technique virtual (rounded to a power of two and
@@ -774,6 +775,28 @@ fn render(args: &RenderArgs) -> Result<()> {
         write_visibility(dir, vis, &scene)?;
     }
     pb.finish_and_clear();
+    if let Some(v) = &frame.virtual_maps {
+        let asked = u64::from(args.page_pool) << 20;
+        if v.pool_bytes != asked {
+            eprintln!(
+                "note: --page-pool {} MiB is used as a {}² pool of {} pages, {:.2} MiB (a square \
+                 of whole 128² pages{})",
+                args.page_pool,
+                v.pool_side,
+                v.pool_pages,
+                v.pool_bytes as f64 / (1 << 20) as f64,
+                if v.pool_bytes < asked && v.pool_side + 128 > ctx.limits().max_texture_dimension_2d
+                {
+                    format!(
+                        ", and this adapter's largest texture is {}",
+                        ctx.limits().max_texture_dimension_2d
+                    )
+                } else {
+                    String::new()
+                }
+            );
+        }
+    }
     let summary = summary(&ctx, &scene, &renderer, &frame, args, started.elapsed());
     print_summary(&summary);
     if let Some(path) = &args.json {

@@ -330,3 +330,40 @@ fn a_ten_minute_frame_is_refused_with_its_estimate() {
         assert!(stderr.contains(needle), "{needle}: {stderr}");
     }
 }
+
+/// A page pool that is not a square of whole pages is announced with what is used (512 MiB:
+/// 11520², 8,100 pages — a power-of-two pool would have kept 4,096); the default is exact.
+#[test]
+fn a_rounded_page_pool_is_announced() {
+    let dir = tmp("page-pool-note");
+    let args = |pool: &'static str| {
+        [
+            "render",
+            "--scene",
+            "cubes",
+            "--technique",
+            "virtual",
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--page-pool",
+            pool,
+        ]
+    };
+    let out_path = dir.join("f.png");
+    let mut a = args("512").to_vec();
+    a.extend(["--out", out_path.to_str().unwrap()]);
+    let out = run(&a);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("--page-pool 512 MiB is used as a 11520² pool of 8100 pages"),
+        "no note: {stderr}"
+    );
+    let mut a = args("256").to_vec();
+    a.extend(["--out", out_path.to_str().unwrap()]);
+    let out = run(&a);
+    assert!(out.status.success());
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("--page-pool"));
+}

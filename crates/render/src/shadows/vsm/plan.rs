@@ -20,8 +20,9 @@ pub const DEFAULT_TABLE_ENTRIES: u32 = 4 << 20;
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct VirtualOptions {
-    /// Page-pool budget in bytes (rounded down to a square power-of-two pool, within the
-    /// adapter's texture limit).
+    /// Page-pool budget in bytes: the pool is the largest square of whole 128² pages of
+    /// 32-bit depth that fits it (512 MiB: 11,520², 8,100 pages, 506 MiB), at most the
+    /// adapter's largest 2D texture; [`VirtualStats::pool_bytes`] says what was used.
     pub pool_bytes: u64,
     /// Largest virtual side of a face (a power of two, 128 to 16,384).
     pub max_side: u32,
@@ -229,13 +230,21 @@ impl VirtualStats {
     }
 }
 
-/// The pool side for a byte budget: the largest power of two whose square of 4-byte texels
-/// fits, at least one page, at most `max_dim`.
+/// The pool side for a byte budget: the largest whole number of pages per row whose square
+/// of 4-byte texels fits, at least one page, at most `max_dim` (rounded down to whole pages).
 pub fn pool_side(bytes: u64, max_dim: u32) -> u32 {
-    let texels = (bytes / 4).max(PAGE_SIZE as u64 * PAGE_SIZE as u64);
-    let side = 1u64 << ((64 - texels.leading_zeros() - 1) / 2);
-    let max = 1u64 << (31 - max_dim.max(PAGE_SIZE).leading_zeros());
-    side.clamp(PAGE_SIZE as u64, max) as u32
+    let page = u64::from(PAGE_SIZE);
+    let texels = (bytes / 4).max(page * page);
+    let mut side = (texels as f64).sqrt() as u64;
+    // The float root may be one off either way; settle it exactly.
+    while side * side > texels {
+        side -= 1;
+    }
+    while (side + 1) * (side + 1) <= texels {
+        side += 1;
+    }
+    let max = (u64::from(max_dim.max(PAGE_SIZE)) / page) * page;
+    ((side / page) * page).clamp(page, max) as u32
 }
 
 #[cfg(test)]
@@ -256,10 +265,15 @@ mod tests {
     #[test]
     fn pool_side_is_the_largest_square_within_budget() {
         assert_eq!(pool_side(256 << 20, 16384), 8192);
-        assert_eq!(pool_side((256 << 20) - 1, 16384), 4096);
+        // One byte less: one page per row less (8064 = 63 pages), not half the side.
+        assert_eq!(pool_side((256 << 20) - 1, 16384), 8064);
         assert_eq!(pool_side(1 << 30, 8192), 8192);
         assert_eq!(pool_side(0, 16384), PAGE_SIZE);
         assert_eq!(pool_side(64 << 20, 16384), 4096);
+        // 512 MiB: 90 pages per row, 8,100 pages (a power of two would give 4,096).
+        assert_eq!(pool_side(512 << 20, 16384), 11520);
+        // Capped by the texture limit, in whole pages.
+        assert_eq!(pool_side(4 << 30, 16100), 16000);
     }
 }
 
