@@ -170,6 +170,9 @@ struct VirtualFace {
     // first page-table entry, finest level, virtual side in texels, and 1 + the face's first
     // entry in last frame's table when its resident pages may be kept (0: draw them anew).
     table: vec4<u32>,
+    // The part of the face (uv min xy, max xy) where casters moved since the last frame:
+    // kept pages overlapping it are drawn anew. Empty (min > max) when nothing moved there.
+    dirty: vec4<f32>,
 }
 
 struct VsmUniforms {

@@ -222,6 +222,9 @@ pub struct VirtualFace {
     /// First page-table entry, finest level, virtual side in texels, 1 + the face's first
     /// entry in last frame's table when its pages may be kept (0: draw them anew).
     pub table: [u32; 4],
+    /// Where casters moved in the face since the last frame (uv min x, min y, max x, max y):
+    /// kept pages overlapping it are drawn anew; empty (min > max) when none did.
+    pub dirty: [f32; 4],
 }
 
 /// Pool and page-table layout of the virtual shadow maps (`VsmUniforms`).
@@ -343,7 +346,7 @@ mod tests {
         );
         same_layout!(ShadowViewData, view_proj, tile, params);
         same_layout!(ClusterUniforms, grid, words, depth, proj, counts);
-        same_layout!(VirtualFace, view_proj, eye, params, table);
+        same_layout!(VirtualFace, view_proj, eye, params, table, dirty);
         same_layout!(VsmUniforms, pool, counts, lod);
         same_layout!(VsmRound, round, counts);
         assert_eq!(VIEW_UNIFORM_STRIDE, 256);

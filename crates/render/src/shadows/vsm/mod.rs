@@ -26,8 +26,10 @@
 //!    [`VirtualStats`](plan::VirtualStats) count them (a pool smaller than one page per face in
 //!    use leaves the faces beyond it unshadowed, counted too). With caching
 //!    ([`crate::settings::RenderSettings::cache_shadows`]) a page resident last frame in a face
-//!    whose view and casters did not change keeps its pool page and its depth; only the other
-//!    pages get free pool pages and are drawn;
+//!    whose view did not change keeps its pool page and its depth unless a caster moved within
+//!    it (the moved bounding spheres, old and new, projected onto the face: only the pages
+//!    under them are invalidated, not the face); only the other pages get free pool pages and
+//!    are drawn;
 //! 3. *render* ([`draw`], `vsm_draw.wgsl`): every page drawn this frame is an ordinary shadow
 //!    view (the face's projection cropped to the page, one tile of the pool), drawn the
 //!    `gpu-driven` way: compute culls caster clusters against each page's frustum slice (and by

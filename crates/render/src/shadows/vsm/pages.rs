@@ -3,7 +3,7 @@
 //! pages (keeping last frame's where the face did not change), writing the indirect arguments,
 //! then the page rendering of [`super::draw`].
 
-use glam::Vec3;
+use glam::{Mat4, Vec3};
 use manyshadows_scene::light_space::ViewKind;
 use manyshadows_scene::Scene;
 
@@ -18,7 +18,7 @@ use crate::gpu_scene::casters::CasterGeometry;
 use crate::settings::ShadowOptions;
 use crate::shadows::vsm::draw::{PageBuffers, PageDraw};
 use crate::shadows::vsm::plan::{
-    pool_side, VirtualOptions, VirtualPlan, VirtualStats, MAX_LEVELS, PAGE_SIZE,
+    pool_side, VirtualOptions, VirtualPlan, VirtualStats, MAX_LEVELS, NOTHING_MOVED, PAGE_SIZE,
 };
 use crate::{GpuContext, RenderError};
 
@@ -411,8 +411,8 @@ impl VirtualShadows {
         self.groups = Some(Groups { mark, alloc });
     }
 
-    /// Notes that a shadow caster's bounding sphere moved from `old` to `new`: pages of faces
-    /// that see either are not kept at the next frame.
+    /// Notes that a shadow caster's bounding sphere moved from `old` to `new`: the pages
+    /// under either, in the faces that see them, are not kept at the next frame.
     pub fn note_moved(&mut self, old: (Vec3, f32), new: (Vec3, f32)) {
         self.moves.push([old, new]);
     }
@@ -425,7 +425,8 @@ impl VirtualShadows {
     /// Records one frame: the caster transform, page marking and allocation (`pages_span`),
     /// then the page clear and render rounds (`span`). Needs the G-buffer and the clusters of
     /// this frame recorded before it. With `keep`, pages resident last frame in faces whose
-    /// view, virtual side and casters did not change keep their depth and are not redrawn.
+    /// view and virtual side did not change keep their depth and are not redrawn, except those
+    /// under the projection of a caster that moved ([`Self::note_moved`]).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &mut self,
@@ -440,21 +441,24 @@ impl VirtualShadows {
         if self.groups.is_none() {
             return;
         }
-        // Which faces may keep last frame's pages: `table.w` = their first entry then + 1.
+        // Which faces may keep last frame's pages: `table.w` = their first entry then + 1, and
+        // where in them casters moved (`dirty`): only the kept pages there are drawn anew.
         let keep = keep && !casters.skinned();
         let mut faces = self.plan.faces.clone();
         for (face, view) in faces.iter_mut().zip(&self.plan.views) {
             face.table[3] = 0;
+            face.dirty = NOTHING_MOVED;
             let Some(last) = self.last.get(&(view.light, view.kind)) else {
                 continue;
             };
-            let touched = self
-                .moves
-                .iter()
-                .flatten()
-                .any(|&(c, r)| view.sphere_visible(c, r));
-            if keep && last.view_proj == face.view_proj && last.side == face.table[2] && !touched {
-                face.table[3] = last.first + 1;
+            if !(keep && last.view_proj == face.view_proj && last.side == face.table[2]) {
+                continue;
+            }
+            face.table[3] = last.first + 1;
+            for &(c, r) in self.moves.iter().flatten() {
+                if view.sphere_visible(c, r) {
+                    face.dirty = union(face.dirty, moved_rect(view.view_proj, c, r));
+                }
             }
         }
         if !faces.is_empty() {
@@ -567,5 +571,75 @@ impl VirtualShadows {
     /// The plan's per-light records for the lights buffer.
     pub fn light_data(&self, scene: &Scene) -> Vec<LightData> {
         self.plan.light_data(scene)
+    }
+}
+
+/// The part of a face (uv, y down, as the page table lays pages out) that a sphere may cover:
+/// the bounds of its enclosing cube's projected corners, the whole face when a corner lies
+/// behind the light's eye (a perspective face seen from within the sphere's reach).
+fn moved_rect(view_proj: Mat4, c: Vec3, r: f32) -> [f32; 4] {
+    let mut rect = NOTHING_MOVED;
+    for k in 0..8 {
+        let corner = c + Vec3::new(
+            if k & 1 == 0 { -r } else { r },
+            if k & 2 == 0 { -r } else { r },
+            if k & 4 == 0 { -r } else { r },
+        );
+        let clip = view_proj * corner.extend(1.0);
+        if !(clip.w > 1e-6) {
+            return [0.0, 0.0, 1.0, 1.0];
+        }
+        let (u, v) = (0.5 + 0.5 * clip.x / clip.w, 0.5 - 0.5 * clip.y / clip.w);
+        rect = union(rect, [u, v, u, v]);
+    }
+    // Pages are whole cells of the face: clamp to it.
+    [
+        rect[0].max(0.0),
+        rect[1].max(0.0),
+        rect[2].min(1.0),
+        rect[3].min(1.0),
+    ]
+}
+
+/// The smallest rectangle holding both (an empty one, min > max, holds nothing).
+fn union(a: [f32; 4], b: [f32; 4]) -> [f32; 4] {
+    let empty = |r: [f32; 4]| r[0] > r[2] || r[1] > r[3];
+    match (empty(a), empty(b)) {
+        (true, _) => b,
+        (_, true) => a,
+        _ => [
+            a[0].min(b[0]),
+            a[1].min(b[1]),
+            a[2].max(b[2]),
+            a[3].max(b[3]),
+        ],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_moved_sphere_marks_the_part_of_the_face_it_projects_to() {
+        // An orthographic face over x, y in [-10, 10] looking down -Z.
+        let vp = Mat4::orthographic_rh(-10.0, 10.0, -10.0, 10.0, 0.1, 100.0)
+            * Mat4::look_at_rh(Vec3::new(0.0, 0.0, 50.0), Vec3::ZERO, Vec3::Y);
+        let r = moved_rect(vp, Vec3::new(5.0, 5.0, 0.0), 1.0);
+        // x 4..6 → u 0.7..0.8; y 4..6 → v (down) 0.2..0.3.
+        for (got, want) in r.iter().zip([0.7, 0.2, 0.8, 0.3]) {
+            assert!((got - want).abs() < 1e-5, "{r:?}");
+        }
+        // Behind a perspective eye: the whole face.
+        let persp = Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0);
+        assert_eq!(
+            moved_rect(persp, Vec3::new(0.0, 0.0, 0.0), 1.0),
+            [0.0, 0.0, 1.0, 1.0]
+        );
+        assert_eq!(union(NOTHING_MOVED, r), r);
+        assert_eq!(
+            union([0.0, 0.0, 0.1, 0.1], [0.5, 0.5, 0.6, 0.6]),
+            [0.0, 0.0, 0.6, 0.6]
+        );
     }
 }

@@ -14,6 +14,8 @@ pub const MAX_LEVELS: u32 = 8;
 pub const MAX_SIDE: u32 = PAGE_SIZE << (MAX_LEVELS - 1);
 /// Default page-pool budget: 256 MiB of 32-bit depth (an 8192² pool of 4096 pages).
 pub const DEFAULT_POOL_BYTES: u64 = 256 << 20;
+/// [`VirtualFace::dirty`] of a face where no caster moved (min > max).
+pub const NOTHING_MOVED: [f32; 4] = [1.0, 1.0, 0.0, 0.0];
 /// Default cap on page-table entries (4 bytes each).
 pub const DEFAULT_TABLE_ENTRIES: u32 = 4 << 20;
 /// Knobs of the virtual shadow maps.
@@ -167,6 +169,7 @@ impl VirtualPlan {
                 ],
                 // w: last frame's first entry + 1 when its pages may be kept (set per frame).
                 table: [first, finest, side, 0],
+                dirty: NOTHING_MOVED,
             });
             first = first.saturating_add(table_entries(side));
         }

@@ -14,8 +14,9 @@
 //    without shadows: the first faces in light order get the pool's pages, the rest are
 //    counted unshadowed.
 // 3. cs_retain, one thread per entry: an admitted page whose face is unchanged since the last
-//    frame (the CPU sets `table.w`) and that was resident then keeps its pool page and its
-//    contents (caching); the other admitted pages are tagged new.
+//    frame (the CPU sets `table.w`), that was resident then and that does not overlap where a
+//    caster moved in the face (`dirty`, from the CPU) keeps its pool page and its contents
+//    (caching); the other admitted pages are tagged new.
 //    cs_free, one thread: the pool pages not kept, in order.
 //    cs_count_new / cs_scan_new / cs_alloc_new: new pages get free pool pages by their rank
 //    in page-table order (block bit counts and a prefix sum), so the frame never depends on
@@ -235,6 +236,16 @@ fn deny(e: u32, level: u32) {
     }
 }
 
+// Whether page `local` of a face's chain (at `level`) overlaps where casters moved.
+fn page_moved(face: VirtualFace, local: u32, level: u32) -> bool {
+    let n = 1u << level;
+    let within = local - ((1u << (2u * level)) - 1u) / 3u;
+    let lo = vec2<f32>(f32(within % n), f32(within / n)) / f32(n);
+    let hi = lo + vec2<f32>(1.0 / f32(n));
+    let d = face.dirty;
+    return d.x <= d.z && d.y <= d.w && all(lo <= d.zw) && all(d.xy <= hi);
+}
+
 @compute @workgroup_size(64, 1, 1)
 fn cs_retain(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let e = gid.x + gid.y * groups.x * 64u;
@@ -261,7 +272,7 @@ fn cs_retain(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         return;
     }
     let face = vsm_faces[face_of(e)];
-    if (face.table.w != 0u) {
+    if (face.table.w != 0u && !page_moved(face, e - face.table.x, level)) {
         let before = prev_table[face.table.w - 1u + (e - face.table.x)];
         if (before >= VSM_FIRST_PAGE && before < VSM_NEEDED_AT) {
             // Resident last frame, in an unchanged face: keep the page and its depth.
