@@ -941,8 +941,8 @@ fn print_summary(s: &serde_json::Value) {
         let fit = &v["fit"];
         let capped = fit["capped_side"].as_u64().unwrap_or(0);
         println!(
-            "virtual      {} faces of {} lights ({} off screen, no faces), page table {} entries ({} KiB){}",
-            fit["faces"], fit["lights"], fit["off_screen"], fit["table_entries"],
+            "virtual      {} faces of {} lights ({} off screen, no faces; {} faces needed by a sample, the rest get no pages), page table {} entries ({} KiB){}",
+            fit["faces"], fit["lights"], fit["off_screen"], v["faces_in_use"], fit["table_entries"],
             v["table_bytes"].as_u64().unwrap_or(0) / 1024,
             if capped > 0 { format!(", virtual sides capped at {capped}² to fit it") } else { String::new() }
         );

@@ -61,3 +61,57 @@ fn virtual_mask_matches_the_reference_better_than_the_atlas() {
     );
     assert!(virt < atlas, "virtual {virt} against traditional {atlas}");
 }
+
+/// A point light above a floor, with the camera seeing every floor point in its reach: the
+/// plan lays out all six cube faces, but only the faces the lit samples look through get
+/// pages. The light sits 1 above the floor; a floor point in reach R lies at most √(R² − 1)
+/// from the foot of the light, and the direction to it is (x, −1, z): the −Y face holds it
+/// while |x| ≤ 1 and |z| ≤ 1. Range 1.3 (at most 0.83 away): the −Y face alone. Range 3 (up to
+/// 2.83 away): −Y and the four side faces, never +Y (nothing above the light).
+#[test]
+fn a_point_light_over_a_floor_gets_pages_only_in_the_faces_its_samples_need() {
+    use glam::{Mat4, Vec3};
+    use manyshadows::scene::{
+        primitives, Attenuation, Camera, Instance, Light, LightKind, Material, Scene,
+    };
+    let ctx = common::context();
+    let scene = |range: f32| Scene {
+        textures: Vec::new(),
+        name: "lamp over a floor".into(),
+        meshes: vec![primitives::plane(20.0, 20.0, 8)],
+        materials: vec![Material::default()],
+        instances: vec![Instance::caster(0, 0, Mat4::IDENTITY)],
+        lights: vec![Light {
+            kind: LightKind::Point {
+                position: Vec3::new(0.0, 1.0, 0.0),
+                range,
+            },
+            ambient: Vec3::ZERO,
+            diffuse: Vec3::ONE,
+            specular: Vec3::ZERO,
+            attenuation: Attenuation::for_range(range),
+            casts_shadows: true,
+            shadow_resolution: 256,
+        }],
+        camera: Camera::look_at(Vec3::new(0.0, 7.0, 4.0), Vec3::ZERO),
+    };
+    let settings = RenderSettings::default()
+        .with_width(256)
+        .with_height(256)
+        .with_technique(Technique::VIRTUAL);
+    for (range, want) in [(1.3, 1), (3.0, 5)] {
+        let mut r = Renderer::new(&ctx, &scene(range), settings.clone()).expect("renderer");
+        let stats = r.render().expect("frame").virtual_maps.expect("stats");
+        eprintln!("range {range}: {stats:?}");
+        assert_eq!(
+            stats.fit.faces, 6,
+            "the plan has every cube face: {stats:?}"
+        );
+        assert_eq!(
+            stats.faces_in_use, want,
+            "range {range}: {} faces in use, want {want}",
+            stats.faces_in_use
+        );
+        assert!(stats.resident >= want, "{stats:?}");
+    }
+}

@@ -556,6 +556,7 @@ impl VirtualShadows {
         Ok(VirtualStats {
             fit: self.plan.fit,
             needed,
+            faces_in_use: needed[0],
             resident: c[9] + c[17],
             kept: c[9],
             drawn: c[17],

@@ -204,6 +204,9 @@ pub struct VirtualStats {
     pub fit: VirtualFit,
     /// Pages needed per level (level 0 = one page per face).
     pub needed: [u32; MAX_LEVELS as usize],
+    /// Faces some sample needs (their level-0 page is needed): of a point light's six cube
+    /// faces only those its visible samples look through; the plan's other faces get no pages.
+    pub faces_in_use: u32,
     /// Pages resident this frame (kept + drawn).
     pub resident: u32,
     /// Resident pages kept, with their depth, from the last frame (caching).
