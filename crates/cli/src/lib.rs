@@ -951,24 +951,25 @@ fn print_summary(s: &serde_json::Value) {
             .map(|a| a.iter().map(|x| x.to_string()).collect())
             .unwrap_or_default();
         let denied = v["denied"].as_u64().unwrap_or(0);
+        let unshadowed = v["unshadowed_faces"].as_u64().unwrap_or(0);
+        let quarter = v["quarter_faces"].as_u64().unwrap_or(0);
+        let mut tail = String::new();
+        if denied > 0 {
+            tail += &format!(
+                "; {denied} pages did not fit the pool, their samples used coarser levels"
+            );
+        }
+        if quarter > 0 {
+            tail += &format!("; {quarter} faces share pool pages four to one at half resolution (the pool has fewer pages than faces in use)");
+        }
+        if unshadowed > 0 {
+            tail += &format!("; {unshadowed} faces had no room even for a quarter page: unshadowed; raise --page-pool");
+        }
         println!(
-            "pages        {} of {} resident ({} drawn, {} kept from the last frame; {}x{} pool, {} MiB); needed by level (coarsest first) {}{}",
+            "pages        {} resident in a pool of {} ({} drawn, {} kept from the last frame; {}x{} texels, {} MiB); needed by level (coarsest first) {}{tail}",
             v["resident"], v["pool_pages"], v["drawn"], v["kept"], v["pool_side"], v["pool_side"],
             v["pool_bytes"].as_u64().unwrap_or(0) >> 20,
             needed.join("/"),
-            if denied > 0 {
-                let unshadowed = v["unshadowed_faces"].as_u64().unwrap_or(0);
-                format!(
-                    "; {denied} pages did not fit the pool, their samples used coarser levels{}",
-                    if unshadowed > 0 {
-                        format!(" ({unshadowed} faces had no room even for one page: unshadowed; raise --page-pool)")
-                    } else {
-                        String::new()
-                    }
-                )
-            } else {
-                String::new()
-            }
         );
     } else {
         let shrink = a["shrink_steps"].as_u64().unwrap_or(0);

@@ -276,7 +276,8 @@ fn bench_lights_reports_stages_clusters_and_fit_per_count() {
 
 /// `bench virtual` on a tiny frame: both paths run in the same run, every light count gets a
 /// record, the virtual side's pages add up (rendered + denied = needed, rendered within the
-/// pool), and a 1 MiB pool (16 pages) at 200 lights must deny pages and say so.
+/// pool, quarter pages four to a pool page), and a 1 MiB pool (16 pages) at 200 lights must
+/// deny pages and say so.
 #[test]
 fn bench_virtual_reports_pages_memory_and_both_paths() {
     let (dir, json) = bench_ok(
@@ -298,7 +299,12 @@ fn bench_virtual_reports_pages_memory_and_both_paths() {
             s["denied"].as_u64().unwrap(),
         );
         assert_eq!(resident + denied, needed, "{r}");
-        assert!(resident <= s["pool_pages"].as_u64().unwrap(), "{r}");
+        // Pool pages used: whole pages plus quarter pages four to one.
+        let quarters = s["quarter_faces"].as_u64().unwrap();
+        assert!(
+            resident - quarters + quarters.div_ceil(4) <= s["pool_pages"].as_u64().unwrap(),
+            "{r}"
+        );
         assert_eq!(
             s["pool_pages"].as_u64().unwrap(),
             16,
@@ -317,14 +323,16 @@ fn bench_virtual_reports_pages_memory_and_both_paths() {
             r,
         );
     }
-    // 200 lights use hundreds of faces: not even one page each fits, so the pool fills with
-    // level-0 pages and the faces beyond it are counted unshadowed.
+    // 200 lights use hundreds of faces: not even a quarter page each fits, so the pool fills
+    // with level-0 quarter pages (four faces to a pool page) and the faces beyond them are
+    // counted unshadowed.
     let s = &records[1]["stats"];
     assert!(
         s["denied"].as_u64().unwrap() > 0,
         "200 lights cannot fit 16 pages: {s}"
     );
-    assert_eq!(s["resident"].as_u64().unwrap(), 16, "{s}");
+    assert_eq!(s["resident"].as_u64().unwrap(), 4 * 16, "{s}");
+    assert_eq!(s["quarter_faces"].as_u64().unwrap(), 4 * 16, "{s}");
     assert!(s["unshadowed_faces"].as_u64().unwrap() > 0, "{s}");
     assert!(dir.join("virtual-cubes-160x90.png").is_file());
 }

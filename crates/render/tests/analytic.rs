@@ -168,3 +168,37 @@ fn a_full_page_pool_is_reported_and_falls_back_to_coarser_levels() {
         "the coarse fallback must still shadow: {wrong} wrong pixels"
     );
 }
+
+/// A pool with fewer pages than faces in use: the point light of `plane-point` looks through
+/// five cube faces at the floor, a pool of 2 × 2 pages cannot give each a page, so the last
+/// faces share a pool page four to one at half resolution (3 whole + 2 quarters fill the
+/// 4 pages) and no face goes unshadowed. A wrong quarter (its place in the pool, its texel
+/// size) misplaces the outline or lights shadowed floor (thousands of pixels); measured: 0
+/// wrong pixels outside the 2-pixel band, as with the default pool.
+#[test]
+fn faces_beyond_the_pool_share_pages_at_half_resolution_and_stay_shadowed() {
+    let settings = RenderSettings::default()
+        .with_technique(Technique::VIRTUAL)
+        .with_virtual_maps(manyshadows::VirtualOptions::default().with_pool_bytes(256 * 256 * 4));
+    let (wrong, frame) = wrong_pixels_with("plane-point", settings, 0, "-pool4");
+    let stats = frame.virtual_maps.expect("virtual stats");
+    eprintln!("four-page pool: {stats:?}");
+    assert_eq!(stats.pool_pages, 4);
+    assert!(
+        stats.faces_in_use > stats.pool_pages,
+        "the test needs more faces than pages: {stats:?}"
+    );
+    let q = stats.quarter_faces;
+    assert!(q > 0, "{stats:?}");
+    // Whole pages plus quarters fill the pool and hold every face.
+    assert_eq!(
+        stats.faces_in_use - q + q.div_ceil(4),
+        stats.pool_pages,
+        "{stats:?}"
+    );
+    assert_eq!(stats.unshadowed_faces, 0, "{stats:?}");
+    assert_eq!(
+        wrong, 0,
+        "faces on quarter pages must still shadow: {wrong} wrong pixels"
+    );
+}

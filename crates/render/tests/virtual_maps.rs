@@ -12,6 +12,21 @@ use manyshadows::{Pcf, RenderSettings, Renderer, Technique};
 /// Misclassified (false shadow + false light) outside the edge band, as a fraction of the
 /// in-reach pairs facing the light (what `compare` reports).
 fn misclassified(technique: Technique) -> (f64, common::ReferenceErrors) {
+    let (f, e, stats) = misclassified_with(technique, manyshadows::VirtualOptions::default());
+    if let Some(stats) = stats {
+        assert_eq!(stats.denied, 0, "{stats:?}");
+    }
+    (f, e)
+}
+
+fn misclassified_with(
+    technique: Technique,
+    options: manyshadows::VirtualOptions,
+) -> (
+    f64,
+    common::ReferenceErrors,
+    Option<manyshadows::VirtualStats>,
+) {
     let ctx = common::context();
     let scene = builtin::build(
         "atrium",
@@ -26,12 +41,10 @@ fn misclassified(technique: Technique) -> (f64, common::ReferenceErrors) {
         .with_height(180)
         .with_pcf(Pcf::Off)
         .with_visibility(true)
-        .with_technique(technique);
+        .with_technique(technique)
+        .with_virtual_maps(options);
     let mut r = Renderer::new(&ctx, &scene, settings).expect("renderer");
     let frame = r.render().expect("frame");
-    if let Some(stats) = frame.virtual_maps {
-        assert_eq!(stats.denied, 0, "{stats:?}");
-    }
     let vis = frame.visibility.expect("mask");
     assert_eq!(vis.words_per_pixel, 2);
     let e = common::reference_errors(&r, &scene, &vis, 2);
@@ -42,7 +55,7 @@ fn misclassified(technique: Technique) -> (f64, common::ReferenceErrors) {
         "atrium, 40 lights, 320x180, {technique}: {:.4} % misclassified; {c:?}",
         f * 100.0
     );
-    (f, e)
+    (f, e, frame.virtual_maps)
 }
 
 /// The virtual mask against the reference: under the 0.2 % outside the edge band, and
@@ -114,4 +127,24 @@ fn a_point_light_over_a_floor_gets_pages_only_in_the_faces_its_samples_need() {
         );
         assert!(stats.resident >= want, "{stats:?}");
     }
+}
+
+/// A pool with fewer pages than the faces in use: the atrium's 40 lights look through 102
+/// faces, a pool of 6 × 6 pages cannot give each one, so every finer level is denied and the
+/// last 88 faces share pool pages four to one (level-0 quarter pages, 64² texels over a 90°
+/// face). Every face keeps a shadow (none unshadowed), and the mask stays near what such
+/// coarse maps give. Measured (lavapipe): 2.50 % misclassified outside the band, mostly
+/// false light where thin casters vanish at 64² (a 10 × 10-page pool, whole level-0 pages for
+/// all but 3 faces: 1.31 %); quarters read from the wrong place in the pool: 9.96 %. Bound:
+/// 4 %.
+#[test]
+fn faces_on_quarter_pages_keep_their_shadows() {
+    let pool = manyshadows::VirtualOptions::default().with_pool_bytes(768 * 768 * 4);
+    let (f, _, stats) = misclassified_with(Technique::VIRTUAL, pool);
+    let stats = stats.expect("stats");
+    eprintln!("36-page pool: {stats:?}");
+    assert_eq!(stats.pool_pages, 36);
+    assert!(stats.quarter_faces > 0, "{stats:?}");
+    assert_eq!(stats.unshadowed_faces, 0, "{stats:?}");
+    assert!(f <= 0.04, "{:.4} % misclassified", f * 100.0);
 }

@@ -23,8 +23,10 @@
 //!    level admitted whole or not at all while the pool lasts; pages of levels that do not fit
 //!    are *denied*, and lookups fall back to their nearest resident ancestor — a coarser
 //!    shadow, never a wrong or missing one — and the frame's
-//!    [`VirtualStats`](plan::VirtualStats) count them (a pool smaller than one page per face in
-//!    use leaves the faces beyond it unshadowed, counted too). With caching
+//!    [`VirtualStats`](plan::VirtualStats) count them. A pool with fewer pages than faces in
+//!    use gives the last faces quarter pages (four faces' level 0 at 64² in one pool page,
+//!    `quarter_faces`), so every face keeps a shadow up to four faces per pool page; only
+//!    past that are faces left unshadowed (counted too). With caching
 //!    ([`crate::settings::RenderSettings::cache_shadows`]) a page resident last frame in a face
 //!    whose view did not change keeps its pool page and its depth unless a caster moved within
 //!    it (the moved bounding spheres, old and new, projected onto the face: only the pages

@@ -63,6 +63,9 @@ pub struct VirtualShadows {
     pub pool_view: wgpu::TextureView,
     pool_side: u32,
     pool_pages: u32,
+    /// Pages the draw can take per frame ([`page_slots`]).
+    slots: u32,
+    shadow: ShadowOptions,
     viewport: (u32, u32),
     uniforms: wgpu::Buffer,
     faces: wgpu::Buffer,
@@ -134,7 +137,8 @@ impl VirtualShadows {
             dimension: Some(wgpu::TextureViewDimension::D2),
             ..Default::default()
         });
-        let draw = PageDraw::new(ctx, pool_pages, casters, shadow);
+        let slots = page_slots(plan.fit.faces, pool_pages);
+        let draw = PageDraw::new(ctx, slots, casters, shadow);
         use wgpu::BufferUsages as U;
         let storage = U::STORAGE | U::COPY_DST;
         let uniforms = buffer(ctx, "vsm.uniforms", 48, U::UNIFORM | U::COPY_DST);
@@ -150,18 +154,7 @@ impl VirtualShadows {
             COUNTERS as u64 * 4,
             U::MAP_READ | U::COPY_DST,
         );
-        let page_views = buffer(
-            ctx,
-            "vsm.page_views",
-            pool_pages as u64 * std::mem::size_of::<ShadowViewData>() as u64,
-            storage,
-        );
-        let args = buffer(
-            ctx,
-            "vsm.args",
-            (3 * draw.rounds().len() as u64 + 4) * 4,
-            storage | U::INDIRECT,
-        );
+        let (page_views, args) = draw_buffers(ctx, slots, &draw);
         let cs = wgpu::ShaderStages::COMPUTE;
         let tex = |binding| {
             crate::gpu::pipelines::texture_entry(binding, wgpu::TextureSampleType::Uint, cs)
@@ -223,6 +216,8 @@ impl VirtualShadows {
             pool_view,
             pool_side,
             pool_pages,
+            slots,
+            shadow,
             viewport: (width, height),
             uniforms,
             faces: buffer(
@@ -287,9 +282,18 @@ impl VirtualShadows {
         ctx: &GpuContext,
         scene: &Scene,
         (width, height): (u32, u32),
+        casters: &CasterGeometry,
     ) -> Result<bool, RenderError> {
         self.plan = VirtualPlan::new(scene, width as f32 / height as f32, height, &self.options);
-        let replaced = self.write_plan(ctx)?;
+        let mut replaced = self.write_plan(ctx)?;
+        let slots = page_slots(self.plan.fit.faces, self.pool_pages);
+        if slots > self.slots {
+            // More faces than the draw has page slots for (quarter pages): larger rounds.
+            self.draw = PageDraw::new(ctx, slots, casters, self.shadow);
+            (self.page_views, self.args) = draw_buffers(ctx, slots, &self.draw);
+            self.slots = slots;
+            replaced = true;
+        }
         if replaced {
             self.groups = None;
         }
@@ -562,6 +566,7 @@ impl VirtualShadows {
             drawn: c[17],
             denied: c[16],
             unshadowed_faces: c[18],
+            quarter_faces: c[12] - c[13],
             pool_pages: self.pool_pages,
             pool_side: self.pool_side,
             pool_bytes: self.pool_side as u64 * self.pool_side as u64 * 4,
@@ -587,7 +592,7 @@ fn moved_rect(view_proj: Mat4, c: Vec3, r: f32) -> [f32; 4] {
             if k & 4 == 0 { -r } else { r },
         );
         let clip = view_proj * corner.extend(1.0);
-        if !(clip.w > 1e-6) {
+        if clip.w.is_nan() || clip.w <= 1e-6 {
             return [0.0, 0.0, 1.0, 1.0];
         }
         let (u, v) = (0.5 + 0.5 * clip.x / clip.w, 0.5 - 0.5 * clip.y / clip.w);
@@ -615,6 +620,32 @@ fn union(a: [f32; 4], b: [f32; 4]) -> [f32; 4] {
             a[3].max(b[3]),
         ],
     }
+}
+
+/// Page slots of the draw: one per pool page, and up to four per pool page when the plan has
+/// more faces than the pool has pages (level-0 quarter pages, see `vsm.wgsl`).
+fn page_slots(faces: usize, pool_pages: u32) -> u32 {
+    let faces = u32::try_from(faces).unwrap_or(u32::MAX);
+    pool_pages.max(faces.min(pool_pages.saturating_mul(4)))
+}
+
+/// The draw list (a view per page slot) and the indirect arguments of `draw`'s rounds.
+fn draw_buffers(ctx: &GpuContext, slots: u32, draw: &PageDraw) -> (wgpu::Buffer, wgpu::Buffer) {
+    use wgpu::BufferUsages as U;
+    let storage = U::STORAGE | U::COPY_DST;
+    let page_views = buffer(
+        ctx,
+        "vsm.page_views",
+        slots as u64 * std::mem::size_of::<ShadowViewData>() as u64,
+        storage,
+    );
+    let args = buffer(
+        ctx,
+        "vsm.args",
+        (3 * draw.rounds().len() as u64 + 4) * 4,
+        storage | U::INDIRECT,
+    );
+    (page_views, args)
 }
 
 #[cfg(test)]

@@ -215,10 +215,13 @@ pub struct VirtualStats {
     pub drawn: u32,
     /// Needed pages that did not fit the pool (their samples used a coarser level).
     pub denied: u32,
-    /// Faces left without shadows because not even their level-0 page fitted (only when the
-    /// pool has fewer pages than faces in use; the faces of the lowest-numbered lights get
-    /// the pool's pages).
+    /// Faces left without shadows because not even a quarter of a pool page was left for their
+    /// level 0 (only when the pool has fewer than a quarter as many pages as faces in use).
     pub unshadowed_faces: u32,
+    /// Faces whose level-0 page is a quarter of a pool page (64² texels, half the resolution):
+    /// only when the pool has fewer pages than faces in use, the last faces in light order
+    /// share pool pages four to one so that every face gets room while that suffices.
+    pub quarter_faces: u32,
     /// Pages the pool holds.
     pub pool_pages: u32,
     /// Pool side in texels.

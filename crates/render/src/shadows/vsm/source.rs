@@ -110,7 +110,8 @@ impl ShadowSource for VirtualSource {
         if self.table.update(ctx, scene, plan)? {
             self.maps.forget_pages();
         }
-        self.maps.update(ctx, scene, self.size)?;
+        self.maps
+            .update(ctx, scene, self.size, &self.table.casters)?;
         Ok(())
     }
 

@@ -10,9 +10,10 @@
 //    cs_scan, one thread per level: prefix sums of those counts and the totals per level.
 //    A level is admitted when it and every coarser level fit the pool (coarsest first, whole
 //    or not at all); pages of other levels are denied and lookups fall back to their resident
-//    ancestor. Only when level 0 alone (one page per face in use) exceeds the pool do faces go
-//    without shadows: the first faces in light order get the pool's pages, the rest are
-//    counted unshadowed.
+//    ancestor. When level 0 alone (one page per face in use) exceeds the pool, the first
+//    faces in light order get whole pool pages and the last ones share pool pages four to one
+//    (quarter pages: the face's level 0 at 64²), as few as let every face fit; only past four
+//    faces per pool page do faces go without shadows, counted unshadowed.
 // 3. cs_retain, one thread per entry: an admitted page whose face is unchanged since the last
 //    frame (the CPU sets `table.w`), that was resident then and that does not overlap where a
 //    caster moved in the face (`dirty`, from the CPU) keeps its pool page and its contents
@@ -36,8 +37,9 @@
 @group(0) @binding(8) var<storage, read> vsm_faces: array<VirtualFace>;
 @group(0) @binding(9) var<storage, read_write> vsm_table: array<atomic<u32>>;
 // [0, 8): pages needed per level; 9: pages kept from the last frame; 10: free pool pages;
-// 11: new pages; 16: pages denied; 17: pages drawn this frame; 18: level-0 pages denied
-// (faces left unshadowed).
+// 11: new pages; 12: new pages that get room (full or quarter); 13: new pages that get a whole
+// pool page (the rest of 12 get quarters); 16: pages denied; 17: pages drawn this frame;
+// 18: level-0 pages denied (faces left unshadowed).
 @group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
 // The pages to draw this frame, in rank order: each one's view (the face's projection
 // cropped to the page; `tile.w` holds the face index's bits).
@@ -57,6 +59,8 @@
 const COUNT_KEPT: u32 = 9u;
 const COUNT_FREE: u32 = 10u;
 const COUNT_NEW: u32 = 11u;
+const COUNT_PLACED: u32 = 12u;
+const COUNT_WHOLE: u32 = 13u;
 const COUNT_DENIED: u32 = 16u;
 const COUNT_DRAWN: u32 = 17u;
 const COUNT_UNSHADOWED: u32 = 18u;
@@ -258,8 +262,8 @@ fn cs_retain(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     }
     let level = v - VSM_NEEDED_AT;
     if (atomicLoad(&counters[0]) > vsm.pool.w) {
-        // Not even level 0 fits: level-0 pages compete by rank (cs_alloc_new), nothing else is
-        // admitted and nothing is kept.
+        // Not even level 0 fits: level-0 pages are placed by rank (cs_alloc_new; the last
+        // ones in quarter pages), nothing else is admitted and nothing is kept.
         if (level == 0u) {
             atomicStore(&vsm_table[e], VSM_NEW_AT);
         } else {
@@ -274,7 +278,7 @@ fn cs_retain(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     let face = vsm_faces[face_of(e)];
     if (face.table.w != 0u && !page_moved(face, e - face.table.x, level)) {
         let before = prev_table[face.table.w - 1u + (e - face.table.x)];
-        if (before >= VSM_FIRST_PAGE && before < VSM_NEEDED_AT) {
+        if (before >= VSM_FIRST_PAGE && before < VSM_FIRST_PAGE + VSM_QUARTER) {
             // Resident last frame, in an unchanged face: keep the page and its depth.
             atomicStore(&vsm_table[e], before);
             scratch[kept_at() + before - VSM_FIRST_PAGE] = 1u;
@@ -329,6 +333,26 @@ fn cs_scan_new() {
         sum = sum + c;
     }
     atomicStore(&counters[COUNT_NEW], sum);
+    // Which new pages get room: normally one free pool page each while they last. When level
+    // 0 alone exceeds the pool (every new page is a level-0 page then, and nothing is kept),
+    // the last q of them share pool pages four to a page (quarter pages, half the face's
+    // level-0 resolution): the fewest q with (sum - q) + ceil(q / 4) <= free, so that as many
+    // faces as the pool can hold get a whole page and every face gets room while 4 per page
+    // suffice.
+    let free = atomicLoad(&counters[COUNT_FREE]);
+    var whole = min(sum, free);
+    var placed = whole;
+    if (atomicLoad(&counters[0]) > vsm.pool.w && sum > free) {
+        var q = min(sum, ((sum - free) * 4u + 2u) / 3u);
+        while (q < sum && (sum - q) + (q + 3u) / 4u > free) {
+            q = q + 1u;
+        }
+        whole = sum - q;
+        placed = min(sum, whole + 4u * (free - min(whole, free)));
+    }
+    placed = min(placed, arrayLength(&page_views));
+    atomicStore(&counters[COUNT_WHOLE], whole);
+    atomicStore(&counters[COUNT_PLACED], placed);
 }
 
 @compute @workgroup_size(32, 1, 1)
@@ -353,13 +377,30 @@ fn cs_alloc_new(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_
     }
     // Rank among this frame's new pages, in page-table order.
     let rank = scratch[new_counts_at() + b] + countOneBits(atomicLoad(&new_bits) & ((1u << i) - 1u));
-    if (rank >= atomicLoad(&counters[COUNT_FREE])) {
-        // Only when level 0 alone overflows the pool.
+    if (rank >= atomicLoad(&counters[COUNT_PLACED])) {
+        // Only when level 0 alone overflows the pool even four faces to a page.
         deny(e, level);
         return;
     }
-    let page = scratch[free_at() + rank];
-    atomicStore(&vsm_table[e], VSM_FIRST_PAGE + page);
+    let whole = atomicLoad(&counters[COUNT_WHOLE]);
+    let side = f32(vsm.pool.z);
+    var page = 0u;
+    var corner = vec2<f32>(0.0);
+    var size = side;
+    var texel_scale = 1.0;
+    if (rank < whole) {
+        page = scratch[free_at() + rank];
+        atomicStore(&vsm_table[e], VSM_FIRST_PAGE + page);
+    } else {
+        // A quarter page: quadrant k of a pool page shared by four faces' level 0.
+        let k = rank - whole;
+        page = scratch[free_at() + whole + k / 4u];
+        let quadrant = k % 4u;
+        atomicStore(&vsm_table[e], VSM_FIRST_PAGE + VSM_QUARTER + 4u * page + quadrant);
+        size = 0.5 * side;
+        corner = vec2<f32>(f32(quadrant % 2u), f32(quadrant / 2u)) * size;
+        texel_scale = 2.0;
+    }
     let fi = face_of(e);
     let face = vsm_faces[fi];
     let within = e - face.table.x - ((1u << (2u * level)) - 1u) / 3u;
@@ -376,17 +417,17 @@ fn cs_alloc_new(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_
         vec4<f32>(0.0, 0.0, 1.0, 0.0),
         vec4<f32>(-nf * cx, -nf * cy, 0.0, 1.0),
     );
-    let side = f32(vsm.pool.z);
     var view: ShadowViewData;
     view.view_proj = crop * face.view_proj;
-    view.tile = vec4<f32>(f32(page % vsm.pool.y) * side, f32(page / vsm.pool.y) * side, side, bitcast<f32>(fi));
-    view.params = vec4<f32>(face.params.xy, face.params.z * f32(1u << (face.table.y - level)), face.params.w);
+    let origin = vec2<f32>(f32(page % vsm.pool.y), f32(page / vsm.pool.y)) * side + corner;
+    view.tile = vec4<f32>(origin, size, bitcast<f32>(fi));
+    view.params = vec4<f32>(face.params.xy, face.params.z * f32(1u << (face.table.y - level)) * texel_scale, face.params.w);
     page_views[rank] = view;
 }
 
 @compute @workgroup_size(1, 1, 1)
 fn cs_args() {
-    let drawn = min(atomicLoad(&counters[COUNT_NEW]), atomicLoad(&counters[COUNT_FREE]));
+    let drawn = atomicLoad(&counters[COUNT_PLACED]);
     atomicStore(&counters[COUNT_DRAWN], drawn);
     let n = arrayLength(&rounds);
     for (var r = 0u; r < n; r = r + 1u) {

@@ -34,9 +34,15 @@ struct VsmPoint {
 }
 
 fn vsm_project(light: LightData, face: VirtualFace, p: vec3<f32>, n: vec3<f32>, level: u32) -> VsmPoint {
+    return vsm_project_texel(light, face, p, n, vsm_texel_world(face, level, p));
+}
+
+// As `vsm_project`, biased for texels of world size `texel` (a quarter page's are twice its
+// level's).
+fn vsm_project_texel(light: LightData, face: VirtualFace, p: vec3<f32>, n: vec3<f32>, texel: f32) -> VsmPoint {
     var out: VsmPoint;
     out.valid = false;
-    let offset = receiver_offset(light, p, n, vsm_texel_world(face, level, p));
+    let offset = receiver_offset(light, p, n, texel);
     let clip = face.view_proj * vec4<f32>(p + offset, 1.0);
     if (clip.w <= 0.0) {
         return out;

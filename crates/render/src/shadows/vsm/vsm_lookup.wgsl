@@ -22,15 +22,29 @@ fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, view_depth: f32) -
         }
         let e = vsm_table[vsm_entry(face, level, q.uv)];
         if (e >= VSM_FIRST_PAGE && e != VSM_DENIED) {
-            let page = e - VSM_FIRST_PAGE;
-            let side = f32(vsm.pool.z);
-            let tile = vec2<f32>(f32(page % vsm.pool.y), f32(page / vsm.pool.y)) * side;
+            var page = e - VSM_FIRST_PAGE;
+            var side = f32(vsm.pool.z);
+            var corner = vec2<f32>(0.0);
+            var at = q;
+            if (page >= VSM_QUARTER) {
+                // A level-0 quarter page: half the side, its texels twice as wide (and the
+                // bias with them).
+                let k = page - VSM_QUARTER;
+                page = k / 4u;
+                side = 0.5 * side;
+                corner = vec2<f32>(f32(k % 2u), f32((k / 2u) % 2u)) * side;
+                at = vsm_project_texel(light, face, p, n, 2.0 * vsm_texel_world(face, level, p));
+                if (!at.valid) {
+                    return out;
+                }
+            }
+            let tile = vec2<f32>(f32(page % vsm.pool.y), f32(page / vsm.pool.y)) * f32(vsm.pool.z) + corner;
             let pages = f32(1u << level);
-            let cell = min(floor(q.uv * pages), vec2<f32>(pages - 1.0));
+            let cell = min(floor(at.uv * pages), vec2<f32>(pages - 1.0));
             out.tile_min = tile;
             out.tile_max = tile + vec2<f32>(side);
-            out.texel = tile + (q.uv * pages - cell) * side;
-            out.depth = q.depth;
+            out.texel = tile + (at.uv * pages - cell) * side;
+            out.depth = at.depth;
             out.valid = true;
             return out;
         }
