@@ -49,10 +49,12 @@ pub struct ShadowsArgs {
 }
 
 /// A renderer whose smallest shadow caster moves back and forth by 5 cm every frame.
-struct Moving {
-    renderer: Renderer,
-    caster: Option<(usize, Mat4)>,
-    frame: u32,
+/// A renderer whose caster (if any) moves by 0.05 back and forth each frame.
+pub(crate) struct Moving {
+    pub(crate) renderer: Renderer,
+    /// The moving instance and its transform at rest.
+    pub(crate) caster: Option<(usize, Mat4)>,
+    pub(crate) frame: u32,
 }
 
 impl Subject for Moving {

@@ -17,10 +17,11 @@ use manyshadows::{VirtualOptions, VirtualStats};
 use serde::Serialize;
 
 use crate::harness::{
-    check_counts, check_scene, ms, seeded_scene, Contender, Figure, FrameCounters, FrameSubject,
-    Harness, RunArgs, Runs,
+    check_counts, check_scene, ms, seeded_scene, Contender, Figure, FrameCounters, Harness,
+    RunArgs, Runs,
 };
 use crate::plot::series;
+use crate::shadows_bench::Moving;
 
 /// Arguments of `manyshadows bench virtual`.
 #[derive(Args, Debug, Clone)]
@@ -49,6 +50,11 @@ pub struct VirtualArgs {
     /// Page pool of the virtual maps, MiB.
     #[arg(long, default_value_t = (manyshadows::shadows::vsm::plan::DEFAULT_POOL_BYTES >> 20) as u32)]
     pub page_pool: u32,
+    /// Both paths keep what did not change (the atlas its unchanged views, the virtual maps
+    /// their pages away from the change) while the scene's smallest caster moves each frame:
+    /// what a frame costs when one thing moves, instead of every map drawn anew
+    #[arg(long)]
+    pub cache: bool,
     #[command(flatten)]
     pub run: RunArgs,
 }
@@ -115,7 +121,16 @@ pub fn virtual_maps(args: &VirtualArgs) -> Result<()> {
         let scene = seeded_scene(&args.scene, n, mix, None)?;
         let base = RenderSettings::default()
             .with_width(args.width)
-            .with_height(args.height);
+            .with_height(args.height)
+            .with_cache_shadows(args.cache);
+        let caster = if args.cache {
+            let k = scene
+                .smallest_caster()
+                .context("--cache moves a caster: the scene has none")?;
+            Some((k, scene.instances[k].transform))
+        } else {
+            None
+        };
         let atlas = base.clone().with_technique(args.atlas_technique);
         let virt = base.with_technique(args.technique).with_virtual_maps(
             VirtualOptions::default().with_pool_bytes(u64::from(args.page_pool) << 20),
@@ -124,8 +139,10 @@ pub fn virtual_maps(args: &VirtualArgs) -> Result<()> {
         for (label, settings) in [("atlas", atlas), ("virtual", virt)] {
             contenders.push(Contender {
                 label: label.into(),
-                subject: FrameSubject {
+                subject: Moving {
                     renderer: Renderer::new(&h.ctx, &scene, settings)?,
+                    caster,
+                    frame: 0,
                 },
             });
         }
@@ -158,6 +175,7 @@ pub fn virtual_maps(args: &VirtualArgs) -> Result<()> {
         "screen": [args.width, args.height],
         "light_types": args.light_types,
         "atlas_technique": args.atlas_technique.name(),
+        "cache": args.cache,
         "records": records,
     });
     h.finish(table, fields, vec![figure])
@@ -168,16 +186,17 @@ fn table(records: &[Record], adapter: &str, args: &VirtualArgs) -> String {
     let mut t = String::new();
     let _ = writeln!(
         t,
-        "== bench virtual: {} at {}x{}, light types {}; median GPU ms over {} frames, {} vs virtual in the same run\n   adapter: {adapter}",
-        args.scene, args.width, args.height, args.light_types, args.run.repeats, args.atlas_technique
+        "== bench virtual: {} at {}x{}, light types {}; median GPU ms over {} frames, {} vs virtual in the same run{}\n   adapter: {adapter}",
+        args.scene, args.width, args.height, args.light_types, args.run.repeats, args.atlas_technique,
+        if args.cache { "; --cache: both keep what did not change while the smallest caster moves each frame" } else { "; every map drawn anew each frame" }
     );
     let _ = writeln!(
         t,
-        "{:>6} | {:>9} {:>9} {:>8} {:>7} | {:>8} {:>9} {:>9} {:>8} {:>7} | {:>6} | {:>6} {:>7} {:>6} {:>6}",
+        "{:>6} | {:>9} {:>9} {:>8} {:>7} | {:>8} {:>9} {:>9} {:>8} {:>7} | {:>6} | {:>6} {:>7} {:>8} {:>6} {:>6}",
         "lights", "shadows", "lighting", "frame", "MiB",
         "pages", "shadows", "lighting", "frame", "MiB",
         "ratio",
-        "faces", "needed", "drawn", "denied"
+        "faces", "needed", "resident", "drawn", "denied"
     );
     let _ = writeln!(
         t,
@@ -193,7 +212,7 @@ fn table(records: &[Record], adapter: &str, args: &VirtualArgs) -> String {
             .map_or("n/a".into(), |v| format!("{v:.2}"));
         let _ = writeln!(
             t,
-            "{:>6} | {:>9} {:>9} {:>8} {:>7.0} | {:>8} {:>9} {:>9} {:>8} {:>7.0} | {:>6} | {:>6} {:>7} {:>6} {:>6}",
+            "{:>6} | {:>9} {:>9} {:>8} {:>7.0} | {:>8} {:>9} {:>9} {:>8} {:>7.0} | {:>6} | {:>6} {:>7} {:>8} {:>6} {:>6}",
             r.lights,
             ms(r.atlas.shadows_ms),
             ms(r.atlas.lighting_ms),
@@ -208,6 +227,7 @@ fn table(records: &[Record], adapter: &str, args: &VirtualArgs) -> String {
             r.stats.fit.faces,
             r.stats.needed_total(),
             r.stats.resident,
+            r.stats.drawn,
             r.stats.denied,
         );
     }
@@ -215,7 +235,8 @@ fn table(records: &[Record], adapter: &str, args: &VirtualArgs) -> String {
         t,
         "   frame: sum of the stages (G-buffer, clusters, pages, shadows, lighting); ratio: \
          virtual / atlas; MiB: shadow memory kept (atlas, or page pool + page table); needed / \
-         drawn / denied: pages (denied ones fell back to coarser levels)."
+         resident / drawn / denied: pages of the last measured frame (drawn: this frame, the \
+         rest of the resident ones kept; denied ones fell back to coarser levels)."
     );
     t
 }

@@ -27,7 +27,10 @@ fn bench(args: &str, extra: &[&str]) -> Output {
 /// a validation error and print and write a table naming the adapter; the directory and its
 /// results.json.
 fn bench_ok(command: &str, args: &str) -> (PathBuf, Value) {
-    let dir = tmp(command);
+    // A directory per command and arguments: tests of one command run side by side.
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    std::hash::Hash::hash(args, &mut h);
+    let dir = tmp(&format!("{command}-{:x}", std::hash::Hasher::finish(&h)));
     let out = bench(
         &format!("{command} {args}"),
         &["--out-dir", dir.to_str().unwrap()],
@@ -398,4 +401,25 @@ fn bench_shadows_puts_every_kind_of_shadow_side_by_side() {
         }
     }
     assert!(dir.join("shadows-cubes-96x54.png").exists());
+}
+
+/// `bench virtual --cache`: both paths keep what did not change while the smallest caster
+/// moves, so the measured (post-warm-up) frame of the virtual maps draws only some of its
+/// resident pages and keeps the rest.
+#[test]
+fn bench_virtual_with_cache_measures_frames_that_keep_pages() {
+    let (_, json) = bench_ok(
+        "virtual",
+        "--scene cubes --lights 8 --width 160 --height 90 --repeats 2 --warmup 1 --cache",
+    );
+    assert_eq!(json["cache"], true, "{json}");
+    let records = records(&json);
+    let s = &records[0]["stats"];
+    let (drawn, kept, resident) = (
+        s["drawn"].as_u64().unwrap(),
+        s["kept"].as_u64().unwrap(),
+        s["resident"].as_u64().unwrap(),
+    );
+    assert!(kept > 0 && drawn < resident, "{s}");
+    assert_eq!(drawn + kept, resident, "{s}");
 }
