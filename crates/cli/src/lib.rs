@@ -235,6 +235,14 @@ pub(crate) struct RenderArgs {
     /// how many views (pages) each frame redraws.
     #[arg(long)]
     cache: bool,
+
+    /// At most N shadow views drawn per frame (atlas techniques; implies --cache): the views
+    /// that changed wait their turn, new tiles and larger (nearer, more important) views
+    /// first; a waiting view is served from its older depth where its tile holds it (counted
+    /// stale, with the age of the oldest) and unshadowed until drawn where it holds nothing
+    /// yet (counted waiting). With --frames, each frame's line says how many of each
+    #[arg(long, value_name = "N")]
+    shadow_budget: Option<u32>,
     /// Render even a frame whose shadow work is far beyond the rest (more than 2 G
     /// triangle-view pairs, e.g. a technique that sends every triangle to each of thousands
     /// of views): without it such a frame is refused with its estimate and the techniques that
@@ -613,6 +621,7 @@ pub(crate) fn flag_error(e: manyshadows::RenderError) -> anyhow::Error {
         ("virtual_maps.lod", "--virtual-lod"),
         ("virtual_maps.max_side", "--virtual-side"),
         ("rays.light_samples", "--light-samples"),
+        ("shadow_budget", "--shadow-budget"),
     ];
     if let manyshadows::RenderError::InvalidOption { option, .. } = &e {
         if let Some((_, flag)) = FLAGS.iter().find(|(o, _)| o == option) {
@@ -652,6 +661,7 @@ pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettin
             manyshadows::CasterOptions::default().with_ignore_masks(!args.shadow_alpha),
         ))
         .with_cache_shadows(args.cache)
+        .with_shadow_budget(args.shadow_budget)
         .with_point_shadows(args.point_shadows)
         .with_pcf(args.pcf)
         .with_bias(ShadowBias::new(
@@ -747,12 +757,23 @@ fn render(args: &RenderArgs) -> Result<()> {
                     v.resident,
                     v.kept
                 ),
-                None => format!(
-                    "frame {:>3}: {:>4} of {} shadow views redrawn, shadow GPU time {shadow_ms}",
-                    f + 1,
-                    fr.shadow_stats.views_drawn,
-                    renderer.plan().views.len()
-                ),
+                None => {
+                    let st = &fr.shadow_stats;
+                    let waiting = if args.shadow_budget.is_some() {
+                        format!(
+                            " ({} stale, oldest {} frames; {} waiting, unshadowed)",
+                            st.views_stale, st.stale_frames, st.views_waiting
+                        )
+                    } else {
+                        String::new()
+                    };
+                    format!(
+                        "frame {:>3}: {:>4} of {} shadow views redrawn{waiting}, shadow GPU time {shadow_ms}",
+                        f + 1,
+                        st.views_drawn,
+                        renderer.plan().views.len()
+                    )
+                }
             };
             pb.suspend(|| eprintln!("{line}"));
         }
@@ -857,6 +878,8 @@ fn summary(
         "shadow_views": r.virtual_plan().map_or(plan.views.len(), |v| v.views.len()),
         "atlas": { "size": plan.layout.size, "fill": plan.fill(), "shrink_steps": plan.layout.shrink_steps, "fit": plan.fit },
         "shadow_work": { "passes": frame.shadow_stats.passes, "draws": frame.shadow_stats.draws, "views_drawn": frame.shadow_stats.views_drawn,
+                         "views_stale": frame.shadow_stats.views_stale, "stale_frames": frame.shadow_stats.stale_frames,
+                         "views_waiting": frame.shadow_stats.views_waiting,
                          "culled_draws": frame.shadow_stats.culled, "triangles": frame.shadow_stats.triangles },
         "light_loop": r.settings().light_loop.name(),
         "clusters": frame.clusters,

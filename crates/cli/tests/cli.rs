@@ -221,6 +221,11 @@ fn silently_changed_values_are_refused_or_announced() {
             "8",
             "--atlas-max: max_atlas_size 8 is out of range",
         ),
+        (
+            "--shadow-budget",
+            "0",
+            "--shadow-budget: shadow_budget 0 is out of range",
+        ),
     ] {
         assert_clean_failure(
             &run(&["render", "--scene", missing, flag, value]),
@@ -366,4 +371,36 @@ fn a_rounded_page_pool_is_announced() {
     let out = run(&a);
     assert!(out.status.success());
     assert!(!String::from_utf8_lossy(&out.stderr).contains("--page-pool"));
+}
+
+/// `--shadow-budget` with `--frames`: each frame's line says how many views were drawn (at
+/// most the budget), how many wait stale and how many wait with no shadow yet.
+#[test]
+fn a_shadow_budget_reports_each_frames_waiting_views() {
+    let dir = tmp("shadow-budget");
+    let out = run(&[
+        "render",
+        "--scene",
+        "cubes",
+        "--lights",
+        "8",
+        "--width",
+        "64",
+        "--height",
+        "36",
+        "--frames",
+        "3",
+        "--shadow-budget",
+        "4",
+        "--out",
+        dir.join("f.png").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    let lines: Vec<&str> = err.lines().filter(|l| l.starts_with("frame ")).collect();
+    assert_eq!(lines.len(), 3, "{err}");
+    assert!(
+        lines[0].contains("   4 of ") && lines[0].contains("waiting, unshadowed"),
+        "{err}"
+    );
 }

@@ -215,6 +215,11 @@ pub struct RenderSettings {
     pub shadow: ShadowOptions,
     /// Keep the tiles of unchanged views between frames (see the shadow generator).
     pub cache_shadows: bool,
+    /// At most this many shadow views drawn per frame (atlas techniques; implies
+    /// [`Self::cache_shadows`]): the others wait, served from their older depth where their
+    /// tile holds it and unshadowed where it holds nothing of them yet, counted in
+    /// [`crate::Frame::shadow_stats`]. `None`: every view that changed is drawn.
+    pub shadow_budget: Option<u32>,
     /// Point-light shadows: six cube faces or two paraboloid hemispheres.
     pub point_shadows: manyshadows_scene::light_space::PointShadows,
     /// Shadow filtering.
@@ -248,6 +253,7 @@ impl Default for RenderSettings {
             technique: Technique::default(),
             shadow: ShadowOptions::default(),
             cache_shadows: false,
+            shadow_budget: None,
             point_shadows: Default::default(),
             pcf: Pcf::default(),
             bias: ShadowBias::default(),
@@ -286,6 +292,22 @@ impl RenderSettings {
         }
         if self.height == 0 {
             return Err(bad("height", self.height, "at least 1 pixel"));
+        }
+        if self.shadow_budget == Some(0) {
+            return Err(bad(
+                "shadow_budget",
+                0,
+                "at least 1 view per frame (or none for no budget)",
+            ));
+        }
+        if self.shadow_budget.is_some()
+            && self.technique.info().fills != crate::shadows::descriptor::Fills::Atlas
+        {
+            return Err(RenderError::NotImplemented {
+                what: "a shadow budget with a technique that fills no atlas",
+                instead: "use an atlas technique, or caching alone (virtual maps redraw only \
+                          the pages under a change)",
+            });
         }
         if let Some(m) = self
             .max_atlas_size
@@ -380,6 +402,7 @@ with_setters!(RenderSettings {
     with_technique: technique: Technique,
     with_shadow: shadow: ShadowOptions,
     with_cache_shadows: cache_shadows: bool,
+    with_shadow_budget: shadow_budget: Option<u32>,
     with_point_shadows: point_shadows: manyshadows_scene::light_space::PointShadows,
     with_pcf: pcf: Pcf,
     with_bias: bias: ShadowBias,

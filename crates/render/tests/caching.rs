@@ -222,3 +222,142 @@ fn cached_virtual_pages_equal_a_full_regeneration() {
     assert!(s4.kept > 0 && s4.drawn > 0, "{s4:?}");
     close(differing(&fourth, &fresh(&r)), "after the turn");
 }
+
+/// A shadow budget of B views: no frame draws more than B views, while the camera turns and a
+/// caster moves (views wait, served stale or unshadowed, counted); once nothing changes, every
+/// view is drawn within ceil(views / B) frames and the frame then equals an unbudgeted
+/// renderer's on the same state, pixel for pixel and bit for bit. While views wait with
+/// nothing in their tiles, their lights cast no shadow (never another view's depth): the
+/// first frame is lit at least as much as the finished one.
+#[test]
+fn a_shadow_budget_bounds_the_views_drawn_and_converges_once_still() {
+    use manyshadows::{RenderSettings, Renderer};
+    let ctx = common::context();
+    let scene = builtin::build(
+        "cubes",
+        &BuiltinOptions {
+            lights: Some(8),
+            seed: 3,
+            mix: LightMix::All,
+            ..Default::default()
+        },
+    )
+    .expect("scene");
+    const BUDGET: u32 = 3;
+    let settings = |budget: Option<u32>| {
+        RenderSettings::default()
+            .with_width(240)
+            .with_height(135)
+            .with_technique(Technique::TRADITIONAL)
+            .with_shadow_budget(budget)
+            .with_visibility(true)
+    };
+    let mut r = Renderer::new(&ctx, &scene, settings(Some(BUDGET))).expect("renderer");
+    let views = r.plan().views.len() as u32;
+    assert!(views > 3 * BUDGET, "{views} views");
+    let lit = |f: &manyshadows::Frame| {
+        let v = f.visibility.as_ref().unwrap();
+        v.words.iter().map(|w| w.count_ones()).sum::<u32>()
+    };
+    let first = r.render().expect("frame 1");
+    let s = first.shadow_stats;
+    assert_eq!(
+        (s.views_drawn, s.views_waiting),
+        (BUDGET, views - BUDGET),
+        "{s:?}"
+    );
+
+    // Moving: the camera turns 4° a frame and the smallest caster slides.
+    let k = scene.smallest_caster().expect("a caster");
+    for step in 1..=4 {
+        let mut cam = r.scene().camera;
+        let turn = glam::Quat::from_axis_angle(cam.up.normalize(), 4f32.to_radians());
+        cam.position = cam.target + turn * (cam.position - cam.target);
+        r.set_camera(cam).unwrap();
+        let moved = Mat4::from_translation(Vec3::new(0.1 * step as f32, 0.0, 0.0))
+            * scene.instances[k].transform;
+        r.set_instance_transform(k, moved).unwrap();
+        let s = r.render().expect("moving frame").shadow_stats;
+        eprintln!("moving {step}: {s:?}");
+        assert!(s.views_drawn <= BUDGET, "{s:?}");
+    }
+
+    // Still: within ceil(views / budget) frames nothing waits.
+    let mut last = None;
+    for still in 1..=views.div_ceil(BUDGET) {
+        let f = r.render().expect("still frame");
+        let s = f.shadow_stats;
+        eprintln!("still {still}: {s:?}");
+        assert!(s.views_drawn <= BUDGET, "{s:?}");
+        let done = s.views_waiting == 0 && s.views_stale == 0;
+        last = Some(f);
+        if done {
+            break;
+        }
+    }
+    let last = last.unwrap();
+    let s = last.shadow_stats;
+    assert_eq!(
+        (s.views_waiting, s.views_stale),
+        (0, 0),
+        "did not converge: {s:?}"
+    );
+    let fresh = Renderer::new(&ctx, r.scene(), settings(None))
+        .expect("fresh renderer")
+        .render()
+        .expect("fresh frame");
+    let px = last
+        .rgba
+        .chunks(4)
+        .zip(fresh.rgba.chunks(4))
+        .filter(|(a, b)| a != b)
+        .count();
+    let bits: u32 = last
+        .visibility
+        .as_ref()
+        .unwrap()
+        .words
+        .iter()
+        .zip(&fresh.visibility.as_ref().unwrap().words)
+        .map(|(a, b)| (a ^ b).count_ones())
+        .sum();
+    assert_eq!(
+        (px, bits),
+        (0, 0),
+        "the converged frame differs from an unbudgeted one"
+    );
+    // Waiting views shadowed nothing: the first frame is lit at least as much as the fresh
+    // one of the first state (same camera).
+    let start = Renderer::new(&ctx, &scene, settings(None))
+        .expect("renderer")
+        .render()
+        .expect("frame");
+    assert!(
+        lit(&first) > lit(&start),
+        "first budgeted frame {} lit bits, full {}",
+        lit(&first),
+        lit(&start)
+    );
+}
+
+/// A budget of 0 views, or a budget with a technique that fills no atlas, is refused by name.
+#[test]
+fn a_shadow_budget_is_refused_where_it_cannot_apply() {
+    use manyshadows::RenderSettings;
+    let zero = RenderSettings::default().with_shadow_budget(Some(0));
+    assert!(matches!(
+        zero.validate(),
+        Err(RenderError::InvalidOption {
+            option: "shadow_budget",
+            ..
+        })
+    ));
+    let virt = RenderSettings::default()
+        .with_shadow_budget(Some(4))
+        .with_technique(Technique::VIRTUAL);
+    assert!(
+        matches!(virt.validate(), Err(RenderError::NotImplemented { .. })),
+        "{:?}",
+        virt.validate()
+    );
+}

@@ -51,6 +51,11 @@ pub struct ViewArgs {
     /// Keep the shadow maps (pages) of views that saw no change between frames.
     #[arg(long)]
     cache: bool,
+    /// Draw at most N shadow views per frame (atlas techniques; implies --cache): the rest
+    /// wait their turn, served from their older depth or unshadowed until drawn (the panel
+    /// counts them).
+    #[arg(long, value_name = "N")]
+    shadow_budget: Option<u32>,
     /// Move the smallest caster in a circle and sway the first spot or point light (of two
     /// or more): with --cache, only the shadow maps that see the caster or belong to that
     /// light are redrawn (the panel counts them).
@@ -177,6 +182,8 @@ struct Choice {
     point_shadows: PointShadows,
     pcf: Pcf,
     cache: bool,
+    /// At most this many shadow views drawn per frame (atlas techniques).
+    budget: Option<u32>,
     /// The hard visibility mask is computed (for the per-light view).
     visibility: bool,
 }
@@ -211,6 +218,8 @@ struct State {
     overlays: Overlays,
     /// Shadow views drawn by the last frame (fewer than planned when caching keeps maps).
     views_drawn: u64,
+    /// The last frame's views left waiting by a budget: (stale, oldest in frames, unshadowed).
+    views_waiting: (u32, u32, u32),
 }
 
 /// The panel's pictures: the shadow atlas and one light's visibility, read back at most
@@ -236,6 +245,10 @@ fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
         .with_point_shadows(c.point_shadows)
         .with_pcf(c.pcf)
         .with_cache_shadows(c.cache)
+        .with_shadow_budget(
+            c.budget
+                .filter(|_| c.technique.info().fills == Fills::Atlas),
+        )
         .with_visibility(c.visibility)
 }
 
@@ -297,6 +310,7 @@ impl App {
             point_shadows: self.args.point_shadows,
             pcf: self.args.pcf,
             cache: self.args.cache,
+            budget: self.args.shadow_budget,
             visibility: self.args.show_visibility.is_some(),
         };
         let renderer = Renderer::new(
@@ -345,6 +359,7 @@ impl App {
             frame_ms: 0.0,
             message: None,
             views_drawn: 0,
+            views_waiting: (0, 0, 0),
             overlays: Overlays {
                 atlas: self.args.show_atlas,
                 light: self.args.show_visibility.or(self.args.follow).unwrap_or(0),
@@ -476,7 +491,9 @@ impl State {
         let t0 = Instant::now();
         match self.renderer.render_to(&texture.texture) {
             Ok(submitted) => {
-                self.views_drawn = u64::from(submitted.shadow_stats.views_drawn);
+                let st = &submitted.shadow_stats;
+                self.views_drawn = u64::from(st.views_drawn);
+                self.views_waiting = (st.views_stale, st.stale_frames, st.views_waiting);
                 // Times of an earlier frame, when one has finished: no wait for this one.
                 if let Some(t) = self.renderer.poll_gpu_timings() {
                     self.gpu_ms = t;
@@ -579,6 +596,7 @@ impl State {
         let gpu_ms = self.gpu_ms.clone();
         let frame_ms = self.frame_ms;
         let views_drawn = self.views_drawn;
+        let (stale, oldest, waiting) = self.views_waiting;
         let technique = self.choice.technique;
         let message = self.message.clone();
         let mut light_count = self.light_count;
@@ -619,6 +637,18 @@ impl State {
                         });
                     ui.checkbox(&mut choice.cache, "keep unchanged maps (cache)");
                     ui.horizontal(|ui| {
+                        let mut on = choice.budget.is_some();
+                        let mut n = choice.budget.unwrap_or(16);
+                        ui.checkbox(&mut on, "shadow budget");
+                        ui.add_enabled(
+                            on,
+                            egui::Slider::new(&mut n, 1..=256)
+                                .logarithmic(true)
+                                .text("views per frame (atlas)"),
+                        );
+                        choice.budget = on.then_some(n);
+                    });
+                    ui.horizontal(|ui| {
                         ui.add(
                             egui::Slider::new(&mut light_count, 0..=4096)
                                 .logarithmic(true)
@@ -646,6 +676,12 @@ impl State {
                         ui.label(format!(
                             "shadow views drawn this frame: {views_drawn} of {views}"
                         ));
+                        if choice.budget.is_some() {
+                            ui.label(format!(
+                                "waiting for the budget: {stale} stale (oldest {oldest} \
+                                 frames), {waiting} with no shadow yet"
+                            ));
+                        }
                     }
                     ui.label(format!(
                         "frame CPU (record + submit, no GPU wait) {frame_ms:.1} ms"

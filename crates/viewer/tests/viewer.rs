@@ -434,3 +434,40 @@ fn the_virtual_maps_page_pool_is_shown() {
     assert!(unused > 20_000, "no unused pool shown ({unused} of 22,000)");
     assert!(used > 500, "no pages in use shown ({used})");
 }
+
+/// A shadow budget in the viewer: no presented frame draws more views than the budget, and a
+/// still scene is finished within ceil(views / budget) frames, after which nothing is drawn.
+#[test]
+#[ignore = "needs Xvfb and xwd: run `cargo xtask test`, which installs them"]
+fn a_shadow_budget_caps_the_views_each_frame_draws() {
+    let (_server, display) = xvfb();
+    let out = Command::new(env!("CARGO_BIN_EXE_manyshadows-view"))
+        .args(["--scene", "cubes", "--width", "160", "--height", "120"])
+        .args(["--shadow-budget", "3", "--hide-panel", "--exit-after", "12"])
+        .env("DISPLAY", &display)
+        .output()
+        .expect("run the viewer");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let drawn: Vec<(u64, u64)> = stdout
+        .lines()
+        .filter_map(|l| {
+            let (_, rest) = l.split_once(": ")?;
+            let mut w = rest.split_whitespace();
+            let k = w.next()?.parse().ok()?;
+            let v = w.nth(1)?.parse().ok()?;
+            Some((k, v))
+        })
+        .collect();
+    eprintln!("{drawn:?}");
+    assert_eq!(drawn.len(), 12, "{stdout}");
+    let views = drawn[0].1;
+    assert!(views > 3, "{drawn:?}");
+    assert!(drawn.iter().all(|&(k, _)| k <= 3), "{drawn:?}");
+    let total: u64 = drawn.iter().map(|&(k, _)| k).sum();
+    assert_eq!(total, views, "every view drawn once, then none: {drawn:?}");
+}

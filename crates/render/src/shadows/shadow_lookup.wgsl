@@ -79,6 +79,10 @@ fn atlas_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, view_depth: f32) ->
         return out;
     }
     let sv = shadow_views[vi];
+    if (sv.tile.z <= 0.0) {
+        // A tile that holds nothing of its view yet (a shadow budget left it for later).
+        return out;
+    }
     let paraboloid = sv.params.w > 1.5;
     // World size of one shadow texel at p.
     let clip0 = sv.view_proj * vec4<f32>(p, 1.0);

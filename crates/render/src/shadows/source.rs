@@ -49,6 +49,12 @@ pub struct ShadowStats {
     pub triangles: u64,
     /// Views drawn (fewer than all when caching kept some tiles).
     pub views_drawn: u32,
+    /// Views out of date but served from their older depth (a shadow budget left them).
+    pub views_stale: u32,
+    /// Frames since the oldest stale view went out of date (0 when none is).
+    pub stale_frames: u32,
+    /// Views with no depth yet, unshadowed until drawn (a shadow budget left them).
+    pub views_waiting: u32,
 }
 
 /// The renderer's buffers a source may read (bound by [`ShadowSource::bind`]).

@@ -7,6 +7,15 @@
 //! ([`ShadowGenerator::note_moved`]) and its old or new bounding sphere touches the view's
 //! frustum. Other tiles keep their depth; the technique clears and redraws only the listed
 //! tiles. Skinned scenes redraw everything (every vertex may move).
+//!
+//! A shadow budget ([`ShadowGenerator::set_budget`]) caps the views drawn per frame. Views
+//! wait their turn by priority: a view whose tile holds nothing of it (new, or moved to
+//! another tile) before one whose tile holds its own older depth, larger tiles (the plan's
+//! nearer and more important views) first, then the longest waiting. A waiting view with its
+//! own older depth is served from it (stale, its age counted); one with none gets no shadow
+//! until drawn (its tile is marked empty for the lookups, counted as waiting). Once nothing
+//! changes, every view is drawn within `ceil(views / budget)` frames and the frame equals an
+//! unbudgeted one.
 
 use glam::Vec3;
 use manyshadows_scene::light_space::PointShadows;
@@ -36,8 +45,25 @@ pub struct ShadowGenerator {
     #[cfg_attr(not(feature = "internals"), allow(dead_code))] // benchmarks and tests
     kind: Technique,
     caching: bool,
-    valid: Vec<bool>,
+    /// Per view of the plan: what its tile holds.
+    state: Vec<TileState>,
     moves: Vec<[(Vec3, f32); 2]>,
+    budget: Option<u32>,
+    /// Generations so far (the clock of [`TileState::Stale`]).
+    frame: u64,
+    /// Views whose tiles were marked empty for the lookups at the last generation.
+    waiting: Vec<u32>,
+}
+
+/// What a view's tile holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum TileState {
+    /// The view's current depth.
+    Current,
+    /// The view's depth from before a change, out of date since generation `since`.
+    Stale { since: u64 },
+    /// Nothing of this view (never drawn here).
+    Empty,
 }
 
 impl ShadowGenerator {
@@ -77,7 +103,7 @@ impl ShadowGenerator {
         }
         let atlas = ShadowAtlas::new(ctx, &plan)?;
         let casters = CasterGeometry::new(ctx, scene, gpu, options.casters)?;
-        let valid = vec![false; plan.views.len()];
+        let state = vec![TileState::Empty; plan.views.len()];
         Ok(Self {
             technique: technique.create(ctx)?,
             kind: technique,
@@ -86,8 +112,11 @@ impl ShadowGenerator {
             casters,
             options,
             caching: false,
-            valid,
+            state,
             moves: Vec::new(),
+            budget: None,
+            frame: 0,
+            waiting: Vec::new(),
         })
     }
 
@@ -100,6 +129,11 @@ impl ShadowGenerator {
     /// Keeps tiles of unchanged views from one generation to the next (off by default).
     pub fn set_caching(&mut self, on: bool) {
         self.caching = on;
+    }
+
+    /// Draws at most `budget` views per generation (with caching; `None`: every changed view).
+    pub fn set_budget(&mut self, budget: Option<u32>) {
+        self.budget = budget.map(|b| b.max(1));
     }
 
     /// Records that a shadow caster's bounding sphere went from `old` to `new` (centre,
@@ -120,50 +154,95 @@ impl ShadowGenerator {
         casters_changed: bool,
     ) -> Result<bool, RenderError> {
         let replaced = self.atlas.update(ctx, &plan)?;
+        // The old tiles' contents by view; a changed view on the same tile still holds its
+        // own older depth (stale), another tile holds nothing of it.
         let old: std::collections::HashMap<_, _> = self
             .plan
             .views
             .iter()
             .zip(&self.plan.layout.tiles)
-            .zip(&self.valid)
-            .filter(|(_, &valid)| valid)
-            .map(|((v, t), _)| ((v.light, v.kind), (v.view_proj, *t)))
+            .zip(&self.state)
+            .filter(|(_, &state)| state != TileState::Empty)
+            .map(|((v, t), &state)| ((v.light, v.kind), (v.view_proj, *t, state)))
             .collect();
-        self.valid = plan
+        let now = self.frame;
+        self.state = plan
             .views
             .iter()
             .zip(&plan.layout.tiles)
-            .map(|(v, t)| {
-                !casters_changed
-                    && !replaced
-                    && old.get(&(v.light, v.kind)) == Some(&(v.view_proj, *t))
+            .map(|(v, t)| match old.get(&(v.light, v.kind)) {
+                Some(&(view_proj, tile, state)) if !replaced && tile == *t => {
+                    if view_proj == v.view_proj && !casters_changed {
+                        state
+                    } else if let TileState::Stale { since } = state {
+                        TileState::Stale { since }
+                    } else {
+                        TileState::Stale { since: now }
+                    }
+                }
+                _ => TileState::Empty,
             })
             .collect();
         self.plan = plan;
+        // The views buffer was rewritten whole: no tile is marked empty any more.
+        self.waiting.clear();
         Ok(replaced)
     }
 
-    /// The views the next generation draws.
-    fn draw_list(&mut self, gpu: &GpuScene) -> Vec<u32> {
+    /// The views the next generation draws (ascending), and the counts of the views left
+    /// waiting.
+    fn draw_list(&mut self, gpu: &GpuScene) -> (Vec<u32>, Waiting) {
         let n = self.plan.views.len();
+        self.frame += 1;
         if !self.caching || gpu.skin.is_some() {
             self.moves.clear();
-            self.valid.iter_mut().for_each(|v| *v = true);
-            return (0..n as u32).collect();
+            self.state.iter_mut().for_each(|v| *v = TileState::Current);
+            return ((0..n as u32).collect(), Waiting::default());
         }
         let moves = std::mem::take(&mut self.moves);
-        let mut list = Vec::new();
-        for (i, view) in self.plan.views.iter().enumerate() {
-            let dirty = !self.valid[i]
-                || moves
+        let now = self.frame;
+        for (view, state) in self.plan.views.iter().zip(&mut self.state) {
+            if *state == TileState::Current
+                && moves
                     .iter()
-                    .any(|m| m.iter().any(|&(c, r)| view.sphere_visible(c, r)));
-            if dirty {
-                list.push(i as u32);
-                self.valid[i] = true;
+                    .any(|m| m.iter().any(|&(c, r)| view.sphere_visible(c, r)))
+            {
+                *state = TileState::Stale { since: now };
             }
         }
-        list
+        let mut list: Vec<u32> = (0..n as u32)
+            .filter(|&i| self.state[i as usize] != TileState::Current)
+            .collect();
+        if let Some(budget) = self.budget.filter(|&b| list.len() > b as usize) {
+            let tiles = &self.plan.layout.tiles;
+            let state = &self.state;
+            // Empty tiles first, larger tiles first, the longest waiting first, view order.
+            list.sort_by_key(|&i| {
+                let (empty, since) = match state[i as usize] {
+                    TileState::Empty => (0, 0),
+                    TileState::Stale { since } => (1, since),
+                    TileState::Current => (2, 0),
+                };
+                (empty, std::cmp::Reverse(tiles[i as usize].size), since, i)
+            });
+            list.truncate(budget as usize);
+            list.sort_unstable();
+        }
+        for &i in &list {
+            self.state[i as usize] = TileState::Current;
+        }
+        let mut waiting = Waiting::default();
+        for (i, state) in self.state.iter().enumerate() {
+            match *state {
+                TileState::Current => {}
+                TileState::Stale { since } => {
+                    waiting.stale += 1;
+                    waiting.oldest = waiting.oldest.max((now - since) as u32);
+                }
+                TileState::Empty => waiting.empty.push(i as u32),
+            }
+        }
+        (list, waiting)
     }
 
     /// Records one generation into `encoder`; `span` times it.
@@ -175,10 +254,15 @@ impl ShadowGenerator {
         timer: &GpuTimer,
         span: Option<Span>,
     ) -> ShadowStats {
-        let list = self.draw_list(gpu);
+        let (list, waiting) = self.draw_list(gpu);
         if !list.is_empty() {
             ctx.queue
                 .write_buffer(&self.atlas.draw_list, 0, bytemuck::cast_slice(&list));
+        }
+        if waiting.empty != self.waiting {
+            // Tiles that hold nothing of their view yet read as "no shadow information".
+            self.atlas.write_view_data(ctx, &self.plan, &waiting.empty);
+            self.waiting = waiting.empty.clone();
         }
         let input = ShadowInput {
             ctx,
@@ -191,6 +275,9 @@ impl ShadowGenerator {
         };
         let mut stats = self.technique.generate(&input, encoder, timer, span);
         stats.views_drawn = list.len() as u32;
+        stats.views_stale = waiting.stale;
+        stats.stale_frames = waiting.oldest;
+        stats.views_waiting = waiting.empty.len() as u32;
         stats
     }
 
@@ -200,4 +287,15 @@ impl ShadowGenerator {
             crate::shadows::image::read_depth(ctx, &self.atlas)
         })
     }
+}
+
+/// The views a budgeted generation left for later.
+#[derive(Debug, Default)]
+struct Waiting {
+    /// Views served from their own older depth.
+    stale: u32,
+    /// Generations since the oldest of them went out of date.
+    oldest: u32,
+    /// Views whose tiles hold nothing of them yet (no shadow until drawn).
+    empty: Vec<u32>,
 }

@@ -32,7 +32,8 @@ impl AtlasSource {
         let plan = params.plan(scene)?;
         let mut generator =
             ShadowGenerator::new(ctx, scene, gpu, plan, technique, settings.shadow)?;
-        generator.set_caching(settings.cache_shadows);
+        generator.set_caching(settings.cache_shadows || settings.shadow_budget.is_some());
+        generator.set_budget(settings.shadow_budget);
         Ok(Self { generator, params })
     }
 }

@@ -81,6 +81,22 @@ impl ShadowAtlas {
         Ok(replaced | self.write_views(ctx, plan)?)
     }
 
+    /// Rewrites the lookups' view records of `plan` (the buffer already holds as many), with
+    /// the tiles of the views in `empty` marked as holding no depth (side 0: no shadow
+    /// information; the techniques never read views outside their draw list).
+    pub fn write_view_data(&self, ctx: &GpuContext, plan: &ShadowPlan, empty: &[u32]) {
+        let mut data = plan.view_data();
+        for &i in empty {
+            if let Some(d) = data.get_mut(i as usize) {
+                d.tile = [0.0; 4];
+            }
+        }
+        if !data.is_empty() {
+            ctx.queue
+                .write_buffer(&self.views_buffer, 0, bytemuck::cast_slice(&data));
+        }
+    }
+
     /// Writes the per-view buffers of `plan`, growing them if needed (true if any grew).
     fn write_views(&mut self, ctx: &GpuContext, plan: &ShadowPlan) -> Result<bool, RenderError> {
         let mut data = plan.view_data();
