@@ -182,6 +182,15 @@ impl Renderer {
         settings: RenderSettings,
     ) -> Result<Self, RenderError> {
         settings.validate()?;
+        if settings.shadow_budget.is_some()
+            && settings.technique.info().fills != crate::shadows::descriptor::Fills::Atlas
+        {
+            return Err(RenderError::NotImplemented {
+                what: "a shadow budget with a technique that fills no atlas",
+                instead: "use an atlas technique, or caching alone (virtual maps redraw only \
+                          the pages under a change)",
+            });
+        }
         scene.validate()?;
         let limits = ctx.limits();
         let max_dim = limits.max_texture_dimension_2d;

@@ -300,15 +300,6 @@ impl RenderSettings {
                 "at least 1 view per frame (or none for no budget)",
             ));
         }
-        if self.shadow_budget.is_some()
-            && self.technique.info().fills != crate::shadows::descriptor::Fills::Atlas
-        {
-            return Err(RenderError::NotImplemented {
-                what: "a shadow budget with a technique that fills no atlas",
-                instead: "use an atlas technique, or caching alone (virtual maps redraw only \
-                          the pages under a change)",
-            });
-        }
         if let Some(m) = self
             .max_atlas_size
             .filter(|&m| m < manyshadows_scene::atlas::MIN_TILE)

@@ -352,12 +352,16 @@ fn a_shadow_budget_is_refused_where_it_cannot_apply() {
             ..
         })
     ));
+    let ctx = common::context();
+    let scene = builtin::build("cubes", &BuiltinOptions::default()).expect("scene");
     let virt = RenderSettings::default()
+        .with_width(32)
+        .with_height(18)
         .with_shadow_budget(Some(4))
         .with_technique(Technique::VIRTUAL);
+    let made = manyshadows::Renderer::new(&ctx, &scene, virt).map(|_| ());
     assert!(
-        matches!(virt.validate(), Err(RenderError::NotImplemented { .. })),
-        "{:?}",
-        virt.validate()
+        matches!(made, Err(RenderError::NotImplemented { .. })),
+        "{made:?}"
     );
 }
