@@ -32,6 +32,7 @@ mod omni;
 mod plot;
 mod shadows_bench;
 mod soak;
+mod suite;
 mod techniques;
 mod viewer;
 mod virtual_bench;
@@ -134,6 +135,11 @@ enum BenchCommand {
         .required(false)
         .help("Directory for results.json and results.txt")))]
     Soak(Box<soak::SoakArgs>),
+    /// The headline measurements in one command, for a GPU: `bench layered` (seed 000's
+    /// sweep), `bench omni` and `bench shadows` at 1080p from 16 to 16,384 lights, each its own
+    /// run; then suite.txt (their tables in order, each naming the adapter) and suite.json.
+    /// `--quick` runs tiny sizes to check that everything runs.
+    Suite(suite::SuiteArgs),
 }
 
 /// Adapter choice: `--backend`, `--adapter`, `--limits` (shared by every subcommand that
@@ -483,6 +489,7 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
         Some(Command::Bench(BenchCommand::Virtual(args))) => virtual_bench::virtual_maps(&args),
         Some(Command::Bench(BenchCommand::Soak(args))) => soak::soak(&args),
         Some(Command::Bench(BenchCommand::Shadows(args))) => shadows_bench::shadows(&args),
+        Some(Command::Bench(BenchCommand::Suite(args))) => suite::suite(&args),
         None => render(&cli.render),
     }
 }

@@ -423,3 +423,39 @@ fn bench_virtual_with_cache_measures_frames_that_keep_pages() {
     assert!(kept > 0 && drawn < resident, "{s}");
     assert_eq!(drawn + kept, resident, "{s}");
 }
+
+/// `bench suite --quick`: its three sections run as their own bench commands into their own
+/// directories, and suite.txt / suite.json gather them in order, each section naming the
+/// adapter; a section that fails stops the suite with its name.
+#[test]
+fn bench_suite_gathers_its_sections() {
+    let dir = tmp("suite");
+    let out = bench("suite --quick", &["--out-dir", dir.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("Validation Error"), "{stderr}");
+    let txt = std::fs::read_to_string(dir.join("suite.txt")).unwrap();
+    let names: Vec<&str> = txt
+        .lines()
+        .filter_map(|l| l.strip_prefix("## "))
+        .map(|l| l.split(' ').next().unwrap())
+        .collect();
+    assert_eq!(names, ["layered", "omni", "shadows"], "{txt}");
+    assert!(txt.matches("adapter:").count() >= 3, "{txt}");
+    let json: Value =
+        serde_json::from_slice(&std::fs::read(dir.join("suite.json")).unwrap()).unwrap();
+    let sections = json["sections"].as_array().unwrap();
+    assert_eq!(sections.len(), 3, "{json}");
+    for s in sections {
+        assert!(s["results"]["adapter"].is_string(), "{s}");
+        let name = s["name"].as_str().unwrap();
+        assert!(dir.join(name).join("results.json").is_file(), "{name}");
+    }
+    let bad = bench(
+        "suite --quick --backend no-such-backend",
+        &["--out-dir", tmp("suite-bad").to_str().unwrap()],
+    );
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success(), "{err}");
+    assert!(err.contains("section layered"), "{err}");
+}
