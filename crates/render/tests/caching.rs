@@ -365,3 +365,90 @@ fn a_shadow_budget_is_refused_where_it_cannot_apply() {
         "{made:?}"
     );
 }
+
+/// Incremental page marking: with the camera and lights still, a frame carries last frame's
+/// needed pages over and marks again only the pixels a moved caster may cover. A box moved
+/// from the floor to above a point light shows the light its underside, which only the
+/// light's +Y cube face sees — a face no sample needed before. The frame must need every page
+/// a fresh renderer's needs (per level at least as many; a frame that did not mark the box's
+/// new pixels has no +Y face at all) and equal it bit for bit in the visibility mask.
+#[test]
+fn a_caster_moved_into_a_new_face_gets_its_pages_marked() {
+    use manyshadows::scene::{
+        primitives, Attenuation, Camera, Instance, Light, LightKind, Material, Scene,
+    };
+    use manyshadows::{RenderSettings, Renderer};
+    let ctx = common::context();
+    let scene = Scene {
+        textures: Vec::new(),
+        name: "box and lamp".into(),
+        meshes: vec![
+            primitives::plane(20.0, 20.0, 4),
+            primitives::cuboid(Vec3::splat(0.5)),
+        ],
+        materials: vec![Material::default()],
+        instances: vec![
+            Instance::caster(0, 0, Mat4::IDENTITY),
+            Instance::caster(1, 0, Mat4::from_translation(Vec3::new(2.0, 0.25, 0.0))),
+        ],
+        lights: vec![Light {
+            kind: LightKind::Point {
+                position: Vec3::new(0.0, 2.0, 0.0),
+                range: 8.0,
+            },
+            ambient: Vec3::ZERO,
+            diffuse: Vec3::ONE,
+            specular: Vec3::ZERO,
+            attenuation: Attenuation::for_range(8.0),
+            casts_shadows: true,
+            shadow_resolution: 256,
+        }],
+        camera: Camera::look_at(Vec3::new(0.0, 3.0, 9.0), Vec3::new(0.0, 1.5, 0.0)),
+    };
+    let settings = |cache| {
+        RenderSettings::default()
+            .with_width(256)
+            .with_height(144)
+            .with_technique(Technique::VIRTUAL)
+            .with_cache_shadows(cache)
+            .with_visibility(true)
+    };
+    let mut r = Renderer::new(&ctx, &scene, settings(true)).expect("renderer");
+    let before = r.render().expect("frame 1").virtual_maps.unwrap();
+    r.render().expect("frame 2: nothing changed");
+    r.set_instance_transform(1, Mat4::from_translation(Vec3::new(0.0, 3.0, 0.0)))
+        .unwrap();
+    let frame = r.render().expect("frame 3");
+    let s = frame.virtual_maps.unwrap();
+    let fresh = Renderer::new(&ctx, r.scene(), settings(false))
+        .expect("fresh")
+        .render()
+        .expect("fresh frame");
+    let f = fresh.virtual_maps.unwrap();
+    eprintln!("before: {before:?}\nafter the move: {s:?}\nfresh: {f:?}");
+    assert!(
+        f.faces_in_use > before.faces_in_use,
+        "the move must need a new face: {before:?} → {f:?}"
+    );
+    for level in 0..s.needed.len() {
+        assert!(
+            s.needed[level] >= f.needed[level],
+            "level {level}: {} pages needed, a fresh frame needs {}",
+            s.needed[level],
+            f.needed[level]
+        );
+    }
+    let bits: u32 = frame
+        .visibility
+        .as_ref()
+        .unwrap()
+        .words
+        .iter()
+        .zip(&fresh.visibility.as_ref().unwrap().words)
+        .map(|(a, b)| (a ^ b).count_ones())
+        .sum();
+    assert_eq!(
+        bits, 0,
+        "{bits} visibility bits differ from a fresh renderer"
+    );
+}

@@ -180,7 +180,8 @@ struct VsmUniforms {
     pool: vec4<u32>,
     // Faces, page-table entries, 1 = mark pages for back-facing samples too, unused.
     counts: vec4<u32>,
-    // Texels per screen pixel wanted (level of detail scale), unused ×3.
+    // Texels per screen pixel wanted (level of detail scale); the marking pass's first pixel
+    // (x, y: it marks a rectangle from there when only part of the screen changed); unused.
     lod: vec4<f32>,
 }
 

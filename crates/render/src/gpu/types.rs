@@ -235,7 +235,8 @@ pub struct VsmUniforms {
     pub pool: [u32; 4],
     /// Faces, page-table entries, 1 = mark pages for back-facing samples too, unused.
     pub counts: [u32; 4],
-    /// Texels per screen pixel wanted, unused ×3.
+    /// Texels per screen pixel wanted; the first pixel (x, y) the marking pass visits (a
+    /// rectangle of the screen when only part of it changed); unused.
     pub lod: [f32; 4],
 }
 

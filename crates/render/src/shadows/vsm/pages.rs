@@ -81,8 +81,18 @@ pub struct VirtualShadows {
     last: std::collections::HashMap<(usize, ViewKind), LastFace>,
     /// Caster bounding spheres moved since the last frame (old and new).
     moves: Vec<[(Vec3, f32); 2]>,
+    /// What the marking depends on besides the G-buffer under moved casters: the camera, the
+    /// lights and the non-casting instances, as of the last [`Self::update`].
+    key: SceneKey,
+    /// Bumped whenever `key` changes.
+    key_gen: u64,
+    /// `key_gen` of the last recorded frame (its table holds that state's needs).
+    marked_gen: u64,
+    /// Camera world → clip, for the screen rectangle of moved casters.
+    camera: Mat4,
     args: wgpu::Buffer,
     mark: wgpu::ComputePipeline,
+    carry: wgpu::ComputePipeline,
     count: wgpu::ComputePipeline,
     scan: wgpu::ComputePipeline,
     retain: wgpu::ComputePipeline,
@@ -203,6 +213,7 @@ impl VirtualShadows {
         let mark = compute("vsm.mark", &mark_module, &mark_pl, "cs_mark");
         let alloc_pl = pipeline_layout("vsm.alloc_pipeline_layout", &alloc_layout);
         let count = compute("vsm.count", &mark_module, &alloc_pl, "cs_count");
+        let carry = compute("vsm.carry", &mark_module, &alloc_pl, "cs_carry");
         let scan = compute("vsm.scan", &mark_module, &alloc_pl, "cs_scan");
         let retain = compute("vsm.retain", &mark_module, &alloc_pl, "cs_retain");
         let free = compute("vsm.free", &mark_module, &alloc_pl, "cs_free");
@@ -235,8 +246,13 @@ impl VirtualShadows {
             prev_entries: 0,
             last: Default::default(),
             moves: Vec::new(),
+            key: SceneKey::of(scene),
+            key_gen: 1,
+            marked_gen: 0,
+            camera: camera_matrix(scene, (width, height)),
             args,
             mark,
+            carry,
             count,
             scan,
             retain,
@@ -285,6 +301,12 @@ impl VirtualShadows {
         casters: &CasterGeometry,
     ) -> Result<bool, RenderError> {
         self.plan = VirtualPlan::new(scene, width as f32 / height as f32, height, &self.options);
+        let key = SceneKey::of(scene);
+        if key != self.key {
+            self.key = key;
+            self.key_gen += 1;
+        }
+        self.camera = camera_matrix(scene, (width, height));
         let mut replaced = self.write_plan(ctx)?;
         let slots = page_slots(self.plan.fit.faces, self.pool_pages);
         if slots > self.slots {
@@ -424,6 +446,7 @@ impl VirtualShadows {
     /// Keeps no page at the next frame (caster geometry or culling decisions changed).
     pub fn forget_pages(&mut self) {
         self.last.clear();
+        self.key_gen += 1;
     }
 
     /// Records one frame: the caster transform, page marking and allocation (`pages_span`),
@@ -481,9 +504,35 @@ impl VirtualShadows {
                 ((v.light, v.kind), last)
             })
             .collect();
+        // Incremental marking: with the camera, lights and every face as last frame (only
+        // casters moved), last frame's needs carry over and only the pixels the moved casters
+        // may cover (old and new places) are marked again.
+        let incremental = keep
+            && self.marked_gen == self.key_gen
+            && self.prev_entries == self.plan.fit.table_entries
+            && faces.iter().all(|f| f.table[3] != 0);
+        let marking = if incremental {
+            let rect = self
+                .moves
+                .iter()
+                .flatten()
+                .map(|&(c, r)| screen_rect(self.camera, self.viewport, c, r))
+                .reduce(|a, b| [a[0].min(b[0]), a[1].min(b[1]), a[2].max(b[2]), a[3].max(b[3])]);
+            Marking::Carry(rect.filter(|r| r[0] < r[2] && r[1] < r[3]))
+        } else {
+            Marking::Full
+        };
+        let origin = match marking {
+            Marking::Carry(Some(r)) => [r[0] as f32, r[1] as f32],
+            _ => [0.0, 0.0],
+        };
+        // `VsmUniforms::lod.yz`: the marking pass's first pixel.
+        ctx.queue
+            .write_buffer(&self.uniforms, 36, bytemuck::cast_slice(&origin));
         self.moves.clear();
-        self.record_passes(encoder, casters, timer, pages_span, span);
+        self.record_passes(encoder, casters, timer, pages_span, span, marking);
         self.prev_entries = self.plan.fit.table_entries;
+        self.marked_gen = self.key_gen;
     }
 
     fn record_passes(
@@ -493,6 +542,7 @@ impl VirtualShadows {
         timer: &GpuTimer,
         pages_span: Option<Span>,
         span: Option<Span>,
+        marking: Marking,
     ) {
         let Some(g) = &self.groups else {
             return;
@@ -524,9 +574,20 @@ impl VirtualShadows {
             let (bx, by) = groups_2d(entries.div_ceil(ALLOC_BLOCK));
             let (ex, ey) = groups_2d(entries.div_ceil(64));
             if !self.plan.faces.is_empty() {
-                pass.set_bind_group(0, &g.mark, &[]);
-                pass.set_pipeline(&self.mark);
-                pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+                let rect = match marking {
+                    Marking::Full => Some([0, 0, w, h]),
+                    Marking::Carry(rect) => {
+                        pass.set_bind_group(0, &g.alloc, &[]);
+                        pass.set_pipeline(&self.carry);
+                        pass.dispatch_workgroups(ex, ey, 1);
+                        rect
+                    }
+                };
+                if let Some([x0, y0, x1, y1]) = rect {
+                    pass.set_bind_group(0, &g.mark, &[]);
+                    pass.set_pipeline(&self.mark);
+                    pass.dispatch_workgroups((x1 - x0).div_ceil(8), (y1 - y0).div_ceil(8), 1);
+                }
                 pass.set_bind_group(0, &g.alloc, &[]);
                 for (pipeline, (x, y)) in [
                     (&self.count, (bx, by)),
@@ -620,6 +681,77 @@ fn union(a: [f32; 4], b: [f32; 4]) -> [f32; 4] {
             a[3].max(b[3]),
         ],
     }
+}
+
+/// How a frame marks the pages its samples need.
+#[derive(Clone, Copy, Debug)]
+enum Marking {
+    /// Every pixel marks.
+    Full,
+    /// Last frame's needs carry over; the pixels of this rectangle (x0, y0, x1, y1; none when
+    /// nothing moved) mark again.
+    Carry(Option<[u32; 4]>),
+}
+
+/// What page marking depends on, besides the G-buffer under moved casters.
+#[derive(Clone, Debug, PartialEq)]
+struct SceneKey {
+    camera: manyshadows_scene::Camera,
+    lights: Vec<manyshadows_scene::Light>,
+    /// Transforms of the instances that cast no shadow (their moves are not noted as moves).
+    others: Vec<Mat4>,
+}
+
+impl SceneKey {
+    fn of(scene: &Scene) -> Self {
+        Self {
+            camera: scene.camera,
+            lights: scene.lights.clone(),
+            others: scene
+                .instances
+                .iter()
+                .filter(|i| !i.casts_shadows)
+                .map(|i| i.transform)
+                .collect(),
+        }
+    }
+}
+
+fn camera_matrix(scene: &Scene, (width, height): (u32, u32)) -> Mat4 {
+    let cam = &scene.camera;
+    cam.projection(width as f32 / height.max(1) as f32) * cam.view()
+}
+
+/// The pixels (x0, y0, x1, y1, clamped to the viewport) a sphere may cover on screen: the
+/// bounds of its enclosing cube's projected corners, one pixel wider; the whole screen when a
+/// corner lies behind the camera.
+fn screen_rect(view_proj: Mat4, (w, h): (u32, u32), c: Vec3, r: f32) -> [u32; 4] {
+    let mut lo = glam::Vec2::splat(f32::INFINITY);
+    let mut hi = glam::Vec2::splat(f32::NEG_INFINITY);
+    for k in 0..8 {
+        let corner = c + Vec3::new(
+            if k & 1 == 0 { -r } else { r },
+            if k & 2 == 0 { -r } else { r },
+            if k & 4 == 0 { -r } else { r },
+        );
+        let clip = view_proj * corner.extend(1.0);
+        if clip.w.is_nan() || clip.w <= 1e-6 {
+            return [0, 0, w, h];
+        }
+        let p = glam::Vec2::new(
+            (0.5 + 0.5 * clip.x / clip.w) * w as f32,
+            (0.5 - 0.5 * clip.y / clip.w) * h as f32,
+        );
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    let clamp = |v: f32, max: u32| v.clamp(0.0, max as f32) as u32;
+    [
+        clamp(lo.x.floor() - 1.0, w),
+        clamp(lo.y.floor() - 1.0, h),
+        clamp(hi.x.ceil() + 1.0, w),
+        clamp(hi.y.ceil() + 1.0, h),
+    ]
 }
 
 /// Page slots of the draw: one per pool page, and up to four per pool page when the plan has

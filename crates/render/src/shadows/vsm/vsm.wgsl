@@ -104,7 +104,8 @@ fn mark_light(i: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
 }
 
 @compute @workgroup_size(8, 8, 1)
-fn cs_mark(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn cs_mark(@builtin(global_invocation_id) id: vec3<u32>) {
+    let gid = id.xy + vec2<u32>(vsm.lod.yz);
     if (gid.x >= u32(frame.viewport.x) || gid.y >= u32(frame.viewport.y)) {
         return;
     }
@@ -139,6 +140,26 @@ fn cs_mark(@builtin(global_invocation_id) gid: vec3<u32>) {
                 mark_light(i, p, n, view_depth);
             }
         }
+    }
+}
+
+// Incremental marking (the camera, the lights and every face unchanged since the last frame,
+// only casters moved): every page needed last frame — resident or denied then — is needed
+// again, one thread per entry; cs_mark then visits only the pixels the moved casters may
+// cover. The needed set stays closed under ancestors (last frame's was).
+@compute @workgroup_size(64, 1, 1)
+fn cs_carry(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let e = gid.x + gid.y * groups.x * 64u;
+    if (e >= vsm.counts.y) {
+        return;
+    }
+    let face = vsm_faces[face_of(e)];
+    if (face.table.w == 0u) {
+        return;
+    }
+    let before = prev_table[face.table.w - 1u + (e - face.table.x)];
+    if (before >= VSM_FIRST_PAGE && (before < VSM_NEEDED_AT || before == VSM_DENIED)) {
+        atomicMax(&vsm_table[e], VSM_NEEDED);
     }
 }
 
