@@ -17,7 +17,9 @@
 //! 1. *mark*: each pixel visits its cluster's lights; for each light that reaches it (and
 //!    faces it), the sample asks for the level whose texel matches its pixel footprint
 //!    ([`VirtualOptions::lod`](plan::VirtualOptions::lod) texels per pixel) and marks that
-//!    page and its ancestors needed;
+//!    page and its ancestors needed. With caching, when the camera, the lights and every face
+//!    are as last frame (only casters moved), last frame's needed pages carry over and only
+//!    the pixels under the moved casters' old and new bounds are marked again;
 //! 2. *allocate*: needed pages get pool pages in page-table order (ranks from per-block counts
 //!    and a prefix sum, so the frame never depends on thread order), coarsest level first, a
 //!    level admitted whole or not at all while the pool lasts; pages of levels that do not fit

@@ -5,6 +5,7 @@
 //    whose texels match the pixel's footprint is marked needed, and so are its ancestors up
 //    to level 0 (a marked entry's ancestors are marked by whoever marked it, so the walk
 //    stops at the first one already marked). Newly marked entries are counted per level.
+//    Incrementally (only casters moved; see cs_carry) it visits a rectangle of the screen.
 // 2. cs_count, one workgroup per block of 32 page-table entries: each needed entry learns its
 //    level (tagged into the entry) and the block counts its needed entries per level;
 //    cs_scan, one thread per level: prefix sums of those counts and the totals per level.
