@@ -517,7 +517,14 @@ impl VirtualShadows {
                 .iter()
                 .flatten()
                 .map(|&(c, r)| screen_rect(self.camera, self.viewport, c, r))
-                .reduce(|a, b| [a[0].min(b[0]), a[1].min(b[1]), a[2].max(b[2]), a[3].max(b[3])]);
+                .reduce(|a, b| {
+                    [
+                        a[0].min(b[0]),
+                        a[1].min(b[1]),
+                        a[2].max(b[2]),
+                        a[3].max(b[3]),
+                    ]
+                });
             Marking::Carry(rect.filter(|r| r[0] < r[2] && r[1] < r[3]))
         } else {
             Marking::Full
