@@ -586,16 +586,48 @@ pub(crate) struct FrameCounters {
 
 /// Whole frames of a [`Renderer`]: stages as the renderer times them (`gbuffer`, `clusters`,
 /// `pages`, `shadows`, `lighting`), CPU time recording and submitting, wall time until the
-/// image is back.
+/// image is back. With a moving caster, that instance moves by 0.05 back and forth before
+/// each frame.
 pub(crate) struct FrameSubject {
     /// The renderer.
     pub renderer: Renderer,
+    /// The moving instance and its transform at rest.
+    caster: Option<(usize, glam::Mat4)>,
+    frame: u32,
+}
+
+impl FrameSubject {
+    /// Frames of an unchanging scene.
+    pub fn new(renderer: Renderer) -> Self {
+        Self::moving(renderer, None)
+    }
+
+    /// Frames in which `caster` (instance, transform at rest), if any, moves.
+    pub fn moving(renderer: Renderer, caster: Option<(usize, glam::Mat4)>) -> Self {
+        Self {
+            renderer,
+            caster,
+            frame: 0,
+        }
+    }
 }
 
 impl Subject for FrameSubject {
     type Counters = FrameCounters;
 
     fn run(&mut self, _ctx: &GpuContext) -> Result<Run<FrameCounters>> {
+        if let Some((k, base)) = self.caster {
+            self.frame += 1;
+            let dx = if self.frame.is_multiple_of(2) {
+                0.0
+            } else {
+                0.05
+            };
+            self.renderer.set_instance_transform(
+                k,
+                glam::Mat4::from_translation(glam::Vec3::new(dx, 0.0, 0.0)) * base,
+            )?;
+        }
         let f = self.renderer.render()?;
         Ok(Run {
             stages: f.timings.gpu_ms,

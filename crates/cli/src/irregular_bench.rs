@@ -115,9 +115,7 @@ pub fn irregular(args: &IrregularArgs) -> Result<()> {
                     .with_technique(*technique);
                 contenders.push(Contender {
                     label: name.clone(),
-                    subject: FrameSubject {
-                        renderer: Renderer::new(&h.ctx, &scene, settings)?,
-                    },
+                    subject: FrameSubject::new(Renderer::new(&h.ctx, &scene, settings)?),
                 });
             }
             for o in h.compare(contenders, Some(&format!("{}@512", Technique::default())))? {

@@ -123,9 +123,7 @@ pub fn lights(args: &LightsArgs) -> Result<()> {
                             .with_light_loop(light_loop);
                         Ok(Contender {
                             label: label.into(),
-                            subject: FrameSubject {
-                                renderer: Renderer::new(&h.ctx, &scene, settings)?,
-                            },
+                            subject: FrameSubject::new(Renderer::new(&h.ctx, &scene, settings)?),
                         })
                     })
                     .collect::<Result<Vec<_>>>()?;

@@ -11,14 +11,13 @@
 
 use anyhow::{bail, Result};
 use clap::Args;
-use glam::{Mat4, Vec3};
 use manyshadows::scene::builtin::{self, LightMix};
-use manyshadows::{Fills, GpuContext, RayOptions, RenderSettings, Renderer, Stage, Technique};
+use manyshadows::{Fills, RayOptions, RenderSettings, Renderer, Stage, Technique};
 use serde::Serialize;
 
 use crate::harness::{
-    check_counts, check_scene, ms, seeded_scene, Contender, Figure, FrameCounters, Harness, Run,
-    RunArgs, Runs, Subject,
+    check_counts, check_scene, ms, seeded_scene, Contender, Figure, FrameCounters, FrameSubject,
+    Harness, RunArgs, Runs,
 };
 use crate::plot::series;
 
@@ -49,43 +48,6 @@ pub struct ShadowsArgs {
 }
 
 /// A renderer whose smallest shadow caster moves back and forth by 5 cm every frame.
-/// A renderer whose caster (if any) moves by 0.05 back and forth each frame.
-pub(crate) struct Moving {
-    pub(crate) renderer: Renderer,
-    /// The moving instance and its transform at rest.
-    pub(crate) caster: Option<(usize, Mat4)>,
-    pub(crate) frame: u32,
-}
-
-impl Subject for Moving {
-    type Counters = FrameCounters;
-
-    fn run(&mut self, _ctx: &GpuContext) -> Result<Run<FrameCounters>> {
-        if let Some((k, base)) = self.caster {
-            self.frame += 1;
-            let dx = if self.frame.is_multiple_of(2) {
-                0.0
-            } else {
-                0.05
-            };
-            self.renderer.set_instance_transform(
-                k,
-                Mat4::from_translation(Vec3::new(dx, 0.0, 0.0)) * base,
-            )?;
-        }
-        let f = self.renderer.render()?;
-        Ok(Run {
-            stages: f.timings.gpu_ms,
-            cpu_ms: f.timings.cpu_record_ms,
-            wall_ms: f.timings.wall_ms,
-            counters: FrameCounters {
-                clusters: f.clusters,
-                virtual_maps: f.virtual_maps,
-            },
-        })
-    }
-}
-
 #[derive(Serialize, Default, Clone)]
 struct Side {
     label: String,
@@ -163,11 +125,7 @@ pub fn shadows(args: &ShadowsArgs) -> Result<()> {
             setup.push(t.elapsed().as_secs_f64() * 1e3);
             contenders.push(Contender {
                 label: label.clone(),
-                subject: Moving {
-                    renderer,
-                    caster,
-                    frame: 0,
-                },
+                subject: FrameSubject::moving(renderer, caster),
             });
         }
         let out = h.compare(contenders, Some("atlas"))?;

@@ -17,11 +17,10 @@ use manyshadows::{VirtualOptions, VirtualStats};
 use serde::Serialize;
 
 use crate::harness::{
-    check_counts, check_scene, ms, seeded_scene, Contender, Figure, FrameCounters, Harness,
-    RunArgs, Runs,
+    check_counts, check_scene, ms, seeded_scene, Contender, Figure, FrameCounters, FrameSubject,
+    Harness, RunArgs, Runs,
 };
 use crate::plot::series;
-use crate::shadows_bench::Moving;
 
 /// Arguments of `manyshadows bench virtual`.
 #[derive(Args, Debug, Clone)]
@@ -139,11 +138,7 @@ pub fn virtual_maps(args: &VirtualArgs) -> Result<()> {
         for (label, settings) in [("atlas", atlas), ("virtual", virt)] {
             contenders.push(Contender {
                 label: label.into(),
-                subject: Moving {
-                    renderer: Renderer::new(&h.ctx, &scene, settings)?,
-                    caster,
-                    frame: 0,
-                },
+                subject: FrameSubject::moving(Renderer::new(&h.ctx, &scene, settings)?, caster),
             });
         }
         let [a, v]: [_; 2] = h

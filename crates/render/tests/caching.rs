@@ -21,6 +21,35 @@ fn generate(ctx: &GpuContext, g: &mut ShadowGenerator, gpu: &GpuScene) -> u32 {
     stats.views_drawn
 }
 
+/// Between two frames: pixels that differ, the largest channel difference, and visibility
+/// bits that differ (both frames must carry a mask).
+fn differing(a: &manyshadows::Frame, b: &manyshadows::Frame) -> (usize, u8, u32) {
+    let px = a
+        .rgba
+        .chunks(4)
+        .zip(b.rgba.chunks(4))
+        .filter(|(x, y)| x != y)
+        .count();
+    let delta = a
+        .rgba
+        .iter()
+        .zip(&b.rgba)
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap_or(0);
+    let (va, vb) = (
+        a.visibility.as_ref().unwrap(),
+        b.visibility.as_ref().unwrap(),
+    );
+    let bits = va
+        .words
+        .iter()
+        .zip(&vb.words)
+        .map(|(x, y)| (x ^ y).count_ones())
+        .sum();
+    (px, delta, bits)
+}
+
 fn generator(
     ctx: &GpuContext,
     scene: &Scene,
@@ -114,7 +143,7 @@ fn cached_generation_equals_a_full_one_after_a_move() {
 /// where the samples still need them).
 #[test]
 fn cached_virtual_pages_equal_a_full_regeneration() {
-    use manyshadows::{Frame, RenderSettings, Renderer};
+    use manyshadows::{RenderSettings, Renderer};
     let ctx = common::context();
     let scene = builtin::build(
         "cubes",
@@ -135,33 +164,6 @@ fn cached_virtual_pages_equal_a_full_regeneration() {
             .with_visibility(true)
     };
     let mut r = Renderer::new(&ctx, &scene, settings(true)).expect("renderer");
-    // (pixels that differ, largest channel difference, visibility bits that differ).
-    let differing = |a: &Frame, b: &Frame| {
-        let px = a
-            .rgba
-            .chunks(4)
-            .zip(b.rgba.chunks(4))
-            .filter(|(x, y)| x != y)
-            .count();
-        let delta = a
-            .rgba
-            .iter()
-            .zip(&b.rgba)
-            .map(|(x, y)| x.abs_diff(*y))
-            .max()
-            .unwrap_or(0);
-        let (va, vb) = (
-            a.visibility.as_ref().unwrap(),
-            b.visibility.as_ref().unwrap(),
-        );
-        let bits: u32 = va
-            .words
-            .iter()
-            .zip(&vb.words)
-            .map(|(x, y)| (x ^ y).count_ones())
-            .sum();
-        (px, delta, bits)
-    };
     let fresh = |r: &Renderer| {
         Renderer::new(&ctx, r.scene(), settings(false))
             .expect("fresh renderer")
@@ -306,21 +308,7 @@ fn a_shadow_budget_bounds_the_views_drawn_and_converges_once_still() {
         .expect("fresh renderer")
         .render()
         .expect("fresh frame");
-    let px = last
-        .rgba
-        .chunks(4)
-        .zip(fresh.rgba.chunks(4))
-        .filter(|(a, b)| a != b)
-        .count();
-    let bits: u32 = last
-        .visibility
-        .as_ref()
-        .unwrap()
-        .words
-        .iter()
-        .zip(&fresh.visibility.as_ref().unwrap().words)
-        .map(|(a, b)| (a ^ b).count_ones())
-        .sum();
+    let (px, _, bits) = differing(&last, &fresh);
     assert_eq!(
         (px, bits),
         (0, 0),
@@ -438,15 +426,7 @@ fn a_caster_moved_into_a_new_face_gets_its_pages_marked() {
             f.needed[level]
         );
     }
-    let bits: u32 = frame
-        .visibility
-        .as_ref()
-        .unwrap()
-        .words
-        .iter()
-        .zip(&fresh.visibility.as_ref().unwrap().words)
-        .map(|(a, b)| (a ^ b).count_ones())
-        .sum();
+    let (_, _, bits) = differing(&frame, &fresh);
     assert_eq!(
         bits, 0,
         "{bits} visibility bits differ from a fresh renderer"

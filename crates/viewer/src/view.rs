@@ -54,7 +54,7 @@ pub struct ViewArgs {
     /// Draw at most N shadow views per frame (atlas techniques; implies --cache): the rest
     /// wait their turn, served from their older depth or unshadowed until drawn (the panel
     /// counts them).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     shadow_budget: Option<u32>,
     /// Move the smallest caster in a circle and sway the first spot or point light (of two
     /// or more): with --cache, only the shadow maps that see the caster or belong to that

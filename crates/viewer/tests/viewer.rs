@@ -361,17 +361,7 @@ fn animation_with_caching_redraws_only_what_moved() {
             "{stdout}{}",
             String::from_utf8_lossy(&out.stderr)
         );
-        // "presented frame N: K of V shadow views drawn"
-        stdout
-            .lines()
-            .filter_map(|l| {
-                let (_, rest) = l.split_once(": ")?;
-                let mut w = rest.split_whitespace();
-                let k = w.next()?.parse().ok()?;
-                let v = w.nth(1)?.parse().ok()?;
-                Some((k, v))
-            })
-            .collect()
+        views_drawn(&stdout)
     };
     let animated = drawn(&["--animate"]);
     let still = drawn(&[]);
@@ -453,7 +443,19 @@ fn a_shadow_budget_caps_the_views_each_frame_draws() {
         "{stdout}{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let drawn: Vec<(u64, u64)> = stdout
+    let drawn = views_drawn(&stdout);
+    eprintln!("{drawn:?}");
+    assert_eq!(drawn.len(), 12, "{stdout}");
+    let views = drawn[0].1;
+    assert!(views > 3, "{drawn:?}");
+    assert!(drawn.iter().all(|&(k, _)| k <= 3), "{drawn:?}");
+    let total: u64 = drawn.iter().map(|&(k, _)| k).sum();
+    assert_eq!(total, views, "every view drawn once, then none: {drawn:?}");
+}
+
+/// (K, V) of each "presented frame N: K of V shadow views drawn" line.
+fn views_drawn(stdout: &str) -> Vec<(u64, u64)> {
+    stdout
         .lines()
         .filter_map(|l| {
             let (_, rest) = l.split_once(": ")?;
@@ -462,12 +464,5 @@ fn a_shadow_budget_caps_the_views_each_frame_draws() {
             let v = w.nth(1)?.parse().ok()?;
             Some((k, v))
         })
-        .collect();
-    eprintln!("{drawn:?}");
-    assert_eq!(drawn.len(), 12, "{stdout}");
-    let views = drawn[0].1;
-    assert!(views > 3, "{drawn:?}");
-    assert!(drawn.iter().all(|&(k, _)| k <= 3), "{drawn:?}");
-    let total: u64 = drawn.iter().map(|&(k, _)| k).sum();
-    assert_eq!(total, views, "every view drawn once, then none: {drawn:?}");
+        .collect()
 }

@@ -301,9 +301,9 @@ impl VirtualShadows {
         casters: &CasterGeometry,
     ) -> Result<bool, RenderError> {
         self.plan = VirtualPlan::new(scene, width as f32 / height as f32, height, &self.options);
-        let key = SceneKey::of(scene);
-        if key != self.key {
-            self.key = key;
+        // Compared in place: a caster moving every frame costs no copy of thousands of lights.
+        if !self.key.matches(scene) {
+            self.key = SceneKey::of(scene);
             self.key_gen += 1;
         }
         self.camera = camera_matrix(scene, (width, height));
@@ -648,11 +648,11 @@ impl VirtualShadows {
     }
 }
 
-/// The part of a face (uv, y down, as the page table lays pages out) that a sphere may cover:
-/// the bounds of its enclosing cube's projected corners, the whole face when a corner lies
-/// behind the light's eye (a perspective face seen from within the sphere's reach).
-fn moved_rect(view_proj: Mat4, c: Vec3, r: f32) -> [f32; 4] {
-    let mut rect = NOTHING_MOVED;
+/// The normalized-device bounds (x, y) of a sphere seen through `view_proj`: its enclosing
+/// cube's eight corners projected; `None` when a corner lies behind the eye.
+fn projected_bounds(view_proj: Mat4, c: Vec3, r: f32) -> Option<(glam::Vec2, glam::Vec2)> {
+    let mut lo = glam::Vec2::splat(f32::INFINITY);
+    let mut hi = glam::Vec2::splat(f32::NEG_INFINITY);
     for k in 0..8 {
         let corner = c + Vec3::new(
             if k & 1 == 0 { -r } else { r },
@@ -661,17 +661,28 @@ fn moved_rect(view_proj: Mat4, c: Vec3, r: f32) -> [f32; 4] {
         );
         let clip = view_proj * corner.extend(1.0);
         if clip.w.is_nan() || clip.w <= 1e-6 {
-            return [0.0, 0.0, 1.0, 1.0];
+            return None;
         }
-        let (u, v) = (0.5 + 0.5 * clip.x / clip.w, 0.5 - 0.5 * clip.y / clip.w);
-        rect = union(rect, [u, v, u, v]);
+        let ndc = glam::Vec2::new(clip.x, clip.y) / clip.w;
+        lo = lo.min(ndc);
+        hi = hi.max(ndc);
     }
+    Some((lo, hi))
+}
+
+/// The part of a face (uv, y down, as the page table lays pages out) that a sphere may cover:
+/// its projected bounds clamped to the face, the whole face when the sphere reaches behind
+/// the light's eye.
+fn moved_rect(view_proj: Mat4, c: Vec3, r: f32) -> [f32; 4] {
+    let Some((lo, hi)) = projected_bounds(view_proj, c, r) else {
+        return [0.0, 0.0, 1.0, 1.0];
+    };
     // Pages are whole cells of the face: clamp to it.
     [
-        rect[0].max(0.0),
-        rect[1].max(0.0),
-        rect[2].min(1.0),
-        rect[3].min(1.0),
+        (0.5 + 0.5 * lo.x).max(0.0),
+        (0.5 - 0.5 * hi.y).max(0.0),
+        (0.5 + 0.5 * hi.x).min(1.0),
+        (0.5 - 0.5 * lo.y).min(1.0),
     ]
 }
 
@@ -701,7 +712,7 @@ enum Marking {
 }
 
 /// What page marking depends on, besides the G-buffer under moved casters.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 struct SceneKey {
     camera: manyshadows_scene::Camera,
     lights: Vec<manyshadows_scene::Light>,
@@ -710,6 +721,17 @@ struct SceneKey {
 }
 
 impl SceneKey {
+    /// True if `scene` has this camera, these lights and these non-casting instances.
+    fn matches(&self, scene: &Scene) -> bool {
+        self.camera == scene.camera
+            && self.lights == scene.lights
+            && self.others.iter().copied().eq(scene
+                .instances
+                .iter()
+                .filter(|i| !i.casts_shadows)
+                .map(|i| i.transform))
+    }
+
     fn of(scene: &Scene) -> Self {
         Self {
             camera: scene.camera,
@@ -729,35 +751,19 @@ fn camera_matrix(scene: &Scene, (width, height): (u32, u32)) -> Mat4 {
     cam.projection(width as f32 / height.max(1) as f32) * cam.view()
 }
 
-/// The pixels (x0, y0, x1, y1, clamped to the viewport) a sphere may cover on screen: the
-/// bounds of its enclosing cube's projected corners, one pixel wider; the whole screen when a
-/// corner lies behind the camera.
+/// The pixels (x0, y0, x1, y1, clamped to the viewport) a sphere may cover on screen: its
+/// projected bounds, one pixel wider; the whole screen when it reaches behind the camera.
 fn screen_rect(view_proj: Mat4, (w, h): (u32, u32), c: Vec3, r: f32) -> [u32; 4] {
-    let mut lo = glam::Vec2::splat(f32::INFINITY);
-    let mut hi = glam::Vec2::splat(f32::NEG_INFINITY);
-    for k in 0..8 {
-        let corner = c + Vec3::new(
-            if k & 1 == 0 { -r } else { r },
-            if k & 2 == 0 { -r } else { r },
-            if k & 4 == 0 { -r } else { r },
-        );
-        let clip = view_proj * corner.extend(1.0);
-        if clip.w.is_nan() || clip.w <= 1e-6 {
-            return [0, 0, w, h];
-        }
-        let p = glam::Vec2::new(
-            (0.5 + 0.5 * clip.x / clip.w) * w as f32,
-            (0.5 - 0.5 * clip.y / clip.w) * h as f32,
-        );
-        lo = lo.min(p);
-        hi = hi.max(p);
-    }
+    let Some((lo, hi)) = projected_bounds(view_proj, c, r) else {
+        return [0, 0, w, h];
+    };
+    let (w_f, h_f) = (w as f32, h as f32);
     let clamp = |v: f32, max: u32| v.clamp(0.0, max as f32) as u32;
     [
-        clamp(lo.x.floor() - 1.0, w),
-        clamp(lo.y.floor() - 1.0, h),
-        clamp(hi.x.ceil() + 1.0, w),
-        clamp(hi.y.ceil() + 1.0, h),
+        clamp(((0.5 + 0.5 * lo.x) * w_f).floor() - 1.0, w),
+        clamp(((0.5 - 0.5 * hi.y) * h_f).floor() - 1.0, h),
+        clamp(((0.5 + 0.5 * hi.x) * w_f).ceil() + 1.0, w),
+        clamp(((0.5 - 0.5 * lo.y) * h_f).ceil() + 1.0, h),
     ]
 }
 
@@ -808,6 +814,20 @@ mod tests {
             [0.0, 0.0, 1.0, 1.0]
         );
         assert_eq!(union(NOTHING_MOVED, r), r);
+        // The same sphere on a 100 × 100 screen: pixels 70..80 × 20..30, one pixel wider
+        // (two where the float bounds round outwards).
+        let px = screen_rect(vp, (100, 100), Vec3::new(5.0, 5.0, 0.0), 1.0);
+        for (got, want) in px.iter().zip([69, 19, 81, 31]) {
+            assert!(got.abs_diff(want) <= 1, "{px:?}");
+        }
+        assert!(
+            px[0] < 70 && px[1] < 20 && px[2] > 80 && px[3] > 30,
+            "{px:?}"
+        );
+        assert_eq!(
+            screen_rect(persp, (100, 50), Vec3::ZERO, 1.0),
+            [0, 0, 100, 50]
+        );
         assert_eq!(
             union([0.0, 0.0, 0.1, 0.1], [0.5, 0.5, 0.6, 0.6]),
             [0.0, 0.0, 0.6, 0.6]
