@@ -16,7 +16,7 @@
 //!
 //! What is measured is a [`Subject`]: a shadow generator alone ([`ShadowSubject`]: `bench
 //! layered`, `bench omni`) or whole frames of a renderer ([`FrameSubject`]: `bench irregular`,
-//! `bench lights`, `bench virtual`).
+//! `bench lights`, `bench virtual`, `bench shadows`; with a moving caster for the last two).
 
 use std::path::PathBuf;
 use std::time::Instant;
