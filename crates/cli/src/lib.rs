@@ -976,10 +976,13 @@ fn print_summary(s: &serde_json::Value) {
             v["table_bytes"].as_u64().unwrap_or(0) / 1024,
             if capped > 0 { format!(", virtual sides capped at {capped}² to fit it") } else { String::new() }
         );
-        let needed: Vec<String> = v["needed"]
-            .as_array()
-            .map(|a| a.iter().map(|x| x.to_string()).collect())
-            .unwrap_or_default();
+        let per_level = |key: &str| -> String {
+            v[key]
+                .as_array()
+                .map(|a| a.iter().map(|x| x.to_string()).collect::<Vec<_>>())
+                .unwrap_or_default()
+                .join("/")
+        };
         let denied = v["denied"].as_u64().unwrap_or(0);
         let unshadowed = v["unshadowed_faces"].as_u64().unwrap_or(0);
         let quarter = v["quarter_faces"].as_u64().unwrap_or(0);
@@ -996,10 +999,11 @@ fn print_summary(s: &serde_json::Value) {
             tail += &format!("; {unshadowed} faces had no room even for a quarter page: unshadowed; raise --page-pool");
         }
         println!(
-            "pages        {} resident in a pool of {} ({} drawn, {} kept from the last frame; {}x{} texels, {} MiB); needed by level (coarsest first) {}{tail}",
+            "pages        {} resident in a pool of {} ({} drawn, {} kept from the last frame; {}x{} texels, {} MiB); asked by samples per level (coarsest first) {} (with their ancestors {}){tail}",
             v["resident"], v["pool_pages"], v["drawn"], v["kept"], v["pool_side"], v["pool_side"],
             v["pool_bytes"].as_u64().unwrap_or(0) >> 20,
-            needed.join("/"),
+            per_level("asked"),
+            per_level("needed"),
         );
     } else {
         let shrink = a["shrink_steps"].as_u64().unwrap_or(0);
@@ -1050,9 +1054,10 @@ fn print_summary(s: &serde_json::Value) {
     match fills {
         // Pages are chosen, culled and drawn on the GPU: their counts are the pages line's.
         Some(manyshadows::Fills::Pages) => println!(
-            "shadow work  {} pages drawn by indirect multi-draws ({} kept from the last frame); \
-             their clusters are culled on the GPU",
-            s["virtual"]["drawn"], s["virtual"]["kept"]
+            "shadow work  {} pages drawn ({} kept from the last frame): {} cluster draws, {} \
+             triangles drawn (clusters culled per page on the GPU, indirect multi-draws)",
+            s["virtual"]["drawn"], s["virtual"]["kept"], s["virtual"]["cluster_draws"],
+            s["virtual"]["triangles"]
         ),
         Some(manyshadows::Fills::Rays) => println!(
             "shadow work  no shadow map: one ray per pixel and light of its cluster (or per \

@@ -5,7 +5,7 @@
 //! (`--atlas-technique`, default `traditional`, default atlas cap) and with `--technique
 //! virtual` (default pool), interleaved frame by frame so drift on the machine hits both
 //! alike, and reports the median GPU time per stage, the shadow memory each keeps (atlas,
-//! or page pool plus page table), and for the virtual maps the pages needed, rendered and
+//! or page pool plus page table), and for the virtual maps the pages asked for, rendered and
 //! denied, and the faces; for the atlas the views and how they were fitted.
 
 use anyhow::{bail, Context, Result};
@@ -191,7 +191,7 @@ fn table(records: &[Record], adapter: &str, args: &VirtualArgs) -> String {
         "lights", "shadows", "lighting", "frame", "MiB",
         "pages", "shadows", "lighting", "frame", "MiB",
         "ratio",
-        "faces", "needed", "resident", "drawn", "denied"
+        "faces", "asked", "resident", "drawn", "denied"
     );
     let _ = writeln!(
         t,
@@ -220,7 +220,7 @@ fn table(records: &[Record], adapter: &str, args: &VirtualArgs) -> String {
             r.virtual_maps.shadow_mib,
             ratio,
             r.stats.fit.faces,
-            r.stats.needed_total(),
+            r.stats.asked_total(),
             r.stats.resident,
             r.stats.drawn,
             r.stats.denied,
@@ -229,9 +229,10 @@ fn table(records: &[Record], adapter: &str, args: &VirtualArgs) -> String {
     let _ = writeln!(
         t,
         "   frame: sum of the stages (G-buffer, clusters, pages, shadows, lighting); ratio: \
-         virtual / atlas; MiB: shadow memory kept (atlas, or page pool + page table); needed / \
-         resident / drawn / denied: pages of the last measured frame (drawn: this frame, the \
-         rest of the resident ones kept; denied ones fell back to coarser levels)."
+         virtual / atlas; MiB: shadow memory kept (atlas, or page pool + page table); asked / \
+         resident / drawn / denied: pages of the last measured frame (asked: by a sample; \
+         drawn: this frame, the rest of the resident ones kept; denied ones fell back to \
+         coarser levels)."
     );
     t
 }
@@ -262,7 +263,7 @@ fn figure(records: &[Record], args: &VirtualArgs) -> Figure {
             "pages".to_string(),
             "pages".to_string(),
             vec![
-                series("needed", &|r| Some(r.stats.needed_total() as f64)),
+                series("asked", &|r| Some(r.stats.asked_total() as f64)),
                 series("rendered", &|r| Some(r.stats.resident as f64)),
                 series("denied", &|r| Some(r.stats.denied as f64)),
                 series("pool", &|r| Some(r.stats.pool_pages as f64)),

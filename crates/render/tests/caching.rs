@@ -420,10 +420,12 @@ fn a_caster_moved_into_a_new_face_gets_its_pages_marked() {
     );
     for level in 0..s.needed.len() {
         assert!(
-            s.needed[level] >= f.needed[level],
-            "level {level}: {} pages needed, a fresh frame needs {}",
+            s.needed[level] >= f.needed[level] && s.asked[level] >= f.asked[level],
+            "level {level}: {} pages needed ({} asked), a fresh frame needs {} ({} asked)",
             s.needed[level],
-            f.needed[level]
+            s.asked[level],
+            f.needed[level],
+            f.asked[level]
         );
     }
     let (_, _, bits) = differing(&frame, &fresh);

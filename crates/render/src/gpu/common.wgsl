@@ -193,12 +193,11 @@ struct VsmRound {
     counts: vec4<u32>,
 }
 
-// Page-table entry values: 0 = not needed, 1 = needed (before allocation), VSM_FIRST_PAGE + p
+// Page-table entry values: 0 = not needed (before allocation, marks 1 and 2: vsm.wgsl), VSM_FIRST_PAGE + p
 // = resident in pool page p, VSM_FIRST_PAGE + VSM_QUARTER + 4p + k = resident in quadrant k
 // of pool page p (a level-0 page at half resolution, only when the pool has fewer pages than
 // faces in use), VSM_DENIED = needed but the pool was full.
 const VSM_EMPTY: u32 = 0u;
-const VSM_NEEDED: u32 = 1u;
 const VSM_FIRST_PAGE: u32 = 2u;
 const VSM_QUARTER: u32 = 0x40000000u;
 const VSM_DENIED: u32 = 0xffffffffu;

@@ -164,7 +164,7 @@ impl PageDraw {
                 crate::gpu::pipelines::storage_entry(7, cs),
                 crate::gpu::pipelines::storage_rw_entry(8, cs),
                 crate::gpu::pipelines::storage_rw_entry(9, cs),
-                crate::gpu::pipelines::storage_entry(10, cs),
+                crate::gpu::pipelines::storage_rw_entry(10, cs),
             ],
         );
         let vs = wgpu::ShaderStages::VERTEX;

@@ -36,7 +36,7 @@ pub(crate) fn shader() -> String {
 /// Page-table entries per allocation workgroup (`BLOCK` in `vsm.wgsl`).
 const ALLOC_BLOCK: u64 = 32;
 /// Words of the counters buffer (see `vsm.wgsl`).
-const COUNTERS: usize = 20;
+const COUNTERS: usize = 28;
 
 /// What the virtual shadow maps read from the rest of the frame.
 pub struct VsmInputs<'a> {
@@ -94,7 +94,6 @@ pub struct VirtualShadows {
     mark: wgpu::ComputePipeline,
     carry: wgpu::ComputePipeline,
     count: wgpu::ComputePipeline,
-    scan: wgpu::ComputePipeline,
     retain: wgpu::ComputePipeline,
     free: wgpu::ComputePipeline,
     count_new: wgpu::ComputePipeline,
@@ -214,7 +213,6 @@ impl VirtualShadows {
         let alloc_pl = pipeline_layout("vsm.alloc_pipeline_layout", &alloc_layout);
         let count = compute("vsm.count", &mark_module, &alloc_pl, "cs_count");
         let carry = compute("vsm.carry", &mark_module, &alloc_pl, "cs_carry");
-        let scan = compute("vsm.scan", &mark_module, &alloc_pl, "cs_scan");
         let retain = compute("vsm.retain", &mark_module, &alloc_pl, "cs_retain");
         let free = compute("vsm.free", &mark_module, &alloc_pl, "cs_free");
         let count_new = compute("vsm.count_new", &mark_module, &alloc_pl, "cs_count_new");
@@ -254,7 +252,6 @@ impl VirtualShadows {
             mark,
             carry,
             count,
-            scan,
             retain,
             free,
             count_new,
@@ -354,7 +351,7 @@ impl VirtualShadows {
         replaced |= crate::gpu::buffers::grow_buffer(
             ctx,
             &mut self.scratch,
-            (2 * self.pool_pages as u64 + (1 + MAX_LEVELS as u64) * blocks) * 4,
+            (2 * self.pool_pages as u64 + blocks) * 4,
             "virtual allocation scratch",
         )?;
         if !face_bytes.is_empty() {
@@ -598,7 +595,6 @@ impl VirtualShadows {
                 pass.set_bind_group(0, &g.alloc, &[]);
                 for (pipeline, (x, y)) in [
                     (&self.count, (bx, by)),
-                    (&self.scan, (1, 1)),
                     (&self.retain, (ex, ey)),
                     (&self.free, (1, 1)),
                     (&self.count_new, (bx, by)),
@@ -625,10 +621,15 @@ impl VirtualShadows {
         let c: &[u32] = bytemuck::cast_slice(&bytes);
         let mut needed = [0u32; MAX_LEVELS as usize];
         needed.copy_from_slice(&c[..MAX_LEVELS as usize]);
+        let mut asked = [0u32; MAX_LEVELS as usize];
+        asked.copy_from_slice(&c[20..20 + MAX_LEVELS as usize]);
         Ok(VirtualStats {
             fit: self.plan.fit,
             needed,
+            asked,
             faces_in_use: needed[0],
+            cluster_draws: c[14],
+            triangles: c[15],
             resident: c[9] + c[17],
             kept: c[9],
             drawn: c[17],

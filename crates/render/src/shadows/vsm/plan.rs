@@ -202,8 +202,15 @@ impl VirtualPlan {
 pub struct VirtualStats {
     /// The plan's layout.
     pub fit: VirtualFit,
-    /// Pages needed per level (level 0 = one page per face).
+    /// Pages marked per level (level 0 = one page per face in use): asked for by a sample, or
+    /// an ancestor of an asked page. Ancestors are drawn only at the admitted level, where the
+    /// pool's room ends (see [`Self::asked`]).
     pub needed: [u32; MAX_LEVELS as usize],
+    /// Pages some sample asked for, per level. When the pool holds every asked page only those
+    /// are drawn; otherwise the finest level A whose marked pages fit with the asked pages of
+    /// the coarser levels is admitted whole, asked pages finer than A are denied and read
+    /// their ancestor at A.
+    pub asked: [u32; MAX_LEVELS as usize],
     /// Faces some sample needs (their level-0 page is needed): of a point light's six cube
     /// faces only those its visible samples look through; the plan's other faces get no pages.
     pub faces_in_use: u32,
@@ -213,6 +220,11 @@ pub struct VirtualStats {
     pub kept: u32,
     /// Pages drawn this frame.
     pub drawn: u32,
+    /// Cluster draws into this frame's pages (a cluster drawn into two pages counts twice),
+    /// after the GPU's frustum and normal-cone culling.
+    pub cluster_draws: u32,
+    /// Triangles of those draws (before the rasterizer's own back-face culling).
+    pub triangles: u32,
     /// Needed pages that did not fit the pool (their samples used a coarser level).
     pub denied: u32,
     /// Faces left without shadows because not even a quarter of a pool page was left for their
@@ -236,6 +248,27 @@ impl VirtualStats {
     /// Pages needed over all levels.
     pub fn needed_total(&self) -> u32 {
         self.needed.iter().sum()
+    }
+
+    /// Pages asked for over all levels.
+    pub fn asked_total(&self) -> u32 {
+        self.asked.iter().sum()
+    }
+
+    /// The admitted level A of the frame (as the GPU's allocation chose it): the finest level
+    /// whose marked pages, with the pages asked at every coarser level, fit the pool. Level 0
+    /// when not even that fits.
+    pub fn admitted_level(&self) -> u32 {
+        let mut coarser = 0u32;
+        let mut admitted = 0;
+        for a in 0..MAX_LEVELS as usize {
+            if coarser + self.needed[a] > self.pool_pages {
+                break;
+            }
+            admitted = a as u32;
+            coarser += self.asked[a];
+        }
+        admitted
     }
 }
 

@@ -2,16 +2,20 @@
 //
 // 1. cs_mark, one thread per pixel: for every light of the pixel's cluster that reaches the
 //    sample (and faces it, unless back-facing samples are wanted too), the page of the level
-//    whose texels match the pixel's footprint is marked needed, and so are its ancestors up
-//    to level 0 (a marked entry's ancestors are marked by whoever marked it, so the walk
-//    stops at the first one already marked). Newly marked entries are counted per level.
+//    whose texels match the pixel's footprint is marked *asked*, and its ancestors up to
+//    level 0 are marked *above* (whoever turns an entry from unmarked to marked walks its
+//    ancestors, so a walk stops at the first entry already marked).
 //    Incrementally (only casters moved; see cs_carry) it visits a rectangle of the screen.
-// 2. cs_count, one workgroup per block of 32 page-table entries: each needed entry learns its
-//    level (tagged into the entry) and the block counts its needed entries per level;
-//    cs_scan, one thread per level: prefix sums of those counts and the totals per level.
-//    A level is admitted when it and every coarser level fit the pool (coarsest first, whole
-//    or not at all); pages of other levels are denied and lookups fall back to their resident
-//    ancestor. When level 0 alone (one page per face in use) exceeds the pool, the first
+// 2. cs_count, one workgroup per block of 32 page-table entries: each marked entry learns its
+//    level (tagged into the entry with whether it was asked) and the block adds its marked
+//    and its asked entries per level to the frame's counters.
+//    Admission (cs_retain): the finest level A such that every asked page coarser than A and
+//    every marked page (asked or above) of A fit the pool. Asked pages of levels below A and
+//    every marked page of A are admitted; pages above only (ancestors of asked pages) are
+//    not drawn at levels coarser than A, where nothing reads them; asked pages finer than A
+//    are denied and their lookups fall back to their ancestor at A (a coarser shadow, never a
+//    wrong or missing one). With room for everything, A is the finest level and only asked
+//    pages are drawn. When level 0 alone (one page per face in use) exceeds the pool, the first
 //    faces in light order get whole pool pages and the last ones share pool pages four to one
 //    (quarter pages: the face's level 0 at 64²), as few as let every face fit; only past four
 //    faces per pool page do faces go without shadows, counted unshadowed.
@@ -37,10 +41,11 @@
 @group(0) @binding(7) var<uniform> vsm: VsmUniforms;
 @group(0) @binding(8) var<storage, read> vsm_faces: array<VirtualFace>;
 @group(0) @binding(9) var<storage, read_write> vsm_table: array<atomic<u32>>;
-// [0, 8): pages needed per level; 9: pages kept from the last frame; 10: free pool pages;
-// 11: new pages; 12: new pages that get room (full or quarter); 13: new pages that get a whole
-// pool page (the rest of 12 get quarters); 16: pages denied; 17: pages drawn this frame;
-// 18: level-0 pages denied (faces left unshadowed).
+// [0, 8): pages marked per level (asked or above); 9: pages kept from the last frame; 10: free
+// pool pages; 11: new pages; 12: new pages that get room (full or quarter); 13: new pages that
+// get a whole pool page (the rest of 12 get quarters); 14: cluster draws and 15: triangles
+// drawn into pages (vsm_draw.wgsl's cull); 16: pages denied; 17: pages drawn this frame;
+// 18: level-0 pages denied (faces left unshadowed); [20, 28): pages asked per level.
 @group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
 // The pages to draw this frame, in rank order: each one's view (the face's projection
 // cropped to the page; `tile.w` holds the face index's bits).
@@ -51,8 +56,7 @@
 // Last frame's page table (for the pages it kept).
 @group(0) @binding(14) var<storage, read> prev_table: array<u32>;
 // Scratch, in u32 words: [0, P) pool page kept this frame (1/0); [P, 2P) free pool pages in
-// order; [2P, 2P + B) per block: new pages, then their prefix; [2P + B, 2P + 9B) per level and
-// block: needed pages, then their prefix (level-major). P = pool pages, B = blocks.
+// order; [2P, 2P + B) per block: new pages, then their prefix. P = pool pages, B = blocks.
 @group(0) @binding(15) var<storage, read_write> scratch: array<u32>;
 // Declared for shadow_lookup.wgsl's `atlas_coord`, which these entry points never call.
 @group(1) @binding(0) var<storage, read> shadow_views: array<ShadowViewData>;
@@ -65,10 +69,16 @@ const COUNT_WHOLE: u32 = 13u;
 const COUNT_DENIED: u32 = 16u;
 const COUNT_DRAWN: u32 = 17u;
 const COUNT_UNSHADOWED: u32 = 18u;
+const COUNT_ASKED: u32 = 20u;
+// Marks before allocation (bits): a sample asked for the page; the page is an ancestor of an
+// asked one.
+const MARK_ASKED: u32 = 1u;
+const MARK_ABOVE: u32 = 2u;
 // Page-table entries per allocation block (one workgroup; ranks by bit count in one word).
 const BLOCK: u32 = 32u;
-// A needed entry after cs_count: this plus its level.
+// A marked entry after cs_count: this plus its level, plus TAG_ASKED if a sample asked for it.
 const VSM_NEEDED_AT: u32 = 0x80000000u;
+const TAG_ASKED: u32 = 0x100u;
 // An admitted entry without a kept page after cs_retain: this plus its level.
 const VSM_NEW_AT: u32 = 0xc0000000u;
 
@@ -91,17 +101,29 @@ fn mark_light(i: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
     if (!q.valid) {
         return;
     }
-    var l = i32(level);
+    let e = vsm_entry(face, level, q.uv);
+    if ((atomicLoad(&vsm_table[e]) & MARK_ASKED) != 0u) {
+        return;
+    }
+    if (atomicOr(&vsm_table[e], MARK_ASKED) != VSM_EMPTY) {
+        return;
+    }
+    var l = i32(level) - 1;
     while (l >= 0) {
-        let e = vsm_entry(face, u32(l), q.uv);
-        if (atomicLoad(&vsm_table[e]) != VSM_EMPTY) {
-            break;
-        }
-        if (atomicMax(&vsm_table[e], VSM_NEEDED) != VSM_EMPTY) {
+        if (!mark_above(vsm_entry(face, u32(l), q.uv))) {
             break;
         }
         l = l - 1;
     }
+}
+
+// Marks entry `e` as an ancestor of an asked page; false if it was marked already (its own
+// ancestors are then marked, or being marked, by whoever marked it).
+fn mark_above(e: u32) -> bool {
+    if (atomicLoad(&vsm_table[e]) != VSM_EMPTY) {
+        return false;
+    }
+    return atomicOr(&vsm_table[e], MARK_ABOVE) == VSM_EMPTY;
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -145,9 +167,10 @@ fn cs_mark(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 // Incremental marking (the camera, the lights and every face unchanged since the last frame,
-// only casters moved): every page needed last frame — resident or denied then — is needed
-// again, one thread per entry; cs_mark then visits only the pixels the moved casters may
-// cover. The needed set stays closed under ancestors (last frame's was).
+// only casters moved): every page resident or denied last frame is asked again, one thread
+// per entry, and its ancestors are marked above; cs_mark then visits only the pixels the moved
+// casters may cover. (Last frame's resident pages of the admitted level A may have been
+// ancestors only; carried as asked they stay resident while only casters move.)
 @compute @workgroup_size(64, 1, 1)
 fn cs_carry(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let e = gid.x + gid.y * groups.x * 64u;
@@ -158,9 +181,25 @@ fn cs_carry(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     if (face.table.w == 0u) {
         return;
     }
-    let before = prev_table[face.table.w - 1u + (e - face.table.x)];
-    if (before >= VSM_FIRST_PAGE && (before < VSM_NEEDED_AT || before == VSM_DENIED)) {
-        atomicMax(&vsm_table[e], VSM_NEEDED);
+    let local = e - face.table.x;
+    let before = prev_table[face.table.w - 1u + local];
+    if (before < VSM_FIRST_PAGE || (before >= VSM_NEEDED_AT && before != VSM_DENIED)) {
+        return;
+    }
+    if (atomicOr(&vsm_table[e], MARK_ASKED) != VSM_EMPTY) {
+        return;
+    }
+    var level = level_of(local);
+    let n = 1u << level;
+    let within = local - ((1u << (2u * level)) - 1u) / 3u;
+    var xy = vec2<u32>(within % n, within / n);
+    while (level > 0u) {
+        level = level - 1u;
+        xy = xy / 2u;
+        let up = face.table.x + ((1u << (2u * level)) - 1u) / 3u + xy.y * (1u << level) + xy.x;
+        if (!mark_above(up)) {
+            break;
+        }
     }
 }
 
@@ -206,52 +245,55 @@ fn free_at() -> u32 {
 fn new_counts_at() -> u32 {
     return 2u * vsm.pool.w;
 }
-fn level_counts_at() -> u32 {
-    return 2u * vsm.pool.w + blocks();
-}
-
 var<workgroup> level_bits: array<atomic<u32>, VSM_LEVELS>;
+var<workgroup> asked_bits: array<atomic<u32>, VSM_LEVELS>;
 
 @compute @workgroup_size(32, 1, 1)
 fn cs_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) i: u32, @builtin(num_workgroups) groups: vec3<u32>) {
     let b = block_id(wg, groups);
     if (i < VSM_LEVELS) {
         atomicStore(&level_bits[i], 0u);
+        atomicStore(&asked_bits[i], 0u);
     }
     workgroupBarrier();
     let e = b * BLOCK + i;
-    if (b < blocks() && e < vsm.counts.y && atomicLoad(&vsm_table[e]) == VSM_NEEDED) {
-        let face = vsm_faces[face_of(e)];
-        let level = level_of(e - face.table.x);
-        atomicStore(&vsm_table[e], VSM_NEEDED_AT + level);
-        atomicOr(&level_bits[level], 1u << i);
+    if (b < blocks() && e < vsm.counts.y) {
+        let v = atomicLoad(&vsm_table[e]);
+        if (v != VSM_EMPTY) {
+            let face = vsm_faces[face_of(e)];
+            let level = level_of(e - face.table.x);
+            let asked = (v & MARK_ASKED) != 0u;
+            atomicStore(&vsm_table[e], VSM_NEEDED_AT + level + select(0u, TAG_ASKED, asked));
+            atomicOr(&level_bits[level], 1u << i);
+            if (asked) {
+                atomicOr(&asked_bits[level], 1u << i);
+            }
+        }
     }
     workgroupBarrier();
     if (b < blocks() && i < VSM_LEVELS) {
-        scratch[level_counts_at() + i * blocks() + b] = countOneBits(atomicLoad(&level_bits[i]));
+        let marked = countOneBits(atomicLoad(&level_bits[i]));
+        if (marked != 0u) {
+            atomicAdd(&counters[i], marked);
+            atomicAdd(&counters[COUNT_ASKED + i], countOneBits(atomicLoad(&asked_bits[i])));
+        }
     }
 }
 
-@compute @workgroup_size(8, 1, 1)
-fn cs_scan(@builtin(local_invocation_index) level: u32) {
-    let n = blocks();
-    let at = level_counts_at() + level * n;
-    var sum = 0u;
-    for (var b = 0u; b < n; b = b + 1u) {
-        let c = scratch[at + b];
-        scratch[at + b] = sum;
-        sum = sum + c;
+// The admitted level A: the finest level whose marked pages, with the asked pages of every
+// coarser level, fit the pool (that sum grows with A: an above-only page of A has a marked
+// child at A + 1). Level 0 when not even that fits (cs_retain's quarter pages then).
+fn admitted_level() -> u32 {
+    var coarser = 0u;
+    var admitted = 0u;
+    for (var a = 0u; a < VSM_LEVELS; a = a + 1u) {
+        if (coarser + atomicLoad(&counters[a]) > vsm.pool.w) {
+            break;
+        }
+        admitted = a;
+        coarser = coarser + atomicLoad(&counters[COUNT_ASKED + a]);
     }
-    atomicStore(&counters[level], sum);
-}
-
-// Pages needed at levels 0..=level, i.e. the pool pages those levels take if admitted.
-fn needed_through(level: u32) -> u32 {
-    var sum = 0u;
-    for (var k = 0u; k <= level; k = k + 1u) {
-        sum = sum + atomicLoad(&counters[k]);
-    }
-    return sum;
+    return admitted;
 }
 
 fn deny(e: u32, level: u32) {
@@ -279,21 +321,31 @@ fn cs_retain(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         return;
     }
     let v = atomicLoad(&vsm_table[e]);
-    if (v < VSM_NEEDED_AT || v >= VSM_NEEDED_AT + VSM_LEVELS) {
+    if (v < VSM_NEEDED_AT || v >= VSM_NEEDED_AT + 2u * TAG_ASKED) {
         return;
     }
-    let level = v - VSM_NEEDED_AT;
+    let level = (v - VSM_NEEDED_AT) % TAG_ASKED;
+    let asked = v >= VSM_NEEDED_AT + TAG_ASKED;
     if (atomicLoad(&counters[0]) > vsm.pool.w) {
         // Not even level 0 fits: level-0 pages are placed by rank (cs_alloc_new; the last
         // ones in quarter pages), nothing else is admitted and nothing is kept.
         if (level == 0u) {
             atomicStore(&vsm_table[e], VSM_NEW_AT);
-        } else {
+        } else if (asked) {
             deny(e, level);
+        } else {
+            atomicStore(&vsm_table[e], VSM_EMPTY);
         }
         return;
     }
-    if (needed_through(level) > vsm.pool.w) {
+    let admitted = admitted_level();
+    if (level != admitted && !asked) {
+        // Only an ancestor: nothing reads it at levels coarser than A (their asked pages'
+        // own pages are resident) and finer ones are not admitted.
+        atomicStore(&vsm_table[e], VSM_EMPTY);
+        return;
+    }
+    if (level > admitted) {
         deny(e, level);
         return;
     }

@@ -18,7 +18,7 @@
 @group(0) @binding(7) var<storage, read> instances: array<InstanceData>;
 @group(0) @binding(8) var<storage, read_write> commands: array<DrawCommand>;
 @group(0) @binding(9) var<storage, read_write> command_count: atomic<u32>;
-@group(0) @binding(10) var<storage, read> counters: array<u32>;
+@group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
 
 // One thread per (cluster, page slot) of the round.
 @compute @workgroup_size(64, 1, 1)
@@ -35,7 +35,7 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
     let bits = round.counts.z;
     // Slots past the last resident page draw nothing (only reached without compaction,
     // where every slot's command is written).
-    var visible = page < counters[17];
+    var visible = page < atomicLoad(&counters[17]);
     let view = page_views[min(page, arrayLength(&page_views) - 1u)];
     if (visible && (bits & CULL_FRUSTUM) != 0u && sphere_outside(view.view_proj, sphere)) {
         visible = false;
@@ -44,6 +44,7 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
         && cluster_faces_away(cl, instances[cl.instance].normal, sphere, vsm_faces[bitcast<u32>(view.tile.w)].eye)) {
         visible = false;
     }
+    if (visible) { atomicAdd(&counters[14], 1u); atomicAdd(&counters[15], cl.triangles); }
     var cmd: DrawCommand;
     cmd.index_count = select(0u, 3u * cl.triangles, visible);
     cmd.instance_count = 1u;
