@@ -2,8 +2,10 @@
 //! drawn page is an ordinary shadow view, the face's projection cropped to the page, filled
 //! the `gpu-driven` way. Per round ([`crate::shadows::cluster_draw`]) compute culls caster
 //! clusters against each page's frustum slice (and by normal cone) and one indirect multi-draw
-//! draws the survivors, clipped to the page's tile of the pool (`vsm_draw.wgsl`). The page
-//! clears and the indirect arguments come from the allocation passes ([`super::pages`]).
+//! draws the survivors, clipped to the page's tile of the pool (`vsm_draw.wgsl`). The cull is
+//! hierarchical: groups of [`CULL_GROUP`] consecutive clusters get a merged bounding sphere
+//! each frame, one thread per (group, page) tests it and only then the group's clusters. The
+//! page clears and the indirect arguments come from the allocation passes ([`super::pages`]).
 
 use crate::gpu::buffers::buffer;
 use crate::gpu::pipelines::whole_entry;
@@ -15,10 +17,27 @@ use crate::settings::ShadowOptions;
 use crate::shadows::cluster_draw::{plan_rounds, Round, COMMAND_SIZE};
 use crate::GpuContext;
 
+/// Consecutive clusters per cull group (one cull thread per group and page).
+pub(crate) const CULL_GROUP: u32 = 16;
+
+/// Flag in the rounds' cull bits: skip the groups' spheres (the flat cull, for measuring).
+const FLAT_CULL: u32 = 1 << 8;
+
+/// `VSM_CULL_GROUP` (and the flat-cull flag) for the shaders that dispatch or run the cull.
+pub(crate) fn group_decl() -> String {
+    format!("const VSM_CULL_GROUP: u32 = {CULL_GROUP}u;\nconst VSM_FLAT_CULL: u32 = {FLAT_CULL}u;")
+}
+
+/// Cull threads' groups along x for a round's clusters `[first, first + count)`.
+fn round_groups(first: u32, count: u32) -> u32 {
+    (first + count).div_ceil(CULL_GROUP) - first / CULL_GROUP
+}
+
 /// Page culling, drawing and clearing.
 pub(crate) fn shader() -> String {
     compose(&[
         "enable clip_distances;",
+        &group_decl(),
         COMMON,
         CULL,
         TILE,
@@ -61,6 +80,10 @@ pub(crate) struct PageDraw {
     commands: wgpu::Buffer,
     command_count: wgpu::Buffer,
     cull: wgpu::ComputePipeline,
+    /// Merges the cluster groups' bounding spheres (`cs_groups`).
+    groups_pipeline: wgpu::ComputePipeline,
+    /// `array<vec4<f32>>`, one sphere per group of [`CULL_GROUP`] clusters.
+    group_bounds: wgpu::Buffer,
     draw: wgpu::RenderPipeline,
     /// Rounds of alpha-tested clusters (`fs_alpha`).
     draw_masked: wgpu::RenderPipeline,
@@ -79,12 +102,14 @@ struct Groups {
 
 impl PageDraw {
     /// Plans the rounds over every page of a pool of `pool_pages` and builds their buffers and
-    /// pipelines. Compacts the commands where `MULTI_DRAW_INDIRECT_COUNT` exists.
+    /// pipelines. Compacts the commands where `MULTI_DRAW_INDIRECT_COUNT` exists; culls by
+    /// cluster groups first unless `group_cull` is false.
     pub fn new(
         ctx: &GpuContext,
         pool_pages: u32,
         casters: &CasterGeometry,
         shadow: ShadowOptions,
+        group_cull: bool,
     ) -> Self {
         let device = &ctx.device;
         let limits = ctx.limits();
@@ -125,6 +150,12 @@ impl PageDraw {
             U::STORAGE | U::INDIRECT,
         );
         let command_count = buffer(ctx, "vsm.command_count", 4, storage | U::INDIRECT);
+        let group_bounds = buffer(
+            ctx,
+            "vsm.group_bounds",
+            u64::from((casters.clusters.len() as u32).div_ceil(CULL_GROUP).max(1)) * 16,
+            U::STORAGE,
+        );
         // Round records (the same for every frame: rounds cover every pool page).
         let records: Vec<VsmRound> = rounds
             .iter()
@@ -133,7 +164,7 @@ impl PageDraw {
                 counts: [
                     casters.vertices,
                     casters.cullable_triangles,
-                    shadow.cull.bits(),
+                    shadow.cull.bits() | if group_cull { 0 } else { FLAT_CULL },
                     u32::from(compact),
                 ],
             })
@@ -165,6 +196,7 @@ impl PageDraw {
                 crate::gpu::pipelines::storage_rw_entry(8, cs),
                 crate::gpu::pipelines::storage_rw_entry(9, cs),
                 crate::gpu::pipelines::storage_rw_entry(10, cs),
+                crate::gpu::pipelines::storage_rw_entry(12, cs),
             ],
         );
         let vs = wgpu::ShaderStages::VERTEX;
@@ -199,6 +231,13 @@ impl PageDraw {
             &draw_module,
             "cs_cull",
         );
+        let groups_pipeline = crate::gpu::pipelines::compute_pipeline(
+            device,
+            "vsm.groups",
+            &cull_pl,
+            &draw_module,
+            "cs_groups",
+        );
         let draw_pl = pipeline_layout("vsm.draw_pipeline_layout", &draw_layout);
         let draw =
             crate::shadows::depth::depth_pipeline(device, &draw_pl, &draw_module, "vs_draw", &[]);
@@ -223,6 +262,8 @@ impl PageDraw {
             commands,
             command_count,
             cull,
+            groups_pipeline,
+            group_bounds,
             draw,
             draw_masked,
             clear,
@@ -270,6 +311,7 @@ impl PageDraw {
                 whole_entry(8, &self.commands),
                 whole_entry(9, &self.command_count),
                 whole_entry(10, pages.counters),
+                whole_entry(12, &self.group_bounds),
             ],
         });
         let draw = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -317,9 +359,18 @@ impl PageDraw {
             pass.draw_indirect(args, clear_args);
         }
         let corners = casters.corners.slice(..);
+        if !self.rounds.is_empty() {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("vsm.groups"),
+                timestamp_writes: timer.compute_writes(span, true, false),
+            });
+            pass.set_pipeline(&self.groups_pipeline);
+            pass.set_bind_group(0, &g.cull, &[0]);
+            let groups = (casters.clusters.len() as u32).div_ceil(CULL_GROUP);
+            pass.dispatch_workgroups(groups.div_ceil(64), 1, 1);
+        }
         for (k, r) in self.rounds.iter().enumerate() {
             let offset = [(k as u64 * self.round_stride) as u32];
-            let first = k == 0;
             let last = k + 1 == self.rounds.len();
             if self.compact {
                 encoder.clear_buffer(&self.command_count, 0, None);
@@ -327,7 +378,7 @@ impl PageDraw {
             {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("vsm.cull"),
-                    timestamp_writes: timer.compute_writes(span, first, false),
+                    timestamp_writes: None,
                 });
                 pass.set_pipeline(&self.cull);
                 pass.set_bind_group(0, &g.cull, &offset);
@@ -335,11 +386,12 @@ impl PageDraw {
                     pass.dispatch_workgroups_indirect(args, 3 * k as u64 * 4);
                 } else {
                     // Every slot's command is written (zero for slots past the last page).
-                    pass.dispatch_workgroups(r.clusters.div_ceil(64), r.views, 1);
+                    let groups = round_groups(r.first_cluster, r.clusters);
+                    pass.dispatch_workgroups(groups.div_ceil(64), r.views, 1);
                 }
             }
             let mut pass = pool_pass(encoder, pool, timer.render_writes(span, false, last));
-            if first {
+            if k == 0 {
                 pass.set_pipeline(&self.clear);
                 pass.set_bind_group(0, &g.clear, &[]);
                 pass.draw_indirect(args, clear_args);

@@ -29,6 +29,7 @@ pub(crate) fn shader() -> String {
         PARABOLOID,
         SHADOW_LOOKUP,
         VSM_COMMON,
+        &super::draw::group_decl(),
         include_str!("vsm.wgsl"),
     ])
 }
@@ -147,7 +148,7 @@ impl VirtualShadows {
             ..Default::default()
         });
         let slots = page_slots(plan.fit.faces, pool_pages);
-        let draw = PageDraw::new(ctx, slots, casters, shadow);
+        let draw = PageDraw::new(ctx, slots, casters, shadow, options.group_cull);
         use wgpu::BufferUsages as U;
         let storage = U::STORAGE | U::COPY_DST;
         let uniforms = buffer(ctx, "vsm.uniforms", 48, U::UNIFORM | U::COPY_DST);
@@ -308,7 +309,7 @@ impl VirtualShadows {
         let slots = page_slots(self.plan.fit.faces, self.pool_pages);
         if slots > self.slots {
             // More faces than the draw has page slots for (quarter pages): larger rounds.
-            self.draw = PageDraw::new(ctx, slots, casters, self.shadow);
+            self.draw = PageDraw::new(ctx, slots, casters, self.shadow, self.options.group_cull);
             (self.page_views, self.args) = draw_buffers(ctx, slots, &self.draw);
             self.slots = slots;
             replaced = true;

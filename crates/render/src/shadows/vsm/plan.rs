@@ -36,6 +36,11 @@ pub struct VirtualOptions {
     /// Mark pages for samples that face away from a light too (what the visibility mask
     /// reads; the lighting pass does not need them).
     pub back_facing: bool,
+    /// Cull caster clusters against a page by groups of 16 first (a merged bounding sphere
+    /// per group, then the group's clusters only where it is inside the page). `false` tests
+    /// every cluster against every page: the same clusters are drawn either way; for
+    /// measuring what the groups save.
+    pub group_cull: bool,
 }
 
 impl Default for VirtualOptions {
@@ -46,6 +51,7 @@ impl Default for VirtualOptions {
             lod: 1.0,
             max_table_entries: DEFAULT_TABLE_ENTRIES,
             back_facing: false,
+            group_cull: true,
         }
     }
 }
@@ -325,4 +331,5 @@ with_setters!(VirtualOptions {
     with_lod: lod: f32,
     with_max_table_entries: max_table_entries: u32,
     with_back_facing: back_facing: bool,
+    with_group_cull: group_cull: bool,
 });

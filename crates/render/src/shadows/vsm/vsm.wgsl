@@ -510,7 +510,10 @@ fn cs_args() {
         if (drawn > first) {
             slots = min(drawn - first, rounds[r].round.y);
         }
-        args[3u * r] = (rounds[r].round.w + 63u) / 64u;
+        // One cull thread per group of clusters the round touches (vsm_draw.wgsl's cs_cull).
+        let lo = rounds[r].round.z;
+        let groups = (lo + rounds[r].round.w + VSM_CULL_GROUP - 1u) / VSM_CULL_GROUP - lo / VSM_CULL_GROUP;
+        args[3u * r] = (groups + 63u) / 64u;
         args[3u * r + 1u] = slots;
         args[3u * r + 2u] = 1u;
     }

@@ -5,6 +5,12 @@
 // into the pages' tiles. `page_views` lists this frame's pages to draw (kept pages are not in
 // it); their count is known only on the GPU: cull dispatches are indirect, and rounds past
 // the last page cull nothing.
+//
+// The cull is hierarchical: clusters come in groups of VSM_CULL_GROUP consecutive ones (one instance's
+// neighbouring triangles, mostly), whose bounding spheres cs_groups merges once per frame. One
+// thread per (group, page) tests the group's sphere and only if it is inside the page tests
+// the group's clusters, so a page far from most of the scene costs a thread per group, not
+// one per cluster.
 
 @group(0) @binding(0) var<uniform> round: VsmRound;
 @group(0) @binding(1) var<uniform> vsm: VsmUniforms;
@@ -19,44 +25,97 @@
 @group(0) @binding(8) var<storage, read_write> commands: array<DrawCommand>;
 @group(0) @binding(9) var<storage, read_write> command_count: atomic<u32>;
 @group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
+// Per group of VSM_CULL_GROUP clusters (draw.rs's CULL_GROUP) (cluster c is in group c / VSM_CULL_GROUP): the merged bounding sphere.
+@group(0) @binding(12) var<storage, read_write> group_bounds: array<vec4<f32>>;
 
-// One thread per (cluster, page slot) of the round.
+// One thread per group: a sphere holding its clusters' spheres.
+@compute @workgroup_size(64, 1, 1)
+fn cs_groups(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let g = gid.x;
+    let clusters_total = arrayLength(&clusters);
+    if (g >= arrayLength(&group_bounds) || g * VSM_CULL_GROUP >= clusters_total) {
+        return;
+    }
+    let last = min(clusters_total, g * VSM_CULL_GROUP + VSM_CULL_GROUP);
+    var lo = vec3<f32>(3.0e38);
+    var hi = vec3<f32>(-3.0e38);
+    for (var c = g * VSM_CULL_GROUP; c < last; c++) {
+        let s = cluster_bounds[c];
+        lo = min(lo, s.xyz - vec3<f32>(s.w));
+        hi = max(hi, s.xyz + vec3<f32>(s.w));
+    }
+    let centre = 0.5 * (lo + hi);
+    var r = 0.0;
+    for (var c = g * VSM_CULL_GROUP; c < last; c++) {
+        let s = cluster_bounds[c];
+        r = max(r, length(s.xyz - centre) + s.w);
+    }
+    // Grown like cs_bounds' spheres, so rounding never drops a cluster the group holds.
+    group_bounds[g] = vec4<f32>(centre, r * 1.0001 + 1e-6);
+}
+
+// One thread per (group, page slot) of the round; the round's clusters are [lo, hi) and its
+// groups those from lo / VSM_CULL_GROUP on.
 @compute @workgroup_size(64, 1, 1)
 fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let local = gid.x;
     let slot = gid.y;
-    if (local >= round.round.w || slot >= round.round.y) {
+    let lo = round.round.z;
+    let hi = lo + round.round.w;
+    let g = lo / VSM_CULL_GROUP + gid.x;
+    if (g * VSM_CULL_GROUP >= hi || slot >= round.round.y) {
         return;
     }
     let page = round.round.x + slot;
-    let c = round.round.z + local;
-    let cl = clusters[c];
-    let sphere = cluster_bounds[c];
     let bits = round.counts.z;
+    let compact = round.counts.w != 0u;
     // Slots past the last resident page draw nothing (only reached without compaction,
     // where every slot's command is written).
-    var visible = page < atomicLoad(&counters[17]);
     let view = page_views[min(page, arrayLength(&page_views) - 1u)];
-    if (visible && (bits & CULL_FRUSTUM) != 0u && sphere_outside(view.view_proj, sphere)) {
-        visible = false;
+    var group_visible = page < atomicLoad(&counters[17]);
+    let frustum = (bits & CULL_FRUSTUM) != 0u;
+    if (group_visible && frustum && (bits & VSM_FLAT_CULL) == 0u
+        && sphere_outside(view.view_proj, group_bounds[g])) {
+        group_visible = false;
     }
-    if (visible && (bits & CULL_BACKFACE) != 0u && cl.first_triangle < round.counts.y
-        && cluster_faces_away(cl, instances[cl.instance].normal, sphere, vsm_faces[bitcast<u32>(view.tile.w)].eye)) {
-        visible = false;
+    if (!group_visible && compact) {
+        return;
     }
-    if (visible) { atomicAdd(&counters[14], 1u); atomicAdd(&counters[15], cl.triangles); }
-    var cmd: DrawCommand;
-    cmd.index_count = select(0u, 3u * cl.triangles, visible);
-    cmd.instance_count = 1u;
-    cmd.first_index = 3u * cl.first_triangle;
-    cmd.base_vertex = i32(slot * round.counts.x);
-    cmd.first_instance = 0u;
-    if (round.counts.w != 0u) {
+    let eye = vsm_faces[min(bitcast<u32>(view.tile.w), arrayLength(&vsm_faces) - 1u)].eye;
+    var draws = 0u;
+    var triangles = 0u;
+    for (var c = max(lo, g * VSM_CULL_GROUP); c < min(hi, g * VSM_CULL_GROUP + VSM_CULL_GROUP); c++) {
+        let cl = clusters[c];
+        var visible = group_visible;
         if (visible) {
-            commands[atomicAdd(&command_count, 1u)] = cmd;
+            let sphere = cluster_bounds[c];
+            if (frustum && sphere_outside(view.view_proj, sphere)) {
+                visible = false;
+            } else if ((bits & CULL_BACKFACE) != 0u && cl.first_triangle < round.counts.y
+                && cluster_faces_away(cl, instances[cl.instance].normal, sphere, eye)) {
+                visible = false;
+            }
         }
-    } else {
-        commands[slot * round.round.w + local] = cmd;
+        var cmd: DrawCommand;
+        cmd.index_count = select(0u, 3u * cl.triangles, visible);
+        cmd.instance_count = 1u;
+        cmd.first_index = 3u * cl.first_triangle;
+        cmd.base_vertex = i32(slot * round.counts.x);
+        cmd.first_instance = 0u;
+        if (compact) {
+            if (visible) {
+                commands[atomicAdd(&command_count, 1u)] = cmd;
+            }
+        } else {
+            commands[slot * round.round.w + (c - lo)] = cmd;
+        }
+        if (visible) {
+            draws = draws + 1u;
+            triangles = triangles + cl.triangles;
+        }
+    }
+    if (draws != 0u) {
+        atomicAdd(&counters[14], draws);
+        atomicAdd(&counters[15], triangles);
     }
 }
 
