@@ -16,15 +16,17 @@
 //! clusters):
 //! 1. *mark*: each pixel visits its cluster's lights; for each light that reaches it (and
 //!    faces it), the sample asks for the level whose texel matches its pixel footprint
-//!    ([`VirtualOptions::lod`](plan::VirtualOptions::lod) texels per pixel) and marks that
-//!    page and its ancestors needed. With caching, when the camera, the lights and every face
-//!    are as last frame (only casters moved), last frame's needed pages carry over and only
-//!    the pixels under the moved casters' old and new bounds are marked again;
-//! 2. *allocate*: needed pages get pool pages in page-table order (ranks from per-block counts
-//!    and a prefix sum, so the frame never depends on thread order), coarsest level first, a
-//!    level admitted whole or not at all while the pool lasts; pages of levels that do not fit
-//!    are *denied*, and lookups fall back to their nearest resident ancestor — a coarser
-//!    shadow, never a wrong or missing one — and the frame's
+//!    ([`VirtualOptions::lod`](plan::VirtualOptions::lod) texels per pixel): that page is
+//!    marked *asked* and its ancestors *above*. With caching, when the camera, the lights and
+//!    every face are as last frame (only casters moved), last frame's pages carry over and
+//!    only the pixels under the moved casters' old and new bounds are marked again;
+//! 2. *allocate*: the *admitted level* A is the finest level whose marked pages fit the pool
+//!    together with the asked pages of every coarser level. Asked pages coarser than A and
+//!    every marked page of A get pool pages in page-table order (ranks from per-block counts
+//!    and a prefix sum, so the frame never depends on thread order). With room for every asked
+//!    page, only those are drawn: an ancestor nobody asked for is never read. Otherwise asked
+//!    pages finer than A are *denied* and their lookups fall back to their ancestor at A — a
+//!    coarser shadow, never a wrong or missing one — and the frame's
 //!    [`VirtualStats`](plan::VirtualStats) count them. A pool with fewer pages than faces in
 //!    use gives the last faces quarter pages (four faces' level 0 at 64² in one pool page,
 //!    `quarter_faces`), so every face keeps a shadow up to four faces per pool page; only
@@ -37,8 +39,9 @@
 //! 3. *render* ([`draw`], `vsm_draw.wgsl`): every page drawn this frame is an ordinary shadow
 //!    view (the face's projection cropped to the page, one tile of the pool), drawn the
 //!    `gpu-driven` way: compute culls caster clusters against each page's frustum slice (and by
-//!    normal cone), one indirect multi-draw per round ([`crate::shadows::cluster_draw`]) draws
-//!    the survivors, clipped to the page's tile.
+//!    normal cone) — groups of 16 clusters by a merged sphere first, then the clusters of the
+//!    groups inside the page — and one indirect multi-draw per round
+//!    ([`crate::shadows::cluster_draw`]) draws the survivors, clipped to the page's tile.
 //!
 //! **Lookups** (`vsm_lookup.wgsl` after `vsm_common.wgsl`, composed into the lighting and
 //! visibility passes) repeat the marking's level and page choice with the same code, read the

@@ -217,7 +217,7 @@ pub struct VirtualStats {
     /// the coarser levels is admitted whole, asked pages finer than A are denied and read
     /// their ancestor at A.
     pub asked: [u32; MAX_LEVELS as usize],
-    /// Faces some sample needs (their level-0 page is needed): of a point light's six cube
+    /// Faces some sample needs (their level-0 page is marked): of a point light's six cube
     /// faces only those its visible samples look through; the plan's other faces get no pages.
     pub faces_in_use: u32,
     /// Pages resident this frame (kept + drawn).
@@ -251,7 +251,7 @@ pub struct VirtualStats {
 }
 
 impl VirtualStats {
-    /// Pages needed over all levels.
+    /// Pages marked over all levels (asked, or ancestors of asked ones).
     pub fn needed_total(&self) -> u32 {
         self.needed.iter().sum()
     }
