@@ -129,7 +129,11 @@ pub fn atlas_copy() -> String {
 
 /// Per-frame world transform of shadow casters.
 pub fn casters() -> String {
-    compose(&[COMMON, include_str!("../gpu_scene/casters.wgsl")])
+    let group = format!(
+        "const CLUSTER_GROUP: u32 = {}u;",
+        crate::gpu_scene::casters::CLUSTER_GROUP
+    );
+    compose(&[COMMON, &group, include_str!("../gpu_scene/casters.wgsl")])
 }
 
 /// The dual-paraboloid warp.

@@ -49,6 +49,10 @@ use crate::{GpuContext, RenderError};
 /// Most triangles per cluster.
 pub const CLUSTER_TRIANGLES: u32 = 128;
 
+/// Consecutive clusters per group (`CLUSTER_GROUP` in `casters.wgsl`): each group's bounding
+/// sphere holds its clusters' spheres, for culling a group before its clusters.
+pub const CLUSTER_GROUP: u32 = 16;
+
 /// How caster geometry is prepared.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[non_exhaustive]
@@ -106,7 +110,8 @@ pub struct CasterGeometry {
     pub corners: wgpu::Buffer,
     /// `array<Cluster>`.
     pub cluster_buffer: wgpu::Buffer,
-    /// `array<vec4<f32>>` world bounding sphere per cluster (written each frame).
+    /// `array<vec4<f32>>` world bounding sphere per cluster, then one per group of
+    /// [`CLUSTER_GROUP`] clusters at `clusters.len() + g` (both written each frame).
     pub cluster_bounds: wgpu::Buffer,
     skinned: bool,
     options: CasterOptions,
@@ -115,6 +120,7 @@ pub struct CasterGeometry {
     decisions: Vec<Decision>,
     transform: wgpu::ComputePipeline,
     bounds: wgpu::ComputePipeline,
+    groups: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
 }
 
@@ -550,7 +556,7 @@ impl CasterGeometry {
         );
         let cluster_bounds = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("casters.cluster_bounds"),
-            size: all_clusters.len() as u64 * 16,
+            size: (all_clusters.len() as u64 + u64::from(groups_of(all_clusters.len()))) * 16,
             usage: wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
@@ -632,6 +638,7 @@ impl CasterGeometry {
             clusters: cluster_list,
             transform: pipeline("cs_transform"),
             bounds: pipeline("cs_bounds"),
+            groups: pipeline("cs_groups"),
             world,
             corners: corners_buf,
             cluster_buffer,
@@ -701,8 +708,15 @@ impl CasterGeometry {
         if bounds && !self.clusters.is_empty() {
             pass.set_pipeline(&self.bounds);
             pass.dispatch_workgroups((self.clusters.len() as u32).div_ceil(64), 1, 1);
+            pass.set_pipeline(&self.groups);
+            pass.dispatch_workgroups(groups_of(self.clusters.len()).div_ceil(64), 1, 1);
         }
     }
+}
+
+/// Groups of [`CLUSTER_GROUP`] clusters covering `clusters`.
+fn groups_of(clusters: usize) -> u32 {
+    (clusters as u32).div_ceil(CLUSTER_GROUP)
 }
 
 #[cfg(test)]

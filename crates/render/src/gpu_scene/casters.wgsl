@@ -3,6 +3,9 @@
 //
 // cs_transform: one thread per caster vertex writes its world position.
 // cs_bounds:    one thread per triangle cluster writes the cluster's bounding sphere.
+// cs_groups:    one thread per group of CLUSTER_GROUP consecutive clusters writes a sphere
+//               holding theirs, after the clusters' own (cluster_bounds[clusters + g]).
+//               (CLUSTER_GROUP is composed in from casters.rs.)
 
 struct TransformParams {
     // Caster vertices, clusters, 1 if skinned, unused.
@@ -94,4 +97,29 @@ fn cs_bounds(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     // Grow by a relative epsilon so rounding never makes the sphere miss a vertex.
     cluster_bounds[c] = vec4<f32>(centre, sqrt(r2) * 1.0001 + 1e-6);
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn cs_groups(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let g = gid.x;
+    let n = tparams.counts.y;
+    if (g * CLUSTER_GROUP >= n) {
+        return;
+    }
+    let last = min(n, g * CLUSTER_GROUP + CLUSTER_GROUP);
+    var lo = vec3<f32>(3.0e38);
+    var hi = vec3<f32>(-3.0e38);
+    for (var c = g * CLUSTER_GROUP; c < last; c++) {
+        let s = cluster_bounds[c];
+        lo = min(lo, s.xyz - vec3<f32>(s.w));
+        hi = max(hi, s.xyz + vec3<f32>(s.w));
+    }
+    let centre = 0.5 * (lo + hi);
+    var r = 0.0;
+    for (var c = g * CLUSTER_GROUP; c < last; c++) {
+        let s = cluster_bounds[c];
+        r = max(r, length(s.xyz - centre) + s.w);
+    }
+    // Grown like the clusters' spheres, so rounding never drops a cluster the group holds.
+    cluster_bounds[n + g] = vec4<f32>(centre, r * 1.0001 + 1e-6);
 }

@@ -3,8 +3,9 @@
 //! the `gpu-driven` way. Per round ([`crate::shadows::cluster_draw`]) compute culls caster
 //! clusters against each page's frustum slice (and by normal cone) and one indirect multi-draw
 //! draws the survivors, clipped to the page's tile of the pool (`vsm_draw.wgsl`). The cull is
-//! hierarchical: groups of [`CULL_GROUP`] consecutive clusters get a merged bounding sphere
-//! each frame, one thread per (group, page) tests it and only then the group's clusters. The
+//! hierarchical: groups of [`CULL_GROUP`] consecutive clusters have a merged bounding sphere
+//! (written with the clusters' by [`CasterGeometry::record`]), one thread per (group, page)
+//! tests it and only then the group's clusters. The
 //! page clears and the indirect arguments come from the allocation passes ([`super::pages`]).
 
 use crate::gpu::buffers::buffer;
@@ -18,7 +19,7 @@ use crate::shadows::cluster_draw::{plan_rounds, Round, COMMAND_SIZE};
 use crate::GpuContext;
 
 /// Consecutive clusters per cull group (one cull thread per group and page).
-pub(crate) const CULL_GROUP: u32 = 16;
+pub(crate) const CULL_GROUP: u32 = crate::gpu_scene::casters::CLUSTER_GROUP;
 
 /// Flag in the rounds' cull bits: skip the groups' spheres (the flat cull, for measuring).
 const FLAT_CULL: u32 = 1 << 8;
@@ -80,10 +81,6 @@ pub(crate) struct PageDraw {
     commands: wgpu::Buffer,
     command_count: wgpu::Buffer,
     cull: wgpu::ComputePipeline,
-    /// Merges the cluster groups' bounding spheres (`cs_groups`).
-    groups_pipeline: wgpu::ComputePipeline,
-    /// `array<vec4<f32>>`, one sphere per group of [`CULL_GROUP`] clusters.
-    group_bounds: wgpu::Buffer,
     draw: wgpu::RenderPipeline,
     /// Rounds of alpha-tested clusters (`fs_alpha`).
     draw_masked: wgpu::RenderPipeline,
@@ -150,12 +147,6 @@ impl PageDraw {
             U::STORAGE | U::INDIRECT,
         );
         let command_count = buffer(ctx, "vsm.command_count", 4, storage | U::INDIRECT);
-        let group_bounds = buffer(
-            ctx,
-            "vsm.group_bounds",
-            u64::from((casters.clusters.len() as u32).div_ceil(CULL_GROUP).max(1)) * 16,
-            U::STORAGE,
-        );
         // Round records (the same for every frame: rounds cover every pool page).
         let records: Vec<VsmRound> = rounds
             .iter()
@@ -196,7 +187,6 @@ impl PageDraw {
                 crate::gpu::pipelines::storage_rw_entry(8, cs),
                 crate::gpu::pipelines::storage_rw_entry(9, cs),
                 crate::gpu::pipelines::storage_rw_entry(10, cs),
-                crate::gpu::pipelines::storage_rw_entry(12, cs),
             ],
         );
         let vs = wgpu::ShaderStages::VERTEX;
@@ -231,13 +221,6 @@ impl PageDraw {
             &draw_module,
             "cs_cull",
         );
-        let groups_pipeline = crate::gpu::pipelines::compute_pipeline(
-            device,
-            "vsm.groups",
-            &cull_pl,
-            &draw_module,
-            "cs_groups",
-        );
         let draw_pl = pipeline_layout("vsm.draw_pipeline_layout", &draw_layout);
         let draw =
             crate::shadows::depth::depth_pipeline(device, &draw_pl, &draw_module, "vs_draw", &[]);
@@ -262,8 +245,6 @@ impl PageDraw {
             commands,
             command_count,
             cull,
-            groups_pipeline,
-            group_bounds,
             draw,
             draw_masked,
             clear,
@@ -311,7 +292,6 @@ impl PageDraw {
                 whole_entry(8, &self.commands),
                 whole_entry(9, &self.command_count),
                 whole_entry(10, pages.counters),
-                whole_entry(12, &self.group_bounds),
             ],
         });
         let draw = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -359,18 +339,9 @@ impl PageDraw {
             pass.draw_indirect(args, clear_args);
         }
         let corners = casters.corners.slice(..);
-        if !self.rounds.is_empty() {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("vsm.groups"),
-                timestamp_writes: timer.compute_writes(span, true, false),
-            });
-            pass.set_pipeline(&self.groups_pipeline);
-            pass.set_bind_group(0, &g.cull, &[0]);
-            let groups = (casters.clusters.len() as u32).div_ceil(CULL_GROUP);
-            pass.dispatch_workgroups(groups.div_ceil(64), 1, 1);
-        }
         for (k, r) in self.rounds.iter().enumerate() {
             let offset = [(k as u64 * self.round_stride) as u32];
+            let first = k == 0;
             let last = k + 1 == self.rounds.len();
             if self.compact {
                 encoder.clear_buffer(&self.command_count, 0, None);
@@ -378,7 +349,7 @@ impl PageDraw {
             {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("vsm.cull"),
-                    timestamp_writes: None,
+                    timestamp_writes: timer.compute_writes(span, first, false),
                 });
                 pass.set_pipeline(&self.cull);
                 pass.set_bind_group(0, &g.cull, &offset);

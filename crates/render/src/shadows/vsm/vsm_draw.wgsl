@@ -6,8 +6,9 @@
 // it); their count is known only on the GPU: cull dispatches are indirect, and rounds past
 // the last page cull nothing.
 //
-// The cull is hierarchical: clusters come in groups of VSM_CULL_GROUP consecutive ones (one instance's
-// neighbouring triangles, mostly), whose bounding spheres cs_groups merges once per frame. One
+// The cull is hierarchical: clusters come in groups of VSM_CULL_GROUP consecutive ones (one
+// instance's neighbouring triangles, mostly), whose bounding spheres casters.wgsl's cs_groups
+// merges once per frame, after the clusters' (cluster_bounds[clusters + g]). One
 // thread per (group, page) tests the group's sphere and only if it is inside the page tests
 // the group's clusters, so a page far from most of the scene costs a thread per group, not
 // one per cluster.
@@ -25,35 +26,6 @@
 @group(0) @binding(8) var<storage, read_write> commands: array<DrawCommand>;
 @group(0) @binding(9) var<storage, read_write> command_count: atomic<u32>;
 @group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
-// Per group of VSM_CULL_GROUP clusters (draw.rs's CULL_GROUP) (cluster c is in group c / VSM_CULL_GROUP): the merged bounding sphere.
-@group(0) @binding(12) var<storage, read_write> group_bounds: array<vec4<f32>>;
-
-// One thread per group: a sphere holding its clusters' spheres.
-@compute @workgroup_size(64, 1, 1)
-fn cs_groups(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let g = gid.x;
-    let clusters_total = arrayLength(&clusters);
-    if (g >= arrayLength(&group_bounds) || g * VSM_CULL_GROUP >= clusters_total) {
-        return;
-    }
-    let last = min(clusters_total, g * VSM_CULL_GROUP + VSM_CULL_GROUP);
-    var lo = vec3<f32>(3.0e38);
-    var hi = vec3<f32>(-3.0e38);
-    for (var c = g * VSM_CULL_GROUP; c < last; c++) {
-        let s = cluster_bounds[c];
-        lo = min(lo, s.xyz - vec3<f32>(s.w));
-        hi = max(hi, s.xyz + vec3<f32>(s.w));
-    }
-    let centre = 0.5 * (lo + hi);
-    var r = 0.0;
-    for (var c = g * VSM_CULL_GROUP; c < last; c++) {
-        let s = cluster_bounds[c];
-        r = max(r, length(s.xyz - centre) + s.w);
-    }
-    // Grown like cs_bounds' spheres, so rounding never drops a cluster the group holds.
-    group_bounds[g] = vec4<f32>(centre, r * 1.0001 + 1e-6);
-}
-
 // One thread per (group, page slot) of the round; the round's clusters are [lo, hi) and its
 // groups those from lo / VSM_CULL_GROUP on.
 @compute @workgroup_size(64, 1, 1)
@@ -74,7 +46,7 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
     var group_visible = page < atomicLoad(&counters[17]);
     let frustum = (bits & CULL_FRUSTUM) != 0u;
     if (group_visible && frustum && (bits & VSM_FLAT_CULL) == 0u
-        && sphere_outside(view.view_proj, group_bounds[g])) {
+        && sphere_outside(view.view_proj, cluster_bounds[arrayLength(&clusters) + g])) {
         group_visible = false;
     }
     if (!group_visible && compact) {
