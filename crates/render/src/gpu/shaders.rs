@@ -127,12 +127,14 @@ pub fn atlas_copy() -> String {
     compose(&[include_str!("../shadows/atlas_copy.wgsl")])
 }
 
+/// Consecutive caster clusters per group (`CLUSTER_GROUP` in `casters.wgsl`; see
+/// `gpu_scene::casters`): each group's bounding sphere holds its clusters' spheres, for
+/// culling a group before its clusters.
+pub const CLUSTER_GROUP: u32 = 16;
+
 /// Per-frame world transform of shadow casters.
 pub fn casters() -> String {
-    let group = format!(
-        "const CLUSTER_GROUP: u32 = {}u;",
-        crate::gpu_scene::casters::CLUSTER_GROUP
-    );
+    let group = format!("const CLUSTER_GROUP: u32 = {CLUSTER_GROUP}u;");
     compose(&[COMMON, &group, include_str!("../gpu_scene/casters.wgsl")])
 }
 

@@ -49,9 +49,7 @@ use crate::{GpuContext, RenderError};
 /// Most triangles per cluster.
 pub const CLUSTER_TRIANGLES: u32 = 128;
 
-/// Consecutive clusters per group (`CLUSTER_GROUP` in `casters.wgsl`): each group's bounding
-/// sphere holds its clusters' spheres, for culling a group before its clusters.
-pub const CLUSTER_GROUP: u32 = 16;
+pub use crate::gpu::shaders::CLUSTER_GROUP;
 
 /// How caster geometry is prepared.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
