@@ -215,3 +215,57 @@ fn group_culling_draws_exactly_what_the_flat_cull_draws() {
         (flat.cluster_draws, flat.triangles)
     );
 }
+
+/// Culling caster clusters beyond a page's farthest receiver skips only casters that no
+/// sample reading the page can see: each sample's shadow test is `receiver <= stored`, and a
+/// caster deeper than every receiver leaves it true. So the image (PCF 2x2) and the hard
+/// visibility mask are the same bit for bit, with fewer triangles drawn. (Bounding a page by
+/// half its farthest receiver changes 22,584 mask words: seen failing.)
+#[test]
+fn casters_beyond_a_pages_farthest_receiver_are_skipped_without_changing_a_pixel() {
+    let ctx = common::context();
+    let scene = builtin::build(
+        "atrium",
+        &BuiltinOptions {
+            lights: Some(40),
+            ..Default::default()
+        },
+    )
+    .expect("atrium");
+    let render = |receiver_cull: bool| {
+        let settings = RenderSettings::default()
+            .with_width(320)
+            .with_height(180)
+            .with_visibility(true)
+            .with_technique(Technique::VIRTUAL)
+            .with_virtual_maps(
+                manyshadows::VirtualOptions::default().with_receiver_cull(receiver_cull),
+            );
+        let mut r = Renderer::new(&ctx, &scene, settings).expect("renderer");
+        r.render().expect("frame")
+    };
+    let (bounded, all) = (render(true), render(false));
+    let (b, a) = (
+        bounded.virtual_maps.expect("stats"),
+        all.virtual_maps.expect("stats"),
+    );
+    eprintln!("bounded: {b:?}\nall: {a:?}");
+    assert_eq!((b.drawn, b.denied), (a.drawn, a.denied));
+    assert!(
+        b.triangles * 10 < a.triangles * 9,
+        "receiver bounds should save over a tenth of the triangles: {} of {}",
+        b.triangles,
+        a.triangles
+    );
+    let words = |f: &manyshadows::Frame| f.visibility.as_ref().expect("mask").words.clone();
+    let (wb, wa) = (words(&bounded), words(&all));
+    let differing = wb.iter().zip(&wa).filter(|(x, y)| x != y).count();
+    assert_eq!(differing, 0, "mask words that differ");
+    let pixels = bounded
+        .rgba
+        .chunks(4)
+        .zip(all.rgba.chunks(4))
+        .filter(|(x, y)| x != y)
+        .count();
+    assert_eq!(pixels, 0, "pixels that differ");
+}

@@ -178,7 +178,8 @@ struct VirtualFace {
 struct VsmUniforms {
     // Pool side in texels, pages per pool row, page side in texels, pages in the pool.
     pool: vec4<u32>,
-    // Faces, page-table entries, 1 = mark pages for back-facing samples too, unused.
+    // Faces, page-table entries, 1 = mark pages for back-facing samples too, 1 = bound each
+    // page's casters by its farthest receiver (the keys after the table's entries).
     counts: vec4<u32>,
     // Texels per screen pixel wanted (level of detail scale); the marking pass's first pixel
     // (x, y: it marks a rectangle from there when only part of the screen changed); unused.

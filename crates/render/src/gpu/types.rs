@@ -233,7 +233,8 @@ pub struct VirtualFace {
 pub struct VsmUniforms {
     /// Pool side in texels, pages per pool row, page side in texels, pages in the pool.
     pub pool: [u32; 4],
-    /// Faces, page-table entries, 1 = mark pages for back-facing samples too, unused.
+    /// Faces, page-table entries, 1 = mark pages for back-facing samples too, 1 = bound each
+    /// page's casters by its farthest receiver (the keys after the table's entries).
     pub counts: [u32; 4],
     /// Texels per screen pixel wanted; the first pixel (x, y) the marking pass visits (a
     /// rectangle of the screen when only part of it changed); unused.

@@ -91,6 +91,10 @@ pub struct VirtualShadows {
     marked_gen: u64,
     /// Camera world → clip, for the screen rectangle of moved casters.
     camera: Mat4,
+    /// Whether the last recorded frame bounded its pages' casters by their farthest
+    /// receivers (only when it kept no pages and will let none be kept: a page drawn for one
+    /// frame's samples may miss casters a later frame's samples need).
+    receiver_bounds: bool,
     args: wgpu::Buffer,
     mark: wgpu::ComputePipeline,
     carry: wgpu::ComputePipeline,
@@ -249,6 +253,7 @@ impl VirtualShadows {
             key_gen: 1,
             marked_gen: 0,
             camera: camera_matrix(scene, (width, height)),
+            receiver_bounds: false,
             args,
             mark,
             carry,
@@ -331,10 +336,11 @@ impl VirtualShadows {
             "virtual faces",
         )?;
         let entries = self.plan.fit.table_entries.max(1) as u64;
+        // The entries, then as many receiver depth keys (`vsm.wgsl`'s marking).
         if crate::gpu::buffers::grow_buffer(
             ctx,
             &mut self.table,
-            entries * 4,
+            entries * 8,
             "virtual page table",
         )? {
             // Last frame's table went with the old buffer: keep no pages this time.
@@ -369,7 +375,7 @@ impl VirtualShadows {
                 self.plan.faces.len() as u32,
                 self.plan.fit.table_entries,
                 u32::from(self.options.back_facing),
-                0,
+                u32::from(self.receiver_bounds),
             ],
             lod: [self.options.lod, 0.0, 0.0, 0.0],
         };
@@ -468,7 +474,16 @@ impl VirtualShadows {
         }
         // Which faces may keep last frame's pages: `table.w` = their first entry then + 1, and
         // where in them casters moved (`dirty`): only the kept pages there are drawn anew.
-        let keep = keep && !casters.skinned();
+        // Pages drawn for their receivers only are never kept; without keeping, casters
+        // beyond a page's farthest receiver are culled.
+        let bounds = !keep && self.options.receiver_cull;
+        let keep = keep && !casters.skinned() && !self.receiver_bounds;
+        if bounds != self.receiver_bounds {
+            self.receiver_bounds = bounds;
+            // `VsmUniforms::counts.w`.
+            ctx.queue
+                .write_buffer(&self.uniforms, 28, bytemuck::bytes_of(&u32::from(bounds)));
+        }
         let mut faces = self.plan.faces.clone();
         for (face, view) in faces.iter_mut().zip(&self.plan.views) {
             face.table[3] = 0;
@@ -640,7 +655,7 @@ impl VirtualShadows {
             pool_pages: self.pool_pages,
             pool_side: self.pool_side,
             pool_bytes: self.pool_side as u64 * self.pool_side as u64 * 4,
-            table_bytes: self.plan.fit.table_entries as u64 * 4,
+            table_bytes: self.plan.fit.table_entries as u64 * 8,
         })
     }
 

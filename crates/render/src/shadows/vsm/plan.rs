@@ -41,6 +41,12 @@ pub struct VirtualOptions {
     /// every cluster against every page: the same clusters are drawn either way; for
     /// measuring what the groups save.
     pub group_cull: bool,
+    /// Cull caster clusters beyond a page's farthest receiver: the marking pass keeps, per
+    /// asked page, the largest depth its samples compare against, and a cluster whose
+    /// bounding sphere lies wholly beyond it cannot shadow any of them. Applies only to frames
+    /// that keep no pages (without shadow caching): a kept page would need the casters a
+    /// later frame's samples see. The same shadows either way; `false` for measuring.
+    pub receiver_cull: bool,
 }
 
 impl Default for VirtualOptions {
@@ -52,6 +58,7 @@ impl Default for VirtualOptions {
             max_table_entries: DEFAULT_TABLE_ENTRIES,
             back_facing: false,
             group_cull: true,
+            receiver_cull: true,
         }
     }
 }
@@ -332,4 +339,5 @@ with_setters!(VirtualOptions {
     with_max_table_entries: max_table_entries: u32,
     with_back_facing: back_facing: bool,
     with_group_cull: group_cull: bool,
+    with_receiver_cull: receiver_cull: bool,
 });

@@ -102,6 +102,11 @@ fn mark_light(i: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
         return;
     }
     let e = vsm_entry(face, level, q.uv);
+    // The farthest receiver of the page (keys are never negative as bits: 0 = no bound).
+    let key = bitcast<u32>(max(q.key, 0.0));
+    if (vsm.counts.w != 0u && key > atomicLoad(&vsm_table[vsm.counts.y + e])) {
+        atomicMax(&vsm_table[vsm.counts.y + e], key);
+    }
     if ((atomicLoad(&vsm_table[e]) & MARK_ASKED) != 0u) {
         return;
     }
@@ -495,7 +500,19 @@ fn cs_alloc_new(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_
     view.view_proj = crop * face.view_proj;
     let origin = vec2<f32>(f32(page % vsm.pool.y), f32(page / vsm.pool.y)) * side + corner;
     view.tile = vec4<f32>(origin, size, bitcast<f32>(fi));
-    view.params = vec4<f32>(face.params.xy, face.params.z * f32(1u << (face.table.y - level)) * texel_scale, face.params.w);
+    // params.x: the page's farthest receiver key when every sample reading the page marked
+    // it (0 = none): not for quarter pages, nor at the admitted level while finer pages are
+    // denied (their samples read it too); above-only pages have none (no sample asked them).
+    var bound = 0.0;
+    let admitted = admitted_level();
+    var finer = 0u;
+    for (var k = admitted + 1u; k < VSM_LEVELS; k = k + 1u) {
+        finer = finer + atomicLoad(&counters[COUNT_ASKED + k]);
+    }
+    if (vsm.counts.w != 0u && atomicLoad(&counters[0]) <= vsm.pool.w && (level < admitted || finer == 0u)) {
+        bound = bitcast<f32>(atomicLoad(&vsm_table[vsm.counts.y + e]));
+    }
+    view.params = vec4<f32>(bound, face.params.y, face.params.z * f32(1u << (face.table.y - level)) * texel_scale, face.params.w);
     page_views[rank] = view;
 }
 

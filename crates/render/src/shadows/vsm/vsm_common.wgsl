@@ -30,6 +30,9 @@ fn vsm_level(face: VirtualFace, p: vec3<f32>, view_depth: f32, lod: f32) -> u32 
 struct VsmPoint {
     uv: vec2<f32>,
     depth: f32,
+    // The receiver's distance key, linear in position and ordered as `depth`: clip w of a
+    // perspective face, clip z of an orthographic one (vsm_draw.wgsl's `key_row`), unclamped.
+    key: f32,
     valid: bool,
 }
 
@@ -55,6 +58,7 @@ fn vsm_project_texel(light: LightData, face: VirtualFace, p: vec3<f32>, n: vec3<
     }
     out.uv = clamp(ndc.xy * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5), vec2<f32>(0.0), vec2<f32>(1.0));
     out.depth = clamp(ndc.z, 0.0, 1.0);
+    out.key = select(clip.w, clip.z, face.params.w > 0.5);
     out.valid = true;
     return out;
 }

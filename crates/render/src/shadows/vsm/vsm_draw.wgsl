@@ -45,9 +45,12 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
     let view = page_views[min(page, arrayLength(&page_views) - 1u)];
     var group_visible = page < atomicLoad(&counters[17]);
     let frustum = (bits & CULL_FRUSTUM) != 0u;
-    if (group_visible && frustum && (bits & VSM_FLAT_CULL) == 0u
-        && sphere_outside(view.view_proj, cluster_bounds[arrayLength(&clusters) + g])) {
-        group_visible = false;
+    let row = key_row(view.view_proj, view.params.w);
+    if (group_visible && frustum && (bits & VSM_FLAT_CULL) == 0u) {
+        let sphere = cluster_bounds[arrayLength(&clusters) + g];
+        if (sphere_outside(view.view_proj, sphere) || beyond_receivers(view, row, sphere)) {
+            group_visible = false;
+        }
     }
     if (!group_visible && compact) {
         return;
@@ -55,12 +58,19 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
     let eye = vsm_faces[min(bitcast<u32>(view.tile.w), arrayLength(&vsm_faces) - 1u)].eye;
     var draws = 0u;
     var triangles = 0u;
+    // In compaction, consecutive visible clusters (whose triangles are consecutive in the
+    // corner buffer) go out as one command: fewer, longer draws.
+    var run: DrawCommand;
+    run.index_count = 0u;
+    run.instance_count = 1u;
+    run.base_vertex = i32(slot * round.counts.x);
+    run.first_instance = 0u;
     for (var c = max(lo, g * VSM_CULL_GROUP); c < min(hi, g * VSM_CULL_GROUP + VSM_CULL_GROUP); c++) {
         let cl = clusters[c];
         var visible = group_visible;
         if (visible) {
             let sphere = cluster_bounds[c];
-            if (frustum && sphere_outside(view.view_proj, sphere)) {
+            if (frustum && (sphere_outside(view.view_proj, sphere) || beyond_receivers(view, row, sphere))) {
                 visible = false;
             } else if ((bits & CULL_BACKFACE) != 0u && cl.first_triangle < round.counts.y
                 && cluster_faces_away(cl, instances[cl.instance].normal, sphere, eye)) {
@@ -75,7 +85,15 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
         cmd.first_instance = 0u;
         if (compact) {
             if (visible) {
-                commands[atomicAdd(&command_count, 1u)] = cmd;
+                if (run.index_count != 0u && run.first_index + run.index_count == cmd.first_index) {
+                    run.index_count += cmd.index_count;
+                } else {
+                    if (run.index_count != 0u) {
+                        commands[atomicAdd(&command_count, 1u)] = run;
+                    }
+                    run.first_index = cmd.first_index;
+                    run.index_count = cmd.index_count;
+                }
             }
         } else {
             commands[slot * round.round.w + (c - lo)] = cmd;
@@ -85,10 +103,33 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
             triangles = triangles + cl.triangles;
         }
     }
+    if (run.index_count != 0u) {
+        commands[atomicAdd(&command_count, 1u)] = run;
+    }
     if (draws != 0u) {
         atomicAdd(&counters[14], draws);
         atomicAdd(&counters[15], triangles);
     }
+}
+
+// The row of a face's (or page's: the crop leaves rows z and w alone) projection whose dot
+// product with a point is its distance key: w for perspective, z for orthographic
+// (`ortho` = params.w), as vsm_common.wgsl's `VsmPoint::key`.
+fn key_row(view_proj: mat4x4<f32>, ortho: f32) -> vec4<f32> {
+    let r = select(3u, 2u, ortho > 0.5);
+    return vec4<f32>(view_proj[0][r], view_proj[1][r], view_proj[2][r], view_proj[3][r]);
+}
+
+// Whether a caster sphere lies wholly beyond the page's farthest receiver (`params.x`, 0 =
+// no bound): its depths then exceed every depth the page's samples compare against, so it
+// can shadow none of them (the comparison is `receiver <= stored`).
+fn beyond_receivers(view: ShadowViewData, row: vec4<f32>, sphere: vec4<f32>) -> bool {
+    let bound = view.params.x;
+    if (bound <= 0.0) {
+        return false;
+    }
+    let nearest = dot(row, vec4<f32>(sphere.xyz, 1.0)) - sphere.w * length(row.xyz);
+    return nearest > bound + 1e-4 * abs(bound) + 1e-6;
 }
 
 // ---- draw and clear (vertex) ----
