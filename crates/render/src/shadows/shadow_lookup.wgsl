@@ -63,11 +63,15 @@ fn to_light(light: LightData, p: vec3<f32>) -> vec3<f32> {
 // and towards the light, in texels of `texel_world` world size; the slope term grows with the
 // tangent of the angle between normal and light, as a depth slope does.
 fn receiver_offset(light: LightData, p: vec3<f32>, n: vec3<f32>, texel_world: f32) -> vec3<f32> {
+    return texel_world * receiver_offset_dir(light, p, n);
+}
+
+// The receiver offset per unit of texel world size (virtual maps scale it per level).
+fn receiver_offset_dir(light: LightData, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     let l = to_light(light, p);
     let cos_t = clamp(dot(n, l), 0.0, 1.0);
     let tan_t = min(sqrt(max(1.0 - cos_t * cos_t, 0.0)) / max(cos_t, 1e-4), 10.0);
-    return n * (frame.bias.z * texel_world)
-        + l * ((frame.bias.x + frame.bias.y * tan_t) * texel_world);
+    return n * frame.bias.z + l * (frame.bias.x + frame.bias.y * tan_t);
 }
 
 // Where `p` (normal `n`, camera view depth `view_depth`) falls in the atlas for `light`.

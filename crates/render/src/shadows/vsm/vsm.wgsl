@@ -96,8 +96,9 @@ fn mark_light(i: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
         return;
     }
     let face = vsm_faces[fi];
-    let level = vsm_level(face, p, view_depth, vsm.lod.x);
-    let q = vsm_project(light, face, p, n, level);
+    let ray = vsm_ray(light, face, p, n);
+    let level = vsm_level(face, ray, view_depth, vsm.lod.x);
+    let q = vsm_project(light, face, ray, level);
     if (!q.valid) {
         return;
     }

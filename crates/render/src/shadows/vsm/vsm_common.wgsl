@@ -1,23 +1,39 @@
 // Virtual shadow maps (vsm.rs): which level and page of a face a surface point needs, and
 // where it falls there. Shared by the page-marking pass and the lookups of the lighting and
 // visibility passes, so that a lookup asks for exactly the page the marking requested.
-// Needs `frame: FrameUniforms` and shadow_lookup.wgsl (`receiver_offset`).
+// Needs `frame: FrameUniforms` and shadow_lookup.wgsl (`receiver_offset_dir`).
 
-// World size of one texel of `face` at `level` around `p`.
-fn vsm_texel_world(face: VirtualFace, level: u32, p: vec3<f32>) -> f32 {
+// A sample seen from a face, computed once per (sample, face): the clip position of the
+// point and of its bias direction. The receiver offset is the texel's world size times that
+// direction (`receiver_offset_dir`), so the biased clip position for any level is
+// `p + texel · d`: walking down to coarser levels costs no further transform.
+struct VsmRay {
+    p: vec4<f32>,
+    d: vec4<f32>,
+}
+
+fn vsm_ray(light: LightData, face: VirtualFace, p: vec3<f32>, n: vec3<f32>) -> VsmRay {
+    var out: VsmRay;
+    out.p = face.view_proj * vec4<f32>(p, 1.0);
+    out.d = face.view_proj * vec4<f32>(receiver_offset_dir(light, p, n), 0.0);
+    return out;
+}
+
+// World size of one texel of `face` at `level` around the sample.
+fn vsm_texel_world(face: VirtualFace, level: u32, ray: VsmRay) -> f32 {
     var t = face.params.z * f32(1u << (face.table.y - level));
     if (face.params.w < 0.5) {
-        t = t * max((face.view_proj * vec4<f32>(p, 1.0)).w, 0.0);
+        t = t * max(ray.p.w, 0.0);
     }
     return t;
 }
 
-// The level a sample at `p` (camera view depth `view_depth`) needs: the coarsest whose texels
-// are no larger than the screen pixel there, divided by the level-of-detail scale `lod`
-// (texels per pixel). Level 0 when even the finest level is coarser than that.
-fn vsm_level(face: VirtualFace, p: vec3<f32>, view_depth: f32, lod: f32) -> u32 {
+// The level a sample (camera view depth `view_depth`) needs: the coarsest whose texels are no
+// larger than the screen pixel there, divided by the level-of-detail scale `lod` (texels per
+// pixel). Level 0 when even the finest level is coarser than that.
+fn vsm_level(face: VirtualFace, ray: VsmRay, view_depth: f32, lod: f32) -> u32 {
     let finest = face.table.y;
-    let texel = vsm_texel_world(face, finest, p);
+    let texel = vsm_texel_world(face, finest, ray);
     let pixel = view_depth * frame.bias.w / max(lod, 1e-6);
     // Level l has texels 2^(finest - l) times the finest: the coarsest level with
     // 2^(finest - l) · texel <= pixel is finest - floor(log2(pixel / texel)).
@@ -36,17 +52,16 @@ struct VsmPoint {
     valid: bool,
 }
 
-fn vsm_project(light: LightData, face: VirtualFace, p: vec3<f32>, n: vec3<f32>, level: u32) -> VsmPoint {
-    return vsm_project_texel(light, face, p, n, vsm_texel_world(face, level, p));
+fn vsm_project(light: LightData, face: VirtualFace, ray: VsmRay, level: u32) -> VsmPoint {
+    return vsm_project_texel(light, face, ray, vsm_texel_world(face, level, ray));
 }
 
 // As `vsm_project`, biased for texels of world size `texel` (a quarter page's are twice its
 // level's).
-fn vsm_project_texel(light: LightData, face: VirtualFace, p: vec3<f32>, n: vec3<f32>, texel: f32) -> VsmPoint {
+fn vsm_project_texel(light: LightData, face: VirtualFace, ray: VsmRay, texel: f32) -> VsmPoint {
     var out: VsmPoint;
     out.valid = false;
-    let offset = receiver_offset(light, p, n, texel);
-    let clip = face.view_proj * vec4<f32>(p + offset, 1.0);
+    let clip = ray.p + texel * ray.d;
     if (clip.w <= 0.0) {
         return out;
     }

@@ -14,9 +14,10 @@ fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, view_depth: f32) -
         return out;
     }
     let face = vsm_faces[fi];
-    var level = vsm_level(face, p, view_depth, vsm.lod.x);
+    let ray = vsm_ray(light, face, p, n);
+    var level = vsm_level(face, ray, view_depth, vsm.lod.x);
     loop {
-        let q = vsm_project(light, face, p, n, level);
+        let q = vsm_project(light, face, ray, level);
         if (!q.valid) {
             return out;
         }
@@ -33,7 +34,7 @@ fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, view_depth: f32) -
                 page = k / 4u;
                 side = 0.5 * side;
                 corner = vec2<f32>(f32(k % 2u), f32((k / 2u) % 2u)) * side;
-                at = vsm_project_texel(light, face, p, n, 2.0 * vsm_texel_world(face, level, p));
+                at = vsm_project_texel(light, face, ray, 2.0 * vsm_texel_world(face, level, ray));
                 if (!at.valid) {
                     return out;
                 }
