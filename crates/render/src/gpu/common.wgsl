@@ -190,7 +190,9 @@ struct VsmUniforms {
 struct VsmRound {
     // First page of the round, page slots in the round, first cluster, clusters in the round.
     round: vec4<u32>,
-    // Caster vertices V, cullable triangles, cull bits, 1 = commands compacted by a counter.
+    // Caster vertices V, cullable triangles, cull bits, 0 = a command per (page, cluster) slot
+    // or else compaction (pairs then triangles, vsm_draw.wgsl): the commands' capacity, where
+    // the pairs drawn whole start.
     counts: vec4<u32>,
 }
 

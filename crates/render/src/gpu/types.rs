@@ -247,7 +247,8 @@ pub struct VsmUniforms {
 pub struct VsmRound {
     /// First page, page slots, first cluster, clusters.
     pub round: [u32; 4],
-    /// Caster vertices, cullable triangles, cull bits, 1 = compacted commands.
+    /// Caster vertices, cullable triangles, cull bits, 0 = a command per (page, cluster) slot
+    /// or else compaction: the commands' capacity, where the pairs drawn whole start.
     pub counts: [u32; 4],
 }
 

@@ -13,7 +13,7 @@ use crate::gpu::pipelines::whole_entry;
 use crate::gpu::shaders::{compose, ALPHA_MASK, CLUSTER_CULL, COMMON, CULL, TILE, TILE_MASK};
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu::types::VsmRound;
-use crate::gpu_scene::casters::CasterGeometry;
+use crate::gpu_scene::casters::{CasterGeometry, CLUSTER_TRIANGLES};
 use crate::settings::ShadowOptions;
 use crate::shadows::cluster_draw::{plan_rounds, Round, COMMAND_SIZE};
 use crate::GpuContext;
@@ -26,8 +26,16 @@ const FLAT_CULL: u32 = 1 << 8;
 
 /// `VSM_CULL_GROUP` (and the flat-cull flag) for the shaders that dispatch or run the cull.
 pub(crate) fn group_decl() -> String {
-    format!("const VSM_CULL_GROUP: u32 = {CULL_GROUP}u;\nconst VSM_FLAT_CULL: u32 = {FLAT_CULL}u;")
+    format!(
+        "const VSM_CULL_GROUP: u32 = {CULL_GROUP}u;\nconst VSM_FLAT_CULL: u32 = {FLAT_CULL}u;\n\
+         const VSM_EXPAND_GROUP: u32 = {CLUSTER_TRIANGLES}u;\n\
+         const VSM_EXPAND_CAPACITY: u32 = {EXPAND_TRIANGLES}u;"
+    )
 }
+
+/// Triangles one round's expansion can hold (24 MiB of indices); the pairs past it are drawn
+/// whole.
+const EXPAND_TRIANGLES: u32 = 2 << 20;
 
 /// Cull threads' groups along x for a round's clusters `[first, first + count)`.
 fn round_groups(first: u32, count: u32) -> u32 {
@@ -80,6 +88,17 @@ pub(crate) struct PageDraw {
     round_stride: u64,
     commands: wgpu::Buffer,
     command_count: wgpu::Buffer,
+    /// Commands per round (with compaction, the pairs drawn whole start there).
+    capacity: u64,
+    /// With compaction: each round's triangles that touch their page (`cs_expand`).
+    expanded: wgpu::Buffer,
+    /// The expansion's dispatch and the round's indexed draw.
+    round_args: wgpu::Buffer,
+    expand: wgpu::ComputePipeline,
+    expand_args: wgpu::ComputePipeline,
+    draw_args: wgpu::ComputePipeline,
+    expand_layout: wgpu::BindGroupLayout,
+    args_layout: wgpu::BindGroupLayout,
     cull: wgpu::ComputePipeline,
     draw: wgpu::RenderPipeline,
     /// Rounds of alpha-tested clusters (`fs_alpha`).
@@ -89,10 +108,24 @@ pub(crate) struct PageDraw {
     draw_layout: wgpu::BindGroupLayout,
     clear_layout: wgpu::BindGroupLayout,
     groups: Option<Groups>,
+    /// The caster layout the rounds were planned for ([`Self::made_for`]).
+    layout: [u32; 4],
+}
+
+/// What the rounds' records take from the caster layout.
+fn caster_layout(casters: &CasterGeometry) -> [u32; 4] {
+    [
+        casters.clusters.len() as u32,
+        casters.first_masked_cluster,
+        casters.vertices,
+        casters.cullable_triangles,
+    ]
 }
 
 struct Groups {
     cull: wgpu::BindGroup,
+    expand: wgpu::BindGroup,
+    args: wgpu::BindGroup,
     draw: wgpu::BindGroup,
     clear: wgpu::BindGroup,
 }
@@ -111,11 +144,13 @@ impl PageDraw {
         let device = &ctx.device;
         let limits = ctx.limits();
         let compact = ctx.has(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT);
+        // With compaction the command buffer holds the pairs, then the pairs drawn whole.
         let max_commands = limits
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size)
             .min(MAX_ROUND_BYTES)
-            / COMMAND_SIZE;
+            / COMMAND_SIZE
+            / if compact { 2 } else { 1 };
         let rounds = plan_rounds(
             pool_pages,
             casters.clusters.len() as u32,
@@ -143,10 +178,17 @@ impl PageDraw {
         let commands = buffer(
             ctx,
             "vsm.commands",
-            capacity * COMMAND_SIZE,
+            capacity * COMMAND_SIZE * if compact { 2 } else { 1 },
             U::STORAGE | U::INDIRECT,
         );
-        let command_count = buffer(ctx, "vsm.command_count", 4, storage | U::INDIRECT);
+        let command_count = buffer(ctx, "vsm.command_count", 16, storage | U::INDIRECT);
+        let expanded = buffer(
+            ctx,
+            "vsm.expanded",
+            if compact { EXPAND_TRIANGLES as u64 * 12 } else { 4 },
+            U::STORAGE | U::INDEX,
+        );
+        let round_args = buffer(ctx, "vsm.round_args", 32, U::STORAGE | U::INDIRECT);
         // Round records (the same for every frame: rounds cover every pool page).
         let records: Vec<VsmRound> = rounds
             .iter()
@@ -156,7 +198,7 @@ impl PageDraw {
                     casters.vertices,
                     casters.cullable_triangles,
                     shadow.cull.bits() | if group_cull { 0 } else { FLAT_CULL },
-                    u32::from(compact),
+                    if compact { capacity as u32 } else { 0 },
                 ],
             })
             .collect();
@@ -187,6 +229,31 @@ impl PageDraw {
                 crate::gpu::pipelines::storage_rw_entry(8, cs),
                 crate::gpu::pipelines::storage_rw_entry(9, cs),
                 crate::gpu::pipelines::storage_rw_entry(10, cs),
+            ],
+        );
+        let expand_layout = crate::gpu::pipelines::bind_group_layout(
+            device,
+            "vsm.expand_layout",
+            &[
+                crate::gpu::pipelines::dynamic_uniform_entry(0, cs, ROUND_SIZE),
+                crate::gpu::pipelines::uniform_entry(1, cs),
+                crate::gpu::pipelines::storage_entry(2, cs),
+                crate::gpu::pipelines::storage_entry(4, cs),
+                crate::gpu::pipelines::storage_rw_entry(8, cs),
+                crate::gpu::pipelines::storage_rw_entry(9, cs),
+                crate::gpu::pipelines::storage_rw_entry(10, cs),
+                crate::gpu::pipelines::storage_entry(11, cs),
+                crate::gpu::pipelines::storage_entry(13, cs),
+                crate::gpu::pipelines::storage_rw_entry(15, cs),
+            ],
+        );
+        let args_layout = crate::gpu::pipelines::bind_group_layout(
+            device,
+            "vsm.round_args_layout",
+            &[
+                crate::gpu::pipelines::storage_rw_entry(10, cs),
+                crate::gpu::pipelines::storage_rw_entry(16, cs),
+                crate::gpu::pipelines::storage_entry(17, cs),
             ],
         );
         let vs = wgpu::ShaderStages::VERTEX;
@@ -221,6 +288,29 @@ impl PageDraw {
             &draw_module,
             "cs_cull",
         );
+        let expand_pl = pipeline_layout("vsm.expand_pipeline_layout", &expand_layout);
+        let expand = crate::gpu::pipelines::compute_pipeline(
+            device,
+            "vsm.expand",
+            &expand_pl,
+            &draw_module,
+            "cs_expand",
+        );
+        let args_pl = pipeline_layout("vsm.round_args_pipeline_layout", &args_layout);
+        let expand_args = crate::gpu::pipelines::compute_pipeline(
+            device,
+            "vsm.expand_args",
+            &args_pl,
+            &draw_module,
+            "cs_expand_args",
+        );
+        let draw_args = crate::gpu::pipelines::compute_pipeline(
+            device,
+            "vsm.draw_args",
+            &args_pl,
+            &draw_module,
+            "cs_draw_args",
+        );
         let draw_pl = pipeline_layout("vsm.draw_pipeline_layout", &draw_layout);
         let draw =
             crate::shadows::depth::depth_pipeline(device, &draw_pl, &draw_module, "vs_draw", &[]);
@@ -244,6 +334,14 @@ impl PageDraw {
             round_stride,
             commands,
             command_count,
+            capacity,
+            expanded,
+            round_args,
+            expand,
+            expand_args,
+            draw_args,
+            expand_layout,
+            args_layout,
             cull,
             draw,
             draw_masked,
@@ -252,7 +350,14 @@ impl PageDraw {
             draw_layout,
             clear_layout,
             groups: None,
+            layout: caster_layout(casters),
         }
+    }
+
+    /// Whether the rounds were planned for `casters`' layout (a caster moving over a light
+    /// changes which triangles may be back-face culled, and the rounds record that).
+    pub fn made_for(&self, casters: &CasterGeometry) -> bool {
+        self.layout == caster_layout(casters)
     }
 
     /// The rounds (every frame the same: they cover every pool page).
@@ -294,6 +399,31 @@ impl PageDraw {
                 whole_entry(10, pages.counters),
             ],
         });
+        let expand = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("vsm.expand_group"),
+            layout: &self.expand_layout,
+            entries: &[
+                round(0),
+                whole_entry(1, pages.uniforms),
+                whole_entry(2, pages.page_views),
+                whole_entry(4, pages.faces),
+                whole_entry(8, &self.commands),
+                whole_entry(9, &self.command_count),
+                whole_entry(10, pages.counters),
+                whole_entry(11, &casters.world),
+                whole_entry(13, &casters.corners),
+                whole_entry(15, &self.expanded),
+            ],
+        });
+        let args = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("vsm.round_args_group"),
+            layout: &self.args_layout,
+            entries: &[
+                whole_entry(10, pages.counters),
+                whole_entry(16, &self.round_args),
+                whole_entry(17, &self.command_count),
+            ],
+        });
         let draw = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("vsm.draw_group"),
             layout: &self.draw_layout,
@@ -313,7 +443,13 @@ impl PageDraw {
                 whole_entry(2, pages.page_views),
             ],
         });
-        self.groups = Some(Groups { cull, draw, clear });
+        self.groups = Some(Groups {
+            cull,
+            expand,
+            args,
+            draw,
+            clear,
+        });
     }
 
     /// Records the page clear and the render rounds into `pool` (`span` times them), with the
@@ -355,6 +491,16 @@ impl PageDraw {
                 pass.set_bind_group(0, &g.cull, &offset);
                 if self.compact {
                     pass.dispatch_workgroups_indirect(args, 3 * k as u64 * 4);
+                    // The pairs' triangles, then the round's draw arguments.
+                    pass.set_bind_group(0, &g.args, &[]);
+                    pass.set_pipeline(&self.expand_args);
+                    pass.dispatch_workgroups(1, 1, 1);
+                    pass.set_bind_group(0, &g.expand, &offset);
+                    pass.set_pipeline(&self.expand);
+                    pass.dispatch_workgroups_indirect(&self.round_args, 0);
+                    pass.set_bind_group(0, &g.args, &[]);
+                    pass.set_pipeline(&self.draw_args);
+                    pass.dispatch_workgroups(1, 1, 1);
                 } else {
                     // Every slot's command is written (zero for slots past the last page).
                     let groups = round_groups(r.first_cluster, r.clusters);
@@ -379,11 +525,14 @@ impl PageDraw {
             pass.set_index_buffer(corners, wgpu::IndexFormat::Uint32);
             let max = r.commands() as u32;
             if self.compact {
+                pass.set_index_buffer(self.expanded.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed_indirect(&self.round_args, 12);
+                pass.set_index_buffer(corners, wgpu::IndexFormat::Uint32);
                 pass.multi_draw_indexed_indirect_count(
                     &self.commands,
-                    0,
+                    self.capacity * COMMAND_SIZE,
                     &self.command_count,
-                    0,
+                    8,
                     max,
                 );
             } else {

@@ -311,9 +311,10 @@ impl VirtualShadows {
         }
         self.camera = camera_matrix(scene, (width, height));
         let mut replaced = self.write_plan(ctx)?;
-        let slots = page_slots(self.plan.fit.faces, self.pool_pages);
-        if slots > self.slots {
-            // More faces than the draw has page slots for (quarter pages): larger rounds.
+        let slots = page_slots(self.plan.fit.faces, self.pool_pages).max(self.slots);
+        if slots > self.slots || !self.draw.made_for(casters) {
+            // More faces than the draw has page slots for (quarter pages): larger rounds; or
+            // the caster layout changed.
             self.draw = PageDraw::new(ctx, slots, casters, self.shadow, self.options.group_cull);
             (self.page_views, self.args) = draw_buffers(ctx, slots, &self.draw);
             self.slots = slots;

@@ -24,7 +24,9 @@
 @group(0) @binding(6) var<storage, read> cluster_bounds: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read> instances: array<InstanceData>;
 @group(0) @binding(8) var<storage, read_write> commands: array<DrawCommand>;
-@group(0) @binding(9) var<storage, read_write> command_count: atomic<u32>;
+// [0] (cluster, page) pairs the cull found, [1] triangles kept by the expansion (those past
+// `expanded`'s capacity are drawn by commands of their own), [2] those commands, [3] unused.
+@group(0) @binding(9) var<storage, read_write> command_count: array<atomic<u32>, 4>;
 @group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
 // One thread per (group, page slot) of the round; the round's clusters are [lo, hi) and its
 // groups those from lo / VSM_CULL_GROUP on.
@@ -58,13 +60,6 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
     let eye = vsm_faces[min(bitcast<u32>(view.tile.w), arrayLength(&vsm_faces) - 1u)].eye;
     var draws = 0u;
     var triangles = 0u;
-    // In compaction, consecutive visible clusters (whose triangles are consecutive in the
-    // corner buffer) go out as one command: fewer, longer draws.
-    var run: DrawCommand;
-    run.index_count = 0u;
-    run.instance_count = 1u;
-    run.base_vertex = i32(slot * round.counts.x);
-    run.first_instance = 0u;
     for (var c = max(lo, g * VSM_CULL_GROUP); c < min(hi, g * VSM_CULL_GROUP + VSM_CULL_GROUP); c++) {
         let cl = clusters[c];
         var visible = group_visible;
@@ -84,16 +79,9 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
         cmd.base_vertex = i32(slot * round.counts.x);
         cmd.first_instance = 0u;
         if (compact) {
+            // A (cluster, page) pair for cs_expand.
             if (visible) {
-                if (run.index_count != 0u && run.first_index + run.index_count == cmd.first_index) {
-                    run.index_count += cmd.index_count;
-                } else {
-                    if (run.index_count != 0u) {
-                        commands[atomicAdd(&command_count, 1u)] = run;
-                    }
-                    run.first_index = cmd.first_index;
-                    run.index_count = cmd.index_count;
-                }
+                commands[atomicAdd(&command_count[0], 1u)] = cmd;
             }
         } else {
             commands[slot * round.round.w + (c - lo)] = cmd;
@@ -103,12 +91,11 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
             triangles = triangles + cl.triangles;
         }
     }
-    if (run.index_count != 0u) {
-        commands[atomicAdd(&command_count, 1u)] = run;
-    }
     if (draws != 0u) {
         atomicAdd(&counters[14], draws);
-        atomicAdd(&counters[15], triangles);
+        if (!compact) {
+            atomicAdd(&counters[15], triangles);
+        }
     }
 }
 
@@ -124,12 +111,103 @@ fn key_row(view_proj: mat4x4<f32>, ortho: f32) -> vec4<f32> {
 // no bound): its depths then exceed every depth the page's samples compare against, so it
 // can shadow none of them (the comparison is `receiver <= stored`).
 fn beyond_receivers(view: ShadowViewData, row: vec4<f32>, sphere: vec4<f32>) -> bool {
-    let bound = view.params.x;
-    if (bound <= 0.0) {
-        return false;
+    return key_beyond(view.params.x, dot(row, vec4<f32>(sphere.xyz, 1.0)) - sphere.w * length(row.xyz));
+}
+
+// Whether distance key `nearest` lies beyond receiver bound `bound` (0 = none).
+fn key_beyond(bound: f32, nearest: f32) -> bool {
+    return bound > 0.0 && nearest > bound + 1e-4 * abs(bound) + 1e-6;
+}
+
+// ---- triangle expansion (compute; with compaction) ----
+//
+// The cull's pairs become triangles: one workgroup per (cluster, page) pair, one thread per
+// triangle, each tested against the page as the cluster was (outside the page's sides, beyond
+// its farthest receiver, facing away from the light where that is exact) and the survivors'
+// corners written, tagged with the page's slot, to `expanded`, which one indexed draw per
+// round renders. Software drivers transform vertices on one thread; this keeps that thread
+// to the triangles that touch a page. A triangle past `expanded`'s capacity is drawn by a
+// command of its own from the corner buffer instead (the commands from `round.counts.w` on).
+
+@group(0) @binding(15) var<storage, read_write> expanded: array<u32>;
+
+// (Per-thread reservations: a workgroup barrier costs a software driver more than the
+// contended counter.)
+@compute @workgroup_size(VSM_EXPAND_GROUP, 1, 1)
+fn cs_expand(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t: u32) {
+    let k = wg.x + wg.y * 65535u;
+    if (k >= atomicLoad(&command_count[0])) {
+        return;
     }
-    let nearest = dot(row, vec4<f32>(sphere.xyz, 1.0)) - sphere.w * length(row.xyz);
-    return nearest > bound + 1e-4 * abs(bound) + 1e-6;
+    let cmd = commands[k];
+    if (3u * t >= cmd.index_count) {
+        return;
+    }
+    let slot = u32(cmd.base_vertex) / round.counts.x;
+    let view = page_views[min(round.round.x + slot, arrayLength(&page_views) - 1u)];
+    let at = cmd.first_index + 3u * t;
+    let i = vec3<u32>(corners[at], corners[at + 1u], corners[at + 2u]);
+    let p0 = world[i.x].xyz;
+    let p1 = world[i.y].xyz;
+    let p2 = world[i.z].xyz;
+    let a = view.view_proj * vec4<f32>(p0, 1.0);
+    let b = view.view_proj * vec4<f32>(p1, 1.0);
+    let c = view.view_proj * vec4<f32>(p2, 1.0);
+    let bits = round.counts.z;
+    if ((bits & CULL_FRUSTUM) != 0u) {
+        // The page's sides only: depth is left to the rasterizer.
+        let outside = (a.x < -a.w && b.x < -b.w && c.x < -c.w)
+            || (a.x > a.w && b.x > b.w && c.x > c.w)
+            || (a.y < -a.w && b.y < -b.w && c.y < -c.w)
+            || (a.y > a.w && b.y > b.w && c.y > c.w);
+        let nearest = select(min(a.w, min(b.w, c.w)), min(a.z, min(b.z, c.z)), view.params.w > 0.5);
+        if (outside || key_beyond(view.params.x, nearest)) {
+            return;
+        }
+    }
+    if ((bits & CULL_BACKFACE) != 0u && cmd.first_index / 3u + t < round.counts.y) {
+        let eye = vsm_faces[min(bitcast<u32>(view.tile.w), arrayLength(&vsm_faces) - 1u)].eye;
+        if (faces_away(p0, p1, p2, eye)) {
+            return;
+        }
+    }
+    let v = atomicAdd(&command_count[1], 1u);
+    if (v < VSM_EXPAND_CAPACITY) {
+        let base = u32(cmd.base_vertex);
+        expanded[3u * v] = base + i.x;
+        expanded[3u * v + 1u] = base + i.y;
+        expanded[3u * v + 2u] = base + i.z;
+    } else {
+        // Out of room: the triangle is drawn by a command of its own.
+        var one = cmd;
+        one.first_index = at;
+        one.index_count = 3u;
+        commands[round.counts.w + atomicAdd(&command_count[2], 1u)] = one;
+    }
+}
+
+// The expansion's dispatch (one workgroup per pair, rows of 65,535) and, after it, the
+// round's indexed draw of what it kept.
+@group(0) @binding(16) var<storage, read_write> round_args: array<u32, 8>;
+@group(0) @binding(17) var<storage, read> round_counts: array<u32, 4>;
+
+@compute @workgroup_size(1, 1, 1)
+fn cs_expand_args() {
+    let n = round_counts[0];
+    round_args[0] = min(n, 65535u);
+    round_args[1] = (n + 65534u) / 65535u;
+    round_args[2] = 1u;
+}
+
+@compute @workgroup_size(1, 1, 1)
+fn cs_draw_args() {
+    round_args[3] = 3u * min(round_counts[1], VSM_EXPAND_CAPACITY);
+    // Triangles drawn into pages (the stats): every one the expansion kept.
+    atomicAdd(&counters[15], round_counts[1]);
+    round_args[4] = 1u;
+    round_args[5] = 0u;
+    round_args[6] = 0u;
+    round_args[7] = 0u;
 }
 
 // ---- draw and clear (vertex) ----
