@@ -1054,8 +1054,9 @@ fn print_summary(s: &serde_json::Value) {
     match fills {
         // Pages are chosen, culled and drawn on the GPU: their counts are the pages line's.
         Some(manyshadows::Fills::Pages) => println!(
-            "shadow work  {} pages drawn ({} kept from the last frame): {} cluster draws, {} \
-             triangles drawn (clusters culled per page on the GPU, indirect multi-draws)",
+            "shadow work  {} pages drawn ({} kept from the last frame): {} (cluster, page) \
+             pairs past the cluster cull, {} triangles drawn (culled per page on the GPU: \
+             clusters, then triangles where the adapter counts draws)",
             s["virtual"]["drawn"], s["virtual"]["kept"], s["virtual"]["cluster_draws"],
             s["virtual"]["triangles"]
         ),
