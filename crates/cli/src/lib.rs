@@ -1057,7 +1057,9 @@ fn print_summary(s: &serde_json::Value) {
             "shadow work  {} pages drawn ({} kept from the last frame): {} (cluster, page) \
              pairs past the cluster cull, {} triangles drawn (culled per page on the GPU: \
              clusters, then triangles where the adapter counts draws)",
-            s["virtual"]["drawn"], s["virtual"]["kept"], s["virtual"]["cluster_draws"],
+            s["virtual"]["drawn"],
+            s["virtual"]["kept"],
+            s["virtual"]["cluster_draws"],
             s["virtual"]["triangles"]
         ),
         Some(manyshadows::Fills::Rays) => println!(

@@ -269,3 +269,63 @@ fn casters_beyond_a_pages_farthest_receiver_are_skipped_without_changing_a_pixel
         .count();
     assert_eq!(pixels, 0, "pixels that differ");
 }
+
+/// Where the adapter counts draws on the GPU, page drawing expands (cluster, page) pairs into
+/// the triangles that touch the page, in an index buffer of `expand_bytes`; when a round's
+/// triangles exceed it, the pairs past it are drawn whole. An index buffer of 1,000 triangles
+/// overflows in every round of the atrium and must give the same image and mask as the
+/// default 2 M. (Drawing nothing past the buffer: 62,630 mask words differ, seen failing.) On
+/// adapters without GPU-counted draws both draw whole clusters and agree trivially.
+#[test]
+fn an_overflowing_triangle_expansion_draws_the_same_shadows() {
+    let ctx = common::context();
+    let scene = builtin::build(
+        "atrium",
+        &BuiltinOptions {
+            lights: Some(40),
+            ..Default::default()
+        },
+    )
+    .expect("atrium");
+    let render = |expand_bytes: u64| {
+        let settings = RenderSettings::default()
+            .with_width(320)
+            .with_height(180)
+            .with_visibility(true)
+            .with_technique(Technique::VIRTUAL)
+            .with_virtual_maps(
+                manyshadows::VirtualOptions::default().with_expand_bytes(expand_bytes),
+            );
+        let mut r = Renderer::new(&ctx, &scene, settings).expect("renderer");
+        r.render().expect("frame")
+    };
+    let (small, full) = (render(12 * 1000), render(24 << 20));
+    let (s, f) = (
+        small.virtual_maps.expect("stats"),
+        full.virtual_maps.expect("stats"),
+    );
+    eprintln!(
+        "GPU-counted draws: {}; triangles kept: {} (small), {} (full)",
+        ctx.device
+            .features()
+            .contains(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT),
+        s.triangles,
+        f.triangles
+    );
+    assert!(f.triangles > 10_000, "{f:?}");
+    assert_eq!(s.drawn, f.drawn);
+    let words = |fr: &manyshadows::Frame| fr.visibility.as_ref().expect("mask").words.clone();
+    let (ws, wf) = (words(&small), words(&full));
+    assert_eq!(
+        ws.iter().zip(&wf).filter(|(x, y)| x != y).count(),
+        0,
+        "mask words that differ"
+    );
+    let pixels = small
+        .rgba
+        .chunks(4)
+        .zip(full.rgba.chunks(4))
+        .filter(|(x, y)| x != y)
+        .count();
+    assert_eq!(pixels, 0, "pixels that differ");
+}

@@ -28,14 +28,9 @@ const FLAT_CULL: u32 = 1 << 8;
 pub(crate) fn group_decl() -> String {
     format!(
         "const VSM_CULL_GROUP: u32 = {CULL_GROUP}u;\nconst VSM_FLAT_CULL: u32 = {FLAT_CULL}u;\n\
-         const VSM_EXPAND_GROUP: u32 = {CLUSTER_TRIANGLES}u;\n\
-         const VSM_EXPAND_CAPACITY: u32 = {EXPAND_TRIANGLES}u;"
+         const VSM_EXPAND_GROUP: u32 = {CLUSTER_TRIANGLES}u;"
     )
 }
-
-/// Triangles one round's expansion can hold (24 MiB of indices); the pairs past it are drawn
-/// whole.
-const EXPAND_TRIANGLES: u32 = 2 << 20;
 
 /// Cull threads' groups along x for a round's clusters `[first, first + count)`.
 fn round_groups(first: u32, count: u32) -> u32 {
@@ -140,6 +135,7 @@ impl PageDraw {
         casters: &CasterGeometry,
         shadow: ShadowOptions,
         group_cull: bool,
+        expand_bytes: u64,
     ) -> Self {
         let device = &ctx.device;
         let limits = ctx.limits();
@@ -185,10 +181,18 @@ impl PageDraw {
         let expanded = buffer(
             ctx,
             "vsm.expanded",
-            if compact { EXPAND_TRIANGLES as u64 * 12 } else { 4 },
+            if compact {
+                // Whole triangles (three u32 corners each).
+                let bytes = expand_bytes
+                    .min(limits.max_buffer_size)
+                    .min(limits.max_storage_buffer_binding_size);
+                (bytes / 12).max(1) * 12
+            } else {
+                4
+            },
             U::STORAGE | U::INDEX,
         );
-        let round_args = buffer(ctx, "vsm.round_args", 32, U::STORAGE | U::INDIRECT);
+        let round_args = buffer(ctx, "vsm.round_args", 36, U::STORAGE | U::INDIRECT);
         // Round records (the same for every frame: rounds cover every pool page).
         let records: Vec<VsmRound> = rounds
             .iter()
@@ -252,6 +256,7 @@ impl PageDraw {
             "vsm.round_args_layout",
             &[
                 crate::gpu::pipelines::storage_rw_entry(10, cs),
+                crate::gpu::pipelines::storage_rw_entry(15, cs),
                 crate::gpu::pipelines::storage_rw_entry(16, cs),
                 crate::gpu::pipelines::storage_entry(17, cs),
             ],
@@ -420,6 +425,7 @@ impl PageDraw {
             layout: &self.args_layout,
             entries: &[
                 whole_entry(10, pages.counters),
+                whole_entry(15, &self.expanded),
                 whole_entry(16, &self.round_args),
                 whole_entry(17, &self.command_count),
             ],
@@ -531,8 +537,8 @@ impl PageDraw {
                 pass.multi_draw_indexed_indirect_count(
                     &self.commands,
                     self.capacity * COMMAND_SIZE,
-                    &self.command_count,
-                    8,
+                    &self.round_args,
+                    32,
                     max,
                 );
             } else {

@@ -152,7 +152,14 @@ impl VirtualShadows {
             ..Default::default()
         });
         let slots = page_slots(plan.fit.faces, pool_pages);
-        let draw = PageDraw::new(ctx, slots, casters, shadow, options.group_cull);
+        let draw = PageDraw::new(
+            ctx,
+            slots,
+            casters,
+            shadow,
+            options.group_cull,
+            options.expand_bytes,
+        );
         use wgpu::BufferUsages as U;
         let storage = U::STORAGE | U::COPY_DST;
         let uniforms = buffer(ctx, "vsm.uniforms", 48, U::UNIFORM | U::COPY_DST);
@@ -315,7 +322,14 @@ impl VirtualShadows {
         if slots > self.slots || !self.draw.made_for(casters) {
             // More faces than the draw has page slots for (quarter pages): larger rounds; or
             // the caster layout changed.
-            self.draw = PageDraw::new(ctx, slots, casters, self.shadow, self.options.group_cull);
+            self.draw = PageDraw::new(
+                ctx,
+                slots,
+                casters,
+                self.shadow,
+                self.options.group_cull,
+                self.options.expand_bytes,
+            );
             (self.page_views, self.args) = draw_buffers(ctx, slots, &self.draw);
             self.slots = slots;
             replaced = true;

@@ -47,6 +47,11 @@ pub struct VirtualOptions {
     /// that keep no pages (without shadow caching): a kept page would need the casters a
     /// later frame's samples see. The same shadows either way; `false` for measuring.
     pub receiver_cull: bool,
+    /// Bytes of the index buffer one round of page drawing expands its triangles into, where
+    /// the adapter counts draws on the GPU (`MULTI_DRAW_INDIRECT_COUNT`): default 24 MiB (2 M
+    /// triangles), at most the device's buffer limits. When a round's triangles exceed it, the
+    /// (cluster, page) pairs past it are drawn whole: the same shadows, more work.
+    pub expand_bytes: u64,
 }
 
 impl Default for VirtualOptions {
@@ -59,6 +64,7 @@ impl Default for VirtualOptions {
             back_facing: false,
             group_cull: true,
             receiver_cull: true,
+            expand_bytes: 24 << 20,
         }
     }
 }
@@ -340,4 +346,5 @@ with_setters!(VirtualOptions {
     with_back_facing: back_facing: bool,
     with_group_cull: group_cull: bool,
     with_receiver_cull: receiver_cull: bool,
+    with_expand_bytes: expand_bytes: u64,
 });

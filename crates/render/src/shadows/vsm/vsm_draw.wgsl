@@ -24,8 +24,8 @@
 @group(0) @binding(6) var<storage, read> cluster_bounds: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read> instances: array<InstanceData>;
 @group(0) @binding(8) var<storage, read_write> commands: array<DrawCommand>;
-// [0] (cluster, page) pairs the cull found, [1] triangles kept by the expansion (those past
-// `expanded`'s capacity are drawn by commands of their own), [2] those commands, [3] unused.
+// [0] (cluster, page) pairs the cull found, [1] triangles kept by the expansion (past
+// `expanded`'s capacity their pairs are drawn whole), [2] and [3] unused.
 @group(0) @binding(9) var<storage, read_write> command_count: array<atomic<u32>, 4>;
 @group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
 // One thread per (group, page slot) of the round; the round's clusters are [lo, hi) and its
@@ -79,9 +79,14 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
         cmd.base_vertex = i32(slot * round.counts.x);
         cmd.first_instance = 0u;
         if (compact) {
-            // A (cluster, page) pair for cs_expand.
+            // A (cluster, page) pair for cs_expand, and its whole-cluster command, empty
+            // unless the expansion runs out of room for the pair's triangles.
             if (visible) {
-                commands[atomicAdd(&command_count[0], 1u)] = cmd;
+                let k = atomicAdd(&command_count[0], 1u);
+                commands[k] = cmd;
+                var empty = cmd;
+                empty.index_count = 0u;
+                commands[round.counts.w + k] = empty;
             }
         } else {
             commands[slot * round.round.w + (c - lo)] = cmd;
@@ -126,8 +131,8 @@ fn key_beyond(bound: f32, nearest: f32) -> bool {
 // its farthest receiver, facing away from the light where that is exact) and the survivors'
 // corners written, tagged with the page's slot, to `expanded`, which one indexed draw per
 // round renders. Software drivers transform vertices on one thread; this keeps that thread
-// to the triangles that touch a page. A triangle past `expanded`'s capacity is drawn by a
-// command of its own from the corner buffer instead (the commands from `round.counts.w` on).
+// to the triangles that touch a page. Where `expanded` runs out, the pairs of the triangles
+// past it are drawn whole from the corner buffer (the commands from `round.counts.w` on).
 
 @group(0) @binding(15) var<storage, read_write> expanded: array<u32>;
 
@@ -172,23 +177,22 @@ fn cs_expand(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
         }
     }
     let v = atomicAdd(&command_count[1], 1u);
-    if (v < VSM_EXPAND_CAPACITY) {
+    if (v < arrayLength(&expanded) / 3u) {
         let base = u32(cmd.base_vertex);
         expanded[3u * v] = base + i.x;
         expanded[3u * v + 1u] = base + i.y;
         expanded[3u * v + 2u] = base + i.z;
     } else {
-        // Out of room: the triangle is drawn by a command of its own.
-        var one = cmd;
-        one.first_index = at;
-        one.index_count = 3u;
-        commands[round.counts.w + atomicAdd(&command_count[2], 1u)] = one;
+        // Out of room: the pair is drawn whole (every overflowing thread of the pair writes
+        // the same command; triangles of it already expanded are drawn twice, to the same
+        // depth).
+        commands[round.counts.w + k] = cmd;
     }
 }
 
 // The expansion's dispatch (one workgroup per pair, rows of 65,535) and, after it, the
 // round's indexed draw of what it kept.
-@group(0) @binding(16) var<storage, read_write> round_args: array<u32, 8>;
+@group(0) @binding(16) var<storage, read_write> round_args: array<u32, 9>;
 @group(0) @binding(17) var<storage, read> round_counts: array<u32, 4>;
 
 @compute @workgroup_size(1, 1, 1)
@@ -201,13 +205,15 @@ fn cs_expand_args() {
 
 @compute @workgroup_size(1, 1, 1)
 fn cs_draw_args() {
-    round_args[3] = 3u * min(round_counts[1], VSM_EXPAND_CAPACITY);
+    round_args[3] = 3u * min(round_counts[1], arrayLength(&expanded) / 3u);
     // Triangles drawn into pages (the stats): every one the expansion kept.
     atomicAdd(&counters[15], round_counts[1]);
     round_args[4] = 1u;
     round_args[5] = 0u;
     round_args[6] = 0u;
     round_args[7] = 0u;
+    // The whole-cluster commands (one per pair) are drawn only if the expansion overflowed.
+    round_args[8] = select(0u, round_counts[0], round_counts[1] > arrayLength(&expanded) / 3u);
 }
 
 // ---- draw and clear (vertex) ----
