@@ -5,6 +5,8 @@
 // cs_bounds:    one thread per triangle cluster writes the cluster's bounding sphere.
 // cs_groups:    one thread per group of CLUSTER_GROUP consecutive clusters writes a sphere
 //               holding theirs, after the clusters' own (cluster_bounds[clusters + g]).
+// (cs_bounds also writes each cluster's axis-aligned box after the groups' spheres:
+// cluster_bounds[clusters + groups + 2c] its low corner, + 1 its high one.)
 //               (CLUSTER_GROUP is composed in from casters.rs.)
 
 struct TransformParams {
@@ -97,6 +99,11 @@ fn cs_bounds(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     // Grow by a relative epsilon so rounding never makes the sphere miss a vertex.
     cluster_bounds[c] = vec4<f32>(centre, sqrt(r2) * 1.0001 + 1e-6);
+    // The box, after the groups' spheres (grown alike).
+    let pad = 1e-5 * max(abs(lo), abs(hi)) + vec3<f32>(1e-6);
+    let at = tparams.counts.y + (tparams.counts.y + CLUSTER_GROUP - 1u) / CLUSTER_GROUP + 2u * c;
+    cluster_bounds[at] = vec4<f32>(lo - pad, 0.0);
+    cluster_bounds[at + 1u] = vec4<f32>(hi + pad, 0.0);
 }
 
 @compute @workgroup_size(64, 1, 1)

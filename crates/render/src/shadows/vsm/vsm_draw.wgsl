@@ -65,7 +65,8 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
         var visible = group_visible;
         if (visible) {
             let sphere = cluster_bounds[c];
-            if (frustum && (sphere_outside(view.view_proj, sphere) || beyond_receivers(view, row, sphere))) {
+            if (frustum && (sphere_outside(view.view_proj, sphere) || beyond_receivers(view, row, sphere)
+                || box_outside(view, row, c))) {
                 visible = false;
             } else if ((bits & CULL_BACKFACE) != 0u && cl.first_triangle < round.counts.y
                 && cluster_faces_away(cl, instances[cl.instance].normal, sphere, eye)) {
@@ -117,6 +118,32 @@ fn key_row(view_proj: mat4x4<f32>, ortho: f32) -> vec4<f32> {
 // can shadow none of them (the comparison is `receiver <= stored`).
 fn beyond_receivers(view: ShadowViewData, row: vec4<f32>, sphere: vec4<f32>) -> bool {
     return key_beyond(view.params.x, dot(row, vec4<f32>(sphere.xyz, 1.0)) - sphere.w * length(row.xyz));
+}
+
+// Whether cluster `c`'s box (casters.wgsl writes it after the groups' spheres) lies wholly
+// outside one side of the page, or beyond its farthest receiver: its eight corners in the
+// page's clip space. Each side is a half-space of homogeneous clip space, so corners outside
+// one put the whole box outside it, whatever the sign of w. Tighter than the sphere for flat
+// and long clusters (the seed's re-projected cluster boxes).
+fn box_outside(view: ShadowViewData, row: vec4<f32>, c: u32) -> bool {
+    let n = arrayLength(&clusters);
+    let at = n + (n + VSM_CULL_GROUP - 1u) / VSM_CULL_GROUP + 2u * c;
+    let lo = cluster_bounds[at].xyz;
+    let hi = cluster_bounds[at + 1u].xyz;
+    var out = vec4<u32>(0u);
+    var nearest = 3.0e38;
+    for (var k = 0u; k < 8u; k++) {
+        let p = vec3<f32>(
+            select(lo.x, hi.x, (k & 1u) != 0u),
+            select(lo.y, hi.y, (k & 2u) != 0u),
+            select(lo.z, hi.z, (k & 4u) != 0u),
+        );
+        let q = view.view_proj * vec4<f32>(p, 1.0);
+        // Outside x < -w, x > w, y < -w, y > w.
+        out += select(vec4<u32>(0u), vec4<u32>(1u), vec4<f32>(-q.x, q.x, -q.y, q.y) > vec4<f32>(q.w));
+        nearest = min(nearest, dot(row, vec4<f32>(p, 1.0)));
+    }
+    return any(out == vec4<u32>(8u)) || key_beyond(view.params.x, nearest);
 }
 
 // Whether distance key `nearest` lies beyond receiver bound `bound` (0 = none).
