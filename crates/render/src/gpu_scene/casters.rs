@@ -14,7 +14,8 @@
 //!   triangles that may be back-face culled come first ([`CasterGeometry::cullable_triangles`]),
 //!   so shaders need one comparison instead of a per-triangle flag;
 //! - *clusters*: runs of at most [`CLUSTER_TRIANGLES`] triangles of one instance, with an
-//!   object-space normal cone; their world bounding spheres are recomputed per frame.
+//!   object-space normal cone; their world bounding spheres and boxes are recomputed per
+//!   frame.
 //!
 //! Alpha-tested casters (materials with a coverage mask, [`manyshadows_scene::masks`]) come
 //! last, in their own class: their triangles after every opaque one
@@ -109,7 +110,9 @@ pub struct CasterGeometry {
     /// `array<Cluster>`.
     pub cluster_buffer: wgpu::Buffer,
     /// `array<vec4<f32>>` world bounding sphere per cluster, then one per group of
-    /// [`CLUSTER_GROUP`] clusters at `clusters.len() + g` (both written each frame).
+    /// [`CLUSTER_GROUP`] clusters at `clusters.len() + g`, then per cluster its axis-aligned
+    /// box as two corners (low, high) at `clusters.len() + groups + 2c` (all written each
+    /// frame).
     pub cluster_bounds: wgpu::Buffer,
     skinned: bool,
     options: CasterOptions,
