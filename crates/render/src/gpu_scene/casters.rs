@@ -558,8 +558,7 @@ impl CasterGeometry {
         let cluster_bounds = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("casters.cluster_bounds"),
             // Per cluster a sphere, per group a sphere, then per cluster a box (two corners).
-            size: (3 * all_clusters.len() as u64 + u64::from(groups_of(all_clusters.len())))
-                * 16,
+            size: (3 * all_clusters.len() as u64 + u64::from(groups_of(all_clusters.len()))) * 16,
             usage: wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
