@@ -28,14 +28,7 @@ fn misclassified_with(
     Option<manyshadows::VirtualStats>,
 ) {
     let ctx = common::context();
-    let scene = builtin::build(
-        "atrium",
-        &BuiltinOptions {
-            lights: Some(40),
-            ..Default::default()
-        },
-    )
-    .expect("atrium");
+    let scene = atrium_40();
     let settings = RenderSettings::default()
         .with_width(320)
         .with_height(180)
@@ -224,25 +217,13 @@ fn group_culling_draws_exactly_what_the_flat_cull_draws() {
 #[test]
 fn casters_beyond_a_pages_farthest_receiver_are_skipped_without_changing_a_pixel() {
     let ctx = common::context();
-    let scene = builtin::build(
-        "atrium",
-        &BuiltinOptions {
-            lights: Some(40),
-            ..Default::default()
-        },
-    )
-    .expect("atrium");
+    let scene = atrium_40();
     let render = |receiver_cull: bool| {
-        let settings = RenderSettings::default()
-            .with_width(320)
-            .with_height(180)
-            .with_visibility(true)
-            .with_technique(Technique::VIRTUAL)
-            .with_virtual_maps(
-                manyshadows::VirtualOptions::default().with_receiver_cull(receiver_cull),
-            );
-        let mut r = Renderer::new(&ctx, &scene, settings).expect("renderer");
-        r.render().expect("frame")
+        virtual_frame(
+            &ctx,
+            &scene,
+            manyshadows::VirtualOptions::default().with_receiver_cull(receiver_cull),
+        )
     };
     let (bounded, all) = (render(true), render(false));
     let (b, a) = (
@@ -257,17 +238,7 @@ fn casters_beyond_a_pages_farthest_receiver_are_skipped_without_changing_a_pixel
         b.triangles,
         a.triangles
     );
-    let words = |f: &manyshadows::Frame| f.visibility.as_ref().expect("mask").words.clone();
-    let (wb, wa) = (words(&bounded), words(&all));
-    let differing = wb.iter().zip(&wa).filter(|(x, y)| x != y).count();
-    assert_eq!(differing, 0, "mask words that differ");
-    let pixels = bounded
-        .rgba
-        .chunks(4)
-        .zip(all.rgba.chunks(4))
-        .filter(|(x, y)| x != y)
-        .count();
-    assert_eq!(pixels, 0, "pixels that differ");
+    assert_same_shadows(&bounded, &all, "virtual_receiver_cull", ["bounded", "all"]);
 }
 
 /// Where the adapter counts draws on the GPU, page drawing expands (cluster, page) pairs into
@@ -279,25 +250,13 @@ fn casters_beyond_a_pages_farthest_receiver_are_skipped_without_changing_a_pixel
 #[test]
 fn an_overflowing_triangle_expansion_draws_the_same_shadows() {
     let ctx = common::context();
-    let scene = builtin::build(
-        "atrium",
-        &BuiltinOptions {
-            lights: Some(40),
-            ..Default::default()
-        },
-    )
-    .expect("atrium");
+    let scene = atrium_40();
     let render = |expand_bytes: u64| {
-        let settings = RenderSettings::default()
-            .with_width(320)
-            .with_height(180)
-            .with_visibility(true)
-            .with_technique(Technique::VIRTUAL)
-            .with_virtual_maps(
-                manyshadows::VirtualOptions::default().with_expand_bytes(expand_bytes),
-            );
-        let mut r = Renderer::new(&ctx, &scene, settings).expect("renderer");
-        r.render().expect("frame")
+        virtual_frame(
+            &ctx,
+            &scene,
+            manyshadows::VirtualOptions::default().with_expand_bytes(expand_bytes),
+        )
     };
     let (small, full) = (render(12 * 1000), render(24 << 20));
     let (s, f) = (
@@ -314,18 +273,52 @@ fn an_overflowing_triangle_expansion_draws_the_same_shadows() {
     );
     assert!(f.triangles > 10_000, "{f:?}");
     assert_eq!(s.drawn, f.drawn);
-    let words = |fr: &manyshadows::Frame| fr.visibility.as_ref().expect("mask").words.clone();
-    let (ws, wf) = (words(&small), words(&full));
+    assert_same_shadows(&small, &full, "virtual_expand_overflow", ["small", "full"]);
+}
+
+/// The atrium with 40 lights of every type (two mask words per pixel).
+fn atrium_40() -> manyshadows::scene::Scene {
+    builtin::build(
+        "atrium",
+        &BuiltinOptions {
+            lights: Some(40),
+            ..Default::default()
+        },
+    )
+    .expect("atrium")
+}
+
+/// One virtual-map frame of `scene` at 320x180 with PCF 2x2 and the hard visibility mask.
+fn virtual_frame(
+    ctx: &manyshadows::GpuContext,
+    scene: &manyshadows::scene::Scene,
+    options: manyshadows::VirtualOptions,
+) -> manyshadows::Frame {
+    let settings = RenderSettings::default()
+        .with_width(320)
+        .with_height(180)
+        .with_visibility(true)
+        .with_technique(Technique::VIRTUAL)
+        .with_virtual_maps(options);
+    let mut r = Renderer::new(ctx, scene, settings).expect("renderer");
+    r.render().expect("frame")
+}
+
+/// Image and visibility mask equal bit for bit (differing images are written as artifacts).
+fn assert_same_shadows(
+    a: &manyshadows::Frame,
+    b: &manyshadows::Frame,
+    stem: &str,
+    tags: [&str; 2],
+) {
+    let words = |f: &manyshadows::Frame| f.visibility.as_ref().expect("mask").words.clone();
+    let (wa, wb) = (words(a), words(b));
+    assert_eq!(wa.len(), wb.len());
+    let differing = wa.iter().zip(&wb).filter(|(x, y)| x != y).count();
+    assert_eq!(differing, 0, "mask words that differ");
     assert_eq!(
-        ws.iter().zip(&wf).filter(|(x, y)| x != y).count(),
+        common::differing_pixels(a, b, stem, tags),
         0,
-        "mask words that differ"
+        "pixels that differ"
     );
-    let pixels = small
-        .rgba
-        .chunks(4)
-        .zip(full.rgba.chunks(4))
-        .filter(|(x, y)| x != y)
-        .count();
-    assert_eq!(pixels, 0, "pixels that differ");
 }

@@ -285,37 +285,16 @@ impl PageDraw {
             crate::gpu::pipelines::pipeline_layout(device, label, &[layout])
         };
         let draw_module = crate::gpu::shaders::module(device, "vsm_draw.shader", &shader());
+        let compute = |label: &str, pl: &wgpu::PipelineLayout, entry: &str| {
+            crate::gpu::pipelines::compute_pipeline(device, label, pl, &draw_module, entry)
+        };
         let cull_pl = pipeline_layout("vsm.cull_pipeline_layout", &cull_layout);
-        let cull = crate::gpu::pipelines::compute_pipeline(
-            device,
-            "vsm.cull",
-            &cull_pl,
-            &draw_module,
-            "cs_cull",
-        );
+        let cull = compute("vsm.cull", &cull_pl, "cs_cull");
         let expand_pl = pipeline_layout("vsm.expand_pipeline_layout", &expand_layout);
-        let expand = crate::gpu::pipelines::compute_pipeline(
-            device,
-            "vsm.expand",
-            &expand_pl,
-            &draw_module,
-            "cs_expand",
-        );
+        let expand = compute("vsm.expand", &expand_pl, "cs_expand");
         let args_pl = pipeline_layout("vsm.round_args_pipeline_layout", &args_layout);
-        let expand_args = crate::gpu::pipelines::compute_pipeline(
-            device,
-            "vsm.expand_args",
-            &args_pl,
-            &draw_module,
-            "cs_expand_args",
-        );
-        let draw_args = crate::gpu::pipelines::compute_pipeline(
-            device,
-            "vsm.draw_args",
-            &args_pl,
-            &draw_module,
-            "cs_draw_args",
-        );
+        let expand_args = compute("vsm.expand_args", &args_pl, "cs_expand_args");
+        let draw_args = compute("vsm.draw_args", &args_pl, "cs_draw_args");
         let draw_pl = pipeline_layout("vsm.draw_pipeline_layout", &draw_layout);
         let draw =
             crate::shadows::depth::depth_pipeline(device, &draw_pl, &draw_module, "vs_draw", &[]);

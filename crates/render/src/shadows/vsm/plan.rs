@@ -49,7 +49,8 @@ pub struct VirtualOptions {
     pub receiver_cull: bool,
     /// Bytes of the index buffer one round of page drawing expands its triangles into, where
     /// the adapter counts draws on the GPU (`MULTI_DRAW_INDIRECT_COUNT`): default 24 MiB (2 M
-    /// triangles), at most the device's buffer limits. When a round's triangles exceed it, the
+    /// triangles), at most the device's buffer limits and at least one triangle (smaller values, 0
+    /// included, are raised to it). When a round's triangles exceed it, the
     /// (cluster, page) pairs past it are drawn whole: the same shadows, more work.
     pub expand_bytes: u64,
 }
