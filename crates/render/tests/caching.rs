@@ -434,3 +434,98 @@ fn a_caster_moved_into_a_new_face_gets_its_pages_marked() {
         "{bits} visibility bits differ from a fresh renderer"
     );
 }
+
+/// Receiver bounds with caching: a kept page holds only the casters up to the farthest
+/// receiver it was drawn for, so it must be drawn again once its samples reach past that. A
+/// spot light looks down on a floor, a pedestal and a plate floating below the pedestal's top;
+/// every face is one page (`max_side` 128). First the camera sees, over a wall out of the
+/// light's reach (no sample of it asks for the page), only the pedestal's top: the page's
+/// farthest receiver is that top, and the plate, wholly beyond it, is not drawn. Then the
+/// wall goes: the floor under the plate is seen, and the page must be redrawn with the plate
+/// (a kept page leaves the plate's shadow off the floor). The cached frame must equal a fresh
+/// renderer's bit for bit.
+#[test]
+fn a_kept_page_is_redrawn_when_its_samples_reach_past_its_receiver_bound() {
+    use manyshadows::scene::{
+        primitives, Attenuation, Camera, Instance, Light, LightKind, Material, Scene,
+    };
+    use manyshadows::{RenderSettings, Renderer, VirtualOptions};
+    let ctx = common::context();
+    let wall_at = Mat4::from_translation(Vec3::new(0.0, 1.1, 10.0));
+    let scene = Scene {
+        textures: Vec::new(),
+        name: "pedestal, plate and wall".into(),
+        meshes: vec![
+            primitives::plane(16.0, 16.0, 4),
+            primitives::cuboid(Vec3::new(1.0, 3.0, 1.0)),
+            primitives::cuboid(Vec3::new(1.0, 0.1, 1.0)),
+            primitives::cuboid(Vec3::new(20.0, 4.2, 0.2)),
+        ],
+        materials: vec![Material::default()],
+        instances: vec![
+            Instance::caster(0, 0, Mat4::IDENTITY),
+            // Pedestal: top at y = 3 (1.5 m of the light's axis nearer than the plate).
+            Instance::caster(1, 0, Mat4::from_translation(Vec3::new(-1.0, 1.5, 0.0))),
+            // Plate: y from 1.0 to 1.1, beside the pedestal.
+            Instance::caster(2, 0, Mat4::from_translation(Vec3::new(1.5, 1.05, 0.0))),
+            // Wall between the camera and the floor, beyond the light's range: y up to 3.2.
+            Instance {
+                casts_shadows: false,
+                ..Instance::caster(3, 0, wall_at)
+            },
+        ],
+        lights: vec![Light {
+            kind: LightKind::Spot {
+                position: Vec3::new(0.0, 6.0, 0.0),
+                direction: Vec3::NEG_Y,
+                cutoff_deg: 40.0,
+                range: 9.0,
+            },
+            ambient: Vec3::ZERO,
+            diffuse: Vec3::ONE,
+            specular: Vec3::ZERO,
+            attenuation: Attenuation::for_range(9.0),
+            casts_shadows: true,
+            shadow_resolution: 128,
+        }],
+        camera: Camera::look_at(Vec3::new(0.0, 3.5, 12.0), Vec3::new(0.0, 2.5, 0.0)),
+    };
+    let settings = |cache| {
+        RenderSettings::default()
+            .with_width(256)
+            .with_height(144)
+            .with_technique(Technique::VIRTUAL)
+            .with_virtual_maps(VirtualOptions::default().with_max_side(128))
+            .with_cache_shadows(cache)
+            .with_visibility(true)
+    };
+    let mut r = Renderer::new(&ctx, &scene, settings(true)).expect("renderer");
+    let first = r.render().expect("frame 1").virtual_maps.unwrap();
+    // The wall drops out of sight (it casts no shadow: no face notes a move).
+    r.set_instance_transform(
+        3,
+        Mat4::from_translation(Vec3::new(0.0, -50.0, 0.0)) * wall_at,
+    )
+    .unwrap();
+    let frame = r.render().expect("frame 2");
+    let second = frame.virtual_maps.unwrap();
+    let fresh = Renderer::new(&ctx, r.scene(), settings(false))
+        .expect("fresh")
+        .render()
+        .expect("fresh frame");
+    eprintln!("behind the wall: {first:?}\nwithout it: {second:?}");
+    let (_, _, bits) = differing(&frame, &fresh);
+    assert_eq!(
+        bits, 0,
+        "{bits} visibility bits differ from a fresh renderer"
+    );
+    assert_eq!(first.resident, 1, "one page per face: {first:?}");
+    // The plate (and the floor) lay beyond the pedestal's top in the first frame.
+    assert!(
+        first.triangles < second.triangles,
+        "the plate must be culled behind the wall and drawn without it: {} then {} triangles",
+        first.triangles,
+        second.triangles
+    );
+    assert_eq!((second.kept, second.drawn), (0, 1), "{second:?}");
+}

@@ -239,6 +239,9 @@ pub struct VsmUniforms {
     /// Texels per screen pixel wanted; the first pixel (x, y) the marking pass visits (a
     /// rectangle of the screen when only part of it changed); unused.
     pub lod: [f32; 4],
+    /// Where last frame's page table keeps its pages' receiver bounds (its entry count);
+    /// unused.
+    pub prev: [u32; 4],
 }
 
 /// One cull + draw round of the page rendering (`VsmRound`).
@@ -350,7 +353,7 @@ mod tests {
         same_layout!(ShadowViewData, view_proj, tile, params);
         same_layout!(ClusterUniforms, grid, words, depth, proj, counts);
         same_layout!(VirtualFace, view_proj, eye, params, table, dirty);
-        same_layout!(VsmUniforms, pool, counts, lod);
+        same_layout!(VsmUniforms, pool, counts, lod, prev);
         same_layout!(VsmRound, round, counts);
         assert_eq!(VIEW_UNIFORM_STRIDE, 256);
     }

@@ -91,10 +91,6 @@ pub struct VirtualShadows {
     marked_gen: u64,
     /// Camera world → clip, for the screen rectangle of moved casters.
     camera: Mat4,
-    /// Whether the last recorded frame bounded its pages' casters by their farthest
-    /// receivers (only when it kept no pages and will let none be kept: a page drawn for one
-    /// frame's samples may miss casters a later frame's samples need).
-    receiver_bounds: bool,
     args: wgpu::Buffer,
     mark: wgpu::ComputePipeline,
     carry: wgpu::ComputePipeline,
@@ -162,7 +158,7 @@ impl VirtualShadows {
         );
         use wgpu::BufferUsages as U;
         let storage = U::STORAGE | U::COPY_DST;
-        let uniforms = buffer(ctx, "vsm.uniforms", 48, U::UNIFORM | U::COPY_DST);
+        let uniforms = buffer(ctx, "vsm.uniforms", 64, U::UNIFORM | U::COPY_DST);
         let counters = buffer(
             ctx,
             "vsm.counters",
@@ -260,7 +256,6 @@ impl VirtualShadows {
             key_gen: 1,
             marked_gen: 0,
             camera: camera_matrix(scene, (width, height)),
-            receiver_bounds: false,
             args,
             mark,
             carry,
@@ -390,9 +385,11 @@ impl VirtualShadows {
                 self.plan.faces.len() as u32,
                 self.plan.fit.table_entries,
                 u32::from(self.options.back_facing),
-                u32::from(self.receiver_bounds),
+                u32::from(self.options.receiver_cull),
             ],
             lod: [self.options.lod, 0.0, 0.0, 0.0],
+            // `record` writes it.
+            prev: [0; 4],
         };
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&data));
@@ -488,17 +485,9 @@ impl VirtualShadows {
             return;
         }
         // Which faces may keep last frame's pages: `table.w` = their first entry then + 1, and
-        // where in them casters moved (`dirty`): only the kept pages there are drawn anew.
-        // Pages drawn for their receivers only are never kept; without keeping, casters
-        // beyond a page's farthest receiver are culled.
-        let bounds = !keep && self.options.receiver_cull;
-        let keep = keep && !casters.skinned() && !self.receiver_bounds;
-        if bounds != self.receiver_bounds {
-            self.receiver_bounds = bounds;
-            // `VsmUniforms::counts.w`.
-            ctx.queue
-                .write_buffer(&self.uniforms, 28, bytemuck::bytes_of(&u32::from(bounds)));
-        }
+        // where in them casters moved (`dirty`): only the kept pages there are drawn anew (and
+        // those whose samples now reach past the receiver bound they were drawn with).
+        let keep = keep && !casters.skinned();
         let mut faces = self.plan.faces.clone();
         for (face, view) in faces.iter_mut().zip(&self.plan.views) {
             face.table[3] = 0;
@@ -561,9 +550,12 @@ impl VirtualShadows {
             Marking::Carry(Some(r)) => [r[0] as f32, r[1] as f32],
             _ => [0.0, 0.0],
         };
-        // `VsmUniforms::lod.yz`: the marking pass's first pixel.
+        // `VsmUniforms::lod.yz`: the marking pass's first pixel; `prev.x`: where last frame's
+        // table (copied by `record_passes`) keeps its receiver bounds.
         ctx.queue
             .write_buffer(&self.uniforms, 36, bytemuck::cast_slice(&origin));
+        ctx.queue
+            .write_buffer(&self.uniforms, 48, bytemuck::bytes_of(&self.prev_entries));
         self.moves.clear();
         self.record_passes(encoder, casters, timer, pages_span, span, marking);
         self.prev_entries = self.plan.fit.table_entries;
@@ -585,13 +577,13 @@ impl VirtualShadows {
         let (w, h) = self.viewport;
         encoder.push_debug_group("virtual shadow maps");
         if self.prev_entries > 0 {
-            // Last frame's table, for the pages this frame keeps.
+            // Last frame's table and its pages' receiver bounds, for the pages this frame keeps.
             encoder.copy_buffer_to_buffer(
                 &self.table,
                 0,
                 &self.prev_table,
                 0,
-                self.prev_entries as u64 * 4,
+                self.prev_entries as u64 * 8,
             );
         }
         encoder.clear_buffer(&self.table, 0, None);

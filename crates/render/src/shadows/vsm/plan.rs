@@ -43,9 +43,10 @@ pub struct VirtualOptions {
     pub group_cull: bool,
     /// Cull caster clusters beyond a page's farthest receiver: the marking pass keeps, per
     /// asked page, the largest depth its samples compare against, and a cluster whose
-    /// bounding sphere lies wholly beyond it cannot shadow any of them. Applies only to frames
-    /// that keep no pages (without shadow caching): a kept page would need the casters a
-    /// later frame's samples see. The same shadows either way; `false` for measuring.
+    /// bounding sphere lies wholly beyond it cannot shadow any of them. With shadow caching a
+    /// page is kept only while its samples stay within the bound it was drawn with (a page
+    /// whose farthest receiver moved past it is drawn again). The same shadows either way;
+    /// `false` for measuring.
     pub receiver_cull: bool,
     /// Bytes of the index buffer one round of page drawing expands its triangles into, where
     /// the adapter counts draws on the GPU (`MULTI_DRAW_INDIRECT_COUNT`): default 24 MiB (2 M

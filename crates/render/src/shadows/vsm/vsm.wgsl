@@ -20,9 +20,17 @@
 //    (quarter pages: the face's level 0 at 64²), as few as let every face fit; only past four
 //    faces per pool page do faces go without shadows, counted unshadowed.
 // 3. cs_retain, one thread per entry: an admitted page whose face is unchanged since the last
-//    frame (the CPU sets `table.w`), that was resident then and that does not overlap where a
-//    caster moved in the face (`dirty`, from the CPU) keeps its pool page and its contents
-//    (caching); the other admitted pages are tagged new.
+//    frame (the CPU sets `table.w`), that was resident then, that does not overlap where a
+//    caster moved in the face (`dirty`, from the CPU) and whose casters were drawn up to at
+//    least this frame's farthest receiver of the page (below) keeps its pool page and its
+//    contents (caching); the other admitted pages are tagged new.
+//
+// Receiver bounds: the marking keeps, per asked page, the largest depth key its samples
+// compare against (after the table's entries: `vsm_table[entries + e]`). A page drawn with a
+// bound holds every caster up to it, so it serves any sample nearer than that bound: the
+// allocation writes the bound each resident page was drawn with over its key (UNBOUNDED when
+// its casters were not culled by one), the next frame receives it with the table, and a page
+// is kept only while its samples stay within it.
 //    cs_free, one thread: the pool pages not kept, in order.
 //    cs_count_new / cs_scan_new / cs_alloc_new: new pages get free pool pages by their rank
 //    in page-table order (block bit counts and a prefix sum), so the frame never depends on
@@ -81,6 +89,14 @@ const VSM_NEEDED_AT: u32 = 0x80000000u;
 const TAG_ASKED: u32 = 0x100u;
 // An admitted entry without a kept page after cs_retain: this plus its level.
 const VSM_NEW_AT: u32 = 0xc0000000u;
+// A resident page's key when its casters were drawn without a receiver bound: the largest
+// finite f32, above every key (and, as a draw's bound, culling nothing).
+const UNBOUNDED: u32 = 0x7f7fffffu;
+
+// Where last frame's table (`prev_table`) keeps its keys: after its own entries.
+fn prev_keys_at() -> u32 {
+    return vsm.prev.x;
+}
 
 fn mark_light(i: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
     let light = lights[i];
@@ -194,6 +210,11 @@ fn cs_carry(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     }
     if (atomicOr(&vsm_table[e], MARK_ASKED) != VSM_EMPTY) {
         return;
+    }
+    // The samples are last frame's (cs_mark adds those under the moved casters): so is their
+    // farthest receiver, or the bound the page was drawn with, which covers it.
+    if (vsm.counts.w != 0u) {
+        atomicMax(&vsm_table[vsm.counts.y + e], prev_table[prev_keys_at() + face.table.w - 1u + local]);
     }
     var level = level_of(local);
     let n = 1u << level;
@@ -357,16 +378,46 @@ fn cs_retain(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     }
     let face = vsm_faces[face_of(e)];
     if (face.table.w != 0u && !page_moved(face, e - face.table.x, level)) {
-        let before = prev_table[face.table.w - 1u + (e - face.table.x)];
-        if (before >= VSM_FIRST_PAGE && before < VSM_FIRST_PAGE + VSM_QUARTER) {
-            // Resident last frame, in an unchanged face: keep the page and its depth.
+        let at = face.table.w - 1u + (e - face.table.x);
+        let before = prev_table[at];
+        let drawn = prev_table[prev_keys_at() + at];
+        if (before >= VSM_FIRST_PAGE && before < VSM_FIRST_PAGE + VSM_QUARTER
+            && needed_bound(e, level, admitted) <= drawn) {
+            // Resident last frame, in an unchanged face, drawn far enough: keep the page and
+            // its depth (and the bound it was drawn with).
             atomicStore(&vsm_table[e], before);
+            atomicStore(&vsm_table[vsm.counts.y + e], drawn);
             scratch[kept_at() + before - VSM_FIRST_PAGE] = 1u;
             atomicAdd(&counters[COUNT_KEPT], 1u);
             return;
         }
     }
     atomicStore(&vsm_table[e], VSM_NEW_AT + level);
+}
+
+// Asked pages finer than the admitted level (denied: their samples read level `admitted`).
+fn asked_finer_than(admitted: u32) -> u32 {
+    var finer = 0u;
+    for (var k = admitted + 1u; k < VSM_LEVELS; k = k + 1u) {
+        finer = finer + atomicLoad(&counters[COUNT_ASKED + k]);
+    }
+    return finer;
+}
+
+// The receiver bound admitted entry `e` (of `level`) is drawn with, as key bits: its farthest
+// receiver's key when every sample that reads the page marked it, UNBOUNDED when not (at the
+// admitted level while finer asked pages are denied, their samples read it too; in the
+// quarter-page regime; without receiver bounds; for an entry no sample asked for: an
+// ancestor at the admitted level, read only by denied finer pages' samples).
+fn needed_bound(e: u32, level: u32, admitted: u32) -> u32 {
+    if (vsm.counts.w == 0u || atomicLoad(&counters[0]) > vsm.pool.w) {
+        return UNBOUNDED;
+    }
+    if (level == admitted && asked_finer_than(admitted) != 0u) {
+        return UNBOUNDED;
+    }
+    let key = atomicLoad(&vsm_table[vsm.counts.y + e]);
+    return select(key, UNBOUNDED, key == 0u);
 }
 
 @compute @workgroup_size(1, 1, 1)
@@ -501,19 +552,11 @@ fn cs_alloc_new(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_
     view.view_proj = crop * face.view_proj;
     let origin = vec2<f32>(f32(page % vsm.pool.y), f32(page / vsm.pool.y)) * side + corner;
     view.tile = vec4<f32>(origin, size, bitcast<f32>(fi));
-    // params.x: the page's farthest receiver key when every sample reading the page marked
-    // it (0 = none): not for quarter pages, nor at the admitted level while finer pages are
-    // denied (their samples read it too); above-only pages have none (no sample asked them).
-    var bound = 0.0;
-    let admitted = admitted_level();
-    var finer = 0u;
-    for (var k = admitted + 1u; k < VSM_LEVELS; k = k + 1u) {
-        finer = finer + atomicLoad(&counters[COUNT_ASKED + k]);
-    }
-    if (vsm.counts.w != 0u && atomicLoad(&counters[0]) <= vsm.pool.w && (level < admitted || finer == 0u)) {
-        bound = bitcast<f32>(atomicLoad(&vsm_table[vsm.counts.y + e]));
-    }
-    view.params = vec4<f32>(bound, face.params.y, face.params.z * f32(1u << (face.table.y - level)) * texel_scale, face.params.w);
+    // params.x: the receiver bound the page's casters are culled by (`needed_bound`; the
+    // largest finite f32 culls nothing), kept with the page for the next frame's cs_retain.
+    let bound = needed_bound(e, level, admitted_level());
+    atomicStore(&vsm_table[vsm.counts.y + e], bound);
+    view.params = vec4<f32>(bitcast<f32>(bound), face.params.y, face.params.z * f32(1u << (face.table.y - level)) * texel_scale, face.params.w);
     page_views[rank] = view;
 }
 
