@@ -109,10 +109,12 @@ pub fn irregular(args: &IrregularArgs) -> Result<()> {
             let mut contenders = Vec::new();
             for (name, (technique, res)) in &methods {
                 let scene = seeded_scene(&args.scene, n, mix, *res)?;
+                // Every repeat draws its maps anew (the scene does not change).
                 let settings = RenderSettings::default()
                     .with_width(*w)
                     .with_height(*h_px)
-                    .with_technique(*technique);
+                    .with_technique(*technique)
+                    .with_cache_shadows(false);
                 contenders.push(Contender {
                     label: name.clone(),
                     subject: FrameSubject::new(Renderer::new(&h.ctx, &scene, settings)?),

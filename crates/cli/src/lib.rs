@@ -236,13 +236,17 @@ pub(crate) struct RenderArgs {
     /// is written.
     #[arg(long, default_value_t = 1)]
     frames: u32,
-    /// Keep the atlas tiles of views that saw no change since the last frame (seed 004's
-    /// caching; with --technique virtual, the pages of unchanged faces); with --frames, shows
-    /// how many views (pages) each frame redraws.
-    #[arg(long)]
+    /// Draw every shadow map anew each frame. By default the atlas tiles of views that saw no
+    /// change since the last frame are kept (seed 004's caching; with --technique virtual,
+    /// the pages of unchanged faces away from moved casters); with --frames, each frame's line
+    /// shows how many views (pages) it redrew.
+    #[arg(long, conflicts_with = "shadow_budget")]
+    no_cache: bool,
+    /// Keep what did not change between frames: the default (kept for older command lines).
+    #[arg(long, hide = true, conflicts_with = "no_cache")]
     cache: bool,
 
-    /// At most N shadow views drawn per frame (atlas techniques; implies --cache): the views
+    /// At most N shadow views drawn per frame (atlas techniques; needs the caching): the views
     /// that changed wait their turn, new tiles and larger (nearer, more important) views
     /// first; a waiting view is served from its older depth where its tile holds it (counted
     /// stale, with the age of the oldest) and unshadowed until drawn where it holds nothing
@@ -667,7 +671,7 @@ pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettin
         .with_shadow(ShadowOptions::default().with_cull(args.cull).with_casters(
             manyshadows::CasterOptions::default().with_ignore_masks(!args.shadow_alpha),
         ))
-        .with_cache_shadows(args.cache)
+        .with_cache_shadows(!args.no_cache)
         .with_shadow_budget(args.shadow_budget)
         .with_point_shadows(args.point_shadows)
         .with_pcf(args.pcf)

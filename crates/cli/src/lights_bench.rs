@@ -116,11 +116,13 @@ pub fn lights(args: &LightsArgs) -> Result<()> {
                 let contenders = loops(n)
                     .iter()
                     .map(|&(label, light_loop)| {
+                        // Every repeat draws its maps anew (the scene does not change).
                         let settings = RenderSettings::default()
                             .with_width(*w)
                             .with_height(*h_px)
                             .with_technique(args.technique)
-                            .with_light_loop(light_loop);
+                            .with_light_loop(light_loop)
+                            .with_cache_shadows(false);
                         Ok(Contender {
                             label: label.into(),
                             subject: FrameSubject::new(Renderer::new(&h.ctx, &scene, settings)?),

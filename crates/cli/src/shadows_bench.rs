@@ -116,9 +116,11 @@ pub fn shadows(args: &ShadowsArgs) -> Result<()> {
         let mut contenders = Vec::new();
         let mut setup = Vec::new();
         for (label, technique, k) in &methods {
+            // Every repeat draws its maps anew (the moving caster aside, nothing changes).
             let settings = RenderSettings::new(args.width, args.height)
                 .with_technique(*technique)
-                .with_rays(RayOptions::default().with_light_samples(*k));
+                .with_rays(RayOptions::default().with_light_samples(*k))
+                .with_cache_shadows(false);
             let t = std::time::Instant::now();
             let renderer = Renderer::new(&h.ctx, &scene, settings)?;
             h.ctx.wait_idle()?;

@@ -404,3 +404,48 @@ fn a_shadow_budget_reports_each_frames_waiting_views() {
         "{err}"
     );
 }
+
+/// Caching is the default: with `--frames`, a frame after the first redraws only the views
+/// that see the moving caster; `--no-cache` redraws every view every frame, and refuses a
+/// shadow budget (which needs the kept tiles).
+#[test]
+fn frames_keep_unchanged_views_unless_no_cache() {
+    let dir = tmp("no-cache");
+    let out = dir.join("f.png");
+    let frames = |extra: &[&str]| -> Vec<(u32, u32)> {
+        let mut a = vec![
+            "render", "--scene", "cubes", "--width", "64", "--height", "36", "--frames", "3",
+        ];
+        a.extend(extra);
+        a.extend(["--out", out.to_str().unwrap()]);
+        let o = run(&a);
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        assert!(o.status.success(), "{err}");
+        // "frame   2:    7 of 10 shadow views redrawn, ..."
+        err.lines()
+            .filter_map(|l| l.strip_prefix("frame "))
+            .map(|l| {
+                let w: Vec<&str> = l.split_whitespace().collect();
+                (w[1].parse().expect("drawn"), w[3].parse().expect("views"))
+            })
+            .collect()
+    };
+    let kept = frames(&[]);
+    let anew = frames(&["--no-cache"]);
+    eprintln!("default {kept:?}, --no-cache {anew:?}");
+    assert_eq!((kept.len(), anew.len()), (3, 3));
+    assert_eq!(kept[0].0, kept[0].1, "the first frame draws every view");
+    assert!(kept[1..].iter().all(|&(k, v)| k < v), "{kept:?}");
+    assert!(anew.iter().all(|&(k, v)| k == v && v > 0), "{anew:?}");
+    let refused = run(&[
+        "render",
+        "--scene",
+        "cubes",
+        "--no-cache",
+        "--shadow-budget",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_clean_failure(&refused, 2, "cannot be used with");
+}

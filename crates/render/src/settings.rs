@@ -213,7 +213,11 @@ pub struct RenderSettings {
     pub technique: Technique,
     /// Culling and caster options of the technique.
     pub shadow: ShadowOptions,
-    /// Keep the tiles of unchanged views between frames (see the shadow generator).
+    /// Keep what did not change between frames (default on): the atlas tiles of views that
+    /// saw no change, the virtual pages of unchanged faces away from moved casters. Changes
+    /// reach the renderer only through its setters, so nothing is kept that a change
+    /// touched; the first frame is the same either way. Off draws every map anew each frame
+    /// (what a benchmark of a whole frame's shadow work wants).
     pub cache_shadows: bool,
     /// At most this many shadow views drawn per frame (atlas techniques; implies
     /// [`Self::cache_shadows`]): the others wait, served from their older depth where their
@@ -252,7 +256,7 @@ impl Default for RenderSettings {
             height: 720,
             technique: Technique::default(),
             shadow: ShadowOptions::default(),
-            cache_shadows: false,
+            cache_shadows: true,
             shadow_budget: None,
             point_shadows: Default::default(),
             pcf: Pcf::default(),

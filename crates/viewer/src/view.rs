@@ -48,17 +48,18 @@ pub struct ViewArgs {
     /// Filtering to start with: off, 2x2 or 3x3.
     #[arg(long, default_value = "2x2", value_parser = manyshadows_cli::parse_pcf)]
     pcf: Pcf,
-    /// Keep the shadow maps (pages) of views that saw no change between frames.
+    /// Start with every shadow map drawn anew each frame (the panel's "keep unchanged maps"
+    /// box unticked); by default the maps (pages) of views that saw no change are kept.
     #[arg(long)]
-    cache: bool,
-    /// Draw at most N shadow views per frame (atlas techniques; implies --cache): the rest
+    no_cache: bool,
+    /// Draw at most N shadow views per frame (atlas techniques; with the caching): the rest
     /// wait their turn, served from their older depth or unshadowed until drawn (the panel
     /// counts them).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     shadow_budget: Option<u32>,
     /// Move the smallest caster in a circle and sway the first spot or point light (of two
-    /// or more): with --cache, only the shadow maps that see the caster or belong to that
-    /// light are redrawn (the panel counts them).
+    /// or more): only the shadow maps that see the caster or belong to that light are
+    /// redrawn (unless --no-cache; the panel counts them).
     #[arg(long)]
     animate: bool,
     /// Camera to start from, `PX,PY,PZ,TX,TY,TZ` (default: the scene's camera).
@@ -309,7 +310,7 @@ impl App {
             technique: self.args.technique,
             point_shadows: self.args.point_shadows,
             pcf: self.args.pcf,
-            cache: self.args.cache,
+            cache: !self.args.no_cache || self.args.shadow_budget.is_some(),
             budget: self.args.shadow_budget,
             visibility: self.args.show_visibility.is_some(),
         };

@@ -340,9 +340,10 @@ fn the_panel_draws_over_the_frame() {
     );
 }
 
-/// `--animate --cache`: after the first frame only the maps that see the moving caster or
-/// belong to the swaying light are redrawn, so every later frame draws some views but not all;
-/// without `--animate` a still scene redraws none.
+/// Caching is the default: with `--animate`, after the first frame only the maps that see the
+/// moving caster or belong to the swaying light are redrawn, so every later frame draws some
+/// views but not all; without `--animate` a still scene redraws none; with `--no-cache` every
+/// frame draws every view.
 #[test]
 #[ignore = "needs Xvfb and xwd: run `cargo xtask test`, which installs them"]
 fn animation_with_caching_redraws_only_what_moved() {
@@ -350,7 +351,7 @@ fn animation_with_caching_redraws_only_what_moved() {
     let drawn = |extra: &[&str]| -> Vec<(u64, u64)> {
         let out = Command::new(env!("CARGO_BIN_EXE_manyshadows-view"))
             .args(["--scene", "cubes", "--width", "160", "--height", "120"])
-            .args(["--cache", "--hide-panel", "--exit-after", "5"])
+            .args(["--hide-panel", "--exit-after", "5"])
             .args(extra)
             .env("DISPLAY", &display)
             .output()
@@ -378,6 +379,12 @@ fn animation_with_caching_redraws_only_what_moved() {
     assert!(
         still[1..].iter().all(|&(k, _)| k == 0),
         "a still scene redrew views: {still:?}"
+    );
+    let anew = drawn(&["--no-cache"]);
+    assert_eq!(anew.len(), 5, "{anew:?}");
+    assert!(
+        anew.iter().all(|&(k, v)| k == v),
+        "--no-cache kept views: {anew:?}"
     );
 }
 
