@@ -435,26 +435,23 @@ fn a_caster_moved_into_a_new_face_gets_its_pages_marked() {
     );
 }
 
-/// Receiver bounds with caching: a kept page holds only the casters up to the farthest
-/// receiver it was drawn for, so it must be drawn again once its samples reach past that. A
-/// spot light looks down on a floor, a pedestal and a plate floating below the pedestal's top;
-/// every face is one page (`max_side` 128). First the camera sees, over a wall out of the
-/// light's reach (no sample of it asks for the page), only the pedestal's top: the page's
-/// farthest receiver is that top, and the plate, wholly beyond it, is not drawn. Then the
-/// wall goes: the floor under the plate is seen, and the page must be redrawn with the plate
-/// (a kept page leaves the plate's shadow off the floor). The cached frame must equal a fresh
-/// renderer's bit for bit.
-#[test]
-fn a_kept_page_is_redrawn_when_its_samples_reach_past_its_receiver_bound() {
+/// A spot light 6 m above a floor looking straight down (40° cone, reaching 5 m around its
+/// foot), one page per face (`max_side` 128): a pedestal 1 m wide and 3 m tall at x = -1, a
+/// plate 1 m wide floating at y = 1 at x = 1.5 (its shadow falls on the floor at x 1.2..2.4),
+/// and `extra` instances (mesh 3: a wall 20 x 4.2 x 0.2 m, casting no shadow).
+fn spot_over_floor(extra: Vec<manyshadows::scene::Instance>) -> Scene {
     use manyshadows::scene::{
-        primitives, Attenuation, Camera, Instance, Light, LightKind, Material, Scene,
+        primitives, Attenuation, Camera, Instance, Light, LightKind, Material,
     };
-    use manyshadows::{RenderSettings, Renderer, VirtualOptions};
-    let ctx = common::context();
-    let wall_at = Mat4::from_translation(Vec3::new(0.0, 1.1, 10.0));
-    let scene = Scene {
+    let mut instances = vec![
+        Instance::caster(0, 0, Mat4::IDENTITY),
+        Instance::caster(1, 0, Mat4::from_translation(Vec3::new(-1.0, 1.5, 0.0))),
+        Instance::caster(2, 0, Mat4::from_translation(Vec3::new(1.5, 1.05, 0.0))),
+    ];
+    instances.extend(extra);
+    Scene {
         textures: Vec::new(),
-        name: "pedestal, plate and wall".into(),
+        name: "spot over a floor".into(),
         meshes: vec![
             primitives::plane(16.0, 16.0, 4),
             primitives::cuboid(Vec3::new(1.0, 3.0, 1.0)),
@@ -462,18 +459,7 @@ fn a_kept_page_is_redrawn_when_its_samples_reach_past_its_receiver_bound() {
             primitives::cuboid(Vec3::new(20.0, 4.2, 0.2)),
         ],
         materials: vec![Material::default()],
-        instances: vec![
-            Instance::caster(0, 0, Mat4::IDENTITY),
-            // Pedestal: top at y = 3 (1.5 m of the light's axis nearer than the plate).
-            Instance::caster(1, 0, Mat4::from_translation(Vec3::new(-1.0, 1.5, 0.0))),
-            // Plate: y from 1.0 to 1.1, beside the pedestal.
-            Instance::caster(2, 0, Mat4::from_translation(Vec3::new(1.5, 1.05, 0.0))),
-            // Wall between the camera and the floor, beyond the light's range: y up to 3.2.
-            Instance {
-                casts_shadows: false,
-                ..Instance::caster(3, 0, wall_at)
-            },
-        ],
+        instances,
         lights: vec![Light {
             kind: LightKind::Spot {
                 position: Vec3::new(0.0, 6.0, 0.0),
@@ -489,17 +475,39 @@ fn a_kept_page_is_redrawn_when_its_samples_reach_past_its_receiver_bound() {
             shadow_resolution: 128,
         }],
         camera: Camera::look_at(Vec3::new(0.0, 3.5, 12.0), Vec3::new(0.0, 2.5, 0.0)),
-    };
-    let settings = |cache| {
-        RenderSettings::default()
-            .with_width(256)
-            .with_height(144)
-            .with_technique(Technique::VIRTUAL)
-            .with_virtual_maps(VirtualOptions::default().with_max_side(128))
-            .with_cache_shadows(cache)
-            .with_visibility(true)
-    };
-    let mut r = Renderer::new(&ctx, &scene, settings(true)).expect("renderer");
+    }
+}
+
+/// Virtual maps at 256x144, one page per face, caching as asked, with the hard mask.
+fn one_page_faces(cache: bool) -> manyshadows::RenderSettings {
+    manyshadows::RenderSettings::default()
+        .with_width(256)
+        .with_height(144)
+        .with_technique(Technique::VIRTUAL)
+        .with_virtual_maps(manyshadows::VirtualOptions::default().with_max_side(128))
+        .with_cache_shadows(cache)
+        .with_visibility(true)
+}
+
+/// Receiver bounds with caching: a kept page holds only the casters up to the farthest
+/// receiver it was drawn for, so it must be drawn again once its samples reach past that. On
+/// `spot_over_floor`, the camera first sees, over a wall out of the light's reach (no sample
+/// of it asks for the page), only the pedestal's top: the page's farthest receiver is that
+/// top, and the plate, wholly beyond it, is not drawn. Then the wall goes: the floor under
+/// the plate is seen, and the page must be redrawn with the plate (a kept page leaves the
+/// plate's shadow off the floor). The cached frame must equal a fresh renderer's bit for bit.
+#[test]
+fn a_kept_page_is_redrawn_when_its_samples_reach_past_its_receiver_bound() {
+    use manyshadows::scene::Instance;
+    use manyshadows::Renderer;
+    let ctx = common::context();
+    // Between the camera and the floor, beyond the light's range: y up to 3.2.
+    let wall_at = Mat4::from_translation(Vec3::new(0.0, 1.1, 10.0));
+    let scene = spot_over_floor(vec![Instance {
+        casts_shadows: false,
+        ..Instance::caster(3, 0, wall_at)
+    }]);
+    let mut r = Renderer::new(&ctx, &scene, one_page_faces(true)).expect("renderer");
     let first = r.render().expect("frame 1").virtual_maps.unwrap();
     // The wall drops out of sight (it casts no shadow: no face notes a move).
     r.set_instance_transform(
@@ -509,7 +517,7 @@ fn a_kept_page_is_redrawn_when_its_samples_reach_past_its_receiver_bound() {
     .unwrap();
     let frame = r.render().expect("frame 2");
     let second = frame.virtual_maps.unwrap();
-    let fresh = Renderer::new(&ctx, r.scene(), settings(false))
+    let fresh = Renderer::new(&ctx, r.scene(), one_page_faces(false))
         .expect("fresh")
         .render()
         .expect("fresh frame");
@@ -527,5 +535,51 @@ fn a_kept_page_is_redrawn_when_its_samples_reach_past_its_receiver_bound() {
         first.triangles,
         second.triangles
     );
+    assert_eq!((second.kept, second.drawn), (0, 1), "{second:?}");
+}
+
+/// The same for the part of a page drawn: a page is drawn only over the rectangle its
+/// samples' filter taps reach, so it must be drawn again once its samples reach past that. On
+/// `spot_over_floor` with a platform 0.5 m high right of the light's foot (x from -0.2), a wall
+/// near the camera (out of the light's cone) first hides everything right of x = 0: the page
+/// is drawn over its left part, where the floor is, without the plate on the right. Then the
+/// wall hides the left instead: the platform's top is seen, nearer the light than any floor
+/// sample was (the depth bound alone would keep the page), and under the plate. The page
+/// must be drawn again (kept, the plate's shadow is missing) and the frame equal a fresh
+/// renderer's bit for bit.
+#[test]
+fn a_kept_page_is_redrawn_when_its_samples_reach_past_its_drawn_rectangle() {
+    use manyshadows::scene::{primitives, Camera, Instance};
+    use manyshadows::Renderer;
+    let ctx = common::context();
+    // The wall covers x from 0 to 20 at z = 7, then from -20 to 0.
+    let wall = |x: f32| Mat4::from_translation(Vec3::new(x, 2.0, 7.0));
+    let mut scene = spot_over_floor(vec![
+        Instance {
+            casts_shadows: false,
+            ..Instance::caster(3, 0, wall(10.0))
+        },
+        Instance::caster(4, 0, Mat4::from_translation(Vec3::new(2.8, 0.25, 0.0))),
+    ]);
+    scene
+        .meshes
+        .push(primitives::cuboid(Vec3::new(6.0, 0.5, 10.0)));
+    scene.camera = Camera::look_at(Vec3::new(0.0, 4.0, 9.0), Vec3::ZERO);
+    let mut r = Renderer::new(&ctx, &scene, one_page_faces(true)).expect("renderer");
+    let first = r.render().expect("frame 1").virtual_maps.unwrap();
+    r.set_instance_transform(3, wall(-10.0)).unwrap();
+    let frame = r.render().expect("frame 2");
+    let second = frame.virtual_maps.unwrap();
+    let fresh = Renderer::new(&ctx, r.scene(), one_page_faces(false))
+        .expect("fresh")
+        .render()
+        .expect("fresh frame");
+    eprintln!("the floor left: {first:?}\nthe platform right: {second:?}");
+    let (_, _, bits) = differing(&frame, &fresh);
+    assert_eq!(
+        bits, 0,
+        "{bits} visibility bits differ from a fresh renderer"
+    );
+    assert_eq!(first.resident, 1, "one page per face: {first:?}");
     assert_eq!((second.kept, second.drawn), (0, 1), "{second:?}");
 }

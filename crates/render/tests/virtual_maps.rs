@@ -209,11 +209,12 @@ fn group_culling_draws_exactly_what_the_flat_cull_draws() {
     );
 }
 
-/// Culling caster clusters beyond a page's farthest receiver skips only casters that no
-/// sample reading the page can see: each sample's shadow test is `receiver <= stored`, and a
-/// caster deeper than every receiver leaves it true. So the image (PCF 2x2) and the hard
-/// visibility mask are the same bit for bit, with fewer triangles drawn. (Bounding a page by
-/// half its farthest receiver changes 22,584 mask words: seen failing.)
+/// Receiver bounds skip only casters that no sample reading the page can see. Depth: each
+/// sample's shadow test is `receiver <= stored`, and a caster deeper than every receiver leaves
+/// it true. Extent: a page is cleared and drawn only over the rectangle its samples' filter
+/// taps reach. So the image (PCF 2x2) and the hard visibility mask are the same bit for bit,
+/// with fewer triangles drawn. (Bounding a page by half its farthest receiver changes 22,584
+/// mask words; a rectangle without the taps' reach, 31 pixels: seen failing.)
 #[test]
 fn casters_beyond_a_pages_farthest_receiver_are_skipped_without_changing_a_pixel() {
     let ctx = common::context();

@@ -36,6 +36,8 @@ pub(crate) fn shader() -> String {
 
 /// Page-table entries per allocation workgroup (`BLOCK` in `vsm.wgsl`).
 const ALLOC_BLOCK: u64 = 32;
+/// Words of the page table per entry: the entry, its receiver depth key and its cell mask.
+const TABLE_WORDS: u64 = 3;
 /// Words of the counters buffer (see `vsm.wgsl`).
 const COUNTERS: usize = 28;
 
@@ -346,11 +348,12 @@ impl VirtualShadows {
             "virtual faces",
         )?;
         let entries = self.plan.fit.table_entries.max(1) as u64;
-        // The entries, then as many receiver depth keys (`vsm.wgsl`'s marking).
+        // The entries, then as many receiver depth keys and as many cell masks (`vsm.wgsl`'s
+        // receiver bounds).
         if crate::gpu::buffers::grow_buffer(
             ctx,
             &mut self.table,
-            entries * 8,
+            entries * TABLE_WORDS * 4,
             "virtual page table",
         )? {
             // Last frame's table went with the old buffer: keep no pages this time.
@@ -583,7 +586,7 @@ impl VirtualShadows {
                 0,
                 &self.prev_table,
                 0,
-                self.prev_entries as u64 * 8,
+                self.prev_entries as u64 * TABLE_WORDS * 4,
             );
         }
         encoder.clear_buffer(&self.table, 0, None);
@@ -662,7 +665,7 @@ impl VirtualShadows {
             pool_pages: self.pool_pages,
             pool_side: self.pool_side,
             pool_bytes: self.pool_side as u64 * self.pool_side as u64 * 4,
-            table_bytes: self.plan.fit.table_entries as u64 * 8,
+            table_bytes: self.plan.fit.table_entries as u64 * TABLE_WORDS * 4,
         })
     }
 

@@ -26,11 +26,13 @@
 //    contents (caching); the other admitted pages are tagged new.
 //
 // Receiver bounds: the marking keeps, per asked page, the largest depth key its samples
-// compare against (after the table's entries: `vsm_table[entries + e]`). A page drawn with a
-// bound holds every caster up to it, so it serves any sample nearer than that bound: the
-// allocation writes the bound each resident page was drawn with over its key (UNBOUNDED when
-// its casters were not culled by one), the next frame receives it with the table, and a page
-// is kept only while its samples stay within it.
+// compare against (after the table's entries: `vsm_table[entries + e]`) and the part of the
+// page their filter taps reach (`vsm_table[2 entries + e]`: 16 columns and 16 rows of 8
+// texels, bit masks). A page drawn with bounds holds every caster up to that depth, drawn
+// over that rectangle, so it serves any sample nearer than the depth whose taps stay in the
+// rectangle: the allocation writes the bounds each resident page was drawn with over its marks
+// (UNBOUNDED and ALL_CELLS when not bounded), the next frame receives them with the table, and
+// a page is kept only while its samples stay within them.
 //    cs_free, one thread: the pool pages not kept, in order.
 //    cs_count_new / cs_scan_new / cs_alloc_new: new pages get free pool pages by their rank
 //    in page-table order (block bit counts and a prefix sum), so the frame never depends on
@@ -93,9 +95,54 @@ const VSM_NEW_AT: u32 = 0xc0000000u;
 // finite f32, above every key (and, as a draw's bound, culling nothing).
 const UNBOUNDED: u32 = 0x7f7fffffu;
 
-// Where last frame's table (`prev_table`) keeps its keys: after its own entries.
+// Every cell of a page (column bits low, row bits high): the whole page.
+const ALL_CELLS: u32 = 0xffffffffu;
+// Texels a filter tap reaches from a sample's texel position (PCF 3x3: 1.5).
+const TAP_REACH: f32 = 2.0;
+
+// Where last frame's table (`prev_table`) keeps its keys and cells: after its own entries.
 fn prev_keys_at() -> u32 {
     return vsm.prev.x;
+}
+fn prev_cells_at() -> u32 {
+    return 2u * vsm.prev.x;
+}
+fn cells_at() -> u32 {
+    return 2u * vsm.counts.y;
+}
+
+// The cells (columns | rows << 16) the filter taps of a sample at `uv` reach in its page of
+// `level`.
+fn tap_cells(uv: vec2<f32>, level: u32) -> u32 {
+    let pages = f32(1u << level);
+    let side = f32(vsm.pool.z);
+    let t = (uv * pages - min(floor(uv * pages), vec2<f32>(pages - 1.0))) * side;
+    let cell = side / 16.0;
+    let lo = vec2<u32>(clamp(floor((t - TAP_REACH) / cell), vec2<f32>(0.0), vec2<f32>(15.0)));
+    let hi = vec2<u32>(clamp(floor((t + TAP_REACH) / cell), vec2<f32>(0.0), vec2<f32>(15.0)));
+    let cols = (2u << hi.x) - (1u << lo.x);
+    let rows = (2u << hi.y) - (1u << lo.y);
+    return cols | (rows << 16u);
+}
+
+// vsm_draw.wgsl's `drawn_rect` code of a span of cells: first and last column and row.
+fn rect_code(m: u32) -> u32 {
+    let cols = m & 0xffffu;
+    let rows = m >> 16u;
+    return u32(firstTrailingBit(cols)) + 16u * u32(firstLeadingBit(cols))
+        + 256u * u32(firstTrailingBit(rows)) + 4096u * u32(firstLeadingBit(rows));
+}
+
+// Every bit between the lowest and the highest set one, per half (the rectangle spanned).
+fn span_cells(m: u32) -> u32 {
+    let cols = m & 0xffffu;
+    let rows = m >> 16u;
+    if (cols == 0u || rows == 0u) {
+        return ALL_CELLS;
+    }
+    let c = (2u << u32(firstLeadingBit(cols))) - (1u << u32(firstTrailingBit(cols)));
+    let r = (2u << u32(firstLeadingBit(rows))) - (1u << u32(firstTrailingBit(rows)));
+    return c | (r << 16u);
 }
 
 fn mark_light(i: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
@@ -121,8 +168,14 @@ fn mark_light(i: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
     let e = vsm_entry(face, level, q.uv);
     // The farthest receiver of the page (keys are never negative as bits: 0 = no bound).
     let key = bitcast<u32>(max(q.key, 0.0));
-    if (vsm.counts.w != 0u && key > atomicLoad(&vsm_table[vsm.counts.y + e])) {
-        atomicMax(&vsm_table[vsm.counts.y + e], key);
+    if (vsm.counts.w != 0u) {
+        if (key > atomicLoad(&vsm_table[vsm.counts.y + e])) {
+            atomicMax(&vsm_table[vsm.counts.y + e], key);
+        }
+        let cells = tap_cells(q.uv, level);
+        if ((atomicLoad(&vsm_table[cells_at() + e]) & cells) != cells) {
+            atomicOr(&vsm_table[cells_at() + e], cells);
+        }
     }
     if ((atomicLoad(&vsm_table[e]) & MARK_ASKED) != 0u) {
         return;
@@ -214,7 +267,9 @@ fn cs_carry(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     // The samples are last frame's (cs_mark adds those under the moved casters): so is their
     // farthest receiver, or the bound the page was drawn with, which covers it.
     if (vsm.counts.w != 0u) {
-        atomicMax(&vsm_table[vsm.counts.y + e], prev_table[prev_keys_at() + face.table.w - 1u + local]);
+        let at = face.table.w - 1u + local;
+        atomicMax(&vsm_table[vsm.counts.y + e], prev_table[prev_keys_at() + at]);
+        atomicOr(&vsm_table[cells_at() + e], prev_table[prev_cells_at() + at]);
     }
     var level = level_of(local);
     let n = 1u << level;
@@ -381,12 +436,15 @@ fn cs_retain(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         let at = face.table.w - 1u + (e - face.table.x);
         let before = prev_table[at];
         let drawn = prev_table[prev_keys_at() + at];
+        let drawn_cells = prev_table[prev_cells_at() + at];
         if (before >= VSM_FIRST_PAGE && before < VSM_FIRST_PAGE + VSM_QUARTER
-            && needed_bound(e, level, admitted) <= drawn) {
-            // Resident last frame, in an unchanged face, drawn far enough: keep the page and
-            // its depth (and the bound it was drawn with).
+            && needed_bound(e, level, admitted) <= drawn
+            && (needed_cells(e, level, admitted) & ~drawn_cells) == 0u) {
+            // Resident last frame, in an unchanged face, drawn far and wide enough: keep the
+            // page and its depth (and the bounds it was drawn with).
             atomicStore(&vsm_table[e], before);
             atomicStore(&vsm_table[vsm.counts.y + e], drawn);
+            atomicStore(&vsm_table[cells_at() + e], drawn_cells);
             scratch[kept_at() + before - VSM_FIRST_PAGE] = 1u;
             atomicAdd(&counters[COUNT_KEPT], 1u);
             return;
@@ -410,14 +468,26 @@ fn asked_finer_than(admitted: u32) -> u32 {
 // quarter-page regime; without receiver bounds; for an entry no sample asked for: an
 // ancestor at the admitted level, read only by denied finer pages' samples).
 fn needed_bound(e: u32, level: u32, admitted: u32) -> u32 {
-    if (vsm.counts.w == 0u || atomicLoad(&counters[0]) > vsm.pool.w) {
-        return UNBOUNDED;
-    }
-    if (level == admitted && asked_finer_than(admitted) != 0u) {
+    if (!bounded(level, admitted)) {
         return UNBOUNDED;
     }
     let key = atomicLoad(&vsm_table[vsm.counts.y + e]);
     return select(key, UNBOUNDED, key == 0u);
+}
+
+// The part of the page drawn (`needed_bound`'s rule): the rectangle its samples' filter taps
+// span, or ALL_CELLS.
+fn needed_cells(e: u32, level: u32, admitted: u32) -> u32 {
+    if (!bounded(level, admitted)) {
+        return ALL_CELLS;
+    }
+    return span_cells(atomicLoad(&vsm_table[cells_at() + e]));
+}
+
+// Whether only the samples that marked a page of `level` read it.
+fn bounded(level: u32, admitted: u32) -> bool {
+    return vsm.counts.w != 0u && atomicLoad(&counters[0]) <= vsm.pool.w
+        && (level != admitted || asked_finer_than(admitted) == 0u);
 }
 
 @compute @workgroup_size(1, 1, 1)
@@ -553,10 +623,14 @@ fn cs_alloc_new(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_
     let origin = vec2<f32>(f32(page % vsm.pool.y), f32(page / vsm.pool.y)) * side + corner;
     view.tile = vec4<f32>(origin, size, bitcast<f32>(fi));
     // params.x: the receiver bound the page's casters are culled by (`needed_bound`; the
-    // largest finite f32 culls nothing), kept with the page for the next frame's cs_retain.
-    let bound = needed_bound(e, level, admitted_level());
+    // largest finite f32 culls nothing); params.y: the cells drawn (`needed_cells`); both
+    // kept with the page for the next frame's cs_retain. (params.z: the texel's world size.)
+    let admitted = admitted_level();
+    let bound = needed_bound(e, level, admitted);
+    let cells = needed_cells(e, level, admitted);
     atomicStore(&vsm_table[vsm.counts.y + e], bound);
-    view.params = vec4<f32>(bitcast<f32>(bound), face.params.y, face.params.z * f32(1u << (face.table.y - level)) * texel_scale, face.params.w);
+    atomicStore(&vsm_table[cells_at() + e], cells);
+    view.params = vec4<f32>(bitcast<f32>(bound), f32(rect_code(cells)), face.params.z * f32(1u << (face.table.y - level)) * texel_scale, face.params.w);
     page_views[rank] = view;
 }
 

@@ -17,6 +17,43 @@
 @group(0) @binding(1) var<uniform> vsm: VsmUniforms;
 @group(0) @binding(2) var<storage, read> page_views: array<ShadowViewData>;
 
+// The part of a page its samples' filter taps reach (vsm.wgsl's `needed_cells`): the page's
+// casters are culled and drawn over that rectangle only, in cells of 1/16 of the page side.
+// `params.y` codes the first and last column and row (0..15 each) as
+// `first_col + 16 last_col + 256 first_row + 4096 last_row` (rows count from the page's top).
+// Returns x0, x1, y0, y1 in the page's normalized device coordinates.
+fn drawn_rect(view: ShadowViewData) -> vec4<f32> {
+    let code = u32(view.params.y);
+    let col = vec2<f32>(f32(code & 15u), f32((code >> 4u) & 15u) + 1.0) / 8.0 - 1.0;
+    let row = 1.0 - vec2<f32>(f32((code >> 12u) & 15u) + 1.0, f32((code >> 8u) & 15u)) / 8.0;
+    return vec4<f32>(col, row);
+}
+
+// A clip position of the page in the clip space of its drawn rectangle (x and y scaled and
+// moved; z and w unchanged).
+fn into_drawn(r: vec4<f32>, c: vec4<f32>) -> vec4<f32> {
+    let s = vec2<f32>(2.0 / (r.y - r.x), 2.0 / (r.w - r.z));
+    let m = vec2<f32>(r.x + r.y, r.z + r.w) * 0.5;
+    return vec4<f32>(s.x * (c.x - m.x * c.w), s.y * (c.y - m.y * c.w), c.z, c.w);
+}
+
+// The page's projection restricted to its drawn rectangle (for the frustum tests).
+fn drawn_proj(view: ShadowViewData) -> mat4x4<f32> {
+    let r = drawn_rect(view);
+    if (all(r == vec4<f32>(-1.0, 1.0, -1.0, 1.0))) {
+        return view.view_proj;
+    }
+    let s = vec2<f32>(2.0 / (r.y - r.x), 2.0 / (r.w - r.z));
+    let m = vec2<f32>(r.x + r.y, r.z + r.w) * 0.5;
+    let sub = mat4x4<f32>(
+        vec4<f32>(s.x, 0.0, 0.0, 0.0),
+        vec4<f32>(0.0, s.y, 0.0, 0.0),
+        vec4<f32>(0.0, 0.0, 1.0, 0.0),
+        vec4<f32>(-s.x * m.x, -s.y * m.y, 0.0, 1.0),
+    );
+    return sub * view.view_proj;
+}
+
 // ---- cull (compute) ----
 
 @group(0) @binding(4) var<storage, read> vsm_faces: array<VirtualFace>;
@@ -48,9 +85,10 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
     var group_visible = page < atomicLoad(&counters[17]);
     let frustum = (bits & CULL_FRUSTUM) != 0u;
     let row = key_row(view.view_proj, view.params.w);
+    let proj = drawn_proj(view);
     if (group_visible && frustum && (bits & VSM_FLAT_CULL) == 0u) {
         let sphere = cluster_bounds[arrayLength(&clusters) + g];
-        if (sphere_outside(view.view_proj, sphere) || beyond_receivers(view, row, sphere)) {
+        if (sphere_outside(proj, sphere) || beyond_receivers(view, row, sphere)) {
             group_visible = false;
         }
     }
@@ -65,8 +103,8 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
         var visible = group_visible;
         if (visible) {
             let sphere = cluster_bounds[c];
-            if (frustum && (sphere_outside(view.view_proj, sphere) || beyond_receivers(view, row, sphere)
-                || box_outside(view, row, c))) {
+            if (frustum && (sphere_outside(proj, sphere) || beyond_receivers(view, row, sphere)
+                || box_outside(view, proj, row, c))) {
                 visible = false;
             } else if ((bits & CULL_BACKFACE) != 0u && cl.first_triangle < round.counts.y
                 && cluster_faces_away(cl, instances[cl.instance].normal, sphere, eye)) {
@@ -121,11 +159,11 @@ fn beyond_receivers(view: ShadowViewData, row: vec4<f32>, sphere: vec4<f32>) -> 
 }
 
 // Whether cluster `c`'s box (casters.wgsl writes it after the groups' spheres) lies wholly
-// outside one side of the page, or beyond its farthest receiver: its eight corners in the
-// page's clip space. Each side is a half-space of homogeneous clip space, so corners outside
+// outside one side of the page's drawn rectangle (`proj`), or beyond its farthest receiver:
+// its eight corners in that clip space. Each side is a half-space of homogeneous clip space, so corners outside
 // one put the whole box outside it, whatever the sign of w. Tighter than the sphere for flat
 // and long clusters (the seed's re-projected cluster boxes).
-fn box_outside(view: ShadowViewData, row: vec4<f32>, c: u32) -> bool {
+fn box_outside(view: ShadowViewData, proj: mat4x4<f32>, row: vec4<f32>, c: u32) -> bool {
     let n = arrayLength(&clusters);
     let at = n + (n + VSM_CULL_GROUP - 1u) / VSM_CULL_GROUP + 2u * c;
     let lo = cluster_bounds[at].xyz;
@@ -138,7 +176,7 @@ fn box_outside(view: ShadowViewData, row: vec4<f32>, c: u32) -> bool {
             select(lo.y, hi.y, (k & 2u) != 0u),
             select(lo.z, hi.z, (k & 4u) != 0u),
         );
-        let q = view.view_proj * vec4<f32>(p, 1.0);
+        let q = proj * vec4<f32>(p, 1.0);
         // Outside x < -w, x > w, y < -w, y > w.
         out += select(vec4<u32>(0u), vec4<u32>(1u), vec4<f32>(-q.x, q.x, -q.y, q.y) > vec4<f32>(q.w));
         nearest = min(nearest, dot(row, vec4<f32>(p, 1.0)));
@@ -182,12 +220,13 @@ fn cs_expand(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
     let p0 = world[i.x].xyz;
     let p1 = world[i.y].xyz;
     let p2 = world[i.z].xyz;
-    let a = view.view_proj * vec4<f32>(p0, 1.0);
-    let b = view.view_proj * vec4<f32>(p1, 1.0);
-    let c = view.view_proj * vec4<f32>(p2, 1.0);
+    let r = drawn_rect(view);
+    let a = into_drawn(r, view.view_proj * vec4<f32>(p0, 1.0));
+    let b = into_drawn(r, view.view_proj * vec4<f32>(p1, 1.0));
+    let c = into_drawn(r, view.view_proj * vec4<f32>(p2, 1.0));
     let bits = round.counts.z;
     if ((bits & CULL_FRUSTUM) != 0u) {
-        // The page's sides only: depth is left to the rasterizer.
+        // The drawn rectangle's sides only: depth is left to the rasterizer.
         let outside = (a.x < -a.w && b.x < -b.w && c.x < -c.w)
             || (a.x > a.w && b.x > b.w && c.x > c.w)
             || (a.y < -a.w && b.y < -b.w && c.y < -c.w)
@@ -257,7 +296,12 @@ fn vs_draw(@builtin(vertex_index) v: u32) -> TileOut {
 
 fn draw(slot: u32, vertex: u32) -> TileOut {
     let view = page_views[round.round.x + slot];
-    return into_tile_of(view.view_proj * world[vertex], view.tile, 1.0 / f32(vsm.pool.x));
+    let c = view.view_proj * world[vertex];
+    var out = into_tile_of(c, view.tile, 1.0 / f32(vsm.pool.x));
+    // Clipped to the page's drawn rectangle (the whole page: into_tile_of's distances).
+    let r = drawn_rect(view);
+    out.clip = array<f32, 5>(c.x - r.x * c.w, r.y * c.w - c.x, c.y - r.z * c.w, r.w * c.w - c.y, 1.0);
+    return out;
 }
 
 // Rounds of alpha-tested clusters, drawn with `fs_alpha`.
@@ -268,7 +312,8 @@ fn vs_draw_masked(@builtin(vertex_index) v: u32) -> MaskedTileOut {
     return masked_tile_out(draw(slot, vertex), mask_tail(), vertex);
 }
 
-// Covers drawn page `i`'s tile at depth 1 (far), before its casters are drawn.
+// Covers drawn page `i`'s drawn rectangle of its tile at depth 1 (far), before its casters are
+// drawn (texels outside it are read by no sample that asked for the page).
 @vertex
 fn vs_clear(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> @builtin(position) vec4<f32> {
     let tile = page_views[i].tile;
@@ -276,7 +321,12 @@ fn vs_clear(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> @
         vec2<f32>(0.0, 0.0), vec2<f32>(1.0, 0.0), vec2<f32>(0.0, 1.0),
         vec2<f32>(0.0, 1.0), vec2<f32>(1.0, 0.0), vec2<f32>(1.0, 1.0),
     );
-    let px = tile.xy + quad[v % 6u] * tile.z;
+    // The rectangle in page texels, from the page's drawn cells (rows from the top).
+    let code = u32(page_views[i].params.y);
+    let cell = tile.z / 16.0;
+    let lo = vec2<f32>(f32(code & 15u), f32((code >> 8u) & 15u)) * cell;
+    let hi = vec2<f32>(f32((code >> 4u) & 15u), f32((code >> 12u) & 15u)) * cell + cell;
+    let px = tile.xy + lo + quad[v % 6u] * (hi - lo);
     let size = f32(vsm.pool.x);
     return vec4<f32>(px.x / size * 2.0 - 1.0, 1.0 - px.y / size * 2.0, 1.0, 1.0);
 }
