@@ -132,9 +132,18 @@ pub fn atlas_copy() -> String {
 /// culling a group before its clusters.
 pub const CLUSTER_GROUP: u32 = 16;
 
+/// Parts of a caster cluster with boxes of their own (`CLUSTER_PARTS` in `casters.wgsl`):
+/// consecutive runs of a quarter of the cluster's triangles, so that a page cull can tell
+/// which parts of a cluster touch a page.
+pub const CLUSTER_PARTS: u32 = 4;
+
 /// Per-frame world transform of shadow casters.
 pub fn casters() -> String {
-    let group = format!("const CLUSTER_GROUP: u32 = {CLUSTER_GROUP}u;");
+    let group = format!(
+        "const CLUSTER_GROUP: u32 = {CLUSTER_GROUP}u;\nconst CLUSTER_PARTS: u32 = {CLUSTER_PARTS}u;\n\
+         const PART_TRIANGLES: u32 = {}u;",
+        crate::gpu_scene::casters::CLUSTER_TRIANGLES / CLUSTER_PARTS
+    );
     compose(&[COMMON, &group, include_str!("../gpu_scene/casters.wgsl")])
 }
 

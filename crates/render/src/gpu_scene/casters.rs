@@ -50,7 +50,7 @@ use crate::{GpuContext, RenderError};
 /// Most triangles per cluster.
 pub const CLUSTER_TRIANGLES: u32 = 128;
 
-pub use crate::gpu::shaders::CLUSTER_GROUP;
+pub use crate::gpu::shaders::{CLUSTER_GROUP, CLUSTER_PARTS};
 
 /// How caster geometry is prepared.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -111,8 +111,9 @@ pub struct CasterGeometry {
     pub cluster_buffer: wgpu::Buffer,
     /// `array<vec4<f32>>` world bounding sphere per cluster, then one per group of
     /// [`CLUSTER_GROUP`] clusters at `clusters.len() + g`, then per cluster its axis-aligned
-    /// box as two corners (low, high) at `clusters.len() + groups + 2c` (all written each
-    /// frame).
+    /// box as two corners (low, high) at `clusters.len() + groups + 2c`, then per cluster the
+    /// boxes of its [`CLUSTER_PARTS`] parts at `3 clusters.len() + groups + 2 (parts c + k)`
+    /// (all written each frame).
     pub cluster_bounds: wgpu::Buffer,
     skinned: bool,
     options: CasterOptions,
@@ -557,8 +558,11 @@ impl CasterGeometry {
         );
         let cluster_bounds = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("casters.cluster_bounds"),
-            // Per cluster a sphere, per group a sphere, then per cluster a box (two corners).
-            size: (3 * all_clusters.len() as u64 + u64::from(groups_of(all_clusters.len()))) * 16,
+            // Per cluster a sphere, per group a sphere, then per cluster a box (two corners),
+            // then per cluster its parts' boxes.
+            size: ((3 + 2 * u64::from(CLUSTER_PARTS)) * all_clusters.len() as u64
+                + u64::from(groups_of(all_clusters.len())))
+                * 16,
             usage: wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });

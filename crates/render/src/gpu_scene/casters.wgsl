@@ -6,7 +6,9 @@
 // cs_groups:    one thread per group of CLUSTER_GROUP consecutive clusters writes a sphere
 //               holding theirs, after the clusters' own (cluster_bounds[clusters + g]).
 // (cs_bounds also writes each cluster's axis-aligned box after the groups' spheres:
-// cluster_bounds[clusters + groups + 2c] its low corner, + 1 its high one.)
+// cluster_bounds[clusters + groups + 2c] its low corner, + 1 its high one; and after those
+// the boxes of its CLUSTER_PARTS parts of PART_TRIANGLES consecutive triangles:
+// cluster_bounds[3 clusters + groups + 2 (CLUSTER_PARTS c + k)], + 1.)
 //               (CLUSTER_GROUP is composed in from casters.rs.)
 
 struct TransformParams {
@@ -104,6 +106,20 @@ fn cs_bounds(@builtin(global_invocation_id) gid: vec3<u32>) {
     let at = tparams.counts.y + (tparams.counts.y + CLUSTER_GROUP - 1u) / CLUSTER_GROUP + 2u * c;
     cluster_bounds[at] = vec4<f32>(lo - pad, 0.0);
     cluster_bounds[at + 1u] = vec4<f32>(hi + pad, 0.0);
+    // The parts' boxes (grown alike; empty parts of a short cluster get an inverted box).
+    let parts = at + 2u * (tparams.counts.y - c) + 2u * CLUSTER_PARTS * c;
+    for (var k = 0u; k < CLUSTER_PARTS; k++) {
+        var plo = vec3<f32>(3.0e38);
+        var phi = vec3<f32>(-3.0e38);
+        for (var i = 3u * PART_TRIANGLES * k; i < min(n, 3u * PART_TRIANGLES * (k + 1u)); i++) {
+            let p = world[corners[first + i]].xyz;
+            plo = min(plo, p);
+            phi = max(phi, p);
+        }
+        let ppad = 1e-5 * max(abs(plo), abs(phi)) + vec3<f32>(1e-6);
+        cluster_bounds[parts + 2u * k] = vec4<f32>(plo - ppad, 0.0);
+        cluster_bounds[parts + 2u * k + 1u] = vec4<f32>(phi + ppad, 0.0);
+    }
 }
 
 @compute @workgroup_size(64, 1, 1)

@@ -13,7 +13,7 @@ use crate::gpu::pipelines::whole_entry;
 use crate::gpu::shaders::{compose, ALPHA_MASK, CLUSTER_CULL, COMMON, CULL, TILE, TILE_MASK};
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu::types::VsmRound;
-use crate::gpu_scene::casters::{CasterGeometry, CLUSTER_TRIANGLES};
+use crate::gpu_scene::casters::{CasterGeometry, CLUSTER_PARTS, CLUSTER_TRIANGLES};
 use crate::settings::ShadowOptions;
 use crate::shadows::cluster_draw::{plan_rounds, Round, COMMAND_SIZE};
 use crate::GpuContext;
@@ -28,7 +28,9 @@ const FLAT_CULL: u32 = 1 << 8;
 pub(crate) fn group_decl() -> String {
     format!(
         "const VSM_CULL_GROUP: u32 = {CULL_GROUP}u;\nconst VSM_FLAT_CULL: u32 = {FLAT_CULL}u;\n\
-         const VSM_EXPAND_GROUP: u32 = {CLUSTER_TRIANGLES}u;"
+         const VSM_EXPAND_GROUP: u32 = {CLUSTER_TRIANGLES}u;\nconst VSM_PARTS: u32 = {CLUSTER_PARTS}u;\n\
+         const VSM_PART_TRIANGLES: u32 = {}u;",
+        CLUSTER_TRIANGLES / CLUSTER_PARTS
     )
 }
 

@@ -103,13 +103,27 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
         var visible = group_visible;
         if (visible) {
             let sphere = cluster_bounds[c];
+            let boxes = arrayLength(&clusters) + (arrayLength(&clusters) + VSM_CULL_GROUP - 1u) / VSM_CULL_GROUP;
             if (frustum && (sphere_outside(proj, sphere) || beyond_receivers(view, row, sphere)
-                || box_outside(view, proj, row, c))) {
+                || box_outside(view, proj, row, boxes + 2u * c))) {
                 visible = false;
             } else if ((bits & CULL_BACKFACE) != 0u && cl.first_triangle < round.counts.y
                 && cluster_faces_away(cl, instances[cl.instance].normal, sphere, eye)) {
                 visible = false;
             }
+        }
+        // With compaction: which parts of the cluster touch the page (their boxes), for
+        // cs_expand to skip the others' triangles.
+        var parts = (1u << VSM_PARTS) - 1u;
+        if (visible && compact && frustum) {
+            let n = arrayLength(&clusters);
+            let first_part = 3u * n + (n + VSM_CULL_GROUP - 1u) / VSM_CULL_GROUP + 2u * VSM_PARTS * c;
+            for (var k = 0u; k < VSM_PARTS; k++) {
+                if (k * VSM_PART_TRIANGLES >= cl.triangles || box_outside(view, proj, row, first_part + 2u * k)) {
+                    parts = parts & ~(1u << k);
+                }
+            }
+            visible = parts != 0u;
         }
         var cmd: DrawCommand;
         cmd.index_count = select(0u, 3u * cl.triangles, visible);
@@ -122,7 +136,9 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
             // unless the expansion runs out of room for the pair's triangles.
             if (visible) {
                 let k = atomicAdd(&command_count[0], 1u);
-                commands[k] = cmd;
+                var pair = cmd;
+                pair.first_instance = parts;
+                commands[k] = pair;
                 var empty = cmd;
                 empty.index_count = 0u;
                 commands[round.counts.w + k] = empty;
@@ -158,14 +174,13 @@ fn beyond_receivers(view: ShadowViewData, row: vec4<f32>, sphere: vec4<f32>) -> 
     return key_beyond(view.params.x, dot(row, vec4<f32>(sphere.xyz, 1.0)) - sphere.w * length(row.xyz));
 }
 
-// Whether cluster `c`'s box (casters.wgsl writes it after the groups' spheres) lies wholly
+// Whether the box at cluster_bounds[at] (low corner; + 1: high corner) — a cluster's or a
+// cluster part's, which casters.wgsl writes after the groups' spheres — lies wholly
 // outside one side of the page's drawn rectangle (`proj`), or beyond its farthest receiver:
 // its eight corners in that clip space. Each side is a half-space of homogeneous clip space, so corners outside
 // one put the whole box outside it, whatever the sign of w. Tighter than the sphere for flat
 // and long clusters (the seed's re-projected cluster boxes).
-fn box_outside(view: ShadowViewData, proj: mat4x4<f32>, row: vec4<f32>, c: u32) -> bool {
-    let n = arrayLength(&clusters);
-    let at = n + (n + VSM_CULL_GROUP - 1u) / VSM_CULL_GROUP + 2u * c;
+fn box_outside(view: ShadowViewData, proj: mat4x4<f32>, row: vec4<f32>, at: u32) -> bool {
     let lo = cluster_bounds[at].xyz;
     let hi = cluster_bounds[at + 1u].xyz;
     var out = vec4<u32>(0u);
@@ -209,10 +224,13 @@ fn cs_expand(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
     if (k >= atomicLoad(&command_count[0])) {
         return;
     }
-    let cmd = commands[k];
-    if (3u * t >= cmd.index_count) {
+    var cmd = commands[k];
+    // Past the cluster's triangles, or in a part of it whose box misses the page (the cull's
+    // part mask rides in the pair's first_instance).
+    if (3u * t >= cmd.index_count || (cmd.first_instance & (1u << (t / VSM_PART_TRIANGLES))) == 0u) {
         return;
     }
+    cmd.first_instance = 0u;
     let slot = u32(cmd.base_vertex) / round.counts.x;
     let view = page_views[min(round.round.x + slot, arrayLength(&page_views) - 1u)];
     let at = cmd.first_index + 3u * t;
