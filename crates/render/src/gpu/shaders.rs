@@ -137,12 +137,16 @@ pub const CLUSTER_GROUP: u32 = 16;
 /// which parts of a cluster touch a page.
 pub const CLUSTER_PARTS: u32 = 4;
 
+/// Most triangles per caster cluster (`gpu_scene::casters`; here beside the shaders it is
+/// spliced into).
+pub const CLUSTER_TRIANGLES: u32 = 128;
+
 /// Per-frame world transform of shadow casters.
 pub fn casters() -> String {
     let group = format!(
         "const CLUSTER_GROUP: u32 = {CLUSTER_GROUP}u;\nconst CLUSTER_PARTS: u32 = {CLUSTER_PARTS}u;\n\
          const PART_TRIANGLES: u32 = {}u;",
-        crate::gpu_scene::casters::CLUSTER_TRIANGLES / CLUSTER_PARTS
+        CLUSTER_TRIANGLES / CLUSTER_PARTS
     );
     compose(&[COMMON, &group, include_str!("../gpu_scene/casters.wgsl")])
 }

@@ -47,10 +47,7 @@ use crate::gpu_scene::instances::{morton_order, GpuScene};
 use crate::gpu_scene::skinning::{MAX_BONES, SKIN_VERTEX_STRIDE};
 use crate::{GpuContext, RenderError};
 
-/// Most triangles per cluster.
-pub const CLUSTER_TRIANGLES: u32 = 128;
-
-pub use crate::gpu::shaders::{CLUSTER_GROUP, CLUSTER_PARTS};
+pub use crate::gpu::shaders::{CLUSTER_GROUP, CLUSTER_PARTS, CLUSTER_TRIANGLES};
 
 /// How caster geometry is prepared.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
