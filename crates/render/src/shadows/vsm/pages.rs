@@ -34,7 +34,7 @@ pub(crate) fn shader() -> String {
     ])
 }
 
-/// Page-table entries per allocation workgroup (`BLOCK` in `vsm.wgsl`).
+/// Page-table entries per allocation thread (`BLOCK` in `vsm.wgsl`).
 const ALLOC_BLOCK: u64 = 32;
 /// Words of the page table per entry: the entry, its receiver depth key and its cell mask.
 const TABLE_WORDS: u64 = 3;
@@ -601,7 +601,8 @@ impl VirtualShadows {
             // One workgroup per block of page-table entries (2D past 65,535 blocks).
             let groups_2d = |n: u64| (n.min(65535) as u32, n.div_ceil(65535) as u32);
             let entries = self.plan.fit.table_entries as u64;
-            let (bx, by) = groups_2d(entries.div_ceil(ALLOC_BLOCK));
+            // One thread per block (64-thread workgroups).
+            let (bx, by) = groups_2d(entries.div_ceil(ALLOC_BLOCK).div_ceil(64));
             let (ex, ey) = groups_2d(entries.div_ceil(64));
             if !self.plan.faces.is_empty() {
                 let rect = match marking {

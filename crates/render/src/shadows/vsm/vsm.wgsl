@@ -6,7 +6,7 @@
 //    level 0 are marked *above* (whoever turns an entry from unmarked to marked walks its
 //    ancestors, so a walk stops at the first entry already marked).
 //    Incrementally (only casters moved; see cs_carry) it visits a rectangle of the screen.
-// 2. cs_count, one workgroup per block of 32 page-table entries: each marked entry learns its
+// 2. cs_count, one thread per block of 32 page-table entries: each marked entry learns its
 //    level (tagged into the entry with whether it was asked) and the block adds its marked
 //    and its asked entries per level to the frame's counters.
 //    Admission (cs_retain): the finest level A such that every asked page coarser than A and
@@ -35,7 +35,7 @@
 // a page is kept only while its samples stay within them.
 //    cs_free, one thread: the pool pages not kept, in order.
 //    cs_count_new / cs_scan_new / cs_alloc_new: new pages get free pool pages by their rank
-//    in page-table order (block bit counts and a prefix sum), so the frame never depends on
+//    in page-table order (block counts and a prefix sum), so the frame never depends on
 //    thread order, and each gets its view in the draw list: the face's projection cropped to
 //    the page, drawn into the page's tile of the pool.
 // 4. cs_args, one thread: the number of pages to draw, and from it the indirect arguments of
@@ -84,7 +84,7 @@ const COUNT_ASKED: u32 = 20u;
 // asked one.
 const MARK_ASKED: u32 = 1u;
 const MARK_ABOVE: u32 = 2u;
-// Page-table entries per allocation block (one workgroup; ranks by bit count in one word).
+// Page-table entries per allocation block (one thread walks them in order).
 const BLOCK: u32 = 32u;
 // A marked entry after cs_count: this plus its level, plus TAG_ASKED if a sample asked for it.
 const VSM_NEEDED_AT: u32 = 0x80000000u;
@@ -309,8 +309,10 @@ fn level_of(local: u32) -> u32 {
     return level;
 }
 
-fn block_id(wg: vec3<u32>, groups: vec3<u32>) -> u32 {
-    return wg.x + wg.y * groups.x;
+// One thread per block of BLOCK entries (no workgroup barriers: a software driver pays
+// dearly for those); `gid` and `groups` of a dispatch of 64-thread workgroups.
+fn block_of(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
+    return gid.x + gid.y * groups.x * 64u;
 }
 
 fn blocks() -> u32 {
@@ -327,37 +329,39 @@ fn free_at() -> u32 {
 fn new_counts_at() -> u32 {
     return 2u * vsm.pool.w;
 }
-var<workgroup> level_bits: array<atomic<u32>, VSM_LEVELS>;
-var<workgroup> asked_bits: array<atomic<u32>, VSM_LEVELS>;
-
-@compute @workgroup_size(32, 1, 1)
-fn cs_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) i: u32, @builtin(num_workgroups) groups: vec3<u32>) {
-    let b = block_id(wg, groups);
-    if (i < VSM_LEVELS) {
-        atomicStore(&level_bits[i], 0u);
-        atomicStore(&asked_bits[i], 0u);
+@compute @workgroup_size(64, 1, 1)
+fn cs_count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let b = block_of(gid, groups);
+    if (b >= blocks()) {
+        return;
     }
-    workgroupBarrier();
-    let e = b * BLOCK + i;
-    if (b < blocks() && e < vsm.counts.y) {
+    var marked: array<u32, VSM_LEVELS>;
+    var asked_pages: array<u32, VSM_LEVELS>;
+    // The face of the entries (found again only when an entry lies past it).
+    var first = 1u;
+    var end = 0u;
+    for (var e = b * BLOCK; e < min(b * BLOCK + BLOCK, vsm.counts.y); e++) {
         let v = atomicLoad(&vsm_table[e]);
-        if (v != VSM_EMPTY) {
-            let face = vsm_faces[face_of(e)];
-            let level = level_of(e - face.table.x);
-            let asked = (v & MARK_ASKED) != 0u;
-            atomicStore(&vsm_table[e], VSM_NEEDED_AT + level + select(0u, TAG_ASKED, asked));
-            atomicOr(&level_bits[level], 1u << i);
-            if (asked) {
-                atomicOr(&asked_bits[level], 1u << i);
-            }
+        if (v == VSM_EMPTY) {
+            continue;
+        }
+        if (e < first || e >= end) {
+            let fi = face_of(e);
+            first = vsm_faces[fi].table.x;
+            end = select(vsm.counts.y, vsm_faces[min(fi + 1u, vsm.counts.x - 1u)].table.x, fi + 1u < vsm.counts.x);
+        }
+        let level = level_of(e - first);
+        let asked = (v & MARK_ASKED) != 0u;
+        atomicStore(&vsm_table[e], VSM_NEEDED_AT + level + select(0u, TAG_ASKED, asked));
+        marked[level] += 1u;
+        if (asked) {
+            asked_pages[level] += 1u;
         }
     }
-    workgroupBarrier();
-    if (b < blocks() && i < VSM_LEVELS) {
-        let marked = countOneBits(atomicLoad(&level_bits[i]));
-        if (marked != 0u) {
-            atomicAdd(&counters[i], marked);
-            atomicAdd(&counters[COUNT_ASKED + i], countOneBits(atomicLoad(&asked_bits[i])));
+    for (var l = 0u; l < VSM_LEVELS; l++) {
+        if (marked[l] != 0u) {
+            atomicAdd(&counters[l], marked[l]);
+            atomicAdd(&counters[COUNT_ASKED + l], asked_pages[l]);
         }
     }
 }
@@ -502,27 +506,23 @@ fn cs_free() {
     atomicStore(&counters[COUNT_FREE], k);
 }
 
-var<workgroup> new_bits: atomic<u32>;
-
 fn is_new(v: u32) -> bool {
     return v >= VSM_NEW_AT && v < VSM_NEW_AT + VSM_LEVELS;
 }
 
-@compute @workgroup_size(32, 1, 1)
-fn cs_count_new(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) i: u32, @builtin(num_workgroups) groups: vec3<u32>) {
-    let b = block_id(wg, groups);
-    if (i == 0u) {
-        atomicStore(&new_bits, 0u);
+@compute @workgroup_size(64, 1, 1)
+fn cs_count_new(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let b = block_of(gid, groups);
+    if (b >= blocks()) {
+        return;
     }
-    workgroupBarrier();
-    let e = b * BLOCK + i;
-    if (b < blocks() && e < vsm.counts.y && is_new(atomicLoad(&vsm_table[e]))) {
-        atomicOr(&new_bits, 1u << i);
+    var n = 0u;
+    for (var e = b * BLOCK; e < min(b * BLOCK + BLOCK, vsm.counts.y); e++) {
+        if (is_new(atomicLoad(&vsm_table[e]))) {
+            n += 1u;
+        }
     }
-    workgroupBarrier();
-    if (b < blocks() && i == 0u) {
-        scratch[new_counts_at() + b] = countOneBits(atomicLoad(&new_bits));
-    }
+    scratch[new_counts_at() + b] = n;
 }
 
 @compute @workgroup_size(1, 1, 1)
@@ -556,28 +556,26 @@ fn cs_scan_new() {
     atomicStore(&counters[COUNT_PLACED], placed);
 }
 
-@compute @workgroup_size(32, 1, 1)
-fn cs_alloc_new(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) i: u32, @builtin(num_workgroups) groups: vec3<u32>) {
-    let b = block_id(wg, groups);
-    if (i == 0u) {
-        atomicStore(&new_bits, 0u);
-    }
-    workgroupBarrier();
-    let e = b * BLOCK + i;
-    var level = VSM_LEVELS;
-    if (b < blocks() && e < vsm.counts.y) {
-        let v = atomicLoad(&vsm_table[e]);
-        if (is_new(v)) {
-            level = v - VSM_NEW_AT;
-            atomicOr(&new_bits, 1u << i);
-        }
-    }
-    workgroupBarrier();
-    if (level == VSM_LEVELS) {
+@compute @workgroup_size(64, 1, 1)
+fn cs_alloc_new(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let b = block_of(gid, groups);
+    if (b >= blocks()) {
         return;
     }
-    // Rank among this frame's new pages, in page-table order.
-    let rank = scratch[new_counts_at() + b] + countOneBits(atomicLoad(&new_bits) & ((1u << i) - 1u));
+    // Ranks among this frame's new pages, in page-table order.
+    var rank = scratch[new_counts_at() + b];
+    for (var e = b * BLOCK; e < min(b * BLOCK + BLOCK, vsm.counts.y); e++) {
+        let v = atomicLoad(&vsm_table[e]);
+        if (is_new(v)) {
+            alloc_new(e, v - VSM_NEW_AT, rank);
+            rank += 1u;
+        }
+    }
+}
+
+// New page `e` of `level`, of rank `rank` among the frame's new pages: its pool page (or
+// quarter), its table entry and its view in the draw list.
+fn alloc_new(e: u32, level: u32, rank: u32) {
     if (rank >= atomicLoad(&counters[COUNT_PLACED])) {
         // Only when level 0 alone overflows the pool even four faces to a page.
         deny(e, level);
