@@ -560,7 +560,16 @@ impl VirtualShadows {
         ctx.queue
             .write_buffer(&self.uniforms, 48, bytemuck::bytes_of(&self.prev_entries));
         self.moves.clear();
-        self.record_passes(encoder, casters, timer, pages_span, span, marking);
+        // Last frame's table is read only where a face may keep its pages.
+        let copy_prev = faces.iter().any(|f| f.table[3] != 0);
+        self.record_passes(
+            encoder,
+            casters,
+            timer,
+            (pages_span, span),
+            marking,
+            copy_prev,
+        );
         self.prev_entries = self.plan.fit.table_entries;
         self.marked_gen = self.key_gen;
     }
@@ -570,16 +579,16 @@ impl VirtualShadows {
         encoder: &mut wgpu::CommandEncoder,
         casters: &CasterGeometry,
         timer: &GpuTimer,
-        pages_span: Option<Span>,
-        span: Option<Span>,
+        (pages_span, span): (Option<Span>, Option<Span>),
         marking: Marking,
+        copy_prev: bool,
     ) {
         let Some(g) = &self.groups else {
             return;
         };
         let (w, h) = self.viewport;
         encoder.push_debug_group("virtual shadow maps");
-        if self.prev_entries > 0 {
+        if self.prev_entries > 0 && copy_prev {
             // Last frame's table and its pages' receiver bounds, for the pages this frame keeps.
             encoder.copy_buffer_to_buffer(
                 &self.table,
