@@ -137,7 +137,8 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
             if (visible) {
                 let k = atomicAdd(&command_count[0], 1u);
                 var pair = cmd;
-                pair.first_instance = parts;
+                // The part mask and the page slot (saves cs_expand a division per thread).
+                pair.first_instance = parts | (slot << VSM_PARTS);
                 commands[k] = pair;
                 var empty = cmd;
                 empty.index_count = 0u;
@@ -226,12 +227,12 @@ fn cs_expand(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
     }
     var cmd = commands[k];
     // Past the cluster's triangles, or in a part of it whose box misses the page (the cull's
-    // part mask rides in the pair's first_instance).
+    // part mask rides in the pair's first_instance, the page slot above it).
     if (3u * t >= cmd.index_count || (cmd.first_instance & (1u << (t / VSM_PART_TRIANGLES))) == 0u) {
         return;
     }
+    let slot = cmd.first_instance >> VSM_PARTS;
     cmd.first_instance = 0u;
-    let slot = u32(cmd.base_vertex) / round.counts.x;
     let view = page_views[min(round.round.x + slot, arrayLength(&page_views) - 1u)];
     let at = cmd.first_index + 3u * t;
     let i = vec3<u32>(corners[at], corners[at + 1u], corners[at + 2u]);
