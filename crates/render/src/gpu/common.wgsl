@@ -184,7 +184,8 @@ struct VsmUniforms {
     // Texels per screen pixel wanted (level of detail scale); the marking pass's first pixel
     // (x, y: it marks a rectangle from there when only part of the screen changed); unused.
     lod: vec4<f32>,
-    // Where last frame's page table keeps its pages' receiver bounds (its entry count); unused.
+    // Where last frame's page table keeps its pages' receiver bounds (its entry count); 1 =
+    // pages drawn now may be kept later and get bounds with room to spare; unused.
     prev: vec4<u32>,
 }
 

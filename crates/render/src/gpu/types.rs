@@ -239,8 +239,8 @@ pub struct VsmUniforms {
     /// Texels per screen pixel wanted; the first pixel (x, y) the marking pass visits (a
     /// rectangle of the screen when only part of it changed); unused.
     pub lod: [f32; 4],
-    /// Where last frame's page table keeps its pages' receiver bounds (its entry count);
-    /// unused.
+    /// Where last frame's page table keeps its pages' receiver bounds (its entry count); 1 =
+    /// pages drawn now may be kept later and get bounds with room to spare; unused.
     pub prev: [u32; 4],
 }
 

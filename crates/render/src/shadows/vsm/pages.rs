@@ -557,8 +557,14 @@ impl VirtualShadows {
         // table (copied by `record_passes`) keeps its receiver bounds.
         ctx.queue
             .write_buffer(&self.uniforms, 36, bytemuck::cast_slice(&origin));
-        ctx.queue
-            .write_buffer(&self.uniforms, 48, bytemuck::bytes_of(&self.prev_entries));
+        // `prev.y`: pages drawn now may be kept later, so they get room to spare (not in a
+        // renderer's first frame: a single image pays nothing for it).
+        let spare = keep && self.prev_entries > 0;
+        ctx.queue.write_buffer(
+            &self.uniforms,
+            48,
+            bytemuck::cast_slice(&[self.prev_entries, u32::from(spare)]),
+        );
         self.moves.clear();
         // Last frame's table is read only where a face may keep its pages.
         let copy_prev = faces.iter().any(|f| f.table[3] != 0);

@@ -125,6 +125,15 @@ fn tap_cells(uv: vec2<f32>, level: u32) -> u32 {
     return cols | (rows << 16u);
 }
 
+// `m` with one more cell on each side (per half, within the page).
+fn widen_cells(m: u32) -> u32 {
+    let cols = m & 0xffffu;
+    let rows = m >> 16u;
+    let c = (cols | (cols << 1u) | (cols >> 1u)) & 0xffffu;
+    let r = (rows | (rows << 1u) | (rows >> 1u)) & 0xffffu;
+    return c | (r << 16u);
+}
+
 // vsm_draw.wgsl's `drawn_rect` code of a span of cells: first and last column and row.
 fn rect_code(m: u32) -> u32 {
     let cols = m & 0xffffu;
@@ -624,8 +633,16 @@ fn alloc_new(e: u32, level: u32, rank: u32) {
     // largest finite f32 culls nothing); params.y: the cells drawn (`needed_cells`); both
     // kept with the page for the next frame's cs_retain. (params.z: the texel's world size.)
     let admitted = admitted_level();
-    let bound = needed_bound(e, level, admitted);
-    let cells = needed_cells(e, level, admitted);
+    var bound = needed_bound(e, level, admitted);
+    var cells = needed_cells(e, level, admitted);
+    if (vsm.prev.y != 0u) {
+        // Pages that may be kept are drawn with some room to spare, so that a camera moving a
+        // little does not outgrow them at once: one cell more on each side, an eighth deeper.
+        cells = widen_cells(cells);
+        if (bound != UNBOUNDED) {
+            bound = bitcast<u32>(bitcast<f32>(bound) * 1.125);
+        }
+    }
     atomicStore(&vsm_table[vsm.counts.y + e], bound);
     atomicStore(&vsm_table[cells_at() + e], cells);
     view.params = vec4<f32>(bitcast<f32>(bound), f32(rect_code(cells)), face.params.z * f32(1u << (face.table.y - level)) * texel_scale, face.params.w);
