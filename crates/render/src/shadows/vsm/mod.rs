@@ -34,14 +34,18 @@
 //!    ([`crate::settings::RenderSettings::cache_shadows`]) a page resident last frame in a face
 //!    whose view did not change keeps its pool page and its depth unless a caster moved within
 //!    it (the moved bounding spheres, old and new, projected onto the face: only the pages
-//!    under them are invalidated, not the face); only the other pages get free pool pages and
-//!    are drawn;
+//!    under them are invalidated, not the face) or its samples now reach past the receiver
+//!    bounds it was drawn with; only the other pages get free pool pages and are drawn;
 //! 3. *render* ([`draw`], `vsm_draw.wgsl`): every page drawn this frame is an ordinary shadow
 //!    view (the face's projection cropped to the page, one tile of the pool), drawn the
 //!    `gpu-driven` way: compute culls caster clusters against each page's frustum slice (and by
 //!    normal cone) — groups of 16 clusters by a merged sphere first, then the clusters of the
-//!    groups inside the page — and one indirect multi-draw per round
-//!    ([`crate::shadows::cluster_draw`]) draws the survivors, clipped to the page's tile.
+//!    groups inside the page, each by its sphere, its box and its quarters' boxes — against
+//!    the page's receiver bounds (the farthest depth its samples compare against and the
+//!    rectangle their filter taps reach, both kept by the marking), then, where draws are
+//!    counted on the GPU, expands the surviving (cluster, page) pairs to the triangles that
+//!    touch the page; one draw per round ([`crate::shadows::cluster_draw`]) renders them,
+//!    clipped to the page's drawn rectangle.
 //!
 //! **Lookups** (`vsm_lookup.wgsl` after `vsm_common.wgsl`, composed into the lighting and
 //! visibility passes) repeat the marking's level and page choice with the same code, read the

@@ -41,12 +41,13 @@ pub struct VirtualOptions {
     /// every cluster against every page: the same clusters are drawn either way; for
     /// measuring what the groups save.
     pub group_cull: bool,
-    /// Cull caster clusters beyond a page's farthest receiver: the marking pass keeps, per
-    /// asked page, the largest depth its samples compare against, and a cluster whose
-    /// bounding sphere lies wholly beyond it cannot shadow any of them. With shadow caching a
-    /// page is kept only while its samples stay within the bound it was drawn with (a page
-    /// whose farthest receiver moved past it is drawn again). The same shadows either way;
-    /// `false` for measuring.
+    /// Receiver bounds: the marking pass keeps, per asked page, the largest depth its samples
+    /// compare against and the rectangle of the page their filter taps reach (in cells of a
+    /// sixteenth of the page side); casters wholly beyond that depth cannot shadow any of them
+    /// and are culled, and the page is cleared, culled and drawn over that rectangle only.
+    /// With shadow caching a page is kept only while its samples stay within the bounds it was
+    /// drawn with (after a renderer's first frame they get room to spare: a cell more on each
+    /// side, an eighth deeper). The same shadows either way; `false` for measuring.
     pub receiver_cull: bool,
     /// Bytes of the index buffer one round of page drawing expands its triangles into, where
     /// the adapter counts draws on the GPU (`MULTI_DRAW_INDIRECT_COUNT`): default 24 MiB (2 M
