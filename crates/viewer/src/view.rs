@@ -50,8 +50,11 @@ pub struct ViewArgs {
     pcf: Pcf,
     /// Start with every shadow map drawn anew each frame (the panel's "keep unchanged maps"
     /// box unticked); by default the maps (pages) of views that saw no change are kept.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "shadow_budget")]
     no_cache: bool,
+    /// Keep what did not change between frames: the default (kept for older command lines).
+    #[arg(long, hide = true, conflicts_with = "no_cache")]
+    cache: bool,
     /// Draw at most N shadow views per frame (atlas techniques; with the caching): the rest
     /// wait their turn, served from their older depth or unshadowed until drawn (the panel
     /// counts them).
@@ -310,7 +313,7 @@ impl App {
             technique: self.args.technique,
             point_shadows: self.args.point_shadows,
             pcf: self.args.pcf,
-            cache: !self.args.no_cache || self.args.shadow_budget.is_some(),
+            cache: !self.args.no_cache,
             budget: self.args.shadow_budget,
             visibility: self.args.show_visibility.is_some(),
         };

@@ -558,8 +558,11 @@ impl VirtualShadows {
         ctx.queue
             .write_buffer(&self.uniforms, 36, bytemuck::cast_slice(&origin));
         // `prev.y`: pages drawn now may be kept later, so they get room to spare (not in a
-        // renderer's first frame: a single image pays nothing for it).
-        let spare = keep && self.prev_entries > 0;
+        // renderer's first frame: a single image pays nothing for it). Not when marking
+        // incrementally either: carried pages' needs are the bounds they were drawn with,
+        // room included, and widening those again would grow a page under a caster that moves
+        // every frame until it covers the whole page.
+        let spare = keep && self.prev_entries > 0 && !incremental;
         ctx.queue.write_buffer(
             &self.uniforms,
             48,

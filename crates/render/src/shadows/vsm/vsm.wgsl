@@ -270,15 +270,16 @@ fn cs_carry(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     if (before < VSM_FIRST_PAGE || (before >= VSM_NEEDED_AT && before != VSM_DENIED)) {
         return;
     }
-    if (atomicOr(&vsm_table[e], MARK_ASKED) != VSM_EMPTY) {
-        return;
-    }
-    // The samples are last frame's (cs_mark adds those under the moved casters): so is their
-    // farthest receiver, or the bound the page was drawn with, which covers it.
+    // The samples are last frame's (cs_mark adds those under the moved casters): so are their
+    // receiver bounds, or the bounds the page was drawn with, which cover them. Before the
+    // entry's mark: another thread's walk up may have marked it already (as an ancestor).
     if (vsm.counts.w != 0u) {
         let at = face.table.w - 1u + local;
         atomicMax(&vsm_table[vsm.counts.y + e], prev_table[prev_keys_at() + at]);
         atomicOr(&vsm_table[cells_at() + e], prev_table[prev_cells_at() + at]);
+    }
+    if (atomicOr(&vsm_table[e], MARK_ASKED) != VSM_EMPTY) {
+        return;
     }
     var level = level_of(local);
     let n = 1u << level;
