@@ -46,8 +46,9 @@ pub struct VirtualOptions {
     /// sixteenth of the page side); casters wholly beyond that depth cannot shadow any of them
     /// and are culled, and the page is cleared, culled and drawn over that rectangle only.
     /// With shadow caching a page is kept only while its samples stay within the bounds it was
-    /// drawn with (after a renderer's first frame they get room to spare: a cell more on each
-    /// side, an eighth deeper). The same shadows either way; `false` for measuring.
+    /// drawn with (after a renderer's first frame, when the camera or lights changed, they get
+    /// room to spare: a cell more on each side, an eighth deeper). The same shadows either
+    /// way; `false` for measuring.
     pub receiver_cull: bool,
     /// Bytes of the index buffer one round of page drawing expands its triangles into, where
     /// the adapter counts draws on the GPU (`MULTI_DRAW_INDIRECT_COUNT`): default 24 MiB (2 M
