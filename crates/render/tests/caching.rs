@@ -50,6 +50,50 @@ fn differing(a: &manyshadows::Frame, b: &manyshadows::Frame) -> (usize, u8, u32)
     (px, delta, bits)
 }
 
+/// Virtual maps at `w`x`h`, caching as asked, with the hard visibility mask.
+fn virtual_settings(w: u32, h: u32, cache: bool) -> manyshadows::RenderSettings {
+    manyshadows::RenderSettings::default()
+        .with_width(w)
+        .with_height(h)
+        .with_technique(Technique::VIRTUAL)
+        .with_cache_shadows(cache)
+        .with_visibility(true)
+}
+
+/// The atrium with `lights` seeded lights.
+fn atrium(lights: usize) -> Scene {
+    builtin::build(
+        "atrium",
+        &BuiltinOptions {
+            lights: Some(lights),
+            ..Default::default()
+        },
+    )
+    .expect("atrium")
+}
+
+/// Frame `frame` of cached renderer `r` against a renderer built fresh on the same state at
+/// `w`x`h`, within what pool placement rounds (see `a_slowly_turning_camera_keeps_most_pages`):
+/// at most 4 mask bits and 8 pixels differ.
+fn assert_near_fresh(
+    ctx: &GpuContext,
+    r: &manyshadows::Renderer,
+    f: &manyshadows::Frame,
+    frame: usize,
+    (w, h): (u32, u32),
+) {
+    let fresh = manyshadows::Renderer::new(ctx, r.scene(), virtual_settings(w, h, false))
+        .expect("fresh")
+        .render()
+        .expect("fresh frame");
+    let (px, delta, bits) = differing(f, &fresh);
+    eprintln!("frame {frame}: {px} pixels differ (by up to {delta}), {bits} mask bits");
+    assert!(
+        bits <= 4 && px <= 8,
+        "frame {frame}: {px} pixels (by up to {delta}) and {bits} mask bits differ from a fresh renderer"
+    );
+}
+
 fn generator(
     ctx: &GpuContext,
     scene: &Scene,
@@ -143,7 +187,7 @@ fn cached_generation_equals_a_full_one_after_a_move() {
 /// where the samples still need them).
 #[test]
 fn cached_virtual_pages_equal_a_full_regeneration() {
-    use manyshadows::{RenderSettings, Renderer};
+    use manyshadows::Renderer;
     let ctx = common::context();
     let scene = builtin::build(
         "cubes",
@@ -155,14 +199,7 @@ fn cached_virtual_pages_equal_a_full_regeneration() {
         },
     )
     .expect("scene");
-    let settings = |cache| {
-        RenderSettings::default()
-            .with_width(320)
-            .with_height(180)
-            .with_technique(Technique::VIRTUAL)
-            .with_cache_shadows(cache)
-            .with_visibility(true)
-    };
+    let settings = |cache| virtual_settings(320, 180, cache);
     let mut r = Renderer::new(&ctx, &scene, settings(true)).expect("renderer");
     let fresh = |r: &Renderer| {
         Renderer::new(&ctx, r.scene(), settings(false))
@@ -365,7 +402,7 @@ fn a_caster_moved_into_a_new_face_gets_its_pages_marked() {
     use manyshadows::scene::{
         primitives, Attenuation, Camera, Instance, Light, LightKind, Material, Scene,
     };
-    use manyshadows::{RenderSettings, Renderer};
+    use manyshadows::Renderer;
     let ctx = common::context();
     let scene = Scene {
         textures: Vec::new(),
@@ -393,14 +430,7 @@ fn a_caster_moved_into_a_new_face_gets_its_pages_marked() {
         }],
         camera: Camera::look_at(Vec3::new(0.0, 3.0, 9.0), Vec3::new(0.0, 1.5, 0.0)),
     };
-    let settings = |cache| {
-        RenderSettings::default()
-            .with_width(256)
-            .with_height(144)
-            .with_technique(Technique::VIRTUAL)
-            .with_cache_shadows(cache)
-            .with_visibility(true)
-    };
+    let settings = |cache| virtual_settings(256, 144, cache);
     let mut r = Renderer::new(&ctx, &scene, settings(true)).expect("renderer");
     let before = r.render().expect("frame 1").virtual_maps.unwrap();
     r.render().expect("frame 2: nothing changed");
@@ -480,13 +510,8 @@ fn spot_over_floor(extra: Vec<manyshadows::scene::Instance>) -> Scene {
 
 /// Virtual maps at 256x144, one page per face, caching as asked, with the hard mask.
 fn one_page_faces(cache: bool) -> manyshadows::RenderSettings {
-    manyshadows::RenderSettings::default()
-        .with_width(256)
-        .with_height(144)
-        .with_technique(Technique::VIRTUAL)
+    virtual_settings(256, 144, cache)
         .with_virtual_maps(manyshadows::VirtualOptions::default().with_max_side(128))
-        .with_cache_shadows(cache)
-        .with_visibility(true)
 }
 
 /// Receiver bounds with caching: a kept page holds only the casters up to the farthest
@@ -598,23 +623,8 @@ fn a_kept_page_is_redrawn_when_its_samples_reach_past_its_drawn_rectangle() {
 fn a_slowly_turning_camera_keeps_most_pages() {
     use manyshadows::Renderer;
     let ctx = common::context();
-    let scene = builtin::build(
-        "atrium",
-        &BuiltinOptions {
-            lights: Some(16),
-            ..Default::default()
-        },
-    )
-    .expect("atrium");
-    let settings = |cache| {
-        manyshadows::RenderSettings::default()
-            .with_width(320)
-            .with_height(180)
-            .with_technique(Technique::VIRTUAL)
-            .with_cache_shadows(cache)
-            .with_visibility(true)
-    };
-    let mut r = Renderer::new(&ctx, &scene, settings(true)).expect("renderer");
+    let scene = atrium(16);
+    let mut r = Renderer::new(&ctx, &scene, virtual_settings(320, 180, true)).expect("renderer");
     let mut kept = Vec::new();
     for frame in 0..6 {
         if frame > 0 {
@@ -626,16 +636,7 @@ fn a_slowly_turning_camera_keeps_most_pages() {
         let f = r.render().expect("frame");
         let s = f.virtual_maps.unwrap();
         kept.push((s.kept, s.resident));
-        let fresh = Renderer::new(&ctx, r.scene(), settings(false))
-            .expect("fresh")
-            .render()
-            .expect("fresh frame");
-        let (px, delta, bits) = differing(&f, &fresh);
-        eprintln!("frame {frame}: {px} pixels differ (by up to {delta}), {bits} mask bits");
-        assert!(
-            bits <= 4 && px <= 8,
-            "frame {frame}: {px} pixels (by up to {delta}) and {bits} mask bits differ from a fresh renderer"
-        );
+        assert_near_fresh(&ctx, &r, &f, frame, (320, 180));
     }
     eprintln!("(kept, resident) per frame: {kept:?}");
     for &(k, n) in &kept[2..] {
@@ -654,25 +655,10 @@ fn a_slowly_turning_camera_keeps_most_pages() {
 fn a_caster_moving_every_frame_matches_a_fresh_renderer() {
     use manyshadows::Renderer;
     let ctx = common::context();
-    let scene = builtin::build(
-        "atrium",
-        &BuiltinOptions {
-            lights: Some(32),
-            ..Default::default()
-        },
-    )
-    .expect("atrium");
-    let settings = |cache| {
-        manyshadows::RenderSettings::default()
-            .with_width(320)
-            .with_height(180)
-            .with_technique(Technique::VIRTUAL)
-            .with_cache_shadows(cache)
-            .with_visibility(true)
-    };
+    let scene = atrium(32);
     let k = scene.smallest_caster().expect("a caster");
     let base = scene.instances[k].transform;
-    let mut r = Renderer::new(&ctx, &scene, settings(true)).expect("renderer");
+    let mut r = Renderer::new(&ctx, &scene, virtual_settings(320, 180, true)).expect("renderer");
     let mut drawn = Vec::new();
     for frame in 0..8 {
         let dx = 0.15 * frame as f32;
@@ -681,16 +667,7 @@ fn a_caster_moving_every_frame_matches_a_fresh_renderer() {
         let f = r.render().expect("frame");
         let s = f.virtual_maps.unwrap();
         drawn.push((s.drawn, s.resident, s.triangles));
-        let fresh = Renderer::new(&ctx, r.scene(), settings(false))
-            .expect("fresh")
-            .render()
-            .expect("fresh frame");
-        let (px, delta, bits) = differing(&f, &fresh);
-        eprintln!("frame {frame}: {px} pixels differ (by up to {delta}), {bits} mask bits");
-        assert!(
-            bits <= 4 && px <= 8,
-            "frame {frame}: {px} pixels (by up to {delta}) and {bits} mask bits differ from a fresh renderer"
-        );
+        assert_near_fresh(&ctx, &r, &f, frame, (320, 180));
     }
     eprintln!("(pages drawn, resident, triangles drawn) per frame: {drawn:?}");
     for &(d, n, _) in &drawn[1..] {
