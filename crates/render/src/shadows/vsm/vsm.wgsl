@@ -452,8 +452,7 @@ fn cs_retain(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         let drawn = prev_table[prev_keys_at() + at];
         let drawn_cells = prev_table[prev_cells_at() + at];
         if (before >= VSM_FIRST_PAGE && before < VSM_FIRST_PAGE + VSM_QUARTER
-            && needed_bound(e, level, admitted) <= drawn
-            && (needed_cells(e, level, admitted) & ~drawn_cells) == 0u) {
+            && covered(needed_bounds(e, level, admitted), drawn, drawn_cells)) {
             // Resident last frame, in an unchanged face, drawn far and wide enough: keep the
             // page and its depth (and the bounds it was drawn with).
             atomicStore(&vsm_table[e], before);
@@ -467,6 +466,11 @@ fn cs_retain(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     atomicStore(&vsm_table[e], VSM_NEW_AT + level);
 }
 
+// Whether bounds `needed` (`needed_bounds`) lie within those a page was drawn with.
+fn covered(needed: vec2<u32>, drawn: u32, drawn_cells: u32) -> bool {
+    return needed.x <= drawn && (needed.y & ~drawn_cells) == 0u;
+}
+
 // Asked pages finer than the admitted level (denied: their samples read level `admitted`).
 fn asked_finer_than(admitted: u32) -> u32 {
     var finer = 0u;
@@ -476,32 +480,20 @@ fn asked_finer_than(admitted: u32) -> u32 {
     return finer;
 }
 
-// The receiver bound admitted entry `e` (of `level`) is drawn with, as key bits: its farthest
-// receiver's key when every sample that reads the page marked it, UNBOUNDED when not (at the
-// admitted level while finer asked pages are denied, their samples read it too; in the
-// quarter-page regime; without receiver bounds; for an entry no sample asked for: an
-// ancestor at the admitted level, read only by denied finer pages' samples).
-fn needed_bound(e: u32, level: u32, admitted: u32) -> u32 {
-    if (!bounded(level, admitted)) {
-        return UNBOUNDED;
+// The receiver bounds admitted entry `e` (of `level`) is drawn with: x, its farthest
+// receiver's key bits; y, the cells its samples' filter taps span. When not every sample that
+// reads the page marked it (at the admitted level while finer asked pages are denied, their
+// samples read it too; in the quarter-page regime; without receiver bounds; for an entry no
+// sample asked for: an ancestor at the admitted level, read only by denied finer pages'
+// samples): UNBOUNDED and ALL_CELLS.
+fn needed_bounds(e: u32, level: u32, admitted: u32) -> vec2<u32> {
+    let bounded = vsm.counts.w != 0u && atomicLoad(&counters[0]) <= vsm.pool.w
+        && (level != admitted || asked_finer_than(admitted) == 0u);
+    if (!bounded) {
+        return vec2<u32>(UNBOUNDED, ALL_CELLS);
     }
     let key = atomicLoad(&vsm_table[vsm.counts.y + e]);
-    return select(key, UNBOUNDED, key == 0u);
-}
-
-// The part of the page drawn (`needed_bound`'s rule): the rectangle its samples' filter taps
-// span, or ALL_CELLS.
-fn needed_cells(e: u32, level: u32, admitted: u32) -> u32 {
-    if (!bounded(level, admitted)) {
-        return ALL_CELLS;
-    }
-    return span_cells(atomicLoad(&vsm_table[cells_at() + e]));
-}
-
-// Whether only the samples that marked a page of `level` read it.
-fn bounded(level: u32, admitted: u32) -> bool {
-    return vsm.counts.w != 0u && atomicLoad(&counters[0]) <= vsm.pool.w
-        && (level != admitted || asked_finer_than(admitted) == 0u);
+    return vec2<u32>(select(key, UNBOUNDED, key == 0u), span_cells(atomicLoad(&vsm_table[cells_at() + e])));
 }
 
 @compute @workgroup_size(1, 1, 1)
@@ -630,12 +622,13 @@ fn alloc_new(e: u32, level: u32, rank: u32) {
     view.view_proj = crop * face.view_proj;
     let origin = vec2<f32>(f32(page % vsm.pool.y), f32(page / vsm.pool.y)) * side + corner;
     view.tile = vec4<f32>(origin, size, bitcast<f32>(fi));
-    // params.x: the receiver bound the page's casters are culled by (`needed_bound`; the
-    // largest finite f32 culls nothing); params.y: the cells drawn (`needed_cells`); both
+    // params.x: the receiver bound the page's casters are culled by (`needed_bounds`; the
+    // largest finite f32 culls nothing); params.y: the cells drawn; both
     // kept with the page for the next frame's cs_retain. (params.z: the texel's world size.)
     let admitted = admitted_level();
-    var bound = needed_bound(e, level, admitted);
-    var cells = needed_cells(e, level, admitted);
+    let needed = needed_bounds(e, level, admitted);
+    var bound = needed.x;
+    var cells = needed.y;
     if (vsm.prev.y != 0u) {
         // Pages that may be kept are drawn with some room to spare, so that a camera moving a
         // little does not outgrow them at once: one cell more on each side, an eighth deeper.

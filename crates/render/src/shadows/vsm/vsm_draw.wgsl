@@ -17,16 +17,22 @@
 @group(0) @binding(1) var<uniform> vsm: VsmUniforms;
 @group(0) @binding(2) var<storage, read> page_views: array<ShadowViewData>;
 
-// The part of a page its samples' filter taps reach (vsm.wgsl's `needed_cells`): the page's
+// The part of a page its samples' filter taps reach (vsm.wgsl's `needed_bounds`): the page's
 // casters are culled and drawn over that rectangle only, in cells of 1/16 of the page side.
 // `params.y` codes the first and last column and row (0..15 each) as
 // `first_col + 16 last_col + 256 first_row + 4096 last_row` (rows count from the page's top).
 // Returns x0, x1, y0, y1 in the page's normalized device coordinates.
 fn drawn_rect(view: ShadowViewData) -> vec4<f32> {
-    let code = u32(view.params.y);
-    let col = vec2<f32>(f32(code & 15u), f32((code >> 4u) & 15u) + 1.0) / 8.0 - 1.0;
-    let row = 1.0 - vec2<f32>(f32((code >> 12u) & 15u) + 1.0, f32((code >> 8u) & 15u)) / 8.0;
+    let c = drawn_cells(view);
+    let col = vec2<f32>(c.x, c.y + 1.0) / 8.0 - 1.0;
+    let row = 1.0 - vec2<f32>(c.w + 1.0, c.z) / 8.0;
     return vec4<f32>(col, row);
+}
+
+// The drawn rectangle's first and last column, first and last row (cells, rows from the top).
+fn drawn_cells(view: ShadowViewData) -> vec4<f32> {
+    let code = u32(view.params.y);
+    return vec4<f32>(vec4<u32>(code, code >> 4u, code >> 8u, code >> 12u) & vec4<u32>(15u));
 }
 
 // A clip position of the page in the clip space of its drawn rectangle (x and y scaled and
@@ -341,10 +347,10 @@ fn vs_clear(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> @
         vec2<f32>(0.0, 1.0), vec2<f32>(1.0, 0.0), vec2<f32>(1.0, 1.0),
     );
     // The rectangle in page texels, from the page's drawn cells (rows from the top).
-    let code = u32(page_views[i].params.y);
+    let c = drawn_cells(page_views[i]);
     let cell = tile.z / 16.0;
-    let lo = vec2<f32>(f32(code & 15u), f32((code >> 8u) & 15u)) * cell;
-    let hi = vec2<f32>(f32((code >> 4u) & 15u), f32((code >> 12u) & 15u)) * cell + cell;
+    let lo = c.xz * cell;
+    let hi = c.yw * cell + cell;
     let px = tile.xy + lo + quad[v % 6u] * (hi - lo);
     let size = f32(vsm.pool.x);
     return vec4<f32>(px.x / size * 2.0 - 1.0, 1.0 - px.y / size * 2.0, 1.0, 1.0);
