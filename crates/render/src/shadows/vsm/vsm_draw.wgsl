@@ -213,7 +213,7 @@ fn key_beyond(bound: f32, nearest: f32) -> bool {
 
 // ---- triangle expansion (compute; with compaction) ----
 //
-// The cull's pairs become triangles: one workgroup per (cluster, page) pair, one thread per
+// The cull's pairs become triangles: one thread per (cluster, page) pair, one loop step per
 // triangle, each tested against the page as the cluster was (outside the page's sides, beyond
 // its farthest receiver, facing away from the light where that is exact) and the survivors'
 // corners written, tagged with the page's slot, to `expanded`, which one indexed draw per
@@ -223,72 +223,92 @@ fn key_beyond(bound: f32, nearest: f32) -> bool {
 
 @group(0) @binding(15) var<storage, read_write> expanded: array<u32>;
 
-// (Per-thread reservations: a workgroup barrier costs a software driver more than the
-// contended counter.)
-@compute @workgroup_size(VSM_EXPAND_GROUP, 1, 1)
-fn cs_expand(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t: u32) {
-    let k = wg.x + wg.y * 65535u;
+// One thread per pair walks the pair's triangles (the parts the cull kept), keeps the
+// survivors' numbers in a private list and reserves their room with one atomic: the page's
+// view, drawn rectangle and projection are read and built once per pair, not per triangle,
+// and a software driver runs no per-pair workgroup.
+@compute @workgroup_size(64, 1, 1)
+fn cs_expand(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let k = gid.x + gid.y * groups.x * 64u;
     if (k >= atomicLoad(&command_count[0])) {
         return;
     }
     var cmd = commands[k];
-    // Past the cluster's triangles, or in a part of it whose box misses the page (the cull's
-    // part mask rides in the pair's first_instance, the page slot above it).
-    if (3u * t >= cmd.index_count || (cmd.first_instance & (1u << (t / VSM_PART_TRIANGLES))) == 0u) {
-        return;
-    }
+    let parts = cmd.first_instance & ((1u << VSM_PARTS) - 1u);
     let slot = cmd.first_instance >> VSM_PARTS;
     cmd.first_instance = 0u;
     let view = page_views[min(round.round.x + slot, arrayLength(&page_views) - 1u)];
-    let at = cmd.first_index + 3u * t;
-    let i = vec3<u32>(corners[at], corners[at + 1u], corners[at + 2u]);
-    let p0 = world[i.x].xyz;
-    let p1 = world[i.y].xyz;
-    let p2 = world[i.z].xyz;
     let r = drawn_rect(view);
-    let a = into_drawn(r, view.view_proj * vec4<f32>(p0, 1.0));
-    let b = into_drawn(r, view.view_proj * vec4<f32>(p1, 1.0));
-    let c = into_drawn(r, view.view_proj * vec4<f32>(p2, 1.0));
+    let ortho = view.params.w > 0.5;
     let bits = round.counts.z;
-    if ((bits & CULL_FRUSTUM) != 0u) {
-        // The drawn rectangle's sides only: depth is left to the rasterizer.
-        let outside = (a.x < -a.w && b.x < -b.w && c.x < -c.w)
-            || (a.x > a.w && b.x > b.w && c.x > c.w)
-            || (a.y < -a.w && b.y < -b.w && c.y < -c.w)
-            || (a.y > a.w && b.y > b.w && c.y > c.w);
-        let nearest = select(min(a.w, min(b.w, c.w)), min(a.z, min(b.z, c.z)), view.params.w > 0.5);
-        if (outside || key_beyond(view.params.x, nearest)) {
-            return;
+    let frustum = (bits & CULL_FRUSTUM) != 0u;
+    let backface = (bits & CULL_BACKFACE) != 0u;
+    let eye = vsm_faces[min(bitcast<u32>(view.tile.w), arrayLength(&vsm_faces) - 1u)].eye;
+    let first = cmd.first_index / 3u;
+    let triangles = cmd.index_count / 3u;
+    var kept: array<u32, VSM_EXPAND_GROUP>;
+    var n = 0u;
+    for (var part = 0u; part < VSM_PARTS; part++) {
+        if ((parts & (1u << part)) == 0u) {
+            continue;
+        }
+        let hi = min(triangles, (part + 1u) * VSM_PART_TRIANGLES);
+        for (var t = part * VSM_PART_TRIANGLES; t < hi; t++) {
+            let at = 3u * (first + t);
+            let p0 = world[corners[at]].xyz;
+            let p1 = world[corners[at + 1u]].xyz;
+            let p2 = world[corners[at + 2u]].xyz;
+            if (frustum) {
+                // In the drawn rectangle's clip space, as vs_draw clips them.
+                let a = into_drawn(r, view.view_proj * vec4<f32>(p0, 1.0));
+                let b = into_drawn(r, view.view_proj * vec4<f32>(p1, 1.0));
+                let c = into_drawn(r, view.view_proj * vec4<f32>(p2, 1.0));
+                // The drawn rectangle's sides only: depth is left to the rasterizer.
+                let outside = (a.x < -a.w && b.x < -b.w && c.x < -c.w)
+                    || (a.x > a.w && b.x > b.w && c.x > c.w)
+                    || (a.y < -a.w && b.y < -b.w && c.y < -c.w)
+                    || (a.y > a.w && b.y > b.w && c.y > c.w);
+                let nearest = select(min(a.w, min(b.w, c.w)), min(a.z, min(b.z, c.z)), ortho);
+                if (outside || key_beyond(view.params.x, nearest)) {
+                    continue;
+                }
+            }
+            if (backface && first + t < round.counts.y && faces_away(p0, p1, p2, eye)) {
+                continue;
+            }
+            kept[n] = t;
+            n = n + 1u;
         }
     }
-    if ((bits & CULL_BACKFACE) != 0u && cmd.first_index / 3u + t < round.counts.y) {
-        let eye = vsm_faces[min(bitcast<u32>(view.tile.w), arrayLength(&vsm_faces) - 1u)].eye;
-        if (faces_away(p0, p1, p2, eye)) {
-            return;
-        }
+    if (n == 0u) {
+        return;
     }
-    let v = atomicAdd(&command_count[1], 1u);
-    if (v < arrayLength(&expanded) / 3u) {
-        let base = u32(cmd.base_vertex);
-        expanded[3u * v] = base + i.x;
-        expanded[3u * v + 1u] = base + i.y;
-        expanded[3u * v + 2u] = base + i.z;
-    } else {
-        // Out of room: the pair is drawn whole (every overflowing thread of the pair writes
-        // the same command; triangles of it already expanded are drawn twice, to the same
-        // depth).
+    let v = atomicAdd(&command_count[1], n);
+    let room = arrayLength(&expanded) / 3u;
+    let base = u32(cmd.base_vertex);
+    for (var j = 0u; j < n && v + j < room; j++) {
+        let at = 3u * (first + kept[j]);
+        let w = 3u * (v + j);
+        expanded[w] = base + corners[at];
+        expanded[w + 1u] = base + corners[at + 1u];
+        expanded[w + 2u] = base + corners[at + 2u];
+    }
+    if (v + n > room) {
+        // Out of room: the pair is drawn whole (its triangles written below the room's end are
+        // drawn twice, to the same depth).
         commands[round.counts.w + k] = cmd;
     }
 }
 
-// The expansion's dispatch (one workgroup per pair, rows of 65,535) and, after it, the
+// The expansion's dispatch (one thread per pair) and, after it, the
 // round's indexed draw of what it kept.
 @group(0) @binding(16) var<storage, read_write> round_args: array<u32, 9>;
 @group(0) @binding(17) var<storage, read> round_counts: array<u32, 4>;
 
 @compute @workgroup_size(1, 1, 1)
 fn cs_expand_args() {
-    let n = round_counts[0];
+    // One thread per pair, in workgroups of 64, rows of 65,535 workgroups.
+    let n = (round_counts[0] + 63u) / 64u;
     round_args[0] = min(n, 65535u);
     round_args[1] = (n + 65534u) / 65535u;
     round_args[2] = 1u;
