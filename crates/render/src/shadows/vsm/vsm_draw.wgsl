@@ -90,11 +90,9 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
     let view = page_views[min(page, arrayLength(&page_views) - 1u)];
     var group_visible = page < atomicLoad(&counters[17]);
     let frustum = (bits & CULL_FRUSTUM) != 0u;
-    let row = key_row(view.view_proj, view.params.w);
-    let proj = drawn_proj(view);
+    let planes = page_planes(view);
     if (group_visible && frustum && (bits & VSM_FLAT_CULL) == 0u) {
-        let sphere = cluster_bounds[arrayLength(&clusters) + g];
-        if (sphere_outside(proj, sphere) || beyond_receivers(view, row, sphere)) {
+        if (sphere_outside_page(planes, view, cluster_bounds[arrayLength(&clusters) + g])) {
             group_visible = false;
         }
     }
@@ -110,8 +108,8 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
         if (visible) {
             let sphere = cluster_bounds[c];
             let boxes = arrayLength(&clusters) + (arrayLength(&clusters) + VSM_CULL_GROUP - 1u) / VSM_CULL_GROUP;
-            if (frustum && (sphere_outside(proj, sphere) || beyond_receivers(view, row, sphere)
-                || box_outside(view, proj, row, boxes + 2u * c))) {
+            if (frustum && (sphere_outside_page(planes, view, sphere)
+                || box_outside(planes, view, boxes + 2u * c))) {
                 visible = false;
             } else if ((bits & CULL_BACKFACE) != 0u && cl.first_triangle < round.counts.y
                 && cluster_faces_away(cl, instances[cl.instance].normal, sphere, eye)) {
@@ -125,7 +123,7 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
             let n = arrayLength(&clusters);
             let first_part = 3u * n + (n + VSM_CULL_GROUP - 1u) / VSM_CULL_GROUP + 2u * VSM_PARTS * c;
             for (var k = 0u; k < VSM_PARTS; k++) {
-                if (k * VSM_PART_TRIANGLES >= cl.triangles || box_outside(view, proj, row, first_part + 2u * k)) {
+                if (k * VSM_PART_TRIANGLES >= cl.triangles || box_outside(planes, view, first_part + 2u * k)) {
                     parts = parts & ~(1u << k);
                 }
             }
@@ -174,36 +172,91 @@ fn key_row(view_proj: mat4x4<f32>, ortho: f32) -> vec4<f32> {
     return vec4<f32>(view_proj[0][r], view_proj[1][r], view_proj[2][r], view_proj[3][r]);
 }
 
-// Whether a caster sphere lies wholly beyond the page's farthest receiver (`params.x`, 0 =
-// no bound): its depths then exceed every depth the page's samples compare against, so it
-// can shadow none of them (the comparison is `receiver <= stored`).
-fn beyond_receivers(view: ShadowViewData, row: vec4<f32>, sphere: vec4<f32>) -> bool {
-    return key_beyond(view.params.x, dot(row, vec4<f32>(sphere.xyz, 1.0)) - sphere.w * length(row.xyz));
+// A page's culling planes, built once per cull thread: the sides of its drawn rectangle and
+// its depth range in homogeneous clip space (Gribb and Hartmann: x >= -w, x <= w, y >= -w,
+// y <= w, z >= 0, z <= w, from the rows of the projection), each with its normal's length in
+// w, and the row whose dot product with a point is its distance key (`key_row`). Separate
+// fields, not an array: a software driver keeps an indexed private array in memory.
+struct PagePlanes {
+    left: vec4<f32>,
+    right: vec4<f32>,
+    bottom: vec4<f32>,
+    top: vec4<f32>,
+    near: vec4<f32>,
+    far: vec4<f32>,
+    lengths: vec4<f32>,
+    depth_lengths: vec2<f32>,
+    row: vec4<f32>,
+}
+
+fn page_planes(view: ShadowViewData) -> PagePlanes {
+    let m = drawn_proj(view);
+    let r0 = vec4<f32>(m[0].x, m[1].x, m[2].x, m[3].x);
+    let r1 = vec4<f32>(m[0].y, m[1].y, m[2].y, m[3].y);
+    let r2 = vec4<f32>(m[0].z, m[1].z, m[2].z, m[3].z);
+    let r3 = vec4<f32>(m[0].w, m[1].w, m[2].w, m[3].w);
+    var out: PagePlanes;
+    out.left = r3 + r0;
+    out.right = r3 - r0;
+    out.bottom = r3 + r1;
+    out.top = r3 - r1;
+    out.near = r2;
+    out.far = r3 - r2;
+    out.lengths = vec4<f32>(length(out.left.xyz), length(out.right.xyz), length(out.bottom.xyz), length(out.top.xyz));
+    out.depth_lengths = vec2<f32>(length(out.near.xyz), length(out.far.xyz));
+    out.row = key_row(view.view_proj, view.params.w);
+    return out;
+}
+
+// Whether sphere `s` (centre, radius) lies wholly outside plane `p` (normal length `len`);
+// a small slack keeps rounding from culling a visible sphere (cluster_cull.wgsl's test).
+fn sphere_outside_plane(p: vec4<f32>, len: f32, s: vec4<f32>, c: f32) -> bool {
+    return dot(p.xyz, s.xyz) + p.w < -s.w * len - 1e-5 * (len * c + abs(p.w));
+}
+
+// Whether a caster sphere lies wholly outside the page's drawn frustum (cluster_cull.wgsl's
+// `sphere_outside`, with the planes built once) or wholly beyond the page's farthest receiver
+// (`params.x`, 0 = no bound): its depths then exceed every depth the page's samples compare
+// against, so it can shadow none of them (the comparison is `receiver <= stored`).
+fn sphere_outside_page(planes: PagePlanes, view: ShadowViewData, s: vec4<f32>) -> bool {
+    let c = length(s.xyz);
+    let l = planes.lengths;
+    if (sphere_outside_plane(planes.left, l.x, s, c) || sphere_outside_plane(planes.right, l.y, s, c)
+        || sphere_outside_plane(planes.bottom, l.z, s, c) || sphere_outside_plane(planes.top, l.w, s, c)
+        || sphere_outside_plane(planes.near, planes.depth_lengths.x, s, c)
+        || sphere_outside_plane(planes.far, planes.depth_lengths.y, s, c)) {
+        return true;
+    }
+    let row = planes.row;
+    return key_beyond(view.params.x, dot(row, vec4<f32>(s.xyz, 1.0)) - s.w * length(row.xyz));
+}
+
+// The largest value of plane `p` over the box of centre `c` and half extent `e` (at the corner
+// farthest along the plane's normal), less a slack of a few ulps of its terms so that rounding
+// never puts a box that touches the plane outside it.
+fn box_reach(p: vec4<f32>, c: vec3<f32>, e: vec3<f32>, scale: vec3<f32>) -> f32 {
+    let a = abs(p.xyz);
+    return dot(p.xyz, c) + p.w + dot(a, e) + 1e-6 * (dot(a, scale) + abs(p.w));
 }
 
 // Whether the box at cluster_bounds[at] (low corner; + 1: high corner) — a cluster's or a
-// cluster part's, which casters.wgsl writes after the groups' spheres — lies wholly
-// outside one side of the page's drawn rectangle (`proj`), or beyond its farthest receiver:
-// its eight corners in that clip space. Each side is a half-space of homogeneous clip space, so corners outside
-// one put the whole box outside it, whatever the sign of w. Tighter than the sphere for flat
-// and long clusters (the seed's re-projected cluster boxes).
-fn box_outside(view: ShadowViewData, proj: mat4x4<f32>, row: vec4<f32>, at: u32) -> bool {
+// cluster part's, which casters.wgsl writes after the groups' spheres — lies wholly outside
+// one side of the page's drawn rectangle, or beyond its farthest receiver: each side is a
+// half-space of homogeneous clip space, so the box is outside it when the corner reaching
+// farthest into it is (the seed's re-projected cluster boxes, without transforming eight
+// corners). Tighter than the sphere for flat and long clusters.
+fn box_outside(planes: PagePlanes, view: ShadowViewData, at: u32) -> bool {
     let lo = cluster_bounds[at].xyz;
     let hi = cluster_bounds[at + 1u].xyz;
-    var out = vec4<u32>(0u);
-    var nearest = 3.0e38;
-    for (var k = 0u; k < 8u; k++) {
-        let p = vec3<f32>(
-            select(lo.x, hi.x, (k & 1u) != 0u),
-            select(lo.y, hi.y, (k & 2u) != 0u),
-            select(lo.z, hi.z, (k & 4u) != 0u),
-        );
-        let q = proj * vec4<f32>(p, 1.0);
-        // Outside x < -w, x > w, y < -w, y > w.
-        out += select(vec4<u32>(0u), vec4<u32>(1u), vec4<f32>(-q.x, q.x, -q.y, q.y) > vec4<f32>(q.w));
-        nearest = min(nearest, dot(row, vec4<f32>(p, 1.0)));
+    let c = 0.5 * (lo + hi);
+    let e = 0.5 * (hi - lo);
+    let scale = abs(c) + e;
+    if (box_reach(planes.left, c, e, scale) < 0.0 || box_reach(planes.right, c, e, scale) < 0.0
+        || box_reach(planes.bottom, c, e, scale) < 0.0 || box_reach(planes.top, c, e, scale) < 0.0) {
+        return true;
     }
-    return any(out == vec4<u32>(8u)) || key_beyond(view.params.x, nearest);
+    // The nearest key over the box: the reach of the negated row, negated.
+    return key_beyond(view.params.x, -box_reach(-planes.row, c, e, scale));
 }
 
 // Whether distance key `nearest` lies beyond receiver bound `bound` (0 = none).
