@@ -246,8 +246,11 @@ fn casters_beyond_a_pages_farthest_receiver_are_skipped_without_changing_a_pixel
 /// the triangles that touch the page, in an index buffer of `expand_bytes`; when a round's
 /// triangles exceed it, the pairs past it are drawn whole. An index buffer of 1,000 triangles
 /// overflows in every round of the atrium and must give the same image and mask as the
-/// default 2 M. (Drawing nothing past the buffer: 62,630 mask words differ, seen failing.) On
-/// adapters without GPU-counted draws both draw whole clusters and agree trivially.
+/// default 2 M. (Drawing nothing past the buffer: 62,630 mask words differ, seen failing.)
+/// Drawn whole, the pairs also skip the expansion's per-triangle culls, so this checks those
+/// against drawing everything: a triangle between texel centres writes no texel (skipping
+/// triangles that reach 0.3 texel past a centre fails here, seen). On adapters without
+/// GPU-counted draws both draw whole clusters and agree trivially.
 #[test]
 fn an_overflowing_triangle_expansion_draws_the_same_shadows() {
     let ctx = common::context();

@@ -259,6 +259,27 @@ fn box_outside(planes: PagePlanes, view: ShadowViewData, at: u32) -> bool {
     return key_beyond(view.params.x, -box_reach(-planes.row, c, e, scale));
 }
 
+// Whether a triangle (page clip positions, all in front of the light) lies between the page's
+// texel centres on some axis, so that rasterizing it writes no texel: its bounding box in
+// page texels (`side` of them) holds no centre k + 1/2 with a margin far above the
+// rasterizer's 1/256-texel snapping. Small triangles of coarse pages are most of a
+// detailed caster's, and each costs a software rasterizer its setup.
+fn covers_no_texel(a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, side: f32) -> bool {
+    if (min(a.w, min(b.w, c.w)) <= 0.0) {
+        return false;
+    }
+    let s = vec2<f32>(0.5, -0.5) * side;
+    let ta = a.xy / a.w * s;
+    let tb = b.xy / b.w * s;
+    let tc = c.xy / c.w * s;
+    // Centres sit at k + 1/2 from the page's corner, i.e. at integers from its middle
+    // (`side` is even) minus one half: shift by the half.
+    let lo = min(ta, min(tb, tc)) + vec2<f32>(0.5 * side - 0.5);
+    let hi = max(ta, max(tb, tc)) + vec2<f32>(0.5 * side - 0.5);
+    let margin = 1.0 / 32.0;
+    return any(ceil(lo - margin) > floor(hi + margin));
+}
+
 // Whether distance key `nearest` lies beyond receiver bound `bound` (0 = none).
 fn key_beyond(bound: f32, nearest: f32) -> bool {
     return bound > 0.0 && nearest > bound + 1e-4 * abs(bound) + 1e-6;
@@ -312,10 +333,16 @@ fn cs_expand(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
             let p1 = world[corners[at + 1u]].xyz;
             let p2 = world[corners[at + 2u]].xyz;
             if (frustum) {
+                let pa = view.view_proj * vec4<f32>(p0, 1.0);
+                let pb = view.view_proj * vec4<f32>(p1, 1.0);
+                let pc = view.view_proj * vec4<f32>(p2, 1.0);
+                if (covers_no_texel(pa, pb, pc, view.tile.z)) {
+                    continue;
+                }
                 // In the drawn rectangle's clip space, as vs_draw clips them.
-                let a = into_drawn(r, view.view_proj * vec4<f32>(p0, 1.0));
-                let b = into_drawn(r, view.view_proj * vec4<f32>(p1, 1.0));
-                let c = into_drawn(r, view.view_proj * vec4<f32>(p2, 1.0));
+                let a = into_drawn(r, pa);
+                let b = into_drawn(r, pb);
+                let c = into_drawn(r, pc);
                 // The drawn rectangle's sides only: depth is left to the rasterizer.
                 let outside = (a.x < -a.w && b.x < -b.w && c.x < -c.w)
                     || (a.x > a.w && b.x > b.w && c.x > c.w)
