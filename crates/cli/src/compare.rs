@@ -115,9 +115,13 @@ pub struct CompareArgs {
     /// atlas size the other variants report).
     #[arg(long, default_value_t = (manyshadows::shadows::vsm::plan::DEFAULT_POOL_BYTES >> 20) as u32)]
     page_pool: u32,
-    /// Shadow texels per screen pixel that --techniques virtual aims for.
-    #[arg(long, default_value_t = 1.0)]
+    /// Shadow texels per screen pixel that --techniques virtual aims for (see render --help).
+    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_LOD)]
     virtual_lod: f32,
+    /// --techniques virtual's receiver bias as a fraction of the --bias-* texels (see render
+    /// --help).
+    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_BIAS_SCALE)]
+    virtual_bias: f32,
     /// Who traces the exact reference: cpu (default, the truth every technique is scored
     /// against) or gpu (ray queries; needs EXPERIMENTAL_RAY_QUERY, for frames and light counts
     /// the CPU would take too long for).
@@ -601,7 +605,8 @@ fn settings(args: &CompareArgs, technique: Technique) -> RenderSettings {
         .with_virtual_maps(
             manyshadows::VirtualOptions::default()
                 .with_pool_bytes(u64::from(args.page_pool) << 20)
-                .with_lod(args.virtual_lod),
+                .with_lod(args.virtual_lod)
+                .with_bias_scale(args.virtual_bias),
         )
 }
 

@@ -336,10 +336,16 @@ pub(crate) struct RenderArgs {
     /// clamped to 128..=16384 texels).
     #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::MAX_SIDE)]
     virtual_side: u32,
-    /// Shadow texels per screen pixel that --technique virtual aims for (1 = texel footprint
-    /// about the pixel footprint; 2 = twice as fine, four times the pages).
-    #[arg(long, default_value_t = 1.0)]
+    /// Shadow texels per screen pixel that --technique virtual aims for (1 = no texel wider
+    /// than the pixel footprint; 2 = twice as fine, four times the pages; 0.7 about 0.6 times
+    /// the pages, with more misclassified pixels where pixels are wide).
+    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_LOD)]
     virtual_lod: f32,
+    /// --technique virtual's receiver bias as a fraction of --bias-constant, --bias-slope and
+    /// --bias-normal (those count texels; a virtual page's texels match the screen pixel, and
+    /// a whole texel of bias leaks light at contacts: 0.5 by default, 0 to 16).
+    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_BIAS_SCALE)]
+    virtual_bias: f32,
     /// With shadow rays (a technique that casts them, see --technique): trace K lights per
     /// pixel, picked among the pixel's cluster lights by importance (their unshadowed
     /// contribution) and weighted so the image stays unbiased — noisy, at a cost that does
@@ -630,6 +636,7 @@ pub(crate) fn flag_error(e: manyshadows::RenderError) -> anyhow::Error {
         ("irregular.hash", "--irregular-hash"),
         ("virtual_maps.pool_bytes", "--page-pool (MiB)"),
         ("virtual_maps.lod", "--virtual-lod"),
+        ("virtual_maps.bias_scale", "--virtual-bias"),
         ("virtual_maps.max_side", "--virtual-side"),
         ("rays.light_samples", "--light-samples"),
         ("shadow_budget", "--shadow-budget"),
@@ -696,7 +703,8 @@ pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettin
             manyshadows::VirtualOptions::default()
                 .with_pool_bytes(u64::from(args.page_pool) << 20)
                 .with_max_side(args.virtual_side)
-                .with_lod(args.virtual_lod),
+                .with_lod(args.virtual_lod)
+                .with_bias_scale(args.virtual_bias),
         )
         .with_rays(
             manyshadows::RayOptions::default()

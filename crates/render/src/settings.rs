@@ -373,6 +373,15 @@ impl RenderSettings {
                 "a positive number of shadow texels per pixel",
             ));
         }
+        if !(self.virtual_maps.bias_scale.is_finite()
+            && (0.0..=16.0).contains(&self.virtual_maps.bias_scale))
+        {
+            return Err(bad(
+                "virtual_maps.bias_scale",
+                self.virtual_maps.bias_scale,
+                "a fraction of the shadow bias from 0 to 16",
+            ));
+        }
         if self.rays.light_samples > MAX_LIGHT_SAMPLES {
             return Err(bad(
                 "rays.light_samples",

@@ -203,3 +203,38 @@ fn full_atlas_in_strict_mode_is_a_clear_error_and_shrinks_otherwise() {
     let sizes: Vec<u32> = tiles.iter().map(|t| t.size).collect();
     assert!(area(&sizes) <= 2048 * 2048 && area(&sizes) >= area(&shrunk));
 }
+
+/// The virtual maps' level of detail and bias scale are checked before any GPU work: NaN,
+/// infinite, zero or negative texels per pixel, and bias scales outside 0..=16, are refused
+/// naming the field (a NaN scale would turn every lookup's position into NaN).
+#[test]
+fn virtual_options_out_of_range_are_refused() {
+    let ctx = common::context();
+    let scene = triangle_scene([Vec3::ZERO, Vec3::X, Vec3::Z]);
+    let with = |o: manyshadows::VirtualOptions| {
+        small()
+            .with_technique(manyshadows::Technique::VIRTUAL)
+            .with_virtual_maps(o)
+    };
+    let d = manyshadows::VirtualOptions::default;
+    let cases = [
+        (d().with_lod(f32::NAN), "virtual_maps.lod"),
+        (d().with_lod(0.0), "virtual_maps.lod"),
+        (d().with_lod(f32::INFINITY), "virtual_maps.lod"),
+        (d().with_bias_scale(f32::NAN), "virtual_maps.bias_scale"),
+        (d().with_bias_scale(-0.5), "virtual_maps.bias_scale"),
+        (d().with_bias_scale(17.0), "virtual_maps.bias_scale"),
+    ];
+    for (o, option) in cases {
+        let err = Renderer::new(&ctx, &scene, with(o)).err();
+        assert!(
+            matches!(&err, Some(RenderError::InvalidOption { option: f, .. }) if *f == option),
+            "{o:?}: {err:?}"
+        );
+    }
+    for scale in [0.0, 0.5, 16.0] {
+        let mut r = Renderer::new(&ctx, &scene, with(d().with_bias_scale(scale)))
+            .unwrap_or_else(|e| panic!("bias scale {scale}: {e}"));
+        r.render().expect("frame");
+    }
+}

@@ -51,17 +51,18 @@ fn misclassified_with(
     (f, e, frame.virtual_maps)
 }
 
-/// The virtual mask against the reference: under the issue's 0.2 % outside the edge band, and
-/// better than the atlas (`traditional`, default maps) on the same frame. Measured (lavapipe
-/// and llvmpipe alike): virtual 0.151 %, traditional 0.424 % (at 960x540 `compare` measures
-/// 0.027 % against 0.417 % with 64 lights: at 320x180 a pixel, hence a page texel, is 3 times
-/// wider).
+/// The virtual mask against the reference: under 0.05 % outside the edge band (the issue
+/// asked for 0.2 %), and better than the atlas (`traditional`, default maps) on the same
+/// frame. Measured (lavapipe): virtual 0.025 %, traditional 0.430 % (at 960x540 `compare`
+/// measures 0.008 % against 0.412 % with 64 lights: at 320x180 a pixel, hence a page texel,
+/// is 3 times wider). A whole texel of receiver bias (`bias_scale` 1, the default before)
+/// leaks light at contacts: 0.156 %, seen failing.
 #[test]
 fn virtual_mask_matches_the_reference_better_than_the_atlas() {
     let (virt, _) = misclassified(Technique::VIRTUAL);
     let (atlas, _) = misclassified(Technique::TRADITIONAL);
     assert!(
-        virt <= 0.002,
+        virt <= 0.0005,
         "virtual: {:.4} % misclassified",
         virt * 100.0
     );
@@ -149,9 +150,9 @@ fn faces_on_quarter_pages_keep_their_shadows() {
 /// finest level A whose marked pages fit with the asked pages of the coarser levels (the CPU
 /// recomputes A from the counters): asked pages coarser than A and every marked page of A are
 /// resident, asked pages finer than A are denied, and the mask stays near the reference
-/// (their samples read their ancestor at A). Measured (lavapipe): 327 asked of 335 marked
-/// pages; an 18 × 18 pool admits level 3 (its 24 marked pages with the 292 asked coarser
-/// ones), denies the 12 of level 4, and misclassifies 0.162 % against the full pool's 0.156 %
+/// (their samples read their ancestor at A). Measured (lavapipe): 328 asked of 348 marked
+/// pages; an 18 × 18 pool admits level 3 (its 24 marked pages with the 293 asked coarser
+/// ones), denies the 12 of level 4, and misclassifies 0.027 % against the full pool's 0.025 %
 /// (bound: 0.05 points more). Marking ancestors as needed, as before, admitted level 2 only.
 #[test]
 fn only_asked_pages_are_drawn_and_a_short_pool_admits_a_whole_level() {
@@ -212,9 +213,15 @@ fn group_culling_draws_exactly_what_the_flat_cull_draws() {
 /// Receiver bounds skip only casters that no sample reading the page can see. Depth: each
 /// sample's shadow test is `receiver <= stored`, and a caster deeper than every receiver leaves
 /// it true. Extent: a page is cleared and drawn only over the rectangle its samples' filter
-/// taps reach. So the image (PCF 2x2) and the hard visibility mask are the same bit for bit,
-/// with fewer triangles drawn. (Bounding a page by half its farthest receiver changes 22,584
-/// mask words; a rectangle without the taps' reach, 31 pixels: seen failing.)
+/// taps reach. So the hard visibility mask is the same bit for bit, with fewer triangles
+/// drawn, and the image (PCF 2x2) too but for rounding: triangles are clipped at the
+/// rectangle's sides, and a clipped triangle's new corners interpolate depths that can differ
+/// in the last bit from the whole triangle's, enough to flip one bilinear tap whose receiver
+/// sits that close to a surface (with the virtual maps' half-texel bias: 1 pixel by 2 of 255
+/// levels; clipping at the page's sides instead gives identical images, seen, but rasterizes
+/// more). So at most 2 pixels may differ, by at most 4 levels. (Bounding a page by half its
+/// farthest receiver changes 22,584 mask words; a rectangle without the taps' reach, 31
+/// pixels: seen failing.)
 #[test]
 fn casters_beyond_a_pages_farthest_receiver_are_skipped_without_changing_a_pixel() {
     let ctx = common::context();
@@ -239,7 +246,21 @@ fn casters_beyond_a_pages_farthest_receiver_are_skipped_without_changing_a_pixel
         b.triangles,
         a.triangles
     );
-    assert_same_shadows(&bounded, &all, "virtual_receiver_cull", ["bounded", "all"]);
+    let words = |f: &manyshadows::Frame| f.visibility.as_ref().expect("mask").words.clone();
+    assert_eq!(words(&bounded), words(&all), "mask words differ");
+    let differing =
+        common::differing_pixels(&bounded, &all, "virtual_receiver_cull", ["bounded", "all"]);
+    let largest = bounded
+        .rgba
+        .iter()
+        .zip(&all.rgba)
+        .map(|(a, b)| a.abs_diff(*b))
+        .max()
+        .unwrap_or(0);
+    assert!(
+        differing <= 2 && largest <= 4,
+        "{differing} pixels differ, by up to {largest} levels"
+    );
 }
 
 /// Where the adapter counts draws on the GPU, page drawing expands (cluster, page) pairs into

@@ -182,7 +182,8 @@ struct VsmUniforms {
     // page's casters by its farthest receiver (the keys after the table's entries).
     counts: vec4<u32>,
     // Texels per screen pixel wanted (level of detail scale); the marking pass's first pixel
-    // (x, y: it marks a rectangle from there when only part of the screen changed); unused.
+    // (x, y: it marks a rectangle from there when only part of the screen changed); the
+    // receiver bias's scale (texels of the bias settings per texel of a page).
     lod: vec4<f32>,
     // Where last frame's page table keeps its pages' receiver bounds (its entry count); 1 =
     // pages drawn now may be kept later and get bounds with room to spare; unused.

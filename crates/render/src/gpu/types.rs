@@ -237,7 +237,8 @@ pub struct VsmUniforms {
     /// page's casters by its farthest receiver (the keys after the table's entries).
     pub counts: [u32; 4],
     /// Texels per screen pixel wanted; the first pixel (x, y) the marking pass visits (a
-    /// rectangle of the screen when only part of it changed); unused.
+    /// rectangle of the screen when only part of it changed); the receiver bias's scale
+    /// (`VirtualOptions::bias_scale`).
     pub lod: [f32; 4],
     /// Where last frame's page table keeps its pages' receiver bounds (its entry count); 1 =
     /// pages drawn now may be kept later and get bounds with room to spare; unused.

@@ -1,12 +1,14 @@
 // Virtual shadow maps (vsm.rs): which level and page of a face a surface point needs, and
 // where it falls there. Shared by the page-marking pass and the lookups of the lighting and
 // visibility passes, so that a lookup asks for exactly the page the marking requested.
-// Needs `frame: FrameUniforms` and shadow_lookup.wgsl (`receiver_offset_dir`).
+// Needs `frame: FrameUniforms`, `vsm: VsmUniforms` and shadow_lookup.wgsl
+// (`receiver_offset_dir`).
 
 // A sample seen from a face, computed once per (sample, face): the clip position of the
 // point and of its bias direction. The receiver offset is the texel's world size times that
-// direction (`receiver_offset_dir`), so the biased clip position for any level is
-// `p + texel · d`: walking down to coarser levels costs no further transform.
+// direction (`receiver_offset_dir`, scaled by `VirtualOptions::bias_scale`), so the biased
+// clip position for any level is `p + texel · d`: walking down to coarser levels costs no
+// further transform.
 struct VsmRay {
     p: vec4<f32>,
     d: vec4<f32>,
@@ -15,7 +17,7 @@ struct VsmRay {
 fn vsm_ray(light: LightData, face: VirtualFace, p: vec3<f32>, n: vec3<f32>) -> VsmRay {
     var out: VsmRay;
     out.p = face.view_proj * vec4<f32>(p, 1.0);
-    out.d = face.view_proj * vec4<f32>(receiver_offset_dir(light, p, n), 0.0);
+    out.d = face.view_proj * vec4<f32>(receiver_offset_dir(light, p, n) * vsm.lod.w, 0.0);
     return out;
 }
 
