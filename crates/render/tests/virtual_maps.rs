@@ -213,15 +213,15 @@ fn group_culling_draws_exactly_what_the_flat_cull_draws() {
 /// Receiver bounds skip only casters that no sample reading the page can see. Depth: each
 /// sample's shadow test is `receiver <= stored`, and a caster deeper than every receiver leaves
 /// it true. Extent: a page is cleared and drawn only over the rectangle its samples' filter
-/// taps reach. So the hard visibility mask is the same bit for bit, with fewer triangles
-/// drawn, and the image (PCF 2x2) too but for rounding: triangles are clipped at the
-/// rectangle's sides, and a clipped triangle's new corners interpolate depths that can differ
-/// in the last bit from the whole triangle's, enough to flip one bilinear tap whose receiver
-/// sits that close to a surface (with the virtual maps' half-texel bias: 1 pixel by 2 of 255
-/// levels; clipping at the page's sides instead gives identical images, seen, but rasterizes
-/// more). So at most 2 pixels may differ, by at most 4 levels. (Bounding a page by half its
-/// farthest receiver changes 22,584 mask words; a rectangle without the taps' reach, 31
-/// pixels: seen failing.)
+/// taps reach. So the hard visibility mask and the image (PCF 2x2) are the same, with fewer
+/// triangles drawn, but for rounding: triangles are clipped at the rectangle's sides, and a
+/// clipped triangle's new corners interpolate depths that can differ in the last bit from the
+/// whole triangle's, enough to flip a comparison whose receiver sits that close to a surface
+/// (with the virtual maps' half-texel bias: on lavapipe 1 pixel by 2 of 255 levels, on
+/// llvmpipe GL 1 mask bit of 2.3 M; clipping at the page's sides instead gives identical
+/// masks and images on both, seen, but rasterizes more). So at most 2 mask bits and 2 pixels
+/// may differ, the pixels by at most 4 levels. (Bounding a page by half its farthest receiver
+/// changes 22,584 mask words; a rectangle without the taps' reach, 31 pixels: seen failing.)
 #[test]
 fn casters_beyond_a_pages_farthest_receiver_are_skipped_without_changing_a_pixel() {
     let ctx = common::context();
@@ -247,9 +247,12 @@ fn casters_beyond_a_pages_farthest_receiver_are_skipped_without_changing_a_pixel
         a.triangles
     );
     let words = |f: &manyshadows::Frame| f.visibility.as_ref().expect("mask").words.clone();
-    assert_eq!(words(&bounded), words(&all), "mask words differ");
+    let (wb, wa) = (words(&bounded), words(&all));
+    let bits: u32 = wb.iter().zip(&wa).map(|(x, y)| (x ^ y).count_ones()).sum();
     let differing =
         common::differing_pixels(&bounded, &all, "virtual_receiver_cull", ["bounded", "all"]);
+    eprintln!("mask bits that differ: {bits}; pixels: {differing}");
+    assert!(bits <= 2, "{bits} mask bits differ");
     let largest = bounded
         .rgba
         .iter()
