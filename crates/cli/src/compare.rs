@@ -330,7 +330,8 @@ fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
                 bar.inc(1);
                 continue;
             }
-            Err(e) => return Err(e.into()),
+            // A setting out of range names the flag that set it, as `render` does.
+            Err(e) => return Err(crate::flag_error(e)),
         };
         let frame = renderer.render()?;
         if reference.is_none() {
@@ -884,6 +885,7 @@ fn report(
         "resolution": [args.width, args.height],
         "lights": { "total": scene.lights.len(), "by_type": by_kind },
         "bias_texels": { "constant": args.bias_constant, "slope": args.bias_slope, "normal": args.bias_normal },
+        "virtual_maps": { "lod": args.virtual_lod, "bias_scale": args.virtual_bias, "page_pool_mib": args.page_pool },
         "edge_band_px": args.edge_band,
         "reference": {
             "triangles": tracer.triangle_count(),

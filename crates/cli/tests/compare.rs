@@ -139,6 +139,18 @@ fn analytic_scenes_score_every_technique_within_bounds() {
         );
         let variants = v["variants"].as_array().unwrap();
         every_technique_scored_or_honestly_skipped(&v, scene);
+        // The virtual maps' settings are recorded with the scores (the library's defaults).
+        let defaults = manyshadows::VirtualOptions::default();
+        assert_eq!(
+            v["virtual_maps"]["bias_scale"].as_f64(),
+            Some(f64::from(defaults.bias_scale)),
+            "{scene}: {}",
+            v["virtual_maps"]
+        );
+        assert_eq!(
+            v["virtual_maps"]["lod"].as_f64(),
+            Some(f64::from(defaults.lod))
+        );
         for var in variants {
             let label = var["label"].as_str().unwrap();
             let by_type = var["by_type"].as_object().unwrap();
@@ -280,6 +292,16 @@ fn bad_input_is_a_clear_error() {
         (&["--scene", "nope"], 1, "unknown built-in scene"),
         (&["--techniques", "nope"], 2, "unknown technique"),
         (&["--atlas-max", "8"], 1, "--atlas-max 8"),
+        (
+            &["--techniques", "virtual", "--virtual-bias", "NaN"],
+            1,
+            "--virtual-bias",
+        ),
+        (
+            &["--techniques", "virtual", "--virtual-lod", "0"],
+            1,
+            "--virtual-lod",
+        ),
         (
             &["--lights", "4096", "--width", "8192", "--height", "8192"],
             1,
