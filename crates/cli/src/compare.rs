@@ -419,7 +419,7 @@ fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
             atlas: plan.layout.size,
             shrink_steps: plan.layout.shrink_steps,
             shadow_bytes: match frame.virtual_maps {
-                Some(v) => v.pool_bytes + v.table_bytes,
+                Some(v) => v.kept_bytes(),
                 None => u64::from(plan.layout.size).pow(2) * 4,
             },
             gpu_ms: frame.timings.gpu_ms.clone(),
@@ -991,7 +991,7 @@ fn print_table(report: &serde_json::Value, results: &[VariantResult], scene: &Sc
         })
         .collect();
     println!(
-        "shadow memory kept (MiB; atlas, or page pool + page table): {}",
+        "shadow memory kept (MiB; atlas, or page pool + page table (+ last frame's with caching)): {}",
         memory.join(", ")
     );
     let first = results.first().map(|v| v.diff_image.clone());

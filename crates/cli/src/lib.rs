@@ -982,10 +982,12 @@ fn print_summary(s: &serde_json::Value) {
     if v.is_object() {
         let fit = &v["fit"];
         let capped = fit["capped_side"].as_u64().unwrap_or(0);
+        let prev = v["prev_table_bytes"].as_u64().unwrap_or(0);
         println!(
-            "virtual      {} faces of {} lights ({} off screen, no faces; {} faces needed by a sample, the rest get no pages), page table {} entries ({} KiB){}",
+            "virtual      {} faces of {} lights ({} off screen, no faces; {} faces needed by a sample, the rest get no pages), page table {} entries ({} KiB{}){}",
             fit["faces"], fit["lights"], fit["off_screen"], v["faces_in_use"], fit["table_entries"],
             v["table_bytes"].as_u64().unwrap_or(0) / 1024,
+            if prev > 0 { format!(", and {} KiB for last frame's, kept for caching", prev / 1024) } else { String::new() },
             if capped > 0 { format!(", virtual sides capped at {capped}² to fit it") } else { String::new() }
         );
         let per_level = |key: &str| -> String {

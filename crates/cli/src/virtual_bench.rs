@@ -68,7 +68,8 @@ struct Side {
     lighting_ms: Option<f64>,
     /// Median over the frames of the stages' sum.
     frame_ms: Option<f64>,
-    /// Shadow memory kept by the technique: the atlas, or the pool plus the page table.
+    /// Shadow memory kept by the technique: the atlas, or the pool plus the page table (and
+    /// last frame's table with caching).
     shadow_mib: f64,
 }
 
@@ -158,7 +159,7 @@ pub fn virtual_maps(args: &VirtualArgs) -> Result<()> {
             atlas_views: plan.views.len(),
             atlas_fit: plan.fit,
             atlas_side: plan.layout.size,
-            virtual_maps: side(&v.runs, (stats.pool_bytes + stats.table_bytes) as f64 / MIB),
+            virtual_maps: side(&v.runs, stats.kept_bytes() as f64 / MIB),
             frame_ratio_virtual_vs_atlas: v.gpu_ratio,
             stats,
         });
@@ -229,7 +230,7 @@ fn table(records: &[Record], adapter: &str, args: &VirtualArgs) -> String {
     let _ = writeln!(
         t,
         "   frame: sum of the stages (G-buffer, clusters, pages, shadows, lighting); ratio: \
-         virtual / atlas; MiB: shadow memory kept (atlas, or page pool + page table); asked / \
+         virtual / atlas; MiB: shadow memory kept (atlas, or page pool + page table, + last frame's table with caching); asked / \
          resident / drawn / denied: pages of the last measured frame (asked: by a sample; \
          drawn: this frame, the rest of the resident ones kept; denied ones fell back to \
          coarser levels)."

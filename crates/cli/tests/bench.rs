@@ -315,9 +315,11 @@ fn bench_virtual_reports_pages_memory_and_both_paths() {
         );
         assert!(resident > 0, "{r}");
         // Memory kept: the page pool (1 MiB) plus the table (per entry its page, its farthest
-        // receiver's key and the cells its samples reach: 12 bytes) against the atlas.
+        // receiver's key and the cells its samples reach: 12 bytes) against the atlas; every
+        // map drawn anew, so no copy of last frame's table is kept.
         let table = s["fit"]["table_entries"].as_u64().unwrap();
         assert_eq!(s["table_bytes"].as_u64().unwrap(), 12 * table, "{r}");
+        assert_eq!(s["prev_table_bytes"].as_u64().unwrap(), 0, "{r}");
         let v_mib = r["virtual_maps"]["shadow_mib"].as_f64().unwrap();
         let want = (s["pool_bytes"].as_u64().unwrap() + 12 * table) as f64 / (1u64 << 20) as f64;
         assert!(
@@ -412,7 +414,8 @@ fn bench_shadows_puts_every_kind_of_shadow_side_by_side() {
 
 /// `bench virtual --cache`: both paths keep what did not change while the smallest caster
 /// moves, so the measured (post-warm-up) frame of the virtual maps draws only some of its
-/// resident pages and keeps the rest.
+/// resident pages and keeps the rest; the memory kept then counts last frame's page table
+/// too (as large as the table).
 #[test]
 fn bench_virtual_with_cache_measures_frames_that_keep_pages() {
     let (_, json) = bench_ok(
@@ -429,6 +432,11 @@ fn bench_virtual_with_cache_measures_frames_that_keep_pages() {
     );
     assert!(kept > 0 && drawn < resident, "{s}");
     assert_eq!(drawn + kept, resident, "{s}");
+    let table = s["table_bytes"].as_u64().unwrap();
+    assert_eq!(s["prev_table_bytes"].as_u64().unwrap(), table, "{s}");
+    let mib = records[0]["virtual_maps"]["shadow_mib"].as_f64().unwrap();
+    let want = (s["pool_bytes"].as_u64().unwrap() + 2 * table) as f64 / (1u64 << 20) as f64;
+    assert!((mib - want).abs() < 1e-6, "{mib} MiB kept, want {want}");
 }
 
 /// `bench suite --quick`: its three sections run as their own bench commands into their own

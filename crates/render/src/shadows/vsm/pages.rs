@@ -73,7 +73,10 @@ pub struct VirtualShadows {
     uniforms: wgpu::Buffer,
     faces: wgpu::Buffer,
     table: wgpu::Buffer,
+    /// Last frame's table, for the pages a frame keeps: allocated only with caching
+    /// ([`Self::new`]'s `keep_pages`), otherwise a 16-byte stand-in for its binding.
     prev_table: wgpu::Buffer,
+    keep_pages: bool,
     scratch: wgpu::Buffer,
     counters: wgpu::Buffer,
     readback: wgpu::Buffer,
@@ -126,7 +129,10 @@ struct Groups {
 impl VirtualShadows {
     /// Plans the faces of `scene` and builds the pool and pipelines. Needs `CLIP_DISTANCES`
     /// and indirect execution (every adapter the project targets has both); compacts the
-    /// page-render commands where `MULTI_DRAW_INDIRECT_COUNT` exists.
+    /// page-render commands where `MULTI_DRAW_INDIRECT_COUNT` exists. With `keep_pages`
+    /// (caching) it also keeps last frame's page table, as large as the table, for the
+    /// pages a frame keeps; without, frames never keep pages.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &GpuContext,
         scene: &Scene,
@@ -134,6 +140,7 @@ impl VirtualShadows {
         options: VirtualOptions,
         shadow: ShadowOptions,
         casters: &CasterGeometry,
+        keep_pages: bool,
     ) -> Result<Self, RenderError> {
         // `RenderSettings::validate` checked the options' ranges.
         debug_assert!(options.lod.is_finite() && options.lod > 0.0);
@@ -247,6 +254,7 @@ impl VirtualShadows {
             ),
             table: buffer(ctx, "vsm.table", 16, storage | U::COPY_SRC),
             prev_table: buffer(ctx, "vsm.prev_table", 16, storage),
+            keep_pages,
             scratch: buffer(ctx, "vsm.scratch", 16, storage),
             counters,
             readback,
@@ -360,13 +368,15 @@ impl VirtualShadows {
             self.last.clear();
             replaced = true;
         }
-        let table_size = self.table.size();
-        replaced |= crate::gpu::buffers::grow_buffer(
-            ctx,
-            &mut self.prev_table,
-            table_size,
-            "virtual previous page table",
-        )?;
+        if self.keep_pages {
+            let table_size = self.table.size();
+            replaced |= crate::gpu::buffers::grow_buffer(
+                ctx,
+                &mut self.prev_table,
+                table_size,
+                "virtual previous page table",
+            )?;
+        }
         let blocks = entries.div_ceil(ALLOC_BLOCK);
         replaced |= crate::gpu::buffers::grow_buffer(
             ctx,
@@ -490,7 +500,7 @@ impl VirtualShadows {
         // Which faces may keep last frame's pages: `table.w` = their first entry then + 1, and
         // where in them casters moved (`dirty`): only the kept pages there are drawn anew (and
         // those whose samples now reach past the receiver bound they were drawn with).
-        let keep = keep && !casters.skinned();
+        let keep = keep && self.keep_pages && !casters.skinned();
         let mut faces = self.plan.faces.clone();
         for (face, view) in faces.iter_mut().zip(&self.plan.views) {
             face.table[3] = 0;
@@ -685,6 +695,11 @@ impl VirtualShadows {
             pool_side: self.pool_side,
             pool_bytes: self.pool_side as u64 * self.pool_side as u64 * 4,
             table_bytes: self.plan.fit.table_entries as u64 * TABLE_WORDS * 4,
+            prev_table_bytes: if self.keep_pages {
+                self.plan.fit.table_entries as u64 * TABLE_WORDS * 4
+            } else {
+                0
+            },
         })
     }
 

@@ -280,9 +280,20 @@ pub struct VirtualStats {
     pub pool_bytes: u64,
     /// Bytes of the page table.
     pub table_bytes: u64,
+    /// Bytes of last frame's page table, kept for the pages a frame keeps: as large as the
+    /// table with caching ([`crate::RenderSettings::cache_shadows`]), 0 without.
+    pub prev_table_bytes: u64,
 }
 
 impl VirtualStats {
+    /// Shadow memory the virtual maps keep between frames: the pool, the page table and,
+    /// with caching, last frame's table (what `bench virtual` and `compare` set against the
+    /// atlas; the per-frame working buffers — the expansion's index buffer, commands — are
+    /// not counted, as the atlas techniques' are not).
+    pub fn kept_bytes(&self) -> u64 {
+        self.pool_bytes + self.table_bytes + self.prev_table_bytes
+    }
+
     /// Pages marked over all levels (asked, or ancestors of asked ones).
     pub fn needed_total(&self) -> u32 {
         self.needed.iter().sum()

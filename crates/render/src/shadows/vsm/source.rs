@@ -86,7 +86,15 @@ impl VirtualSource {
             ..settings.virtual_maps
         };
         let size = (settings.width, settings.height);
-        let maps = VirtualShadows::new(ctx, scene, size, options, settings.shadow, &table.casters)?;
+        let maps = VirtualShadows::new(
+            ctx,
+            scene,
+            size,
+            options,
+            settings.shadow,
+            &table.casters,
+            settings.cache_shadows,
+        )?;
         Ok(Self {
             table,
             maps,
