@@ -46,9 +46,11 @@ pub struct VirtualArgs {
     /// The paged technique to measure against it.
     #[arg(long, default_value_t = crate::techniques::first_filling(manyshadows::Fills::Pages), value_parser = |s: &str| s.parse::<Technique>())]
     pub technique: Technique,
-    /// Page pool of the virtual maps, MiB.
-    #[arg(long, default_value_t = (manyshadows::shadows::vsm::plan::DEFAULT_POOL_BYTES >> 20) as u32)]
-    pub page_pool: u32,
+    /// Page pool of the virtual maps, MiB. Default: as many bytes as the atlas keeps at
+    /// each light count (equal memory: 64 MiB at 16 lights of the atrium, 256 MiB from 64
+    /// up), at least one page.
+    #[arg(long)]
+    pub page_pool: Option<u32>,
     /// Both paths keep what did not change (the atlas its unchanged views, the virtual maps
     /// their pages away from the change) while the scene's smallest caster moves each frame:
     /// what a frame costs when one thing moves, instead of every map drawn anew
@@ -132,16 +134,25 @@ pub fn virtual_maps(args: &VirtualArgs) -> Result<()> {
             None
         };
         let atlas = base.clone().with_technique(args.atlas_technique);
-        let virt = base.with_technique(args.technique).with_virtual_maps(
-            VirtualOptions::default().with_pool_bytes(u64::from(args.page_pool) << 20),
-        );
-        let mut contenders = Vec::new();
-        for (label, settings) in [("atlas", atlas), ("virtual", virt)] {
-            contenders.push(Contender {
-                label: label.into(),
-                subject: FrameSubject::moving(Renderer::new(&h.ctx, &scene, settings)?, caster),
-            });
-        }
+        let atlas_renderer = Renderer::new(&h.ctx, &scene, atlas)?;
+        // Equal memory unless --page-pool says otherwise: the pool gets the atlas's bytes.
+        let pool_bytes = match args.page_pool {
+            Some(mib) => u64::from(mib) << 20,
+            None => (u64::from(atlas_renderer.plan().layout.size).pow(2) * 4).max(128 * 128 * 4),
+        };
+        let virt = base
+            .with_technique(args.technique)
+            .with_virtual_maps(VirtualOptions::default().with_pool_bytes(pool_bytes));
+        let contenders = vec![
+            Contender {
+                label: "atlas".into(),
+                subject: FrameSubject::moving(atlas_renderer, caster),
+            },
+            Contender {
+                label: "virtual".into(),
+                subject: FrameSubject::moving(Renderer::new(&h.ctx, &scene, virt)?, caster),
+            },
+        ];
         let [a, v]: [_; 2] = h
             .compare(contenders, Some("atlas"))?
             .try_into()
@@ -172,6 +183,7 @@ pub fn virtual_maps(args: &VirtualArgs) -> Result<()> {
         "light_types": args.light_types,
         "atlas_technique": args.atlas_technique.name(),
         "cache": args.cache,
+        "page_pool_mib": args.page_pool,
         "records": records,
     });
     h.finish(table, fields, vec![figure])
@@ -182,9 +194,13 @@ fn table(records: &[Record], adapter: &str, args: &VirtualArgs) -> String {
     let mut t = String::new();
     let _ = writeln!(
         t,
-        "== bench virtual: {} at {}x{}, light types {}; median GPU ms over {} frames, {} vs virtual in the same run{}\n   adapter: {adapter}",
+        "== bench virtual: {} at {}x{}, light types {}; median GPU ms over {} frames, {} vs virtual in the same run{}; {}\n   adapter: {adapter}",
         args.scene, args.width, args.height, args.light_types, args.run.repeats, args.atlas_technique,
-        if args.cache { "; --cache: both keep what did not change while the smallest caster moves each frame" } else { "; every map drawn anew each frame" }
+        if args.cache { "; --cache: both keep what did not change while the smallest caster moves each frame" } else { "; every map drawn anew each frame" },
+        match args.page_pool {
+            Some(mib) => format!("page pool {mib} MiB"),
+            None => "page pool as large as the atlas (equal memory)".to_string(),
+        }
     );
     let _ = writeln!(
         t,

@@ -415,7 +415,8 @@ fn bench_shadows_puts_every_kind_of_shadow_side_by_side() {
 /// `bench virtual --cache`: both paths keep what did not change while the smallest caster
 /// moves, so the measured (post-warm-up) frame of the virtual maps draws only some of its
 /// resident pages and keeps the rest; the memory kept then counts last frame's page table
-/// too (as large as the table).
+/// too (as large as the table). Without `--page-pool` the pool is as large as the atlas
+/// (equal memory).
 #[test]
 fn bench_virtual_with_cache_measures_frames_that_keep_pages() {
     let (_, json) = bench_ok(
@@ -434,6 +435,12 @@ fn bench_virtual_with_cache_measures_frames_that_keep_pages() {
     assert_eq!(drawn + kept, resident, "{s}");
     let table = s["table_bytes"].as_u64().unwrap();
     assert_eq!(s["prev_table_bytes"].as_u64().unwrap(), table, "{s}");
+    let atlas_mib = records[0]["atlas"]["shadow_mib"].as_f64().unwrap();
+    let pool_mib = s["pool_bytes"].as_u64().unwrap() as f64 / (1u64 << 20) as f64;
+    assert!(
+        (pool_mib - atlas_mib).abs() < 1e-6,
+        "pool {pool_mib} MiB, atlas {atlas_mib} MiB"
+    );
     let mib = records[0]["virtual_maps"]["shadow_mib"].as_f64().unwrap();
     let want = (s["pool_bytes"].as_u64().unwrap() + 2 * table) as f64 / (1u64 << 20) as f64;
     assert!((mib - want).abs() < 1e-6, "{mib} MiB kept, want {want}");
