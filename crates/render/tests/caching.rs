@@ -21,35 +21,6 @@ fn generate(ctx: &GpuContext, g: &mut ShadowGenerator, gpu: &GpuScene) -> u32 {
     stats.views_drawn
 }
 
-/// Between two frames: pixels that differ, the largest channel difference, and visibility
-/// bits that differ (both frames must carry a mask).
-fn differing(a: &manyshadows::Frame, b: &manyshadows::Frame) -> (usize, u8, u32) {
-    let px = a
-        .rgba
-        .chunks(4)
-        .zip(b.rgba.chunks(4))
-        .filter(|(x, y)| x != y)
-        .count();
-    let delta = a
-        .rgba
-        .iter()
-        .zip(&b.rgba)
-        .map(|(x, y)| x.abs_diff(*y))
-        .max()
-        .unwrap_or(0);
-    let (va, vb) = (
-        a.visibility.as_ref().unwrap(),
-        b.visibility.as_ref().unwrap(),
-    );
-    let bits = va
-        .words
-        .iter()
-        .zip(&vb.words)
-        .map(|(x, y)| (x ^ y).count_ones())
-        .sum();
-    (px, delta, bits)
-}
-
 /// Virtual maps at `w`x`h`, caching as asked, with the hard visibility mask.
 fn virtual_settings(w: u32, h: u32, cache: bool) -> manyshadows::RenderSettings {
     manyshadows::RenderSettings::default()
@@ -86,7 +57,7 @@ fn assert_near_fresh(
         .expect("fresh")
         .render()
         .expect("fresh frame");
-    let (px, delta, bits) = differing(f, &fresh);
+    let (px, delta, bits) = common::frame_differences(f, &fresh);
     eprintln!("frame {frame}: {px} pixels differ (by up to {delta}), {bits} mask bits");
     assert!(
         bits <= 4 && px <= 8,
@@ -216,7 +187,7 @@ fn cached_virtual_pages_equal_a_full_regeneration() {
     let second = r.render().expect("frame 2");
     let s2 = second.virtual_maps.unwrap();
     assert_eq!((s2.kept, s2.drawn), (s1.resident, 0), "{s2:?}");
-    assert_eq!(differing(&first, &second), (0, 0, 0));
+    assert_eq!(common::frame_differences(&first, &second), (0, 0, 0));
 
     // The smallest caster moves: the faces that see its old or new place redraw.
     let k = scene.smallest_caster().expect("a caster");
@@ -248,7 +219,10 @@ fn cached_virtual_pages_equal_a_full_regeneration() {
             "{step}: {px} pixels differ, by up to {delta}"
         );
     };
-    close(differing(&third, &fresh(&r)), "after the move");
+    close(
+        common::frame_differences(&third, &fresh(&r)),
+        "after the move",
+    );
 
     // The camera turns 10° about its target.
     let mut cam = r.scene().camera;
@@ -259,7 +233,10 @@ fn cached_virtual_pages_equal_a_full_regeneration() {
     let s4 = fourth.virtual_maps.unwrap();
     eprintln!("after the turn: {s4:?}");
     assert!(s4.kept > 0 && s4.drawn > 0, "{s4:?}");
-    close(differing(&fourth, &fresh(&r)), "after the turn");
+    close(
+        common::frame_differences(&fourth, &fresh(&r)),
+        "after the turn",
+    );
 }
 
 /// A shadow budget of B views: no frame draws more than B views, while the camera turns and a
@@ -345,7 +322,7 @@ fn a_shadow_budget_bounds_the_views_drawn_and_converges_once_still() {
         .expect("fresh renderer")
         .render()
         .expect("fresh frame");
-    let (px, _, bits) = differing(&last, &fresh);
+    let (px, _, bits) = common::frame_differences(&last, &fresh);
     assert_eq!(
         (px, bits),
         (0, 0),
@@ -458,7 +435,7 @@ fn a_caster_moved_into_a_new_face_gets_its_pages_marked() {
             f.asked[level]
         );
     }
-    let (_, _, bits) = differing(&frame, &fresh);
+    let (_, _, bits) = common::frame_differences(&frame, &fresh);
     assert_eq!(
         bits, 0,
         "{bits} visibility bits differ from a fresh renderer"
@@ -514,6 +491,24 @@ fn one_page_faces(cache: bool) -> manyshadows::RenderSettings {
         .with_virtual_maps(manyshadows::VirtualOptions::default().with_max_side(128))
 }
 
+/// `frame`, rendered by the caching renderer `r`, has exactly the visibility mask a fresh
+/// renderer without caching gives for `r`'s scene (`one_page_faces`).
+fn assert_mask_matches_fresh(
+    ctx: &manyshadows::GpuContext,
+    r: &manyshadows::Renderer,
+    frame: &manyshadows::Frame,
+) {
+    let fresh = manyshadows::Renderer::new(ctx, r.scene(), one_page_faces(false))
+        .expect("fresh")
+        .render()
+        .expect("fresh frame");
+    let (_, _, bits) = common::frame_differences(frame, &fresh);
+    assert_eq!(
+        bits, 0,
+        "{bits} visibility bits differ from a fresh renderer"
+    );
+}
+
 /// Receiver bounds with caching: a kept page holds only the casters up to the farthest
 /// receiver it was drawn for, so it must be drawn again once its samples reach past that. On
 /// `spot_over_floor`, the camera first sees, over a wall out of the light's reach (no sample
@@ -542,16 +537,8 @@ fn a_kept_page_is_redrawn_when_its_samples_reach_past_its_receiver_bound() {
     .unwrap();
     let frame = r.render().expect("frame 2");
     let second = frame.virtual_maps.unwrap();
-    let fresh = Renderer::new(&ctx, r.scene(), one_page_faces(false))
-        .expect("fresh")
-        .render()
-        .expect("fresh frame");
     eprintln!("behind the wall: {first:?}\nwithout it: {second:?}");
-    let (_, _, bits) = differing(&frame, &fresh);
-    assert_eq!(
-        bits, 0,
-        "{bits} visibility bits differ from a fresh renderer"
-    );
+    assert_mask_matches_fresh(&ctx, &r, &frame);
     assert_eq!(first.resident, 1, "one page per face: {first:?}");
     // The plate (and the floor) lay beyond the pedestal's top in the first frame.
     assert!(
@@ -595,16 +582,8 @@ fn a_kept_page_is_redrawn_when_its_samples_reach_past_its_drawn_rectangle() {
     r.set_instance_transform(3, wall(-10.0)).unwrap();
     let frame = r.render().expect("frame 2");
     let second = frame.virtual_maps.unwrap();
-    let fresh = Renderer::new(&ctx, r.scene(), one_page_faces(false))
-        .expect("fresh")
-        .render()
-        .expect("fresh frame");
     eprintln!("the floor left: {first:?}\nthe platform right: {second:?}");
-    let (_, _, bits) = differing(&frame, &fresh);
-    assert_eq!(
-        bits, 0,
-        "{bits} visibility bits differ from a fresh renderer"
-    );
+    assert_mask_matches_fresh(&ctx, &r, &frame);
     assert_eq!(first.resident, 1, "one page per face: {first:?}");
     assert_eq!((second.kept, second.drawn), (0, 1), "{second:?}");
 }

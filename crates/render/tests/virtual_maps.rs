@@ -246,20 +246,11 @@ fn casters_beyond_a_pages_farthest_receiver_are_skipped_without_changing_a_pixel
         b.triangles,
         a.triangles
     );
-    let words = |f: &manyshadows::Frame| f.visibility.as_ref().expect("mask").words.clone();
-    let (wb, wa) = (words(&bounded), words(&all));
-    let bits: u32 = wb.iter().zip(&wa).map(|(x, y)| (x ^ y).count_ones()).sum();
-    let differing =
-        common::differing_pixels(&bounded, &all, "virtual_receiver_cull", ["bounded", "all"]);
+    let (differing, largest, bits) = common::frame_differences(&bounded, &all);
+    // (Writes both images as artifacts when any pixel differs.)
+    common::differing_pixels(&bounded, &all, "virtual_receiver_cull", ["bounded", "all"]);
     eprintln!("mask bits that differ: {bits}; pixels: {differing}");
     assert!(bits <= 2, "{bits} mask bits differ");
-    let largest = bounded
-        .rgba
-        .iter()
-        .zip(&all.rgba)
-        .map(|(a, b)| a.abs_diff(*b))
-        .max()
-        .unwrap_or(0);
     assert!(
         differing <= 2 && largest <= 4,
         "{differing} pixels differ, by up to {largest} levels"

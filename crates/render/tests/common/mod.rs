@@ -284,6 +284,35 @@ pub fn reference_errors(
     e
 }
 
+/// Between two frames: pixels that differ, the largest channel difference, and visibility
+/// bits that differ (both frames must carry a mask).
+pub fn frame_differences(a: &manyshadows::Frame, b: &manyshadows::Frame) -> (usize, u8, u32) {
+    let px = a
+        .rgba
+        .chunks(4)
+        .zip(b.rgba.chunks(4))
+        .filter(|(x, y)| x != y)
+        .count();
+    let delta = a
+        .rgba
+        .iter()
+        .zip(&b.rgba)
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap_or(0);
+    let (va, vb) = (
+        a.visibility.as_ref().unwrap(),
+        b.visibility.as_ref().unwrap(),
+    );
+    let bits = va
+        .words
+        .iter()
+        .zip(&vb.words)
+        .map(|(x, y)| (x ^ y).count_ones())
+        .sum();
+    (px, delta, bits)
+}
+
 /// Pixels whose RGBA differs between two frames; when any do, both frames go to
 /// target/test-artifacts as `{stem}_{tag}.png`.
 #[allow(dead_code)]
