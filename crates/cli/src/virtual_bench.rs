@@ -138,7 +138,10 @@ pub fn virtual_maps(args: &VirtualArgs) -> Result<()> {
         // Equal memory unless --page-pool says otherwise: the pool gets the atlas's bytes.
         let pool_bytes = match args.page_pool {
             Some(mib) => u64::from(mib) << 20,
-            None => (u64::from(atlas_renderer.plan().layout.size).pow(2) * 4).max(128 * 128 * 4),
+            None => {
+                let page = u64::from(manyshadows::shadows::vsm::plan::PAGE_SIZE).pow(2) * 4;
+                (u64::from(atlas_renderer.plan().layout.size).pow(2) * 4).max(page)
+            }
         };
         let virt = base
             .with_technique(args.technique)

@@ -16,25 +16,58 @@ const HALF_PI: f32 = 1.5707963;
 // Angle (radians) added to every cone test so rounding never culls a visible cluster.
 const CONE_MARGIN: f32 = 1e-4;
 
-// True if the sphere (centre, radius) lies wholly outside one plane of the view's clip volume
-// (wgpu clip space: -w <= x, y <= w, 0 <= z <= w). Planes are the rows of the view-projection
-// combined (Gribb and Hartmann); a small slack keeps rounding from culling a visible sphere.
-fn sphere_outside(m: mat4x4<f32>, s: vec4<f32>) -> bool {
+// The six planes of a view's clip volume (wgpu clip space: -w <= x, y <= w, 0 <= z <= w):
+// the rows of the view-projection combined (Gribb and Hartmann), with their normals' lengths.
+// Separate fields, not an array: a software driver keeps an indexed private array in memory.
+// A cull testing many spheres or boxes against one view builds them once.
+struct ViewPlanes {
+    left: vec4<f32>,
+    right: vec4<f32>,
+    bottom: vec4<f32>,
+    top: vec4<f32>,
+    near: vec4<f32>,
+    far: vec4<f32>,
+    // left, right, bottom, top; then near, far.
+    lengths: vec4<f32>,
+    depth_lengths: vec2<f32>,
+}
+
+fn view_planes(m: mat4x4<f32>) -> ViewPlanes {
     let r0 = vec4<f32>(m[0].x, m[1].x, m[2].x, m[3].x);
     let r1 = vec4<f32>(m[0].y, m[1].y, m[2].y, m[3].y);
     let r2 = vec4<f32>(m[0].z, m[1].z, m[2].z, m[3].z);
     let r3 = vec4<f32>(m[0].w, m[1].w, m[2].w, m[3].w);
-    let planes = array<vec4<f32>, 6>(r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2);
+    var out: ViewPlanes;
+    out.left = r3 + r0;
+    out.right = r3 - r0;
+    out.bottom = r3 + r1;
+    out.top = r3 - r1;
+    out.near = r2;
+    out.far = r3 - r2;
+    out.lengths = vec4<f32>(length(out.left.xyz), length(out.right.xyz), length(out.bottom.xyz), length(out.top.xyz));
+    out.depth_lengths = vec2<f32>(length(out.near.xyz), length(out.far.xyz));
+    return out;
+}
+
+// Whether sphere `s` (centre, radius; `c` = length of the centre) lies wholly outside plane `p`
+// (normal length `len`); a small slack keeps rounding from culling a visible sphere.
+fn sphere_outside_plane(p: vec4<f32>, len: f32, s: vec4<f32>, c: f32) -> bool {
+    return dot(p.xyz, s.xyz) + p.w < -s.w * len - 1e-5 * (len * c + abs(p.w));
+}
+
+// True if the sphere (centre, radius) lies wholly outside one of the planes.
+fn sphere_outside_planes(v: ViewPlanes, s: vec4<f32>) -> bool {
     let c = length(s.xyz);
-    for (var i = 0u; i < 6u; i++) {
-        let p = planes[i];
-        let len = length(p.xyz);
-        let slack = 1e-5 * (len * c + abs(p.w));
-        if (dot(p.xyz, s.xyz) + p.w < -s.w * len - slack) {
-            return true;
-        }
-    }
-    return false;
+    let l = v.lengths;
+    return sphere_outside_plane(v.left, l.x, s, c) || sphere_outside_plane(v.right, l.y, s, c)
+        || sphere_outside_plane(v.bottom, l.z, s, c) || sphere_outside_plane(v.top, l.w, s, c)
+        || sphere_outside_plane(v.near, v.depth_lengths.x, s, c)
+        || sphere_outside_plane(v.far, v.depth_lengths.y, s, c);
+}
+
+// True if the sphere (centre, radius) lies wholly outside one plane of the view's clip volume.
+fn sphere_outside(m: mat4x4<f32>, s: vec4<f32>) -> bool {
+    return sphere_outside_planes(view_planes(m), s);
 }
 
 // True if every triangle of the cluster faces away from every point of its bounding sphere as

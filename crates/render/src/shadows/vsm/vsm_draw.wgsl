@@ -172,59 +172,27 @@ fn key_row(view_proj: mat4x4<f32>, ortho: f32) -> vec4<f32> {
     return vec4<f32>(view_proj[0][r], view_proj[1][r], view_proj[2][r], view_proj[3][r]);
 }
 
-// A page's culling planes, built once per cull thread: the sides of its drawn rectangle and
-// its depth range in homogeneous clip space (Gribb and Hartmann: x >= -w, x <= w, y >= -w,
-// y <= w, z >= 0, z <= w, from the rows of the projection), each with its normal's length in
-// w, and the row whose dot product with a point is its distance key (`key_row`). Separate
-// fields, not an array: a software driver keeps an indexed private array in memory.
+// A page's culling planes, built once per cull thread: its drawn rectangle's clip volume
+// (cluster_cull.wgsl's `ViewPlanes`) and the row whose dot product with a point is its distance
+// key (`key_row`).
 struct PagePlanes {
-    left: vec4<f32>,
-    right: vec4<f32>,
-    bottom: vec4<f32>,
-    top: vec4<f32>,
-    near: vec4<f32>,
-    far: vec4<f32>,
-    lengths: vec4<f32>,
-    depth_lengths: vec2<f32>,
+    clip: ViewPlanes,
     row: vec4<f32>,
 }
 
 fn page_planes(view: ShadowViewData) -> PagePlanes {
-    let m = drawn_proj(view);
-    let r0 = vec4<f32>(m[0].x, m[1].x, m[2].x, m[3].x);
-    let r1 = vec4<f32>(m[0].y, m[1].y, m[2].y, m[3].y);
-    let r2 = vec4<f32>(m[0].z, m[1].z, m[2].z, m[3].z);
-    let r3 = vec4<f32>(m[0].w, m[1].w, m[2].w, m[3].w);
     var out: PagePlanes;
-    out.left = r3 + r0;
-    out.right = r3 - r0;
-    out.bottom = r3 + r1;
-    out.top = r3 - r1;
-    out.near = r2;
-    out.far = r3 - r2;
-    out.lengths = vec4<f32>(length(out.left.xyz), length(out.right.xyz), length(out.bottom.xyz), length(out.top.xyz));
-    out.depth_lengths = vec2<f32>(length(out.near.xyz), length(out.far.xyz));
+    out.clip = view_planes(drawn_proj(view));
     out.row = key_row(view.view_proj, view.params.w);
     return out;
 }
 
-// Whether sphere `s` (centre, radius) lies wholly outside plane `p` (normal length `len`);
-// a small slack keeps rounding from culling a visible sphere (cluster_cull.wgsl's test).
-fn sphere_outside_plane(p: vec4<f32>, len: f32, s: vec4<f32>, c: f32) -> bool {
-    return dot(p.xyz, s.xyz) + p.w < -s.w * len - 1e-5 * (len * c + abs(p.w));
-}
-
-// Whether a caster sphere lies wholly outside the page's drawn frustum (cluster_cull.wgsl's
-// `sphere_outside`, with the planes built once) or wholly beyond the page's farthest receiver
-// (`params.x`, 0 = no bound): its depths then exceed every depth the page's samples compare
-// against, so it can shadow none of them (the comparison is `receiver <= stored`).
+// Whether a caster sphere lies wholly outside the page's drawn frustum or wholly beyond the
+// page's farthest receiver (`params.x`, 0 = no bound): its depths then exceed every depth the
+// page's samples compare against, so it can shadow none of them (the comparison is
+// `receiver <= stored`).
 fn sphere_outside_page(planes: PagePlanes, view: ShadowViewData, s: vec4<f32>) -> bool {
-    let c = length(s.xyz);
-    let l = planes.lengths;
-    if (sphere_outside_plane(planes.left, l.x, s, c) || sphere_outside_plane(planes.right, l.y, s, c)
-        || sphere_outside_plane(planes.bottom, l.z, s, c) || sphere_outside_plane(planes.top, l.w, s, c)
-        || sphere_outside_plane(planes.near, planes.depth_lengths.x, s, c)
-        || sphere_outside_plane(planes.far, planes.depth_lengths.y, s, c)) {
+    if (sphere_outside_planes(planes.clip, s)) {
         return true;
     }
     let row = planes.row;
@@ -251,8 +219,9 @@ fn box_outside(planes: PagePlanes, view: ShadowViewData, at: u32) -> bool {
     let c = 0.5 * (lo + hi);
     let e = 0.5 * (hi - lo);
     let scale = abs(c) + e;
-    if (box_reach(planes.left, c, e, scale) < 0.0 || box_reach(planes.right, c, e, scale) < 0.0
-        || box_reach(planes.bottom, c, e, scale) < 0.0 || box_reach(planes.top, c, e, scale) < 0.0) {
+    let v = planes.clip;
+    if (box_reach(v.left, c, e, scale) < 0.0 || box_reach(v.right, c, e, scale) < 0.0
+        || box_reach(v.bottom, c, e, scale) < 0.0 || box_reach(v.top, c, e, scale) < 0.0) {
         return true;
     }
     // The nearest key over the box: the reach of the negated row, negated.
@@ -320,7 +289,7 @@ fn cs_expand(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     let eye = vsm_faces[min(bitcast<u32>(view.tile.w), arrayLength(&vsm_faces) - 1u)].eye;
     let first = cmd.first_index / 3u;
     let triangles = cmd.index_count / 3u;
-    var kept: array<u32, VSM_EXPAND_GROUP>;
+    var kept: array<u32, VSM_CLUSTER_TRIANGLES>;
     var n = 0u;
     for (var part = 0u; part < VSM_PARTS; part++) {
         if ((parts & (1u << part)) == 0u) {
