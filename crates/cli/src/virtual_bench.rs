@@ -153,7 +153,11 @@ pub fn virtual_maps(args: &VirtualArgs) -> Result<()> {
             },
             Contender {
                 label: "virtual".into(),
-                subject: FrameSubject::moving(Renderer::new(&h.ctx, &scene, virt)?, caster),
+                // A pool out of range names --page-pool, as render does.
+                subject: FrameSubject::moving(
+                    Renderer::new(&h.ctx, &scene, virt).map_err(crate::flag_error)?,
+                    caster,
+                ),
             },
         ];
         let [a, v]: [_; 2] = h

@@ -416,7 +416,7 @@ fn bench_shadows_puts_every_kind_of_shadow_side_by_side() {
 /// moves, so the measured (post-warm-up) frame of the virtual maps draws only some of its
 /// resident pages and keeps the rest; the memory kept then counts last frame's page table
 /// too (as large as the table). Without `--page-pool` the pool is as large as the atlas
-/// (equal memory).
+/// (equal memory); `--page-pool 0` is refused naming the flag.
 #[test]
 fn bench_virtual_with_cache_measures_frames_that_keep_pages() {
     let (_, json) = bench_ok(
@@ -430,6 +430,11 @@ fn bench_virtual_with_cache_measures_frames_that_keep_pages() {
         s["drawn"].as_u64().unwrap(),
         s["kept"].as_u64().unwrap(),
         s["resident"].as_u64().unwrap(),
+    );
+    // A pool below one page is refused naming the flag, before any frame is measured.
+    rejects(
+        "virtual --scene cubes --lights 4 --width 32 --height 18 --page-pool 0",
+        "--page-pool",
     );
     assert!(kept > 0 && drawn < resident, "{s}");
     assert_eq!(drawn + kept, resident, "{s}");

@@ -28,7 +28,7 @@ const FLAT_CULL: u32 = 1 << 8;
 pub(crate) fn group_decl() -> String {
     format!(
         "const VSM_CULL_GROUP: u32 = {CULL_GROUP}u;\nconst VSM_FLAT_CULL: u32 = {FLAT_CULL}u;\n\
-         const VSM_EXPAND_GROUP: u32 = {CLUSTER_TRIANGLES}u;\nconst VSM_PARTS: u32 = {CLUSTER_PARTS}u;\n\
+         const VSM_CLUSTER_TRIANGLES: u32 = {CLUSTER_TRIANGLES}u;\nconst VSM_PARTS: u32 = {CLUSTER_PARTS}u;\n\
          const VSM_PART_TRIANGLES: u32 = {}u;",
         CLUSTER_TRIANGLES / CLUSTER_PARTS
     )
