@@ -160,6 +160,15 @@ pub struct GpuArgs {
     limits: Option<Limits>,
 }
 
+/// `--virtual-marking`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+enum VirtualMarking {
+    /// By 4x4-pixel tiles, per pixel where the tile's bounds leave it uncertain.
+    Tiles,
+    /// Every (pixel, light) pair.
+    Pixels,
+}
+
 #[derive(ValueEnum, Clone, Copy, Debug)]
 enum Limits {
     /// WebGPU's default limits.
@@ -346,6 +355,13 @@ pub(crate) struct RenderArgs {
     /// a whole texel of bias leaks light at contacts: 0.5 by default, 0 to 16).
     #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_BIAS_SCALE)]
     virtual_bias: f32,
+    /// How --technique virtual finds the pages the samples need: `tiles` bounds the samples
+    /// of 4x4-pixel tiles and marks a light's page once where every sample needing one needs
+    /// the same page, per pixel elsewhere; `pixels` marks every (pixel, light) pair. The same
+    /// pages either way (the summary's `marking` line says how the tiles went); `pixels` is
+    /// for measuring.
+    #[arg(long, value_enum, default_value_t = VirtualMarking::Tiles)]
+    virtual_marking: VirtualMarking,
     /// With shadow rays (a technique that casts them, see --technique): trace K lights per
     /// pixel, picked among the pixel's cluster lights by importance (their unshadowed
     /// contribution) and weighted so the image stays unbiased — noisy, at a cost that does
@@ -704,7 +720,8 @@ pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettin
                 .with_pool_bytes(u64::from(args.page_pool) << 20)
                 .with_max_side(args.virtual_side)
                 .with_lod(args.virtual_lod)
-                .with_bias_scale(args.virtual_bias),
+                .with_bias_scale(args.virtual_bias)
+                .with_tile_marking(args.virtual_marking == VirtualMarking::Tiles),
         )
         .with_rays(
             manyshadows::RayOptions::default()
@@ -1019,6 +1036,18 @@ fn print_summary(s: &serde_json::Value) {
             per_level("asked"),
             per_level("needed"),
         );
+        let t = &v["tiles"];
+        let count = |k: &str| t[k].as_u64().unwrap_or(0);
+        if count("empty") + count("one_page") + count("known_page") + count("per_pixel") > 0 {
+            println!(
+                "marking      by 4x4-pixel tiles, (tile, light) pairs: {} need no page, {} one page marked once, {} a known page checked per pixel, {} marked per pixel ({} tiles whole)",
+                count("empty"),
+                count("one_page"),
+                count("known_page"),
+                count("per_pixel"),
+                count("whole_tiles"),
+            );
+        }
     } else {
         let shrink = a["shrink_steps"].as_u64().unwrap_or(0);
         println!(

@@ -117,7 +117,7 @@ pub use shadows::irregular::maps::{IrregularOptions, IrregularStats};
 pub use shadows::plan::DEFAULT_MAX_ATLAS_SIZE;
 pub use shadows::raytraced::accel::RayOptions;
 pub use shadows::source::ShadowStats;
-pub use shadows::vsm::plan::{VirtualOptions, VirtualStats};
+pub use shadows::vsm::plan::{TileMarking, VirtualOptions, VirtualStats};
 
 /// Everything that can go wrong in the renderer. Each message says what to do; each variant
 /// carries what a caller may act on as typed fields.

@@ -18,7 +18,8 @@ use crate::gpu_scene::casters::CasterGeometry;
 use crate::settings::ShadowOptions;
 use crate::shadows::vsm::draw::{PageBuffers, PageDraw};
 use crate::shadows::vsm::plan::{
-    pool_side, VirtualOptions, VirtualPlan, VirtualStats, MAX_LEVELS, NOTHING_MOVED, PAGE_SIZE,
+    pool_side, TileMarking, VirtualOptions, VirtualPlan, VirtualStats, MAX_LEVELS, NOTHING_MOVED,
+    PAGE_SIZE,
 };
 use crate::{GpuContext, RenderError};
 
@@ -38,8 +39,23 @@ pub(crate) fn shader() -> String {
 const ALLOC_BLOCK: u64 = 32;
 /// Words of the page table per entry: the entry, its receiver depth key and its cell mask.
 const TABLE_WORDS: u64 = 3;
+/// Pixels per side of a tile of the tile marking (`MARK_TILE` in `vsm.wgsl`).
+const MARK_TILE: u32 = 4;
+/// Room for the tile marking's jobs, in words per tile of the screen (a job is 2 words and 3
+/// per light handed on; a tile whose job does not fit is handed on whole: the same pages, more
+/// work).
+const JOB_WORDS_PER_TILE: u64 = 12;
+
+/// Bytes of the tile marking's hand-off list for a `width` x `height` screen (`mark_list` in
+/// `vsm.wgsl`): counts, a word per tile for tiles handed on whole and one for jobs' offsets,
+/// then the jobs.
+fn mark_list_bytes(width: u32, height: u32) -> u64 {
+    let tiles = width.div_ceil(MARK_TILE) as u64 * height.div_ceil(MARK_TILE) as u64;
+    4 * (8 + 2 * tiles + tiles * JOB_WORDS_PER_TILE)
+}
+
 /// Words of the counters buffer (see `vsm.wgsl`).
-const COUNTERS: usize = 28;
+const COUNTERS: usize = 33;
 
 /// What the virtual shadow maps read from the rest of the frame.
 pub struct VsmInputs<'a> {
@@ -97,7 +113,14 @@ pub struct VirtualShadows {
     /// Camera world → clip, for the screen rectangle of moved casters.
     camera: Mat4,
     args: wgpu::Buffer,
+    /// The (tile, light) pairs the tile marking hands on to per-pixel marking, and their
+    /// dispatch arguments (`mark_list`, `mark_args` in `vsm.wgsl`).
+    mark_list: wgpu::Buffer,
+    mark_args: wgpu::Buffer,
     mark: wgpu::ComputePipeline,
+    mark_tiles: wgpu::ComputePipeline,
+    mark_pixels: wgpu::ComputePipeline,
+    mark_args_pipeline: wgpu::ComputePipeline,
     carry: wgpu::ComputePipeline,
     count: wgpu::ComputePipeline,
     retain: wgpu::ComputePipeline,
@@ -108,6 +131,7 @@ pub struct VirtualShadows {
     args_pipeline: wgpu::ComputePipeline,
     mark_layout: wgpu::BindGroupLayout,
     alloc_layout: wgpu::BindGroupLayout,
+    mark_args_layout: wgpu::BindGroupLayout,
     groups: Option<Groups>,
     /// The page rendering: rounds, command buffers, pipelines.
     draw: PageDraw,
@@ -124,6 +148,7 @@ struct LastFace {
 struct Groups {
     mark: wgpu::BindGroup,
     alloc: wgpu::BindGroup,
+    mark_args: wgpu::BindGroup,
 }
 
 impl VirtualShadows {
@@ -199,6 +224,17 @@ impl VirtualShadows {
                 crate::gpu::pipelines::uniform_entry(7, cs),
                 crate::gpu::pipelines::storage_entry(8, cs),
                 crate::gpu::pipelines::storage_rw_entry(9, cs),
+                crate::gpu::pipelines::storage_rw_entry(16, cs),
+            ],
+        );
+        let mark_args_layout = crate::gpu::pipelines::bind_group_layout(
+            device,
+            "vsm.mark_args_layout",
+            &[
+                crate::gpu::pipelines::uniform_entry(0, cs),
+                crate::gpu::pipelines::storage_rw_entry(10, cs),
+                crate::gpu::pipelines::storage_rw_entry(16, cs),
+                crate::gpu::pipelines::storage_rw_entry(17, cs),
             ],
         );
         // The allocation passes: eight storage buffers, WebGPU's default per-stage limit.
@@ -227,6 +263,11 @@ impl VirtualShadows {
                 crate::gpu::pipelines::compute_pipeline(device, label, pl, module, entry)
             };
         let mark = compute("vsm.mark", &mark_module, &mark_pl, "cs_mark");
+        let mark_tiles = compute("vsm.mark_tiles", &mark_module, &mark_pl, "cs_mark_tiles");
+        let mark_pixels = compute("vsm.mark_pixels", &mark_module, &mark_pl, "cs_mark_pixels");
+        let mark_args_pl = pipeline_layout("vsm.mark_args_pipeline_layout", &mark_args_layout);
+        let mark_args_pipeline =
+            compute("vsm.mark_args", &mark_module, &mark_args_pl, "cs_mark_args");
         let alloc_pl = pipeline_layout("vsm.alloc_pipeline_layout", &alloc_layout);
         let count = compute("vsm.count", &mark_module, &alloc_pl, "cs_count");
         let carry = compute("vsm.carry", &mark_module, &alloc_pl, "cs_carry");
@@ -267,7 +308,17 @@ impl VirtualShadows {
             marked_gen: 0,
             camera: camera_matrix(scene, (width, height)),
             args,
+            mark_list: buffer(
+                ctx,
+                "vsm.mark_list",
+                mark_list_bytes(width, height),
+                storage,
+            ),
+            mark_args: buffer(ctx, "vsm.mark_args", 12, U::STORAGE | U::INDIRECT),
             mark,
+            mark_tiles,
+            mark_pixels,
+            mark_args_pipeline,
             carry,
             count,
             retain,
@@ -278,6 +329,7 @@ impl VirtualShadows {
             args_pipeline,
             mark_layout,
             alloc_layout,
+            mark_args_layout,
             groups: None,
             draw,
         };
@@ -435,6 +487,17 @@ impl VirtualShadows {
                 whole_entry(7, &self.uniforms),
                 whole_entry(8, &self.faces),
                 whole_entry(9, &self.table),
+                whole_entry(16, &self.mark_list),
+            ],
+        });
+        let mark_args = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("vsm.mark_args_group"),
+            layout: &self.mark_args_layout,
+            entries: &[
+                whole_entry(0, inputs.frame),
+                whole_entry(10, &self.counters),
+                whole_entry(16, &self.mark_list),
+                whole_entry(17, &self.mark_args),
             ],
         });
         let alloc = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -463,7 +526,11 @@ impl VirtualShadows {
                 instances: inputs.instances,
             },
         );
-        self.groups = Some(Groups { mark, alloc });
+        self.groups = Some(Groups {
+            mark,
+            alloc,
+            mark_args,
+        });
     }
 
     /// Notes that a shadow caster's bounding sphere moved from `old` to `new`: the pages
@@ -620,6 +687,10 @@ impl VirtualShadows {
         encoder.clear_buffer(&self.table, 0, None);
         encoder.clear_buffer(&self.counters, 0, None);
         encoder.clear_buffer(&self.scratch, 0, None);
+        if self.options.tile_marking {
+            // The hand-off count (the entries are written before they are read).
+            encoder.clear_buffer(&self.mark_list, 0, Some(32));
+        }
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("vsm.pages"),
@@ -644,8 +715,22 @@ impl VirtualShadows {
                 };
                 if let Some([x0, y0, x1, y1]) = rect {
                     pass.set_bind_group(0, &g.mark, &[]);
-                    pass.set_pipeline(&self.mark);
-                    pass.dispatch_workgroups((x1 - x0).div_ceil(8), (y1 - y0).div_ceil(8), 1);
+                    if self.options.tile_marking {
+                        // One thread per tile of MARK_TILE² pixels (workgroups of 8 x 8
+                        // tiles), then one workgroup per (tile, light) it handed on.
+                        let tiles = |n: u32| n.div_ceil(MARK_TILE).div_ceil(8);
+                        pass.set_pipeline(&self.mark_tiles);
+                        pass.dispatch_workgroups(tiles(x1 - x0), tiles(y1 - y0), 1);
+                        pass.set_bind_group(0, &g.mark_args, &[]);
+                        pass.set_pipeline(&self.mark_args_pipeline);
+                        pass.dispatch_workgroups(1, 1, 1);
+                        pass.set_bind_group(0, &g.mark, &[]);
+                        pass.set_pipeline(&self.mark_pixels);
+                        pass.dispatch_workgroups_indirect(&self.mark_args, 0);
+                    } else {
+                        pass.set_pipeline(&self.mark);
+                        pass.dispatch_workgroups((x1 - x0).div_ceil(8), (y1 - y0).div_ceil(8), 1);
+                    }
                 }
                 pass.set_bind_group(0, &g.alloc, &[]);
                 for (pipeline, (x, y)) in [
@@ -699,6 +784,13 @@ impl VirtualShadows {
                 self.plan.fit.table_entries as u64 * TABLE_WORDS * 4
             } else {
                 0
+            },
+            tiles: TileMarking {
+                empty: c[28],
+                one_page: c[29],
+                known_page: c[30],
+                per_pixel: c[31],
+                whole_tiles: c[32],
             },
         })
     }

@@ -70,6 +70,13 @@ pub struct VirtualOptions {
     /// included, are raised to it). When a round's triangles exceed it, the
     /// (cluster, page) pairs past it are drawn whole: the same shadows, more work.
     pub expand_bytes: u64,
+    /// Mark pages by tiles of 8 x 8 pixels: where the bounds of a tile's samples (positions,
+    /// view depths, normals) prove that every sample needing a page of a light needs the same
+    /// one, that page is marked once, and the tile is marked per pixel otherwise. Every page
+    /// the per-pixel marking asks for is asked, so the shadows are the same; a tile
+    /// straddling a light's reach may ask for a page none of its samples needs. `false`
+    /// marks every (pixel, light) pair: for measuring and for tests.
+    pub tile_marking: bool,
 }
 
 impl Default for VirtualOptions {
@@ -84,6 +91,7 @@ impl Default for VirtualOptions {
             group_cull: true,
             receiver_cull: true,
             expand_bytes: 24 << 20,
+            tile_marking: true,
         }
     }
 }
@@ -283,6 +291,28 @@ pub struct VirtualStats {
     /// Bytes of last frame's page table, kept for the pages a frame keeps: as large as the
     /// table with caching ([`crate::RenderSettings::cache_shadows`]), 0 without.
     pub prev_table_bytes: u64,
+    /// How the marking went (with [`VirtualOptions::tile_marking`]; all 0 without).
+    pub tiles: TileMarking,
+}
+
+/// The tile marking's (tile, light) pairs of one frame ([`VirtualOptions::tile_marking`]):
+/// settled by the bounds of the tile's samples, or handed on to per-pixel work.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[non_exhaustive]
+pub struct TileMarking {
+    /// Pairs where no sample needs a page (out of the light's reach, cone or view, or facing
+    /// away).
+    pub empty: u32,
+    /// Pairs where every sample needs the same page: marked once.
+    pub one_page: u32,
+    /// Pairs where the samples that need a page need the same one but some may need none:
+    /// each pixel checks only whether it does.
+    pub known_page: u32,
+    /// Pairs marked per pixel as without tiles (a tile handed on whole counts once).
+    pub per_pixel: u32,
+    /// Tiles marked per pixel whole (spread over too many light clusters, too many lights
+    /// left uncertain, or the hand-off list full).
+    pub whole_tiles: u32,
 }
 
 impl VirtualStats {
@@ -378,4 +408,5 @@ with_setters!(VirtualOptions {
     with_group_cull: group_cull: bool,
     with_receiver_cull: receiver_cull: bool,
     with_expand_bytes: expand_bytes: u64,
+    with_tile_marking: tile_marking: bool,
 });
