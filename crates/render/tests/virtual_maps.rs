@@ -306,7 +306,8 @@ fn an_overflowing_triangle_expansion_draws_the_same_shadows() {
 /// the visibility mask (pages for samples facing away too) and once for the lighting alone
 /// (facing tests on), on the atrium (every light type) and the terrain (cascades over long
 /// slopes). Each of the tiles' ways (no page, one page marked once, a known page checked per
-/// pixel, per pixel) must have been taken. (Seen failing: the level margin at -0.2, the asked
+/// pixel, per pixel) must have been taken; in the atrium's lighting-only frames some tiles also
+/// find the jobs' room full and do their per-pixel work themselves (seen with a counter). (Seen failing: the level margin at -0.2, the asked
 /// pages differ; the facing proof without the box's angular radius, 27 pixels by up to 114
 /// levels; the uv margin at -0.01, 24 mask bits, its cells too small. Not caught: dropping the
 /// bias's half-texel growth of the box, whose rare misses neighbouring tiles ask for anyway.)

@@ -42,8 +42,8 @@ const TABLE_WORDS: u64 = 3;
 /// Pixels per side of a tile of the tile marking (`MARK_TILE` in `vsm.wgsl`).
 const MARK_TILE: u32 = 4;
 /// Room for the tile marking's jobs, in words per tile of the screen (a job is 2 words and 3
-/// per light handed on; a tile whose job does not fit is handed on whole: the same pages, more
-/// work).
+/// per light handed on; a tile whose job does not fit does it in its own thread: the same
+/// pages, slower).
 const JOB_WORDS_PER_TILE: u64 = 12;
 
 /// Bytes of the tile marking's hand-off list for a `width` x `height` screen (`mark_list` in

@@ -305,9 +305,9 @@ fn mark_pixel(px: vec2<u32>, only: u32) {
 // TILE_SOME and TILE_UNSURE lights are handed on to cs_mark_pixels in one job per tile, one
 // thread per pixel: it marks an unsure light exactly as cs_mark does (mark_light), and a
 // TILE_SOME light's known page where the sample passes mark_light's reach and facing tests,
-// with mark_light's receiver bounds. A tile spread over too many clusters, handing on more
-// than JOB_LIGHTS lights, or finding the jobs' room full, is handed on whole: cs_mark's loop
-// over its pixels' clusters. So exactly the pages cs_mark asks for are asked.
+// with mark_light's receiver bounds. A tile spread over too many clusters, or handing on more
+// than JOB_LIGHTS lights, is handed on whole: cs_mark's loop over its pixels' clusters. So
+// exactly the pages cs_mark asks for are asked.
 //
 // The page a sample needs: its level follows from the ratio of its pixel's footprint (view
 // depth) to the face's texel (perspective: its clip w), both bounded over the box; its page
@@ -344,7 +344,7 @@ const WHOLE_FIRST: u32 = 8u;
 // sample, handed on with their page; [4] whole tiles handed on; [5] pairs handed on without
 // their page (a whole tile counts once); [6] jobs; then from WHOLE_FIRST the whole tiles and
 // the jobs' offsets (room for every tile of the screen in each), then the jobs' words, as many
-// as fit (a tile whose job does not fit is handed on whole).
+// as fit (a tile whose job does not fit does it itself).
 @group(0) @binding(16) var<storage, read_write> mark_list: array<atomic<u32>>;
 // cs_mark_pixels' dispatch arguments (JOBS_PER_GROUP per workgroup, rows of 65,535).
 @group(0) @binding(17) var<storage, read_write> mark_args: array<u32, 3>;
@@ -815,16 +815,57 @@ fn cs_mark_tiles(@builtin(global_invocation_id) id: vec3<u32>) {
             atomicAdd(&mark_list[1u + k], h.seen[k]);
         }
     }
-    if (h.whole || (h.count != 0u && !hand_on(origin, h))) {
+    if (h.whole) {
         hand_on_whole(origin);
         atomicAdd(&mark_list[5], 1u);
-    } else if (h.count != 0u) {
-        var unsure = 0u;
-        for (var k = 0u; k < h.count; k = k + 1u) {
-            unsure = unsure + select(1u, 0u, (h.lights[k] & PAGE_KNOWN) != 0u);
-        }
-        atomicAdd(&mark_list[5], unsure);
+        return;
     }
+    if (h.count == 0u) {
+        return;
+    }
+    var unsure = 0u;
+    for (var k = 0u; k < h.count; k = k + 1u) {
+        unsure = unsure + select(1u, 0u, (h.lights[k] & PAGE_KNOWN) != 0u);
+    }
+    atomicAdd(&mark_list[5], unsure);
+    if (!hand_on(origin, h)) {
+        // No room left for the job (rare: which tiles find room depends on thread order, so
+        // the counts above do not): the thread does it, the same work.
+        for (var y = 0u; y < MARK_TILE; y = y + 1u) {
+            for (var x = 0u; x < MARK_TILE; x = x + 1u) {
+                let s = tile_pixel(origin, x, y);
+                if (!s.valid) {
+                    continue;
+                }
+                let view_depth = -(frame.view * vec4<f32>(s.p, 1.0)).z;
+                for (var k = 0u; k < h.count; k = k + 1u) {
+                    mark_job_light(h.lights[k], h.entries[k], h.faces[k], s.p, s.n, view_depth);
+                }
+            }
+        }
+    }
+}
+
+// A job's light for the sample at `p` (normal `n`): an unsure light marked as cs_mark marks
+// it; a known page (PAGE_KNOWN, its entry `e` of face `fi`) marked if the sample reaches and
+// faces the light (mark_light's first tests: its level and page are then the tile's, what
+// mark_light would compute), with the receiver bounds mark_light computes.
+fn mark_job_light(light: u32, e: u32, fi: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
+    if ((light & PAGE_KNOWN) == 0u) {
+        mark_light(light, p, n, view_depth);
+        return;
+    }
+    let l = lights[light & ~PAGE_KNOWN];
+    if (!in_reach(l, p) || (vsm.counts.z == 0u && dot(n, to_light(l, p)) <= 0.0)) {
+        return;
+    }
+    let face = vsm_faces[fi];
+    if (vsm.counts.w != 0u) {
+        let level = level_of(e - face.table.x);
+        let q = vsm_project(l, face, vsm_ray(l, face, p, n), level);
+        bound_page(e, bitcast<u32>(max(q.key, 0.0)), tap_cells(q.uv, level));
+    }
+    ask_entry(face, e);
 }
 
 // Jobs of cs_mark_pixels per workgroup (one thread per pixel of each).
@@ -865,26 +906,8 @@ fn cs_mark_pixels(
     let view_depth = -(frame.view * vec4<f32>(p, 1.0)).z;
     let count = atomicLoad(&mark_list[w + 1u]);
     for (var j = 0u; j < count; j = j + 1u) {
-        let light = atomicLoad(&mark_list[w + 2u + 3u * j]);
-        if ((light & PAGE_KNOWN) == 0u) {
-            mark_light(light, p, n, view_depth);
-            continue;
-        }
-        // The page is the tile's: the sample needs it when it reaches and faces the light
-        // (mark_light's first tests); its level and page are what mark_light would compute,
-        // and its receiver bounds are computed as mark_light does.
-        let l = lights[light & ~PAGE_KNOWN];
-        if (!in_reach(l, p) || (vsm.counts.z == 0u && dot(n, to_light(l, p)) <= 0.0)) {
-            continue;
-        }
-        let e = atomicLoad(&mark_list[w + 3u + 3u * j]);
-        let face = vsm_faces[atomicLoad(&mark_list[w + 4u + 3u * j])];
-        if (vsm.counts.w != 0u) {
-            let level = level_of(e - face.table.x);
-            let q = vsm_project(l, face, vsm_ray(l, face, p, n), level);
-            bound_page(e, bitcast<u32>(max(q.key, 0.0)), tap_cells(q.uv, level));
-        }
-        ask_entry(face, e);
+        let at = w + 2u + 3u * j;
+        mark_job_light(atomicLoad(&mark_list[at]), atomicLoad(&mark_list[at + 1u]), atomicLoad(&mark_list[at + 2u]), p, n, view_depth);
     }
 }
 
