@@ -17,7 +17,10 @@
 //! 1. *mark*: each pixel visits its cluster's lights; for each light that reaches it (and
 //!    faces it), the sample asks for the level whose texel matches its pixel footprint
 //!    ([`VirtualOptions::lod`](plan::VirtualOptions::lod) texels per pixel): that page is
-//!    marked *asked* and its ancestors *above*. With caching, when the camera, the lights and
+//!    marked *asked* and its ancestors *above*. By default 4×4-pixel tiles do this once per
+//!    light where the bounds of their samples prove that every sample needing a page needs
+//!    the same one, and hand the rest to per-pixel marking: the same pages
+//!    ([`VirtualOptions::tile_marking`](plan::VirtualOptions::tile_marking)). With caching, when the camera, the lights and
 //!    every face are as last frame (only casters moved), last frame's pages carry over and
 //!    only the pixels under the moved casters' old and new bounds are marked again;
 //! 2. *allocate*: the *admitted level* A is the finest level whose marked pages fit the pool

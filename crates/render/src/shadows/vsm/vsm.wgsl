@@ -872,7 +872,7 @@ fn mark_job_light(light: u32, e: u32, fi: u32, p: vec3<f32>, n: vec3<f32>, view_
 const JOBS_PER_GROUP: u32 = 64u / (MARK_TILE * MARK_TILE);
 
 // The jobs and whole tiles handed on, JOBS_PER_GROUP per workgroup, one thread per pixel of
-// each (lavapipe pays per workgroup: one job each cost twice as much).
+// each (lavapipe pays per workgroup: with one each the marking took 160 ms instead of 134).
 @compute @workgroup_size(64, 1, 1)
 fn cs_mark_pixels(
     @builtin(workgroup_id) wg: vec3<u32>,
