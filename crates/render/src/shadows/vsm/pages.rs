@@ -48,10 +48,14 @@ const JOB_WORDS_PER_TILE: u64 = 12;
 
 /// Bytes of the tile marking's hand-off list for a `width` x `height` screen (`mark_list` in
 /// `vsm.wgsl`): counts, a word per tile for tiles handed on whole and one for jobs' offsets,
-/// then the jobs.
-fn mark_list_bytes(width: u32, height: u32) -> u64 {
+/// then room for the jobs, as much of it as `limit` (the device's binding limit) leaves. The
+/// fixed part, 8 bytes per 4x4-pixel tile, fits every device the renderer accepts (2 MiB at
+/// its 2048² texture limit against 4 MiB bindings).
+fn mark_list_bytes(width: u32, height: u32, limit: u64) -> u64 {
     let tiles = width.div_ceil(MARK_TILE) as u64 * height.div_ceil(MARK_TILE) as u64;
-    4 * (8 + 2 * tiles + tiles * JOB_WORDS_PER_TILE)
+    let fixed = 4 * (8 + 2 * tiles);
+    let room = (4 * tiles * JOB_WORDS_PER_TILE).min(limit.saturating_sub(fixed) / 16 * 16);
+    fixed + room
 }
 
 /// Words of the counters buffer (see `vsm.wgsl`).
@@ -311,7 +315,13 @@ impl VirtualShadows {
             mark_list: buffer(
                 ctx,
                 "vsm.mark_list",
-                mark_list_bytes(width, height),
+                mark_list_bytes(
+                    width,
+                    height,
+                    limits
+                        .max_storage_buffer_binding_size
+                        .min(limits.max_buffer_size),
+                ),
                 storage,
             ),
             mark_args: buffer(ctx, "vsm.mark_args", 12, U::STORAGE | U::INDIRECT),
@@ -985,5 +995,25 @@ mod tests {
             union([0.0, 0.0, 0.1, 0.1], [0.5, 0.5, 0.6, 0.6]),
             [0.0, 0.0, 0.6, 0.6]
         );
+    }
+
+    /// The hand-off list: its fixed part (counts, a word per tile for whole tiles and one for
+    /// job offsets) always, the jobs' room up to what the binding limit leaves; on the
+    /// smallest device the renderer accepts (2048² textures, 4 MiB bindings) a full-size
+    /// screen still fits.
+    #[test]
+    fn the_mark_list_fits_the_binding_limit() {
+        let big = 1u64 << 40;
+        // 1280x720: 320 x 180 tiles.
+        let tiles = 320 * 180;
+        assert_eq!(
+            mark_list_bytes(1280, 720, big),
+            4 * (8 + 2 * tiles + JOB_WORDS_PER_TILE * tiles)
+        );
+        let small = 4u64 << 20;
+        let bytes = mark_list_bytes(2048, 2048, small);
+        let fixed = 4 * (8 + 2 * 512 * 512);
+        assert!(bytes <= small && bytes > fixed, "{bytes}");
+        assert_eq!((bytes - fixed) % 16, 0);
     }
 }

@@ -738,6 +738,8 @@ fn cs_mark_tiles(@builtin(global_invocation_id) id: vec3<u32>) {
                 continue;
             }
             let view_depth = -(frame.view * vec4<f32>(s.p, 1.0)).z;
+            // A NaN would drop out of min and max: such a tile is marked per pixel.
+            spread = spread || any(s.p != s.p) || any(s.n != s.n);
             t.lo = min(t.lo, s.p);
             t.hi = max(t.hi, s.p);
             t.near = min(t.near, view_depth);
