@@ -40,7 +40,11 @@ fn require(tool: &str, package: &str) {
 }
 
 /// Starts Xvfb on a display it picks itself (`-displayfd`: no race with other X servers or
-/// parallel tests); returns it and the display name.
+/// parallel tests); returns it and the display name. Once in a full run the third viewer of
+/// a test found no X server (cause not pinned down: a server writing its display number once
+/// more after a reset was ruled out, it does not); so, defensively, `-noreset` keeps it as it
+/// is between the test's viewers and its stdout is drained until it exits, never a closed
+/// pipe to write into.
 fn xvfb() -> (Killed, String) {
     require("Xvfb", "xvfb");
     require("xwd", "x11-apps");
@@ -53,6 +57,7 @@ fn xvfb() -> (Killed, String) {
             "1024x768x24",
             "-nolisten",
             "tcp",
+            "-noreset",
         ])
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
@@ -62,9 +67,12 @@ fn xvfb() -> (Killed, String) {
     let server = Killed(child);
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
+        let mut reader = BufReader::new(stdout);
         let mut line = String::new();
-        let _ = BufReader::new(stdout).read_line(&mut line);
+        let _ = reader.read_line(&mut line);
         let _ = tx.send(line);
+        // Keep the pipe open until the server exits.
+        let _ = std::io::copy(&mut reader, &mut std::io::sink());
     });
     let line = rx
         .recv_timeout(Duration::from_secs(20))
