@@ -304,13 +304,16 @@ fn an_overflowing_triangle_expansion_draws_the_same_shadows() {
 /// its pixels') only rounding at the drawn rectangle's sides may differ, as in
 /// `casters_beyond_a_pages_farthest_receiver_are_skipped_without_changing_a_pixel`. Once with
 /// the visibility mask (pages for samples facing away too) and once for the lighting alone
-/// (facing tests on), on the atrium (every light type) and the terrain (cascades over long
-/// slopes). Each of the tiles' ways (no page, one page marked once, a known page checked per
+/// (facing tests on), on the atrium (every light type), the terrain (cascades over long
+/// slopes) and the atrium moved 3,000 units from the origin (coordinates rounding 300 times
+/// coarser: the tiles' margins grow with them). Each of the tiles' ways (no page, one page marked once, a known page checked per
 /// pixel, per pixel) must have been taken; in the atrium's lighting-only frames some tiles also
 /// find the jobs' room full and do their per-pixel work themselves (seen with a counter). (Seen failing: the level margin at -0.2, the asked
 /// pages differ; the facing proof without the box's angular radius, 27 pixels by up to 114
 /// levels; the uv margin at -0.01, 24 mask bits, its cells too small. Not caught: dropping the
-/// bias's half-texel growth of the box, whose rare misses neighbouring tiles ask for anyway.)
+/// bias's half-texel growth of the box, or the margins' growth with the coordinates (the far
+/// atrium passes without it), whose rare misses neighbouring tiles ask for anyway: the check
+/// is per level, not per tile.)
 #[test]
 fn tile_marking_asks_exactly_the_pages_per_pixel_marking_asks() {
     let ctx = common::context();
@@ -322,9 +325,32 @@ fn tile_marking_asks_exactly_the_pages_per_pixel_marking_asks() {
         },
     )
     .expect("terrain");
-    for (name, scene) in [("atrium", atrium_40()), ("terrain", terrain)] {
+    // The atrium 3,000 units from the world's origin: samples' coordinates round 300 times
+    // coarser, which the tiles' margins must cover (the per-pixel path rounds as it will).
+    let mut far = atrium_40();
+    let offset = glam::Vec3::new(3000.0, 0.0, -2000.0);
+    for i in &mut far.instances {
+        i.transform = glam::Mat4::from_translation(offset) * i.transform;
+    }
+    for l in &mut far.lights {
+        match &mut l.kind {
+            manyshadows::scene::LightKind::Spot { position, .. }
+            | manyshadows::scene::LightKind::Point { position, .. } => *position += offset,
+            _ => {}
+        }
+    }
+    far.camera.position += offset;
+    far.camera.target += offset;
+    for (name, scene) in [
+        ("atrium", atrium_40()),
+        ("terrain", terrain),
+        ("far atrium", far),
+    ] {
         for visibility in [true, false] {
             for receiver_cull in [false, true] {
+                if name == "far atrium" && receiver_cull {
+                    continue;
+                }
                 let render = |tiles: bool| {
                     let settings = RenderSettings::default()
                         .with_width(320)

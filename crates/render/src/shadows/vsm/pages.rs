@@ -54,7 +54,8 @@ const JOB_WORDS_PER_TILE: u64 = 12;
 fn mark_list_bytes(width: u32, height: u32, limit: u64) -> u64 {
     let tiles = width.div_ceil(MARK_TILE) as u64 * height.div_ceil(MARK_TILE) as u64;
     let fixed = 4 * (8 + 2 * tiles);
-    let room = (4 * tiles * JOB_WORDS_PER_TILE).min(limit.saturating_sub(fixed) / 16 * 16);
+    // (16 bytes spare: the buffer is rounded up to a multiple of 16.)
+    let room = (4 * tiles * JOB_WORDS_PER_TILE).min(limit.saturating_sub(fixed + 16) / 16 * 16);
     fixed + room
 }
 
@@ -121,6 +122,8 @@ pub struct VirtualShadows {
     /// dispatch arguments (`mark_list`, `mark_args` in `vsm.wgsl`).
     mark_list: wgpu::Buffer,
     mark_args: wgpu::Buffer,
+    /// [`VirtualOptions::tile_marking`], unless the device cannot hold the hand-off list.
+    tile_marking: bool,
     mark: wgpu::ComputePipeline,
     mark_tiles: wgpu::ComputePipeline,
     mark_pixels: wgpu::ComputePipeline,
@@ -186,6 +189,14 @@ impl VirtualShadows {
             ..Default::default()
         });
         let slots = page_slots(plan.fit.faces, pool_pages);
+        // The tile marking's hand-off list, where the device's bindings hold it.
+        let binding_limit = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size)
+            / 16
+            * 16;
+        let mark_list = mark_list_bytes(width, height, binding_limit);
+        let tile_marking = options.tile_marking && mark_list <= binding_limit;
         let draw = PageDraw::new(
             ctx,
             slots,
@@ -315,15 +326,10 @@ impl VirtualShadows {
             mark_list: buffer(
                 ctx,
                 "vsm.mark_list",
-                mark_list_bytes(
-                    width,
-                    height,
-                    limits
-                        .max_storage_buffer_binding_size
-                        .min(limits.max_buffer_size),
-                ),
+                if tile_marking { mark_list } else { 16 },
                 storage,
             ),
+            tile_marking,
             mark_args: buffer(ctx, "vsm.mark_args", 12, U::STORAGE | U::INDIRECT),
             mark,
             mark_tiles,
@@ -697,7 +703,7 @@ impl VirtualShadows {
         encoder.clear_buffer(&self.table, 0, None);
         encoder.clear_buffer(&self.counters, 0, None);
         encoder.clear_buffer(&self.scratch, 0, None);
-        if self.options.tile_marking {
+        if self.tile_marking {
             // The hand-off count (the entries are written before they are read).
             encoder.clear_buffer(&self.mark_list, 0, Some(32));
         }
@@ -725,9 +731,11 @@ impl VirtualShadows {
                 };
                 if let Some([x0, y0, x1, y1]) = rect {
                     pass.set_bind_group(0, &g.mark, &[]);
-                    if self.options.tile_marking {
+                    if self.tile_marking {
                         // One thread per tile of MARK_TILE² pixels (workgroups of 8 x 8
-                        // tiles), then one workgroup per (tile, light) it handed on.
+                        // tiles: past the rectangle's end by up to 31 pixels, like the
+                        // per-pixel pass's 7), then the jobs the tiles handed on, four per
+                        // workgroup.
                         let tiles = |n: u32| n.div_ceil(MARK_TILE).div_ceil(8);
                         pass.set_pipeline(&self.mark_tiles);
                         pass.dispatch_workgroups(tiles(x1 - x0), tiles(y1 - y0), 1);
@@ -1013,7 +1021,12 @@ mod tests {
         let small = 4u64 << 20;
         let bytes = mark_list_bytes(2048, 2048, small);
         let fixed = 4 * (8 + 2 * 512 * 512);
-        assert!(bytes <= small && bytes > fixed, "{bytes}");
+        assert!(
+            bytes.next_multiple_of(16) <= small && bytes > fixed,
+            "{bytes}"
+        );
         assert_eq!((bytes - fixed) % 16, 0);
+        // A screen whose fixed part alone passes the limit: the renderer turns tiles off.
+        assert!(mark_list_bytes(16384, 16384, small) > small);
     }
 }

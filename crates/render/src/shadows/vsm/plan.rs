@@ -70,12 +70,14 @@ pub struct VirtualOptions {
     /// included, are raised to it). When a round's triangles exceed it, the
     /// (cluster, page) pairs past it are drawn whole: the same shadows, more work.
     pub expand_bytes: u64,
-    /// Mark pages by tiles of 8 x 8 pixels: where the bounds of a tile's samples (positions,
-    /// view depths, normals) prove that every sample needing a page of a light needs the same
-    /// one, that page is marked once, and the tile is marked per pixel otherwise. Every page
-    /// the per-pixel marking asks for is asked, so the shadows are the same; a tile
-    /// straddling a light's reach may ask for a page none of its samples needs. `false`
-    /// marks every (pixel, light) pair: for measuring and for tests.
+    /// Mark pages by tiles of 4 x 4 pixels (default): where the bounds of a tile's samples
+    /// (positions, view depths, normals) prove that every sample needing a page of a light
+    /// needs the same one, that page is marked once (or, when only some samples may need it,
+    /// each pixel checks only whether it does), and the rest is marked per pixel. The pages
+    /// asked are exactly those of per-pixel marking, so the shadows are the same; receiver
+    /// bounds of pages marked once are their tile's, a little wider. `false` marks every
+    /// (pixel, light) pair: for measuring and for tests. Off as well where the device's
+    /// storage bindings cannot hold the hand-off list (8 bytes per tile and up).
     pub tile_marking: bool,
 }
 
@@ -311,7 +313,7 @@ pub struct TileMarking {
     /// Pairs marked per pixel as without tiles (a tile handed on whole counts once).
     pub per_pixel: u32,
     /// Tiles marked per pixel whole (spread over too many light clusters, too many lights
-    /// left uncertain, or the hand-off list full).
+    /// left uncertain, or a sample that is not a number).
     pub whole_tiles: u32,
 }
 

@@ -441,6 +441,7 @@ fn face_rect(face: VirtualFace, level: u32, lo: vec3<f32>, hi: vec3<f32>) -> Fac
     let az = m[2] * g.z;
     out.uv_lo = vec2<f32>(3.0e38);
     out.uv_hi = vec2<f32>(-3.0e38);
+    var w_min = 3.0e38;
     for (var j = 0u; j < 8u; j = j + 1u) {
         let sign = vec3<f32>(select(-1.0, 1.0, (j & 1u) != 0u), select(-1.0, 1.0, (j & 2u) != 0u), select(-1.0, 1.0, (j & 4u) != 0u));
         let clip = cc + sign.x * ax + sign.y * ay + sign.z * az;
@@ -450,9 +451,17 @@ fn face_rect(face: VirtualFace, level: u32, lo: vec3<f32>, hi: vec3<f32>) -> Fac
         let uv = clip.xy / clip.w * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
         out.uv_lo = min(out.uv_lo, uv);
         out.uv_hi = max(out.uv_hi, uv);
+        w_min = min(w_min, clip.w);
     }
-    out.uv_lo = out.uv_lo - vec2<f32>(UV_MARGIN);
-    out.uv_hi = out.uv_hi + vec2<f32>(UV_MARGIN);
+    // A sample's own clip position rounds by a few ulps of its terms, which grow with its
+    // distance from the world's origin: the margin grows with them.
+    let mag = vec4<f32>(abs(c) + g, 1.0);
+    let terms = dot(abs(vec4<f32>(m[0][0], m[1][0], m[2][0], m[3][0])), mag)
+        + dot(abs(vec4<f32>(m[0][1], m[1][1], m[2][1], m[3][1])), mag)
+        + 2.0 * dot(abs(vec4<f32>(m[0][3], m[1][3], m[2][3], m[3][3])), mag);
+    let margin = UV_MARGIN + 2e-6 * terms / w_min;
+    out.uv_lo = out.uv_lo - vec2<f32>(margin);
+    out.uv_hi = out.uv_hi + vec2<f32>(margin);
     out.valid = true;
     return out;
 }
@@ -474,18 +483,24 @@ fn tile_light(i: u32, t: TileSamples) -> TilePage {
     var u = -light.direction.xyz;
     var sin_b = 0.0;
     var cos_b = 1.0;
+    // The cosine margin of the angle tests: 1e-4, plus the angle a sample's rounded offset from
+    // the light may be off by far from the world's origin.
+    var cos_margin = 1e-4;
     if (kind != LIGHT_DIRECTIONAL) {
         let to = light.position.xyz - c;
         let dist = length(to);
         let range = light.ambient.w;
+        // How far a sample's offset from the light may round: a few ulps of the coordinates.
+        let slack = 2e-6 * (length(abs(c) + e) + length(light.position.xyz));
         // The box's nearest point beyond the range: every sample is; its farthest: none is.
-        if (length(max(abs(to) - e, vec3<f32>(0.0))) > range * (1.0 + 1e-4)) {
+        if (length(max(abs(to) - e, vec3<f32>(0.0))) > range * (1.0 + 1e-4) + slack) {
             return tile_outcome(TILE_NONE);
         }
-        every = length(abs(to) + e) < range * (1.0 - 1e-4);
-        if (dist <= radius * 1.001 + 1e-6) {
+        every = length(abs(to) + e) < range * (1.0 - 1e-4) - slack;
+        if (dist <= radius * 1.001 + 1e-6 + 2.0 * slack) {
             return tile_outcome(TILE_UNSURE);
         }
+        cos_margin = 1e-4 + slack / dist;
         u = to / dist;
         sin_b = radius / dist;
         cos_b = sqrt(max(1.0 - sin_b * sin_b, 0.0));
@@ -495,11 +510,11 @@ fn tile_light(i: u32, t: TileSamples) -> TilePage {
             let cos_c = light.direction.w;
             let sin_c = sqrt(max(1.0 - cos_c * cos_c, 0.0));
             let cos_axis = dot(light.direction.xyz, -u);
-            if (sin_c * cos_b + cos_c * sin_b > 0.0 && cos_axis < cos_c * cos_b - sin_c * sin_b - 1e-4) {
+            if (sin_c * cos_b + cos_c * sin_b > 0.0 && cos_axis < cos_c * cos_b - sin_c * sin_b - cos_margin) {
                 return tile_outcome(TILE_NONE);
             }
             every = every && sin_c * cos_b - cos_c * sin_b > 0.0
-                && cos_axis > cos_c * cos_b + sin_c * sin_b + 1e-4;
+                && cos_axis > cos_c * cos_b + sin_c * sin_b + cos_margin;
         }
     }
     if (vsm.counts.z == 0u) {
@@ -510,10 +525,10 @@ fn tile_light(i: u32, t: TileSamples) -> TilePage {
             let cos_sum = cos_b * t.cos_cone - sin_b * sin_n;
             let sin_sum = sin_b * t.cos_cone + cos_b * sin_n;
             let cos_axis = dot(t.axis, u);
-            if (cos_sum > 0.0 && cos_axis < -sin_sum - 1e-4) {
+            if (cos_sum > 0.0 && cos_axis < -sin_sum - cos_margin) {
                 return tile_outcome(TILE_NONE);
             }
-            every = every && cos_sum > 0.0 && cos_axis > sin_sum + 1e-4;
+            every = every && cos_sum > 0.0 && cos_axis > sin_sum + cos_margin;
         } else {
             every = false;
         }
@@ -543,7 +558,8 @@ fn tile_light(i: u32, t: TileSamples) -> TilePage {
     // The level: vsm_level's ratio of footprint to finest texel, over the tile.
     let w_row = vec4<f32>(face.view_proj[0][3], face.view_proj[1][3], face.view_proj[2][3], face.view_proj[3][3]);
     let w_c = dot(w_row.xyz, c) + w_row.w;
-    let w_e = dot(abs(w_row.xyz), e);
+    // The box's extent along the row, and how far a sample's rounded w may be off.
+    let w_e = dot(abs(w_row.xyz), e) + 2e-6 * (dot(abs(w_row.xyz), abs(c) + e) + abs(w_row.w));
     var tex_lo = face.params.z;
     var tex_hi = face.params.z;
     if (face.params.w < 0.5) {
@@ -616,7 +632,9 @@ fn box_key(face: VirtualFace, level: u32, c: vec3<f32>, e: vec3<f32>) -> u32 {
     let b = abs(frame.bias.xyz) * vsm.lod.w;
     let toward = min(frame.bias.x, frame.bias.x + MAX_TAN * frame.bias.y);
     let moved = texel * (1.0 + 1e-5) * select(b.x + MAX_TAN * b.y + b.z, b.z, toward >= 0.0);
-    let key = (dot(row.xyz, c) + row.w + dot(abs(row.xyz), e) + length(row.xyz) * moved) * (1.0 + 1e-5) + 1e-30;
+    // (With a few ulps of the terms for the samples' own rounding.)
+    let key = (dot(row.xyz, c) + row.w + dot(abs(row.xyz), e) + length(row.xyz) * moved) * (1.0 + 1e-5)
+        + 2e-6 * (dot(abs(row.xyz), abs(c) + e) + abs(row.w)) + 1e-30;
     return bitcast<u32>(max(key, 0.0));
 }
 
@@ -769,6 +787,11 @@ fn cs_mark_tiles(@builtin(global_invocation_id) id: vec3<u32>) {
         atomicAdd(&mark_list[5], 1u);
         return;
     }
+    // A few ulps more on each side: the box's centre and half extent, as the tests compute
+    // them, round.
+    let pad = 1e-6 * max(abs(t.lo), abs(t.hi));
+    t.lo = t.lo - pad;
+    t.hi = t.hi + pad;
     // The normal cone: around the normal box's centre direction, with the least cosine of the
     // box (a linear function's minimum over the box) as its bound.
     let nc = 0.5 * (n_lo + n_hi);
