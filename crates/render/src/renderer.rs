@@ -808,6 +808,46 @@ impl Renderer {
     }
 }
 
+impl Renderer {
+    /// Reads the virtual maps' page table back as the last frame left it: first, per entry
+    /// (`VirtualStats::fit.table_entries` of them), the page it got — a pool page, or a marker
+    /// for none or denied — then per entry the farthest receiver's depth key, then the drawn
+    /// cells (the buffer may hold more words than that). Equal tables mean the same pages in
+    /// the same pool places. Only [`Technique::VIRTUAL`](crate::settings::Technique::VIRTUAL)
+    /// has one.
+    pub fn read_page_table(&self) -> Result<Vec<u32>, RenderError> {
+        match self.source.output() {
+            crate::shadows::source::ShadowOutput::Pages { pages, .. } => {
+                let size = pages.table.size();
+                let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("manyshadows.page_table.readback"),
+                    size,
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                let mut encoder =
+                    self.ctx
+                        .device
+                        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                            label: Some("manyshadows.page_table.copy"),
+                        });
+                encoder.copy_buffer_to_buffer(pages.table, 0, &staging, 0, size);
+                self.ctx.queue.submit([encoder.finish()]);
+                let bytes = crate::gpu::readback::map_read(&self.ctx, &staging, 0..size)?;
+                Ok(bytemuck::cast_slice(&bytes).to_vec())
+            }
+            _ => Err(RenderError::NoPagePool {
+                technique: self.settings.technique,
+                with_pool: crate::shadows::registry::TECHNIQUES
+                    .iter()
+                    .filter(|i| i.fills == crate::shadows::descriptor::Fills::Pages)
+                    .map(|i| i.technique.name())
+                    .collect(),
+            }),
+        }
+    }
+}
+
 /// The lights buffer's records, one placeholder when there are no lights (a binding is never
 /// empty).
 fn lights_or_placeholder(mut data: Vec<LightData>) -> Vec<LightData> {

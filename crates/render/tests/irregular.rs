@@ -199,6 +199,13 @@ fn refuses_atlas_paths_and_paraboloids() {
         })
     ));
     assert!(matches!(
+        r.read_page_table(),
+        Err(RenderError::NoPagePool {
+            technique: Technique::IRREGULAR,
+            ..
+        })
+    ));
+    assert!(matches!(
         r.read_atlas(),
         Err(RenderError::NoAtlas {
             technique: Technique::IRREGULAR,

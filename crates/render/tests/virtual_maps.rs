@@ -308,12 +308,14 @@ fn an_overflowing_triangle_expansion_draws_the_same_shadows() {
 /// slopes) and the atrium moved 3,000 units from the origin (coordinates rounding 300 times
 /// coarser: the tiles' margins grow with them). Each of the tiles' ways (no page, one page marked once, a known page checked per
 /// pixel, per pixel) must have been taken; in the atrium's lighting-only frames some tiles also
-/// find the jobs' room full and do their per-pixel work themselves (seen with a counter). (Seen failing: the level margin at -0.2, the asked
+/// find the jobs' room full and do their per-pixel work themselves (seen with a counter). The
+/// page tables are compared entry by entry: the same pages in the same pool places. (Seen failing: the level margin at -0.2, the asked
 /// pages differ; the facing proof without the box's angular radius, 27 pixels by up to 114
-/// levels; the uv margin at -0.01, 24 mask bits, its cells too small. Not caught: dropping the
-/// bias's half-texel growth of the box, or the margins' growth with the coordinates (the far
-/// atrium passes without it), whose rare misses neighbouring tiles ask for anyway: the check
-/// is per level, not per tile.)
+/// levels; the uv margin at -0.01, 24 mask bits, its cells too small. Not caught, even entry
+/// by entry: dropping the bias's half-texel growth of the box, the margins' growth with the
+/// coordinates (the far atrium passes without it) or a uv margin of -0.002 leave the page
+/// tables identical — a page one tile's samples would miss is asked by their neighbours — so
+/// only a per-tile check could see them.)
 #[test]
 fn tile_marking_asks_exactly_the_pages_per_pixel_marking_asks() {
     let ctx = common::context();
@@ -363,9 +365,11 @@ fn tile_marking_asks_exactly_the_pages_per_pixel_marking_asks() {
                                 .with_receiver_cull(receiver_cull),
                         );
                     let mut r = Renderer::new(&ctx, &scene, settings).expect("renderer");
-                    r.render().expect("frame")
+                    let frame = r.render().expect("frame");
+                    let table = r.read_page_table().expect("page table");
+                    (frame, table)
                 };
-                let (tiles, pixels) = (render(true), render(false));
+                let ((tiles, t_table), (pixels, p_table)) = (render(true), render(false));
                 let (t, p) = (
                     tiles.virtual_maps.expect("stats"),
                     pixels.virtual_maps.expect("stats"),
@@ -380,6 +384,11 @@ fn tile_marking_asks_exactly_the_pages_per_pixel_marking_asks() {
                     "{case}: every way of the tiles should be taken: {m:?}"
                 );
                 assert_eq!((t.asked, t.needed), (p.asked, p.needed), "{case}");
+                // Entry by entry: the same pages, in the same pool places.
+                let entries = t.fit.table_entries as usize;
+                assert_eq!(p.fit.table_entries as usize, entries, "{case}");
+                let differing = (0..entries).filter(|&k| t_table[k] != p_table[k]).count();
+                assert_eq!(differing, 0, "{case}: page-table entries that differ");
                 assert!(t.asked_total() > 50, "{case}: {t:?}");
                 assert_eq!((t.drawn, t.denied), (p.drawn, p.denied), "{case}");
                 if !receiver_cull {
