@@ -16,7 +16,7 @@
 //! - [`ShadowOutput::Mask`]: the per-pixel, per-light visibility bits themselves
 //!   (`irregular`: [`crate::shadows::irregular::source::IrregularSource`]).
 //!
-//! `shadows::create` is the one place a [`Technique`] becomes a source.
+//! `shadows::create` is the one place a [`crate::Technique`] becomes a source.
 
 use glam::Vec3;
 use manyshadows_scene::atlas::FitPolicy;
@@ -319,7 +319,7 @@ pub trait ShadowSource {
     fn output(&self) -> ShadowOutput<'_>;
 
     /// Reads the depth atlas back (`size`² floats, row-major);
-    /// [`RenderError::Unsupported`] for sources that fill no atlas.
+    /// [`RenderError::NoAtlas`] for sources that fill no atlas.
     fn read_atlas(&self, ctx: &GpuContext) -> Result<Vec<f32>, RenderError>;
 
     /// Reads the visibility mask back, for a source whose output is the mask (`None`

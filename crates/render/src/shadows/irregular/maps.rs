@@ -34,7 +34,7 @@
 //! (an occupancy flag per tile, set by `cs_insert`) are appended to a queue that an indirect
 //! dispatch walks with one workgroup per tile and one thread per texel, so one floor quad
 //! covering a whole grid does not serialize on one thread, and empty parts of a light's view
-//! cost one flag read per tile. A full queue is an error ([`RenderError::Irregular`]), never
+//! cost one flag read per tile. A full queue is an error ([`crate::RenderError::TileQueueFull`]), never
 //! a dropped tile.
 //!
 //! **llvmpipe's loop budget.** Mesa's software driver (GL and Vulkan) ends every loop of an

@@ -2,7 +2,7 @@
 //! acceleration structures ([`RayAccel`]) and rebuilds the TLAS when an instance moved; the
 //! lighting and visibility passes cast the rays themselves (`rays.wgsl` composed into them),
 //! from the G-buffer point to each light of the pixel's cluster, or to `K` lights picked by
-//! importance ([`RayOptions::light_samples`]).
+//! importance ([`crate::RayOptions::light_samples`]).
 
 use manyshadows_scene::light_space::PointShadows;
 use manyshadows_scene::Scene;

@@ -3,7 +3,7 @@
 //! the `gpu-driven` way. Per round ([`crate::shadows::cluster_draw`]) compute culls caster
 //! clusters against each page's frustum slice (and by normal cone) and one indirect multi-draw
 //! draws the survivors, clipped to the page's tile of the pool (`vsm_draw.wgsl`). The cull is
-//! hierarchical: groups of [`CULL_GROUP`] consecutive clusters have a merged bounding sphere
+//! hierarchical: groups of `CULL_GROUP` consecutive clusters have a merged bounding sphere
 //! (written with the clusters' by [`CasterGeometry::record`]), one thread per (group, page)
 //! tests it and only then the group's clusters. The
 //! page clears and the indirect arguments come from the allocation passes ([`super::pages`]).

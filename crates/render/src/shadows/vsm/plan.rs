@@ -32,12 +32,12 @@ pub struct VirtualOptions {
     pub pool_bytes: u64,
     /// Largest virtual side of a face (a power of two, 128 to 16,384).
     pub max_side: u32,
-    /// Shadow texels wanted per screen pixel (default [`DEFAULT_LOD`], 1: no texel wider
+    /// Shadow texels wanted per screen pixel (default 1, `DEFAULT_LOD`: no texel wider
     /// than the pixel footprint; 0.7 draws about 0.6 times the pages, and misclassifies more
     /// where pixels are wide, docs/techniques.md).
     pub lod: f32,
     /// The receiver bias of virtual maps as a fraction of [`crate::ShadowBias`] (which
-    /// counts texels; default [`DEFAULT_BIAS_SCALE`]). A page's texels match the screen
+    /// counts texels; default 0.5, `DEFAULT_BIAS_SCALE`). A page's texels match the screen
     /// pixel, not a fixed atlas tile, so a whole texel of bias per term moves samples
     /// further than the texel's depth steps need and leaks light at contacts: on the atrium
     /// with 64 lights (960x540) half the bias misclassifies 0.008 % of (pixel, light) pairs
