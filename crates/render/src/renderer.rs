@@ -796,19 +796,10 @@ impl Renderer {
                 pages.side,
                 crate::shadows::image::read_depth_view(&self.ctx, pages.pool, pages.side)?,
             )),
-            _ => Err(RenderError::NoPagePool {
-                technique: self.settings.technique,
-                with_pool: crate::shadows::registry::TECHNIQUES
-                    .iter()
-                    .filter(|i| i.fills == crate::shadows::descriptor::Fills::Pages)
-                    .map(|i| i.technique.name())
-                    .collect(),
-            }),
+            _ => Err(self.no_page_pool()),
         }
     }
-}
 
-impl Renderer {
     /// Reads the virtual maps' page table back as the last frame left it: first, per entry
     /// (`VirtualStats::fit.table_entries` of them), the page it got — a pool page, or a marker
     /// for none or denied — then per entry the farthest receiver's depth key, then the drawn
@@ -817,33 +808,23 @@ impl Renderer {
     /// has one.
     pub fn read_page_table(&self) -> Result<Vec<u32>, RenderError> {
         match self.source.output() {
-            crate::shadows::source::ShadowOutput::Pages { pages, .. } => {
-                let size = pages.table.size();
-                let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("manyshadows.page_table.readback"),
-                    size,
-                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
-                let mut encoder =
-                    self.ctx
-                        .device
-                        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                            label: Some("manyshadows.page_table.copy"),
-                        });
-                encoder.copy_buffer_to_buffer(pages.table, 0, &staging, 0, size);
-                self.ctx.queue.submit([encoder.finish()]);
-                let bytes = crate::gpu::readback::map_read(&self.ctx, &staging, 0..size)?;
-                Ok(bytemuck::cast_slice(&bytes).to_vec())
-            }
-            _ => Err(RenderError::NoPagePool {
-                technique: self.settings.technique,
-                with_pool: crate::shadows::registry::TECHNIQUES
-                    .iter()
-                    .filter(|i| i.fills == crate::shadows::descriptor::Fills::Pages)
-                    .map(|i| i.technique.name())
-                    .collect(),
-            }),
+            crate::shadows::source::ShadowOutput::Pages { pages, .. } => Ok(bytemuck::cast_slice(
+                &crate::gpu::readback::read_buffer(&self.ctx, pages.table)?,
+            )
+            .to_vec()),
+            _ => Err(self.no_page_pool()),
+        }
+    }
+
+    /// [`RenderError::NoPagePool`] for this renderer's technique, naming those with a pool.
+    fn no_page_pool(&self) -> RenderError {
+        RenderError::NoPagePool {
+            technique: self.settings.technique,
+            with_pool: crate::shadows::registry::TECHNIQUES
+                .iter()
+                .filter(|i| i.fills == crate::shadows::descriptor::Fills::Pages)
+                .map(|i| i.technique.name())
+                .collect(),
         }
     }
 }

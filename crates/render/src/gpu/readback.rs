@@ -35,6 +35,26 @@ pub fn map_read(
     Ok(bytes)
 }
 
+/// Copies a whole `COPY_SRC` buffer into a staging buffer and reads it back (for inspection
+/// and tests, not per frame).
+pub fn read_buffer(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, RenderError> {
+    let size = buffer.size();
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("manyshadows.readback"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("manyshadows.readback.copy"),
+        });
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    ctx.queue.submit([encoder.finish()]);
+    map_read(ctx, &staging, 0..size)
+}
+
 /// Copies a whole 2D texture (colour formats) to tightly packed bytes.
 pub fn read_texture(
     ctx: &GpuContext,

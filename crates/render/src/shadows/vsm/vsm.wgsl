@@ -248,20 +248,42 @@ fn slot_has(slot: u32, i: u32) -> bool {
     return (cluster_masks[base + clusters.words.x + i / 32u] & (1u << (i % 32u))) != 0u;
 }
 
+// The G-buffer sample of pixel `px`: position, unit normal, camera view depth; not valid off
+// screen or without geometry.
+struct PixelSample {
+    valid: bool,
+    p: vec3<f32>,
+    n: vec3<f32>,
+    view_depth: f32,
+}
+
+fn pixel_sample(px: vec2<u32>) -> PixelSample {
+    var out: PixelSample;
+    out.valid = false;
+    if (any(px >= vec2<u32>(frame.viewport.xy))) {
+        return out;
+    }
+    let gpos = textureLoad(gbuf_position, vec2<i32>(px), 0);
+    if (!has_geometry(gpos)) {
+        return out;
+    }
+    out.p = bitcast<vec4<f32>>(gpos).xyz;
+    out.n = normalize(bitcast<vec3<f32>>(textureLoad(gbuf_normal, vec2<i32>(px), 0).xyz));
+    out.view_depth = -(frame.view * vec4<f32>(out.p, 1.0)).z;
+    out.valid = true;
+    return out;
+}
+
 // Marks the pages the sample of pixel `px` needs: of light `only`, or with ALL_LIGHTS of every
 // light of its cluster.
 fn mark_pixel(px: vec2<u32>, only: u32) {
-    if (px.x >= u32(frame.viewport.x) || px.y >= u32(frame.viewport.y)) {
+    let s = pixel_sample(px);
+    if (!s.valid) {
         return;
     }
-    let gpos = textureLoad(gbuf_position, vec2<i32>(px), 0);
-    let pos = bitcast<vec4<f32>>(gpos);
-    if (!has_geometry(gpos)) {
-        return;
-    }
-    let p = pos.xyz;
-    let n = normalize(bitcast<vec3<f32>>(textureLoad(gbuf_normal, vec2<i32>(px), 0).xyz));
-    let view_depth = -(frame.view * vec4<f32>(p, 1.0)).z;
+    let p = s.p;
+    let n = s.n;
+    let view_depth = s.view_depth;
     if (only != ALL_LIGHTS) {
         mark_light(only, p, n, view_depth);
         return;
@@ -709,30 +731,6 @@ fn hand_on_whole(origin: vec2<u32>) {
     }
 }
 
-// The pixel `x`, `y` of the tile at `origin`: false when off screen or without geometry.
-struct TilePixel {
-    valid: bool,
-    p: vec3<f32>,
-    n: vec3<f32>,
-}
-
-fn tile_pixel(origin: vec2<u32>, x: u32, y: u32) -> TilePixel {
-    var out: TilePixel;
-    out.valid = false;
-    let px = origin + vec2<u32>(x, y);
-    if (any(px >= vec2<u32>(frame.viewport.xy))) {
-        return out;
-    }
-    let gpos = textureLoad(gbuf_position, vec2<i32>(px), 0);
-    if (!has_geometry(gpos)) {
-        return out;
-    }
-    out.p = bitcast<vec4<f32>>(gpos).xyz;
-    out.n = normalize(bitcast<vec3<f32>>(textureLoad(gbuf_normal, vec2<i32>(px), 0).xyz));
-    out.valid = true;
-    return out;
-}
-
 @compute @workgroup_size(8, 8, 1)
 fn cs_mark_tiles(@builtin(global_invocation_id) id: vec3<u32>) {
     let origin = vec2<u32>(vsm.lod.yz) + id.xy * MARK_TILE;
@@ -751,11 +749,11 @@ fn cs_mark_tiles(@builtin(global_invocation_id) id: vec3<u32>) {
     var spread = false;
     for (var y = 0u; y < MARK_TILE; y = y + 1u) {
         for (var x = 0u; x < MARK_TILE; x = x + 1u) {
-            let s = tile_pixel(origin, x, y);
+            let s = pixel_sample(origin + vec2<u32>(x, y));
             if (!s.valid) {
                 continue;
             }
-            let view_depth = -(frame.view * vec4<f32>(s.p, 1.0)).z;
+            let view_depth = s.view_depth;
             // A NaN would drop out of min and max: such a tile is marked per pixel.
             spread = spread || any(s.p != s.p) || any(s.n != s.n);
             t.lo = min(t.lo, s.p);
@@ -858,13 +856,12 @@ fn cs_mark_tiles(@builtin(global_invocation_id) id: vec3<u32>) {
         // the counts above do not): the thread does it, the same work.
         for (var y = 0u; y < MARK_TILE; y = y + 1u) {
             for (var x = 0u; x < MARK_TILE; x = x + 1u) {
-                let s = tile_pixel(origin, x, y);
+                let s = pixel_sample(origin + vec2<u32>(x, y));
                 if (!s.valid) {
                     continue;
                 }
-                let view_depth = -(frame.view * vec4<f32>(s.p, 1.0)).z;
                 for (var k = 0u; k < h.count; k = k + 1u) {
-                    mark_job_light(h.lights[k], h.entries[k], h.faces[k], s.p, s.n, view_depth);
+                    mark_job_light(h.lights[k], h.entries[k], h.faces[k], s.p, s.n, s.view_depth);
                 }
             }
         }
@@ -918,21 +915,14 @@ fn cs_mark_pixels(
     }
     let w = words_at() + atomicLoad(&mark_list[offsets_at() + k]);
     let first = atomicLoad(&mark_list[w]);
-    let px = vec2<u32>(first & 0xffffu, first >> 16u) + offset;
-    if (px.x >= u32(frame.viewport.x) || px.y >= u32(frame.viewport.y)) {
+    let s = pixel_sample(vec2<u32>(first & 0xffffu, first >> 16u) + offset);
+    if (!s.valid) {
         return;
     }
-    let gpos = textureLoad(gbuf_position, vec2<i32>(px), 0);
-    if (!has_geometry(gpos)) {
-        return;
-    }
-    let p = bitcast<vec4<f32>>(gpos).xyz;
-    let n = normalize(bitcast<vec3<f32>>(textureLoad(gbuf_normal, vec2<i32>(px), 0).xyz));
-    let view_depth = -(frame.view * vec4<f32>(p, 1.0)).z;
     let count = atomicLoad(&mark_list[w + 1u]);
     for (var j = 0u; j < count; j = j + 1u) {
         let at = w + 2u + 3u * j;
-        mark_job_light(atomicLoad(&mark_list[at]), atomicLoad(&mark_list[at + 1u]), atomicLoad(&mark_list[at + 2u]), p, n, view_depth);
+        mark_job_light(atomicLoad(&mark_list[at]), atomicLoad(&mark_list[at + 1u]), atomicLoad(&mark_list[at + 2u]), s.p, s.n, s.view_depth);
     }
 }
 
