@@ -677,21 +677,7 @@ impl IrregularShadows {
 
     /// Reads the mask back.
     pub fn read_mask(&self, ctx: &GpuContext) -> Result<VisibilityMask, RenderError> {
-        let size = self.mask.size();
-        let readback = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("irregular.mask_readback"),
-            size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut encoder = ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("irregular.mask_copy"),
-            });
-        encoder.copy_buffer_to_buffer(&self.mask, 0, &readback, 0, size);
-        ctx.queue.submit([encoder.finish()]);
-        let bytes = crate::gpu::readback::map_read(ctx, &readback, 0..size)?;
+        let bytes = crate::gpu::readback::read_buffer(ctx, &self.mask)?;
         Ok(VisibilityMask {
             width: self.width,
             height: self.height,
