@@ -118,6 +118,9 @@ pub struct CompareArgs {
     /// Shadow texels per screen pixel that --techniques virtual aims for (see render --help).
     #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_LOD)]
     virtual_lod: f32,
+    /// Factor on --virtual-lod for spot and directional lights' faces (see render --help).
+    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_DIRECTED_LOD)]
+    virtual_directed_lod: f32,
     /// --techniques virtual's receiver bias as a fraction of the --bias-* texels (see render
     /// --help).
     #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_BIAS_SCALE)]
@@ -371,12 +374,13 @@ fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
         let footprints = match renderer.virtual_plan() {
             Some(vp) => {
                 let sides: Vec<u32> = vp.faces.iter().map(|f| f.table[2]).collect();
+                let lods: Vec<f32> = vp.faces.iter().map(|f| f.detail[0]).collect();
                 aliasing::footprints(
                     &scene_v,
                     &PlannedViews {
                         views: &vp.views,
                         tile_sizes: &sides,
-                        virtual_lod: Some(renderer.settings().virtual_maps.lod),
+                        virtual_lods: Some(&lods),
                     },
                     &r.surfaces,
                     &r.vis.reach,
@@ -389,7 +393,7 @@ fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
                     &PlannedViews {
                         views: &plan.views,
                         tile_sizes: &tile_sizes,
-                        virtual_lod: None,
+                        virtual_lods: None,
                     },
                     &r.surfaces,
                     &r.vis.reach,
@@ -607,6 +611,7 @@ fn settings(args: &CompareArgs, technique: Technique) -> RenderSettings {
             manyshadows::VirtualOptions::default()
                 .with_pool_bytes(u64::from(args.page_pool) << 20)
                 .with_lod(args.virtual_lod)
+                .with_directed_lod(args.virtual_directed_lod)
                 .with_bias_scale(args.virtual_bias),
         )
 }
@@ -885,7 +890,7 @@ fn report(
         "resolution": [args.width, args.height],
         "lights": { "total": scene.lights.len(), "by_type": by_kind },
         "bias_texels": { "constant": args.bias_constant, "slope": args.bias_slope, "normal": args.bias_normal },
-        "virtual_maps": { "lod": args.virtual_lod, "bias_scale": args.virtual_bias, "page_pool_mib": args.page_pool },
+        "virtual_maps": { "lod": args.virtual_lod, "directed_lod": args.virtual_directed_lod, "bias_scale": args.virtual_bias, "page_pool_mib": args.page_pool },
         "edge_band_px": args.edge_band,
         "reference": {
             "triangles": tracer.triangle_count(),

@@ -347,9 +347,16 @@ pub(crate) struct RenderArgs {
     virtual_side: u32,
     /// Shadow texels per screen pixel that --technique virtual aims for (1 = no texel wider
     /// than the pixel footprint; 2 = twice as fine, four times the pages; 0.7 about 0.6 times
-    /// the pages, with more misclassified pixels where pixels are wide).
+    /// the pages, with more misclassified pixels where pixels are wide): point lights' cube
+    /// faces get it, spot and directional lights' faces it times --virtual-directed-lod.
     #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_LOD)]
     virtual_lod: f32,
+    /// Factor on --virtual-lod for the faces of spot and directional lights (0.8 by default:
+    /// their texels up to 1.25 pixels, which costs them few misclassified pixels while point
+    /// lights' cube faces, seeing walls near the light, keep --virtual-lod; 1 gives every face
+    /// --virtual-lod).
+    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_DIRECTED_LOD)]
+    virtual_directed_lod: f32,
     /// --technique virtual's receiver bias as a fraction of --bias-constant, --bias-slope and
     /// --bias-normal (those count texels; a virtual page's texels match the screen pixel, and
     /// a whole texel of bias leaks light at contacts: 0.5 by default, 0 to 16).
@@ -652,6 +659,7 @@ pub(crate) fn flag_error(e: manyshadows::RenderError) -> anyhow::Error {
         ("irregular.hash", "--irregular-hash"),
         ("virtual_maps.pool_bytes", "--page-pool (MiB)"),
         ("virtual_maps.lod", "--virtual-lod"),
+        ("virtual_maps.directed_lod", "--virtual-directed-lod"),
         ("virtual_maps.bias_scale", "--virtual-bias"),
         ("virtual_maps.max_side", "--virtual-side"),
         ("rays.light_samples", "--light-samples"),
@@ -720,6 +728,7 @@ pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettin
                 .with_pool_bytes(u64::from(args.page_pool) << 20)
                 .with_max_side(args.virtual_side)
                 .with_lod(args.virtual_lod)
+                .with_directed_lod(args.virtual_directed_lod)
                 .with_bias_scale(args.virtual_bias)
                 .with_tile_marking(args.virtual_marking == VirtualMarking::Tiles),
         )

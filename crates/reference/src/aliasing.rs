@@ -151,11 +151,12 @@ pub struct PlannedViews<'a> {
     /// view's requested resolution when the atlas was shrunk to fit). For virtual shadow maps,
     /// each face's virtual side.
     pub tile_sizes: &'a [u32],
-    /// Virtual shadow maps with this level-of-detail scale (texels per pixel): a pixel reads
-    /// the level the lookup picks, the coarsest whose texel is no wider than `pixel / lod`,
-    /// between the 128-texel level 0 and the face's virtual side (pages denied for lack of
-    /// pool room, which fall back to coarser levels, are not modelled).
-    pub virtual_lod: Option<f32>,
+    /// Virtual shadow maps with these levels of detail (texels per pixel, in view order): a
+    /// pixel reads the level the lookup picks, the coarsest whose texel is no wider than
+    /// `pixel / lod` of its face, between the 128-texel level 0 and the face's virtual side
+    /// (pages denied for lack of pool room, which fall back to coarser levels, are not
+    /// modelled).
+    pub virtual_lods: Option<&'a [f32]>,
 }
 
 /// Side of a virtual shadow map page (level 0 spans the face with one page).
@@ -267,7 +268,8 @@ pub fn footprints(
             if !v.orthographic {
                 texel *= clip.w;
             }
-            if let Some(lod) = planned.virtual_lod {
+            if let Some(lods) = planned.virtual_lods {
+                let lod = lods[vi];
                 // As vsm_level in shaders/vsm_common.wgsl: 2^k finest texels per level texel.
                 let finest = (planned.tile_sizes[vi] / VIRTUAL_PAGE)
                     .max(1)

@@ -373,6 +373,13 @@ impl RenderSettings {
                 "a positive number of shadow texels per pixel",
             ));
         }
+        if !(self.virtual_maps.directed_lod.is_finite() && self.virtual_maps.directed_lod > 0.0) {
+            return Err(bad(
+                "virtual_maps.directed_lod",
+                self.virtual_maps.directed_lod,
+                "a positive factor on virtual_maps.lod",
+            ));
+        }
         if !(self.virtual_maps.bias_scale.is_finite()
             && (0.0..=16.0).contains(&self.virtual_maps.bias_scale))
         {

@@ -221,6 +221,8 @@ fn virtual_options_out_of_range_are_refused() {
         (d().with_lod(f32::NAN), "virtual_maps.lod"),
         (d().with_lod(0.0), "virtual_maps.lod"),
         (d().with_lod(f32::INFINITY), "virtual_maps.lod"),
+        (d().with_directed_lod(f32::NAN), "virtual_maps.directed_lod"),
+        (d().with_directed_lod(-1.0), "virtual_maps.directed_lod"),
         (d().with_bias_scale(f32::NAN), "virtual_maps.bias_scale"),
         (d().with_bias_scale(-0.5), "virtual_maps.bias_scale"),
         (d().with_bias_scale(17.0), "virtual_maps.bias_scale"),

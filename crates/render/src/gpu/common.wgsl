@@ -173,6 +173,9 @@ struct VirtualFace {
     // The part of the face (uv min xy, max xy) where casters moved since the last frame:
     // kept pages overlapping it are drawn anew. Empty (min > max) when nothing moved there.
     dirty: vec4<f32>,
+    // x: shadow texels per screen pixel the face aims for (its level of detail); y, z, w
+    // unused.
+    detail: vec4<f32>,
 }
 
 struct VsmUniforms {
@@ -181,7 +184,7 @@ struct VsmUniforms {
     // Faces, page-table entries, 1 = mark pages for back-facing samples too, 1 = bound each
     // page's casters by its farthest receiver (the keys after the table's entries).
     counts: vec4<u32>,
-    // Texels per screen pixel wanted (level of detail scale); the marking pass's first pixel
+    // Unused (the faces carry their level of detail); the marking pass's first pixel
     // (x, y: it marks a rectangle from there when only part of the screen changed); the
     // receiver bias's scale (texels of the bias settings per texel of a page).
     lod: vec4<f32>,

@@ -225,6 +225,10 @@ pub struct VirtualFace {
     /// Where casters moved in the face since the last frame (uv min x, min y, max x, max y):
     /// kept pages overlapping it are drawn anew; empty (min > max) when none did.
     pub dirty: [f32; 4],
+    /// x: shadow texels per screen pixel the face aims for (its level of detail:
+    /// `VirtualOptions::lod`, times `VirtualOptions::directed_lod` for spot and directional
+    /// lights); y, z, w unused.
+    pub detail: [f32; 4],
 }
 
 /// Pool and page-table layout of the virtual shadow maps (`VsmUniforms`).
@@ -236,7 +240,8 @@ pub struct VsmUniforms {
     /// Faces, page-table entries, 1 = mark pages for back-facing samples too, 1 = bound each
     /// page's casters by its farthest receiver (the keys after the table's entries).
     pub counts: [u32; 4],
-    /// Texels per screen pixel wanted; the first pixel (x, y) the marking pass visits (a
+    /// Unused (the faces carry their level of detail, `VirtualFace::detail`); the first
+    /// pixel (x, y) the marking pass visits (a
     /// rectangle of the screen when only part of it changed); the receiver bias's scale
     /// (`VirtualOptions::bias_scale`).
     pub lod: [f32; 4],
@@ -353,7 +358,7 @@ mod tests {
         );
         same_layout!(ShadowViewData, view_proj, tile, params);
         same_layout!(ClusterUniforms, grid, words, depth, proj, counts);
-        same_layout!(VirtualFace, view_proj, eye, params, table, dirty);
+        same_layout!(VirtualFace, view_proj, eye, params, table, dirty, detail);
         same_layout!(VsmUniforms, pool, counts, lod, prev);
         same_layout!(VsmRound, round, counts);
         assert_eq!(VIEW_UNIFORM_STRIDE, 256);

@@ -468,7 +468,7 @@ impl VirtualShadows {
                 u32::from(self.options.back_facing),
                 u32::from(self.options.receiver_cull),
             ],
-            lod: [self.options.lod, 0.0, 0.0, self.options.bias_scale],
+            lod: [0.0, 0.0, 0.0, self.options.bias_scale],
             // `record` writes it.
             prev: [0; 4],
         };

@@ -20,6 +20,9 @@ pub const NOTHING_MOVED: [f32; 4] = [1.0, 1.0, 0.0, 0.0];
 pub const DEFAULT_TABLE_ENTRIES: u32 = 4 << 20;
 /// Default shadow texels per screen pixel of virtual maps ([`VirtualOptions::lod`]).
 pub const DEFAULT_LOD: f32 = 1.0;
+/// Default factor on [`DEFAULT_LOD`] for spot and directional lights' faces
+/// ([`VirtualOptions::directed_lod`]).
+pub const DEFAULT_DIRECTED_LOD: f32 = 0.8;
 /// Default receiver-bias scale of virtual maps ([`VirtualOptions::bias_scale`]).
 pub const DEFAULT_BIAS_SCALE: f32 = 0.5;
 /// Knobs of the virtual shadow maps.
@@ -33,9 +36,16 @@ pub struct VirtualOptions {
     /// Largest virtual side of a face (a power of two, 128 to 16,384).
     pub max_side: u32,
     /// Shadow texels wanted per screen pixel (default 1, `DEFAULT_LOD`: no texel wider
-    /// than the pixel footprint; 0.7 draws about 0.6 times the pages, and misclassifies more
-    /// where pixels are wide, docs/techniques.md).
+    /// than the pixel footprint) by point lights' cube faces, and, times
+    /// [`Self::directed_lod`], by spot and directional lights' faces. Lower values draw fewer
+    /// pages and misclassify more where pixels are wide (docs/techniques.md).
     pub lod: f32,
+    /// Factor on [`Self::lod`] for the faces of spot and directional lights (default 0.8,
+    /// `DEFAULT_DIRECTED_LOD`: their texels up to 1.25 pixels). Measured on the atrium
+    /// (docs/techniques.md): coarser texels cost point lights' cube faces most of their
+    /// extra errors (walls near the lights, seen through wide pixels), spot and directional
+    /// faces few, so they alone get them; 1 gives every face `lod`.
+    pub directed_lod: f32,
     /// The receiver bias of virtual maps as a fraction of [`crate::ShadowBias`] (which
     /// counts texels; default 0.5, `DEFAULT_BIAS_SCALE`). A page's texels match the screen
     /// pixel, not a fixed atlas tile, so a whole texel of bias per term moves samples
@@ -87,6 +97,7 @@ impl Default for VirtualOptions {
             pool_bytes: DEFAULT_POOL_BYTES,
             max_side: MAX_SIDE,
             lod: DEFAULT_LOD,
+            directed_lod: DEFAULT_DIRECTED_LOD,
             bias_scale: DEFAULT_BIAS_SCALE,
             max_table_entries: DEFAULT_TABLE_ENTRIES,
             back_facing: false,
@@ -127,6 +138,14 @@ pub struct VirtualPlan {
     pub fit: VirtualFit,
 }
 
+/// Shadow texels per screen pixel that `light`'s faces aim for (`VirtualFace::detail`).
+pub fn face_lod(light: &manyshadows_scene::Light, options: &VirtualOptions) -> f32 {
+    match light.kind {
+        manyshadows_scene::LightKind::Point { .. } => options.lod,
+        _ => options.lod * options.directed_lod,
+    }
+}
+
 /// Page-table entries of a face of virtual side `side`: `(4^(L+1) − 1) / 3` for
 /// `L = log2(side / PAGE_SIZE)`.
 pub fn table_entries(side: u32) -> u32 {
@@ -151,6 +170,7 @@ impl VirtualPlan {
         let mut fit = VirtualFit::default();
         let mut views = Vec::new();
         let mut sides = Vec::new();
+        let mut lods = Vec::new();
         let mut light_views = vec![(0u32, 0u32); scene.lights.len()];
         let mut i = 0;
         while i < all.len() {
@@ -165,6 +185,7 @@ impl VirtualPlan {
                 }
             }
             let importance = crate::shadows::plan::light_importance(scene, light);
+            let lod = face_lod(&scene.lights[light], options);
             light_views[light] = (views.len() as u32, n as u32);
             fit.lights += 1;
             for v in group {
@@ -176,7 +197,7 @@ impl VirtualPlan {
                     max_side
                 } else {
                     let tan_half = 1.0 / v.proj.x_axis.x.abs().max(1e-6);
-                    let want = tan_half * p11 * height as f32 * options.lod * importance;
+                    let want = tan_half * p11 * height as f32 * lod * importance;
                     if want.is_finite() && want < max_side as f32 {
                         (want.ceil().max(1.0) as u32)
                             .next_power_of_two()
@@ -187,6 +208,7 @@ impl VirtualPlan {
                 };
                 views.push(*v);
                 sides.push(side);
+                lods.push(lod);
             }
         }
         // Keep the page table within its cap: halve the largest sides first.
@@ -204,7 +226,7 @@ impl VirtualPlan {
         }
         let mut faces = Vec::with_capacity(views.len());
         let mut first = 0u32;
-        for (v, &side) in views.iter().zip(&sides) {
+        for ((v, &side), &lod) in views.iter().zip(&sides).zip(&lods) {
             let finest = (side / PAGE_SIZE).trailing_zeros();
             faces.push(VirtualFace {
                 view_proj: v.view_proj.to_cols_array_2d(),
@@ -218,6 +240,7 @@ impl VirtualPlan {
                 // w: last frame's first entry + 1 when its pages may be kept (set per frame).
                 table: [first, finest, side, 0],
                 dirty: NOTHING_MOVED,
+                detail: [lod, 0.0, 0.0, 0.0],
             });
             first = first.saturating_add(table_entries(side));
         }
@@ -404,6 +427,7 @@ with_setters!(VirtualOptions {
     with_pool_bytes: pool_bytes: u64,
     with_max_side: max_side: u32,
     with_lod: lod: f32,
+    with_directed_lod: directed_lod: f32,
     with_bias_scale: bias_scale: f32,
     with_max_table_entries: max_table_entries: u32,
     with_back_facing: back_facing: bool,

@@ -175,7 +175,7 @@ fn mark_light(i: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
     }
     let face = vsm_faces[fi];
     let ray = vsm_ray(light, face, p, n);
-    let level = vsm_level(face, ray, view_depth, vsm.lod.x);
+    let level = vsm_level(face, ray, view_depth);
     let q = vsm_project(light, face, ray, level);
     if (!q.valid) {
         return;
@@ -592,7 +592,7 @@ fn tile_light(i: u32, t: TileSamples) -> TilePage {
         tex_lo = tex_lo * w_lo;
         tex_hi = tex_hi * (w_c + w_e) * (1.0 + 1e-5);
     }
-    let footprint = frame.bias.w / max(vsm.lod.x, 1e-6);
+    let footprint = frame.bias.w / max(face.detail.x, 1e-6);
     let k_lo = floor(log2(max(t.near * footprint, 1e-30) / max(tex_hi, 1e-30)) - LEVEL_MARGIN);
     let k_hi = floor(log2(max(t.far * footprint, 1e-30) / max(tex_lo, 1e-30)) + LEVEL_MARGIN);
     let steps = clamp(k_lo, 0.0, f32(finest));

@@ -31,12 +31,12 @@ fn vsm_texel_world(face: VirtualFace, level: u32, ray: VsmRay) -> f32 {
 }
 
 // The level a sample (camera view depth `view_depth`) needs: the coarsest whose texels are no
-// larger than the screen pixel there, divided by the level-of-detail scale `lod` (texels per
-// pixel). Level 0 when even the finest level is coarser than that.
-fn vsm_level(face: VirtualFace, ray: VsmRay, view_depth: f32, lod: f32) -> u32 {
+// larger than the screen pixel there, divided by the face's level of detail (`detail.x`,
+// texels per pixel). Level 0 when even the finest level is coarser than that.
+fn vsm_level(face: VirtualFace, ray: VsmRay, view_depth: f32) -> u32 {
     let finest = face.table.y;
     let texel = vsm_texel_world(face, finest, ray);
-    let pixel = view_depth * frame.bias.w / max(lod, 1e-6);
+    let pixel = view_depth * frame.bias.w / max(face.detail.x, 1e-6);
     // Level l has texels 2^(finest - l) times the finest: the coarsest level with
     // 2^(finest - l) · texel <= pixel is finest - floor(log2(pixel / texel)).
     let k = floor(log2(max(pixel, 1e-30) / max(texel, 1e-30)));

@@ -15,7 +15,7 @@ fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, view_depth: f32) -
     }
     let face = vsm_faces[fi];
     let ray = vsm_ray(light, face, p, n);
-    var level = vsm_level(face, ray, view_depth, vsm.lod.x);
+    var level = vsm_level(face, ray, view_depth);
     loop {
         let q = vsm_project(light, face, ray, level);
         if (!q.valid) {
