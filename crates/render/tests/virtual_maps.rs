@@ -71,6 +71,33 @@ fn virtual_mask_matches_the_reference_better_than_the_atlas() {
     assert!(virt < atlas, "virtual {virt} against traditional {atlas}");
 }
 
+/// A 20 × 20 floor (a caster) lit by one shadowed light of `kind` reaching `range`.
+fn lamp_over_floor(
+    kind: manyshadows::scene::LightKind,
+    range: f32,
+    camera: manyshadows::scene::Camera,
+) -> manyshadows::scene::Scene {
+    use glam::{Mat4, Vec3};
+    use manyshadows::scene::{primitives, Attenuation, Instance, Light, Material, Scene};
+    Scene {
+        textures: Vec::new(),
+        name: "lamp over a floor".into(),
+        meshes: vec![primitives::plane(20.0, 20.0, 8)],
+        materials: vec![Material::default()],
+        instances: vec![Instance::caster(0, 0, Mat4::IDENTITY)],
+        lights: vec![Light {
+            kind,
+            ambient: Vec3::ZERO,
+            diffuse: Vec3::ONE,
+            specular: Vec3::ZERO,
+            attenuation: Attenuation::for_range(range),
+            casts_shadows: true,
+            shadow_resolution: 256,
+        }],
+        camera,
+    }
+}
+
 /// A point light above a floor, with the camera seeing every floor point in its reach: the
 /// plan lays out all six cube faces, but only the faces the lit samples look through get
 /// pages. The light sits 1 above the floor; a floor point in reach R lies at most √(R² − 1)
@@ -79,30 +106,18 @@ fn virtual_mask_matches_the_reference_better_than_the_atlas() {
 /// 2.83 away): −Y and the four side faces, never +Y (nothing above the light).
 #[test]
 fn a_point_light_over_a_floor_gets_pages_only_in_the_faces_its_samples_need() {
-    use glam::{Mat4, Vec3};
-    use manyshadows::scene::{
-        primitives, Attenuation, Camera, Instance, Light, LightKind, Material, Scene,
-    };
+    use glam::Vec3;
+    use manyshadows::scene::{Camera, LightKind};
     let ctx = common::context();
-    let scene = |range: f32| Scene {
-        textures: Vec::new(),
-        name: "lamp over a floor".into(),
-        meshes: vec![primitives::plane(20.0, 20.0, 8)],
-        materials: vec![Material::default()],
-        instances: vec![Instance::caster(0, 0, Mat4::IDENTITY)],
-        lights: vec![Light {
-            kind: LightKind::Point {
+    let scene = |range: f32| {
+        lamp_over_floor(
+            LightKind::Point {
                 position: Vec3::new(0.0, 1.0, 0.0),
                 range,
             },
-            ambient: Vec3::ZERO,
-            diffuse: Vec3::ONE,
-            specular: Vec3::ZERO,
-            attenuation: Attenuation::for_range(range),
-            casts_shadows: true,
-            shadow_resolution: 256,
-        }],
-        camera: Camera::look_at(Vec3::new(0.0, 7.0, 4.0), Vec3::ZERO),
+            range,
+            Camera::look_at(Vec3::new(0.0, 7.0, 4.0), Vec3::ZERO),
+        )
     };
     let settings = RenderSettings::default()
         .with_width(256)
@@ -134,27 +149,15 @@ fn a_point_light_over_a_floor_gets_pages_only_in_the_faces_its_samples_need() {
 /// `lod` leaves the spot's levels unchanged: seen failing.)
 #[test]
 fn spot_faces_take_the_directed_level_of_detail_and_cube_faces_keep_theirs() {
-    use glam::{Mat4, Vec3};
-    use manyshadows::scene::{
-        primitives, Attenuation, Camera, Instance, Light, LightKind, Material, Scene,
-    };
+    use glam::Vec3;
+    use manyshadows::scene::{Camera, LightKind};
     let ctx = common::context();
-    let scene = |kind: LightKind| Scene {
-        textures: Vec::new(),
-        name: "lamp over a floor".into(),
-        meshes: vec![primitives::plane(20.0, 20.0, 8)],
-        materials: vec![Material::default()],
-        instances: vec![Instance::caster(0, 0, Mat4::IDENTITY)],
-        lights: vec![Light {
+    let scene = |kind: LightKind| {
+        lamp_over_floor(
             kind,
-            ambient: Vec3::ZERO,
-            diffuse: Vec3::ONE,
-            specular: Vec3::ZERO,
-            attenuation: Attenuation::for_range(4.0),
-            casts_shadows: true,
-            shadow_resolution: 256,
-        }],
-        camera: Camera::look_at(Vec3::new(0.0, 4.0, 2.5), Vec3::ZERO),
+            4.0,
+            Camera::look_at(Vec3::new(0.0, 4.0, 2.5), Vec3::ZERO),
+        )
     };
     let position = Vec3::new(0.0, 2.0, 0.0);
     let point = LightKind::Point {
