@@ -505,7 +505,14 @@ pub fn layered(args: &LayeredArgs) -> Result<()> {
                 .with_casters(CasterOptions::default().with_assume_closed(variant.assume_closed))
                 .with_discard_raster(variant.discard && !args.raster);
             let created = ctx.scoped(&format!("building {}", m.technique), || {
-                ShadowGenerator::new(ctx, &scene, gpu, shadow_plan.clone(), m.technique, options)
+                ShadowGenerator::new(
+                    ctx,
+                    &scene,
+                    gpu,
+                    shadow_plan.clone(),
+                    m.technique.info(),
+                    options,
+                )
             });
             match created {
                 Ok(g) => contenders.push(Contender {

@@ -24,7 +24,7 @@ use manyshadows_reference::score::{self, class, Counts};
 use manyshadows_reference::{Mask, ReferenceVisibility, SurfacePoint, Surfaces, Tracer};
 use serde_json::json;
 
-use crate::{GpuArgs, RenderArgs};
+use crate::args::{GpuArgs, RenderArgs};
 
 /// Most (pixel, light) pairs one comparison may trace: about a minute of rays on two cores.
 const MAX_RAYS: u64 = 200_000_000;
@@ -56,7 +56,7 @@ pub struct CompareArgs {
     #[arg(skip)]
     scene: String,
     /// Techniques to score, comma-separated (default: every technique).
-    #[arg(long, value_delimiter = ',', value_parser = crate::parse_technique)]
+    #[arg(long, value_delimiter = ',', value_parser = crate::args::parse_technique)]
     techniques: Vec<Technique>,
     /// Number of lights, placed by a seeded layout. Default: 8 for the atrium (a quick run),
     /// otherwise the scene's own lights.
@@ -69,7 +69,7 @@ pub struct CompareArgs {
     #[arg(long, default_value = "all")]
     light_types: String,
     /// Point-light shadows: cube or dual-paraboloid (scored by the same reference).
-    #[arg(long, default_value = "cube", value_parser = crate::parse_point_shadows)]
+    #[arg(long, default_value = "cube", value_parser = crate::args::parse_point_shadows)]
     point_shadows: manyshadows::scene::light_space::PointShadows,
     /// Split every triangle into four this many times first (as for `render`).
     #[arg(long, default_value_t = 0)]
@@ -103,7 +103,7 @@ pub struct CompareArgs {
     /// let light through, as in the reference) or off (they cast as solid cards, what a
     /// renderer that ignores alpha would draw; the reference keeps its holes, so this scores
     /// that mistake).
-    #[arg(long, default_value = "on", value_parser = crate::parse_on_off, action = clap::ArgAction::Set)]
+    #[arg(long, default_value = "on", value_parser = crate::args::parse_on_off, action = clap::ArgAction::Set)]
     shadow_alpha: bool,
     /// Largest shadow-atlas side in texels (clamped to the adapter's limit).
     #[arg(long, default_value_t = manyshadows::DEFAULT_MAX_ATLAS_SIZE)]
@@ -253,7 +253,7 @@ fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
         }
     }
     let multi = MultiProgress::new();
-    let pb = multi.add(crate::spinner("loading the scene"));
+    let pb = multi.add(crate::progress::spinner("loading the scene"));
     let scene = load(args)?;
     let pixels = args.width as u64 * args.height as u64;
     let max_rays = match args.reference {
@@ -303,7 +303,7 @@ fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
     pb.set_message("opening the GPU");
     let ctx = GpuContext::new(&args.gpu.request())?;
     let args = &CompareArgs {
-        atlas_max: pb.suspend(|| crate::effective_atlas_max(&ctx, args.atlas_max)),
+        atlas_max: pb.suspend(|| crate::args::effective_atlas_max(&ctx, args.atlas_max)),
         ..args.clone()
     };
     pb.set_message("building the BVH of the shadow casters");
@@ -334,7 +334,7 @@ fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
                 continue;
             }
             // A setting out of range names the flag that set it, as `render` does.
-            Err(e) => return Err(crate::flag_error(e)),
+            Err(e) => return Err(crate::args::flag_error(e)),
         };
         let frame = renderer.render()?;
         if reference.is_none() {
@@ -569,7 +569,7 @@ fn load(args: &CompareArgs) -> Result<Scene> {
         subdivide: args.subdivide,
         ..RenderArgs::default()
     };
-    crate::load_scene(&ra)
+    crate::scenes::load_scene(&ra)
 }
 
 /// The scene with every light's shadow map at `resolution` (what `--shadow-resolution` does).

@@ -35,8 +35,8 @@ use manyshadows::VirtualStats;
 use manyshadows::{GpuContext, Renderer, ShadowStats};
 use serde::Serialize;
 
+use crate::args::GpuArgs;
 use crate::plot::{Panel, PlotPoint};
-use crate::GpuArgs;
 
 /// The options every comparison bench takes. Each `bench` subcommand sets its own default of
 /// `--out-dir` and, where it differs, of `--repeats` (main.rs).

@@ -131,7 +131,7 @@ pub fn omni(args: &OmniArgs) -> Result<()> {
                     FitPolicy::Strict,
                     mode,
                 )?;
-                ShadowGenerator::new(ctx, &scene, &gpu, plan, t, ShadowOptions::default())
+                ShadowGenerator::new(ctx, &scene, &gpu, plan, t.info(), ShadowOptions::default())
             });
             match made {
                 Ok(g) => contenders.push(Contender {

@@ -155,7 +155,7 @@ pub fn virtual_maps(args: &VirtualArgs) -> Result<()> {
                 label: "virtual".into(),
                 // A pool out of range names --page-pool, as render does.
                 subject: FrameSubject::moving(
-                    Renderer::new(&h.ctx, &scene, virt).map_err(crate::flag_error)?,
+                    Renderer::new(&h.ctx, &scene, virt).map_err(crate::args::flag_error)?,
                     caster,
                 ),
             },

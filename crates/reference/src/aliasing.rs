@@ -23,7 +23,8 @@ use manyshadows_scene::light_space::ShadowView;
 use manyshadows_scene::{LightKind, Scene};
 use serde::Serialize;
 
-use crate::{Mask, ReferenceError, Surfaces};
+use crate::error::ReferenceError;
+use crate::frame::{Mask, Surfaces};
 
 /// Histogram bins per octave (factor of 2) of footprint.
 const BINS_PER_OCTAVE: i32 = 8;

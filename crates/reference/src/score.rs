@@ -25,7 +25,9 @@
 
 use serde::Serialize;
 
-use crate::{Mask, ReferenceError, ReferenceVisibility};
+use crate::error::ReferenceError;
+use crate::frame::Mask;
+use crate::visibility::ReferenceVisibility;
 
 /// Per pixel, the lights whose reference bit differs within `radius` pixels (see the module
 /// docs). `covered[pixel]` is false where the pixel saw no geometry; those pixels neither are

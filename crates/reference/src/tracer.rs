@@ -17,7 +17,7 @@ use obvhs::cwbvh::{builder::build_cwbvh, CwBvh};
 use obvhs::ray::Ray;
 use obvhs::BvhBuildParams;
 
-use crate::ReferenceError;
+use crate::error::ReferenceError;
 
 /// Padding of each triangle's bounding box in the BVH, relative to its largest coordinate
 /// (about 10 ulps of an `f32`).

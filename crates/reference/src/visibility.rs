@@ -26,7 +26,8 @@ use glam::Vec3;
 use manyshadows_scene::{Light, LightKind};
 use rayon::prelude::*;
 
-use crate::{Mask, Surfaces, Tracer};
+use crate::frame::{Mask, Surfaces};
+use crate::tracer::Tracer;
 
 /// The ray-start offset along the normal, relative to the point's largest coordinate: about
 /// 100 ulps of an `f32`, far above the rounding of G-buffer positions (which the GPU

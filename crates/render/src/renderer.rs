@@ -17,20 +17,23 @@ use glam::Vec3;
 use manyshadows_scene::{Camera, Light, Scene, SceneError};
 use wgpu::util::DeviceExt;
 
+use crate::error::RenderError;
 use crate::frame::clusters::{ClusterStats, LightClusters, LightLoop};
 use crate::frame::gbuffer::GBuffer;
 use crate::frame::gbuffer_readback::GBufferData;
-use crate::frame::lighting::{LightingInputs, LightingPass};
-use crate::frame::visibility::VisibilityPass;
 use crate::frame::visibility_mask::VisibilityMask;
+use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, GpuTimes, Stage};
 use crate::gpu::types::{FrameUniforms, LightData};
 use crate::gpu_scene::instances::GpuScene;
 use crate::settings::RenderSettings;
+use crate::shading::lighting::{LightingInputs, LightingPass};
+use crate::shading::visibility::VisibilityPass;
+use crate::shadows::image::ShadowPicture;
 use crate::shadows::plan::DEFAULT_MAX_ATLAS_SIZE;
 use crate::shadows::source::{ShadowSource, ShadowStats, SourceInputs};
 use crate::shadows::vsm::plan::VirtualStats;
-use crate::{GpuContext, RenderError};
+use crate::shadows::vsm::source::VirtualSource;
 
 /// Times of one frame.
 #[derive(Clone, Debug, Default)]
@@ -82,7 +85,7 @@ pub struct SubmittedFrame {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadowLayout {
     /// What the technique fills.
-    pub fills: crate::shadows::descriptor::Fills,
+    pub fills: crate::error::Fills,
     /// Shadow views: atlas tiles, or virtual faces.
     pub views: usize,
     /// Side of the depth texture shadows are read from (the atlas or the page pool; 1 for a
@@ -134,18 +137,6 @@ const MAP_PENDING: u8 = 0;
 const MAP_DONE: u8 = 1;
 const MAP_FAILED: u8 = 2;
 
-/// A picture of a renderer's shadow maps ([`Renderer::shadow_picture`]).
-#[non_exhaustive]
-#[derive(Clone, Debug)]
-pub struct ShadowPicture {
-    /// Side of the square picture in pixels.
-    pub side: u32,
-    /// RGB8 pixels, row-major from the top-left.
-    pub rgb: Vec<u8>,
-    /// What it shows ("4096² atlas, 97 views").
-    pub description: String,
-}
-
 /// A scene uploaded and ready to render frames.
 pub struct Renderer {
     /// Shared so a frame can hold it while it mutates the renderer (one reference-count
@@ -163,7 +154,7 @@ pub struct Renderer {
     /// The visibility pass, when asked for and the source's output is not the mask itself.
     visibility: Option<VisibilityPass>,
     /// Copies frames into callers' textures ([`Renderer::render_to`]); built on first use.
-    blit: Option<crate::frame::blit::Blit>,
+    blit: Option<crate::shading::blit::Blit>,
     /// GPU times of frames drawn by `render_to`, read back without waiting (oldest first).
     timings: TimingsInFlight,
     timer: GpuTimer,
@@ -183,7 +174,7 @@ impl Renderer {
     ) -> Result<Self, RenderError> {
         settings.validate()?;
         if settings.shadow_budget.is_some()
-            && settings.technique.info().fills != crate::shadows::descriptor::Fills::Atlas
+            && settings.technique.info().fills != crate::error::Fills::Atlas
         {
             return Err(RenderError::NotImplemented {
                 what: "a shadow budget with a technique that fills no atlas",
@@ -207,7 +198,7 @@ impl Renderer {
             .min(max_dim);
         ctx.scoped("creating the renderer", || {
             let gpu_scene = GpuScene::new(ctx, scene)?;
-            let mut source = crate::shadows::create(ctx, scene, &gpu_scene, &settings, max_atlas)?;
+            let mut source = crate::registry::create(ctx, scene, &gpu_scene, &settings, max_atlas)?;
             let light_data = lights_or_placeholder(source.light_data(scene));
             let lights = ctx
                 .device
@@ -250,7 +241,7 @@ impl Renderer {
                     instances: &gpu_scene.instances,
                 },
             )?;
-            let shadow_side = source.output().depth_side();
+            let shadow_side = source.output().depth_side;
             ctx.queue.write_buffer(
                 &frame_buffer,
                 0,
@@ -295,20 +286,22 @@ impl Renderer {
         self.source.plan()
     }
 
-    /// The faces of [`Technique::VIRTUAL`](crate::settings::Technique::VIRTUAL) (`None` for
+    /// The faces of [`Technique::VIRTUAL`](crate::error::Technique::VIRTUAL) (`None` for
     /// other techniques).
     #[cfg(feature = "internals")]
     pub fn virtual_plan(&self) -> Option<&crate::shadows::vsm::plan::VirtualPlan> {
-        self.source.virtual_plan()
+        self.virtual_source().map(VirtualSource::plan)
+    }
+
+    /// The source as virtual maps, where the technique is `virtual`.
+    fn virtual_source(&self) -> Option<&VirtualSource> {
+        (&*self.source as &dyn std::any::Any).downcast_ref::<VirtualSource>()
     }
 
     /// Shadow views of the current plan: every atlas tile, or every virtual face (a spot
     /// light's frustum, a cube face, a cascade).
     pub fn shadow_views(&self) -> usize {
-        match self.source.virtual_plan() {
-            Some(p) => p.faces.len(),
-            None => self.source.plan().views.len(),
-        }
+        self.source.view_count()
     }
 
     /// What holds the shadows: the kind, how many views, and the side of the texture they
@@ -319,9 +312,8 @@ impl Renderer {
         ShadowLayout {
             fills,
             views: self.shadow_views(),
-            side: self.source.output().depth_side(),
-            atlas_fill: (fills == crate::shadows::descriptor::Fills::Atlas)
-                .then(|| plan.fill() as f32),
+            side: self.source.output().depth_side,
+            atlas_fill: (fills == crate::error::Fills::Atlas).then(|| plan.fill() as f32),
         }
     }
 
@@ -372,37 +364,7 @@ impl Renderer {
     /// dark blue), at most 2048² (larger ones are shown every n-th texel). A technique that
     /// keeps neither answers [`RenderError::NoAtlas`].
     pub fn shadow_picture(&self) -> Result<ShadowPicture, RenderError> {
-        use crate::shadows::source::ShadowOutput;
-        match self.source.output() {
-            ShadowOutput::Atlas(atlas) => {
-                let depth = self.source.read_atlas(&self.ctx)?;
-                let (side, rgb) =
-                    crate::shadows::image::atlas_picture(&depth, atlas.size, self.source.plan());
-                Ok(ShadowPicture {
-                    side,
-                    rgb,
-                    description: format!(
-                        "{}² atlas, {} views",
-                        atlas.size,
-                        self.source.plan().views.len()
-                    ),
-                })
-            }
-            ShadowOutput::Pages { .. } => {
-                let (pool, depth) = self.read_page_pool()?;
-                let (side, rgb) = crate::shadows::image::pool_picture(&depth, pool);
-                let pages = (pool / crate::shadows::vsm::plan::PAGE_SIZE).pow(2);
-                Ok(ShadowPicture {
-                    side,
-                    rgb,
-                    description: format!("{pool}² page pool ({pages} pages)"),
-                })
-            }
-            ShadowOutput::Mask { .. } | ShadowOutput::Rays { .. } => Err(RenderError::NoAtlas {
-                technique: self.settings.technique,
-                fills: self.settings.technique.info().fills,
-            }),
-        }
+        self.source.picture(&self.ctx)
     }
 
     /// The settings in use.
@@ -428,7 +390,7 @@ impl Renderer {
 
     /// The shadow atlas.
     #[cfg(feature = "internals")]
-    pub fn atlas(&self) -> &crate::shadows::atlas::storage::ShadowAtlas {
+    pub fn atlas(&self) -> &crate::shadows::storage::ShadowAtlas {
         self.source.atlas()
     }
 
@@ -546,7 +508,7 @@ impl Renderer {
             bytemuck::bytes_of(&frame_uniforms(
                 scene,
                 settings,
-                self.source.output().depth_side(),
+                self.source.output().depth_side,
             )),
         );
         self.lighting.rebind(
@@ -627,7 +589,7 @@ impl Renderer {
     /// any normalized or float colour format, sRGB or not: a window's surface texture, say),
     /// and submits it without reading anything back. The caller presents or samples the
     /// texture after this returns; [`Renderer::render`] is the same frame read back to the CPU.
-    /// With [`Technique::IRREGULAR`](crate::settings::Technique::IRREGULAR) this waits for the
+    /// With [`Technique::IRREGULAR`](crate::error::Technique::IRREGULAR) this waits for the
     /// frame's overflow check (an overflowed frame is an error, never a wrong image).
     pub fn render_to(&mut self, target: &wgpu::Texture) -> Result<SubmittedFrame, RenderError> {
         let ctx = &*self.ctx.clone();
@@ -635,7 +597,7 @@ impl Renderer {
             let (start, mut encoder, shadow_stats) = self.begin_frame(ctx)?;
             let blit = self
                 .blit
-                .get_or_insert_with(|| crate::frame::blit::Blit::new(ctx));
+                .get_or_insert_with(|| crate::shading::blit::Blit::new(ctx));
             blit.record(ctx, &mut encoder, &self.lighting.color, target)?;
             // The frame's timestamps go to a staging buffer mapped without waiting
             // (`poll_gpu_timings`); `read_gpu_timings` can still resolve them afterwards.
@@ -729,7 +691,11 @@ impl Renderer {
             // A source whose frame went wrong (irregular's full node pool) makes it an error,
             // never a wrong image.
             self.source.finish(ctx)?;
-            let virtual_maps = self.source.read_virtual_stats(ctx)?;
+            let virtual_maps = self
+                .source
+                .technique_stats(ctx)?
+                .and_then(|s| s.downcast::<VirtualStats>().ok())
+                .map(|s| *s);
             let visibility = match &self.visibility {
                 Some(pass) => {
                     let span = self.timer.span(Stage::Visibility);
@@ -769,10 +735,18 @@ impl Renderer {
     }
 
     /// Counters of the last frame of irregular shadow maps
-    /// ([`Technique::IRREGULAR`](crate::settings::Technique::IRREGULAR); `None` for other
+    /// ([`Technique::IRREGULAR`](crate::error::Technique::IRREGULAR); `None` for other
     /// techniques).
     pub fn irregular_stats(&self) -> Option<crate::shadows::irregular::maps::IrregularStats> {
-        self.source.irregular_stats()
+        self.source
+            .technique_stats(&self.ctx)
+            .ok()
+            .flatten()
+            .and_then(|s| {
+                s.downcast::<crate::shadows::irregular::maps::IrregularStats>()
+                    .ok()
+            })
+            .map(|s| *s)
     }
 
     /// Reads the G-buffer of the last frame [`Renderer::render`] produced (before the first
@@ -789,14 +763,11 @@ impl Renderer {
 
     /// Reads the virtual maps' page pool back: `(side, side² depths)`, row-major from the
     /// top-left texel, as the last frame left it. Only
-    /// [`Technique::VIRTUAL`](crate::settings::Technique::VIRTUAL) has one.
+    /// [`Technique::VIRTUAL`](crate::error::Technique::VIRTUAL) has one.
     pub fn read_page_pool(&self) -> Result<(u32, Vec<f32>), RenderError> {
-        match self.source.output() {
-            crate::shadows::source::ShadowOutput::Pages { pages, .. } => Ok((
-                pages.side,
-                crate::shadows::image::read_depth_view(&self.ctx, pages.pool, pages.side)?,
-            )),
-            _ => Err(self.no_page_pool()),
+        match self.virtual_source() {
+            Some(v) => v.read_pool(&self.ctx),
+            None => Err(self.no_page_pool()),
         }
     }
 
@@ -804,15 +775,12 @@ impl Renderer {
     /// (`VirtualStats::fit.table_entries` of them), the page it got — a pool page, or a marker
     /// for none or denied — then per entry the farthest receiver's depth key, then the drawn
     /// cells (the buffer may hold more words than that). Equal tables mean the same pages in
-    /// the same pool places. Only [`Technique::VIRTUAL`](crate::settings::Technique::VIRTUAL)
+    /// the same pool places. Only [`Technique::VIRTUAL`](crate::error::Technique::VIRTUAL)
     /// has one.
     pub fn read_page_table(&self) -> Result<Vec<u32>, RenderError> {
-        match self.source.output() {
-            crate::shadows::source::ShadowOutput::Pages { pages, .. } => Ok(bytemuck::cast_slice(
-                &crate::gpu::readback::read_buffer(&self.ctx, pages.table)?,
-            )
-            .to_vec()),
-            _ => Err(self.no_page_pool()),
+        match self.virtual_source() {
+            Some(v) => v.read_table(&self.ctx),
+            None => Err(self.no_page_pool()),
         }
     }
 
@@ -820,9 +788,9 @@ impl Renderer {
     fn no_page_pool(&self) -> RenderError {
         RenderError::NoPagePool {
             technique: self.settings.technique,
-            with_pool: crate::shadows::registry::TECHNIQUES
+            with_pool: crate::registry::TECHNIQUES
                 .iter()
-                .filter(|i| i.fills == crate::shadows::descriptor::Fills::Pages)
+                .filter(|i| i.fills == crate::error::Fills::Pages)
                 .map(|i| i.technique.name())
                 .collect(),
         }
@@ -847,7 +815,7 @@ fn visibility_pass(
     source: &dyn ShadowSource,
 ) -> Result<Option<VisibilityPass>, RenderError> {
     let shadows = source.output();
-    if !settings.visibility || shadows.mask().is_some() {
+    if !settings.visibility || shadows.mask.is_some() {
         return Ok(None);
     }
     VisibilityPass::new(

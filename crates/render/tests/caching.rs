@@ -72,7 +72,7 @@ fn generator(
     t: Technique,
 ) -> Result<ShadowGenerator, RenderError> {
     let plan = ShadowPlan::new(scene, 16.0 / 9.0, 4096, FitPolicy::Shrink).expect("plan");
-    ShadowGenerator::new(ctx, scene, gpu, plan, t, ShadowOptions::default())
+    ShadowGenerator::new(ctx, scene, gpu, plan, t.info(), ShadowOptions::default())
 }
 
 #[test]

@@ -15,9 +15,9 @@ use manyshadows::scene::{
     primitives, Attenuation, Camera, Instance, Light, LightKind, Material, Mesh, Scene,
 };
 use manyshadows::shadows::atlas::compute::Compute;
-use manyshadows::shadows::atlas::storage::ShadowAtlas;
-use manyshadows::shadows::atlas::technique::ShadowTechnique;
 use manyshadows::shadows::plan::ShadowPlan;
+use manyshadows::shadows::storage::ShadowAtlas;
+use manyshadows::shadows::technique::ShadowTechnique;
 use manyshadows::{CullMode, GpuContext, ShadowOptions, Technique};
 
 /// Depth difference that counts as a different texel (as in the equivalence tests).
@@ -104,7 +104,7 @@ fn run(
     let atlas = ShadowAtlas::new(ctx, &plan).expect("atlas");
     let casters = CasterGeometry::new(ctx, scene, &gpu, options.casters).expect("casters");
     let list: Vec<u32> = (0..plan.views.len() as u32).collect();
-    let input = manyshadows::shadows::atlas::technique::ShadowInput {
+    let input = manyshadows::shadows::technique::ShadowInput {
         ctx,
         scene: &gpu,
         views: &plan.views,
@@ -426,7 +426,7 @@ fn partial_draw_lists_touch_only_listed_tiles() {
     let mut generate = |list: &[u32], options: ShadowOptions| {
         ctx.queue
             .write_buffer(&atlas.draw_list, 0, bytemuck::cast_slice(list));
-        let input = manyshadows::shadows::atlas::technique::ShadowInput {
+        let input = manyshadows::shadows::technique::ShadowInput {
             ctx: &ctx,
             scene: &gpu,
             views: &plan.views,

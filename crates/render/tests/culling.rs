@@ -63,7 +63,7 @@ fn atlas(
 ) -> Vec<f32> {
     let plan = ShadowPlan::new(scene, 1.0, 4096, FitPolicy::Strict).expect("plan");
     let gpu = GpuScene::new(ctx, scene).expect("upload");
-    let mut g = ShadowGenerator::new(ctx, scene, &gpu, plan, technique, options)
+    let mut g = ShadowGenerator::new(ctx, scene, &gpu, plan, technique.info(), options)
         .unwrap_or_else(|e| panic!("{technique}: {e}"));
     let timer = manyshadows::gpu::timing::GpuTimer::new(ctx);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());

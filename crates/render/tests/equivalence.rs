@@ -35,7 +35,7 @@ fn atlas(
 ) -> Vec<f32> {
     let plan = ShadowPlan::new(scene, 16.0 / 9.0, 4096, FitPolicy::Shrink).expect("plan");
     let gpu = GpuScene::new(ctx, scene).expect("upload");
-    let mut generator = ShadowGenerator::new(ctx, scene, &gpu, plan, technique, options)
+    let mut generator = ShadowGenerator::new(ctx, scene, &gpu, plan, technique.info(), options)
         .unwrap_or_else(|e| panic!("{technique} cannot run on this adapter: {e}"));
     let timer = manyshadows::gpu::timing::GpuTimer::new(ctx);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
@@ -232,14 +232,14 @@ fn compute_matches_traditional() {
 /// Runs `technique` directly on `scene`'s views with the given draw list into `atlas`.
 fn generate_into(
     ctx: &GpuContext,
-    technique: &mut dyn manyshadows::shadows::atlas::technique::ShadowTechnique,
+    technique: &mut dyn manyshadows::shadows::technique::ShadowTechnique,
     parts: &Parts,
     options: &ShadowOptions,
     draw_list: &[u32],
 ) -> manyshadows::ShadowStats {
     ctx.queue
         .write_buffer(&parts.atlas.draw_list, 0, bytemuck::cast_slice(draw_list));
-    let input = manyshadows::shadows::atlas::technique::ShadowInput {
+    let input = manyshadows::shadows::technique::ShadowInput {
         ctx,
         scene: &parts.gpu,
         views: &parts.plan.views,
@@ -259,14 +259,14 @@ fn generate_into(
 struct Parts {
     plan: ShadowPlan,
     gpu: GpuScene,
-    atlas: manyshadows::shadows::atlas::storage::ShadowAtlas,
+    atlas: manyshadows::shadows::storage::ShadowAtlas,
     casters: manyshadows::gpu_scene::casters::CasterGeometry,
 }
 
 fn parts(ctx: &GpuContext, scene: &Scene) -> Parts {
     let plan = ShadowPlan::new(scene, 16.0 / 9.0, 4096, FitPolicy::Shrink).expect("plan");
     let gpu = GpuScene::new(ctx, scene).expect("upload");
-    let atlas = manyshadows::shadows::atlas::storage::ShadowAtlas::new(ctx, &plan).expect("atlas");
+    let atlas = manyshadows::shadows::storage::ShadowAtlas::new(ctx, &plan).expect("atlas");
     let casters =
         manyshadows::gpu_scene::casters::CasterGeometry::new(ctx, scene, &gpu, Default::default())
             .expect("casters");

@@ -175,7 +175,7 @@ fn refuses_atlas_paths_and_paraboloids() {
         &scene,
         &gpu,
         plan,
-        Technique::IRREGULAR,
+        Technique::IRREGULAR.info(),
         ShadowOptions::default(),
     )
     .err()

@@ -38,7 +38,7 @@ fn atlas(ctx: &GpuContext, scene: &Scene, t: Technique, cull: CullMode) -> Vec<f
     .expect("plan");
     let gpu = GpuScene::new(ctx, scene).expect("upload");
     let options = ShadowOptions::default().with_cull(cull);
-    let mut g = ShadowGenerator::new(ctx, scene, &gpu, plan, t, options).expect("generator");
+    let mut g = ShadowGenerator::new(ctx, scene, &gpu, plan, t.info(), options).expect("generator");
     let timer = manyshadows::gpu::timing::GpuTimer::new(ctx);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     g.generate(ctx, &gpu, &mut encoder, &timer, None);

@@ -38,7 +38,7 @@
 
 use glam::{Mat4, Vec3, Vec4};
 
-use crate::{Camera, LightKind, Scene};
+use crate::model::{Camera, LightKind, Scene};
 
 /// Near plane of a spot or point light's projection, as a fraction of the light's range.
 pub const LIGHT_NEAR_FRACTION: f32 = 0.002;
@@ -621,7 +621,7 @@ fn box_corners(lo: Vec3, hi: Vec3) -> [Vec3; 8] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Attenuation, Instance, Light, Material, Mesh};
+    use crate::model::{Attenuation, Instance, Light, Material, Mesh};
     use glam::Vec4;
 
     /// A small deterministic generator (xorshift64*), uniform in [0, 1).

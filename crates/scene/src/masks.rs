@@ -7,7 +7,7 @@
 //! So the answer is precomputed here, once per material: texel `(x, y)` is covered when its
 //! alpha (0..1) times [`Material::base_alpha`](crate::Material) is at least the material's
 //! cutoff. Lookups take the nearest texel of the wrapped coordinate
-//! ([`Wrap::texel`](crate::Wrap::texel)) at full resolution, no filtering and no mipmaps, in
+//! ([`Wrap::texel`](crate::texture::Wrap::texel)) at full resolution, no filtering and no mipmaps, in
 //! WGSL (`alpha_mask.wgsl`) and in Rust ([`MaskSet::covered`]) with the same arithmetic.
 //!
 //! Masks whose texels are all covered are dropped (the material is opaque for shadows: no
@@ -20,8 +20,8 @@ use std::collections::HashMap;
 
 use glam::Vec2;
 
+use crate::model::Scene;
 use crate::texture::Wrap;
-use crate::Scene;
 
 /// Most bytes of coverage bits over all masks (4 MiB = 33.5 million texels).
 pub const MASK_BUDGET_BYTES: usize = 4 << 20;
@@ -237,7 +237,8 @@ impl MaskSet {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Material, Texture, TextureRef};
+    use crate::model::Material;
+    use crate::texture::{Texture, TextureRef};
 
     fn scene_with(texture: Texture, materials: Vec<Material>) -> Scene {
         Scene {

@@ -7,7 +7,7 @@ use glam::{Mat4, Vec2, Vec3};
 
 use crate::texture::{AlphaMode, Texture, TextureRef};
 
-use crate::SceneError;
+use crate::error::SceneError;
 
 /// An indexed triangle mesh in object space.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -61,20 +61,6 @@ impl Mesh {
             .into_iter()
             .map(|n| n.try_normalize().unwrap_or(Vec3::Y))
             .collect();
-    }
-
-    /// Replaces the normals with crease-angle normals, splitting vertices where needed:
-    /// positions are welded, each triangle corner averages (area-weighted) the triangles
-    /// around its position whose normals are within `crease_deg` of its own triangle's, and
-    /// each distinct (vertex, normal) pair becomes one vertex (texture coordinates carried
-    /// along; the first keeps the vertex's index). Edges sharper than the angle stay sharp (a
-    /// box with shared corners gets flat faces), gentler ones smooth (a finely tessellated
-    /// cylinder). The loaders use it at
-    /// [`CREASE_ANGLE_DEG`](crate::loaders::CREASE_ANGLE_DEG) for files without normals.
-    /// Meshes whose indices are out of range get [`Mesh::compute_normals`] instead (and fail
-    /// [`Mesh::validate`]).
-    pub fn compute_normals_with_crease(&mut self, crease_deg: f32) {
-        crate::loaders::normals::crease_normals(self, crease_deg);
     }
 
     /// Checks the mesh is usable: indices in range, a multiple of three, one normal per
@@ -537,22 +523,6 @@ impl Scene {
             })
             .min_by(|a, b| a.1.total_cmp(&b.1))
             .map(|(k, _)| k)
-    }
-
-    /// Splits every mesh's triangles `levels` times ([`crate::primitives::subdivide`]: 4^levels
-    /// as many triangles). Fails past 20 million triangles over all instances.
-    pub fn subdivide(&mut self, levels: u32) -> Result<(), crate::SceneError> {
-        const MAX: u64 = 20_000_000;
-        let after = (self.triangle_count() as u64).saturating_mul(4u64.saturating_pow(levels));
-        if levels > 12 || after > MAX {
-            return Err(crate::SceneError::InvalidRequest(format!(
-                "subdividing {levels} times would make {after} triangles (at most {MAX})"
-            )));
-        }
-        for m in &mut self.meshes {
-            *m = crate::primitives::subdivide(m, levels);
-        }
-        Ok(())
     }
 
     /// Total triangles drawn (summed over instances).

@@ -26,7 +26,8 @@ use std::f32::consts::{PI, TAU};
 
 use glam::{Mat3, Mat4, Vec2, Vec3};
 
-use crate::Mesh;
+use crate::error::SceneError;
+use crate::model::{Mesh, Scene};
 
 /// Collects vertices and triangles; orients triangles from the normals it is given so every
 /// generator gets the counter-clockwise-outside rule right by construction.
@@ -764,4 +765,22 @@ pub fn subdivide(mesh: &Mesh, levels: u32) -> Mesh {
         m.indices = indices;
     }
     m
+}
+
+impl Scene {
+    /// Splits every mesh's triangles `levels` times ([`subdivide`]: 4^levels
+    /// as many triangles). Fails past 20 million triangles over all instances.
+    pub fn subdivide(&mut self, levels: u32) -> Result<(), SceneError> {
+        const MAX: u64 = 20_000_000;
+        let after = (self.triangle_count() as u64).saturating_mul(4u64.saturating_pow(levels));
+        if levels > 12 || after > MAX {
+            return Err(SceneError::InvalidRequest(format!(
+                "subdividing {levels} times would make {after} triangles (at most {MAX})"
+            )));
+        }
+        for m in &mut self.meshes {
+            *m = subdivide(m, levels);
+        }
+        Ok(())
+    }
 }

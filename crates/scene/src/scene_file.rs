@@ -23,8 +23,9 @@ use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use serde::Deserialize;
 use toml::Spanned;
 
+use crate::error::SceneError;
 use crate::loaders::{self, MAX_TRIANGLES};
-use crate::{Attenuation, Camera, Instance, Light, LightKind, Material, Mesh, Scene, SceneError};
+use crate::model::{Attenuation, Camera, Instance, Light, LightKind, Material, Mesh, Scene};
 
 use crate::primitives as prims;
 

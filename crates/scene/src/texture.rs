@@ -10,7 +10,7 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use crate::SceneError;
+use crate::error::SceneError;
 
 /// Largest texture side accepted (texels).
 pub const MAX_TEXTURE_SIDE: u32 = 16384;

@@ -38,10 +38,11 @@ use manyshadows_scene::light_space;
 use manyshadows_scene::Scene;
 use wgpu::util::DeviceExt;
 
+use crate::error::RenderError;
 use crate::frame::gbuffer::GBuffer;
+use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu::types::ClusterUniforms;
-use crate::{GpuContext, RenderError};
 
 /// Default tile side in pixels.
 pub const DEFAULT_TILE: u32 = 32;
@@ -96,6 +97,35 @@ pub struct ClusterOptions {
     /// Budget of the slot pool in bytes (capped by the adapter's storage-binding limit);
     /// `None` = 128 MiB.
     pub pool_bytes: Option<u64>,
+}
+
+impl ClusterOptions {
+    /// Checks every value that has a range of its own ([`RenderError::InvalidOption`] names
+    /// the first one out of range, as `RenderSettings` names the field).
+    pub fn validate(&self) -> Result<(), RenderError> {
+        if self.tile == 0 {
+            return Err(RenderError::invalid_option(
+                "clusters.tile",
+                self.tile,
+                "at least 1 pixel",
+            ));
+        }
+        if !(1..=256).contains(&self.slices) {
+            return Err(RenderError::invalid_option(
+                "clusters.slices",
+                self.slices,
+                "1 to 256 depth slices",
+            ));
+        }
+        if self.pool_bytes == Some(0) {
+            return Err(RenderError::invalid_option(
+                "clusters.pool_bytes",
+                0,
+                "at least 1 byte, or None for the default",
+            ));
+        }
+        Ok(())
+    }
 }
 
 impl Default for ClusterOptions {
@@ -243,11 +273,7 @@ impl LightClusters {
                 crate::gpu::pipelines::storage_rw_entry(9, cs),
             ],
         );
-        let module = crate::gpu::shaders::module(
-            device,
-            "clusters.shader",
-            &crate::gpu::shaders::clusters(),
-        );
+        let module = crate::gpu::shaders::module(device, "clusters.shader", &shader());
         let pipeline_layout =
             crate::gpu::pipelines::pipeline_layout(device, "clusters.pipeline_layout", &[&layout]);
         let pipeline = |entry: &str| {
@@ -509,3 +535,22 @@ with_setters!(ClusterOptions {
     with_slices: slices: u32,
     with_pool_bytes: pool_bytes: Option<u64>,
 });
+
+/// Clustered light assignment's WGSL (mark, compact, assign, statistics).
+pub fn shader() -> String {
+    crate::gpu::shaders::compose(&[crate::gpu::shaders::COMMON, include_str!("clusters.wgsl")])
+}
+
+#[cfg(test)]
+mod shader_tests {
+    /// What this module composes is WGSL a WebGPU device accepts.
+    #[test]
+    fn shader_validates_for_webgpu() {
+        crate::gpu::shaders::validate_for_webgpu(
+            "clusters",
+            &super::shader(),
+            wgpu::Features::empty(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+    }
+}

@@ -2,9 +2,9 @@
 //! surface. Positions are stored directly (not reconstructed from depth) so the quality
 //! reference can ray-trace from exactly the points the frame shades.
 
+use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu_scene::instances::{GpuScene, NORMAL_LAYOUT, POSITION_LAYOUT, UV_LAYOUT};
-use crate::GpuContext;
 
 /// xyz world position (`f32` bits in a `u32` target, because OpenGL ES and WebGL cannot render
 /// to `Rgba32Float` but can to `Rgba32Uint`, and positions must be exact); w = the surface's
@@ -85,8 +85,7 @@ impl GBuffer {
             U::RENDER_ATTACHMENT,
         );
         let device = &ctx.device;
-        let module =
-            crate::gpu::shaders::module(device, "gbuffer.shader", &crate::gpu::shaders::gbuffer());
+        let module = crate::gpu::shaders::module(device, "gbuffer.shader", &shader());
         let layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "gbuffer.layout",
@@ -242,5 +241,24 @@ impl GBuffer {
                 );
             }
         }
+    }
+}
+
+/// The G-buffer pass's WGSL.
+pub fn shader() -> String {
+    crate::gpu::shaders::compose(&[crate::gpu::shaders::COMMON, include_str!("gbuffer.wgsl")])
+}
+
+#[cfg(test)]
+mod shader_tests {
+    /// What this module composes is WGSL a WebGPU device accepts.
+    #[test]
+    fn shader_validates_for_webgpu() {
+        crate::gpu::shaders::validate_for_webgpu(
+            "gbuffer",
+            &super::shader(),
+            wgpu::Features::empty(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
     }
 }

@@ -7,8 +7,9 @@
 
 use glam::Vec3;
 
+use crate::error::RenderError;
 use crate::frame::gbuffer::GBuffer;
-use crate::{GpuContext, RenderError};
+use crate::gpu::context::GpuContext;
 
 /// The G-buffer of the last rendered frame on the CPU, row-major from the top-left pixel.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,5 +1,5 @@
 //! The visibility mask on the CPU: one bit per light and pixel, as the visibility pass
-//! ([`crate::frame::visibility`]) or irregular shadow maps leave it, and its file format.
+//! ([`crate::shading::visibility`]) or irregular shadow maps leave it, and its file format.
 //!
 //! File format written by [`VisibilityMask::write_raw`] (`.msvis`, little-endian):
 //! the 8 bytes `MSVIS001`, then `u32` width, height, light count, words per pixel, then

@@ -1,6 +1,7 @@
 //! Buffers that grow with the scene or the frame.
 
-use crate::{GpuContext, RenderError};
+use crate::error::RenderError;
+use crate::gpu::context::GpuContext;
 
 /// Makes `buffer` hold at least `needed` bytes: a buffer too small is replaced by one with room
 /// for twice as much (so a growing scene reallocates rarely), capped at the device's limit for

@@ -8,7 +8,7 @@
 
 use std::sync::{Arc, Mutex};
 
-use crate::RenderError;
+use crate::error::RenderError;
 
 /// What the caller asks of the adapter choice.
 #[derive(Clone, Debug, Default)]
@@ -498,3 +498,20 @@ with_setters!(AdapterRequest {
     with_name: name: Option<String>,
     with_limits: limits: Option<wgpu::Limits>,
 });
+
+impl RenderError {
+    /// [`RenderError::MissingFeature`] for `ctx`'s adapter.
+    pub(crate) fn missing_feature(
+        ctx: &GpuContext,
+        needs: impl Into<String>,
+        feature: impl Into<String>,
+        instead: impl Into<String>,
+    ) -> Self {
+        RenderError::MissingFeature {
+            needs: needs.into(),
+            feature: feature.into(),
+            adapter: describe_adapter(&ctx.info),
+            instead: instead.into(),
+        }
+    }
+}

@@ -1,7 +1,8 @@
 //! Reading GPU results back to the CPU: textures through a row-padded buffer, buffers by
 //! mapping. Every wait is bounded by the device poll and every failure is an error, not a panic.
 
-use crate::{GpuContext, RenderError};
+use crate::error::RenderError;
+use crate::gpu::context::GpuContext;
 
 /// Maps `range` of a `MAP_READ` buffer after the work that fills it has been submitted, and
 /// copies the bytes out.

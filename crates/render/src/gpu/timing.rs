@@ -10,7 +10,8 @@
 
 use std::cell::Cell;
 
-use crate::{GpuContext, RenderError};
+use crate::error::RenderError;
+use crate::gpu::context::GpuContext;
 
 /// Pipeline-statistics counters summed over the passes of one generation.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]

@@ -43,11 +43,40 @@ use manyshadows_scene::masks::MaskSet;
 use manyshadows_scene::{LightKind, Mesh, Scene};
 use wgpu::util::DeviceExt;
 
+use crate::error::RenderError;
+use crate::gpu::context::GpuContext;
 use crate::gpu_scene::instances::{morton_order, GpuScene};
 use crate::gpu_scene::skinning::{MAX_BONES, SKIN_VERTEX_STRIDE};
-use crate::{GpuContext, RenderError};
 
-pub use crate::gpu::shaders::{CLUSTER_GROUP, CLUSTER_PARTS, CLUSTER_TRIANGLES};
+/// Consecutive caster clusters per group (`CLUSTER_GROUP` in `casters.wgsl`): each group's
+/// bounding sphere holds its clusters' spheres, for culling a group before its clusters.
+pub const CLUSTER_GROUP: u32 = 16;
+
+/// Parts of a caster cluster with boxes of their own (`CLUSTER_PARTS` in `casters.wgsl`):
+/// consecutive runs of a quarter of the cluster's triangles, so that a page cull can tell
+/// which parts of a cluster touch a page.
+pub const CLUSTER_PARTS: u32 = 4;
+
+/// Most triangles per caster cluster.
+pub const CLUSTER_TRIANGLES: u32 = 128;
+
+/// Alpha-tested casters: the mask tail of the corner buffer, for any shader that tests a
+/// caster's mask (it needs a `corners` binding).
+pub const ALPHA_MASK: &str = include_str!("alpha_mask.wgsl");
+
+/// The per-frame world transform of shadow casters: its WGSL, with the cluster constants.
+pub fn shader() -> String {
+    let group = format!(
+        "const CLUSTER_GROUP: u32 = {CLUSTER_GROUP}u;\nconst CLUSTER_PARTS: u32 = {CLUSTER_PARTS}u;\n\
+         const PART_TRIANGLES: u32 = {}u;",
+        CLUSTER_TRIANGLES / CLUSTER_PARTS
+    );
+    crate::gpu::shaders::compose(&[
+        crate::gpu::shaders::COMMON,
+        &group,
+        include_str!("casters.wgsl"),
+    ])
+}
 
 /// How caster geometry is prepared.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -589,8 +618,7 @@ impl CasterGeometry {
             }
         };
 
-        let module =
-            crate::gpu::shaders::module(device, "casters.shader", &crate::gpu::shaders::casters());
+        let module = crate::gpu::shaders::module(device, "casters.shader", &shader());
         let cs = wgpu::ShaderStages::COMPUTE;
         let layout = crate::gpu::pipelines::bind_group_layout(
             device,
@@ -727,7 +755,7 @@ mod tests {
     #[test]
     fn cluster_record_matches_the_wgsl() {
         use crate::gpu::types::layout::same_layout;
-        same_layout!(in crate::gpu::shaders::casters(), super::ClusterData as "Cluster", first_triangle, triangles, instance, flags, cone);
+        same_layout!(in super::shader(), super::ClusterData as "Cluster", first_triangle, triangles, instance, flags, cone);
     }
 
     use super::*;
@@ -775,3 +803,17 @@ with_setters!(CasterOptions {
     with_assume_closed: assume_closed: bool,
     with_ignore_masks: ignore_masks: bool,
 });
+
+#[cfg(test)]
+mod shader_tests {
+    /// What this module composes is WGSL a WebGPU device accepts.
+    #[test]
+    fn shader_validates_for_webgpu() {
+        crate::gpu::shaders::validate_for_webgpu(
+            "casters",
+            &super::shader(),
+            wgpu::Features::empty(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+    }
+}

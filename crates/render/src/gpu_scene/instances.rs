@@ -7,8 +7,9 @@ use manyshadows_scene::masks::MaskSet;
 use manyshadows_scene::{Mesh, Scene};
 use wgpu::util::DeviceExt;
 
+use crate::error::RenderError;
+use crate::gpu::context::GpuContext;
 use crate::gpu::types::{InstanceData, MaterialData};
-use crate::{GpuContext, RenderError};
 
 /// Where one mesh lives in the shared buffers.
 #[derive(Clone, Copy, Debug)]

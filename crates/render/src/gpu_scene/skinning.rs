@@ -6,7 +6,8 @@ use glam::Mat4;
 use manyshadows_scene::Scene;
 use wgpu::util::DeviceExt;
 
-use crate::{GpuContext, RenderError};
+use crate::error::RenderError;
+use crate::gpu::context::GpuContext;
 
 /// Bone matrices of a skinned scene (seed 000 Listing 19.7).
 pub const MAX_BONES: usize = 64;

@@ -20,7 +20,8 @@
 use manyshadows_scene::texture::{linear_to_srgb, srgb_to_linear};
 use manyshadows_scene::{Scene, Texture};
 
-use crate::{GpuContext, RenderError};
+use crate::error::RenderError;
+use crate::gpu::context::GpuContext;
 
 /// Largest side of a texture-array layer.
 pub const MAX_LAYER_SIDE: u32 = 2048;

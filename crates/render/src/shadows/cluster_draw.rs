@@ -129,3 +129,6 @@ mod tests {
         assert!(plan_rounds(0, 5, 5, 10, 10).is_empty());
     }
 }
+
+/// Culling whole caster clusters by bounding sphere and normal cone (`gpu-driven`, virtual).
+pub const CLUSTER_CULL: &str = include_str!("cluster_cull.wgsl");

@@ -149,3 +149,12 @@ fn depth_pipeline_with(
         cache: None,
     })
 }
+
+/// Alpha-tested casters drawn into tiles: outputs and the discarding fragment stage.
+pub const TILE_MASK: &str = include_str!("tile_mask.wgsl");
+
+/// Per-view triangle culling (frustum, back-face).
+pub const CULL: &str = include_str!("cull.wgsl");
+
+/// Mapping clip positions into atlas tiles with clip distances (`layered`, `gpu-driven`).
+pub const TILE: &str = include_str!("tile.wgsl");

@@ -1,42 +1,17 @@
 //! How a technique declares itself: one [`TechniqueInfo`] in its own module says its name,
 //! what it is, what it fills, which point-shadow modes it renders, what it needs of the
 //! device, how it is built and which WGSL it compiles. The registry
-//! ([`crate::shadows::registry`]) is the list of them; nothing else names a technique.
+//! ([`crate::registry`]) is the list of them; nothing else names a technique.
 
 use manyshadows_scene::light_space::PointShadows;
 use manyshadows_scene::Scene;
 
+use crate::error::{Fills, RenderError, Technique};
+use crate::gpu::context::GpuContext;
 use crate::gpu_scene::instances::GpuScene;
-use crate::settings::{RenderSettings, Technique};
-use crate::shadows::atlas::technique::ShadowTechnique;
-use crate::shadows::source::{PlanParams, ShadowSource};
-use crate::{GpuContext, RenderError};
-
-/// What a technique leaves for the lighting pass.
-#[non_exhaustive]
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Fills {
-    /// A depth atlas: one tile per shadow view (the shadow-map techniques).
-    Atlas,
-    /// A pool of depth pages behind a page table (virtual shadow maps).
-    Pages,
-    /// The per-pixel, per-light visibility bits themselves (exact techniques).
-    Mask,
-    /// Nothing: the lighting pass casts shadow rays through an acceleration structure.
-    Rays,
-}
-
-impl Fills {
-    /// A few words for messages and menus.
-    pub fn describe(self) -> &'static str {
-        match self {
-            Fills::Atlas => "a shadow atlas",
-            Fills::Pages => "a virtual page pool",
-            Fills::Mask => "the visibility mask directly",
-            Fills::Rays => "no map (shadow rays through an acceleration structure)",
-        }
-    }
-}
+use crate::shadows::lookup::LookupWgsl;
+use crate::shadows::source::{PlanParams, ShadowSource, SourceSettings};
+use crate::shadows::technique::ShadowTechnique;
 
 /// Where a technique drops the caster triangles a shadow view cannot see, which decides how its
 /// work grows with views × triangles.
@@ -147,7 +122,7 @@ pub(crate) struct SourceArgs<'a> {
     pub scene: &'a Scene,
     pub gpu: &'a GpuScene,
     pub params: PlanParams,
-    pub settings: &'a RenderSettings,
+    pub settings: &'a SourceSettings<'a>,
 }
 
 /// Builds a technique's shadow source (after its needs were checked).
@@ -212,6 +187,9 @@ pub struct TechniqueInfo {
     pub needs: &'static [Need],
     /// What to use where it cannot run.
     pub instead: &'static str,
+    /// How the lighting and visibility passes read its shadows (the atlas techniques share
+    /// [`crate::shadows::lookup::ATLAS_LOOKUP`]).
+    pub lookup: LookupWgsl,
     pub(crate) build: Build,
     /// Its composed WGSL (validated by naga in the tests).
     pub(crate) shaders: fn() -> Vec<Wgsl>,
@@ -248,6 +226,21 @@ impl TechniqueInfo {
                 value: mode.name(),
                 supported: self.point_shadows.iter().map(|m| m.name()).collect(),
             })
+        }
+    }
+
+    /// Builds an atlas technique's pipelines, after checking its needs against the device;
+    /// [`RenderError::NoAtlas`] for a technique that fills no atlas.
+    pub fn create_atlas(&self, ctx: &GpuContext) -> Result<Box<dyn ShadowTechnique>, RenderError> {
+        match self.build {
+            Build::Atlas(build) => {
+                self.check(ctx)?;
+                build(ctx)
+            }
+            Build::Source(_) => Err(RenderError::NoAtlas {
+                technique: self.technique,
+                fills: self.fills,
+            }),
         }
     }
 

@@ -4,9 +4,50 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::shadows::atlas::storage::ShadowAtlas;
+use crate::error::RenderError;
+use crate::gpu::context::GpuContext;
 use crate::shadows::plan::ShadowPlan;
-use crate::{GpuContext, RenderError};
+use crate::shadows::storage::ShadowAtlas;
+
+/// A picture of a renderer's shadow maps (`Renderer::shadow_picture`).
+#[non_exhaustive]
+#[derive(Clone, Debug)]
+pub struct ShadowPicture {
+    /// Side of the square picture in pixels.
+    pub side: u32,
+    /// RGB8 pixels, row-major from the top-left.
+    pub rgb: Vec<u8>,
+    /// What it shows ("4096² atlas, 97 views").
+    pub description: String,
+}
+
+impl ShadowPicture {
+    /// The atlas with each of `plan`'s view tiles outlined, read back from the GPU.
+    pub fn of_atlas(
+        ctx: &GpuContext,
+        atlas: &ShadowAtlas,
+        plan: &ShadowPlan,
+    ) -> Result<Self, RenderError> {
+        let depth = read_depth(ctx, atlas)?;
+        let (side, rgb) = atlas_picture(&depth, atlas.size, plan);
+        Ok(ShadowPicture {
+            side,
+            rgb,
+            description: format!("{}² atlas, {} views", atlas.size, plan.views.len()),
+        })
+    }
+
+    /// A page pool of `pool_side`² texels in pages of `page_size`² (its `depth` read back).
+    pub fn of_pool(depth: &[f32], pool_side: u32, page_size: u32) -> Self {
+        let (side, rgb) = pool_picture(depth, pool_side);
+        let pages = (pool_side / page_size).pow(2);
+        ShadowPicture {
+            side,
+            rgb,
+            description: format!("{pool_side}² page pool ({pages} pages)"),
+        }
+    }
+}
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -47,11 +88,7 @@ pub fn read_depth_view(
             crate::gpu::pipelines::uniform_entry(2, wgpu::ShaderStages::COMPUTE),
         ],
     );
-    let module = crate::gpu::shaders::module(
-        device,
-        "atlas_copy.shader",
-        &crate::gpu::shaders::atlas_copy(),
-    );
+    let module = crate::gpu::shaders::module(device, "atlas_copy.shader", &atlas_copy_shader());
     let pipeline_layout =
         crate::gpu::pipelines::pipeline_layout(device, "atlas_copy.pipeline_layout", &[&layout]);
     let pipeline = crate::gpu::pipelines::compute_pipeline(
@@ -213,6 +250,25 @@ mod tests {
 
     #[test]
     fn params_match_the_wgsl() {
-        same_layout!(in crate::gpu::shaders::atlas_copy(), CopyParams, first_row, rows, width, _pad);
+        same_layout!(in super::atlas_copy_shader(), CopyParams, first_row, rows, width, _pad);
+    }
+}
+
+/// The depth read-back copy's WGSL.
+fn atlas_copy_shader() -> String {
+    include_str!("atlas_copy.wgsl").to_string()
+}
+
+#[cfg(test)]
+mod shader_tests {
+    /// What this module composes is WGSL a WebGPU device accepts.
+    #[test]
+    fn shader_validates_for_webgpu() {
+        crate::gpu::shaders::validate_for_webgpu(
+            "atlas_copy",
+            &super::atlas_copy_shader(),
+            wgpu::Features::empty(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
     }
 }

@@ -21,50 +21,11 @@ pub mod depth;
 pub mod descriptor;
 pub mod image;
 pub mod irregular;
+pub mod lookup;
+pub mod options;
 pub mod plan;
 pub mod raytraced;
-pub mod registry;
 pub mod source;
+pub mod storage;
+pub mod technique;
 pub mod vsm;
-
-use manyshadows_scene::Scene;
-
-use crate::gpu_scene::instances::GpuScene;
-use crate::settings::RenderSettings;
-use crate::shadows::atlas::source::AtlasSource;
-use crate::shadows::descriptor::{Build, SourceArgs};
-use crate::shadows::source::{PlanParams, ShadowSource};
-use crate::{GpuContext, RenderError};
-
-/// The one mapping from a technique to its source: its declaration's needs and point-shadow
-/// modes checked, then an atlas technique under the generator, or the technique's own source.
-pub(crate) fn create(
-    ctx: &GpuContext,
-    scene: &Scene,
-    gpu: &GpuScene,
-    settings: &RenderSettings,
-    max_atlas: u32,
-) -> Result<Box<dyn ShadowSource>, RenderError> {
-    let info = settings.technique.info();
-    info.check(ctx)?;
-    // Refused whether or not the scene has point lights now: `set_lights` may add some.
-    info.check_point_shadows(settings.point_shadows)?;
-    let params = PlanParams::new(settings, max_atlas);
-    Ok(match info.build {
-        Build::Atlas(_) => Box::new(AtlasSource::new(
-            ctx,
-            scene,
-            gpu,
-            params,
-            settings.technique,
-            settings,
-        )?),
-        Build::Source(build) => build(SourceArgs {
-            ctx,
-            scene,
-            gpu,
-            params,
-            settings,
-        })?,
-    })
-}

@@ -11,8 +11,8 @@ use manyshadows_scene::atlas::{self, AtlasLayout, FitPolicy};
 use manyshadows_scene::light_space::{self, PointShadows, ShadowView, ViewKind};
 use manyshadows_scene::Scene;
 
+use crate::error::RenderError;
 use crate::gpu::types::{LightData, ShadowViewData};
-use crate::RenderError;
 
 /// Largest atlas side the renderer uses by default (256 MiB of depth), further clamped to the
 /// adapter's `max_texture_dimension_2d`.

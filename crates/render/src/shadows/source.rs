@@ -6,34 +6,32 @@
 //! renderer's buffers ([`ShadowSource::bind`]), records its work after the G-buffer and the
 //! light clusters ([`ShadowSource::record`]) and checks it after submission
 //! ([`ShadowSource::finish`]). What it leaves for the lighting and visibility passes is a
-//! [`ShadowOutput`]:
-//!
-//! - [`ShadowOutput::Atlas`]: a depth atlas with every view's tile and the view table
-//!   (`traditional`, `layered`, `multiview`, `gpu-driven`, `compute`:
-//!   [`crate::shadows::atlas::source::AtlasSource`]);
-//! - [`ShadowOutput::Pages`]: a virtual page pool and its page table (`virtual`:
-//!   [`crate::shadows::vsm::source::VirtualSource`]);
-//! - [`ShadowOutput::Mask`]: the per-pixel, per-light visibility bits themselves
-//!   (`irregular`: [`crate::shadows::irregular::source::IrregularSource`]).
-//!
-//! `shadows::create` is the one place a [`crate::Technique`] becomes a source.
+//! [`ShadowOutput`]: the view table, the depth texture to sample, the mask where the source
+//! computed it, and the source's own lookup WGSL with its bindings. Nothing here names a
+//! technique: what one counts of its own work is a [`TechniqueStats`] value of its type, and
+//! what it reads of the settings beside the shared choices it finds by type in
+//! [`SourceSettings`]. The registry (`crate::registry`) is the one place a technique becomes
+//! a source.
 
 use glam::Vec3;
 use manyshadows_scene::atlas::FitPolicy;
 use manyshadows_scene::light_space::PointShadows;
 use manyshadows_scene::Scene;
 
+use crate::error::{RenderError, Technique};
 use crate::frame::clusters::LightClusters;
 use crate::frame::gbuffer::GBuffer;
 use crate::frame::visibility_mask::VisibilityMask;
+use crate::gpu::context::GpuContext;
 use crate::gpu::timing::GpuTimer;
 use crate::gpu::types::LightData;
 use crate::gpu_scene::casters::CasterGeometry;
 use crate::gpu_scene::instances::GpuScene;
-use crate::settings::RenderSettings;
-use crate::shadows::atlas::storage::ShadowAtlas;
+use crate::shadows::image::ShadowPicture;
+use crate::shadows::lookup::LookupWgsl;
+use crate::shadows::options::ShadowOptions;
 use crate::shadows::plan::ShadowPlan;
-use crate::{GpuContext, RenderError};
+use crate::shadows::storage::ShadowAtlas;
 
 /// Work counters of one shadow generation.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -73,176 +71,68 @@ pub struct SourceInputs<'a> {
     pub instances: &'a wgpu::Buffer,
 }
 
-/// A virtual page pool and its page table.
-#[derive(Clone, Copy)]
-pub struct PagePool<'a> {
-    /// Depth view of the pool.
-    pub pool: &'a wgpu::TextureView,
-    /// Side of the pool in texels.
-    pub side: u32,
-    /// `VsmUniforms`.
-    pub uniforms: &'a wgpu::Buffer,
-    /// `array<VirtualFace>`.
-    pub faces: &'a wgpu::Buffer,
-    /// The page table.
-    pub table: &'a wgpu::Buffer,
-}
-
-/// The ray-traced scene the lighting and visibility passes cast shadow rays into.
-#[derive(Clone, Copy)]
-pub struct RayScene<'a> {
-    /// The top-level acceleration structure of the shadow casters.
-    pub tlas: &'a wgpu::Tlas,
-    /// Per instance and masked triangle what the alpha test reads, then the mask tail.
-    pub geometry: &'a wgpu::Buffer,
-    /// `RayParams` (samples per pixel, seed).
-    pub params: &'a wgpu::Buffer,
-}
-
-/// What a source leaves for the lighting and visibility passes. Every kind carries a view
-/// table (`array<ShadowViewData>`, empty for virtual maps, whose faces are in the page table)
-/// and a depth texture to bind (a 1×1 placeholder where shadows are not read from one).
-#[derive(Clone, Copy)]
-pub enum ShadowOutput<'a> {
-    /// A depth atlas: every view's tile, found through the atlas's view table.
-    Atlas(&'a ShadowAtlas),
-    /// Virtual shadow maps: resident pages in a pool; `views` holds the view table.
-    Pages {
-        /// Pool and page table.
-        pages: PagePool<'a>,
-        /// View table and placeholder texture.
-        views: &'a ShadowAtlas,
-    },
-    /// Shadow rays through the scene's acceleration structure, cast by the lighting and
-    /// visibility passes themselves.
-    Rays {
-        /// The acceleration structure, its ray geometry and the sampling parameters.
-        rays: RayScene<'a>,
-        /// View table and placeholder texture.
-        views: &'a ShadowAtlas,
-    },
-    /// The visibility of every (pixel, light) pair: `counts.w` words of light bits per pixel.
-    Mask {
-        /// The mask.
-        mask: &'a wgpu::Buffer,
-        /// View table and placeholder texture.
-        views: &'a ShadowAtlas,
-    },
+/// What a source leaves for the lighting and visibility passes: the view table, the depth
+/// texture they sample (the atlas, a page pool, or a 1×1 placeholder), the mask where the
+/// source computed it, and its lookup: the WGSL that finds a point's shadow
+/// ([`LookupWgsl`]) and that WGSL's own bindings, which the passes place from their first
+/// free binding on.
+#[derive(Clone)]
+pub struct ShadowOutput<'a> {
+    /// `array<ShadowViewData>`.
+    pub view_table: &'a wgpu::Buffer,
+    /// The depth texture shadows are read from.
+    pub depth: &'a wgpu::TextureView,
+    /// Side of [`ShadowOutput::depth`] in texels (the frame uniforms' `counts.z`).
+    pub depth_side: u32,
+    /// The visibility of every (pixel, light) pair, `counts.w` words of light bits per pixel,
+    /// where the source computed it itself (the passes then shade with it directly).
+    pub mask: Option<&'a wgpu::Buffer>,
+    /// The source's WGSL for the passes.
+    pub lookup: LookupWgsl,
+    /// The bindings [`ShadowOutput::lookup`] declares, in order from its first binding.
+    pub bindings: Vec<(wgpu::BindingType, wgpu::BindingResource<'a>)>,
 }
 
 impl<'a> ShadowOutput<'a> {
-    /// The atlas, or the view table with its placeholder texture.
-    fn views(&self) -> &'a ShadowAtlas {
-        match *self {
-            ShadowOutput::Atlas(a) => a,
-            ShadowOutput::Pages { views, .. }
-            | ShadowOutput::Mask { views, .. }
-            | ShadowOutput::Rays { views, .. } => views,
+    /// The output of a source read through `views`' table and depth texture with `lookup`
+    /// and no bindings of its own.
+    pub fn from_views(views: &'a ShadowAtlas, lookup: LookupWgsl) -> Self {
+        ShadowOutput {
+            view_table: &views.views_buffer,
+            depth: &views.view,
+            depth_side: views.size,
+            mask: None,
+            lookup,
+            bindings: Vec::new(),
         }
     }
 
-    /// `array<ShadowViewData>`.
-    pub fn view_table(&self) -> &'a wgpu::Buffer {
-        &self.views().views_buffer
-    }
-
-    /// The depth texture shadows are read from: the atlas or the page pool (a placeholder for
-    /// a mask).
-    pub fn depth(&self) -> &'a wgpu::TextureView {
-        match *self {
-            ShadowOutput::Pages { pages, .. } => pages.pool,
-            _ => &self.views().view,
-        }
-    }
-
-    /// Side of [`ShadowOutput::depth`] in texels (the frame uniforms' `counts.z`).
-    pub fn depth_side(&self) -> u32 {
-        match *self {
-            ShadowOutput::Pages { pages, .. } => pages.side,
-            _ => self.views().size,
-        }
-    }
-
-    /// How the lighting and visibility shaders find shadows, their extra declarations from
-    /// binding `first` on.
-    pub(crate) fn shader_source(&self, first: u32) -> crate::gpu::shaders::ShadowSource {
-        match self {
-            ShadowOutput::Pages { .. } => crate::gpu::shaders::ShadowSource::Virtual { first },
-            ShadowOutput::Rays { .. } => crate::gpu::shaders::ShadowSource::Rays { first },
-            _ => crate::gpu::shaders::ShadowSource::Atlas,
-        }
-    }
-
-    /// Layout entries of the extra declarations at `first` .. (the page table, or the rays).
+    /// Layout entries of the lookup's bindings from `first` on.
     pub(crate) fn extra_layout(
         &self,
         first: u32,
         visibility: wgpu::ShaderStages,
     ) -> Vec<wgpu::BindGroupLayoutEntry> {
-        use crate::gpu::pipelines::{storage_entry, uniform_entry};
-        match self {
-            ShadowOutput::Pages { .. } => vec![
-                uniform_entry(first, visibility),
-                storage_entry(first + 1, visibility),
-                storage_entry(first + 2, visibility),
-            ],
-            ShadowOutput::Rays { .. } => vec![
-                wgpu::BindGroupLayoutEntry {
-                    binding: first,
-                    visibility,
-                    ty: wgpu::BindingType::AccelerationStructure {
-                        vertex_return: false,
-                    },
-                    count: None,
-                },
-                storage_entry(first + 1, visibility),
-                uniform_entry(first + 2, visibility),
-            ],
-            _ => Vec::new(),
-        }
+        (first..)
+            .zip(&self.bindings)
+            .map(|(binding, (ty, _))| wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility,
+                ty: *ty,
+                count: None,
+            })
+            .collect()
     }
 
-    /// Bind-group entries of the extra declarations at `first` ...
+    /// Bind-group entries of the lookup's bindings from `first` on.
     pub(crate) fn extra_entries(&self, first: u32) -> Vec<wgpu::BindGroupEntry<'a>> {
-        match *self {
-            ShadowOutput::Pages { pages, .. } => vec![
-                wgpu::BindGroupEntry {
-                    binding: first,
-                    resource: pages.uniforms.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: first + 1,
-                    resource: pages.faces.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: first + 2,
-                    resource: pages.table.as_entire_binding(),
-                },
-            ],
-            ShadowOutput::Rays { rays, .. } => vec![
-                wgpu::BindGroupEntry {
-                    binding: first,
-                    resource: rays.tlas.as_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: first + 1,
-                    resource: rays.geometry.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: first + 2,
-                    resource: rays.params.as_entire_binding(),
-                },
-            ],
-            _ => Vec::new(),
-        }
-    }
-
-    /// The visibility mask, if the source computed it.
-    pub fn mask(&self) -> Option<&'a wgpu::Buffer> {
-        match *self {
-            ShadowOutput::Mask { mask, .. } => Some(mask),
-            _ => None,
-        }
+        (first..)
+            .zip(&self.bindings)
+            .map(|(binding, (_, resource))| wgpu::BindGroupEntry {
+                binding,
+                resource: resource.clone(),
+            })
+            .collect()
     }
 }
 
@@ -260,12 +150,12 @@ pub struct Views<'a> {
 
 /// Makes a frame's shadows: fills an atlas, a page pool or a visibility mask. The renderer
 /// drives every source the same way; see the [module](self) for the order of calls.
-pub trait ShadowSource {
+pub trait ShadowSource: std::any::Any {
     /// The plan, the atlas (or view table) and the caster geometry the source keeps.
     fn views(&self) -> Views<'_>;
 
-    /// The shadow views and atlas layout (no views for virtual maps, whose faces are in
-    /// [`ShadowSource::virtual_plan`]).
+    /// The shadow views and atlas layout (no views for sources that lay out their own, such
+    /// as virtual maps' faces; [`ShadowSource::view_count`] counts those).
     fn plan(&self) -> &ShadowPlan {
         self.views().plan
     }
@@ -328,22 +218,64 @@ pub trait ShadowSource {
         Ok(None)
     }
 
-    /// Counters of the last finished frame of irregular shadow maps.
-    fn irregular_stats(&self) -> Option<crate::shadows::irregular::maps::IrregularStats> {
-        None
+    /// Shadow views of the current plan: every atlas tile, or every face of a source that
+    /// lays out views of its own (a spot light's frustum, a cube face, a cascade).
+    fn view_count(&self) -> usize {
+        self.plan().views.len()
     }
 
-    /// The faces of virtual shadow maps.
-    fn virtual_plan(&self) -> Option<&crate::shadows::vsm::plan::VirtualPlan> {
-        None
-    }
-
-    /// Reads the counters of the last submitted frame of virtual shadow maps.
-    fn read_virtual_stats(
-        &self,
-        _ctx: &GpuContext,
-    ) -> Result<Option<crate::shadows::vsm::plan::VirtualStats>, RenderError> {
+    /// The technique's own counters of the last frame (virtual maps' pages, irregular maps'
+    /// lists), for a caller that knows the technique to downcast (`None` where it keeps
+    /// none). Sources that count on the GPU read them back here.
+    fn technique_stats(&self, _ctx: &GpuContext) -> Result<Option<TechniqueStats>, RenderError> {
         Ok(None)
+    }
+
+    /// A picture of what the source keeps of its shadows (its atlas, its page pool);
+    /// [`RenderError::NoAtlas`] for a source that keeps no map.
+    fn picture(&self, ctx: &GpuContext) -> Result<ShadowPicture, RenderError>;
+}
+
+/// A technique's own counters ([`ShadowSource::technique_stats`]): one value whose type the
+/// technique defines (`VirtualStats`, `IrregularStats`).
+pub type TechniqueStats = Box<dyn std::any::Any + Send + Sync>;
+
+/// What a source reads of the frame's settings: the choices every source honours and, for
+/// each technique, its own options, found by type ([`SourceSettings::options`]).
+/// `RenderSettings::source_settings` makes it.
+#[derive(Clone)]
+pub struct SourceSettings<'a> {
+    /// The technique.
+    pub technique: Technique,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Culling and caster options.
+    pub shadow: ShadowOptions,
+    /// Keep what did not change between frames.
+    pub cache_shadows: bool,
+    /// Most shadow views drawn per frame (atlas techniques).
+    pub shadow_budget: Option<u32>,
+    /// The hard visibility mask is asked for too.
+    pub visibility: bool,
+    /// Point-light shadows: cube faces or paraboloids.
+    pub point_shadows: PointShadows,
+    /// What to do when the shadow maps do not fit the atlas.
+    pub fit: FitPolicy,
+    /// Every technique's own options.
+    pub options: Vec<&'a (dyn std::any::Any + Send + Sync)>,
+}
+
+impl SourceSettings<'_> {
+    /// The options of type `T` (a technique's own, such as `VirtualOptions`), or their
+    /// defaults where the settings hold none.
+    pub fn options<T: std::any::Any + Default + Clone>(&self) -> T {
+        self.options
+            .iter()
+            .find_map(|o| o.downcast_ref::<T>())
+            .cloned()
+            .unwrap_or_default()
     }
 }
 
@@ -358,7 +290,7 @@ pub(crate) struct PlanParams {
 }
 
 impl PlanParams {
-    pub fn new(settings: &RenderSettings, max_atlas: u32) -> Self {
+    pub fn new(settings: &SourceSettings<'_>, max_atlas: u32) -> Self {
         Self {
             aspect: settings.width as f32 / settings.height as f32,
             max_atlas,
@@ -402,7 +334,7 @@ impl ViewTable {
         scene: &Scene,
         gpu: &GpuScene,
         plan: ShadowPlan,
-        settings: &RenderSettings,
+        settings: &SourceSettings<'_>,
     ) -> Result<Self, RenderError> {
         Ok(Self {
             views: ShadowAtlas::views_only(ctx, &plan)?,

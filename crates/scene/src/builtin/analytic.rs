@@ -17,7 +17,8 @@ use glam::Vec3;
 
 use super::lights::{Tone, AMBIENT_FRACTION};
 use super::options::BuiltinOptions;
-use crate::{primitives, Attenuation, Camera, Instance, Light, LightKind, Material, Scene};
+use crate::model::{Attenuation, Camera, Instance, Light, LightKind, Material, Scene};
+use crate::primitives;
 
 /// Edge length of the square floor, centred at the origin at `y = 0`.
 pub const FLOOR_SIZE: f32 = 20.0;

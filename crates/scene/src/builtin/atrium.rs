@@ -32,7 +32,8 @@ use glam::{Mat4, Quat, Vec2, Vec3};
 use super::lights::LightCounts;
 use super::lights::{self, density_dim, slanted_direction, tint, Rand, Tone};
 use super::options::{BuiltinOptions, LightMix};
-use crate::{primitives, Camera, Instance, Light, Material, Mesh, Scene};
+use crate::model::{Camera, Instance, Light, Material, Mesh, Scene};
+use crate::primitives;
 
 /// Length of the hall along X (inner faces of the end walls at `x = ±20`).
 pub const HALL_LENGTH: f32 = 40.0;

@@ -24,7 +24,9 @@ use glam::{Mat4, Quat, Vec2, Vec3};
 
 use super::lights::{self, Rand, Tone};
 use super::options::{BuiltinOptions, LightMix};
-use crate::{primitives, Camera, Instance, Light, Material, Scene, Texture, TextureRef, Wrap};
+use crate::model::{Camera, Instance, Light, Material, Scene};
+use crate::primitives;
+use crate::texture::{Texture, TextureRef, Wrap};
 
 /// Camera position of `courtyard`.
 pub const COURTYARD_CAMERA_POSITION: Vec3 = Vec3::new(7.5, 5.0, 8.5);

@@ -10,7 +10,8 @@ use glam::{Mat4, Quat, Vec3};
 
 use super::lights::{self, Tone};
 use super::options::{BuiltinOptions, LightMix};
-use crate::{primitives, Camera, Instance, Light, Material, Scene};
+use crate::model::{Camera, Instance, Light, Material, Scene};
+use crate::primitives;
 
 /// Camera position of `cubes`.
 pub const CUBES_CAMERA_POSITION: Vec3 = Vec3::new(6.0, 6.0, 8.0);

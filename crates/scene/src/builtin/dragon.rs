@@ -17,7 +17,9 @@ use glam::{Mat4, Quat, Vec2, Vec3};
 use super::lights::LightCounts;
 use super::lights::{self, tint, Rand, Tone};
 use super::options::{BuiltinOptions, LightMix};
-use crate::{primitives, Camera, Instance, Light, Material, Mesh, Scene, SceneError};
+use crate::error::SceneError;
+use crate::model::{Camera, Instance, Light, Material, Mesh, Scene};
+use crate::primitives;
 
 /// Height the model is scaled to (metres).
 pub const DRAGON_HEIGHT: f32 = 2.0;

@@ -12,7 +12,7 @@ use rand_core::{Rng, SeedableRng};
 use rand_pcg::Pcg32;
 
 use super::options::LightMix;
-use crate::{Attenuation, Light, LightKind, Scene};
+use crate::model::{Attenuation, Light, LightKind, Scene};
 
 /// Default shadow-map resolution of spot lights (texels per side).
 pub const SPOT_SHADOW_RESOLUTION: u32 = 512;
@@ -503,8 +503,8 @@ pub(crate) fn local(
 
 /// World-space bounding boxes of a scene's instances (for [`local`]'s obstacles).
 pub(crate) fn instance_boxes(
-    meshes: &[crate::Mesh],
-    instances: &[crate::Instance],
+    meshes: &[crate::model::Mesh],
+    instances: &[crate::model::Instance],
 ) -> Vec<(Vec3, Vec3)> {
     instances
         .iter()

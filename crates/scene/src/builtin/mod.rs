@@ -35,7 +35,8 @@ mod lights;
 mod options;
 pub mod terrain;
 
-use crate::{Light, Scene, SceneError};
+use crate::error::SceneError;
+use crate::model::{Light, Scene};
 
 pub use analytic::*;
 pub use lights::{

@@ -4,7 +4,8 @@
 use std::fmt;
 use std::str::FromStr;
 
-use crate::{Mesh, SceneError};
+use crate::error::SceneError;
+use crate::model::Mesh;
 
 /// The most lights a built-in scene or [`scatter_lights`] layout may ask for; more is a
 /// [`SceneError::InvalidRequest`]. Layouts above [`LOCAL_LAYOUT_ABOVE`] lights are local

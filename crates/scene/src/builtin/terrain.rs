@@ -18,7 +18,8 @@ use glam::{Mat4, Quat, Vec2, Vec3};
 use super::lights::LightCounts;
 use super::lights::{self, density_dim, r2, tint, Rand, Tone};
 use super::options::BuiltinOptions;
-use crate::{primitives, Camera, Instance, Light, Material, Mesh, Scene};
+use crate::model::{Camera, Instance, Light, Material, Mesh, Scene};
+use crate::primitives;
 
 /// Edge length of the square terrain (metres), centred at the origin.
 pub const TERRAIN_SIZE: f32 = 100.0;

@@ -7,7 +7,9 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use crate::{Attenuation, Camera, Light, Material, Mesh, SceneError, Texture};
+use crate::error::SceneError;
+use crate::model::{Attenuation, Camera, Light, Material, Mesh};
+use crate::texture::Texture;
 
 /// Crease angle of computed normals, in degrees: where a file gives no normals, triangles
 /// meeting at more than this angle keep a sharp edge between them (see

@@ -41,8 +41,9 @@ use crate::builtin::{
     DIRECTIONAL_CASCADES, DIRECTIONAL_SHADOW_RESOLUTION, DIRECTIONAL_SPLIT_LAMBDA,
     POINT_SHADOW_RESOLUTION, SPOT_SHADOW_RESOLUTION,
 };
+use crate::error::SceneError;
+use crate::model::{Attenuation, Camera, Light, LightKind, Material, Mesh};
 use crate::texture::{AlphaMode, Texture, TextureRef, Wrap};
-use crate::{Attenuation, Camera, Light, LightKind, Material, Mesh, SceneError};
 
 /// Extensions a file may *require* that this loader still reads, ignoring the extension with a
 /// note (the result looks different from what the author intended, but it is the scene): texture

@@ -14,8 +14,9 @@ use serde_json::{json, Map, Value};
 
 use super::base64;
 use super::common::PHONG_PER_LUX;
+use crate::error::SceneError;
+use crate::model::{LightKind, Material, Scene};
 use crate::texture::{AlphaMode, TextureRef, Wrap};
-use crate::{LightKind, Material, Scene, SceneError};
 
 /// Writes `scene` as glTF 2.0 at `path`: binary (`.glb`) if the extension says so (any case),
 /// else JSON with everything embedded.
@@ -283,7 +284,7 @@ impl Writer {
 
     /// Writes a mesh's vertex data and indices; returns the primitive's `attributes` and
     /// `indices` as JSON.
-    fn mesh(&mut self, mesh: &crate::Mesh) -> Value {
+    fn mesh(&mut self, mesh: &crate::model::Mesh) -> Value {
         const ARRAY_BUFFER: u32 = 34962;
         const ELEMENT_ARRAY_BUFFER: u32 = 34963;
         const FLOAT: u32 = 5126;
@@ -373,7 +374,7 @@ fn material_json(
     out
 }
 
-fn encode_png(t: &crate::Texture) -> Result<Vec<u8>, String> {
+fn encode_png(t: &crate::texture::Texture) -> Result<Vec<u8>, String> {
     let image = image::RgbaImage::from_raw(t.width, t.height, t.rgba.to_vec())
         .ok_or_else(|| format!("'{}': data does not match its size", t.name))?;
     let mut png = Vec::new();

@@ -128,7 +128,6 @@ pub(crate) mod common;
 mod gltf;
 mod gltf_write;
 mod mtl;
-pub(crate) mod normals;
 mod obj;
 mod ply;
 
@@ -137,7 +136,8 @@ use std::path::Path;
 use glam::Mat4;
 
 use crate::builtin::{scatter_lights, LightMix};
-use crate::{Camera, Instance, Material, Mesh, Scene, SceneError};
+use crate::error::SceneError;
+use crate::model::{Camera, Instance, Material, Mesh, Scene};
 
 use common::{check_file_size, check_triangles, default_camera, parse_error, Parts};
 pub use common::{

@@ -35,8 +35,8 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
+use crate::model::Material;
 use crate::texture::{AlphaMode, Texture, TextureRef, Wrap};
-use crate::Material;
 
 /// A texture statement's file and the options that matter here.
 #[derive(Debug, PartialEq)]
@@ -200,7 +200,7 @@ pub(super) fn convert(
     materials: &[tobj::Material],
     dirs: &[PathBuf],
     notes: &mut Vec<String>,
-) -> (Vec<Material>, Vec<crate::Texture>) {
+) -> (Vec<Material>, Vec<crate::texture::Texture>) {
     let mut images = Images::default();
     let mut height_maps = Vec::new();
     let mut out = Vec::with_capacity(materials.len());

@@ -21,7 +21,8 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 
 use super::common::{mesh_name, open_limited, parse_error, set_normals, Parts};
-use crate::{Material, Mesh, SceneError};
+use crate::error::SceneError;
+use crate::model::{Material, Mesh};
 
 /// Largest material library (`.mtl`) read, in bytes (64 MiB; real ones are kilobytes).
 pub const MAX_MTL_BYTES: u64 = 64 << 20;

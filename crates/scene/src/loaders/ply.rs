@@ -24,7 +24,8 @@ use super::common::{
     check_triangles, mesh_name, open_limited, parse_error, set_normals, too_large,
     MAX_DECOMPRESSED_BYTES, MAX_TRIANGLES,
 };
-use crate::{Mesh, SceneError};
+use crate::error::SceneError;
+use crate::model::Mesh;
 
 /// Loads a `.ply` (or, with `gzip`, a `.ply.gz`) file as one mesh.
 pub(super) fn load(path: &Path, gzip: bool) -> Result<Vec<Mesh>, SceneError> {

@@ -32,12 +32,17 @@
 
 use manyshadows_scene::light_space::PointShadows;
 
-use crate::gpu::shaders::{compose, ALPHA_MASK, COMMON, CULL};
-use crate::settings::Technique;
-use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
-use crate::shadows::descriptor::{Build, Culling, Fills, TechniqueInfo, Wgsl};
+use crate::error::Fills;
+use crate::error::RenderError;
+use crate::error::Technique;
+use crate::gpu::context::GpuContext;
+use crate::gpu::shaders::{compose, COMMON};
+use crate::gpu_scene::casters::ALPHA_MASK;
+use crate::shadows::depth::CULL;
+use crate::shadows::descriptor::{Build, Culling, TechniqueInfo, Wgsl};
+use crate::shadows::lookup::ATLAS_LOOKUP;
 use crate::shadows::source::ShadowStats;
-use crate::{GpuContext, RenderError};
+use crate::shadows::technique::{Generation, ShadowTechnique};
 
 impl Technique {
     /// A rasterizer in compute shaders (beyond the seeds).
@@ -55,6 +60,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     point_shadows: &[PointShadows::Cube],
     needs: &[],
     instead: "",
+    lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(Compute::new(ctx)?))),
     shaders: || {
         vec![

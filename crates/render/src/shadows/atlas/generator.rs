@@ -21,15 +21,18 @@ use glam::Vec3;
 use manyshadows_scene::light_space::PointShadows;
 use manyshadows_scene::Scene;
 
+use crate::error::RenderError;
+use crate::error::Technique;
+use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu_scene::casters::CasterGeometry;
 use crate::gpu_scene::instances::GpuScene;
-use crate::settings::{ShadowOptions, Technique};
-use crate::shadows::atlas::storage::ShadowAtlas;
-use crate::shadows::atlas::technique::{ShadowInput, ShadowTechnique};
+use crate::shadows::descriptor::TechniqueInfo;
+use crate::shadows::options::ShadowOptions;
 use crate::shadows::plan::ShadowPlan;
 use crate::shadows::source::ShadowStats;
-use crate::{GpuContext, RenderError};
+use crate::shadows::storage::ShadowAtlas;
+use crate::shadows::technique::{ShadowInput, ShadowTechnique};
 
 /// Everything needed to fill the atlas, frame after frame.
 pub struct ShadowGenerator {
@@ -73,7 +76,7 @@ impl ShadowGenerator {
         scene: &Scene,
         gpu: &GpuScene,
         plan: ShadowPlan,
-        technique: Technique,
+        technique: &'static TechniqueInfo,
         options: ShadowOptions,
     ) -> Result<Self, RenderError> {
         let paraboloid = plan.views.iter().any(|v| {
@@ -83,9 +86,7 @@ impl ShadowGenerator {
             )
         });
         if paraboloid {
-            technique
-                .info()
-                .check_point_shadows(PointShadows::DualParaboloid)?;
+            technique.check_point_shadows(PointShadows::DualParaboloid)?;
         }
         if paraboloid && !ctx.has(wgpu::Features::CLIP_DISTANCES) {
             return Err(RenderError::missing_feature(
@@ -105,8 +106,8 @@ impl ShadowGenerator {
         let casters = CasterGeometry::new(ctx, scene, gpu, options.casters)?;
         let state = vec![TileState::Empty; plan.views.len()];
         Ok(Self {
-            technique: technique.create(ctx)?,
-            kind: technique,
+            technique: technique.create_atlas(ctx)?,
+            kind: technique.technique,
             plan,
             atlas,
             casters,

@@ -24,16 +24,22 @@
 
 use manyshadows_scene::light_space::PointShadows;
 
+use crate::error::Fills;
+use crate::error::RenderError;
+use crate::error::Technique;
+use crate::gpu::context::GpuContext;
 use crate::gpu::pipelines::{dynamic_uniform_entry, whole_entry};
-use crate::gpu::shaders::{compose, ALPHA_MASK, CLUSTER_CULL, COMMON, CULL, TILE, TILE_MASK};
-use crate::settings::Technique;
+use crate::gpu::shaders::{compose, COMMON};
+use crate::gpu_scene::casters::ALPHA_MASK;
 use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear, UniformRecords};
-use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
+use crate::shadows::cluster_draw::CLUSTER_CULL;
 use crate::shadows::cluster_draw::{plan_rounds, Round, COMMAND_SIZE};
 use crate::shadows::depth::depth_pipeline;
-use crate::shadows::descriptor::{Build, Culling, Fills, Need, TechniqueInfo, Wgsl};
+use crate::shadows::depth::{CULL, TILE, TILE_MASK};
+use crate::shadows::descriptor::{Build, Culling, Need, TechniqueInfo, Wgsl};
+use crate::shadows::lookup::ATLAS_LOOKUP;
 use crate::shadows::source::ShadowStats;
-use crate::{GpuContext, RenderError};
+use crate::shadows::technique::{Generation, ShadowTechnique};
 
 impl Technique {
     /// Clusters culled per view in compute, one indirect multi-draw
@@ -58,6 +64,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
         Need::indirect("indirect draws"),
     ],
     instead: "use technique layered",
+    lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(GpuDriven::new(ctx)?))),
     shaders: || {
         vec![Wgsl::with(

@@ -14,14 +14,20 @@
 
 use manyshadows_scene::light_space::PointShadows;
 
-use crate::gpu::shaders::{compose, ALPHA_MASK, COMMON, CULL, PARABOLOID, TILE, TILE_MASK};
-use crate::settings::Technique;
+use crate::error::Fills;
+use crate::error::RenderError;
+use crate::error::Technique;
+use crate::gpu::context::GpuContext;
+use crate::gpu::shaders::{compose, COMMON};
+use crate::gpu_scene::casters::ALPHA_MASK;
 use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear};
-use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
 use crate::shadows::depth::{depth_pipeline, masked_depth_pipeline};
-use crate::shadows::descriptor::{Build, Culling, Fills, Need, TechniqueInfo, Wgsl};
+use crate::shadows::depth::{CULL, TILE, TILE_MASK};
+use crate::shadows::descriptor::{Build, Culling, Need, TechniqueInfo, Wgsl};
+use crate::shadows::lookup::ATLAS_LOOKUP;
+use crate::shadows::lookup::PARABOLOID;
 use crate::shadows::source::ShadowStats;
-use crate::{GpuContext, RenderError};
+use crate::shadows::technique::{Generation, ShadowTechnique};
 
 impl Technique {
     /// Every view in one instanced draw (seed 000).
@@ -41,6 +47,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
         "to keep each view inside its atlas tile",
     )],
     instead: "use technique traditional",
+    lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(Layered::new(ctx)?))),
     shaders: || {
         vec![Wgsl::with(
@@ -195,7 +202,7 @@ impl ShadowTechnique for Layered {
             if range.is_empty() {
                 continue;
             }
-            if cull == crate::settings::CullMode::None {
+            if cull == crate::shadows::options::CullMode::None {
                 pass.set_pipeline(indexed);
                 pass.set_index_buffer(casters.corners.slice(..), wgpu::IndexFormat::Uint32);
                 pass.draw_indexed(range, 0, 0..views);

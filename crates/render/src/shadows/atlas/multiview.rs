@@ -24,15 +24,21 @@ use std::num::NonZeroU32;
 
 use manyshadows_scene::light_space::PointShadows;
 
+use crate::error::Fills;
+use crate::error::RenderError;
+use crate::error::Technique;
+use crate::gpu::context::GpuContext;
 use crate::gpu::pipelines::dynamic_uniform_entry;
-use crate::gpu::shaders::{compose, ALPHA_MASK, COMMON, CULL};
-use crate::settings::{CullMode, Technique};
+use crate::gpu::shaders::{compose, COMMON};
+use crate::gpu_scene::casters::ALPHA_MASK;
 use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear, UniformRecords};
-use crate::shadows::atlas::technique::{Generation, ShadowTechnique};
+use crate::shadows::depth::CULL;
 use crate::shadows::depth::{layered_depth_pipeline, masked_depth_pipeline};
-use crate::shadows::descriptor::{Build, Culling, Fills, Need, TechniqueInfo, Wgsl};
+use crate::shadows::descriptor::{Build, Culling, Need, TechniqueInfo, Wgsl};
+use crate::shadows::lookup::ATLAS_LOOKUP;
+use crate::shadows::options::CullMode;
 use crate::shadows::source::ShadowStats;
-use crate::{GpuContext, RenderError};
+use crate::shadows::technique::{Generation, ShadowTechnique};
 
 impl Technique {
     /// Groups of equal-size views per multiview pass (seed 000).
@@ -52,6 +58,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
         "one render pass per group of up to 6-32 equal-size shadow views",
     )],
     instead: "use technique layered, which fills the same atlas with one instanced draw",
+    lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(Multiview::new(ctx)?))),
     shaders: || {
         vec![

@@ -4,9 +4,9 @@
 //! attachment. The depth pipelines they draw with are [`crate::shadows::depth`]'s (virtual
 //! pages use them too).
 
-use crate::shadows::atlas::technique::ShadowInput;
+use crate::gpu::context::GpuContext;
 use crate::shadows::depth::clear_pipeline;
-use crate::GpuContext;
+use crate::shadows::technique::ShadowInput;
 
 /// Clears only the tiles of the views in [`ShadowInput::draw_list`] (to depth 1), for
 /// generations that must keep the other, cached tiles.
@@ -23,11 +23,7 @@ impl TileClear {
     /// Builds the clear pipeline.
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let module = crate::gpu::shaders::module(
-            device,
-            "tile_clear.shader",
-            &crate::gpu::shaders::tile_clear(),
-        );
+        let module = crate::gpu::shaders::module(device, "tile_clear.shader", &tile_clear_shader());
         let vs = wgpu::ShaderStages::VERTEX;
         let layout = crate::gpu::pipelines::bind_group_layout(
             device,
@@ -230,5 +226,24 @@ pub(crate) fn atlas_attachment<'a>(
             store: wgpu::StoreOp::Store,
         }),
         stencil_ops: None,
+    }
+}
+
+/// Clearing single tiles of the atlas: the WGSL.
+fn tile_clear_shader() -> String {
+    crate::gpu::shaders::compose(&[crate::gpu::shaders::COMMON, include_str!("tile_clear.wgsl")])
+}
+
+#[cfg(test)]
+mod shader_tests {
+    /// What this module composes is WGSL a WebGPU device accepts.
+    #[test]
+    fn shader_validates_for_webgpu() {
+        crate::gpu::shaders::validate_for_webgpu(
+            "tile_clear",
+            &super::tile_clear_shader(),
+            wgpu::Features::empty(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
     }
 }

@@ -4,15 +4,18 @@
 use glam::Vec3;
 use manyshadows_scene::Scene;
 
+use crate::error::RenderError;
+use crate::gpu::context::GpuContext;
 use crate::gpu::timing::GpuTimer;
 use crate::gpu::types::LightData;
 use crate::gpu_scene::instances::GpuScene;
-use crate::settings::{RenderSettings, Technique};
 use crate::shadows::atlas::generator::ShadowGenerator;
+use crate::shadows::descriptor::{SourceArgs, TechniqueInfo};
+use crate::shadows::image::ShadowPicture;
+use crate::shadows::lookup::ATLAS_LOOKUP;
 use crate::shadows::source::{
     PlanParams, ShadowOutput, ShadowSource, ShadowStats, SourceInputs, Views,
 };
-use crate::{GpuContext, RenderError};
 
 /// An atlas-filling technique ([`ShadowGenerator`]) as a frame's shadow source.
 pub struct AtlasSource {
@@ -21,17 +24,20 @@ pub struct AtlasSource {
 }
 
 impl AtlasSource {
+    /// The source of the atlas technique `info`.
     pub(crate) fn new(
-        ctx: &GpuContext,
-        scene: &Scene,
-        gpu: &GpuScene,
-        params: PlanParams,
-        technique: Technique,
-        settings: &RenderSettings,
+        args: SourceArgs<'_>,
+        info: &'static TechniqueInfo,
     ) -> Result<Self, RenderError> {
+        let SourceArgs {
+            ctx,
+            scene,
+            gpu,
+            params,
+            settings,
+        } = args;
         let plan = params.plan(scene)?;
-        let mut generator =
-            ShadowGenerator::new(ctx, scene, gpu, plan, technique, settings.shadow)?;
+        let mut generator = ShadowGenerator::new(ctx, scene, gpu, plan, info, settings.shadow)?;
         generator.set_caching(settings.cache_shadows || settings.shadow_budget.is_some());
         generator.set_budget(settings.shadow_budget);
         Ok(Self { generator, params })
@@ -79,7 +85,11 @@ impl ShadowSource for AtlasSource {
     }
 
     fn output(&self) -> ShadowOutput<'_> {
-        ShadowOutput::Atlas(&self.generator.atlas)
+        ShadowOutput::from_views(&self.generator.atlas, ATLAS_LOOKUP)
+    }
+
+    fn picture(&self, ctx: &GpuContext) -> Result<ShadowPicture, RenderError> {
+        ShadowPicture::of_atlas(ctx, &self.generator.atlas, &self.generator.plan)
     }
 
     fn read_atlas(&self, ctx: &GpuContext) -> Result<Vec<f32>, RenderError> {

@@ -5,16 +5,20 @@
 
 use manyshadows_scene::light_space::{PointShadows, ViewKind};
 
-use crate::gpu::shaders::{compose, ALPHA_MASK, COMMON, PARABOLOID};
+use crate::error::Fills;
+use crate::error::Technique;
+use crate::gpu::context::GpuContext;
+use crate::gpu::shaders::{compose, COMMON};
 use crate::gpu::types::VIEW_UNIFORM_STRIDE;
+use crate::gpu_scene::casters::ALPHA_MASK;
 use crate::gpu_scene::instances::{POSITION_LAYOUT, UV_LAYOUT_1};
 use crate::gpu_scene::skinning::{MAX_BONES, SKIN_LAYOUT};
-use crate::settings::Technique;
 use crate::shadows::atlas::shared::{atlas_attachment, TileClear};
-use crate::shadows::atlas::technique::{visible_casters, Generation, ShadowInput, ShadowTechnique};
-use crate::shadows::descriptor::{Build, Culling, Fills, TechniqueInfo, Wgsl};
+use crate::shadows::descriptor::{Build, Culling, TechniqueInfo, Wgsl};
+use crate::shadows::lookup::ATLAS_LOOKUP;
+use crate::shadows::lookup::PARABOLOID;
 use crate::shadows::source::ShadowStats;
-use crate::GpuContext;
+use crate::shadows::technique::{visible_casters, Generation, ShadowInput, ShadowTechnique};
 
 impl Technique {
     /// One depth pass per shadow view (seed 004).
@@ -31,6 +35,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     point_shadows: &[PointShadows::Cube, PointShadows::DualParaboloid],
     needs: &[],
     instead: "",
+    lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(Traditional::new(ctx)))),
     shaders,
 };

@@ -34,7 +34,7 @@
 //! (an occupancy flag per tile, set by `cs_insert`) are appended to a queue that an indirect
 //! dispatch walks with one workgroup per tile and one thread per texel, so one floor quad
 //! covering a whole grid does not serialize on one thread, and empty parts of a light's view
-//! cost one flag read per tile. A full queue is an error ([`crate::RenderError::TileQueueFull`]), never
+//! cost one flag read per tile. A full queue is an error ([`crate::error::RenderError::TileQueueFull`]), never
 //! a dropped tile.
 //!
 //! **llvmpipe's loop budget.** Mesa's software driver (GL and Vulkan) ends every loop of an
@@ -79,13 +79,16 @@ use manyshadows_scene::light_space::ViewKind;
 use manyshadows_scene::{LightKind, Scene};
 use wgpu::util::DeviceExt;
 
+use crate::error::RenderError;
 use crate::frame::gbuffer::GBuffer;
 use crate::frame::visibility_mask::VisibilityMask;
-use crate::gpu::shaders::{compose, ALPHA_MASK, COMMON, PARABOLOID, SHADOW_LOOKUP};
+use crate::gpu::context::GpuContext;
+use crate::gpu::shaders::{compose, COMMON};
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu_scene::casters::CasterGeometry;
+use crate::gpu_scene::casters::ALPHA_MASK;
+use crate::shadows::lookup::{PARABOLOID, SHADOW_LOOKUP};
 use crate::shadows::plan::ShadowPlan;
-use crate::{GpuContext, RenderError};
 
 /// Sample lists per light-space texel, exact per-triangle tests.
 pub(crate) fn shader() -> String {
@@ -149,6 +152,28 @@ pub struct IrregularOptions {
     /// overflow reporting.
     #[cfg(feature = "test-hooks")]
     pub node_capacity: Option<u32>,
+}
+
+impl IrregularOptions {
+    /// Checks every value that has a range of its own ([`RenderError::InvalidOption`] names
+    /// the first one out of range, as `RenderSettings` names the field).
+    pub fn validate(&self) -> Result<(), RenderError> {
+        if let Some(g) = self.grid.filter(|g| !(1..=GRID_LIMIT).contains(g)) {
+            return Err(RenderError::invalid_option(
+                "irregular.grid",
+                g,
+                "1 to 1024 texels per side (GRID_LIMIT)",
+            ));
+        }
+        if self.hash == Some(0) {
+            return Err(RenderError::invalid_option(
+                "irregular.hash",
+                0,
+                "at least 1 (1 = one list per texel, no hashing)",
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// Work counters of the last frame.

@@ -4,19 +4,20 @@
 use manyshadows_scene::light_space::PointShadows;
 use manyshadows_scene::Scene;
 
+use crate::error::{Fills, RenderError, Technique};
 use crate::frame::visibility_mask::VisibilityMask;
+use crate::gpu::context::GpuContext;
 use crate::gpu::timing::GpuTimer;
 use crate::gpu::types::LightData;
 use crate::gpu_scene::instances::GpuScene;
-use crate::settings::{RenderSettings, Technique};
-use crate::shadows::descriptor::{Build, Culling, Fills, TechniqueInfo, Wgsl};
-use crate::shadows::irregular::maps::{
-    IrregularInputs, IrregularOptions, IrregularShadows, IrregularStats,
-};
+use crate::shadows::descriptor::{Build, Culling, TechniqueInfo, Wgsl};
+use crate::shadows::image::ShadowPicture;
+use crate::shadows::irregular::maps::{IrregularInputs, IrregularOptions, IrregularShadows};
+use crate::shadows::lookup::ATLAS_LOOKUP;
 use crate::shadows::source::{
-    PlanParams, ShadowOutput, ShadowSource, ShadowStats, SourceInputs, ViewTable, Views,
+    PlanParams, ShadowOutput, ShadowSource, ShadowStats, SourceInputs, SourceSettings,
+    TechniqueStats, ViewTable, Views,
 };
-use crate::{GpuContext, RenderError};
 
 impl Technique {
     /// Irregular (alias-free) shadow maps (seed 001).
@@ -34,6 +35,8 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     point_shadows: &[PointShadows::Cube],
     needs: &[],
     instead: "",
+    // The passes shade with the mask and never call `shadow_coord`.
+    lookup: ATLAS_LOOKUP,
     build: Build::Source(|a| {
         Ok(Box::new(IrregularSource::new(
             a.ctx, a.scene, a.gpu, a.params, a.settings,
@@ -65,14 +68,14 @@ impl IrregularSource {
         scene: &Scene,
         gpu: &GpuScene,
         params: PlanParams,
-        settings: &RenderSettings,
+        settings: &SourceSettings<'_>,
     ) -> Result<Self, RenderError> {
         let plan = params.plan(scene)?;
         Ok(Self {
             table: ViewTable::new(ctx, scene, gpu, plan, settings)?,
             params,
             size: (settings.width, settings.height),
-            options: settings.irregular,
+            options: settings.options::<IrregularOptions>(),
             passes: None,
         })
     }
@@ -140,10 +143,17 @@ impl ShadowSource for IrregularSource {
     }
 
     fn output(&self) -> ShadowOutput<'_> {
-        ShadowOutput::Mask {
-            mask: self.passes().mask(),
-            views: &self.table.views,
+        ShadowOutput {
+            mask: Some(self.passes().mask()),
+            ..ShadowOutput::from_views(&self.table.views, ATLAS_LOOKUP)
         }
+    }
+
+    fn picture(&self, _ctx: &GpuContext) -> Result<ShadowPicture, RenderError> {
+        Err(RenderError::NoAtlas {
+            technique: INFO.technique,
+            fills: INFO.fills,
+        })
     }
 
     fn read_atlas(&self, _ctx: &GpuContext) -> Result<Vec<f32>, RenderError> {
@@ -157,7 +167,11 @@ impl ShadowSource for IrregularSource {
         self.passes().read_mask(ctx).map(Some)
     }
 
-    fn irregular_stats(&self) -> Option<IrregularStats> {
-        self.passes.as_ref().map(|p| p.stats())
+    /// `IrregularStats` of the last finished frame.
+    fn technique_stats(&self, _ctx: &GpuContext) -> Result<Option<TechniqueStats>, RenderError> {
+        Ok(self
+            .passes
+            .as_ref()
+            .map(|p| Box::new(p.stats()) as TechniqueStats))
     }
 }

@@ -18,8 +18,9 @@ use manyshadows_scene::masks::MaskSet;
 use manyshadows_scene::Scene;
 use wgpu::util::DeviceExt;
 
+use crate::error::RenderError;
+use crate::gpu::context::GpuContext;
 use crate::gpu_scene::instances::GpuScene;
-use crate::{GpuContext, RenderError};
 
 /// Most lights one pixel may sample (`MAX_SAMPLES` in lighting.wgsl).
 pub const MAX_LIGHT_SAMPLES: u32 = 16;
@@ -35,6 +36,21 @@ pub struct RayOptions {
     pub light_samples: u32,
     /// Seed of the sampling (the same seed gives the same image).
     pub seed: u32,
+}
+
+impl RayOptions {
+    /// Checks every value that has a range of its own ([`RenderError::InvalidOption`] names
+    /// the first one out of range, as `RenderSettings` names the field).
+    pub fn validate(&self) -> Result<(), RenderError> {
+        if self.light_samples > MAX_LIGHT_SAMPLES {
+            return Err(RenderError::invalid_option(
+                "rays.light_samples",
+                self.light_samples,
+                "0 (every light) to 16 sampled lights per pixel",
+            ));
+        }
+        Ok(())
+    }
 }
 
 with_setters!(RayOptions {

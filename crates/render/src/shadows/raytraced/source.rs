@@ -7,18 +7,21 @@
 use manyshadows_scene::light_space::PointShadows;
 use manyshadows_scene::Scene;
 
-use crate::gpu::shaders::{lighting, visibility, ShadowSource as ShaderSource};
+use crate::error::{Fills, RenderError, Technique};
+use crate::gpu::context::GpuContext;
+use crate::gpu::pipelines::{storage_entry, uniform_entry};
 use crate::gpu::timing::{GpuTimer, Stage};
 use crate::gpu::types::LightData;
+use crate::gpu_scene::casters::ALPHA_MASK;
 use crate::gpu_scene::instances::GpuScene;
-use crate::settings::{RenderSettings, Technique};
-use crate::shadows::descriptor::{Build, Culling, Fills, Need, TechniqueInfo, Wgsl};
+use crate::shadows::descriptor::{Build, Culling, Need, TechniqueInfo};
+use crate::shadows::image::ShadowPicture;
+use crate::shadows::lookup::{atlas_coord, LookupWgsl};
 use crate::shadows::plan::ShadowPlan;
-use crate::shadows::raytraced::accel::RayAccel;
+use crate::shadows::raytraced::accel::{RayAccel, RayOptions};
 use crate::shadows::source::{
-    RayScene, ShadowOutput, ShadowSource, ShadowStats, SourceInputs, ViewTable, Views,
+    ShadowOutput, ShadowSource, ShadowStats, SourceInputs, SourceSettings, ViewTable, Views,
 };
-use crate::{GpuContext, RenderError};
 
 impl Technique {
     /// Shadow rays through an acceleration structure (ray queries).
@@ -40,26 +43,29 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
         "ray queries in the lighting and visibility passes",
     )],
     instead: "use technique irregular for exact shadows without ray queries",
+    lookup: RAYS_LOOKUP,
     build: Build::Source(|a| {
         Ok(Box::new(RaytracedSource::new(
             a.ctx, a.scene, a.gpu, a.settings,
         )?))
     }),
-    shaders: || {
-        let rays = ShaderSource::Rays { first: 12 };
-        vec![
-            Wgsl::with(
-                "lighting_rays",
-                lighting(rays),
-                wgpu::Features::EXPERIMENTAL_RAY_QUERY,
-            ),
-            Wgsl::with(
-                "visibility_rays",
-                visibility(rays),
-                wgpu::Features::EXPERIMENTAL_RAY_QUERY,
-            ),
-        ]
+    // Its only WGSL is its lookup, composed into the lighting and visibility passes.
+    shaders: Vec::new,
+};
+
+/// Shadow rays from the passes themselves: the atlas's `shadow_coord` (never reached: no
+/// light has views), the alpha-mask tail and `rays.wgsl`. Its declarations: the TLAS, the
+/// ray geometry and the sampling parameters.
+const RAYS_LOOKUP: LookupWgsl = LookupWgsl {
+    enables: "enable wgpu_ray_query;",
+    source: |first| {
+        let rays = include_str!("rays.wgsl")
+            .replace("RT_FIRST", &first.to_string())
+            .replace("RT_SECOND", &(first + 1).to_string())
+            .replace("RT_THIRD", &(first + 2).to_string());
+        format!("{}\n{ALPHA_MASK}\n{rays}", atlas_coord())
     },
+    features: wgpu::Features::EXPERIMENTAL_RAY_QUERY,
 };
 
 /// Ray-traced shadows as a frame's [`ShadowSource`].
@@ -73,7 +79,7 @@ impl RaytracedSource {
         ctx: &GpuContext,
         scene: &Scene,
         gpu: &GpuScene,
-        settings: &RenderSettings,
+        settings: &SourceSettings<'_>,
     ) -> Result<Self, RenderError> {
         let table = ViewTable::new(
             ctx,
@@ -87,7 +93,7 @@ impl RaytracedSource {
         } else {
             gpu.masks.clone()
         };
-        let accel = RayAccel::new(ctx, scene, gpu, &masks, settings.rays)?;
+        let accel = RayAccel::new(ctx, scene, gpu, &masks, settings.options::<RayOptions>())?;
         Ok(Self { table, accel })
     }
 }
@@ -146,14 +152,31 @@ impl ShadowSource for RaytracedSource {
     }
 
     fn output(&self) -> ShadowOutput<'_> {
-        ShadowOutput::Rays {
-            rays: RayScene {
-                tlas: self.accel.tlas(),
-                geometry: &self.accel.geometry,
-                params: &self.accel.params,
-            },
-            views: &self.table.views,
+        let any = wgpu::ShaderStages::empty();
+        let tlas = wgpu::BindingType::AccelerationStructure {
+            vertex_return: false,
+        };
+        ShadowOutput {
+            bindings: vec![
+                (tlas, self.accel.tlas().as_binding()),
+                (
+                    storage_entry(0, any).ty,
+                    self.accel.geometry.as_entire_binding(),
+                ),
+                (
+                    uniform_entry(0, any).ty,
+                    self.accel.params.as_entire_binding(),
+                ),
+            ],
+            ..ShadowOutput::from_views(&self.table.views, RAYS_LOOKUP)
         }
+    }
+
+    fn picture(&self, _ctx: &GpuContext) -> Result<ShadowPicture, RenderError> {
+        Err(RenderError::NoAtlas {
+            technique: INFO.technique,
+            fills: INFO.fills,
+        })
     }
 
     fn read_atlas(&self, _ctx: &GpuContext) -> Result<Vec<f32>, RenderError> {

@@ -9,14 +9,17 @@
 //! page clears and the indirect arguments come from the allocation passes ([`super::pages`]).
 
 use crate::gpu::buffers::buffer;
+use crate::gpu::context::GpuContext;
 use crate::gpu::pipelines::whole_entry;
-use crate::gpu::shaders::{compose, ALPHA_MASK, CLUSTER_CULL, COMMON, CULL, TILE, TILE_MASK};
+use crate::gpu::shaders::{compose, COMMON};
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu::types::VsmRound;
+use crate::gpu_scene::casters::ALPHA_MASK;
 use crate::gpu_scene::casters::{CasterGeometry, CLUSTER_PARTS, CLUSTER_TRIANGLES};
-use crate::settings::ShadowOptions;
+use crate::shadows::cluster_draw::CLUSTER_CULL;
 use crate::shadows::cluster_draw::{plan_rounds, Round, COMMAND_SIZE};
-use crate::GpuContext;
+use crate::shadows::depth::{CULL, TILE, TILE_MASK};
+use crate::shadows::options::ShadowOptions;
 
 /// Consecutive clusters per cull group (one cull thread per group and page).
 pub(crate) const CULL_GROUP: u32 = crate::gpu_scene::casters::CLUSTER_GROUP;

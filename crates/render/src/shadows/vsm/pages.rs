@@ -7,21 +7,24 @@ use glam::{Mat4, Vec3};
 use manyshadows_scene::light_space::ViewKind;
 use manyshadows_scene::Scene;
 
+use crate::error::RenderError;
 use crate::frame::clusters::LightClusters;
 use crate::frame::gbuffer::GBuffer;
 use crate::gpu::buffers::buffer;
+use crate::gpu::context::GpuContext;
 use crate::gpu::pipelines::whole_entry;
-use crate::gpu::shaders::{compose, COMMON, PARABOLOID, SHADOW_LOOKUP, VSM_COMMON};
+use crate::gpu::shaders::{compose, COMMON};
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu::types::{LightData, ShadowViewData, VirtualFace, VsmUniforms};
 use crate::gpu_scene::casters::CasterGeometry;
-use crate::settings::ShadowOptions;
+use crate::shadows::lookup::{PARABOLOID, SHADOW_LOOKUP};
+use crate::shadows::options::ShadowOptions;
 use crate::shadows::vsm::draw::{PageBuffers, PageDraw};
+use crate::shadows::vsm::plan::VSM_COMMON;
 use crate::shadows::vsm::plan::{
     pool_side, TileMarking, VirtualOptions, VirtualPlan, VirtualStats, MAX_LEVELS, NOTHING_MOVED,
     PAGE_SIZE,
 };
-use crate::{GpuContext, RenderError};
 
 /// Page marking, allocation and indirect arguments.
 pub(crate) fn shader() -> String {

@@ -4,7 +4,11 @@
 use manyshadows_scene::light_space::{self, PointShadows, ShadowView};
 use manyshadows_scene::Scene;
 
+use crate::error::RenderError;
 use crate::gpu::types::{LightData, VirtualFace};
+
+/// Level and page selection, shared by the page marking and the lookups.
+pub const VSM_COMMON: &str = include_str!("vsm_common.wgsl");
 
 /// Side of a page in texels.
 pub const PAGE_SIZE: u32 = 128;
@@ -106,6 +110,50 @@ impl Default for VirtualOptions {
             expand_bytes: 24 << 20,
             tile_marking: true,
         }
+    }
+}
+
+impl VirtualOptions {
+    /// Checks every value that has a range of its own ([`RenderError::InvalidOption`] names
+    /// the first one out of range, as `RenderSettings` names the field).
+    pub fn validate(&self) -> Result<(), RenderError> {
+        let page_bytes = u64::from(PAGE_SIZE) * u64::from(PAGE_SIZE) * 4;
+        if self.pool_bytes < page_bytes {
+            return Err(RenderError::invalid_option(
+                "virtual_maps.pool_bytes",
+                self.pool_bytes,
+                "at least one 128x128 page of 32-bit depth (65,536 bytes)",
+            ));
+        }
+        if !(self.lod.is_finite() && self.lod > 0.0) {
+            return Err(RenderError::invalid_option(
+                "virtual_maps.lod",
+                self.lod,
+                "a positive number of shadow texels per pixel",
+            ));
+        }
+        if !(self.directed_lod.is_finite() && self.directed_lod > 0.0) {
+            return Err(RenderError::invalid_option(
+                "virtual_maps.directed_lod",
+                self.directed_lod,
+                "a positive factor on virtual_maps.lod",
+            ));
+        }
+        if !(self.bias_scale.is_finite() && (0.0..=16.0).contains(&self.bias_scale)) {
+            return Err(RenderError::invalid_option(
+                "virtual_maps.bias_scale",
+                self.bias_scale,
+                "a fraction of the shadow bias from 0 to 16",
+            ));
+        }
+        if self.max_side == 0 {
+            return Err(RenderError::invalid_option(
+                "virtual_maps.max_side",
+                0,
+                "a virtual side of 128 to 16,384 texels (rounded to a power of two)",
+            ));
+        }
+        Ok(())
     }
 }
 

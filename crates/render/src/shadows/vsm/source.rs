@@ -5,18 +5,22 @@ use glam::Vec3;
 use manyshadows_scene::light_space::PointShadows;
 use manyshadows_scene::Scene;
 
+use crate::error::{Fills, RenderError, Technique};
+use crate::gpu::context::GpuContext;
+use crate::gpu::pipelines::{storage_entry, uniform_entry};
 use crate::gpu::timing::GpuTimer;
 use crate::gpu::types::LightData;
 use crate::gpu_scene::instances::GpuScene;
-use crate::settings::{RenderSettings, Technique};
-use crate::shadows::descriptor::{Build, Culling, Fills, Need, TechniqueInfo, Wgsl};
+use crate::shadows::descriptor::{Build, Culling, Need, TechniqueInfo, Wgsl};
+use crate::shadows::image::{read_depth_view, ShadowPicture};
+use crate::shadows::lookup::{LookupWgsl, NO_RAYS};
 use crate::shadows::plan::ShadowPlan;
 use crate::shadows::source::{
-    PagePool, ShadowOutput, ShadowSource, ShadowStats, SourceInputs, ViewTable, Views,
+    ShadowOutput, ShadowSource, ShadowStats, SourceInputs, SourceSettings, TechniqueStats,
+    ViewTable, Views,
 };
 use crate::shadows::vsm::pages::{VirtualShadows, VsmInputs};
-use crate::shadows::vsm::plan::{VirtualOptions, VirtualPlan, VirtualStats};
-use crate::{GpuContext, RenderError};
+use crate::shadows::vsm::plan::{VirtualOptions, VirtualPlan, PAGE_SIZE, VSM_COMMON};
 
 impl Technique {
     /// Virtual shadow maps (seed 002).
@@ -40,6 +44,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
         Need::indirect("indirect dispatches and draws (to allocate and draw its pages)"),
     ],
     instead: "use technique traditional",
+    lookup: VSM_LOOKUP,
     build: Build::Source(|a| {
         Ok(Box::new(VirtualSource::new(
             a.ctx, a.scene, a.gpu, a.settings,
@@ -57,6 +62,25 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     },
 };
 
+/// Shadows through the page table: the face's level, the resident page or a coarser one.
+/// Its declarations: the uniforms, the faces and the page table.
+const VSM_LOOKUP: LookupWgsl = LookupWgsl {
+    enables: "",
+    source: |first| {
+        format!(
+            "{NO_RAYS}\n{VSM_COMMON}\n\
+             @group(0) @binding({}) var<uniform> vsm: VsmUniforms;\n\
+             @group(0) @binding({}) var<storage, read> vsm_faces: array<VirtualFace>;\n\
+             @group(0) @binding({}) var<storage, read> vsm_table: array<u32>;\n{}",
+            first,
+            first + 1,
+            first + 2,
+            include_str!("vsm_lookup.wgsl")
+        )
+    },
+    features: wgpu::Features::empty(),
+};
+
 /// Virtual shadow maps as a frame's [`ShadowSource`]: an empty shadow plan (the faces are in
 /// [`VirtualPlan`]), the caster geometry and the page pool, which is the output.
 pub struct VirtualSource {
@@ -72,7 +96,7 @@ impl VirtualSource {
         ctx: &GpuContext,
         scene: &Scene,
         gpu: &GpuScene,
-        settings: &RenderSettings,
+        settings: &SourceSettings<'_>,
     ) -> Result<Self, RenderError> {
         let table = ViewTable::new(
             ctx,
@@ -83,7 +107,7 @@ impl VirtualSource {
         )?;
         let options = VirtualOptions {
             back_facing: settings.visibility,
-            ..settings.virtual_maps
+            ..settings.options::<VirtualOptions>()
         };
         let size = (settings.width, settings.height);
         let maps = VirtualShadows::new(
@@ -164,16 +188,35 @@ impl ShadowSource for VirtualSource {
     }
 
     fn output(&self) -> ShadowOutput<'_> {
-        ShadowOutput::Pages {
-            pages: PagePool {
-                pool: &self.maps.pool_view,
-                side: self.maps.pool_side(),
-                uniforms: self.maps.uniforms(),
-                faces: self.maps.faces(),
-                table: self.maps.table(),
-            },
-            views: &self.table.views,
+        let any = wgpu::ShaderStages::empty();
+        ShadowOutput {
+            depth: &self.maps.pool_view,
+            depth_side: self.maps.pool_side(),
+            bindings: vec![
+                (
+                    uniform_entry(0, any).ty,
+                    self.maps.uniforms().as_entire_binding(),
+                ),
+                (
+                    storage_entry(0, any).ty,
+                    self.maps.faces().as_entire_binding(),
+                ),
+                (
+                    storage_entry(0, any).ty,
+                    self.maps.table().as_entire_binding(),
+                ),
+            ],
+            ..ShadowOutput::from_views(&self.table.views, VSM_LOOKUP)
         }
+    }
+
+    fn view_count(&self) -> usize {
+        self.maps.plan.faces.len()
+    }
+
+    fn picture(&self, ctx: &GpuContext) -> Result<ShadowPicture, RenderError> {
+        let (side, depth) = self.read_pool(ctx)?;
+        Ok(ShadowPicture::of_pool(&depth, side, PAGE_SIZE))
     }
 
     fn read_atlas(&self, _ctx: &GpuContext) -> Result<Vec<f32>, RenderError> {
@@ -183,11 +226,30 @@ impl ShadowSource for VirtualSource {
         })
     }
 
-    fn virtual_plan(&self) -> Option<&VirtualPlan> {
-        Some(&self.maps.plan)
+    /// `VirtualStats` of the last submitted frame, read back.
+    fn technique_stats(&self, ctx: &GpuContext) -> Result<Option<TechniqueStats>, RenderError> {
+        Ok(Some(Box::new(self.maps.read_stats(ctx)?)))
+    }
+}
+
+impl VirtualSource {
+    /// The faces of the current frame and their page-table layout.
+    #[cfg_attr(not(feature = "internals"), allow(dead_code))] // Renderer::virtual_plan
+    pub fn plan(&self) -> &VirtualPlan {
+        &self.maps.plan
     }
 
-    fn read_virtual_stats(&self, ctx: &GpuContext) -> Result<Option<VirtualStats>, RenderError> {
-        self.maps.read_stats(ctx).map(Some)
+    /// The page pool's side and its depth, read back.
+    pub fn read_pool(&self, ctx: &GpuContext) -> Result<(u32, Vec<f32>), RenderError> {
+        let side = self.maps.pool_side();
+        Ok((side, read_depth_view(ctx, &self.maps.pool_view, side)?))
+    }
+
+    /// The page table as the last frame left it (one entry per page of every face's levels).
+    pub fn read_table(&self, ctx: &GpuContext) -> Result<Vec<u32>, RenderError> {
+        Ok(
+            bytemuck::cast_slice(&crate::gpu::readback::read_buffer(ctx, self.maps.table())?)
+                .to_vec(),
+        )
     }
 }

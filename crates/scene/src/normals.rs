@@ -7,7 +7,7 @@
 //! smooth") is a crease angle: a triangle's corner averages only the triangles around it whose
 //! normals are within the angle of its own, so edges sharper than the angle stay sharp.
 //!
-//! The steps, for [`Mesh::compute_normals_with_crease`](crate::Mesh::compute_normals_with_crease):
+//! The steps, for [`Mesh::compute_normals_with_crease`]:
 //!
 //! 1. **Weld** vertices by exact position, so that vertices split in the file for other reasons
 //!    (texture seams) still share their neighbourhood.
@@ -30,7 +30,23 @@ use std::collections::HashMap;
 
 use glam::Vec3;
 
-use crate::Mesh;
+use crate::model::Mesh;
+
+impl Mesh {
+    /// Replaces the normals with crease-angle normals, splitting vertices where needed:
+    /// positions are welded, each triangle corner averages (area-weighted) the triangles
+    /// around its position whose normals are within `crease_deg` of its own triangle's, and
+    /// each distinct (vertex, normal) pair becomes one vertex (texture coordinates carried
+    /// along; the first keeps the vertex's index). Edges sharper than the angle stay sharp (a
+    /// box with shared corners gets flat faces), gentler ones smooth (a finely tessellated
+    /// cylinder). The loaders use it at
+    /// [`CREASE_ANGLE_DEG`](crate::loaders::CREASE_ANGLE_DEG) for files without normals.
+    /// Meshes whose indices are out of range get [`Mesh::compute_normals`] instead (and fail
+    /// [`Mesh::validate`]).
+    pub fn compute_normals_with_crease(&mut self, crease_deg: f32) {
+        crease_normals(self, crease_deg);
+    }
+}
 
 /// Largest number of triangles around one welded position compared pairwise.
 const EXACT_VALENCE: usize = 64;

@@ -1,11 +1,12 @@
-//! The deferred Phong lighting pass (seed 004): reads the G-buffer and the shadow atlas, writes
-//! the final colour. Every light is visited per pixel for now; the light list is one storage
-//! buffer so a clustered (per-tile) list can replace it without touching the shading.
+//! The deferred Phong lighting pass (seed 004): reads the G-buffer, the pixel's light cluster
+//! and the frame's shadows (through the source's lookup, or its mask), writes the final
+//! colour.
 
 use crate::frame::gbuffer::GBuffer;
+use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, Span};
+use crate::shadows::lookup::{compose_reader, LookupWgsl};
 use crate::shadows::source::ShadowOutput;
-use crate::GpuContext;
 
 /// First binding of a shadow source's own declarations (the virtual maps' page table, the
 /// ray-traced scene) in the lighting and visibility passes.
@@ -13,6 +14,12 @@ pub(crate) const SOURCE_FIRST_BINDING: u32 = 12;
 
 /// Output colour format (sRGB-encoded on write).
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+
+/// The lighting pass's WGSL, shadows found through `lookup` (its declarations from
+/// [`SOURCE_FIRST_BINDING`]).
+pub fn shader(lookup: &LookupWgsl) -> String {
+    compose_reader(lookup, SOURCE_FIRST_BINDING, include_str!("lighting.wgsl"))
+}
 
 /// The lighting pass and its output image.
 pub struct LightingPass {
@@ -46,7 +53,7 @@ pub struct LightingInputs<'a> {
 impl LightingInputs<'_> {
     /// The depth texture shadows are read from: the virtual maps' page pool or the atlas.
     pub fn shadow_texture(&self) -> &wgpu::TextureView {
-        self.shadows.depth()
+        self.shadows.depth
     }
 
     /// The bind-group entries the lighting and the visibility pass both declare, at the same
@@ -63,7 +70,7 @@ impl LightingInputs<'_> {
         let mut entries = vec![
             crate::gpu::pipelines::whole_entry(0, self.frame),
             crate::gpu::pipelines::whole_entry(1, self.lights),
-            crate::gpu::pipelines::whole_entry(2, self.shadows.view_table()),
+            crate::gpu::pipelines::whole_entry(2, self.shadows.view_table),
             wgpu::BindGroupEntry {
                 binding: 4,
                 resource: wgpu::BindingResource::TextureView(position),
@@ -137,11 +144,8 @@ impl LightingPass {
             ..Default::default()
         });
         let bind_group = bind(ctx, &layout, &linear, inputs);
-        let module = crate::gpu::shaders::module(
-            device,
-            "lighting.shader",
-            &crate::gpu::shaders::lighting(inputs.shadows.shader_source(SOURCE_FIRST_BINDING)),
-        );
+        let module =
+            crate::gpu::shaders::module(device, "lighting.shader", &shader(&inputs.shadows.lookup));
         let pipeline_layout =
             crate::gpu::pipelines::pipeline_layout(device, "lighting.pipeline_layout", &[&layout]);
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -158,7 +162,7 @@ impl LightingPass {
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &module,
-                entry_point: Some(if inputs.shadows.mask().is_some() {
+                entry_point: Some(if inputs.shadows.mask.is_some() {
                     "fs_mask"
                 } else {
                     "fs_main"
@@ -217,7 +221,7 @@ fn bind(
     let device = &ctx.device;
     // `fs_main` never reads the mask, but one layout serves both entry points.
     let dummy_mask;
-    let mask = match inputs.shadows.mask() {
+    let mask = match inputs.shadows.mask {
         Some(m) => m,
         None => {
             dummy_mask = device.create_buffer(&wgpu::BufferDescriptor {
@@ -247,4 +251,16 @@ fn bind(
         layout,
         entries: &entries,
     })
+}
+
+#[cfg(test)]
+mod shader_tests {
+    /// With the atlas lookup the pass is WGSL a WebGPU device accepts (every technique's own
+    /// lookup is checked by the registry's tests).
+    #[test]
+    fn shader_validates_for_webgpu() {
+        let src = super::shader(&crate::shadows::lookup::ATLAS_LOOKUP);
+        crate::gpu::shaders::validate_for_webgpu("lighting", &src, wgpu::Features::empty())
+            .unwrap_or_else(|e| panic!("{e}"));
+    }
 }

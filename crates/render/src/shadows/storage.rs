@@ -4,9 +4,10 @@
 
 use manyshadows_scene::atlas::Tile;
 
+use crate::error::RenderError;
+use crate::gpu::context::GpuContext;
 use crate::gpu::types::{ViewUniform, VIEW_UNIFORM_STRIDE};
 use crate::shadows::plan::{view_eye, ShadowPlan};
-use crate::{GpuContext, RenderError};
 
 /// The depth atlas and the per-view data techniques read.
 pub struct ShadowAtlas {
@@ -26,7 +27,7 @@ pub struct ShadowAtlas {
     /// (w = 1) or, for orthographic views, the direction light travels (w = 0).
     pub eyes: wgpu::Buffer,
     /// `array<u32>`: the views a generation draws (see
-    /// [`ShadowInput::draw_list`](crate::shadows::atlas::technique::ShadowInput::draw_list)).
+    /// [`ShadowInput::draw_list`](crate::shadows::technique::ShadowInput::draw_list)).
     pub draw_list: wgpu::Buffer,
 }
 

@@ -4,7 +4,8 @@
 
 use std::collections::HashMap;
 
-use crate::{GpuContext, RenderError};
+use crate::error::RenderError;
+use crate::gpu::context::GpuContext;
 
 /// The blit pipelines and their shared layout.
 pub(crate) struct Blit {
@@ -20,8 +21,7 @@ pub(crate) struct Blit {
 impl Blit {
     pub(crate) fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let module =
-            crate::gpu::shaders::module(device, "blit.shader", &crate::gpu::shaders::blit());
+        let module = crate::gpu::shaders::module(device, "blit.shader", include_str!("blit.wgsl"));
         let fs = wgpu::ShaderStages::FRAGMENT;
         let layout = crate::gpu::pipelines::bind_group_layout(
             device,
@@ -171,5 +171,19 @@ impl Blit {
         pass.set_bind_group(0, &self.group.as_ref().expect("bind group").1, &[]);
         pass.draw(0..3, 0..1);
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod shader_tests {
+    /// What this module composes is WGSL a WebGPU device accepts.
+    #[test]
+    fn shader_validates_for_webgpu() {
+        crate::gpu::shaders::validate_for_webgpu(
+            "blit",
+            &include_str!("blit.wgsl"),
+            wgpu::Features::empty(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
     }
 }

@@ -1,13 +1,22 @@
-//! The registry: every technique's [`TechniqueInfo`], in the order menus and tables list them.
-//! Adding a technique is its module (with its `INFO` and its `Technique` constant) and one
-//! line in [`TECHNIQUES`]; the CLI, the benchmarks, the viewer and the web page read this list.
+//! The registry: every technique's [`TechniqueInfo`], in the order menus and tables list them,
+//! and [`create`], where a technique becomes the frame's shadow source. Adding a technique is
+//! its module (with its `INFO` and its `Technique` constant) and one line in [`TECHNIQUES`];
+//! the CLI, the benchmarks, the viewer and the web page read this list. It is the one module
+//! that names the techniques, above all of them and above the settings that hold their
+//! options.
 
-use crate::settings::Technique;
-use crate::shadows::atlas::technique::ShadowTechnique;
+use manyshadows_scene::Scene;
+
+use crate::error::{RenderError, Technique};
+use crate::gpu::context::GpuContext;
+use crate::gpu_scene::instances::GpuScene;
+use crate::settings::RenderSettings;
+use crate::shadows::atlas::source::AtlasSource;
 use crate::shadows::atlas::{compute, gpu_driven, layered, multiview, traditional};
-use crate::shadows::descriptor::{Build, TechniqueInfo};
+use crate::shadows::descriptor::{Build, SourceArgs, TechniqueInfo};
+use crate::shadows::source::{PlanParams, ShadowSource};
+use crate::shadows::technique::ShadowTechnique;
 use crate::shadows::{irregular, raytraced, vsm};
-use crate::{GpuContext, RenderError};
 
 /// Every technique, the default first.
 pub const TECHNIQUES: &[&TechniqueInfo] = &[
@@ -43,18 +52,36 @@ impl Technique {
     /// Builds an atlas technique's pipelines, after checking its needs against the device;
     /// [`RenderError::NoAtlas`] for a technique that fills no atlas.
     pub fn create(self, ctx: &GpuContext) -> Result<Box<dyn ShadowTechnique>, RenderError> {
-        let info = self.info();
-        match info.build {
-            Build::Atlas(build) => {
-                info.check(ctx)?;
-                build(ctx)
-            }
-            Build::Source(_) => Err(RenderError::NoAtlas {
-                technique: self,
-                fills: info.fills,
-            }),
-        }
+        self.info().create_atlas(ctx)
     }
+}
+
+/// The frame's shadow source for `settings.technique`: its declaration's needs and
+/// point-shadow modes checked, then an atlas technique under the generator, or the
+/// technique's own source.
+pub(crate) fn create(
+    ctx: &GpuContext,
+    scene: &Scene,
+    gpu: &GpuScene,
+    settings: &RenderSettings,
+    max_atlas: u32,
+) -> Result<Box<dyn ShadowSource>, RenderError> {
+    let info = settings.technique.info();
+    info.check(ctx)?;
+    // Refused whether or not the scene has point lights now: `set_lights` may add some.
+    info.check_point_shadows(settings.point_shadows)?;
+    let source_settings = settings.source_settings();
+    let args = SourceArgs {
+        ctx,
+        scene,
+        gpu,
+        params: PlanParams::new(&source_settings, max_atlas),
+        settings: &source_settings,
+    };
+    Ok(match info.build {
+        Build::Atlas(_) => Box::new(AtlasSource::new(args, info)?),
+        Build::Source(build) => build(args)?,
+    })
 }
 
 /// The registry's first technique.
@@ -105,19 +132,37 @@ mod tests {
 
     /// Every technique's WGSL parses and validates as a WebGPU device with the features its
     /// shader declares would (no more): what a browser would accept. A shader needing a
-    /// feature it does not declare fails here.
+    /// feature it does not declare fails here. Its lookup is checked composed into the
+    /// lighting and visibility passes.
     #[test]
     fn every_technique_shader_validates_for_webgpu() {
         let mut n = 0;
         for info in TECHNIQUES {
-            let shaders = info.shaders();
-            assert!(!shaders.is_empty(), "{} declares no WGSL", info.technique);
+            let mut shaders = info.shaders();
+            let features = info.lookup.features;
+            shaders.push(crate::shadows::descriptor::Wgsl::with(
+                "lighting",
+                crate::shading::lighting::shader(&info.lookup),
+                features,
+            ));
+            shaders.push(crate::shadows::descriptor::Wgsl::with(
+                "visibility",
+                crate::shading::visibility::shader(&info.lookup),
+                features,
+            ));
             for w in shaders {
+                assert!(
+                    info.features().contains(w.features),
+                    "technique {}: {} needs {:?}, which the technique does not declare",
+                    info.technique,
+                    w.name,
+                    w.features
+                );
                 crate::gpu::shaders::validate_for_webgpu(w.name, &w.source, w.features)
                     .unwrap_or_else(|e| panic!("technique {}: {e}", info.technique));
                 n += 1;
             }
         }
-        assert!(n >= TECHNIQUES.len());
+        assert!(n >= 3 * TECHNIQUES.len());
     }
 }

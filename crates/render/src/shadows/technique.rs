@@ -1,17 +1,17 @@
 //! The interface every atlas technique implements: what it is given ([`ShadowInput`]), one
 //! generation as it records it ([`Generation`]), and the trait ([`ShadowTechnique`]). The
 //! techniques are created through their declarations ([`crate::shadows::descriptor`],
-//! [`crate::shadows::registry`]).
+//! [`crate::registry`]).
 
 use manyshadows_scene::light_space::ShadowView;
 
+use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu_scene::casters::CasterGeometry;
 use crate::gpu_scene::instances::{DrawItem, GpuScene};
-use crate::settings::ShadowOptions;
-use crate::shadows::atlas::storage::ShadowAtlas;
+use crate::shadows::options::ShadowOptions;
 use crate::shadows::source::ShadowStats;
-use crate::GpuContext;
+use crate::shadows::storage::ShadowAtlas;
 
 /// What a technique is given to fill the atlas.
 pub struct ShadowInput<'a> {
@@ -53,8 +53,8 @@ pub struct Generation<'a> {
 }
 
 /// A shadow-generation technique: fills every view's tile of the atlas with depth. Its name
-/// is [`Technique::name`](crate::settings::Technique::name) of the
-/// [`Technique`](crate::settings::Technique) that created it.
+/// is [`Technique::name`](crate::error::Technique::name) of the
+/// [`Technique`](crate::error::Technique) that created it.
 pub trait ShadowTechnique {
     /// Records the generation of a non-empty draw list (see [`ShadowTechnique::generate`],
     /// which calls it).

@@ -3,11 +3,13 @@
 //! bias as the lighting pass but without filtering. Its result is a
 //! [`VisibilityMask`] ([`crate::frame::visibility_mask`]).
 
-use crate::frame::lighting::{LightingInputs, SOURCE_FIRST_BINDING};
+use crate::error::RenderError;
 use crate::frame::visibility_mask::VisibilityMask;
+use crate::gpu::context::GpuContext;
 use crate::gpu::pipelines::texture_entry;
 use crate::gpu::timing::{GpuTimer, Span};
-use crate::{GpuContext, RenderError};
+use crate::shading::lighting::{LightingInputs, SOURCE_FIRST_BINDING};
+use crate::shadows::lookup::{compose_reader, LookupWgsl};
 
 /// Layout of `VisibilityParams` in `visibility.wgsl`.
 #[repr(C)]
@@ -17,6 +19,16 @@ struct VisibilityParams {
     word_count: u32,
     _pad0: u32,
     _pad1: u32,
+}
+
+/// The visibility pass's WGSL, shadows found through `lookup` (its declarations from
+/// [`SOURCE_FIRST_BINDING`], as in the lighting pass).
+pub fn shader(lookup: &LookupWgsl) -> String {
+    compose_reader(
+        lookup,
+        SOURCE_FIRST_BINDING,
+        include_str!("visibility.wgsl"),
+    )
 }
 
 /// The visibility compute pass.
@@ -31,8 +43,6 @@ pub struct VisibilityPass {
     /// Words computed per dispatch (so one chunk's buffer stays within the binding limit).
     chunk_words: u32,
 }
-
-// The virtual maps' page-table declarations start where the lighting pass's do.
 
 impl VisibilityPass {
     /// Plans the pass; fails if even one word per pixel exceeds the storage-binding limit.
@@ -79,14 +89,10 @@ impl VisibilityPass {
             crate::gpu::pipelines::storage_entry(11, comp),
         ];
         entries.extend(shadows.extra_layout(SOURCE_FIRST_BINDING, comp));
-        let source = shadows.shader_source(SOURCE_FIRST_BINDING);
         let layout =
             crate::gpu::pipelines::bind_group_layout(device, "visibility.layout", &entries);
-        let module = crate::gpu::shaders::module(
-            device,
-            "visibility.shader",
-            &crate::gpu::shaders::visibility(source),
-        );
+        let module =
+            crate::gpu::shaders::module(device, "visibility.shader", &shader(&shadows.lookup));
         let pipeline_layout = crate::gpu::pipelines::pipeline_layout(
             device,
             "visibility.pipeline_layout",
@@ -200,12 +206,13 @@ impl VisibilityPass {
 
 #[cfg(test)]
 mod tests {
+    use super::shader;
     use super::VisibilityParams;
-    use crate::gpu::shaders::{visibility, ShadowSource};
     use crate::gpu::types::layout::same_layout;
+    use crate::shadows::lookup::ATLAS_LOOKUP;
 
     #[test]
     fn params_match_the_wgsl() {
-        same_layout!(in visibility(ShadowSource::Atlas), VisibilityParams, first_word, word_count, _pad0, _pad1);
+        same_layout!(in shader(&ATLAS_LOOKUP), VisibilityParams, first_word, word_count, _pad0, _pad1);
     }
 }

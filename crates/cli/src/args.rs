@@ -1,0 +1,449 @@
+//! The arguments commands share (`GpuArgs`, `RenderArgs`), the parsers of option values, and
+//! how `render`'s arguments become [`RenderSettings`] (with the errors that name the flag
+//! behind a bad value).
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Result};
+use clap::{Args, Parser, ValueEnum};
+use manyshadows::scene::atlas::FitPolicy;
+use manyshadows::scene::light_space::PointShadows;
+use manyshadows::{
+    AdapterRequest, CullMode, GpuContext, Pcf, RenderSettings, ShadowBias, ShadowOptions, Technique,
+};
+
+/// Adapter choice: `--backend`, `--adapter`, `--limits` (shared by every subcommand that
+/// renders, and by the viewer).
+#[derive(Args, Debug, Clone)]
+pub struct GpuArgs {
+    /// Graphics backend (default: WGPU_BACKEND, else the best adapter of any backend:
+    /// hardware first, then Vulkan on the CPU, then OpenGL on the CPU).
+    #[arg(long, value_enum)]
+    pub(crate) backend: Option<Backend>,
+    /// Use the adapter whose name contains this text (default: WGPU_ADAPTER_NAME).
+    #[arg(long)]
+    pub(crate) adapter: Option<String>,
+    /// Create the device with smaller limits than the adapter's: `webgpu` = what a browser
+    /// gives by default (8 storage buffers per stage, 8192² textures, 128 MiB storage
+    /// bindings) — how the renderer behaves on a small device, without one.
+    #[arg(long, value_enum)]
+    pub(crate) limits: Option<Limits>,
+}
+
+/// `--virtual-marking`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum VirtualMarking {
+    /// By 4x4-pixel tiles, per pixel where the tile's bounds leave it uncertain.
+    Tiles,
+    /// Every (pixel, light) pair.
+    Pixels,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+pub(crate) enum Limits {
+    /// WebGPU's default limits.
+    Webgpu,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+pub(crate) enum Backend {
+    Vulkan,
+    Gl,
+    Metal,
+    Dx12,
+}
+
+impl GpuArgs {
+    /// The adapter request these options describe.
+    pub fn request(&self) -> AdapterRequest {
+        AdapterRequest::default()
+            .with_backends(self.backend.map(|b| match b {
+                Backend::Vulkan => wgpu_backends("vulkan"),
+                Backend::Gl => wgpu_backends("gl"),
+                Backend::Metal => wgpu_backends("metal"),
+                Backend::Dx12 => wgpu_backends("dx12"),
+            }))
+            .with_name(self.adapter.clone())
+            .with_limits(self.limits.map(|l| match l {
+                Limits::Webgpu => manyshadows::webgpu_default_limits(),
+            }))
+    }
+}
+
+/// `on` / `off` (also yes/no, true/false, 1/0).
+pub(crate) fn parse_on_off(s: &str) -> Result<bool, String> {
+    match s.trim().to_ascii_lowercase().as_str() {
+        "on" | "yes" | "true" | "1" => Ok(true),
+        "off" | "no" | "false" | "0" => Ok(false),
+        _ => Err(format!("'{s}' is neither on nor off")),
+    }
+}
+
+pub(crate) fn wgpu_backends(name: &str) -> manyshadows::wgpu::Backends {
+    manyshadows::wgpu::Backends::from_comma_list(name)
+}
+
+#[derive(Args, Debug, Clone)]
+pub(crate) struct RenderArgs {
+    /// Built-in scene name, a TOML scene file (see docs/SCENE_FORMAT.md), or a model file
+    /// (.gltf/.glb with its materials, textures, KHR_lights_punctual lights and camera; .obj
+    /// with its MTL; .ply/.ply.gz), rendered with its own lights and camera (8 seeded lights
+    /// and a framing camera when it has none). Built-ins: atrium, terrain, dragon, cubes,
+    /// courtyard (textures and alpha-masked foliage, lattice, banners), courtyard-opaque,
+    /// plane-spot, plane-point, plane-directional.
+    #[arg(long, default_value = "atrium")]
+    pub(crate) scene: String,
+    /// Shadow technique (--help lists them all, with what each fills and needs).
+    #[arg(long, default_value_t = Technique::default(), value_parser = parse_technique, long_help = crate::techniques::help())]
+    pub(crate) technique: Technique,
+    /// Per-view triangle culling of the single-pass techniques: none, frustum, backface
+    /// (closed meshes only, so shadows never change) or all. The default technique, one pass
+    /// per view, culls whole instances on the CPU and ignores it.
+    #[arg(long, default_value = "all", value_parser = parse_cull)]
+    pub(crate) cull: CullMode,
+    /// Point-light shadows: cube (six 90° faces) or dual-paraboloid (two hemispheres, each
+    /// map twice the per-face resolution; needs finely tessellated geometry, see --subdivide).
+    /// `--help` under --technique says which techniques render which.
+    #[arg(long, default_value = "cube", value_parser = parse_point_shadows)]
+    pub(crate) point_shadows: PointShadows,
+    /// Split every triangle into four this many times before rendering (4^N triangles), e.g.
+    /// to give dual-paraboloid maps the fine geometry their non-linear warp needs.
+    #[arg(long, default_value_t = 0)]
+    pub(crate) subdivide: u32,
+    /// Render this many frames; with more than one, one shadow caster (see --move-instance)
+    /// moves a little each frame and a line per frame reports the shadow work. The last frame
+    /// is written.
+    #[arg(long, default_value_t = 1)]
+    pub(crate) frames: u32,
+    /// Draw every shadow map anew each frame. By default the atlas tiles of views that saw no
+    /// change since the last frame are kept (seed 004's caching; with --technique virtual,
+    /// the pages of unchanged faces away from moved casters); with --frames, each frame's line
+    /// shows how many views (pages) it redrew.
+    #[arg(long, conflicts_with = "shadow_budget")]
+    pub(crate) no_cache: bool,
+    /// Keep what did not change between frames: the default (kept for older command lines).
+    #[arg(long, hide = true, conflicts_with = "no_cache")]
+    pub(crate) cache: bool,
+
+    /// At most N shadow views drawn per frame (atlas techniques; needs the caching): the views
+    /// that changed wait their turn, new tiles and larger (nearer, more important) views
+    /// first; a waiting view is served from its older depth where its tile holds it (counted
+    /// stale, with the age of the oldest) and unshadowed until drawn where it holds nothing
+    /// yet (counted waiting). With --frames, each frame's line says how many of each
+    #[arg(long, value_name = "N")]
+    pub(crate) shadow_budget: Option<u32>,
+    /// Render even a frame whose shadow work is far beyond the rest (more than 2 G
+    /// triangle-view pairs, e.g. a technique that sends every triangle to each of thousands
+    /// of views): without it such a frame is refused with its estimate and the techniques that
+    /// scale, before anything is drawn.
+    #[arg(long)]
+    pub(crate) insist: bool,
+    /// With --frames > 1, turn the camera this many degrees per frame around its target (about
+    /// its up axis). The shadow plan follows: cascades refit, lights that leave the screen
+    /// give up their maps and lights that enter it get them.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub(crate) orbit: f32,
+    /// The instance that moves when --frames > 1 (default: the smallest shadow caster).
+    #[arg(long)]
+    pub(crate) move_instance: Option<usize>,
+    /// Number of lights, placed by a seeded layout (default: the scene's own lights).
+    #[arg(long)]
+    pub(crate) lights: Option<usize>,
+    /// Seed of the light layout.
+    #[arg(long, default_value_t = 1)]
+    pub(crate) seed: u64,
+    /// Light types the layout uses: all (mixed), spot, point or directional.
+    #[arg(long, default_value = "all")]
+    pub(crate) light_types: String,
+    /// Mesh file for the dragon scene (.obj, .gltf/.glb, .ply, .ply.gz); without it a
+    /// procedural stand-in of ~35k triangles is used.
+    #[arg(long)]
+    pub(crate) mesh: Option<PathBuf>,
+    /// Shadow-map resolution per view (texels per side) for every light.
+    #[arg(long)]
+    pub(crate) shadow_resolution: Option<u32>,
+    /// Camera position and target, `PX,PY,PZ,TX,TY,TZ` (default: the scene's camera).
+    #[arg(long, value_parser = parse_camera, allow_hyphen_values = true)]
+    pub(crate) camera: Option<[f32; 6]>,
+    /// Image width.
+    #[arg(long, default_value_t = 1280)]
+    pub(crate) width: u32,
+    /// Image height.
+    #[arg(long, default_value_t = 720)]
+    pub(crate) height: u32,
+    /// Percentage-closer filtering: off, 2x2 or 3x3.
+    #[arg(long, default_value = "2x2", value_parser = parse_pcf)]
+    pub(crate) pcf: Pcf,
+    /// Receiver bias towards the light, in shadow texels.
+    #[arg(long, default_value_t = ShadowBias::default().constant)]
+    pub(crate) bias_constant: f32,
+    /// Receiver bias towards the light per unit of tan(angle between normal and light), texels.
+    #[arg(long, default_value_t = ShadowBias::default().slope)]
+    pub(crate) bias_slope: f32,
+    /// Receiver offset along the surface normal, texels.
+    #[arg(long, default_value_t = ShadowBias::default().normal_offset)]
+    pub(crate) bias_normal: f32,
+    /// Alpha-tested casters in the shadow passes: on (holes in foliage, lattices and banners
+    /// let light through) or off (they cast as solid cards, as a renderer that ignores alpha
+    /// would draw them; the camera still sees the holes).
+    #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    pub(crate) shadow_alpha: bool,
+    /// Largest shadow-atlas side in texels (clamped to the adapter's limit).
+    #[arg(long, default_value_t = manyshadows::DEFAULT_MAX_ATLAS_SIZE)]
+    pub(crate) atlas_max: u32,
+    /// Fail when the shadow maps don't fit the atlas. By default maps that don't fit degrade by
+    /// importance: lights that reach nothing on screen get no maps, the least important lights
+    /// (smallest angle at the camera) get smaller maps first, and as a last resort no shadows;
+    /// the summary counts each.
+    #[arg(long)]
+    pub(crate) strict_atlas: bool,
+    /// Grid side (texels) of each light view for --technique irregular (default: the view's
+    /// shadow resolution, at most 512). Changes speed, not the result.
+    #[arg(long)]
+    pub(crate) irregular_grid: Option<u32>,
+    /// Multimap hash of --technique irregular: N texels share a list head (seed 001's
+    /// equalising hash; default: one list per texel). Changes speed, not the result.
+    #[arg(long)]
+    pub(crate) irregular_hash: Option<u32>,
+    /// Page pool of --technique virtual, MiB of 32-bit depth: the largest square of whole 128²
+    /// pages that fits (256 = an 8192² pool of 4,096 pages, 512 = 11520² of 8,100 pages), at
+    /// most the adapter's largest texture; the summary says when that is less than asked.
+    /// Pages that do not fit fall back to coarser levels, counted in the summary.
+    #[arg(long, default_value_t = (manyshadows::shadows::vsm::plan::DEFAULT_POOL_BYTES >> 20) as u32)]
+    pub(crate) page_pool: u32,
+    /// Largest virtual side of a face for --technique virtual (rounded to a power of two and
+    /// clamped to 128..=16384 texels).
+    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::MAX_SIDE)]
+    pub(crate) virtual_side: u32,
+    /// Shadow texels per screen pixel that --technique virtual aims for (1 = no texel wider
+    /// than the pixel footprint; 2 = twice as fine, four times the pages; 0.7 about 0.6 times
+    /// the pages, with more misclassified pixels where pixels are wide): point lights' cube
+    /// faces get it, spot and directional lights' faces it times --virtual-directed-lod.
+    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_LOD)]
+    pub(crate) virtual_lod: f32,
+    /// Factor on --virtual-lod for the faces of spot and directional lights (0.8 by default:
+    /// their texels up to 1.25 pixels, which costs them few misclassified pixels while point
+    /// lights' cube faces, seeing walls near the light, keep --virtual-lod; 1 gives every face
+    /// --virtual-lod).
+    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_DIRECTED_LOD)]
+    pub(crate) virtual_directed_lod: f32,
+    /// --technique virtual's receiver bias as a fraction of --bias-constant, --bias-slope and
+    /// --bias-normal (those count texels; a virtual page's texels match the screen pixel, and
+    /// a whole texel of bias leaks light at contacts: 0.5 by default, 0 to 16).
+    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_BIAS_SCALE)]
+    pub(crate) virtual_bias: f32,
+    /// How --technique virtual finds the pages the samples need: `tiles` bounds the samples
+    /// of 4x4-pixel tiles and marks a light's page once where every sample needing one needs
+    /// the same page, per pixel elsewhere; `pixels` marks every (pixel, light) pair. The same
+    /// pages either way (the summary's `marking` line says how the tiles went); `pixels` is
+    /// for measuring.
+    #[arg(long, value_enum, default_value_t = VirtualMarking::Tiles)]
+    pub(crate) virtual_marking: VirtualMarking,
+    /// With shadow rays (a technique that casts them, see --technique): trace K lights per
+    /// pixel, picked among the pixel's cluster lights by importance (their unshadowed
+    /// contribution) and weighted so the image stays unbiased — noisy, at a cost that does
+    /// not grow with the light count. 0 (default) traces every cluster light: exact.
+    #[arg(long, default_value_t = 0)]
+    pub(crate) light_samples: u32,
+    /// Seed of --light-samples' choices (the same seed gives the same image).
+    #[arg(long, default_value_t = 0)]
+    pub(crate) ray_seed: u32,
+    /// Which lights each pixel visits: clustered (the lights assigned to its cluster of a
+    /// tiles x depth-slices grid, built on the GPU each frame) or all (every light: the
+    /// reference the clustered image must equal, and slow past a few hundred lights).
+    #[arg(long, default_value = "clustered", value_parser = parse_light_loop)]
+    pub(crate) light_loop: manyshadows::LightLoop,
+    /// Cluster tile side in pixels.
+    #[arg(long, default_value_t = manyshadows::ClusterOptions::default().tile)]
+    pub(crate) cluster_tile: u32,
+    /// Exponential depth slices of the cluster grid (1 to 256).
+    #[arg(long, default_value_t = manyshadows::ClusterOptions::default().slices)]
+    pub(crate) cluster_slices: u32,
+    /// Output image.
+    #[arg(long, short, default_value = "frame.png")]
+    pub(crate) out: PathBuf,
+    /// Also write the shadow atlas as a picture (linearized depth, tiles outlined).
+    #[arg(long)]
+    pub(crate) atlas_out: Option<PathBuf>,
+    /// Also write the hard visibility mask into this directory: visibility.msvis (raw bits,
+    /// format in the renderer's visibility module docs) and one PNG per light (white = lit).
+    #[arg(long)]
+    pub(crate) visibility_out: Option<PathBuf>,
+    /// Also write the summary as JSON.
+    #[arg(long)]
+    pub(crate) json: Option<PathBuf>,
+    #[command(flatten)]
+    pub(crate) gpu: GpuArgs,
+}
+
+impl Default for RenderArgs {
+    /// What `manyshadows render` with no flags asks for.
+    fn default() -> Self {
+        #[derive(Parser)]
+        struct Only {
+            #[command(flatten)]
+            render: RenderArgs,
+        }
+        Only::parse_from(["manyshadows"]).render
+    }
+}
+
+/// A technique name (as `--technique` takes it).
+pub fn parse_technique(s: &str) -> Result<Technique, String> {
+    s.parse()
+}
+
+/// `cube` or `dual-paraboloid`.
+pub fn parse_point_shadows(s: &str) -> Result<PointShadows, String> {
+    s.parse()
+}
+
+pub(crate) fn parse_cull(s: &str) -> Result<CullMode, String> {
+    s.parse()
+}
+
+/// `PX,PY,PZ,TX,TY,TZ`: six finite numbers.
+pub fn parse_camera(s: &str) -> Result<[f32; 6], String> {
+    let v: Vec<f32> = s
+        .split([',', ' '])
+        .filter(|t| !t.is_empty())
+        .map(|t| t.parse::<f32>().map_err(|e| format!("'{t}': {e}")))
+        .collect::<Result<_, _>>()?;
+    match <[f32; 6]>::try_from(v.as_slice()) {
+        Ok(a) if a.iter().all(|x| x.is_finite()) => {
+            if a[..3] == a[3..] {
+                Err("the camera position and target must differ".into())
+            } else {
+                Ok(a)
+            }
+        }
+        Ok(_) => Err("camera coordinates must be finite".into()),
+        Err(_) => Err(format!(
+            "expected six numbers PX,PY,PZ,TX,TY,TZ, got {}",
+            v.len()
+        )),
+    }
+}
+
+/// `off`, `2x2` or `3x3`.
+pub fn parse_pcf(s: &str) -> Result<Pcf, String> {
+    s.parse()
+}
+
+pub(crate) fn parse_light_loop(s: &str) -> Result<manyshadows::LightLoop, String> {
+    s.parse()
+}
+
+/// Refuses option values that could only be changed silently; checked before anything is
+/// loaded or uploaded.
+pub(crate) fn check_render_args(args: &RenderArgs) -> Result<()> {
+    if args.frames == 0 {
+        bail!("--frames must be at least 1");
+    }
+    // The renderer checks every option's range itself; asking it here refuses a bad value
+    // before anything is loaded, and names the flag that set it.
+    render_settings(args, args.atlas_max)
+        .validate()
+        .map_err(flag_error)
+}
+
+/// A renderer error about an option, with the CLI flag that sets the option in front.
+pub(crate) fn flag_error(e: manyshadows::RenderError) -> anyhow::Error {
+    const FLAGS: &[(&str, &str)] = &[
+        ("width", "--width"),
+        ("height", "--height"),
+        ("max_atlas_size", "--atlas-max"),
+        ("bias.constant", "--bias-constant"),
+        ("bias.slope", "--bias-slope"),
+        ("bias.normal_offset", "--bias-normal"),
+        ("clusters.tile", "--cluster-tile"),
+        ("clusters.slices", "--cluster-slices"),
+        ("irregular.grid", "--irregular-grid"),
+        ("irregular.hash", "--irregular-hash"),
+        ("virtual_maps.pool_bytes", "--page-pool (MiB)"),
+        ("virtual_maps.lod", "--virtual-lod"),
+        ("virtual_maps.directed_lod", "--virtual-directed-lod"),
+        ("virtual_maps.bias_scale", "--virtual-bias"),
+        ("virtual_maps.max_side", "--virtual-side"),
+        ("rays.light_samples", "--light-samples"),
+        ("shadow_budget", "--shadow-budget"),
+    ];
+    if let manyshadows::RenderError::InvalidOption { option, .. } = &e {
+        if let Some((_, flag)) = FLAGS.iter().find(|(o, _)| o == option) {
+            return anyhow::anyhow!("{flag}: {e}");
+        }
+    }
+    e.into()
+}
+
+/// The atlas side `--atlas-max` really allows on this adapter (a power of two, at most the
+/// adapter's texture limit), with a note on stderr when it is not the number given.
+pub(crate) fn effective_atlas_max(ctx: &GpuContext, requested: u32) -> u32 {
+    let limit = ctx.limits().max_texture_dimension_2d;
+    let capped = requested.min(limit);
+    let side = 1u32 << (31 - capped.leading_zeros());
+    if side != requested {
+        eprintln!(
+            "note: --atlas-max {requested} is used as {side} (atlas sides are powers of two{})",
+            if requested > limit {
+                format!(", and this adapter's largest texture is {limit}")
+            } else {
+                String::new()
+            }
+        );
+    }
+    side
+}
+
+/// The renderer settings `args` ask for, with the atlas cap already checked against the
+/// adapter.
+pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettings {
+    RenderSettings::default()
+        .with_width(args.width)
+        .with_height(args.height)
+        .with_technique(args.technique)
+        .with_shadow(ShadowOptions::default().with_cull(args.cull).with_casters(
+            manyshadows::CasterOptions::default().with_ignore_masks(!args.shadow_alpha),
+        ))
+        .with_cache_shadows(!args.no_cache)
+        .with_shadow_budget(args.shadow_budget)
+        .with_point_shadows(args.point_shadows)
+        .with_pcf(args.pcf)
+        .with_bias(ShadowBias::new(
+            args.bias_constant,
+            args.bias_slope,
+            args.bias_normal,
+        ))
+        .with_max_atlas_size(Some(atlas_max))
+        .with_fit(if args.strict_atlas {
+            FitPolicy::Strict
+        } else {
+            FitPolicy::Prioritize
+        })
+        .with_visibility(args.visibility_out.is_some())
+        .with_irregular(
+            manyshadows::IrregularOptions::default()
+                .with_grid(args.irregular_grid)
+                .with_hash(args.irregular_hash),
+        )
+        .with_virtual_maps(
+            manyshadows::VirtualOptions::default()
+                .with_pool_bytes(u64::from(args.page_pool) << 20)
+                .with_max_side(args.virtual_side)
+                .with_lod(args.virtual_lod)
+                .with_directed_lod(args.virtual_directed_lod)
+                .with_bias_scale(args.virtual_bias)
+                .with_tile_marking(args.virtual_marking == VirtualMarking::Tiles),
+        )
+        .with_rays(
+            manyshadows::RayOptions::default()
+                .with_light_samples(args.light_samples)
+                .with_seed(args.ray_seed),
+        )
+        .with_light_loop(args.light_loop)
+        .with_clusters(
+            manyshadows::ClusterOptions::default()
+                .with_tile(args.cluster_tile)
+                .with_slices(args.cluster_slices),
+        )
+}

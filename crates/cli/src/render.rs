@@ -1,0 +1,217 @@
+//! `manyshadows render`: one frame to PNG, with the check of its shadow work before it is
+//! drawn.
+
+use std::path::Path;
+use std::time::Instant;
+
+use crate::args::{check_render_args, effective_atlas_max, render_settings, RenderArgs};
+use crate::progress::spinner;
+use crate::scenes::load_scene;
+use crate::summary::{print_summary, summary};
+use anyhow::{bail, Context, Result};
+use manyshadows::scene::Scene;
+use manyshadows::{GpuContext, Renderer, Technique};
+
+pub(crate) fn render(args: &RenderArgs) -> Result<()> {
+    let started = Instant::now();
+    check_render_args(args)?;
+    let pb = spinner("loading the scene");
+    let scene = load_scene(args)?;
+    pb.set_message("opening the GPU");
+    let ctx = GpuContext::new(&args.gpu.request())?;
+    let atlas_max = pb.suspend(|| effective_atlas_max(&ctx, args.atlas_max));
+    let settings = render_settings(args, atlas_max);
+    pb.set_message("uploading the scene and building pipelines");
+    let mut renderer = Renderer::new(&ctx, &scene, settings)?;
+    if !args.insist {
+        pb.suspend(|| check_shadow_work(&renderer))?;
+    }
+    let mover = match args.move_instance {
+        Some(k) if k >= scene.instances.len() => bail!(
+            "--move-instance {k}: the scene has {} instances",
+            scene.instances.len()
+        ),
+        Some(k) => Some(k),
+        None => scene.smallest_caster(),
+    };
+    let mut frame = None;
+    for f in 0..args.frames {
+        pb.set_message(format!("rendering frame {}/{}", f + 1, args.frames));
+        if f > 0 {
+            if let Some(k) = mover {
+                // A small circle in the ground plane, one step per frame.
+                let a = f as f32 * 0.35;
+                let offset = glam::Vec3::new(0.3 * a.cos() - 0.3, 0.0, 0.3 * a.sin());
+                renderer.set_instance_transform(
+                    k,
+                    glam::Mat4::from_translation(offset) * scene.instances[k].transform,
+                )?;
+            }
+            if args.orbit != 0.0 {
+                let mut cam = renderer.scene().camera;
+                let turn = glam::Quat::from_axis_angle(cam.up.normalize(), args.orbit.to_radians());
+                cam.position = cam.target + turn * (cam.position - cam.target);
+                renderer.set_camera(cam)?;
+            }
+        }
+        let fr = renderer.render()?;
+        if args.frames > 1 {
+            let shadow_ms = fr
+                .timings
+                .gpu_ms
+                .get(manyshadows::Stage::Shadows)
+                .map_or("n/a".to_string(), |v| format!("{v:.2} ms"));
+            let line = match &fr.virtual_maps {
+                Some(v) => format!(
+                    "frame {:>3}: {:>4} of {} resident pages drawn ({} kept), shadow GPU time {shadow_ms}",
+                    f + 1,
+                    v.drawn,
+                    v.resident,
+                    v.kept
+                ),
+                None => {
+                    let st = &fr.shadow_stats;
+                    let waiting = if args.shadow_budget.is_some() {
+                        format!(
+                            " ({} stale, oldest {} frames; {} waiting, unshadowed)",
+                            st.views_stale, st.stale_frames, st.views_waiting
+                        )
+                    } else {
+                        String::new()
+                    };
+                    format!(
+                        "frame {:>3}: {:>4} of {} shadow views redrawn{waiting}, shadow GPU time {shadow_ms}",
+                        f + 1,
+                        st.views_drawn,
+                        renderer.plan().views.len()
+                    )
+                }
+            };
+            pb.suspend(|| eprintln!("{line}"));
+        }
+        frame = Some(fr);
+    }
+    let frame = frame.expect("at least one frame");
+    pb.set_message("writing images");
+    write_rgba_png(&args.out, frame.width, frame.height, &frame.rgba)?;
+    if let Some(path) = &args.atlas_out {
+        let depth = renderer.read_atlas()?;
+        let (side, rgb) = manyshadows::shadows::image::atlas_picture(
+            &depth,
+            renderer.atlas().size,
+            renderer.plan(),
+        );
+        image::save_buffer(path, &rgb, side, side, image::ExtendedColorType::Rgb8)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    if let (Some(dir), Some(vis)) = (&args.visibility_out, &frame.visibility) {
+        write_visibility(dir, vis, &scene)?;
+    }
+    pb.finish_and_clear();
+    if let Some(v) = &frame.virtual_maps {
+        let asked = u64::from(args.page_pool) << 20;
+        if v.pool_bytes != asked {
+            eprintln!(
+                "note: --page-pool {} MiB is used as a {}² pool of {} pages, {:.2} MiB (a square \
+                 of whole 128² pages{})",
+                args.page_pool,
+                v.pool_side,
+                v.pool_pages,
+                v.pool_bytes as f64 / (1 << 20) as f64,
+                if v.pool_bytes < asked && v.pool_side + 128 > ctx.limits().max_texture_dimension_2d
+                {
+                    format!(
+                        ", and this adapter's largest texture is {}",
+                        ctx.limits().max_texture_dimension_2d
+                    )
+                } else {
+                    String::new()
+                }
+            );
+        }
+    }
+    let summary = summary(&ctx, &scene, &renderer, &frame, args, started.elapsed());
+    print_summary(&summary);
+    if let Some(path) = &args.json {
+        std::fs::write(path, serde_json::to_string_pretty(&summary)?)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+pub(crate) fn write_rgba_png(path: &Path, w: u32, h: u32, rgba: &[u8]) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    image::save_buffer(path, rgba, w, h, image::ExtendedColorType::Rgba8)
+        .with_context(|| format!("writing {}", path.display()))
+}
+
+pub(crate) fn write_visibility(
+    dir: &Path,
+    vis: &manyshadows::VisibilityMask,
+    scene: &Scene,
+) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let raw = dir.join("visibility.msvis");
+    let file = std::fs::File::create(&raw).with_context(|| format!("writing {}", raw.display()))?;
+    vis.write_raw(std::io::BufWriter::new(file))?;
+    for (i, light) in scene.lights.iter().enumerate() {
+        let path = dir.join(format!("light_{i:03}_{}.png", light.type_name()));
+        image::save_buffer(
+            &path,
+            &vis.light_image(i as u32),
+            vis.width,
+            vis.height,
+            image::ExtendedColorType::L8,
+        )
+        .with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// Most (caster triangle, view) pairs a frame may take without `--insist`: 2 G. The layered
+/// technique with the atrium's 16,384 lights asks 9.4 G and ran past ten minutes on lavapipe;
+/// the default frame asks 21.6 M.
+pub(crate) const MAX_UNASKED_TRIANGLE_VIEWS: u64 = 2_000_000_000;
+
+/// Refuses, before any frame is drawn, a frame whose per-view shadow work passes
+/// [`MAX_UNASKED_TRIANGLE_VIEWS`], with the estimate and the techniques that scale.
+pub(crate) fn check_shadow_work(renderer: &Renderer) -> Result<()> {
+    let Some(work) = renderer.shadow_work() else {
+        return Ok(());
+    };
+    if work.triangle_views <= MAX_UNASKED_TRIANGLE_VIEWS {
+        return Ok(());
+    }
+    let technique = renderer.settings().technique;
+    let g = |n: u64| format!("{:.1} G", n as f64 / 1e9);
+    let culled: Vec<&str> = Technique::all()
+        .into_iter()
+        .filter(|t| {
+            matches!(
+                t.info().culling,
+                manyshadows::Culling::Instances | manyshadows::Culling::Clusters
+            ) && t.info().fills == manyshadows::Fills::Atlas
+        })
+        .map(|t| t.name())
+        .collect();
+    let viewless: Vec<&str> = Technique::all()
+        .into_iter()
+        .filter(|t| t.info().fills != manyshadows::Fills::Atlas)
+        .map(|t| t.name())
+        .collect();
+    bail!(
+        "technique {technique} would take {} (caster triangle, view) pairs this frame ({} \
+         views; it culls per view only after every triangle reached the view), more than the \
+         {} this command starts unasked. Techniques that cull whole instances or clusters per \
+         view first take at most {} here ({}); {} scale with pixels and lights instead of \
+         views. Pass --insist to render it anyway.",
+        g(work.triangle_views),
+        work.views,
+        g(MAX_UNASKED_TRIANGLE_VIEWS),
+        g(work.after_instance_culling),
+        culled.join(", "),
+        viewless.join(", ")
+    );
+}

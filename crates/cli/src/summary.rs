@@ -1,0 +1,222 @@
+//! What `render` prints and writes about a frame: the summary as JSON, and as text.
+
+use std::time::Duration;
+
+use crate::args::RenderArgs;
+use manyshadows::gpu::context::describe_adapter;
+use manyshadows::scene::Scene;
+use manyshadows::{Frame, GpuContext, Renderer, Technique};
+
+pub(crate) fn summary(
+    ctx: &GpuContext,
+    scene: &Scene,
+    r: &Renderer,
+    frame: &Frame,
+    args: &RenderArgs,
+    total: Duration,
+) -> serde_json::Value {
+    let count = |t: &str| scene.lights.iter().filter(|l| l.type_name() == t).count();
+    let plan = r.plan();
+    serde_json::json!({
+        "adapter": describe_adapter(&ctx.info),
+        "backend": format!("{:?}", ctx.info.backend),
+        "scene": scene.name,
+        "technique": r.settings().technique.name(),
+        "pcf": r.settings().pcf.name(),
+        "resolution": [frame.width, frame.height],
+        "triangles": r.triangles(),
+        "instances": scene.instances.len(),
+        "lights": { "total": scene.lights.len(), "spot": count("spot"), "point": count("point"), "directional": count("directional"),
+                    "shadowed": scene.lights.iter().filter(|l| l.casts_shadows).count() },
+        "shadow_views": r.virtual_plan().map_or(plan.views.len(), |v| v.views.len()),
+        "atlas": { "size": plan.layout.size, "fill": plan.fill(), "shrink_steps": plan.layout.shrink_steps, "fit": plan.fit },
+        "shadow_work": { "passes": frame.shadow_stats.passes, "draws": frame.shadow_stats.draws, "views_drawn": frame.shadow_stats.views_drawn,
+                         "views_stale": frame.shadow_stats.views_stale, "stale_frames": frame.shadow_stats.stale_frames,
+                         "views_waiting": frame.shadow_stats.views_waiting,
+                         "culled_draws": frame.shadow_stats.culled, "triangles": frame.shadow_stats.triangles },
+        "light_loop": r.settings().light_loop.name(),
+        "clusters": frame.clusters,
+        "virtual": frame.virtual_maps,
+        "gpu_ms": frame.timings.gpu_ms,
+        "cpu_record_ms": frame.timings.cpu_record_ms,
+        "frame_wall_ms": frame.timings.wall_ms,
+        "total_wall_ms": total.as_secs_f64() * 1e3,
+        "output": args.out,
+    })
+}
+
+pub(crate) fn print_summary(s: &serde_json::Value) {
+    let l = &s["lights"];
+    let a = &s["atlas"];
+    let w = &s["shadow_work"];
+    println!("adapter      {}", s["adapter"].as_str().unwrap_or("?"));
+    println!(
+        "scene        {} ({} triangles, {} instances)",
+        s["scene"].as_str().unwrap_or("?"),
+        s["triangles"],
+        s["instances"]
+    );
+    println!(
+        "lights       {} ({} spot, {} point, {} directional; {} shadowed)",
+        l["total"], l["spot"], l["point"], l["directional"], l["shadowed"]
+    );
+    println!(
+        "shadows      {} views, technique {}, PCF {}",
+        s["shadow_views"],
+        s["technique"].as_str().unwrap_or("?"),
+        s["pcf"].as_str().unwrap_or("?")
+    );
+    let v = &s["virtual"];
+    if v.is_object() {
+        let fit = &v["fit"];
+        let capped = fit["capped_side"].as_u64().unwrap_or(0);
+        let prev = v["prev_table_bytes"].as_u64().unwrap_or(0);
+        println!(
+            "virtual      {} faces of {} lights ({} off screen, no faces; {} faces needed by a sample, the rest get no pages), page table {} entries ({} KiB{}){}",
+            fit["faces"], fit["lights"], fit["off_screen"], v["faces_in_use"], fit["table_entries"],
+            v["table_bytes"].as_u64().unwrap_or(0) / 1024,
+            if prev > 0 { format!(", and {} KiB for last frame's, kept for caching", prev / 1024) } else { String::new() },
+            if capped > 0 { format!(", virtual sides capped at {capped}² to fit it") } else { String::new() }
+        );
+        let per_level = |key: &str| -> String {
+            v[key]
+                .as_array()
+                .map(|a| a.iter().map(|x| x.to_string()).collect::<Vec<_>>())
+                .unwrap_or_default()
+                .join("/")
+        };
+        let denied = v["denied"].as_u64().unwrap_or(0);
+        let unshadowed = v["unshadowed_faces"].as_u64().unwrap_or(0);
+        let quarter = v["quarter_faces"].as_u64().unwrap_or(0);
+        let mut tail = String::new();
+        if denied > 0 {
+            tail += &format!(
+                "; {denied} pages did not fit the pool, their samples used coarser levels"
+            );
+        }
+        if quarter > 0 {
+            tail += &format!("; {quarter} faces share pool pages four to one at half resolution (the pool has fewer pages than faces in use)");
+        }
+        if unshadowed > 0 {
+            tail += &format!("; {unshadowed} faces had no room even for a quarter page: unshadowed; raise --page-pool");
+        }
+        println!(
+            "pages        {} resident in a pool of {} ({} drawn, {} kept from the last frame; {}x{} texels, {} MiB); asked by samples per level (coarsest first) {} (with their ancestors {}){tail}",
+            v["resident"], v["pool_pages"], v["drawn"], v["kept"], v["pool_side"], v["pool_side"],
+            v["pool_bytes"].as_u64().unwrap_or(0) >> 20,
+            per_level("asked"),
+            per_level("needed"),
+        );
+        let t = &v["tiles"];
+        let count = |k: &str| t[k].as_u64().unwrap_or(0);
+        if count("empty") + count("one_page") + count("known_page") + count("per_pixel") > 0 {
+            println!(
+                "marking      by 4x4-pixel tiles, (tile, light) pairs: {} need no page, {} one page marked once, {} a known page checked per pixel, {} marked per pixel ({} tiles whole)",
+                count("empty"),
+                count("one_page"),
+                count("known_page"),
+                count("per_pixel"),
+                count("whole_tiles"),
+            );
+        }
+    } else {
+        let shrink = a["shrink_steps"].as_u64().unwrap_or(0);
+        println!(
+            "atlas        {0}x{0}, {1:.0}% filled{2}",
+            a["size"],
+            a["fill"].as_f64().unwrap_or(0.0) * 100.0,
+            if shrink > 0 {
+                format!(", maps shrunk {}x per side to fit", 1u64 << shrink)
+            } else {
+                String::new()
+            }
+        );
+        let fit = &a["fit"];
+        if fit["reduced"].as_u64().unwrap_or(0)
+            + fit["unshadowed"].as_u64().unwrap_or(0)
+            + fit["off_screen"].as_u64().unwrap_or(0)
+            > 0
+        {
+            println!(
+                "shadow fit   {} lights at full resolution, {} with smaller maps, {} unshadowed (no room), {} off screen (no maps needed)",
+                fit["full"], fit["reduced"], fit["unshadowed"], fit["off_screen"]
+            );
+        }
+    }
+    // What the triangle count is: drawn (after instance or cluster culling), or handed to a
+    // stage that culls each (triangle, view) itself.
+    let culling = s["technique"]
+        .as_str()
+        .and_then(|t| t.parse::<Technique>().ok())
+        .map(|t| t.info().culling);
+    let what = match culling {
+        Some(manyshadows::Culling::VertexStage) => {
+            "triangle-views submitted (each culled per view in the vertex stage)"
+        }
+        Some(manyshadows::Culling::Threads) => {
+            "triangle-views submitted (each culled per view by its setup thread)"
+        }
+        Some(manyshadows::Culling::Clusters) => {
+            "triangle-views submitted (clusters culled per view in compute before drawing)"
+        }
+        _ => "triangles drawn",
+    };
+    let fills = s["technique"]
+        .as_str()
+        .and_then(|t| t.parse::<Technique>().ok())
+        .map(|t| t.info().fills);
+    match fills {
+        // Pages are chosen, culled and drawn on the GPU: their counts are the pages line's.
+        Some(manyshadows::Fills::Pages) => println!(
+            "shadow work  {} pages drawn ({} kept from the last frame): {} (cluster, page) \
+             pairs past the cluster cull, {} triangles drawn (culled per page on the GPU: \
+             clusters, then triangles where the adapter counts draws)",
+            s["virtual"]["drawn"],
+            s["virtual"]["kept"],
+            s["virtual"]["cluster_draws"],
+            s["virtual"]["triangles"]
+        ),
+        Some(manyshadows::Fills::Rays) => println!(
+            "shadow work  no shadow map: one ray per pixel and light of its cluster (or per \
+             sampled light) in the lighting pass; {} top-level structure build(s)",
+            w["passes"]
+        ),
+        _ => println!(
+            "shadow work  {} passes, {} draws ({} instance-views culled on the CPU), {} {what}",
+            w["passes"], w["draws"], w["culled_draws"], w["triangles"]
+        ),
+    }
+    let c = &s["clusters"];
+    if c.is_object() {
+        let overflow = c["overflowed"].as_u64().unwrap_or(0);
+        println!(
+            "clusters     {}x{}x{} grid, {} occupied, lights per cluster {:.1} mean / {} max, {} of {} lights in view{}",
+            c["tiles"][0], c["tiles"][1], c["slices"], c["occupied"],
+            c["mean_lights"].as_f64().unwrap_or(0.0), c["max_lights"], c["lights_in_view"], l["total"],
+            if overflow > 0 {
+                format!("; {overflow} clusters overflowed the {} KiB list pool and looped over every light", c["pool_bytes"].as_u64().unwrap_or(0) / 1024)
+            } else {
+                String::new()
+            }
+        );
+    } else {
+        println!("clusters     off (every pixel loops over every light)");
+    }
+    match s["gpu_ms"].as_object() {
+        Some(m) if !m.is_empty() => {
+            let parts: Vec<String> = m
+                .iter()
+                .map(|(k, v)| format!("{k} {:.2} ms", v.as_f64().unwrap_or(0.0)))
+                .collect();
+            println!("GPU time     {}", parts.join(", "));
+        }
+        _ => println!("GPU time     (no timestamp queries on this adapter)"),
+    }
+    println!(
+        "CPU record   {:.2} ms; frame wall {:.1} ms; total {:.1} s",
+        s["cpu_record_ms"].as_f64().unwrap_or(0.0),
+        s["frame_wall_ms"].as_f64().unwrap_or(0.0),
+        s["total_wall_ms"].as_f64().unwrap_or(0.0) / 1e3
+    );
+    println!("wrote        {}", s["output"].as_str().unwrap_or("?"));
+}
