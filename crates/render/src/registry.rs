@@ -151,13 +151,6 @@ mod tests {
                 features,
             ));
             for w in shaders {
-                assert!(
-                    info.features().contains(w.features),
-                    "technique {}: {} needs {:?}, which the technique does not declare",
-                    info.technique,
-                    w.name,
-                    w.features
-                );
                 crate::gpu::shaders::validate_for_webgpu(w.name, &w.source, w.features)
                     .unwrap_or_else(|e| panic!("technique {}: {e}", info.technique));
                 n += 1;

@@ -157,12 +157,52 @@ fn nan_vertices_are_refused() {
 
 #[test]
 fn degenerate_triangles_render() {
+    // A zero-area caster (three points on a line) between a spot light and its floor covers
+    // no pixel and casts no shadow: with every technique the device runs, the frame and its
+    // visibility equal the frame without it, and the floor is lit.
     let ctx = common::context();
-    let scene = triangle_scene([Vec3::ZERO, Vec3::X, Vec3::X * 2.0]);
-    Renderer::new(&ctx, &scene, small())
-        .unwrap()
-        .render()
-        .unwrap();
+    let plain = builtin::build("plane-spot", &BuiltinOptions::default()).unwrap();
+    let mut with_line = plain.clone();
+    let (lo, hi) = plain.world_bounds(false).expect("the plane");
+    let mid = (lo + hi) * 0.5 + Vec3::Y * 0.5;
+    with_line.meshes.push(Mesh {
+        name: "line".into(),
+        positions: vec![mid - Vec3::X, mid, mid + Vec3::X],
+        normals: vec![Vec3::Y; 3],
+        uvs: Vec::new(),
+        indices: vec![0, 1, 2],
+    });
+    with_line.instances.push(Instance::caster(
+        with_line.meshes.len() - 1,
+        0,
+        Mat4::IDENTITY,
+    ));
+    let mut ran = 0;
+    for technique in manyshadows::Technique::all() {
+        let settings = small().with_technique(technique);
+        let frame = |scene: &Scene| match Renderer::new(&ctx, scene, settings.clone()) {
+            Ok(mut r) => Some(r.render().unwrap()),
+            Err(e) if e.is_unsupported() => None,
+            Err(e) => panic!("{technique}: {e}"),
+        };
+        let (Some(a), Some(b)) = (frame(&plain), frame(&with_line)) else {
+            continue;
+        };
+        assert!(
+            a.rgba.chunks_exact(4).any(|p| p[0] > 60),
+            "{technique}: the spot lights the floor"
+        );
+        assert!(
+            a.rgba == b.rgba,
+            "{technique}: the degenerate caster changed the image"
+        );
+        assert_eq!(
+            a.visibility, b.visibility,
+            "{technique}: it changed the mask"
+        );
+        ran += 1;
+    }
+    assert!(ran >= 5, "only {ran} techniques ran");
 }
 
 #[test]
