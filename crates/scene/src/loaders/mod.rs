@@ -126,6 +126,10 @@
 mod base64;
 pub(crate) mod common;
 mod gltf;
+mod gltf_geometry;
+mod gltf_lights_camera;
+mod gltf_materials;
+mod gltf_open;
 mod gltf_write;
 mod mtl;
 mod obj;

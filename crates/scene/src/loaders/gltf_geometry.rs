@@ -1,0 +1,393 @@
+//! The geometry of a glTF document: every triangle primitive reached from the default scene,
+//! depth-first, as its own [`Mesh`] with the node's world transform baked in. Accessors are
+//! checked (type, stride, sparse section) before the `gltf` crate reads them; strips and fans
+//! become lists as the specification numbers their triangles; mirroring transforms flip the
+//! winding back to counter-clockwise.
+
+use std::path::Path;
+
+use ::gltf::accessor::{DataType, Dimensions};
+use ::gltf::mesh::Mode;
+use ::gltf::{Accessor, Semantic};
+use glam::{Mat3, Mat4, Vec2, Vec3};
+
+use super::common::{check_triangles, mesh_name, parse_error, set_normals, too_large};
+use super::gltf_open::Opened;
+use crate::error::SceneError;
+use crate::model::Mesh;
+
+/// The triangle meshes of a document, in depth-first node order.
+pub(super) struct Geometry<'a> {
+    pub(super) meshes: Vec<Mesh>,
+    /// The glTF material of each mesh (`None`: the primitive names none).
+    pub(super) materials: Vec<Option<usize>>,
+    /// Every node reached from the default scene with its world transform, depth-first.
+    pub(super) nodes: Vec<(::gltf::Node<'a>, Mat4)>,
+    /// Point and line primitives skipped.
+    pub(super) skipped: usize,
+}
+
+pub(super) fn read_geometry<'a>(
+    path: &Path,
+    opened: &'a Opened,
+) -> Result<Geometry<'a>, SceneError> {
+    let document = &opened.document;
+    let buffers = &opened.buffers;
+    let get = |b: ::gltf::Buffer<'_>| buffers.get(b.index()).map(|d| d.0.as_slice());
+    let mut out = Geometry {
+        meshes: Vec::new(),
+        materials: Vec::new(),
+        nodes: Vec::new(),
+        skipped: 0,
+    };
+    let mut total_triangles = 0usize;
+    let mut emit = |out: &mut Geometry<'a>, mesh: ::gltf::Mesh<'a>, world: Mat4| {
+        for prim in mesh.primitives() {
+            let mode = prim.mode();
+            if !matches!(
+                mode,
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
+                log::warn!(
+                    "{}: skipping a {:?} primitive of mesh {} (only triangles are loaded)",
+                    path.display(),
+                    mode,
+                    mesh.index()
+                );
+                out.skipped += 1;
+                continue;
+            }
+            let label = match mesh.name() {
+                Some(n) => format!("{n}#{}", prim.index()),
+                None => format!("mesh{}#{}", mesh.index(), prim.index()),
+            };
+            let m = read_primitive(path, &label, &prim, &get, world)?;
+            if m.indices.is_empty() {
+                continue;
+            }
+            total_triangles += m.triangle_count();
+            check_triangles(path, total_triangles)?;
+            out.meshes.push(m);
+            out.materials.push(prim.material().index());
+        }
+        Ok::<(), SceneError>(())
+    };
+
+    match document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    {
+        Some(scene) => {
+            // Depth-first walk with an explicit stack; a node reached twice means the "tree" has
+            // a cycle or shared child, which the specification forbids.
+            let mut seen = vec![false; document.nodes().len()];
+            let mut stack: Vec<(::gltf::Node<'a>, Mat4)> =
+                scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+            stack.reverse();
+            while let Some((node, parent)) = stack.pop() {
+                if std::mem::replace(&mut seen[node.index()], true) {
+                    return Err(parse_error(
+                        path,
+                        format!(
+                            "glTF: node {} is reached twice (the node graph is not a tree)",
+                            node.index()
+                        ),
+                    ));
+                }
+                let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+                if let Some(mesh) = node.mesh() {
+                    emit(&mut out, mesh, world)?;
+                }
+                let children: Vec<_> = node.children().collect();
+                stack.extend(children.into_iter().rev().map(|c| (c, world)));
+                out.nodes.push((node, world));
+            }
+        }
+        None => {
+            for mesh in document.meshes() {
+                emit(&mut out, mesh, Mat4::IDENTITY)?;
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Checks an accessor's buffer views are safe to hand to the crate's readers.
+fn check_layout(a: &Accessor<'_>, bad: &dyn Fn(String) -> SceneError) -> Result<(), SceneError> {
+    let size = a.size();
+    let views = a
+        .view()
+        .into_iter()
+        .chain(a.sparse().map(|s| s.values().view()));
+    for v in views {
+        if let Some(stride) = v.stride() {
+            if stride < size {
+                return Err(bad(format!(
+                    "buffer view stride {stride} is smaller than an element ({size} bytes)"
+                )));
+            }
+        }
+    }
+    if let Some(s) = a.sparse() {
+        if s.count() == 0 {
+            return Err(bad("accessor has an empty sparse section".into()));
+        }
+    }
+    Ok(())
+}
+
+/// Checks an accessor has one of `types` (not normalized) and `dims`, and a safe layout.
+fn check_accessor(
+    path: &Path,
+    label: &str,
+    what: &str,
+    a: &Accessor<'_>,
+    types: &[DataType],
+    dims: Dimensions,
+) -> Result<(), SceneError> {
+    let bad =
+        |reason: String| parse_error(path, format!("glTF primitive {label}: {what} {reason}"));
+    if !types.contains(&a.data_type()) || a.dimensions() != dims || a.normalized() {
+        return Err(bad(format!(
+            "accessor has type {:?} {:?}{}; expected {dims:?} of {types:?}",
+            a.dimensions(),
+            a.data_type(),
+            if a.normalized() { " (normalized)" } else { "" }
+        )));
+    }
+    check_layout(a, &bad)
+}
+
+/// Texture coordinates: `Vec2` of floats, or of normalized unsigned bytes or shorts.
+fn check_texcoord_accessor(path: &Path, label: &str, a: &Accessor<'_>) -> Result<(), SceneError> {
+    let bad =
+        |reason: String| parse_error(path, format!("glTF primitive {label}: TEXCOORD_0 {reason}"));
+    let ok = a.dimensions() == Dimensions::Vec2
+        && match a.data_type() {
+            DataType::F32 => !a.normalized(),
+            DataType::U8 | DataType::U16 => a.normalized(),
+            _ => false,
+        };
+    if !ok {
+        return Err(bad(format!(
+            "accessor has type {:?} {:?}{}; expected Vec2 of F32, or of normalized U8 or U16",
+            a.dimensions(),
+            a.data_type(),
+            if a.normalized() { " (normalized)" } else { "" }
+        )));
+    }
+    check_layout(a, &bad)
+}
+
+/// Triangle `i` of a strip is `(v_i, v_{i+1+i%2}, v_{i+2-i%2})` (glTF 2.0, §3.7.2.1), which
+/// keeps every triangle's winding that of the first.
+pub(crate) fn strip_to_list(v: &[u32]) -> Vec<u32> {
+    let n = v.len().saturating_sub(2);
+    let mut out = Vec::with_capacity(3 * n);
+    for i in 0..n {
+        out.extend_from_slice(&[v[i], v[i + 1 + i % 2], v[i + 2 - i % 2]]);
+    }
+    out
+}
+
+/// Triangle `i` of a fan is `(v_{i+1}, v_{i+2}, v_0)` (glTF 2.0, §3.7.2.1).
+pub(crate) fn fan_to_list(v: &[u32]) -> Vec<u32> {
+    let n = v.len().saturating_sub(2);
+    let mut out = Vec::with_capacity(3 * n);
+    for i in 0..n {
+        out.extend_from_slice(&[v[i + 1], v[i + 2], v[0]]);
+    }
+    out
+}
+
+fn read_primitive<'p, 's, F>(
+    path: &Path,
+    label: &str,
+    prim: &'p ::gltf::Primitive<'p>,
+    get: &F,
+    world: Mat4,
+) -> Result<Mesh, SceneError>
+where
+    F: Clone + Fn(::gltf::Buffer<'p>) -> Option<&'s [u8]>,
+{
+    let name = mesh_name(path, Some(label));
+    let mode = prim.mode();
+    let pos_acc = prim.get(&Semantic::Positions).ok_or_else(|| {
+        parse_error(
+            path,
+            format!("glTF primitive {label} has no POSITION attribute"),
+        )
+    })?;
+    check_accessor(
+        path,
+        label,
+        "POSITION",
+        &pos_acc,
+        &[DataType::F32],
+        Dimensions::Vec3,
+    )?;
+    let vertex_count = pos_acc.count();
+    if vertex_count == 0 {
+        return Ok(Mesh {
+            name,
+            ..Mesh::default()
+        });
+    }
+    if vertex_count > u32::MAX as usize {
+        return Err(too_large(
+            path,
+            format!("glTF primitive {label} has {vertex_count} vertices"),
+        ));
+    }
+    let normal_acc = prim
+        .get(&Semantic::Normals)
+        .filter(|a| a.count() == vertex_count);
+    if let Some(a) = &normal_acc {
+        check_accessor(path, label, "NORMAL", a, &[DataType::F32], Dimensions::Vec3)?;
+    }
+    let uv_acc = prim
+        .get(&Semantic::TexCoords(0))
+        .filter(|a| a.count() == vertex_count);
+    if let Some(a) = &uv_acc {
+        check_texcoord_accessor(path, label, a)?;
+    }
+    let index_acc = prim.indices();
+    let listed = match &index_acc {
+        Some(a) => {
+            check_accessor(
+                path,
+                label,
+                "indices",
+                a,
+                &[DataType::U8, DataType::U16, DataType::U32],
+                Dimensions::Scalar,
+            )?;
+            a.count()
+        }
+        None => vertex_count,
+    };
+    check_triangles(
+        path,
+        match mode {
+            Mode::Triangles => listed / 3,
+            _ => listed.saturating_sub(2),
+        },
+    )?;
+
+    let reader = prim.reader(get.clone());
+    let missing = |what: &str| {
+        parse_error(
+            path,
+            format!("glTF primitive {label}: {what} data is missing or outside its buffer"),
+        )
+    };
+    let positions: Vec<Vec3> = reader
+        .read_positions()
+        .ok_or_else(|| missing("POSITION"))?
+        .map(Vec3::from_array)
+        .collect();
+    if positions.len() != vertex_count {
+        return Err(missing("POSITION"));
+    }
+    let normals: Option<Vec<Vec3>> = match &normal_acc {
+        Some(_) => Some(
+            reader
+                .read_normals()
+                .ok_or_else(|| missing("NORMAL"))?
+                .map(Vec3::from_array)
+                .collect(),
+        ),
+        None => None,
+    };
+    let uvs: Vec<Vec2> = match &uv_acc {
+        Some(_) => {
+            let uvs: Vec<Vec2> = reader
+                .read_tex_coords(0)
+                .ok_or_else(|| missing("TEXCOORD_0"))?
+                .into_f32()
+                .map(Vec2::from_array)
+                .collect();
+            if uvs.len() != vertex_count {
+                return Err(missing("TEXCOORD_0"));
+            }
+            uvs
+        }
+        None => Vec::new(),
+    };
+    let listed: Vec<u32> = match &index_acc {
+        Some(a) => {
+            let idx: Vec<u32> = reader
+                .read_indices()
+                .ok_or_else(|| missing("indices"))?
+                .into_u32()
+                .collect();
+            if idx.len() != a.count() {
+                return Err(missing("indices"));
+            }
+            idx
+        }
+        None => (0..vertex_count as u32).collect(),
+    };
+    let mut indices = match mode {
+        Mode::TriangleStrip => strip_to_list(&listed),
+        Mode::TriangleFan => fan_to_list(&listed),
+        _ => {
+            if !listed.len().is_multiple_of(3) {
+                return Err(parse_error(
+                    path,
+                    format!(
+                        "glTF primitive {label}: {} indices is not a multiple of 3",
+                        listed.len()
+                    ),
+                ));
+            }
+            listed
+        }
+    };
+
+    // Bake the node's world transform.
+    let positions: Vec<Vec3> = positions
+        .into_iter()
+        .map(|p| world.transform_point3(p))
+        .collect();
+    let linear = Mat3::from_mat4(world);
+    let det = linear.determinant();
+    if det < 0.0 {
+        // A mirroring transform turns counter-clockwise triangles clockwise; swap two corners.
+        for t in indices.chunks_exact_mut(3) {
+            t.swap(1, 2);
+        }
+    }
+    let normals = if det.is_finite() && det.abs() > 1e-30 {
+        let normal_matrix = linear.inverse().transpose();
+        normals.map(|ns| ns.into_iter().map(|n| normal_matrix * n).collect())
+    } else {
+        None // a singular transform flattens the mesh: derive normals from what is left
+    };
+    let mut mesh = Mesh {
+        name,
+        positions,
+        normals: Vec::new(),
+        uvs,
+        indices,
+    };
+    super::common::check_indices(&mesh)?;
+    set_normals(&mut mesh, normals);
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strips_and_fans_follow_the_specification() {
+        assert_eq!(
+            strip_to_list(&[0, 1, 2, 3, 4]),
+            vec![0, 1, 2, 1, 3, 2, 2, 3, 4]
+        );
+        assert_eq!(fan_to_list(&[0, 1, 2, 3]), vec![1, 2, 0, 2, 3, 0]);
+        assert!(strip_to_list(&[0, 1]).is_empty());
+        assert!(fan_to_list(&[]).is_empty());
+    }
+}
