@@ -70,7 +70,7 @@ macro_rules! with_setters {
     };
 }
 
-// The floors, bottom up (ARCHITECTURE.md; `tests/import_floors.rs` holds them to it). They are
+// The floors (ARCHITECTURE.md; `tests/import_floors/` holds them to it). They are
 // the crate's inside: public only with the `internals` feature, which the project's own CLI,
 // benchmarks and tests turn on and which promises no stability. An embedder uses the facade
 // below.
@@ -92,6 +92,7 @@ pub mod registry;
 #[cfg(not(feature = "internals"))]
 pub(crate) mod registry;
 mod renderer;
+mod report;
 mod settings;
 #[cfg(feature = "internals")]
 pub mod shading;
@@ -117,8 +118,9 @@ pub use gpu::context::{
     GpuContext,
 };
 pub use gpu::timing::{GpuTimes, Stage};
-pub use gpu_scene::casters::CasterOptions;
-pub use renderer::{Frame, FrameTimings, Renderer, ShadowLayout, ShadowWork, SubmittedFrame};
+pub use gpu_scene::caster_layout::CasterOptions;
+pub use renderer::Renderer;
+pub use report::{Frame, FrameTimings, ShadowLayout, ShadowWork, SubmittedFrame};
 pub use settings::RenderSettings;
 pub use shadows::descriptor::{Culling, Need, Requirement, TechniqueInfo};
 pub use shadows::image::ShadowPicture;

@@ -2,7 +2,7 @@
 //!
 //! 1. G-buffer (world position, normal, material per pixel),
 //! 2. shadows: the frame's [`ShadowSource`] (made from the technique by
-//!    `shadows::create`) fills an atlas, a virtual page pool or a visibility mask,
+//!    `registry::create`) fills an atlas, a virtual page pool or a visibility mask,
 //! 3. deferred Phong lighting with the shadow test (or the mask),
 //! 4. optionally, the hard visibility mask (computed from the atlas or pool; a source whose
 //!    output is the mask reads it back).
@@ -18,7 +18,7 @@ use manyshadows_scene::{Camera, Light, Scene, SceneError};
 use wgpu::util::DeviceExt;
 
 use crate::error::RenderError;
-use crate::frame::clusters::{ClusterStats, LightClusters, LightLoop};
+use crate::frame::clusters::{LightClusters, LightLoop};
 use crate::frame::gbuffer::GBuffer;
 use crate::frame::gbuffer_readback::GBufferData;
 use crate::frame::visibility_mask::VisibilityMask;
@@ -26,6 +26,7 @@ use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, GpuTimes, Stage};
 use crate::gpu::types::{FrameUniforms, LightData};
 use crate::gpu_scene::instances::GpuScene;
+use crate::report::{Frame, FrameTimings, ShadowLayout, ShadowWork, SubmittedFrame};
 use crate::settings::RenderSettings;
 use crate::shading::lighting::{LightingInputs, LightingPass};
 use crate::shading::visibility::VisibilityPass;
@@ -34,84 +35,6 @@ use crate::shadows::plan::DEFAULT_MAX_ATLAS_SIZE;
 use crate::shadows::source::{ShadowSource, ShadowStats, SourceInputs};
 use crate::shadows::vsm::plan::VirtualStats;
 use crate::shadows::vsm::source::VirtualSource;
-
-/// Times of one frame.
-#[derive(Clone, Debug, Default)]
-#[non_exhaustive]
-pub struct FrameTimings {
-    /// GPU milliseconds per [`Stage`] in the order they ran, empty if the adapter has no
-    /// timestamp queries.
-    pub gpu_ms: GpuTimes,
-    /// CPU milliseconds to record and submit the frame's commands.
-    pub cpu_record_ms: f64,
-    /// Wall milliseconds from the start of recording until the image is back on the CPU.
-    pub wall_ms: f64,
-}
-
-/// A rendered frame.
-#[derive(Clone, Debug)]
-#[non_exhaustive]
-pub struct Frame {
-    /// Width.
-    pub width: u32,
-    /// Height.
-    pub height: u32,
-    /// sRGB RGBA8 pixels, row-major from the top-left.
-    pub rgba: Vec<u8>,
-    /// The hard visibility mask, if asked for.
-    pub visibility: Option<VisibilityMask>,
-    /// Timings.
-    pub timings: FrameTimings,
-    /// Shadow-generation work counters.
-    pub shadow_stats: ShadowStats,
-    /// Light-cluster counters (`None` with [`LightLoop::All`]).
-    pub clusters: Option<ClusterStats>,
-    /// Virtual shadow map counters (`None` for other techniques).
-    pub virtual_maps: Option<VirtualStats>,
-}
-
-/// What [`Renderer::render_to`] reports: the frame is submitted, not read back.
-#[derive(Clone, Debug)]
-#[non_exhaustive]
-pub struct SubmittedFrame {
-    /// Shadow-generation work counters.
-    pub shadow_stats: ShadowStats,
-    /// CPU milliseconds to record and submit the frame's commands.
-    pub cpu_record_ms: f64,
-}
-
-/// Where a renderer's shadows are ([`Renderer::shadow_layout`]).
-#[non_exhaustive]
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ShadowLayout {
-    /// What the technique fills.
-    pub fills: crate::error::Fills,
-    /// Shadow views: atlas tiles, or virtual faces.
-    pub views: usize,
-    /// Side of the depth texture shadows are read from (the atlas or the page pool; 1 for a
-    /// mask).
-    pub side: u32,
-    /// Fraction of the atlas the views' tiles cover (atlas techniques only).
-    pub atlas_fill: Option<f32>,
-}
-
-/// How much per-view shadow work a frame asks for, known before it is rendered
-/// ([`Renderer::shadow_work`]).
-#[non_exhaustive]
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ShadowWork {
-    /// Shadow views of the frame.
-    pub views: usize,
-    /// (caster triangle, view) pairs this technique's per-view stage takes on: every caster
-    /// triangle in every view where the technique culls in its vertex stage or per thread,
-    /// the pairs left by culling whole instances per view otherwise (clusters only cut that
-    /// further).
-    pub triangle_views: u64,
-    /// The pairs left after culling whole instances per view by bounding sphere.
-    pub after_instance_culling: u64,
-    /// Every caster triangle in every view.
-    pub all_pairs: u64,
-}
 
 /// Timestamp copies of submitted frames on their way back: mapped asynchronously, decoded
 /// when the GPU has finished them, never waited for.

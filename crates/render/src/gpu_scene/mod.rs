@@ -4,6 +4,7 @@
 //! shadow-caster geometry every shadow technique reads ([`casters`], with the alpha-mask tail
 //! and its WGSL beside it).
 
+pub mod caster_layout;
 pub mod casters;
 pub mod instances;
 pub mod skinning;

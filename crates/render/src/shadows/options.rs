@@ -3,7 +3,7 @@
 //! the receiver [`ShadowBias`]. Plain data on the shadows' lowest floor; `RenderSettings`
 //! (above every technique) holds them.
 
-use crate::gpu_scene::casters::CasterOptions;
+use crate::gpu_scene::caster_layout::CasterOptions;
 
 /// Which triangles single-pass techniques drop per view before rasterization (seed 000
 /// Listings 19.9 and 19.10).

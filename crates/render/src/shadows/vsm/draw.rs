@@ -14,15 +14,16 @@ use crate::gpu::pipelines::whole_entry;
 use crate::gpu::shaders::{compose, COMMON};
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu::types::VsmRound;
+use crate::gpu_scene::caster_layout::{CLUSTER_PARTS, CLUSTER_TRIANGLES};
+use crate::gpu_scene::casters::CasterGeometry;
 use crate::gpu_scene::casters::ALPHA_MASK;
-use crate::gpu_scene::casters::{CasterGeometry, CLUSTER_PARTS, CLUSTER_TRIANGLES};
 use crate::shadows::cluster_draw::CLUSTER_CULL;
 use crate::shadows::cluster_draw::{plan_rounds, Round, COMMAND_SIZE};
 use crate::shadows::depth::{CULL, TILE, TILE_MASK};
 use crate::shadows::options::ShadowOptions;
 
 /// Consecutive clusters per cull group (one cull thread per group and page).
-pub(crate) const CULL_GROUP: u32 = crate::gpu_scene::casters::CLUSTER_GROUP;
+pub(crate) const CULL_GROUP: u32 = crate::gpu_scene::caster_layout::CLUSTER_GROUP;
 
 /// Flag in the rounds' cull bits: skip the groups' spheres (the flat cull, for measuring).
 const FLAT_CULL: u32 = 1 << 8;

@@ -1,0 +1,88 @@
+//! What a frame reports to its caller: the image and its counters ([`Frame`], [`FrameTimings`],
+//! [`SubmittedFrame`]), and what the renderer says of its shadows before a frame
+//! ([`ShadowLayout`], [`ShadowWork`]).
+
+use crate::error::Fills;
+use crate::frame::clusters::ClusterStats;
+use crate::frame::visibility_mask::VisibilityMask;
+use crate::gpu::timing::GpuTimes;
+use crate::shadows::source::ShadowStats;
+use crate::shadows::vsm::plan::VirtualStats;
+
+/// Times of one frame.
+#[derive(Clone, Debug, Default)]
+#[non_exhaustive]
+pub struct FrameTimings {
+    /// GPU milliseconds per [`Stage`] in the order they ran, empty if the adapter has no
+    /// timestamp queries.
+    pub gpu_ms: GpuTimes,
+    /// CPU milliseconds to record and submit the frame's commands.
+    pub cpu_record_ms: f64,
+    /// Wall milliseconds from the start of recording until the image is back on the CPU.
+    pub wall_ms: f64,
+}
+
+/// A rendered frame.
+#[derive(Clone, Debug)]
+#[non_exhaustive]
+pub struct Frame {
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+    /// sRGB RGBA8 pixels, row-major from the top-left.
+    pub rgba: Vec<u8>,
+    /// The hard visibility mask, if asked for.
+    pub visibility: Option<VisibilityMask>,
+    /// Timings.
+    pub timings: FrameTimings,
+    /// Shadow-generation work counters.
+    pub shadow_stats: ShadowStats,
+    /// Light-cluster counters (`None` with [`LightLoop::All`]).
+    pub clusters: Option<ClusterStats>,
+    /// Virtual shadow map counters (`None` for other techniques).
+    pub virtual_maps: Option<VirtualStats>,
+}
+
+/// What [`Renderer::render_to`] reports: the frame is submitted, not read back.
+#[derive(Clone, Debug)]
+#[non_exhaustive]
+pub struct SubmittedFrame {
+    /// Shadow-generation work counters.
+    pub shadow_stats: ShadowStats,
+    /// CPU milliseconds to record and submit the frame's commands.
+    pub cpu_record_ms: f64,
+}
+
+/// Where a renderer's shadows are ([`Renderer::shadow_layout`]).
+#[non_exhaustive]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowLayout {
+    /// What the technique fills.
+    pub fills: Fills,
+    /// Shadow views: atlas tiles, or virtual faces.
+    pub views: usize,
+    /// Side of the depth texture shadows are read from (the atlas or the page pool; 1 for a
+    /// mask).
+    pub side: u32,
+    /// Fraction of the atlas the views' tiles cover (atlas techniques only).
+    pub atlas_fill: Option<f32>,
+}
+
+/// How much per-view shadow work a frame asks for, known before it is rendered
+/// ([`Renderer::shadow_work`]).
+#[non_exhaustive]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ShadowWork {
+    /// Shadow views of the frame.
+    pub views: usize,
+    /// (caster triangle, view) pairs this technique's per-view stage takes on: every caster
+    /// triangle in every view where the technique culls in its vertex stage or per thread,
+    /// the pairs left by culling whole instances per view otherwise (clusters only cut that
+    /// further).
+    pub triangle_views: u64,
+    /// The pairs left after culling whole instances per view by bounding sphere.
+    pub after_instance_culling: u64,
+    /// Every caster triangle in every view.
+    pub all_pairs: u64,
+}
