@@ -1,0 +1,145 @@
+//! The flags of `manyshadows compare` and its long help: what to score (scenes, techniques,
+//! shadow resolutions), how to render it (frame size, biases, atlas, virtual maps), who
+//! traces the reference, and where the images and the JSON go.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use manyshadows::{ShadowBias, Technique};
+
+use crate::args::GpuArgs;
+
+/// Who traces the reference.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ReferenceTracer {
+    /// The CPU (obvhs BVH, watertight triangle test): the default truth.
+    Cpu,
+    /// The GPU, with ray queries (the technique that fills rays, every light of every pixel):
+    /// the same rays from the same points, practical at 1080p × 1,024 lights.
+    Gpu,
+}
+
+/// The options of `manyshadows compare`.
+#[derive(Args, Debug, Clone)]
+pub struct CompareArgs {
+    /// Built-in scene name or a TOML scene file (as for `render`); several, comma-separated,
+    /// are scored one after the other, each into its own sub-directory of --out-dir (e.g.
+    /// `atrium,plane-spot,plane-point,plane-directional`).
+    #[arg(long = "scene", default_value = "atrium", value_delimiter = ',')]
+    pub(super) scenes: Vec<String>,
+    /// The one scene this run scores (set from `scenes` for each run).
+    #[arg(skip)]
+    pub(super) scene: String,
+    /// Techniques to score, comma-separated (default: every technique).
+    #[arg(long, value_delimiter = ',', value_parser = crate::args::parse_technique)]
+    pub(super) techniques: Vec<Technique>,
+    /// Number of lights, placed by a seeded layout. Default: 8 for the atrium (a quick run),
+    /// otherwise the scene's own lights.
+    #[arg(long)]
+    pub(super) lights: Option<usize>,
+    /// Seed of the light layout.
+    #[arg(long, default_value_t = 1)]
+    pub(super) seed: u64,
+    /// Light types the layout uses: all (mixed), spot, point or directional.
+    #[arg(long, default_value = "all")]
+    pub(super) light_types: String,
+    /// Point-light shadows: cube or dual-paraboloid (scored by the same reference).
+    #[arg(long, default_value = "cube", value_parser = crate::args::parse_point_shadows)]
+    pub(super) point_shadows: manyshadows::scene::light_space::PointShadows,
+    /// Split every triangle into four this many times first (as for `render`).
+    #[arg(long, default_value_t = 0)]
+    pub(super) subdivide: u32,
+    /// Mesh file for the dragon scene.
+    #[arg(long)]
+    pub(super) mesh: Option<PathBuf>,
+    /// Shadow-map resolutions to score, comma-separated; every technique runs at each
+    /// (default: the scene's own resolutions).
+    #[arg(long, value_delimiter = ',')]
+    pub(super) shadow_resolutions: Vec<u32>,
+    /// Image width.
+    #[arg(long, default_value_t = 960)]
+    pub(super) width: u32,
+    /// Image height.
+    #[arg(long, default_value_t = 540)]
+    pub(super) height: u32,
+    /// Half-width of the edge band in pixels (Chebyshev distance to a reference edge).
+    #[arg(long, default_value_t = 2)]
+    pub(super) edge_band: u32,
+    /// Receiver bias towards the light, in shadow texels.
+    #[arg(long, default_value_t = ShadowBias::default().constant, allow_negative_numbers = true)]
+    pub(super) bias_constant: f32,
+    /// Receiver bias towards the light per unit of tan(angle between normal and light), texels.
+    #[arg(long, default_value_t = ShadowBias::default().slope, allow_negative_numbers = true)]
+    pub(super) bias_slope: f32,
+    /// Receiver offset along the surface normal, texels.
+    #[arg(long, default_value_t = ShadowBias::default().normal_offset, allow_negative_numbers = true)]
+    pub(super) bias_normal: f32,
+    /// Alpha-tested casters in the shadow passes: on (holes in foliage, lattices and banners
+    /// let light through, as in the reference) or off (they cast as solid cards, what a
+    /// renderer that ignores alpha would draw; the reference keeps its holes, so this scores
+    /// that mistake).
+    #[arg(long, default_value = "on", value_parser = crate::args::parse_on_off, action = clap::ArgAction::Set)]
+    pub(super) shadow_alpha: bool,
+    /// Largest shadow-atlas side in texels (clamped to the adapter's limit).
+    #[arg(long, default_value_t = manyshadows::DEFAULT_MAX_ATLAS_SIZE)]
+    pub(super) atlas_max: u32,
+    /// Fail when the shadow maps don't fit the atlas, instead of shrinking them.
+    #[arg(long)]
+    pub(super) strict_atlas: bool,
+    /// Page pool of --techniques virtual, MiB (compare at equal memory by setting it to the
+    /// atlas size the other variants report).
+    #[arg(long, default_value_t = (manyshadows::shadows::vsm::plan::DEFAULT_POOL_BYTES >> 20) as u32)]
+    pub(super) page_pool: u32,
+    /// Shadow texels per screen pixel that --techniques virtual aims for (see render --help).
+    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_LOD)]
+    pub(super) virtual_lod: f32,
+    /// Factor on --virtual-lod for spot and directional lights' faces (see render --help).
+    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_DIRECTED_LOD)]
+    pub(super) virtual_directed_lod: f32,
+    /// --techniques virtual's receiver bias as a fraction of the --bias-* texels (see render
+    /// --help).
+    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_BIAS_SCALE)]
+    pub(super) virtual_bias: f32,
+    /// Who traces the exact reference: cpu (default, the truth every technique is scored
+    /// against) or gpu (ray queries; needs EXPERIMENTAL_RAY_QUERY, for frames and light counts
+    /// the CPU would take too long for).
+    #[arg(long, value_enum, default_value_t = ReferenceTracer::Cpu)]
+    pub(super) reference: ReferenceTracer,
+    /// Directory for the frame, the difference images and reference.msvis.
+    #[arg(long, default_value = "compare")]
+    pub(super) out_dir: PathBuf,
+    /// Also write every number as JSON.
+    #[arg(long)]
+    pub(super) json: Option<PathBuf>,
+    /// Also write one difference image per light and technique.
+    #[arg(long)]
+    pub(super) per_light_images: bool,
+    #[command(flatten)]
+    pub(super) gpu: GpuArgs,
+}
+
+/// `manyshadows compare --help`.
+pub const LONG_ABOUT: &str = "\
+Score every shadow technique against an exact CPU ray-traced reference.
+
+For each pixel of one frame, the reference casts a ray from the pixel's own G-buffer point
+(moved 1e-4 x max(1, |p|) along its normal) to every light that reaches it, through a BVH of
+all shadow-casting triangles. Each technique renders the same frame and its hard visibility
+mask (no PCF) is compared with the reference, per light type:
+
+  false shadow  the reference sees the light, the technique shadows the pixel
+  false light   the reference is shadowed, the technique lights the pixel
+  edge band     pixels within --edge-band pixels of a reference shadow edge (outline, spot
+                cone, range, contact line); errors there are reported apart
+  footprint     screen pixels one shadow texel spans at the pixel (perspective aliasing)
+
+Fractions are of the (pixel, light) pairs within a light's reach whose normal faces it;
+pixels facing away (the light adds nothing to them) are counted apart in the JSON
+(back_facing_*). Writes the lit frame,
+one difference image per technique (red = false shadow, green = false light; dark red and
+dark green inside the edge band; over the dimmed frame) and reference.msvis to --out-dir.
+
+Examples:
+  manyshadows compare                                          # atrium, 8 lights, all techniques
+  manyshadows compare --scene plane-spot --shadow-resolutions 256,1024,2048
+  manyshadows compare --scene atrium --lights 16 --shadow-resolutions 512 --json q.json";

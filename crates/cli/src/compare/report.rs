@@ -1,0 +1,185 @@
+//! The JSON report of one scene (what `--json` writes and the table prints): the adapter,
+//! the scene, the flags that shape the score, the reference's cost, and each variant's counts
+//! and footprints by light type and per light, its point-light errors by distance, and the
+//! variants this adapter could not run.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use manyshadows::gpu::context::describe_adapter;
+use manyshadows::scene::Scene;
+use manyshadows_reference::aliasing::Footprints;
+use manyshadows_reference::score::Counts;
+use serde_json::json;
+
+use crate::compare::reference::Reference;
+use crate::compare::scoring::{Scored, VariantResult};
+use crate::compare::setup::Setup;
+
+/// The report of one scored scene: [`report`]'s numbers, each variant's point-light errors
+/// by distance (when the scene has point lights), and the skipped variants.
+pub(super) fn scene_report(
+    setup: &Setup,
+    scene: &Scene,
+    r: &Reference,
+    scored: &Scored,
+    started: Instant,
+) -> serde_json::Value {
+    let results = &scored.results;
+    let mut report = report(setup, scene, r, results, started);
+    for (i, v) in results.iter().enumerate() {
+        if !v.by_distance.is_empty() {
+            report["variants"][i]["point_light_errors_by_distance"] = json!(v
+                .by_distance
+                .iter()
+                .map(|&(b, n, e)| json!({ "below_m": if b.is_finite() { json!(b) } else { json!(null) }, "pairs": n, "errors": e }))
+                .collect::<Vec<_>>());
+        }
+    }
+    report["skipped"] = json!(scored
+        .skipped
+        .iter()
+        .map(|(label, why)| json!({ "variant": label, "reason": why }))
+        .collect::<Vec<_>>());
+    report
+}
+
+/// Writes `value` as pretty JSON to `path`, creating its directory.
+pub(super) fn write_json(path: &Path, value: &serde_json::Value) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    std::fs::write(path, serde_json::to_string_pretty(value)?)
+        .with_context(|| format!("writing {}", path.display()))
+}
+
+/// Light-type groups in table order, with the lights they hold.
+pub(super) fn groups(scene: &Scene) -> Vec<(&'static str, Vec<usize>)> {
+    let mut out = Vec::new();
+    for t in ["spot", "point", "directional"] {
+        let ids: Vec<usize> = (0..scene.lights.len())
+            .filter(|&i| scene.lights[i].type_name() == t)
+            .collect();
+        if !ids.is_empty() {
+            out.push((t, ids));
+        }
+    }
+    if out.len() > 1 {
+        out.push(("all", (0..scene.lights.len()).collect()));
+    }
+    out
+}
+
+/// One group's (or one light's) counts and their fractions.
+fn counts_json(c: &Counts) -> serde_json::Value {
+    json!({
+        "lights": c.lights,
+        "in_reach_pixels": c.in_reach,
+        "false_shadow": c.false_shadow,
+        "false_light": c.false_light,
+        "false_shadow_fraction": c.false_shadow_fraction(),
+        "false_light_fraction": c.false_light_fraction(),
+        "error_fraction": c.error_fraction(),
+        "band_pixels": c.band,
+        "band_fraction": c.band_fraction(),
+        "band_false_shadow": c.band_false_shadow,
+        "band_false_light": c.band_false_light,
+        "band_error_fraction": c.band_error_fraction(),
+        "back_facing_pixels": c.back_facing,
+        "back_facing_disagree": c.back_facing_disagree,
+    })
+}
+
+/// The footprints of the lights `ids`, merged.
+pub(super) fn merged(f: &[Footprints], ids: &[usize]) -> Footprints {
+    let mut h = Footprints::default();
+    for &i in ids {
+        h.merge(&f[i]);
+    }
+    h
+}
+
+/// The numbers of the scene, the reference and each variant (by light type and per light).
+fn report(
+    setup: &Setup,
+    scene: &Scene,
+    r: &Reference,
+    results: &[VariantResult],
+    started: Instant,
+) -> serde_json::Value {
+    let Setup {
+        ctx,
+        args,
+        tracer,
+        bvh_ms,
+    } = setup;
+    let groups = groups(scene);
+    let variants: Vec<serde_json::Value> = results
+        .iter()
+        .map(|v| {
+            let by_type: serde_json::Map<String, serde_json::Value> = groups
+                .iter()
+                .map(|(name, ids)| {
+                    let c = v.score.total(|i| ids.contains(&i));
+                    let mut j = counts_json(&c);
+                    j["footprint_px"] = json!(merged(&v.footprints, ids).summary());
+                    (name.to_string(), j)
+                })
+                .collect();
+            let per_light: Vec<serde_json::Value> = v
+                .score
+                .per_light
+                .iter()
+                .enumerate()
+                .map(|(i, c)| {
+                    let mut j = counts_json(c);
+                    j["type"] = json!(scene.lights[i].type_name());
+                    j["footprint_px"] = json!(v.footprints[i].summary());
+                    j
+                })
+                .collect();
+            json!({
+                "label": v.label,
+                "technique": v.technique.name(),
+                "shadow_resolution": v.resolution,
+                "atlas": { "size": v.atlas, "shrink_steps": v.shrink_steps },
+                "shadow_bytes": v.shadow_bytes,
+                "gpu_ms": v.gpu_ms,
+                "difference_image": v.diff_image,
+                "by_type": by_type,
+                "per_light": per_light,
+            })
+        })
+        .collect();
+    let count = |t: &str| scene.lights.iter().filter(|l| l.type_name() == t).count();
+    let mut by_kind = BTreeMap::new();
+    for t in ["spot", "point", "directional"] {
+        by_kind.insert(t, count(t));
+    }
+    json!({
+        "adapter": describe_adapter(&ctx.info),
+        "backend": format!("{:?}", ctx.info.backend),
+        "scene": scene.name,
+        "resolution": [args.width, args.height],
+        "lights": { "total": scene.lights.len(), "by_type": by_kind },
+        "bias_texels": { "constant": args.bias_constant, "slope": args.bias_slope, "normal": args.bias_normal },
+        "virtual_maps": { "lod": args.virtual_lod, "directed_lod": args.virtual_directed_lod, "bias_scale": args.virtual_bias, "page_pool_mib": args.page_pool },
+        "edge_band_px": args.edge_band,
+        "reference": {
+            "triangles": tracer.triangle_count(),
+            "bvh_build_ms": bvh_ms,
+            "trace_ms": r.ms,
+            "rays": r.rays,
+            "rays_per_second": if r.ms > 0.0 { r.rays as f64 / (r.ms / 1e3) } else { 0.0 },
+            "threads": rayon::current_num_threads(),
+            "ray_offset_relative": manyshadows_reference::visibility::RAY_OFFSET_RELATIVE,
+            "tracer": format!("{:?}", args.reference).to_lowercase(),
+            "mask": args.out_dir.join("reference.msvis"),
+        },
+        "frame": args.out_dir.join("frame.png"),
+        "variants": variants,
+        "total_wall_ms": started.elapsed().as_secs_f64() * 1e3,
+    })
+}

@@ -1,0 +1,220 @@
+//! Before anything is scored: the flags checked (edge band, resolutions, biases, how many
+//! reference rays the frame and its lights need), the scene loaded, the variants listed
+//! (each technique at each shadow resolution), the render settings every variant and the GPU
+//! reference share, and the GPU and the casters' BVH opened.
+
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use indicatif::ProgressBar;
+use manyshadows::scene::atlas::FitPolicy;
+use manyshadows::scene::Scene;
+use manyshadows::{GpuContext, Pcf, RenderSettings, ShadowBias, Technique};
+use manyshadows_reference::Tracer;
+
+use crate::args::RenderArgs;
+use crate::compare::args::{CompareArgs, ReferenceTracer};
+
+/// Most (pixel, light) pairs one comparison may trace: about a minute of rays on two cores.
+const MAX_RAYS: u64 = 200_000_000;
+/// Most (pixel, light) pairs the GPU reference traces: 1920×1080 × 2,048 lights.
+const MAX_GPU_RAYS: u64 = 1920 * 1080 * 2048;
+/// Largest edge band accepted, pixels.
+const MAX_EDGE_BAND: u32 = 64;
+/// Atrium lights when `--lights` is not given: a run of well under a minute on two cores.
+const ATRIUM_DEFAULT_LIGHTS: usize = 8;
+
+/// One technique at one shadow resolution.
+pub(super) struct Variant {
+    pub(super) technique: Technique,
+    pub(super) resolution: Option<u32>,
+}
+
+impl Variant {
+    pub(super) fn label(&self) -> String {
+        match self.resolution {
+            Some(r) => format!("{}-{r}", self.technique.name()),
+            None => self.technique.name().to_string(),
+        }
+    }
+}
+
+/// Fails on the flags no scene can be scored with: an edge band over [`MAX_EDGE_BAND`], a
+/// shadow resolution out of range, a bias that is not a finite number.
+pub(super) fn check_flags(args: &CompareArgs) -> Result<()> {
+    if args.edge_band > MAX_EDGE_BAND {
+        bail!(
+            "--edge-band {} is more than the supported {MAX_EDGE_BAND} pixels",
+            args.edge_band
+        );
+    }
+    for &r in &args.shadow_resolutions {
+        if !(1..=16384).contains(&r) {
+            bail!("--shadow-resolutions: {r} must be between 1 and 16384 texels");
+        }
+    }
+    for (name, v) in [
+        ("--bias-constant", args.bias_constant),
+        ("--bias-slope", args.bias_slope),
+        ("--bias-normal", args.bias_normal),
+    ] {
+        if !v.is_finite() {
+            bail!("{name} must be a finite number of texels, not {v}");
+        }
+    }
+    Ok(())
+}
+
+/// `args.scene` with its lights (the atrium gets [`ATRIUM_DEFAULT_LIGHTS`] unless `--lights`
+/// says otherwise).
+pub(super) fn load(args: &CompareArgs) -> Result<Scene> {
+    let lights = match args.lights {
+        Some(n) => Some(n),
+        None if args.scene == "atrium" => Some(ATRIUM_DEFAULT_LIGHTS),
+        None => None,
+    };
+    let ra = RenderArgs {
+        scene: args.scene.clone(),
+        lights,
+        seed: args.seed,
+        light_types: args.light_types.clone(),
+        mesh: args.mesh.clone(),
+        subdivide: args.subdivide,
+        ..RenderArgs::default()
+    };
+    crate::scenes::load_scene(&ra)
+}
+
+/// Fails when the frame's pixels times the scene's lights are more reference rays than the
+/// chosen tracer takes in reasonable time.
+pub(super) fn check_ray_budget(args: &CompareArgs, scene: &Scene) -> Result<()> {
+    let pixels = args.width as u64 * args.height as u64;
+    let max_rays = match args.reference {
+        ReferenceTracer::Cpu => MAX_RAYS,
+        ReferenceTracer::Gpu => MAX_GPU_RAYS,
+    };
+    if pixels * scene.lights.len() as u64 > max_rays {
+        bail!(
+            "{}x{} pixels x {} lights is more than {max_rays} reference rays; use fewer lights \
+             or a smaller frame{}",
+            args.width,
+            args.height,
+            scene.lights.len(),
+            if args.reference == ReferenceTracer::Cpu {
+                ", or --reference gpu"
+            } else {
+                ""
+            }
+        );
+    }
+    Ok(())
+}
+
+/// Every asked technique (each once, in the order asked; every technique when none is) at
+/// every asked shadow resolution (the scene's own when none is).
+pub(super) fn variants(args: &CompareArgs) -> Vec<Variant> {
+    let mut techniques: Vec<Technique> = Vec::new();
+    let asked = if args.techniques.is_empty() {
+        Technique::all()
+    } else {
+        args.techniques.clone()
+    };
+    for t in asked {
+        if !techniques.contains(&t) {
+            techniques.push(t);
+        }
+    }
+    let resolutions: Vec<Option<u32>> = if args.shadow_resolutions.is_empty() {
+        vec![None]
+    } else {
+        args.shadow_resolutions.iter().map(|&r| Some(r)).collect()
+    };
+    techniques
+        .iter()
+        .flat_map(|&technique| {
+            resolutions.iter().map(move |&resolution| Variant {
+                technique,
+                resolution,
+            })
+        })
+        .collect()
+}
+
+/// The scene with every light's shadow map at `resolution` (what `--shadow-resolution` does).
+pub(super) fn with_resolution(scene: &Scene, resolution: Option<u32>) -> Scene {
+    let mut s = scene.clone();
+    if let Some(r) = resolution {
+        for l in &mut s.lights {
+            l.shadow_resolution = r;
+        }
+    }
+    s
+}
+
+/// The render settings of `technique` under the flags: the frame, the biases, the atlas, the
+/// point shadows, the casters' alpha and the virtual maps, with the hard visibility mask on.
+pub(super) fn settings(args: &CompareArgs, technique: Technique) -> RenderSettings {
+    // The score reads the hard visibility mask, which PCF does not touch; the frame under
+    // the difference images shows the hard edges that are being scored.
+    RenderSettings::default()
+        .with_width(args.width)
+        .with_height(args.height)
+        .with_technique(technique)
+        .with_pcf(Pcf::Off)
+        .with_bias(ShadowBias::new(
+            args.bias_constant,
+            args.bias_slope,
+            args.bias_normal,
+        ))
+        .with_max_atlas_size(Some(args.atlas_max))
+        .with_fit(if args.strict_atlas {
+            FitPolicy::Strict
+        } else {
+            FitPolicy::Shrink
+        })
+        .with_visibility(true)
+        .with_point_shadows(args.point_shadows)
+        .with_shadow(manyshadows::ShadowOptions::default().with_casters(
+            manyshadows::CasterOptions::default().with_ignore_masks(!args.shadow_alpha),
+        ))
+        .with_virtual_maps(
+            manyshadows::VirtualOptions::default()
+                .with_pool_bytes(u64::from(args.page_pool) << 20)
+                .with_lod(args.virtual_lod)
+                .with_directed_lod(args.virtual_directed_lod)
+                .with_bias_scale(args.virtual_bias),
+        )
+}
+
+/// What one scene's scoring runs on: the GPU, the flags as that GPU takes them, and the BVH
+/// of the shadow casters that the CPU reference traces.
+pub(super) struct Setup {
+    pub(super) ctx: GpuContext,
+    /// The flags, `--atlas-max` clamped to the adapter's limit.
+    pub(super) args: CompareArgs,
+    pub(super) tracer: Tracer,
+    /// Time to build `tracer`, ms.
+    pub(super) bvh_ms: f64,
+}
+
+/// Opens the GPU, builds the casters' BVH and creates `--out-dir`, saying each step on `pb`.
+pub(super) fn open(pb: &ProgressBar, scene: &Scene, args: &CompareArgs) -> Result<Setup> {
+    pb.set_message("opening the GPU");
+    let ctx = GpuContext::new(&args.gpu.request())?;
+    let args = CompareArgs {
+        atlas_max: pb.suspend(|| crate::args::effective_atlas_max(&ctx, args.atlas_max)),
+        ..args.clone()
+    };
+    pb.set_message("building the BVH of the shadow casters");
+    let t = Instant::now();
+    let tracer = Tracer::new(scene)?;
+    let bvh_ms = t.elapsed().as_secs_f64() * 1e3;
+    std::fs::create_dir_all(&args.out_dir)
+        .with_context(|| format!("creating {}", args.out_dir.display()))?;
+    Ok(Setup {
+        ctx,
+        args,
+        tracer,
+        bvh_ms,
+    })
+}

@@ -1,0 +1,120 @@
+//! The viewer's flags (the scene, the technique and options to start with, the window's
+//! size, a camera script and when to stop, what the panel shows first), the controls' help,
+//! and the camera script's reader.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Result};
+use clap::Args;
+use manyshadows::scene::light_space::PointShadows;
+use manyshadows::{Pcf, Technique};
+
+#[derive(Args, Debug, Clone)]
+pub struct ViewArgs {
+    /// Built-in scene name or a TOML scene file (as for `render`).
+    #[arg(long, default_value = "atrium")]
+    pub(super) scene: String,
+    /// Mesh file for the dragon scene (.obj, .gltf/.glb, .ply, .ply.gz).
+    #[arg(long)]
+    pub(super) mesh: Option<PathBuf>,
+    /// Number of lights, placed by a seeded layout (default: the scene's own lights); the
+    /// panel changes it at run time.
+    #[arg(long)]
+    pub(super) lights: Option<usize>,
+    /// Seed of the light layout.
+    #[arg(long, default_value_t = 1)]
+    pub(super) seed: u64,
+    /// Shadow technique to start with (as for `render`; the panel switches it).
+    #[arg(long, default_value_t = Technique::default(), value_parser = manyshadows_cli::parse_technique)]
+    pub(super) technique: Technique,
+    /// Point-light shadows to start with: cube or dual-paraboloid.
+    #[arg(long, default_value = "cube", value_parser = manyshadows_cli::parse_point_shadows)]
+    pub(super) point_shadows: PointShadows,
+    /// Filtering to start with: off, 2x2 or 3x3.
+    #[arg(long, default_value = "2x2", value_parser = manyshadows_cli::parse_pcf)]
+    pub(super) pcf: Pcf,
+    /// Start with every shadow map drawn anew each frame (the panel's "keep unchanged maps"
+    /// box unticked); by default the maps (pages) of views that saw no change are kept.
+    #[arg(long, conflicts_with = "shadow_budget")]
+    pub(super) no_cache: bool,
+    /// Keep what did not change between frames: the default (kept for older command lines).
+    #[arg(long, hide = true, conflicts_with = "no_cache")]
+    pub(super) cache: bool,
+    /// Draw at most N shadow views per frame (atlas techniques; with the caching): the rest
+    /// wait their turn, served from their older depth or unshadowed until drawn (the panel
+    /// counts them).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub(super) shadow_budget: Option<u32>,
+    /// Move the smallest caster in a circle and sway the first spot or point light (of two
+    /// or more): only the shadow maps that see the caster or belong to that light are
+    /// redrawn (unless --no-cache; the panel counts them).
+    #[arg(long)]
+    pub(super) animate: bool,
+    /// Camera to start from, `PX,PY,PZ,TX,TY,TZ` (default: the scene's camera).
+    #[arg(long, value_parser = manyshadows_cli::parse_camera, allow_hyphen_values = true)]
+    pub(super) camera: Option<[f32; 6]>,
+    /// Window width (the frame is rendered at the window's size).
+    #[arg(long, default_value_t = 960)]
+    pub(super) width: u32,
+    /// Window height.
+    #[arg(long, default_value_t = 540)]
+    pub(super) height: u32,
+    /// Camera script: one camera per line, `PX PY PZ TX TY TZ` (commas allowed, `#`
+    /// comments); frame k uses line k, and the last camera stays after the script ends.
+    #[arg(long)]
+    pub(super) script: Option<PathBuf>,
+    /// Close the window after this many frames.
+    #[arg(long)]
+    pub(super) exit_after: Option<u64>,
+    /// Start with the panel hidden (F1 toggles it).
+    #[arg(long)]
+    pub(super) hide_panel: bool,
+    /// Start with the shadow-atlas picture shown (read back once a second).
+    #[arg(long)]
+    pub(super) show_atlas: bool,
+    /// Start with this light's hard visibility shown (white = lit; read back once a second).
+    #[arg(long)]
+    pub(super) show_visibility: Option<usize>,
+    /// Start following this light (the camera at the light, looking where it shines).
+    #[arg(long)]
+    pub(super) follow: Option<usize>,
+    #[command(flatten)]
+    pub(super) gpu: manyshadows_cli::GpuArgs,
+}
+
+/// Help shown in the panel and by `--help`.
+pub(crate) const CONTROLS: &str = "W/A/S/D move, Q/E down/up, right mouse button + drag look, \
+     wheel changes speed, F1 panel, Esc quits";
+
+/// The cameras of a `--script`: one per line that is not empty once its `#` comment is cut.
+pub(super) fn parse_script(text: &str) -> Result<Vec<[f32; 6]>> {
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        out.push(
+            manyshadows_cli::parse_camera(line)
+                .map_err(|e| anyhow::anyhow!("script line {}: {e}", i + 1))?,
+        );
+    }
+    if out.is_empty() {
+        bail!("the script has no camera lines");
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn scripts_parse_and_bad_lines_name_their_line() {
+        let cams = super::parse_script("# a path\n0 1 2 0 0 0\n\n1,1,1, 0,0,0 # end\n").unwrap();
+        assert_eq!(cams.len(), 2);
+        assert_eq!(cams[1], [1.0, 1.0, 1.0, 0.0, 0.0, 0.0]);
+        let e = super::parse_script("0 1 2 0 0 0\n1 2 3\n").unwrap_err();
+        assert!(e.to_string().contains("line 2"), "{e}");
+        assert!(super::parse_script("# nothing\n").is_err());
+        assert!(super::parse_script("1 1 1 1 1 1\n").is_err());
+    }
+}

@@ -1,0 +1,163 @@
+//! What the open window holds between frames: its surface, the GPU and the renderer, the
+//! panel's choices (a change of technique, point shadows, PCF, caching, budget or visibility
+//! rebuilds the renderer), egui's state, the fly camera, the overlays and the last frame's
+//! numbers the panel shows.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::Result;
+use manyshadows::scene::light_space::PointShadows;
+use manyshadows::scene::Scene;
+use manyshadows::{wgpu, Fills, GpuContext, Pcf, RenderSettings, Renderer, Technique};
+use winit::window::Window;
+
+use crate::view::args::ViewArgs;
+use crate::view::camera::FlyCamera;
+use crate::view::overlays::Overlays;
+
+/// What the panel edits; a change of technique, point shadows or PCF rebuilds the renderer.
+#[derive(Clone, Copy, PartialEq)]
+pub(super) struct Choice {
+    pub(super) technique: Technique,
+    pub(super) point_shadows: PointShadows,
+    pub(super) pcf: Pcf,
+    pub(super) cache: bool,
+    /// At most this many shadow views drawn per frame (atlas techniques).
+    pub(super) budget: Option<u32>,
+    /// The hard visibility mask is computed (for the per-light view).
+    pub(super) visibility: bool,
+}
+
+/// The open window and everything drawn into it.
+pub(super) struct State {
+    pub(super) window: Arc<Window>,
+    pub(super) surface: wgpu::Surface<'static>,
+    pub(super) config: wgpu::SurfaceConfiguration,
+    pub(super) ctx: GpuContext,
+    pub(super) renderer: Renderer,
+    pub(super) choice: Choice,
+    /// The panel's light count (applied with its button) and the layout's seed.
+    pub(super) light_count: usize,
+    pub(super) seed: u64,
+    pub(super) egui_ctx: egui::Context,
+    pub(super) egui_state: egui_winit::State,
+    pub(super) egui_renderer: egui_wgpu::Renderer,
+    /// The panel is shown (F1).
+    pub(super) panel: bool,
+    pub(super) fly: FlyCamera,
+    pub(super) last_frame: Instant,
+    pub(super) started: Instant,
+    pub(super) frames: u64,
+    pub(super) gpu_ms: manyshadows::GpuTimes,
+    pub(super) frame_ms: f64,
+    pub(super) message: Option<String>,
+    pub(super) overlays: Overlays,
+    /// Shadow views drawn by the last frame (fewer than planned when caching keeps maps).
+    pub(super) views_drawn: u64,
+    /// The last frame's views left waiting by a budget: (stale, oldest in frames, unshadowed).
+    pub(super) views_waiting: (u32, u32, u32),
+}
+
+/// The renderer's settings for a `width`×`height` frame with `c` (the budget only for
+/// techniques that fill an atlas).
+fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
+    RenderSettings::default()
+        .with_width(width)
+        .with_height(height)
+        .with_technique(c.technique)
+        .with_point_shadows(c.point_shadows)
+        .with_pcf(c.pcf)
+        .with_cache_shadows(c.cache)
+        .with_shadow_budget(
+            c.budget
+                .filter(|_| c.technique.info().fills == Fills::Atlas),
+        )
+        .with_visibility(c.visibility)
+}
+
+impl State {
+    /// The state of a window whose `surface` is configured as `config`: the renderer with
+    /// the choices `args` starts with, egui set up for the window, the camera at the scene's.
+    pub(super) fn new(
+        window: Arc<Window>,
+        surface: wgpu::Surface<'static>,
+        config: wgpu::SurfaceConfiguration,
+        ctx: GpuContext,
+        scene: &Scene,
+        args: &ViewArgs,
+    ) -> Result<State> {
+        let choice = Choice {
+            technique: args.technique,
+            point_shadows: args.point_shadows,
+            pcf: args.pcf,
+            cache: !args.no_cache,
+            budget: args.shadow_budget,
+            visibility: args.show_visibility.is_some(),
+        };
+        let renderer = Renderer::new(&ctx, scene, settings(config.width, config.height, choice))?;
+        let egui_ctx = egui::Context::default();
+        let egui_state = egui_winit::State::new(
+            egui_ctx.clone(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(ctx.limits().max_texture_dimension_2d as usize),
+        );
+        let egui_renderer = egui_wgpu::Renderer::new(
+            &ctx.device,
+            config.format,
+            egui_wgpu::RendererOptions::default(),
+        );
+        log::info!("viewer: {} on {}", args.scene, ctx.describe());
+        Ok(State {
+            window,
+            surface,
+            config,
+            ctx,
+            renderer,
+            choice,
+            light_count: scene.lights.len(),
+            seed: args.seed,
+            egui_ctx,
+            egui_state,
+            egui_renderer,
+            panel: !args.hide_panel,
+            fly: FlyCamera::new(scene.camera),
+            last_frame: Instant::now(),
+            started: Instant::now(),
+            frames: 0,
+            gpu_ms: Default::default(),
+            frame_ms: 0.0,
+            message: None,
+            views_drawn: 0,
+            views_waiting: (0, 0, 0),
+            overlays: Overlays::new(
+                args.show_atlas,
+                args.show_visibility.or(args.follow).unwrap_or(0),
+                args.follow,
+            ),
+        })
+    }
+
+    /// A new renderer for `scene` (at the current camera) with `choice`; a choice this device
+    /// cannot render is said on the panel and the old renderer kept.
+    pub(super) fn rebuild(&mut self, scene: &Scene, choice: Choice) {
+        let mut s = scene.clone();
+        s.camera = self.fly.camera;
+        match Renderer::new(
+            &self.ctx,
+            &s,
+            settings(self.config.width, self.config.height, choice),
+        ) {
+            Ok(r) => {
+                self.renderer = r;
+                self.choice = choice;
+                self.message = None;
+            }
+            // Unsupported choices (multiview without the feature, say) are said, not fatal.
+            Err(e) => self.message = Some(format!("{e}")),
+        }
+    }
+}
