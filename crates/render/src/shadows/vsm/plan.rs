@@ -45,18 +45,16 @@ pub struct VirtualOptions {
     /// pages and misclassify more where pixels are wide (docs/techniques.md).
     pub lod: f32,
     /// Factor on [`Self::lod`] for the faces of spot and directional lights (default 0.8,
-    /// `DEFAULT_DIRECTED_LOD`: their texels up to 1.25 pixels). Measured on the atrium
-    /// (docs/techniques.md): coarser texels cost point lights' cube faces most of their
-    /// extra errors (walls near the lights, seen through wide pixels), spot and directional
-    /// faces few, so they alone get them; 1 gives every face `lod`.
+    /// `DEFAULT_DIRECTED_LOD`: their texels up to 1.25 pixels). Coarser texels cost point
+    /// lights' cube faces most of their extra errors (walls near the lights seen through wide
+    /// pixels) and spot and directional faces few, so they alone get them; 1 gives every face
+    /// `lod`.
     pub directed_lod: f32,
     /// The receiver bias of virtual maps as a fraction of [`crate::ShadowBias`] (which
     /// counts texels; default 0.5, `DEFAULT_BIAS_SCALE`). A page's texels match the screen
-    /// pixel, not a fixed atlas tile, so a whole texel of bias per term moves samples
-    /// further than the texel's depth steps need and leaks light at contacts: on the atrium
-    /// with 64 lights (960x540) half the bias misclassifies 0.008 % of (pixel, light) pairs
-    /// instead of 0.027 %, with 40 lights at 320x180 0.026 % instead of 0.156 %
-    /// (docs/techniques.md has the scenes' table).
+    /// pixel, not a fixed atlas tile, so a whole texel of bias per term moves samples further
+    /// than the texel's depth steps need and leaks light at contacts (docs/decisions.md has
+    /// the measurements).
     pub bias_scale: f32,
     /// Cap on page-table entries: when the faces' tables would exceed it, the largest
     /// virtual sides are halved until they fit (reported in `VirtualFit::capped_side`).
