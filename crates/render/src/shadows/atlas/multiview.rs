@@ -4,7 +4,7 @@
 //! Multiview renders into the layers of an array texture, but the atlas is one 2D texture with
 //! tiles of different sizes. So consecutive views of the draw list with the same tile size form
 //! a group (a point light's six cube faces, a run of equal cascades or spot lights), at most
-//! `max_multiview_view_count` views (6 on lavapipe, up to 32 on desktop Vulkan). Each group is
+//! `max_multiview_view_count` views (6 on lavapipe; at most 31, see `MAX_VIEWS`). Each group is
 //! rendered into layers `0..n` of a scratch `Depth32Float` array (viewport = the tile size,
 //! `@builtin(view_index)` picks the view), then a small render pass copies every layer into its
 //! atlas tile: a quad per tile whose fragments load the scratch texel and write it as
@@ -116,6 +116,17 @@ pub fn clips_into_layer_zero(info: &wgpu::AdapterInfo) -> bool {
     info.backend == wgpu::Backend::Vulkan && info.name.to_lowercase().contains("llvmpipe")
 }
 
+/// Most views of one pass. wgpu 30 takes a pipeline's view mask as "views 0..n" only when
+/// `mask + 1` is a power of two, which wraps to 0 for all 32 views and then asks for
+/// `SELECTIVE_MULTIVIEW` (an NVIDIA driver that offers 32 views failed so): 31 is the most
+/// views a mask of the plain `MULTIVIEW` feature can name.
+const MAX_VIEWS: u32 = 31;
+
+/// The view mask of a pass or pipeline over views `0..n` (`n` in `1..=MAX_VIEWS`).
+fn view_mask(n: u32) -> Option<NonZeroU32> {
+    NonZeroU32::new((1u32 << n.clamp(1, MAX_VIEWS)) - 1)
+}
+
 /// The multiview technique's pipelines and scratch texture.
 pub struct Multiview {
     module: wgpu::ShaderModule,
@@ -151,7 +162,7 @@ impl Multiview {
     /// Builds the pipelines; the registry has checked `MULTIVIEW`. A device that has the
     /// feature but allows no view is refused the same way.
     pub fn new(ctx: &GpuContext) -> Result<Self, RenderError> {
-        let mut max_views = ctx.limits().max_multiview_view_count.min(32);
+        let mut max_views = ctx.limits().max_multiview_view_count.min(MAX_VIEWS);
         if max_views == 0 {
             return Err(RenderError::missing_feature(
                 ctx,
@@ -259,7 +270,7 @@ impl Multiview {
         self.pipelines
             .entry((n, pulled, masked))
             .or_insert_with(|| {
-                let mask = NonZeroU32::new(if n >= 32 { u32::MAX } else { (1u32 << n) - 1 });
+                let mask = view_mask(n);
                 let entry = match (pulled, masked) {
                     (true, false) => "vs_pulled",
                     (false, false) => "vs_indexed",
@@ -453,7 +464,7 @@ impl ShadowTechnique for Multiview {
                     }),
                     timestamp_writes: None,
                     occlusion_query_set: None,
-                    multiview_mask: NonZeroU32::new(if n >= 32 { u32::MAX } else { (1 << n) - 1 }),
+                    multiview_mask: view_mask(n),
                 });
                 let s = g.timer.begin_render_stats(&mut pass);
                 pass.set_viewport(0.0, 0.0, size as f32, size as f32, 0.0, 1.0);
@@ -510,7 +521,7 @@ impl ShadowTechnique for Multiview {
 
 #[cfg(test)]
 mod tests {
-    use super::{copy_shader, groups, shader, MultiviewParams};
+    use super::{copy_shader, groups, shader, view_mask, MultiviewParams, MAX_VIEWS};
     use crate::gpu::types::layout::same_layout;
 
     #[test]
@@ -532,5 +543,21 @@ mod tests {
         let g = groups(&[1, 2, 7, 9], |v| sizes[v as usize], 6);
         assert_eq!(g, vec![(0, 2), (2, 1), (3, 1)]);
         assert!(groups(&[], |_| 1, 6).is_empty());
+    }
+
+    /// Every mask the technique uses names views `0..n` the way wgpu 30 checks it
+    /// (`(mask + 1).is_power_of_two()`, in wrapping u32 arithmetic), so no pipeline or pass
+    /// asks for `SELECTIVE_MULTIVIEW`; 32 views would not.
+    #[test]
+    fn view_masks_need_no_selective_multiview() {
+        for n in 1..=MAX_VIEWS {
+            let mask = view_mask(n).expect("a view").get();
+            assert_eq!(mask.count_ones(), n);
+            assert!(
+                mask.wrapping_add(1).is_power_of_two(),
+                "{n} views: {mask:#x}"
+            );
+        }
+        assert!(!u32::MAX.wrapping_add(1).is_power_of_two());
     }
 }
