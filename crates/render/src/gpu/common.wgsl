@@ -203,7 +203,7 @@ struct VsmRound {
     counts: vec4<u32>,
 }
 
-// Page-table entry values: 0 = not needed (before allocation, marks 1 and 2: vsm.wgsl), VSM_FIRST_PAGE + p
+// Page-table entry values: 0 = not needed (before allocation, marks 1 and 2: vsm_table.wgsl), VSM_FIRST_PAGE + p
 // = resident in pool page p, VSM_FIRST_PAGE + VSM_QUARTER + 4p + k = resident in quadrant k
 // of pool page p (a level-0 page at half resolution, only when the pool has fewer pages than
 // faces in use), VSM_DENIED = needed but the pool was full.

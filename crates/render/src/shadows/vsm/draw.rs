@@ -6,7 +6,7 @@
 //! hierarchical: groups of `CULL_GROUP` consecutive clusters have a merged bounding sphere
 //! (written with the clusters' by [`CasterGeometry::record`]), one thread per (group, page)
 //! tests it and only then the group's clusters. The
-//! page clears and the indirect arguments come from the allocation passes ([`super::pages`]).
+//! page clears and the indirect arguments come from the allocation passes ([`super::alloc`]).
 
 use crate::gpu::buffers::buffer;
 use crate::gpu::context::GpuContext;

@@ -12,27 +12,29 @@
 //! page-table entry per page of every level ([`VirtualPlan`](plan::VirtualPlan)); lights that
 //! reach nothing the camera sees get no faces.
 //!
-//! **Pages on the GPU, every frame** ([`pages`], `vsm.wgsl`, after the G-buffer and the light
-//! clusters):
-//! 1. *mark*: each pixel visits its cluster's lights; for each light that reaches it (and
-//!    faces it), the sample asks for the level whose texel matches its pixel footprint
-//!    ([`VirtualOptions::lod`](plan::VirtualOptions::lod) texels per pixel): that page is
-//!    marked *asked* and its ancestors *above*. By default 4×4-pixel tiles do this once per
-//!    light where the bounds of their samples prove that every sample needing a page needs
-//!    the same one, and hand the rest to per-pixel marking: the same pages
-//!    ([`VirtualOptions::tile_marking`](plan::VirtualOptions::tile_marking)). With caching, when the camera, the lights and
-//!    every face are as last frame (only casters moved), last frame's pages carry over and
-//!    only the pixels under the moved casters' old and new bounds are marked again;
-//! 2. *allocate*: the *admitted level* A is the finest level whose marked pages fit the pool
-//!    together with the asked pages of every coarser level. Asked pages coarser than A and
-//!    every marked page of A get pool pages in page-table order (ranks from per-block counts
-//!    and a prefix sum, so the frame never depends on thread order). With room for every asked
-//!    page, only those are drawn: an ancestor nobody asked for is never read. Otherwise asked
-//!    pages finer than A are *denied* and their lookups fall back to their ancestor at A — a
-//!    coarser shadow, never a wrong or missing one — and the frame's
-//!    [`VirtualStats`](plan::VirtualStats) count them. A pool with fewer pages than faces in
-//!    use gives the last faces quarter pages (four faces' level 0 at 64² in one pool page,
-//!    `quarter_faces`), so every face keeps a shadow up to four faces per pool page; only
+//! **Pages on the GPU, every frame** ([`pages`] records the stages in order, after the G-buffer
+//! and the light clusters; what they share of the page table is [`table`], `vsm_table.wgsl`):
+//! 1. *mark* ([`mark`], `vsm_mark.wgsl`): each pixel visits its cluster's lights; for each
+//!    light that reaches it (and faces it), the sample asks for the level whose texel matches
+//!    its pixel footprint ([`VirtualOptions::lod`](plan::VirtualOptions::lod) texels per
+//!    pixel): that page is marked *asked* and its ancestors *above*. By default 4×4-pixel
+//!    tiles do this once per light where the bounds of their samples prove that every sample
+//!    needing a page needs the same one, and hand the rest to per-pixel marking: the same
+//!    pages ([`VirtualOptions::tile_marking`](plan::VirtualOptions::tile_marking); [`tiles`],
+//!    `vsm_tiles.wgsl`). With caching, when the camera, the lights and every face are as last
+//!    frame (only casters moved), last frame's pages carry over ([`carry`], `vsm_carry.wgsl`)
+//!    and only the pixels under the moved casters' old and new bounds ([`moved`]) are marked
+//!    again;
+//! 2. *allocate* ([`alloc`], `vsm_alloc.wgsl`): the *admitted level* A is the finest level
+//!    whose marked pages fit the pool together with the asked pages of every coarser level.
+//!    Asked pages coarser than A and every marked page of A get pool pages in page-table order
+//!    (ranks from per-block counts and a prefix sum, so the frame never depends on thread
+//!    order). With room for every asked page, only those are drawn: an ancestor nobody asked
+//!    for is never read. Otherwise asked pages finer than A are *denied* and their lookups fall
+//!    back to their ancestor at A — a coarser shadow, never a wrong or missing one — and the
+//!    frame's [`VirtualStats`](plan::VirtualStats) count them. A pool with fewer pages than
+//!    faces in use gives the last faces quarter pages (four faces' level 0 at 64² in one pool
+//!    page, `quarter_faces`), so every face keeps a shadow up to four faces per pool page; only
 //!    past that are faces left unshadowed (counted too). With caching
 //!    ([`crate::settings::RenderSettings::cache_shadows`]) a page resident last frame in a face
 //!    whose view did not change keeps its pool page and its depth unless a caster moved within
@@ -56,7 +58,13 @@
 //!
 //! [`source`] is the frame's shadow source made of them (its output: the pool and its table).
 
+pub mod alloc;
+pub mod carry;
 pub mod draw;
+pub mod mark;
+pub mod moved;
 pub mod pages;
 pub mod plan;
 pub mod source;
+pub mod table;
+pub mod tiles;

@@ -52,7 +52,10 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     }),
     shaders: || {
         vec![
-            Wgsl::core("vsm", crate::shadows::vsm::pages::shader()),
+            Wgsl::core("vsm_carry", crate::shadows::vsm::carry::shader()),
+            Wgsl::core("vsm_mark", crate::shadows::vsm::mark::shader()),
+            Wgsl::core("vsm_tiles", crate::shadows::vsm::tiles::shader()),
+            Wgsl::core("vsm_alloc", crate::shadows::vsm::alloc::shader()),
             Wgsl::with(
                 "vsm_draw",
                 crate::shadows::vsm::draw::shader(),

@@ -17,7 +17,7 @@
 @group(0) @binding(1) var<uniform> vsm: VsmUniforms;
 @group(0) @binding(2) var<storage, read> page_views: array<ShadowViewData>;
 
-// The part of a page its samples' filter taps reach (vsm.wgsl's `needed_bounds`): the page's
+// The part of a page its samples' filter taps reach (vsm_alloc.wgsl's `needed_bounds`): the page's
 // casters are culled and drawn over that rectangle only, in cells of 1/16 of the page side.
 // `params.y` codes the first and last column and row (0..15 each) as
 // `first_col + 16 last_col + 256 first_row + 4096 last_row` (rows count from the page's top).
