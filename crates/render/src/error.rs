@@ -261,7 +261,7 @@ pub enum RenderError {
 }
 
 impl RenderError {
-    /// [`RenderError::InvalidOption`]: `option` (named as `RenderSettings` names the field)
+    /// [`RenderError::InvalidOption`]: the option (named as `RenderSettings` names the field)
     /// is `value`, and must be `expected`.
     pub fn invalid_option(
         option: &'static str,

@@ -1,5 +1,5 @@
 //! The registry: every technique's [`TechniqueInfo`], in the order menus and tables list them,
-//! and [`create`], where a technique becomes the frame's shadow source. Adding a technique is
+//! and `create`, where a technique becomes the frame's shadow source. Adding a technique is
 //! its module (with its `INFO` and its `Technique` constant) and one line in [`TECHNIQUES`];
 //! the CLI, the benchmarks, the viewer and the web page read this list. It is the one module
 //! that names the techniques, above all of them and above the settings that hold their

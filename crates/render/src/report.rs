@@ -13,7 +13,7 @@ use crate::shadows::vsm::plan::VirtualStats;
 #[derive(Clone, Debug, Default)]
 #[non_exhaustive]
 pub struct FrameTimings {
-    /// GPU milliseconds per [`Stage`] in the order they ran, empty if the adapter has no
+    /// GPU milliseconds per [`Stage`](crate::gpu::timing::Stage) in the order they ran, empty if the adapter has no
     /// timestamp queries.
     pub gpu_ms: GpuTimes,
     /// CPU milliseconds to record and submit the frame's commands.
@@ -38,13 +38,13 @@ pub struct Frame {
     pub timings: FrameTimings,
     /// Shadow-generation work counters.
     pub shadow_stats: ShadowStats,
-    /// Light-cluster counters (`None` with [`LightLoop::All`]).
+    /// Light-cluster counters (`None` with [`LightLoop::All`](crate::frame::clusters::LightLoop::All)).
     pub clusters: Option<ClusterStats>,
     /// Virtual shadow map counters (`None` for other techniques).
     pub virtual_maps: Option<VirtualStats>,
 }
 
-/// What [`Renderer::render_to`] reports: the frame is submitted, not read back.
+/// What [`Renderer::render_to`](crate::Renderer::render_to) reports: the frame is submitted, not read back.
 #[derive(Clone, Debug)]
 #[non_exhaustive]
 pub struct SubmittedFrame {
@@ -54,7 +54,7 @@ pub struct SubmittedFrame {
     pub cpu_record_ms: f64,
 }
 
-/// Where a renderer's shadows are ([`Renderer::shadow_layout`]).
+/// Where a renderer's shadows are ([`Renderer::shadow_layout`](crate::Renderer::shadow_layout)).
 #[non_exhaustive]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadowLayout {
@@ -70,7 +70,7 @@ pub struct ShadowLayout {
 }
 
 /// How much per-view shadow work a frame asks for, known before it is rendered
-/// ([`Renderer::shadow_work`]).
+/// ([`Renderer::shadow_work`](crate::Renderer::shadow_work)).
 #[non_exhaustive]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ShadowWork {

@@ -2,7 +2,7 @@
 //! this module, kept in sync with [`crate::gpu::types`]) is prepended to the shaders that need
 //! it; every other WGSL file lies beside the module that owns it, which composes its own
 //! shaders with [`compose`] and makes the module with [`module`]. Each owner validates what it
-//! composes against WebGPU's capabilities in its tests ([`validate_for_webgpu`]), so broken
+//! composes against WebGPU's capabilities in its tests (`validate_for_webgpu`), so broken
 //! WGSL fails `cargo test` without a GPU.
 
 /// Struct declarations shared by all shaders.

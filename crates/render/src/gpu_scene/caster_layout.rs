@@ -5,7 +5,7 @@
 //! - *caster vertices*: one per (caster instance, mesh vertex), `sources[i] = (scene vertex,
 //!   instance)`;
 //! - *corners*: three caster-vertex indices per triangle (also usable as an index buffer);
-//!   triangles that may be back-face culled come first ([`CasterGeometry::cullable_triangles`]),
+//!   triangles that may be back-face culled come first ([`CasterGeometry::cullable_triangles`](crate::gpu_scene::casters::CasterGeometry::cullable_triangles)),
 //!   so shaders need one comparison instead of a per-triangle flag;
 //! - *clusters*: runs of at most [`CLUSTER_TRIANGLES`] triangles of one instance, with an
 //!   object-space normal cone; their world bounding spheres and boxes are recomputed per
@@ -13,7 +13,7 @@
 //!
 //! Alpha-tested casters (materials with a coverage mask, [`manyshadows_scene::masks`]) come
 //! last, in their own class: their triangles after every opaque one
-//! ([`CasterGeometry::first_masked_triangle`]), their clusters after every opaque cluster
+//! ([`CasterGeometry::first_masked_triangle`](crate::gpu_scene::casters::CasterGeometry::first_masked_triangle)), their clusters after every opaque cluster
 //! (flag [`CLUSTER_MASKED`]) and their caster vertices after every opaque one. So a technique
 //! draws the opaque range with its depth-only pipeline exactly as before and the masked range
 //! with an alpha-testing one; opaque casters never run an alpha test. What the alpha test

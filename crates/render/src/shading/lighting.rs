@@ -16,7 +16,7 @@ pub(crate) const SOURCE_FIRST_BINDING: u32 = 12;
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 
 /// The lighting pass's WGSL, shadows found through `lookup` (its declarations from
-/// [`SOURCE_FIRST_BINDING`]).
+/// `SOURCE_FIRST_BINDING`).
 pub fn shader(lookup: &LookupWgsl) -> String {
     compose_reader(lookup, SOURCE_FIRST_BINDING, include_str!("lighting.wgsl"))
 }
@@ -59,7 +59,7 @@ impl LightingInputs<'_> {
     /// The bind-group entries the lighting and the visibility pass both declare, at the same
     /// bindings: frame 0, lights 1, shadow views 2, G-buffer position 4 (`position`) and
     /// normal 5 (`normal`), the shadow texture 6, the visibility mask 8 (`mask`), the light
-    /// clusters 9–11 and the shadow source's own declarations from [`SOURCE_FIRST_BINDING`]. Bindings 3
+    /// clusters 9–11 and the shadow source's own declarations from `SOURCE_FIRST_BINDING`. Bindings 3
     /// and 7 are each pass's own.
     pub(crate) fn shared_entries<'s>(
         &'s self,

@@ -22,7 +22,7 @@ struct VisibilityParams {
 }
 
 /// The visibility pass's WGSL, shadows found through `lookup` (its declarations from
-/// [`SOURCE_FIRST_BINDING`], as in the lighting pass).
+/// `SOURCE_FIRST_BINDING`, as in the lighting pass).
 pub fn shader(lookup: &LookupWgsl) -> String {
     compose_reader(
         lookup,

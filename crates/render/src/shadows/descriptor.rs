@@ -188,8 +188,8 @@ pub struct TechniqueInfo {
     /// What to use where it cannot run.
     pub instead: &'static str,
     /// How the lighting and visibility passes read its shadows (the atlas techniques share
-    /// [`crate::shadows::lookup::ATLAS_LOOKUP`]).
-    pub lookup: LookupWgsl,
+    /// `shadows::lookup::ATLAS_LOOKUP`).
+    pub(crate) lookup: LookupWgsl,
     pub(crate) build: Build,
     /// Its composed WGSL (validated by naga in the tests).
     pub(crate) shaders: fn() -> Vec<Wgsl>,

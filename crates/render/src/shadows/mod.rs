@@ -5,7 +5,7 @@
 //! - [`depth`] and [`cluster_draw`]: the depth-only pipelines every shadow map is drawn with,
 //!   and the cluster culling + indirect multi-draw rounds `gpu-driven` and the virtual maps
 //!   share (with their WGSL); [`image`]: depth read-back and pictures;
-//! - [`source`]: the [`ShadowSource`] trait the renderer drives, its
+//! - [`source`]: the [`ShadowSource`](source::ShadowSource) trait the renderer drives, its
 //!   output, and the view table of the sources that fill no atlas;
 //! - one folder per kind of source: [`atlas`] (the atlas, its techniques, their registry and
 //!   generator), [`irregular`] (a visibility mask), [`vsm`] (virtual shadow maps: a page pool);

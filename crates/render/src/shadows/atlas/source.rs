@@ -12,7 +12,6 @@ use crate::gpu_scene::instances::GpuScene;
 use crate::shadows::atlas::generator::ShadowGenerator;
 use crate::shadows::descriptor::{SourceArgs, TechniqueInfo};
 use crate::shadows::image::ShadowPicture;
-use crate::shadows::lookup::ATLAS_LOOKUP;
 use crate::shadows::source::{
     PlanParams, ShadowOutput, ShadowSource, ShadowStats, SourceInputs, Views,
 };
@@ -21,6 +20,7 @@ use crate::shadows::source::{
 pub struct AtlasSource {
     generator: ShadowGenerator,
     params: PlanParams,
+    info: &'static TechniqueInfo,
 }
 
 impl AtlasSource {
@@ -40,7 +40,11 @@ impl AtlasSource {
         let mut generator = ShadowGenerator::new(ctx, scene, gpu, plan, info, settings.shadow)?;
         generator.set_caching(settings.cache_shadows || settings.shadow_budget.is_some());
         generator.set_budget(settings.shadow_budget);
-        Ok(Self { generator, params })
+        Ok(Self {
+            generator,
+            params,
+            info,
+        })
     }
 }
 
@@ -85,7 +89,7 @@ impl ShadowSource for AtlasSource {
     }
 
     fn output(&self) -> ShadowOutput<'_> {
-        ShadowOutput::from_views(&self.generator.atlas, ATLAS_LOOKUP)
+        ShadowOutput::from_views(&self.generator.atlas, self.info.lookup)
     }
 
     fn picture(&self, ctx: &GpuContext) -> Result<ShadowPicture, RenderError> {

@@ -145,7 +145,7 @@ impl ShadowSource for IrregularSource {
     fn output(&self) -> ShadowOutput<'_> {
         ShadowOutput {
             mask: Some(self.passes().mask()),
-            ..ShadowOutput::from_views(&self.table.views, ATLAS_LOOKUP)
+            ..ShadowOutput::from_views(&self.table.views, INFO.lookup)
         }
     }
 

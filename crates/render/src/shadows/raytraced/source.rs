@@ -168,7 +168,7 @@ impl ShadowSource for RaytracedSource {
                     self.accel.params.as_entire_binding(),
                 ),
             ],
-            ..ShadowOutput::from_views(&self.table.views, RAYS_LOOKUP)
+            ..ShadowOutput::from_views(&self.table.views, INFO.lookup)
         }
     }
 

@@ -209,7 +209,7 @@ impl ShadowSource for VirtualSource {
                     self.maps.table().as_entire_binding(),
                 ),
             ],
-            ..ShadowOutput::from_views(&self.table.views, VSM_LOOKUP)
+            ..ShadowOutput::from_views(&self.table.views, INFO.lookup)
         }
     }
 

@@ -1,4 +1,4 @@
-// Virtual shadow maps (vsm.rs): which level and page of a face a surface point needs, and
+// Virtual shadow maps (vsm/): which level and page of a face a surface point needs, and
 // where it falls there. Shared by the page-marking pass and the lookups of the lighting and
 // visibility passes, so that a lookup asks for exactly the page the marking requested.
 // Needs `frame: FrameUniforms`, `vsm: VsmUniforms` and shadow_lookup.wgsl
