@@ -288,6 +288,7 @@ fn bench_scene(mesh: &Mesh, maps: usize, resolution: u32, instances: usize) -> R
                 attenuation: Attenuation::for_range(range),
                 casts_shadows: true,
                 shadow_resolution: resolution,
+                size: 0.0,
             }
         })
         .collect();

@@ -29,6 +29,7 @@ fn spot(i: usize) -> Light {
         attenuation: Attenuation::for_range(10.0),
         casts_shadows: true,
         shadow_resolution: 64,
+        size: 0.0,
     }
 }
 

@@ -404,6 +404,7 @@ fn a_caster_moved_into_a_new_face_gets_its_pages_marked() {
             attenuation: Attenuation::for_range(8.0),
             casts_shadows: true,
             shadow_resolution: 256,
+            size: 0.0,
         }],
         camera: Camera::look_at(Vec3::new(0.0, 3.0, 9.0), Vec3::new(0.0, 1.5, 0.0)),
     };
@@ -480,6 +481,7 @@ fn spot_over_floor(extra: Vec<manyshadows::scene::Instance>) -> Scene {
             attenuation: Attenuation::for_range(9.0),
             casts_shadows: true,
             shadow_resolution: 128,
+            size: 0.0,
         }],
         camera: Camera::look_at(Vec3::new(0.0, 3.5, 12.0), Vec3::new(0.0, 2.5, 0.0)),
     }

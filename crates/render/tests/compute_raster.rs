@@ -37,6 +37,7 @@ fn spot(position: Vec3, direction: Vec3, resolution: u32) -> Light {
         attenuation: Attenuation::for_range(20.0),
         casts_shadows: true,
         shadow_resolution: resolution,
+        size: 0.0,
     }
 }
 

@@ -34,6 +34,7 @@ fn scene() -> Scene {
         attenuation: Attenuation::for_range(10.0),
         casts_shadows: true,
         shadow_resolution: 256,
+        size: 0.0,
     };
     Scene {
         textures: Vec::new(),

@@ -25,6 +25,7 @@ fn light(kind: LightKind, range: f32) -> Light {
         attenuation: Attenuation::for_range(range),
         casts_shadows: true,
         shadow_resolution: 256,
+        size: 0.0,
     }
 }
 

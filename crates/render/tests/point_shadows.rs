@@ -168,6 +168,7 @@ fn light_inside_geometry_lights_nothing_outside() {
         attenuation: Attenuation::for_range(20.0),
         casts_shadows: true,
         shadow_resolution: 128,
+        size: 0.0,
     };
     let scene = Scene {
         textures: Vec::new(),

@@ -51,6 +51,7 @@ fn scene(sphere: Mesh) -> Scene {
         attenuation: Attenuation::for_range(range),
         casts_shadows: true,
         shadow_resolution: 1024,
+        size: 0.0,
     };
     Scene {
         textures: Vec::new(),
@@ -179,6 +180,7 @@ fn roof_winding_changes_nothing() {
             attenuation: Attenuation::NONE,
             casts_shadows: true,
             shadow_resolution: 1024,
+            size: 0.0,
         }];
         s.camera.position = Vec3::new(2.5, 3.0, 4.0);
         s.camera.target = Vec3::new(0.0, 1.4, 0.0);

@@ -93,6 +93,7 @@ fn lamp_over_floor(
             attenuation: Attenuation::for_range(range),
             casts_shadows: true,
             shadow_resolution: 256,
+            size: 0.0,
         }],
         camera,
     }

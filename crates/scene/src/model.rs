@@ -336,6 +336,10 @@ pub enum LightKind {
     },
 }
 
+/// Largest angular diameter of a directional light, degrees (a cone of 90° half-angle would
+/// light from the whole hemisphere; soft-shadow filters are meant for the sun's half degree).
+pub const MAX_ANGULAR_SIZE_DEG: f32 = 30.0;
+
 /// A light source with Phong colours.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Light {
@@ -354,6 +358,11 @@ pub struct Light {
     /// Requested shadow-map resolution in texels (per face / per cascade); the renderer may
     /// shrink it to fit the atlas and says so.
     pub shadow_resolution: u32,
+    /// The light's size, which softens its shadows: 0 is a point (hard shadows). A point
+    /// light is a sphere of this radius and a spot light a disc of this radius facing along
+    /// its direction (world units); a directional light is a cone of this angular diameter in
+    /// degrees (the sun: about 0.53).
+    pub size: f32,
 }
 
 impl Light {
@@ -648,6 +657,16 @@ fn validate_light(l: &Light) -> Result<(), String> {
         return Err(format!(
             "shadow_resolution {} must be between 1 and 16384",
             l.shadow_resolution
+        ));
+    }
+    if !(l.size.is_finite() && l.size >= 0.0) {
+        return Err(format!("size {} must be finite and >= 0", l.size));
+    }
+    if matches!(l.kind, LightKind::Directional { .. }) && l.size >= MAX_ANGULAR_SIZE_DEG {
+        return Err(format!(
+            "size {} of a directional light is an angular diameter in degrees and must be \
+             below {MAX_ANGULAR_SIZE_DEG}",
+            l.size
         ));
     }
     let unit = |v: Vec3, what: &str| -> Result<(), String> {

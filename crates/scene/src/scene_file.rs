@@ -563,6 +563,7 @@ fn build_light(cx: &Ctx<'_>, i: usize, l: &Spanned<LightDef>) -> Result<Light, S
         attenuation,
         casts_shadows: d.casts_shadows.unwrap_or(true),
         shadow_resolution: d.shadow_resolution.unwrap_or(default_resolution),
+        size: 0.0,
     })
 }
 

@@ -238,6 +238,7 @@ fn textured_scene() -> Scene {
         attenuation: Attenuation::NONE,
         casts_shadows: true,
         shadow_resolution: 256,
+        size: 0.0,
     };
     Scene {
         name: "fuzz".into(),

@@ -142,6 +142,7 @@ impl AnalyticLight {
             attenuation,
             casts_shadows: true,
             shadow_resolution: resolution,
+            size: 0.0,
         }
     }
 }

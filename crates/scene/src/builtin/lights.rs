@@ -166,6 +166,7 @@ impl Tone {
             attenuation,
             casts_shadows: true,
             shadow_resolution: resolution,
+            size: 0.0,
         }
     }
 }

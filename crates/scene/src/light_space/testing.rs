@@ -61,6 +61,7 @@ pub(super) fn light(kind: LightKind, resolution: u32) -> Light {
         attenuation: Attenuation::NONE,
         casts_shadows: true,
         shadow_resolution: resolution,
+        size: 0.0,
     }
 }
 

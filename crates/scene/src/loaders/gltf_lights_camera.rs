@@ -128,6 +128,7 @@ pub(super) fn read_lights(
             attenuation,
             casts_shadows: true,
             shadow_resolution,
+            size: 0.0,
         });
     }
     Ok(lights)

@@ -66,6 +66,7 @@ fn writer_scene() -> Scene {
         },
         casts_shadows: true,
         shadow_resolution: 512,
+        size: 0.0,
     };
     Scene {
         name: "writer".into(),
