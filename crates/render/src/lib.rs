@@ -125,7 +125,7 @@ pub use settings::RenderSettings;
 pub use shadows::descriptor::{Culling, Need, Requirement, TechniqueInfo};
 pub use shadows::image::ShadowPicture;
 pub use shadows::irregular::maps::{IrregularOptions, IrregularStats};
-pub use shadows::options::{CullMode, Pcf, ShadowBias, ShadowOptions};
+pub use shadows::options::{CullMode, Pcf, ShadowBias, ShadowOptions, SoftShadows};
 pub use shadows::plan::DEFAULT_MAX_ATLAS_SIZE;
 pub use shadows::raytraced::accel::RayOptions;
 pub use shadows::source::ShadowStats;

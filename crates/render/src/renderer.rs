@@ -782,6 +782,12 @@ fn frame_uniforms(scene: &Scene, s: &RenderSettings, atlas_size: u32) -> FrameUn
             2.0 / (proj.y_axis.y * s.height as f32),
         ],
         sky: SKY.extend(1.0).to_array(),
+        soft: [
+            s.soft.blocker_taps as f32,
+            s.soft.filter_taps as f32,
+            s.soft.max_penumbra,
+            0.0,
+        ],
     }
 }
 

@@ -10,7 +10,7 @@ use manyshadows_scene::atlas::FitPolicy;
 use crate::error::{RenderError, Technique};
 use crate::frame::clusters::{ClusterOptions, LightLoop};
 use crate::shadows::irregular::maps::IrregularOptions;
-use crate::shadows::options::{Pcf, ShadowBias, ShadowOptions};
+use crate::shadows::options::{Pcf, ShadowBias, ShadowOptions, SoftShadows};
 use crate::shadows::raytraced::accel::RayOptions;
 use crate::shadows::source::SourceSettings;
 use crate::shadows::vsm::plan::VirtualOptions;
@@ -44,6 +44,8 @@ pub struct RenderSettings {
     pub pcf: Pcf,
     /// Receiver bias.
     pub bias: ShadowBias,
+    /// Soft shadows of sized lights (taps, largest penumbra).
+    pub soft: SoftShadows,
     /// Largest atlas side (clamped to the adapter's limit); `None` =
     /// [`DEFAULT_MAX_ATLAS_SIZE`](crate::shadows::plan::DEFAULT_MAX_ATLAS_SIZE).
     pub max_atlas_size: Option<u32>,
@@ -75,6 +77,7 @@ impl Default for RenderSettings {
             point_shadows: Default::default(),
             pcf: Pcf::default(),
             bias: ShadowBias::default(),
+            soft: SoftShadows::default(),
             max_atlas_size: None,
             fit: FitPolicy::default(),
             visibility: false,
@@ -137,6 +140,7 @@ impl RenderSettings {
                 return Err(bad(option, v, "a finite number of texels"));
             }
         }
+        self.soft.validate()?;
         self.clusters.validate()?;
         self.irregular.validate()?;
         self.virtual_maps.validate()?;
@@ -155,6 +159,7 @@ with_setters!(RenderSettings {
     with_point_shadows: point_shadows: manyshadows_scene::light_space::PointShadows,
     with_pcf: pcf: Pcf,
     with_bias: bias: ShadowBias,
+    with_soft: soft: SoftShadows,
     with_max_atlas_size: max_atlas_size: Option<u32>,
     with_fit: fit: FitPolicy,
     with_visibility: visibility: bool,

@@ -24,6 +24,9 @@ struct FrameUniforms {
     bias: vec4<f32>,
     // Ambient-only colour of pixels no light reaches, and sky colour: rgb + unused.
     sky: vec4<f32>,
+    // Soft shadows of sized lights (pcss.wgsl): blocker-search taps, filter taps, largest
+    // penumbra radius in shadow texels, unused.
+    soft: vec4<f32>,
 }
 
 struct InstanceData {

@@ -32,6 +32,8 @@ pub struct FrameUniforms {
     pub bias: [f32; 4],
     /// Sky colour (rgb).
     pub sky: [f32; 4],
+    /// Soft shadows: blocker-search taps, filter taps, largest penumbra radius in texels.
+    pub soft: [f32; 4],
 }
 
 /// Per-instance data (`InstanceData`).
@@ -121,7 +123,8 @@ pub struct LightData {
     pub direction: [f32; 4],
     /// rgb ambient, w: range.
     pub ambient: [f32; 4],
-    /// rgb diffuse.
+    /// rgb diffuse, w: the light's size as soft shadows read it (a spot or point light's
+    /// radius, a directional light's tangent of half its angular diameter; 0: hard).
     pub diffuse: [f32; 4],
     /// rgb specular.
     pub specular: [f32; 4],
@@ -170,12 +173,21 @@ impl LightData {
             position: position.extend(1.0).to_array(),
             direction: direction.extend(cos_cutoff).to_array(),
             ambient: light.ambient.extend(range).to_array(),
-            diffuse: light.diffuse.extend(0.0).to_array(),
+            diffuse: light.diffuse.extend(soft_size(light)).to_array(),
             specular: light.specular.extend(0.0).to_array(),
             attenuation: [a.constant, a.linear, a.quadratic, 0.0],
             splits,
             shadow: [first_view, views.len() as u32, kind, 0],
         }
+    }
+}
+
+/// A light's size as the shaders read it: radius (spot, point) or the tangent of half the
+/// angular diameter (directional); 0 for a hard light.
+fn soft_size(light: &Light) -> f32 {
+    match light.kind {
+        LightKind::Directional { .. } => (0.5 * light.size).to_radians().tan(),
+        _ => light.size,
     }
 }
 
@@ -341,7 +353,8 @@ mod tests {
             viewport,
             counts,
             bias,
-            sky
+            sky,
+            soft
         );
         same_layout!(InstanceData, model, normal, material);
         same_layout!(MaterialData, ambient, diffuse, specular, texture);

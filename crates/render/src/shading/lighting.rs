@@ -10,7 +10,7 @@ use crate::shadows::source::ShadowOutput;
 
 /// First binding of a shadow source's own declarations (the virtual maps' page table, the
 /// ray-traced scene) in the lighting and visibility passes.
-pub(crate) const SOURCE_FIRST_BINDING: u32 = 12;
+pub(crate) const SOURCE_FIRST_BINDING: u32 = 13;
 
 /// Output colour format (sRGB-encoded on write).
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -133,6 +133,11 @@ impl LightingPass {
             crate::gpu::pipelines::uniform_entry(9, frag),
             crate::gpu::pipelines::storage_entry(10, frag),
             crate::gpu::pipelines::storage_entry(11, frag),
+            crate::gpu::pipelines::texture_entry(
+                12,
+                wgpu::TextureSampleType::Float { filterable: false },
+                frag,
+            ),
         ];
         entries.extend(inputs.shadows.extra_layout(SOURCE_FIRST_BINDING, frag));
         let layout = crate::gpu::pipelines::bind_group_layout(device, "lighting.layout", &entries);
@@ -244,6 +249,10 @@ fn bind(
         wgpu::BindGroupEntry {
             binding: 7,
             resource: wgpu::BindingResource::Sampler(sampler),
+        },
+        wgpu::BindGroupEntry {
+            binding: 12,
+            resource: wgpu::BindingResource::TextureView(inputs.shadow_texture()),
         },
     ]);
     device.create_bind_group(&wgpu::BindGroupDescriptor {

@@ -20,6 +20,17 @@
 @group(0) @binding(9) var<uniform> clusters: ClusterUniforms;
 @group(0) @binding(10) var<storage, read> cluster_slots: array<u32>;
 @group(0) @binding(11) var<storage, read> cluster_masks: array<u32>;
+// The shadow texture's raw depths for the soft shadows' blocker search: `atlas` again, read
+// as floats (on OpenGL one texture cannot be paired with two samplers).
+@group(0) @binding(12) var atlas_depth: texture_2d<f32>;
+
+fn shadow_depth_at(texel: vec2<i32>) -> f32 {
+    return textureLoad(atlas_depth, texel, 0).r;
+}
+
+fn shadow_compare_at(t: vec2<f32>, depth: f32) -> f32 {
+    return textureSampleCompareLevel(atlas, cmp_linear, t / f32(frame.counts.z), depth);
+}
 
 // Scale of the linear colour before tone mapping.
 const EXPOSURE: f32 = 1.4;
@@ -132,10 +143,17 @@ fn light_lit(i: u32, s: Surface) -> f32 {
         let word = vis_mask[(u32(s.px.y) * u32(frame.viewport.x) + u32(s.px.x)) * frame.counts.w + i / 32u];
         return f32((word >> (i % 32u)) & 1u);
     }
+    let light = lights[i];
     if (SHADOW_RAYS) {
-        return ray_lit(lights[i], s.p, s.n);
+        return ray_lit(light, s.p, s.n);
     }
-    return shadow_factor(shadow_coord(lights[i], s.p, s.n, s.view_depth));
+    let c = shadow_coord(light, s.p, s.n, s.view_depth);
+    if (light.diffuse.w > 0.0 && c.valid) {
+        let cos_t = clamp(dot(s.n, to_light(light, s.p)), 1e-4, 1.0);
+        let tan_t = sqrt(max(1.0 - cos_t * cos_t, 0.0)) / cos_t;
+        return soft_shadow(light.diffuse.w, c, tan_t, soft_rotation(s.px));
+    }
+    return shadow_factor(c);
 }
 
 // `color` plus light `i`'s contribution at `s` (nothing beyond the light's reach). Both light

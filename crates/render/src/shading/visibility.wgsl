@@ -25,6 +25,23 @@ struct VisibilityParams {
 @group(0) @binding(10) var<storage, read> cluster_slots: array<u32>;
 @group(0) @binding(11) var<storage, read> cluster_masks: array<u32>;
 
+fn shadow_depth_at(texel: vec2<i32>) -> f32 {
+    return textureLoad(atlas, texel, 0).r;
+}
+
+// The bilinearly weighted comparison a comparison sampler makes, from the four texels' loads.
+fn shadow_compare_at(t: vec2<f32>, depth: f32) -> f32 {
+    let f = t - vec2<f32>(0.5);
+    let b = floor(f);
+    let w = f - b;
+    let i = vec2<i32>(b);
+    let c00 = select(0.0, 1.0, depth <= shadow_depth_at(i));
+    let c10 = select(0.0, 1.0, depth <= shadow_depth_at(i + vec2<i32>(1, 0)));
+    let c01 = select(0.0, 1.0, depth <= shadow_depth_at(i + vec2<i32>(0, 1)));
+    let c11 = select(0.0, 1.0, depth <= shadow_depth_at(i + vec2<i32>(1, 1)));
+    return mix(mix(c00, c10, w.x), mix(c01, c11, w.x), w.y);
+}
+
 // Bit b set = light 32·word + b is lit at the point (in reach, and the atlas says unoccluded),
 // for the lights whose bits are set in `candidates`.
 fn word_bits(word: u32, candidates: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) -> u32 {

@@ -12,6 +12,10 @@ pub const SHADOW_LOOKUP: &str = include_str!("shadow_lookup.wgsl");
 /// The dual-paraboloid warp.
 pub const PARABOLOID: &str = include_str!("paraboloid.wgsl");
 
+/// Soft shadows of sized lights (percentage-closer soft shadows); the pass defines the two
+/// reads of its shadow texture that it calls.
+pub const PCSS: &str = include_str!("pcss.wgsl");
+
 /// `shadow_coord` of the passes when shadows come from the atlas's tiles.
 const ATLAS_COORD: &str = "fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, \
      view_depth: f32) -> ShadowCoord {\n    return atlas_coord(light, p, n, view_depth);\n}";
@@ -33,7 +37,8 @@ pub struct LookupWgsl {
     pub enables: &'static str,
     /// Its WGSL, declarations from binding `first` on.
     pub source: fn(first: u32) -> String,
-    /// The device features it compiles only with.
+    /// The device features it compiles only with (the registry's shader test reads them).
+    #[cfg_attr(not(test), allow(dead_code))]
     pub features: wgpu::Features,
 }
 
@@ -55,7 +60,8 @@ pub fn atlas_coord() -> &'static str {
     ATLAS_COORD
 }
 
-/// A shadow-reading pass: `lookup`'s enables, the shared parts, `lookup` with its declarations
+/// A shadow-reading pass: `lookup`'s enables, the shared parts (with the soft-shadow filter),
+/// `lookup` with its declarations
 /// from binding `first`, then `pass` (the pass's own WGSL, which declares bindings below
 /// `first`).
 pub fn compose_reader(lookup: &LookupWgsl, first: u32, pass: &str) -> String {
@@ -64,6 +70,7 @@ pub fn compose_reader(lookup: &LookupWgsl, first: u32, pass: &str) -> String {
         COMMON,
         PARABOLOID,
         SHADOW_LOOKUP,
+        PCSS,
         &(lookup.source)(first),
         pass,
     ]

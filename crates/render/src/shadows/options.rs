@@ -3,6 +3,7 @@
 //! the receiver [`ShadowBias`]. Plain data on the shadows' lowest floor; `RenderSettings`
 //! (above every technique) holds them.
 
+use crate::error::RenderError;
 use crate::gpu_scene::caster_layout::CasterOptions;
 
 /// Which triangles single-pass techniques drop per view before rasterization (seed 000
@@ -173,5 +174,66 @@ impl ShadowBias {
             slope,
             normal_offset,
         }
+    }
+}
+
+/// Soft shadows of sized lights in the shadow-map techniques: percentage-closer soft shadows
+/// (a blocker search, the penumbra it implies, a filter of that size), both with rotated
+/// Vogel-disc taps. Lights of size 0 keep the hard test and its PCF.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct SoftShadows {
+    /// Depth taps of the blocker search.
+    pub blocker_taps: u32,
+    /// Comparison taps of the penumbra filter.
+    pub filter_taps: u32,
+    /// Largest penumbra radius in shadow texels (the search and the filter stop there).
+    pub max_penumbra: f32,
+}
+
+impl Default for SoftShadows {
+    fn default() -> Self {
+        Self {
+            blocker_taps: 16,
+            filter_taps: 16,
+            max_penumbra: 32.0,
+        }
+    }
+}
+
+with_setters!(SoftShadows {
+    with_blocker_taps: blocker_taps: u32,
+    with_filter_taps: filter_taps: u32,
+    with_max_penumbra: max_penumbra: f32,
+});
+
+/// Most taps of the blocker search or the filter.
+pub const MAX_SOFT_TAPS: u32 = 64;
+
+impl SoftShadows {
+    /// Checks the ranges ([`RenderError::InvalidOption`] names the first out of range).
+    pub fn validate(&self) -> Result<(), RenderError> {
+        if !(1..=MAX_SOFT_TAPS).contains(&self.blocker_taps) {
+            return Err(RenderError::invalid_option(
+                "soft.blocker_taps",
+                self.blocker_taps,
+                "1 to 64 taps",
+            ));
+        }
+        if !(1..=MAX_SOFT_TAPS).contains(&self.filter_taps) {
+            return Err(RenderError::invalid_option(
+                "soft.filter_taps",
+                self.filter_taps,
+                "1 to 64 taps",
+            ));
+        }
+        if !(self.max_penumbra.is_finite() && (1.0..=256.0).contains(&self.max_penumbra)) {
+            return Err(RenderError::invalid_option(
+                "soft.max_penumbra",
+                self.max_penumbra,
+                "1 to 256 shadow texels",
+            ));
+        }
+        Ok(())
     }
 }

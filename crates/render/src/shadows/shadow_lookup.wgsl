@@ -13,6 +13,10 @@ struct ShadowCoord {
     // False when the light casts no shadow here (no shadow view, beyond the last cascade,
     // outside the view): the point counts as unoccluded.
     valid: bool,
+    // What soft shadows need of the view (pcss.wgsl): near, far, the world size of one of
+    // these texels (per unit of distance from the light where `w` is 0 or 2), and the
+    // projection (0 perspective, 1 orthographic, 2 dual paraboloid).
+    lin: vec4<f32>,
 }
 
 // Index of the shadow view that covers `p` for `light`, or -1.
@@ -117,6 +121,7 @@ fn atlas_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, view_depth: f32) ->
     out.tile_max = sv.tile.xy + vec2<f32>(sv.tile.z);
     out.texel = sv.tile.xy + uv * sv.tile.z;
     out.depth = clamp(ndc.z, 0.0, 1.0);
+    out.lin = sv.params;
     out.valid = true;
     return out;
 }

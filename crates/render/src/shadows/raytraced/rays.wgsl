@@ -7,7 +7,7 @@
 // front or back, the parts of alpha-masked surfaces their mask keeps — shadows the point. No
 // shadow-map bias applies: there is no sampling error to hide.
 //
-// Bindings (`first` = 12): the top-level acceleration structure, the ray geometry (per TLAS
+// Bindings (`first` = 13): the top-level acceleration structure, the ray geometry (per TLAS
 // instance its masked-triangle table base and material, per masked triangle its three texture
 // coordinates, then the mask tail of alpha_mask.wgsl: records, coverage bits, header) and the
 // sampling parameters.

@@ -46,6 +46,9 @@ fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, view_depth: f32) -
             out.tile_max = tile + vec2<f32>(side);
             out.texel = tile + (at.uv * pages - cell) * side;
             out.depth = at.depth;
+            // The texel of this page per unit of distance (perspective) or in the world.
+            let texel = face.params.z * f32(1u << (face.table.y - level)) * select(1.0, 2.0, side < f32(vsm.pool.z));
+            out.lin = vec4<f32>(face.params.x, face.params.y, texel, face.params.w);
             out.valid = true;
             return out;
         }

@@ -1,0 +1,106 @@
+// Soft shadows of sized lights: percentage-closer soft shadows (Fernando 2005). A blocker
+// search averages the depth of the casters between the receiver and the light within the
+// region the light can be seen through; the light's size and the two distances give the
+// penumbra's radius in texels; a filter of that radius averages comparison taps. Taps lie on a
+// Vogel disc (golden-angle spiral) turned by a per-pixel angle, so neighbouring pixels sample
+// different directions. Every tap stays inside the view's tile or page.
+//
+// The includer defines the two reads of its shadow texture:
+//   shadow_depth_at(texel: vec2<i32>) -> f32        the raw depth of a texel;
+//   shadow_compare_at(t: vec2<f32>, depth: f32) -> f32
+//                                                    bilinearly weighted comparison around
+//                                                    continuous texel coordinates `t`.
+// Needs `frame: FrameUniforms` (`soft`: taps and the largest radius) and `ShadowCoord`.
+
+const GOLDEN_ANGLE: f32 = 2.3999632;
+
+// Distance from the light of a depth of the view (`lin`: near, far, texel size, projection):
+// along the view's axis for a perspective view, from the view's origin plane for an
+// orthographic one, from the light for a dual paraboloid (both linear in depth).
+fn soft_distance(z: f32, lin: vec4<f32>) -> f32 {
+    if (lin.w > 0.5) {
+        return lin.x + z * (lin.y - lin.x);
+    }
+    return lin.x * lin.y / max(lin.y - z * (lin.y - lin.x), 1e-20);
+}
+
+// The depth of the view at distance `d` (the inverse of `soft_distance`).
+fn soft_depth(d: f32, lin: vec4<f32>) -> f32 {
+    if (lin.w > 0.5) {
+        return (d - lin.x) / (lin.y - lin.x);
+    }
+    return lin.y * (d - lin.x) / (max(d, 1e-20) * (lin.y - lin.x));
+}
+
+// World size of one texel at distance `d`.
+fn soft_texel_world(d: f32, lin: vec4<f32>) -> f32 {
+    if (abs(lin.w - 1.0) < 0.5) {
+        return lin.z;
+    }
+    return lin.z * d;
+}
+
+// Radius in texels over which a light of size `size` (radius, or tangent of half the angle
+// of a directional light) blurs what a caster at distance `d_b` shadows at distance `d_r`.
+fn soft_radius(size: f32, d_b: f32, d_r: f32, lin: vec4<f32>) -> f32 {
+    if (abs(lin.w - 1.0) < 0.5) {
+        return size * max(d_r - d_b, 0.0) / lin.z;
+    }
+    return size * max(1.0 / max(d_b, 1e-6) - 1.0 / max(d_r, 1e-6), 0.0) / lin.z;
+}
+
+// Tap `i` of `n` on the unit Vogel disc, turned by `rot` radians.
+fn vogel(i: u32, n: u32, rot: f32) -> vec2<f32> {
+    let r = sqrt((f32(i) + 0.5) / f32(n));
+    let a = f32(i) * GOLDEN_ANGLE + rot;
+    return r * vec2<f32>(cos(a), sin(a));
+}
+
+// The depth a tap `r` texels from the receiver compares against: the receiver's, moved
+// towards the light by how far a surface tilted `tan_t` from the light rises over `r` texels
+// (plus one texel), so the receiver's own surface never shadows its filter.
+fn soft_reference(c: ShadowCoord, d_r: f32, r: f32, tan_t: f32) -> f32 {
+    let rise = (r * tan_t + 1.0) * soft_texel_world(d_r, c.lin);
+    return min(c.depth, soft_depth(max(d_r - rise, c.lin.x), c.lin));
+}
+
+// Fraction of a light of size `size` that reaches the receiver at `c` (0 in umbra, 1 lit);
+// `tan_t` is the tangent of the angle between the receiver's normal and the light, `rot` the
+// pixel's angle for the taps.
+fn soft_shadow(size: f32, c: ShadowCoord, tan_t: f32, rot: f32) -> f32 {
+    let d_r = soft_distance(c.depth, c.lin);
+    let max_r = frame.soft.z;
+    let slope = min(tan_t, 10.0);
+    // Blockers can lie anywhere between the view's near plane and the receiver.
+    let search = clamp(soft_radius(size, c.lin.x, d_r, c.lin), 1.0, max_r);
+    let nb = u32(frame.soft.x);
+    var sum = 0.0;
+    var blockers = 0.0;
+    for (var i = 0u; i < nb; i = i + 1u) {
+        let off = vogel(i, nb, rot) * search;
+        let t = clamp(floor(c.texel + off), c.tile_min, c.tile_max - vec2<f32>(1.0));
+        let z = shadow_depth_at(vec2<i32>(t));
+        if (z < soft_reference(c, d_r, length(off), slope)) {
+            sum = sum + soft_distance(z, c.lin);
+            blockers = blockers + 1.0;
+        }
+    }
+    if (blockers == 0.0) {
+        return 1.0;
+    }
+    let radius = clamp(soft_radius(size, sum / blockers, d_r, c.lin), 0.5, max_r);
+    let nf = u32(frame.soft.y);
+    var lit = 0.0;
+    for (var i = 0u; i < nf; i = i + 1u) {
+        let off = vogel(i, nf, rot + 1.0) * radius;
+        let t = clamp(c.texel + off, c.tile_min + vec2<f32>(0.5), c.tile_max - vec2<f32>(0.5));
+        lit = lit + shadow_compare_at(t, soft_reference(c, d_r, length(off), slope));
+    }
+    return lit / f32(nf);
+}
+
+// A pixel's angle for the taps: interleaved gradient noise (Jimenez 2014) of its position.
+fn soft_rotation(px: vec2<i32>) -> f32 {
+    let p = vec2<f32>(px);
+    return 6.2831853 * fract(52.982919 * fract(0.06711056 * p.x + 0.00583715 * p.y));
+}
