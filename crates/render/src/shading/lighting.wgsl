@@ -145,13 +145,14 @@ fn light_lit(i: u32, s: Surface) -> f32 {
     }
     let light = lights[i];
     if (SHADOW_RAYS) {
+        if (light.diffuse.w > 0.0) {
+            return ray_lit_area(light, s.p, s.n, ray_area_side(), soft_jitter(s.px, i));
+        }
         return ray_lit(light, s.p, s.n);
     }
     let c = shadow_coord(light, s.p, s.n, s.view_depth);
     if (light.diffuse.w > 0.0 && c.valid) {
-        let cos_t = clamp(dot(s.n, to_light(light, s.p)), 1e-4, 1.0);
-        let tan_t = sqrt(max(1.0 - cos_t * cos_t, 0.0)) / cos_t;
-        return soft_shadow(light.diffuse.w, c, tan_t, soft_rotation(s.px));
+        return soft_shadow(light.diffuse.w, c, soft_rotation(s.px));
     }
     return shadow_factor(c);
 }

@@ -20,9 +20,20 @@ pub const PCSS: &str = include_str!("pcss.wgsl");
 const ATLAS_COORD: &str = "fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, \
      view_depth: f32) -> ShadowCoord {\n    return atlas_coord(light, p, n, view_depth);\n}";
 
+/// The soft filter's taps in an atlas tile (`ShadowCoord::soft` counts texels from the tile's
+/// corner): raw depth, and the pass's bilinear comparison, clamped to the tile.
+pub const ATLAS_TAPS: &str = "fn soft_tap_depth(c: ShadowCoord, t: vec2<f32>) -> f32 {\n\
+     \x20   return shadow_depth_at(vec2<i32>(c.tile_min + clamp(floor(t), vec2<f32>(0.0), vec2<f32>(c.soft.z - 1.0))));\n\
+     }\n\
+     fn soft_tap_compare(c: ShadowCoord, t: vec2<f32>, depth: f32) -> f32 {\n\
+     \x20   return shadow_compare_at(c.tile_min + clamp(t, vec2<f32>(0.5), vec2<f32>(c.soft.z - 0.5)), depth);\n\
+     }";
+
 /// What the passes call where shadows do not come from rays: no ray is ever cast.
 pub const NO_RAYS: &str = "const SHADOW_RAYS: bool = false;\n\
      fn ray_lit(light: LightData, p: vec3<f32>, n: vec3<f32>) -> f32 { return 1.0; }\n\
+     fn ray_lit_area(light: LightData, p: vec3<f32>, n: vec3<f32>, m: u32, jitter: vec2<f32>) -> f32 { return 1.0; }\n\
+     fn ray_area_side() -> u32 { return 1u; }\n\
      fn ray_samples() -> u32 { return 0u; }\n\
      fn ray_seed() -> u32 { return 0u; }";
 
@@ -43,7 +54,7 @@ pub struct LookupWgsl {
 }
 
 fn atlas_lookup(_first: u32) -> String {
-    format!("{ATLAS_COORD}\n{NO_RAYS}")
+    format!("{ATLAS_COORD}\n{ATLAS_TAPS}\n{NO_RAYS}")
 }
 
 /// Shadows from the atlas's tiles through the view table (every atlas technique, and the

@@ -5,11 +5,10 @@
 // Vogel disc (golden-angle spiral) turned by a per-pixel angle, so neighbouring pixels sample
 // different directions. Every tap stays inside the view's tile or page.
 //
-// The includer defines the two reads of its shadow texture:
-//   shadow_depth_at(texel: vec2<i32>) -> f32        the raw depth of a texel;
-//   shadow_compare_at(t: vec2<f32>, depth: f32) -> f32
-//                                                    bilinearly weighted comparison around
-//                                                    continuous texel coordinates `t`.
+// Taps are read through the source's lookup, in the coordinate's soft texel space
+// (`ShadowCoord::soft`): `soft_tap_depth(c, t)` (raw depth) and `soft_tap_compare(c, t,
+// depth)` (bilinearly weighted comparison); the atlas's go through the pass's
+// `shadow_depth_at` and `shadow_compare_at`, virtual maps' find each tap's page.
 // Needs `frame: FrameUniforms` (`soft`: taps and the largest radius) and `ShadowCoord`.
 
 const GOLDEN_ANGLE: f32 = 2.3999632;
@@ -56,21 +55,19 @@ fn vogel(i: u32, n: u32, rot: f32) -> vec2<f32> {
     return r * vec2<f32>(cos(a), sin(a));
 }
 
-// The depth a tap `r` texels from the receiver compares against: the receiver's, moved
-// towards the light by how far a surface tilted `tan_t` from the light rises over `r` texels
-// (plus one texel), so the receiver's own surface never shadows its filter.
-fn soft_reference(c: ShadowCoord, d_r: f32, r: f32, tan_t: f32) -> f32 {
-    let rise = (r * tan_t + 1.0) * soft_texel_world(d_r, c.lin);
-    return min(c.depth, soft_depth(max(d_r - rise, c.lin.x), c.lin));
+// The depth a tap `off` texels from the receiver compares against: the receiver's tangent
+// plane there, moved one texel towards the light, so the receiver's own surface never
+// shadows its filter.
+fn soft_reference(c: ShadowCoord, d_r: f32, off: vec2<f32>) -> f32 {
+    let one = c.depth - soft_depth(max(d_r - soft_texel_world(d_r, c.lin), c.lin.x), c.lin);
+    return c.depth + dot(c.grad, off) - one;
 }
 
 // Fraction of a light of size `size` that reaches the receiver at `c` (0 in umbra, 1 lit);
-// `tan_t` is the tangent of the angle between the receiver's normal and the light, `rot` the
-// pixel's angle for the taps.
-fn soft_shadow(size: f32, c: ShadowCoord, tan_t: f32, rot: f32) -> f32 {
+// `rot` is the pixel's angle for the taps.
+fn soft_shadow(size: f32, c: ShadowCoord, rot: f32) -> f32 {
     let d_r = soft_distance(c.depth, c.lin);
     let max_r = frame.soft.z;
-    let slope = min(tan_t, 10.0);
     // Blockers can lie anywhere between the view's near plane and the receiver.
     let search = clamp(soft_radius(size, c.lin.x, d_r, c.lin), 1.0, max_r);
     let nb = u32(frame.soft.x);
@@ -78,9 +75,9 @@ fn soft_shadow(size: f32, c: ShadowCoord, tan_t: f32, rot: f32) -> f32 {
     var blockers = 0.0;
     for (var i = 0u; i < nb; i = i + 1u) {
         let off = vogel(i, nb, rot) * search;
-        let t = clamp(floor(c.texel + off), c.tile_min, c.tile_max - vec2<f32>(1.0));
-        let z = shadow_depth_at(vec2<i32>(t));
-        if (z < soft_reference(c, d_r, length(off), slope)) {
+        let t = floor(c.soft.xy + off) + vec2<f32>(0.5);
+        let z = soft_tap_depth(c, t);
+        if (z < soft_reference(c, d_r, t - c.soft.xy)) {
             sum = sum + soft_distance(z, c.lin);
             blockers = blockers + 1.0;
         }
@@ -93,10 +90,24 @@ fn soft_shadow(size: f32, c: ShadowCoord, tan_t: f32, rot: f32) -> f32 {
     var lit = 0.0;
     for (var i = 0u; i < nf; i = i + 1u) {
         let off = vogel(i, nf, rot + 1.0) * radius;
-        let t = clamp(c.texel + off, c.tile_min + vec2<f32>(0.5), c.tile_max - vec2<f32>(0.5));
-        lit = lit + shadow_compare_at(t, soft_reference(c, d_r, length(off), slope));
+        lit = lit + soft_tap_compare(c, c.soft.xy + off, soft_reference(c, d_r, off));
     }
     return lit / f32(nf);
+}
+
+// A pixel's shift of a sized light's sample grid for light `i` (shadow rays): hashed from the
+// pixel, the light and the frame's seed, so strata differ between neighbours and frames.
+fn soft_jitter(px: vec2<i32>, i: u32) -> vec2<f32> {
+    var h = soft_hash(u32(px.x) ^ soft_hash(u32(px.y) ^ soft_hash(i ^ soft_hash(ray_seed()))));
+    let a = f32(h >> 8u) / 16777216.0;
+    h = soft_hash(h);
+    return vec2<f32>(a, f32(h >> 8u) / 16777216.0);
+}
+
+fn soft_hash(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
 }
 
 // A pixel's angle for the taps: interleaved gradient noise (Jimenez 2014) of its position.

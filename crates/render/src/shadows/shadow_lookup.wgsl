@@ -17,6 +17,44 @@ struct ShadowCoord {
     // these texels (per unit of distance from the light where `w` is 0 or 2), and the
     // projection (0 perspective, 1 orthographic, 2 dual paraboloid).
     lin: vec4<f32>,
+    // Sized lights only: how the receiver's tangent plane's depth changes per texel (x, y), so
+    // wide soft-shadow filters compare each tap against the plane, not the centre's depth.
+    grad: vec2<f32>,
+    // Sized lights only: the point in the soft filter's texel space (xy, from 0 to side z):
+    // the view's tile for the atlas, the whole face at one level for virtual maps, whose taps
+    // find their own pages (`soft_tap_depth`, `soft_tap_compare` of the lookup).
+    soft: vec3<f32>,
+    // What the lookup's taps need to find texels (virtual maps: face, level).
+    src: vec2<u32>,
+}
+
+// A clip position as the view's continuous coordinates (0..1, y down) and depth.
+fn view_uvz(clip: vec4<f32>) -> vec3<f32> {
+    let ndc = clip.xyz / clip.w;
+    return vec3<f32>(ndc.xy * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5), ndc.z);
+}
+
+// Two unit tangents of the plane with normal `n`.
+fn plane_tangents(n: vec3<f32>) -> mat2x3<f32> {
+    let a = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(n.x) > 0.9);
+    let t1 = normalize(cross(n, a));
+    return mat2x3<f32>(t1, cross(n, t1));
+}
+
+// Depth change per unit of the view's coordinates of the plane through three of its points
+// projected (`view_uvz`), bounded so a plane seen edge-on from the light stays finite.
+fn plane_gradient(q0: vec3<f32>, q1: vec3<f32>, q2: vec3<f32>) -> vec2<f32> {
+    let a = q1 - q0;
+    let b = q2 - q0;
+    let det = a.x * b.y - a.y * b.x;
+    if (abs(det) < 1e-12) {
+        return vec2<f32>(0.0);
+    }
+    let g = vec2<f32>(a.z * b.y - b.z * a.y, b.z * a.x - a.z * b.x) / det;
+    // At most ten times the depth change of one step across the plane's points.
+    let most = 10.0 * max(abs(a.z), abs(b.z)) / max(min(length(a.xy), length(b.xy)), 1e-12);
+    let len = length(g);
+    return select(g, g * (most / len), len > most);
 }
 
 // Index of the shadow view that covers `p` for `light`, or -1.
@@ -117,6 +155,19 @@ fn atlas_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, view_depth: f32) ->
         }
     }
     let uv = clamp(ndc.xy * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5), vec2<f32>(0.0), vec2<f32>(1.0));
+    if (light.diffuse.w > 0.0) {
+        // The tangent plane through the biased point, one texel away on each side.
+        let t = plane_tangents(n) * texel_world;
+        let q = p + offset;
+        var c1 = sv.view_proj * vec4<f32>(q + t[0], 1.0);
+        var c2 = sv.view_proj * vec4<f32>(q + t[1], 1.0);
+        if (paraboloid) {
+            c1 = paraboloid_clip(sv.view_proj, sv.params, vec4<f32>(q + t[0], 1.0)).clip;
+            c2 = paraboloid_clip(sv.view_proj, sv.params, vec4<f32>(q + t[1], 1.0)).clip;
+        }
+        out.grad = plane_gradient(view_uvz(clip), view_uvz(c1), view_uvz(c2)) / sv.tile.z;
+        out.soft = vec3<f32>(uv * sv.tile.z, sv.tile.z);
+    }
     out.tile_min = sv.tile.xy;
     out.tile_max = sv.tile.xy + vec2<f32>(sv.tile.z);
     out.texel = sv.tile.xy + uv * sv.tile.z;

@@ -27,7 +27,7 @@ pub const MAX_LIGHT_SAMPLES: u32 = 16;
 
 /// Knobs of ray-traced shadows.
 #[non_exhaustive]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RayOptions {
     /// Lights a pixel traces a shadow ray to: 0 (default) traces every light of the pixel's
     /// cluster, exactly; `K` in `1..=16` picks K of them by resampled importance sampling
@@ -36,7 +36,23 @@ pub struct RayOptions {
     pub light_samples: u32,
     /// Seed of the sampling (the same seed gives the same image).
     pub seed: u32,
+    /// Samples per side of the stratified grid over a sized light's shape (the light's
+    /// fraction seen from a pixel is traced with `area_samples²` rays; 0 counts as 1).
+    pub area_samples: u32,
 }
+
+impl Default for RayOptions {
+    fn default() -> Self {
+        Self {
+            light_samples: 0,
+            seed: 0,
+            area_samples: DEFAULT_AREA_SAMPLES,
+        }
+    }
+}
+
+/// Default samples per side of a sized light's grid (4 rays per pixel and light).
+pub const DEFAULT_AREA_SAMPLES: u32 = 2;
 
 impl RayOptions {
     /// Checks every value that has a range of its own ([`RenderError::InvalidOption`] names
@@ -49,6 +65,13 @@ impl RayOptions {
                 "0 (every light) to 16 sampled lights per pixel",
             ));
         }
+        if self.area_samples > 8 {
+            return Err(RenderError::invalid_option(
+                "rays.area_samples",
+                self.area_samples,
+                "0 to 8 samples per side of a sized light's grid (64 rays)",
+            ));
+        }
         Ok(())
     }
 }
@@ -56,13 +79,14 @@ impl RayOptions {
 with_setters!(RayOptions {
     with_light_samples: light_samples: u32,
     with_seed: seed: u32,
+    with_area_samples: area_samples: u32,
 });
 
 /// `RayParams` of rays.wgsl.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct RayParams {
-    /// Samples per pixel, seed, unused, unused.
+    /// Samples per pixel, seed, samples per side of a sized light's grid, unused.
     pub(crate) samples: [u32; 4],
 }
 
@@ -298,7 +322,7 @@ impl RayAccel {
         let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("raytraced.params"),
             contents: bytemuck::bytes_of(&RayParams {
-                samples: [options.light_samples, options.seed, 0, 0],
+                samples: [options.light_samples, options.seed, options.area_samples, 0],
             }),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });

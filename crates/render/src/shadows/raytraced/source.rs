@@ -16,7 +16,7 @@ use crate::gpu_scene::casters::ALPHA_MASK;
 use crate::gpu_scene::instances::GpuScene;
 use crate::shadows::descriptor::{Build, Culling, Need, TechniqueInfo};
 use crate::shadows::image::ShadowPicture;
-use crate::shadows::lookup::{atlas_coord, LookupWgsl};
+use crate::shadows::lookup::{atlas_coord, LookupWgsl, ATLAS_TAPS};
 use crate::shadows::plan::ShadowPlan;
 use crate::shadows::raytraced::accel::{RayAccel, RayOptions};
 use crate::shadows::source::{
@@ -63,7 +63,7 @@ const RAYS_LOOKUP: LookupWgsl = LookupWgsl {
             .replace("RT_FIRST", &first.to_string())
             .replace("RT_SECOND", &(first + 1).to_string())
             .replace("RT_THIRD", &(first + 2).to_string());
-        format!("{}\n{ALPHA_MASK}\n{rays}", atlas_coord())
+        format!("{}\n{ATLAS_TAPS}\n{ALPHA_MASK}\n{rays}", atlas_coord())
     },
     features: wgpu::Features::EXPERIMENTAL_RAY_QUERY,
 };

@@ -49,6 +49,22 @@ fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, view_depth: f32) -
             // The texel of this page per unit of distance (perspective) or in the world.
             let texel = face.params.z * f32(1u << (face.table.y - level)) * select(1.0, 2.0, side < f32(vsm.pool.z));
             out.lin = vec4<f32>(face.params.x, face.params.y, texel, face.params.w);
+            if (light.diffuse.w > 0.0) {
+                // The receiver's tangent plane, one texel away on each side, in page texels.
+                let tw = select(texel, texel * max(ray.p.w, 0.0), face.params.w < 0.5);
+                let t = plane_tangents(n) * tw;
+                let r1 = vsm_ray(light, face, p + t[0], n);
+                let r2 = vsm_ray(light, face, p + t[1], n);
+                let q0 = ray.p + tw * ray.d;
+                let q1 = r1.p + tw * r1.d;
+                let q2 = r2.p + tw * r2.d;
+                // Taps find their own pages: the soft texel space is the whole face at this
+                // level, in full pages' texels.
+                let full = pages * f32(vsm.pool.z);
+                out.grad = plane_gradient(view_uvz(q0), view_uvz(q1), view_uvz(q2)) / full;
+                out.soft = vec3<f32>(at.uv * full, full);
+                out.src = vec2<u32>(u32(fi), level);
+            }
             out.valid = true;
             return out;
         }
@@ -58,4 +74,54 @@ fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, view_depth: f32) -
         level = level - 1u;
     }
     return out;
+}
+
+// The pool texel (continuous, xy) holding the point `t` of a sized light's soft texel space
+// (the face at level `c.src.y`, in full pages' texels), and 1 in z where that page is
+// resident (0 where it is not: the tap sees no caster).
+fn vsm_tap_texel(c: ShadowCoord, t: vec2<f32>) -> vec3<f32> {
+    let face = vsm_faces[c.src.x];
+    let level = c.src.y;
+    let pages = f32(1u << level);
+    let side = f32(vsm.pool.z);
+    let uv = clamp(t, vec2<f32>(0.0), vec2<f32>(c.soft.z - 1e-3)) / c.soft.z;
+    let e = vsm_table[vsm_entry(face, level, uv)];
+    if (e < VSM_FIRST_PAGE || e == VSM_DENIED) {
+        return vec3<f32>(0.0);
+    }
+    var page = e - VSM_FIRST_PAGE;
+    var s = side;
+    var corner = vec2<f32>(0.0);
+    if (page >= VSM_QUARTER) {
+        let k = page - VSM_QUARTER;
+        page = k / 4u;
+        s = 0.5 * side;
+        corner = vec2<f32>(f32(k % 2u), f32((k / 2u) % 2u)) * s;
+    }
+    let tile = vec2<f32>(f32(page % vsm.pool.y), f32(page / vsm.pool.y)) * side + corner;
+    let cell = min(floor(uv * pages), vec2<f32>(pages - 1.0));
+    let local = clamp((uv * pages - cell) * s, vec2<f32>(0.0), vec2<f32>(s - 1e-3));
+    return vec3<f32>(tile + local, 1.0);
+}
+
+// Raw depth of the texel holding `t` (nothing, depth 1, where its page is not resident).
+fn soft_tap_depth(c: ShadowCoord, t: vec2<f32>) -> f32 {
+    let q = vsm_tap_texel(c, t);
+    if (q.z == 0.0) {
+        return 1.0;
+    }
+    return shadow_depth_at(vec2<i32>(floor(q.xy)));
+}
+
+// Bilinearly weighted comparison around `t`, each of the four texels found in its own page.
+fn soft_tap_compare(c: ShadowCoord, t: vec2<f32>, depth: f32) -> f32 {
+    let f = t - vec2<f32>(0.5);
+    let b = floor(f);
+    let w = f - b;
+    let at = b + vec2<f32>(0.5);
+    let c00 = select(0.0, 1.0, depth <= soft_tap_depth(c, at));
+    let c10 = select(0.0, 1.0, depth <= soft_tap_depth(c, at + vec2<f32>(1.0, 0.0)));
+    let c01 = select(0.0, 1.0, depth <= soft_tap_depth(c, at + vec2<f32>(0.0, 1.0)));
+    let c11 = select(0.0, 1.0, depth <= soft_tap_depth(c, at + vec2<f32>(1.0, 1.0)));
+    return mix(mix(c00, c10, w.x), mix(c01, c11, w.x), w.y);
 }
