@@ -112,7 +112,7 @@ pub use wgpu;
 pub use error::{Fills, RenderError, Technique};
 pub use frame::clusters::{ClusterOptions, ClusterStats, LightLoop};
 pub use frame::gbuffer_readback::GBufferData;
-pub use frame::visibility_mask::{MaskFileError, VisibilityMask};
+pub use frame::visibility_mask::{MaskFileError, SoftVisibility, VisibilityMask};
 pub use gpu::context::{
     feature_use, list_adapters, required_limits, webgpu_default_limits, AdapterRequest, FeatureUse,
     GpuContext,

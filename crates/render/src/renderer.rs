@@ -21,7 +21,7 @@ use crate::error::RenderError;
 use crate::frame::clusters::{LightClusters, LightLoop};
 use crate::frame::gbuffer::GBuffer;
 use crate::frame::gbuffer_readback::GBufferData;
-use crate::frame::visibility_mask::VisibilityMask;
+use crate::frame::visibility_mask::{SoftVisibility, VisibilityMask};
 use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, GpuTimes, Stage};
 use crate::gpu::types::{FrameUniforms, LightData};
@@ -619,7 +619,7 @@ impl Renderer {
                 .technique_stats(ctx)?
                 .and_then(|s| s.downcast::<VirtualStats>().ok())
                 .map(|s| *s);
-            let visibility = match &self.visibility {
+            let (visibility, soft_visibility) = match &self.visibility {
                 Some(pass) => {
                     let span = self.timer.span(Stage::Visibility);
                     let inputs = LightingInputs {
@@ -630,11 +630,20 @@ impl Renderer {
                         clusters: &self.clusters,
                         shadows: self.source.output(),
                     };
-                    Some(pass.run(ctx, &inputs, &self.timer, span)?)
+                    let (mask, soft) = pass.run(ctx, &inputs, &self.timer, span)?;
+                    (Some(mask), soft)
                 }
-                // The source's output is the mask itself.
-                None if self.settings.visibility => self.source.read_mask(ctx)?,
-                None => None,
+                // The source's output is the mask itself: a hard answer, also as soft
+                // visibility.
+                None if self.settings.visibility || self.settings.soft_visibility => {
+                    let mask = self.source.read_mask(ctx)?;
+                    let soft = mask
+                        .as_ref()
+                        .filter(|_| self.settings.soft_visibility)
+                        .map(SoftVisibility::from_mask);
+                    (mask, soft)
+                }
+                None => (None, None),
             };
             let gpu_ms = self.resolve_timings(ctx)?;
             debug_assert!(visibility
@@ -645,6 +654,7 @@ impl Renderer {
                 height: self.settings.height,
                 rgba,
                 visibility,
+                soft_visibility,
                 timings: FrameTimings {
                     gpu_ms,
                     cpu_record_ms,
@@ -738,7 +748,7 @@ fn visibility_pass(
     source: &dyn ShadowSource,
 ) -> Result<Option<VisibilityPass>, RenderError> {
     let shadows = source.output();
-    if !settings.visibility || shadows.mask.is_some() {
+    if !(settings.visibility || settings.soft_visibility) || shadows.mask.is_some() {
         return Ok(None);
     }
     VisibilityPass::new(
@@ -747,6 +757,7 @@ fn visibility_pass(
         settings.height,
         scene.lights.len() as u32,
         &shadows,
+        settings.soft_visibility,
     )
     .map(Some)
 }

@@ -4,7 +4,7 @@
 
 use crate::error::Fills;
 use crate::frame::clusters::ClusterStats;
-use crate::frame::visibility_mask::VisibilityMask;
+use crate::frame::visibility_mask::{SoftVisibility, VisibilityMask};
 use crate::gpu::timing::GpuTimes;
 use crate::shadows::source::ShadowStats;
 use crate::shadows::vsm::plan::VirtualStats;
@@ -32,8 +32,11 @@ pub struct Frame {
     pub height: u32,
     /// sRGB RGBA8 pixels, row-major from the top-left.
     pub rgba: Vec<u8>,
-    /// The hard visibility mask, if asked for.
+    /// The hard visibility mask, if asked for (also there when soft visibility is).
     pub visibility: Option<VisibilityMask>,
+    /// How much of each light reaches each pixel, if asked for
+    /// (`RenderSettings::soft_visibility`).
+    pub soft_visibility: Option<SoftVisibility>,
     /// Timings.
     pub timings: FrameTimings,
     /// Shadow-generation work counters.

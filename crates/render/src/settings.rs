@@ -53,6 +53,9 @@ pub struct RenderSettings {
     pub fit: FitPolicy,
     /// Also compute the hard visibility mask.
     pub visibility: bool,
+    /// Also read back how much of each light reaches each pixel (`Frame::soft_visibility`):
+    /// the filtered answer of sized lights' soft shadows, what soft shadows are scored on.
+    pub soft_visibility: bool,
     /// Knobs of [`Technique::IRREGULAR`] (ignored by the other techniques).
     pub irregular: IrregularOptions,
     /// Knobs of [`Technique::VIRTUAL`] (ignored by the other techniques).
@@ -81,6 +84,7 @@ impl Default for RenderSettings {
             max_atlas_size: None,
             fit: FitPolicy::default(),
             visibility: false,
+            soft_visibility: false,
             irregular: IrregularOptions::default(),
             virtual_maps: VirtualOptions::default(),
             rays: RayOptions::default(),
@@ -163,6 +167,7 @@ with_setters!(RenderSettings {
     with_max_atlas_size: max_atlas_size: Option<u32>,
     with_fit: fit: FitPolicy,
     with_visibility: visibility: bool,
+    with_soft_visibility: soft_visibility: bool,
     with_irregular: irregular: IrregularOptions,
     with_virtual_maps: virtual_maps: VirtualOptions,
     with_rays: rays: RayOptions,

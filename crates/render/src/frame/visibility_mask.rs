@@ -146,6 +146,50 @@ impl VisibilityMask {
     }
 }
 
+/// How much of each light reaches each pixel, 0..=255 for 0..=1, where a technique filters
+/// sized lights' shadows (soft shadows) or the hard test decides (0 or 255): what the
+/// visibility pass writes beside the mask when `RenderSettings::soft_visibility` asks for
+/// it. 0 for pixels without geometry and lights that do not reach the pixel.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SoftVisibility {
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Lights per pixel.
+    pub lights: u32,
+    /// `width·height·lights` values, row-major from the top-left pixel, lights in order.
+    pub values: Vec<u8>,
+}
+
+impl SoftVisibility {
+    /// The fraction of light `light` reaching pixel (x, y), 0..=1.
+    pub fn get(&self, x: u32, y: u32, light: u32) -> f32 {
+        let i = (y as usize * self.width as usize + x as usize) * self.lights as usize;
+        f32::from(self.values[i + light as usize]) / 255.0
+    }
+
+    /// The hard mask as soft visibility (each bit 0 or 255): what a technique that only
+    /// answers lit or not reports.
+    pub fn from_mask(mask: &VisibilityMask) -> Self {
+        let mut values =
+            Vec::with_capacity(mask.width as usize * mask.height as usize * mask.lights as usize);
+        for y in 0..mask.height {
+            for x in 0..mask.width {
+                for l in 0..mask.lights {
+                    values.push(if mask.lit(x, y, l) { 255 } else { 0 });
+                }
+            }
+        }
+        Self {
+            width: mask.width,
+            height: mask.height,
+            lights: mask.lights,
+            values,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::VisibilityMask;

@@ -4,7 +4,7 @@
 //! [`VisibilityMask`] ([`crate::frame::visibility_mask`]).
 
 use crate::error::RenderError;
-use crate::frame::visibility_mask::VisibilityMask;
+use crate::frame::visibility_mask::{SoftVisibility, VisibilityMask};
 use crate::gpu::context::GpuContext;
 use crate::gpu::pipelines::texture_entry;
 use crate::gpu::timing::{GpuTimer, Span};
@@ -17,7 +17,7 @@ use crate::shadows::lookup::{compose_reader, LookupWgsl};
 struct VisibilityParams {
     first_word: u32,
     word_count: u32,
-    _pad0: u32,
+    soft: u32,
     _pad1: u32,
 }
 
@@ -40,9 +40,14 @@ pub struct VisibilityPass {
     lights: u32,
     /// 32-light words per pixel in total.
     words: u32,
-    /// Words computed per dispatch (so one chunk's buffer stays within the binding limit).
+    /// Words computed per dispatch (so one chunk's buffers stay within the binding limit).
     chunk_words: u32,
+    /// Also the fraction of each light reaching each pixel (`SoftVisibility`).
+    soft: bool,
 }
+
+/// Bytes of soft visibility per pixel and 32-light word (one byte per light).
+const SOFT_BYTES_PER_WORD: u64 = 32;
 
 impl VisibilityPass {
     /// Plans the pass; fails if even one word per pixel exceeds the storage-binding limit.
@@ -53,11 +58,13 @@ impl VisibilityPass {
         h: u32,
         lights: u32,
         shadows: &crate::shadows::source::ShadowOutput<'_>,
+        soft: bool,
     ) -> Result<Self, RenderError> {
         let device = &ctx.device;
         let limit = ctx.limits().max_storage_buffer_binding_size;
         let words = lights.div_ceil(32).max(1);
-        let per_word = w as u64 * h as u64 * 4;
+        // The largest buffer one word of a chunk adds: its mask words, or its soft bytes.
+        let per_word = w as u64 * h as u64 * if soft { SOFT_BYTES_PER_WORD } else { 4 };
         if per_word > limit {
             return Err(RenderError::TooLarge {
                 what: format!("the visibility mask of a {w}x{h} frame, per 32 lights,"),
@@ -87,6 +94,7 @@ impl VisibilityPass {
             crate::gpu::pipelines::uniform_entry(9, comp),
             crate::gpu::pipelines::storage_entry(10, comp),
             crate::gpu::pipelines::storage_entry(11, comp),
+            crate::gpu::pipelines::storage_rw_entry(12, comp),
         ];
         entries.extend(shadows.extra_layout(SOURCE_FIRST_BINDING, comp));
         let layout =
@@ -113,6 +121,7 @@ impl VisibilityPass {
             lights,
             words,
             chunk_words,
+            soft,
         })
     }
 
@@ -121,17 +130,24 @@ impl VisibilityPass {
         self.lights
     }
 
-    /// Computes and reads back the mask (its own submissions, after the frame's).
+    /// Computes and reads back the mask, and the soft visibility when asked for (its own
+    /// submissions, after the frame's).
     pub fn run(
         &self,
         ctx: &GpuContext,
         inputs: &LightingInputs<'_>,
         timer: &GpuTimer,
         span: Option<Span>,
-    ) -> Result<VisibilityMask, RenderError> {
+    ) -> Result<(VisibilityMask, Option<SoftVisibility>), RenderError> {
         let device = &ctx.device;
         let pixels = self.width as u64 * self.height as u64;
         let mut words = vec![0u32; (pixels * self.words as u64) as usize];
+        let lights = self.lights as usize;
+        let mut soft = if self.soft {
+            vec![0u8; pixels as usize * lights]
+        } else {
+            Vec::new()
+        };
         let pv = inputs.gbuffer.position.create_view(&Default::default());
         let nv = inputs.gbuffer.normal.create_view(&Default::default());
         let mut first = 0;
@@ -150,6 +166,24 @@ impl VisibilityPass {
                 usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
+            // One byte per light of the chunk's words (4 bytes where not asked for).
+            let soft_size = if self.soft {
+                pixels * count as u64 * SOFT_BYTES_PER_WORD
+            } else {
+                4
+            };
+            let soft_out = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("visibility.soft"),
+                size: soft_size,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let soft_readback = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("visibility.soft_readback"),
+                size: soft_size,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
             let params = wgpu::util::DeviceExt::create_buffer_init(
                 device,
                 &wgpu::util::BufferInitDescriptor {
@@ -157,7 +191,7 @@ impl VisibilityPass {
                     contents: bytemuck::bytes_of(&VisibilityParams {
                         first_word: first,
                         word_count: count,
-                        _pad0: 0,
+                        soft: u32::from(self.soft),
                         _pad1: 0,
                     }),
                     usage: wgpu::BufferUsages::UNIFORM,
@@ -165,6 +199,7 @@ impl VisibilityPass {
             );
             let mut entries = inputs.shared_entries(&pv, &nv, &mask);
             entries.push(crate::gpu::pipelines::whole_entry(7, &params));
+            entries.push(crate::gpu::pipelines::whole_entry(12, &soft_out));
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("visibility.bind_group"),
                 layout: &self.layout,
@@ -184,6 +219,9 @@ impl VisibilityPass {
                 pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
             }
             encoder.copy_buffer_to_buffer(&mask, 0, &readback, 0, size);
+            if self.soft {
+                encoder.copy_buffer_to_buffer(&soft_out, 0, &soft_readback, 0, soft_size);
+            }
             ctx.queue.submit([encoder.finish()]);
             let bytes = crate::gpu::readback::map_read(ctx, &readback, 0..size)?;
             let chunk: &[u32] = bytemuck::cast_slice(&bytes);
@@ -192,15 +230,33 @@ impl VisibilityPass {
                 words[dst..dst + count as usize]
                     .copy_from_slice(&chunk[px * count as usize..(px + 1) * count as usize]);
             }
+            if self.soft {
+                let bytes = crate::gpu::readback::map_read(ctx, &soft_readback, 0..soft_size)?;
+                // Per pixel the chunk's words, 32 bytes each: light 32·word + b at byte b.
+                let per_px = count as usize * 32;
+                let first_light = first as usize * 32;
+                let n = (lights - first_light).min(per_px);
+                for px in 0..pixels as usize {
+                    soft[px * lights + first_light..px * lights + first_light + n]
+                        .copy_from_slice(&bytes[px * per_px..px * per_px + n]);
+                }
+            }
             first += count;
         }
-        Ok(VisibilityMask {
+        let mask = VisibilityMask {
             width: self.width,
             height: self.height,
             lights: self.lights,
             words_per_pixel: self.words,
             words,
-        })
+        };
+        let soft = self.soft.then(|| SoftVisibility {
+            width: self.width,
+            height: self.height,
+            lights: self.lights,
+            values: soft,
+        });
+        Ok((mask, soft))
     }
 }
 
@@ -213,6 +269,6 @@ mod tests {
 
     #[test]
     fn params_match_the_wgsl() {
-        same_layout!(in shader(&ATLAS_LOOKUP), VisibilityParams, first_word, word_count, _pad0, _pad1);
+        same_layout!(in shader(&ATLAS_LOOKUP), VisibilityParams, first_word, word_count, soft, _pad1);
     }
 }

@@ -3,10 +3,11 @@
 // what shadow quality is scored on.
 
 struct VisibilityParams {
-    // First light of this chunk, number of 32-light words in this chunk, unused x2.
+    // First light of this chunk, number of 32-light words in this chunk, 1 when the soft
+    // visibility is written too, unused.
     first_word: u32,
     word_count: u32,
-    _pad0: u32,
+    soft: u32,
     _pad1: u32,
 }
 
@@ -24,6 +25,9 @@ struct VisibilityParams {
 @group(0) @binding(9) var<uniform> clusters: ClusterUniforms;
 @group(0) @binding(10) var<storage, read> cluster_slots: array<u32>;
 @group(0) @binding(11) var<storage, read> cluster_masks: array<u32>;
+// The fraction of each light reaching each pixel, one byte per light (0..255), four lights per
+// word: per pixel, 8 words per 32-light word of the chunk (a 4-byte dummy without `soft`).
+@group(0) @binding(12) var<storage, read_write> soft_out: array<u32>;
 
 fn shadow_depth_at(texel: vec2<i32>) -> f32 {
     return textureLoad(atlas, texel, 0).r;
@@ -42,32 +46,51 @@ fn shadow_compare_at(t: vec2<f32>, depth: f32) -> f32 {
     return mix(mix(c00, c10, w.x), mix(c01, c11, w.x), w.y);
 }
 
-// Bit b set = light 32·word + b is lit at the point (in reach, and the atlas says unoccluded),
-// for the lights whose bits are set in `candidates`.
-fn word_bits(word: u32, candidates: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) -> u32 {
-    var bits = 0u;
+// One word's answers: bit b set = light 32·word + b is lit at the point (in reach, and the
+// shadow test at the light's centre says unoccluded); with `soft`, each light's fraction.
+struct WordVisibility {
+    bits: u32,
+    soft: array<u32, 8>,
+}
+
+// The lights of `word` whose bits are set in `candidates`, at pixel `px`.
+fn word_bits(word: u32, candidates: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32, px: vec2<i32>) -> WordVisibility {
+    var out: WordVisibility;
     var left = candidates;
     while (left != 0u) {
         let b = firstTrailingBit(left);
         left = left & (left - 1u);
-        let light = lights[word * 32u + b];
+        let i = word * 32u + b;
+        let light = lights[i];
         if (!in_reach(light, p)) {
             continue;
         }
         var lit = true;
+        var fraction = 1.0;
+        let sized = light.diffuse.w > 0.0 && params.soft != 0u;
         if (SHADOW_RAYS) {
             lit = ray_lit(light, p, n) > 0.5;
+            fraction = select(0.0, 1.0, lit);
+            if (sized) {
+                fraction = ray_lit_area(light, p, n, ray_area_side(), soft_jitter(px, i));
+            }
         } else {
             let c = shadow_coord(light, p, n, view_depth);
             if (c.valid) {
                 lit = c.depth <= textureLoad(atlas, hard_texel(c), 0).r;
+                fraction = select(0.0, 1.0, lit);
+                if (sized) {
+                    fraction = soft_shadow(light.diffuse.w, c, soft_rotation(px));
+                }
             }
         }
         if (lit) {
-            bits = bits | (1u << b);
+            out.bits = out.bits | (1u << b);
         }
+        let byte = u32(round(clamp(fraction, 0.0, 1.0) * 255.0));
+        out.soft[b / 4u] = out.soft[b / 4u] | (byte << (8u * (b % 4u)));
     }
-    return bits;
+    return out;
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -93,7 +116,7 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let base = (slot - CLUSTER_FIRST_SLOT) * clusters.words.z;
     for (var wi = 0u; wi < params.word_count; wi = wi + 1u) {
         let word = params.first_word + wi;
-        var bits = 0u;
+        var vis: WordVisibility;
         if (covered) {
             // The lights of this word to test: the cluster's, or every light.
             var candidates = 0xffffffffu;
@@ -108,8 +131,14 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
                     candidates = candidates & cluster_masks[base + clusters.words.x + word];
                 }
             }
-            bits = word_bits(word, candidates, p, n, view_depth);
+            vis = word_bits(word, candidates, p, n, view_depth, vec2<i32>(gid.xy));
         }
-        mask[pixel * params.word_count + wi] = bits;
+        mask[pixel * params.word_count + wi] = vis.bits;
+        if (params.soft != 0u) {
+            let base_soft = (pixel * params.word_count + wi) * 8u;
+            for (var k = 0u; k < 8u; k = k + 1u) {
+                soft_out[base_soft + k] = vis.soft[k];
+            }
+        }
     }
 }

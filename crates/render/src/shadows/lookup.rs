@@ -27,6 +27,9 @@ pub const ATLAS_TAPS: &str = "fn soft_tap_depth(c: ShadowCoord, t: vec2<f32>) ->
      }\n\
      fn soft_tap_compare(c: ShadowCoord, t: vec2<f32>, depth: f32) -> f32 {\n\
      \x20   return shadow_compare_at(c.tile_min + clamp(t, vec2<f32>(0.5), vec2<f32>(c.soft.z - 0.5)), depth);\n\
+     }\n\
+     fn soft_coarser(c: ShadowCoord, k: u32) -> ShadowCoord {\n\
+     \x20   return c;\n\
      }";
 
 /// What the passes call where shadows do not come from rays: no ray is ever cast.

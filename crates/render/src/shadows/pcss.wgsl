@@ -8,7 +8,8 @@
 // Taps are read through the source's lookup, in the coordinate's soft texel space
 // (`ShadowCoord::soft`): `soft_tap_depth(c, t)` (raw depth) and `soft_tap_compare(c, t,
 // depth)` (bilinearly weighted comparison); the atlas's go through the pass's
-// `shadow_depth_at` and `shadow_compare_at`, virtual maps' find each tap's page.
+// `shadow_depth_at` and `shadow_compare_at`, virtual maps' find each tap's page. The lookup's
+// `soft_coarser(c, k)` gives the coordinate `k` times halved in resolution where it can.
 // Needs `frame: FrameUniforms` (`soft`: taps and the largest radius) and `ShadowCoord`.
 
 const GOLDEN_ANGLE: f32 = 2.3999632;
@@ -85,12 +86,20 @@ fn soft_shadow(size: f32, c: ShadowCoord, rot: f32) -> f32 {
     if (blockers == 0.0) {
         return 1.0;
     }
-    let radius = clamp(soft_radius(size, sum / blockers, d_r, c.lin), 0.5, max_r);
+    // A penumbra wider than the largest radius is filtered where the source has coarser
+    // texels (virtual maps' coarser levels); the atlas has none and clamps it.
+    var f = c;
+    var radius = soft_radius(size, sum / blockers, d_r, c.lin);
+    if (radius > max_r) {
+        f = soft_coarser(c, u32(ceil(log2(radius / max_r))));
+        radius = radius * c.lin.z / f.lin.z;
+    }
+    radius = clamp(radius, 0.5, max_r);
     let nf = u32(frame.soft.y);
     var lit = 0.0;
     for (var i = 0u; i < nf; i = i + 1u) {
         let off = vogel(i, nf, rot + 1.0) * radius;
-        lit = lit + soft_tap_compare(c, c.soft.xy + off, soft_reference(c, d_r, off));
+        lit = lit + soft_tap_compare(f, f.soft.xy + off, soft_reference(f, d_r, off));
     }
     return lit / f32(nf);
 }

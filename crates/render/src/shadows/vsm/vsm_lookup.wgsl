@@ -125,3 +125,29 @@ fn soft_tap_compare(c: ShadowCoord, t: vec2<f32>, depth: f32) -> f32 {
     let c11 = select(0.0, 1.0, depth <= soft_tap_depth(c, at + vec2<f32>(1.0, 1.0)));
     return mix(mix(c00, c10, w.x), mix(c01, c11, w.x), w.y);
 }
+
+// The coordinate up to `k` levels coarser: the coarsest of them whose page under the point
+// is resident (the same level where none is), in a face of half the texels per level, for a
+// penumbra wider than the filter's largest radius.
+fn soft_coarser(c: ShadowCoord, k: u32) -> ShadowCoord {
+    let face = vsm_faces[c.src.x];
+    let uv = c.soft.xy / c.soft.z;
+    var level = c.src.y - min(k, c.src.y);
+    loop {
+        if (level >= c.src.y) {
+            return c;
+        }
+        let e = vsm_table[vsm_entry(face, level, uv)];
+        if (e >= VSM_FIRST_PAGE && e != VSM_DENIED) {
+            break;
+        }
+        level = level + 1u;
+    }
+    var out = c;
+    let scale = f32(1u << (c.src.y - level));
+    out.src.y = level;
+    out.soft = c.soft / scale;
+    out.grad = c.grad * scale;
+    out.lin.z = c.lin.z * scale;
+    return out;
+}
