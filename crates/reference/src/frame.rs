@@ -1,5 +1,6 @@
 //! What a frame hands the reference and gets back: its surface points (one per pixel, from
-//! the G-buffer) and a bit mask per pixel and light.
+//! the G-buffer), a bit mask per pixel and light (hard shadows), and a fraction per pixel and
+//! light (soft shadows).
 
 use glam::Vec3;
 
@@ -127,6 +128,62 @@ impl Mask {
                 what,
                 expected: shape(self),
                 found: format!("{} ({} words)", shape(other), other.words.len()),
+            })
+        }
+    }
+}
+
+/// A visibility fraction in `[0, 1]` per pixel and light (soft shadows: the share of a sized
+/// light the point sees), `lights` values per pixel, row-major from the top-left pixel: the
+/// value of light `l` at pixel index `p` (`y · width + x`) is `values[p · lights + l]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Fractions {
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Number of lights.
+    pub lights: u32,
+    /// `width · height · lights` values.
+    pub values: Vec<f32>,
+}
+
+impl Fractions {
+    /// All zero (nothing visible).
+    pub fn zeros(width: u32, height: u32, lights: u32) -> Self {
+        Self {
+            width,
+            height,
+            lights,
+            values: vec![0.0; width as usize * height as usize * lights as usize],
+        }
+    }
+
+    /// Value of `light` at pixel index `pixel` (`y · width + x`).
+    pub fn get(&self, pixel: usize, light: u32) -> f32 {
+        self.values[pixel * self.lights as usize + light as usize]
+    }
+
+    /// Checks that `other` describes the same frame and lights as `self` (and holds as many
+    /// values as it says).
+    pub fn check_same_shape(
+        &self,
+        other: &Fractions,
+        what: &'static str,
+    ) -> Result<(), ReferenceError> {
+        let shape = |f: &Fractions| format!("{}x{} pixels, {} lights", f.width, f.height, f.lights);
+        let ok = self.width == other.width
+            && self.height == other.height
+            && self.lights == other.lights
+            && other.values.len()
+                == other.width as usize * other.height as usize * other.lights as usize;
+        if ok {
+            Ok(())
+        } else {
+            Err(ReferenceError::Mismatch {
+                what,
+                expected: shape(self),
+                found: format!("{} ({} values)", shape(other), other.values.len()),
             })
         }
     }

@@ -12,7 +12,19 @@
 //! - [`score`]: a technique's mask against the reference: false shadow and false light among
 //!   the pixels the light reaches, with a tolerance band at the reference's shadow edges
 //!   counted separately, and per-pixel error classes for difference images;
-//! - [`aliasing`]: perspective aliasing in numbers, the shadow-texel footprint in screen pixels.
+//! - [`aliasing`]: perspective aliasing in numbers, the shadow-texel footprint in screen pixels;
+//! - [`soft`]: soft shadows from sized lights, per pixel and light the fraction of the light
+//!   the point sees: the light shapes (a spot's disc of radius `size` facing along its axis, a
+//!   point light's sphere seen as its silhouette disc facing the receiver, a directional
+//!   light's cone of angular diameter `size`, uniform in solid angle; size 0 is the hard
+//!   reference bit for bit), sampled on an n×n jittered grid (N rounded up to a square, the
+//!   concentric map onto discs, a hashed seed per pixel and light, so deterministic), one ray
+//!   per sample with the hard reference's tracer, start and reach;
+//! - [`soft_score`](mod@soft_score): a technique's fractions against the soft reference, the
+//!   mean absolute error split by the reference's class (umbra = 0, lit = 1, penumbra
+//!   between) over the pairs the hard score counts (in reach, facing the light);
+//! - [`flip`](mod@flip): ꟻLIP, the perceptual difference of two shaded frames (mean error and
+//!   the magma-coloured error map), through the `nv-flip` crate.
 //!
 //! Why the G-buffer's points and not the reference's own camera rays: the reference then
 //! answers for exactly the surface points the frame shaded, so rasterization differences
@@ -20,13 +32,19 @@
 
 pub mod aliasing;
 pub mod error;
+pub mod flip;
 pub mod frame;
 pub mod score;
+pub mod soft;
+pub mod soft_score;
 mod tracer;
 pub mod visibility;
 
 pub use error::ReferenceError;
-pub use frame::{Mask, SurfacePoint, Surfaces};
+pub use flip::{flip_rgba8, FlipDifference};
+pub use frame::{Fractions, Mask, SurfacePoint, Surfaces};
+pub use soft::{reference_soft_visibility, SoftVisibility};
+pub use soft_score::{soft_score, SoftScore};
 pub use tracer::Tracer;
 pub use visibility::{
     in_reach, ray_offset, reach_and_facing, reference_visibility, ReferenceVisibility,
