@@ -250,6 +250,16 @@ pub enum RenderError {
         /// Walks cut short.
         walks: u32,
     },
+    /// Two things that must describe the same frame do not.
+    #[error("{what} does not fit this renderer: expected {expected}, found {found}")]
+    Mismatch {
+        /// What was given.
+        what: &'static str,
+        /// What the renderer has.
+        expected: String,
+        /// What was given.
+        found: String,
+    },
     /// Reading results back failed.
     #[error("reading {what} back from the GPU failed: {reason}")]
     Readback {

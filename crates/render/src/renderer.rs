@@ -682,6 +682,66 @@ impl Renderer {
             .map(|s| *s)
     }
 
+    /// The last frame [`Renderer::render`] produced, shaded again with `visibility` instead
+    /// of the technique's shadows (the fraction of each light reaching each pixel, as
+    /// [`Frame::soft_visibility`] holds it): the image a technique would give if its
+    /// visibility were `visibility`, such as the reference's. sRGB RGBA8, as [`Frame::rgba`].
+    pub fn shade_with(&self, visibility: &SoftVisibility) -> Result<Vec<u8>, RenderError> {
+        let (w, h) = (self.settings.width, self.settings.height);
+        let lights = self.current.lights.len() as u32;
+        if (visibility.width, visibility.height, visibility.lights) != (w, h, lights) {
+            return Err(RenderError::Mismatch {
+                what: "the visibility to shade with",
+                expected: format!("{w}x{h} pixels of {lights} lights"),
+                found: format!(
+                    "{}x{} pixels of {} lights",
+                    visibility.width, visibility.height, visibility.lights
+                ),
+            });
+        }
+        let ctx = &*self.ctx;
+        let limit = ctx.limits().max_storage_buffer_binding_size;
+        let mut bytes = visibility.values.clone();
+        bytes.resize(bytes.len().div_ceil(4).max(1) * 4, 0);
+        if bytes.len() as u64 > limit {
+            return Err(RenderError::TooLarge {
+                what: "the visibility to shade with".into(),
+                needed: bytes.len() as u64,
+                limit,
+                unit: "bytes",
+                limit_name: "max_storage_buffer_binding_size",
+            });
+        }
+        ctx.scoped("shading with a given visibility", || {
+            let fractions = ctx
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("lighting.fractions"),
+                    contents: &bytes,
+                    usage: wgpu::BufferUsages::STORAGE,
+                });
+            let mut shadows = self.source.output();
+            shadows.mask = Some(&fractions);
+            let inputs = LightingInputs {
+                frame: &self.frame_buffer,
+                lights: &self.lights,
+                materials: &self.scene.materials,
+                gbuffer: &self.gbuffer,
+                clusters: &self.clusters,
+                shadows,
+            };
+            let pass = LightingPass::with_fractions(ctx, &inputs, w, h);
+            let mut encoder = ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("lighting.fractions.encoder"),
+                });
+            pass.record(&mut encoder, &self.timer, None);
+            ctx.queue.submit([encoder.finish()]);
+            crate::gpu::readback::read_texture(ctx, &pass.color, 4)
+        })
+    }
+
     /// Reads the G-buffer of the last frame [`Renderer::render`] produced (before the first
     /// frame every pixel reads as uncovered).
     pub fn read_gbuffer(&self) -> Result<GBufferData, RenderError> {

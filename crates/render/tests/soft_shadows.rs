@@ -227,3 +227,52 @@ fn size_zero_is_untouched_by_soft_settings() {
     }
     assert!(ran >= 5, "only {ran} techniques ran");
 }
+
+/// Shading the last frame again with its own soft visibility gives its image: exactly for
+/// hard lights without filtering (the lighting pass's test is the visibility pass's), within
+/// the bytes' rounding for sized lights; and a visibility of another shape is refused.
+#[test]
+fn shading_with_the_frames_own_visibility_gives_its_image() {
+    let ctx = common::context();
+    let mut scene = manyshadows::scene::builtin::build("cubes", &Default::default()).unwrap();
+    let settings = RenderSettings::new(96, 72)
+        .with_pcf(manyshadows::Pcf::Off)
+        .with_soft_visibility(true);
+    let mut r = Renderer::new(&ctx, &scene, settings.clone()).unwrap();
+    let frame = r.render().unwrap();
+    let soft = frame.soft_visibility.clone().unwrap();
+    assert!(r.shade_with(&soft).unwrap() == frame.rgba, "hard lights");
+    let dark = manyshadows::SoftVisibility {
+        values: vec![0; soft.values.len()],
+        ..soft.clone()
+    };
+    assert!(
+        r.shade_with(&dark).unwrap() != frame.rgba,
+        "no light reaching changes it"
+    );
+    let wrong = manyshadows::SoftVisibility {
+        lights: soft.lights + 1,
+        ..soft
+    };
+    assert!(matches!(
+        r.shade_with(&wrong),
+        Err(manyshadows::RenderError::Mismatch { .. })
+    ));
+
+    for l in &mut scene.lights {
+        l.size = 0.15;
+    }
+    let mut r = Renderer::new(&ctx, &scene, settings).unwrap();
+    let frame = r.render().unwrap();
+    let again = r
+        .shade_with(frame.soft_visibility.as_ref().unwrap())
+        .unwrap();
+    let worst = frame
+        .rgba
+        .iter()
+        .zip(&again)
+        .map(|(a, b)| a.abs_diff(*b))
+        .max()
+        .unwrap();
+    assert!(worst <= 2, "sized lights: a channel differs by {worst}");
+}

@@ -96,6 +96,27 @@ impl LightingInputs<'_> {
 impl LightingPass {
     /// Creates the output texture and pipeline.
     pub fn new(ctx: &GpuContext, inputs: &LightingInputs<'_>, w: u32, h: u32) -> Self {
+        let entry = if inputs.shadows.mask.is_some() {
+            "fs_mask"
+        } else {
+            "fs_main"
+        };
+        Self::with_entry(ctx, inputs, w, h, entry)
+    }
+
+    /// The pass shading with given fractions per pixel and light (`inputs.shadows.mask` holds
+    /// them, a byte each) instead of the shadow source's answer.
+    pub fn with_fractions(ctx: &GpuContext, inputs: &LightingInputs<'_>, w: u32, h: u32) -> Self {
+        Self::with_entry(ctx, inputs, w, h, "fs_fraction")
+    }
+
+    fn with_entry(
+        ctx: &GpuContext,
+        inputs: &LightingInputs<'_>,
+        w: u32,
+        h: u32,
+        entry: &'static str,
+    ) -> Self {
         let device = &ctx.device;
         let color = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("lighting.color"),
@@ -167,11 +188,7 @@ impl LightingPass {
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &module,
-                entry_point: Some(if inputs.shadows.mask.is_some() {
-                    "fs_mask"
-                } else {
-                    "fs_main"
-                }),
+                entry_point: Some(entry),
                 compilation_options: Default::default(),
                 targets: &[Some(COLOR_FORMAT.into())],
             }),

@@ -13,8 +13,9 @@
 // samplers. At a texel centre bilinear weights are (1, 0, 0, 0), so a lookup there compares
 // exactly one texel, as a nearest-filtered one would.
 @group(0) @binding(7) var cmp_linear: sampler_comparison;
-// Visibility computed elsewhere (irregular shadow maps): `counts.w` words per pixel, bit set =
-// lit. Read by `fs_mask` only; the atlas entry point `fs_main` is bound to a dummy.
+// Visibility computed elsewhere: for `fs_mask` (irregular shadow maps) `counts.w` words per
+// pixel, bit set = lit; for `fs_fraction` (a frame shaded with a given visibility) a byte per
+// pixel and light, four to a word, 255 = all of the light. `fs_main` is bound to a dummy.
 @group(0) @binding(8) var<storage, read> vis_mask: array<u32>;
 // The clustered light lists (clusters.rs): per cluster a slot value, and the slot pool.
 @group(0) @binding(9) var<uniform> clusters: ClusterUniforms;
@@ -77,14 +78,25 @@ fn shadow_factor(c: ShadowCoord) -> f32 {
 // Shadows from the atlas (every shadow-map technique).
 @fragment
 fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
-    return shade(vec2<i32>(frag.xy), false);
+    return shade(vec2<i32>(frag.xy), MASK_NONE);
 }
 
 // Shadows from the visibility mask (irregular shadow maps).
 @fragment
 fn fs_mask(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
-    return shade(vec2<i32>(frag.xy), true);
+    return shade(vec2<i32>(frag.xy), MASK_BITS);
 }
+
+// Shadows from a given fraction per pixel and light (`Renderer::shade_with`).
+@fragment
+fn fs_fraction(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
+    return shade(vec2<i32>(frag.xy), MASK_FRACTIONS);
+}
+
+// Where `light_lit` finds shadows: the shadow source, the mask's bits, or given fractions.
+const MASK_NONE: u32 = 0u;
+const MASK_BITS: u32 = 1u;
+const MASK_FRACTIONS: u32 = 2u;
 
 // The surface point a pixel shades, and what every light's term needs of it.
 struct Surface {
@@ -94,7 +106,7 @@ struct Surface {
     view_depth: f32,
     mat: MaterialData,
     px: vec2<i32>,
-    from_mask: bool,
+    mask: u32,
 }
 
 // Light `i`'s terms at `s` before its shadow: whether it reaches the point, whether the point
@@ -139,7 +151,11 @@ fn light_terms(i: u32, s: Surface) -> Terms {
 // How much of light `i` reaches `s` past the casters, 0..1: from the visibility mask, a shadow
 // ray, or the shadow test of the atlas or page pool.
 fn light_lit(i: u32, s: Surface) -> f32 {
-    if (s.from_mask) {
+    if (s.mask == MASK_FRACTIONS) {
+        let k = (u32(s.px.y) * u32(frame.viewport.x) + u32(s.px.x)) * frame.counts.x + i;
+        return f32((vis_mask[k / 4u] >> (8u * (k % 4u))) & 255u) / 255.0;
+    }
+    if (s.mask == MASK_BITS) {
         let word = vis_mask[(u32(s.px.y) * u32(frame.viewport.x) + u32(s.px.x)) * frame.counts.w + i / 32u];
         return f32((word >> (i % 32u)) & 1u);
     }
@@ -259,7 +275,7 @@ fn resolve_samples(s: Surface, acc: ptr<function, Acc>) {
     (*acc).color = (*acc).color + direct / f32(k);
 }
 
-fn shade(px: vec2<i32>, from_mask: bool) -> vec4<f32> {
+fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     let gpos = textureLoad(gbuf_position, px, 0);
     let pos = bitcast<vec4<f32>>(gpos);
     if (!has_geometry(gpos)) {
@@ -278,7 +294,7 @@ fn shade(px: vec2<i32>, from_mask: bool) -> vec4<f32> {
     s.v = normalize(frame.camera_pos.xyz - s.p);
     s.view_depth = -(frame.view * vec4<f32>(s.p, 1.0)).z;
     s.px = px;
-    s.from_mask = from_mask;
+    s.mask = mask;
     var acc: Acc;
     acc.color = vec3<f32>(0.0);
     acc.wsum = 0.0;
