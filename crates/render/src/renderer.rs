@@ -106,6 +106,13 @@ impl Renderer {
             });
         }
         scene.validate()?;
+        let info = settings.technique.info();
+        if !info.soft_shadows && scene.lights.iter().any(|l| l.size > 0.0) {
+            log::warn!(
+                "technique {} renders hard shadows: the lights' sizes do not soften them",
+                info.technique
+            );
+        }
         let limits = ctx.limits();
         let max_dim = limits.max_texture_dimension_2d;
         if settings.width > max_dim || settings.height > max_dim {

@@ -185,6 +185,9 @@ pub struct TechniqueInfo {
     pub point_shadows: &'static [PointShadows],
     /// What it needs of the device beyond the renderer's own minimum.
     pub needs: &'static [Need],
+    /// Whether sized lights soften its shadows (false: it answers lit or not at the light's
+    /// centre, whatever the light's size, and says so).
+    pub soft_shadows: bool,
     /// What to use where it cannot run.
     pub instead: &'static str,
     /// How the lighting and visibility passes read its shadows (the atlas techniques share

@@ -59,6 +59,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     culling: Culling::Threads,
     point_shadows: &[PointShadows::Cube],
     needs: &[],
+    soft_shadows: true,
     instead: "",
     lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(Compute::new(ctx)?))),

@@ -63,6 +63,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
         ),
         Need::indirect("indirect draws"),
     ],
+    soft_shadows: true,
     instead: "use technique layered",
     lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(GpuDriven::new(ctx)?))),

@@ -46,6 +46,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
         wgpu::Features::CLIP_DISTANCES,
         "to keep each view inside its atlas tile",
     )],
+    soft_shadows: true,
     instead: "use technique traditional",
     lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(Layered::new(ctx)?))),

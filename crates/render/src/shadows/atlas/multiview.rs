@@ -57,6 +57,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     needs: &[Need::multiview(
         "one render pass per group of up to 6-32 equal-size shadow views",
     )],
+    soft_shadows: true,
     instead: "use technique layered, which fills the same atlas with one instanced draw",
     lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(Multiview::new(ctx)?))),

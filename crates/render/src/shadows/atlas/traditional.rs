@@ -34,6 +34,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     culling: Culling::Instances,
     point_shadows: &[PointShadows::Cube, PointShadows::DualParaboloid],
     needs: &[],
+    soft_shadows: true,
     instead: "",
     lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(Traditional::new(ctx)))),

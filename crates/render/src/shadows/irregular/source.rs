@@ -34,6 +34,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     culling: Culling::NoViews,
     point_shadows: &[PointShadows::Cube],
     needs: &[],
+    soft_shadows: false,
     instead: "",
     // The passes shade with the mask and never call `shadow_coord`.
     lookup: ATLAS_LOOKUP,

@@ -42,6 +42,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
         wgpu::Features::EXPERIMENTAL_RAY_QUERY,
         "ray queries in the lighting and visibility passes",
     )],
+    soft_shadows: true,
     instead: "use technique irregular for exact shadows without ray queries",
     lookup: RAYS_LOOKUP,
     build: Build::Source(|a| {

@@ -43,6 +43,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
         ),
         Need::indirect("indirect dispatches and draws (to allocate and draw its pages)"),
     ],
+    soft_shadows: true,
     instead: "use technique traditional",
     lookup: VSM_LOOKUP,
     build: Build::Source(|a| {
