@@ -54,8 +54,8 @@
 //!   hard shadows: the file looks as its author made it) unless the light's `extras` give
 //!   [`GLTF_SIZE_EXTRA`] (`"extras": { "manyshadows_size": 0.1 }`: a radius in world units for
 //!   point and spot lights, an angular diameter in degrees for directional ones, as
-//!   [`Light::size`]); a value that is not a number, negative, or (directional) 30° or more is
-//!   ignored with a note.
+//!   [`Light::size`](crate::Light::size)); a value that is not a number, negative, or
+//!   (directional) 30° or more is ignored with a note.
 //!
 //! A file with no lights (and every OBJ and PLY file) gets the seeded layout
 //! [`scatter_lights`]`(scene, 8, seed 1, LightMix::All, None)` (whose lights have the built-in
@@ -124,6 +124,7 @@
 //! libraries to [`MAX_MTL_BYTES`].
 //!
 //! [`Instance`]: crate::Instance
+//! [`Light`]: crate::Light
 //! [`scatter_lights`]: crate::builtin::scatter_lights
 //! [`DIRECTIONAL_CASCADES`]: crate::builtin::DIRECTIONAL_CASCADES
 //! [`DIRECTIONAL_SPLIT_LAMBDA`]: crate::builtin::DIRECTIONAL_SPLIT_LAMBDA
