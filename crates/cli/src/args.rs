@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Result};
 use clap::{Args, Parser, ValueEnum};
 use manyshadows::scene::atlas::FitPolicy;
+use manyshadows::scene::light_size::LightSizes;
 use manyshadows::scene::light_space::PointShadows;
 use manyshadows::{
     AdapterRequest, CullMode, GpuContext, Pcf, RenderSettings, ShadowBias, ShadowOptions, Technique,
@@ -67,6 +68,55 @@ impl GpuArgs {
             .with_limits(self.limits.map(|l| match l {
                 Limits::Webgpu => manyshadows::webgpu_default_limits(),
             }))
+    }
+}
+
+/// `--light-size`, `--sun-size`: every light's size instead of the scene's own (shared by
+/// `render`, `compare` and the viewer, and applied wherever they load a scene).
+#[derive(Args, Debug, Clone, Copy, Default)]
+pub struct LightSizeArgs {
+    /// Radius of every spot and point light, world units, for soft shadows (0 = hard; suns:
+    /// --sun-size).
+    ///
+    /// A point light becomes a sphere of this radius, a spot light a disc of it facing along
+    /// its cone: the larger, the wider the penumbrae. 0 = points, hard shadows. Default: the
+    /// scene's own sizes: the built-in scenes make each light's radius 2% of its range
+    /// (cubes and plane-* are hard), scene and glTF files say theirs (0 when they don't).
+    /// Directional lights are sized by --sun-size.
+    #[arg(long, value_name = "RADIUS", allow_negative_numbers = true)]
+    pub light_size: Option<f32>,
+    /// Angular diameter of every directional light, degrees, below 30, for soft shadows (the
+    /// sun: 0.53; 0 = hard).
+    ///
+    /// How wide the light's disc looks from the scene: the sun and the moon are about 0.53°.
+    /// The larger, the wider the penumbrae; 0 = parallel rays, hard shadows. Default: the
+    /// scene's own sizes: the built-in scenes' suns are 0.53° (cubes and plane-* are hard),
+    /// scene and glTF files say theirs (0 when they don't).
+    #[arg(long, value_name = "DEGREES", allow_negative_numbers = true)]
+    pub sun_size: Option<f32>,
+}
+
+impl LightSizeArgs {
+    /// The sizes asked for, checked (a negative or non-finite size, a sun of 30° or more is
+    /// an error naming its flag).
+    pub fn sizes(&self) -> Result<LightSizes> {
+        let radius = LightSizes {
+            radius: self.light_size,
+            sun_deg: None,
+        };
+        radius
+            .check()
+            .map_err(|e| anyhow::anyhow!("--light-size: {e}"))?;
+        let sun = LightSizes {
+            radius: None,
+            sun_deg: self.sun_size,
+        };
+        sun.check()
+            .map_err(|e| anyhow::anyhow!("--sun-size: {e}"))?;
+        Ok(LightSizes {
+            radius: self.light_size,
+            sun_deg: self.sun_size,
+        })
     }
 }
 
@@ -162,6 +212,8 @@ pub(crate) struct RenderArgs {
     /// Shadow-map resolution per view (texels per side) for every light.
     #[arg(long)]
     pub(crate) shadow_resolution: Option<u32>,
+    #[command(flatten)]
+    pub(crate) light_sizes: LightSizeArgs,
     /// Camera position and target, `PX,PY,PZ,TX,TY,TZ` (default: the scene's camera).
     #[arg(long, value_parser = parse_camera, allow_hyphen_values = true)]
     pub(crate) camera: Option<[f32; 6]>,
@@ -340,6 +392,7 @@ pub(crate) fn check_render_args(args: &RenderArgs) -> Result<()> {
     if args.frames == 0 {
         bail!("--frames must be at least 1");
     }
+    args.light_sizes.sizes()?;
     // The renderer checks every option's range itself; asking it here refuses a bad value
     // before anything is loaded, and names the flag that set it.
     render_settings(args, args.atlas_max)

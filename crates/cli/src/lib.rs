@@ -12,7 +12,9 @@ use clap::Parser;
 
 use crate::commands::{BenchCommand, Cli, Command};
 
-pub use args::{parse_camera, parse_pcf, parse_point_shadows, parse_technique, GpuArgs};
+pub use args::{
+    parse_camera, parse_pcf, parse_point_shadows, parse_technique, GpuArgs, LightSizeArgs,
+};
 pub use scenes::load_scene_for_view;
 
 mod args;

@@ -3,19 +3,20 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::args::RenderArgs;
+use crate::args::{LightSizeArgs, RenderArgs};
 use anyhow::{bail, Result};
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::scene::Scene;
 
 /// Loads a scene as `render` does: a built-in name, a TOML file or a model file, with `lights`
-/// seeded lights instead of its own when given and the camera at `camera` (`PX,PY,PZ,TX,TY,TZ`)
-/// when given (what the viewer shows).
+/// seeded lights instead of its own when given, the light sizes `light_sizes` asks for and the
+/// camera at `camera` (`PX,PY,PZ,TX,TY,TZ`) when given (what the viewer shows).
 pub fn load_scene_for_view(
     scene: &str,
     mesh: Option<PathBuf>,
     lights: Option<usize>,
     seed: u64,
+    light_sizes: LightSizeArgs,
     camera: Option<[f32; 6]>,
 ) -> Result<Scene> {
     load_scene(&RenderArgs {
@@ -23,12 +24,14 @@ pub fn load_scene_for_view(
         mesh,
         lights,
         seed,
+        light_sizes,
         camera,
         ..RenderArgs::default()
     })
 }
 
-/// Loads a built-in scene or a TOML file, applying `--lights`/`--seed`/`--light-types`.
+/// Loads a built-in scene or a TOML file, applying `--lights`/`--seed`/`--light-types` and
+/// `--light-size`/`--sun-size`.
 pub(crate) fn load_scene(args: &RenderArgs) -> Result<Scene> {
     let mut scene = load_scene_unsubdivided(args)?;
     if args.subdivide > 0 {
@@ -43,6 +46,7 @@ pub(crate) fn load_scene(args: &RenderArgs) -> Result<Scene> {
 
 pub(crate) fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
     let mix: LightMix = args.light_types.parse()?;
+    let light_sizes = args.light_sizes.sizes()?;
     let path = Path::new(&args.scene);
     let lower = args.scene.to_ascii_lowercase();
     let model = [".obj", ".gltf", ".glb", ".ply", ".ply.gz"]
@@ -78,6 +82,7 @@ pub(crate) fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
                 l.shadow_resolution = r;
             }
         }
+        light_sizes.apply(&mut scene.lights);
         return Ok(scene);
     }
     let mesh = match &args.mesh {
@@ -98,6 +103,7 @@ pub(crate) fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
         mix,
         mesh,
         shadow_resolution: args.shadow_resolution,
+        light_sizes,
     };
     Ok(builtin::build(&args.scene, &opts)?)
 }

@@ -27,7 +27,8 @@ pub(crate) fn summary(
         "triangles": r.triangles(),
         "instances": scene.instances.len(),
         "lights": { "total": scene.lights.len(), "spot": count("spot"), "point": count("point"), "directional": count("directional"),
-                    "shadowed": scene.lights.iter().filter(|l| l.casts_shadows).count() },
+                    "shadowed": scene.lights.iter().filter(|l| l.casts_shadows).count(),
+                    "sizes": { "radius": size_range(scene, false), "sun_deg": size_range(scene, true) } },
         "shadow_views": r.virtual_plan().map_or(plan.views.len(), |v| v.views.len()),
         "atlas": { "size": plan.layout.size, "fill": plan.fill(), "shrink_steps": plan.layout.shrink_steps, "fit": plan.fit },
         "shadow_work": { "passes": frame.shadow_stats.passes, "draws": frame.shadow_stats.draws, "views_drawn": frame.shadow_stats.views_drawn,
@@ -45,6 +46,58 @@ pub(crate) fn summary(
     })
 }
 
+/// `[smallest, largest]` size of the directional lights (`suns`: angular diameters, degrees)
+/// or of the spot and point lights (radii, world units); null when the scene has none.
+fn size_range(scene: &Scene, suns: bool) -> serde_json::Value {
+    scene
+        .lights
+        .iter()
+        .filter(|l| (l.type_name() == "directional") == suns)
+        .map(|l| l.size)
+        .fold(None, |r: Option<(f32, f32)>, x| {
+            Some(r.map_or((x, x), |(lo, hi)| (lo.min(x), hi.max(x))))
+        })
+        .map_or(serde_json::Value::Null, |(lo, hi)| {
+            // The f32's shortest decimal (0.53, not 0.5299999713897705), which reads back as
+            // the same f32.
+            let short = |x: f32| x.to_string().parse::<f64>().unwrap_or(f64::from(x));
+            serde_json::json!([short(lo), short(hi)])
+        })
+}
+
+/// The lights' sizes in words: `all hard (size 0)`, or `sizes: radius 0.16–0.48, sun 0.53°`;
+/// empty without lights.
+fn describe_sizes(sizes: &serde_json::Value) -> String {
+    let range = |key: &str| {
+        let r = sizes[key].as_array()?;
+        Some((r.first()?.as_f64()?, r.get(1)?.as_f64()?))
+    };
+    let (radius, sun) = (range("radius"), range("sun_deg"));
+    if radius.is_none() && sun.is_none() {
+        return String::new();
+    }
+    if radius.into_iter().chain(sun).all(|(_, hi)| hi == 0.0) {
+        return ", all hard (size 0)".into();
+    }
+    // Three decimals at most: sizes are inputs, not measurements.
+    let num = |x: f64| format!("{}", (x * 1000.0).round() / 1000.0);
+    let span = |(lo, hi): (f64, f64)| {
+        if num(lo) == num(hi) {
+            num(lo)
+        } else {
+            format!("{}–{}", num(lo), num(hi))
+        }
+    };
+    let mut parts = Vec::new();
+    if let Some(r) = radius {
+        parts.push(format!("radius {}", span(r)));
+    }
+    if let Some(d) = sun {
+        parts.push(format!("sun {}°", span(d)));
+    }
+    format!(", sizes: {}", parts.join(", "))
+}
+
 pub(crate) fn print_summary(s: &serde_json::Value) {
     let l = &s["lights"];
     let a = &s["atlas"];
@@ -57,8 +110,13 @@ pub(crate) fn print_summary(s: &serde_json::Value) {
         s["instances"]
     );
     println!(
-        "lights       {} ({} spot, {} point, {} directional; {} shadowed)",
-        l["total"], l["spot"], l["point"], l["directional"], l["shadowed"]
+        "lights       {} ({} spot, {} point, {} directional; {} shadowed){}",
+        l["total"],
+        l["spot"],
+        l["point"],
+        l["directional"],
+        l["shadowed"],
+        describe_sizes(&l["sizes"])
     );
     println!(
         "shadows      {} views, technique {}, PCF {}",

@@ -7,13 +7,15 @@
 //! - the shadow-atlas tile allocator ([`atlas`]),
 //! - file loaders ([`loaders`]: OBJ, glTF 2.0, PLY and `.ply.gz`) and the TOML scene format
 //!   ([`scene_file`]),
-//! - built-in scenes ([`builtin`]) and seeded light layouts.
+//! - built-in scenes ([`builtin`]) and seeded light layouts, with the default sizes of their
+//!   lights and overrides of every light's size ([`light_size`]).
 //!
 //! Everything here can be unit-tested without a graphics adapter.
 
 pub mod atlas;
 pub mod builtin;
 pub mod error;
+pub mod light_size;
 pub mod light_space;
 pub mod loaders;
 pub mod masks;

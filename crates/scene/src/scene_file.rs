@@ -25,7 +25,9 @@ use toml::Spanned;
 
 use crate::error::SceneError;
 use crate::loaders::{self, MAX_TRIANGLES};
-use crate::model::{Attenuation, Camera, Instance, Light, LightKind, Material, Mesh, Scene};
+use crate::model::{
+    Attenuation, Camera, Instance, Light, LightKind, Material, Mesh, Scene, MAX_ANGULAR_SIZE_DEG,
+};
 
 use crate::primitives as prims;
 
@@ -193,6 +195,7 @@ struct LightDef {
     attenuation: Option<Attenuation>,
     casts_shadows: Option<bool>,
     shadow_resolution: Option<u32>,
+    size: Option<f32>,
 }
 
 /// A number or an array of numbers (`scale = 2` or `scale = [1, 2, 1]`).
@@ -554,6 +557,24 @@ fn build_light(cx: &Ctx<'_>, i: usize, l: &Spanned<LightDef>) -> Result<Light, S
             2048,
         ),
     };
+    let size = d.size.unwrap_or(0.0);
+    let size_err = |what: String| cx.err(span.clone(), format_args!("[[light]] {i}: {what}"));
+    if !(size.is_finite() && size >= 0.0) {
+        return Err(size_err(format!(
+            "`size` = {size} must be a finite number >= 0 ({}; 0 = hard shadows)",
+            if d.kind == LightType::Directional {
+                "an angular diameter in degrees"
+            } else {
+                "a radius in world units"
+            }
+        )));
+    }
+    if d.kind == LightType::Directional && size >= MAX_ANGULAR_SIZE_DEG {
+        return Err(size_err(format!(
+            "`size` = {size} of a directional light is an angular diameter in degrees and must \
+             be below {MAX_ANGULAR_SIZE_DEG} (the sun is about 0.53)"
+        )));
+    }
     let diffuse = d.diffuse.unwrap_or(Vec3::ONE);
     Ok(Light {
         kind,
@@ -563,7 +584,7 @@ fn build_light(cx: &Ctx<'_>, i: usize, l: &Spanned<LightDef>) -> Result<Light, S
         attenuation,
         casts_shadows: d.casts_shadows.unwrap_or(true),
         shadow_resolution: d.shadow_resolution.unwrap_or(default_resolution),
-        size: 0.0,
+        size,
     })
 }
 

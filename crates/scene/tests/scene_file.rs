@@ -67,6 +67,10 @@ fn example_scene_parses() {
     assert!((lo - Vec3::new(-10.0, 0.0, -10.0)).length() < 1e-4, "{lo}");
     assert!((hi - Vec3::new(10.0, 0.0, 10.0)).length() < 1e-4, "{hi}");
 
+    // Sizes: the spot and the sun say theirs, the point light is hard by default.
+    let sizes: Vec<f32> = scene.lights.iter().map(|l| l.size).collect();
+    assert_eq!(sizes, [0.15, 0.0, 0.53]);
+
     // The spot light took its defaults.
     let spot = &scene.lights[0];
     assert_eq!(spot.shadow_resolution, 1024);
@@ -404,4 +408,41 @@ fn limits_are_enforced() {
     let r = load_scene_file(&p);
     let _ = std::fs::remove_file(&p);
     assert!(matches!(r, Err(SceneError::TooLarge { .. })), "{r:?}");
+}
+
+/// `size`: read per light, 0 when absent, refused (a `Parse` error naming the light's entry,
+/// its line and the key) when negative or not finite, or when a directional light's angular
+/// diameter reaches 30 degrees (`MAX_ANGULAR_SIZE_DEG`).
+#[test]
+fn light_size_is_read_defaulted_and_checked() {
+    let lights = |sizes: [&str; 3]| {
+        format!(
+            "[[light]]\ntype = \"spot\"\nposition = [0, 4, 0]\ndirection = [0, -1, 0]\n\
+             cutoff_deg = 30\nrange = 10\n{}\n\
+             [[light]]\ntype = \"point\"\nposition = [1, 2, 0]\nrange = 5\n{}\n\
+             [[light]]\ntype = \"directional\"\ndirection = [0, -1, 0]\n{}\n",
+            sizes[0], sizes[1], sizes[2]
+        )
+    };
+    let scene = parse(&lights(["size = 0.25", "size = 1", "size = 0.53"])).unwrap();
+    let sizes: Vec<f32> = scene.lights.iter().map(|l| l.size).collect();
+    assert_eq!(sizes, [0.25, 1.0, 0.53]);
+    let scene = parse(&lights(["", "", ""])).unwrap();
+    assert!(scene.lights.iter().all(|l| l.size == 0.0), "default: hard");
+
+    for (sizes, light, line, needle) in [
+        (["size = -0.1", "", ""], 0, 1, "radius in world units"),
+        (["", "size = nan", ""], 1, 8, "finite number >= 0"),
+        (["", "size = inf", ""], 1, 8, "finite number >= 0"),
+        (["", "", "size = -1"], 2, 13, "angular diameter in degrees"),
+        (["", "", "size = 30"], 2, 13, "below 30"),
+    ] {
+        let msg = parse_err(&lights(sizes));
+        assert!(msg.contains(&format!("[[light]] {light}")), "{msg}");
+        assert!(msg.contains(&format!("line {line}")), "{msg}");
+        assert!(msg.contains("`size`") && msg.contains(needle), "{msg}");
+    }
+    let msg =
+        parse_err("[[light]]\ntype = \"point\"\nposition = [0, 1, 0]\nrange = 5\nsize = \"big\"\n");
+    assert!(msg.contains("size"), "{msg}");
 }

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use clap::Args;
 use manyshadows::{ShadowBias, Technique};
 
-use crate::args::GpuArgs;
+use crate::args::{GpuArgs, LightSizeArgs};
 
 /// Who traces the reference.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -43,6 +43,8 @@ pub struct CompareArgs {
     /// Light types the layout uses: all (mixed), spot, point or directional.
     #[arg(long, default_value = "all")]
     pub(super) light_types: String,
+    #[command(flatten)]
+    pub(super) light_sizes: LightSizeArgs,
     /// Point-light shadows: cube or dual-paraboloid (scored by the same reference).
     #[arg(long, default_value = "cube", value_parser = crate::args::parse_point_shadows)]
     pub(super) point_shadows: manyshadows::scene::light_space::PointShadows,

@@ -40,8 +40,10 @@ impl Variant {
 }
 
 /// Fails on the flags no scene can be scored with: an edge band over [`MAX_EDGE_BAND`], a
-/// shadow resolution out of range, a bias that is not a finite number.
+/// shadow resolution out of range, a bias that is not a finite number, a light size no light
+/// can have.
 pub(super) fn check_flags(args: &CompareArgs) -> Result<()> {
+    args.light_sizes.sizes()?;
     if args.edge_band > MAX_EDGE_BAND {
         bail!(
             "--edge-band {} is more than the supported {MAX_EDGE_BAND} pixels",
@@ -78,6 +80,7 @@ pub(super) fn load(args: &CompareArgs) -> Result<Scene> {
         lights,
         seed: args.seed,
         light_types: args.light_types.clone(),
+        light_sizes: args.light_sizes,
         mesh: args.mesh.clone(),
         subdivide: args.subdivide,
         ..RenderArgs::default()

@@ -142,6 +142,7 @@ impl AnalyticLight {
             attenuation,
             casts_shadows: true,
             shadow_resolution: resolution,
+            // A point: the exact outline is that of a hard shadow.
             size: 0.0,
         }
     }

@@ -243,8 +243,8 @@ pub fn atrium_lights(
         lights: Some(n),
         seed,
         mix,
-        mesh: None,
         shadow_resolution,
+        ..BuiltinOptions::default()
     })
     .lights
 }

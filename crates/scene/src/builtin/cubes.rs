@@ -4,7 +4,8 @@
 //! software rasterizer), exercises all three light types and their shadows at once, and never
 //! changes. With the default options its three lights are fixed, not seeded; asking for a light
 //! count or a non-`all` mix switches to the generic seeded layout
-//! ([`scatter_lights`](super::scatter_lights)).
+//! ([`scatter_lights`](super::scatter_lights)). Its lights are hard (size 0) either way, unlike
+//! the other built-ins' ([`crate::light_size`]): the golden images are of hard shadows.
 
 use glam::{Mat4, Quat, Vec3};
 
@@ -18,11 +19,11 @@ pub const CUBES_CAMERA_POSITION: Vec3 = Vec3::new(6.0, 6.0, 8.0);
 /// Camera target of `cubes`.
 pub const CUBES_CAMERA_TARGET: Vec3 = Vec3::new(0.0, 0.5, 0.0);
 
-/// The three fixed lights: a warm spot, a cool point light and a white sun.
+/// The three fixed lights: a warm spot, a cool point light and a white sun, all hard.
 pub fn cubes_default_lights(shadow_resolution: Option<u32>) -> Vec<Light> {
     let spot_pos = Vec3::new(-3.0, 5.0, 3.0);
     let point_pos = Vec3::new(2.5, 3.0, 2.5);
-    vec![
+    hard(vec![
         lights::spot(
             spot_pos,
             Vec3::new(0.0, 0.5, 0.0) - spot_pos,
@@ -53,7 +54,15 @@ pub fn cubes_default_lights(shadow_resolution: Option<u32>) -> Vec<Light> {
             },
             shadow_resolution,
         ),
-    ]
+    ])
+}
+
+/// `lights` with size 0: points, hard shadows.
+fn hard(mut lights: Vec<Light>) -> Vec<Light> {
+    for l in &mut lights {
+        l.size = 0.0;
+    }
+    lights
 }
 
 /// Builds `cubes`.
@@ -138,13 +147,13 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
     scene.lights = if opts.lights.is_none() && opts.mix == LightMix::All {
         cubes_default_lights(opts.shadow_resolution)
     } else {
-        lights::scatter(
+        hard(lights::scatter(
             &scene,
             opts.lights.unwrap_or(3),
             opts.seed,
             opts.mix,
             opts.shadow_resolution,
-        )
+        ))
     };
     scene
 }

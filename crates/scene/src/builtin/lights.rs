@@ -2,8 +2,10 @@
 //! types, colours, brightness, and the generic [`scatter`] layout.
 //!
 //! Why one place: every scene must follow the same rules (type split, default shadow
-//! resolutions, ambient fraction, brightness at a key distance) so that light counts and mixes
-//! mean the same thing in every scene and benchmark.
+//! resolutions, ambient fraction, brightness at a key distance, size) so that light counts and
+//! mixes mean the same thing in every scene and benchmark. Every light made here has the
+//! default size of [`crate::light_size`]: a radius of 2 % of its range for a spot or point
+//! light, the sun's 0.53° for a directional one (scenes that must stay hard set 0 after).
 
 use std::f32::consts::TAU;
 
@@ -12,6 +14,7 @@ use rand_core::{Rng, SeedableRng};
 use rand_pcg::Pcg32;
 
 use super::options::LightMix;
+use crate::light_size::default_size;
 use crate::model::{Attenuation, Light, LightKind, Scene};
 
 /// Default shadow-map resolution of spot lights (texels per side).
@@ -166,7 +169,7 @@ impl Tone {
             attenuation,
             casts_shadows: true,
             shadow_resolution: resolution,
-            size: 0.0,
+            size: default_size(&kind),
         }
     }
 }

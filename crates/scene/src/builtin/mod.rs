@@ -25,6 +25,12 @@
 //! reach a useful brightness at the distance it is meant to light (its "key distance").
 //! Each light's ambient colour is a small fraction of its diffuse colour ([`AMBIENT_FRACTION`]),
 //! so shadowed areas stay dark but not black whatever the count.
+//!
+//! Sizes: every light has the default size of [`crate::light_size`] (a spot or point light's
+//! radius 2 % of its range, a directional light the sun's 0.53°), so the default pictures show
+//! soft shadows; `cubes` and the `plane-*` scenes keep hard lights (size 0), because golden
+//! images and exact-outline tests compare them. [`BuiltinOptions::light_sizes`] overrides
+//! every light's size in any scene.
 
 pub mod analytic;
 pub mod atrium;
@@ -62,7 +68,8 @@ pub const SCENE_NAMES: &[&str] = &[
 /// Builds the built-in scene `name` (one of [`SCENE_NAMES`]).
 ///
 /// Errors: [`SceneError::UnknownScene`] listing the names; [`SceneError::InvalidRequest`] for
-/// more than [`MAX_LIGHTS`] lights or a shadow resolution outside `1..=16384`; whatever
+/// more than [`MAX_LIGHTS`] lights, a shadow resolution outside `1..=16384` or light sizes
+/// [`LightSizes::check`](crate::light_size::LightSizes::check) refuses; whatever
 /// [`Scene::validate`] finds (e.g. a bad `opts.mesh`). The returned scene has passed
 /// [`Scene::validate`].
 pub fn build(name: &str, opts: &BuiltinOptions) -> Result<Scene, SceneError> {
@@ -82,7 +89,8 @@ pub fn build(name: &str, opts: &BuiltinOptions) -> Result<Scene, SceneError> {
             )));
         }
     }
-    let scene = match name {
+    opts.light_sizes.check()?;
+    let mut scene = match name {
         "atrium" => atrium::build(opts),
         "terrain" => terrain::build(opts),
         "dragon" => dragon::build(opts)?,
@@ -94,6 +102,7 @@ pub fn build(name: &str, opts: &BuiltinOptions) -> Result<Scene, SceneError> {
         "courtyard-opaque" => courtyard::build(opts, false),
         _ => unreachable!("checked against SCENE_NAMES above"),
     };
+    opts.light_sizes.apply(&mut scene.lights);
     scene.validate()?;
     Ok(scene)
 }
@@ -105,7 +114,8 @@ pub fn build(name: &str, opts: &BuiltinOptions) -> Result<Scene, SceneError> {
 /// half, directional lights slant in at 35–65° elevation; positions follow a jittered
 /// low-discrepancy sequence so any `n` covers the area evenly. Ranges shrink as `n` grows so
 /// each light affects a neighbourhood, not the whole scene. A scene with no geometry gets a
-/// layout over a 10 m square. The caller checks `n` against [`MAX_LIGHTS`] (see
+/// layout over a 10 m square. The lights have the default sizes ([`crate::light_size`]). The
+/// caller checks `n` against [`MAX_LIGHTS`] (see
 /// [`check_light_count`]); this function produces whatever it is asked for.
 pub fn scatter_lights(
     scene: &Scene,

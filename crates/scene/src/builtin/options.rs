@@ -5,6 +5,7 @@ use std::fmt;
 use std::str::FromStr;
 
 use crate::error::SceneError;
+use crate::light_size::LightSizes;
 use crate::model::Mesh;
 
 /// The most lights a built-in scene or [`scatter_lights`] layout may ask for; more is a
@@ -64,8 +65,8 @@ impl FromStr for LightMix {
     }
 }
 
-/// What to build: light count, seed, light types, a mesh for the dragon scene and a shadow-map
-/// resolution override.
+/// What to build: light count, seed, light types, a mesh for the dragon scene, and overrides of
+/// every light's shadow-map resolution and size.
 #[derive(Clone, Debug)]
 pub struct BuiltinOptions {
     /// Number of lights; `None` means the scene's default (atrium 32, terrain 8, dragon 8,
@@ -82,6 +83,11 @@ pub struct BuiltinOptions {
     /// `None` uses the defaults: spot 512, point 256, directional 1024 (the analytic scenes
     /// use 1024 for all).
     pub shadow_resolution: Option<u32>,
+    /// Sizes for every light (radius of spots and points, angular diameter of suns); `None`
+    /// parts keep the defaults: [`crate::light_size`]'s rule (2 % of the range, the sun's
+    /// 0.53°), except `cubes` and the `plane-*` scenes, whose lights are hard (size 0) for
+    /// exact comparisons. [`LightSizes::HARD`] makes every light hard.
+    pub light_sizes: LightSizes,
 }
 
 impl Default for BuiltinOptions {
@@ -92,6 +98,7 @@ impl Default for BuiltinOptions {
             mix: LightMix::All,
             mesh: None,
             shadow_resolution: None,
+            light_sizes: LightSizes::default(),
         }
     }
 }

@@ -22,6 +22,14 @@ pub const CREASE_ANGLE_DEG: f32 = 60.0;
 /// colours (one unit of light colour is 10 lux). See the module documentation.
 pub const PHONG_PER_LUX: f32 = 0.1;
 
+/// The key in a glTF light's `extras` that holds its [`Light::size`], which
+/// `KHR_lights_punctual` has no field for: `"extras": { "manyshadows_size": 0.1 }` on the
+/// light's entry in the extension's `lights` array, in the units of [`Light::size`] (a radius
+/// in world units for point and spot lights, unaffected by node scale like `range`; an angular
+/// diameter in degrees for directional ones). Without it a loaded light is a point (size 0),
+/// so a file looks as its author made it.
+pub const GLTF_SIZE_EXTRA: &str = "manyshadows_size";
+
 /// Number of seeded lights a scene without lights gets.
 pub const DEFAULT_LIGHT_COUNT: usize = 8;
 

@@ -8,14 +8,14 @@ use std::path::Path;
 use ::gltf::json::validation::Checked;
 use glam::{Mat4, Vec3};
 
-use super::common::{parse_error, PHONG_PER_LUX};
+use super::common::{parse_error, GLTF_SIZE_EXTRA, PHONG_PER_LUX};
 use super::gltf_open::Opened;
 use crate::builtin::{
     DIRECTIONAL_CASCADES, DIRECTIONAL_SHADOW_RESOLUTION, DIRECTIONAL_SPLIT_LAMBDA,
     POINT_SHADOW_RESOLUTION, SPOT_SHADOW_RESOLUTION,
 };
 use crate::error::SceneError;
-use crate::model::{Attenuation, Camera, Light, LightKind};
+use crate::model::{Attenuation, Camera, Light, LightKind, MAX_ANGULAR_SIZE_DEG};
 
 /// The direction a node's local −Z points in world space (lights and cameras look down −Z).
 fn forward_of(world: &Mat4) -> Option<Vec3> {
@@ -128,10 +128,43 @@ pub(super) fn read_lights(
             attenuation,
             casts_shadows: true,
             shadow_resolution,
-            size: 0.0,
+            size: size_from_extras(&opened.json, index, &name, &kind, notes),
         });
     }
     Ok(lights)
+}
+
+/// The size in the `extras` of light `index` of the file's `KHR_lights_punctual` list
+/// ([`GLTF_SIZE_EXTRA`]); 0 (a point) without one, and with a note for a value that is not a
+/// size a light of `kind` can have.
+fn size_from_extras(
+    json: &serde_json::Value,
+    index: usize,
+    name: &str,
+    kind: &LightKind,
+    notes: &mut Vec<String>,
+) -> f32 {
+    let pointer =
+        format!("/extensions/KHR_lights_punctual/lights/{index}/extras/{GLTF_SIZE_EXTRA}");
+    let Some(value) = json.pointer(&pointer) else {
+        return 0.0;
+    };
+    let directional = matches!(kind, LightKind::Directional { .. });
+    match value.as_f64().map(|v| v as f32) {
+        Some(s) if s.is_finite() && s >= 0.0 && !(directional && s >= MAX_ANGULAR_SIZE_DEG) => s,
+        _ => {
+            notes.push(format!(
+                "light '{name}': extras.{GLTF_SIZE_EXTRA} = {value} is not {}: ignored, the \
+                 light is a point (hard shadows)",
+                if directional {
+                    format!("an angular diameter in degrees, >= 0 and below {MAX_ANGULAR_SIZE_DEG}")
+                } else {
+                    "a radius >= 0 in world units".to_string()
+                }
+            ));
+            0.0
+        }
+    }
 }
 
 pub(super) fn read_camera(

@@ -13,7 +13,7 @@ use glam::{Mat3, Mat4, Quat, Vec3};
 use serde_json::{json, Map, Value};
 
 use super::base64;
-use super::common::PHONG_PER_LUX;
+use super::common::{GLTF_SIZE_EXTRA, PHONG_PER_LUX};
 use crate::error::SceneError;
 use crate::model::{LightKind, Material, Scene};
 use crate::texture::{AlphaMode, TextureRef, Wrap};
@@ -37,8 +37,10 @@ use crate::texture::{AlphaMode, TextureRef, Wrap};
 /// - Lights as `KHR_lights_punctual` nodes: `intensity = max(diffuse) / PHONG_PER_LUX`,
 ///   `color = diffuse / max(diffuse)` (negative channels written as 0), `range`, the spot's
 ///   cutoff as `outerConeAngle` (inner 0), the direction as the node's rotation of −Z, the
-///   position as its translation. Loading gives back the diffuse colour (as diffuse and
-///   specular), range, cone, position and direction to float rounding. Not representable:
+///   position as its translation, a size above 0 as the light's
+///   `"extras": { "manyshadows_size": size }` ([`GLTF_SIZE_EXTRA`]). Loading gives back the
+///   diffuse colour (as diffuse and specular), range, cone, position, direction and size to
+///   float rounding. Not representable:
 ///   ambient and a specular colour different from diffuse, the attenuation (loaded lights use
 ///   the inverse square), shadow resolutions, cascades, `casts_shadows`.
 /// - The camera as a perspective camera node: `yfov`, `znear`, `zfar`, translation = position,
@@ -137,6 +139,9 @@ pub fn write_gltf(scene: &Scene, path: &Path) -> Result<(), SceneError> {
             "color": color.to_array(),
             "intensity": intensity,
         });
+        if l.size > 0.0 {
+            def["extras"] = json!({ GLTF_SIZE_EXTRA: l.size });
+        }
         let mut node = json!({ "name": format!("light {i}") });
         let aim = |direction: Vec3| -> [f32; 4] {
             Quat::from_rotation_arc(Vec3::NEG_Z, direction.normalize())

@@ -49,13 +49,21 @@
 //!   [`DIRECTIONAL_SPLIT_LAMBDA`], every cascade at [`DIRECTIONAL_SHADOW_RESOLUTION`]
 //!   (`cascade_resolution_scale` 1); spot and point lights [`SPOT_SHADOW_RESOLUTION`] and
 //!   [`POINT_SHADOW_RESOLUTION`]; every light casts shadows. A light of zero intensity or colour
-//!   is kept (it adds nothing).
+//!   is kept (it adds nothing);
+//! - size: `KHR_lights_punctual` lights are punctual, so a loaded light is a point (size 0,
+//!   hard shadows: the file looks as its author made it) unless the light's `extras` give
+//!   [`GLTF_SIZE_EXTRA`] (`"extras": { "manyshadows_size": 0.1 }`: a radius in world units for
+//!   point and spot lights, an angular diameter in degrees for directional ones, as
+//!   [`Light::size`](crate::Light::size)); a value that is not a number, negative, or
+//!   (directional) 30° or more is ignored with a note.
 //!
 //! A file with no lights (and every OBJ and PLY file) gets the seeded layout
-//! [`scatter_lights`]`(scene, 8, seed 1, LightMix::All, None)` and a note saying so.
+//! [`scatter_lights`]`(scene, 8, seed 1, LightMix::All, None)` (whose lights have the built-in
+//! default sizes, [`crate::light_size`]) and a note saying so.
 //! [`write_gltf`] writes the inverse mapping (`intensity = max(diffuse) / PHONG_PER_LUX`,
-//! `color = diffuse / max(diffuse)`), so a written light loads back with the same colours,
-//! range, cone and direction; a light's ambient colour, a specular colour different from its
+//! `color = diffuse / max(diffuse)`, a size above 0 as [`GLTF_SIZE_EXTRA`]), so a written
+//! light loads back with the same colours, range, cone, direction and size; a light's ambient
+//! colour, a specular colour different from its
 //! diffuse one and its attenuation are not representable in glTF and come back as above.
 //!
 //! # glTF materials → Phong materials
@@ -116,6 +124,7 @@
 //! libraries to [`MAX_MTL_BYTES`].
 //!
 //! [`Instance`]: crate::Instance
+//! [`Light`]: crate::Light
 //! [`scatter_lights`]: crate::builtin::scatter_lights
 //! [`DIRECTIONAL_CASCADES`]: crate::builtin::DIRECTIONAL_CASCADES
 //! [`DIRECTIONAL_SPLIT_LAMBDA`]: crate::builtin::DIRECTIONAL_SPLIT_LAMBDA
@@ -145,8 +154,8 @@ use crate::model::{Camera, Instance, Material, Mesh, Scene};
 
 use common::{check_file_size, check_triangles, default_camera, parse_error, Parts};
 pub use common::{
-    CREASE_ANGLE_DEG, DEFAULT_LIGHT_COUNT, MAX_DECOMPRESSED_BYTES, MAX_FILE_BYTES, MAX_TRIANGLES,
-    PHONG_PER_LUX,
+    CREASE_ANGLE_DEG, DEFAULT_LIGHT_COUNT, GLTF_SIZE_EXTRA, MAX_DECOMPRESSED_BYTES, MAX_FILE_BYTES,
+    MAX_TRIANGLES, PHONG_PER_LUX,
 };
 pub use gltf_write::write_gltf;
 pub use obj::{write_obj, MAX_MTL_BYTES};

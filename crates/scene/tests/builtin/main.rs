@@ -7,8 +7,8 @@
 //!
 //! By subject: what holds for every scene and the light options (`every_scene`), one module per
 //! scene (`atrium`, `terrain`, `dragon`, `analytic`, `cubes_and_layout` with the generic light
-//! layout) and the procedural primitives (`primitives`); the helpers they share are in
-//! `common`.
+//! layout), the lights' sizes (`light_sizes`) and the procedural primitives (`primitives`);
+//! the helpers they share are in `common`.
 
 mod analytic;
 mod atrium;
@@ -16,5 +16,6 @@ mod common;
 mod cubes_and_layout;
 mod dragon;
 mod every_scene;
+mod light_sizes;
 mod primitives;
 mod terrain;

@@ -6,7 +6,7 @@ use manyshadows_scene::builtin::{
     DIRECTIONAL_CASCADES, DIRECTIONAL_SHADOW_RESOLUTION, DIRECTIONAL_SPLIT_LAMBDA,
     POINT_SHADOW_RESOLUTION, SPOT_SHADOW_RESOLUTION,
 };
-use manyshadows_scene::loaders::{write_ply_ascii, PHONG_PER_LUX};
+use manyshadows_scene::loaders::{write_ply_ascii, GLTF_SIZE_EXTRA, PHONG_PER_LUX};
 use manyshadows_scene::{AlphaMode, Attenuation, Camera, LightKind, Texture, TextureRef, Wrap};
 use serde_json::{json, Value};
 
@@ -210,6 +210,7 @@ fn gltf_lights_map_to_the_documented_phong_values() {
         assert_eq!(l.ambient, Vec3::ZERO);
         assert_eq!(l.specular, l.diffuse);
         assert!(l.casts_shadows);
+        assert_eq!(l.size, 0.0, "punctual: hard without a size in extras");
         l.validate().unwrap();
     }
 
@@ -305,6 +306,56 @@ fn gltf_lights_map_to_the_documented_phong_values() {
     };
     assert!(cutoff_deg < 89.0 && cutoff_deg > 88.9, "{cutoff_deg}");
     assert_eq!(direction, Vec3::NEG_Z);
+}
+
+/// A light's size comes from `extras.manyshadows_size` on its `KHR_lights_punctual` entry, in
+/// the units of `Light::size`; a value no light of its type can have is a note and a point.
+#[test]
+fn gltf_light_size_comes_from_extras() {
+    let dir = temp_dir("gltf_light_sizes");
+    let mut doc = lights_doc();
+    let lights = &mut doc["extensions"]["KHR_lights_punctual"]["lights"];
+    for (i, size) in [
+        (0, json!(0.3)),
+        (1, json!(0.53)),
+        (2, json!("big")),
+        (3, json!(-1)),
+        (4, json!(2)),
+    ] {
+        lights[i]["extras"] = json!({ GLTF_SIZE_EXTRA: size });
+    }
+    lights[5]["extras"] = json!({ "other": 1 });
+    let loaded = scene_of(&save_json(&dir, "sizes.gltf", &doc));
+    let sizes: Vec<f32> = loaded.scene.lights.iter().map(|l| l.size).collect();
+    assert_eq!(sizes, [0.3, 0.53, 0.0, 0.0, 2.0, 0.0]);
+    for (name, value) in [("bulb", "\"big\""), ("bright", "-1")] {
+        assert!(
+            loaded
+                .notes
+                .iter()
+                .any(|n| n.contains(&format!("light '{name}'"))
+                    && n.contains(&format!("{GLTF_SIZE_EXTRA} = {value}"))
+                    && n.contains("radius")),
+            "{name}: {:?}",
+            loaded.notes
+        );
+    }
+    loaded.scene.validate().unwrap();
+
+    // A directional light's size is an angular diameter below 30 degrees.
+    let mut doc = lights_doc();
+    doc["extensions"]["KHR_lights_punctual"]["lights"][1]["extras"] =
+        json!({ GLTF_SIZE_EXTRA: 30 });
+    let loaded = scene_of(&save_json(&dir, "wide-sun.gltf", &doc));
+    assert_eq!(loaded.scene.lights[1].size, 0.0);
+    assert!(
+        loaded
+            .notes
+            .iter()
+            .any(|n| n.contains("light 'sun'") && n.contains("angular diameter")),
+        "{:?}",
+        loaded.notes
+    );
 }
 
 #[test]

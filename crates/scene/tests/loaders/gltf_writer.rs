@@ -1,7 +1,7 @@
 //! The glTF writer: a written scene loads back the same, an empty one is refused on load.
 
 use glam::{Mat4, Quat, Vec2, Vec3};
-use manyshadows_scene::loaders::{load_scene, write_gltf};
+use manyshadows_scene::loaders::{load_scene, write_gltf, GLTF_SIZE_EXTRA};
 use manyshadows_scene::{
     AlphaMode, Attenuation, Camera, Instance, Light, LightKind, Material, Scene, Texture,
     TextureRef, Wrap,
@@ -68,6 +68,7 @@ fn writer_scene() -> Scene {
         shadow_resolution: 512,
         size: 0.0,
     };
+    let sized = |size: f32, l: Light| Light { size, ..l };
     Scene {
         name: "writer".into(),
         meshes: vec![card, cube, plain],
@@ -80,30 +81,39 @@ fn writer_scene() -> Scene {
             Instance::caster(1, 0, moved),
         ],
         lights: vec![
-            light(
-                LightKind::Spot {
-                    position: Vec3::new(1.0, 5.0, 2.0),
-                    direction: Vec3::new(0.2, -1.0, 0.1).normalize(),
-                    cutoff_deg: 35.0,
-                    range: 12.5,
-                },
-                Vec3::new(2.0, 1.5, 0.5),
+            sized(
+                0.25,
+                light(
+                    LightKind::Spot {
+                        position: Vec3::new(1.0, 5.0, 2.0),
+                        direction: Vec3::new(0.2, -1.0, 0.1).normalize(),
+                        cutoff_deg: 35.0,
+                        range: 12.5,
+                    },
+                    Vec3::new(2.0, 1.5, 0.5),
+                ),
             ),
-            light(
-                LightKind::Point {
-                    position: Vec3::new(-2.0, 3.0, 0.5),
-                    range: 6.0,
-                },
-                Vec3::new(0.3, 0.3, 0.4),
+            sized(
+                0.12,
+                light(
+                    LightKind::Point {
+                        position: Vec3::new(-2.0, 3.0, 0.5),
+                        range: 6.0,
+                    },
+                    Vec3::new(0.3, 0.3, 0.4),
+                ),
             ),
-            light(
-                LightKind::Directional {
-                    direction: Vec3::new(0.0, 0.0, 1.0),
-                    cascades: 3,
-                    split_lambda: 0.75,
-                    cascade_resolution_scale: 1.0,
-                },
-                Vec3::new(1.0, 0.95, 0.9),
+            sized(
+                0.53,
+                light(
+                    LightKind::Directional {
+                        direction: Vec3::new(0.0, 0.0, 1.0),
+                        cascades: 3,
+                        split_lambda: 0.75,
+                        cascade_resolution_scale: 1.0,
+                    },
+                    Vec3::new(1.0, 0.95, 0.9),
+                ),
             ),
             light(
                 LightKind::Spot {
@@ -209,6 +219,7 @@ fn written_gltf_loads_back_the_same_scene() {
         assert_eq!(scene.lights.len(), original.lights.len());
         for (a, b) in original.lights.iter().zip(&scene.lights) {
             assert_eq!(a.type_name(), b.type_name());
+            assert_eq!(a.size, b.size, "{name}: the size, through extras");
             assert!(
                 close(a.diffuse, b.diffuse, 1e-5),
                 "{} vs {}",
@@ -269,6 +280,31 @@ fn written_gltf_loads_back_the_same_scene() {
             assert!((x - y).abs() < 1e-5, "{va} vs {vb}");
         }
     }
+}
+
+/// A light's size goes into its `extras` only when it has one: a hard light's entry is plain
+/// `KHR_lights_punctual`.
+#[test]
+fn written_gltf_has_size_extras_only_for_sized_lights() {
+    let dir = temp_dir("write_sizes");
+    let path = dir.join("sizes.gltf");
+    write_gltf(&writer_scene(), &path).unwrap();
+    let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    let lights = doc["extensions"]["KHR_lights_punctual"]["lights"]
+        .as_array()
+        .unwrap();
+    let extras: Vec<Option<f32>> = lights
+        .iter()
+        .map(|l| {
+            l.get("extras")
+                .map(|e| e[GLTF_SIZE_EXTRA].as_f64().unwrap() as f32)
+        })
+        .collect();
+    assert_eq!(
+        extras,
+        [Some(0.25), Some(0.12), Some(0.53), None],
+        "{lights:?}"
+    );
 }
 
 #[test]

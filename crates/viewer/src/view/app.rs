@@ -66,6 +66,7 @@ fn load(args: &ViewArgs) -> Result<Scene> {
         args.mesh.clone(),
         args.lights,
         args.seed,
+        args.light_sizes,
         args.camera,
     )
 }

@@ -24,6 +24,8 @@ pub struct ViewArgs {
     /// Seed of the light layout.
     #[arg(long, default_value_t = 1)]
     pub(super) seed: u64,
+    #[command(flatten)]
+    pub(super) light_sizes: manyshadows_cli::LightSizeArgs,
     /// Shadow technique to start with (as for `render`; the panel switches it).
     #[arg(long, default_value_t = Technique::default(), value_parser = manyshadows_cli::parse_technique)]
     pub(super) technique: Technique,

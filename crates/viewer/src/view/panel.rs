@@ -144,6 +144,7 @@ impl State {
                 manyshadows::scene::builtin::LightMix::All,
                 None,
             );
+            self.light_sizes.apply(&mut app_scene.lights);
             let c = self.choice;
             self.rebuild(app_scene, c);
         }

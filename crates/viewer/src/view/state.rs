@@ -7,6 +7,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Result;
+use manyshadows::scene::light_size::LightSizes;
 use manyshadows::scene::light_space::PointShadows;
 use manyshadows::scene::Scene;
 use manyshadows::{wgpu, Fills, GpuContext, Pcf, RenderSettings, Renderer, Technique};
@@ -37,9 +38,11 @@ pub(super) struct State {
     pub(super) ctx: GpuContext,
     pub(super) renderer: Renderer,
     pub(super) choice: Choice,
-    /// The panel's light count (applied with its button) and the layout's seed.
+    /// The panel's light count (applied with its button), the layout's seed and the light
+    /// sizes the flags ask for (kept when the panel scatters new lights).
     pub(super) light_count: usize,
     pub(super) seed: u64,
+    pub(super) light_sizes: LightSizes,
     pub(super) egui_ctx: egui::Context,
     pub(super) egui_state: egui_winit::State,
     pub(super) egui_renderer: egui_wgpu::Renderer,
@@ -120,6 +123,7 @@ impl State {
             choice,
             light_count: scene.lights.len(),
             seed: args.seed,
+            light_sizes: args.light_sizes.sizes()?,
             egui_ctx,
             egui_state,
             egui_renderer,
