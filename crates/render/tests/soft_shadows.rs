@@ -276,3 +276,51 @@ fn shading_with_the_frames_own_visibility_gives_its_image() {
         .unwrap();
     assert!(worst <= 2, "sized lights: a channel differs by {worst}");
 }
+
+/// Virtual maps with sized lights: the soft filter reads up to the largest penumbra from a
+/// sample, so its page's receiver bounds and the pages beside it must hold the casters there.
+/// Culling casters by the receiver bounds, and marking by tiles, then change no pixel.
+#[test]
+fn virtual_soft_shadows_keep_what_their_filter_reads() {
+    let ctx = common::context();
+    let scene = manyshadows::scene::builtin::build(
+        "atrium",
+        &manyshadows::scene::builtin::BuiltinOptions {
+            lights: Some(12),
+            ..Default::default()
+        },
+    )
+    .expect("atrium");
+    assert!(scene.lights.iter().all(|l| l.size > 0.0));
+    let render = |options: manyshadows::VirtualOptions| {
+        Renderer::new(
+            &ctx,
+            &scene,
+            RenderSettings::new(240, 135)
+                .with_technique(Technique::VIRTUAL)
+                .with_virtual_maps(options),
+        )
+        .expect("renderer")
+        .render()
+        .expect("frame")
+    };
+    let base = render(manyshadows::VirtualOptions::default());
+    for (what, options) in [
+        (
+            "without receiver bounds",
+            manyshadows::VirtualOptions::default().with_receiver_cull(false),
+        ),
+        (
+            "marking per pixel",
+            manyshadows::VirtualOptions::default().with_tile_marking(false),
+        ),
+    ] {
+        let other = render(options);
+        let (differing, largest, _) = common::frame_differences(&base, &other);
+        eprintln!("{what}: {differing} pixels differ, by up to {largest}");
+        assert!(
+            differing <= 2 && largest <= 4,
+            "{what}: {differing} pixels differ, by up to {largest} levels"
+        );
+    }
+}

@@ -411,6 +411,7 @@ fn tile_marking_asks_exactly_the_pages_per_pixel_marking_asks() {
         "terrain",
         &BuiltinOptions {
             lights: Some(24),
+            light_sizes: manyshadows::scene::light_size::LightSizes::HARD,
             ..Default::default()
         },
     )
@@ -513,12 +514,15 @@ fn tile_marking_asks_exactly_the_pages_per_pixel_marking_asks() {
     }
 }
 
-/// The atrium with 40 lights of every type (two mask words per pixel).
+/// The atrium with 40 hard lights of every type (two mask words per pixel): these tests
+/// check which pages are drawn and what they hold, where sized lights' soft filters would also
+/// read pages beside the asked ones (soft virtual maps: `soft_shadows.rs`).
 fn atrium_40() -> manyshadows::scene::Scene {
     builtin::build(
         "atrium",
         &BuiltinOptions {
             lights: Some(40),
+            light_sizes: manyshadows::scene::light_size::LightSizes::HARD,
             ..Default::default()
         },
     )

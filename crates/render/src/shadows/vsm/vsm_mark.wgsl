@@ -30,16 +30,26 @@ const TAP_REACH: f32 = 2.0;
 // The cells (columns | rows << 16) the filter taps of a sample at `uv` reach in its page of
 // `level`.
 fn tap_cells(uv: vec2<f32>, level: u32) -> u32 {
+    return tap_cells_within(uv, level, TAP_REACH);
+}
+
+// The cells taps up to `reach` texels from a sample at `uv` reach in its page of `level`.
+fn tap_cells_within(uv: vec2<f32>, level: u32, reach: f32) -> u32 {
     let pages = f32(1u << level);
     let t = (uv * pages - min(floor(uv * pages), vec2<f32>(pages - 1.0))) * f32(vsm.pool.z);
-    return cells_between(t, t);
+    return cells_reached(t, t, reach);
 }
 
 // The cells the filter taps of samples at page texel positions from `t0` to `t1` reach.
 fn cells_between(t0: vec2<f32>, t1: vec2<f32>) -> u32 {
+    return cells_reached(t0, t1, TAP_REACH);
+}
+
+// The cells within `reach` texels of page texel positions from `t0` to `t1`.
+fn cells_reached(t0: vec2<f32>, t1: vec2<f32>, reach: f32) -> u32 {
     let cell = f32(vsm.pool.z) / 16.0;
-    let lo = vec2<u32>(clamp(floor((t0 - TAP_REACH) / cell), vec2<f32>(0.0), vec2<f32>(15.0)));
-    let hi = vec2<u32>(clamp(floor((t1 + TAP_REACH) / cell), vec2<f32>(0.0), vec2<f32>(15.0)));
+    let lo = vec2<u32>(clamp(floor((t0 - reach) / cell), vec2<f32>(0.0), vec2<f32>(15.0)));
+    let hi = vec2<u32>(clamp(floor((t1 + reach) / cell), vec2<f32>(0.0), vec2<f32>(15.0)));
     let cols = (2u << hi.x) - (1u << lo.x);
     let rows = (2u << hi.y) - (1u << lo.y);
     return cols | (rows << 16u);
@@ -68,11 +78,41 @@ fn mark_light(i: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
         return;
     }
     let e = vsm_entry(face, level, q.uv);
+    if (light.diffuse.w > 0.0) {
+        mark_soft(face, level, q, e);
+        return;
+    }
     if (vsm.counts.w != 0u) {
         // The farthest receiver of the page (keys are never negative as bits: 0 = no bound).
         bound_page(e, bitcast<u32>(max(q.key, 0.0)), tap_cells(q.uv, level));
     }
     ask_page(face, level, q.uv, e);
+}
+
+// A sized light's sample: its soft filter's taps reach up to the largest penumbra (and a
+// texel) from it, so the pages within that reach are asked for too, with bounds over the
+// cells the taps reach (all of a neighbour's: the reach is below a page) and no depth bound:
+// taps compare against the receiver's plane extended up to that reach, which may lie beyond
+// every sample.
+fn mark_soft(face: VirtualFace, level: u32, q: VsmPoint, e: u32) {
+    let reach = frame.soft.z + 1.0;
+    let key = bitcast<u32>(3.4e38);
+    if (vsm.counts.w != 0u) {
+        bound_page(e, key, tap_cells_within(q.uv, level, reach));
+    }
+    ask_page(face, level, q.uv, e);
+    let r = vec2<f32>(reach / (f32(1u << level) * f32(vsm.pool.z)));
+    for (var k = 0u; k < 4u; k = k + 1u) {
+        let corner = vec2<f32>(f32(k & 1u), f32(k >> 1u)) * 2.0 - vec2<f32>(1.0);
+        let uv = clamp(q.uv + corner * r, vec2<f32>(0.0), vec2<f32>(1.0 - 1e-6));
+        let n = vsm_entry(face, level, uv);
+        if (n != e) {
+            if (vsm.counts.w != 0u) {
+                bound_page(n, key, 0xffffffffu);
+            }
+            ask_page(face, level, uv, n);
+        }
+    }
 }
 
 // Widens page `e`'s receiver bounds to depth key `key` and the cells `cells`.

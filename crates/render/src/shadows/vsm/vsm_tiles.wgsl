@@ -182,6 +182,10 @@ fn tile_light(i: u32, t: TileSamples) -> TilePage {
     if (light.shadow.y == 0u) {
         return tile_outcome(TILE_NONE);
     }
+    // A sized light's samples ask for the pages their soft filter reaches: per pixel.
+    if (light.diffuse.w > 0.0) {
+        return tile_outcome(TILE_UNSURE);
+    }
     let c = 0.5 * (t.lo + t.hi);
     let e = 0.5 * (t.hi - t.lo);
     let radius = length(e);
