@@ -241,7 +241,10 @@ fn size_zero_is_the_hard_reference_bit_for_bit() {
         if count > 1 {
             scene.lights[count - 1].casts_shadows = false;
         }
-        assert!(scene.lights.iter().all(|l| l.size == 0.0));
+        // The built-in scenes may size their lights: this test is about size 0.
+        for l in &mut scene.lights {
+            l.size = 0.0;
+        }
         let tracer = Tracer::new(&scene).unwrap();
         let step = (scene.triangle_count() / 1500).max(1);
         let surfaces = scene_points(&scene, step);
