@@ -31,6 +31,9 @@ struct WebSettings {
     light_loop: LightLoop,
     /// Camera turned about the scene's target by this many degrees (the page's orbit slider).
     orbit_deg: f32,
+    /// Every light's size times this (the page's light-size slider: 1 = the scene's sizes,
+    /// 0 = hard shadows).
+    light_size: f32,
 }
 
 impl Default for WebSettings {
@@ -46,6 +49,7 @@ impl Default for WebSettings {
             seed: 1,
             light_loop: LightLoop::default(),
             orbit_deg: 0.0,
+            light_size: 1.0,
         }
     }
 }
@@ -88,6 +92,13 @@ impl WebSettings {
                         .ok()
                         .filter(|d| d.is_finite())
                         .ok_or_else(|| format!("orbit '{v}' is not a number of degrees"))?
+                }
+                "size" => {
+                    s.light_size = v
+                        .parse::<f32>()
+                        .ok()
+                        .filter(|k| k.is_finite() && (0.0..=4.0).contains(k))
+                        .ok_or_else(|| format!("size '{v}' is not a factor from 0 to 4"))?
                 }
                 // Keys the page itself uses.
                 "report" | "auto" => {}
@@ -196,6 +207,12 @@ impl WebRenderer {
             ..Default::default()
         };
         let mut scene = builtin::build(&s.scene, &opts).map_err(err)?;
+        for l in &mut scene.lights {
+            l.size *= s.light_size;
+            if matches!(l.kind, manyshadows::scene::LightKind::Directional { .. }) {
+                l.size = l.size.min(manyshadows::scene::MAX_ANGULAR_SIZE_DEG * 0.99);
+            }
+        }
         let base_camera = scene.camera;
         scene.camera = orbit(&base_camera, s.orbit_deg);
         let renderer = Renderer::new(ctx, &scene, s.render_settings()).map_err(err)?;

@@ -207,6 +207,10 @@ fn shadow_options(ui: &mut egui::Ui, choice: &mut Choice) {
                 ui.selectable_value(&mut choice.pcf, p, p.name());
             }
         });
+    ui.add(
+        egui::Slider::new(&mut choice.light_size, 0.0..=4.0)
+            .text("light size × (soft shadows; 0 = hard)"),
+    );
     ui.checkbox(&mut choice.cache, "keep unchanged maps (cache)");
     ui.horizontal(|ui| {
         let mut on = choice.budget.is_some();

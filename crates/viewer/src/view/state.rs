@@ -1,6 +1,6 @@
 //! What the open window holds between frames: its surface, the GPU and the renderer, the
-//! panel's choices (a change of technique, point shadows, PCF, caching, budget or visibility
-//! rebuilds the renderer), egui's state, the fly camera, the overlays and the last frame's
+//! panel's choices (a change of technique, point shadows, PCF, caching, budget, visibility or
+//! light size rebuilds the renderer), egui's state, the fly camera, the overlays and the last frame's
 //! numbers the panel shows.
 
 use std::sync::Arc;
@@ -28,6 +28,8 @@ pub(super) struct Choice {
     pub(super) budget: Option<u32>,
     /// The hard visibility mask is computed (for the per-light view).
     pub(super) visibility: bool,
+    /// Every light's size times this (1: the scene's sizes, 0: hard shadows).
+    pub(super) light_size: f32,
 }
 
 /// The open window and everything drawn into it.
@@ -97,6 +99,7 @@ impl State {
             cache: !args.no_cache,
             budget: args.shadow_budget,
             visibility: args.show_visibility.is_some(),
+            light_size: 1.0,
         };
         let renderer = Renderer::new(&ctx, scene, settings(config.width, config.height, choice))?;
         let egui_ctx = egui::Context::default();
@@ -150,6 +153,12 @@ impl State {
     pub(super) fn rebuild(&mut self, scene: &Scene, choice: Choice) {
         let mut s = scene.clone();
         s.camera = self.fly.camera;
+        for l in &mut s.lights {
+            l.size *= choice.light_size;
+            if matches!(l.kind, manyshadows::scene::LightKind::Directional { .. }) {
+                l.size = l.size.min(manyshadows::scene::MAX_ANGULAR_SIZE_DEG * 0.99);
+            }
+        }
         match Renderer::new(
             &self.ctx,
             &s,
