@@ -73,6 +73,12 @@ fn prerequisites() -> Vec<Prerequisite> {
             skip: &[],
         },
         Prerequisite {
+            what: "a C++ compiler (g++)",
+            needed_by: "the build: the reference crate's FLIP (nv-flip compiles NVIDIA's C++)",
+            install: Install::Apt(&["g++"]),
+            skip: &[],
+        },
+        Prerequisite {
             what: "an X server and screenshots (Xvfb, xwd, X client libraries)",
             needed_by: "the viewer's window tests",
             install: Install::Apt(&[
