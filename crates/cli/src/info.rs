@@ -54,6 +54,15 @@ pub(crate) fn info(args: &GpuArgs) -> Result<()> {
         "  max_multiview_view_count        {}",
         l.max_multiview_view_count
     );
+    let per_pass = manyshadows::shadows::atlas::multiview::views_per_pass_on(&ctx);
+    println!(
+        "  multiview views per pass        {per_pass}{}",
+        if per_pass == 1 && l.max_multiview_view_count > 1 {
+            " (this driver loses clipped primitives' view index: one view per pass)"
+        } else {
+            ""
+        }
+    );
     println!("optional features:");
     for f in feature_use(ctx.adapter.features()) {
         println!(

@@ -110,11 +110,21 @@ pub fn groups(draw_list: &[u32], tile_size: impl Fn(u32) -> u32, max: u32) -> Ve
 }
 
 /// True for drivers whose multiview loses the view index of primitives that go through the
-/// clipper (they all land in layer 0): Mesa's lavapipe (checked on 22.3.6; a point light's
+/// clipper (they all land in layer 0): Mesa's lavapipe before 25 (22.3.6: a point light's
 /// cube faces, whose floor crosses the frustum, came out as the union of all six faces in
-/// layer 0, while groups whose triangles needed no clipping were exact).
+/// layer 0, while groups whose triangles needed no clipping were exact). Mesa 25.0.7's
+/// lavapipe routes them right (`tests/equivalence.rs` renders six views per pass there).
+/// A lavapipe whose Mesa version cannot be read counts as affected.
 pub fn clips_into_layer_zero(info: &wgpu::AdapterInfo) -> bool {
-    info.backend == wgpu::Backend::Vulkan && info.name.to_lowercase().contains("llvmpipe")
+    info.backend == wgpu::Backend::Vulkan
+        && info.name.to_lowercase().contains("llvmpipe")
+        && mesa_major(&info.driver_info).is_none_or(|major| major < 25)
+}
+
+/// The major version of a Mesa driver's description ("Mesa 25.0.7-2~bpo12+1" → 25).
+fn mesa_major(driver_info: &str) -> Option<u32> {
+    let rest = &driver_info[driver_info.find("Mesa ")? + 5..];
+    rest.split('.').next()?.trim().parse().ok()
 }
 
 /// Most views of one pass. wgpu 30 takes a pipeline's view mask as "views 0..n" only when
@@ -122,6 +132,21 @@ pub fn clips_into_layer_zero(info: &wgpu::AdapterInfo) -> bool {
 /// `SELECTIVE_MULTIVIEW` (an NVIDIA driver that offers 32 views failed so): 31 is the most
 /// views a mask of the plain `MULTIVIEW` feature can name.
 const MAX_VIEWS: u32 = 31;
+
+/// Views one multiview pass renders on `ctx`'s device: the device's limit, at most
+/// [`MAX_VIEWS`], one where the driver loses clipped primitives' view index
+/// ([`clips_into_layer_zero`]); 0 without multiview.
+pub fn views_per_pass_on(ctx: &GpuContext) -> u32 {
+    if !ctx.has(wgpu::Features::MULTIVIEW) {
+        return 0;
+    }
+    let limit = ctx.limits().max_multiview_view_count.min(MAX_VIEWS);
+    if clips_into_layer_zero(&ctx.info) {
+        limit.min(1)
+    } else {
+        limit
+    }
+}
 
 /// The view mask of a pass or pipeline over views `0..n` (`n` in `1..=MAX_VIEWS`).
 fn view_mask(n: u32) -> Option<NonZeroU32> {
@@ -163,7 +188,7 @@ impl Multiview {
     /// Builds the pipelines; the registry has checked `MULTIVIEW`. A device that has the
     /// feature but allows no view is refused the same way.
     pub fn new(ctx: &GpuContext) -> Result<Self, RenderError> {
-        let mut max_views = ctx.limits().max_multiview_view_count.min(MAX_VIEWS);
+        let max_views = views_per_pass_on(ctx);
         if max_views == 0 {
             return Err(RenderError::missing_feature(
                 ctx,
@@ -177,12 +202,11 @@ impl Multiview {
             WARNED.call_once(|| {
                 log::warn!(
                 "multiview: {} renders every primitive that needs clipping into view 0's layer \
-                 (Mesa lavapipe's clipper drops the view index), so each multiview pass holds \
+                 (lavapipe before Mesa 25 drops the view index), so each multiview pass holds \
                  one view here; expect no multiview speed-up on this adapter",
                 crate::gpu::context::describe_adapter(&ctx.info)
             )
             });
-            max_views = 1;
         }
         let device = &ctx.device;
         let module = crate::gpu::shaders::module(device, "multiview.shader", &shader());
@@ -560,5 +584,27 @@ mod tests {
             );
         }
         assert!(!u32::MAX.wrapping_add(1).is_power_of_two());
+    }
+
+    #[test]
+    fn only_lavapipe_before_mesa_25_runs_one_view_per_pass() {
+        let info = |backend, name: &str, driver_info: &str| wgpu::AdapterInfo {
+            name: name.into(),
+            driver_info: driver_info.into(),
+            backend,
+            ..wgpu::AdapterInfo::new(wgpu::DeviceType::Cpu, backend)
+        };
+        let lavapipe = |d: &str| info(wgpu::Backend::Vulkan, "llvmpipe (LLVM 15.0.6, 256 bits)", d);
+        assert!(super::clips_into_layer_zero(&lavapipe("Mesa 22.3.6")));
+        assert!(!super::clips_into_layer_zero(&lavapipe(
+            "Mesa 25.0.7-2~bpo12+1"
+        )));
+        assert!(super::clips_into_layer_zero(&lavapipe("unknown")));
+        assert!(!super::clips_into_layer_zero(&info(
+            wgpu::Backend::Vulkan,
+            "NVIDIA H200",
+            "580.159.04"
+        )));
+        assert_eq!(super::mesa_major("Mesa 25.0.7-2~bpo12+1"), Some(25));
     }
 }
