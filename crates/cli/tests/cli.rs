@@ -449,3 +449,107 @@ fn frames_keep_unchanged_views_unless_no_cache() {
     ]);
     assert_clean_failure(&refused, 2, "cannot be used with");
 }
+
+/// The summary says what each technique did and nothing it did not: an atlas and passes for
+/// the map techniques, pages for virtual maps, lists for irregular maps (no atlas, no passes),
+/// rays without a map; a soft-shadow line only where lights are sized, saying what the
+/// technique makes of them. Every line is checked for every technique the adapter runs.
+#[test]
+fn the_summary_of_each_technique_is_its_own() {
+    let techniques = run(&["render", "--help"]);
+    let help = String::from_utf8_lossy(&techniques.stdout).to_string();
+    for t in [
+        "traditional",
+        "layered",
+        "multiview",
+        "gpu-driven",
+        "compute",
+        "irregular",
+        "virtual",
+        "raytraced",
+    ] {
+        assert!(help.contains(t), "render --help does not list {t}");
+        let out = run(&[
+            "render",
+            "--technique",
+            t,
+            "--lights",
+            "6",
+            "--width",
+            "96",
+            "--height",
+            "54",
+            "--out",
+            tmp(&format!("summary-{t}"))
+                .join("frame.png")
+                .to_str()
+                .unwrap(),
+        ]);
+        let text = String::from_utf8_lossy(&out.stdout).to_string();
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        if !out.status.success() {
+            // Refused by name on a device without what the technique needs.
+            assert!(err.contains(&format!("technique {t} needs")), "{t}: {err}");
+            continue;
+        }
+        let has = |label: &str| text.lines().any(|l| l.starts_with(label));
+        let line = |label: &str| {
+            text.lines()
+                .find(|l| l.starts_with(label))
+                .unwrap_or_else(|| panic!("{t}: no '{label}' line in\n{text}"))
+                .to_string()
+        };
+        for label in [
+            "adapter", "scene", "lights", "shadows", "clusters", "GPU time", "wrote",
+        ] {
+            line(label);
+        }
+        // The atrium's seeded lights are sized: each technique says what it makes of them.
+        let soft = line("soft");
+        match t {
+            "irregular" => {
+                assert!(
+                    !has("atlas") && !has("shadow work") && !has("pages"),
+                    "{t}:\n{text}"
+                );
+                assert!(line("irregular").contains("list nodes"), "{t}:\n{text}");
+                assert!(soft.contains("hard") && !line("shadows").contains("PCF"));
+            }
+            "raytraced" => {
+                assert!(!has("atlas") && !has("pages"), "{t}:\n{text}");
+                assert!(line("shadow work").contains("no shadow map"));
+                assert!(soft.contains("samples of their shape"), "{t}: {soft}");
+            }
+            "virtual" => {
+                assert!(!has("atlas") && !has("irregular"), "{t}:\n{text}");
+                assert!(line("pages").contains("resident"));
+                assert!(line("shadow work").contains("pages drawn"));
+                assert!(soft.contains("PCSS"), "{t}: {soft}");
+            }
+            _ => {
+                assert!(!has("pages") && !has("irregular"), "{t}:\n{text}");
+                assert!(line("atlas").contains("filled"));
+                assert!(line("shadow work").contains("passes"));
+                assert!(
+                    line("shadows").contains("PCF") && soft.contains("PCSS"),
+                    "{t}: {soft}"
+                );
+            }
+        }
+    }
+    // Hard lights get no soft line.
+    let out = run(&[
+        "render",
+        "--scene",
+        "cubes",
+        "--width",
+        "96",
+        "--height",
+        "54",
+        "--out",
+        tmp("summary-hard").join("frame.png").to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(out.status.success(), "{text}");
+    assert!(!text.lines().any(|l| l.starts_with("soft")), "{text}");
+}

@@ -177,7 +177,7 @@ impl IrregularOptions {
 }
 
 /// Work counters of the last frame.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 #[non_exhaustive]
 pub struct IrregularStats {
     /// Batches of lights.
