@@ -5,8 +5,8 @@ use clap::{Parser, Subcommand};
 
 use crate::args::{GpuArgs, RenderArgs};
 use crate::{
-    bench, compare, irregular_bench, lights_bench, omni, shadows_bench, soak, suite, viewer,
-    virtual_bench,
+    bench, compare, irregular_bench, lights_bench, omni, shadows_bench, soak, soft_bench, suite,
+    viewer, virtual_bench,
 };
 
 pub(crate) const ABOUT: &str = "Render scenes lit by many shadow-casting lights, headless, to PNG.";
@@ -100,6 +100,13 @@ pub(crate) enum BenchCommand {
     #[command(mut_arg("repeats", |a| a.default_value("3")))]
     #[command(mut_arg("out_dir", |a| a.default_value("bench-shadows").required(false)))]
     Shadows(Box<shadows_bench::ShadowsArgs>),
+    /// What soft shadows cost: whole frames with percentage-closer soft shadows against the
+    /// same lights rendered hard (2x2 PCF), per technique (traditional and virtual) and light
+    /// count, interleaved in the same run; GPU time per stage and ratios; table and
+    /// results.json.
+    #[command(long_about = soft_bench::LONG_ABOUT)]
+    #[command(mut_arg("out_dir", |a| a.default_value("bench-soft").required(false)))]
+    Soft(Box<soft_bench::SoftArgs>),
     /// Thousands of frames in which the camera, a caster, a light and the light count change:
     /// resident memory after a warm-up against its baseline (fails past --max-growth-mib),
     /// frame times per interval, any failed frame; table and results.json.

@@ -32,6 +32,7 @@ mod render;
 mod scenes;
 mod shadows_bench;
 mod soak;
+mod soft_bench;
 mod suite;
 mod summary;
 mod techniques;
@@ -101,6 +102,7 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
         Some(Command::Bench(BenchCommand::Virtual(args))) => virtual_bench::virtual_maps(&args),
         Some(Command::Bench(BenchCommand::Soak(args))) => soak::soak(&args),
         Some(Command::Bench(BenchCommand::Shadows(args))) => shadows_bench::shadows(&args),
+        Some(Command::Bench(BenchCommand::Soft(args))) => soft_bench::soft(&args),
         Some(Command::Bench(BenchCommand::Suite(args))) => suite::suite(&args),
         None => render::render(&cli.render),
     }

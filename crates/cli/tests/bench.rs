@@ -442,6 +442,56 @@ fn bench_shadows_puts_every_kind_of_shadow_side_by_side() {
     assert!(dir.join("shadows-cubes-96x54.png").exists());
 }
 
+/// `bench soft` on a tiny frame: per technique and light count the hard frame and one PCSS
+/// frame per `--taps` count, in one run, with ratios from the same run's medians; sizes from
+/// the flags (`cubes` is hard of its own); bad tap counts are refused naming the flag.
+#[test]
+fn bench_soft_times_pcss_against_hard_frames() {
+    let (_, json) = bench_ok(
+        "soft",
+        "--scene cubes --lights 3,12 --width 96 --height 54 --light-size 0.1 --sun-size 1 \
+         --taps 4,16 --repeats 1 --warmup 0",
+    );
+    let records = records(&json);
+    let cells: Vec<(String, u64)> = records
+        .iter()
+        .map(|r| {
+            (
+                r["technique"].as_str().unwrap().to_string(),
+                r["lights"].as_u64().unwrap(),
+            )
+        })
+        .collect();
+    let want: Vec<(String, u64)> = [3, 12]
+        .iter()
+        .flat_map(|&n| ["traditional", "virtual"].map(|t| (t.to_string(), n)))
+        .collect();
+    assert_eq!(cells, want, "{json}");
+    for r in records {
+        assert_eq!(r["sized_lights"], r["lights"], "every light sized: {r}");
+        let sides = r["sides"].as_array().unwrap();
+        let methods: Vec<&str> = sides
+            .iter()
+            .map(|s| s["method"].as_str().unwrap())
+            .collect();
+        assert_eq!(methods, ["hard", "pcss-4", "pcss-16"], "{r}");
+        let taps: Vec<u64> = sides.iter().map(|s| s["taps"].as_u64().unwrap()).collect();
+        assert_eq!(taps, [0, 4, 16], "{r}");
+        for s in sides {
+            assert_ratio(&s["ratio"], &s["frame_ms"], &sides[0]["frame_ms"], s);
+            assert_ratio(
+                &s["lighting_ratio"],
+                &s["lighting_ms"],
+                &sides[0]["lighting_ms"],
+                s,
+            );
+        }
+    }
+    rejects("soft --taps 0", "--taps 0");
+    rejects("soft --taps 65", "--taps 65");
+    rejects("soft --max-penumbra 0.5", "--max-penumbra");
+}
+
 /// `bench virtual --cache`: both paths keep what did not change while the smallest caster
 /// moves, so the measured (post-warm-up) frame of the virtual maps draws only some of its
 /// resident pages and keeps the rest; the memory kept then counts last frame's page table

@@ -1,6 +1,6 @@
 //! The files a comparison writes beside its numbers: the lit frame (PNG), the reference's
-//! lit bits (`.msvis`, the renderer's raw visibility-mask format) and the difference images
-//! (each pixel's error class over the dimmed frame).
+//! lit bits (`.msvis`, the renderer's raw visibility-mask format), the difference images
+//! (each pixel's error class over the dimmed frame) and ꟻLIP's error maps (RGB PNG).
 
 use std::path::Path;
 
@@ -14,6 +14,12 @@ const DIM: f32 = 0.35;
 /// An RGBA8 image (the lit frame) as PNG.
 pub(super) fn image_out(path: &Path, w: u32, h: u32, rgba: &[u8]) -> Result<()> {
     image::save_buffer(path, rgba, w, h, image::ExtendedColorType::Rgba8)
+        .with_context(|| format!("writing {}", path.display()))
+}
+
+/// An RGB8 image (a ꟻLIP error map) as PNG.
+pub(super) fn image_rgb_out(path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<()> {
+    image::save_buffer(path, rgb, w, h, image::ExtendedColorType::Rgb8)
         .with_context(|| format!("writing {}", path.display()))
 }
 

@@ -5,13 +5,16 @@
 //! (at each requested shadow resolution) then renders the same frame, and its hard visibility
 //! mask is scored against the reference: false shadow and false light among the pixels a light
 //! reaches, with errors in the edge band reported apart, plus the shadow-texel footprint in
-//! screen pixels (perspective aliasing). Results: a table, optional JSON, difference images.
+//! screen pixels (perspective aliasing). When lights have sizes, the CPU also traces the soft
+//! reference (the fraction of each light each pixel sees) and each technique's soft visibility
+//! and shaded frame are scored against it. Results: a table, optional JSON, difference images
+//! and ꟻLIP error maps.
 //!
 //! The parts, in the order a run uses them: `args` (the flags and the long help), `run` (the
 //! steps, per scene), `setup` (checks, scene, variants, settings, GPU and BVH), `scoring`
 //! (each variant rendered and scored), `reference` (traced once, on the CPU or the GPU),
-//! `images` (the frame, the reference mask and the difference images), `report` (the JSON)
-//! and `table` (what is printed).
+//! `soft` (the soft reference and the soft scores), `images` (the frame, the reference mask,
+//! the difference images and ꟻLIP maps), `report` (the JSON) and `table` (what is printed).
 
 mod args;
 mod images;
@@ -20,6 +23,7 @@ mod report;
 mod run;
 mod scoring;
 mod setup;
+mod soft;
 mod table;
 
 pub use args::{CompareArgs, LONG_ABOUT};

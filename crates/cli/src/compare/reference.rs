@@ -1,7 +1,8 @@
 //! The exact reference every variant is scored against, computed once per scene from the
 //! first frame's G-buffer (the same for every technique): which (pixel, light) pairs the
 //! light reaches and faces, which of them it lights, and the edge band around the reference's
-//! shadow edges. Traced on the CPU (the default truth) or on the GPU with ray queries.
+//! shadow edges. Traced on the CPU (the default truth) or on the GPU with ray queries; when
+//! soft shadows are scored, the soft reference too (on the CPU, `compare::soft`).
 
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
@@ -14,7 +15,8 @@ use manyshadows_reference::score;
 use manyshadows_reference::{Mask, ReferenceVisibility, SurfacePoint, Surfaces, Tracer};
 
 use crate::compare::args::{CompareArgs, ReferenceTracer};
-use crate::compare::setup::{settings, Setup};
+use crate::compare::setup::{settings, Setup, SoftPlan};
+use crate::compare::soft::{self, SoftReference};
 
 /// The reference of the frame, computed once (the G-buffer is the same for every technique).
 pub(super) struct Reference {
@@ -25,6 +27,8 @@ pub(super) struct Reference {
     pub(super) ms: f64,
     /// The (pixel, light) pairs traced: every pair in reach of a light that casts shadows.
     pub(super) rays: u64,
+    /// The soft reference, when soft shadows are scored.
+    pub(super) soft: Option<SoftReference>,
 }
 
 /// The reference of `renderer`'s frame, traced by the tracer `--reference` names.
@@ -35,12 +39,22 @@ pub(super) fn trace(
     scene: &Scene,
 ) -> Result<Reference> {
     let args = &setup.args;
-    match args.reference {
+    let mut r = match args.reference {
         ReferenceTracer::Cpu => {
-            trace_reference(multi, renderer, &setup.tracer, scene, args.edge_band)
+            trace_reference(multi, renderer, &setup.tracer, scene, args.edge_band)?
         }
-        ReferenceTracer::Gpu => gpu_reference(&setup.ctx, renderer, scene, args, args.edge_band),
+        ReferenceTracer::Gpu => gpu_reference(&setup.ctx, renderer, scene, args, args.edge_band)?,
+    };
+    if let SoftPlan::Traced(samples) = setup.soft {
+        r.soft = Some(soft::trace(
+            multi,
+            &setup.tracer,
+            &scene.lights,
+            &r.surfaces,
+            samples,
+        )?);
     }
+    Ok(r)
 }
 
 /// The surface point of every covered pixel of `renderer`'s G-buffer.
@@ -105,6 +119,7 @@ fn trace_reference(
         band,
         ms,
         rays,
+        soft: None,
     })
 }
 
@@ -126,7 +141,7 @@ fn gpu_reference(
     rays.info().check(ctx)?;
     let surfaces = surfaces(renderer)?;
     let t = Instant::now();
-    let settings = settings(args, rays).with_light_loop(manyshadows::LightLoop::All);
+    let settings = settings(args, rays, false).with_light_loop(manyshadows::LightLoop::All);
     let frame = Renderer::new(ctx, scene, settings)?.render()?;
     let ms = t.elapsed().as_secs_f64() * 1e3;
     let mask = frame
@@ -149,5 +164,6 @@ fn gpu_reference(
         band,
         ms,
         rays: traced,
+        soft: None,
     })
 }

@@ -1,7 +1,7 @@
 //! The JSON report of one scene (what `--json` writes and the table prints): the adapter,
 //! the scene, the flags that shape the score, the reference's cost, and each variant's counts
-//! and footprints by light type and per light, its point-light errors by distance, and the
-//! variants this adapter could not run.
+//! and footprints by light type and per light, its point-light errors by distance, its soft
+//! scores when soft shadows are scored, and the variants this adapter could not run.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -12,11 +12,14 @@ use manyshadows::gpu::context::describe_adapter;
 use manyshadows::scene::Scene;
 use manyshadows_reference::aliasing::Footprints;
 use manyshadows_reference::score::Counts;
+use manyshadows_reference::soft_score::{ClassError, SoftCounts};
 use serde_json::json;
 
+use crate::compare::args::CompareArgs;
 use crate::compare::reference::Reference;
 use crate::compare::scoring::{Scored, VariantResult};
-use crate::compare::setup::Setup;
+use crate::compare::setup::{Setup, SoftPlan};
+use crate::compare::soft::SoftResult;
 
 /// The report of one scored scene: [`report`]'s numbers, each variant's point-light errors
 /// by distance (when the scene has point lights), and the skipped variants.
@@ -92,6 +95,64 @@ fn counts_json(c: &Counts) -> serde_json::Value {
     })
 }
 
+/// One class's pairs and mean absolute error.
+fn class_json(c: &ClassError) -> serde_json::Value {
+    json!({ "pairs": c.pairs, "mean_abs_error": c.mean() })
+}
+
+/// One group's (or one light's) soft score.
+fn soft_counts_json(c: &SoftCounts) -> serde_json::Value {
+    json!({
+        "lights": c.lights,
+        "umbra": class_json(&c.umbra),
+        "penumbra": class_json(&c.penumbra),
+        "lit": class_json(&c.lit),
+        "all": class_json(&c.scored()),
+        "back_facing": class_json(&c.back_facing),
+        "outside_reach_lit": c.outside_reach_lit,
+    })
+}
+
+/// One variant's soft scores: by light type, per light, and its frame against the frame
+/// shaded with the reference's fractions.
+fn soft_json(s: &SoftResult, groups: &[(&str, Vec<usize>)], scene: &Scene) -> serde_json::Value {
+    let by_type: serde_json::Map<String, serde_json::Value> = groups
+        .iter()
+        .map(|(name, ids)| {
+            let c = s.score.total(|i| ids.contains(&i));
+            (name.to_string(), soft_counts_json(&c))
+        })
+        .collect();
+    let per_light: Vec<serde_json::Value> = s
+        .score
+        .per_light
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let mut j = soft_counts_json(c);
+            j["type"] = json!(scene.lights[i].type_name());
+            j["size"] = json!(scene.lights[i].size);
+            j
+        })
+        .collect();
+    json!({
+        "by_type": by_type,
+        "per_light": per_light,
+        "image_rmse_8bit": s.image_rmse,
+        "flip_mean": s.flip,
+        "flip_image": s.flip_image,
+    })
+}
+
+/// Shadow rays per (pixel, sized light) of a technique that casts rays, at the settings
+/// `compare` renders with; `None` for the others.
+pub(super) fn area_rays(v: &VariantResult) -> Option<u32> {
+    (v.technique.info().fills == manyshadows::Fills::Rays).then(|| {
+        let side = manyshadows::RayOptions::default().area_samples.max(1);
+        side * side
+    })
+}
+
 /// The footprints of the lights `ids`, merged.
 pub(super) fn merged(f: &[Footprints], ids: &[usize]) -> Footprints {
     let mut h = Footprints::default();
@@ -114,6 +175,7 @@ fn report(
         args,
         tracer,
         bvh_ms,
+        soft,
     } = setup;
     let groups = groups(scene);
     let variants: Vec<serde_json::Value> = results
@@ -150,6 +212,10 @@ fn report(
                 "difference_image": v.diff_image,
                 "by_type": by_type,
                 "per_light": per_light,
+                "soft_filter": v.soft_filter,
+                "soft_shadows": v.technique.info().soft_shadows,
+                "area_rays": area_rays(v),
+                "soft": v.soft.as_ref().map(|s| soft_json(s, &groups, scene)),
             })
         })
         .collect();
@@ -178,8 +244,35 @@ fn report(
             "tracer": format!("{:?}", args.reference).to_lowercase(),
             "mask": args.out_dir.join("reference.msvis"),
         },
+        "soft": soft_reference_json(args, *soft, r),
         "frame": args.out_dir.join("frame.png"),
         "variants": variants,
         "total_wall_ms": started.elapsed().as_secs_f64() * 1e3,
     })
+}
+
+/// Whether soft shadows were scored (and why not), and the soft reference's cost.
+fn soft_reference_json(args: &CompareArgs, plan: SoftPlan, r: &Reference) -> serde_json::Value {
+    let filters: Vec<&str> = args
+        .soft
+        .iter()
+        .map(|&on| if on { "on" } else { "off" })
+        .collect();
+    match (plan, &r.soft) {
+        (SoftPlan::Traced(samples), Some(s)) => json!({
+            "scored": true,
+            "samples": samples,
+            "filters": filters,
+            "trace_ms": s.ms,
+            "rays": s.rays,
+            "rays_per_second": if s.ms > 0.0 { s.rays as f64 / (s.ms / 1e3) } else { 0.0 },
+            "reference_image": args.out_dir.join("soft-reference.png"),
+        }),
+        (SoftPlan::Skipped(why), _) => {
+            json!({ "scored": false, "why_not": why, "filters": filters })
+        }
+        (SoftPlan::Traced(_), None) => {
+            json!({ "scored": false, "why_not": "not traced", "filters": filters })
+        }
+    }
 }

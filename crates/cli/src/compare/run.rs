@@ -12,7 +12,9 @@ use serde_json::json;
 use crate::compare::args::CompareArgs;
 use crate::compare::report::{scene_report, write_json};
 use crate::compare::scoring::score_variants;
-use crate::compare::setup::{check_flags, check_ray_budget, load, open, variants};
+use crate::compare::setup::{
+    check_flags, check_ray_budget, has_sized_light, load, open, soft_plan, variants,
+};
 use crate::compare::table;
 
 /// Runs the comparison of every `--scene`.
@@ -58,8 +60,19 @@ fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
     let pb = multi.add(crate::progress::spinner("loading the scene"));
     let scene = load(args)?;
     check_ray_budget(args, &scene)?;
-    let variants = variants(args);
-    let setup = open(&pb, &scene, args)?;
+    let soft = soft_plan(args, &scene)?;
+    let sized = has_sized_light(&scene);
+    if !sized && args.soft.contains(&false) {
+        pb.suspend(|| {
+            eprintln!(
+                "note: {} has no sized light that casts shadows: --soft off renders the same \
+                 frame as on, so it is not run",
+                scene.name
+            )
+        });
+    }
+    let variants = variants(args, sized);
+    let setup = open(&pb, &scene, args, soft)?;
     pb.finish_and_clear();
     let scored = score_variants(&multi, &setup, &scene, &variants)?;
     let r = scored

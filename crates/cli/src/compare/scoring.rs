@@ -1,7 +1,8 @@
 //! Each variant rendered and scored against the reference: its hard visibility mask's false
 //! shadow and false light (edge band apart), the shadow-texel footprint at each pixel, the
-//! point-light errors by distance, and its difference images. The reference is traced from
-//! the first variant that runs, and written beside the frame.
+//! point-light errors by distance, its difference images, and when soft shadows are scored
+//! its soft visibility and frame against the soft reference's (`compare::soft`). The
+//! reference is traced from the first variant that runs, and written beside the frame.
 
 use std::path::PathBuf;
 
@@ -15,7 +16,8 @@ use manyshadows_reference::Mask;
 
 use crate::compare::images::{image_out, write_diff, write_msvis};
 use crate::compare::reference::{self, Reference};
-use crate::compare::setup::{settings, with_resolution, Setup, Variant};
+use crate::compare::setup::{settings, variant_scene, Setup, SoftPlan, Variant};
+use crate::compare::soft::{self, SoftResult};
 
 /// Distance bins (upper bounds, metres) of the point-light error breakdown.
 pub(super) const DISTANCE_BINS: [f32; 5] = [2.0, 4.0, 8.0, 16.0, f32::INFINITY];
@@ -25,6 +27,8 @@ pub(super) struct VariantResult {
     pub(super) label: String,
     pub(super) technique: Technique,
     pub(super) resolution: Option<u32>,
+    /// The lights rendered with their sizes (the soft filter on), or every one hard.
+    pub(super) soft_filter: bool,
     pub(super) atlas: u32,
     pub(super) shrink_steps: u32,
     /// Shadow memory the variant keeps: the atlas, or the page pool plus the page table.
@@ -36,6 +40,8 @@ pub(super) struct VariantResult {
     /// Point lights only: (upper bound of the distance bin in m, scored pairs, errors outside
     /// the edge band).
     pub(super) by_distance: Vec<(f32, u64, u64)>,
+    /// Its soft shadows against the soft reference, when they are scored.
+    pub(super) soft: Option<SoftResult>,
 }
 
 /// What scoring one scene's variants found.
@@ -66,7 +72,7 @@ pub(super) fn score_variants(
     };
     for v in variants {
         bar.set_message(format!("rendering {}", v.label()));
-        let scene_v = with_resolution(scene, v.resolution);
+        let scene_v = variant_scene(scene, v);
         let Some(mut renderer) = renderer_for(setup, &scene_v, v, &mut scored.skipped)? else {
             bar.inc(1);
             continue;
@@ -95,7 +101,12 @@ fn renderer_for(
     skipped: &mut Vec<(String, String)>,
 ) -> Result<Option<Renderer>> {
     let args = &setup.args;
-    match Renderer::new(&setup.ctx, scene_v, settings(args, v.technique)) {
+    let soft_visibility = matches!(setup.soft, SoftPlan::Traced(_));
+    match Renderer::new(
+        &setup.ctx,
+        scene_v,
+        settings(args, v.technique, soft_visibility),
+    ) {
         Ok(r) => Ok(Some(r)),
         // Asked for every technique: run those this adapter can, say which it cannot.
         Err(e) if e.is_unsupported() && args.techniques.is_empty() => {
@@ -107,8 +118,9 @@ fn renderer_for(
     }
 }
 
-/// The reference traced from `renderer`'s G-buffer, with the lit frame (`frame.png`) and the
-/// reference's lit bits (`reference.msvis`) written to `--out-dir`.
+/// The reference traced from `renderer`'s G-buffer, with the lit frame (`frame.png`), the
+/// reference's lit bits (`reference.msvis`) and, when soft shadows are scored, the frame shaded
+/// with the soft reference (`soft-reference.png`) written to `--out-dir`.
 fn first_reference(
     multi: &MultiProgress,
     setup: &Setup,
@@ -125,6 +137,15 @@ fn first_reference(
         &frame.rgba,
     )?;
     write_msvis(&out_dir.join("reference.msvis"), &r.vis.lit)?;
+    if let Some(s) = &r.soft {
+        let image = soft::reference_image(renderer, s)?;
+        image_out(
+            &out_dir.join("soft-reference.png"),
+            frame.width,
+            frame.height,
+            &image,
+        )?;
+    }
     Ok(r)
 }
 
@@ -154,11 +175,23 @@ fn score_variant(
     let footprints = footprints(renderer, scene_v, r)?;
     let diff_image = write_diffs(setup, scene, v, frame, r, &mask)?;
     let by_distance = point_errors_by_distance(scene, r, &mask)?;
+    let soft = match &r.soft {
+        Some(s) => Some(soft::score(
+            &setup.args.out_dir,
+            &v.label(),
+            renderer,
+            frame,
+            s,
+        )?),
+        None => None,
+    };
     Ok(VariantResult {
         by_distance,
         label: v.label(),
         technique: v.technique,
         resolution: v.resolution,
+        soft_filter: v.soft,
+        soft,
         atlas: plan.layout.size,
         shrink_steps: plan.layout.shrink_steps,
         shadow_bytes: match &frame.virtual_maps {

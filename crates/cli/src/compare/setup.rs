@@ -23,19 +23,77 @@ const MAX_GPU_RAYS: u64 = 1920 * 1080 * 2048;
 const MAX_EDGE_BAND: u32 = 64;
 /// Atrium lights when `--lights` is not given: a run of well under a minute on two cores.
 const ATRIUM_DEFAULT_LIGHTS: usize = 8;
+/// Most soft-reference rays one comparison may trace (pixels × sized lights × samples, an
+/// upper bound: only pairs in reach are traced): about ten minutes on two cores.
+const MAX_SOFT_RAYS: u64 = 3_000_000_000;
 
-/// One technique at one shadow resolution.
+/// Whether soft shadows are scored on a scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum SoftPlan {
+    /// Traced on the CPU with this many samples per (pixel, sized light): `--soft-samples`
+    /// rounded up to a square.
+    Traced(u32),
+    /// Not scored, and why.
+    Skipped(&'static str),
+}
+
+/// Whether soft shadows are scored on `scene` under the flags: when it has a sized light that
+/// casts shadows, `--soft-samples` is not 0 and the reference is the CPU's. Fails when the
+/// soft reference would trace more than [`MAX_SOFT_RAYS`].
+pub(super) fn soft_plan(args: &CompareArgs, scene: &Scene) -> Result<SoftPlan> {
+    if !has_sized_light(scene) {
+        return Ok(SoftPlan::Skipped(
+            "no light with a size casts shadows (--light-size, --sun-size size them)",
+        ));
+    }
+    if args.soft_samples == 0 {
+        return Ok(SoftPlan::Skipped("--soft-samples 0"));
+    }
+    if args.reference == ReferenceTracer::Gpu {
+        return Ok(SoftPlan::Skipped(
+            "the GPU reference (--reference gpu) is hard only",
+        ));
+    }
+    let n = manyshadows_reference::soft::grid_side(args.soft_samples);
+    let sized = scene
+        .lights
+        .iter()
+        .filter(|l| l.size > 0.0 && l.casts_shadows)
+        .count() as u64;
+    let pixels = args.width as u64 * args.height as u64;
+    let rays = pixels * sized * u64::from(n * n);
+    if rays > MAX_SOFT_RAYS {
+        bail!(
+            "{}x{} pixels x {sized} sized lights x {} samples is more than {MAX_SOFT_RAYS} soft \
+             reference rays; use fewer --soft-samples (0 scores hard shadows only), fewer lights \
+             or a smaller frame",
+            args.width,
+            args.height,
+            n * n
+        );
+    }
+    Ok(SoftPlan::Traced(n * n))
+}
+
+/// One technique at one shadow resolution, with its soft-shadow filter on or off.
 pub(super) struct Variant {
     pub(super) technique: Technique,
     pub(super) resolution: Option<u32>,
+    /// The lights rendered with their sizes (the soft filter on), or every one hard.
+    pub(super) soft: bool,
 }
 
 impl Variant {
+    /// `<technique>[-<resolution>][-hard]`: the name of its row and of its images.
     pub(super) fn label(&self) -> String {
-        match self.resolution {
-            Some(r) => format!("{}-{r}", self.technique.name()),
-            None => self.technique.name().to_string(),
+        let mut label = self.technique.name().to_string();
+        if let Some(r) = self.resolution {
+            label += &format!("-{r}");
         }
+        if !self.soft {
+            label += "-hard";
+        }
+        label
     }
 }
 
@@ -114,8 +172,9 @@ pub(super) fn check_ray_budget(args: &CompareArgs, scene: &Scene) -> Result<()> 
 }
 
 /// Every asked technique (each once, in the order asked; every technique when none is) at
-/// every asked shadow resolution (the scene's own when none is).
-pub(super) fn variants(args: &CompareArgs) -> Vec<Variant> {
+/// every asked shadow resolution (the scene's own when none is), with each asked `--soft`
+/// (only `on` when `sized` is false: without a sized light the two are the same frame).
+pub(super) fn variants(args: &CompareArgs, sized: bool) -> Vec<Variant> {
     let mut techniques: Vec<Technique> = Vec::new();
     let asked = if args.techniques.is_empty() {
         Technique::all()
@@ -132,31 +191,59 @@ pub(super) fn variants(args: &CompareArgs) -> Vec<Variant> {
     } else {
         args.shadow_resolutions.iter().map(|&r| Some(r)).collect()
     };
-    techniques
-        .iter()
-        .flat_map(|&technique| {
-            resolutions.iter().map(move |&resolution| Variant {
-                technique,
-                resolution,
-            })
-        })
-        .collect()
+    let mut softs: Vec<bool> = Vec::new();
+    for &on in &args.soft {
+        if !softs.contains(&on) && (on || sized) {
+            softs.push(on);
+        }
+    }
+    if softs.is_empty() {
+        softs.push(true);
+    }
+    let mut out = Vec::new();
+    for &technique in &techniques {
+        for &resolution in &resolutions {
+            for &soft in &softs {
+                out.push(Variant {
+                    technique,
+                    resolution,
+                    soft,
+                });
+            }
+        }
+    }
+    out
 }
 
-/// The scene with every light's shadow map at `resolution` (what `--shadow-resolution` does).
-pub(super) fn with_resolution(scene: &Scene, resolution: Option<u32>) -> Scene {
+/// Whether `scene` has a light that casts soft shadows: one with a size that casts shadows.
+pub(super) fn has_sized_light(scene: &Scene) -> bool {
+    scene.lights.iter().any(|l| l.size > 0.0 && l.casts_shadows)
+}
+
+/// The scene variant `v` renders: every light's shadow map at its resolution (what
+/// `--shadow-resolution` does) and, with its soft filter off, every light hard (size 0; the
+/// references keep the sizes).
+pub(super) fn variant_scene(scene: &Scene, v: &Variant) -> Scene {
     let mut s = scene.clone();
-    if let Some(r) = resolution {
-        for l in &mut s.lights {
+    for l in &mut s.lights {
+        if let Some(r) = v.resolution {
             l.shadow_resolution = r;
+        }
+        if !v.soft {
+            l.size = 0.0;
         }
     }
     s
 }
 
 /// The render settings of `technique` under the flags: the frame, the biases, the atlas, the
-/// point shadows, the casters' alpha and the virtual maps, with the hard visibility mask on.
-pub(super) fn settings(args: &CompareArgs, technique: Technique) -> RenderSettings {
+/// point shadows, the casters' alpha and the virtual maps, with the hard visibility mask on
+/// (and the soft visibility too when `soft_visibility`).
+pub(super) fn settings(
+    args: &CompareArgs,
+    technique: Technique,
+    soft_visibility: bool,
+) -> RenderSettings {
     // The score reads the hard visibility mask, which PCF does not touch; the frame under
     // the difference images shows the hard edges that are being scored.
     RenderSettings::default()
@@ -176,6 +263,7 @@ pub(super) fn settings(args: &CompareArgs, technique: Technique) -> RenderSettin
             FitPolicy::Shrink
         })
         .with_visibility(true)
+        .with_soft_visibility(soft_visibility)
         .with_point_shadows(args.point_shadows)
         .with_shadow(manyshadows::ShadowOptions::default().with_casters(
             manyshadows::CasterOptions::default().with_ignore_masks(!args.shadow_alpha),
@@ -198,10 +286,18 @@ pub(super) struct Setup {
     pub(super) tracer: Tracer,
     /// Time to build `tracer`, ms.
     pub(super) bvh_ms: f64,
+    /// Whether soft shadows are scored.
+    pub(super) soft: SoftPlan,
 }
 
-/// Opens the GPU, builds the casters' BVH and creates `--out-dir`, saying each step on `pb`.
-pub(super) fn open(pb: &ProgressBar, scene: &Scene, args: &CompareArgs) -> Result<Setup> {
+/// Opens the GPU, builds the casters' BVH and creates `--out-dir`, saying each step on `pb`;
+/// `soft` is [`soft_plan`]'s answer.
+pub(super) fn open(
+    pb: &ProgressBar,
+    scene: &Scene,
+    args: &CompareArgs,
+    soft: SoftPlan,
+) -> Result<Setup> {
     pb.set_message("opening the GPU");
     let ctx = GpuContext::new(&args.gpu.request())?;
     let args = CompareArgs {
@@ -219,5 +315,6 @@ pub(super) fn open(pb: &ProgressBar, scene: &Scene, args: &CompareArgs) -> Resul
         args,
         tracer,
         bvh_ms,
+        soft,
     })
 }

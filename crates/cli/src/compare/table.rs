@@ -1,17 +1,18 @@
 //! The printed result of one scene: the adapter, the scene and the reference's cost, one
 //! table row per variant and light type (errors outside and inside the edge band, texel
-//! footprints), the shadow memory each variant keeps, the point-light errors by distance and
-//! the skipped variants.
+//! footprints), the shadow memory each variant keeps, the point-light errors by distance, the
+//! soft-shadow table when soft shadows are scored, and the skipped variants.
 
 use manyshadows::scene::Scene;
 
-use crate::compare::report::{groups, merged};
+use crate::compare::report::{area_rays, groups, merged};
 use crate::compare::scoring::{Scored, VariantResult, DISTANCE_BINS};
 
 /// Prints everything `report` holds for a reader, in the order a run shows it.
 pub(super) fn print(report: &serde_json::Value, scored: &Scored, scene: &Scene) {
     print_table(report, &scored.results, scene);
     print_distances(&scored.results);
+    print_soft(report, &scored.results, scene);
     for (label, why) in &scored.skipped {
         println!("skipped    {label}: {why}");
     }
@@ -145,6 +146,93 @@ fn print_table(report: &serde_json::Value, results: &[VariantResult], scene: &Sc
     if let Some(dir) = first.as_ref().and_then(|p| p.parent()) {
         println!(
             "wrote      {} (frame.png, diff-*.png: red false shadow, green false light, dark = in band; reference.msvis)",
+            dir.display()
+        );
+    }
+}
+
+/// The soft-shadow table: per variant and light type the mean absolute error of the visible
+/// fraction by the reference's class, and per variant its frame against the frame shaded with
+/// the reference's fractions (8-bit RMSE, mean ꟻLIP); or why soft shadows were not scored.
+fn print_soft(report: &serde_json::Value, results: &[VariantResult], scene: &Scene) {
+    let s = &report["soft"];
+    if s["scored"] != true {
+        if let Some(why) = s["why_not"].as_str() {
+            println!("\nsoft shadows not scored: {why}");
+        }
+        return;
+    }
+    println!(
+        "\nsoft reference  {} samples per (pixel, sized light): {} rays in {:.1} s ({:.2} M rays/s)",
+        s["samples"],
+        s["rays"],
+        s["trace_ms"].as_f64().unwrap_or(0.0) / 1e3,
+        s["rays_per_second"].as_f64().unwrap_or(0.0) / 1e6,
+    );
+    println!(
+        "{:<24} {:<13} {:>10} {:>10} {:>10} {:>10} {:>10} | {:>10} {:>7}",
+        "technique", "lights", "penumbrae", "umbra", "penumbra", "lit", "all", "image RMSE", "FLIP"
+    );
+    let groups = groups(scene);
+    for v in results {
+        let Some(soft) = &v.soft else { continue };
+        for (k, (name, ids)) in groups.iter().enumerate() {
+            let c = soft.score.total(|i| ids.contains(&i));
+            // The whole frame's numbers on the variant's last row (every light).
+            let whole = if k + 1 == groups.len() {
+                format!("{:>10.2} {:>7.4}", soft.image_rmse, soft.flip)
+            } else {
+                String::new()
+            };
+            println!(
+                "{:<24} {:<13} {:>10} {:>10.4} {:>10.4} {:>10.4} {:>10.4} | {whole}",
+                v.label,
+                format!("{name} ({})", c.lights),
+                c.penumbra.pairs,
+                c.umbra.mean(),
+                c.penumbra.mean(),
+                c.lit.mean(),
+                c.scored().mean(),
+            );
+        }
+    }
+    println!();
+    println!(
+        "umbra / penumbra / lit: mean |technique - reference| of the fraction of the light seen, over the in-reach"
+    );
+    println!(
+        "pairs facing the light where the reference sees none, some or all of it (penumbrae: how many pairs);"
+    );
+    println!(
+        "image RMSE (8-bit RGB levels) and FLIP (mean): the frame against the same frame shaded with the reference."
+    );
+    let hard: Vec<&str> = results
+        .iter()
+        .filter(|v| v.soft.is_some() && !v.technique.info().soft_shadows)
+        .map(|v| v.label.as_str())
+        .collect();
+    if !hard.is_empty() {
+        println!(
+            "render sized lights hard (no soft filter): {}",
+            hard.join(", ")
+        );
+    }
+    for v in results.iter().filter(|v| v.soft_filter) {
+        if let Some(n) = area_rays(v) {
+            println!("{}: {n} shadow rays per (pixel, sized light)", v.label);
+        }
+    }
+    if results.iter().any(|v| !v.soft_filter) {
+        println!(
+            "-hard: every light rendered with size 0 (--soft off); the references keep the sizes."
+        );
+    }
+    if let Some(dir) = report["soft"]["reference_image"]
+        .as_str()
+        .and_then(|p| std::path::Path::new(p).parent())
+    {
+        println!(
+            "wrote      {} (soft-reference.png: the frame shaded with the reference; flip-*.png: FLIP error maps)",
             dir.display()
         );
     }
