@@ -76,10 +76,19 @@ fn shadow_coord(light: LightData, p: vec3<f32>, n: vec3<f32>, view_depth: f32) -
     return out;
 }
 
-// The pool texel (continuous, xy) holding the point `t` of a sized light's soft texel space
-// (the face at level `c.src.y`, in full pages' texels), and 1 in z where that page is
-// resident (0 where it is not: the tap sees no caster).
-fn vsm_tap_texel(c: ShadowCoord, t: vec2<f32>) -> vec3<f32> {
+// Where the point `t` of a sized light's soft texel space (the face at level `c.src.y`, in
+// full pages' texels) lies in the pool: its continuous pool texel, its position inside its
+// page and the page's side in texels; `resident` false where that page is not (the tap then
+// sees no caster).
+struct VsmTap {
+    pool: vec2<f32>,
+    local: vec2<f32>,
+    side: f32,
+    resident: bool,
+}
+
+fn vsm_tap(c: ShadowCoord, t: vec2<f32>) -> VsmTap {
+    var out: VsmTap;
     let face = vsm_faces[c.src.x];
     let level = c.src.y;
     let pages = f32(1u << level);
@@ -87,7 +96,7 @@ fn vsm_tap_texel(c: ShadowCoord, t: vec2<f32>) -> vec3<f32> {
     let uv = clamp(t, vec2<f32>(0.0), vec2<f32>(c.soft.z - 1e-3)) / c.soft.z;
     let e = vsm_table[vsm_entry(face, level, uv)];
     if (e < VSM_FIRST_PAGE || e == VSM_DENIED) {
-        return vec3<f32>(0.0);
+        return out;
     }
     var page = e - VSM_FIRST_PAGE;
     var s = side;
@@ -100,21 +109,29 @@ fn vsm_tap_texel(c: ShadowCoord, t: vec2<f32>) -> vec3<f32> {
     }
     let tile = vec2<f32>(f32(page % vsm.pool.y), f32(page / vsm.pool.y)) * side + corner;
     let cell = min(floor(uv * pages), vec2<f32>(pages - 1.0));
-    let local = clamp((uv * pages - cell) * s, vec2<f32>(0.0), vec2<f32>(s - 1e-3));
-    return vec3<f32>(tile + local, 1.0);
+    out.local = clamp((uv * pages - cell) * s, vec2<f32>(0.0), vec2<f32>(s - 1e-3));
+    out.pool = tile + out.local;
+    out.side = s;
+    out.resident = true;
+    return out;
 }
 
 // Raw depth of the texel holding `t` (nothing, depth 1, where its page is not resident).
 fn soft_tap_depth(c: ShadowCoord, t: vec2<f32>) -> f32 {
-    let q = vsm_tap_texel(c, t);
-    if (q.z == 0.0) {
+    let q = vsm_tap(c, t);
+    if (!q.resident) {
         return 1.0;
     }
-    return shadow_depth_at(vec2<i32>(floor(q.xy)));
+    return shadow_depth_at(vec2<i32>(floor(q.pool)));
 }
 
-// Bilinearly weighted comparison around `t`, each of the four texels found in its own page.
+// Bilinearly weighted comparison around `t`: the pass's comparison sampler where the four
+// texels lie in one page (one page-table read), else each texel found in its own page.
 fn soft_tap_compare(c: ShadowCoord, t: vec2<f32>, depth: f32) -> f32 {
+    let q = vsm_tap(c, t);
+    if (q.resident && all(q.local >= vec2<f32>(0.5)) && all(q.local <= vec2<f32>(q.side - 0.5))) {
+        return shadow_compare_at(q.pool, depth);
+    }
     let f = t - vec2<f32>(0.5);
     let b = floor(f);
     let w = f - b;
