@@ -56,7 +56,7 @@ pub(crate) fn info(args: &GpuArgs) -> Result<()> {
     );
     let per_pass = manyshadows::shadows::atlas::multiview::views_per_pass_on(&ctx);
     println!(
-        "  multiview views per pass        {per_pass}{}",
+        "  views per MULTIVIEW pass        {per_pass}{}",
         if per_pass == 1 && l.max_multiview_view_count > 1 {
             " (this driver loses clipped primitives' view index: one view per pass)"
         } else {

@@ -56,8 +56,9 @@ pub struct SoftArgs {
     /// Light types of the seeded layout: all, spot, point or directional.
     #[arg(long, default_value = "all")]
     pub light_types: String,
-    /// Techniques, comma-separated (default: the atlas's `traditional` and `virtual` maps).
-    #[arg(long, default_value = "traditional,virtual", value_delimiter = ',', value_parser = crate::args::parse_technique)]
+    /// Techniques, comma-separated (default: the registry's default atlas technique and the
+    /// techniques that fill a page pool).
+    #[arg(long, value_delimiter = ',', value_parser = crate::args::parse_technique)]
     pub techniques: Vec<Technique>,
     /// Taps of the blocker search and of the filter (each), comma-separated: one PCSS
     /// contender per count (1 to 64; the renderer's default is 16).
@@ -126,8 +127,19 @@ pub fn soft(args: &SoftArgs) -> Result<()> {
     let sizes = args.light_sizes.sizes()?;
     let mix: LightMix = args.light_types.parse().map_err(anyhow::Error::msg)?;
     let h = Harness::start(&args.run)?;
+    let asked = if args.techniques.is_empty() {
+        std::iter::once(Technique::default())
+            .chain(
+                Technique::all()
+                    .into_iter()
+                    .filter(|t| t.info().fills == manyshadows::Fills::Pages),
+            )
+            .collect()
+    } else {
+        args.techniques.clone()
+    };
     let mut techniques: Vec<Technique> = Vec::new();
-    for &t in &args.techniques {
+    for &t in &asked {
         if techniques.contains(&t) {
             continue;
         }

@@ -38,7 +38,7 @@ pub(crate) fn summary(
         "light_loop": r.settings().light_loop.name(),
         "clusters": frame.clusters,
         "virtual": frame.virtual_maps,
-        "irregular": r.irregular_stats(),
+        "lists": r.irregular_stats(),
         "soft": { "blocker_taps": r.settings().soft.blocker_taps, "filter_taps": r.settings().soft.filter_taps,
                   "max_penumbra": r.settings().soft.max_penumbra, "area_samples": r.settings().rays.area_samples,
                   "technique_softens": r.settings().technique.info().soft_shadows },
@@ -245,12 +245,12 @@ fn print_virtual(s: &serde_json::Value) {
 
 /// Irregular maps: their own work, no atlas and no passes of shadow maps.
 fn print_irregular(s: &serde_json::Value) {
-    let i = &s["irregular"];
+    let i = &s["lists"];
     if !i.is_object() {
         return;
     }
     println!(
-        "irregular    {} batch(es) of lights, the largest holding {} of {} list nodes (camera \
+        "lists        {} batch(es) of lights, the largest holding {} of {} list nodes (camera \
          samples in light-space lists); up to {} 8x8-texel tiles queued for the triangle \
          tests{}",
         i["batches"],

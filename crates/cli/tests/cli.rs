@@ -512,7 +512,7 @@ fn the_summary_of_each_technique_is_its_own() {
                     !has("atlas") && !has("shadow work") && !has("pages"),
                     "{t}:\n{text}"
                 );
-                assert!(line("irregular").contains("list nodes"), "{t}:\n{text}");
+                assert!(line("lists").contains("list nodes"), "{t}:\n{text}");
                 assert!(soft.contains("hard") && !line("shadows").contains("PCF"));
             }
             "raytraced" => {
@@ -521,13 +521,13 @@ fn the_summary_of_each_technique_is_its_own() {
                 assert!(soft.contains("samples of their shape"), "{t}: {soft}");
             }
             "virtual" => {
-                assert!(!has("atlas") && !has("irregular"), "{t}:\n{text}");
+                assert!(!has("atlas") && !has("lists"), "{t}:\n{text}");
                 assert!(line("pages").contains("resident"));
                 assert!(line("shadow work").contains("pages drawn"));
                 assert!(soft.contains("PCSS"), "{t}: {soft}");
             }
             _ => {
-                assert!(!has("pages") && !has("irregular"), "{t}:\n{text}");
+                assert!(!has("pages") && !has("lists"), "{t}:\n{text}");
                 assert!(line("atlas").contains("filled"));
                 assert!(line("shadow work").contains("passes"));
                 assert!(

@@ -554,10 +554,29 @@ fn soft_shadows_beat_hard_ones_in_the_penumbra() {
             .unwrap_or_else(|| panic!("{label}: no -hard twin"));
         assert_eq!(hard["soft_filter"], false);
         // The hard score reads the test at each light's centre: the sizes do not change it.
-        assert_eq!(
-            on["by_type"], hard["by_type"],
-            "{label}: hard scores differ"
-        );
+        // Virtual maps' sized lights ask for the pages their filter reaches, so more pages
+        // are resident and a hard test may read a finer page than without: only inside the
+        // edge band (measured: 606 / 568 band errors against 607 / 571; outside it the same).
+        let outside_band = |scores: &serde_json::Value| -> serde_json::Value {
+            let mut s = scores.clone();
+            for kind in s.as_object_mut().unwrap().values_mut() {
+                let o = kind.as_object_mut().unwrap();
+                o.retain(|k, _| !k.starts_with("band_"));
+            }
+            s
+        };
+        if label.starts_with("virtual") {
+            assert_eq!(
+                outside_band(&on["by_type"]),
+                outside_band(&hard["by_type"]),
+                "{label}: hard scores outside the edge band differ"
+            );
+        } else {
+            assert_eq!(
+                on["by_type"], hard["by_type"],
+                "{label}: hard scores differ"
+            );
+        }
         let (pairs, soft_error) = soft_class(on, "penumbra");
         let (hard_pairs, hard_error) = soft_class(hard, "penumbra");
         assert_eq!(
