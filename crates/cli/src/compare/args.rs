@@ -104,8 +104,8 @@ pub struct CompareArgs {
     pub(super) virtual_bias: f32,
     /// Who traces the exact reference: cpu (default, the truth every technique is scored
     /// against) or gpu (ray queries; needs EXPERIMENTAL_RAY_QUERY, for frames and light counts
-    /// the CPU would take too long for). The GPU reference is hard only: with it, soft
-    /// shadows are not scored.
+    /// the CPU would take too long for). It traces the soft reference too, with at most 256
+    /// samples per (pixel, sized light).
     #[arg(long, value_enum, default_value_t = ReferenceTracer::Cpu)]
     pub(super) reference: ReferenceTracer,
     /// Samples of the soft reference per (pixel, sized light), rounded up to a square (256 =
@@ -173,9 +173,9 @@ against it, and its frame against the same frame shaded with the reference's fra
 
 The frame shaded with the reference is soft-reference.png. --soft off renders every light
 hard (size 0) against the same soft reference, --soft on,off runs each technique both ways
-(rows -hard): what the soft filter buys. The GPU reference (--reference gpu) is hard only:
-with it soft shadows are not scored. --soft-samples 0 skips them (hard scores only; the hard
-scores never change with these flags).
+(rows -hard): what the soft filter buys. The GPU reference (--reference gpu) traces the soft
+reference too, with the ray-traced technique's shadow rays (at most 256 per pair). --soft-
+samples 0 skips them (hard scores only; the hard scores never change with these flags).
 
 Examples:
   manyshadows compare                                          # atrium, 8 lights, all techniques

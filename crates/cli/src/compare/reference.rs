@@ -43,9 +43,20 @@ pub(super) fn trace(
         ReferenceTracer::Cpu => {
             trace_reference(multi, renderer, &setup.tracer, scene, args.edge_band)?
         }
-        ReferenceTracer::Gpu => gpu_reference(&setup.ctx, renderer, scene, args, args.edge_band)?,
+        ReferenceTracer::Gpu => gpu_reference(
+            &setup.ctx,
+            renderer,
+            scene,
+            args,
+            args.edge_band,
+            match setup.soft {
+                SoftPlan::Traced(samples) => Some(samples),
+                SoftPlan::Skipped(_) => None,
+            },
+        )?,
     };
-    if let SoftPlan::Traced(samples) = setup.soft {
+    if let (SoftPlan::Traced(samples), None) = (&setup.soft, &r.soft) {
+        let samples = *samples;
         r.soft = Some(soft::trace(
             multi,
             &setup.tracer,
@@ -133,6 +144,7 @@ fn gpu_reference(
     scene: &Scene,
     args: &CompareArgs,
     edge_band: u32,
+    soft_samples: Option<u32>,
 ) -> Result<Reference> {
     let rays = crate::techniques::first_filling(manyshadows::Fills::Rays);
     if rays.info().fills != manyshadows::Fills::Rays {
@@ -141,7 +153,14 @@ fn gpu_reference(
     rays.info().check(ctx)?;
     let surfaces = surfaces(renderer)?;
     let t = Instant::now();
-    let settings = settings(args, rays, false).with_light_loop(manyshadows::LightLoop::All);
+    let mut settings = settings(args, rays, false).with_light_loop(manyshadows::LightLoop::All);
+    if let Some(samples) = soft_samples {
+        // The soft reference from the same rays: each sized light's shape sampled on an n x n
+        // grid per pixel, as the CPU reference samples it.
+        let side = manyshadows_reference::soft::grid_side(samples);
+        let rays = settings.rays.with_area_samples(side);
+        settings = settings.with_soft_visibility(true).with_rays(rays);
+    }
     let frame = Renderer::new(ctx, scene, settings)?.render()?;
     let ms = t.elapsed().as_secs_f64() * 1e3;
     let mask = frame
@@ -158,12 +177,18 @@ fn gpu_reference(
     }
     let traced = shadow_rays(&vis.reach, &scene.lights);
     let band = score::edge_band(&vis.lit, &surfaces.covered(), edge_band);
+    let soft = match (soft_samples, frame.soft_visibility) {
+        (Some(samples), Some(bytes)) => {
+            Some(soft::from_gpu(&vis, bytes, samples, &scene.lights, ms))
+        }
+        _ => None,
+    };
     Ok(Reference {
         surfaces,
         vis,
         band,
         ms,
         rays: traced,
-        soft: None,
+        soft,
     })
 }

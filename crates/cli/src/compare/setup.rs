@@ -49,12 +49,14 @@ pub(super) fn soft_plan(args: &CompareArgs, scene: &Scene) -> Result<SoftPlan> {
     if args.soft_samples == 0 {
         return Ok(SoftPlan::Skipped("--soft-samples 0"));
     }
-    if args.reference == ReferenceTracer::Gpu {
-        return Ok(SoftPlan::Skipped(
-            "the GPU reference (--reference gpu) is hard only",
-        ));
-    }
     let n = manyshadows_reference::soft::grid_side(args.soft_samples);
+    if args.reference == ReferenceTracer::Gpu && n > 16 {
+        bail!(
+            "--soft-samples {}: the GPU reference traces at most 256 rays per (pixel, sized \
+             light) (a 16x16 grid); use --reference cpu for more",
+            args.soft_samples
+        );
+    }
     let sized = scene
         .lights
         .iter()

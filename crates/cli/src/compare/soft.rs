@@ -70,6 +70,40 @@ pub(super) fn trace(
     })
 }
 
+/// The soft reference traced on the GPU (`--reference gpu`): the ray-traced technique's soft
+/// visibility over every light, `samples` rays per (pixel, sized light), with the hard
+/// reference's reach and facing masks; `ms` is the GPU frame that traced both.
+pub(super) fn from_gpu(
+    hard: &manyshadows_reference::ReferenceVisibility,
+    bytes: manyshadows::SoftVisibility,
+    samples: u32,
+    lights: &[Light],
+    ms: f64,
+) -> SoftReference {
+    let mut visible = to_fractions(&bytes);
+    let lights_n = visible.lights as usize;
+    for (i, v) in visible.values.iter_mut().enumerate() {
+        if !hard.reach.get(i / lights_n, (i % lights_n) as u32) {
+            *v = 0.0;
+        }
+    }
+    let side = manyshadows_reference::soft::grid_side(samples);
+    let vis = manyshadows_reference::SoftVisibility {
+        visible,
+        reach: hard.reach.clone(),
+        facing: hard.facing.clone(),
+        samples: side * side,
+    };
+    let rays = soft_rays(&vis, lights);
+    let bytes = to_bytes(&vis.visible);
+    SoftReference {
+        vis,
+        bytes,
+        ms,
+        rays,
+    }
+}
+
 /// The rays the soft reference traced (see [`SoftReference::rays`]).
 fn soft_rays(vis: &manyshadows_reference::SoftVisibility, lights: &[Light]) -> u64 {
     let pixels = vis.visible.width as usize * vis.visible.height as usize;

@@ -65,11 +65,11 @@ impl RayOptions {
                 "0 (every light) to 16 sampled lights per pixel",
             ));
         }
-        if self.area_samples > 8 {
+        if self.area_samples > 16 {
             return Err(RenderError::invalid_option(
                 "rays.area_samples",
                 self.area_samples,
-                "0 to 8 samples per side of a sized light's grid (64 rays)",
+                "0 to 16 samples per side of a sized light's grid (256 rays)",
             ));
         }
         Ok(())
