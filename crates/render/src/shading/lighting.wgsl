@@ -162,7 +162,10 @@ fn light_lit(i: u32, s: Surface) -> f32 {
     let light = lights[i];
     if (SHADOW_RAYS) {
         if (light.diffuse.w > 0.0) {
-            return ray_lit_area(light, s.p, s.n, ray_area_side(), soft_jitter(s.px, i));
+            // With sampled lights (`ray_samples() > 0`) a pixel's sample is a light and one
+            // point on it; with every light, a stratified grid over each sized light's shape.
+            let side = select(ray_area_side(), 1u, ray_samples() > 0u);
+            return ray_lit_area(light, s.p, s.n, side, soft_jitter(s.px, i));
         }
         return ray_lit(light, s.p, s.n);
     }

@@ -37,7 +37,8 @@ pub struct RayOptions {
     /// Seed of the sampling (the same seed gives the same image).
     pub seed: u32,
     /// Samples per side of the stratified grid over a sized light's shape (the light's
-    /// fraction seen from a pixel is traced with `area_samples²` rays; 0 counts as 1).
+    /// fraction seen from a pixel is traced with `area_samples²` rays; 0 counts as 1). With
+    /// `light_samples` K > 0 the lighting pass traces one point of each sampled light instead.
     pub area_samples: u32,
 }
 
