@@ -160,10 +160,16 @@ pub struct Material {
     /// Coverage threshold of `mask` materials (glTF `alphaCutoff`, default 0.5).
     #[serde(default = "Material::default_cutoff")]
     pub alpha_cutoff: f32,
-    /// glTF `doubleSided`. Shading is two-sided for every material; for shadows it means the
-    /// caster is never back-face culled, whatever its mesh's closure.
+    /// glTF `doubleSided`. For shadows it means the caster is never back-face culled,
+    /// whatever its mesh's closure.
     #[serde(default)]
     pub double_sided: bool,
+    /// The camera sees only the front faces (counter-clockwise, as glTF winds them): glTF's
+    /// single-sided materials (an outline shell, an inverted hull, shows only at the
+    /// silhouette). Off for the built-in scenes and TOML and OBJ files, whose surfaces the
+    /// camera shades from both sides.
+    #[serde(default)]
+    pub cull_back_faces: bool,
 }
 
 impl Material {
@@ -235,6 +241,7 @@ impl Default for Material {
             alpha_mode: AlphaMode::Opaque,
             alpha_cutoff: Self::default_cutoff(),
             double_sided: false,
+            cull_back_faces: false,
         }
     }
 }

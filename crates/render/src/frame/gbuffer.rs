@@ -4,7 +4,9 @@
 
 use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, Span};
-use crate::gpu_scene::instances::{GpuScene, NORMAL_LAYOUT, POSITION_LAYOUT, UV_LAYOUT};
+use crate::gpu_scene::instances::{
+    CameraCull, GpuScene, NORMAL_LAYOUT, POSITION_LAYOUT, UV_LAYOUT,
+};
 
 /// xyz world position (`f32` bits in a `u32` target, because OpenGL ES and WebGL cannot render
 /// to `Rgba32Float` but can to `Rgba32Uint`, and positions must be exact); w = the surface's
@@ -25,9 +27,9 @@ pub struct GBuffer {
     pub normal: wgpu::Texture,
     /// Render-target views of position, normal and depth, made once.
     views: [wgpu::TextureView; 3],
-    pipeline: wgpu::RenderPipeline,
-    /// The same with the alpha test (`fs_masked`), for alpha-tested materials.
-    masked_pipeline: wgpu::RenderPipeline,
+    /// By (alpha-tested, face culling): the opaque and alpha-testing pipelines, and culling
+    /// variants where a material asks for them.
+    pipelines: std::collections::HashMap<(bool, CameraCull), wgpu::RenderPipeline>,
     bind_group: wgpu::BindGroup,
 }
 
@@ -135,7 +137,12 @@ impl GBuffer {
         });
         let pipeline_layout =
             crate::gpu::pipelines::pipeline_layout(device, "gbuffer.pipeline_layout", &[&layout]);
-        let pipeline = |fragment: &str| {
+        let pipeline = |fragment: &str, cull: CameraCull| {
+            let (front_face, cull_mode) = match cull {
+                CameraCull::None => (wgpu::FrontFace::Ccw, None),
+                CameraCull::BackCcw => (wgpu::FrontFace::Ccw, Some(wgpu::Face::Back)),
+                CameraCull::BackCw => (wgpu::FrontFace::Cw, Some(wgpu::Face::Back)),
+            };
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(fragment),
                 layout: Some(&pipeline_layout),
@@ -146,8 +153,8 @@ impl GBuffer {
                     buffers: &[Some(POSITION_LAYOUT), Some(NORMAL_LAYOUT), Some(UV_LAYOUT)],
                 },
                 primitive: wgpu::PrimitiveState {
-                    front_face: wgpu::FrontFace::Ccw,
-                    cull_mode: None,
+                    front_face,
+                    cull_mode,
                     ..Default::default()
                 },
                 depth_stencil: Some(wgpu::DepthStencilState {
@@ -168,14 +175,30 @@ impl GBuffer {
                 cache: None,
             })
         };
-        let (masked_pipeline, pipeline) = (pipeline("fs_masked"), pipeline("fs_main"));
+        // Per alpha test and face culling; the culling ones only where a material asks (an
+        // instance's transform may turn mirrored later, so then both windings).
+        let culls: &[CameraCull] = if scene
+            .draws
+            .iter()
+            .any(|d| d.camera_cull != CameraCull::None)
+        {
+            &[CameraCull::None, CameraCull::BackCcw, CameraCull::BackCw]
+        } else {
+            &[CameraCull::None]
+        };
+        let mut pipelines = std::collections::HashMap::new();
+        for masked in [false, true] {
+            for &cull in culls {
+                let fragment = if masked { "fs_masked" } else { "fs_main" };
+                pipelines.insert((masked, cull), pipeline(fragment, cull));
+            }
+        }
         let views = [&position, &normal, &depth].map(|t| t.create_view(&Default::default()));
         Self {
             position,
             normal,
             views,
-            pipeline,
-            masked_pipeline,
+            pipelines,
             bind_group,
         }
     }
@@ -223,15 +246,12 @@ impl GBuffer {
         pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
         // Opaque surfaces first (early depth testing), then the alpha-tested ones.
         for masked in [false, true] {
-            let mut set = false;
+            let mut set = None;
             for d in scene.draws.iter().filter(|d| d.masked == masked) {
-                if !set {
-                    pass.set_pipeline(if masked {
-                        &self.masked_pipeline
-                    } else {
-                        &self.pipeline
-                    });
-                    set = true;
+                let key = (masked, d.camera_cull);
+                if set != Some(key) {
+                    pass.set_pipeline(&self.pipelines[&key]);
+                    set = Some(key);
                 }
                 let m = d.mesh;
                 pass.draw_indexed(

@@ -39,6 +39,19 @@ pub struct DrawItem {
     pub material: u32,
     /// Its material is alpha-tested (drawn with the alpha-testing pipelines).
     pub masked: bool,
+    /// Which faces the camera sees (`Material::cull_back_faces`).
+    pub camera_cull: CameraCull,
+}
+
+/// Which faces of a draw the camera pass keeps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum CameraCull {
+    /// Both (the default: surfaces shaded from either side).
+    None,
+    /// The front faces, counter-clockwise on screen (glTF's single-sided materials).
+    BackCcw,
+    /// The front faces of a mirrored instance (negative determinant), clockwise on screen.
+    BackCw,
 }
 
 /// Scene buffers on the GPU.
@@ -217,6 +230,16 @@ impl GpuScene {
                     sphere: (m.transform_point3(c), r * scale),
                     casts_shadows: inst.casts_shadows,
                     masked: masks.is_masked(inst.material),
+                    camera_cull: match scene.materials.get(inst.material) {
+                        Some(mat) if mat.cull_back_faces => {
+                            if m.determinant() < 0.0 {
+                                CameraCull::BackCw
+                            } else {
+                                CameraCull::BackCcw
+                            }
+                        }
+                        _ => CameraCull::None,
+                    },
                 }
             })
             .collect();
@@ -287,6 +310,14 @@ impl GpuScene {
         };
         let (c, r) = d.object_sphere;
         d.sphere = (m.transform_point3(c), r * max_axis_scale(m));
+        // A mirroring transform turns the winding the camera sees as front.
+        if d.camera_cull != CameraCull::None {
+            d.camera_cull = if m.determinant() < 0.0 {
+                CameraCull::BackCw
+            } else {
+                CameraCull::BackCcw
+            };
+        }
         let data = InstanceData::new(m, d.material);
         queue.write_buffer(
             &self.instances,

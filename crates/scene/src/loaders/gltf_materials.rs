@@ -186,6 +186,7 @@ pub(super) fn read_materials(
             },
             alpha_cutoff: m.alpha_cutoff().unwrap_or(0.5),
             double_sided: m.double_sided(),
+            cull_back_faces: !m.double_sided(),
         };
         let mut use_texture = |what: &str, tex: ::gltf::Texture<'_>, set: u32| {
             if set != 0 {
