@@ -133,6 +133,7 @@ struct MaterialDef {
     diffuse: Option<Vec3>,
     specular: Option<Vec3>,
     shininess: Option<f32>,
+    cull_back_faces: Option<bool>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
@@ -318,6 +319,7 @@ fn parse(
             diffuse: m.diffuse.unwrap_or(d.diffuse),
             specular: m.specular.unwrap_or(d.specular),
             shininess: m.shininess.unwrap_or(d.shininess),
+            cull_back_faces: m.cull_back_faces.unwrap_or(d.cull_back_faces),
             ..d
         });
     }

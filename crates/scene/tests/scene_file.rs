@@ -446,3 +446,15 @@ fn light_size_is_read_defaulted_and_checked() {
         parse_err("[[light]]\ntype = \"point\"\nposition = [0, 1, 0]\nrange = 5\nsize = \"big\"\n");
     assert!(msg.contains("size"), "{msg}");
 }
+
+#[test]
+fn cull_back_faces_is_read_and_defaults_to_two_sided() {
+    let text = "[[material]]\nname = \"shell\"\ncull_back_faces = true\n[[material]]\nname = \"m\"\n\
+                [[mesh]]\nname = \"b\"\nprimitive = \"cube\"\nsize = 1\n\
+                [[instance]]\nmesh = \"b\"\nmaterial = \"shell\"\n[[instance]]\nmesh = \"b\"\nmaterial = \"m\"\n";
+    let s = parse(text).unwrap();
+    assert!(s.materials[0].cull_back_faces);
+    assert!(!s.materials[1].cull_back_faces);
+    let e = parse_err("[[material]]\nname = \"m\"\ncull_back_faces = 1\n");
+    assert!(e.contains("cull_back_faces") || e.contains("bool"), "{e}");
+}
