@@ -86,6 +86,7 @@ fn scene(meshes: Vec<Mesh>, lights: Vec<Light>) -> Scene {
         materials: vec![Material::default()],
         lights,
         camera: Camera::look_at(Vec3::new(0.0, 6.0, 8.0), Vec3::ZERO),
+        lighting: Default::default(),
     }
 }
 

@@ -189,6 +189,7 @@ fn light_inside_geometry_lights_nothing_outside() {
         // Looking at the floor beside the box (the box's own outside is "unoccluded" by
         // the hard test: a zero-thickness wall is its own shadow caster, and the bias lifts it).
         camera: Camera::look_at(Vec3::new(7.0, 4.0, 3.0), Vec3::new(7.0, 0.0, -1.0)),
+        lighting: Default::default(),
     };
     for points in PointShadows::ALL {
         for technique in [Technique::TRADITIONAL, Technique::LAYERED] {

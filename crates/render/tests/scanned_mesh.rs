@@ -71,6 +71,7 @@ fn scene(sphere: Mesh) -> Scene {
             target: Vec3::new(0.0, 1.2, 0.0),
             ..Default::default()
         },
+        lighting: Default::default(),
     }
 }
 

@@ -96,6 +96,7 @@ fn lamp_over_floor(
             size: 0.0,
         }],
         camera,
+        lighting: Default::default(),
     }
 }
 

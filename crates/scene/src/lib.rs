@@ -18,6 +18,7 @@ pub mod error;
 pub mod light_size;
 pub mod light_space;
 pub mod loaders;
+pub mod look;
 pub mod masks;
 mod model;
 mod normals;
@@ -26,5 +27,6 @@ pub mod scene_file;
 pub mod texture;
 
 pub use error::SceneError;
+pub use look::{Lighting, Pbr};
 pub use model::*;
 pub use texture::{AlphaMode, Texture, TextureRef, Wrap};

@@ -5,6 +5,7 @@
 
 use glam::{Mat4, Vec2, Vec3};
 
+use crate::look::{Lighting, Pbr};
 use crate::texture::{AlphaMode, Texture, TextureRef};
 
 use crate::error::SceneError;
@@ -170,6 +171,15 @@ pub struct Material {
     /// camera shades from both sides.
     #[serde(default)]
     pub cull_back_faces: bool,
+    /// Metallic-roughness parameters for the glTF BRDF (glTF files); `None`: derived from the
+    /// Phong colours when shaded physically ([`Pbr::from_phong`]).
+    #[serde(default)]
+    pub pbr: Option<Pbr>,
+    /// Emitted radiance, added to the shaded colour whatever the lights (glTF
+    /// `emissiveFactor × KHR_materials_emissive_strength`; in a physical scene in nits, i.e.
+    /// candela per square metre, through the exposure like the lights). Default black.
+    #[serde(default)]
+    pub emissive: Vec3,
 }
 
 impl Material {
@@ -242,6 +252,8 @@ impl Default for Material {
             alpha_cutoff: Self::default_cutoff(),
             double_sided: false,
             cull_back_faces: false,
+            pbr: None,
+            emissive: Vec3::ZERO,
         }
     }
 }
@@ -522,6 +534,9 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// The viewpoint.
     pub camera: Camera,
+    /// Units of the lights and the shading the scene's author meant (the renderer's defaults
+    /// for shading, exposure and tone map).
+    pub lighting: Lighting,
 }
 
 impl Scene {

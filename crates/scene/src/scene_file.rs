@@ -422,6 +422,7 @@ fn parse(
         instances,
         lights,
         camera: doc.camera.unwrap_or_default(),
+        lighting: Default::default(),
     };
     scene.validate()?;
     Ok(scene)

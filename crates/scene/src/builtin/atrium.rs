@@ -755,5 +755,6 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
         materials: materials(),
         instances: h.instances,
         camera,
+        lighting: Default::default(),
     }
 }

@@ -345,5 +345,6 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
         instances,
         lights: terrain_lights(n, opts.seed, opts.mix, opts.shadow_resolution),
         camera,
+        lighting: Default::default(),
     }
 }

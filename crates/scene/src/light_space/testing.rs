@@ -97,6 +97,7 @@ pub(super) fn test_scene(lights: Vec<Light>) -> Scene {
         instances: vec![instance(0, false), instance(1, true), instance(2, true)],
         lights,
         camera: Camera::look_at(Vec3::new(0.0, 5.0, 10.0), Vec3::ZERO),
+        lighting: Default::default(),
     }
 }
 

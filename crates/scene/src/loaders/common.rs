@@ -22,6 +22,9 @@ pub const CREASE_ANGLE_DEG: f32 = 60.0;
 /// colours (one unit of light colour is 10 lux). See the module documentation.
 pub const PHONG_PER_LUX: f32 = 0.1;
 
+/// The glTF extension that scales a material's emissive factor past 1.
+pub(crate) const EMISSIVE_STRENGTH: &str = "KHR_materials_emissive_strength";
+
 /// The key in a glTF light's `extras` that holds its [`Light::size`], which
 /// `KHR_lights_punctual` has no field for: `"extras": { "manyshadows_size": 0.1 }` on the
 /// light's entry in the extension's `lights` array, in the units of [`Light::size`] (a radius

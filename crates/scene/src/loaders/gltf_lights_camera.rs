@@ -55,7 +55,11 @@ pub(super) fn read_lights(
             continue;
         };
         let name = def.name.clone().unwrap_or_else(|| format!("light {index}"));
-        let colour = Vec3::from(def.color).max(Vec3::ZERO) * def.intensity.max(0.0) * PHONG_PER_LUX;
+        // Physical units (candela, lux): the scene is `Lighting::Physical`.
+        let colour = Vec3::from(def.color).max(Vec3::ZERO) * def.intensity.max(0.0);
+        // The reach where a file gives none: as far as a Phong light of a tenth of the
+        // intensity reaches (one Phong unit is 10 cd), the range the loader always gave.
+        let phong = colour * PHONG_PER_LUX;
         if !colour.is_finite() {
             return Err(parse_error(
                 path,
@@ -74,9 +78,9 @@ pub(super) fn read_lights(
                     "light '{name}': range {r} is not a positive number: computed from its \
                      intensity instead"
                 ));
-                super::common::light_range(colour, diagonal)
+                super::common::light_range(phong, diagonal)
             }
-            None => super::common::light_range(colour, diagonal),
+            None => super::common::light_range(phong, diagonal),
         };
         let kind = match ty {
             Type::Point => LightKind::Point { position, range },

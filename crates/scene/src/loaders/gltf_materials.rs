@@ -11,8 +11,9 @@ use ::gltf::texture::WrappingMode;
 use glam::Vec3;
 use serde_json::Value;
 
-use super::common::read_limited;
+use super::common::{read_limited, EMISSIVE_STRENGTH};
 use super::gltf_open::{percent_decode, Opened};
+use crate::look::Pbr;
 use crate::model::Material;
 use crate::texture::{AlphaMode, Texture, TextureRef, Wrap};
 
@@ -154,6 +155,36 @@ fn material_extensions(json: &Value, material: usize) -> BTreeSet<String> {
     names
 }
 
+/// Material `index`'s emitted radiance: `emissiveFactor` times
+/// `KHR_materials_emissive_strength`'s `emissiveStrength` (default 1); black, with a note,
+/// where the product is not a finite, non-negative colour.
+fn emissive(
+    json: &Value,
+    index: usize,
+    factor: [f32; 3],
+    name: &str,
+    notes: &mut Vec<String>,
+) -> Vec3 {
+    let strength = json
+        .get("materials")
+        .and_then(|m| m.get(index))
+        .and_then(|m| m.get("extensions"))
+        .and_then(|e| e.get(EMISSIVE_STRENGTH))
+        .and_then(|e| e.get("emissiveStrength"))
+        .and_then(Value::as_f64)
+        .map_or(1.0, |v| v as f32);
+    let e = Vec3::from(factor) * strength;
+    if e.is_finite() && e.min_element() >= 0.0 {
+        e
+    } else {
+        notes.push(format!(
+            "material '{name}': emissive factor {factor:?} × strength {strength} is not a \
+             colour: it emits nothing"
+        ));
+        Vec3::ZERO
+    }
+}
+
 /// Every material of the document, in order, and the textures they use.
 pub(super) fn read_materials(
     opened: &Opened,
@@ -187,6 +218,11 @@ pub(super) fn read_materials(
             alpha_cutoff: m.alpha_cutoff().unwrap_or(0.5),
             double_sided: m.double_sided(),
             cull_back_faces: !m.double_sided(),
+            pbr: Some(Pbr {
+                metallic,
+                roughness,
+            }),
+            emissive: emissive(&opened.json, i, m.emissive_factor(), &name, notes),
         };
         let mut use_texture = |what: &str, tex: ::gltf::Texture<'_>, set: u32| {
             if set != 0 {
@@ -218,7 +254,8 @@ pub(super) fn read_materials(
         if let Some(info) = m.normal_texture() {
             out.normal_texture = use_texture("normal", info.texture(), info.tex_coord());
         }
-        let extensions = material_extensions(&opened.json, i);
+        let mut extensions = material_extensions(&opened.json, i);
+        extensions.remove(EMISSIVE_STRENGTH);
         if !extensions.is_empty() {
             notes.push(format!(
                 "material '{name}': {} ignored",

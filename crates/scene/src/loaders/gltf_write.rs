@@ -13,8 +13,9 @@ use glam::{Mat3, Mat4, Quat, Vec3};
 use serde_json::{json, Map, Value};
 
 use super::base64;
-use super::common::{GLTF_SIZE_EXTRA, PHONG_PER_LUX};
+use super::common::{EMISSIVE_STRENGTH, GLTF_SIZE_EXTRA, PHONG_PER_LUX};
 use crate::error::SceneError;
+use crate::look::Lighting;
 use crate::model::{LightKind, Material, Scene};
 use crate::texture::{AlphaMode, TextureRef, Wrap};
 
@@ -33,8 +34,12 @@ use crate::texture::{AlphaMode, TextureRef, Wrap};
 ///   `(2 / (shininess + 2))^¼` (shininess clamped to 1..=512), metallic = the least-squares
 ///   fit of `specular = mix(0.04, diffuse, metallic)`. So shininess always round-trips,
 ///   specular only when it has that form (e.g. grey diffuse with grey specular), and ambient
-///   comes back equal to diffuse.
-/// - Lights as `KHR_lights_punctual` nodes: `intensity = max(diffuse) / PHONG_PER_LUX`,
+///   comes back equal to diffuse. A material with [`Material::pbr`] writes those parameters
+///   instead (they load back exactly). A non-black [`Material::emissive`] is written as
+///   `emissiveFactor`, its part above 1 as `KHR_materials_emissive_strength`.
+/// - Lights as `KHR_lights_punctual` nodes: `intensity = max(diffuse)` for a physical scene
+///   ([`Lighting::Physical`]: the colours are candela and lux already), `max(diffuse) /
+///   PHONG_PER_LUX` for a Phong one (one unit of Phong light is 10 cd or 10 lx),
 ///   `color = diffuse / max(diffuse)` (negative channels written as 0), `range`, the spot's
 ///   cutoff as `outerConeAngle` (inner 0), the direction as the node's rotation of −Z, the
 ///   position as its translation, a size above 0 as the light's
@@ -129,7 +134,11 @@ pub fn write_gltf(scene: &Scene, path: &Path) -> Result<(), SceneError> {
     for (i, l) in scene.lights.iter().enumerate() {
         let peak = l.diffuse.max_element();
         let (color, intensity) = if peak > 0.0 && peak.is_finite() {
-            ((l.diffuse / peak).max(Vec3::ZERO), peak / PHONG_PER_LUX)
+            let per_unit = match scene.lighting {
+                Lighting::Phong => 1.0 / PHONG_PER_LUX,
+                Lighting::Physical => 1.0,
+            };
+            ((l.diffuse / peak).max(Vec3::ZERO), peak * per_unit)
         } else {
             (Vec3::ONE, 0.0)
         };
@@ -223,8 +232,21 @@ pub fn write_gltf(scene: &Scene, path: &Path) -> Result<(), SceneError> {
     put("accessors", w.accessors);
     put("bufferViews", w.views);
     doc.insert("cameras".into(), cameras);
+    let mut used = Vec::new();
     if !lights.is_empty() {
-        doc.insert("extensionsUsed".into(), json!(["KHR_lights_punctual"]));
+        used.push("KHR_lights_punctual");
+    }
+    if scene
+        .materials
+        .iter()
+        .any(|m| m.emissive.max_element() > 1.0)
+    {
+        used.push(EMISSIVE_STRENGTH);
+    }
+    if !used.is_empty() {
+        doc.insert("extensionsUsed".into(), json!(used));
+    }
+    if !lights.is_empty() {
         doc.insert(
             "extensions".into(),
             json!({ "KHR_lights_punctual": { "lights": lights } }),
@@ -352,6 +374,9 @@ fn material_json(
     };
     let shininess = m.shininess.clamp(1.0, 512.0);
     let roughness = (2.0 / (shininess + 2.0)).sqrt().sqrt();
+    let (metallic, roughness) = m
+        .pbr
+        .map_or((metallic, roughness), |p| (p.metallic, p.roughness));
     let mut pbr = json!({
         "baseColorFactor": [m.diffuse.x, m.diffuse.y, m.diffuse.z, m.base_alpha],
         "metallicFactor": metallic,
@@ -375,6 +400,15 @@ fn material_json(
     }
     if let Some(t) = m.normal_texture {
         out["normalTexture"] = json!({ "index": texture(t) });
+    }
+    let peak = m.emissive.max_element();
+    if peak > 0.0 {
+        // emissiveFactor is at most 1: brighter emission goes into the strength extension.
+        let strength = peak.max(1.0);
+        out["emissiveFactor"] = json!((m.emissive / strength).to_array());
+        if strength > 1.0 {
+            out["extensions"] = json!({ EMISSIVE_STRENGTH: { "emissiveStrength": strength } });
+        }
     }
     out
 }

@@ -25,21 +25,23 @@
 //! materials, textures, lights and camera, and one-line notes on whatever it had to ignore,
 //! replace or invent (the CLI prints them).
 //!
-//! # glTF lights (`KHR_lights_punctual`) → Phong lights
+//! # glTF lights (`KHR_lights_punctual`) → physical lights
 //!
 //! glTF lights are physical: candela (lm/sr) for point and spot lights, lux (lm/m²) for
-//! directional ones, falling off with the inverse square of distance. This renderer's lights
-//! are Phong colours with an attenuation. The mapping:
+//! directional ones, falling off with the inverse square of distance. A loaded glTF scene is
+//! [`Lighting::Physical`](crate::Lighting): its lights keep those units and the renderer
+//! shades it with the glTF BRDF through an exposure (see `manyshadows_render::Look`). The
+//! mapping:
 //!
-//! - diffuse = specular = `color × intensity × PHONG_PER_LUX`, with [`PHONG_PER_LUX`] = 0.1:
-//!   one unit of this renderer's light colour stands for 10 lux of irradiance (a 10 lux
-//!   directional light is colour 1: a white surface facing it shows its full diffuse colour);
-//!   ambient = 0 (the file's lights add no ambient term);
-//! - point and spot attenuation = `1 / (1 + d²)` (constant 1, linear 0, quadratic 1: the
-//!   inverse square, kept finite at the light);
-//! - range = the light's `range` if the file gives one, else the distance at which
-//!   `max(colour) / (1 + d²)` falls to 1/256 (below one step of an 8-bit image), at least 0.1
-//!   and at most 4 × the diagonal of the scene's bounds;
+//! - diffuse = specular = `color × intensity` (candela or lux); ambient = 0 (the file's
+//!   lights add no ambient term);
+//! - point and spot attenuation = `1 / (1 + d²)` (the Phong model's inverse square, kept
+//!   finite at the light); shaded physically, the falloff is glTF's instead:
+//!   `window(d / range) / max(d², 0.01)`;
+//! - range = the light's `range` if the file gives one, else the distance at which a Phong
+//!   light of a tenth of the intensity, `max(colour × PHONG_PER_LUX) / (1 + d²)`, falls to
+//!   1/256 ([`PHONG_PER_LUX`] = 0.1: one Phong unit is 10 cd), at least 0.1 and at most 4 ×
+//!   the diagonal of the scene's bounds;
 //! - position = the node's world translation; direction (spot, directional) = the node's
 //!   world rotation applied to (0, 0, −1);
 //! - spot `cutoff_deg` = `outerConeAngle` in degrees (glTF's default π/4), clamped into
@@ -59,15 +61,20 @@
 //!
 //! A file with no lights (and every OBJ and PLY file) gets the seeded layout
 //! [`scatter_lights`]`(scene, 8, seed 1, LightMix::All, None)` (whose lights have the built-in
-//! default sizes, [`crate::light_size`]) and a note saying so.
-//! [`write_gltf`] writes the inverse mapping (`intensity = max(diffuse) / PHONG_PER_LUX`,
-//! `color = diffuse / max(diffuse)`, a size above 0 as [`GLTF_SIZE_EXTRA`]), so a written
-//! light loads back with the same colours, range, cone, direction and size; a light's ambient
+//! default sizes, [`crate::light_size`]) and a note saying so; in a glTF scene their Phong
+//! colours are turned into candela and lux (× 10, 1 / [`PHONG_PER_LUX`]).
+//! [`write_gltf`] writes the inverse mapping (`intensity = max(diffuse)` for a physical
+//! scene, `max(diffuse) / PHONG_PER_LUX` for a Phong one; `color = diffuse / max(diffuse)`, a
+//! size above 0 as [`GLTF_SIZE_EXTRA`]), so a written light loads back with the same colours
+//! (ten times a Phong scene's), range, cone, direction and size; a light's ambient
 //! colour, a specular colour different from its
 //! diffuse one and its attenuation are not representable in glTF and come back as above.
 //!
-//! # glTF materials → Phong materials
+//! # glTF materials → materials
 //!
+//! - `metallicFactor` and `roughnessFactor` → [`Material::pbr`] (the glTF BRDF's parameters;
+//!   the Phong terms below are what `--shading phong` shows);
+//! - `emissiveFactor` × `KHR_materials_emissive_strength` → [`Material::emissive`];
 //! - `baseColorFactor` rgb → `diffuse` and `ambient`; its alpha → `base_alpha`;
 //! - specular = `mix(0.04, base rgb, metallic)` per channel (dielectrics reflect about 4 %
 //!   white, metals their own colour);
@@ -76,7 +83,7 @@
 //! - `baseColorTexture` → `base_color_texture`, `normalTexture` → `normal_texture`, each with
 //!   its sampler's `wrapS` / `wrapT`; texture-coordinate set 0 is always used (a texture that
 //!   names another set gets a note); metallic-roughness, occlusion and emissive textures are
-//!   not used;
+//!   not used (their factors are);
 //! - `alphaMode`, `alphaCutoff` (default 0.5) and `doubleSided` are copied;
 //! - primitives without a material get [`Material::default`];
 //! - extensions used by a material (`KHR_texture_transform`, `KHR_materials_*`, …) are
@@ -150,6 +157,7 @@ use glam::Mat4;
 
 use crate::builtin::{scatter_lights, LightMix};
 use crate::error::SceneError;
+use crate::look::Lighting;
 use crate::model::{Camera, Instance, Material, Mesh, Scene};
 
 use common::{check_file_size, check_triangles, default_camera, parse_error, Parts};
@@ -245,9 +253,13 @@ pub fn load_scene(path: &Path) -> Result<LoadedScene, SceneError> {
     })?;
     check_file_size(path)?;
     catch_parser_panic(path, || {
+        let mut lighting = Lighting::Phong;
         let parts = match format {
             Format::Obj => obj::load_scene(path)?,
-            Format::Gltf => gltf::load_scene(path)?,
+            Format::Gltf => {
+                lighting = Lighting::Physical;
+                gltf::load_scene(path)?
+            }
             Format::Ply { gzip } => {
                 let meshes = ply::load(path, gzip)?;
                 Parts {
@@ -261,13 +273,13 @@ pub fn load_scene(path: &Path) -> Result<LoadedScene, SceneError> {
                 }
             }
         };
-        assemble(path, parts)
+        assemble(path, parts, lighting)
     })
 }
 
 /// Checks the meshes, places them, adds default lights and camera where the file has none,
 /// and validates the result.
-fn assemble(path: &Path, parts: Parts) -> Result<LoadedScene, SceneError> {
+fn assemble(path: &Path, parts: Parts, lighting: Lighting) -> Result<LoadedScene, SceneError> {
     let Parts {
         meshes,
         mesh_material,
@@ -303,11 +315,20 @@ fn assemble(path: &Path, parts: Parts) -> Result<LoadedScene, SceneError> {
         instances,
         lights,
         camera: Camera::default(),
+        lighting,
     };
     let bounds = scene.world_bounds(false);
     scene.camera = camera.unwrap_or_else(|| default_camera(bounds));
     if scene.lights.is_empty() {
         scene.lights = scatter_lights(&scene, DEFAULT_LIGHT_COUNT, 1, LightMix::All, None);
+        if lighting == Lighting::Physical {
+            // The seeded lights are in Phong units: 10 cd (or lx) each.
+            for l in &mut scene.lights {
+                l.ambient /= PHONG_PER_LUX;
+                l.diffuse /= PHONG_PER_LUX;
+                l.specular /= PHONG_PER_LUX;
+            }
+        }
         let count = |t: &str| scene.lights.iter().filter(|l| l.type_name() == t).count();
         notes.push(format!(
             "the file has no lights: added {} seeded lights ({} spot, {} point, {} directional)",

@@ -133,6 +133,7 @@ fn writer_scene() -> Scene {
             near: 0.2,
             far: 300.0,
         },
+        lighting: Default::default(),
     }
 }
 
