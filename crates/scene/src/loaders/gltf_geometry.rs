@@ -1,8 +1,10 @@
 //! The geometry of a glTF document: every triangle primitive reached from the default scene,
-//! depth-first, as its own [`Mesh`] with the node's world transform baked in. Accessors are
-//! checked (type, stride, sparse section) before the `gltf` crate reads them; strips and fans
+//! depth-first, as its own [`Mesh`] with the node's world transform baked in, or, for a node
+//! with `EXT_mesh_gpu_instancing`, in the mesh's own coordinates with one placement per
+//! instance. Accessors are checked (type, stride, sparse section) before the `gltf` crate
+//! reads them; Draco-compressed primitives are decoded (`gltf_compressed`); strips and fans
 //! become lists as the specification numbers their triangles; mirroring transforms flip the
-//! winding back to counter-clockwise.
+//! winding back to counter-clockwise; positions and normals are checked finite, by vertex.
 
 use std::path::Path;
 
@@ -11,7 +13,11 @@ use ::gltf::mesh::Mode;
 use ::gltf::{Accessor, Semantic};
 use glam::{Mat3, Mat4, Vec2, Vec3};
 
-use super::common::{check_triangles, mesh_name, parse_error, set_normals, too_large};
+use super::common::{
+    check_finite, check_triangles, mesh_name, parse_error, set_normals, too_large, RawTriangles,
+};
+use super::gltf_draco::decode_draco;
+use super::gltf_instancing::instance_transforms;
 use super::gltf_open::Opened;
 use crate::error::SceneError;
 use crate::model::Mesh;
@@ -21,6 +27,11 @@ pub(super) struct Geometry<'a> {
     pub(super) meshes: Vec<Mesh>,
     /// The glTF material of each mesh (`None`: the primitive names none).
     pub(super) materials: Vec<Option<usize>>,
+    /// The placements of each mesh: the identity (the node's transform is baked in), or one
+    /// per instance of an `EXT_mesh_gpu_instancing` node.
+    pub(super) transforms: Vec<Vec<Mat4>>,
+    /// Remarks on instances left out.
+    pub(super) notes: Vec<String>,
     /// Every node reached from the default scene with its world transform, depth-first.
     pub(super) nodes: Vec<(::gltf::Node<'a>, Mat4)>,
     /// Point and line primitives skipped.
@@ -37,41 +48,55 @@ pub(super) fn read_geometry<'a>(
     let mut out = Geometry {
         meshes: Vec::new(),
         materials: Vec::new(),
+        transforms: Vec::new(),
+        notes: Vec::new(),
         nodes: Vec::new(),
         skipped: 0,
     };
     let mut total_triangles = 0usize;
-    let mut emit = |out: &mut Geometry<'a>, mesh: ::gltf::Mesh<'a>, world: Mat4| {
-        for prim in mesh.primitives() {
-            let mode = prim.mode();
-            if !matches!(
-                mode,
-                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
-            ) {
-                log::warn!(
-                    "{}: skipping a {:?} primitive of mesh {} (only triangles are loaded)",
-                    path.display(),
+    // `world` is baked into the vertices; `placed` are the mesh's placements.
+    let mut emit =
+        |out: &mut Geometry<'a>, mesh: ::gltf::Mesh<'a>, world: Mat4, placed: &[Mat4]| {
+            for prim in mesh.primitives() {
+                let mode = prim.mode();
+                if !matches!(
                     mode,
-                    mesh.index()
-                );
-                out.skipped += 1;
-                continue;
+                    Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+                ) {
+                    log::debug!(
+                        "{}: skipping a {:?} primitive of mesh {} (only triangles are loaded)",
+                        path.display(),
+                        mode,
+                        mesh.index()
+                    );
+                    out.skipped += 1;
+                    continue;
+                }
+                let label = match mesh.name() {
+                    Some(n) => format!("{n}#{}", prim.index()),
+                    None => format!("mesh{}#{}", mesh.index(), prim.index()),
+                };
+                let draco = opened.json.pointer(&format!(
+                    "/meshes/{}/primitives/{}/extensions/KHR_draco_mesh_compression",
+                    mesh.index(),
+                    prim.index()
+                ));
+                let read = match draco {
+                    Some(ext) => decode_draco(path, &label, opened, ext)?,
+                    None => read_primitive(path, &label, &prim, &get)?,
+                };
+                let m = finish(path, &label, read, world)?;
+                if m.indices.is_empty() {
+                    continue;
+                }
+                total_triangles += m.triangle_count();
+                check_triangles(path, total_triangles)?;
+                out.meshes.push(m);
+                out.materials.push(prim.material().index());
+                out.transforms.push(placed.to_vec());
             }
-            let label = match mesh.name() {
-                Some(n) => format!("{n}#{}", prim.index()),
-                None => format!("mesh{}#{}", mesh.index(), prim.index()),
-            };
-            let m = read_primitive(path, &label, &prim, &get, world)?;
-            if m.indices.is_empty() {
-                continue;
-            }
-            total_triangles += m.triangle_count();
-            check_triangles(path, total_triangles)?;
-            out.meshes.push(m);
-            out.materials.push(prim.material().index());
-        }
-        Ok::<(), SceneError>(())
-    };
+            Ok::<(), SceneError>(())
+        };
 
     match document
         .default_scene()
@@ -96,7 +121,29 @@ pub(super) fn read_geometry<'a>(
                 }
                 let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
                 if let Some(mesh) = node.mesh() {
-                    emit(&mut out, mesh, world)?;
+                    match instance_transforms(path, opened, node.index())? {
+                        // The node's mesh is drawn once per instance, at world × instance
+                        // (EXT_mesh_gpu_instancing), and not at the node itself.
+                        Some(instances) => {
+                            let (placed, singular): (Vec<Mat4>, Vec<Mat4>) = instances
+                                .into_iter()
+                                .map(|t| world * t)
+                                .partition(|t| t.is_finite() && t.determinant().abs() >= 1e-12);
+                            if !singular.is_empty() {
+                                out.notes.push(format!(
+                                    "node {}: {} of its {} instances are scaled to nothing or \
+                                     not finite: left out",
+                                    node.index(),
+                                    singular.len(),
+                                    singular.len() + placed.len()
+                                ));
+                            }
+                            if !placed.is_empty() {
+                                emit(&mut out, mesh, Mat4::IDENTITY, &placed)?;
+                            }
+                        }
+                        None => emit(&mut out, mesh, world, &[Mat4::IDENTITY])?,
+                    }
                 }
                 let children: Vec<_> = node.children().collect();
                 stack.extend(children.into_iter().rev().map(|c| (c, world)));
@@ -105,7 +152,7 @@ pub(super) fn read_geometry<'a>(
         }
         None => {
             for mesh in document.meshes() {
-                emit(&mut out, mesh, Mat4::IDENTITY)?;
+                emit(&mut out, mesh, Mat4::IDENTITY, &[Mat4::IDENTITY])?;
             }
         }
     }
@@ -200,17 +247,16 @@ pub(crate) fn fan_to_list(v: &[u32]) -> Vec<u32> {
     out
 }
 
+/// Reads a primitive through its accessors.
 fn read_primitive<'p, 's, F>(
     path: &Path,
     label: &str,
     prim: &'p ::gltf::Primitive<'p>,
     get: &F,
-    world: Mat4,
-) -> Result<Mesh, SceneError>
+) -> Result<RawTriangles, SceneError>
 where
     F: Clone + Fn(::gltf::Buffer<'p>) -> Option<&'s [u8]>,
 {
-    let name = mesh_name(path, Some(label));
     let mode = prim.mode();
     let pos_acc = prim.get(&Semantic::Positions).ok_or_else(|| {
         parse_error(
@@ -228,9 +274,11 @@ where
     )?;
     let vertex_count = pos_acc.count();
     if vertex_count == 0 {
-        return Ok(Mesh {
-            name,
-            ..Mesh::default()
+        return Ok(RawTriangles {
+            positions: Vec::new(),
+            normals: None,
+            uvs: Vec::new(),
+            indices: Vec::new(),
         });
     }
     if vertex_count > u32::MAX as usize {
@@ -328,7 +376,7 @@ where
         }
         None => (0..vertex_count as u32).collect(),
     };
-    let mut indices = match mode {
+    let indices = match mode {
         Mode::TriangleStrip => strip_to_list(&listed),
         Mode::TriangleFan => fan_to_list(&listed),
         _ => {
@@ -344,7 +392,24 @@ where
             listed
         }
     };
+    Ok(RawTriangles {
+        positions,
+        normals,
+        uvs,
+        indices,
+    })
+}
 
+/// Checks a primitive's vertices and bakes the node's world transform into them.
+fn finish(path: &Path, label: &str, read: RawTriangles, world: Mat4) -> Result<Mesh, SceneError> {
+    let name = mesh_name(path, Some(label));
+    let RawTriangles {
+        positions,
+        normals,
+        uvs,
+        mut indices,
+    } = read;
+    check_finite(&name, &positions, normals.as_deref())?;
     // Bake the node's world transform.
     let positions: Vec<Vec3> = positions
         .into_iter()

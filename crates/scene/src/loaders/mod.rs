@@ -134,269 +134,31 @@
 
 mod base64;
 pub(crate) mod common;
+mod dispatch;
+mod framing;
 mod gltf;
+mod gltf_draco;
+mod gltf_extensions;
 mod gltf_geometry;
+mod gltf_instancing;
 mod gltf_lights_camera;
 mod gltf_materials;
+mod gltf_meshopt;
 mod gltf_open;
 mod gltf_write;
 mod mtl;
 mod obj;
+mod obj_text;
+pub(crate) mod options;
+mod paths;
 mod ply;
 
-use std::path::Path;
-
-use glam::Mat4;
-
-use crate::builtin::{scatter_lights, LightMix};
-use crate::error::SceneError;
-use crate::model::{Camera, Instance, Material, Mesh, Scene};
-
-use common::{check_file_size, check_triangles, default_camera, parse_error, Parts};
 pub use common::{
     CREASE_ANGLE_DEG, DEFAULT_LIGHT_COUNT, GLTF_SIZE_EXTRA, MAX_DECOMPRESSED_BYTES, MAX_FILE_BYTES,
     MAX_TRIANGLES, PHONG_PER_LUX,
 };
+pub use dispatch::{load_mesh, load_mesh_with, load_scene, load_scene_with, LoadedScene};
 pub use gltf_write::write_gltf;
 pub use obj::{write_obj, MAX_MTL_BYTES};
+pub use options::{Ground, LoadOptions};
 pub use ply::write_ply_ascii;
-
-/// The file formats [`load_mesh`] understands, chosen by file extension.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Format {
-    Obj,
-    Gltf,
-    Ply { gzip: bool },
-}
-
-fn format_of(path: &Path) -> Option<Format> {
-    let name = path.file_name()?.to_string_lossy().to_ascii_lowercase();
-    if name.ends_with(".ply.gz") {
-        return Some(Format::Ply { gzip: true });
-    }
-    let ext = path.extension()?.to_string_lossy().to_ascii_lowercase();
-    match ext.as_str() {
-        "obj" => Some(Format::Obj),
-        "gltf" | "glb" => Some(Format::Gltf),
-        "ply" => Some(Format::Ply { gzip: false }),
-        _ => None,
-    }
-}
-
-/// Loads every triangle mesh in a file, choosing the format by extension (case-insensitive):
-///
-/// - `.obj`: one [`Mesh`] per OBJ object / group (polygons fan-triangulated, normals from `vn`
-///   where the file has them, computed otherwise; materials and texture coordinates ignored);
-/// - `.gltf` / `.glb`: one [`Mesh`] per triangle primitive per node of the default scene
-///   (the first scene if none is marked default; every mesh untransformed if the file has no
-///   scene), with the node's world transform baked into positions and normals;
-/// - `.ply` / `.ply.gz`: one [`Mesh`] (ascii, binary little- or big-endian).
-///
-/// Every returned mesh passes [`Mesh::validate`]. Errors: [`SceneError::UnsupportedFormat`] for
-/// another extension, [`SceneError::Io`] if the file cannot be read, [`SceneError::TooLarge`] for
-/// the limits ([`MAX_FILE_BYTES`], [`MAX_DECOMPRESSED_BYTES`], [`MAX_TRIANGLES`]),
-/// [`SceneError::Parse`] (with the path and the parser's reason) for malformed content and
-/// [`SceneError::InvalidMesh`] for non-finite coordinates or out-of-range indices.
-pub fn load_mesh(path: &Path) -> Result<Vec<Mesh>, SceneError> {
-    let format = format_of(path).ok_or_else(|| SceneError::UnsupportedFormat {
-        path: path.to_path_buf(),
-    })?;
-    check_file_size(path)?;
-    let meshes = catch_parser_panic(path, || match format {
-        Format::Obj => obj::load(path),
-        Format::Gltf => gltf::load(path),
-        Format::Ply { gzip } => ply::load(path, gzip),
-    })?;
-    if meshes.is_empty() {
-        return Err(parse_error(path, "the file contains no triangles"));
-    }
-    for m in &meshes {
-        check_triangles(path, m.triangle_count())?;
-        m.validate()?;
-    }
-    Ok(meshes)
-}
-
-/// A scene read from a file, with remarks on it.
-#[derive(Clone, Debug)]
-pub struct LoadedScene {
-    /// The scene; it has passed [`Scene::validate`].
-    pub scene: Scene,
-    /// One-line, human-readable remarks on what was ignored, replaced or added (lights
-    /// invented for a file without any, extensions ignored, a material library that could not
-    /// be read, …), in the order they arose. Empty when the file was used as it is.
-    pub notes: Vec<String>,
-}
-
-/// Loads a whole scene from a mesh file, choosing the format by extension as [`load_mesh`]
-/// does (`.gltf`, `.glb`, `.obj`, `.ply`, `.ply.gz`): meshes (one per glTF triangle primitive,
-/// node transforms baked; one per OBJ object and material; one for PLY), one identity
-/// [`Instance`] per mesh casting shadows, the file's materials and textures,
-/// its lights and camera, mapped as the module documentation describes. A file without lights
-/// gets [`DEFAULT_LIGHT_COUNT`] seeded ones, a file without a camera one that frames the
-/// bounds; the notes say so.
-///
-/// Errors: those of [`load_mesh`], plus [`SceneError::Parse`] for glTF 1.0 files (with how to
-/// convert them) and for glTF files requiring an unsupported extension, and the
-/// [`Scene::validate`] errors (e.g. a material colour that is not finite).
-pub fn load_scene(path: &Path) -> Result<LoadedScene, SceneError> {
-    let format = format_of(path).ok_or_else(|| SceneError::UnsupportedFormat {
-        path: path.to_path_buf(),
-    })?;
-    check_file_size(path)?;
-    catch_parser_panic(path, || {
-        let parts = match format {
-            Format::Obj => obj::load_scene(path)?,
-            Format::Gltf => gltf::load_scene(path)?,
-            Format::Ply { gzip } => {
-                let meshes = ply::load(path, gzip)?;
-                Parts {
-                    mesh_material: vec![0; meshes.len()],
-                    meshes,
-                    materials: vec![Material::default()],
-                    textures: Vec::new(),
-                    lights: Vec::new(),
-                    camera: None,
-                    notes: Vec::new(),
-                }
-            }
-        };
-        assemble(path, parts)
-    })
-}
-
-/// Checks the meshes, places them, adds default lights and camera where the file has none,
-/// and validates the result.
-fn assemble(path: &Path, parts: Parts) -> Result<LoadedScene, SceneError> {
-    let Parts {
-        meshes,
-        mesh_material,
-        materials,
-        textures,
-        lights,
-        camera,
-        mut notes,
-    } = parts;
-    if meshes.is_empty() {
-        return Err(parse_error(path, "the file contains no triangles"));
-    }
-    let mut total = 0usize;
-    for m in &meshes {
-        total = total.saturating_add(m.triangle_count());
-        check_triangles(path, m.triangle_count())?;
-        m.validate()?;
-    }
-    let instances = mesh_material
-        .iter()
-        .enumerate()
-        .map(|(mesh, &material)| Instance::caster(mesh, material, Mat4::IDENTITY))
-        .collect();
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| path.display().to_string());
-    let mut scene = Scene {
-        name,
-        meshes,
-        materials,
-        textures,
-        instances,
-        lights,
-        camera: Camera::default(),
-    };
-    let bounds = scene.world_bounds(false);
-    scene.camera = camera.unwrap_or_else(|| default_camera(bounds));
-    if scene.lights.is_empty() {
-        scene.lights = scatter_lights(&scene, DEFAULT_LIGHT_COUNT, 1, LightMix::All, None);
-        let count = |t: &str| scene.lights.iter().filter(|l| l.type_name() == t).count();
-        notes.push(format!(
-            "the file has no lights: added {} seeded lights ({} spot, {} point, {} directional)",
-            scene.lights.len(),
-            count("spot"),
-            count("point"),
-            count("directional")
-        ));
-    }
-    log::debug!("{}: {total} triangles", path.display());
-    scene.validate()?;
-    Ok(LoadedScene { scene, notes })
-}
-
-/// Runs a parser, turning a panic inside a third-party parser into [`SceneError::Parse`]. The
-/// loaders check what they can before calling the parsers; this is the last line of defence so
-/// a hostile file can never take the process down.
-fn catch_parser_panic<T>(
-    path: &Path,
-    f: impl FnOnce() -> Result<T, SceneError>,
-) -> Result<T, SceneError> {
-    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)) {
-        Ok(r) => r,
-        Err(payload) => {
-            let what = payload
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| payload.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "unknown panic".into());
-            Err(parse_error(
-                path,
-                format!("the parser failed on malformed data ({what})"),
-            ))
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::common::*;
-    use super::*;
-    use glam::Vec3;
-
-    #[test]
-    fn format_dispatch_is_case_insensitive() {
-        assert_eq!(format_of(Path::new("a/B.OBJ")), Some(Format::Obj));
-        assert_eq!(format_of(Path::new("x.GlB")), Some(Format::Gltf));
-        assert_eq!(format_of(Path::new("x.gltf")), Some(Format::Gltf));
-        assert_eq!(
-            format_of(Path::new("x.Ply")),
-            Some(Format::Ply { gzip: false })
-        );
-        assert_eq!(
-            format_of(Path::new("x.PLY.GZ")),
-            Some(Format::Ply { gzip: true })
-        );
-        assert_eq!(format_of(Path::new("x.gz")), None);
-        assert_eq!(format_of(Path::new("x.stl")), None);
-        assert_eq!(format_of(Path::new("noext")), None);
-    }
-
-    #[test]
-    fn triangle_limit() {
-        assert!(check_triangles(Path::new("m.ply"), MAX_TRIANGLES).is_ok());
-        assert!(matches!(
-            check_triangles(Path::new("m.ply"), MAX_TRIANGLES + 1),
-            Err(SceneError::TooLarge { .. })
-        ));
-    }
-
-    #[test]
-    fn parser_panic_becomes_parse_error() {
-        let r: Result<(), _> = catch_parser_panic(Path::new("p.ply"), || panic!("boom"));
-        match r {
-            Err(SceneError::Parse { reason, .. }) => assert!(reason.contains("boom"), "{reason}"),
-            other => panic!("unexpected {other:?}"),
-        }
-    }
-
-    #[test]
-    fn zero_normals_fall_back_to_computed() {
-        let mut m = Mesh {
-            name: "t".into(),
-            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Z],
-            indices: vec![0, 2, 1],
-            ..Mesh::default()
-        };
-        set_normals(&mut m, Some(vec![Vec3::ZERO, Vec3::Y * 3.0, Vec3::Y]));
-        // Triangle (0, Z, X) winds counter-clockwise seen from +Y.
-        assert_eq!(m.normals, vec![Vec3::Y, Vec3::Y, Vec3::Y]);
-    }
-}
