@@ -9,6 +9,7 @@ use clap::{Args, Parser, ValueEnum};
 use manyshadows::scene::atlas::FitPolicy;
 use manyshadows::scene::light_size::LightSizes;
 use manyshadows::scene::light_space::PointShadows;
+use manyshadows::scene::loaders::Ground;
 use manyshadows::{
     AdapterRequest, CullMode, GpuContext, Pcf, RenderSettings, ShadowBias, ShadowOptions, Technique,
 };
@@ -209,6 +210,18 @@ pub(crate) struct RenderArgs {
     /// procedural stand-in of ~35k triangles is used.
     #[arg(long)]
     pub(crate) mesh: Option<PathBuf>,
+    /// Let a model file read files outside its own folder: absolute paths and `..` in glTF
+    /// buffer and image URIs, OBJ `mtllib` and MTL texture paths, symbolic links that lead
+    /// out. Without it such paths are refused by name (a model file is untrusted input).
+    #[arg(long)]
+    pub(crate) allow_outside_paths: bool,
+    /// A ground plane under a model file (.gltf/.glb/.obj/.ply), catching its shadows: auto
+    /// (only under a model without a floor of its own: no large horizontal surface at the
+    /// bottom of its bounds), on or off; `--ground` alone is on. Not for built-in or TOML
+    /// scenes.
+    #[arg(long, default_value = "auto", num_args = 0..=1, default_missing_value = "on",
+          value_parser = parse_ground, value_name = "auto|on|off")]
+    pub(crate) ground: Ground,
     /// Shadow-map resolution per view (texels per side) for every light.
     #[arg(long)]
     pub(crate) shadow_resolution: Option<u32>,
@@ -351,6 +364,11 @@ pub fn parse_point_shadows(s: &str) -> Result<PointShadows, String> {
 }
 
 pub(crate) fn parse_cull(s: &str) -> Result<CullMode, String> {
+    s.parse()
+}
+
+/// `auto`, `on` or `off`.
+pub(crate) fn parse_ground(s: &str) -> Result<Ground, String> {
     s.parse()
 }
 

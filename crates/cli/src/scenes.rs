@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use crate::args::{LightSizeArgs, RenderArgs};
 use anyhow::{bail, Result};
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
+use manyshadows::scene::loaders::LoadOptions;
 use manyshadows::scene::Scene;
 
 /// Loads a scene as `render` does: a built-in name, a TOML file or a model file, with `lights`
@@ -56,11 +57,15 @@ pub(crate) fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
     let is_file = lower.ends_with(".toml")
         || model
         || (path.is_file() && !builtin::SCENE_NAMES.contains(&args.scene.as_str()));
+    let load_options = LoadOptions {
+        allow_outside_paths: args.allow_outside_paths,
+        ground: args.ground,
+    };
     if is_file {
         let mut scene = if model {
             // A model file is a scene of its own: its materials, textures, lights and camera
             // (defaults added where it has none, and said).
-            let loaded = manyshadows::scene::loaders::load_scene(path)?;
+            let loaded = manyshadows::scene::loaders::load_scene_with(path, &load_options)?;
             for note in &loaded.notes {
                 eprintln!("note: {}: {note}", path.display());
             }
@@ -87,7 +92,7 @@ pub(crate) fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
     }
     let mesh = match &args.mesh {
         Some(p) => {
-            let meshes = manyshadows::scene::loaders::load_mesh(p)?;
+            let meshes = manyshadows::scene::loaders::load_mesh_with(p, &load_options)?;
             Some(manyshadows::scene::primitives::merge(
                 &meshes
                     .into_iter()
