@@ -14,16 +14,37 @@
 //!   at [`CREASE_ANGLE_DEG`]): edges sharper than 60° stay sharp (boxes keep flat faces),
 //!   finely tessellated curves stay smooth;
 //! - glTF node transforms are baked into the vertices (the renderer places meshes with
-//!   [`Instance`] transforms, not with a node hierarchy);
-//! - every returned mesh has passed [`Mesh::validate`] (and every [`load_scene`] result
-//!   [`Scene::validate`]), so NaNs and out-of-range indices become a [`SceneError`] here
-//!   instead of a GPU fault later.
+//!   [`Instance`] transforms, not with a node hierarchy), except that an
+//!   `EXT_mesh_gpu_instancing` node's mesh stays in its own coordinates with one instance per
+//!   instance;
+//! - positions and normals are checked finite right after reading (an error naming the mesh
+//!   and the vertex as the file numbers them), and every returned mesh has passed
+//!   [`Mesh::validate`] (and every [`load_scene`] result [`Scene::validate`]), so NaNs and
+//!   out-of-range indices become a [`SceneError`] here instead of a GPU fault later.
 //!
 //! [`load_mesh`] reads geometry only (the TOML scene format and benchmarks place meshes
 //! themselves). [`load_scene`] reads a whole scene: one [`Mesh`] per glTF triangle primitive
-//! or OBJ (object, material), one identity [`Instance`] per mesh (casting shadows), the file's
-//! materials, textures, lights and camera, and one-line notes on whatever it had to ignore,
-//! replace or invent (the CLI prints them).
+//! or OBJ (object, material), one identity [`Instance`] per mesh (casting shadows; one per
+//! instance for instanced glTF nodes), the file's materials, textures, lights and camera, and
+//! one-line notes on whatever it had to ignore, replace or invent, each said once (the CLI
+//! prints them; nothing is logged beside a note). [`load_scene_with`] and [`load_mesh_with`]
+//! take [`LoadOptions`]: whether the file may read outside its folder, and the ground plane.
+//!
+//! # Paths a file may read
+//!
+//! Every path a file names (glTF buffer and image URIs, OBJ `mtllib`, MTL texture statements)
+//! must resolve inside the model file's folder or below: an absolute path, a `..` that climbs
+//! above the folder and a symbolic link that leads out are refused, naming the path and
+//! `--allow-outside-paths` ([`LoadOptions::allow_outside_paths`] lets them through). A glTF
+//! buffer outside is an error; an image, material library or texture outside is left out with
+//! a note, as a missing one is. Nothing is ever downloaded.
+//!
+//! # Text and names
+//!
+//! OBJ and MTL lines that are not UTF-8 are read as Latin-1; a `newmtl` / `usemtl` without a
+//! name names the material "(unnamed)" on both sides; MTL statements `tobj` would refuse
+//! (a texture statement without a file, a colour with fewer than three numbers) are mended or
+//! dropped. A glTF scene without `nodes` is an empty scene.
 //!
 //! # glTF lights (`KHR_lights_punctual`) → Phong lights
 //!
@@ -77,12 +98,23 @@
 //!   its sampler's `wrapS` / `wrapT`; texture-coordinate set 0 is always used (a texture that
 //!   names another set gets a note); metallic-roughness, occlusion and emissive textures are
 //!   not used;
+//! - `KHR_texture_transform` (offset, rotation, scale) is baked into the texture coordinates
+//!   of the material's meshes: the base-colour texture's transform, or the normal texture's
+//!   where there is no base colour (all of a material's textures are sampled with one set of
+//!   coordinates; a normal texture with a different transform gets a note);
 //! - `alphaMode`, `alphaCutoff` (default 0.5) and `doubleSided` are copied;
-//! - primitives without a material get [`Material::default`];
-//! - extensions used by a material (`KHR_texture_transform`, `KHR_materials_*`, …) are
-//!   ignored with a note; a file that *requires* one of those still loads (with a note), a
-//!   file that requires any other unsupported extension (compressed geometry or textures) is
-//!   refused with a [`SceneError::Parse`] naming it.
+//! - primitives without a material get [`Material::default`].
+//!
+//! # glTF extensions
+//!
+//! Read: `KHR_lights_punctual`, `KHR_texture_transform`, `EXT_mesh_gpu_instancing`,
+//! `KHR_draco_mesh_compression` (decoded with `draco-core`) and `EXT_meshopt_compression`
+//! (decoded with meshoptimizer; not in the browser build). Every other extension the file
+//! uses (listed in `extensionsUsed` or found in an `extensions` object) gets exactly one
+//! note naming it and what uses it. A file that *requires* one of them still loads if it is
+//! a `KHR_materials_*` extension (the note says it is required); any other unsupported
+//! requirement (`KHR_mesh_quantization`, compressed textures) is refused with a
+//! [`SceneError::Parse`] naming it.
 //!
 //! Images come from a buffer view (GLB), a base64 `data:` URI or a file relative to the
 //! `.gltf` (nothing is downloaded); each is decoded once with [`Texture::decode`] (PNG or
@@ -95,7 +127,7 @@
 //! described in the `mtl` module: in short, `map_d` becomes the alpha of the base-colour
 //! texture of a masked, double-sided material, and `d` / `Tr` without `map_d` are ignored.
 //! An OBJ whose material library is missing, unreadable or empty loads with default
-//! materials, a note and a logged warning. PLY files get one default material.
+//! materials and a note. PLY files get one default material.
 //!
 //! # Cameras
 //!
@@ -109,10 +141,21 @@
 //! `aspectRatio` is ignored (the output image decides). Orthographic cameras are skipped with
 //! a note.
 //!
-//! Without a camera (and for OBJ and PLY): the default camera looks at the centre of the
+//! Without a camera (and for OBJ and PLY): the framing camera looks at the centre of the
 //! bounds from the direction (1, 0.6, 1) (above and to the side, the usual three-quarter
-//! view), at the distance where the bounding sphere fits a 60° vertical field of view with a
-//! 10 % margin; near = diagonal / 1000, far = 4 × diagonal + that distance.
+//! view), at the nearest distance where all eight corners of the bounds fit a 60° field of
+//! view vertically and horizontally with a 5 % margin (the model fills any frame at least as
+//! wide as it is high); near = diagonal / 1000, far = 4 × diagonal + that distance.
+//!
+//! # The ground plane
+//!
+//! With [`Ground::On`], or [`Ground::Auto`] for a model without a floor, [`load_scene_with`]
+//! adds a ground plane after the lights and camera: a square of 3 × the bounds' diagonal,
+//! facing +Y (the scene's up), centred under the bounds a thousandth of the diagonal below
+//! their lowest point, light grey, receiving shadows and casting none, with a note. A model
+//! has a floor when its horizontal triangles (|normal.y| > 0.95) within the lowest 2 % of the
+//! bounds' height cover at least a quarter of the bounds' X-Z footprint, seen from above.
+//! [`LoadOptions::default`] is [`Ground::Off`]; the CLI's `--ground` is `auto`.
 //!
 //! # Hostile input
 //!
@@ -123,8 +166,36 @@
 //! [`MAX_TEXTURE_BYTES`](crate::texture::MAX_TEXTURE_BYTES) before they are decoded, material
 //! libraries to [`MAX_MTL_BYTES`].
 //!
-//! [`Instance`]: crate::Instance
-//! [`Light`]: crate::Light
+//! [`Instance`]: crate::model::Instance
+//! [`Light`]: crate::model::Light
+//! [`Mesh`]: crate::model::Mesh
+//! [`Material`]: crate::model::Material
+//! [`Camera`]: crate::model::Camera
+//! [`Light::validate`]: crate::model::Light::validate
+//! [`Camera::validate`]: crate::model::Camera::validate
+//! [`Scene::validate`]: crate::model::Scene::validate
+//! [`Mesh::validate`]: crate::model::Mesh::validate
+//! [`Mesh::compute_normals_with_crease`]: crate::model::Mesh::compute_normals_with_crease
+//! [`Material::default`]: crate::model::Material
+//! [`SceneError`]: crate::error::SceneError
+//! [`SceneError::Parse`]: crate::error::SceneError::Parse
+//! [`SceneError::TooLarge`]: crate::error::SceneError::TooLarge
+//! [`Texture::decode`]: crate::texture::Texture::decode
+//! [`load_scene`]: dispatch::load_scene
+//! [`load_mesh`]: dispatch::load_mesh
+//! [`load_scene_with`]: dispatch::load_scene_with
+//! [`load_mesh_with`]: dispatch::load_mesh_with
+//! [`LoadOptions`]: options::LoadOptions
+//! [`LoadOptions::allow_outside_paths`]: options::LoadOptions::allow_outside_paths
+//! [`LoadOptions::default`]: options::LoadOptions
+//! [`Ground::On`]: options::Ground::On
+//! [`Ground::Auto`]: options::Ground::Auto
+//! [`Ground::Off`]: options::Ground::Off
+//! [`write_gltf`]: gltf_write::write_gltf
+//! [`CREASE_ANGLE_DEG`]: common::CREASE_ANGLE_DEG
+//! [`PHONG_PER_LUX`]: common::PHONG_PER_LUX
+//! [`GLTF_SIZE_EXTRA`]: common::GLTF_SIZE_EXTRA
+//! [`MAX_MTL_BYTES`]: obj::MAX_MTL_BYTES
 //! [`scatter_lights`]: crate::builtin::scatter_lights
 //! [`DIRECTIONAL_CASCADES`]: crate::builtin::DIRECTIONAL_CASCADES
 //! [`DIRECTIONAL_SPLIT_LAMBDA`]: crate::builtin::DIRECTIONAL_SPLIT_LAMBDA
