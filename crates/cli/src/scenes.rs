@@ -3,15 +3,15 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::args::{LightSizeArgs, RenderArgs};
+use crate::args::{LightSizeArgs, ModelArgs, RenderArgs};
 use anyhow::{bail, Result};
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
-use manyshadows::scene::loaders::LoadOptions;
 use manyshadows::scene::Scene;
 
-/// Loads a scene as `render` does: a built-in name, a TOML file or a model file, with `lights`
-/// seeded lights instead of its own when given, the light sizes `light_sizes` asks for and the
-/// camera at `camera` (`PX,PY,PZ,TX,TY,TZ`) when given (what the viewer shows).
+/// Loads a scene as `render` does: a built-in name, a TOML file or a model file (loaded as
+/// `model` asks: paths outside its folder, the ground plane), with `lights` seeded lights
+/// instead of its own when given, the light sizes `light_sizes` asks for and the camera at
+/// `camera` (`PX,PY,PZ,TX,TY,TZ`) when given (what the viewer shows).
 pub fn load_scene_for_view(
     scene: &str,
     mesh: Option<PathBuf>,
@@ -19,6 +19,7 @@ pub fn load_scene_for_view(
     seed: u64,
     light_sizes: LightSizeArgs,
     camera: Option<[f32; 6]>,
+    model: ModelArgs,
 ) -> Result<Scene> {
     load_scene(&RenderArgs {
         scene: scene.to_string(),
@@ -27,6 +28,7 @@ pub fn load_scene_for_view(
         seed,
         light_sizes,
         camera,
+        model,
         ..RenderArgs::default()
     })
 }
@@ -57,10 +59,7 @@ pub(crate) fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
     let is_file = lower.ends_with(".toml")
         || model
         || (path.is_file() && !builtin::SCENE_NAMES.contains(&args.scene.as_str()));
-    let load_options = LoadOptions {
-        allow_outside_paths: args.allow_outside_paths,
-        ground: args.ground,
-    };
+    let load_options = args.model.options();
     if is_file {
         let mut scene = if model {
             // A model file is a scene of its own: its materials, textures, lights and camera

@@ -79,7 +79,7 @@ pub(crate) fn has_floor(scene: &Scene) -> bool {
     };
     let extent = hi - lo;
     let footprint = extent.x * extent.z;
-    if !(footprint > 0.0) {
+    if footprint.is_nan() || footprint <= 0.0 {
         return false;
     }
     let tolerance = (0.02 * extent.y).max(1e-3 * extent.length());

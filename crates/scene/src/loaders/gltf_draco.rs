@@ -16,7 +16,7 @@ use super::gltf_open::Opened;
 use crate::error::SceneError;
 
 /// The bytes of buffer view `view` of an opened document.
-fn view_bytes<'o>(opened: &'o Opened, view: usize) -> Result<&'o [u8], String> {
+fn view_bytes(opened: &Opened, view: usize) -> Result<&[u8], String> {
     let root = opened.document.as_json();
     let v = root
         .buffer_views

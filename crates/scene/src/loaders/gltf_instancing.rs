@@ -136,8 +136,7 @@ pub(super) fn instance_transforms(
             raw.into_iter()
                 .map(|q| {
                     let q = glam::Vec4::from_array(q);
-                    q.try_normalize()
-                        .map_or(Quat::IDENTITY, |q| Quat::from_vec4(q))
+                    q.try_normalize().map_or(Quat::IDENTITY, Quat::from_vec4)
                 })
                 .collect()
         }
