@@ -4,7 +4,8 @@
 //!
 //! Read here: `KHR_lights_punctual` (lights), `KHR_texture_transform` (baked into texture
 //! coordinates, `gltf.rs`), `EXT_mesh_gpu_instancing` (`gltf_instancing`),
-//! `KHR_draco_mesh_compression` and `EXT_meshopt_compression` (`gltf_compressed`). Everything
+//! `KHR_draco_mesh_compression` (`gltf_draco`), `EXT_meshopt_compression` (`gltf_meshopt`),
+//! `KHR_mesh_quantization` (integer vertex attributes, `gltf_accessors`). Everything
 //! else a file uses gets exactly one note naming it, however many materials or nodes use it.
 
 use std::collections::BTreeMap;
@@ -19,12 +20,13 @@ pub(crate) const SUPPORTED: &[&str] = &[
     "EXT_mesh_gpu_instancing",
     "KHR_draco_mesh_compression",
     "EXT_meshopt_compression",
+    "KHR_mesh_quantization",
 ];
 
 /// Extensions a file may *require* that this loader still reads without: the PBR material
 /// extensions, which a Phong renderer cannot show anyway (the scene looks different from what
 /// the author intended, and a note says so). Any other unsupported requirement (compressed
-/// textures, quantized geometry) is refused.
+/// textures, for one) is refused.
 pub(crate) fn ignorable_requirement(name: &str) -> bool {
     name.starts_with("KHR_materials_")
 }
@@ -117,8 +119,6 @@ fn consequence(name: &str) -> &'static str {
         "materials may look different from what the author intended"
     } else if name.starts_with("KHR_texture_") || name.starts_with("EXT_texture_") {
         "textures stored that way are not shown"
-    } else if name == "KHR_mesh_quantization" {
-        "quantized geometry cannot be read"
     } else if name == "KHR_animation_pointer" || name.contains("anim") {
         "the scene is shown as it stands, unanimated"
     } else {

@@ -1,20 +1,23 @@
 //! The geometry of a glTF document: every triangle primitive reached from the default scene,
 //! depth-first, as its own [`Mesh`] with the node's world transform baked in, or, for a node
 //! with `EXT_mesh_gpu_instancing`, in the mesh's own coordinates with one placement per
-//! instance. Accessors are checked (type, stride, sparse section) before the `gltf` crate
-//! reads them; Draco-compressed primitives are decoded (`gltf_compressed`); strips and fans
+//! instance. Accessors are checked (type, stride, sparse section) before they are read, in
+//! every component type `KHR_mesh_quantization` allows (`gltf_accessors`); Draco-compressed primitives are decoded (`gltf_compressed`); strips and fans
 //! become lists as the specification numbers their triangles; mirroring transforms flip the
 //! winding back to counter-clockwise; positions and normals are checked finite, by vertex.
 
 use std::path::Path;
 
-use ::gltf::accessor::{DataType, Dimensions};
+use ::gltf::accessor::Dimensions;
 use ::gltf::mesh::Mode;
-use ::gltf::{Accessor, Semantic};
+use ::gltf::Semantic;
 use glam::{Mat3, Mat4, Vec2, Vec3};
 
 use super::common::{
     check_finite, check_triangles, mesh_name, parse_error, set_normals, too_large, RawTriangles,
+};
+use super::gltf_accessors::{
+    check_accessor, read_vec2, read_vec3, INDEX_TYPES, NORMAL_TYPES, POSITION_TYPES, TEXCOORD_TYPES,
 };
 use super::gltf_draco::decode_draco;
 use super::gltf_instancing::instance_transforms;
@@ -159,73 +162,6 @@ pub(super) fn read_geometry<'a>(
     Ok(out)
 }
 
-/// Checks an accessor's buffer views are safe to hand to the crate's readers.
-fn check_layout(a: &Accessor<'_>, bad: &dyn Fn(String) -> SceneError) -> Result<(), SceneError> {
-    let size = a.size();
-    let views = a
-        .view()
-        .into_iter()
-        .chain(a.sparse().map(|s| s.values().view()));
-    for v in views {
-        if let Some(stride) = v.stride() {
-            if stride < size {
-                return Err(bad(format!(
-                    "buffer view stride {stride} is smaller than an element ({size} bytes)"
-                )));
-            }
-        }
-    }
-    if let Some(s) = a.sparse() {
-        if s.count() == 0 {
-            return Err(bad("accessor has an empty sparse section".into()));
-        }
-    }
-    Ok(())
-}
-
-/// Checks an accessor has one of `types` (not normalized) and `dims`, and a safe layout.
-fn check_accessor(
-    path: &Path,
-    label: &str,
-    what: &str,
-    a: &Accessor<'_>,
-    types: &[DataType],
-    dims: Dimensions,
-) -> Result<(), SceneError> {
-    let bad =
-        |reason: String| parse_error(path, format!("glTF primitive {label}: {what} {reason}"));
-    if !types.contains(&a.data_type()) || a.dimensions() != dims || a.normalized() {
-        return Err(bad(format!(
-            "accessor has type {:?} {:?}{}; expected {dims:?} of {types:?}",
-            a.dimensions(),
-            a.data_type(),
-            if a.normalized() { " (normalized)" } else { "" }
-        )));
-    }
-    check_layout(a, &bad)
-}
-
-/// Texture coordinates: `Vec2` of floats, or of normalized unsigned bytes or shorts.
-fn check_texcoord_accessor(path: &Path, label: &str, a: &Accessor<'_>) -> Result<(), SceneError> {
-    let bad =
-        |reason: String| parse_error(path, format!("glTF primitive {label}: TEXCOORD_0 {reason}"));
-    let ok = a.dimensions() == Dimensions::Vec2
-        && match a.data_type() {
-            DataType::F32 => !a.normalized(),
-            DataType::U8 | DataType::U16 => a.normalized(),
-            _ => false,
-        };
-    if !ok {
-        return Err(bad(format!(
-            "accessor has type {:?} {:?}{}; expected Vec2 of F32, or of normalized U8 or U16",
-            a.dimensions(),
-            a.data_type(),
-            if a.normalized() { " (normalized)" } else { "" }
-        )));
-    }
-    check_layout(a, &bad)
-}
-
 /// Triangle `i` of a strip is `(v_i, v_{i+1+i%2}, v_{i+2-i%2})` (glTF 2.0, §3.7.2.1), which
 /// keeps every triangle's winding that of the first.
 pub(crate) fn strip_to_list(v: &[u32]) -> Vec<u32> {
@@ -269,7 +205,7 @@ where
         label,
         "POSITION",
         &pos_acc,
-        &[DataType::F32],
+        POSITION_TYPES,
         Dimensions::Vec3,
     )?;
     let vertex_count = pos_acc.count();
@@ -291,25 +227,25 @@ where
         .get(&Semantic::Normals)
         .filter(|a| a.count() == vertex_count);
     if let Some(a) = &normal_acc {
-        check_accessor(path, label, "NORMAL", a, &[DataType::F32], Dimensions::Vec3)?;
+        check_accessor(path, label, "NORMAL", a, NORMAL_TYPES, Dimensions::Vec3)?;
     }
     let uv_acc = prim
         .get(&Semantic::TexCoords(0))
         .filter(|a| a.count() == vertex_count);
     if let Some(a) = &uv_acc {
-        check_texcoord_accessor(path, label, a)?;
+        check_accessor(
+            path,
+            label,
+            "TEXCOORD_0",
+            a,
+            TEXCOORD_TYPES,
+            Dimensions::Vec2,
+        )?;
     }
     let index_acc = prim.indices();
     let listed = match &index_acc {
         Some(a) => {
-            check_accessor(
-                path,
-                label,
-                "indices",
-                a,
-                &[DataType::U8, DataType::U16, DataType::U32],
-                Dimensions::Scalar,
-            )?;
+            check_accessor(path, label, "indices", a, INDEX_TYPES, Dimensions::Scalar)?;
             a.count()
         }
         None => vertex_count,
@@ -329,32 +265,17 @@ where
             format!("glTF primitive {label}: {what} data is missing or outside its buffer"),
         )
     };
-    let positions: Vec<Vec3> = reader
-        .read_positions()
-        .ok_or_else(|| missing("POSITION"))?
-        .map(Vec3::from_array)
-        .collect();
+    let positions = read_vec3(&pos_acc, get.clone()).ok_or_else(|| missing("POSITION"))?;
     if positions.len() != vertex_count {
         return Err(missing("POSITION"));
     }
     let normals: Option<Vec<Vec3>> = match &normal_acc {
-        Some(_) => Some(
-            reader
-                .read_normals()
-                .ok_or_else(|| missing("NORMAL"))?
-                .map(Vec3::from_array)
-                .collect(),
-        ),
+        Some(a) => Some(read_vec3(a, get.clone()).ok_or_else(|| missing("NORMAL"))?),
         None => None,
     };
     let uvs: Vec<Vec2> = match &uv_acc {
-        Some(_) => {
-            let uvs: Vec<Vec2> = reader
-                .read_tex_coords(0)
-                .ok_or_else(|| missing("TEXCOORD_0"))?
-                .into_f32()
-                .map(Vec2::from_array)
-                .collect();
+        Some(a) => {
+            let uvs = read_vec2(a, get.clone()).ok_or_else(|| missing("TEXCOORD_0"))?;
             if uvs.len() != vertex_count {
                 return Err(missing("TEXCOORD_0"));
             }

@@ -108,12 +108,13 @@
 //! # glTF extensions
 //!
 //! Read: `KHR_lights_punctual`, `KHR_texture_transform`, `EXT_mesh_gpu_instancing`,
-//! `KHR_draco_mesh_compression` (decoded with `draco-core`) and `EXT_meshopt_compression`
-//! (decoded with meshoptimizer; not in the browser build). Every other extension the file
+//! `KHR_draco_mesh_compression` (decoded with `draco-core`), `EXT_meshopt_compression`
+//! (decoded with meshoptimizer; not in the browser build) and `KHR_mesh_quantization`
+//! (integer positions, normals and texture coordinates). Every other extension the file
 //! uses (listed in `extensionsUsed` or found in an `extensions` object) gets exactly one
 //! note naming it and what uses it. A file that *requires* one of them still loads if it is
 //! a `KHR_materials_*` extension (the note says it is required); any other unsupported
-//! requirement (`KHR_mesh_quantization`, compressed textures) is refused with a
+//! requirement (compressed textures: KTX2 / BasisU, WebP) is refused with a
 //! [`SceneError::Parse`] naming it.
 //!
 //! Images come from a buffer view (GLB), a base64 `data:` URI or a file relative to the
@@ -208,6 +209,7 @@ pub(crate) mod common;
 mod dispatch;
 mod framing;
 mod gltf;
+mod gltf_accessors;
 mod gltf_draco;
 mod gltf_extensions;
 mod gltf_geometry;

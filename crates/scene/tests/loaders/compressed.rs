@@ -218,3 +218,45 @@ fn meshopt_views_decode_to_their_source_bytes() {
         }
     }
 }
+
+#[test]
+fn meshopt_filtered_quantized_normals_decode_as_gltfpack_writes_them() {
+    // Octahedral-filtered 8-bit normals (stride 4) on a triangle, as gltfpack writes them with
+    // KHR_mesh_quantization: they decode to within 8-bit precision of the source normals.
+    let dir = temp_dir("meshopt_oct");
+    let source = [
+        Vec3::X,
+        Vec3::new(0.0, 0.6, 0.8),
+        Vec3::new(0.48, 0.6, 0.64),
+    ];
+    let four: Vec<[f32; 4]> = source.iter().map(|n| [n.x, n.y, n.z, 0.0]).collect();
+    let filtered: Vec<[i8; 4]> = meshopt::encode_filter_oct(&four, 8);
+    let encoded = meshopt::encode_vertex_buffer(&filtered).unwrap();
+    let positions: Vec<[f32; 3]> = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    let mut data = bytes_of(&positions);
+    let at = data.len();
+    data.extend_from_slice(&encoded);
+    let mut file = doc(
+        &[(Some(&data), data.len()), (None, 12)],
+        json!([
+            { "buffer": 0, "byteLength": 36 },
+            { "buffer": 1, "byteLength": 12, "byteStride": 4, "extensions": {
+                "EXT_meshopt_compression": { "buffer": 0, "byteOffset": at,
+                    "byteLength": encoded.len(), "byteStride": 4, "count": 3,
+                    "mode": "ATTRIBUTES", "filter": "OCTAHEDRAL" } } }
+        ]),
+        json!([
+            { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+              "min": [0, 0, 0], "max": [1, 1, 0] },
+            { "bufferView": 1, "componentType": 5120, "normalized": true, "count": 3,
+              "type": "VEC3" }
+        ]),
+        json!({ "attributes": { "POSITION": 0, "NORMAL": 1 } }),
+    );
+    file["extensionsUsed"] = json!(["EXT_meshopt_compression", "KHR_mesh_quantization"]);
+    file["extensionsRequired"] = json!(["EXT_meshopt_compression", "KHR_mesh_quantization"]);
+    let meshes = load_mesh(&save_json(&dir, "oct.gltf", &file)).unwrap_or_else(|e| panic!("{e}"));
+    for (got, want) in meshes[0].normals.iter().zip(source) {
+        assert!((*got - want).length() < 0.02, "{got} vs {want}");
+    }
+}

@@ -1,6 +1,6 @@
 //! glTF extensions: `EXT_mesh_gpu_instancing` as instances, `KHR_texture_transform` baked into
-//! texture coordinates, and one note for each extension the loader ignores (required ones that
-//! it cannot ignore refused by name).
+//! texture coordinates, `KHR_mesh_quantization`'s integer attributes, and one note for each
+//! extension the loader ignores (required ones that it cannot ignore refused by name).
 
 use glam::{Mat4, Quat, Vec2, Vec3};
 use manyshadows_scene::loaders::{load_mesh, load_scene};
@@ -232,9 +232,76 @@ fn each_ignored_extension_gets_one_note() {
         loaded.notes
     );
     // A requirement that cannot be ignored is refused, by name.
-    doc["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
-    let e = load_scene(&save_json(&dir, "quantized.gltf", &doc))
+    doc["extensionsRequired"] = json!(["EXT_texture_webp"]);
+    let e = load_scene(&save_json(&dir, "webp.gltf", &doc))
         .unwrap_err()
         .to_string();
-    assert!(e.contains("KHR_mesh_quantization"), "{e}");
+    assert!(e.contains("EXT_texture_webp"), "{e}");
+}
+
+#[test]
+fn quantized_attributes_are_read_as_the_extension_defines() {
+    let dir = temp_dir("quantization");
+    // The unit quad with positions as unsigned shorts (1000 = one unit, the node scales them
+    // back), normals as normalized signed bytes and texture coordinates as normalized
+    // unsigned shorts: what KHR_mesh_quantization (and gltfpack) writes.
+    let mut data = Vec::new();
+    for p in [[0u16, 0, 0], [1000, 0, 0], [1000, 1000, 0], [0, 1000, 0]] {
+        for c in p {
+            data.extend_from_slice(&c.to_le_bytes());
+        }
+        data.extend_from_slice(&[0, 0]); // each element padded to 4 bytes
+    }
+    for _ in 0..4 {
+        data.extend_from_slice(&[0, 0, 127, 0]);
+    }
+    for uv in [[0u16, 0], [65535, 0], [65535, 65535], [0, 65535]] {
+        for c in uv {
+            data.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        data.extend_from_slice(&i.to_le_bytes());
+    }
+    let uri = format!("data:application/octet-stream;base64,{}", base64(&data));
+    let doc = json!({
+        "asset": { "version": "2.0" },
+        "extensionsUsed": ["KHR_mesh_quantization"],
+        "extensionsRequired": ["KHR_mesh_quantization"],
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "mesh": 0, "scale": [0.001, 0.001, 0.001] }],
+        "meshes": [{ "name": "q", "primitives": [{
+            "attributes": { "POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2 }, "indices": 3 }] }],
+        "buffers": [{ "uri": uri, "byteLength": data.len() }],
+        "bufferViews": [
+            { "buffer": 0, "byteOffset": 0, "byteLength": 32, "byteStride": 8 },
+            { "buffer": 0, "byteOffset": 32, "byteLength": 16, "byteStride": 4 },
+            { "buffer": 0, "byteOffset": 48, "byteLength": 16 },
+            { "buffer": 0, "byteOffset": 64, "byteLength": 12 }
+        ],
+        "accessors": [
+            { "bufferView": 0, "componentType": 5123, "count": 4, "type": "VEC3",
+              "min": [0, 0, 0], "max": [1000, 1000, 0] },
+            { "bufferView": 1, "componentType": 5120, "normalized": true, "count": 4, "type": "VEC3" },
+            { "bufferView": 2, "componentType": 5123, "normalized": true, "count": 4, "type": "VEC2" },
+            { "bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR" }
+        ]
+    });
+    let loaded = scene_of(&save_json(&dir, "quantized.gltf", &doc));
+    let m = &loaded.scene.meshes[0];
+    let want = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
+    for (p, w) in m.positions.iter().zip(want) {
+        assert!(close(*p, w, 1e-6), "{p} vs {w}");
+    }
+    assert!(
+        m.normals.iter().all(|n| close(*n, Vec3::Z, 1e-6)),
+        "{:?}",
+        m.normals
+    );
+    assert_eq!(m.uvs, vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y]);
+    assert!(
+        loaded.notes.iter().all(|n| !n.contains("quantization")),
+        "{:?}",
+        loaded.notes
+    );
 }

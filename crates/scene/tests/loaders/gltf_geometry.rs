@@ -117,10 +117,10 @@ fn gltf_bad_accessor_is_an_error_not_a_panic() {
             r#""componentType": 5123, "count": 6"#,
             r#""componentType": 5123, "count": 60"#,
         ),
-        // Positions declared as unsigned bytes.
+        // Positions declared as unsigned ints (bytes and shorts are KHR_mesh_quantization's).
         good.replacen(
             r#""componentType": 5126, "count": 4, "type": "VEC3""#,
-            r#""componentType": 5121, "count": 4, "type": "VEC3""#,
+            r#""componentType": 5125, "count": 4, "type": "VEC3""#,
             1,
         ),
         // A stride smaller than one element.
