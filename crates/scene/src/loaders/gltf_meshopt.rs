@@ -158,12 +158,13 @@ fn decode_meshopt(source: &[u8], m: &MeshoptView) -> Result<Vec<u8>, String> {
 }
 
 #[cfg(target_arch = "wasm32")]
-fn decode_meshopt(_: &[u8], _: &MeshoptView) -> Result<Vec<u8>, String> {
-    Err(
-        "is not decoded in the browser build (meshoptimizer is C++): convert the file without \
-         it (e.g. gltfpack without -c) or load it with the native manyshadows"
-            .into(),
-    )
+fn decode_meshopt(_: &[u8], m: &MeshoptView) -> Result<Vec<u8>, String> {
+    Err(format!(
+        "({} view, filter {}) is not decoded in the browser build (meshoptimizer is C++): \
+         convert the file without it (e.g. gltfpack without -c) or load it with the native \
+         manyshadows",
+        m.mode, m.filter
+    ))
 }
 
 /// A vertex of `N` bytes, for meshopt's typed decoder.
