@@ -9,6 +9,7 @@ use clap::{Args, Parser, ValueEnum};
 use manyshadows::scene::atlas::FitPolicy;
 use manyshadows::scene::light_size::LightSizes;
 use manyshadows::scene::light_space::PointShadows;
+use manyshadows::scene::loaders::{Ground, LoadOptions};
 use manyshadows::{
     AdapterRequest, CullMode, GpuContext, Pcf, RenderSettings, ShadowBias, ShadowOptions, Technique,
 };
@@ -209,6 +210,8 @@ pub(crate) struct RenderArgs {
     /// procedural stand-in of ~35k triangles is used.
     #[arg(long)]
     pub(crate) mesh: Option<PathBuf>,
+    #[command(flatten)]
+    pub(crate) model: ModelArgs,
     /// Shadow-map resolution per view (texels per side) for every light.
     #[arg(long)]
     pub(crate) shadow_resolution: Option<u32>,
@@ -328,6 +331,33 @@ pub(crate) struct RenderArgs {
     pub(crate) gpu: GpuArgs,
 }
 
+/// How a model file (.gltf/.glb/.obj/.ply) is loaded: shared by `render`, `compare`, `bench`
+/// and the viewer.
+#[derive(Args, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ModelArgs {
+    /// Let a model file read files outside its own folder: absolute paths and `..` in glTF
+    /// buffer and image URIs, OBJ `mtllib` and MTL texture paths, symbolic links that lead
+    /// out. Without it such paths are refused by name (a model file is untrusted input).
+    #[arg(long)]
+    pub allow_outside_paths: bool,
+    /// A ground plane under a model file, catching its shadows: auto (only under a model
+    /// without a floor of its own: no large horizontal surface at the bottom of its bounds),
+    /// on or off; `--ground` alone is on. Not for built-in or TOML scenes.
+    #[arg(long, default_value = "auto", num_args = 0..=1, default_missing_value = "on",
+          value_parser = parse_ground, value_name = "auto|on|off")]
+    pub ground: Ground,
+}
+
+impl ModelArgs {
+    /// The loader options these flags ask for.
+    pub fn options(&self) -> LoadOptions {
+        LoadOptions {
+            allow_outside_paths: self.allow_outside_paths,
+            ground: self.ground,
+        }
+    }
+}
+
 impl Default for RenderArgs {
     /// What `manyshadows render` with no flags asks for.
     fn default() -> Self {
@@ -351,6 +381,11 @@ pub fn parse_point_shadows(s: &str) -> Result<PointShadows, String> {
 }
 
 pub(crate) fn parse_cull(s: &str) -> Result<CullMode, String> {
+    s.parse()
+}
+
+/// `auto`, `on` or `off`.
+pub fn parse_ground(s: &str) -> Result<Ground, String> {
     s.parse()
 }
 

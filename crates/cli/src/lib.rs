@@ -13,7 +13,8 @@ use clap::Parser;
 use crate::commands::{BenchCommand, Cli, Command};
 
 pub use args::{
-    parse_camera, parse_pcf, parse_point_shadows, parse_technique, GpuArgs, LightSizeArgs,
+    parse_camera, parse_ground, parse_pcf, parse_point_shadows, parse_technique, GpuArgs,
+    LightSizeArgs, ModelArgs,
 };
 pub use scenes::load_scene_for_view;
 

@@ -3,14 +3,15 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::args::{LightSizeArgs, RenderArgs};
+use crate::args::{LightSizeArgs, ModelArgs, RenderArgs};
 use anyhow::{bail, Result};
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::scene::Scene;
 
-/// Loads a scene as `render` does: a built-in name, a TOML file or a model file, with `lights`
-/// seeded lights instead of its own when given, the light sizes `light_sizes` asks for and the
-/// camera at `camera` (`PX,PY,PZ,TX,TY,TZ`) when given (what the viewer shows).
+/// Loads a scene as `render` does: a built-in name, a TOML file or a model file (loaded as
+/// `model` asks: paths outside its folder, the ground plane), with `lights` seeded lights
+/// instead of its own when given, the light sizes `light_sizes` asks for and the camera at
+/// `camera` (`PX,PY,PZ,TX,TY,TZ`) when given (what the viewer shows).
 pub fn load_scene_for_view(
     scene: &str,
     mesh: Option<PathBuf>,
@@ -18,6 +19,7 @@ pub fn load_scene_for_view(
     seed: u64,
     light_sizes: LightSizeArgs,
     camera: Option<[f32; 6]>,
+    model: ModelArgs,
 ) -> Result<Scene> {
     load_scene(&RenderArgs {
         scene: scene.to_string(),
@@ -26,6 +28,7 @@ pub fn load_scene_for_view(
         seed,
         light_sizes,
         camera,
+        model,
         ..RenderArgs::default()
     })
 }
@@ -56,11 +59,12 @@ pub(crate) fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
     let is_file = lower.ends_with(".toml")
         || model
         || (path.is_file() && !builtin::SCENE_NAMES.contains(&args.scene.as_str()));
+    let load_options = args.model.options();
     if is_file {
         let mut scene = if model {
             // A model file is a scene of its own: its materials, textures, lights and camera
             // (defaults added where it has none, and said).
-            let loaded = manyshadows::scene::loaders::load_scene(path)?;
+            let loaded = manyshadows::scene::loaders::load_scene_with(path, &load_options)?;
             for note in &loaded.notes {
                 eprintln!("note: {}: {note}", path.display());
             }
@@ -87,7 +91,7 @@ pub(crate) fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
     }
     let mesh = match &args.mesh {
         Some(p) => {
-            let meshes = manyshadows::scene::loaders::load_mesh(p)?;
+            let meshes = manyshadows::scene::loaders::load_mesh_with(p, &load_options)?;
             Some(manyshadows::scene::primitives::merge(
                 &meshes
                     .into_iter()

@@ -1,11 +1,11 @@
 //! What the loaders share: limits, the conversions from a file's lights and cameras, the
-//! parts a loader returns, error constructors and size checks. The folder's `mod.rs` only
-//! dispatches to the loaders; they and it import these from here.
+//! parts a loader returns, error constructors and size checks, and baking a transform into a
+//! mesh. The loaders and their dispatch (`dispatch.rs`) import these from here.
 
 use std::fs::File;
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{Mat3, Mat4, Vec3};
 
 use crate::error::SceneError;
 use crate::model::{Attenuation, Camera, Light, Material, Mesh};
@@ -67,6 +67,9 @@ pub(crate) struct Parts {
     pub meshes: Vec<Mesh>,
     /// The material of each mesh (an index into `materials`).
     pub mesh_material: Vec<usize>,
+    /// The placements of each mesh: one instance per transform (the identity for a mesh whose
+    /// node transform is baked in; one per instance of an `EXT_mesh_gpu_instancing` node).
+    pub transforms: Vec<Vec<Mat4>>,
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
     /// The file's lights; empty: seeded ones are added.
@@ -76,12 +79,63 @@ pub(crate) struct Parts {
     pub notes: Vec<String>,
 }
 
-/// The union of the meshes' bounds.
-pub(crate) fn bounds_of(meshes: &[Mesh]) -> Option<(Vec3, Vec3)> {
-    meshes
-        .iter()
-        .filter_map(Mesh::bounds)
-        .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+/// A primitive's vertices as a file stores them (before any transform), its triangles as a
+/// list: what the glTF accessor reader and the Draco decoder hand to the same finishing.
+pub(crate) struct RawTriangles {
+    pub positions: Vec<Vec3>,
+    pub normals: Option<Vec<Vec3>>,
+    /// Empty: no texture coordinates.
+    pub uvs: Vec<glam::Vec2>,
+    pub indices: Vec<u32>,
+}
+
+/// The union of the bounds of every placement of every mesh (`transforms[i]` places mesh `i`).
+pub(crate) fn bounds_of_placed(meshes: &[Mesh], transforms: &[Vec<Mat4>]) -> Option<(Vec3, Vec3)> {
+    let mut out: Option<(Vec3, Vec3)> = None;
+    for (m, placed) in meshes.iter().zip(transforms) {
+        let Some((lo, hi)) = m.bounds() else {
+            continue;
+        };
+        for t in placed {
+            for i in 0..8 {
+                let corner = Vec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                );
+                let p = t.transform_point3(corner);
+                out = Some(out.map_or((p, p), |(a, b)| (a.min(p), b.max(p))));
+            }
+        }
+    }
+    out
+}
+
+/// `mesh` with `transform` baked into its positions and normals (normals by the inverse
+/// transpose, renormalised): a mirroring transform swaps two corners of every triangle so the
+/// winding stays counter-clockwise, a singular one (which flattens the mesh) gets its normals
+/// computed again from what is left.
+pub(crate) fn bake(mesh: &Mesh, transform: Mat4) -> Mesh {
+    let mut out = mesh.clone();
+    for p in &mut out.positions {
+        *p = transform.transform_point3(*p);
+    }
+    let linear = Mat3::from_mat4(transform);
+    let det = linear.determinant();
+    if det < 0.0 {
+        for t in out.indices.chunks_exact_mut(3) {
+            t.swap(1, 2);
+        }
+    }
+    if det.is_finite() && det.abs() > 1e-30 {
+        let normal_matrix = linear.inverse().transpose();
+        for n in &mut out.normals {
+            *n = (normal_matrix * *n).try_normalize().unwrap_or(*n);
+        }
+    } else {
+        out.compute_normals_with_crease(CREASE_ANGLE_DEG);
+    }
+    out
 }
 
 /// Centre and diagonal length of bounds (the origin and 0 without any).
@@ -119,25 +173,6 @@ pub(crate) fn clamp_fov(deg: f32) -> f32 {
         60.0
     } else {
         deg.clamp(0.501, 178.999)
-    }
-}
-
-/// The camera of a file without one: see the module documentation.
-pub(crate) fn default_camera(bounds: Option<(Vec3, Vec3)>) -> Camera {
-    let (centre, diagonal) = centre_and_diagonal(bounds);
-    // A floor on the size, relative to how far from the origin the scene is, so that a
-    // degenerate (flat or point-like) scene still gets distinct eye and target.
-    let size = diagonal.max(1e-3).max(centre.abs().max_element() * 1e-5);
-    let radius = 0.5 * size;
-    let distance = 1.1 * radius / 30f32.to_radians().sin();
-    let direction = Vec3::new(1.0, 0.6, 1.0).normalize();
-    Camera {
-        position: centre + direction * distance,
-        target: centre,
-        up: Vec3::Y,
-        fov_y_deg: 60.0,
-        near: size / 1000.0,
-        far: 4.0 * size + distance,
     }
 }
 
@@ -282,4 +317,33 @@ pub(crate) fn mesh_name(path: &Path, inner: Option<&str>) -> String {
         Some(s) if !s.trim().is_empty() => format!("{file}/{}", s.trim()),
         _ => file,
     }
+}
+
+/// Fails with [`SceneError::InvalidMesh`] naming the mesh and the first vertex (numbered as
+/// the file stores them, before any transform or normal computation) whose position or
+/// normal is not finite (NaN or infinite): such a vertex would poison bounds, normals and
+/// every shadow map it is drawn into.
+pub(crate) fn check_finite(
+    mesh: &str,
+    positions: &[Vec3],
+    normals: Option<&[Vec3]>,
+) -> Result<(), SceneError> {
+    let bad = |reason: String| SceneError::InvalidMesh {
+        mesh: mesh.to_string(),
+        reason,
+    };
+    if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+        return Err(bad(format!(
+            "vertex {i} has a non-finite position {}: the file is damaged (fix or re-export it)",
+            positions[i]
+        )));
+    }
+    if let Some(i) = normals.and_then(|n| n.iter().position(|n| !n.is_finite())) {
+        let n = normals.map_or(Vec3::ZERO, |n| n[i]);
+        return Err(bad(format!(
+            "vertex {i} has a non-finite normal {n}: the file is damaged (fix or re-export it, \
+             or leave its normals out to have them computed)"
+        )));
+    }
+    Ok(())
 }

@@ -8,11 +8,13 @@
 //! specification asks). Triangle strips and fans are turned into lists exactly as the
 //! specification numbers their triangles; points and lines are skipped with a warning.
 //!
-//! [`load`] (behind [`load_mesh`](super::load_mesh)) reads geometry only and never decodes an
-//! image. [`load_scene`] also reads materials, the images they use (each decoded once, from a
-//! buffer view, a `data:` URI or a file beside the `.gltf`), `KHR_lights_punctual` lights and
-//! the first perspective camera, with the mappings documented in [`super`]. Skins, morph
-//! targets and animations are ignored.
+//! [`load`] (behind [`load_mesh`](super::dispatch::load_mesh)) reads geometry only and never
+//! decodes an image. [`load_scene`] also reads materials, the images they use (each decoded
+//! once, from a buffer view, a `data:` URI or a file in the `.gltf`'s folder),
+//! `KHR_texture_transform` (baked into texture coordinates), `KHR_lights_punctual` lights and
+//! the first perspective camera, with the mappings documented in [`super`];
+//! `EXT_mesh_gpu_instancing` nodes become one instance per instance. Skins, morph targets and
+//! animations are ignored, and every other extension the file uses gets one note.
 //!
 //! The `gltf` crate's accessors and wrappers assume a well-formed document in a few places
 //! (found by fuzzing or by reading them), so: accessor types, strides and counts are checked
@@ -22,43 +24,68 @@
 //! glTF 1.0 before the 2.0 schema produces a confusing message, and to name the extensions a
 //! material uses, which the typed document drops.
 //!
-//! This file is the loader's entry: it opens the file (`gltf_open`), reads the geometry
-//! (`gltf_geometry`), then for a whole scene the materials and images (`gltf_materials`) and
-//! the lights and camera (`gltf_lights_camera`), and puts the parts together.
+//! This file is the loader's entry: it opens the file (`gltf_open`, which also decodes meshopt
+//! views, `gltf_compressed`), reads the geometry (`gltf_geometry`, with Draco primitives and
+//! `gltf_instancing`), then for a whole scene the materials and images (`gltf_materials`),
+//! the notes on extensions it ignores (`gltf_extensions`) and the lights and camera
+//! (`gltf_lights_camera`), and puts the parts together.
 //!
 //! [`MAX_FILE_BYTES`]: super::common::MAX_FILE_BYTES
 
 use std::path::Path;
 
-use super::common::Parts;
+use super::common::{bake, bounds_of_placed, check_triangles, Parts};
+use super::gltf_extensions::unsupported_notes;
 use super::gltf_geometry::read_geometry;
 use super::gltf_lights_camera::{read_camera, read_lights};
 use super::gltf_materials::read_materials;
 use super::gltf_open::open;
+use super::options::LoadOptions;
 use crate::error::SceneError;
 use crate::model::{Material, Mesh};
 
-/// Loads every triangle primitive of the default scene, transforms baked.
-pub(super) fn load(path: &Path) -> Result<Vec<Mesh>, SceneError> {
-    let opened = open(path)?;
-    Ok(read_geometry(path, &opened)?.meshes)
+/// Loads every triangle primitive of the default scene, transforms baked (an instanced mesh
+/// once per instance).
+pub(super) fn load(path: &Path, options: &LoadOptions) -> Result<Vec<Mesh>, SceneError> {
+    let opened = open(path, options)?;
+    let geometry = read_geometry(path, &opened)?;
+    let mut out = Vec::with_capacity(geometry.meshes.len());
+    let mut total = 0usize;
+    for (mesh, placed) in geometry.meshes.into_iter().zip(geometry.transforms) {
+        if let [t] = placed[..] {
+            if t == glam::Mat4::IDENTITY {
+                out.push(mesh);
+                continue;
+            }
+        }
+        total = total.saturating_add(mesh.triangle_count().saturating_mul(placed.len()));
+        check_triangles(path, total)?;
+        out.extend(placed.iter().map(|&t| bake(&mesh, t)));
+    }
+    Ok(out)
 }
 
 /// Loads meshes, materials, textures, lights and the camera (see [`super`] for the mappings).
-pub(super) fn load_scene(path: &Path) -> Result<Parts, SceneError> {
-    let opened = open(path)?;
-    let geometry = read_geometry(path, &opened)?;
-    let mut notes = opened.notes.clone();
+pub(super) fn load_scene(path: &Path, options: &LoadOptions) -> Result<Parts, SceneError> {
+    let opened = open(path, options)?;
+    let mut geometry = read_geometry(path, &opened)?;
+    let mut notes = unsupported_notes(&opened.json, &opened.required);
+    notes.append(&mut geometry.notes);
     if geometry.skipped > 0 {
         notes.push(format!(
             "{} point or line primitive(s) skipped (only triangles are drawn)",
             geometry.skipped
         ));
     }
-    let (mut materials, textures) = read_materials(&opened, &mut notes);
+    let materials = read_materials(&opened, &mut notes);
+    let (mut materials, textures, uv_transforms) = (
+        materials.materials,
+        materials.textures,
+        materials.uv_transforms,
+    );
     let default_material = materials.len();
     let mut needs_default = false;
-    let mesh_material = geometry
+    let mesh_material: Vec<usize> = geometry
         .materials
         .iter()
         .map(|m| match m {
@@ -72,12 +99,21 @@ pub(super) fn load_scene(path: &Path) -> Result<Parts, SceneError> {
     if needs_default {
         materials.push(Material::default());
     }
-    let bounds = super::common::bounds_of(&geometry.meshes);
+    // KHR_texture_transform, baked into the texture coordinates of each mesh of the material.
+    for (mesh, &material) in geometry.meshes.iter_mut().zip(&mesh_material) {
+        if let Some(Some(t)) = uv_transforms.get(material) {
+            for uv in &mut mesh.uvs {
+                *uv = t.transform_point2(*uv);
+            }
+        }
+    }
+    let bounds = bounds_of_placed(&geometry.meshes, &geometry.transforms);
     let lights = read_lights(path, &opened, &geometry.nodes, bounds, &mut notes)?;
     let camera = read_camera(&opened, &geometry.nodes, bounds, &mut notes);
     Ok(Parts {
         meshes: geometry.meshes,
         mesh_material,
+        transforms: geometry.transforms,
         materials,
         textures,
         lights,

@@ -1,17 +1,26 @@
 //! The geometry of a glTF document: every triangle primitive reached from the default scene,
-//! depth-first, as its own [`Mesh`] with the node's world transform baked in. Accessors are
-//! checked (type, stride, sparse section) before the `gltf` crate reads them; strips and fans
+//! depth-first, as its own [`Mesh`] with the node's world transform baked in, or, for a node
+//! with `EXT_mesh_gpu_instancing`, in the mesh's own coordinates with one placement per
+//! instance. Accessors are checked (type, stride, sparse section) before they are read, in
+//! every component type `KHR_mesh_quantization` allows (`gltf_accessors`); Draco-compressed primitives are decoded (`gltf_compressed`); strips and fans
 //! become lists as the specification numbers their triangles; mirroring transforms flip the
-//! winding back to counter-clockwise.
+//! winding back to counter-clockwise; positions and normals are checked finite, by vertex.
 
 use std::path::Path;
 
-use ::gltf::accessor::{DataType, Dimensions};
+use ::gltf::accessor::Dimensions;
 use ::gltf::mesh::Mode;
-use ::gltf::{Accessor, Semantic};
+use ::gltf::Semantic;
 use glam::{Mat3, Mat4, Vec2, Vec3};
 
-use super::common::{check_triangles, mesh_name, parse_error, set_normals, too_large};
+use super::common::{
+    check_finite, check_triangles, mesh_name, parse_error, set_normals, too_large, RawTriangles,
+};
+use super::gltf_accessors::{
+    check_accessor, read_vec2, read_vec3, INDEX_TYPES, NORMAL_TYPES, POSITION_TYPES, TEXCOORD_TYPES,
+};
+use super::gltf_draco::decode_draco;
+use super::gltf_instancing::instance_transforms;
 use super::gltf_open::Opened;
 use crate::error::SceneError;
 use crate::model::Mesh;
@@ -21,6 +30,11 @@ pub(super) struct Geometry<'a> {
     pub(super) meshes: Vec<Mesh>,
     /// The glTF material of each mesh (`None`: the primitive names none).
     pub(super) materials: Vec<Option<usize>>,
+    /// The placements of each mesh: the identity (the node's transform is baked in), or one
+    /// per instance of an `EXT_mesh_gpu_instancing` node.
+    pub(super) transforms: Vec<Vec<Mat4>>,
+    /// Remarks on instances left out.
+    pub(super) notes: Vec<String>,
     /// Every node reached from the default scene with its world transform, depth-first.
     pub(super) nodes: Vec<(::gltf::Node<'a>, Mat4)>,
     /// Point and line primitives skipped.
@@ -37,41 +51,55 @@ pub(super) fn read_geometry<'a>(
     let mut out = Geometry {
         meshes: Vec::new(),
         materials: Vec::new(),
+        transforms: Vec::new(),
+        notes: Vec::new(),
         nodes: Vec::new(),
         skipped: 0,
     };
     let mut total_triangles = 0usize;
-    let mut emit = |out: &mut Geometry<'a>, mesh: ::gltf::Mesh<'a>, world: Mat4| {
-        for prim in mesh.primitives() {
-            let mode = prim.mode();
-            if !matches!(
-                mode,
-                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
-            ) {
-                log::warn!(
-                    "{}: skipping a {:?} primitive of mesh {} (only triangles are loaded)",
-                    path.display(),
+    // `world` is baked into the vertices; `placed` are the mesh's placements.
+    let mut emit =
+        |out: &mut Geometry<'a>, mesh: ::gltf::Mesh<'a>, world: Mat4, placed: &[Mat4]| {
+            for prim in mesh.primitives() {
+                let mode = prim.mode();
+                if !matches!(
                     mode,
-                    mesh.index()
-                );
-                out.skipped += 1;
-                continue;
+                    Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+                ) {
+                    log::debug!(
+                        "{}: skipping a {:?} primitive of mesh {} (only triangles are loaded)",
+                        path.display(),
+                        mode,
+                        mesh.index()
+                    );
+                    out.skipped += 1;
+                    continue;
+                }
+                let label = match mesh.name() {
+                    Some(n) => format!("{n}#{}", prim.index()),
+                    None => format!("mesh{}#{}", mesh.index(), prim.index()),
+                };
+                let draco = opened.json.pointer(&format!(
+                    "/meshes/{}/primitives/{}/extensions/KHR_draco_mesh_compression",
+                    mesh.index(),
+                    prim.index()
+                ));
+                let read = match draco {
+                    Some(ext) => decode_draco(path, &label, opened, ext)?,
+                    None => read_primitive(path, &label, &prim, &get)?,
+                };
+                let m = finish(path, &label, read, world)?;
+                if m.indices.is_empty() {
+                    continue;
+                }
+                total_triangles += m.triangle_count();
+                check_triangles(path, total_triangles)?;
+                out.meshes.push(m);
+                out.materials.push(prim.material().index());
+                out.transforms.push(placed.to_vec());
             }
-            let label = match mesh.name() {
-                Some(n) => format!("{n}#{}", prim.index()),
-                None => format!("mesh{}#{}", mesh.index(), prim.index()),
-            };
-            let m = read_primitive(path, &label, &prim, &get, world)?;
-            if m.indices.is_empty() {
-                continue;
-            }
-            total_triangles += m.triangle_count();
-            check_triangles(path, total_triangles)?;
-            out.meshes.push(m);
-            out.materials.push(prim.material().index());
-        }
-        Ok::<(), SceneError>(())
-    };
+            Ok::<(), SceneError>(())
+        };
 
     match document
         .default_scene()
@@ -96,7 +124,29 @@ pub(super) fn read_geometry<'a>(
                 }
                 let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
                 if let Some(mesh) = node.mesh() {
-                    emit(&mut out, mesh, world)?;
+                    match instance_transforms(path, opened, node.index())? {
+                        // The node's mesh is drawn once per instance, at world × instance
+                        // (EXT_mesh_gpu_instancing), and not at the node itself.
+                        Some(instances) => {
+                            let (placed, singular): (Vec<Mat4>, Vec<Mat4>) = instances
+                                .into_iter()
+                                .map(|t| world * t)
+                                .partition(|t| t.is_finite() && t.determinant().abs() >= 1e-12);
+                            if !singular.is_empty() {
+                                out.notes.push(format!(
+                                    "node {}: {} of its {} instances are scaled to nothing or \
+                                     not finite: left out",
+                                    node.index(),
+                                    singular.len(),
+                                    singular.len() + placed.len()
+                                ));
+                            }
+                            if !placed.is_empty() {
+                                emit(&mut out, mesh, Mat4::IDENTITY, &placed)?;
+                            }
+                        }
+                        None => emit(&mut out, mesh, world, &[Mat4::IDENTITY])?,
+                    }
                 }
                 let children: Vec<_> = node.children().collect();
                 stack.extend(children.into_iter().rev().map(|c| (c, world)));
@@ -105,78 +155,11 @@ pub(super) fn read_geometry<'a>(
         }
         None => {
             for mesh in document.meshes() {
-                emit(&mut out, mesh, Mat4::IDENTITY)?;
+                emit(&mut out, mesh, Mat4::IDENTITY, &[Mat4::IDENTITY])?;
             }
         }
     }
     Ok(out)
-}
-
-/// Checks an accessor's buffer views are safe to hand to the crate's readers.
-fn check_layout(a: &Accessor<'_>, bad: &dyn Fn(String) -> SceneError) -> Result<(), SceneError> {
-    let size = a.size();
-    let views = a
-        .view()
-        .into_iter()
-        .chain(a.sparse().map(|s| s.values().view()));
-    for v in views {
-        if let Some(stride) = v.stride() {
-            if stride < size {
-                return Err(bad(format!(
-                    "buffer view stride {stride} is smaller than an element ({size} bytes)"
-                )));
-            }
-        }
-    }
-    if let Some(s) = a.sparse() {
-        if s.count() == 0 {
-            return Err(bad("accessor has an empty sparse section".into()));
-        }
-    }
-    Ok(())
-}
-
-/// Checks an accessor has one of `types` (not normalized) and `dims`, and a safe layout.
-fn check_accessor(
-    path: &Path,
-    label: &str,
-    what: &str,
-    a: &Accessor<'_>,
-    types: &[DataType],
-    dims: Dimensions,
-) -> Result<(), SceneError> {
-    let bad =
-        |reason: String| parse_error(path, format!("glTF primitive {label}: {what} {reason}"));
-    if !types.contains(&a.data_type()) || a.dimensions() != dims || a.normalized() {
-        return Err(bad(format!(
-            "accessor has type {:?} {:?}{}; expected {dims:?} of {types:?}",
-            a.dimensions(),
-            a.data_type(),
-            if a.normalized() { " (normalized)" } else { "" }
-        )));
-    }
-    check_layout(a, &bad)
-}
-
-/// Texture coordinates: `Vec2` of floats, or of normalized unsigned bytes or shorts.
-fn check_texcoord_accessor(path: &Path, label: &str, a: &Accessor<'_>) -> Result<(), SceneError> {
-    let bad =
-        |reason: String| parse_error(path, format!("glTF primitive {label}: TEXCOORD_0 {reason}"));
-    let ok = a.dimensions() == Dimensions::Vec2
-        && match a.data_type() {
-            DataType::F32 => !a.normalized(),
-            DataType::U8 | DataType::U16 => a.normalized(),
-            _ => false,
-        };
-    if !ok {
-        return Err(bad(format!(
-            "accessor has type {:?} {:?}{}; expected Vec2 of F32, or of normalized U8 or U16",
-            a.dimensions(),
-            a.data_type(),
-            if a.normalized() { " (normalized)" } else { "" }
-        )));
-    }
-    check_layout(a, &bad)
 }
 
 /// Triangle `i` of a strip is `(v_i, v_{i+1+i%2}, v_{i+2-i%2})` (glTF 2.0, §3.7.2.1), which
@@ -200,17 +183,16 @@ pub(crate) fn fan_to_list(v: &[u32]) -> Vec<u32> {
     out
 }
 
+/// Reads a primitive through its accessors.
 fn read_primitive<'p, 's, F>(
     path: &Path,
     label: &str,
     prim: &'p ::gltf::Primitive<'p>,
     get: &F,
-    world: Mat4,
-) -> Result<Mesh, SceneError>
+) -> Result<RawTriangles, SceneError>
 where
     F: Clone + Fn(::gltf::Buffer<'p>) -> Option<&'s [u8]>,
 {
-    let name = mesh_name(path, Some(label));
     let mode = prim.mode();
     let pos_acc = prim.get(&Semantic::Positions).ok_or_else(|| {
         parse_error(
@@ -223,14 +205,16 @@ where
         label,
         "POSITION",
         &pos_acc,
-        &[DataType::F32],
+        POSITION_TYPES,
         Dimensions::Vec3,
     )?;
     let vertex_count = pos_acc.count();
     if vertex_count == 0 {
-        return Ok(Mesh {
-            name,
-            ..Mesh::default()
+        return Ok(RawTriangles {
+            positions: Vec::new(),
+            normals: None,
+            uvs: Vec::new(),
+            indices: Vec::new(),
         });
     }
     if vertex_count > u32::MAX as usize {
@@ -243,25 +227,25 @@ where
         .get(&Semantic::Normals)
         .filter(|a| a.count() == vertex_count);
     if let Some(a) = &normal_acc {
-        check_accessor(path, label, "NORMAL", a, &[DataType::F32], Dimensions::Vec3)?;
+        check_accessor(path, label, "NORMAL", a, NORMAL_TYPES, Dimensions::Vec3)?;
     }
     let uv_acc = prim
         .get(&Semantic::TexCoords(0))
         .filter(|a| a.count() == vertex_count);
     if let Some(a) = &uv_acc {
-        check_texcoord_accessor(path, label, a)?;
+        check_accessor(
+            path,
+            label,
+            "TEXCOORD_0",
+            a,
+            TEXCOORD_TYPES,
+            Dimensions::Vec2,
+        )?;
     }
     let index_acc = prim.indices();
     let listed = match &index_acc {
         Some(a) => {
-            check_accessor(
-                path,
-                label,
-                "indices",
-                a,
-                &[DataType::U8, DataType::U16, DataType::U32],
-                Dimensions::Scalar,
-            )?;
+            check_accessor(path, label, "indices", a, INDEX_TYPES, Dimensions::Scalar)?;
             a.count()
         }
         None => vertex_count,
@@ -281,32 +265,17 @@ where
             format!("glTF primitive {label}: {what} data is missing or outside its buffer"),
         )
     };
-    let positions: Vec<Vec3> = reader
-        .read_positions()
-        .ok_or_else(|| missing("POSITION"))?
-        .map(Vec3::from_array)
-        .collect();
+    let positions = read_vec3(&pos_acc, get.clone()).ok_or_else(|| missing("POSITION"))?;
     if positions.len() != vertex_count {
         return Err(missing("POSITION"));
     }
     let normals: Option<Vec<Vec3>> = match &normal_acc {
-        Some(_) => Some(
-            reader
-                .read_normals()
-                .ok_or_else(|| missing("NORMAL"))?
-                .map(Vec3::from_array)
-                .collect(),
-        ),
+        Some(a) => Some(read_vec3(a, get.clone()).ok_or_else(|| missing("NORMAL"))?),
         None => None,
     };
     let uvs: Vec<Vec2> = match &uv_acc {
-        Some(_) => {
-            let uvs: Vec<Vec2> = reader
-                .read_tex_coords(0)
-                .ok_or_else(|| missing("TEXCOORD_0"))?
-                .into_f32()
-                .map(Vec2::from_array)
-                .collect();
+        Some(a) => {
+            let uvs = read_vec2(a, get.clone()).ok_or_else(|| missing("TEXCOORD_0"))?;
             if uvs.len() != vertex_count {
                 return Err(missing("TEXCOORD_0"));
             }
@@ -328,7 +297,7 @@ where
         }
         None => (0..vertex_count as u32).collect(),
     };
-    let mut indices = match mode {
+    let indices = match mode {
         Mode::TriangleStrip => strip_to_list(&listed),
         Mode::TriangleFan => fan_to_list(&listed),
         _ => {
@@ -344,7 +313,24 @@ where
             listed
         }
     };
+    Ok(RawTriangles {
+        positions,
+        normals,
+        uvs,
+        indices,
+    })
+}
 
+/// Checks a primitive's vertices and bakes the node's world transform into them.
+fn finish(path: &Path, label: &str, read: RawTriangles, world: Mat4) -> Result<Mesh, SceneError> {
+    let name = mesh_name(path, Some(label));
+    let RawTriangles {
+        positions,
+        normals,
+        uvs,
+        mut indices,
+    } = read;
+    check_finite(&name, &positions, normals.as_deref())?;
     // Bake the node's world transform.
     let positions: Vec<Vec3> = positions
         .into_iter()

@@ -1,18 +1,18 @@
 //! glTF materials and images into this crate's Phong [`Material`]s and [`Texture`]s, with the
 //! mapping documented in [`super`]: base colour, metallic and roughness to the Phong colours
 //! and exponent, the base-colour and normal textures with their samplers' wrapping, each image
-//! decoded once however many materials use it, and a note (not an error) for an image that
-//! cannot be read or decoded and for the material extensions that are ignored.
-
-use std::collections::BTreeSet;
-use std::path::PathBuf;
+//! decoded once however many materials use it, a note (not an error) for an image that cannot
+//! be read or decoded, and each material's `KHR_texture_transform` (baked into its meshes'
+//! texture coordinates by `gltf.rs`).
 
 use ::gltf::texture::WrappingMode;
-use glam::Vec3;
+use glam::{Affine2, Vec3};
+
 use serde_json::Value;
 
-use super::common::{read_limited, EMISSIVE_STRENGTH};
-use super::gltf_open::{percent_decode, Opened};
+use super::common::EMISSIVE_STRENGTH;
+use super::gltf_extensions::TextureTransform;
+use super::gltf_open::{read_uri, Opened};
 use crate::look::Pbr;
 use crate::model::Material;
 use crate::texture::{AlphaMode, Texture, TextureRef, Wrap};
@@ -95,34 +95,8 @@ impl<'o> Images<'o> {
                 }
             }
         } else if let Some(uri) = &image.uri {
-            if let Some(rest) = uri.strip_prefix("data:") {
-                let (meta, data) = rest
-                    .split_once(',')
-                    .ok_or_else(|| format!("image '{name}': malformed data URI"))?;
-                if !meta.ends_with(";base64") {
-                    return Err(format!(
-                        "image '{name}': only base64 data URIs are supported"
-                    ));
-                }
-                super::base64::decode(data).map_err(|e| format!("image '{name}': {e}"))?
-            } else {
-                let file = if let Some(rest) = uri.strip_prefix("file://") {
-                    PathBuf::from(rest)
-                } else if let Some(rest) = uri.strip_prefix("file:") {
-                    PathBuf::from(rest)
-                } else if uri.contains(':') {
-                    return Err(format!(
-                        "image '{name}': URI '{uri}' is neither a file nor a data: URI (nothing \
-                         is downloaded)"
-                    ));
-                } else {
-                    let decoded = percent_decode(uri).ok_or_else(|| {
-                        format!("image '{name}': URI '{uri}' is not valid percent-encoded UTF-8")
-                    })?;
-                    self.opened.base.join(decoded)
-                };
-                read_limited(&file).map_err(|e| e.to_string())?
-            }
+            read_uri(&self.opened.base, uri, self.opened.allow_outside)
+                .map_err(|e| format!("image '{name}': {e}"))?
         } else {
             return Err(format!(
                 "image '{name}' has neither a buffer view nor a URI"
@@ -132,27 +106,15 @@ impl<'o> Images<'o> {
     }
 }
 
-/// The extensions a material (or one of its texture references) uses, from the raw JSON.
-fn material_extensions(json: &Value, material: usize) -> BTreeSet<String> {
-    let mut names = BTreeSet::new();
-    let Some(m) = json.get("materials").and_then(|m| m.get(material)) else {
-        return names;
-    };
-    let mut add = |v: Option<&Value>| {
-        if let Some(Value::Object(e)) = v.and_then(|v| v.get("extensions")) {
-            names.extend(e.keys().cloned());
-        }
-    };
-    add(Some(m));
-    for key in ["normalTexture", "occlusionTexture", "emissiveTexture"] {
-        add(m.get(key));
-    }
-    if let Some(p) = m.get("pbrMetallicRoughness") {
-        add(Some(p));
-        add(p.get("baseColorTexture"));
-        add(p.get("metallicRoughnessTexture"));
-    }
-    names
+/// What [`read_materials`] returns.
+pub(super) struct Materials {
+    /// Every material of the document, in order.
+    pub(super) materials: Vec<Material>,
+    /// The textures they use.
+    pub(super) textures: Vec<Texture>,
+    /// For each material, the `KHR_texture_transform` to bake into the texture coordinates of
+    /// its meshes (`None`: none, or the identity).
+    pub(super) uv_transforms: Vec<Option<Affine2>>,
 }
 
 /// Material `index`'s emitted radiance: `emissiveFactor` times
@@ -185,13 +147,12 @@ fn emissive(
     }
 }
 
-/// Every material of the document, in order, and the textures they use.
-pub(super) fn read_materials(
-    opened: &Opened,
-    notes: &mut Vec<String>,
-) -> (Vec<Material>, Vec<Texture>) {
+/// Every material of the document, in order, the textures they use and their texture
+/// transforms.
+pub(super) fn read_materials(opened: &Opened, notes: &mut Vec<String>) -> Materials {
     let mut images = Images::new(opened);
     let mut materials = Vec::new();
+    let mut uv_transforms = Vec::new();
     for (i, m) in opened.document.materials().enumerate() {
         let name = m
             .name()
@@ -224,6 +185,26 @@ pub(super) fn read_materials(
             }),
             emissive: emissive(&opened.json, i, m.emissive_factor(), &name, notes),
         };
+        let json = opened.json.get("materials").and_then(|m| m.get(i));
+        let transform_of = |pointer: &str, what: &str, notes: &mut Vec<String>| {
+            let info = json.and_then(|m| m.pointer(pointer))?;
+            match TextureTransform::of(info) {
+                Ok(t) => t,
+                Err(reason) => {
+                    notes.push(format!(
+                        "material '{name}': the KHR_texture_transform of its {what} texture is \
+                         not used ({reason})"
+                    ));
+                    None
+                }
+            }
+        };
+        let base_transform = transform_of(
+            "/pbrMetallicRoughness/baseColorTexture",
+            "base-colour",
+            notes,
+        );
+        let normal_transform = transform_of("/normalTexture", "normal", notes);
         let mut use_texture = |what: &str, tex: ::gltf::Texture<'_>, set: u32| {
             if set != 0 {
                 notes.push(format!(
@@ -239,7 +220,6 @@ pub(super) fn read_materials(
                     wrap_t: wrap(sampler.wrap_t()),
                 }),
                 Err(reason) => {
-                    log::warn!("material '{name}': {what} texture not used: {reason}");
                     notes.push(format!(
                         "material '{name}': its {what} texture could not be used ({reason}): \
                          left without it"
@@ -248,23 +228,67 @@ pub(super) fn read_materials(
                 }
             }
         };
+        // A transform's texCoord replaces the reference's texture-coordinate set.
+        let set_of = |t: &Option<TextureTransform>, set: u32| {
+            t.and_then(|t| t.tex_coord)
+                .map_or(set, |s| u32::try_from(s).unwrap_or(u32::MAX))
+        };
         if let Some(info) = pbr.base_color_texture() {
-            out.base_color_texture = use_texture("base-colour", info.texture(), info.tex_coord());
+            let set = set_of(&base_transform, info.tex_coord());
+            out.base_color_texture = use_texture("base-colour", info.texture(), set);
         }
         if let Some(info) = m.normal_texture() {
-            out.normal_texture = use_texture("normal", info.texture(), info.tex_coord());
+            let set = set_of(&normal_transform, info.tex_coord());
+            out.normal_texture = use_texture("normal", info.texture(), set);
         }
-        let mut extensions = material_extensions(&opened.json, i);
-        extensions.remove(EMISSIVE_STRENGTH);
-        if !extensions.is_empty() {
-            notes.push(format!(
-                "material '{name}': {} ignored",
-                extensions.into_iter().collect::<Vec<_>>().join(", ")
-            ));
-        }
+        uv_transforms.push(uv_transform(
+            &name,
+            out.base_color_texture
+                .is_some()
+                .then_some(base_transform)
+                .flatten(),
+            out.normal_texture
+                .is_some()
+                .then_some(normal_transform)
+                .flatten(),
+            out.base_color_texture.is_some(),
+            notes,
+        ));
         materials.push(out);
     }
-    (materials, images.textures)
+    Materials {
+        materials,
+        textures: images.textures,
+        uv_transforms,
+    }
+}
+
+/// The one texture-coordinate transform a material's meshes get (this renderer samples every
+/// texture of a material with the same coordinates): the base-colour texture's, or the normal
+/// texture's where the material has no base-colour texture. Where the two textures have
+/// different transforms, the base colour's wins and a note says the normal map is misplaced.
+fn uv_transform(
+    name: &str,
+    base: Option<TextureTransform>,
+    normal: Option<TextureTransform>,
+    has_base: bool,
+    notes: &mut Vec<String>,
+) -> Option<Affine2> {
+    let base_matrix = base.map_or(Affine2::IDENTITY, |t| t.matrix);
+    let normal_matrix = normal.map_or(Affine2::IDENTITY, |t| t.matrix);
+    let chosen = if has_base {
+        if normal.is_some() && !normal_matrix.abs_diff_eq(base_matrix, 1e-6) {
+            notes.push(format!(
+                "material '{name}': its normal texture has a KHR_texture_transform different \
+                 from its base-colour texture's; the base colour's is applied to both (the normal \
+                 map is misplaced)"
+            ));
+        }
+        base_matrix
+    } else {
+        normal_matrix
+    };
+    (chosen != Affine2::IDENTITY).then_some(chosen)
 }
 
 /// Phong exponent of a glTF roughness: `2/α² − 2` with `α = roughness²` (the Blinn-Phong

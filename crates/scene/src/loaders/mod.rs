@@ -14,16 +14,37 @@
 //!   at [`CREASE_ANGLE_DEG`]): edges sharper than 60° stay sharp (boxes keep flat faces),
 //!   finely tessellated curves stay smooth;
 //! - glTF node transforms are baked into the vertices (the renderer places meshes with
-//!   [`Instance`] transforms, not with a node hierarchy);
-//! - every returned mesh has passed [`Mesh::validate`] (and every [`load_scene`] result
-//!   [`Scene::validate`]), so NaNs and out-of-range indices become a [`SceneError`] here
-//!   instead of a GPU fault later.
+//!   [`Instance`] transforms, not with a node hierarchy), except that an
+//!   `EXT_mesh_gpu_instancing` node's mesh stays in its own coordinates with one instance per
+//!   instance;
+//! - positions and normals are checked finite right after reading (an error naming the mesh
+//!   and the vertex as the file numbers them), and every returned mesh has passed
+//!   [`Mesh::validate`] (and every [`load_scene`] result [`Scene::validate`]), so NaNs and
+//!   out-of-range indices become a [`SceneError`] here instead of a GPU fault later.
 //!
 //! [`load_mesh`] reads geometry only (the TOML scene format and benchmarks place meshes
 //! themselves). [`load_scene`] reads a whole scene: one [`Mesh`] per glTF triangle primitive
-//! or OBJ (object, material), one identity [`Instance`] per mesh (casting shadows), the file's
-//! materials, textures, lights and camera, and one-line notes on whatever it had to ignore,
-//! replace or invent (the CLI prints them).
+//! or OBJ (object, material), one identity [`Instance`] per mesh (casting shadows; one per
+//! instance for instanced glTF nodes), the file's materials, textures, lights and camera, and
+//! one-line notes on whatever it had to ignore, replace or invent, each said once (the CLI
+//! prints them; nothing is logged beside a note). [`load_scene_with`] and [`load_mesh_with`]
+//! take [`LoadOptions`]: whether the file may read outside its folder, and the ground plane.
+//!
+//! # Paths a file may read
+//!
+//! Every path a file names (glTF buffer and image URIs, OBJ `mtllib`, MTL texture statements)
+//! must resolve inside the model file's folder or below: an absolute path, a `..` that climbs
+//! above the folder and a symbolic link that leads out are refused, naming the path and
+//! `--allow-outside-paths` ([`LoadOptions::allow_outside_paths`] lets them through). A glTF
+//! buffer outside is an error; an image, material library or texture outside is left out with
+//! a note, as a missing one is. Nothing is ever downloaded.
+//!
+//! # Text and names
+//!
+//! OBJ and MTL lines that are not UTF-8 are read as Latin-1; a `newmtl` / `usemtl` without a
+//! name names the material "(unnamed)" on both sides; MTL statements `tobj` would refuse
+//! (a texture statement without a file, a colour with fewer than three numbers) are mended or
+//! dropped. A glTF scene without `nodes` is an empty scene.
 //!
 //! # glTF lights (`KHR_lights_punctual`) → physical lights
 //!
@@ -84,12 +105,24 @@
 //!   its sampler's `wrapS` / `wrapT`; texture-coordinate set 0 is always used (a texture that
 //!   names another set gets a note); metallic-roughness, occlusion and emissive textures are
 //!   not used (their factors are);
+//! - `KHR_texture_transform` (offset, rotation, scale) is baked into the texture coordinates
+//!   of the material's meshes: the base-colour texture's transform, or the normal texture's
+//!   where there is no base colour (all of a material's textures are sampled with one set of
+//!   coordinates; a normal texture with a different transform gets a note);
 //! - `alphaMode`, `alphaCutoff` (default 0.5) and `doubleSided` are copied;
-//! - primitives without a material get [`Material::default`];
-//! - extensions used by a material (`KHR_texture_transform`, `KHR_materials_*`, …) are
-//!   ignored with a note; a file that *requires* one of those still loads (with a note), a
-//!   file that requires any other unsupported extension (compressed geometry or textures) is
-//!   refused with a [`SceneError::Parse`] naming it.
+//! - primitives without a material get [`Material::default`].
+//!
+//! # glTF extensions
+//!
+//! Read: `KHR_lights_punctual`, `KHR_texture_transform`, `EXT_mesh_gpu_instancing`,
+//! `KHR_draco_mesh_compression` (decoded with `draco-core`), `EXT_meshopt_compression`
+//! (decoded with meshoptimizer; not in the browser build) and `KHR_mesh_quantization`
+//! (integer positions, normals and texture coordinates). Every other extension the file
+//! uses (listed in `extensionsUsed` or found in an `extensions` object) gets exactly one
+//! note naming it and what uses it. A file that *requires* one of them still loads if it is
+//! a `KHR_materials_*` extension (the note says it is required); any other unsupported
+//! requirement (compressed textures: KTX2 / BasisU, WebP) is refused with a
+//! [`SceneError::Parse`] naming it.
 //!
 //! Images come from a buffer view (GLB), a base64 `data:` URI or a file relative to the
 //! `.gltf` (nothing is downloaded); each is decoded once with [`Texture::decode`] (PNG or
@@ -102,7 +135,7 @@
 //! described in the `mtl` module: in short, `map_d` becomes the alpha of the base-colour
 //! texture of a masked, double-sided material, and `d` / `Tr` without `map_d` are ignored.
 //! An OBJ whose material library is missing, unreadable or empty loads with default
-//! materials, a note and a logged warning. PLY files get one default material.
+//! materials and a note. PLY files get one default material.
 //!
 //! # Cameras
 //!
@@ -116,10 +149,21 @@
 //! `aspectRatio` is ignored (the output image decides). Orthographic cameras are skipped with
 //! a note.
 //!
-//! Without a camera (and for OBJ and PLY): the default camera looks at the centre of the
+//! Without a camera (and for OBJ and PLY): the framing camera looks at the centre of the
 //! bounds from the direction (1, 0.6, 1) (above and to the side, the usual three-quarter
-//! view), at the distance where the bounding sphere fits a 60° vertical field of view with a
-//! 10 % margin; near = diagonal / 1000, far = 4 × diagonal + that distance.
+//! view), at the nearest distance where all eight corners of the bounds fit a 60° field of
+//! view vertically and horizontally with a 5 % margin (the model fills any frame at least as
+//! wide as it is high); near = diagonal / 1000, far = 4 × diagonal + that distance.
+//!
+//! # The ground plane
+//!
+//! With [`Ground::On`], or [`Ground::Auto`] for a model without a floor, [`load_scene_with`]
+//! adds a ground plane after the lights and camera: a square of 3 × the bounds' diagonal,
+//! facing +Y (the scene's up), centred under the bounds a thousandth of the diagonal below
+//! their lowest point, light grey, receiving shadows and casting none, with a note. A model
+//! has a floor when its horizontal triangles (|normal.y| > 0.95) within the lowest 2 % of the
+//! bounds' height cover at least a quarter of the bounds' X-Z footprint, seen from above.
+//! [`LoadOptions::default`] is [`Ground::Off`]; the CLI's `--ground` is `auto`.
 //!
 //! # Hostile input
 //!
@@ -130,8 +174,36 @@
 //! [`MAX_TEXTURE_BYTES`](crate::texture::MAX_TEXTURE_BYTES) before they are decoded, material
 //! libraries to [`MAX_MTL_BYTES`].
 //!
-//! [`Instance`]: crate::Instance
-//! [`Light`]: crate::Light
+//! [`Instance`]: crate::model::Instance
+//! [`Light`]: crate::model::Light
+//! [`Mesh`]: crate::model::Mesh
+//! [`Material`]: crate::model::Material
+//! [`Camera`]: crate::model::Camera
+//! [`Light::validate`]: crate::model::Light::validate
+//! [`Camera::validate`]: crate::model::Camera::validate
+//! [`Scene::validate`]: crate::model::Scene::validate
+//! [`Mesh::validate`]: crate::model::Mesh::validate
+//! [`Mesh::compute_normals_with_crease`]: crate::model::Mesh::compute_normals_with_crease
+//! [`Material::default`]: crate::model::Material
+//! [`SceneError`]: crate::error::SceneError
+//! [`SceneError::Parse`]: crate::error::SceneError::Parse
+//! [`SceneError::TooLarge`]: crate::error::SceneError::TooLarge
+//! [`Texture::decode`]: crate::texture::Texture::decode
+//! [`load_scene`]: dispatch::load_scene
+//! [`load_mesh`]: dispatch::load_mesh
+//! [`load_scene_with`]: dispatch::load_scene_with
+//! [`load_mesh_with`]: dispatch::load_mesh_with
+//! [`LoadOptions`]: options::LoadOptions
+//! [`LoadOptions::allow_outside_paths`]: options::LoadOptions::allow_outside_paths
+//! [`LoadOptions::default`]: options::LoadOptions
+//! [`Ground::On`]: options::Ground::On
+//! [`Ground::Auto`]: options::Ground::Auto
+//! [`Ground::Off`]: options::Ground::Off
+//! [`write_gltf`]: gltf_write::write_gltf
+//! [`CREASE_ANGLE_DEG`]: common::CREASE_ANGLE_DEG
+//! [`PHONG_PER_LUX`]: common::PHONG_PER_LUX
+//! [`GLTF_SIZE_EXTRA`]: common::GLTF_SIZE_EXTRA
+//! [`MAX_MTL_BYTES`]: obj::MAX_MTL_BYTES
 //! [`scatter_lights`]: crate::builtin::scatter_lights
 //! [`DIRECTIONAL_CASCADES`]: crate::builtin::DIRECTIONAL_CASCADES
 //! [`DIRECTIONAL_SPLIT_LAMBDA`]: crate::builtin::DIRECTIONAL_SPLIT_LAMBDA
@@ -141,283 +213,32 @@
 
 mod base64;
 pub(crate) mod common;
+mod dispatch;
+mod framing;
 mod gltf;
+mod gltf_accessors;
+mod gltf_draco;
+mod gltf_extensions;
 mod gltf_geometry;
+mod gltf_instancing;
 mod gltf_lights_camera;
 mod gltf_materials;
+mod gltf_meshopt;
 mod gltf_open;
 mod gltf_write;
 mod mtl;
 mod obj;
+mod obj_text;
+pub(crate) mod options;
+mod paths;
 mod ply;
 
-use std::path::Path;
-
-use glam::Mat4;
-
-use crate::builtin::{scatter_lights, LightMix};
-use crate::error::SceneError;
-use crate::look::Lighting;
-use crate::model::{Camera, Instance, Material, Mesh, Scene};
-
-use common::{check_file_size, check_triangles, default_camera, parse_error, Parts};
 pub use common::{
     CREASE_ANGLE_DEG, DEFAULT_LIGHT_COUNT, GLTF_SIZE_EXTRA, MAX_DECOMPRESSED_BYTES, MAX_FILE_BYTES,
     MAX_TRIANGLES, PHONG_PER_LUX,
 };
+pub use dispatch::{load_mesh, load_mesh_with, load_scene, load_scene_with, LoadedScene};
 pub use gltf_write::write_gltf;
 pub use obj::{write_obj, MAX_MTL_BYTES};
+pub use options::{Ground, LoadOptions};
 pub use ply::write_ply_ascii;
-
-/// The file formats [`load_mesh`] understands, chosen by file extension.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Format {
-    Obj,
-    Gltf,
-    Ply { gzip: bool },
-}
-
-fn format_of(path: &Path) -> Option<Format> {
-    let name = path.file_name()?.to_string_lossy().to_ascii_lowercase();
-    if name.ends_with(".ply.gz") {
-        return Some(Format::Ply { gzip: true });
-    }
-    let ext = path.extension()?.to_string_lossy().to_ascii_lowercase();
-    match ext.as_str() {
-        "obj" => Some(Format::Obj),
-        "gltf" | "glb" => Some(Format::Gltf),
-        "ply" => Some(Format::Ply { gzip: false }),
-        _ => None,
-    }
-}
-
-/// Loads every triangle mesh in a file, choosing the format by extension (case-insensitive):
-///
-/// - `.obj`: one [`Mesh`] per OBJ object / group (polygons fan-triangulated, normals from `vn`
-///   where the file has them, computed otherwise; materials and texture coordinates ignored);
-/// - `.gltf` / `.glb`: one [`Mesh`] per triangle primitive per node of the default scene
-///   (the first scene if none is marked default; every mesh untransformed if the file has no
-///   scene), with the node's world transform baked into positions and normals;
-/// - `.ply` / `.ply.gz`: one [`Mesh`] (ascii, binary little- or big-endian).
-///
-/// Every returned mesh passes [`Mesh::validate`]. Errors: [`SceneError::UnsupportedFormat`] for
-/// another extension, [`SceneError::Io`] if the file cannot be read, [`SceneError::TooLarge`] for
-/// the limits ([`MAX_FILE_BYTES`], [`MAX_DECOMPRESSED_BYTES`], [`MAX_TRIANGLES`]),
-/// [`SceneError::Parse`] (with the path and the parser's reason) for malformed content and
-/// [`SceneError::InvalidMesh`] for non-finite coordinates or out-of-range indices.
-pub fn load_mesh(path: &Path) -> Result<Vec<Mesh>, SceneError> {
-    let format = format_of(path).ok_or_else(|| SceneError::UnsupportedFormat {
-        path: path.to_path_buf(),
-    })?;
-    check_file_size(path)?;
-    let meshes = catch_parser_panic(path, || match format {
-        Format::Obj => obj::load(path),
-        Format::Gltf => gltf::load(path),
-        Format::Ply { gzip } => ply::load(path, gzip),
-    })?;
-    if meshes.is_empty() {
-        return Err(parse_error(path, "the file contains no triangles"));
-    }
-    for m in &meshes {
-        check_triangles(path, m.triangle_count())?;
-        m.validate()?;
-    }
-    Ok(meshes)
-}
-
-/// A scene read from a file, with remarks on it.
-#[derive(Clone, Debug)]
-pub struct LoadedScene {
-    /// The scene; it has passed [`Scene::validate`].
-    pub scene: Scene,
-    /// One-line, human-readable remarks on what was ignored, replaced or added (lights
-    /// invented for a file without any, extensions ignored, a material library that could not
-    /// be read, …), in the order they arose. Empty when the file was used as it is.
-    pub notes: Vec<String>,
-}
-
-/// Loads a whole scene from a mesh file, choosing the format by extension as [`load_mesh`]
-/// does (`.gltf`, `.glb`, `.obj`, `.ply`, `.ply.gz`): meshes (one per glTF triangle primitive,
-/// node transforms baked; one per OBJ object and material; one for PLY), one identity
-/// [`Instance`] per mesh casting shadows, the file's materials and textures,
-/// its lights and camera, mapped as the module documentation describes. A file without lights
-/// gets [`DEFAULT_LIGHT_COUNT`] seeded ones, a file without a camera one that frames the
-/// bounds; the notes say so.
-///
-/// Errors: those of [`load_mesh`], plus [`SceneError::Parse`] for glTF 1.0 files (with how to
-/// convert them) and for glTF files requiring an unsupported extension, and the
-/// [`Scene::validate`] errors (e.g. a material colour that is not finite).
-pub fn load_scene(path: &Path) -> Result<LoadedScene, SceneError> {
-    let format = format_of(path).ok_or_else(|| SceneError::UnsupportedFormat {
-        path: path.to_path_buf(),
-    })?;
-    check_file_size(path)?;
-    catch_parser_panic(path, || {
-        let mut lighting = Lighting::Phong;
-        let parts = match format {
-            Format::Obj => obj::load_scene(path)?,
-            Format::Gltf => {
-                lighting = Lighting::Physical;
-                gltf::load_scene(path)?
-            }
-            Format::Ply { gzip } => {
-                let meshes = ply::load(path, gzip)?;
-                Parts {
-                    mesh_material: vec![0; meshes.len()],
-                    meshes,
-                    materials: vec![Material::default()],
-                    textures: Vec::new(),
-                    lights: Vec::new(),
-                    camera: None,
-                    notes: Vec::new(),
-                }
-            }
-        };
-        assemble(path, parts, lighting)
-    })
-}
-
-/// Checks the meshes, places them, adds default lights and camera where the file has none,
-/// and validates the result.
-fn assemble(path: &Path, parts: Parts, lighting: Lighting) -> Result<LoadedScene, SceneError> {
-    let Parts {
-        meshes,
-        mesh_material,
-        materials,
-        textures,
-        lights,
-        camera,
-        mut notes,
-    } = parts;
-    if meshes.is_empty() {
-        return Err(parse_error(path, "the file contains no triangles"));
-    }
-    let mut total = 0usize;
-    for m in &meshes {
-        total = total.saturating_add(m.triangle_count());
-        check_triangles(path, m.triangle_count())?;
-        m.validate()?;
-    }
-    let instances = mesh_material
-        .iter()
-        .enumerate()
-        .map(|(mesh, &material)| Instance::caster(mesh, material, Mat4::IDENTITY))
-        .collect();
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| path.display().to_string());
-    let mut scene = Scene {
-        name,
-        meshes,
-        materials,
-        textures,
-        instances,
-        lights,
-        camera: Camera::default(),
-        lighting,
-    };
-    let bounds = scene.world_bounds(false);
-    scene.camera = camera.unwrap_or_else(|| default_camera(bounds));
-    if scene.lights.is_empty() {
-        scene.lights = scatter_lights(&scene, DEFAULT_LIGHT_COUNT, 1, LightMix::All, None);
-        if lighting == Lighting::Physical {
-            // The seeded lights are in Phong units: 10 cd (or lx) each.
-            for l in &mut scene.lights {
-                l.ambient /= PHONG_PER_LUX;
-                l.diffuse /= PHONG_PER_LUX;
-                l.specular /= PHONG_PER_LUX;
-            }
-        }
-        let count = |t: &str| scene.lights.iter().filter(|l| l.type_name() == t).count();
-        notes.push(format!(
-            "the file has no lights: added {} seeded lights ({} spot, {} point, {} directional)",
-            scene.lights.len(),
-            count("spot"),
-            count("point"),
-            count("directional")
-        ));
-    }
-    log::debug!("{}: {total} triangles", path.display());
-    scene.validate()?;
-    Ok(LoadedScene { scene, notes })
-}
-
-/// Runs a parser, turning a panic inside a third-party parser into [`SceneError::Parse`]. The
-/// loaders check what they can before calling the parsers; this is the last line of defence so
-/// a hostile file can never take the process down.
-fn catch_parser_panic<T>(
-    path: &Path,
-    f: impl FnOnce() -> Result<T, SceneError>,
-) -> Result<T, SceneError> {
-    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)) {
-        Ok(r) => r,
-        Err(payload) => {
-            let what = payload
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| payload.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "unknown panic".into());
-            Err(parse_error(
-                path,
-                format!("the parser failed on malformed data ({what})"),
-            ))
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::common::*;
-    use super::*;
-    use glam::Vec3;
-
-    #[test]
-    fn format_dispatch_is_case_insensitive() {
-        assert_eq!(format_of(Path::new("a/B.OBJ")), Some(Format::Obj));
-        assert_eq!(format_of(Path::new("x.GlB")), Some(Format::Gltf));
-        assert_eq!(format_of(Path::new("x.gltf")), Some(Format::Gltf));
-        assert_eq!(
-            format_of(Path::new("x.Ply")),
-            Some(Format::Ply { gzip: false })
-        );
-        assert_eq!(
-            format_of(Path::new("x.PLY.GZ")),
-            Some(Format::Ply { gzip: true })
-        );
-        assert_eq!(format_of(Path::new("x.gz")), None);
-        assert_eq!(format_of(Path::new("x.stl")), None);
-        assert_eq!(format_of(Path::new("noext")), None);
-    }
-
-    #[test]
-    fn triangle_limit() {
-        assert!(check_triangles(Path::new("m.ply"), MAX_TRIANGLES).is_ok());
-        assert!(matches!(
-            check_triangles(Path::new("m.ply"), MAX_TRIANGLES + 1),
-            Err(SceneError::TooLarge { .. })
-        ));
-    }
-
-    #[test]
-    fn parser_panic_becomes_parse_error() {
-        let r: Result<(), _> = catch_parser_panic(Path::new("p.ply"), || panic!("boom"));
-        match r {
-            Err(SceneError::Parse { reason, .. }) => assert!(reason.contains("boom"), "{reason}"),
-            other => panic!("unexpected {other:?}"),
-        }
-    }
-
-    #[test]
-    fn zero_normals_fall_back_to_computed() {
-        let mut m = Mesh {
-            name: "t".into(),
-            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Z],
-            indices: vec![0, 2, 1],
-            ..Mesh::default()
-        };
-        set_normals(&mut m, Some(vec![Vec3::ZERO, Vec3::Y * 3.0, Vec3::Y]));
-        // Triangle (0, Z, X) winds counter-clockwise seen from +Y.
-        assert_eq!(m.normals, vec![Vec3::Y, Vec3::Y, Vec3::Y]);
-    }
-}

@@ -24,7 +24,10 @@
 //!   tangent-space normal map). A greyscale image is a height map, which this renderer does
 //!   not use: ignored, with a note.
 //!
-//! Texture paths are relative to the MTL's directory; backslashes are read as separators, and
+//! Texture paths are relative to the MTL's directory and must stay inside the model's folder
+//! (unless [`LoadOptions::allow_outside_paths`](super::options::LoadOptions) allows more: a
+//! path that leaves it is not opened, and the note says why); backslashes are read as
+//! separators, and
 //! the statement's options (`-bm 1.0`, `-o u v w`, `-clamp on`, …) are skipped (`-clamp on`
 //! selects clamp-to-edge wrapping, everything else repeats). Each image file is decoded once
 //! however many materials use it. An image that cannot be read or decoded leaves its material
@@ -35,6 +38,7 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
+use super::paths::resolve;
 use crate::model::Material;
 use crate::texture::{AlphaMode, Texture, TextureRef, Wrap};
 
@@ -195,10 +199,12 @@ fn wrap(clamp: bool) -> Wrap {
     }
 }
 
-/// Converts tobj's materials; `dirs[i]` is the directory material `i`'s library lives in.
+/// Converts tobj's materials; `dirs[i]` is the directory material `i`'s library lives in;
+/// `(root, allow_outside)`: the model's folder, and whether texture paths may leave it.
 pub(super) fn convert(
     materials: &[tobj::Material],
     dirs: &[PathBuf],
+    (root, allow_outside): (&Path, bool),
     notes: &mut Vec<String>,
 ) -> (Vec<Material>, Vec<crate::texture::Texture>) {
     let mut images = Images::default();
@@ -236,14 +242,17 @@ pub(super) fn convert(
                 notes.push(format!("material '{name}': {what} names no file: ignored"));
                 return None;
             }
-            let file = dir.join(&arg.file);
-            match images.image(&file, &arg.file) {
-                Ok(t) => Some((file, t, arg.clamp)),
+            let found = resolve(
+                root,
+                dir,
+                &arg.file,
+                &format!("{what} '{}'", arg.file),
+                allow_outside,
+            )
+            .and_then(|file| images.image(&file, &arg.file).map(|t| (file, t)));
+            match found {
+                Ok((file, t)) => Some((file, t, arg.clamp)),
                 Err(reason) => {
-                    log::warn!(
-                        "material '{name}': {what} '{}' not used: {reason}",
-                        arg.file
-                    );
                     notes.push(format!(
                         "material '{name}': {what} '{}' could not be used ({reason}): ignored",
                         arg.file

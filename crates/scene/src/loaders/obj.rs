@@ -7,12 +7,13 @@
 //! material. Texture coordinates are flipped to glTF's convention (`v = 1 − v_obj`: OBJ's
 //! `v = 0` is the bottom of the image, ours the top).
 //!
-//! [`load`] (behind [`load_mesh`](super::load_mesh)) reads geometry only and never opens
-//! another file. [`load_scene`] also opens the material libraries (`mtllib`, relative to the
-//! OBJ, at most [`MAX_MTL_BYTES`] each) and their textures ([`super::mtl`]). A library that is
-//! missing, unreadable or empty is not an error: the meshes get a default material and the
-//! scene a note (and the log a warning), since geometry without its materials is still worth
-//! rendering.
+//! [`load`] (behind [`load_mesh`](super::dispatch::load_mesh)) reads geometry only and never
+//! opens another file. [`load_scene`] also opens the material libraries (`mtllib`, relative to
+//! the OBJ and inside its folder unless allowed, at most [`MAX_MTL_BYTES`] each) and their
+//! textures ([`super::mtl`]). A library that is missing, unreadable, outside the folder or
+//! empty is not an error: the meshes get a default material and the scene a note, since
+//! geometry without its materials is still worth rendering. Lines that are not UTF-8 are read
+//! as Latin-1, and a material without a name is called "(unnamed)" (`obj_text`).
 
 use std::cell::RefCell;
 use std::io::{BufReader, Read, Write};
@@ -20,7 +21,10 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
 
-use super::common::{mesh_name, open_limited, parse_error, set_normals, Parts};
+use super::common::{check_finite, mesh_name, open_limited, parse_error, set_normals, Parts};
+use super::obj_text::{sanitize_mtl, ObjText};
+use super::options::LoadOptions;
+use super::paths::{model_folder, resolve};
 use crate::error::SceneError;
 use crate::model::{Material, Mesh};
 
@@ -48,12 +52,12 @@ struct ObjRead {
 
 /// Loads every object / group (per material) with faces as one mesh.
 pub(super) fn load(path: &Path) -> Result<Vec<Mesh>, SceneError> {
-    Ok(read(path, false)?.meshes)
+    Ok(read(path, None)?.meshes)
 }
 
 /// Loads the meshes with their materials and textures.
-pub(super) fn load_scene(path: &Path) -> Result<Parts, SceneError> {
-    let read = read(path, true)?;
+pub(super) fn load_scene(path: &Path, options: &LoadOptions) -> Result<Parts, SceneError> {
+    let read = read(path, Some(options.allow_outside_paths))?;
     let mut notes = Vec::new();
     for lib in &read.libraries {
         let note = match &lib.outcome {
@@ -68,7 +72,6 @@ pub(super) fn load_scene(path: &Path) -> Result<Parts, SceneError> {
             ),
             Ok(_) => continue,
         };
-        log::warn!("{}: {note}", path.display());
         notes.push(note);
     }
     // tobj appends each library's materials in turn: the directory of material `i`.
@@ -78,9 +81,14 @@ pub(super) fn load_scene(path: &Path) -> Result<Parts, SceneError> {
             dirs.extend(std::iter::repeat_n(lib.dir.clone(), n));
         }
     }
-    let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-    dirs.resize(read.materials.len(), base);
-    let (mut materials, textures) = super::mtl::convert(&read.materials, &dirs, &mut notes);
+    let base = model_folder(path);
+    dirs.resize(read.materials.len(), base.clone());
+    let (mut materials, textures) = super::mtl::convert(
+        &read.materials,
+        &dirs,
+        (&base, options.allow_outside_paths),
+        &mut notes,
+    );
     let default_material = materials.len();
     let mut needs_default = false;
     let mesh_material = read
@@ -98,6 +106,7 @@ pub(super) fn load_scene(path: &Path) -> Result<Parts, SceneError> {
         materials.push(Material::default());
     }
     Ok(Parts {
+        transforms: vec![vec![glam::Mat4::IDENTITY]; read.meshes.len()],
         meshes: read.meshes,
         mesh_material,
         materials,
@@ -125,37 +134,10 @@ fn read_mtl(file: &Path) -> Result<Vec<u8>, String> {
     Ok(bytes)
 }
 
-/// Rewrites colour statements tobj 4.0.5 would panic on: it unwraps three numbers after `Ka`,
-/// `Kd`, `Ks` and `Ke` (found by fuzzing). The MTL specification lets green and blue default to
-/// red (`Kd 0.5` is grey), so one or two numbers are completed that way; a colour statement
-/// with no number is dropped (the material keeps its default). Invalid UTF-8 is replaced.
-fn sanitize_mtl(bytes: &[u8]) -> Vec<u8> {
-    let text = String::from_utf8_lossy(bytes);
-    let mut out = String::with_capacity(text.len());
-    for line in text.lines() {
-        let mut words = line.split_whitespace();
-        let keyword = words.next();
-        if matches!(keyword, Some("Ka" | "Kd" | "Ks" | "Ke")) {
-            let values: Vec<&str> = words.take(3).collect();
-            match values.len() {
-                0 => continue,
-                1 | 2 => {
-                    let r = values[0];
-                    let g = values.get(1).copied().unwrap_or(r);
-                    out.push_str(&format!("{} {r} {g} {r}\n", keyword.unwrap_or_default()));
-                    continue;
-                }
-                _ => {}
-            }
-        }
-        out.push_str(line);
-        out.push('\n');
-    }
-    out.into_bytes()
-}
-
-fn read(path: &Path, with_materials: bool) -> Result<ObjRead, SceneError> {
-    let mut reader = BufReader::new(open_limited(path)?);
+/// Reads the OBJ; `with_materials` is `None` for geometry only (no other file is opened),
+/// else whether material libraries may lie outside the OBJ's folder.
+fn read(path: &Path, with_materials: Option<bool>) -> Result<ObjRead, SceneError> {
+    let mut reader = BufReader::new(ObjText::new(BufReader::new(open_limited(path)?)));
     // `..Default::default()` covers fields that only exist with some of tobj's optional features.
     #[allow(clippy::needless_update)]
     let options = tobj::LoadOptions {
@@ -165,17 +147,24 @@ fn read(path: &Path, with_materials: bool) -> Result<ObjRead, SceneError> {
         ignore_lines: true,
         ..Default::default()
     };
-    let base = path.parent().unwrap_or(Path::new("."));
+    let base = model_folder(path);
     let libraries = RefCell::new(Vec::new());
     let load_library = |name: &Path| -> tobj::MTLLoadResult {
-        if !with_materials {
+        let Some(allow_outside) = with_materials else {
             // Geometry only: never open another file.
             return Err(tobj::LoadError::OpenFileFailed);
-        }
+        };
         let name = name.to_string_lossy().replace('\\', "/");
         let file = base.join(&name);
-        let dir = file.parent().unwrap_or(base).to_path_buf();
-        let (outcome, result) = match read_mtl(&file) {
+        let dir = file.parent().unwrap_or(&base).to_path_buf();
+        let safe = resolve(
+            &base,
+            &base,
+            &name,
+            &format!("mtllib '{name}'"),
+            allow_outside,
+        );
+        let (outcome, result) = match safe.and_then(|file| read_mtl(&file)) {
             Ok(bytes) => {
                 match tobj::load_mtl_buf(&mut std::io::Cursor::new(sanitize_mtl(&bytes))) {
                     Ok((materials, map)) => (Ok(materials.len()), Ok((materials, map))),
@@ -216,8 +205,10 @@ fn read(path: &Path, with_materials: bool) -> Result<ObjRead, SceneError> {
             uvs,
             indices: m.indices,
         };
-        // Check indices before computing normals so the error is InvalidMesh, not a silent skip.
+        // Check indices and numbers before computing normals so the error is InvalidMesh
+        // naming the vertex, not a silent skip or a NaN normal.
         super::common::check_indices(&mesh)?;
+        check_finite(&mesh.name, &mesh.positions, normals.as_deref())?;
         set_normals(&mut mesh, normals);
         meshes.push(mesh);
         material_ids.push(m.material_id);

@@ -265,7 +265,9 @@ fn read_ply(path: &Path, source: impl BufRead) -> Result<Mesh, SceneError> {
         );
     }
     super::common::check_indices(&mesh)?;
-    set_normals(&mut mesh, layout.has_normals.then_some(normals));
+    let normals = layout.has_normals.then_some(normals);
+    super::common::check_finite(&mesh.name, &mesh.positions, normals.as_deref())?;
+    set_normals(&mut mesh, normals);
     Ok(mesh)
 }
 

@@ -212,3 +212,36 @@ pub(crate) fn png(t: &Texture) -> Vec<u8> {
 pub(crate) fn close(a: Vec3, b: Vec3, tolerance: f32) -> bool {
     (a - b).length() <= tolerance * (1.0 + a.length().max(b.length()))
 }
+
+/// The framing camera of a file without one: it looks from (1, 0.6, 1) at the centre of the
+/// bounds with a 60° field of view, every corner of the bounds is in view for any frame at
+/// least as wide as it is high, and the bounds fill the frame (a corner touches its margin).
+pub(crate) fn assert_frames(camera: &manyshadows_scene::Camera, lo: Vec3, hi: Vec3) {
+    let centre = (lo + hi) / 2.0;
+    assert!(close(camera.target, centre, 1e-6), "{camera:?}");
+    let back = (camera.position - camera.target).normalize();
+    assert!(
+        close(back, Vec3::new(1.0, 0.6, 1.0).normalize(), 1e-5),
+        "{camera:?}"
+    );
+    assert_eq!(camera.fov_y_deg, 60.0);
+    let view = glam::Mat4::look_at_rh(camera.position, camera.target, camera.up);
+    let tan = 30f32.to_radians().tan();
+    let mut widest = 0.0f32;
+    for i in 0..8 {
+        let c = Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        );
+        let v = view.transform_point3(c);
+        assert!(-v.z > camera.near, "corner {c} is behind the near plane");
+        let (x, y) = (v.x / (-v.z * tan), v.y / (-v.z * tan));
+        assert!(
+            x.abs() <= 1.0 + 1e-4 && y.abs() <= 1.0 + 1e-4,
+            "corner {c} at ({x}, {y})"
+        );
+        widest = widest.max(x.abs()).max(y.abs());
+    }
+    assert!(widest > 0.85, "the bounds fill only {widest} of the frame");
+}

@@ -117,10 +117,10 @@ fn gltf_bad_accessor_is_an_error_not_a_panic() {
             r#""componentType": 5123, "count": 6"#,
             r#""componentType": 5123, "count": 60"#,
         ),
-        // Positions declared as unsigned bytes.
+        // Positions declared as unsigned ints (bytes and shorts are KHR_mesh_quantization's).
         good.replacen(
             r#""componentType": 5126, "count": 4, "type": "VEC3""#,
-            r#""componentType": 5121, "count": 4, "type": "VEC3""#,
+            r#""componentType": 5125, "count": 4, "type": "VEC3""#,
             1,
         ),
         // A stride smaller than one element.
@@ -330,13 +330,14 @@ fn gltf_1_0_is_refused_with_a_clear_message() {
 fn gltf_required_extensions_are_named() {
     let dir = temp_dir("gltf_required");
     let mut doc = quad_doc(json!([{ "mesh": 0 }]));
-    doc["extensionsUsed"] = json!(["KHR_draco_mesh_compression"]);
-    doc["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
-    let e = load_scene(&save_json(&dir, "draco.gltf", &doc)).unwrap_err();
+    doc["extensionsUsed"] = json!(["KHR_texture_basisu"]);
+    doc["extensionsRequired"] = json!(["KHR_texture_basisu"]);
+    let e = load_scene(&save_json(&dir, "basisu.gltf", &doc)).unwrap_err();
     assert!(matches!(e, SceneError::Parse { .. }), "{e:?}");
-    assert!(e.to_string().contains("KHR_draco_mesh_compression"), "{e}");
+    assert!(e.to_string().contains("KHR_texture_basisu"), "{e}");
 
-    // A required texture transform still loads, with a note.
+    // A required texture transform is read (no note); a required PBR material extension is
+    // ignored, with a note.
     doc["extensionsUsed"] = json!(["KHR_texture_transform"]);
     doc["extensionsRequired"] = json!(["KHR_texture_transform"]);
     let loaded = scene_of(&save_json(&dir, "transform.gltf", &doc));
@@ -344,7 +345,18 @@ fn gltf_required_extensions_are_named() {
         loaded
             .notes
             .iter()
-            .any(|n| n.contains("requires KHR_texture_transform")),
+            .all(|n| !n.contains("KHR_texture_transform")),
+        "{:?}",
+        loaded.notes
+    );
+    doc["extensionsUsed"] = json!(["KHR_materials_volume"]);
+    doc["extensionsRequired"] = json!(["KHR_materials_volume"]);
+    let loaded = scene_of(&save_json(&dir, "volume.gltf", &doc));
+    assert!(
+        loaded
+            .notes
+            .iter()
+            .any(|n| n.contains("KHR_materials_volume") && n.contains("requires it")),
         "{:?}",
         loaded.notes
     );

@@ -68,6 +68,7 @@ fn load(args: &ViewArgs) -> Result<Scene> {
         args.seed,
         args.light_sizes,
         args.camera,
+        args.model,
     )
 }
 

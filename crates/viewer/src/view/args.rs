@@ -26,6 +26,8 @@ pub struct ViewArgs {
     pub(super) seed: u64,
     #[command(flatten)]
     pub(super) light_sizes: manyshadows_cli::LightSizeArgs,
+    #[command(flatten)]
+    pub(super) model: manyshadows_cli::ModelArgs,
     /// Shadow technique to start with (as for `render`; the panel switches it).
     #[arg(long, default_value_t = Technique::default(), value_parser = manyshadows_cli::parse_technique)]
     pub(super) technique: Technique,
