@@ -6,8 +6,8 @@ use manyshadows_scene::builtin::{
     DIRECTIONAL_CASCADES, DIRECTIONAL_SHADOW_RESOLUTION, DIRECTIONAL_SPLIT_LAMBDA,
     POINT_SHADOW_RESOLUTION, SPOT_SHADOW_RESOLUTION,
 };
-use manyshadows_scene::loaders::{write_ply_ascii, GLTF_SIZE_EXTRA, PHONG_PER_LUX};
-use manyshadows_scene::{AlphaMode, Attenuation, LightKind, Texture, TextureRef, Wrap};
+use manyshadows_scene::loaders::{write_ply_ascii, GLTF_SIZE_EXTRA};
+use manyshadows_scene::{AlphaMode, Attenuation, LightKind, Lighting, Texture, TextureRef, Wrap};
 use serde_json::{json, Value};
 
 use crate::common::{
@@ -194,9 +194,10 @@ fn lights_doc() -> Value {
 }
 
 #[test]
-fn gltf_lights_map_to_the_documented_phong_values() {
+fn gltf_lights_map_to_the_documented_physical_values() {
     let dir = temp_dir("gltf_lights");
     let loaded = scene_of(&save_json(&dir, "lights.gltf", &lights_doc()));
+    assert_eq!(loaded.scene.lighting, Lighting::Physical);
     let lights = &loaded.scene.lights;
     assert_eq!(lights.len(), 6, "{lights:?}");
     assert!(
@@ -219,8 +220,8 @@ fn gltf_lights_map_to_the_documented_phong_values() {
         l.validate().unwrap();
     }
 
-    // Spot: −90° about X turns −Z into −Y; colour × intensity × 0.1; range where
-    // 0.05 / (1 + d²) = 1/256; cutoff = outer angle.
+    // Spot: −90° about X turns −Z into −Y; colour × intensity (candela); range where a
+    // tenth of it, 0.05 / (1 + d²), is 1/256; cutoff = outer angle.
     let spot = lights[0];
     let LightKind::Spot {
         position,
@@ -234,11 +235,7 @@ fn gltf_lights_map_to_the_documented_phong_values() {
     assert!(close(position, Vec3::new(1.0, 2.0, 3.0), 1e-6));
     assert!(close(direction, Vec3::NEG_Y, 1e-6), "{direction}");
     assert!((cutoff_deg - 0.5f32.to_degrees()).abs() < 1e-4);
-    assert!(close(
-        spot.diffuse,
-        Vec3::new(1.0, 0.5, 0.25) * 0.5 * PHONG_PER_LUX,
-        1e-6
-    ));
+    assert!(close(spot.diffuse, Vec3::new(1.0, 0.5, 0.25) * 0.5, 1e-6));
     assert!(
         (range - (256.0f32 * 0.05 - 1.0).sqrt()).abs() < 1e-4,
         "{range}"
@@ -270,7 +267,7 @@ fn gltf_lights_map_to_the_documented_phong_values() {
     if let LightKind::Directional { direction, .. } = sun.kind {
         assert!(close(direction, want, 1e-5), "{direction} vs {want}");
     }
-    assert!(close(sun.diffuse, Vec3::new(3.0, 2.7, 2.4), 1e-6));
+    assert!(close(sun.diffuse, Vec3::new(30.0, 27.0, 24.0), 1e-5));
     assert_eq!(sun.attenuation, Attenuation::NONE);
     assert_eq!(sun.shadow_resolution, DIRECTIONAL_SHADOW_RESOLUTION);
 
@@ -284,7 +281,7 @@ fn gltf_lights_map_to_the_documented_phong_values() {
         "{position}"
     );
     assert_eq!(range, 7.5);
-    assert!(close(bulb.diffuse, Vec3::splat(10.0), 1e-6));
+    assert!(close(bulb.diffuse, Vec3::splat(100.0), 1e-5));
     assert_eq!(bulb.attenuation, inverse_square);
     assert_eq!(bulb.shadow_resolution, POINT_SHADOW_RESOLUTION);
 

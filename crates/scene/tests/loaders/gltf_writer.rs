@@ -1,10 +1,10 @@
 //! The glTF writer: a written scene loads back the same, an empty one is refused on load.
 
 use glam::{Mat4, Quat, Vec2, Vec3};
-use manyshadows_scene::loaders::{load_scene, write_gltf, GLTF_SIZE_EXTRA};
+use manyshadows_scene::loaders::{load_scene, write_gltf, GLTF_SIZE_EXTRA, PHONG_PER_LUX};
 use manyshadows_scene::{
-    AlphaMode, Attenuation, Camera, Instance, Light, LightKind, Material, Scene, Texture,
-    TextureRef, Wrap,
+    AlphaMode, Attenuation, Camera, Instance, Light, LightKind, Lighting, Material, Pbr, Scene,
+    Texture, TextureRef, Wrap,
 };
 
 use crate::common::{close, pyramid, scene_of, temp_dir};
@@ -218,16 +218,19 @@ fn written_gltf_loads_back_the_same_scene() {
 
         // Lights.
         assert_eq!(scene.lights.len(), original.lights.len());
+        // A Phong scene's light units are 10 cd (or lx) each: the glTF is physical.
+        assert_eq!(scene.lighting, Lighting::Physical);
         for (a, b) in original.lights.iter().zip(&scene.lights) {
             assert_eq!(a.type_name(), b.type_name());
             assert_eq!(a.size, b.size, "{name}: the size, through extras");
+            let physical = a.diffuse / PHONG_PER_LUX;
             assert!(
-                close(a.diffuse, b.diffuse, 1e-5),
+                close(physical, b.diffuse, 1e-4),
                 "{} vs {}",
-                a.diffuse,
+                physical,
                 b.diffuse
             );
-            assert!(close(a.diffuse, b.specular, 1e-5));
+            assert!(close(physical, b.specular, 1e-4));
             match (a.kind, b.kind) {
                 (
                     LightKind::Spot {
@@ -316,4 +319,95 @@ fn written_gltf_of_an_empty_scene_is_refused_on_load() {
     write_gltf(&Scene::default(), &path).unwrap();
     let e = load_scene(&path).unwrap_err();
     assert!(e.to_string().contains("no triangles"), "{e}");
+}
+
+/// A physical scene's lights are written in their own units and its materials' metallic,
+/// roughness and emission (above 1 through `KHR_materials_emissive_strength`) load back.
+#[test]
+fn physical_lights_and_pbr_materials_round_trip() {
+    let dir = temp_dir("gltf_writer_physical");
+    let mut scene = Scene {
+        name: "physical".into(),
+        meshes: vec![manyshadows_scene::primitives::cuboid(Vec3::ONE)],
+        materials: vec![
+            Material {
+                diffuse: Vec3::new(0.9, 0.5, 0.2),
+                pbr: Some(Pbr {
+                    metallic: 0.75,
+                    roughness: 0.3,
+                }),
+                emissive: Vec3::new(8.0, 4.0, 0.0),
+                ..Material::default()
+            },
+            Material {
+                emissive: Vec3::new(0.5, 0.25, 0.0),
+                ..Material::default()
+            },
+        ],
+        instances: vec![
+            Instance::caster(0, 0, Mat4::IDENTITY),
+            Instance::caster(0, 1, Mat4::from_translation(Vec3::X * 3.0)),
+        ],
+        lights: vec![Light {
+            kind: LightKind::Point {
+                position: Vec3::new(0.0, 3.0, 0.0),
+                range: 12.0,
+            },
+            ambient: Vec3::ZERO,
+            diffuse: Vec3::splat(250.0),
+            specular: Vec3::splat(250.0),
+            attenuation: Attenuation {
+                constant: 1.0,
+                linear: 0.0,
+                quadratic: 1.0,
+            },
+            casts_shadows: true,
+            shadow_resolution: 512,
+            size: 0.0,
+        }],
+        lighting: Lighting::Physical,
+        ..Default::default()
+    };
+    scene.camera = Camera::look_at(Vec3::new(4.0, 3.0, 5.0), Vec3::ZERO);
+    let path = dir.join("physical.gltf");
+    write_gltf(&scene, &path).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    assert!(
+        json["extensionsUsed"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|e| e == "KHR_materials_emissive_strength"),
+        "{}",
+        json["extensionsUsed"]
+    );
+    let loaded = scene_of(&path);
+    assert!(
+        !loaded.notes.iter().any(|n| n.contains("emissive")),
+        "{:?}",
+        loaded.notes
+    );
+    let s = loaded.scene;
+    assert_eq!(s.lighting, Lighting::Physical);
+    assert!(close(s.lights[0].diffuse, Vec3::splat(250.0), 1e-6));
+    let m0 = s.materials[s.instances[0].material];
+    let m1 = s.materials[s.instances[1].material];
+    let p = m0
+        .pbr
+        .expect("glTF materials carry their metallic-roughness parameters");
+    assert!(
+        (p.metallic - 0.75).abs() < 1e-6 && (p.roughness - 0.3).abs() < 1e-6,
+        "{p:?}"
+    );
+    assert!(
+        close(m0.emissive, Vec3::new(8.0, 4.0, 0.0), 1e-6),
+        "{}",
+        m0.emissive
+    );
+    assert!(
+        close(m1.emissive, Vec3::new(0.5, 0.25, 0.0), 1e-6),
+        "{}",
+        m1.emissive
+    );
 }
