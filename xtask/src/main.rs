@@ -54,6 +54,13 @@ enum Install {
     RustupTarget(&'static str),
     /// `wasm-bindgen-cli` at the version of the `wasm-bindgen` crate in Cargo.lock.
     WasmBindgen,
+    /// An npm package's published tarball, checked against the registry's SHA-1 and unpacked
+    /// into `target/npm/NAME-VERSION/package` (with curl, tar and sha1sum: no Node needed).
+    NpmTarball {
+        name: &'static str,
+        version: &'static str,
+        sha1: &'static str,
+    },
 }
 
 const VIEWER_TESTS: &[&str] = &[
@@ -63,6 +70,15 @@ const VIEWER_TESTS: &[&str] = &[
     "the_virtual_maps_page_pool_is_shown",
 ];
 const WEB_TESTS: &[&str] = &["the_page_renders_the_native_frame_and_its_controls_work"];
+const THREE_TESTS: &[&str] = &["gltf_models_render_as_three_js_renders_them"];
+
+/// three.js, the independent renderer the glTF look is checked against (its version is
+/// also in crates/cli/tests/threejs.rs).
+const THREE: Install = Install::NpmTarball {
+    name: "three",
+    version: "0.187.0",
+    sha1: "face29ee2de9bcc31a1b573a76f224e35e0b2894",
+};
 
 fn prerequisites() -> Vec<Prerequisite> {
     vec![
@@ -97,6 +113,18 @@ fn prerequisites() -> Vec<Prerequisite> {
             needed_by: "the web page's test",
             install: Install::Apt(&["chromium"]),
             skip: WEB_TESTS,
+        },
+        Prerequisite {
+            what: "Chromium (WebGL through SwiftShader), curl",
+            needed_by: "the three.js comparison",
+            install: Install::Apt(&["chromium", "curl", "ca-certificates"]),
+            skip: THREE_TESTS,
+        },
+        Prerequisite {
+            what: "three.js 0.187.0 (npm tarball into target/npm)",
+            needed_by: "the three.js comparison",
+            install: THREE,
+            skip: THREE_TESTS,
         },
         Prerequisite {
             what: "the wasm32-unknown-unknown target",
@@ -349,6 +377,11 @@ impl Setup {
                     Err(e) => Outcome::Missing(format!("`rustup target add {target}` failed: {e}")),
                 }
             }
+            Install::NpmTarball {
+                name,
+                version,
+                sha1,
+            } => self.npm_tarball(name, version, sha1),
             Install::WasmBindgen => {
                 let Some(version) = locked_version(&self.root, "wasm-bindgen") else {
                     return Outcome::Missing("no wasm-bindgen in Cargo.lock".into());
@@ -379,6 +412,46 @@ impl Setup {
                     Err(e) => Outcome::Missing(format!("cargo install failed: {e}")),
                 }
             }
+        }
+    }
+}
+
+impl Setup {
+    /// See [`Install::NpmTarball`].
+    fn npm_tarball(&self, name: &str, version: &str, sha1: &str) -> Outcome {
+        let dir = self.root.join(format!("target/npm/{name}-{version}"));
+        if dir.join("package/package.json").is_file() {
+            return Outcome::Present;
+        }
+        let url = format!("https://registry.npmjs.org/{name}/-/{name}-{version}.tgz");
+        if self.no_install {
+            return Outcome::Missing(format!("not in {}; --no-install", dir.display()));
+        }
+        if !on_path("curl") || !on_path("tar") || !on_path("sha1sum") {
+            return Outcome::Missing("needs curl, tar and sha1sum".into());
+        }
+        let _ = std::fs::create_dir_all(&dir);
+        let tgz = dir.join("package.tgz");
+        let tgz_s = tgz.to_string_lossy().into_owned();
+        if let Err(e) = quiet("curl", &["-fsSL", "--retry", "3", "-o", &tgz_s, &url], &[]) {
+            return Outcome::Missing(format!("downloading {url} failed: {e}"));
+        }
+        let got = output("sha1sum", &[&tgz_s]).unwrap_or_default();
+        if got.split_whitespace().next() != Some(sha1) {
+            let _ = std::fs::remove_file(&tgz);
+            return Outcome::Missing(format!(
+                "{url} has SHA-1 {}, not the registry's {sha1}",
+                got.split_whitespace().next().unwrap_or("?")
+            ));
+        }
+        let dir_s = dir.to_string_lossy().into_owned();
+        match quiet("tar", &["xzf", &tgz_s, "-C", &dir_s], &[]) {
+            Ok(()) if dir.join("package/package.json").is_file() => {
+                let _ = std::fs::remove_file(&tgz);
+                Outcome::Installed
+            }
+            Ok(()) => Outcome::Missing(format!("{url} has no package/package.json")),
+            Err(e) => Outcome::Missing(format!("unpacking {url} failed: {e}")),
         }
     }
 }

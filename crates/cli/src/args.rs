@@ -11,7 +11,8 @@ use manyshadows::scene::light_size::LightSizes;
 use manyshadows::scene::light_space::PointShadows;
 use manyshadows::scene::loaders::{Ground, LoadOptions};
 use manyshadows::{
-    AdapterRequest, CullMode, GpuContext, Pcf, RenderSettings, ShadowBias, ShadowOptions, Technique,
+    AdapterRequest, CullMode, Exposure, GpuContext, Look, Pcf, RenderSettings, Shading, ShadowBias,
+    ShadowOptions, Technique, ToneMap,
 };
 
 /// Adapter choice: `--backend`, `--adapter`, `--limits` (shared by every subcommand that
@@ -217,6 +218,8 @@ pub(crate) struct RenderArgs {
     pub(crate) shadow_resolution: Option<u32>,
     #[command(flatten)]
     pub(crate) light_sizes: LightSizeArgs,
+    #[command(flatten)]
+    pub(crate) look: LookArgs,
     /// Camera position and target, `PX,PY,PZ,TX,TY,TZ` (default: the scene's camera).
     #[arg(long, value_parser = parse_camera, allow_hyphen_values = true)]
     pub(crate) camera: Option<[f32; 6]>,
@@ -238,6 +241,10 @@ pub(crate) struct RenderArgs {
     /// Receiver offset along the surface normal, texels.
     #[arg(long, default_value_t = ShadowBias::default().normal_offset)]
     pub(crate) bias_normal: f32,
+    /// Shadows: on, or off (every light lights as if nothing stood in its way: for looking
+    /// at shading alone, or comparing it with a viewer that draws no shadows).
+    #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    pub(crate) shadows: bool,
     /// Alpha-tested casters in the shadow passes: on (holes in foliage, lattices and banners
     /// let light through) or off (they cast as solid cards, as a renderer that ignores alpha
     /// would draw them; the camera still sees the holes).
@@ -348,6 +355,56 @@ pub struct ModelArgs {
     pub ground: Ground,
 }
 
+/// How shaded light becomes a pixel: shared by `render` and the viewer. Each follows the
+/// scene when not given: Phong, ×1.4 and the exponential tone map for built-in, TOML, OBJ and
+/// PLY scenes (the seeds' look); the glTF BRDF, an automatic exposure and Khronos PBR Neutral
+/// for glTF files.
+#[derive(Args, Debug, Clone, Copy, PartialEq, Default)]
+pub struct LookArgs {
+    /// Shading model: pbr (the glTF specification's metallic-roughness BRDF; default for glTF
+    /// files) or phong (seed 004's model; default for every other scene).
+    #[arg(long, value_parser = parse_shading, value_name = "phong|pbr")]
+    pub shading: Option<Shading>,
+    /// Exposure: `auto` (an incident-light meter at the camera target: EV100 = log2(lux ·
+    /// 100 / 250); the default for glTF files), an EV100 (higher is darker: about 15 for a
+    /// sunny day, 7 for an office, 0 for a scene lit by a few candela), or `x1.4` for a plain
+    /// scale (the other scenes' default). The summary says which was used.
+    #[arg(long, value_parser = parse_exposure, allow_hyphen_values = true,
+          value_name = "auto|EV100|xSCALE")]
+    pub exposure: Option<Exposure>,
+    /// Tone map: neutral (Khronos PBR Neutral: colours below 0.76 pass unchanged, highlights
+    /// roll off to white; default for glTF files), exponential (1 - e^-x: many overlapping
+    /// lights never clip; the other scenes' default) or clamp (none).
+    #[arg(long, value_parser = parse_tone_map, value_name = "neutral|exponential|clamp")]
+    pub tone_map: Option<ToneMap>,
+}
+
+impl LookArgs {
+    /// The look these flags ask for (unset ones follow the scene).
+    pub fn look(&self) -> Look {
+        Look {
+            shading: self.shading,
+            exposure: self.exposure,
+            tone_map: self.tone_map,
+        }
+    }
+}
+
+/// `phong` or `pbr`.
+pub fn parse_shading(s: &str) -> Result<Shading, String> {
+    s.parse()
+}
+
+/// `auto`, an EV100 or `xSCALE`.
+pub fn parse_exposure(s: &str) -> Result<Exposure, String> {
+    s.parse()
+}
+
+/// `neutral`, `exponential` or `clamp`.
+pub fn parse_tone_map(s: &str) -> Result<ToneMap, String> {
+    s.parse()
+}
+
 impl ModelArgs {
     /// The loader options these flags ask for.
     pub fn options(&self) -> LoadOptions {
@@ -455,6 +512,7 @@ pub(crate) fn flag_error(e: manyshadows::RenderError) -> anyhow::Error {
         ("virtual_maps.max_side", "--virtual-side"),
         ("rays.light_samples", "--light-samples"),
         ("shadow_budget", "--shadow-budget"),
+        ("look.exposure", "--exposure"),
     ];
     if let manyshadows::RenderError::InvalidOption { option, .. } = &e {
         if let Some((_, flag)) = FLAGS.iter().find(|(o, _)| o == option) {
@@ -528,6 +586,7 @@ pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettin
                 .with_light_samples(args.light_samples)
                 .with_seed(args.ray_seed),
         )
+        .with_look(args.look.look())
         .with_light_loop(args.light_loop)
         .with_clusters(
             manyshadows::ClusterOptions::default()

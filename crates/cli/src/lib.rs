@@ -14,7 +14,7 @@ use crate::commands::{BenchCommand, Cli, Command};
 
 pub use args::{
     parse_camera, parse_ground, parse_pcf, parse_point_shadows, parse_technique, GpuArgs,
-    LightSizeArgs, ModelArgs,
+    LightSizeArgs, LookArgs, ModelArgs,
 };
 pub use scenes::load_scene_for_view;
 

@@ -40,6 +40,11 @@ pub(crate) fn load_scene(args: &RenderArgs) -> Result<Scene> {
     if args.subdivide > 0 {
         scene.subdivide(args.subdivide)?;
     }
+    if !args.shadows {
+        for l in &mut scene.lights {
+            l.casts_shadows = false;
+        }
+    }
     if let Some(c) = args.camera {
         scene.camera.position = glam::Vec3::new(c[0], c[1], c[2]);
         scene.camera.target = glam::Vec3::new(c[3], c[4], c[5]);
@@ -81,6 +86,16 @@ pub(crate) fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
             }
             scene.lights =
                 builtin::scatter_lights(&scene, n, args.seed, mix, args.shadow_resolution);
+            if scene.lighting == manyshadows::scene::Lighting::Physical {
+                // The layout's lights are in Phong units: 10 cd (or lx) each, as a model
+                // file's seeded lights.
+                let k = 1.0 / manyshadows::scene::loaders::PHONG_PER_LUX;
+                for l in &mut scene.lights {
+                    l.ambient *= k;
+                    l.diffuse *= k;
+                    l.specular *= k;
+                }
+            }
         } else if let Some(r) = args.shadow_resolution {
             for l in &mut scene.lights {
                 l.shadow_resolution = r;

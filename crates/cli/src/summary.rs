@@ -35,6 +35,7 @@ pub(crate) fn summary(
                          "views_stale": frame.shadow_stats.views_stale, "stale_frames": frame.shadow_stats.stale_frames,
                          "views_waiting": frame.shadow_stats.views_waiting,
                          "culled_draws": frame.shadow_stats.culled, "triangles": frame.shadow_stats.triangles },
+        "look": look_json(&r.look()),
         "light_loop": r.settings().light_loop.name(),
         "clusters": frame.clusters,
         "virtual": frame.virtual_maps,
@@ -47,6 +48,18 @@ pub(crate) fn summary(
         "frame_wall_ms": frame.timings.wall_ms,
         "total_wall_ms": total.as_secs_f64() * 1e3,
         "output": args.out,
+    })
+}
+
+/// The frame's shading model, exposure and tone map.
+fn look_json(l: &manyshadows::ResolvedLook) -> serde_json::Value {
+    serde_json::json!({
+        "shading": l.shading.name(),
+        "tone_map": l.tone_map.name(),
+        "ev100": l.ev100,
+        "exposure_scale": l.exposure_scale,
+        "metered": l.metered,
+        "description": l.describe(),
     })
 }
 
@@ -138,6 +151,9 @@ fn print_scene(s: &serde_json::Value) {
         l["shadowed"],
         describe_sizes(&l["sizes"])
     );
+    if let Some(look) = s["look"]["description"].as_str() {
+        println!("look         {look}");
+    }
 }
 
 /// The technique, its views, how it filters, and what sized lights get from it.

@@ -24,7 +24,7 @@ fn run(args: &[&str]) -> Output {
 
 /// Renders a 32x32 frame of `scene` with `flags`: the summary's `lights` line and its JSON
 /// `lights.sizes`.
-fn sizes(dir: &PathBuf, scene: &str, flags: &[&str]) -> (String, serde_json::Value) {
+fn sizes(dir: &std::path::Path, scene: &str, flags: &[&str]) -> (String, serde_json::Value) {
     let json = dir.join("summary.json");
     let out_png = dir.join("frame.png");
     let mut args = vec![

@@ -9,47 +9,16 @@
 //! DevTools protocol on a pipe: evaluate the page's promises, read its pixels, take a
 //! screenshot. Without those tools it fails and says what to install. `.ci/run` installs them.
 
-use std::io::{BufRead, BufReader, Write};
-use std::net::{TcpListener, TcpStream};
-use std::path::{Path, PathBuf};
-use std::process::{Child, ChildStdin, Command, Stdio};
-use std::sync::mpsc::{Receiver, RecvTimeoutError};
-use std::time::{Duration, Instant};
+mod common;
 
-use serde_json::{json, Value};
+use std::path::Path;
+use std::process::Command;
+
+use common::{base64, on_path, repo, serve, tmp, Browser};
+use serde_json::json;
 
 const W: u32 = 480;
 const H: u32 = 270;
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("manyshadows-web-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn on_path(tool: &str) -> Option<PathBuf> {
-    std::env::var_os("PATH").and_then(|p| {
-        std::env::split_paths(&p)
-            .map(|d| d.join(tool))
-            .find(|f| f.is_file())
-    })
-}
-
-/// Chromium: `$MANYSHADOWS_CHROMIUM`, else `chromium` or `chromium-browser` on the PATH.
-fn chromium() -> PathBuf {
-    if let Some(p) = std::env::var_os("MANYSHADOWS_CHROMIUM") {
-        return p.into();
-    }
-    ["chromium", "chromium-browser"]
-        .iter()
-        .find_map(|t| on_path(t))
-        .expect("the web page test needs Chromium: install it with `apt-get install -y chromium`")
-}
 
 /// Builds the page's wasm module into `out` (its own target directory: the test's cargo
 /// holds the workspace's).
@@ -71,252 +40,17 @@ fn build_page(out: &Path) {
     );
 }
 
-/// Serves `web/` (and the built module under `/pkg/`) on a free local port.
-fn serve(pkg: PathBuf) -> u16 {
-    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
-    let port = listener.local_addr().unwrap().port();
-    let web = repo().join("web");
-    std::thread::spawn(move || {
-        for stream in listener.incoming().flatten() {
-            let (web, pkg) = (web.clone(), pkg.clone());
-            std::thread::spawn(move || answer(stream, &web, &pkg));
-        }
-    });
-    port
+/// Opens the page at `url` and waits for its script to have started (the old page's handle
+/// must not answer for the new one).
+fn open_page(browser: &mut Browser, url: &str) {
+    browser.eval("delete window.manyshadows", 30);
+    browser.open(url, "typeof window.manyshadows == 'object'");
 }
 
-fn answer(mut stream: TcpStream, web: &Path, pkg: &Path) {
-    let mut line = String::new();
-    if BufReader::new(&stream).read_line(&mut line).is_err() {
-        return;
-    }
-    let path = line.split_whitespace().nth(1).unwrap_or("/");
-    let path = path.split('?').next().unwrap_or("/");
-    let file = match path {
-        "/" => Some(web.join("index.html")),
-        p if p.starts_with("/pkg/") && !p.contains("..") => Some(pkg.join(&p[5..])),
-        _ => None,
-    };
-    let (status, kind, body) = match file.and_then(|f| Some((std::fs::read(&f).ok()?, f))) {
-        Some((body, f)) => {
-            let kind = match f.extension().and_then(|e| e.to_str()) {
-                Some("html") => "text/html; charset=utf-8",
-                Some("js") => "text/javascript",
-                Some("wasm") => "application/wasm",
-                _ => "application/octet-stream",
-            };
-            ("200 OK", kind, body)
-        }
-        None => ("404 Not Found", "text/plain", b"not found".to_vec()),
-    };
-    let _ = write!(
-        stream,
-        "HTTP/1.1 {status}\r\nContent-Type: {kind}\r\nContent-Length: {}\r\nConnection: close\r\n\r\n",
-        body.len()
-    );
-    let _ = stream.write_all(&body);
-}
-
-/// Headless Chromium driven over the DevTools protocol on a pipe (fds 3 and 4, mapped by the
-/// shell onto the child's stdin and stdout).
-struct Browser {
-    child: Child,
-    to: ChildStdin,
-    from: Receiver<Value>,
-    next_id: u64,
-    session: String,
-    /// Console lines and exceptions of the page, for failure messages.
-    log: Vec<String>,
-}
-
-impl Drop for Browser {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-impl Browser {
-    fn start(dir: &Path) -> Browser {
-        let exe = chromium();
-        let mut child = Command::new("sh")
-            .arg("-c")
-            .arg(r#"exec "$0" "$@" 3<&0 4>&1 </dev/null >/dev/null"#)
-            .arg(&exe)
-            .args([
-                "--headless=new",
-                "--no-sandbox",
-                "--enable-unsafe-webgpu",
-                // The same software adapter everywhere (it would take a Vulkan driver if it
-                // found one it likes, and give other pixels).
-                "--use-webgpu-adapter=swiftshader",
-                "--remote-debugging-pipe",
-                "--no-first-run",
-                "--disable-extensions",
-                "--window-size=1000,700",
-                "--hide-scrollbars",
-            ])
-            .arg(format!("--user-data-dir={}", dir.join("profile").display()))
-            .arg("about:blank")
-            .stdin(Stdio::piped())
-            .stdout(Stdio::piped())
-            .stderr(std::fs::File::create(dir.join("chromium.log")).unwrap())
-            .spawn()
-            .unwrap_or_else(|e| panic!("start {}: {e}", exe.display()));
-        let to = child.stdin.take().unwrap();
-        let stdout = child.stdout.take().unwrap();
-        let (tx, from) = std::sync::mpsc::channel();
-        std::thread::spawn(move || {
-            let mut reader = BufReader::new(stdout);
-            let mut buf = Vec::new();
-            while let Ok(n) = reader.read_until(0, &mut buf) {
-                if n == 0 {
-                    break;
-                }
-                buf.pop_if(|b| *b == 0);
-                if let Ok(v) = serde_json::from_slice::<Value>(&buf) {
-                    if tx.send(v).is_err() {
-                        break;
-                    }
-                }
-                buf.clear();
-            }
-        });
-        let mut b = Browser {
-            child,
-            to,
-            from,
-            next_id: 0,
-            session: String::new(),
-            log: Vec::new(),
-        };
-        let targets = b.call("Target.getTargets", json!({}), 60);
-        let page = targets["targetInfos"]
-            .as_array()
-            .and_then(|t| t.iter().find(|t| t["type"] == "page"))
-            .unwrap_or_else(|| panic!("Chromium shows no page: {targets}"))["targetId"]
-            .clone();
-        let attached = b.call(
-            "Target.attachToTarget",
-            json!({"targetId": page, "flatten": true}),
-            30,
-        );
-        b.session = attached["sessionId"].as_str().unwrap().to_string();
-        b.call("Runtime.enable", json!({}), 30);
-        b.call("Page.enable", json!({}), 30);
-        b
-    }
-
-    /// Sends a command (to the page once attached) and waits up to `secs` for its answer.
-    fn call(&mut self, method: &str, params: Value, secs: u64) -> Value {
-        self.next_id += 1;
-        let id = self.next_id;
-        let mut msg = json!({"id": id, "method": method, "params": params});
-        if !self.session.is_empty() {
-            msg["sessionId"] = json!(self.session);
-        }
-        let mut bytes = serde_json::to_vec(&msg).unwrap();
-        bytes.push(0);
-        self.to
-            .write_all(&bytes)
-            .and_then(|_| self.to.flush())
-            .unwrap_or_else(|e| panic!("Chromium closed its pipe: {e}"));
-        let deadline = Instant::now() + Duration::from_secs(secs);
-        loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            match self.from.recv_timeout(left) {
-                Ok(v) if v["id"] == id => {
-                    if let Some(e) = v.get("error") {
-                        panic!("{method}: {e}\npage log:\n{}", self.log.join("\n"));
-                    }
-                    return v["result"].clone();
-                }
-                Ok(v) => self.note(&v),
-                Err(RecvTimeoutError::Timeout) => panic!(
-                    "{method}: no answer from Chromium within {secs} s\npage log:\n{}",
-                    self.log.join("\n")
-                ),
-                Err(RecvTimeoutError::Disconnected) => {
-                    panic!("Chromium exited\npage log:\n{}", self.log.join("\n"))
-                }
-            }
-        }
-    }
-
-    fn note(&mut self, v: &Value) {
-        match v["method"].as_str() {
-            Some("Runtime.consoleAPICalled") => {
-                let args: Vec<String> = v["params"]["args"]
-                    .as_array()
-                    .into_iter()
-                    .flatten()
-                    .map(|a| a["value"].to_string())
-                    .collect();
-                self.log.push(format!("console: {}", args.join(" ")));
-            }
-            Some("Runtime.exceptionThrown") => self
-                .log
-                .push(format!("exception: {}", v["params"]["exceptionDetails"])),
-            _ => {}
-        }
-    }
-
-    /// Evaluates `expr` in the page, awaiting a promise, and returns its value.
-    fn eval(&mut self, expr: &str, secs: u64) -> Value {
-        let r = self.call(
-            "Runtime.evaluate",
-            json!({"expression": expr, "awaitPromise": true, "returnByValue": true}),
-            secs,
-        );
-        if let Some(e) = r.get("exceptionDetails") {
-            panic!("{expr}: {e}\npage log:\n{}", self.log.join("\n"));
-        }
-        r["result"]["value"].clone()
-    }
-
-    /// Opens `url` and waits for the page's script to have started.
-    fn open(&mut self, url: &str) {
-        // The old page's handle must not answer for the new one.
-        self.eval("delete window.manyshadows", 30);
-        self.call("Page.navigate", json!({"url": url}), 30);
-        let start = Instant::now();
-        while self.eval("typeof window.manyshadows", 30) != "object" {
-            assert!(
-                start.elapsed() < Duration::from_secs(60),
-                "the page's script did not start within 60 s\npage log:\n{}",
-                self.log.join("\n")
-            );
-            std::thread::sleep(Duration::from_millis(200));
-        }
-    }
-
-    /// The last frame the page computed, RGBA.
-    fn frame(&mut self) -> Vec<u8> {
-        let b64 = self.eval("window.manyshadows.frameBase64()", 60);
-        base64(b64.as_str().expect("frameBase64 returns a string"))
-    }
-}
-
-/// Standard base64 (the DevTools protocol's screenshots and the page's pixels).
-fn base64(s: &str) -> Vec<u8> {
-    let val = |c: u8| match c {
-        b'A'..=b'Z' => c - b'A',
-        b'a'..=b'z' => c - b'a' + 26,
-        b'0'..=b'9' => c - b'0' + 52,
-        b'+' => 62,
-        b'/' => 63,
-        _ => panic!("not base64: {}", c as char),
-    };
-    let bytes: Vec<u8> = s.bytes().filter(|&c| c != b'=').collect();
-    let mut out = Vec::with_capacity(bytes.len() * 3 / 4);
-    for chunk in bytes.chunks(4) {
-        let mut acc = 0u32;
-        for (i, &c) in chunk.iter().enumerate() {
-            acc |= (val(c) as u32) << (18 - 6 * i);
-        }
-        out.extend_from_slice(&acc.to_be_bytes()[1..chunk.len()]);
-    }
-    out
+/// The last frame the page computed, RGBA.
+fn frame(browser: &mut Browser) -> Vec<u8> {
+    let b64 = browser.eval("window.manyshadows.frameBase64()", 60);
+    base64(b64.as_str().expect("frameBase64 returns a string"))
 }
 
 fn render_native(dir: &Path, name: &str, args: &[&str]) -> image::RgbImage {
@@ -387,16 +121,17 @@ fn the_page_renders_the_native_frame_and_its_controls_work() {
     let chromium_dir = tmp("chromium");
     let pkg = tmp("pkg");
     build_page(&pkg);
-    let port = serve(pkg.clone());
-    let mut browser = Browser::start(&chromium_dir);
+    let port = serve(repo().join("web/index.html"), vec![("pkg", pkg.clone())]);
+    let mut browser = Browser::start(&chromium_dir, &[]);
     let dir = tmp("native");
 
     // The atrium's 32 lights with the compute rasterizer, as `render` makes it. (The other
     // techniques rasterize with the browser's fixed-function pipeline, and SwiftShader puts
     // extra depth into point lights' cube faces; see README "In a web page".)
-    browser.open(&format!(
-        "http://127.0.0.1:{port}/?w={W}&h={H}&technique=compute"
-    ));
+    open_page(
+        &mut browser,
+        &format!("http://127.0.0.1:{port}/?w={W}&h={H}&technique=compute"),
+    );
     let status = browser.eval("window.manyshadows.ready", 900);
     let info = browser.eval("window.manyshadows.info()", 10);
     eprintln!("page: {status}\n{}", info.as_str().unwrap_or(""));
@@ -405,7 +140,7 @@ fn the_page_renders_the_native_frame_and_its_controls_work() {
         "the page failed: {status}\npage log:\n{}",
         browser.log.join("\n")
     );
-    let first = browser.frame();
+    let first = frame(&mut browser);
     let native = render_native(
         &dir,
         "atrium",
@@ -458,7 +193,7 @@ fn the_page_renders_the_native_frame_and_its_controls_work() {
         "multiview on WebGPU: {status}"
     );
     assert!(
-        browser.frame() == first,
+        frame(&mut browser) == first,
         "a refused setting changed the frame"
     );
     // A bad value is refused with the renderer's message and the frame stays. (A number
@@ -470,7 +205,7 @@ fn the_page_renders_the_native_frame_and_its_controls_work() {
         status.starts_with("not applied") && status.contains(needle),
         "{set}: {status}"
     );
-    assert!(browser.frame() == first, "{set} changed the frame");
+    assert!(frame(&mut browser) == first, "{set} changed the frame");
 
     // The controls rebuild the renderer: another scene, technique and filter, as `render`
     // makes them.
@@ -482,7 +217,7 @@ fn the_page_renders_the_native_frame_and_its_controls_work() {
         !status.as_str().unwrap_or("").starts_with("not applied"),
         "{status}"
     );
-    let cubes = browser.frame();
+    let cubes = frame(&mut browser);
     let native = render_native(&dir, "cubes", &["--scene", "cubes", "--pcf", "3x3"]);
     let off = differing(&cubes, &native);
     eprintln!("page vs render (cubes, traditional, PCF 3x3): {off} pixels differ");
@@ -491,7 +226,7 @@ fn the_page_renders_the_native_frame_and_its_controls_work() {
 
     // The orbit slider moves only the camera; back at 0° the frame is the same again.
     browser.eval("window.manyshadows.set({orbit: '40'})", 600);
-    let turned = browser.frame();
+    let turned = frame(&mut browser);
     let moved = turned
         .chunks(4)
         .zip(cubes.chunks(4))
@@ -504,7 +239,7 @@ fn the_page_renders_the_native_frame_and_its_controls_work() {
     );
     browser.eval("window.manyshadows.set({orbit: '0'})", 600);
     assert!(
-        browser.frame() == cubes,
+        frame(&mut browser) == cubes,
         "orbit back to 0° gives another frame"
     );
 
@@ -513,7 +248,7 @@ fn the_page_renders_the_native_frame_and_its_controls_work() {
         ("w=abc", "width 'abc' is not a whole number"),
         ("w=320&h=5000", "height 5000 must be between 1 and 2048"),
     ] {
-        browser.open(&format!("http://127.0.0.1:{port}/?{query}"));
+        open_page(&mut browser, &format!("http://127.0.0.1:{port}/?{query}"));
         let status = browser.eval("window.manyshadows.ready", 600);
         let status = status.as_str().unwrap_or("");
         assert!(

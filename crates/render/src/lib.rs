@@ -122,6 +122,7 @@ pub use gpu_scene::caster_layout::CasterOptions;
 pub use renderer::Renderer;
 pub use report::{Frame, FrameTimings, ShadowLayout, ShadowWork, SubmittedFrame};
 pub use settings::RenderSettings;
+pub use shading::look::{Exposure, Look, ResolvedLook, Shading, ToneMap};
 pub use shadows::descriptor::{Culling, Need, Requirement, TechniqueInfo};
 pub use shadows::image::ShadowPicture;
 pub use shadows::irregular::maps::{IrregularOptions, IrregularStats};

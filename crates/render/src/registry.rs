@@ -140,11 +140,39 @@ mod tests {
         for info in TECHNIQUES {
             let mut shaders = info.shaders();
             let features = info.lookup.features;
-            shaders.push(crate::shadows::descriptor::Wgsl::with(
-                "lighting",
-                crate::shading::lighting::shader(&info.lookup),
-                features,
-            ));
+            // Phong as the seeds' scenes compile it, and the glTF BRDF with physical light
+            // shaded by Phong (every constant away from its default).
+            for (name, consts) in [
+                ("lighting", Default::default()),
+                (
+                    "lighting (pbr)",
+                    crate::shading::look::ShadingConsts {
+                        shading: crate::shading::look::Shading::Pbr,
+                        physical_falloff: true,
+                        light_scale: 1.0,
+                        tone_map: crate::shading::look::ToneMap::Neutral,
+                        fixed_exposure: None,
+                        emission: true,
+                    },
+                ),
+                (
+                    "lighting (phong, physical)",
+                    crate::shading::look::ShadingConsts {
+                        shading: crate::shading::look::Shading::Phong,
+                        physical_falloff: true,
+                        light_scale: std::f32::consts::FRAC_1_PI,
+                        tone_map: crate::shading::look::ToneMap::Clamp,
+                        fixed_exposure: Some(0.5),
+                        emission: false,
+                    },
+                ),
+            ] {
+                shaders.push(crate::shadows::descriptor::Wgsl::with(
+                    name,
+                    crate::shading::lighting::shader(&info.lookup, &consts),
+                    features,
+                ));
+            }
             shaders.push(crate::shadows::descriptor::Wgsl::with(
                 "visibility",
                 crate::shading::visibility::shader(&info.lookup),

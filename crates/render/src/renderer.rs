@@ -185,7 +185,12 @@ impl Renderer {
                 clusters: &clusters,
                 shadows: source.output(),
             };
-            let lighting = LightingPass::new(ctx, &inputs, settings.width, settings.height);
+            let lighting = LightingPass::new(
+                ctx,
+                &inputs,
+                (settings.width, settings.height),
+                &settings.look.resolve(scene).consts(),
+            );
             let visibility = visibility_pass(ctx, &settings, scene, &*source)?;
             Ok(Self {
                 // In a browser wgpu's handles are not Send; the Arc only shares, never crosses
@@ -300,6 +305,14 @@ impl Renderer {
     /// The settings in use.
     pub fn settings(&self) -> &RenderSettings {
         &self.settings
+    }
+
+    /// The shading model, exposure and tone map of the next frame: the settings' [`Look`]
+    /// decided for the current scene and camera (a metered exposure follows the camera).
+    ///
+    /// [`Look`]: crate::shading::look::Look
+    pub fn look(&self) -> crate::shading::look::ResolvedLook {
+        self.settings.look.resolve(&self.current)
     }
 
     /// Triangles in the scene (over all instances).
@@ -737,7 +750,8 @@ impl Renderer {
                 clusters: &self.clusters,
                 shadows,
             };
-            let pass = LightingPass::with_fractions(ctx, &inputs, w, h);
+            let consts = self.settings.look.resolve(&self.current).consts();
+            let pass = LightingPass::with_fractions(ctx, &inputs, (w, h), &consts);
             let mut encoder = ctx
                 .device
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -836,6 +850,7 @@ fn frame_uniforms(scene: &Scene, s: &RenderSettings, atlas_size: u32) -> FrameUn
     let aspect = s.width as f32 / s.height as f32;
     let view = cam.view();
     let proj = cam.projection(aspect);
+    let (look, modes) = s.look.resolve(scene).uniforms();
     FrameUniforms {
         view_proj: (proj * view).to_cols_array_2d(),
         view: view.to_cols_array_2d(),
@@ -866,6 +881,8 @@ fn frame_uniforms(scene: &Scene, s: &RenderSettings, atlas_size: u32) -> FrameUn
             s.soft.max_penumbra,
             0.0,
         ],
+        look,
+        modes,
     }
 }
 

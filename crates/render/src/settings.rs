@@ -9,6 +9,7 @@ use manyshadows_scene::atlas::FitPolicy;
 
 use crate::error::{RenderError, Technique};
 use crate::frame::clusters::{ClusterOptions, LightLoop};
+use crate::shading::look::Look;
 use crate::shadows::irregular::maps::IrregularOptions;
 use crate::shadows::options::{Pcf, ShadowBias, ShadowOptions, SoftShadows};
 use crate::shadows::raytraced::accel::RayOptions;
@@ -66,6 +67,8 @@ pub struct RenderSettings {
     pub light_loop: LightLoop,
     /// The cluster grid.
     pub clusters: ClusterOptions,
+    /// Shading model, exposure and tone map (default: as the scene's lighting says).
+    pub look: Look,
 }
 
 impl Default for RenderSettings {
@@ -90,6 +93,7 @@ impl Default for RenderSettings {
             rays: RayOptions::default(),
             light_loop: LightLoop::default(),
             clusters: ClusterOptions::default(),
+            look: Look::default(),
         }
     }
 }
@@ -149,6 +153,7 @@ impl RenderSettings {
         self.irregular.validate()?;
         self.virtual_maps.validate()?;
         self.rays.validate()?;
+        self.look.validate()?;
         Ok(())
     }
 }
@@ -168,6 +173,7 @@ with_setters!(RenderSettings {
     with_fit: fit: FitPolicy,
     with_visibility: visibility: bool,
     with_soft_visibility: soft_visibility: bool,
+    with_look: look: Look,
     with_irregular: irregular: IrregularOptions,
     with_virtual_maps: virtual_maps: VirtualOptions,
     with_rays: rays: RayOptions,

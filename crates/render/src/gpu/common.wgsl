@@ -27,7 +27,17 @@ struct FrameUniforms {
     // Soft shadows of sized lights (pcss.wgsl): blocker-search taps, filter taps, largest
     // penumbra radius in shadow texels, unused.
     soft: vec4<f32>,
+    // Exposure scale (linear colour times it before the tone map), unused ×3 (look.rs).
+    look: vec4<f32>,
+    // Tone map (TONE_*), unused ×3.
+    modes: vec4<u32>,
 }
+
+const SHADING_PHONG: u32 = 0u;
+const SHADING_PBR: u32 = 1u;
+const TONE_EXPONENTIAL: u32 = 0u;
+const TONE_NEUTRAL: u32 = 1u;
+const TONE_CLAMP: u32 = 2u;
 
 struct InstanceData {
     model: mat4x4<f32>,
@@ -47,6 +57,10 @@ struct MaterialData {
     // the base colour in bits 0-3, of the normal map in bits 4-7, MATERIAL_ALPHA_TEST), alpha
     // cutoff (f32 bits).
     texture: vec4<u32>,
+    // metallic, roughness (glTF BRDF), unused, unused.
+    pbr: vec4<f32>,
+    // rgb emitted radiance, unused.
+    emissive: vec4<f32>,
 }
 
 const MATERIAL_ALPHA_TEST: u32 = 256u;

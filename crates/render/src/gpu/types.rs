@@ -5,7 +5,7 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
-use manyshadows_scene::{light_space::ShadowView, Light, LightKind, Material};
+use manyshadows_scene::{light_space::ShadowView, Light, LightKind, Material, Pbr};
 
 /// Light type codes, as `LIGHT_*` in `common.wgsl`.
 pub const LIGHT_DIRECTIONAL: u32 = 0;
@@ -34,6 +34,10 @@ pub struct FrameUniforms {
     pub sky: [f32; 4],
     /// Soft shadows: blocker-search taps, filter taps, largest penumbra radius in texels.
     pub soft: [f32; 4],
+    /// Exposure scale, unused ×3 (`ResolvedLook::uniforms`).
+    pub look: [f32; 4],
+    /// Tone map, unused ×3.
+    pub modes: [u32; 4],
 }
 
 /// Per-instance data (`InstanceData`).
@@ -72,6 +76,10 @@ pub struct MaterialData {
     /// 1 + base-colour layer (0: none), 1 + normal-map layer (0: none), flags
     /// (`MATERIAL_*` in common.wgsl: wrap modes, alpha test), alpha cutoff (`f32` bits).
     pub texture: [u32; 4],
+    /// metallic, roughness (the glTF BRDF's), unused ×2.
+    pub pbr: [f32; 4],
+    /// rgb emitted radiance, unused.
+    pub emissive: [f32; 4],
 }
 
 /// Material flag: the G-buffer alpha-tests the material (its coverage mask is not all solid).
@@ -89,6 +97,9 @@ impl MaterialData {
         let wrap = |t: Option<manyshadows_scene::TextureRef>| {
             t.map_or(0, |t| t.wrap_s.code() | (t.wrap_t.code() << 2))
         };
+        let pbr = m
+            .pbr
+            .unwrap_or_else(|| Pbr::from_phong(m.shininess, m.specular));
         let flags = wrap(m.base_color_texture)
             | (wrap(m.normal_texture) << 4)
             | if alpha_test { MATERIAL_ALPHA_TEST } else { 0 };
@@ -102,6 +113,8 @@ impl MaterialData {
                 flags,
                 m.effective_cutoff().unwrap_or(0.0).to_bits(),
             ],
+            pbr: [pbr.metallic, pbr.roughness, 0.0, 0.0],
+            emissive: m.emissive.extend(0.0).to_array(),
         }
     }
 }
@@ -354,10 +367,20 @@ mod tests {
             counts,
             bias,
             sky,
-            soft
+            soft,
+            look,
+            modes
         );
         same_layout!(InstanceData, model, normal, material);
-        same_layout!(MaterialData, ambient, diffuse, specular, texture);
+        same_layout!(
+            MaterialData,
+            ambient,
+            diffuse,
+            specular,
+            texture,
+            pbr,
+            emissive
+        );
         same_layout!(
             LightData,
             position,

@@ -181,7 +181,7 @@ mod shader_tests {
     fn shader_validates_for_webgpu() {
         crate::gpu::shaders::validate_for_webgpu(
             "blit",
-            &include_str!("blit.wgsl"),
+            include_str!("blit.wgsl"),
             wgpu::Features::empty(),
         )
         .unwrap_or_else(|e| panic!("{e}"));

@@ -5,6 +5,7 @@
 use crate::frame::gbuffer::GBuffer;
 use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, Span};
+use crate::shading::look::ShadingConsts;
 use crate::shadows::lookup::{compose_reader, LookupWgsl};
 use crate::shadows::source::ShadowOutput;
 
@@ -16,9 +17,10 @@ pub(crate) const SOURCE_FIRST_BINDING: u32 = 13;
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 
 /// The lighting pass's WGSL, shadows found through `lookup` (its declarations from
-/// `SOURCE_FIRST_BINDING`).
-pub fn shader(lookup: &LookupWgsl) -> String {
-    compose_reader(lookup, SOURCE_FIRST_BINDING, include_str!("lighting.wgsl"))
+/// `SOURCE_FIRST_BINDING`), shading as `consts` say.
+pub(crate) fn shader(lookup: &LookupWgsl, consts: &ShadingConsts) -> String {
+    let pass = format!("{}{}", consts.wgsl(), include_str!("lighting.wgsl"));
+    compose_reader(lookup, SOURCE_FIRST_BINDING, &pass)
 }
 
 /// The lighting pass and its output image.
@@ -95,27 +97,37 @@ impl LightingInputs<'_> {
 
 impl LightingPass {
     /// Creates the output texture and pipeline.
-    pub fn new(ctx: &GpuContext, inputs: &LightingInputs<'_>, w: u32, h: u32) -> Self {
+    pub(crate) fn new(
+        ctx: &GpuContext,
+        inputs: &LightingInputs<'_>,
+        (w, h): (u32, u32),
+        consts: &ShadingConsts,
+    ) -> Self {
         let entry = if inputs.shadows.mask.is_some() {
             "fs_mask"
         } else {
             "fs_main"
         };
-        Self::with_entry(ctx, inputs, w, h, entry)
+        Self::with_entry(ctx, inputs, (w, h), entry, consts)
     }
 
     /// The pass shading with given fractions per pixel and light (`inputs.shadows.mask` holds
     /// them, a byte each) instead of the shadow source's answer.
-    pub fn with_fractions(ctx: &GpuContext, inputs: &LightingInputs<'_>, w: u32, h: u32) -> Self {
-        Self::with_entry(ctx, inputs, w, h, "fs_fraction")
+    pub(crate) fn with_fractions(
+        ctx: &GpuContext,
+        inputs: &LightingInputs<'_>,
+        (w, h): (u32, u32),
+        consts: &ShadingConsts,
+    ) -> Self {
+        Self::with_entry(ctx, inputs, (w, h), "fs_fraction", consts)
     }
 
     fn with_entry(
         ctx: &GpuContext,
         inputs: &LightingInputs<'_>,
-        w: u32,
-        h: u32,
+        (w, h): (u32, u32),
         entry: &'static str,
+        consts: &ShadingConsts,
     ) -> Self {
         let device = &ctx.device;
         let color = device.create_texture(&wgpu::TextureDescriptor {
@@ -170,8 +182,11 @@ impl LightingPass {
             ..Default::default()
         });
         let bind_group = bind(ctx, &layout, &linear, inputs);
-        let module =
-            crate::gpu::shaders::module(device, "lighting.shader", &shader(&inputs.shadows.lookup));
+        let module = crate::gpu::shaders::module(
+            device,
+            "lighting.shader",
+            &shader(&inputs.shadows.lookup, consts),
+        );
         let pipeline_layout =
             crate::gpu::pipelines::pipeline_layout(device, "lighting.pipeline_layout", &[&layout]);
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -285,7 +300,10 @@ mod shader_tests {
     /// lookup is checked by the registry's tests).
     #[test]
     fn shader_validates_for_webgpu() {
-        let src = super::shader(&crate::shadows::lookup::ATLAS_LOOKUP);
+        let src = super::shader(
+            &crate::shadows::lookup::ATLAS_LOOKUP,
+            &crate::shading::look::ShadingConsts::default(),
+        );
         crate::gpu::shaders::validate_for_webgpu("lighting", &src, wgpu::Features::empty())
             .unwrap_or_else(|e| panic!("{e}"));
     }

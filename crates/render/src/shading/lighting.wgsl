@@ -1,6 +1,8 @@
-// Deferred Phong lighting (seed 004): ambient + diffuse + specular per light, quadratic
-// attenuation, spot cutoff; a shadowed point keeps only the ambient term. Shadows by comparison
-// sampling of the atlas with PCF off / 2x2 / 3x3, never reading outside the view's tile.
+// Deferred lighting: seed 004's Phong model (ambient + diffuse + specular per light, quadratic
+// attenuation, spot cutoff) or the glTF BRDF (SHADING_PBR, with glTF's inverse-square falloff
+// and range window for physical lights); a shadowed point keeps only the ambient term. Then
+// emission, exposure and a tone map (look.rs). Shadows by comparison sampling of the atlas
+// with PCF off / 2x2 / 3x3, never reading outside the view's tile.
 
 @group(0) @binding(0) var<uniform> frame: FrameUniforms;
 @group(0) @binding(1) var<storage, read> lights: array<LightData>;
@@ -33,8 +35,6 @@ fn shadow_compare_at(t: vec2<f32>, depth: f32) -> f32 {
     return textureSampleCompareLevel(atlas, cmp_linear, t / f32(frame.counts.z), depth);
 }
 
-// Scale of the linear colour before tone mapping.
-const EXPOSURE: f32 = 1.4;
 
 @vertex
 fn vs_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
@@ -120,6 +120,33 @@ struct Terms {
     ds: vec3<f32>,
 }
 
+const PI: f32 = 3.14159265358979;
+
+// The glTF specification's BRDF (appendix B, "Complete model") for base colour `base`,
+// `metallic` and perceptual `roughness`, times nothing: the caller multiplies by the light's
+// irradiance. Roughness is kept at least 0.045 (Filament's and three.js' floor), so a point
+// light's highlight on a mirror stays finite.
+fn gltf_brdf(base: vec3<f32>, metallic: f32, roughness: f32, n: vec3<f32>, l: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
+    let h = normalize(l + v);
+    let ndl = max(dot(n, l), 0.0);
+    let ndv = max(abs(dot(n, v)), 1e-4);
+    let ndh = max(dot(n, h), 0.0);
+    let vdh = max(dot(v, h), 0.0);
+    let r = clamp(roughness, 0.045, 1.0);
+    let a2 = r * r * r * r;
+    let dd = ndh * ndh * (a2 - 1.0) + 1.0;
+    let d = a2 / (PI * dd * dd);
+    let gv = ndl * sqrt(ndv * ndv * (1.0 - a2) + a2);
+    let gl = ndv * sqrt(ndl * ndl * (1.0 - a2) + a2);
+    let vis = 0.5 / max(gv + gl, 1e-7);
+    let spec = d * vis;
+    let fw = pow(1.0 - vdh, 5.0);
+    let metal = spec * (base + (vec3<f32>(1.0) - base) * fw);
+    let f = 0.04 + 0.96 * fw;
+    let dielectric = mix(base / PI, vec3<f32>(spec), f);
+    return mix(dielectric, metal, metallic);
+}
+
 fn light_terms(i: u32, s: Surface) -> Terms {
     var t: Terms;
     let light = lights[i];
@@ -131,10 +158,29 @@ fn light_terms(i: u32, s: Surface) -> Terms {
     t.att = 1.0;
     if (kind != LIGHT_DIRECTIONAL) {
         let d = distance(light.position.xyz, s.p);
-        let a = light.attenuation;
-        t.att = 1.0 / max(a.x + a.y * d + a.z * d * d, 1e-6);
+        if (PHYSICAL_FALLOFF) {
+            // glTF: inverse square (kept finite within 10 cm) times the range window.
+            let x = d / light.ambient.w;
+            let w = clamp(1.0 - x * x * x * x, 0.0, 1.0);
+            t.att = w * w / max(d * d, 0.01);
+        } else {
+            let a = light.attenuation;
+            t.att = 1.0 / max(a.x + a.y * d + a.z * d * d, 1e-6);
+        }
     }
     let l = to_light(light, s.p);
+    if (SHADING_MODEL == SHADING_PBR) {
+        let base = s.mat.diffuse.rgb;
+        let c_diff = base * (1.0 - s.mat.pbr.x);
+        t.ambient = light.ambient.rgb * c_diff * (t.att * LIGHT_SCALE / PI);
+        let ndl = dot(s.n, l);
+        t.facing = ndl > 0.0;
+        if (!t.facing) {
+            return t;
+        }
+        t.ds = light.diffuse.rgb * gltf_brdf(base, s.mat.pbr.x, s.mat.pbr.y, s.n, l, s.v) * (ndl * LIGHT_SCALE);
+        return t;
+    }
     t.ambient = light.ambient.rgb * s.mat.ambient.rgb * t.att;
     let ndl = dot(s.n, l);
     t.facing = ndl > 0.0;
@@ -145,7 +191,53 @@ fn light_terms(i: u32, s: Surface) -> Terms {
     let r = reflect(-l, s.n);
     let spec = light.specular.rgb * s.mat.specular.rgb * pow(max(dot(r, s.v), 0.0), max(s.mat.ambient.w, 1.0));
     t.ds = diffuse + spec;
+    if (LIGHT_SCALE != 1.0) {
+        // Physical lights shaded with Phong (look.rs).
+        t.ambient = t.ambient * LIGHT_SCALE;
+        t.ds = t.ds * LIGHT_SCALE;
+    }
     return t;
+}
+
+// Khronos PBR Neutral (https://github.com/KhronosGroup/ToneMapping, 2024): identity up to
+// 0.76 after a small black offset, then highlights compressed towards 1 and desaturated.
+fn tone_neutral(c_in: vec3<f32>) -> vec3<f32> {
+    let start = 0.8 - 0.04;
+    let desaturation = 0.15;
+    var c = c_in;
+    let x = min(c.r, min(c.g, c.b));
+    let offset = select(0.04, x - 6.25 * x * x, x < 0.08);
+    c = c - offset;
+    let peak = max(c.r, max(c.g, c.b));
+    if (peak < start) {
+        return c;
+    }
+    let d = 1.0 - start;
+    let new_peak = 1.0 - d * d / (peak + d - start);
+    c = c * (new_peak / peak);
+    let g = 1.0 - 1.0 / (desaturation * (peak - new_peak) + 1.0);
+    return mix(c, vec3<f32>(new_peak), g);
+}
+
+// Linear colour to a displayable one: exposure, then the tone map. A fixed exposure is a
+// constant (the compiler folds it into exp's own scale, as it always did for the Phong
+// scenes' 1.4); a metered one the frame's.
+fn tone_map(c: vec3<f32>) -> vec3<f32> {
+    if (EXPOSURE_IS_FIXED) {
+        return tone_map_at(c, FIXED_EXPOSURE);
+    }
+    return tone_map_at(c, frame.look.x);
+}
+
+fn tone_map_at(c: vec3<f32>, k: f32) -> vec3<f32> {
+    if (TONE_MAP == TONE_NEUTRAL) {
+        return clamp(tone_neutral(c * k), vec3<f32>(0.0), vec3<f32>(1.0));
+    }
+    if (TONE_MAP == TONE_CLAMP) {
+        return clamp(c * k, vec3<f32>(0.0), vec3<f32>(1.0));
+    }
+    // Exponential: many overlapping lights add up past 1 without clipping to white.
+    return vec3<f32>(1.0) - exp(-c * k);
 }
 
 // How much of light `i` reaches `s` past the casters, 0..1: from the visibility mask, a shadow
@@ -331,6 +423,9 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
         }
     }
     resolve_samples(s, &acc);
-    // Exponential tone mapping: many overlapping lights add up past 1 without clipping to white.
-    return vec4<f32>(vec3<f32>(1.0) - exp(-acc.color * EXPOSURE), 1.0);
+    if (EMISSION) {
+        // Emitted radiance, through the exposure like reflected light.
+        acc.color = acc.color + s.mat.emissive.rgb;
+    }
+    return vec4<f32>(tone_map(acc.color), 1.0);
 }

@@ -5,4 +5,5 @@
 
 pub(crate) mod blit;
 pub mod lighting;
+pub mod look;
 pub mod visibility;

@@ -241,7 +241,7 @@ fn registered(c: &Crate) -> Vec<String> {
 /// folder of any other technique's declaration.
 fn home(technique: &str) -> String {
     match technique.rsplit_once("::") {
-        Some((folder, _)) if folder == "shadows::atlas" => technique.to_string(),
+        Some(("shadows::atlas", _)) => technique.to_string(),
         Some((folder, _)) => folder.to_string(),
         None => technique.to_string(),
     }

@@ -28,6 +28,8 @@ pub struct ViewArgs {
     pub(super) light_sizes: manyshadows_cli::LightSizeArgs,
     #[command(flatten)]
     pub(super) model: manyshadows_cli::ModelArgs,
+    #[command(flatten)]
+    pub(super) look: manyshadows_cli::LookArgs,
     /// Shadow technique to start with (as for `render`; the panel switches it).
     #[arg(long, default_value_t = Technique::default(), value_parser = manyshadows_cli::parse_technique)]
     pub(super) technique: Technique,

@@ -30,6 +30,8 @@ pub(super) struct Choice {
     pub(super) visibility: bool,
     /// Every light's size times this (1: the scene's sizes, 0: hard shadows).
     pub(super) light_size: f32,
+    /// Shading model, exposure and tone map (from the command line).
+    pub(super) look: manyshadows::Look,
 }
 
 /// The open window and everything drawn into it.
@@ -79,6 +81,7 @@ fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
                 .filter(|_| c.technique.info().fills == Fills::Atlas),
         )
         .with_visibility(c.visibility)
+        .with_look(c.look)
 }
 
 impl State {
@@ -100,6 +103,7 @@ impl State {
             budget: args.shadow_budget,
             visibility: args.show_visibility.is_some(),
             light_size: 1.0,
+            look: args.look.look(),
         };
         let renderer = Renderer::new(&ctx, scene, settings(config.width, config.height, choice))?;
         let egui_ctx = egui::Context::default();
