@@ -1,6 +1,6 @@
 //! glTF files look as another viewer shows them: sample models written by this test (spheres
-//! across metallic and roughness under a sun and a point light, a textured box, a lamp of
-//! point lights with an emissive bulb) render in `manyshadows render` within a mean ꟻLIP of
+//! across metallic and roughness under a sun and a point light, a textured box, metallic and
+//! roughness from a texture, a lamp of point lights with an emissive bulb) render in `manyshadows render` within a mean ꟻLIP of
 //! 0.1 of three.js (npm `three`, its `GLTFLoader` and `MeshStandardMaterial`, WebGL through
 //! SwiftShader in headless Chromium). Both sides see the same file: its camera, its
 //! `KHR_lights_punctual` lights in candela and lux, no shadows, the exposure ours metered
@@ -193,6 +193,45 @@ fn textured_box() -> Scene {
     s
 }
 
+/// Metallic and roughness from a texture (glTF's metallicRoughnessTexture: green roughness,
+/// blue metallic) times factors of 1: a sphere and a box banded metal / dielectric, roughness
+/// rising across them.
+fn metal_rough_map() -> Scene {
+    let mut s = physical(
+        "metal-rough-map",
+        Camera::look_at(Vec3::new(0.0, 0.6, 3.2), Vec3::new(0.0, 0.0, 0.0)),
+    );
+    s.textures
+        .push(Texture::from_fn("metal-rough", 128, 128, |x, y| {
+            let metal = if (y / 32) % 2 == 0 { 255 } else { 0 };
+            let rough = (40 + x * 215 / 127) as u8;
+            [0, rough, metal, 255]
+        }));
+    s.meshes.push(uv_sphere(0.6, 64, 32));
+    s.meshes.push(cuboid(Vec3::splat(0.9)));
+    s.materials.push(Material {
+        metallic_roughness_texture: Some(TextureRef::repeat(0)),
+        ..pbr(Vec3::new(0.95, 0.7, 0.3), 1.0, 1.0)
+    });
+    s.instances.push(Instance::caster(
+        0,
+        0,
+        Mat4::from_translation(Vec3::new(-0.7, 0.0, 0.0)),
+    ));
+    s.instances.push(Instance::caster(
+        1,
+        0,
+        Mat4::from_rotation_translation(Quat::from_rotation_y(0.6), Vec3::new(0.8, -0.1, 0.0)),
+    ));
+    backdrop(&mut s, -0.6, -1.5, 10.0);
+    s.lights = vec![
+        sun(Vec3::new(-0.3, -0.5, -1.0), Vec3::splat(3.0)),
+        point(Vec3::new(1.0, 1.5, 2.0), 10.0, Vec3::new(12.0, 11.0, 10.0)),
+        point(Vec3::new(-1.5, 0.5, 1.5), 10.0, Vec3::new(4.0, 5.0, 7.0)),
+    ];
+    s
+}
+
 /// A floor lamp: a pole, an open shade, an emissive bulb with a warm point light in it, and
 /// four coloured point lights around, in front of the backdrop.
 fn lamp() -> Scene {
@@ -302,7 +341,7 @@ fn save_rgba(path: &Path, rgba: &[u8]) {
 /// The models to compare: the generated ones and any from `MANYSHADOWS_THREEJS_MODELS`
 /// (loaded, defaults added, written again), as (name, glb path).
 fn models(dir: &Path) -> Vec<(String, PathBuf)> {
-    let mut scenes = vec![spheres(), textured_box(), lamp()];
+    let mut scenes = vec![spheres(), textured_box(), metal_rough_map(), lamp()];
     if let Some(list) = std::env::var_os("MANYSHADOWS_THREEJS_MODELS") {
         for p in std::env::split_paths(&list.to_string_lossy().replace(',', ":")) {
             let loaded = manyshadows_scene::loaders::load_scene(&p)
@@ -383,7 +422,8 @@ fn gltf_models_render_as_three_js_renders_them() {
             failures.push(format!("{name}: mean ꟻLIP {:.4}", flip.mean));
         }
         // Not a blank frame on either side: the generated models are lit.
-        let generated = ["spheres", "textured-box", "lamp"].contains(&name.as_str());
+        let generated =
+            ["spheres", "textured-box", "metal-rough-map", "lamp"].contains(&name.as_str());
         for (who, img) in [("ours", &ours), ("three.js", &theirs)]
             .into_iter()
             .filter(|_| generated)

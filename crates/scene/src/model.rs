@@ -150,6 +150,10 @@ pub struct Material {
     /// Tangent-space normal map (glTF convention: +Y up in the image's green channel).
     #[serde(skip)]
     pub normal_texture: Option<TextureRef>,
+    /// glTF's metallic-roughness texture (linear data: green = roughness, blue = metallic),
+    /// multiplying [`Material::pbr`]'s factors texel by texel; used by the glTF BRDF only.
+    #[serde(skip)]
+    pub metallic_roughness_texture: Option<TextureRef>,
     /// Alpha of the base colour (glTF `baseColorFactor.a`): multiplies the texture's alpha.
     #[serde(default = "Material::default_alpha")]
     pub base_alpha: f32,
@@ -247,6 +251,7 @@ impl Default for Material {
             shininess: Self::default_shininess(),
             base_color_texture: None,
             normal_texture: None,
+            metallic_roughness_texture: None,
             base_alpha: Self::default_alpha(),
             alpha_mode: AlphaMode::Opaque,
             alpha_cutoff: Self::default_cutoff(),

@@ -3,8 +3,9 @@
 @group(0) @binding(0) var<uniform> frame: FrameUniforms;
 @group(0) @binding(1) var<storage, read> instances: array<InstanceData>;
 @group(0) @binding(2) var<storage, read> materials: array<MaterialData>;
-// The scene's images (textures.rs): base colours (sRGB, so samples are linear) and normal maps,
-// one layer each, every layer the same side; wrap modes are applied here, not by the sampler.
+// The scene's images (textures.rs): base colours (sRGB, so samples are linear), and normal and
+// metallic-roughness maps (linear data), one layer each, every layer the same side; wrap
+// modes are applied here, not by the sampler.
 @group(0) @binding(3) var colour_tex: texture_2d_array<f32>;
 @group(0) @binding(4) var normal_tex: texture_2d_array<f32>;
 @group(0) @binding(5) var tex_sampler: sampler;
@@ -98,7 +99,9 @@ struct GBufferOut {
     // xyz world position, w = albedo (see has_geometry in common.wgsl; the clear value 0 means
     // no geometry).
     @location(0) position: vec4<u32>,
-    // xyz unit normal facing the camera, w = material index (as u32, not bits).
+    // xyz unit normal facing the camera, w = material index (bits 0-15) and, for a material
+    // with a metallic-roughness texture, the texel's roughness (bits 16-23) and metallic
+    // (bits 24-31) as bytes.
     @location(1) normal_material: vec4<u32>,
 }
 
@@ -158,6 +161,13 @@ fn surface(in: VsOut, front: bool, mat: MaterialData, base: vec4<f32>, d: Derivs
         albedo = pack4x8unorm(vec4<f32>(srgb_from_linear(base.rgb), 1.0)) | 0xff000000u;
     }
     out.position = vec4<u32>(bitcast<vec3<u32>>(in.world), albedo);
-    out.normal_material = vec4<u32>(bitcast<vec3<u32>>(n), in.material);
+    var material_word = in.material;
+    let mr_layer = bitcast<u32>(mat.pbr.z);
+    if (mr_layer != 0u) {
+        let t = sample_layer(normal_tex, mr_layer, bitcast<u32>(mat.pbr.w), in.uv, d);
+        let bytes = vec2<u32>(round(clamp(t.gb, vec2<f32>(0.0), vec2<f32>(1.0)) * 255.0));
+        material_word = material_word | (bytes.x << 16u) | (bytes.y << 24u);
+    }
+    out.normal_material = vec4<u32>(bitcast<vec3<u32>>(n), material_word);
     return out;
 }

@@ -80,7 +80,8 @@ impl GBufferData {
                 out.albedo.push(p[3].to_le_bytes());
                 out.normal
                     .push(Vec3::new(f(n[0]), f(n[1]), f(n[2])).normalize_or_zero());
-                out.material.push(n[3]);
+                // Bits 16-31 hold a metallic-roughness texel (gbuffer.wgsl).
+                out.material.push(n[3] & 0xffff);
             }
             Ok(out)
         })

@@ -57,7 +57,8 @@ struct MaterialData {
     // the base colour in bits 0-3, of the normal map in bits 4-7, MATERIAL_ALPHA_TEST), alpha
     // cutoff (f32 bits).
     texture: vec4<u32>,
-    // metallic, roughness (glTF BRDF), unused, unused.
+    // metallic, roughness (glTF BRDF), bits of 1 + the metallic-roughness texture's layer in
+    // the data array (0: none), bits of its wrap modes.
     pbr: vec4<f32>,
     // rgb emitted radiance, unused.
     emissive: vec4<f32>,

@@ -76,7 +76,8 @@ pub struct MaterialData {
     /// 1 + base-colour layer (0: none), 1 + normal-map layer (0: none), flags
     /// (`MATERIAL_*` in common.wgsl: wrap modes, alpha test), alpha cutoff (`f32` bits).
     pub texture: [u32; 4],
-    /// metallic, roughness (the glTF BRDF's), unused ×2.
+    /// metallic, roughness (the glTF BRDF's), the bits of 1 + the metallic-roughness layer in
+    /// the data array (0: none), the bits of its wrap modes.
     pub pbr: [f32; 4],
     /// rgb emitted radiance, unused.
     pub emissive: [f32; 4],
@@ -86,12 +87,14 @@ pub struct MaterialData {
 pub const MATERIAL_ALPHA_TEST: u32 = 1 << 8;
 
 impl MaterialData {
-    /// Packs `m` whose base-colour and normal textures sit in those layers of the scene's
-    /// texture arrays (`None`: untextured), alpha-tested if `alpha_test`.
+    /// Packs `m` whose base-colour, normal and metallic-roughness textures sit in those
+    /// layers of the scene's texture arrays (`None`: untextured; the last two share the data
+    /// array), alpha-tested if `alpha_test`.
     pub fn new(
         m: &Material,
         base_layer: Option<u32>,
         normal_layer: Option<u32>,
+        mr_layer: Option<u32>,
         alpha_test: bool,
     ) -> Self {
         let wrap = |t: Option<manyshadows_scene::TextureRef>| {
@@ -113,7 +116,12 @@ impl MaterialData {
                 flags,
                 m.effective_cutoff().unwrap_or(0.0).to_bits(),
             ],
-            pbr: [pbr.metallic, pbr.roughness, 0.0, 0.0],
+            pbr: [
+                pbr.metallic,
+                pbr.roughness,
+                f32::from_bits(mr_layer.map_or(0, |l| l + 1)),
+                f32::from_bits(wrap(m.metallic_roughness_texture)),
+            ],
             emissive: m.emissive.extend(0.0).to_array(),
         }
     }
@@ -122,7 +130,7 @@ impl MaterialData {
 impl From<&Material> for MaterialData {
     /// An untextured, opaque material.
     fn from(m: &Material) -> Self {
-        Self::new(m, None, None, false)
+        Self::new(m, None, None, None, false)
     }
 }
 

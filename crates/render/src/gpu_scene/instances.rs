@@ -84,6 +84,10 @@ pub struct GpuScene {
 /// Bytes per vertex position.
 pub const POSITION_STRIDE: u64 = 12;
 
+/// Most materials a scene may have: the G-buffer keeps a pixel's material index in 16 bits
+/// (the other 16 hold its metallic-roughness texel).
+pub const MAX_MATERIALS: usize = 1 << 16;
+
 /// Vertex layout of the position buffer (location 0).
 pub const POSITION_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
     array_stride: POSITION_STRIDE,
@@ -193,6 +197,15 @@ impl GpuScene {
                 .map(|i| InstanceData::new(i.transform, i.material as u32))
                 .collect()
         };
+        if scene.materials.len() > MAX_MATERIALS {
+            return Err(RenderError::TooLarge {
+                what: format!("the scene's {} materials", scene.materials.len()),
+                needed: scene.materials.len() as u64,
+                limit: MAX_MATERIALS as u64,
+                unit: "materials",
+                limit_name: "G-buffer material index (16 bits)",
+            });
+        }
         let masks = MaskSet::new(scene);
         let textures = crate::gpu_scene::textures::SceneTextures::new(ctx, scene)?;
         let layer = |layers: &[Option<u32>], t: Option<manyshadows_scene::TextureRef>| {
@@ -207,6 +220,7 @@ impl GpuScene {
                     m,
                     layer(&textures.colour_layers, m.base_color_texture),
                     layer(&textures.normal_layers, m.normal_texture),
+                    layer(&textures.mr_layers, m.metallic_roughness_texture),
                     masks.is_masked(i),
                 )
             })

@@ -1,6 +1,6 @@
 //! The scene's images on the GPU, for the camera's view: base colours in one sRGB texture
-//! array, normal maps in another, every layer the same square side with a full mip chain, and
-//! one trilinear sampler.
+//! array, linear data (normal maps and metallic-roughness maps) in another, every layer the
+//! same square side with a full mip chain, and one trilinear sampler.
 //!
 //! Why arrays of one size: core WebGPU (and so OpenGL and browsers) has no arrays of textures
 //! of different sizes in one binding, and binding one texture per material would mean one draw
@@ -32,21 +32,24 @@ pub const TEXTURE_BUDGET_BYTES: u64 = 256 << 20;
 /// Format of the base-colour array (sampling returns linear colour, alpha as stored).
 pub const COLOUR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 
-/// Format of the normal-map array.
+/// Format of the data array (normal maps, metallic-roughness maps).
 pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 /// The texture arrays of a scene.
 pub struct SceneTextures {
     /// Base colours, one layer per texture some material uses as its base colour.
     pub colour: wgpu::TextureView,
-    /// Normal maps, one layer per texture some material uses as its normal map.
+    /// Linear data: one layer per texture some material uses as its normal map, and one per
+    /// texture some material uses as its metallic-roughness map.
     pub normal: wgpu::TextureView,
     /// Trilinear, repeating.
     pub sampler: wgpu::Sampler,
     /// Layer of each scene texture in the colour array (`None`: not a base colour).
     pub colour_layers: Vec<Option<u32>>,
-    /// Layer of each scene texture in the normal array.
+    /// Layer of each scene texture in the data array as a normal map.
     pub normal_layers: Vec<Option<u32>>,
+    /// Layer of each scene texture in the data array as a metallic-roughness map.
+    pub mr_layers: Vec<Option<u32>>,
     /// Side of every layer in texels (1 when the scene has no textures).
     pub side: u32,
     /// Bytes of both arrays with their mipmaps.
@@ -181,6 +184,25 @@ fn normal_mips(texture: &Texture, side: u32) -> Vec<Vec<u8>> {
     levels
 }
 
+/// The mip chain of one metallic-roughness layer: the values averaged as they are (they are
+/// factors, not colours).
+fn data_mips(texture: &Texture, side: u32) -> Vec<Vec<u8>> {
+    let encode = |v: &[[f32; 4]]| -> Vec<u8> {
+        v.iter()
+            .flat_map(|c| c.map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8))
+            .collect()
+    };
+    let mut level = resize_linear(texture, side);
+    let mut levels = vec![encode(&level)];
+    let mut s = side;
+    while s > 1 {
+        level = halve(&level, s);
+        s /= 2;
+        levels.push(encode(&level));
+    }
+    levels
+}
+
 /// `texture` resampled to `side`² without any colour conversion, as floats in 0..1.
 fn resize_linear(texture: &Texture, side: u32) -> Vec<[f32; 4]> {
     let src = image::RgbaImage::from_raw(texture.width, texture.height, texture.rgba.to_vec())
@@ -219,6 +241,7 @@ impl SceneTextures {
         let n = scene.textures.len();
         let mut colour_layers = vec![None; n];
         let mut normal_layers = vec![None; n];
+        let mut mr_layers = vec![None; n];
         let (mut colours, mut normals) = (0u32, 0u32);
         for m in &scene.materials {
             if let Some(t) = m.base_color_texture {
@@ -234,12 +257,22 @@ impl SceneTextures {
                 });
             }
         }
+        // Metallic-roughness maps after the normal maps, in the same (linear) array.
+        for m in &scene.materials {
+            if let Some(t) = m.metallic_roughness_texture {
+                mr_layers[t.texture].get_or_insert_with(|| {
+                    normals += 1;
+                    normals - 1
+                });
+            }
+        }
         let limits = ctx.limits();
         let max_layers = limits.max_texture_array_layers;
         if colours.max(normals) > max_layers {
             return Err(RenderError::TooLarge {
                 what: format!(
-                    "the materials' {colours} base-colour and {normals} normal-map textures"
+                    "the materials' {colours} base-colour and {normals} normal-map and \
+                     metallic-roughness textures"
                 ),
                 needed: u64::from(colours.max(normals)),
                 limit: u64::from(max_layers),
@@ -251,7 +284,11 @@ impl SceneTextures {
             .textures
             .iter()
             .enumerate()
-            .filter(|(i, _)| colour_layers[*i].is_some() || normal_layers[*i].is_some())
+            .filter(|(i, _)| {
+                colour_layers[*i].is_some()
+                    || normal_layers[*i].is_some()
+                    || mr_layers[*i].is_some()
+            })
             .map(|(_, t)| t)
             .collect();
         let side = layer_side(&used, colours + normals, limits.max_texture_dimension_2d);
@@ -318,6 +355,9 @@ impl SceneTextures {
             if let Some(layer) = normal_layers[i] {
                 upload(&normal, layer, normal_mips(t, side));
             }
+            if let Some(layer) = mr_layers[i] {
+                upload(&normal, layer, data_mips(t, side));
+            }
         }
         let view = |t: &wgpu::Texture| {
             t.create_view(&wgpu::TextureViewDescriptor {
@@ -341,6 +381,7 @@ impl SceneTextures {
             sampler,
             colour_layers,
             normal_layers,
+            mr_layers,
             side,
             bytes: array_bytes(side, colours) + array_bytes(side, normals),
         })

@@ -380,7 +380,12 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     var s: Surface;
     s.p = pos.xyz;
     s.n = normalize(bitcast<vec3<f32>>(nm.xyz));
-    s.mat = materials[nm.w];
+    s.mat = materials[nm.w & 0xffffu];
+    if (bitcast<u32>(s.mat.pbr.z) != 0u) {
+        // The metallic-roughness texel the G-buffer kept (gbuffer.wgsl) times the factors.
+        s.mat.pbr.x = s.mat.pbr.x * (f32(nm.w >> 24u) / 255.0);
+        s.mat.pbr.y = s.mat.pbr.y * (f32((nm.w >> 16u) & 255u) / 255.0);
+    }
     // The texture's colour multiplies the material's ambient and diffuse reflectance (exactly
     // 1 for untextured surfaces, so their numbers do not change).
     let albedo = gbuffer_albedo(gpos);

@@ -37,7 +37,7 @@ pub mod atrium;
 pub mod courtyard;
 pub mod cubes;
 pub mod dragon;
-mod lights;
+pub(crate) mod lights;
 mod options;
 pub mod terrain;
 

@@ -33,7 +33,8 @@ pub(crate) const EMISSIVE_STRENGTH: &str = "KHR_materials_emissive_strength";
 /// so a file looks as its author made it.
 pub const GLTF_SIZE_EXTRA: &str = "manyshadows_size";
 
-/// Number of seeded lights a scene without lights gets.
+/// Number of lights a model file without lights gets: the default rig's key, fill and rim
+/// directional lights and its coloured point lights (`default_rig` in framing.rs).
 pub const DEFAULT_LIGHT_COUNT: usize = 8;
 
 /// Largest spot cone half-angle a glTF spot light maps to: just under the 89° that

@@ -7,13 +7,9 @@ use std::path::Path;
 
 use glam::Mat4;
 
-use super::common::{
-    bounds_of_placed, check_file_size, check_triangles, parse_error, Parts, DEFAULT_LIGHT_COUNT,
-    PHONG_PER_LUX,
-};
-use super::framing::{add_ground, default_camera};
+use super::common::{bounds_of_placed, check_file_size, check_triangles, parse_error, Parts};
+use super::framing::{add_ground, default_camera, default_rig};
 use super::options::LoadOptions;
-use crate::builtin::{scatter_lights, LightMix};
 use crate::error::SceneError;
 use crate::look::Lighting;
 use crate::model::{Camera, Instance, Material, Mesh, Scene};
@@ -106,8 +102,9 @@ pub struct LoadedScene {
 /// node transforms baked, one instance per `EXT_mesh_gpu_instancing` instance; one per OBJ
 /// object and material; one for PLY), instances casting shadows, the file's materials and
 /// textures, its lights and camera, mapped as the module documentation describes. A file
-/// without lights gets [`DEFAULT_LIGHT_COUNT`] seeded ones, a file without a camera one that
-/// frames the bounds, a model without a floor a ground plane; the notes say so.
+/// without lights gets the [`DEFAULT_LIGHT_COUNT`] lights of a default rig (key, fill, rim,
+/// coloured accents), a file without a camera one that frames the bounds, a model without a
+/// floor a ground plane; the notes say so.
 ///
 /// The same as [`load_scene_with`] with [`LoadOptions::default`].
 ///
@@ -200,22 +197,12 @@ fn assemble(
     };
     scene.camera = camera.unwrap_or_else(|| default_camera(bounds));
     if scene.lights.is_empty() {
-        scene.lights = scatter_lights(&scene, DEFAULT_LIGHT_COUNT, 1, LightMix::All, None);
-        if lighting == Lighting::Physical {
-            // The seeded lights are in Phong units: 10 cd (or lx) each.
-            for l in &mut scene.lights {
-                l.ambient /= PHONG_PER_LUX;
-                l.diffuse /= PHONG_PER_LUX;
-                l.specular /= PHONG_PER_LUX;
-            }
-        }
-        let count = |t: &str| scene.lights.iter().filter(|l| l.type_name() == t).count();
+        scene.lights = default_rig(bounds, &scene.camera, lighting);
         notes.push(format!(
-            "the file has no lights: added {} seeded lights ({} spot, {} point, {} directional)",
+            "the file has no lights: added a light rig of {} (key, fill and rim directional \
+             lights, {} coloured point lights around the model)",
             scene.lights.len(),
-            count("spot"),
-            count("point"),
-            count("directional")
+            scene.lights.len() - 3
         ));
     }
     if let Some(note) = add_ground(&mut scene, options.ground) {

@@ -4,9 +4,11 @@
 
 use glam::{Mat4, Vec3};
 
-use super::common::centre_and_diagonal;
+use super::common::{centre_and_diagonal, DEFAULT_LIGHT_COUNT, PHONG_PER_LUX};
 use super::options::Ground;
-use crate::model::{Camera, Instance, Material, Scene};
+use crate::builtin::lights::{directional, point, Tone};
+use crate::look::Lighting;
+use crate::model::{Camera, Instance, Light, LightKind, Material, Scene};
 
 /// Vertical field of view of the framing camera, in degrees.
 const FRAMING_FOV_DEG: f32 = 60.0;
@@ -68,6 +70,101 @@ pub(crate) fn default_camera(bounds: Option<(Vec3, Vec3)>) -> Camera {
         near: size / 1000.0,
         far: 4.0 * size + distance,
     }
+}
+
+/// The coloured point lights of the default rig, around the model.
+const RIG_POINTS: usize = DEFAULT_LIGHT_COUNT - 3;
+
+/// The light rig of a file without lights, placed for `camera` around `bounds`: a studio's
+/// three-point lighting plus coloured accents, every light outside the model.
+///
+/// - **key**: a directional light from the camera's left, 45° above the view's horizontal
+///   direction, warm white, brightness 0.9, casting shadows (onto the ground plane behind the
+///   model and to its right, where the camera sees them);
+/// - **fill**: from the camera's right and lower (about 15°), cool, 0.35, no shadows, so that
+///   the key's shadowed side is not black;
+/// - **rim**: from behind and above, white, 0.6, casting shadows: it outlines the silhouette;
+/// - **accents**: [`RIG_POINTS`] shadow-casting point lights evenly around the model at 0.8
+///   diagonals from its centre (outside its bounds, whose half-diagonal is 0.5) and 0.1 to 0.4
+///   diagonals above it, in muted colours, each lighting the model's centre to 0.25.
+///
+/// Brightnesses are Phong units (what a white surface facing the light shows); in a physical
+/// scene each directional light gives 10 lux per unit and each point light the candela that
+/// give 10 lux per unit at the model's centre, so the rig looks the same at any model scale.
+pub(crate) fn default_rig(
+    bounds: Option<(Vec3, Vec3)>,
+    camera: &Camera,
+    lighting: Lighting,
+) -> Vec<Light> {
+    let (centre, diagonal) = centre_and_diagonal(bounds);
+    let size = diagonal.max(1e-3);
+    // The view's horizontal direction from the model towards the camera, and its right.
+    let mut back = camera.position - camera.target;
+    back.y = 0.0;
+    let back = back.try_normalize().unwrap_or(Vec3::Z);
+    let right = Vec3::Y.cross(back);
+    let sun = |from: Vec3, colour: Vec3, brightness: f32, shadows: bool| {
+        let mut l = directional(
+            -from.normalize(),
+            Tone {
+                color: colour,
+                brightness,
+            },
+            None,
+        );
+        l.casts_shadows = shadows;
+        l
+    };
+    let mut lights = vec![
+        sun(
+            back - right + Vec3::Y * 1.41,
+            Vec3::new(1.0, 0.95, 0.88),
+            0.9,
+            true,
+        ),
+        sun(
+            back + right * 1.2 + Vec3::Y * 0.42,
+            Vec3::new(0.82, 0.9, 1.0),
+            0.35,
+            false,
+        ),
+        sun(-back + right * 0.3 + Vec3::Y * 1.0, Vec3::ONE, 0.6, true),
+    ];
+    const ACCENTS: [Vec3; RIG_POINTS] = [
+        Vec3::new(1.0, 0.72, 0.45),
+        Vec3::new(0.55, 0.75, 1.0),
+        Vec3::new(1.0, 0.55, 0.65),
+        Vec3::new(0.6, 1.0, 0.75),
+        Vec3::new(0.85, 0.7, 1.0),
+    ];
+    for (i, colour) in ACCENTS.iter().enumerate() {
+        let angle = std::f32::consts::TAU * (i as f32 + 0.25) / RIG_POINTS as f32;
+        let height = size * (0.1 + 0.3 * i as f32 / (RIG_POINTS - 1) as f32);
+        let position =
+            centre + (back * angle.cos() + right * angle.sin()) * (0.8 * size) + Vec3::Y * height;
+        let key = position.distance(centre);
+        let tone = Tone {
+            color: *colour,
+            brightness: 0.25,
+        };
+        lights.push(point(position, 2.5 * key, key, tone, None));
+    }
+    if lighting == Lighting::Physical {
+        for l in &mut lights {
+            // Directional: 10 lx per unit. Point: 10 lx per unit at the model's centre.
+            let scale = match l.kind {
+                LightKind::Point { position, .. } => {
+                    position.distance_squared(centre)
+                        * l.attenuation.factor(position.distance(centre))
+                }
+                _ => 1.0,
+            } / PHONG_PER_LUX;
+            l.ambient = Vec3::ZERO;
+            l.diffuse *= scale;
+            l.specular = l.diffuse;
+        }
+    }
+    lights
 }
 
 /// Whether the scene has a floor of its own: its horizontal triangles within the lowest 2 % of

@@ -170,6 +170,7 @@ pub(super) fn read_materials(opened: &Opened, notes: &mut Vec<String>) -> Materi
             shininess: shininess_from_roughness(roughness),
             base_color_texture: None,
             normal_texture: None,
+            metallic_roughness_texture: None,
             base_alpha: base[3],
             alpha_mode: match m.alpha_mode() {
                 ::gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
@@ -205,6 +206,11 @@ pub(super) fn read_materials(opened: &Opened, notes: &mut Vec<String>) -> Materi
             notes,
         );
         let normal_transform = transform_of("/normalTexture", "normal", notes);
+        let mr_transform = transform_of(
+            "/pbrMetallicRoughness/metallicRoughnessTexture",
+            "metallic-roughness",
+            notes,
+        );
         let mut use_texture = |what: &str, tex: ::gltf::Texture<'_>, set: u32| {
             if set != 0 {
                 notes.push(format!(
@@ -241,16 +247,43 @@ pub(super) fn read_materials(opened: &Opened, notes: &mut Vec<String>) -> Materi
             let set = set_of(&normal_transform, info.tex_coord());
             out.normal_texture = use_texture("normal", info.texture(), set);
         }
+        if let Some(info) = pbr.metallic_roughness_texture() {
+            let set = set_of(&mr_transform, info.tex_coord());
+            out.metallic_roughness_texture = use_texture("metallic-roughness", info.texture(), set);
+        }
+        let chosen = if out.base_color_texture.is_some() {
+            base_transform
+        } else {
+            normal_transform
+        };
+        if out.metallic_roughness_texture.is_some()
+            && (out.base_color_texture.is_some() || out.normal_texture.is_some())
+            && !mr_transform
+                .map_or(Affine2::IDENTITY, |t| t.matrix)
+                .abs_diff_eq(chosen.map_or(Affine2::IDENTITY, |t| t.matrix), 1e-6)
+        {
+            notes.push(format!(
+                "material '{name}': its metallic-roughness texture has a KHR_texture_transform                  different from its other textures'; theirs is applied (the metallic-roughness                  map is misplaced)"
+            ));
+        }
+        let lone_mr = out.base_color_texture.is_none() && out.normal_texture.is_none();
         uv_transforms.push(uv_transform(
             &name,
             out.base_color_texture
                 .is_some()
                 .then_some(base_transform)
                 .flatten(),
-            out.normal_texture
-                .is_some()
-                .then_some(normal_transform)
-                .flatten(),
+            if lone_mr {
+                out.metallic_roughness_texture
+                    .is_some()
+                    .then_some(mr_transform)
+                    .flatten()
+            } else {
+                out.normal_texture
+                    .is_some()
+                    .then_some(normal_transform)
+                    .flatten()
+            },
             out.base_color_texture.is_some(),
             notes,
         ));

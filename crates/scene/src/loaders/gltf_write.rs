@@ -28,9 +28,9 @@ use crate::texture::{AlphaMode, TextureRef, Wrap};
 ///   triangles are left out. Loading bakes each node's transform, so a mesh placed twice comes
 ///   back as two meshes.
 /// - Materials, all and in order: `baseColorFactor` = (diffuse, `base_alpha`), `alphaMode`,
-///   `alphaCutoff` (only for `Mask`, where it means something), `doubleSided`, base-colour
-///   and normal textures (each scene texture an embedded PNG image, with a sampler for its
-///   wrap modes). The Phong terms go through the loader's mapping backwards: roughness =
+///   `alphaCutoff` (only for `Mask`, where it means something), `doubleSided`, base-colour,
+///   normal and metallic-roughness textures (each scene texture an embedded PNG image, with a
+///   sampler for its wrap modes). The Phong terms go through the loader's mapping backwards: roughness =
 ///   `(2 / (shininess + 2))^¼` (shininess clamped to 1..=512), metallic = the least-squares
 ///   fit of `specular = mix(0.04, diffuse, metallic)`. So shininess always round-trips,
 ///   specular only when it has that form (e.g. grey diffuse with grey specular), and ambient
@@ -384,6 +384,9 @@ fn material_json(
     });
     if let Some(t) = m.base_color_texture {
         pbr["baseColorTexture"] = json!({ "index": texture(t) });
+    }
+    if let Some(t) = m.metallic_roughness_texture {
+        pbr["metallicRoughnessTexture"] = json!({ "index": texture(t) });
     }
     let mut out = json!({
         "name": format!("material {index}"),

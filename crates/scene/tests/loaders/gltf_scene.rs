@@ -441,17 +441,36 @@ fn files_without_lights_or_camera_get_defaults_and_a_note() {
         let count = |t: &str| scene.lights.iter().filter(|l| l.type_name() == t).count();
         assert_eq!(
             (count("spot"), count("point"), count("directional")),
-            (5, 2, 1)
+            (0, 5, 3)
         );
         assert!(
             loaded.notes.contains(
-                &"the file has no lights: added 8 seeded lights (5 spot, 2 point, 1 directional)"
+                &"the file has no lights: added a light rig of 8 (key, fill and rim directional \
+                  lights, 5 coloured point lights around the model)"
                     .to_string()
             ),
             "{:?}",
             loaded.notes
         );
         let (lo, hi) = scene.world_bounds(false).unwrap();
+        // The rig lights the side the camera sees: key and fill come from the camera's side
+        // (and from above), the rim from behind; no light stands inside the model.
+        let towards_camera = (scene.camera.position - scene.camera.target).normalize();
+        let from: Vec<f32> = scene
+            .lights
+            .iter()
+            .filter_map(|l| match l.kind {
+                LightKind::Directional { direction, .. } => Some(-direction.dot(towards_camera)),
+                _ => None,
+            })
+            .collect();
+        assert!(from[0] > 0.3 && from[1] > 0.3 && from[2] < 0.0, "{from:?}");
+        for l in &scene.lights {
+            if let LightKind::Point { position, .. } = l.kind {
+                let inside = position.cmpge(lo).all() && position.cmple(hi).all();
+                assert!(!inside, "a rig light inside the model's bounds: {position}");
+            }
+        }
         assert_frames(&scene.camera, lo, hi);
         let diagonal = (hi - lo).length();
         assert!((scene.camera.near - diagonal / 1000.0).abs() < 1e-7);
