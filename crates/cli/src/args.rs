@@ -139,7 +139,7 @@ pub(crate) fn wgpu_backends(name: &str) -> manyshadows::wgpu::Backends {
 pub(crate) struct RenderArgs {
     /// Built-in scene name, a TOML scene file (see docs/SCENE_FORMAT.md), or a model file
     /// (.gltf/.glb with its materials, textures, KHR_lights_punctual lights and camera; .obj
-    /// with its MTL; .ply/.ply.gz), rendered with its own lights and camera (8 seeded lights
+    /// with its MTL; .ply/.ply.gz), rendered with its own lights and camera (a light rig of 8
     /// and a framing camera when it has none). Built-ins: atrium, terrain, dragon, cubes,
     /// courtyard (textures and alpha-masked foliage, lattice, banners), courtyard-opaque,
     /// plane-spot, plane-point, plane-directional.

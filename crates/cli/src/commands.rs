@@ -16,7 +16,9 @@ Render scenes lit by many shadow-casting lights, headless, to PNG.
 
 Every frame is: a G-buffer pass, shadow generation into one depth atlas (one tile per shadow
 view: 1 per spot light, 6 per point light, one per cascade of a directional light), then
-deferred Phong lighting with percentage-closer filtering.
+deferred lighting with percentage-closer filtering: Phong for the built-in and TOML scenes,
+the glTF BRDF with an automatic exposure and Khronos PBR Neutral for glTF files (--shading,
+--exposure, --tone-map choose).
 
 Run with no arguments to render the built-in `atrium` (a two-storey hall, >200k triangles)
 with 32 lights of all three types to frame.png.

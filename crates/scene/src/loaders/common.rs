@@ -73,7 +73,7 @@ pub(crate) struct Parts {
     pub transforms: Vec<Vec<Mat4>>,
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
-    /// The file's lights; empty: seeded ones are added.
+    /// The file's lights; empty: the default rig is added.
     pub lights: Vec<Light>,
     /// The file's camera; `None`: the default framing.
     pub camera: Option<Camera>,

@@ -102,7 +102,7 @@ pub struct LoadedScene {
 /// node transforms baked, one instance per `EXT_mesh_gpu_instancing` instance; one per OBJ
 /// object and material; one for PLY), instances casting shadows, the file's materials and
 /// textures, its lights and camera, mapped as the module documentation describes. A file
-/// without lights gets the [`DEFAULT_LIGHT_COUNT`] lights of a default rig (key, fill, rim,
+/// without lights gets the [`DEFAULT_LIGHT_COUNT`](super::DEFAULT_LIGHT_COUNT) lights of a default rig (key, fill, rim,
 /// coloured accents), a file without a camera one that frames the bounds, a model without a
 /// floor a ground plane; the notes say so.
 ///

@@ -80,10 +80,12 @@
 //!   [`Light::size`](crate::Light::size)); a value that is not a number, negative, or
 //!   (directional) 30° or more is ignored with a note.
 //!
-//! A file with no lights (and every OBJ and PLY file) gets the seeded layout
-//! [`scatter_lights`]`(scene, 8, seed 1, LightMix::All, None)` (whose lights have the built-in
-//! default sizes, [`crate::light_size`]) and a note saying so; in a glTF scene their Phong
-//! colours are turned into candela and lux (× 10, 1 / [`PHONG_PER_LUX`]).
+//! A file with no lights (and every OBJ and PLY file) gets a light rig placed for its camera
+//! around its bounds (`default_rig` in framing.rs: key, fill and rim directional lights and
+//! coloured point lights outside the model, with the built-in default sizes,
+//! [`crate::light_size`]) and a note saying so; in a glTF scene their Phong colours are
+//! turned into lux (directional: × 10, 1 / [`PHONG_PER_LUX`]) and into the candela that give
+//! as much at the model's centre (point).
 //! [`write_gltf`] writes the inverse mapping (`intensity = max(diffuse)` for a physical
 //! scene, `max(diffuse) / PHONG_PER_LUX` for a Phong one; `color = diffuse / max(diffuse)`, a
 //! size above 0 as [`GLTF_SIZE_EXTRA`]), so a written light loads back with the same colours
@@ -93,9 +95,9 @@
 //!
 //! # glTF materials → materials
 //!
-//! - `metallicFactor` and `roughnessFactor` → [`Material::pbr`] (the glTF BRDF's parameters;
+//! - `metallicFactor` and `roughnessFactor` → [`Material::pbr`](crate::Material::pbr) (the glTF BRDF's parameters;
 //!   the Phong terms below are what `--shading phong` shows);
-//! - `emissiveFactor` × `KHR_materials_emissive_strength` → [`Material::emissive`];
+//! - `emissiveFactor` × `KHR_materials_emissive_strength` → [`Material::emissive`](crate::Material::emissive);
 //! - `baseColorFactor` rgb → `diffuse` and `ambient`; its alpha → `base_alpha`;
 //! - specular = `mix(0.04, base rgb, metallic)` per channel (dielectrics reflect about 4 %
 //!   white, metals their own colour);
