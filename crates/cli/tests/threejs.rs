@@ -1,6 +1,7 @@
 //! glTF files look as another viewer shows them: sample models written by this test (spheres
 //! across metallic and roughness under a sun and a point light, a textured box, metallic and
-//! roughness from a texture, a lamp of point lights with an emissive bulb) render in `manyshadows render` within a mean ꟻLIP of
+//! roughness from a texture, a lamp of point lights with an emissive bulb and a sign whose
+//! emission is a texture) render in `manyshadows render` within a mean ꟻLIP of
 //! 0.1 of three.js (npm `three`, its `GLTFLoader` and `MeshStandardMaterial`, WebGL through
 //! SwiftShader in headless Chromium). Both sides see the same file: its camera, its
 //! `KHR_lights_punctual` lights in candela and lux, no shadows, the exposure ours metered
@@ -233,7 +234,8 @@ fn metal_rough_map() -> Scene {
 }
 
 /// A floor lamp: a pole, an open shade, an emissive bulb with a warm point light in it, and
-/// four coloured point lights around, in front of the backdrop.
+/// four coloured point lights around, in front of the backdrop with a sign on it whose
+/// emission comes from a texture.
 fn lamp() -> Scene {
     let mut s = physical(
         "lamp",
@@ -268,6 +270,29 @@ fn lamp() -> Scene {
         bulb,
         2,
         Mat4::from_translation(Vec3::Y * 1.45),
+    ));
+    // A glowing sign on the wall: emission from a texture (bars of three colours on black).
+    s.textures.push(Texture::from_fn("sign", 64, 32, |x, y| {
+        let on = (4..28).contains(&y) && x % 16 >= 3 && x % 16 < 13;
+        match (on, x / 16 % 3) {
+            (false, _) => [0, 0, 0, 255],
+            (true, 0) => [255, 80, 40, 255],
+            (true, 1) => [60, 255, 120, 255],
+            (true, _) => [70, 120, 255, 255],
+        }
+    }));
+    let sign = s.meshes.len();
+    s.meshes.push(cuboid(Vec3::new(0.8, 0.4, 0.02)));
+    let sign_material = s.materials.len();
+    s.materials.push(Material {
+        emissive: Vec3::splat(3.0),
+        emissive_texture: Some(TextureRef::repeat(s.textures.len() - 1)),
+        ..pbr(Vec3::splat(0.05), 0.0, 0.6)
+    });
+    s.instances.push(Instance::caster(
+        sign,
+        sign_material,
+        Mat4::from_translation(Vec3::new(-0.8, 1.6, -1.15)),
     ));
     backdrop(&mut s, 0.0, -1.2, 8.0);
     s.lights = vec![

@@ -153,6 +153,7 @@ mod tests {
                         tone_map: crate::shading::look::ToneMap::Neutral,
                         fixed_exposure: None,
                         emission: true,
+                        emission_texture: true,
                     },
                 ),
                 (
@@ -164,6 +165,7 @@ mod tests {
                         tone_map: crate::shading::look::ToneMap::Clamp,
                         fixed_exposure: Some(0.5),
                         emission: false,
+                        emission_texture: false,
                     },
                 ),
             ] {

@@ -11,6 +11,7 @@
 //! says what the lighting and visibility passes read.
 
 // `std::time::Instant` panics in a browser; web-time is std's on native targets.
+use crate::shading::look::ShadingConsts;
 use web_time::Instant;
 
 use glam::Vec3;
@@ -189,7 +190,10 @@ impl Renderer {
                 ctx,
                 &inputs,
                 (settings.width, settings.height),
-                &settings.look.resolve(scene).consts(),
+                &ShadingConsts {
+                    emission_texture: gbuffer.emission.is_some(),
+                    ..settings.look.resolve(scene).consts()
+                },
             );
             let visibility = visibility_pass(ctx, &settings, scene, &*source)?;
             Ok(Self {
@@ -750,7 +754,10 @@ impl Renderer {
                 clusters: &self.clusters,
                 shadows,
             };
-            let consts = self.settings.look.resolve(&self.current).consts();
+            let consts = ShadingConsts {
+                emission_texture: self.gbuffer.emission.is_some(),
+                ..self.settings.look.resolve(&self.current).consts()
+            };
             let pass = LightingPass::with_fractions(ctx, &inputs, (w, h), &consts);
             let mut encoder = ctx
                 .device

@@ -154,6 +154,10 @@ pub struct Material {
     /// multiplying [`Material::pbr`]'s factors texel by texel; used by the glTF BRDF only.
     #[serde(skip)]
     pub metallic_roughness_texture: Option<TextureRef>,
+    /// glTF's emissive texture (sRGB colour), multiplying [`Material::emissive`] texel by
+    /// texel.
+    #[serde(skip)]
+    pub emissive_texture: Option<TextureRef>,
     /// Alpha of the base colour (glTF `baseColorFactor.a`): multiplies the texture's alpha.
     #[serde(default = "Material::default_alpha")]
     pub base_alpha: f32,
@@ -252,6 +256,7 @@ impl Default for Material {
             base_color_texture: None,
             normal_texture: None,
             metallic_roughness_texture: None,
+            emissive_texture: None,
             base_alpha: Self::default_alpha(),
             alpha_mode: AlphaMode::Opaque,
             alpha_cutoff: Self::default_cutoff(),

@@ -18,6 +18,10 @@ pub const POSITION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint
 pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
 /// Camera depth buffer.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// The emissive texture's texel (linear rgb, stored sRGB), only for scenes whose materials
+/// have emissive textures, on devices whose colour attachments may hold more than the 32
+/// bytes per pixel of position and normal (every native adapter; not a browser's WebGPU).
+pub const EMISSION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 
 /// G-buffer targets and the pipeline that fills them.
 pub struct GBuffer {
@@ -25,8 +29,11 @@ pub struct GBuffer {
     pub position: wgpu::Texture,
     /// Normals and material indices.
     pub normal: wgpu::Texture,
-    /// Render-target views of position, normal and depth, made once.
-    views: [wgpu::TextureView; 3],
+    /// Emissive texels (see [`EMISSION_FORMAT`]); `None` where no material has an emissive
+    /// texture or the device cannot hold a third target (the factor alone is used then).
+    pub emission: Option<wgpu::Texture>,
+    /// Render-target views of position, normal, depth and emission, made once.
+    views: Vec<wgpu::TextureView>,
     /// By (alpha-tested, face culling): the opaque and alpha-testing pipelines, and culling
     /// variants where a material asks for them.
     pipelines: std::collections::HashMap<(bool, CameraCull), wgpu::RenderPipeline>,
@@ -78,6 +85,30 @@ impl GBuffer {
         let color_usage = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC;
         let position = target(ctx, "gbuffer.position", w, h, POSITION_FORMAT, color_usage);
         let normal = target(ctx, "gbuffer.normal", w, h, NORMAL_FORMAT, color_usage);
+        let bytes_needed = [POSITION_FORMAT, NORMAL_FORMAT, EMISSION_FORMAT]
+            .iter()
+            .map(|f| f.target_pixel_byte_cost().unwrap_or(16))
+            .sum::<u32>();
+        let emission = if !scene.textures.has_emissive() {
+            None
+        } else if ctx.limits().max_color_attachment_bytes_per_sample >= bytes_needed {
+            Some(target(
+                ctx,
+                "gbuffer.emission",
+                w,
+                h,
+                EMISSION_FORMAT,
+                color_usage,
+            ))
+        } else {
+            log::warn!(
+                "emissive textures are not shown on this device (its colour attachments hold \
+                 {} bytes per pixel, the G-buffer would need {bytes_needed}): their materials \
+                 emit their factor",
+                ctx.limits().max_color_attachment_bytes_per_sample
+            );
+            None
+        };
         let depth = target(
             ctx,
             "gbuffer.depth",
@@ -137,6 +168,12 @@ impl GBuffer {
         });
         let pipeline_layout =
             crate::gpu::pipelines::pipeline_layout(device, "gbuffer.pipeline_layout", &[&layout]);
+        let color_targets: Vec<Option<wgpu::ColorTargetState>> =
+            [POSITION_FORMAT, NORMAL_FORMAT, EMISSION_FORMAT]
+                .into_iter()
+                .take(if emission.is_some() { 3 } else { 2 })
+                .map(|f| Some(f.into()))
+                .collect();
         let pipeline = |fragment: &str, cull: CameraCull| {
             let (front_face, cull_mode) = match cull {
                 CameraCull::None => (wgpu::FrontFace::Ccw, None),
@@ -169,7 +206,7 @@ impl GBuffer {
                     module: &module,
                     entry_point: Some(fragment),
                     compilation_options: Default::default(),
-                    targets: &[Some(POSITION_FORMAT.into()), Some(NORMAL_FORMAT.into())],
+                    targets: &color_targets,
                 }),
                 multiview_mask: None,
                 cache: None,
@@ -189,14 +226,29 @@ impl GBuffer {
         let mut pipelines = std::collections::HashMap::new();
         for masked in [false, true] {
             for &cull in culls {
-                let fragment = if masked { "fs_masked" } else { "fs_main" };
+                let fragment = match (masked, emission.is_some()) {
+                    (false, false) => "fs_main",
+                    (true, false) => "fs_masked",
+                    (false, true) => "fs_main_emission",
+                    (true, true) => "fs_masked_emission",
+                };
                 pipelines.insert((masked, cull), pipeline(fragment, cull));
             }
         }
-        let views = [&position, &normal, &depth].map(|t| t.create_view(&Default::default()));
+        let views = [
+            Some(&position),
+            Some(&normal),
+            Some(&depth),
+            emission.as_ref(),
+        ]
+        .into_iter()
+        .flatten()
+        .map(|t| t.create_view(&Default::default()))
+        .collect();
         Self {
             position,
             normal,
+            emission,
             views,
             pipelines,
             bind_group,
@@ -212,7 +264,7 @@ impl GBuffer {
         timer: &GpuTimer,
         span: Option<Span>,
     ) {
-        let [pv, nv, dv] = &self.views;
+        let (pv, nv, dv) = (&self.views[0], &self.views[1], &self.views[2]);
         let clear = |view| {
             Some(wgpu::RenderPassColorAttachment {
                 view,
@@ -226,7 +278,11 @@ impl GBuffer {
         };
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("gbuffer.pass"),
-            color_attachments: &[clear(pv), clear(nv)],
+            color_attachments: &if let Some(ev) = self.views.get(3) {
+                vec![clear(pv), clear(nv), clear(ev)]
+            } else {
+                vec![clear(pv), clear(nv)]
+            },
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: dv,
                 depth_ops: Some(wgpu::Operations {

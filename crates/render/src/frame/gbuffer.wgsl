@@ -105,6 +105,46 @@ struct GBufferOut {
     @location(1) normal_material: vec4<u32>,
 }
 
+// With emissive textures (gbuffer.rs): the emissive texel too, linear rgb (white where the
+// material has none: the lighting pass reads it only for materials that have one).
+struct GBufferOutEmission {
+    @location(0) position: vec4<u32>,
+    @location(1) normal_material: vec4<u32>,
+    @location(2) emission: vec4<f32>,
+}
+
+fn emission_texel(mat: MaterialData, uv: vec2<f32>, d: Derivs) -> vec4<f32> {
+    let bits = bitcast<u32>(mat.emissive.w);
+    let layer1 = bits & 0xffffffu;
+    if (layer1 == 0u) {
+        return vec4<f32>(1.0);
+    }
+    return vec4<f32>(sample_layer(colour_tex, layer1, bits >> 24u, uv, d).rgb, 1.0);
+}
+
+fn with_emission(g: GBufferOut, e: vec4<f32>) -> GBufferOutEmission {
+    return GBufferOutEmission(g.position, g.normal_material, e);
+}
+
+@fragment
+fn fs_main_emission(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOutEmission {
+    let d = derivs(in);
+    let mat = materials[in.material];
+    let g = surface(in, front, mat, base_colour(mat, in.uv, d), d);
+    return with_emission(g, emission_texel(mat, in.uv, d));
+}
+
+@fragment
+fn fs_masked_emission(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOutEmission {
+    let d = derivs(in);
+    let mat = materials[in.material];
+    let base = base_colour(mat, in.uv, d);
+    if ((mat.texture.z & MATERIAL_ALPHA_TEST) != 0u && base.a < bitcast<f32>(mat.texture.w)) {
+        discard;
+    }
+    return with_emission(surface(in, front, mat, base, d), emission_texel(mat, in.uv, d));
+}
+
 @fragment
 fn fs_main(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOut {
     let d = derivs(in);

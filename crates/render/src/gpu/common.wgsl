@@ -60,7 +60,8 @@ struct MaterialData {
     // metallic, roughness (glTF BRDF), bits of 1 + the metallic-roughness texture's layer in
     // the data array (0: none), bits of its wrap modes.
     pbr: vec4<f32>,
-    // rgb emitted radiance, unused.
+    // rgb emitted radiance, w: bits of 1 + the emissive texture's layer in the colour array
+    // (bits 0-23; 0: none) and its wrap modes (bits 24-27).
     emissive: vec4<f32>,
 }
 

@@ -79,7 +79,8 @@ pub struct MaterialData {
     /// metallic, roughness (the glTF BRDF's), the bits of 1 + the metallic-roughness layer in
     /// the data array (0: none), the bits of its wrap modes.
     pub pbr: [f32; 4],
-    /// rgb emitted radiance, unused.
+    /// rgb emitted radiance, w: the bits of 1 + the emissive texture's layer in the colour
+    /// array (bits 0-23; 0: none) and its wrap modes (bits 24-27).
     pub emissive: [f32; 4],
 }
 
@@ -87,14 +88,16 @@ pub struct MaterialData {
 pub const MATERIAL_ALPHA_TEST: u32 = 1 << 8;
 
 impl MaterialData {
-    /// Packs `m` whose base-colour, normal and metallic-roughness textures sit in those
-    /// layers of the scene's texture arrays (`None`: untextured; the last two share the data
-    /// array), alpha-tested if `alpha_test`.
+    /// Packs `m` whose base-colour, normal, metallic-roughness and emissive textures sit in
+    /// those layers of the scene's texture arrays (`None`: untextured; normal and
+    /// metallic-roughness maps share the data array, emissive textures the colour array),
+    /// alpha-tested if `alpha_test`.
     pub fn new(
         m: &Material,
         base_layer: Option<u32>,
         normal_layer: Option<u32>,
         mr_layer: Option<u32>,
+        emissive_layer: Option<u32>,
         alpha_test: bool,
     ) -> Self {
         let wrap = |t: Option<manyshadows_scene::TextureRef>| {
@@ -122,7 +125,12 @@ impl MaterialData {
                 f32::from_bits(mr_layer.map_or(0, |l| l + 1)),
                 f32::from_bits(wrap(m.metallic_roughness_texture)),
             ],
-            emissive: m.emissive.extend(0.0).to_array(),
+            emissive: m
+                .emissive
+                .extend(f32::from_bits(
+                    emissive_layer.map_or(0, |l| (l + 1) | (wrap(m.emissive_texture) << 24)),
+                ))
+                .to_array(),
         }
     }
 }
@@ -130,7 +138,7 @@ impl MaterialData {
 impl From<&Material> for MaterialData {
     /// An untextured, opaque material.
     fn from(m: &Material) -> Self {
-        Self::new(m, None, None, None, false)
+        Self::new(m, None, None, None, None, false)
     }
 }
 

@@ -221,6 +221,7 @@ impl GpuScene {
                     layer(&textures.colour_layers, m.base_color_texture),
                     layer(&textures.normal_layers, m.normal_texture),
                     layer(&textures.mr_layers, m.metallic_roughness_texture),
+                    layer(&textures.emissive_layers, m.emissive_texture),
                     masks.is_masked(i),
                 )
             })

@@ -1,5 +1,5 @@
-//! The scene's images on the GPU, for the camera's view: base colours in one sRGB texture
-//! array, linear data (normal maps and metallic-roughness maps) in another, every layer the
+//! The scene's images on the GPU, for the camera's view: base colours and emissive textures
+//! in one sRGB texture array, linear data (normal maps and metallic-roughness maps) in another, every layer the
 //! same square side with a full mip chain, and one trilinear sampler.
 //!
 //! Why arrays of one size: core WebGPU (and so OpenGL and browsers) has no arrays of textures
@@ -46,6 +46,8 @@ pub struct SceneTextures {
     pub sampler: wgpu::Sampler,
     /// Layer of each scene texture in the colour array (`None`: not a base colour).
     pub colour_layers: Vec<Option<u32>>,
+    /// Layer of each scene texture in the colour array as an emissive texture.
+    pub emissive_layers: Vec<Option<u32>>,
     /// Layer of each scene texture in the data array as a normal map.
     pub normal_layers: Vec<Option<u32>>,
     /// Layer of each scene texture in the data array as a metallic-roughness map.
@@ -235,6 +237,11 @@ fn halve(src: &[[f32; 4]], side: u32) -> Vec<[f32; 4]> {
 }
 
 impl SceneTextures {
+    /// Whether any material's emission comes from a texture.
+    pub fn has_emissive(&self) -> bool {
+        self.emissive_layers.iter().any(Option::is_some)
+    }
+
     /// Uploads the textures `scene`'s materials use. Fails when there are more layers than
     /// the device's array-layer limit.
     pub fn new(ctx: &GpuContext, scene: &Scene) -> Result<Self, RenderError> {
@@ -242,6 +249,7 @@ impl SceneTextures {
         let mut colour_layers = vec![None; n];
         let mut normal_layers = vec![None; n];
         let mut mr_layers = vec![None; n];
+        let mut emissive_layers = vec![None; n];
         let (mut colours, mut normals) = (0u32, 0u32);
         for m in &scene.materials {
             if let Some(t) = m.base_color_texture {
@@ -257,8 +265,19 @@ impl SceneTextures {
                 });
             }
         }
-        // Metallic-roughness maps after the normal maps, in the same (linear) array.
+        // Metallic-roughness maps after the normal maps, in the same (linear) array; emissive
+        // textures after the base colours (sRGB colours too; a texture used as both gets one
+        // layer).
         for m in &scene.materials {
+            if let Some(t) = m.emissive_texture {
+                if let Some(l) = colour_layers[t.texture] {
+                    emissive_layers[t.texture] = Some(l);
+                }
+                emissive_layers[t.texture].get_or_insert_with(|| {
+                    colours += 1;
+                    colours - 1
+                });
+            }
             if let Some(t) = m.metallic_roughness_texture {
                 mr_layers[t.texture].get_or_insert_with(|| {
                     normals += 1;
@@ -286,6 +305,7 @@ impl SceneTextures {
             .enumerate()
             .filter(|(i, _)| {
                 colour_layers[*i].is_some()
+                    || emissive_layers[*i].is_some()
                     || normal_layers[*i].is_some()
                     || mr_layers[*i].is_some()
             })
@@ -352,6 +372,9 @@ impl SceneTextures {
             if let Some(layer) = colour_layers[i] {
                 upload(&colour, layer, colour_mips(t, side));
             }
+            if let Some(layer) = emissive_layers[i].filter(|&l| Some(l) != colour_layers[i]) {
+                upload(&colour, layer, colour_mips(t, side));
+            }
             if let Some(layer) = normal_layers[i] {
                 upload(&normal, layer, normal_mips(t, side));
             }
@@ -380,6 +403,7 @@ impl SceneTextures {
             normal: view(&normal),
             sampler,
             colour_layers,
+            emissive_layers,
             normal_layers,
             mr_layers,
             side,

@@ -11,7 +11,7 @@ use crate::shadows::source::ShadowOutput;
 
 /// First binding of a shadow source's own declarations (the virtual maps' page table, the
 /// ray-traced scene) in the lighting and visibility passes.
-pub(crate) const SOURCE_FIRST_BINDING: u32 = 13;
+pub(crate) const SOURCE_FIRST_BINDING: u32 = 14;
 
 /// Output colour format (sRGB-encoded on write).
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -171,6 +171,11 @@ impl LightingPass {
                 wgpu::TextureSampleType::Float { filterable: false },
                 frag,
             ),
+            crate::gpu::pipelines::texture_entry(
+                13,
+                wgpu::TextureSampleType::Float { filterable: false },
+                frag,
+            ),
         ];
         entries.extend(inputs.shadows.extra_layout(SOURCE_FIRST_BINDING, frag));
         let layout = crate::gpu::pipelines::bind_group_layout(device, "lighting.layout", &entries);
@@ -272,6 +277,27 @@ fn bind(
     };
     let pv = inputs.gbuffer.position.create_view(&Default::default());
     let nv = inputs.gbuffer.normal.create_view(&Default::default());
+    // The G-buffer's emissive texels, or one white texel where it keeps none (never read
+    // then: `EMISSION_TEXTURE` is false).
+    let ev = match &inputs.gbuffer.emission {
+        Some(t) => t.create_view(&Default::default()),
+        None => device
+            .create_texture(&wgpu::TextureDescriptor {
+                label: Some("lighting.no_emission"),
+                size: wgpu::Extent3d {
+                    width: 1,
+                    height: 1,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: crate::frame::gbuffer::EMISSION_FORMAT,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+            .create_view(&Default::default()),
+    };
     let mut entries = inputs.shared_entries(&pv, &nv, mask);
     entries.extend([
         wgpu::BindGroupEntry {
@@ -285,6 +311,10 @@ fn bind(
         wgpu::BindGroupEntry {
             binding: 12,
             resource: wgpu::BindingResource::TextureView(inputs.shadow_texture()),
+        },
+        wgpu::BindGroupEntry {
+            binding: 13,
+            resource: wgpu::BindingResource::TextureView(&ev),
         },
     ]);
     device.create_bind_group(&wgpu::BindGroupDescriptor {

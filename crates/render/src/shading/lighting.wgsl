@@ -26,6 +26,9 @@
 // The shadow texture's raw depths for the soft shadows' blocker search: `atlas` again, read
 // as floats (on OpenGL one texture cannot be paired with two samplers).
 @group(0) @binding(12) var atlas_depth: texture_2d<f32>;
+// The emissive texel of each pixel's material (gbuffer.rs; a white texel where the G-buffer
+// keeps none, and then EMISSION_TEXTURE is false).
+@group(0) @binding(13) var gbuf_emission: texture_2d<f32>;
 
 fn shadow_depth_at(texel: vec2<i32>) -> f32 {
     return textureLoad(atlas_depth, texel, 0).r;
@@ -429,8 +432,13 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     }
     resolve_samples(s, &acc);
     if (EMISSION) {
-        // Emitted radiance, through the exposure like reflected light.
-        acc.color = acc.color + s.mat.emissive.rgb;
+        // Emitted radiance (times the emissive texel), through the exposure like reflected
+        // light.
+        var emitted = s.mat.emissive.rgb;
+        if (EMISSION_TEXTURE && (bitcast<u32>(s.mat.emissive.w) & 0xffffffu) != 0u) {
+            emitted = emitted * textureLoad(gbuf_emission, px, 0).rgb;
+        }
+        acc.color = acc.color + emitted;
     }
     return vec4<f32>(tone_map(acc.color), 1.0);
 }

@@ -289,6 +289,8 @@ pub(crate) struct ShadingConsts {
     pub fixed_exposure: Option<f32>,
     /// Whether emission is added (only scenes with emissive materials pay for it).
     pub emission: bool,
+    /// Whether the G-buffer keeps emissive texels to multiply emission by.
+    pub emission_texture: bool,
 }
 
 impl Default for ShadingConsts {
@@ -300,19 +302,20 @@ impl Default for ShadingConsts {
             tone_map: ToneMap::Exponential,
             fixed_exposure: Some(PHONG_EXPOSURE),
             emission: false,
+            emission_texture: false,
         }
     }
 }
 
 impl ShadingConsts {
     /// The WGSL constants (`SHADING_MODEL`, `PHYSICAL_FALLOFF`, `LIGHT_SCALE`, `TONE_MAP`,
-    /// `EXPOSURE_IS_FIXED`, `FIXED_EXPOSURE`, `EMISSION`).
+    /// `EXPOSURE_IS_FIXED`, `FIXED_EXPOSURE`, `EMISSION`, `EMISSION_TEXTURE`).
     pub(crate) fn wgsl(&self) -> String {
         format!(
             "const SHADING_MODEL: u32 = {}u;\nconst PHYSICAL_FALLOFF: bool = {};\n\
              const LIGHT_SCALE: f32 = {:?}f;\nconst TONE_MAP: u32 = {}u;\n\
              const EXPOSURE_IS_FIXED: bool = {};\nconst FIXED_EXPOSURE: f32 = {:?}f;\n\
-             const EMISSION: bool = {};\n",
+             const EMISSION: bool = {};\nconst EMISSION_TEXTURE: bool = {};\n",
             self.shading.code(),
             self.physical_falloff,
             self.light_scale,
@@ -320,6 +323,7 @@ impl ShadingConsts {
             self.fixed_exposure.is_some(),
             self.fixed_exposure.unwrap_or(1.0),
             self.emission,
+            self.emission_texture,
         )
     }
 }
@@ -400,6 +404,7 @@ impl ResolvedLook {
             tone_map: self.tone_map,
             fixed_exposure: self.metered.is_none().then_some(self.exposure_scale),
             emission: self.emission,
+            emission_texture: false,
         }
     }
 

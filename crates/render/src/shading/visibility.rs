@@ -250,7 +250,7 @@ impl VisibilityPass {
             words_per_pixel: self.words,
             words,
         };
-        let soft = self.soft.then(|| SoftVisibility {
+        let soft = self.soft.then_some(SoftVisibility {
             width: self.width,
             height: self.height,
             lights: self.lights,

@@ -82,6 +82,9 @@ pub fn plan_rounds(
     rounds
 }
 
+/// Culling whole caster clusters by bounding sphere and normal cone (`gpu-driven`, virtual).
+pub const CLUSTER_CULL: &str = include_str!("cluster_cull.wgsl");
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -130,5 +133,3 @@ mod tests {
     }
 }
 
-/// Culling whole caster clusters by bounding sphere and normal cone (`gpu-driven`, virtual).
-pub const CLUSTER_CULL: &str = include_str!("cluster_cull.wgsl");

@@ -171,6 +171,7 @@ pub(super) fn read_materials(opened: &Opened, notes: &mut Vec<String>) -> Materi
             base_color_texture: None,
             normal_texture: None,
             metallic_roughness_texture: None,
+            emissive_texture: None,
             base_alpha: base[3],
             alpha_mode: match m.alpha_mode() {
                 ::gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
@@ -211,6 +212,7 @@ pub(super) fn read_materials(opened: &Opened, notes: &mut Vec<String>) -> Materi
             "metallic-roughness",
             notes,
         );
+        let emissive_transform = transform_of("/emissiveTexture", "emissive", notes);
         let mut use_texture = |what: &str, tex: ::gltf::Texture<'_>, set: u32| {
             if set != 0 {
                 notes.push(format!(
@@ -251,20 +253,40 @@ pub(super) fn read_materials(opened: &Opened, notes: &mut Vec<String>) -> Materi
             let set = set_of(&mr_transform, info.tex_coord());
             out.metallic_roughness_texture = use_texture("metallic-roughness", info.texture(), set);
         }
+        if out.emissive.max_element() > 0.0 {
+            if let Some(info) = m.emissive_texture() {
+                let set = set_of(&emissive_transform, info.tex_coord());
+                out.emissive_texture = use_texture("emissive", info.texture(), set);
+            }
+        }
         let chosen = if out.base_color_texture.is_some() {
             base_transform
         } else {
             normal_transform
         };
-        if out.metallic_roughness_texture.is_some()
-            && (out.base_color_texture.is_some() || out.normal_texture.is_some())
-            && !mr_transform
-                .map_or(Affine2::IDENTITY, |t| t.matrix)
-                .abs_diff_eq(chosen.map_or(Affine2::IDENTITY, |t| t.matrix), 1e-6)
-        {
-            notes.push(format!(
-                "material '{name}': its metallic-roughness texture has a KHR_texture_transform                  different from its other textures'; theirs is applied (the metallic-roughness                  map is misplaced)"
-            ));
+        let matrix = |t: Option<TextureTransform>| t.map_or(Affine2::IDENTITY, |t| t.matrix);
+        for (what, present, transform) in [
+            (
+                "metallic-roughness",
+                out.metallic_roughness_texture.is_some(),
+                mr_transform,
+            ),
+            (
+                "emissive",
+                out.emissive_texture.is_some(),
+                emissive_transform,
+            ),
+        ] {
+            if present
+                && (out.base_color_texture.is_some() || out.normal_texture.is_some())
+                && !matrix(transform).abs_diff_eq(matrix(chosen), 1e-6)
+            {
+                notes.push(format!(
+                    "material '{name}': its {what} texture has a KHR_texture_transform \
+                     different from its other textures'; theirs is applied (the {what} map \
+                     is misplaced)"
+                ));
+            }
         }
         let lone_mr = out.base_color_texture.is_none() && out.normal_texture.is_none();
         uv_transforms.push(uv_transform(

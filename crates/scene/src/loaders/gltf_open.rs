@@ -214,7 +214,7 @@ fn load_buffers(
                 return Err(parse_error(
                     path,
                     format!(
-                        "glTF buffer {i} has no URI and is not the binary chunk of a .glb: its                          data is missing"
+                        "glTF buffer {i} has no URI and is not the binary chunk of a .glb: its data is missing"
                     ),
                 ))
             }

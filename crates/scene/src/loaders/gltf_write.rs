@@ -29,8 +29,8 @@ use crate::texture::{AlphaMode, TextureRef, Wrap};
 ///   back as two meshes.
 /// - Materials, all and in order: `baseColorFactor` = (diffuse, `base_alpha`), `alphaMode`,
 ///   `alphaCutoff` (only for `Mask`, where it means something), `doubleSided`, base-colour,
-///   normal and metallic-roughness textures (each scene texture an embedded PNG image, with a
-///   sampler for its wrap modes). The Phong terms go through the loader's mapping backwards: roughness =
+///   normal, metallic-roughness and emissive textures (each scene texture an embedded PNG
+///   image, with a sampler for its wrap modes). The Phong terms go through the loader's mapping backwards: roughness =
 ///   `(2 / (shininess + 2))^¼` (shininess clamped to 1..=512), metallic = the least-squares
 ///   fit of `specular = mix(0.04, diffuse, metallic)`. So shininess always round-trips,
 ///   specular only when it has that form (e.g. grey diffuse with grey specular), and ambient
@@ -405,6 +405,9 @@ fn material_json(
         out["normalTexture"] = json!({ "index": texture(t) });
     }
     let peak = m.emissive.max_element();
+    if let Some(t) = m.emissive_texture.filter(|_| peak > 0.0) {
+        out["emissiveTexture"] = json!({ "index": texture(t) });
+    }
     if peak > 0.0 {
         // emissiveFactor is at most 1: brighter emission goes into the strength extension.
         let strength = peak.max(1.0);

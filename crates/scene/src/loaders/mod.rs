@@ -104,10 +104,11 @@
 //! - shininess = `2/α² − 2` with `α = roughness²` (the Blinn-Phong exponent whose highlight
 //!   matches GGX of that α), clamped to 1..=512;
 //! - `baseColorTexture` → `base_color_texture`, `normalTexture` → `normal_texture`,
-//!   `metallicRoughnessTexture` → `metallic_roughness_texture`, each with its sampler's
-//!   `wrapS` / `wrapT`; texture-coordinate set 0 is always used (a texture that names another
-//!   set gets a note); occlusion and emissive textures are not used (their factors are:
-//!   occlusion scales indirect light, which punctual lights do not give);
+//!   `metallicRoughnessTexture` → `metallic_roughness_texture`, `emissiveTexture` →
+//!   `emissive_texture` (for a material that emits), each with its sampler's `wrapS` /
+//!   `wrapT`; texture-coordinate set 0 is always used (a texture that names another set gets a
+//!   note); occlusion textures are not used (occlusion scales indirect light, which punctual
+//!   lights do not give);
 //! - `KHR_texture_transform` (offset, rotation, scale) is baked into the texture coordinates
 //!   of the material's meshes: the base-colour texture's transform, or the normal texture's
 //!   where there is no base colour (all of a material's textures are sampled with one set of

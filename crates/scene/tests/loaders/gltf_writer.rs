@@ -329,6 +329,12 @@ fn physical_lights_and_pbr_materials_round_trip() {
     let mut scene = Scene {
         name: "physical".into(),
         meshes: vec![manyshadows_scene::primitives::cuboid(Vec3::ONE)],
+        textures: vec![
+            Texture::from_fn("metal-rough", 4, 4, |x, y| {
+                [0, (x * 60) as u8, (y * 60) as u8, 255]
+            }),
+            Texture::from_fn("glow", 4, 4, |x, _| [255, (x * 60) as u8, 0, 255]),
+        ],
         materials: vec![
             Material {
                 diffuse: Vec3::new(0.9, 0.5, 0.2),
@@ -337,6 +343,8 @@ fn physical_lights_and_pbr_materials_round_trip() {
                     roughness: 0.3,
                 }),
                 emissive: Vec3::new(8.0, 4.0, 0.0),
+                metallic_roughness_texture: Some(TextureRef::repeat(0)),
+                emissive_texture: Some(TextureRef::repeat(1)),
                 ..Material::default()
             },
             Material {
@@ -410,4 +418,18 @@ fn physical_lights_and_pbr_materials_round_trip() {
         "{}",
         m1.emissive
     );
+    // The metallic-roughness and emissive textures come back as written, texel for texel.
+    let texel_of = |r: Option<TextureRef>| {
+        let t = &s.textures[r.expect("the texture is read back").texture];
+        (t.width, t.height, t.rgba.to_vec())
+    };
+    assert_eq!(
+        texel_of(m0.metallic_roughness_texture),
+        (4, 4, scene.textures[0].rgba.to_vec())
+    );
+    assert_eq!(
+        texel_of(m0.emissive_texture),
+        (4, 4, scene.textures[1].rgba.to_vec())
+    );
+    assert!(m1.metallic_roughness_texture.is_none() && m1.emissive_texture.is_none());
 }
