@@ -690,6 +690,7 @@ mod tests {
         for (file, names) in [
             ("crates/viewer/tests/viewer.rs", VIEWER_TESTS),
             ("crates/cli/tests/web.rs", WEB_TESTS),
+            ("crates/cli/tests/threejs.rs", THREE_TESTS),
         ] {
             let text = std::fs::read_to_string(root.join(file)).unwrap();
             for name in names {

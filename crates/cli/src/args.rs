@@ -338,8 +338,8 @@ pub(crate) struct RenderArgs {
     pub(crate) gpu: GpuArgs,
 }
 
-/// How a model file (.gltf/.glb/.obj/.ply) is loaded: shared by `render`, `compare`, `bench`
-/// and the viewer.
+/// How a model file (.gltf/.glb/.obj/.ply) is loaded: shared by `render`, `compare` and the
+/// viewer (the benches render built-in scenes only).
 #[derive(Args, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ModelArgs {
     /// Let a model file read files outside its own folder: absolute paths and `..` in glTF

@@ -45,6 +45,8 @@ pub struct CompareArgs {
     pub(super) light_types: String,
     #[command(flatten)]
     pub(super) light_sizes: LightSizeArgs,
+    #[command(flatten)]
+    pub(super) model: crate::args::ModelArgs,
     /// Point-light shadows: cube or dual-paraboloid (scored by the same reference).
     #[arg(long, default_value = "cube", value_parser = crate::args::parse_point_shadows)]
     pub(super) point_shadows: manyshadows::scene::light_space::PointShadows,

@@ -141,6 +141,7 @@ pub(super) fn load(args: &CompareArgs) -> Result<Scene> {
         seed: args.seed,
         light_types: args.light_types.clone(),
         light_sizes: args.light_sizes,
+        model: args.model,
         mesh: args.mesh.clone(),
         subdivide: args.subdivide,
         ..RenderArgs::default()

@@ -132,4 +132,3 @@ mod tests {
         assert!(plan_rounds(0, 5, 5, 10, 10).is_empty());
     }
 }
-
