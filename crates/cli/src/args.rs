@@ -196,8 +196,12 @@ pub(crate) struct RenderArgs {
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub(crate) orbit: f32,
     /// The instance that moves when --frames > 1 (default: the smallest shadow caster).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "still")]
     pub(crate) move_instance: Option<usize>,
+    /// With --frames > 1, move no caster (with --orbit the camera still turns): still frames,
+    /// e.g. for --denoise to accumulate.
+    #[arg(long)]
+    pub(crate) still: bool,
     /// Number of lights, placed by a seeded layout (default: the scene's own lights).
     #[arg(long)]
     pub(crate) lights: Option<usize>,
@@ -307,6 +311,13 @@ pub(crate) struct RenderArgs {
     /// not grow with the light count. 0 (default) traces every cluster light: exact.
     #[arg(long, default_value_t = 0)]
     pub(crate) light_samples: u32,
+    /// With --light-samples K: denoise the sampled rays. The exact unshadowed light of every
+    /// cluster light times the rays' shadow ratio, accumulated over frames at each surface
+    /// point (reprojected when the camera moves) and filtered by an edge-stopping wavelet
+    /// (one pass for all lights). Biased where a pixel's lights are shadowed differently; with
+    /// --frames it converges as the frames go by.
+    #[arg(long)]
+    pub(crate) denoise: bool,
     /// Seed of --light-samples' choices (the same seed gives the same image).
     #[arg(long, default_value_t = 0)]
     pub(crate) ray_seed: u32,
@@ -511,6 +522,7 @@ pub(crate) fn flag_error(e: manyshadows::RenderError) -> anyhow::Error {
         ("virtual_maps.bias_scale", "--virtual-bias"),
         ("virtual_maps.max_side", "--virtual-side"),
         ("rays.light_samples", "--light-samples"),
+        ("rays.denoise", "--denoise"),
         ("shadow_budget", "--shadow-budget"),
         ("look.exposure", "--exposure"),
     ];
@@ -584,6 +596,7 @@ pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettin
         .with_rays(
             manyshadows::RayOptions::default()
                 .with_light_samples(args.light_samples)
+                .with_denoise(args.denoise)
                 .with_seed(args.ray_seed),
         )
         .with_look(args.look.look())

@@ -27,6 +27,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         pb.suspend(|| check_shadow_work(&renderer))?;
     }
     let mover = match args.move_instance {
+        _ if args.still => None,
         Some(k) if k >= scene.instances.len() => bail!(
             "--move-instance {k}: the scene has {} instances",
             scene.instances.len()

@@ -140,8 +140,9 @@ mod tests {
         for info in TECHNIQUES {
             let mut shaders = info.shaders();
             let features = info.lookup.features;
-            // Phong as the seeds' scenes compile it, and the glTF BRDF with physical light
-            // shaded by Phong (every constant away from its default).
+            // Phong as the seeds' scenes compile it, the glTF BRDF with emissive textures and
+            // the denoiser's writes, and physical light shaded by Phong (every constant away
+            // from its default).
             for (name, consts) in [
                 ("lighting", Default::default()),
                 (
@@ -154,6 +155,7 @@ mod tests {
                         fixed_exposure: None,
                         emission: true,
                         emission_texture: true,
+                        denoise: true,
                     },
                 ),
                 (
@@ -166,6 +168,7 @@ mod tests {
                         fixed_exposure: Some(0.5),
                         emission: false,
                         emission_texture: false,
+                        denoise: false,
                     },
                 ),
             ] {

@@ -86,6 +86,12 @@ pub struct Renderer {
     current: Scene,
     /// True when `current` changed since the GPU state was last derived from it.
     dirty: bool,
+    /// The denoiser of sampled shadow rays (`RayOptions::denoise`).
+    denoiser: Option<crate::shading::denoise::Denoiser>,
+    /// Frames the denoiser has seen (their rays' random numbers differ by it).
+    frames_denoised: u32,
+    /// A light changed since the last frame (the denoiser's history no longer holds).
+    lights_changed: bool,
 }
 
 impl Renderer {
@@ -178,6 +184,14 @@ impl Renderer {
                 0,
                 bytemuck::bytes_of(&frame_uniforms(scene, &settings, shadow_side)),
             );
+            let denoiser = settings.rays.denoise.then(|| {
+                crate::shading::denoise::Denoiser::new(
+                    ctx,
+                    &gbuffer,
+                    settings.width,
+                    settings.height,
+                )
+            });
             let inputs = LightingInputs {
                 frame: &frame_buffer,
                 lights: &lights,
@@ -185,6 +199,7 @@ impl Renderer {
                 gbuffer: &gbuffer,
                 clusters: &clusters,
                 shadows: source.output(),
+                denoise: denoiser.as_ref().map(|d| &d.buffers),
             };
             let lighting = LightingPass::new(
                 ctx,
@@ -192,6 +207,7 @@ impl Renderer {
                 (settings.width, settings.height),
                 &ShadingConsts {
                     emission_texture: gbuffer.emission.is_some(),
+                    denoise: denoiser.is_some(),
                     ..settings.look.resolve(scene).consts()
                 },
             );
@@ -208,6 +224,9 @@ impl Renderer {
                 lights,
                 gbuffer,
                 lighting,
+                denoiser,
+                frames_denoised: 0,
+                lights_changed: false,
                 clusters,
                 visibility,
                 blit: None,
@@ -373,6 +392,7 @@ impl Renderer {
             .map_err(|reason| SceneError::InvalidLight { index, reason })?;
         *slot = light;
         self.dirty = true;
+        self.lights_changed = true;
         Ok(())
     }
 
@@ -385,6 +405,7 @@ impl Renderer {
         }
         self.current.lights = lights;
         self.dirty = true;
+        self.lights_changed = true;
         Ok(())
     }
 
@@ -467,6 +488,7 @@ impl Renderer {
                 gbuffer: &self.gbuffer,
                 clusters: &self.clusters,
                 shadows: self.source.output(),
+                denoise: self.denoiser.as_ref().map(|d| &d.buffers),
             },
         );
         let lights = scene.lights.len() as u32;
@@ -496,11 +518,30 @@ impl Renderer {
             let span = self.timer.span(Stage::Clusters);
             self.clusters.record(encoder, &self.timer, span);
         }
+        if let Some(d) = &mut self.denoiser {
+            if std::mem::take(&mut self.lights_changed) {
+                d.reset();
+            }
+            // New random numbers for the rays every frame (FrameUniforms::modes.y).
+            self.frames_denoised = self.frames_denoised.wrapping_add(1);
+            ctx.queue.write_buffer(
+                &self.frame_buffer,
+                (std::mem::offset_of!(FrameUniforms, modes) + 4) as u64,
+                bytemuck::bytes_of(&self.frames_denoised),
+            );
+        }
         let shadow_stats = self
             .source
             .record(ctx, &self.scene, encoder, &mut self.timer);
         let span = self.timer.span(Stage::Lighting);
         self.lighting.record(encoder, &self.timer, span);
+        if let Some(d) = &mut self.denoiser {
+            let cam = self.current.camera;
+            let aspect = self.settings.width as f32 / self.settings.height as f32;
+            let view_proj = cam.projection(aspect) * cam.view();
+            d.record(ctx, encoder, view_proj, cam.position, cam.fov_y_deg);
+            self.lighting.record_composite(encoder, &self.timer, span);
+        }
         Ok(shadow_stats)
     }
 
@@ -653,6 +694,7 @@ impl Renderer {
                         gbuffer: &self.gbuffer,
                         clusters: &self.clusters,
                         shadows: self.source.output(),
+                        denoise: None,
                     };
                     let (mask, soft) = pass.run(ctx, &inputs, &self.timer, span)?;
                     (Some(mask), soft)
@@ -753,6 +795,7 @@ impl Renderer {
                 gbuffer: &self.gbuffer,
                 clusters: &self.clusters,
                 shadows,
+                denoise: None,
             };
             let consts = ShadingConsts {
                 emission_texture: self.gbuffer.emission.is_some(),

@@ -149,6 +149,20 @@ impl RenderSettings {
             }
         }
         self.soft.validate()?;
+        if self.rays.denoise
+            && (self.rays.light_samples == 0
+                || self.technique.info().fills != crate::error::Fills::Rays)
+        {
+            return Err(bad(
+                "rays.denoise",
+                format!(
+                    "on with technique {} and {} light samples",
+                    self.technique.name(),
+                    self.rays.light_samples
+                ),
+                "sampled shadow rays to denoise: technique raytraced with light_samples 1 to 16",
+            ));
+        }
         self.clusters.validate()?;
         self.irregular.validate()?;
         self.virtual_maps.validate()?;

@@ -30,6 +30,8 @@ pub struct LightingPass {
     /// Render-target view of `color`, made once.
     color_view: wgpu::TextureView,
     pipeline: wgpu::RenderPipeline,
+    /// `fs_composite` over `color`, after the denoiser (only when rays are denoised).
+    composite: Option<wgpu::RenderPipeline>,
     layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
     bind_group: wgpu::BindGroup,
@@ -50,6 +52,8 @@ pub struct LightingInputs<'a> {
     /// What the frame's shadow source produced: an atlas, a page pool (both read with the
     /// shadow test, `fs_main`) or a visibility mask (shaded with directly, `fs_mask`).
     pub shadows: ShadowOutput<'a>,
+    /// The denoiser's buffers, when sampled rays are denoised (`ShadingConsts::denoise`).
+    pub denoise: Option<&'a crate::shading::denoise::DenoiseBuffers>,
 }
 
 impl LightingInputs<'_> {
@@ -178,6 +182,10 @@ impl LightingPass {
             ),
         ];
         entries.extend(inputs.shadows.extra_layout(SOURCE_FIRST_BINDING, frag));
+        if consts.denoise {
+            entries.push(crate::gpu::pipelines::storage_rw_entry(40, frag));
+            entries.push(crate::gpu::pipelines::storage_entry(41, frag));
+        }
         let layout = crate::gpu::pipelines::bind_group_layout(device, "lighting.layout", &entries);
         let linear = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("lighting.cmp_linear"),
@@ -194,31 +202,36 @@ impl LightingPass {
         );
         let pipeline_layout =
             crate::gpu::pipelines::pipeline_layout(device, "lighting.pipeline_layout", &[&layout]);
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("lighting.pipeline"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_fullscreen"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                targets: &[Some(COLOR_FORMAT.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let fullscreen = |entry: &str| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_fullscreen"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: Default::default(),
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    targets: &[Some(COLOR_FORMAT.into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let pipeline = fullscreen(entry);
+        let composite = consts.denoise.then(|| fullscreen("fs_composite"));
         Self {
             color_view: color.create_view(&Default::default()),
             color,
             pipeline,
+            composite,
             layout,
             sampler: linear,
             bind_group,
@@ -230,8 +243,35 @@ impl LightingPass {
         self.bind_group = bind(ctx, &self.layout, &self.sampler, inputs);
     }
 
-    /// Records the pass.
+    /// Records the pass (with a denoiser, the first of the span: [`LightingPass::record_composite`]
+    /// ends it).
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: &GpuTimer, span: Option<Span>) {
+        self.fullscreen_pass(
+            encoder,
+            &self.pipeline,
+            timer.render_writes(span, true, self.composite.is_none()),
+        );
+    }
+
+    /// With a denoiser: shades the filtered ratio into the frame (after the denoiser's passes),
+    /// ending the lighting span.
+    pub fn record_composite(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &GpuTimer,
+        span: Option<Span>,
+    ) {
+        if let Some(composite) = &self.composite {
+            self.fullscreen_pass(encoder, composite, timer.render_writes(span, false, true));
+        }
+    }
+
+    fn fullscreen_pass(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        pipeline: &wgpu::RenderPipeline,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("lighting.pass"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -244,11 +284,11 @@ impl LightingPass {
                 },
             })],
             depth_stencil_attachment: None,
-            timestamp_writes: timer.render_writes(span, true, true),
+            timestamp_writes,
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.draw(0..3, 0..1);
     }
@@ -317,6 +357,10 @@ fn bind(
             resource: wgpu::BindingResource::TextureView(&ev),
         },
     ]);
+    if let Some(d) = inputs.denoise {
+        entries.push(crate::gpu::pipelines::whole_entry(40, &d.pixels));
+        entries.push(crate::gpu::pipelines::whole_entry(41, &d.ratio));
+    }
     device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("lighting.bind_group"),
         layout,

@@ -300,6 +300,11 @@ struct Acc {
     count: u32,
     first: array<u32, MAX_SAMPLES>,
     rng: u32,
+    // With DENOISE: the unshadowed direct light of every light visited, and the sampled
+    // estimates of the direct light with and without shadows (denoise.rs).
+    unshadowed: vec3<f32>,
+    est_shadowed: vec3<f32>,
+    est_unshadowed: vec3<f32>,
 }
 
 fn pcg(v: u32) -> u32 {
@@ -330,6 +335,9 @@ fn visit(i: u32, s: Surface, acc: ptr<function, Acc>) {
     (*acc).color = (*acc).color + t.ambient;
     if (!t.facing) {
         return;
+    }
+    if (DENOISE) {
+        (*acc).unshadowed = (*acc).unshadowed + t.att * t.ds;
     }
     let w = dot(t.att * t.ds, vec3<f32>(0.2126, 0.7152, 0.0722));
     if (w <= 0.0) {
@@ -363,20 +371,37 @@ fn resolve_samples(s: Surface, acc: ptr<function, Acc>) {
             direct = direct + light_lit(i, s) * t.att * t.ds;
         }
         (*acc).color = (*acc).color + direct;
+        if (DENOISE) {
+            // Every light traced: both "estimates" are exact.
+            (*acc).est_shadowed = direct;
+            (*acc).est_unshadowed = (*acc).unshadowed;
+        }
         return;
     }
+    var unlit = vec3<f32>(0.0);
     for (var j = 0u; j < k; j = j + 1u) {
         let i = (*acc).chosen[j];
         let t = light_terms(i, s);
-        direct = direct + light_lit(i, s) * t.att * t.ds * ((*acc).wsum / (*acc).weight[j]);
+        let term = t.att * t.ds * ((*acc).wsum / (*acc).weight[j]);
+        direct = direct + light_lit(i, s) * term;
+        if (DENOISE) {
+            unlit = unlit + term;
+        }
     }
     (*acc).color = (*acc).color + direct / f32(k);
+    if (DENOISE) {
+        (*acc).est_shadowed = direct / f32(k);
+        (*acc).est_unshadowed = unlit / f32(k);
+    }
 }
 
 fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     let gpos = textureLoad(gbuf_position, px, 0);
     let pos = bitcast<vec4<f32>>(gpos);
     if (!has_geometry(gpos)) {
+        if (DENOISE) {
+            denoise_store(px, vec4<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
+        }
         return vec4<f32>(frame.sky.rgb, 1.0);
     }
     let nm = textureLoad(gbuf_normal, px, 0);
@@ -402,7 +427,12 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     acc.color = vec3<f32>(0.0);
     acc.wsum = 0.0;
     acc.count = 0u;
-    acc.rng = pcg(u32(px.x) + pcg(u32(px.y) + pcg(ray_seed())));
+    // `modes.y` is the frame's number when rays are denoised (new random numbers each frame),
+    // else 0.
+    acc.rng = pcg(u32(px.x) + pcg(u32(px.y) + pcg(ray_seed() + frame.modes.y)));
+    acc.unshadowed = vec3<f32>(0.0);
+    acc.est_shadowed = vec3<f32>(0.0);
+    acc.est_unshadowed = vec3<f32>(0.0);
     var slot = CLUSTER_OVERFLOW;
     if (clusters.words.w != 0u) {
         slot = cluster_slots[cluster_index(clusters, vec2<u32>(px), s.view_depth)];
@@ -430,6 +460,7 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
             }
         }
     }
+    let ambient = acc.color;
     resolve_samples(s, &acc);
     if (EMISSION) {
         // Emitted radiance (times the emissive texel), through the exposure like reflected
@@ -439,6 +470,11 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
             emitted = emitted * textureLoad(gbuf_emission, px, 0).rgb;
         }
         acc.color = acc.color + emitted;
+        if (DENOISE) {
+            denoise_store(px, vec4<f32>(acc.unshadowed, 1.0), acc.est_shadowed, acc.est_unshadowed, ambient + emitted);
+        }
+    } else if (DENOISE) {
+        denoise_store(px, vec4<f32>(acc.unshadowed, 1.0), acc.est_shadowed, acc.est_unshadowed, ambient);
     }
     return vec4<f32>(tone_map(acc.color), 1.0);
 }

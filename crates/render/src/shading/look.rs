@@ -291,6 +291,9 @@ pub(crate) struct ShadingConsts {
     pub emission: bool,
     /// Whether the G-buffer keeps emissive texels to multiply emission by.
     pub emission_texture: bool,
+    /// Whether sampled shadow rays are denoised (denoise.rs): the pass also writes each
+    /// pixel's unshadowed light and shadow ratio, and `fs_composite` shades the filtered ratio.
+    pub denoise: bool,
 }
 
 impl Default for ShadingConsts {
@@ -303,6 +306,7 @@ impl Default for ShadingConsts {
             fixed_exposure: Some(PHONG_EXPOSURE),
             emission: false,
             emission_texture: false,
+            denoise: false,
         }
     }
 }
@@ -311,11 +315,12 @@ impl ShadingConsts {
     /// The WGSL constants (`SHADING_MODEL`, `PHYSICAL_FALLOFF`, `LIGHT_SCALE`, `TONE_MAP`,
     /// `EXPOSURE_IS_FIXED`, `FIXED_EXPOSURE`, `EMISSION`, `EMISSION_TEXTURE`).
     pub(crate) fn wgsl(&self) -> String {
-        format!(
+        let consts = format!(
             "const SHADING_MODEL: u32 = {}u;\nconst PHYSICAL_FALLOFF: bool = {};\n\
              const LIGHT_SCALE: f32 = {:?}f;\nconst TONE_MAP: u32 = {}u;\n\
              const EXPOSURE_IS_FIXED: bool = {};\nconst FIXED_EXPOSURE: f32 = {:?}f;\n\
-             const EMISSION: bool = {};\nconst EMISSION_TEXTURE: bool = {};\n",
+             const EMISSION: bool = {};\nconst EMISSION_TEXTURE: bool = {};\n\
+             const DENOISE: bool = {};\n",
             self.shading.code(),
             self.physical_falloff,
             self.light_scale,
@@ -324,9 +329,54 @@ impl ShadingConsts {
             self.fixed_exposure.unwrap_or(1.0),
             self.emission,
             self.emission_texture,
-        )
+            self.denoise,
+        );
+        if self.denoise {
+            format!("{consts}{DENOISE_WGSL}")
+        } else {
+            format!(
+                "{consts}fn denoise_store(px: vec2<i32>, a: vec4<f32>, s: vec3<f32>, \
+                 u: vec3<f32>, r: vec3<f32>) {{}}\n"
+            )
+        }
     }
 }
+
+/// The lighting pass's side of the denoiser (denoise.rs): where it writes each pixel's
+/// unshadowed light and shadow ratio, and `fs_composite`, which shades the filtered ratio.
+const DENOISE_WGSL: &str = "
+@group(0) @binding(40) var<storage, read_write> denoise_px: array<vec4<f32>>;
+@group(0) @binding(41) var<storage, read> denoise_ratio: array<vec4<f32>>;
+
+// Per pixel: [exact unshadowed direct light, 1 = geometry], [estimate with shadows, 0],
+// [the same estimate without, 0], [ambient + emission, 0].
+fn denoise_store(px: vec2<i32>, a: vec4<f32>, shadowed: vec3<f32>, unshadowed: vec3<f32>, rest: vec3<f32>) {
+    let i = 4u * (u32(px.y) * u32(frame.viewport.x) + u32(px.x));
+    denoise_px[i] = a;
+    denoise_px[i + 1u] = vec4<f32>(shadowed, 0.0);
+    denoise_px[i + 2u] = vec4<f32>(unshadowed, 0.0);
+    denoise_px[i + 3u] = vec4<f32>(rest, 0.0);
+}
+
+@fragment
+fn fs_composite(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
+    let px = vec2<i32>(frag.xy);
+    let i = u32(px.y) * u32(frame.viewport.x) + u32(px.x);
+    let exact = denoise_px[4u * i];
+    if (exact.w == 0.0) {
+        return vec4<f32>(frame.sky.rgb, 1.0);
+    }
+    // Per channel: the filtered estimate with shadows over the same without, where that
+    // channel carries light (else the luminance ratio).
+    let s = denoise_ratio[2u * i].rgb;
+    let u = denoise_ratio[2u * i + 1u].rgb;
+    let luma = vec3<f32>(0.2126, 0.7152, 0.0722);
+    let r_lum = dot(s, luma) / max(dot(u, luma), 1e-30);
+    let r = select(vec3<f32>(r_lum), s / max(u, vec3<f32>(1e-30)), u > vec3<f32>(1e-6 * dot(u, luma)));
+    let rest = denoise_px[4u * i + 3u].rgb;
+    return vec4<f32>(tone_map(rest + exact.rgb * clamp(r, vec3<f32>(0.0), vec3<f32>(1.0))), 1.0);
+}
+";
 
 /// Incident-light meter calibration constant (lux · s at ISO 100).
 const METER_CALIBRATION: f32 = 250.0;
@@ -405,6 +455,7 @@ impl ResolvedLook {
             fixed_exposure: self.metered.is_none().then_some(self.exposure_scale),
             emission: self.emission,
             emission_texture: false,
+            denoise: false,
         }
     }
 

@@ -4,6 +4,7 @@
 //! lookup WGSL into their own. Each pass's WGSL lies beside it.
 
 pub(crate) mod blit;
+pub mod denoise;
 pub mod lighting;
 pub mod look;
 pub mod visibility;

@@ -40,6 +40,10 @@ pub struct RayOptions {
     /// fraction seen from a pixel is traced with `area_samples²` rays; 0 counts as 1). With
     /// `light_samples` K > 0 the lighting pass traces one point of each sampled light instead.
     pub area_samples: u32,
+    /// With `light_samples` K > 0: denoise the sampled rays (shading/denoise.rs): the exact
+    /// unshadowed light times the shadow ratio accumulated over frames and filtered. Biased
+    /// where lights of one pixel are shadowed differently; see the module.
+    pub denoise: bool,
 }
 
 impl Default for RayOptions {
@@ -48,6 +52,7 @@ impl Default for RayOptions {
             light_samples: 0,
             seed: 0,
             area_samples: DEFAULT_AREA_SAMPLES,
+            denoise: false,
         }
     }
 }
@@ -81,6 +86,7 @@ with_setters!(RayOptions {
     with_light_samples: light_samples: u32,
     with_seed: seed: u32,
     with_area_samples: area_samples: u32,
+    with_denoise: denoise: bool,
 });
 
 /// `RayParams` of rays.wgsl.

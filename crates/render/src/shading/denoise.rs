@@ -1,0 +1,258 @@
+//! The denoiser of sampled shadow rays (`RayOptions::denoise`, `--denoise`): one pass for
+//! every light, whatever their number.
+//!
+//! With `--light-samples K` each pixel traces K of its lights, picked by importance, and the
+//! image is noise. Most of that noise is visibility: the unshadowed light is cheap to sum
+//! exactly over every light of the pixel's cluster, only the rays are few. So the lighting
+//! pass writes, per pixel, the exact unshadowed direct light `U` and the ratio `r` of its
+//! sampled estimate with shadows to the same estimate without (Heitz et al., "Combining
+//! Analytic Direct Illumination and Stochastic Shadows", 2018; with K samples of weight
+//! `wsum / w` whose luminance is `wsum`, `r` is the mean of the K rays' visibility). Only `r`
+//! is filtered, so texture and lighting detail stay sharp:
+//!
+//! 1. **temporal**: each pixel's surface point is projected into the previous frame; where
+//!    the point was seen there (within two pixel footprints) its history — mean and second
+//!    moment of `r`, frame count up to [`MAX_HISTORY`] — is blended with this frame's `r`,
+//!    else it starts anew (disocclusion). The rays' random numbers change every frame.
+//! 2. **spatial**: [`ATROUS_STEPS`] passes of a 5 × 5 à-trous wavelet (steps 1, 2, 4, 8 pixels)
+//!    whose weights stop at edges of geometry (normal, distance to the pixel's plane) and of
+//!    the ratio itself (a few standard deviations of the temporal variance, wide while the
+//!    history is short), as SVGF does.
+//! 3. **composite**: the lighting pass's `fs_composite` shades `ambient + emission + U · r̄`
+//!    and tone-maps it into the frame.
+//!
+//! What is biased: `U · r̄` is exact where every light of a pixel is seen alike (all lit,
+//! all shadowed) and for one light; where lights of different colours or strengths are
+//! shadowed differently the ratio mixes them (the colour of the unshadowed sum is kept); the
+//! filters blur the ratio across a few pixels where the edge stops do not hold; history lags
+//! a change of lights or casters until it is replaced (lights changed: history dropped).
+
+use crate::frame::gbuffer::GBuffer;
+use crate::gpu::context::GpuContext;
+
+/// Frames of history at most (the weight of a new frame never drops below 1/32).
+pub const MAX_HISTORY: u32 = 32;
+
+/// À-trous passes (steps 1, 2, 4, 8 pixels: a 33-pixel footprint).
+pub const ATROUS_STEPS: u32 = 4;
+
+const _: () = assert!(
+    ATROUS_STEPS.is_multiple_of(2),
+    "the last à-trous pass must write DenoiseBuffers::ratio"
+);
+
+/// Ratio tolerance of the à-trous weights, in standard deviations of the temporal variance.
+const RATIO_SIGMAS: f32 = 0.75;
+
+/// `DenoiseParams` in denoise.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct DenoiseParams {
+    prev_view_proj: [[f32; 4]; 4],
+    size: [u32; 4],
+    pixel: [f32; 4],
+    camera: [f32; 4],
+}
+
+/// The buffers the lighting pass writes and its composite reads.
+pub struct DenoiseBuffers {
+    /// Per pixel two `vec4<f32>`: `[U.rgb, r]`, `[ambient + emission, 1 = geometry]`.
+    pub pixels: wgpu::Buffer,
+    /// Per pixel `[r̄, variance, frames, 0]`: the filtered ratio the composite reads.
+    pub ratio: wgpu::Buffer,
+}
+
+/// The denoiser's buffers and passes for one frame size.
+pub struct Denoiser {
+    /// What the lighting pass reads and writes.
+    pub buffers: DenoiseBuffers,
+    width: u32,
+    height: u32,
+    /// One parameter block per pass: the temporal one, then one per à-trous step.
+    params: Vec<wgpu::Buffer>,
+    temporal: wgpu::ComputePipeline,
+    atrous: wgpu::ComputePipeline,
+    /// Temporal bind groups by the history buffer read (0 or 1; the two history buffers, read
+    /// from one and written to the other, alternating per frame, and the à-trous ping-pong
+    /// partner of `buffers.ratio` live in the bind groups).
+    temporal_groups: [wgpu::BindGroup; 2],
+    /// À-trous bind groups in pass order.
+    atrous_groups: Vec<wgpu::BindGroup>,
+    /// Which history buffer this frame reads.
+    parity: usize,
+    /// Camera world → clip of the last frame denoised (`None`: no history yet).
+    prev_view_proj: Option<glam::Mat4>,
+}
+
+fn storage(ctx: &GpuContext, label: &str, bytes: u64) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: bytes.max(16),
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    })
+}
+
+impl Denoiser {
+    /// Buffers and pipelines for a `w` × `h` frame whose G-buffer is `gbuffer`.
+    pub fn new(ctx: &GpuContext, gbuffer: &GBuffer, w: u32, h: u32) -> Self {
+        let device = &ctx.device;
+        let pixels = u64::from(w) * u64::from(h);
+        let buffers = DenoiseBuffers {
+            pixels: storage(ctx, "denoise.pixels", pixels * 64),
+            ratio: storage(ctx, "denoise.ratio", pixels * 32),
+        };
+        let history = [
+            storage(ctx, "denoise.history0", pixels * 64),
+            storage(ctx, "denoise.history1", pixels * 64),
+        ];
+        let scratch = storage(ctx, "denoise.scratch", pixels * 32);
+        let params: Vec<wgpu::Buffer> = (0..=ATROUS_STEPS)
+            .map(|_| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("denoise.params"),
+                    size: std::mem::size_of::<DenoiseParams>() as u64,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
+            })
+            .collect();
+        let module =
+            crate::gpu::shaders::module(device, "denoise.shader", include_str!("denoise.wgsl"));
+        let temporal = crate::gpu::pipelines::compute_pipeline_with(
+            device,
+            "denoise.temporal",
+            None,
+            &module,
+            "temporal",
+            &[],
+        );
+        let atrous = crate::gpu::pipelines::compute_pipeline_with(
+            device,
+            "denoise.atrous",
+            None,
+            &module,
+            "atrous",
+            &[],
+        );
+        let pv = gbuffer.position.create_view(&Default::default());
+        let nv = gbuffer.normal.create_view(&Default::default());
+        let texture = |binding, view| wgpu::BindGroupEntry {
+            binding,
+            resource: wgpu::BindingResource::TextureView(view),
+        };
+        let whole = crate::gpu::pipelines::whole_entry;
+        let temporal_layout = temporal.get_bind_group_layout(0);
+        let temporal_groups = [0usize, 1].map(|read| {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("denoise.temporal"),
+                layout: &temporal_layout,
+                entries: &[
+                    whole(0, &params[0]),
+                    texture(1, &pv),
+                    whole(3, &buffers.pixels),
+                    whole(4, &history[read]),
+                    whole(5, &history[1 - read]),
+                    whole(6, &buffers.ratio),
+                ],
+            })
+        });
+        // The temporal pass writes `buffers.ratio`; the à-trous passes alternate so that the
+        // last one writes it again (ATROUS_STEPS is even: ratio → scratch → ratio → …).
+        let atrous_layout = atrous.get_bind_group_layout(0);
+        let atrous_groups = (0..ATROUS_STEPS as usize)
+            .map(|k| {
+                let (from, to) = if k % 2 == 0 {
+                    (&buffers.ratio, &scratch)
+                } else {
+                    (&scratch, &buffers.ratio)
+                };
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("denoise.atrous"),
+                    layout: &atrous_layout,
+                    entries: &[
+                        whole(0, &params[k + 1]),
+                        texture(1, &pv),
+                        texture(2, &nv),
+                        whole(7, from),
+                        whole(8, to),
+                    ],
+                })
+            })
+            .collect();
+        Self {
+            buffers,
+            width: w,
+            height: h,
+            params,
+            temporal,
+            atrous,
+            temporal_groups,
+            atrous_groups,
+            parity: 0,
+            prev_view_proj: None,
+        }
+    }
+
+    /// Drops the history (the lights changed: what the pixels saw no longer holds).
+    pub fn reset(&mut self) {
+        self.prev_view_proj = None;
+    }
+
+    /// Records the temporal and à-trous passes of a frame seen through `view_proj` from
+    /// `eye` with a vertical field of view of `fov_y_deg`, after the lighting pass wrote the
+    /// pixels.
+    pub fn record(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        view_proj: glam::Mat4,
+        eye: glam::Vec3,
+        fov_y_deg: f32,
+    ) {
+        let pixel = 2.0 * (0.5 * fov_y_deg).to_radians().tan() / self.height as f32;
+        let fresh = self.prev_view_proj.is_none();
+        let prev = self.prev_view_proj.unwrap_or(view_proj);
+        for (k, buffer) in self.params.iter().enumerate() {
+            let step = if k == 0 { 0 } else { 1u32 << (k - 1) };
+            let params = DenoiseParams {
+                prev_view_proj: prev.to_cols_array_2d(),
+                size: [self.width, self.height, step, MAX_HISTORY],
+                pixel: [pixel, RATIO_SIGMAS, if fresh { 1.0 } else { 0.0 }, 0.0],
+                camera: eye.extend(1.0).to_array(),
+            };
+            ctx.queue
+                .write_buffer(buffer, 0, bytemuck::bytes_of(&params));
+        }
+        let groups = (self.width.div_ceil(8), self.height.div_ceil(8));
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("denoise"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.temporal);
+        pass.set_bind_group(0, &self.temporal_groups[self.parity], &[]);
+        pass.dispatch_workgroups(groups.0, groups.1, 1);
+        pass.set_pipeline(&self.atrous);
+        for g in &self.atrous_groups {
+            pass.set_bind_group(0, g, &[]);
+            pass.dispatch_workgroups(groups.0, groups.1, 1);
+        }
+        drop(pass);
+        self.parity = 1 - self.parity;
+        self.prev_view_proj = Some(view_proj);
+    }
+}
+
+#[cfg(test)]
+mod shader_tests {
+    /// The denoiser's WGSL is what a WebGPU device accepts.
+    #[test]
+    fn shader_validates_for_webgpu() {
+        crate::gpu::shaders::validate_for_webgpu(
+            "denoise",
+            include_str!("denoise.wgsl"),
+            wgpu::Features::empty(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+    }
+}

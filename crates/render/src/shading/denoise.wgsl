@@ -1,0 +1,175 @@
+// The ratio denoiser of sampled shadow rays (denoise.rs): one pass for every light.
+//
+// The lighting pass writes per pixel the exact unshadowed direct light U of the pixel's
+// lights and the ratio r = shadowed / unshadowed of its sampled lights' estimate (Heitz et al.
+// 2018). Only r is noisy; it is accumulated over frames at the same surface point (the
+// G-buffer's position reprojected into the last frame) and filtered by an edge-stopping
+// à-trous wavelet (Dammertz et al. 2010) on position, normal and its own temporal variance
+// (SVGF, Schied et al. 2017). The lighting pass's `fs_composite` then shades U · r̄.
+
+struct DenoiseParams {
+    // Camera world → clip of the previous frame.
+    prev_view_proj: mat4x4<f32>,
+    // width, height, à-trous step (pixels), most frames of history.
+    size: vec4<u32>,
+    // world size of a pixel at distance 1, ratio tolerance in standard deviations,
+    // 1 = no history this frame, unused.
+    pixel: vec4<f32>,
+    // eye position (xyz).
+    camera: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> p: DenoiseParams;
+@group(0) @binding(1) var gbuf_position: texture_2d<u32>;
+@group(0) @binding(2) var gbuf_normal: texture_2d<u32>;
+
+fn surface_at(px: vec2<u32>) -> vec4<f32> {
+    let g = textureLoad(gbuf_position, vec2<i32>(px), 0);
+    return vec4<f32>(bitcast<vec3<f32>>(g.xyz), select(0.0, 1.0, g.w != 0u));
+}
+
+fn normal_at(px: vec2<u32>) -> vec3<f32> {
+    return normalize(bitcast<vec3<f32>>(textureLoad(gbuf_normal, vec2<i32>(px), 0).xyz));
+}
+
+// ---- temporal accumulation -------------------------------------------------------------
+
+const LUMA: vec3<f32> = vec3<f32>(0.2126, 0.7152, 0.0722);
+
+// The luminance ratio of an estimate with shadows to the same without (1 where no light).
+fn ratio_of(s: vec3<f32>, u: vec3<f32>) -> f32 {
+    let lu = dot(u, LUMA);
+    return select(1.0, dot(s, LUMA) / lu, lu > 0.0);
+}
+
+// Per pixel, from the lighting pass: [exact unshadowed, 1 = geometry], [estimate with
+// shadows], [the same without], [ambient + emission].
+@group(0) @binding(3) var<storage, read> px_in: array<vec4<f32>>;
+// Per pixel: [mean estimate with shadows, frames], [mean estimate without, mean ratio],
+// [mean ratio², 0, 0, 0], [world position, 1 = valid].
+@group(0) @binding(4) var<storage, read> hist_in: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read_write> hist_out: array<vec4<f32>>;
+// Per pixel: [estimate with shadows, variance of the ratio], [estimate without, frames].
+@group(0) @binding(6) var<storage, read_write> ratio_out: array<vec4<f32>>;
+
+@compute @workgroup_size(8, 8)
+fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let w = p.size.x;
+    let h = p.size.y;
+    if (gid.x >= w || gid.y >= h) {
+        return;
+    }
+    let i = gid.y * w + gid.x;
+    let s = surface_at(gid.xy);
+    if (s.w == 0.0) {
+        for (var k = 0u; k < 4u; k = k + 1u) {
+            hist_out[4u * i + k] = vec4<f32>(0.0);
+        }
+        ratio_out[2u * i] = vec4<f32>(0.0);
+        ratio_out[2u * i + 1u] = vec4<f32>(0.0, 0.0, 0.0, 1.0);
+        return;
+    }
+    let pos = s.xyz;
+    var shadowed = px_in[4u * i + 1u].rgb;
+    var unshadowed = px_in[4u * i + 2u].rgb;
+    let r = ratio_of(shadowed, unshadowed);
+    var mean = r;
+    var m2 = r * r;
+    var frames = 1.0;
+    let clip = p.prev_view_proj * vec4<f32>(pos, 1.0);
+    if (p.pixel.z == 0.0 && clip.w > 0.0) {
+        let ndc = clip.xy / clip.w;
+        let q = vec2<f32>((ndc.x * 0.5 + 0.5) * f32(w), (0.5 - ndc.y * 0.5) * f32(h));
+        if (q.x >= 0.0 && q.y >= 0.0 && q.x < f32(w) && q.y < f32(h)) {
+            let j = u32(q.y) * w + u32(q.x);
+            let h0 = hist_in[4u * j];
+            let h1 = hist_in[4u * j + 1u];
+            let h2 = hist_in[4u * j + 2u];
+            let hp = hist_in[4u * j + 3u];
+            // The same surface point: within two pixel footprints of where it was.
+            let footprint = distance(pos, p.camera.xyz) * p.pixel.x;
+            if (hp.w > 0.0 && distance(hp.xyz, pos) <= 2.0 * footprint + 1e-6) {
+                frames = min(h0.w + 1.0, f32(p.size.w));
+                let a = 1.0 / frames;
+                shadowed = mix(h0.rgb, shadowed, a);
+                unshadowed = mix(h1.rgb, unshadowed, a);
+                mean = mix(h1.w, r, a);
+                m2 = mix(h2.x, r * r, a);
+            }
+        }
+    }
+    hist_out[4u * i] = vec4<f32>(shadowed, frames);
+    hist_out[4u * i + 1u] = vec4<f32>(unshadowed, mean);
+    hist_out[4u * i + 2u] = vec4<f32>(m2, 0.0, 0.0, 0.0);
+    hist_out[4u * i + 3u] = vec4<f32>(pos, 1.0);
+    ratio_out[2u * i] = vec4<f32>(shadowed, max(m2 - mean * mean, 0.0));
+    ratio_out[2u * i + 1u] = vec4<f32>(unshadowed, frames);
+}
+
+// ---- à-trous filter --------------------------------------------------------------------
+
+@group(0) @binding(7) var<storage, read> ratio_in: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read_write> ratio_filtered: array<vec4<f32>>;
+
+@compute @workgroup_size(8, 8)
+fn atrous(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let w = p.size.x;
+    let h = p.size.y;
+    if (gid.x >= w || gid.y >= h) {
+        return;
+    }
+    let i = gid.y * w + gid.x;
+    let c0 = ratio_in[2u * i];
+    let c1 = ratio_in[2u * i + 1u];
+    let s = surface_at(gid.xy);
+    if (s.w == 0.0) {
+        ratio_filtered[2u * i] = c0;
+        ratio_filtered[2u * i + 1u] = c1;
+        return;
+    }
+    let pos = s.xyz;
+    let n = normal_at(gid.xy);
+    let step = i32(p.size.z);
+    let footprint = distance(pos, p.camera.xyz) * p.pixel.x;
+    let r = ratio_of(c0.rgb, c1.rgb);
+    // How far a neighbour's ratio may differ: a few standard deviations of the two pixels'
+    // mean ratios, with the variance at least a coin's of their mean ratio (a pixel whose
+    // few rays all came out alike has an estimated variance of 0, and would never average
+    // with its neighbours), and wide while the history is short.
+    let frames = max(c1.w, 1.0);
+    var kernel = array<f32, 3>(0.375, 0.25, 0.0625);
+    var sum_s = vec3<f32>(0.0);
+    var sum_u = vec3<f32>(0.0);
+    var vsum = 0.0;
+    var wsum = 0.0;
+    for (var dy = -2; dy <= 2; dy = dy + 1) {
+        for (var dx = -2; dx <= 2; dx = dx + 1) {
+            let q = vec2<i32>(gid.xy) + vec2<i32>(dx, dy) * step;
+            if (q.x < 0 || q.y < 0 || q.x >= i32(w) || q.y >= i32(h)) {
+                continue;
+            }
+            let qs = surface_at(vec2<u32>(q));
+            if (qs.w == 0.0) {
+                continue;
+            }
+            let j = u32(q.y) * w + u32(q.x);
+            let q0 = ratio_in[2u * j];
+            let q1 = ratio_in[2u * j + 1u];
+            let wn = pow(max(dot(n, normal_at(vec2<u32>(q))), 0.0), 32.0);
+            let wp = exp(-abs(dot(n, qs.xyz - pos)) / (footprint * f32(step) + 1e-6));
+            let rq = ratio_of(q0.rgb, q1.rgb);
+            let rm = clamp(0.5 * (r + rq), 0.0, 1.0);
+            let variance = max(0.5 * (c0.w + q0.w), rm * (1.0 - rm));
+            let tol = max(p.pixel.y * sqrt(variance / frames) + 0.5 / frames, 1e-3);
+            let wr = exp(-abs(rq - r) / tol);
+            let wt = kernel[abs(dx)] * kernel[abs(dy)] * wn * wp * wr;
+            sum_s = sum_s + wt * q0.rgb;
+            sum_u = sum_u + wt * q1.rgb;
+            vsum = vsum + wt * wt * q0.w;
+            wsum = wsum + wt;
+        }
+    }
+    // The centre tap always counts (its weights are all 1 but the kernel's).
+    ratio_filtered[2u * i] = vec4<f32>(sum_s / wsum, vsum / (wsum * wsum));
+    ratio_filtered[2u * i + 1u] = vec4<f32>(sum_u / wsum, c1.w);
+}

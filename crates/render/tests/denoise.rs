@@ -1,0 +1,120 @@
+//! The denoiser of sampled shadow rays (`RayOptions::denoise`): against the exact image (every
+//! cluster light traced), one light sampled per pixel denoised must be far closer than one
+//! sampled plainly, and come closer frame after frame on a still camera. Where the adapter has
+//! no ray queries (OpenGL, older Mesa) the technique is refused by name; options that cannot be
+//! denoised are refused everywhere.
+
+mod common;
+
+use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
+use manyshadows::scene::Scene;
+use manyshadows::{GpuContext, RayOptions, RenderError, RenderSettings, Renderer, Technique};
+
+/// The renderer, or `None` after checking that a device without ray queries refuses the
+/// technique by name.
+fn renderer(ctx: &GpuContext, scene: &Scene, settings: RenderSettings) -> Option<Renderer> {
+    let unmet = Technique::RAYTRACED.info().unmet(ctx);
+    match Renderer::new(ctx, scene, settings.with_technique(Technique::RAYTRACED)) {
+        Ok(r) => {
+            assert!(unmet.is_empty(), "rendered without {unmet:?}");
+            Some(r)
+        }
+        Err(e @ RenderError::MissingFeature { .. }) => {
+            assert!(
+                !unmet.is_empty(),
+                "refused on a device that has ray queries: {e}"
+            );
+            assert!(
+                e.to_string().contains("EXPERIMENTAL_RAY_QUERY"),
+                "the refusal names the feature: {e}"
+            );
+            eprintln!("refused here, by name: {e}");
+            None
+        }
+        Err(e) => panic!("{e}"),
+    }
+}
+
+/// Root-mean-square difference of two frames' sRGB channels, 0..255.
+fn rmse(a: &manyshadows::Frame, b: &manyshadows::Frame) -> f64 {
+    let n = a.rgba.len() as f64;
+    let s: f64 = a
+        .rgba
+        .iter()
+        .zip(&b.rgba)
+        .map(|(&x, &y)| (f64::from(x) - f64::from(y)).powi(2))
+        .sum();
+    (s / n).sqrt()
+}
+
+/// The cubes under 48 seeded lights of every type (each pixel has more candidates than one
+/// sample), 160 × 120: plain K = 1 against denoised K = 1 over eight still frames.
+#[test]
+fn denoised_samples_are_close_to_every_light_and_converge() {
+    let ctx = common::context();
+    let mut scene = builtin::build("cubes", &BuiltinOptions::default()).expect("scene");
+    scene.lights = builtin::scatter_lights(&scene, 48, 3, LightMix::All, None);
+    let base = RenderSettings::new(160, 120);
+    let Some(mut exact) = renderer(&ctx, &scene, base.clone()) else {
+        return;
+    };
+    let exact = exact.render().expect("frame");
+    let one = RayOptions::default().with_light_samples(1);
+    let plain = renderer(&ctx, &scene, base.clone().with_rays(one))
+        .expect("same device")
+        .render()
+        .expect("frame");
+    let plain = rmse(&plain, &exact);
+    let mut denoised =
+        renderer(&ctx, &scene, base.with_rays(one.with_denoise(true))).expect("same device");
+    let errors: Vec<f64> = (0..8)
+        .map(|_| rmse(&denoised.render().expect("frame"), &exact))
+        .collect();
+    eprintln!(
+        "RMSE against every light: K = 1 plain {plain:.2}; denoised, frames 1 to 8: {errors:.2?}"
+    );
+    let artifacts = common::artifacts_dir();
+    let last = denoised.render().expect("frame");
+    image::RgbaImage::from_raw(160, 120, last.rgba.clone())
+        .expect("frame size")
+        .save(artifacts.join("denoise-cubes-9-frames.png"))
+        .expect("write");
+    assert!(
+        errors[0] < 0.5 * plain,
+        "the first denoised frame is not much closer than plain sampling: {} vs {plain}",
+        errors[0]
+    );
+    assert!(
+        errors[7] < 0.8 * errors[0],
+        "eight still frames do not converge: {errors:?}"
+    );
+    assert!(errors[7] < 0.3 * plain, "{} vs {plain}", errors[7]);
+}
+
+/// Denoising asks for sampled rays: without them (every light traced, or a shadow-map
+/// technique) the settings are refused, naming the option, on any device.
+#[test]
+fn denoising_without_sampled_rays_is_refused_by_name() {
+    let ctx = common::context();
+    let scene = builtin::build("cubes", &BuiltinOptions::default()).expect("scene");
+    for settings in [
+        RenderSettings::new(32, 32)
+            .with_technique(Technique::RAYTRACED)
+            .with_rays(RayOptions::default().with_denoise(true)),
+        RenderSettings::new(32, 32)
+            .with_technique(Technique::default())
+            .with_rays(
+                RayOptions::default()
+                    .with_light_samples(1)
+                    .with_denoise(true),
+            ),
+    ] {
+        match Renderer::new(&ctx, &scene, settings) {
+            Err(e @ RenderError::InvalidOption { .. }) => {
+                assert!(e.to_string().contains("rays.denoise"), "{e}");
+            }
+            Err(e) => panic!("refused for another reason: {e}"),
+            Ok(_) => panic!("denoising without sampled rays was accepted"),
+        }
+    }
+}
