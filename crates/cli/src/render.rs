@@ -197,17 +197,27 @@ pub(crate) fn check_shadow_work(renderer: &Renderer) -> Result<()> {
         })
         .map(|t| t.name())
         .collect();
+    // Techniques whose work is not per (triangle, view) pair: virtual pages and rays.
     let viewless: Vec<&str> = Technique::all()
         .into_iter()
-        .filter(|t| t.info().fills != manyshadows::Fills::Atlas)
+        .filter(|t| {
+            matches!(
+                t.info().fills,
+                manyshadows::Fills::Pages | manyshadows::Fills::Rays
+            )
+        })
         .map(|t| t.name())
         .collect();
+    let how = if technique.info().fills == manyshadows::Fills::Mask {
+        "it tests every caster triangle against every light view's grid of samples"
+    } else {
+        "it culls per view only after every triangle reached the view"
+    };
     bail!(
         "technique {technique} would take {} (caster triangle, view) pairs this frame ({} \
-         views; it culls per view only after every triangle reached the view), more than the \
-         {} this command starts unasked. Techniques that cull whole instances or clusters per \
-         view first take at most {} here ({}); {} scale with pixels and lights instead of \
-         views. Pass --insist to render it anyway.",
+         views; {how}), more than the {} this command starts unasked. Techniques that cull \
+         whole instances or clusters per view first take at most {} here ({}); {} scale with \
+         pixels and lights instead of views. Pass --insist to render it anyway.",
         g(work.triangle_views),
         work.views,
         g(MAX_UNASKED_TRIANGLE_VIEWS),

@@ -336,6 +336,43 @@ fn a_ten_minute_frame_is_refused_with_its_estimate() {
     }
 }
 
+/// Irregular shadow maps test every caster triangle against every light view (one thread per
+/// pair): at 16,384 lights, 320 × 180, they ran for minutes without a word (issue 42). Now
+/// the frame is estimated and refused before anything is drawn, and the refusal recommends
+/// only techniques that scale (not irregular itself).
+#[test]
+fn irregular_maps_of_thousands_of_lights_are_estimated_and_refused() {
+    let started = std::time::Instant::now();
+    let out = run(&[
+        "render",
+        "--lights",
+        "16384",
+        "--technique",
+        "irregular",
+        "--width",
+        "320",
+        "--height",
+        "180",
+        "--out",
+        "/dev/null",
+    ]);
+    assert_clean_failure(&out, 1, "technique irregular would take 9.4 G");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    for needle in [
+        "36499 views",
+        "every light view's grid of samples",
+        "virtual, raytraced scale",
+        "--insist",
+    ] {
+        assert!(stderr.contains(needle), "{needle}: {stderr}");
+    }
+    assert!(
+        !stderr.contains("irregular, virtual"),
+        "the refusal recommends the refused technique: {stderr}"
+    );
+    eprintln!("refused after {:.1} s", started.elapsed().as_secs_f64());
+}
+
 /// A page pool that is not a square of whole pages is announced with what is used (512 MiB:
 /// 11520², 8,100 pages — a power-of-two pool would have kept 4,096); the default is exact.
 #[test]

@@ -278,13 +278,16 @@ impl Renderer {
     /// The per-view shadow work the next frame asks for, from its shadow plan, before anything
     /// is rendered: what a caller checks before starting a frame that could take minutes (a
     /// technique that sends every triangle to every one of 36,499 views takes 9.4 G pairs).
-    /// `None` for techniques without shadow views (rays, irregular's samples, virtual pages
-    /// made on the GPU).
+    /// Irregular shadow maps test every caster triangle against every light view's grid (one
+    /// thread per pair), so they count every pair too. `None` for techniques whose work is not
+    /// per view: rays, and virtual pages made on the GPU.
     pub fn shadow_work(&self) -> Option<ShadowWork> {
         use crate::shadows::descriptor::Culling;
-        let culling = self.settings.technique.info().culling;
+        let info = self.settings.technique.info();
+        let culling = info.culling;
         let views = &self.source.plan().views;
-        if culling == Culling::NoViews || views.is_empty() {
+        let per_pair_mask = culling == Culling::NoViews && info.fills == crate::error::Fills::Mask;
+        if (culling == Culling::NoViews && !per_pair_mask) || views.is_empty() {
             return None;
         }
         let casters: Vec<_> = self
@@ -309,7 +312,7 @@ impl Renderer {
         Some(ShadowWork {
             views: views.len(),
             triangle_views: match culling {
-                Culling::VertexStage | Culling::Threads => all_pairs,
+                Culling::VertexStage | Culling::Threads | Culling::NoViews => all_pairs,
                 _ => culled,
             },
             after_instance_culling: culled,
