@@ -90,7 +90,7 @@ pub struct Renderer {
     denoiser: Option<crate::shading::denoise::Denoiser>,
     /// Frames the denoiser has seen (their rays' random numbers differ by it).
     frames_denoised: u32,
-    /// A light changed since the last frame (the denoiser's history no longer holds).
+    /// A light changed since the last frame (the denoiser's history follows it fast).
     lights_changed: bool,
 }
 
@@ -523,7 +523,7 @@ impl Renderer {
         }
         if let Some(d) = &mut self.denoiser {
             if std::mem::take(&mut self.lights_changed) {
-                d.reset();
+                d.lights_changed();
             }
             // New random numbers for the rays every frame (FrameUniforms::modes.y).
             self.frames_denoised = self.frames_denoised.wrapping_add(1);

@@ -25,13 +25,28 @@
 //! all shadowed) and for one light; where lights of different colours or strengths are
 //! shadowed differently the ratio mixes them (the colour of the unshadowed sum is kept); the
 //! filters blur the ratio across a few pixels where the edge stops do not hold; history lags
-//! a change of lights or casters until it is replaced (lights changed: history dropped).
+//! a change of lights or casters until it is replaced. When lights change the unshadowed
+//! light is exact at once; the history is kept, but for [`CHANGED_FRAMES`] frames each
+//! frame's estimates weigh at least [`CHANGED_WEIGHT`] (cubes, a sun of 48 lights switched
+//! off: error 1.18× the steady one after four frames; keeping the history unchanged 1.42×,
+//! dropping it 2.1× — the spatial filter widens again with a short history — and weighing
+//! new frames 0.5 adds more noise than it removes). A moving light's or caster's old shadows
+//! stay in the ratio where the surface did not move: detecting that (temporal gradients,
+//! A-SVGF) is not done.
 
 use crate::frame::gbuffer::GBuffer;
 use crate::gpu::context::GpuContext;
 
 /// Frames of history at most (the weight of a new frame never drops below 1/32).
 pub const MAX_HISTORY: u32 = 32;
+
+/// After a change of lights, this many frames weigh their estimates at least
+/// [`CHANGED_WEIGHT`] in the history (it follows the change within a few frames; its frame
+/// count, which narrows the spatial filter, keeps growing).
+pub const CHANGED_FRAMES: u32 = 4;
+
+/// See [`CHANGED_FRAMES`].
+pub const CHANGED_WEIGHT: f32 = 0.2;
 
 /// À-trous passes (steps 1, 2, 4, 8 pixels: a 33-pixel footprint).
 pub const ATROUS_STEPS: u32 = 4;
@@ -82,6 +97,8 @@ pub struct Denoiser {
     parity: usize,
     /// Camera world → clip of the last frame denoised (`None`: no history yet).
     prev_view_proj: Option<glam::Mat4>,
+    /// Frames left whose estimates weigh at least [`CHANGED_WEIGHT`] (after lights changed).
+    fast_frames: u32,
 }
 
 fn storage(ctx: &GpuContext, label: &str, bytes: u64) -> wgpu::Buffer {
@@ -191,12 +208,14 @@ impl Denoiser {
             atrous_groups,
             parity: 0,
             prev_view_proj: None,
+            fast_frames: 0,
         }
     }
 
-    /// Drops the history (the lights changed: what the pixels saw no longer holds).
-    pub fn reset(&mut self) {
-        self.prev_view_proj = None;
+    /// The lights changed: the next [`CHANGED_FRAMES`] frames follow them fast. (The
+    /// unshadowed light is exact at once; only the shadow ratio's history is old.)
+    pub fn lights_changed(&mut self) {
+        self.fast_frames = CHANGED_FRAMES;
     }
 
     /// Records the temporal and à-trous passes of a frame seen through `view_proj` from
@@ -212,13 +231,24 @@ impl Denoiser {
     ) {
         let pixel = 2.0 * (0.5 * fov_y_deg).to_radians().tan() / self.height as f32;
         let fresh = self.prev_view_proj.is_none();
+        let least_weight = if self.fast_frames > 0 {
+            self.fast_frames -= 1;
+            CHANGED_WEIGHT
+        } else {
+            0.0
+        };
         let prev = self.prev_view_proj.unwrap_or(view_proj);
         for (k, buffer) in self.params.iter().enumerate() {
             let step = if k == 0 { 0 } else { 1u32 << (k - 1) };
             let params = DenoiseParams {
                 prev_view_proj: prev.to_cols_array_2d(),
                 size: [self.width, self.height, step, MAX_HISTORY],
-                pixel: [pixel, RATIO_SIGMAS, if fresh { 1.0 } else { 0.0 }, 0.0],
+                pixel: [
+                    pixel,
+                    RATIO_SIGMAS,
+                    if fresh { 1.0 } else { 0.0 },
+                    least_weight,
+                ],
                 camera: eye.extend(1.0).to_array(),
             };
             ctx.queue

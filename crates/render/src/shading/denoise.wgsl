@@ -13,7 +13,8 @@ struct DenoiseParams {
     // width, height, à-trous step (pixels), most frames of history.
     size: vec4<u32>,
     // world size of a pixel at distance 1, ratio tolerance in standard deviations,
-    // 1 = no history this frame, unused.
+    // 1 = no history this frame, least weight of this frame's estimates (after a change of
+    // lights: the history follows fast while its frame count keeps the filter narrow).
     pixel: vec4<f32>,
     // eye position (xyz).
     camera: vec4<f32>,
@@ -90,7 +91,7 @@ fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
             let footprint = distance(pos, p.camera.xyz) * p.pixel.x;
             if (hp.w > 0.0 && distance(hp.xyz, pos) <= 2.0 * footprint + 1e-6) {
                 frames = min(h0.w + 1.0, f32(p.size.w));
-                let a = 1.0 / frames;
+                let a = max(1.0 / frames, p.pixel.w);
                 shadowed = mix(h0.rgb, shadowed, a);
                 unshadowed = mix(h1.rgb, unshadowed, a);
                 mean = mix(h1.w, r, a);
