@@ -506,6 +506,10 @@ pub fn layered(args: &LayeredArgs) -> Result<()> {
                 .with_cull(m.cull)
                 .with_casters(CasterOptions::default().with_assume_closed(variant.assume_closed))
                 .with_discard_raster(variant.discard && !args.raster);
+            h.message(format!(
+                "{} {res}² ×{maps}: building {}",
+                variant.name, m.technique
+            ));
             let created = ctx.scoped(&format!("building {}", m.technique), || {
                 ShadowGenerator::new(
                     ctx,

@@ -229,6 +229,10 @@ pub(crate) struct Harness {
     out_dir: PathBuf,
     pb: ProgressBar,
     notes: std::cell::RefCell<Vec<String>>,
+    /// Stderr is not a terminal (a log file, CI, a remote runner): the bar draws nothing
+    /// there, so each configuration is printed as a line instead, with the time so far.
+    plain: bool,
+    started: std::time::Instant,
 }
 
 impl Harness {
@@ -268,6 +272,8 @@ impl Harness {
             out_dir: out_dir.to_path_buf(),
             pb,
             notes: Default::default(),
+            plain: !std::io::IsTerminal::is_terminal(&std::io::stderr()),
+            started: std::time::Instant::now(),
         })
     }
 
@@ -284,8 +290,17 @@ impl Harness {
             .set_draw_target(indicatif::ProgressDrawTarget::stderr());
     }
 
-    /// What is being measured now, beside the bar.
+    /// What is being measured now, beside the bar (a line of its own where stderr is no
+    /// terminal: no silent minutes in a log).
     pub fn message(&self, msg: String) {
+        if self.plain {
+            let (done, total) = (self.pb.position(), self.pb.length().unwrap_or(0));
+            eprintln!(
+                "[{:>6.1} s, {}%] {msg}",
+                self.started.elapsed().as_secs_f64(),
+                (done * 100).checked_div(total).unwrap_or(0)
+            );
+        }
         self.pb.set_message(msg);
     }
 

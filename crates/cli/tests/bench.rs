@@ -566,3 +566,31 @@ fn bench_suite_gathers_its_sections() {
     assert!(!bad.status.success(), "{err}");
     assert!(err.contains("section layered"), "{err}");
 }
+
+/// Where stderr is no terminal (a log, CI, a remote runner) the progress bar draws nothing,
+/// so each configuration and each technique being built is a line with the time so far: a
+/// GPU run of `bench layered` was silent for 470 s (issue 42).
+#[test]
+fn bench_progress_is_printed_as_lines_in_a_log() {
+    let dir = tmp("layered-lines");
+    let out = bench(
+        "layered --maps 1 --resolutions 64 --variants simple --methods traditional,layered \
+         --repeats 1 --warmup 0",
+        &["--out-dir", dir.to_str().unwrap()],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    for needle in [
+        "] simple 64² ×1",
+        "simple 64² ×1: building traditional",
+        "simple 64² ×1: building layered",
+    ] {
+        assert!(stderr.contains(needle), "{needle}: {stderr}");
+    }
+    assert!(
+        stderr
+            .lines()
+            .any(|l| l.starts_with('[') && l.contains(" s, ") && l.contains("%]")),
+        "{stderr}"
+    );
+}
