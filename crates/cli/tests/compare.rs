@@ -668,3 +668,29 @@ fn the_gpu_soft_reference_agrees_with_the_cpu_one() {
     assert!(cpu_pairs.abs_diff(gpu_pairs) * 100 <= 3 * cpu_pairs);
     assert!((cpu_error - gpu_error).abs() <= 0.01);
 }
+
+/// A technique whose frame would take minutes is estimated before it is drawn, as `render`
+/// does: named, it is refused with its estimate (irregular at 16,384 lights: every caster
+/// triangle against each of 43,693 light views).
+#[test]
+fn a_technique_of_minutes_is_refused_with_its_estimate() {
+    let dir = tmp("minutes");
+    let out = run(&[
+        "compare",
+        "--lights",
+        "16384",
+        "--techniques",
+        "irregular",
+        "--soft-samples",
+        "0",
+        "--width",
+        "64",
+        "--height",
+        "36",
+        "--out-dir",
+        dir.to_str().unwrap(),
+    ]);
+    assert_clean_failure_compare(&out, "technique irregular would take");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("--insist"), "{stderr}");
+}

@@ -135,6 +135,12 @@ pub struct CompareArgs {
     /// Also write one difference image per light and technique.
     #[arg(long)]
     pub(super) per_light_images: bool,
+    /// Score even a technique whose frame is far beyond the rest (more than 2 G caster
+    /// triangle-view pairs, e.g. every triangle sent to each of thousands of views): without
+    /// it such a technique is skipped with its estimate when every technique is asked for,
+    /// and refused when named.
+    #[arg(long)]
+    pub(super) insist: bool,
     #[command(flatten)]
     pub(super) gpu: GpuArgs,
 }

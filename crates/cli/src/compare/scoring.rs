@@ -107,7 +107,19 @@ fn renderer_for(
         scene_v,
         settings(args, v.technique, soft_visibility),
     ) {
-        Ok(r) => Ok(Some(r)),
+        Ok(r) => {
+            // A frame of minutes is estimated before it is drawn, as `render` does.
+            if !args.insist {
+                if let Err(e) = crate::render::check_shadow_work(&r) {
+                    if args.techniques.is_empty() {
+                        skipped.push((v.label(), e.to_string()));
+                        return Ok(None);
+                    }
+                    return Err(e);
+                }
+            }
+            Ok(Some(r))
+        }
         // Asked for every technique: run those this adapter can, say which it cannot.
         Err(e) if e.is_unsupported() && args.techniques.is_empty() => {
             skipped.push((v.label(), e.to_string()));
