@@ -694,3 +694,37 @@ fn a_technique_of_minutes_is_refused_with_its_estimate() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("--insist"), "{stderr}");
 }
+
+/// The CPU reference shows its progress: in a log (stderr no terminal) a line at every tenth
+/// of its rows with the rays so far, rays per second and the time left (issue 42).
+#[test]
+fn the_reference_shows_its_progress_in_a_log() {
+    let dir = tmp("progress");
+    let out = run(&[
+        "compare",
+        "--scene",
+        "plane-spot",
+        "--techniques",
+        "traditional",
+        "--width",
+        "80",
+        "--height",
+        "60",
+        "--out-dir",
+        dir.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let lines: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("reference rays: "))
+        .collect();
+    assert_eq!(lines.len(), 10, "a line per tenth of 60 rows: {stderr}");
+    assert!(
+        lines[9].starts_with("reference rays: 60/60 rows"),
+        "{stderr}"
+    );
+    for l in &lines {
+        assert!(l.contains("/s") && l.ends_with("s left"), "{l}");
+    }
+}

@@ -8,7 +8,7 @@ use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
+use indicatif::MultiProgress;
 use manyshadows::scene::{Light, Scene};
 use manyshadows::{GpuContext, Renderer};
 use manyshadows_reference::score;
@@ -106,22 +106,24 @@ fn trace_reference(
     edge_band: u32,
 ) -> Result<Reference> {
     let surfaces = surfaces(renderer)?;
-    let rows = multi.add(ProgressBar::new(surfaces.height as u64));
-    rows.set_style(
-        ProgressStyle::with_template("{bar:30} {pos}/{len} rows of reference rays [{elapsed}]")
-            .expect("valid template"),
+    // At most one ray per pixel and light (fewer: out of reach or facing away).
+    let rows = crate::progress::RowProgress::new(
+        multi,
+        surfaces.height as u64,
+        surfaces.width as f64 * scene.lights.len() as f64,
+        "reference rays",
     );
     let t = Instant::now();
     let vis = manyshadows_reference::reference_visibility(
         tracer,
         &scene.lights,
         &surfaces,
-        &|| rows.inc(1),
+        &|| rows.row(),
         &AtomicBool::new(false),
     )
     .context("the reference was cancelled")?;
     let ms = t.elapsed().as_secs_f64() * 1e3;
-    rows.finish_and_clear();
+    rows.finish();
     let rays = shadow_rays(&vis.reach, &scene.lights);
     let band = score::edge_band(&vis.lit, &surfaces.covered(), edge_band);
     Ok(Reference {

@@ -11,7 +11,7 @@ use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
+use indicatif::MultiProgress;
 use manyshadows::scene::Light;
 use manyshadows::{Frame, Renderer};
 use manyshadows_reference::soft_score::SoftScore;
@@ -41,12 +41,13 @@ pub(super) fn trace(
     surfaces: &Surfaces,
     samples: u32,
 ) -> Result<SoftReference> {
-    let rows = multi.add(ProgressBar::new(surfaces.height as u64));
-    rows.set_style(
-        ProgressStyle::with_template(&format!(
-            "{{bar:30}} {{pos}}/{{len}} rows of soft reference rays ({samples} per pair) [{{elapsed}}]"
-        ))
-        .expect("valid template"),
+    // At most `samples` rays per pixel and sized light.
+    let sized = lights.iter().filter(|l| l.size > 0.0).count();
+    let rows = crate::progress::RowProgress::new(
+        multi,
+        surfaces.height as u64,
+        surfaces.width as f64 * sized as f64 * f64::from(samples),
+        &format!("soft reference rays ({samples} per pair)"),
     );
     let t = Instant::now();
     let vis = manyshadows_reference::reference_soft_visibility(
@@ -54,12 +55,12 @@ pub(super) fn trace(
         lights,
         surfaces,
         samples,
-        &|| rows.inc(1),
+        &|| rows.row(),
         &AtomicBool::new(false),
     )
     .context("the soft reference was cancelled")?;
     let ms = t.elapsed().as_secs_f64() * 1e3;
-    rows.finish_and_clear();
+    rows.finish();
     let rays = soft_rays(&vis, lights);
     let bytes = to_bytes(&vis.visible);
     Ok(SoftReference {
