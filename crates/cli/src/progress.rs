@@ -65,7 +65,7 @@ impl RowProgress {
             crate::progress::si(rays / secs)
         );
         let step = (self.rows / 10).max(1);
-        if self.plain && (done % step == 0 || done == self.rows) {
+        if self.plain && (done.is_multiple_of(step) || done == self.rows) {
             let left = secs * (self.rows - done) as f64 / done.max(1) as f64;
             eprintln!(
                 "{}: {done}/{} rows, {status}, ~{left:.0} s left",
