@@ -590,3 +590,88 @@ fn the_summary_of_each_technique_is_its_own() {
     assert!(out.status.success(), "{text}");
     assert!(!text.lines().any(|l| l.starts_with("soft")), "{text}");
 }
+
+/// Every technique's summary says what that technique did and nothing it did not (issue 42:
+/// irregular's summary once showed an atlas it does not keep and "0 passes"): the shared
+/// lines for all, then per kind of output — an atlas and its passes for the atlas techniques,
+/// sample lists for irregular, faces, pages and marking for virtual maps, rays for the
+/// ray-traced technique — and no atlas line where there is no atlas. A technique this adapter
+/// cannot run must be refused naming the feature it lacks.
+#[test]
+fn every_technique_summary_is_true_to_the_technique() {
+    let dir = tmp("summaries");
+    for t in manyshadows::Technique::all() {
+        let png = dir.join(format!("{}.png", t.name()));
+        let out = run(&[
+            "render",
+            "--scene",
+            "cubes",
+            "--technique",
+            t.name(),
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--out",
+            png.to_str().unwrap(),
+        ]);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        if !out.status.success() {
+            assert!(
+                stderr.contains("needs the") && stderr.contains(t.name()),
+                "{} failed without naming what it needs: {stderr}",
+                t.name()
+            );
+            continue;
+        }
+        let has = |label: &str| stdout.lines().any(|l| l.starts_with(label));
+        let line = |label: &str| {
+            stdout
+                .lines()
+                .find(|l| l.starts_with(label))
+                .unwrap_or_else(|| panic!("{}: no '{label}' line in\n{stdout}", t.name()))
+                .to_string()
+        };
+        for label in [
+            "adapter ",
+            "scene ",
+            "lights ",
+            "look ",
+            "clusters ",
+            "GPU time ",
+            "wrote ",
+        ] {
+            line(label);
+        }
+        assert!(
+            line("shadows ").contains(&format!("technique {}", t.name())),
+            "{stdout}"
+        );
+        match t.info().fills {
+            manyshadows::Fills::Atlas => {
+                assert!(line("atlas ").contains("filled"), "{stdout}");
+                assert!(line("shadow work ").contains(" passes"), "{stdout}");
+            }
+            manyshadows::Fills::Mask => {
+                assert!(line("lists ").contains("list nodes"), "{stdout}");
+                assert!(!has("atlas ") && !has("shadow work "), "{stdout}");
+            }
+            manyshadows::Fills::Pages => {
+                assert!(line("virtual ").contains("faces of"), "{stdout}");
+                assert!(line("pages ").contains("resident in a pool"), "{stdout}");
+                line("marking ");
+                assert!(line("shadow work ").contains("pages drawn"), "{stdout}");
+                assert!(!has("atlas "), "{stdout}");
+            }
+            manyshadows::Fills::Rays => {
+                assert!(
+                    line("shadow work ").contains("no shadow map: rays"),
+                    "{stdout}"
+                );
+                assert!(!has("atlas "), "{stdout}");
+            }
+            other => panic!("a kind of output this test does not know: {other:?}"),
+        }
+    }
+}
