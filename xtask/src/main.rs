@@ -68,6 +68,7 @@ const VIEWER_TESTS: &[&str] = &[
     "the_panel_draws_over_the_frame",
     "animation_with_caching_redraws_only_what_moved",
     "the_virtual_maps_page_pool_is_shown",
+    "a_frame_of_minutes_is_refused_at_start",
 ];
 const WEB_TESTS: &[&str] = &["the_page_renders_the_native_frame_and_its_controls_work"];
 const THREE_TESTS: &[&str] = &["gltf_models_render_as_three_js_renders_them"];

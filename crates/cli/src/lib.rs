@@ -18,6 +18,15 @@ pub use args::{
 };
 pub use scenes::load_scene_for_view;
 
+/// Why a frame of `renderer` would take far longer than the rest (its per-view shadow work
+/// past `render`'s bound, with the estimate and the techniques that scale), or `None`: what
+/// `render` and `compare` refuse without `--insist`, for the viewer to say on its panel.
+pub fn shadow_work_refusal(renderer: &manyshadows::Renderer) -> Option<String> {
+    render::check_shadow_work(renderer)
+        .err()
+        .map(|e| e.to_string())
+}
+
 mod args;
 mod bench;
 mod commands;

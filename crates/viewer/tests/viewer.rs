@@ -481,3 +481,26 @@ fn views_drawn(stdout: &str) -> Vec<(u64, u64)> {
         })
         .collect()
 }
+
+/// A technique whose frame would take minutes (irregular maps at 16,384 lights: every caster
+/// triangle against each of some 36,000 light views: 9.2 G pairs) is refused at start with its estimate, as
+/// `render` refuses it, instead of a window that freezes.
+#[test]
+#[ignore = "needs Xvfb and xwd: run `cargo xtask test`, which installs them"]
+fn a_frame_of_minutes_is_refused_at_start() {
+    let (_server, display) = xvfb();
+    let out = Command::new(env!("CARGO_BIN_EXE_manyshadows-view"))
+        .args(["--lights", "16384", "--technique", "irregular"])
+        .args(["--width", "160", "--height", "120", "--exit-after", "1"])
+        .env("DISPLAY", &display)
+        .output()
+        .expect("run the viewer");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("technique irregular would take")
+            && stderr.contains("G (caster triangle, view) pairs")
+            && stderr.contains("--insist"),
+        "{stderr}"
+    );
+}

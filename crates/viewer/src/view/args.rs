@@ -81,6 +81,11 @@ pub struct ViewArgs {
     /// Start with this light's hard visibility shown (white = lit; read back once a second).
     #[arg(long)]
     pub(super) show_visibility: Option<usize>,
+    /// Accept techniques whose frames are far beyond the rest (more than 2 G caster
+    /// triangle-view pairs): without it such a choice is refused with its estimate (at start)
+    /// or said on the panel (switching), as `render` refuses it without --insist.
+    #[arg(long)]
+    pub(super) insist: bool,
     /// Start following this light (the camera at the light, looking where it shines).
     #[arg(long)]
     pub(super) follow: Option<usize>,

@@ -59,6 +59,8 @@ pub(super) struct State {
     pub(super) gpu_ms: manyshadows::GpuTimes,
     pub(super) frame_ms: f64,
     pub(super) message: Option<String>,
+    /// `--insist`: frames of minutes are not refused.
+    pub(super) insist: bool,
     pub(super) overlays: Overlays,
     /// Shadow views drawn by the last frame (fewer than planned when caching keeps maps).
     pub(super) views_drawn: u64,
@@ -106,6 +108,11 @@ impl State {
             look: args.look.look(),
         };
         let renderer = Renderer::new(&ctx, scene, settings(config.width, config.height, choice))?;
+        if !args.insist {
+            if let Some(why) = manyshadows_cli::shadow_work_refusal(&renderer) {
+                anyhow::bail!("{why}");
+            }
+        }
         let egui_ctx = egui::Context::default();
         let egui_state = egui_winit::State::new(
             egui_ctx.clone(),
@@ -142,6 +149,7 @@ impl State {
             gpu_ms: Default::default(),
             frame_ms: 0.0,
             message: None,
+            insist: args.insist,
             views_drawn: 0,
             views_waiting: (0, 0, 0),
             overlays: Overlays::new(
@@ -168,11 +176,15 @@ impl State {
             &s,
             settings(self.config.width, self.config.height, choice),
         ) {
-            Ok(r) => {
-                self.renderer = r;
-                self.choice = choice;
-                self.message = None;
-            }
+            // A frame of minutes would freeze the window: said, and the old renderer kept.
+            Ok(r) => match manyshadows_cli::shadow_work_refusal(&r).filter(|_| !self.insist) {
+                Some(why) => self.message = Some(why),
+                None => {
+                    self.renderer = r;
+                    self.choice = choice;
+                    self.message = None;
+                }
+            },
             // Unsupported choices (multiview without the feature, say) are said, not fatal.
             Err(e) => self.message = Some(format!("{e}")),
         }
