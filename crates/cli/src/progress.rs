@@ -25,6 +25,9 @@ pub(crate) struct RowProgress {
     rays_per_row: f64,
     what: String,
     started: std::time::Instant,
+    /// Rows done: each tracing thread's row gets its own count (the bar's position may be
+    /// read by two threads at once).
+    done: std::sync::atomic::AtomicU64,
 }
 
 impl RowProgress {
@@ -49,13 +52,14 @@ impl RowProgress {
             rays_per_row,
             what: what.to_string(),
             started: std::time::Instant::now(),
+            done: std::sync::atomic::AtomicU64::new(0),
         }
     }
 
     /// One row done (called from the tracing threads).
     pub(crate) fn row(&self) {
         self.bar.inc(1);
-        let done = self.bar.position();
+        let done = self.done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
         let secs = self.started.elapsed().as_secs_f64().max(1e-3);
         let rays = done as f64 * self.rays_per_row;
         // An upper bound: pixels out of a light's reach or facing away trace nothing.
