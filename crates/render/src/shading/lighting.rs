@@ -34,6 +34,7 @@ pub struct LightingPass {
     composite: Option<wgpu::RenderPipeline>,
     layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
+    no_emission: wgpu::TextureView,
     bind_group: wgpu::BindGroup,
 }
 
@@ -194,7 +195,8 @@ impl LightingPass {
             compare: Some(wgpu::CompareFunction::LessEqual),
             ..Default::default()
         });
-        let bind_group = bind(ctx, &layout, &linear, inputs);
+        let no_emission = no_emission(ctx);
+        let bind_group = bind(ctx, &layout, &linear, &no_emission, inputs);
         let module = crate::gpu::shaders::module(
             device,
             "lighting.shader",
@@ -234,13 +236,14 @@ impl LightingPass {
             composite,
             layout,
             sampler: linear,
+            no_emission,
             bind_group,
         }
     }
 
     /// Binds new inputs (after a frame's update replaced a buffer or the atlas).
     pub fn rebind(&mut self, ctx: &GpuContext, inputs: &LightingInputs<'_>) {
-        self.bind_group = bind(ctx, &self.layout, &self.sampler, inputs);
+        self.bind_group = bind(ctx, &self.layout, &self.sampler, &self.no_emission, inputs);
     }
 
     /// Records the pass (with a denoiser, the first of the span: [`LightingPass::record_composite`]
@@ -294,10 +297,32 @@ impl LightingPass {
     }
 }
 
+/// One white texel bound where the G-buffer keeps no emissive texels (never read then:
+/// `EMISSION_TEXTURE` is false); made once per pass, not per bind.
+fn no_emission(ctx: &GpuContext) -> wgpu::TextureView {
+    ctx.device
+        .create_texture(&wgpu::TextureDescriptor {
+            label: Some("lighting.no_emission"),
+            size: wgpu::Extent3d {
+                width: 1,
+                height: 1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: crate::frame::gbuffer::EMISSION_FORMAT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        })
+        .create_view(&Default::default())
+}
+
 fn bind(
     ctx: &GpuContext,
     layout: &wgpu::BindGroupLayout,
     sampler: &wgpu::Sampler,
+    no_emission: &wgpu::TextureView,
     inputs: &LightingInputs<'_>,
 ) -> wgpu::BindGroup {
     let device = &ctx.device;
@@ -317,27 +342,13 @@ fn bind(
     };
     let pv = inputs.gbuffer.position.create_view(&Default::default());
     let nv = inputs.gbuffer.normal.create_view(&Default::default());
-    // The G-buffer's emissive texels, or one white texel where it keeps none (never read
-    // then: `EMISSION_TEXTURE` is false).
-    let ev = match &inputs.gbuffer.emission {
-        Some(t) => t.create_view(&Default::default()),
-        None => device
-            .create_texture(&wgpu::TextureDescriptor {
-                label: Some("lighting.no_emission"),
-                size: wgpu::Extent3d {
-                    width: 1,
-                    height: 1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: crate::frame::gbuffer::EMISSION_FORMAT,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
-            .create_view(&Default::default()),
-    };
+    // The G-buffer's emissive texels, or the white texel where it keeps none.
+    let ev = inputs
+        .gbuffer
+        .emission
+        .as_ref()
+        .map(|t| t.create_view(&Default::default()));
+    let ev = ev.as_ref().unwrap_or(no_emission);
     let mut entries = inputs.shared_entries(&pv, &nv, mask);
     entries.extend([
         wgpu::BindGroupEntry {
@@ -354,7 +365,7 @@ fn bind(
         },
         wgpu::BindGroupEntry {
             binding: 13,
-            resource: wgpu::BindingResource::TextureView(&ev),
+            resource: wgpu::BindingResource::TextureView(ev),
         },
     ]);
     if let Some(d) = inputs.denoise {
