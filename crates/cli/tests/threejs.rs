@@ -38,7 +38,7 @@ use serde_json::json;
 const W: u32 = 400;
 const H: u32 = 300;
 const THREE_VERSION: &str = "0.187.0";
-/// The renderer's colour of pixels without geometry (linear; `SKY` in renderer.rs).
+/// The renderer's colour of pixels without geometry (linear; `SKY` in renderer/uniforms.rs).
 const SKY: [f32; 3] = [0.015, 0.018, 0.03];
 /// The acceptance bound of issue 37.
 const MAX_MEAN_FLIP: f64 = 0.1;

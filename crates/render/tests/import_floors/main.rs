@@ -41,9 +41,10 @@ use graph::{
 
 /// The render crate's registry module: the list of the technique declarations.
 const REGISTRY: &str = "registry";
-/// The modules that may import a technique's module: the registry, and the renderer, whose
-/// public API reads what one technique alone keeps (the virtual maps' page pool and table).
-const TECHNIQUE_IMPORTERS: [&str; 2] = [REGISTRY, "renderer"];
+/// The modules that may import a technique's module: the registry, and the renderer's
+/// `inspect` part, whose public API reads what one technique alone keeps (the virtual maps'
+/// page pool and table).
+const TECHNIQUE_IMPORTERS: [&str; 2] = [REGISTRY, "renderer::inspect"];
 /// The registry's file.
 const REGISTRY_FILE: &str = "registry.rs";
 

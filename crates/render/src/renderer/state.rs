@@ -1,41 +1,28 @@
-//! The frame, assembled from its passes in the order of the algorithm:
-//!
-//! 1. G-buffer (world position, normal, material per pixel),
-//! 2. shadows: the frame's [`ShadowSource`] (made from the technique by
-//!    `registry::create`) fills an atlas, a virtual page pool or a visibility mask,
-//! 3. deferred Phong lighting with the shadow test (or the mask),
-//! 4. optionally, the hard visibility mask (computed from the atlas or pool; a source whose
-//!    output is the mask reads it back).
-//!
-//! Nothing here depends on the technique: the source's [`crate::shadows::source::ShadowOutput`]
-//! says what the lighting and visibility passes read.
+//! The renderer: creation, the frame's state and its setters, and the frame loop.
 
 // `std::time::Instant` panics in a browser; web-time is std's on native targets.
+use super::uniforms::{frame_uniforms, lights_or_placeholder};
 use crate::shading::look::ShadingConsts;
 use web_time::Instant;
 
-use glam::Vec3;
 use manyshadows_scene::{Camera, Light, Scene, SceneError};
 use wgpu::util::DeviceExt;
 
 use crate::error::RenderError;
 use crate::frame::clusters::{LightClusters, LightLoop};
 use crate::frame::gbuffer::GBuffer;
-use crate::frame::gbuffer_readback::GBufferData;
 use crate::frame::visibility_mask::{SoftVisibility, VisibilityMask};
 use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, GpuTimes, Stage};
-use crate::gpu::types::{FrameUniforms, LightData};
+use crate::gpu::types::FrameUniforms;
 use crate::gpu_scene::instances::GpuScene;
-use crate::report::{Frame, FrameTimings, ShadowLayout, ShadowWork, SubmittedFrame};
+use crate::report::{Frame, FrameTimings, SubmittedFrame};
 use crate::settings::RenderSettings;
 use crate::shading::lighting::{LightingInputs, LightingPass};
 use crate::shading::visibility::VisibilityPass;
-use crate::shadows::image::ShadowPicture;
 use crate::shadows::plan::DEFAULT_MAX_ATLAS_SIZE;
 use crate::shadows::source::{ShadowSource, ShadowStats, SourceInputs};
 use crate::shadows::vsm::plan::VirtualStats;
-use crate::shadows::vsm::source::VirtualSource;
 
 /// Timestamp copies of submitted frames on their way back: mapped asynchronously, decoded
 /// when the GPU has finished them, never waited for.
@@ -65,33 +52,33 @@ const MAP_FAILED: u8 = 2;
 pub struct Renderer {
     /// Shared so a frame can hold it while it mutates the renderer (one reference-count
     /// increment per frame, no copy of the adapter's description).
-    ctx: std::sync::Arc<GpuContext>,
-    settings: RenderSettings,
-    scene: GpuScene,
+    pub(super) ctx: std::sync::Arc<GpuContext>,
+    pub(super) settings: RenderSettings,
+    pub(super) scene: GpuScene,
     /// Where the frame's shadows come from (atlas, page pool or visibility mask).
-    source: Box<dyn ShadowSource>,
-    frame_buffer: wgpu::Buffer,
-    lights: wgpu::Buffer,
-    gbuffer: GBuffer,
-    lighting: LightingPass,
-    clusters: LightClusters,
+    pub(super) source: Box<dyn ShadowSource>,
+    pub(super) frame_buffer: wgpu::Buffer,
+    pub(super) lights: wgpu::Buffer,
+    pub(super) gbuffer: GBuffer,
+    pub(super) lighting: LightingPass,
+    pub(super) clusters: LightClusters,
     /// The visibility pass, when asked for and the source's output is not the mask itself.
-    visibility: Option<VisibilityPass>,
+    pub(super) visibility: Option<VisibilityPass>,
     /// Copies frames into callers' textures ([`Renderer::render_to`]); built on first use.
-    blit: Option<crate::shading::blit::Blit>,
+    pub(super) blit: Option<crate::shading::blit::Blit>,
     /// GPU times of frames drawn by `render_to`, read back without waiting (oldest first).
     timings: TimingsInFlight,
-    timer: GpuTimer,
+    pub(super) timer: GpuTimer,
     /// The frame's state (camera, lights, instance transforms) as last set.
-    current: Scene,
+    pub(super) current: Scene,
     /// True when `current` changed since the GPU state was last derived from it.
-    dirty: bool,
+    pub(super) dirty: bool,
     /// The denoiser of sampled shadow rays (`RayOptions::denoise`).
-    denoiser: Option<crate::shading::denoise::Denoiser>,
+    pub(super) denoiser: Option<crate::shading::denoise::Denoiser>,
     /// Frames the denoiser has seen (their rays' random numbers differ by it).
-    frames_denoised: u32,
+    pub(super) frames_denoised: u32,
     /// A light changed since the last frame (the denoiser's history follows it fast).
-    lights_changed: bool,
+    pub(super) lights_changed: bool,
 }
 
 impl Renderer {
@@ -236,137 +223,6 @@ impl Renderer {
                 dirty: false,
             })
         })
-    }
-
-    /// The shadow views and atlas layout.
-    #[cfg(feature = "internals")]
-    pub fn plan(&self) -> &crate::shadows::plan::ShadowPlan {
-        self.source.plan()
-    }
-
-    /// The faces of [`Technique::VIRTUAL`](crate::error::Technique::VIRTUAL) (`None` for
-    /// other techniques).
-    #[cfg(feature = "internals")]
-    pub fn virtual_plan(&self) -> Option<&crate::shadows::vsm::plan::VirtualPlan> {
-        self.virtual_source().map(VirtualSource::plan)
-    }
-
-    /// The source as virtual maps, where the technique is `virtual`.
-    fn virtual_source(&self) -> Option<&VirtualSource> {
-        (&*self.source as &dyn std::any::Any).downcast_ref::<VirtualSource>()
-    }
-
-    /// Shadow views of the current plan: every atlas tile, or every virtual face (a spot
-    /// light's frustum, a cube face, a cascade).
-    pub fn shadow_views(&self) -> usize {
-        self.source.view_count()
-    }
-
-    /// What holds the shadows: the kind, how many views, and the side of the texture they
-    /// are read from.
-    pub fn shadow_layout(&self) -> ShadowLayout {
-        let fills = self.settings.technique.info().fills;
-        let plan = self.source.plan();
-        ShadowLayout {
-            fills,
-            views: self.shadow_views(),
-            side: self.source.output().depth_side,
-            atlas_fill: (fills == crate::error::Fills::Atlas).then(|| plan.fill() as f32),
-        }
-    }
-
-    /// The per-view shadow work the next frame asks for, from its shadow plan, before anything
-    /// is rendered: what a caller checks before starting a frame that could take minutes (a
-    /// technique that sends every triangle to every one of 36,499 views takes 9.4 G pairs).
-    /// Irregular shadow maps test every caster triangle against every light view's grid (one
-    /// thread per pair), so they count every pair too. `None` for techniques whose work is not
-    /// per view: rays, and virtual pages made on the GPU.
-    pub fn shadow_work(&self) -> Option<ShadowWork> {
-        use crate::shadows::descriptor::Culling;
-        let info = self.settings.technique.info();
-        let culling = info.culling;
-        let views = &self.source.plan().views;
-        let per_pair_mask = culling == Culling::NoViews && info.fills == crate::error::Fills::Mask;
-        if (culling == Culling::NoViews && !per_pair_mask) || views.is_empty() {
-            return None;
-        }
-        let casters: Vec<_> = self
-            .scene
-            .draws
-            .iter()
-            .filter(|d| d.casts_shadows)
-            .collect();
-        let per_view: u64 = casters
-            .iter()
-            .map(|d| u64::from(d.mesh.index_count / 3))
-            .sum();
-        let mut culled = 0u64;
-        for v in views {
-            for d in &casters {
-                if v.sphere_visible(d.sphere.0, d.sphere.1) {
-                    culled += u64::from(d.mesh.index_count / 3);
-                }
-            }
-        }
-        let all_pairs = per_view * views.len() as u64;
-        Some(ShadowWork {
-            views: views.len(),
-            triangle_views: match culling {
-                Culling::VertexStage | Culling::Threads | Culling::NoViews => all_pairs,
-                _ => culled,
-            },
-            after_instance_culling: culled,
-            all_pairs,
-        })
-    }
-
-    /// A picture of the shadow maps as the last frame left them: the atlas with each view's
-    /// tile outlined by light type, or the virtual maps' page pool (pages in use, unused pool
-    /// dark blue), at most 2048² (larger ones are shown every n-th texel). A technique that
-    /// keeps neither answers [`RenderError::NoAtlas`].
-    pub fn shadow_picture(&self) -> Result<ShadowPicture, RenderError> {
-        self.source.picture(&self.ctx)
-    }
-
-    /// The settings in use.
-    pub fn settings(&self) -> &RenderSettings {
-        &self.settings
-    }
-
-    /// The shading model, exposure and tone map of the next frame: the settings' [`Look`]
-    /// decided for the current scene and camera (a metered exposure follows the camera).
-    ///
-    /// [`Look`]: crate::shading::look::Look
-    pub fn look(&self) -> crate::shading::look::ResolvedLook {
-        self.settings.look.resolve(&self.current)
-    }
-
-    /// Triangles in the scene (over all instances).
-    pub fn triangles(&self) -> u64 {
-        self.scene.triangles
-    }
-
-    /// The GPU context.
-    pub fn context(&self) -> &GpuContext {
-        &self.ctx
-    }
-
-    /// The world-space shadow-caster geometry (its back-face culling decisions included).
-    #[cfg(feature = "internals")]
-    pub fn casters(&self) -> &crate::gpu_scene::casters::CasterGeometry {
-        self.source.casters()
-    }
-
-    /// The shadow atlas.
-    #[cfg(feature = "internals")]
-    pub fn atlas(&self) -> &crate::shadows::storage::ShadowAtlas {
-        self.source.atlas()
-    }
-
-    /// The scene as the next frame will render it (camera, lights and instance transforms as
-    /// last set).
-    pub fn scene(&self) -> &Scene {
-        &self.current
     }
 
     /// Moves the camera before the next frame. The next [`Renderer::render`] re-plans the
@@ -735,142 +591,6 @@ impl Renderer {
             })
         })
     }
-
-    /// Counters of the last frame of irregular shadow maps
-    /// ([`Technique::IRREGULAR`](crate::error::Technique::IRREGULAR); `None` for other
-    /// techniques).
-    pub fn irregular_stats(&self) -> Option<crate::shadows::irregular::maps::IrregularStats> {
-        self.source
-            .technique_stats(&self.ctx)
-            .ok()
-            .flatten()
-            .and_then(|s| {
-                s.downcast::<crate::shadows::irregular::maps::IrregularStats>()
-                    .ok()
-            })
-            .map(|s| *s)
-    }
-
-    /// The last frame [`Renderer::render`] produced, shaded again with `visibility` instead
-    /// of the technique's shadows (the fraction of each light reaching each pixel, as
-    /// [`Frame::soft_visibility`] holds it): the image a technique would give if its
-    /// visibility were `visibility`, such as the reference's. sRGB RGBA8, as [`Frame::rgba`].
-    pub fn shade_with(&self, visibility: &SoftVisibility) -> Result<Vec<u8>, RenderError> {
-        let (w, h) = (self.settings.width, self.settings.height);
-        let lights = self.current.lights.len() as u32;
-        if (visibility.width, visibility.height, visibility.lights) != (w, h, lights) {
-            return Err(RenderError::Mismatch {
-                what: "the visibility to shade with",
-                expected: format!("{w}x{h} pixels of {lights} lights"),
-                found: format!(
-                    "{}x{} pixels of {} lights",
-                    visibility.width, visibility.height, visibility.lights
-                ),
-            });
-        }
-        let ctx = &*self.ctx;
-        let limit = ctx.limits().max_storage_buffer_binding_size;
-        let mut bytes = visibility.values.clone();
-        bytes.resize(bytes.len().div_ceil(4).max(1) * 4, 0);
-        if bytes.len() as u64 > limit {
-            return Err(RenderError::TooLarge {
-                what: "the visibility to shade with".into(),
-                needed: bytes.len() as u64,
-                limit,
-                unit: "bytes",
-                limit_name: "max_storage_buffer_binding_size",
-            });
-        }
-        ctx.scoped("shading with a given visibility", || {
-            let fractions = ctx
-                .device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("lighting.fractions"),
-                    contents: &bytes,
-                    usage: wgpu::BufferUsages::STORAGE,
-                });
-            let mut shadows = self.source.output();
-            shadows.mask = Some(&fractions);
-            let inputs = LightingInputs {
-                frame: &self.frame_buffer,
-                lights: &self.lights,
-                materials: &self.scene.materials,
-                gbuffer: &self.gbuffer,
-                clusters: &self.clusters,
-                shadows,
-                denoise: None,
-            };
-            let consts = ShadingConsts {
-                emission_texture: self.gbuffer.emission.is_some(),
-                ..self.settings.look.resolve(&self.current).consts()
-            };
-            let pass = LightingPass::with_fractions(ctx, &inputs, (w, h), &consts);
-            let mut encoder = ctx
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("lighting.fractions.encoder"),
-                });
-            pass.record(&mut encoder, &self.timer, None);
-            ctx.queue.submit([encoder.finish()]);
-            crate::gpu::readback::read_texture(ctx, &pass.color, 4)
-        })
-    }
-
-    /// Reads the G-buffer of the last frame [`Renderer::render`] produced (before the first
-    /// frame every pixel reads as uncovered).
-    pub fn read_gbuffer(&self) -> Result<GBufferData, RenderError> {
-        GBufferData::read(self.context(), &self.gbuffer)
-    }
-
-    /// Reads the depth atlas back (`size`² floats, row-major); techniques that fill no atlas
-    /// (`irregular`, `virtual`) answer [`RenderError::NoAtlas`].
-    pub fn read_atlas(&self) -> Result<Vec<f32>, RenderError> {
-        self.source.read_atlas(&self.ctx)
-    }
-
-    /// Reads the virtual maps' page pool back: `(side, side² depths)`, row-major from the
-    /// top-left texel, as the last frame left it. Only
-    /// [`Technique::VIRTUAL`](crate::error::Technique::VIRTUAL) has one.
-    pub fn read_page_pool(&self) -> Result<(u32, Vec<f32>), RenderError> {
-        match self.virtual_source() {
-            Some(v) => v.read_pool(&self.ctx),
-            None => Err(self.no_page_pool()),
-        }
-    }
-
-    /// Reads the virtual maps' page table back as the last frame left it: first, per entry
-    /// (`VirtualStats::fit.table_entries` of them), the page it got — a pool page, or a marker
-    /// for none or denied — then per entry the farthest receiver's depth key, then the drawn
-    /// cells (the buffer may hold more words than that). Equal tables mean the same pages in
-    /// the same pool places. Only [`Technique::VIRTUAL`](crate::error::Technique::VIRTUAL)
-    /// has one.
-    pub fn read_page_table(&self) -> Result<Vec<u32>, RenderError> {
-        match self.virtual_source() {
-            Some(v) => v.read_table(&self.ctx),
-            None => Err(self.no_page_pool()),
-        }
-    }
-
-    /// [`RenderError::NoPagePool`] for this renderer's technique, naming those with a pool.
-    fn no_page_pool(&self) -> RenderError {
-        RenderError::NoPagePool {
-            technique: self.settings.technique,
-            with_pool: crate::registry::TECHNIQUES
-                .iter()
-                .filter(|i| i.fills == crate::error::Fills::Pages)
-                .map(|i| i.technique.name())
-                .collect(),
-        }
-    }
-}
-
-/// The lights buffer's records, one placeholder when there are no lights (a binding is never
-/// empty).
-fn lights_or_placeholder(mut data: Vec<LightData>) -> Vec<LightData> {
-    if data.is_empty() {
-        data.push(bytemuck::Zeroable::zeroed());
-    }
-    data
 }
 
 /// The visibility pass of `scene`'s lights when the settings ask for the mask and the source
@@ -895,49 +615,3 @@ fn visibility_pass(
     )
     .map(Some)
 }
-
-/// The frame's uniforms; `atlas_size` is the side of the texture shadows are read from (the
-/// atlas, or the virtual maps' page pool).
-fn frame_uniforms(scene: &Scene, s: &RenderSettings, atlas_size: u32) -> FrameUniforms {
-    let cam = &scene.camera;
-    let aspect = s.width as f32 / s.height as f32;
-    let view = cam.view();
-    let proj = cam.projection(aspect);
-    let (look, modes) = s.look.resolve(scene).uniforms();
-    FrameUniforms {
-        view_proj: (proj * view).to_cols_array_2d(),
-        view: view.to_cols_array_2d(),
-        camera_pos: cam.position.extend(1.0).to_array(),
-        viewport: [
-            s.width as f32,
-            s.height as f32,
-            1.0 / s.width as f32,
-            1.0 / s.height as f32,
-        ],
-        counts: [
-            scene.lights.len() as u32,
-            s.pcf.code(),
-            atlas_size,
-            (scene.lights.len() as u32).div_ceil(32).max(1),
-        ],
-        // w: world size of a pixel at view depth 1 (virtual maps pick levels by it).
-        bias: [
-            s.bias.constant,
-            s.bias.slope,
-            s.bias.normal_offset,
-            2.0 / (proj.y_axis.y * s.height as f32),
-        ],
-        sky: SKY.extend(1.0).to_array(),
-        soft: [
-            s.soft.blocker_taps as f32,
-            s.soft.filter_taps as f32,
-            s.soft.max_penumbra,
-            0.0,
-        ],
-        look,
-        modes,
-    }
-}
-
-/// Colour of pixels with no geometry (linear).
-const SKY: Vec3 = Vec3::new(0.015, 0.018, 0.03);

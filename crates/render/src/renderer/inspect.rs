@@ -1,0 +1,276 @@
+//! What callers read of a renderer: its plans and estimates, GPU read-backs, and frames
+//! shaded with a given visibility.
+
+use super::state::Renderer;
+use crate::error::RenderError;
+use crate::frame::gbuffer_readback::GBufferData;
+use crate::frame::visibility_mask::SoftVisibility;
+use crate::gpu::context::GpuContext;
+use crate::report::{ShadowLayout, ShadowWork};
+use crate::settings::RenderSettings;
+use crate::shading::lighting::{LightingInputs, LightingPass};
+use crate::shading::look::ShadingConsts;
+use crate::shadows::image::ShadowPicture;
+use crate::shadows::vsm::source::VirtualSource;
+use manyshadows_scene::Scene;
+use wgpu::util::DeviceExt;
+
+impl Renderer {
+    /// The shadow views and atlas layout.
+    #[cfg(feature = "internals")]
+    pub fn plan(&self) -> &crate::shadows::plan::ShadowPlan {
+        self.source.plan()
+    }
+
+    /// The faces of [`Technique::VIRTUAL`](crate::error::Technique::VIRTUAL) (`None` for
+    /// other techniques).
+    #[cfg(feature = "internals")]
+    pub fn virtual_plan(&self) -> Option<&crate::shadows::vsm::plan::VirtualPlan> {
+        self.virtual_source().map(VirtualSource::plan)
+    }
+
+    /// The source as virtual maps, where the technique is `virtual`.
+    fn virtual_source(&self) -> Option<&VirtualSource> {
+        (&*self.source as &dyn std::any::Any).downcast_ref::<VirtualSource>()
+    }
+
+    /// Shadow views of the current plan: every atlas tile, or every virtual face (a spot
+    /// light's frustum, a cube face, a cascade).
+    pub fn shadow_views(&self) -> usize {
+        self.source.view_count()
+    }
+
+    /// What holds the shadows: the kind, how many views, and the side of the texture they
+    /// are read from.
+    pub fn shadow_layout(&self) -> ShadowLayout {
+        let fills = self.settings.technique.info().fills;
+        let plan = self.source.plan();
+        ShadowLayout {
+            fills,
+            views: self.shadow_views(),
+            side: self.source.output().depth_side,
+            atlas_fill: (fills == crate::error::Fills::Atlas).then(|| plan.fill() as f32),
+        }
+    }
+
+    /// The per-view shadow work the next frame asks for, from its shadow plan, before anything
+    /// is rendered: what a caller checks before starting a frame that could take minutes (a
+    /// technique that sends every triangle to every one of 36,499 views takes 9.4 G pairs).
+    /// Irregular shadow maps test every caster triangle against every light view's grid (one
+    /// thread per pair), so they count every pair too. `None` for techniques whose work is not
+    /// per view: rays, and virtual pages made on the GPU.
+    pub fn shadow_work(&self) -> Option<ShadowWork> {
+        use crate::shadows::descriptor::Culling;
+        let info = self.settings.technique.info();
+        let culling = info.culling;
+        let views = &self.source.plan().views;
+        let per_pair_mask = culling == Culling::NoViews && info.fills == crate::error::Fills::Mask;
+        if (culling == Culling::NoViews && !per_pair_mask) || views.is_empty() {
+            return None;
+        }
+        let casters: Vec<_> = self
+            .scene
+            .draws
+            .iter()
+            .filter(|d| d.casts_shadows)
+            .collect();
+        let per_view: u64 = casters
+            .iter()
+            .map(|d| u64::from(d.mesh.index_count / 3))
+            .sum();
+        let mut culled = 0u64;
+        for v in views {
+            for d in &casters {
+                if v.sphere_visible(d.sphere.0, d.sphere.1) {
+                    culled += u64::from(d.mesh.index_count / 3);
+                }
+            }
+        }
+        let all_pairs = per_view * views.len() as u64;
+        Some(ShadowWork {
+            views: views.len(),
+            triangle_views: match culling {
+                Culling::VertexStage | Culling::Threads | Culling::NoViews => all_pairs,
+                _ => culled,
+            },
+            after_instance_culling: culled,
+            all_pairs,
+        })
+    }
+
+    /// A picture of the shadow maps as the last frame left them: the atlas with each view's
+    /// tile outlined by light type, or the virtual maps' page pool (pages in use, unused pool
+    /// dark blue), at most 2048² (larger ones are shown every n-th texel). A technique that
+    /// keeps neither answers [`RenderError::NoAtlas`].
+    pub fn shadow_picture(&self) -> Result<ShadowPicture, RenderError> {
+        self.source.picture(&self.ctx)
+    }
+
+    /// The settings in use.
+    pub fn settings(&self) -> &RenderSettings {
+        &self.settings
+    }
+
+    /// The shading model, exposure and tone map of the next frame: the settings' [`Look`]
+    /// decided for the current scene and camera (a metered exposure follows the camera).
+    ///
+    /// [`Look`]: crate::shading::look::Look
+    pub fn look(&self) -> crate::shading::look::ResolvedLook {
+        self.settings.look.resolve(&self.current)
+    }
+
+    /// Triangles in the scene (over all instances).
+    pub fn triangles(&self) -> u64 {
+        self.scene.triangles
+    }
+
+    /// The GPU context.
+    pub fn context(&self) -> &GpuContext {
+        &self.ctx
+    }
+
+    /// The world-space shadow-caster geometry (its back-face culling decisions included).
+    #[cfg(feature = "internals")]
+    pub fn casters(&self) -> &crate::gpu_scene::casters::CasterGeometry {
+        self.source.casters()
+    }
+
+    /// The shadow atlas.
+    #[cfg(feature = "internals")]
+    pub fn atlas(&self) -> &crate::shadows::storage::ShadowAtlas {
+        self.source.atlas()
+    }
+
+    /// The scene as the next frame will render it (camera, lights and instance transforms as
+    /// last set).
+    pub fn scene(&self) -> &Scene {
+        &self.current
+    }
+
+    /// Counters of the last frame of irregular shadow maps
+    /// ([`Technique::IRREGULAR`](crate::error::Technique::IRREGULAR); `None` for other
+    /// techniques).
+    pub fn irregular_stats(&self) -> Option<crate::shadows::irregular::maps::IrregularStats> {
+        self.source
+            .technique_stats(&self.ctx)
+            .ok()
+            .flatten()
+            .and_then(|s| {
+                s.downcast::<crate::shadows::irregular::maps::IrregularStats>()
+                    .ok()
+            })
+            .map(|s| *s)
+    }
+
+    /// The last frame [`Renderer::render`] produced, shaded again with `visibility` instead
+    /// of the technique's shadows (the fraction of each light reaching each pixel, as
+    /// [`Frame::soft_visibility`] holds it): the image a technique would give if its
+    /// visibility were `visibility`, such as the reference's. sRGB RGBA8, as [`Frame::rgba`].
+    pub fn shade_with(&self, visibility: &SoftVisibility) -> Result<Vec<u8>, RenderError> {
+        let (w, h) = (self.settings.width, self.settings.height);
+        let lights = self.current.lights.len() as u32;
+        if (visibility.width, visibility.height, visibility.lights) != (w, h, lights) {
+            return Err(RenderError::Mismatch {
+                what: "the visibility to shade with",
+                expected: format!("{w}x{h} pixels of {lights} lights"),
+                found: format!(
+                    "{}x{} pixels of {} lights",
+                    visibility.width, visibility.height, visibility.lights
+                ),
+            });
+        }
+        let ctx = &*self.ctx;
+        let limit = ctx.limits().max_storage_buffer_binding_size;
+        let mut bytes = visibility.values.clone();
+        bytes.resize(bytes.len().div_ceil(4).max(1) * 4, 0);
+        if bytes.len() as u64 > limit {
+            return Err(RenderError::TooLarge {
+                what: "the visibility to shade with".into(),
+                needed: bytes.len() as u64,
+                limit,
+                unit: "bytes",
+                limit_name: "max_storage_buffer_binding_size",
+            });
+        }
+        ctx.scoped("shading with a given visibility", || {
+            let fractions = ctx
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("lighting.fractions"),
+                    contents: &bytes,
+                    usage: wgpu::BufferUsages::STORAGE,
+                });
+            let mut shadows = self.source.output();
+            shadows.mask = Some(&fractions);
+            let inputs = LightingInputs {
+                frame: &self.frame_buffer,
+                lights: &self.lights,
+                materials: &self.scene.materials,
+                gbuffer: &self.gbuffer,
+                clusters: &self.clusters,
+                shadows,
+                denoise: None,
+            };
+            let consts = ShadingConsts {
+                emission_texture: self.gbuffer.emission.is_some(),
+                ..self.settings.look.resolve(&self.current).consts()
+            };
+            let pass = LightingPass::with_fractions(ctx, &inputs, (w, h), &consts);
+            let mut encoder = ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("lighting.fractions.encoder"),
+                });
+            pass.record(&mut encoder, &self.timer, None);
+            ctx.queue.submit([encoder.finish()]);
+            crate::gpu::readback::read_texture(ctx, &pass.color, 4)
+        })
+    }
+
+    /// Reads the G-buffer of the last frame [`Renderer::render`] produced (before the first
+    /// frame every pixel reads as uncovered).
+    pub fn read_gbuffer(&self) -> Result<GBufferData, RenderError> {
+        GBufferData::read(self.context(), &self.gbuffer)
+    }
+
+    /// Reads the depth atlas back (`size`² floats, row-major); techniques that fill no atlas
+    /// (`irregular`, `virtual`) answer [`RenderError::NoAtlas`].
+    pub fn read_atlas(&self) -> Result<Vec<f32>, RenderError> {
+        self.source.read_atlas(&self.ctx)
+    }
+
+    /// Reads the virtual maps' page pool back: `(side, side² depths)`, row-major from the
+    /// top-left texel, as the last frame left it. Only
+    /// [`Technique::VIRTUAL`](crate::error::Technique::VIRTUAL) has one.
+    pub fn read_page_pool(&self) -> Result<(u32, Vec<f32>), RenderError> {
+        match self.virtual_source() {
+            Some(v) => v.read_pool(&self.ctx),
+            None => Err(self.no_page_pool()),
+        }
+    }
+
+    /// Reads the virtual maps' page table back as the last frame left it: first, per entry
+    /// (`VirtualStats::fit.table_entries` of them), the page it got — a pool page, or a marker
+    /// for none or denied — then per entry the farthest receiver's depth key, then the drawn
+    /// cells (the buffer may hold more words than that). Equal tables mean the same pages in
+    /// the same pool places. Only [`Technique::VIRTUAL`](crate::error::Technique::VIRTUAL)
+    /// has one.
+    pub fn read_page_table(&self) -> Result<Vec<u32>, RenderError> {
+        match self.virtual_source() {
+            Some(v) => v.read_table(&self.ctx),
+            None => Err(self.no_page_pool()),
+        }
+    }
+
+    /// [`RenderError::NoPagePool`] for this renderer's technique, naming those with a pool.
+    fn no_page_pool(&self) -> RenderError {
+        RenderError::NoPagePool {
+            technique: self.settings.technique,
+            with_pool: crate::registry::TECHNIQUES
+                .iter()
+                .filter(|i| i.fills == crate::error::Fills::Pages)
+                .map(|i| i.technique.name())
+                .collect(),
+        }
+    }
+}
