@@ -7,68 +7,36 @@
 mod common;
 
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
-use manyshadows::scene::Scene;
-use manyshadows::{GpuContext, RayOptions, RenderError, RenderSettings, Renderer, Technique};
+use manyshadows::{RayOptions, RenderError, RenderSettings, Renderer, Technique};
 
-/// The renderer, or `None` after checking that a device without ray queries refuses the
-/// technique by name.
-fn renderer(ctx: &GpuContext, scene: &Scene, settings: RenderSettings) -> Option<Renderer> {
-    let unmet = Technique::RAYTRACED.info().unmet(ctx);
-    match Renderer::new(ctx, scene, settings.with_technique(Technique::RAYTRACED)) {
-        Ok(r) => {
-            assert!(unmet.is_empty(), "rendered without {unmet:?}");
-            Some(r)
-        }
-        Err(e @ RenderError::MissingFeature { .. }) => {
-            assert!(
-                !unmet.is_empty(),
-                "refused on a device that has ray queries: {e}"
-            );
-            assert!(
-                e.to_string().contains("EXPERIMENTAL_RAY_QUERY"),
-                "the refusal names the feature: {e}"
-            );
-            eprintln!("refused here, by name: {e}");
-            None
-        }
-        Err(e) => panic!("{e}"),
-    }
+/// The cubes under 48 seeded lights of every type: each pixel has more candidates than one
+/// sample.
+fn cubes_under_48_lights() -> manyshadows::scene::Scene {
+    let mut scene = builtin::build("cubes", &BuiltinOptions::default()).expect("scene");
+    scene.lights = builtin::scatter_lights(&scene, 48, 3, LightMix::All, None);
+    scene
 }
 
-/// Root-mean-square difference of two frames' sRGB channels, 0..255.
-fn rmse(a: &manyshadows::Frame, b: &manyshadows::Frame) -> f64 {
-    let n = a.rgba.len() as f64;
-    let s: f64 = a
-        .rgba
-        .iter()
-        .zip(&b.rgba)
-        .map(|(&x, &y)| (f64::from(x) - f64::from(y)).powi(2))
-        .sum();
-    (s / n).sqrt()
-}
-
-/// The cubes under 48 seeded lights of every type (each pixel has more candidates than one
-/// sample), 160 × 120: plain K = 1 against denoised K = 1 over eight still frames.
+/// The cubes under 48 lights, 160 × 120: plain K = 1 against denoised K = 1 over eight still frames.
 #[test]
 fn denoised_samples_are_close_to_every_light_and_converge() {
     let ctx = common::context();
-    let mut scene = builtin::build("cubes", &BuiltinOptions::default()).expect("scene");
-    scene.lights = builtin::scatter_lights(&scene, 48, 3, LightMix::All, None);
+    let scene = cubes_under_48_lights();
     let base = RenderSettings::new(160, 120);
-    let Some(mut exact) = renderer(&ctx, &scene, base.clone()) else {
+    let Some(mut exact) = common::raytraced(&ctx, &scene, base.clone()) else {
         return;
     };
     let exact = exact.render().expect("frame");
     let one = RayOptions::default().with_light_samples(1);
-    let plain = renderer(&ctx, &scene, base.clone().with_rays(one))
+    let plain = common::raytraced(&ctx, &scene, base.clone().with_rays(one))
         .expect("same device")
         .render()
         .expect("frame");
-    let plain = rmse(&plain, &exact);
-    let mut denoised =
-        renderer(&ctx, &scene, base.with_rays(one.with_denoise(true))).expect("same device");
+    let plain = common::rmse(&plain, &exact);
+    let mut denoised = common::raytraced(&ctx, &scene, base.with_rays(one.with_denoise(true)))
+        .expect("same device");
     let errors: Vec<f64> = (0..8)
-        .map(|_| rmse(&denoised.render().expect("frame"), &exact))
+        .map(|_| common::rmse(&denoised.render().expect("frame"), &exact))
         .collect();
     eprintln!(
         "RMSE against every light: K = 1 plain {plain:.2}; denoised, frames 1 to 8: {errors:.2?}"
@@ -127,10 +95,9 @@ fn denoising_without_sampled_rays_is_refused_by_name() {
 #[test]
 fn a_light_switched_off_leaves_the_frame_within_four_frames() {
     let ctx = common::context();
-    let mut scene = builtin::build("cubes", &BuiltinOptions::default()).expect("scene");
-    scene.lights = builtin::scatter_lights(&scene, 48, 3, LightMix::All, None);
+    let scene = cubes_under_48_lights();
     let base = RenderSettings::new(160, 120);
-    let Some(mut exact) = renderer(&ctx, &scene, base.clone()) else {
+    let Some(mut exact) = common::raytraced(&ctx, &scene, base.clone()) else {
         return;
     };
     let exact_before = exact.render().expect("frame");
@@ -146,25 +113,26 @@ fn a_light_switched_off_leaves_the_frame_within_four_frames() {
     dark.ambient = glam::Vec3::ZERO;
     exact.set_light(off, dark).expect("light");
     let exact_after = exact.render().expect("frame");
-    let moved = rmse(&exact_before, &exact_after);
+    let moved = common::rmse(&exact_before, &exact_after);
     let one = RayOptions::default()
         .with_light_samples(1)
         .with_denoise(true);
     // The steady error of the scene without the light: 16 frames of a fresh denoiser.
     let mut without = scene.clone();
     without.lights[off] = dark;
-    let mut fresh = renderer(&ctx, &without, base.clone().with_rays(one)).expect("same device");
+    let mut fresh =
+        common::raytraced(&ctx, &without, base.clone().with_rays(one)).expect("same device");
     let mut steady = 0.0;
     for _ in 0..16 {
-        steady = rmse(&fresh.render().expect("frame"), &exact_after);
+        steady = common::rmse(&fresh.render().expect("frame"), &exact_after);
     }
-    let mut r = renderer(&ctx, &scene, base.with_rays(one)).expect("same device");
+    let mut r = common::raytraced(&ctx, &scene, base.with_rays(one)).expect("same device");
     for _ in 0..16 {
         r.render().expect("frame");
     }
     r.set_light(off, dark).expect("light");
     let after: Vec<f64> = (0..4)
-        .map(|_| rmse(&r.render().expect("frame"), &exact_after))
+        .map(|_| common::rmse(&r.render().expect("frame"), &exact_after))
         .collect();
     eprintln!(
         "switching light {off} off changes the exact image by {moved:.2}; denoised after the \

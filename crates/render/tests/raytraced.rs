@@ -7,38 +7,10 @@ mod common;
 
 use glam::{Mat4, Vec3};
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
-use manyshadows::scene::Scene;
-use manyshadows::{
-    GpuContext, LightLoop, Pcf, RayOptions, RenderError, RenderSettings, Renderer, Technique,
-};
+use manyshadows::{LightLoop, Pcf, RayOptions, RenderSettings};
 
 const SIZE: u32 = 256;
 const EDGE_BAND_PX: i32 = 2;
-
-/// The renderer, or `None` after checking that a device without ray queries refuses the
-/// technique by name.
-fn renderer(ctx: &GpuContext, scene: &Scene, settings: RenderSettings) -> Option<Renderer> {
-    let unmet = Technique::RAYTRACED.info().unmet(ctx);
-    match Renderer::new(ctx, scene, settings.with_technique(Technique::RAYTRACED)) {
-        Ok(r) => {
-            assert!(unmet.is_empty(), "rendered without {unmet:?}");
-            Some(r)
-        }
-        Err(e @ RenderError::MissingFeature { .. }) => {
-            assert!(
-                !unmet.is_empty(),
-                "refused on a device that has ray queries: {e}"
-            );
-            assert!(
-                e.to_string().contains("EXPERIMENTAL_RAY_QUERY"),
-                "the refusal names the feature: {e}"
-            );
-            eprintln!("refused here, by name: {e}");
-            None
-        }
-        Err(e) => panic!("{e}"),
-    }
-}
 
 /// The three analytic scenes: nothing but the outline's band may disagree with the exact
 /// shadow the test computes itself, and inside the band only sub-pixel placement (measured:
@@ -51,7 +23,7 @@ fn shadows_match_exact_outlines() {
         let settings = RenderSettings::new(SIZE, SIZE)
             .with_pcf(Pcf::Off)
             .with_visibility(true);
-        let Some(mut r) = renderer(&ctx, &scene, settings) else {
+        let Some(mut r) = common::raytraced(&ctx, &scene, settings) else {
             return;
         };
         let frame = r.render().expect("frame");
@@ -88,7 +60,7 @@ fn the_atrium_agrees_with_the_cpu_reference() {
     .expect("scene");
     scene.lights = builtin::scatter_lights(&scene, 64, 7, LightMix::All, None);
     let settings = RenderSettings::new(320, 180).with_visibility(true);
-    let Some(mut r) = renderer(&ctx, &scene, settings) else {
+    let Some(mut r) = common::raytraced(&ctx, &scene, settings) else {
         return;
     };
     let frame = r.render().expect("frame");
@@ -117,7 +89,7 @@ fn moved_caster_and_light_equal_a_fresh_renderer() {
     let ctx = common::context();
     let scene = builtin::build("cubes", &BuiltinOptions::default()).expect("scene");
     let settings = RenderSettings::new(160, 120).with_visibility(true);
-    let Some(mut r) = renderer(&ctx, &scene, settings.clone()) else {
+    let Some(mut r) = common::raytraced(&ctx, &scene, settings.clone()) else {
         return;
     };
     let before = r.render().expect("frame");
@@ -140,7 +112,7 @@ fn moved_caster_and_light_equal_a_fresh_renderer() {
         .unwrap();
     r.set_light(0, light).unwrap();
     let after = r.render().expect("frame");
-    let fresh = renderer(&ctx, &moved, settings)
+    let fresh = common::raytraced(&ctx, &moved, settings)
         .expect("same device")
         .render()
         .expect("frame");
@@ -153,18 +125,6 @@ fn moved_caster_and_light_equal_a_fresh_renderer() {
     assert_eq!(after.visibility, fresh.visibility);
 }
 
-/// Root-mean-square difference of two frames' sRGB channels, 0..255.
-fn rmse(a: &manyshadows::Frame, b: &manyshadows::Frame) -> f64 {
-    let n = a.rgba.len() as f64;
-    let s: f64 = a
-        .rgba
-        .iter()
-        .zip(&b.rgba)
-        .map(|(&x, &y)| (f64::from(x) - f64::from(y)).powi(2))
-        .sum();
-    (s / n).sqrt()
-}
-
 /// Sampled lights: the error against the all-lights image shrinks as K grows (1, 4, 16), the
 /// average of several seeds is closer than one (no bias that averaging cannot remove), and
 /// 16,384 lights render.
@@ -175,12 +135,12 @@ fn sampled_lights_converge_to_every_light() {
     scene.lights = builtin::scatter_lights(&scene, 48, 3, LightMix::All, None);
     // Every light is a candidate of every pixel (48 > 16 samples), so each K samples.
     let base = RenderSettings::new(128, 96).with_light_loop(LightLoop::All);
-    let Some(mut exact) = renderer(&ctx, &scene, base.clone()) else {
+    let Some(mut exact) = common::raytraced(&ctx, &scene, base.clone()) else {
         return;
     };
     let exact = exact.render().expect("frame");
     let sampled = |k: u32, seed: u32| {
-        renderer(
+        common::raytraced(
             &ctx,
             &scene,
             base.clone()
@@ -192,7 +152,7 @@ fn sampled_lights_converge_to_every_light() {
     };
     let errors: Vec<f64> = [1, 4, 16]
         .iter()
-        .map(|&k| rmse(&sampled(k, 1), &exact))
+        .map(|&k| common::rmse(&sampled(k, 1), &exact))
         .collect();
     eprintln!("RMSE against every light, K = 1, 4, 16: {errors:?}");
     assert!(
@@ -206,7 +166,7 @@ fn sampled_lights_converge_to_every_light() {
         let sum: u32 = frames.iter().map(|f| u32::from(f.rgba[i])).sum();
         *v = ((sum as f64) / 8.0).round() as u8;
     }
-    let averaged = rmse(&mean, &exact);
+    let averaged = common::rmse(&mean, &exact);
     eprintln!(
         "K = 4: one seed {:.2}, eight seeds averaged {averaged:.2}",
         errors[1]
@@ -216,7 +176,7 @@ fn sampled_lights_converge_to_every_light() {
     // 16,384 lights, 4 samples per pixel.
     let mut many = builtin::build("cubes", &BuiltinOptions::default()).expect("scene");
     many.lights = builtin::scatter_lights(&many, 16_384, 1, LightMix::All, None);
-    let frame = renderer(
+    let frame = common::raytraced(
         &ctx,
         &many,
         RenderSettings::new(64, 48).with_rays(RayOptions::default().with_light_samples(4)),

@@ -18,7 +18,7 @@
 //! sampler serves every material.
 
 use manyshadows_scene::texture::{linear_to_srgb, srgb_to_linear};
-use manyshadows_scene::{Scene, Texture};
+use manyshadows_scene::{Scene, Texture, TextureRef};
 
 use crate::error::RenderError;
 use crate::gpu::context::GpuContext;
@@ -251,39 +251,30 @@ impl SceneTextures {
         let mut mr_layers = vec![None; n];
         let mut emissive_layers = vec![None; n];
         let (mut colours, mut normals) = (0u32, 0u32);
+        // Texture `t`'s layer in `layers`, the array's next one (counted in `count`) if it has none.
+        let assign = |layers: &mut [Option<u32>], t: Option<TextureRef>, count: &mut u32| {
+            if let Some(t) = t {
+                layers[t.texture].get_or_insert_with(|| {
+                    *count += 1;
+                    *count - 1
+                });
+            }
+        };
         for m in &scene.materials {
-            if let Some(t) = m.base_color_texture {
-                colour_layers[t.texture].get_or_insert_with(|| {
-                    colours += 1;
-                    colours - 1
-                });
-            }
-            if let Some(t) = m.normal_texture {
-                normal_layers[t.texture].get_or_insert_with(|| {
-                    normals += 1;
-                    normals - 1
-                });
-            }
+            assign(&mut colour_layers, m.base_color_texture, &mut colours);
+            assign(&mut normal_layers, m.normal_texture, &mut normals);
         }
         // Metallic-roughness maps after the normal maps, in the same (linear) array; emissive
-        // textures after the base colours (sRGB colours too; a texture used as both gets one
-        // layer).
+        // textures after the base colours (sRGB colours too; a texture used as both keeps its
+        // base-colour layer).
         for m in &scene.materials {
             if let Some(t) = m.emissive_texture {
-                if let Some(l) = colour_layers[t.texture] {
-                    emissive_layers[t.texture] = Some(l);
+                if emissive_layers[t.texture].is_none() {
+                    emissive_layers[t.texture] = colour_layers[t.texture];
                 }
-                emissive_layers[t.texture].get_or_insert_with(|| {
-                    colours += 1;
-                    colours - 1
-                });
             }
-            if let Some(t) = m.metallic_roughness_texture {
-                mr_layers[t.texture].get_or_insert_with(|| {
-                    normals += 1;
-                    normals - 1
-                });
-            }
+            assign(&mut emissive_layers, m.emissive_texture, &mut colours);
+            assign(&mut mr_layers, m.metallic_roughness_texture, &mut normals);
         }
         let limits = ctx.limits();
         let max_layers = limits.max_texture_array_layers;

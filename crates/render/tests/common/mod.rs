@@ -342,3 +342,48 @@ pub fn differing_pixels(
     }
     differing
 }
+
+/// A ray-traced renderer (`settings` with technique raytraced), or `None` after checking that a device without ray queries refuses the
+/// technique by name.
+pub fn raytraced(
+    ctx: &GpuContext,
+    scene: &Scene,
+    settings: manyshadows::RenderSettings,
+) -> Option<manyshadows::Renderer> {
+    let unmet = manyshadows::Technique::RAYTRACED.info().unmet(ctx);
+    match manyshadows::Renderer::new(
+        ctx,
+        scene,
+        settings.with_technique(manyshadows::Technique::RAYTRACED),
+    ) {
+        Ok(r) => {
+            assert!(unmet.is_empty(), "rendered without {unmet:?}");
+            Some(r)
+        }
+        Err(e @ manyshadows::RenderError::MissingFeature { .. }) => {
+            assert!(
+                !unmet.is_empty(),
+                "refused on a device that has ray queries: {e}"
+            );
+            assert!(
+                e.to_string().contains("EXPERIMENTAL_RAY_QUERY"),
+                "the refusal names the feature: {e}"
+            );
+            eprintln!("refused here, by name: {e}");
+            None
+        }
+        Err(e) => panic!("{e}"),
+    }
+}
+
+/// Root-mean-square difference of two frames' sRGB channels, 0..255.
+pub fn rmse(a: &manyshadows::Frame, b: &manyshadows::Frame) -> f64 {
+    let n = a.rgba.len() as f64;
+    let s: f64 = a
+        .rgba
+        .iter()
+        .zip(&b.rgba)
+        .map(|(&x, &y)| (f64::from(x) - f64::from(y)).powi(2))
+        .sum();
+    (s / n).sqrt()
+}
