@@ -43,6 +43,18 @@ const SKY: [f32; 3] = [0.015, 0.018, 0.03];
 /// The acceptance bound of issue 37.
 const MAX_MEAN_FLIP: f64 = 0.1;
 
+/// Tighter bounds per generated model, so that a feature broken on our side fails even where
+/// the issue's 0.1 would let it pass. Measured on llvmpipe (Vulkan and GL alike): spheres
+/// 0.044, textured box 0.010, metallic-roughness map 0.028, lamp 0.012. Broken on purpose:
+/// the BRDF's specular dropped gives spheres 0.117; the metallic-roughness texture ignored
+/// gives 0.090 on its model; the emissive texture ignored gives the lamp 0.023.
+const MODEL_BOUNDS: [(&str, f64); 4] = [
+    ("spheres", 0.06),
+    ("textured-box", 0.02),
+    ("metal-rough-map", 0.045),
+    ("lamp", 0.018),
+];
+
 fn three_dir() -> PathBuf {
     let dir = std::env::var_os("MANYSHADOWS_THREE")
         .map(PathBuf::from)
@@ -443,8 +455,15 @@ fn gltf_models_render_as_three_js_renders_them() {
             flip.mean,
             revision.trim_matches('"')
         ));
-        if flip.mean.is_nan() || flip.mean > MAX_MEAN_FLIP {
-            failures.push(format!("{name}: mean ꟻLIP {:.4}", flip.mean));
+        let bound = MODEL_BOUNDS
+            .iter()
+            .find(|(m, _)| m == name)
+            .map_or(MAX_MEAN_FLIP, |&(_, b)| b);
+        if flip.mean.is_nan() || flip.mean > bound {
+            failures.push(format!(
+                "{name}: mean ꟻLIP {:.4} (bound {bound})",
+                flip.mean
+            ));
         }
         // Not a blank frame on either side: the generated models are lit.
         let generated =
@@ -468,7 +487,8 @@ fn gltf_models_render_as_three_js_renders_them() {
     std::fs::write(artifacts.join("figures.txt"), format!("{table}\n")).unwrap();
     assert!(
         failures.is_empty(),
-        "over a mean ꟻLIP of {MAX_MEAN_FLIP} against three.js: {failures:?} (images in {})\n{table}",
+        "over their mean ꟻLIP bounds against three.js (the issue's {MAX_MEAN_FLIP}, tighter for \
+         the generated models): {failures:?} (images in {})\n{table}",
         artifacts.display()
     );
 }
