@@ -148,3 +148,34 @@ fn a_light_switched_off_leaves_the_frame_within_four_frames() {
         after[3]
     );
 }
+
+/// A frame whose denoiser buffers (64 bytes a pixel) pass the device's storage-binding limit
+/// is refused by name before anything is bound (it was a validation error at 2048 × 2048 on
+/// lavapipe's 128 MiB).
+#[test]
+fn a_frame_too_large_to_denoise_is_refused_by_name() {
+    let ctx = common::context();
+    let scene = cubes_under_48_lights();
+    let limits = ctx.limits();
+    let limit = u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+    let w = limits.max_texture_dimension_2d.min(4096);
+    let h = ((limit / 64 / u64::from(w)) + 1).min(u64::from(w)) as u32;
+    let settings = RenderSettings::new(w, h)
+        .with_technique(Technique::RAYTRACED)
+        .with_rays(
+            RayOptions::default()
+                .with_light_samples(1)
+                .with_denoise(true),
+        );
+    match Renderer::new(&ctx, &scene, settings) {
+        Err(e @ RenderError::TooLarge { .. }) => {
+            assert!(e.to_string().contains("denoiser"), "{e}");
+        }
+        Err(e @ RenderError::MissingFeature { .. }) => eprintln!("refused here, by name: {e}"),
+        Err(e) => panic!("refused for another reason: {e}"),
+        Ok(_) => assert!(
+            u64::from(w) * u64::from(h) * 64 <= limit,
+            "a {w}x{h} denoised frame past the {limit}-byte limit was accepted"
+        ),
+    }
+}

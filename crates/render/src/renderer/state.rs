@@ -171,14 +171,18 @@ impl Renderer {
                 0,
                 bytemuck::bytes_of(&frame_uniforms(scene, &settings, shadow_side)),
             );
-            let denoiser = settings.rays.denoise.then(|| {
-                crate::shading::denoise::Denoiser::new(
-                    ctx,
-                    &gbuffer,
-                    settings.width,
-                    settings.height,
-                )
-            });
+            let denoiser = settings
+                .rays
+                .denoise
+                .then(|| {
+                    crate::shading::denoise::Denoiser::new(
+                        ctx,
+                        &gbuffer,
+                        settings.width,
+                        settings.height,
+                    )
+                })
+                .transpose()?;
             let inputs = LightingInputs {
                 frame: &frame_buffer,
                 lights: &lights,

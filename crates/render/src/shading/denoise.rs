@@ -34,6 +34,7 @@
 //! stay in the ratio where the surface did not move: detecting that (temporal gradients,
 //! A-SVGF) is not done.
 
+use crate::error::RenderError;
 use crate::frame::gbuffer::GBuffer;
 use crate::gpu::context::GpuContext;
 
@@ -111,10 +112,23 @@ fn storage(ctx: &GpuContext, label: &str, bytes: u64) -> wgpu::Buffer {
 }
 
 impl Denoiser {
-    /// Buffers and pipelines for a `w` × `h` frame whose G-buffer is `gbuffer`.
-    pub fn new(ctx: &GpuContext, gbuffer: &GBuffer, w: u32, h: u32) -> Self {
+    /// Buffers and pipelines for a `w` × `h` frame whose G-buffer is `gbuffer`; a frame
+    /// whose per-pixel buffers (64 bytes a pixel) pass the device's storage-binding limit is
+    /// [`RenderError::TooLarge`].
+    pub fn new(ctx: &GpuContext, gbuffer: &GBuffer, w: u32, h: u32) -> Result<Self, RenderError> {
         let device = &ctx.device;
         let pixels = u64::from(w) * u64::from(h);
+        let limits = ctx.limits();
+        let limit = u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+        if pixels * 64 > limit {
+            return Err(RenderError::TooLarge {
+                what: format!("the denoiser's per-pixel buffers of a {w}x{h} frame"),
+                needed: pixels * 64,
+                limit,
+                unit: "bytes",
+                limit_name: "max_storage_buffer_binding_size",
+            });
+        }
         let buffers = DenoiseBuffers {
             pixels: storage(ctx, "denoise.pixels", pixels * 64),
             ratio: storage(ctx, "denoise.ratio", pixels * 32),
@@ -197,7 +211,7 @@ impl Denoiser {
                 })
             })
             .collect();
-        Self {
+        Ok(Self {
             buffers,
             width: w,
             height: h,
@@ -209,7 +223,7 @@ impl Denoiser {
             parity: 0,
             prev_view_proj: None,
             fast_frames: 0,
-        }
+        })
     }
 
     /// The lights changed: the next [`CHANGED_FRAMES`] frames follow them fast. (The
