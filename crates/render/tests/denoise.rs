@@ -157,7 +157,9 @@ fn a_frame_too_large_to_denoise_is_refused_by_name() {
     let ctx = common::context();
     let scene = cubes_under_48_lights();
     let limits = ctx.limits();
-    let limit = u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+    let limit = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
     let w = limits.max_texture_dimension_2d.min(4096);
     let h = ((limit / 64 / u64::from(w)) + 1).min(u64::from(w)) as u32;
     let settings = RenderSettings::new(w, h)

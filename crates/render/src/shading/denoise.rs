@@ -119,7 +119,9 @@ impl Denoiser {
         let device = &ctx.device;
         let pixels = u64::from(w) * u64::from(h);
         let limits = ctx.limits();
-        let limit = u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+        let limit = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
         if pixels * 64 > limit {
             return Err(RenderError::TooLarge {
                 what: format!("the denoiser's per-pixel buffers of a {w}x{h} frame"),
