@@ -316,8 +316,18 @@ pub(crate) struct RenderArgs {
     /// point (reprojected when the camera moves) and filtered by an edge-stopping wavelet
     /// (one pass for all lights). Biased where a pixel's lights are shadowed differently; with
     /// --frames it converges as the frames go by.
+    ///
+    /// Without --light-samples (every light traced): accumulate the sized lights' area
+    /// samples over frames, new points on each light every frame and no filter, so
+    /// `--frames N --still` converges to the exact soft shadows (unbiased; the error falls as
+    /// 1/sqrt(N) up to 32 frames).
     #[arg(long)]
     pub(crate) denoise: bool,
+    /// With shadow rays: rays per side of the stratified grid over each sized light's shape
+    /// (N² rays per pixel and light when every light is traced; 0 counts as 1; at most 16).
+    /// More: smoother penumbrae, at N² the cost of a hard shadow ray.
+    #[arg(long, default_value_t = manyshadows::DEFAULT_AREA_SAMPLES)]
+    pub(crate) area_samples: u32,
     /// Seed of --light-samples' choices (the same seed gives the same image).
     #[arg(long, default_value_t = 0)]
     pub(crate) ray_seed: u32,
@@ -523,6 +533,7 @@ pub(crate) fn flag_error(e: manyshadows::RenderError) -> anyhow::Error {
         ("virtual_maps.max_side", "--virtual-side"),
         ("rays.light_samples", "--light-samples"),
         ("rays.denoise", "--denoise"),
+        ("rays.area_samples", "--area-samples"),
         ("shadow_budget", "--shadow-budget"),
         ("look.exposure", "--exposure"),
     ];
@@ -597,6 +608,7 @@ pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettin
             manyshadows::RayOptions::default()
                 .with_light_samples(args.light_samples)
                 .with_denoise(args.denoise)
+                .with_area_samples(args.area_samples)
                 .with_seed(args.ray_seed),
         )
         .with_look(args.look.look())

@@ -62,7 +62,36 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
                 .gpu_ms
                 .get(manyshadows::Stage::Shadows)
                 .map_or("n/a".to_string(), |v| format!("{v:.2} ms"));
+            let info = renderer.settings().technique.info();
             let line = match &fr.virtual_maps {
+                // No maps: the rays are traced in the lighting pass.
+                None if info.fills == manyshadows::Fills::Rays => {
+                    let rays = renderer.settings().rays;
+                    let lighting_ms = fr
+                        .timings
+                        .gpu_ms
+                        .get(manyshadows::Stage::Lighting)
+                        .map_or("n/a".to_string(), |v| format!("{v:.2} ms"));
+                    let history = (f + 1).min(manyshadows::shading::denoise::MAX_HISTORY);
+                    let plural = if history == 1 { "" } else { "s" };
+                    let kept = if !rays.denoise {
+                        String::new()
+                    } else if rays.light_samples > 0 {
+                        format!(", denoised (history up to {history} frame{plural})")
+                    } else {
+                        format!(", area samples accumulated (up to {history} frame{plural})")
+                    };
+                    format!(
+                        "frame {:>3}: shadow rays in the lighting pass{kept}, lighting GPU time {lighting_ms}",
+                        f + 1
+                    )
+                }
+                // Sample lists: every view's are built anew each frame (nothing is kept).
+                None if info.fills == manyshadows::Fills::Mask => format!(
+                    "frame {:>3}: sample lists of all {} light views built anew, shadow GPU time {shadow_ms}",
+                    f + 1,
+                    renderer.plan().views.len()
+                ),
                 Some(v) => format!(
                     "frame {:>3}: {:>4} of {} resident pages drawn ({} kept), shadow GPU time {shadow_ms}",
                     f + 1,

@@ -42,6 +42,7 @@ pub(crate) fn summary(
         "lists": r.irregular_stats(),
         "soft": { "blocker_taps": r.settings().soft.blocker_taps, "filter_taps": r.settings().soft.filter_taps,
                   "max_penumbra": r.settings().soft.max_penumbra, "area_samples": r.settings().rays.area_samples,
+                  "light_samples": r.settings().rays.light_samples, "denoise": r.settings().rays.denoise,
                   "technique_softens": r.settings().technique.info().soft_shadows },
         "gpu_ms": frame.timings.gpu_ms,
         "cpu_record_ms": frame.timings.cpu_record_ms,
@@ -169,14 +170,30 @@ fn print_shadows(s: &serde_json::Value, fills: Option<manyshadows::Fills>) {
             "no filter (exact, hard)".to_string(),
             "hard: answers at each light's centre, sizes ignored".to_string(),
         ),
-        Some(manyshadows::Fills::Rays) => (
-            "no shadow views".to_string(),
-            "no filter".to_string(),
-            format!(
-                "sized lights traced with {0}x{0} samples of their shape per pixel",
-                soft["area_samples"].as_u64().unwrap_or(0).max(1)
-            ),
-        ),
+        Some(manyshadows::Fills::Rays) => {
+            ("no shadow views".to_string(), "no filter".to_string(), {
+                let denoise = soft["denoise"].as_bool().unwrap_or(false);
+                match soft["light_samples"].as_u64().unwrap_or(0) {
+                    0 => format!(
+                        "sized lights traced with {0}x{0} samples of their shape per pixel{1}",
+                        soft["area_samples"].as_u64().unwrap_or(0).max(1),
+                        if denoise {
+                            ", new each frame and accumulated over still frames"
+                        } else {
+                            ""
+                        }
+                    ),
+                    _ => format!(
+                        "a sampled sized light is traced at one point of its shape{}",
+                        if denoise {
+                            ", new each frame, denoised"
+                        } else {
+                            ""
+                        }
+                    ),
+                }
+            })
+        }
         _ => (
             format!("{} views", s["shadow_views"]),
             format!("PCF {}", s["pcf"].as_str().unwrap_or("?")),

@@ -516,6 +516,8 @@ fn the_summary_of_each_technique_is_its_own() {
             "96",
             "--height",
             "54",
+            "--frames",
+            "2",
             "--out",
             tmp(&format!("summary-{t}"))
                 .join("frame.png")
@@ -540,6 +542,19 @@ fn the_summary_of_each_technique_is_its_own() {
             "adapter", "scene", "lights", "shadows", "clusters", "GPU time", "wrote",
         ] {
             line(label);
+        }
+        // Each frame's line says what that technique redid (issue 42: rays and irregular
+        // maps once reported "0 of N shadow views redrawn").
+        let frames: Vec<&str> = err.lines().filter(|l| l.starts_with("frame ")).collect();
+        assert_eq!(frames.len(), 2, "{t}: {err}");
+        let per_frame = match t {
+            "raytraced" => "shadow rays in the lighting pass",
+            "irregular" => "sample lists of all",
+            "virtual" => "resident pages drawn",
+            _ => "shadow views redrawn",
+        };
+        for l in &frames {
+            assert!(l.contains(per_frame), "{t}: {l}");
         }
         // The atrium's seeded lights are sized: each technique says what it makes of them.
         let soft = line("soft");

@@ -149,18 +149,11 @@ impl RenderSettings {
             }
         }
         self.soft.validate()?;
-        if self.rays.denoise
-            && (self.rays.light_samples == 0
-                || self.technique.info().fills != crate::error::Fills::Rays)
-        {
+        if self.rays.denoise && self.technique.info().fills != crate::error::Fills::Rays {
             return Err(bad(
                 "rays.denoise",
-                format!(
-                    "on with technique {} and {} light samples",
-                    self.technique.name(),
-                    self.rays.light_samples
-                ),
-                "sampled shadow rays to denoise: technique raytraced with light_samples 1 to 16",
+                format!("on with technique {}", self.technique.name()),
+                "shadow rays to denoise or accumulate: technique raytraced",
             ));
         }
         self.clusters.validate()?;

@@ -59,15 +59,72 @@ fn denoised_samples_are_close_to_every_light_and_converge() {
     assert!(errors[7] < 0.3 * plain, "{} vs {plain}", errors[7]);
 }
 
-/// Denoising asks for sampled rays: without them (every light traced, or a shadow-map
-/// technique) the settings are refused, naming the option, on any device.
+/// Every light traced, one area sample per sized light and pixel: still frames accumulate
+/// (new points on the lights each frame, no spatial filter) towards the image traced with 64
+/// samples per light, and without bias: 16 frames must more than halve the first frame's
+/// error (one sample per frame averages to 1/4 of it, down to the 64-sample image's own
+/// noise), where the same frame without accumulation does not improve at all.
 #[test]
-fn denoising_without_sampled_rays_is_refused_by_name() {
+fn every_light_traced_accumulates_area_samples_over_still_frames() {
+    let ctx = common::context();
+    let mut scene = builtin::build("cubes", &BuiltinOptions::default()).expect("scene");
+    scene.lights = builtin::scatter_lights(&scene, 8, 5, LightMix::All, None);
+    // Wide penumbrae: four times the default radii (suns keep theirs).
+    for l in &mut scene.lights {
+        if l.type_name() != "directional" {
+            l.size *= 4.0;
+        }
+    }
+    assert!(scene.lights.iter().all(|l| l.size > 0.0));
+    let base = RenderSettings::new(160, 120);
+    let rays = |area: u32| RayOptions::default().with_area_samples(area);
+    let Some(mut exact) = common::raytraced(&ctx, &scene, base.clone().with_rays(rays(8))) else {
+        return;
+    };
+    let exact = exact.render().expect("frame");
+    let mut plain =
+        common::raytraced(&ctx, &scene, base.clone().with_rays(rays(1))).expect("same device");
+    let plain: Vec<f64> = (0..2)
+        .map(|_| common::rmse(&plain.render().expect("frame"), &exact))
+        .collect();
+    let mut acc = common::raytraced(&ctx, &scene, base.with_rays(rays(1).with_denoise(true)))
+        .expect("same device");
+    let errors: Vec<f64> = (0..16)
+        .map(|_| common::rmse(&acc.render().expect("frame"), &exact))
+        .collect();
+    eprintln!(
+        "RMSE against 64 area samples: one sample, two frames without accumulating {plain:.2?}; \
+         accumulated, frames 1 to 16: {errors:.2?}"
+    );
+    assert!(
+        plain[0] > 1.0,
+        "the penumbrae are too small to test: {plain:?}"
+    );
+    assert!(
+        (errors[0] - plain[0]).abs() < 0.25 * plain[0],
+        "the first accumulated frame is not the plain frame: {} vs {}",
+        errors[0],
+        plain[0]
+    );
+    assert!(
+        (plain[1] - plain[0]).abs() < 0.1 * plain[0],
+        "frames without accumulation should not converge: {plain:?}"
+    );
+    assert!(
+        errors[15] < 0.5 * errors[0],
+        "16 still frames do not converge: {errors:?}"
+    );
+}
+
+/// Denoising and accumulating ask for shadow rays: a shadow-map technique with them is
+/// refused, naming the option, on any device.
+#[test]
+fn denoising_without_shadow_rays_is_refused_by_name() {
     let ctx = common::context();
     let scene = builtin::build("cubes", &BuiltinOptions::default()).expect("scene");
     for settings in [
         RenderSettings::new(32, 32)
-            .with_technique(Technique::RAYTRACED)
+            .with_technique(Technique::default())
             .with_rays(RayOptions::default().with_denoise(true)),
         RenderSettings::new(32, 32)
             .with_technique(Technique::default())
@@ -82,7 +139,7 @@ fn denoising_without_sampled_rays_is_refused_by_name() {
                 assert!(e.to_string().contains("rays.denoise"), "{e}");
             }
             Err(e) => panic!("refused for another reason: {e}"),
-            Ok(_) => panic!("denoising without sampled rays was accepted"),
+            Ok(_) => panic!("denoising without shadow rays was accepted"),
         }
     }
 }

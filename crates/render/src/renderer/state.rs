@@ -180,6 +180,7 @@ impl Renderer {
                         &gbuffer,
                         settings.width,
                         settings.height,
+                        settings.rays.light_samples > 0,
                     )
                 })
                 .transpose()?;

@@ -21,6 +21,12 @@
 //! 3. **composite**: the lighting pass's `fs_composite` shades `ambient + emission + U · r̄`
 //!    and tone-maps it into the frame.
 //!
+//! Where every light is traced (`light_samples` 0) the only noise is the sized lights' area
+//! samples, new each frame: there the denoiser only accumulates (no spatial pass), and with
+//! a still camera the per-channel ratio times the exact `U` is the running mean of the
+//! traced light itself, which converges to the exact soft shadow without bias (until
+//! [`MAX_HISTORY`] frames; then a moving average of that many).
+//!
 //! What is biased: `U · r̄` is exact where every light of a pixel is seen alike (all lit,
 //! all shadowed) and for one light; where lights of different colours or strengths are
 //! shadowed differently the ratio mixes them (the colour of the unshadowed sum is kept); the
@@ -94,6 +100,8 @@ pub struct Denoiser {
     temporal_groups: [wgpu::BindGroup; 2],
     /// À-trous bind groups in pass order.
     atrous_groups: Vec<wgpu::BindGroup>,
+    /// Whether the à-trous passes run (sampled lights); without, frames only accumulate.
+    spatial: bool,
     /// Which history buffer this frame reads.
     parity: usize,
     /// Camera world → clip of the last frame denoised (`None`: no history yet).
@@ -112,10 +120,17 @@ fn storage(ctx: &GpuContext, label: &str, bytes: u64) -> wgpu::Buffer {
 }
 
 impl Denoiser {
-    /// Buffers and pipelines for a `w` × `h` frame whose G-buffer is `gbuffer`; a frame
+    /// Buffers and pipelines for a `w` × `h` frame whose G-buffer is `gbuffer`, filtering in
+    /// space too where `spatial` (sampled lights; else frames only accumulate); a frame
     /// whose per-pixel buffers (64 bytes a pixel) pass the device's storage-binding limit is
     /// [`RenderError::TooLarge`].
-    pub fn new(ctx: &GpuContext, gbuffer: &GBuffer, w: u32, h: u32) -> Result<Self, RenderError> {
+    pub fn new(
+        ctx: &GpuContext,
+        gbuffer: &GBuffer,
+        w: u32,
+        h: u32,
+        spatial: bool,
+    ) -> Result<Self, RenderError> {
         let device = &ctx.device;
         let pixels = u64::from(w) * u64::from(h);
         let limits = ctx.limits();
@@ -222,6 +237,7 @@ impl Denoiser {
             atrous,
             temporal_groups,
             atrous_groups,
+            spatial,
             parity: 0,
             prev_view_proj: None,
             fast_frames: 0,
@@ -278,10 +294,12 @@ impl Denoiser {
         pass.set_pipeline(&self.temporal);
         pass.set_bind_group(0, &self.temporal_groups[self.parity], &[]);
         pass.dispatch_workgroups(groups.0, groups.1, 1);
-        pass.set_pipeline(&self.atrous);
-        for g in &self.atrous_groups {
-            pass.set_bind_group(0, g, &[]);
-            pass.dispatch_workgroups(groups.0, groups.1, 1);
+        if self.spatial {
+            pass.set_pipeline(&self.atrous);
+            for g in &self.atrous_groups {
+                pass.set_bind_group(0, g, &[]);
+                pass.dispatch_workgroups(groups.0, groups.1, 1);
+            }
         }
         drop(pass);
         self.parity = 1 - self.parity;

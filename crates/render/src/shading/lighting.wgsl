@@ -325,7 +325,25 @@ fn random(acc: ptr<function, Acc>) -> f32 {
 fn visit(i: u32, s: Surface, acc: ptr<function, Acc>) {
     let k = ray_samples();
     if (k == 0u) {
-        (*acc).color = add_light((*acc).color, i, s);
+        if (!DENOISE) {
+            (*acc).color = add_light((*acc).color, i, s);
+            return;
+        }
+        // Every light traced, its area samples new each frame: the direct light is kept
+        // apart from the ambient (resolve_samples adds it) and both "estimates" are exact
+        // but for those samples, which the denoiser accumulates over frames.
+        let t = light_terms(i, s);
+        if (!t.reaches) {
+            return;
+        }
+        (*acc).color = (*acc).color + t.ambient;
+        if (!t.facing) {
+            return;
+        }
+        let d = t.att * t.ds;
+        (*acc).unshadowed = (*acc).unshadowed + d;
+        (*acc).est_unshadowed = (*acc).est_unshadowed + d;
+        (*acc).est_shadowed = (*acc).est_shadowed + light_lit(i, s) * d;
         return;
     }
     let t = light_terms(i, s);
@@ -360,6 +378,10 @@ fn visit(i: u32, s: Surface, acc: ptr<function, Acc>) {
 // own weight: an unbiased estimate of the sum over every light of the loop.
 fn resolve_samples(s: Surface, acc: ptr<function, Acc>) {
     let k = ray_samples();
+    if (k == 0u && DENOISE) {
+        (*acc).color = (*acc).color + (*acc).est_shadowed;
+        return;
+    }
     if (k == 0u || (*acc).wsum <= 0.0) {
         return;
     }

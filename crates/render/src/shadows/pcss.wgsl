@@ -105,9 +105,11 @@ fn soft_shadow(size: f32, c: ShadowCoord, rot: f32) -> f32 {
 }
 
 // A pixel's shift of a sized light's sample grid for light `i` (shadow rays): hashed from the
-// pixel, the light and the frame's seed, so strata differ between neighbours and frames.
+// pixel, the light, the rays' seed and the frame's number where frames accumulate
+// (`frame.modes.y`, 0 otherwise), so strata differ between neighbours and between the frames
+// a denoiser accumulates.
 fn soft_jitter(px: vec2<i32>, i: u32) -> vec2<f32> {
-    var h = soft_hash(u32(px.x) ^ soft_hash(u32(px.y) ^ soft_hash(i ^ soft_hash(ray_seed()))));
+    var h = soft_hash(u32(px.x) ^ soft_hash(u32(px.y) ^ soft_hash(i ^ soft_hash(ray_seed() + frame.modes.y))));
     let a = f32(h >> 8u) / 16777216.0;
     h = soft_hash(h);
     return vec2<f32>(a, f32(h >> 8u) / 16777216.0);

@@ -42,7 +42,9 @@ pub struct RayOptions {
     pub area_samples: u32,
     /// With `light_samples` K > 0: denoise the sampled rays (shading/denoise.rs): the exact
     /// unshadowed light times the shadow ratio accumulated over frames and filtered. Biased
-    /// where lights of one pixel are shadowed differently; see the module.
+    /// where lights of one pixel are shadowed differently; see the module. With
+    /// `light_samples` 0: accumulate the sized lights' area samples over frames (new points
+    /// each frame, no filter), so still frames converge to the exact soft shadows.
     pub denoise: bool,
 }
 
