@@ -89,10 +89,23 @@ struct VsmTap {
 
 fn vsm_tap(c: ShadowCoord, t: vec2<f32>) -> VsmTap {
     var out: VsmTap;
+    // Most taps lie in the sample's own page, which the lookup found (`tile_min`, `tile_max`:
+    // its texels in the pool; none after `soft_coarser`): no page-table read for those.
+    let side = f32(vsm.pool.z);
+    let s0 = c.tile_max.x - c.tile_min.x;
+    // (The page's origin from the sample's own place in it, not from rounding `soft / side`
+    // again, which can put a sample on a page border into the page beside.)
+    let own = t - c.soft.xy + (c.texel - c.tile_min) * (side / max(s0, 1.0));
+    if (s0 > 0.0 && all(own >= vec2<f32>(0.0)) && all(own < vec2<f32>(side))) {
+        out.local = own * (s0 / side);
+        out.pool = c.tile_min + out.local;
+        out.side = s0;
+        out.resident = true;
+        return out;
+    }
     let face = vsm_faces[c.src.x];
     let level = c.src.y;
     let pages = f32(1u << level);
-    let side = f32(vsm.pool.z);
     let uv = clamp(t, vec2<f32>(0.0), vec2<f32>(c.soft.z - 1e-3)) / c.soft.z;
     let e = vsm_table[vsm_entry(face, level, uv)];
     if (e < VSM_FIRST_PAGE || e == VSM_DENIED) {
@@ -163,6 +176,8 @@ fn soft_coarser(c: ShadowCoord, k: u32) -> ShadowCoord {
     var out = c;
     let scale = f32(1u << (c.src.y - level));
     out.src.y = level;
+    // The sample's page is another now: every tap finds its own (vsm_tap).
+    out.tile_max = out.tile_min;
     out.soft = c.soft / scale;
     out.grad = c.grad * scale;
     out.lin.z = c.lin.z * scale;

@@ -45,6 +45,15 @@ fn cells_between(t0: vec2<f32>, t1: vec2<f32>) -> u32 {
     return cells_reached(t0, t1, TAP_REACH);
 }
 
+// The cells within `reach` texels of a sample at `uv` in the page of `level` that holds
+// `inside` (a page beside the sample's: the sample lies outside it, the cells along the
+// border it faces).
+fn cells_beside(uv: vec2<f32>, inside: vec2<f32>, level: u32, reach: f32) -> u32 {
+    let pages = f32(1u << level);
+    let t = (uv * pages - min(floor(inside * pages), vec2<f32>(pages - 1.0))) * f32(vsm.pool.z);
+    return cells_reached(t, t, reach);
+}
+
 // The cells within `reach` texels of page texel positions from `t0` to `t1`.
 fn cells_reached(t0: vec2<f32>, t1: vec2<f32>, reach: f32) -> u32 {
     let cell = f32(vsm.pool.z) / 16.0;
@@ -79,7 +88,7 @@ fn mark_light(i: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
     }
     let e = vsm_entry(face, level, q.uv);
     if (light.diffuse.w > 0.0) {
-        mark_soft(face, level, q, e);
+        mark_soft(face, level, q, e, soft_key_bound(light, face, level, ray, p, n, q));
         return;
     }
     if (vsm.counts.w != 0u) {
@@ -91,12 +100,13 @@ fn mark_light(i: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
 
 // A sized light's sample: its soft filter's taps reach up to the largest penumbra (and a
 // texel) from it, so the pages within that reach are asked for too, with bounds over the
-// cells the taps reach (all of a neighbour's: the reach is below a page) and no depth bound:
-// taps compare against the receiver's plane extended up to that reach, which may lie beyond
-// every sample.
-fn mark_soft(face: VirtualFace, level: u32, q: VsmPoint, e: u32) {
+// cells the taps reach (in a page beside the sample's, those along the border it faces) and
+// the depth bound
+// `key` of the receiver's plane extended that far (`soft_key_bound`): taps compare against
+// that plane, which may lie beyond every sample.
+fn mark_soft(face: VirtualFace, level: u32, q: VsmPoint, e: u32, bound: f32) {
     let reach = frame.soft.z + 1.0;
-    let key = bitcast<u32>(3.4e38);
+    let key = bitcast<u32>(max(bound, 0.0));
     if (vsm.counts.w != 0u) {
         bound_page(e, key, tap_cells_within(q.uv, level, reach));
     }
@@ -108,11 +118,35 @@ fn mark_soft(face: VirtualFace, level: u32, q: VsmPoint, e: u32) {
         let n = vsm_entry(face, level, uv);
         if (n != e) {
             if (vsm.counts.w != 0u) {
-                bound_page(n, key, 0xffffffffu);
+                bound_page(n, key, cells_beside(q.uv, uv, level, reach));
             }
             ask_page(face, level, uv, n);
         }
     }
+}
+
+// The farthest distance key a sized light's taps around sample `q` (of `face` at `level`)
+// compare against: the receiver's tangent plane (the lookup's gradient, vsm_lookup.wgsl)
+// extended by the largest penumbra and a texel, its slope doubled for the two computations'
+// rounding; no bound (3.4e38) where that passes the far plane.
+fn soft_key_bound(light: LightData, face: VirtualFace, level: u32, ray: VsmRay, p: vec3<f32>, n: vec3<f32>, q: VsmPoint) -> f32 {
+    let tw = vsm_texel_world(face, level, ray);
+    let t = plane_tangents(n) * tw;
+    let r1 = vsm_ray(light, face, p + t[0], n);
+    let r2 = vsm_ray(light, face, p + t[1], n);
+    let full = f32(1u << level) * f32(vsm.pool.z);
+    let g = plane_gradient(view_uvz(ray.p + tw * ray.d), view_uvz(r1.p + tw * r1.d), view_uvz(r2.p + tw * r2.d)) / full;
+    let depth = q.depth + 2.0 * (abs(g.x) + abs(g.y)) * (frame.soft.z + 1.0);
+    if (depth >= 1.0) {
+        return 3.4e38;
+    }
+    if (face.params.w > 0.5) {
+        // Orthographic: the key is the depth.
+        return max(depth, q.key);
+    }
+    let near = face.params.x;
+    let far = face.params.y;
+    return max(near * far / max(far - depth * (far - near), 1e-20), q.key);
 }
 
 // Widens page `e`'s receiver bounds to depth key `key` and the cells `cells`.
