@@ -5,8 +5,8 @@ use clap::{Parser, Subcommand};
 
 use crate::args::{GpuArgs, RenderArgs};
 use crate::{
-    bench, compare, irregular_bench, lights_bench, omni, shadows_bench, soak, soft_bench, suite,
-    viewer, virtual_bench,
+    bench, compare, denoise_bench, irregular_bench, lights_bench, omni, shadows_bench, soak,
+    soft_bench, suite, viewer, virtual_bench,
 };
 
 pub(crate) const ABOUT: &str = "Render scenes lit by many shadow-casting lights, headless, to PNG.";
@@ -109,6 +109,13 @@ pub(crate) enum BenchCommand {
     #[command(long_about = soft_bench::LONG_ABOUT)]
     #[command(mut_arg("out_dir", |a| a.default_value("bench-soft").required(false)))]
     Soft(Box<soft_bench::SoftArgs>),
+    /// Sampled shadow rays and their denoiser over a sequence (the camera turning, a caster
+    /// moving), each frame scored against the exact image of that frame: RMSE per frame, GPU
+    /// time of the plain and the denoised frames and their ratio, per light count; table,
+    /// results.json and a plot.
+    #[command(long_about = denoise_bench::LONG_ABOUT)]
+    #[command(mut_arg("out_dir", |a| a.default_value("bench-denoise").required(false)))]
+    Denoise(Box<denoise_bench::DenoiseArgs>),
     /// Thousands of frames in which the camera, a caster, a light and the light count change:
     /// resident memory after a warm-up against its baseline (fails past --max-growth-mib),
     /// frame times per interval, any failed frame; table and results.json.

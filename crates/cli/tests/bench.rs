@@ -594,3 +594,56 @@ fn bench_progress_is_printed_as_lines_in_a_log() {
         "{stderr}"
     );
 }
+
+/// `bench denoise` on a tiny sequence: every frame scored against the exact image of that
+/// frame, the denoised frames closer than the plain ones on average (the denoiser's point:
+/// measured on cubes with 48 lights, 96x72, 4 frames), the cost ratio from the same
+/// sequence's medians; `--reference off` times only. Without ray queries it is refused naming
+/// the feature.
+#[test]
+fn bench_denoise_scores_each_frame_of_a_sequence() {
+    let args = "denoise --scene cubes --lights 48 --frames 4 --width 96 --height 72";
+    let ctx = manyshadows::GpuContext::new(&Default::default()).expect("adapter");
+    let rays_here = manyshadows::Technique::RAYTRACED
+        .info()
+        .unmet(&ctx)
+        .is_empty();
+    if !rays_here {
+        rejects(args, "EXPERIMENTAL_RAY_QUERY");
+        return;
+    }
+    let (dir, json) = bench_ok("denoise", &args["denoise ".len()..]);
+    let rows = records(&json);
+    assert_eq!(rows.len(), 1, "{json}");
+    let r = &rows[0];
+    let frames = r["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 4, "{r}");
+    for f in frames {
+        for key in ["plain_rmse", "denoised_rmse", "plain_ms", "denoised_ms"] {
+            assert!(f[key].as_f64().is_some_and(|v| v >= 0.0), "{key}: {f}");
+        }
+    }
+    let (plain, denoised) = (
+        r["plain_mean_rmse"].as_f64().unwrap(),
+        r["denoised_mean_rmse"].as_f64().unwrap(),
+    );
+    eprintln!("bench denoise: mean RMSE plain {plain:.2}, denoised {denoised:.2}");
+    assert!(denoised < 0.7 * plain, "{r}");
+    assert_ratio(
+        &r["cost_ratio"],
+        &r["denoised_median_ms"],
+        &r["plain_median_ms"],
+        r,
+    );
+    assert!(dir.join("frames.png").exists());
+    let (_, json) = bench_ok(
+        "denoise",
+        "--scene cubes --lights 8 --frames 2 --width 64 --height 48 --reference off",
+    );
+    let f = &records(&json)[0]["frames"][0];
+    assert!(
+        f["plain_rmse"].is_null() && f["denoised_ms"].is_number(),
+        "{f}"
+    );
+    rejects("denoise --frames 0", "--frames");
+}

@@ -1,0 +1,341 @@
+//! `manyshadows bench denoise`: sampled shadow rays and their denoiser over a sequence, each
+//! frame scored against the exact image of that same frame.
+//!
+//! Three renderers see the same frames: every cluster light traced (the exact image), K
+//! lights sampled per pixel as they are, and the same K denoised (`RayOptions::denoise`). The
+//! camera turns `--orbit` degrees a frame around its target and the scene's smallest caster
+//! circles (unless `--still`), set alike on all three before each frame. Per frame: the RMSE
+//! of each sampled image against the exact one (sRGB channels, 0–255) and GPU times. Per
+//! light count: mean, first and last errors, median frame times and the denoised frame over
+//! the plain one; across light counts, how the frames grow. Without `--reference` (`off`)
+//! only the times are taken, for light counts whose exact frames take too long.
+
+use anyhow::{bail, Result};
+use clap::Args;
+use manyshadows::scene::builtin::{self, LightMix};
+use manyshadows::{Frame, RayOptions, RenderSettings, Renderer, Stage, Technique};
+use serde::Serialize;
+
+use crate::harness::{check_counts, check_scene, median, ms, seeded_scene, Figure, Harness};
+
+/// `manyshadows bench denoise --help`.
+pub const LONG_ABOUT: &str = "\
+Sampled shadow rays (--light-samples K) and their denoiser over a sequence of frames, each
+frame scored against the exact image of the same frame (every cluster light traced).
+
+Three renderers see the same frames: exact, K lights sampled per pixel as they are, and the
+same K denoised (the exact unshadowed light times the rays' shadow ratio, accumulated over
+frames and filtered). The camera turns --orbit degrees a frame around its target and the
+scene's smallest shadow caster circles, unless --still. Per frame: RMSE of the plain and the
+denoised image against the exact one (sRGB channels, 0-255) and GPU times; per light count:
+the mean, first and last errors, median GPU ms of each frame and the denoised frame over the
+plain one (the same frames, interleaved); across light counts, how each frame grows. Writes
+results.txt, results.json (every frame's numbers) and frames.png (error and time per frame).
+
+Needs ray queries (EXPERIMENTAL_RAY_QUERY: Vulkan with Mesa 25's lavapipe, or a GPU driver
+that has them). --reference off skips the exact frames (times only), for light counts whose
+exact frames take long on a CPU adapter.
+
+Examples:
+  manyshadows bench denoise                                    # atrium, 1,024 lights, 60 frames
+  manyshadows bench denoise --still --frames 8                 # a still camera converging
+  manyshadows bench denoise --lights 1024,16384 --reference off --frames 10   # cost growth";
+
+/// Arguments of `manyshadows bench denoise`.
+#[derive(Args, Debug, Clone)]
+pub struct DenoiseArgs {
+    /// Built-in scene.
+    #[arg(long, default_value = "atrium")]
+    pub scene: String,
+    /// Numbers of lights, comma-separated (1 to 16384 each).
+    #[arg(long, default_value = "1024", value_delimiter = ',')]
+    pub lights: Vec<usize>,
+    /// Frames of the sequence.
+    #[arg(long, default_value_t = 60)]
+    pub frames: u32,
+    /// Degrees the camera turns around its target each frame (0: it stays).
+    #[arg(long, default_value_t = 0.5)]
+    pub orbit: f32,
+    /// Move no caster (with --orbit 0: still frames, as `render --still`).
+    #[arg(long)]
+    pub still: bool,
+    /// Lights sampled per pixel (1 to 16).
+    #[arg(long, default_value_t = 1)]
+    pub light_samples: u32,
+    /// Score against the exact image of every frame (on) or only time the frames (off).
+    #[arg(long, default_value = "on", value_parser = ["on", "off"])]
+    pub reference: String,
+    /// Image width.
+    #[arg(long, default_value_t = 640)]
+    pub width: u32,
+    /// Image height.
+    #[arg(long, default_value_t = 360)]
+    pub height: u32,
+    #[command(flatten)]
+    pub output: crate::harness::OutputArgs,
+}
+
+/// One frame's numbers.
+#[derive(Serialize, Clone, Copy)]
+struct FrameRow {
+    frame: u32,
+    /// RMSE against the exact frame (None without the reference).
+    plain_rmse: Option<f64>,
+    denoised_rmse: Option<f64>,
+    plain_ms: Option<f64>,
+    denoised_ms: Option<f64>,
+    /// The denoised frame's lighting stage (the composite included).
+    denoised_lighting_ms: Option<f64>,
+    exact_ms: Option<f64>,
+}
+
+/// One light count's sequence.
+#[derive(Serialize)]
+struct Record {
+    lights: usize,
+    frames: Vec<FrameRow>,
+    plain_mean_rmse: Option<f64>,
+    denoised_mean_rmse: Option<f64>,
+    plain_median_ms: Option<f64>,
+    denoised_median_ms: Option<f64>,
+    /// Denoised frame over plain frame, medians of the same sequence.
+    cost_ratio: Option<f64>,
+}
+
+#[derive(Serialize)]
+struct Fields<'a> {
+    scene: &'a str,
+    width: u32,
+    height: u32,
+    orbit_degrees_per_frame: f32,
+    caster_moves: bool,
+    light_samples: u32,
+    records: Vec<Record>,
+}
+
+fn rmse_rgb(a: &Frame, b: &Frame) -> f64 {
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for (p, q) in a.rgba.chunks_exact(4).zip(b.rgba.chunks_exact(4)) {
+        for c in 0..3 {
+            sum += (f64::from(p[c]) - f64::from(q[c])).powi(2);
+        }
+        n += 3;
+    }
+    (sum / n.max(1) as f64).sqrt()
+}
+
+fn mean(v: impl Iterator<Item = f64>) -> Option<f64> {
+    let v: Vec<f64> = v.collect();
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
+/// Runs `manyshadows bench denoise`.
+pub fn denoise(args: &DenoiseArgs) -> Result<()> {
+    check_counts("--lights", &args.lights, builtin::MAX_LIGHTS, "")?;
+    check_scene("--scene", &args.scene)?;
+    if args.frames == 0 {
+        bail!("--frames must be at least 1");
+    }
+    if !args.orbit.is_finite() {
+        bail!("--orbit must be a finite number of degrees");
+    }
+    let reference = args.reference == "on";
+    let h = Harness::start_unscheduled(&args.output)?;
+    let per_frame = if reference { 3 } else { 2 };
+    h.plan(args.lights.len() as u64 * u64::from(args.frames) * per_frame);
+    let mut records = Vec::new();
+    for &n in &args.lights {
+        h.message(format!("{}, {n} lights: building", args.scene));
+        let scene = seeded_scene(&args.scene, n, LightMix::All, None)?;
+        let base =
+            RenderSettings::new(args.width, args.height).with_technique(Technique::RAYTRACED);
+        let sampled = RayOptions::default().with_light_samples(args.light_samples);
+        let make = |rays: RayOptions| Renderer::new(&h.ctx, &scene, base.clone().with_rays(rays));
+        let mut plain = make(sampled)?;
+        let mut denoised = make(sampled.with_denoise(true))?;
+        let mut exact = if reference {
+            Some(make(RayOptions::default())?)
+        } else {
+            None
+        };
+        let mover = if args.still {
+            None
+        } else {
+            scene.smallest_caster()
+        };
+        let mut rows = Vec::new();
+        for f in 0..args.frames {
+            h.message(format!(
+                "{}, {n} lights: frame {}/{}",
+                args.scene,
+                f + 1,
+                args.frames
+            ));
+            let mut renderers: Vec<&mut Renderer> = vec![&mut plain, &mut denoised];
+            if let Some(e) = exact.as_mut() {
+                renderers.push(e);
+            }
+            if f > 0 {
+                for r in renderers.iter_mut() {
+                    if let Some(k) = mover {
+                        // A small circle in the ground plane, as `render --frames` moves it.
+                        let a = f as f32 * 0.35;
+                        let offset = glam::Vec3::new(0.3 * a.cos() - 0.3, 0.0, 0.3 * a.sin());
+                        r.set_instance_transform(
+                            k,
+                            glam::Mat4::from_translation(offset) * scene.instances[k].transform,
+                        )?;
+                    }
+                    if args.orbit != 0.0 {
+                        let mut cam = scene.camera;
+                        let turn = glam::Quat::from_axis_angle(
+                            cam.up.normalize(),
+                            (args.orbit * f as f32).to_radians(),
+                        );
+                        cam.position = cam.target + turn * (cam.position - cam.target);
+                        r.set_camera(cam)?;
+                    }
+                }
+            }
+            let p = plain.render()?;
+            h.advance(1);
+            let d = denoised.render()?;
+            h.advance(1);
+            let e = match exact.as_mut() {
+                Some(r) => {
+                    let e = r.render()?;
+                    h.advance(1);
+                    Some(e)
+                }
+                None => None,
+            };
+            rows.push(FrameRow {
+                frame: f + 1,
+                plain_rmse: e.as_ref().map(|e| rmse_rgb(&p, e)),
+                denoised_rmse: e.as_ref().map(|e| rmse_rgb(&d, e)),
+                plain_ms: p.timings.gpu_ms.total(),
+                denoised_ms: d.timings.gpu_ms.total(),
+                denoised_lighting_ms: d.timings.gpu_ms.get(Stage::Lighting),
+                exact_ms: e.as_ref().and_then(|e| e.timings.gpu_ms.total()),
+            });
+        }
+        let med = |v: Vec<f64>| (!v.is_empty()).then(|| median(&v));
+        let plain_median_ms = med(rows.iter().filter_map(|r| r.plain_ms).collect());
+        let denoised_median_ms = med(rows.iter().filter_map(|r| r.denoised_ms).collect());
+        records.push(Record {
+            lights: n,
+            plain_mean_rmse: mean(rows.iter().filter_map(|r| r.plain_rmse)),
+            denoised_mean_rmse: mean(rows.iter().filter_map(|r| r.denoised_rmse)),
+            cost_ratio: crate::harness::ratio(denoised_median_ms, plain_median_ms),
+            plain_median_ms,
+            denoised_median_ms,
+            frames: rows,
+        });
+    }
+    let table = table(args, &h.adapter, &records);
+    type Pick = fn(&FrameRow) -> Option<f64>;
+    let per_frame = |picks: &[(&str, Pick)]| {
+        let mut series = Vec::new();
+        for r in &records {
+            for (name, pick) in picks {
+                let points: Vec<(f64, f64)> = r
+                    .frames
+                    .iter()
+                    .filter_map(|x| pick(x).map(|v| (f64::from(x.frame), v)))
+                    .collect();
+                if !points.is_empty() {
+                    series.push((
+                        format!("{} lights, K = {} {name}", r.lights, args.light_samples),
+                        points,
+                    ));
+                }
+            }
+        }
+        series
+    };
+    let figures = vec![Figure::Panels {
+        file: "frames.png".to_string(),
+        title: format!(
+            "bench denoise: {} {}x{}, {} frames",
+            args.scene, args.width, args.height, args.frames
+        ),
+        x_name: "frame",
+        panels: vec![
+            (
+                "RMSE against every light traced".to_string(),
+                "RMSE (0-255)".to_string(),
+                per_frame(&[
+                    ("plain", |x| x.plain_rmse),
+                    ("denoised", |x| x.denoised_rmse),
+                ]),
+            ),
+            (
+                "GPU time per frame".to_string(),
+                "ms".to_string(),
+                per_frame(&[("plain", |x| x.plain_ms), ("denoised", |x| x.denoised_ms)]),
+            ),
+        ],
+    }];
+    h.finish(
+        table,
+        Fields {
+            scene: &args.scene,
+            width: args.width,
+            height: args.height,
+            orbit_degrees_per_frame: args.orbit,
+            caster_moves: !args.still,
+            light_samples: args.light_samples,
+            records,
+        },
+        figures,
+    )
+}
+
+fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
+    let opt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}"));
+    let mut t = format!(
+        "== bench denoise: {} at {}x{}, {} frames, camera {} deg/frame, {}; K = {}\n   adapter: {adapter}\n",
+        args.scene,
+        args.width,
+        args.height,
+        args.frames,
+        args.orbit,
+        if args.still { "no caster moving" } else { "the smallest caster circling" },
+        args.light_samples
+    );
+    t += "lights | RMSE plain: mean first last | denoised: mean first last | GPU ms plain denoised | ratio\n";
+    for r in records {
+        let first = r.frames.first();
+        let last = r.frames.last();
+        t += &format!(
+            "{:>6} | {:>16} {:>5} {:>5} | {:>14} {:>5} {:>5} | {:>14} {:>8} | {:>5}\n",
+            r.lights,
+            opt(r.plain_mean_rmse),
+            opt(first.and_then(|x| x.plain_rmse)),
+            opt(last.and_then(|x| x.plain_rmse)),
+            opt(r.denoised_mean_rmse),
+            opt(first.and_then(|x| x.denoised_rmse)),
+            opt(last.and_then(|x| x.denoised_rmse)),
+            ms(r.plain_median_ms),
+            ms(r.denoised_median_ms),
+            opt(r.cost_ratio),
+        );
+    }
+    if let (Some(a), Some(b)) = (records.first(), records.last()) {
+        if records.len() > 1 {
+            t += &format!(
+                "growth from {} to {} lights: plain {}x, denoised {}x (median frames)\n",
+                a.lights,
+                b.lights,
+                opt(crate::harness::ratio(b.plain_median_ms, a.plain_median_ms)),
+                opt(crate::harness::ratio(
+                    b.denoised_median_ms,
+                    a.denoised_median_ms
+                )),
+            );
+        }
+    }
+    t += "   RMSE: sRGB channels 0-255 against every cluster light traced in the same frame; GPU ms: \
+          median over the frames of each renderer's frame (the denoised one includes its passes).\n";
+    t
+}
