@@ -56,6 +56,9 @@ pub enum Stage {
     Shadows,
     /// Deferred lighting.
     Lighting,
+    /// The denoiser of shadow rays: its temporal and spatial passes and the composite that
+    /// shades their result (`RayOptions::denoise`).
+    Denoise,
     /// The hard visibility mask.
     Visibility,
 }
@@ -69,11 +72,12 @@ impl Stage {
         Stage::Accel,
         Stage::Shadows,
         Stage::Lighting,
+        Stage::Denoise,
         Stage::Visibility,
     ];
 
     /// The stage's name in reports and JSON (`gbuffer`, `clusters`, `pages`, `accel`,
-    /// `shadows`, `lighting`, `visibility`).
+    /// `shadows`, `lighting`, `denoise`, `visibility`).
     pub fn name(self) -> &'static str {
         match self {
             Stage::GBuffer => "gbuffer",
@@ -82,6 +86,7 @@ impl Stage {
             Stage::Accel => "accel",
             Stage::Shadows => "shadows",
             Stage::Lighting => "lighting",
+            Stage::Denoise => "denoise",
             Stage::Visibility => "visibility",
         }
     }

@@ -403,7 +403,14 @@ impl Renderer {
             let cam = self.current.camera;
             let aspect = self.settings.width as f32 / self.settings.height as f32;
             let view_proj = cam.projection(aspect) * cam.view();
-            d.record(ctx, encoder, view_proj, cam.position, cam.fov_y_deg);
+            let span = self.timer.span(Stage::Denoise);
+            d.record(
+                ctx,
+                encoder,
+                (view_proj, cam.position, cam.fov_y_deg),
+                &self.timer,
+                span,
+            );
             self.lighting.record_composite(encoder, &self.timer, span);
         }
         Ok(shadow_stats)

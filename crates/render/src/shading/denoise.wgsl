@@ -139,13 +139,15 @@ fn atrous(@builtin(global_invocation_id) gid: vec3<u32>) {
     // few rays all came out alike has an estimated variance of 0, and would never average
     // with its neighbours), and wide while the history is short.
     let frames = max(c1.w, 1.0);
-    var kernel = array<f32, 3>(0.375, 0.25, 0.0625);
+    // The 3-tap B-spline (1/4, 1/2, 1/4) per axis: 3 × 3 taps (denoise.rs: as good as 5 × 5
+    // here at 40 % of the cost).
+    var kernel = array<f32, 2>(0.5, 0.25);
     var sum_s = vec3<f32>(0.0);
     var sum_u = vec3<f32>(0.0);
     var vsum = 0.0;
     var wsum = 0.0;
-    for (var dy = -2; dy <= 2; dy = dy + 1) {
-        for (var dx = -2; dx <= 2; dx = dx + 1) {
+    for (var dy = -1; dy <= 1; dy = dy + 1) {
+        for (var dx = -1; dx <= 1; dx = dx + 1) {
             let q = vec2<i32>(gid.xy) + vec2<i32>(dx, dy) * step;
             if (q.x < 0 || q.y < 0 || q.x >= i32(w) || q.y >= i32(h)) {
                 continue;

@@ -252,12 +252,12 @@ impl LightingPass {
         self.fullscreen_pass(
             encoder,
             &self.pipeline,
-            timer.render_writes(span, true, self.composite.is_none()),
+            timer.render_writes(span, true, true),
         );
     }
 
     /// With a denoiser: shades the filtered ratio into the frame (after the denoiser's passes),
-    /// ending the lighting span.
+    /// ending the denoiser's span (`Stage::Denoise`, begun by its passes).
     pub fn record_composite(
         &self,
         encoder: &mut wgpu::CommandEncoder,
