@@ -13,7 +13,7 @@
 use anyhow::{bail, Result};
 use clap::Args;
 use manyshadows::scene::builtin::{self, LightMix};
-use manyshadows::{Frame, RayOptions, RenderSettings, Renderer, Stage, Technique};
+use manyshadows::{Frame, RayOptions, RenderSettings, Renderer, Stage};
 use serde::Serialize;
 
 use crate::harness::{check_counts, check_scene, median, ms, seeded_scene, Figure, Harness};
@@ -152,8 +152,8 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
     for &n in &args.lights {
         h.message(format!("{}, {n} lights: building", args.scene));
         let scene = seeded_scene(&args.scene, n, LightMix::All, None)?;
-        let base =
-            RenderSettings::new(args.width, args.height).with_technique(Technique::RAYTRACED);
+        let base = RenderSettings::new(args.width, args.height)
+            .with_technique(crate::techniques::first_filling(manyshadows::Fills::Rays));
         let sampled = RayOptions::default().with_light_samples(args.light_samples);
         let make = |rays: RayOptions| Renderer::new(&h.ctx, &scene, base.clone().with_rays(rays));
         let mut plain = make(sampled)?;

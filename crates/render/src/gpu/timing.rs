@@ -488,6 +488,7 @@ mod tests {
                 "accel",
                 "shadows",
                 "lighting",
+                "denoise",
                 "visibility"
             ]
         );
