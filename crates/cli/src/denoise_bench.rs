@@ -3,7 +3,7 @@
 //!
 //! Three renderers see the same frames: every cluster light traced (the exact image), K
 //! lights sampled per pixel as they are, and the same K denoised (`RayOptions::denoise`). The
-//! camera turns `--orbit` degrees a frame around its target and the scene's smallest caster
+//! camera turns `--orbit` degrees a frame around its target and a caster the camera sees
 //! circles (unless `--still`), set alike on all three before each frame. Per frame: the RMSE
 //! of each sampled image against the exact one (sRGB channels, 0–255) and GPU times. Per
 //! light count: mean, first and last errors, median frame times and the denoised frame over
@@ -25,8 +25,11 @@ frame scored against the exact image of the same frame (every cluster light trac
 
 Three renderers see the same frames: exact, K lights sampled per pixel as they are, and the
 same K denoised (the exact unshadowed light times the rays' shadow ratio, accumulated over
-frames and filtered). The camera turns --orbit degrees a frame around its target and the
-scene's smallest shadow caster circles, unless --still. Per frame: RMSE of the plain and the
+frames and filtered). The camera turns --orbit degrees a frame around its target and a shadow
+caster the camera sees circles (--move-instance), unless --still. With the camera still
+(--orbit 0) and the caster moving, it also finds how many frames the denoised shadow trails:
+over the pixels the caster's motion changed, which of the last exact frames the denoised one
+is closest to. Per frame: RMSE of the plain and the
 denoised image against the exact one (sRGB channels, 0-255) and GPU times; per light count:
 the mean, first and last errors, median GPU ms of each frame and the denoised frame over the
 plain one (the same frames, interleaved); across light counts, how each frame grows. Writes
@@ -61,6 +64,10 @@ pub struct DenoiseArgs {
     /// Move no caster (with --orbit 0: still frames, as `render --still`).
     #[arg(long)]
     pub still: bool,
+    /// The instance that circles (default: the nearest caster to the camera among the smaller
+    /// half whose centre the camera sees, so that its shadow's motion is in the frames).
+    #[arg(long)]
+    pub move_instance: Option<usize>,
     /// Lights sampled per pixel (1 to 16).
     #[arg(long, default_value_t = 1)]
     pub light_samples: u32,
@@ -90,6 +97,9 @@ struct FrameRow {
     denoised_lighting_ms: Option<f64>,
     denoise_ms: Option<f64>,
     exact_ms: Option<f64>,
+    /// With a still camera and a moving caster: how many frames behind the denoised shadow
+    /// is (see [`trail`]).
+    trail_frames: Option<u32>,
 }
 
 /// One light count's sequence.
@@ -105,6 +115,8 @@ struct Record {
     cost_ratio: Option<f64>,
     /// Median of the denoiser's own passes and composite.
     denoise_median_ms: Option<f64>,
+    /// Mean of the frames' trails (still camera, moving caster).
+    mean_trail_frames: Option<f64>,
 }
 
 #[derive(Serialize)]
@@ -127,6 +139,113 @@ fn rmse_rgb(a: &Frame, b: &Frame) -> f64 {
         n += 3;
     }
     (sum / n.max(1) as f64).sqrt()
+}
+
+/// The caster that moves: of the 16 casters nearest the camera, no larger than the median and
+/// with their centre well inside the camera's view, the one whose move (by its size, upwards)
+/// changes the most pixels of a 160 × 90 frame, at least 20 (a caster may hide behind others;
+/// the smallest caster of the atrium is out of sight, and moving it changed no pixel).
+fn seen_caster(
+    ctx: &manyshadows::GpuContext,
+    scene: &manyshadows::scene::Scene,
+) -> Result<Option<usize>> {
+    let (w, h) = (160u32, 90u32);
+    let view_proj = scene.camera.projection(w as f32 / h as f32) * scene.camera.view();
+    let casters: Vec<(usize, glam::Vec3, f32)> = scene
+        .instances
+        .iter()
+        .enumerate()
+        .filter(|(_, i)| i.casts_shadows)
+        .filter_map(|(k, i)| {
+            let (lo, hi) = scene.meshes.get(i.mesh)?.bounds()?;
+            let centre = i.transform.transform_point3(0.5 * (lo + hi));
+            Some((k, centre, caster_size(scene, k)))
+        })
+        .collect();
+    let mut sizes: Vec<f32> = casters.iter().map(|c| c.2).collect();
+    sizes.sort_by(f32::total_cmp);
+    let Some(&median) = sizes.get(sizes.len() / 2) else {
+        return Ok(None);
+    };
+    let mut near: Vec<&(usize, glam::Vec3, f32)> = casters
+        .iter()
+        .filter(|c| c.2 <= median && c.2 > 0.0)
+        .filter(|c| {
+            let clip = view_proj * c.1.extend(1.0);
+            clip.w > 0.0
+                && (glam::Vec2::new(clip.x, clip.y) / clip.w)
+                    .abs()
+                    .max_element()
+                    < 0.8
+        })
+        .collect();
+    let d = |c: &&(usize, glam::Vec3, f32)| c.1.distance(scene.camera.position);
+    near.sort_by(|a, b| d(a).total_cmp(&d(b)));
+    let mut r = Renderer::new(ctx, scene, RenderSettings::new(w, h))?;
+    let base = r.render()?.rgba;
+    let mut best = (None, 19usize);
+    for &&(k, _, size) in near.iter().take(16) {
+        let t = scene.instances[k].transform;
+        r.set_instance_transform(k, glam::Mat4::from_translation(glam::Vec3::Y * size) * t)?;
+        let moved = r.render()?.rgba;
+        r.set_instance_transform(k, t)?;
+        let changed = base
+            .chunks_exact(4)
+            .zip(moved.chunks_exact(4))
+            .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b[c]) > 8))
+            .count();
+        if changed > best.1 {
+            best = (Some(k), changed);
+        }
+    }
+    Ok(best.0)
+}
+
+/// An instance's size: its mesh's bounding-box diagonal times its largest scale.
+fn caster_size(scene: &manyshadows::scene::Scene, k: usize) -> f32 {
+    let i = &scene.instances[k];
+    scene
+        .meshes
+        .get(i.mesh)
+        .and_then(|m| m.bounds())
+        .map_or(0.0, |(lo, hi)| {
+            (hi - lo).length() * i.transform.to_scale_rotation_translation().0.max_element()
+        })
+}
+
+/// Exact frames a trail is looked for in.
+const TRAIL_FRAMES: usize = 3;
+
+/// How many frames behind the moving caster's shadow the denoised frame `denoised` is: over
+/// the pixels where the exact frame `exact` differs from the one before (`past[0]`) by more
+/// than 8 levels, the k (0 to [`TRAIL_FRAMES`]) whose exact frame, `exact` or `past[k - 1]`,
+/// the denoised one is closest to. None until enough frames are kept or where fewer than 50
+/// pixels changed.
+fn trail(denoised: &[u8], exact: &[u8], past: &std::collections::VecDeque<Vec<u8>>) -> Option<u32> {
+    if past.len() < TRAIL_FRAMES {
+        return None;
+    }
+    let changed: Vec<usize> = (0..exact.len() / 4)
+        .filter(|&i| (0..3).any(|c| exact[4 * i + c].abs_diff(past[0][4 * i + c]) > 8))
+        .collect();
+    if changed.len() < 50 {
+        return None;
+    }
+    let error = |other: &[u8]| -> f64 {
+        changed
+            .iter()
+            .flat_map(|&i| (0..3).map(move |c| 4 * i + c))
+            .map(|k| (f64::from(denoised[k]) - f64::from(other[k])).powi(2))
+            .sum()
+    };
+    let mut best = (0u32, error(exact));
+    for (k, frame) in past.iter().enumerate() {
+        let e = error(frame);
+        if e < best.1 {
+            best = (k as u32 + 1, e);
+        }
+    }
+    Some(best.0)
 }
 
 fn mean(v: impl Iterator<Item = f64>) -> Option<f64> {
@@ -163,12 +282,28 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
         } else {
             None
         };
-        let mover = if args.still {
-            None
-        } else {
-            scene.smallest_caster()
+        let mover = match args.move_instance {
+            _ if args.still => None,
+            Some(k) if k >= scene.instances.len() => bail!(
+                "--move-instance {k}: the scene has {} instances",
+                scene.instances.len()
+            ),
+            Some(k) => Some(k),
+            None => seen_caster(&h.ctx, &scene)?,
         };
+        let radius = mover.map_or(0.0, |k| 0.5 * caster_size(&scene, k));
+        match mover {
+            Some(k) => h.note(format!(
+                "{n} lights: instance {k} circles (radius {radius:.2})"
+            )),
+            None if !args.still => h.note(format!(
+                "{n} lights: no caster near the camera moves a pixel when moved: none moves"
+            )),
+            None => {}
+        }
         let mut rows = Vec::new();
+        // The last exact frames, newest first (for the trail).
+        let mut past: std::collections::VecDeque<Vec<u8>> = Default::default();
         for f in 0..args.frames {
             h.message(format!(
                 "{}, {n} lights: frame {}/{}",
@@ -183,9 +318,10 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
             if f > 0 {
                 for r in renderers.iter_mut() {
                     if let Some(k) = mover {
-                        // A small circle in the ground plane, as `render --frames` moves it.
+                        // A circle in the ground plane of half the caster's size, a step
+                        // of 0.35 radians a frame.
                         let a = f as f32 * 0.35;
-                        let offset = glam::Vec3::new(0.3 * a.cos() - 0.3, 0.0, 0.3 * a.sin());
+                        let offset = radius * glam::Vec3::new(a.cos() - 1.0, 0.0, a.sin());
                         r.set_instance_transform(
                             k,
                             glam::Mat4::from_translation(offset) * scene.instances[k].transform,
@@ -214,8 +350,18 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
                 }
                 None => None,
             };
+            let trail_frames = match &e {
+                Some(e) if args.orbit == 0.0 && !args.still => {
+                    let t = trail(&d.rgba, &e.rgba, &past);
+                    past.push_front(e.rgba.clone());
+                    past.truncate(TRAIL_FRAMES);
+                    t
+                }
+                _ => None,
+            };
             rows.push(FrameRow {
                 frame: f + 1,
+                trail_frames,
                 plain_rmse: e.as_ref().map(|e| rmse_rgb(&p, e)),
                 denoised_rmse: e.as_ref().map(|e| rmse_rgb(&d, e)),
                 plain_ms: p.timings.gpu_ms.total(),
@@ -234,6 +380,7 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
             denoised_mean_rmse: mean(rows.iter().filter_map(|r| r.denoised_rmse)),
             cost_ratio: crate::harness::ratio(denoised_median_ms, plain_median_ms),
             denoise_median_ms: med(rows.iter().filter_map(|r| r.denoise_ms).collect()),
+            mean_trail_frames: mean(rows.iter().filter_map(|r| r.trail_frames.map(f64::from))),
             plain_median_ms,
             denoised_median_ms,
             frames: rows,
@@ -307,7 +454,7 @@ fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
         args.height,
         args.frames,
         args.orbit,
-        if args.still { "no caster moving" } else { "the smallest caster circling" },
+        if args.still { "no caster moving" } else { "a caster circling" },
         args.light_samples
     );
     t += "lights | RMSE plain: mean first last | denoised: mean first last | GPU ms plain denoised (its passes) | ratio\n";
@@ -328,6 +475,17 @@ fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
             ms(r.denoise_median_ms),
             opt(r.cost_ratio),
         );
+    }
+    for r in records {
+        if let Some(trail) = r.mean_trail_frames {
+            t += &format!(
+                "{} lights: the denoised frame's changed pixels match the exact frame {:.2} frames \
+                 back on average (0: no trail; over {} frames with enough change)\n",
+                r.lights,
+                trail,
+                r.frames.iter().filter(|x| x.trail_frames.is_some()).count()
+            );
+        }
     }
     if let (Some(a), Some(b)) = (records.first(), records.last()) {
         if records.len() > 1 {

@@ -645,5 +645,28 @@ fn bench_denoise_scores_each_frame_of_a_sequence() {
         f["plain_rmse"].is_null() && f["denoised_ms"].is_number(),
         "{f}"
     );
+    // A still camera and a moving caster: the bench picks a caster whose move shows, says
+    // which, and measures how far the denoised shadow trails (issue 39: at most 2 frames).
+    let (_, json) = bench_ok(
+        "denoise",
+        "--scene cubes --lights 48 --frames 8 --orbit 0 --width 96 --height 72",
+    );
+    let notes = json["notes"].to_string();
+    assert!(notes.contains("circles"), "{notes}");
+    let r = &records(&json)[0];
+    let trails: Vec<u64> = r["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|f| f["trail_frames"].as_u64())
+        .collect();
+    eprintln!("bench denoise: trail per frame {trails:?}");
+    assert!(trails.len() >= 3, "{r}");
+    let trail = r["mean_trail_frames"].as_f64().unwrap();
+    assert!(trail <= 2.0, "the denoised shadow trails by {trail} frames: {r}");
     rejects("denoise --frames 0", "--frames");
+    rejects(
+        "denoise --scene cubes --lights 4 --frames 1 --width 32 --height 32 --move-instance 100000",
+        "--move-instance",
+    );
 }
