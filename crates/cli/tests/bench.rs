@@ -663,7 +663,10 @@ fn bench_denoise_scores_each_frame_of_a_sequence() {
     eprintln!("bench denoise: trail per frame {trails:?}");
     assert!(trails.len() >= 3, "{r}");
     let trail = r["mean_trail_frames"].as_f64().unwrap();
-    assert!(trail <= 2.0, "the denoised shadow trails by {trail} frames: {r}");
+    assert!(
+        trail <= 2.0,
+        "the denoised shadow trails by {trail} frames: {r}"
+    );
     rejects("denoise --frames 0", "--frames");
     rejects(
         "denoise --scene cubes --lights 4 --frames 1 --width 32 --height 32 --move-instance 100000",

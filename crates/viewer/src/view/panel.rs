@@ -1,5 +1,6 @@
 //! The on-screen panel (egui), drawn over the frame: the controls' help; the technique,
-//! point-shadow, PCF, caching, budget and light-count choices; the shadow views, memory and
+//! point-shadow, PCF, caching, budget, light-count and (for shadow rays) sampling and denoising
+//! choices; the shadow views, memory and
 //! times of the last frame; the pictures to show (the atlas and one light's visibility, each
 //! in a window of its own) and the light to follow. Each section is a function; what the
 //! panel changed is applied after it is drawn (a new choice rebuilds the renderer).
@@ -211,6 +212,18 @@ fn shadow_options(ui: &mut egui::Ui, choice: &mut Choice) {
         egui::Slider::new(&mut choice.light_size, 0.0..=4.0)
             .text("light size × (soft shadows; 0 = hard)"),
     );
+    if choice.technique.info().fills == manyshadows::Fills::Rays {
+        ui.add(
+            egui::Slider::new(&mut choice.light_samples, 0..=16)
+                .text("lights traced per pixel (0 = every light)"),
+        );
+        let what = if choice.light_samples > 0 {
+            "denoise the sampled rays"
+        } else {
+            "accumulate area samples over frames"
+        };
+        ui.checkbox(&mut choice.denoise, what);
+    }
     ui.checkbox(&mut choice.cache, "keep unchanged maps (cache)");
     ui.horizontal(|ui| {
         let mut on = choice.budget.is_some();

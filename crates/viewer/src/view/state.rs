@@ -10,7 +10,7 @@ use anyhow::Result;
 use manyshadows::scene::light_size::LightSizes;
 use manyshadows::scene::light_space::PointShadows;
 use manyshadows::scene::Scene;
-use manyshadows::{wgpu, Fills, GpuContext, Pcf, RenderSettings, Renderer, Technique};
+use manyshadows::{wgpu, Fills, GpuContext, Pcf, RayOptions, RenderSettings, Renderer, Technique};
 use winit::window::Window;
 
 use crate::view::args::ViewArgs;
@@ -32,6 +32,10 @@ pub(super) struct Choice {
     pub(super) light_size: f32,
     /// Shading model, exposure and tone map (from the command line).
     pub(super) look: manyshadows::Look,
+    /// Lights traced per pixel (shadow rays; 0: every light).
+    pub(super) light_samples: u32,
+    /// Shadow rays denoised / accumulated over frames.
+    pub(super) denoise: bool,
 }
 
 /// The open window and everything drawn into it.
@@ -84,6 +88,11 @@ fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
         )
         .with_visibility(c.visibility)
         .with_look(c.look)
+        .with_rays(
+            RayOptions::default()
+                .with_light_samples(c.light_samples)
+                .with_denoise(c.denoise && c.technique.info().fills == Fills::Rays),
+        )
 }
 
 impl State {
@@ -106,6 +115,8 @@ impl State {
             visibility: args.show_visibility.is_some(),
             light_size: 1.0,
             look: args.look.look(),
+            light_samples: args.light_samples,
+            denoise: args.denoise,
         };
         let renderer = Renderer::new(&ctx, scene, settings(config.width, config.height, choice))?;
         if !args.insist {
