@@ -55,7 +55,30 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
                 renderer.set_camera(cam)?;
             }
         }
-        let fr = renderer.render()?;
+        let fr = if args.stages || long_frame(&renderer) {
+            let t0 = std::time::Instant::now();
+            let f = f + 1;
+            pb.set_message(format!("frame {f}: G-buffer and light clusters"));
+            renderer.render_reporting(&mut |part| {
+                pb.suspend(|| {
+                    eprintln!(
+                        "frame {f:>3}: {} done after {:.1} s",
+                        part.describe(),
+                        t0.elapsed().as_secs_f64()
+                    )
+                });
+                // What the GPU works on now.
+                match part {
+                    manyshadows::FramePart::Camera => pb.set_message(format!("frame {f}: shadows")),
+                    manyshadows::FramePart::Shadows => {
+                        pb.set_message(format!("frame {f}: lighting"))
+                    }
+                    _ => {}
+                }
+            })?
+        } else {
+            renderer.render()?
+        };
         if args.frames > 1 {
             let shadow_ms = fr
                 .timings
@@ -204,6 +227,16 @@ pub(crate) fn write_visibility(
 /// technique with the atrium's 16,384 lights asks 9.4 G and ran past ten minutes on lavapipe;
 /// the default frame asks 21.6 M.
 pub(crate) const MAX_UNASKED_TRIANGLE_VIEWS: u64 = 2_000_000_000;
+
+/// Shadow work past which `render` says each part of a frame as it finishes (`--stages`).
+const STAGED_TRIANGLE_VIEWS: u64 = MAX_UNASKED_TRIANGLE_VIEWS / 10;
+
+/// Whether the frame's shadow work is estimated past [`STAGED_TRIANGLE_VIEWS`].
+fn long_frame(renderer: &Renderer) -> bool {
+    renderer
+        .shadow_work()
+        .is_some_and(|w| w.triangle_views > STAGED_TRIANGLE_VIEWS)
+}
 
 /// Refuses, before any frame is drawn, a frame whose per-view shadow work passes
 /// [`MAX_UNASKED_TRIANGLE_VIEWS`], with the estimate and the techniques that scale.

@@ -690,3 +690,65 @@ fn every_technique_summary_is_true_to_the_technique() {
         }
     }
 }
+
+/// `render --stages` says each part of the frame as the GPU finishes it, in order, and the
+/// image is the one a frame submitted whole gives, byte for byte, for every technique the
+/// adapter runs (each part is submitted and waited for before the next is recorded: a
+/// technique that wrote a buffer for a later part too early would differ here).
+#[test]
+fn a_frame_told_in_stages_is_the_same_frame() {
+    let mut ran = 0;
+    for t in manyshadows::Technique::all() {
+        let name = t.name();
+        let dir = tmp(&format!("stages-{name}"));
+        let frame = |stages: bool| {
+            let png = dir.join(if stages { "staged.png" } else { "whole.png" });
+            let mut args = vec![
+                "render",
+                "--technique",
+                name,
+                "--lights",
+                "6",
+                "--width",
+                "96",
+                "--height",
+                "54",
+                "--out",
+                png.to_str().unwrap(),
+            ];
+            if stages {
+                args.push("--stages");
+            }
+            (run(&args), png)
+        };
+        let (whole, whole_png) = frame(false);
+        if !whole.status.success() {
+            let err = String::from_utf8_lossy(&whole.stderr);
+            assert!(
+                err.contains(&format!("technique {name} needs")),
+                "{name}: {err}"
+            );
+            continue;
+        }
+        let (staged, staged_png) = frame(true);
+        let err = String::from_utf8_lossy(&staged.stderr).to_string();
+        assert!(staged.status.success(), "{name}: {err}");
+        let parts: Vec<&str> = err
+            .lines()
+            .filter(|l| l.starts_with("frame ") && l.contains(" done after "))
+            .collect();
+        assert_eq!(parts.len(), 3, "{name}: {err}");
+        for (l, part) in parts
+            .iter()
+            .zip(["G-buffer and light clusters", "shadows", "lighting"])
+        {
+            assert!(l.contains(part), "{name}: {l}");
+        }
+        assert!(
+            std::fs::read(&whole_png).unwrap() == std::fs::read(&staged_png).unwrap(),
+            "{name}: the staged frame differs"
+        );
+        ran += 1;
+    }
+    assert!(ran >= 5, "only {ran} techniques ran");
+}

@@ -119,7 +119,7 @@ pub use gpu::context::{
 };
 pub use gpu::timing::{GpuTimes, Stage};
 pub use gpu_scene::caster_layout::CasterOptions;
-pub use renderer::Renderer;
+pub use renderer::{FramePart, Renderer};
 pub use report::{Frame, FrameTimings, ShadowLayout, ShadowWork, SubmittedFrame};
 pub use settings::RenderSettings;
 pub use shading::look::{Exposure, Look, ResolvedLook, Shading, ToneMap};

@@ -18,4 +18,4 @@ mod inspect;
 mod state;
 mod uniforms;
 
-pub use state::Renderer;
+pub use state::{FramePart, Renderer};

@@ -373,6 +373,7 @@ impl Renderer {
         &mut self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
+        mut boundary: Option<&mut Boundary<'_>>,
     ) -> Result<ShadowStats, RenderError> {
         self.prepare()?;
         self.timer.reset();
@@ -394,9 +395,15 @@ impl Renderer {
                 bytemuck::bytes_of(&self.frames_denoised),
             );
         }
+        if let Some(b) = boundary.as_deref_mut() {
+            b(encoder, FramePart::Camera)?;
+        }
         let shadow_stats = self
             .source
             .record(ctx, &self.scene, encoder, &mut self.timer);
+        if let Some(b) = boundary {
+            b(encoder, FramePart::Shadows)?;
+        }
         let span = self.timer.span(Stage::Lighting);
         self.lighting.record(encoder, &self.timer, span);
         if let Some(d) = &mut self.denoiser {
@@ -417,17 +424,33 @@ impl Renderer {
     }
 
     /// Starts a frame: a new encoder with the frame recorded up to the lit image.
-    fn begin_frame(
+    fn begin_frame<'p>(
         &mut self,
         ctx: &GpuContext,
+        progress: Option<&mut (dyn FnMut(FramePart) + 'p)>,
     ) -> Result<(Instant, wgpu::CommandEncoder, ShadowStats), RenderError> {
         let start = Instant::now();
-        let mut encoder = ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("frame.encoder"),
-            });
-        let shadow_stats = self.record_frame(ctx, &mut encoder)?;
+        let new_encoder = || {
+            ctx.device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("frame.encoder"),
+                })
+        };
+        let mut encoder = new_encoder();
+        let shadow_stats = match progress {
+            None => self.record_frame(ctx, &mut encoder, None)?,
+            Some(progress) => {
+                // Each part is submitted and waited for before the next is recorded.
+                let mut boundary = |enc: &mut wgpu::CommandEncoder, part: FramePart| {
+                    let done = std::mem::replace(enc, new_encoder());
+                    ctx.queue.submit([done.finish()]);
+                    ctx.wait_idle()?;
+                    progress(part);
+                    Ok(())
+                };
+                self.record_frame(ctx, &mut encoder, Some(&mut boundary))?
+            }
+        };
         Ok((start, encoder, shadow_stats))
     }
 
@@ -453,7 +476,7 @@ impl Renderer {
     pub fn render_to(&mut self, target: &wgpu::Texture) -> Result<SubmittedFrame, RenderError> {
         let ctx = &*self.ctx.clone();
         ctx.scoped("rendering a frame into the caller's texture", || {
-            let (start, mut encoder, shadow_stats) = self.begin_frame(ctx)?;
+            let (start, mut encoder, shadow_stats) = self.begin_frame(ctx, None)?;
             let blit = self
                 .blit
                 .get_or_insert_with(|| crate::shading::blit::Blit::new(ctx));
@@ -535,12 +558,34 @@ impl Renderer {
 
     /// Renders one frame and reads it back.
     pub fn render(&mut self) -> Result<Frame, RenderError> {
+        self.render_frame(None)
+    }
+
+    /// [`Renderer::render`], telling `progress` each part of the frame as the GPU finishes it
+    /// (the camera's G-buffer and light clusters, the shadows, the lighting): each part is
+    /// submitted and waited for before the next is recorded, so a frame that takes minutes
+    /// says where it is. The image is the one `render` gives, byte for byte; only the CPU
+    /// record time and the wall time include the waits.
+    pub fn render_reporting(
+        &mut self,
+        progress: &mut dyn FnMut(FramePart),
+    ) -> Result<Frame, RenderError> {
+        self.render_frame(Some(progress))
+    }
+
+    fn render_frame<'p>(
+        &mut self,
+        mut progress: Option<&mut (dyn FnMut(FramePart) + 'p)>,
+    ) -> Result<Frame, RenderError> {
         let ctx = &*self.ctx.clone();
         ctx.scoped("rendering a frame", || {
-            let (start, encoder, shadow_stats) = self.begin_frame(ctx)?;
+            let (start, encoder, shadow_stats) = self.begin_frame(ctx, progress.as_deref_mut())?;
             ctx.queue.submit([encoder.finish()]);
             let cpu_record_ms = start.elapsed().as_secs_f64() * 1e3;
             let rgba = crate::gpu::readback::read_texture(ctx, &self.lighting.color, 4)?;
+            if let Some(p) = progress {
+                p(FramePart::Lighting);
+            }
             let wall_ms = start.elapsed().as_secs_f64() * 1e3;
             let clusters = if self.clusters.enabled() {
                 Some(self.clusters.read_stats(ctx)?)
@@ -627,3 +672,29 @@ fn visibility_pass(
     )
     .map(Some)
 }
+
+/// The parts of a frame [`Renderer::render_reporting`] reports as the GPU finishes them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FramePart {
+    /// The camera's G-buffer and the light clusters.
+    Camera,
+    /// The shadows: maps, pages, lists or the acceleration structure (the technique's
+    /// source).
+    Shadows,
+    /// The lighting (and the denoiser) and the image read back.
+    Lighting,
+}
+
+impl FramePart {
+    /// A few words for progress lines.
+    pub fn describe(self) -> &'static str {
+        match self {
+            FramePart::Camera => "G-buffer and light clusters",
+            FramePart::Shadows => "shadows",
+            FramePart::Lighting => "lighting",
+        }
+    }
+}
+
+/// Submits the frame recorded so far and starts a new encoder at a part's end.
+type Boundary<'a> = dyn FnMut(&mut wgpu::CommandEncoder, FramePart) -> Result<(), RenderError> + 'a;
