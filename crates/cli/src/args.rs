@@ -195,6 +195,11 @@ pub(crate) struct RenderArgs {
     /// give up their maps and lights that enter it get them.
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub(crate) orbit: f32,
+    /// A fly path for --frames: one camera per line, `PX PY PZ TX TY TZ` (commas allowed, `#`
+    /// comments); frame k takes line k and the last camera stays after the path ends (the
+    /// viewer's --script format). Frame 1 takes line 1 in place of the scene's camera.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["orbit", "camera"])]
+    pub(crate) camera_path: Option<std::path::PathBuf>,
     /// The instance that moves when --frames > 1 (default: the smallest shadow caster).
     #[arg(long, conflicts_with = "still")]
     pub(crate) move_instance: Option<usize>,
@@ -472,6 +477,24 @@ pub(crate) fn parse_cull(s: &str) -> Result<CullMode, String> {
 /// `auto`, `on` or `off`.
 pub fn parse_ground(s: &str) -> Result<Ground, String> {
     s.parse()
+}
+
+/// The cameras of a camera path (`render --camera-path`, the viewer's `--script`): one per
+/// line that is not empty once its `#` comment is cut, each as [`parse_camera`] reads it; a bad
+/// line is named by its number, a path without cameras refused.
+pub fn parse_camera_path(text: &str) -> anyhow::Result<Vec<[f32; 6]>> {
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        out.push(parse_camera(line).map_err(|e| anyhow::anyhow!("line {}: {e}", i + 1))?);
+    }
+    if out.is_empty() {
+        anyhow::bail!("no camera lines (one `PX PY PZ TX TY TZ` per line)");
+    }
+    Ok(out)
 }
 
 /// `PX,PY,PZ,TX,TY,TZ`: six finite numbers.

@@ -13,8 +13,8 @@ use clap::Parser;
 use crate::commands::{BenchCommand, Cli, Command};
 
 pub use args::{
-    parse_camera, parse_ground, parse_pcf, parse_point_shadows, parse_technique, GpuArgs,
-    LightSizeArgs, LookArgs, ModelArgs,
+    parse_camera, parse_camera_path, parse_ground, parse_pcf, parse_point_shadows, parse_technique,
+    GpuArgs, LightSizeArgs, LookArgs, ModelArgs,
 };
 pub use scenes::load_scene_for_view;
 

@@ -35,8 +35,24 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         Some(k) => Some(k),
         None => scene.smallest_caster(),
     };
+    let path = match &args.camera_path {
+        Some(p) => Some(
+            crate::args::parse_camera_path(
+                &std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?,
+            )
+            .with_context(|| format!("--camera-path {}", p.display()))?,
+        ),
+        None => None,
+    };
     let mut frame = None;
     for f in 0..args.frames {
+        if let Some(path) = &path {
+            let c = path[(f as usize).min(path.len() - 1)];
+            let mut cam = renderer.scene().camera;
+            cam.position = glam::Vec3::new(c[0], c[1], c[2]);
+            cam.target = glam::Vec3::new(c[3], c[4], c[5]);
+            renderer.set_camera(cam)?;
+        }
         pb.set_message(format!("rendering frame {}/{}", f + 1, args.frames));
         if f > 0 {
             if let Some(k) = mover {

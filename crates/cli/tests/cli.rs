@@ -752,3 +752,91 @@ fn a_frame_told_in_stages_is_the_same_frame() {
     }
     assert!(ran >= 5, "only {ran} techniques ran");
 }
+
+/// `render --frames N --camera-path FILE` flies the path (frame k takes line k, the last
+/// stays): its last frame is the frame `render --camera` gives at the path's last camera, byte
+/// for byte (maps drawn anew each frame, no caster moving); a bad line is refused naming it.
+#[test]
+fn a_camera_path_is_flown_frame_by_frame() {
+    let dir = tmp("camera-path");
+    let path = dir.join("path.txt");
+    std::fs::write(
+        &path,
+        "# fly in\n0 4 9 0 1 0\n1,3.5,8, 0,1,0\n2 3 7 0 0.5 0 # last\n",
+    )
+    .unwrap();
+    let flown = dir.join("flown.png");
+    let direct = dir.join("direct.png");
+    let common = [
+        "render",
+        "--scene",
+        "cubes",
+        "--width",
+        "96",
+        "--height",
+        "72",
+        "--no-cache",
+    ];
+    let out = run(&[
+        &common[..],
+        &[
+            "--frames",
+            "4",
+            "--still",
+            "--camera-path",
+            path.to_str().unwrap(),
+            "--out",
+            flown.to_str().unwrap(),
+        ],
+    ]
+    .concat());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = run(&[
+        &common[..],
+        &[
+            "--camera",
+            "2,3,7,0,0.5,0",
+            "--out",
+            direct.to_str().unwrap(),
+        ],
+    ]
+    .concat());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        std::fs::read(&flown).unwrap() == std::fs::read(&direct).unwrap(),
+        "the flown frame is not the frame at the path's last camera"
+    );
+    // A first frame elsewhere: the path's first camera is not the scene's.
+    let first = dir.join("first.png");
+    run(&[
+        &common[..],
+        &[
+            "--camera-path",
+            path.to_str().unwrap(),
+            "--out",
+            first.to_str().unwrap(),
+        ],
+    ]
+    .concat());
+    assert!(std::fs::read(&first).unwrap() != std::fs::read(&direct).unwrap());
+    std::fs::write(&path, "0 4 9 0 1 0\n1 2 3\n").unwrap();
+    let out = run(&[
+        &common[..],
+        &[
+            "--camera-path",
+            path.to_str().unwrap(),
+            "--out",
+            first.to_str().unwrap(),
+        ],
+    ]
+    .concat());
+    assert_clean_failure(&out, 1, "line 2");
+}

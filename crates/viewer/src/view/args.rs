@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use clap::Args;
 use manyshadows::scene::light_space::PointShadows;
 use manyshadows::{Pcf, Technique};
@@ -106,23 +106,9 @@ pub struct ViewArgs {
 pub(crate) const CONTROLS: &str = "W/A/S/D move, Q/E down/up, right mouse button + drag look, \
      wheel changes speed, F1 panel, Esc quits";
 
-/// The cameras of a `--script`: one per line that is not empty once its `#` comment is cut.
+/// The cameras of a `--script` (the format of `render --camera-path`).
 pub(super) fn parse_script(text: &str) -> Result<Vec<[f32; 6]>> {
-    let mut out = Vec::new();
-    for (i, line) in text.lines().enumerate() {
-        let line = line.split('#').next().unwrap_or("").trim();
-        if line.is_empty() {
-            continue;
-        }
-        out.push(
-            manyshadows_cli::parse_camera(line)
-                .map_err(|e| anyhow::anyhow!("script line {}: {e}", i + 1))?,
-        );
-    }
-    if out.is_empty() {
-        bail!("the script has no camera lines");
-    }
-    Ok(out)
+    manyshadows_cli::parse_camera_path(text).map_err(|e| anyhow::anyhow!("script {e}"))
 }
 
 #[cfg(test)]
