@@ -248,7 +248,7 @@ pub(crate) const MAX_UNASKED_TRIANGLE_VIEWS: u64 = 2_000_000_000;
 const STAGED_TRIANGLE_VIEWS: u64 = MAX_UNASKED_TRIANGLE_VIEWS / 10;
 
 /// Whether the frame's shadow work is estimated past [`STAGED_TRIANGLE_VIEWS`].
-fn long_frame(renderer: &Renderer) -> bool {
+pub(crate) fn long_frame(renderer: &Renderer) -> bool {
     renderer
         .shadow_work()
         .is_some_and(|w| w.triangle_views > STAGED_TRIANGLE_VIEWS)

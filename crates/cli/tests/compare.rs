@@ -740,3 +740,41 @@ fn the_reference_shows_its_progress_in_a_log() {
         assert!(l.contains("/s") && l.ends_with("s left"), "{l}");
     }
 }
+
+/// `compare --stages` says each part of every technique's frame as the GPU finishes it, in
+/// order (as `render --stages`, whose frames are checked byte for byte in cli.rs).
+#[test]
+fn compare_tells_each_frame_in_stages() {
+    let dir = tmp("stages");
+    let out = run(&[
+        "compare",
+        "--scene",
+        "cubes",
+        "--techniques",
+        "traditional,virtual",
+        "--width",
+        "96",
+        "--height",
+        "72",
+        "--soft-samples",
+        "0",
+        "--stages",
+        "--out-dir",
+        dir.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(out.status.success(), "{err}");
+    for t in ["traditional", "virtual"] {
+        let lines: Vec<&str> = err
+            .lines()
+            .filter(|l| l.starts_with(&format!("{t}: ")) && l.contains(" done after "))
+            .collect();
+        assert_eq!(lines.len(), 3, "{t}: {err}");
+        for (l, part) in lines
+            .iter()
+            .zip(["G-buffer and light clusters", "shadows", "lighting"])
+        {
+            assert!(l.contains(part), "{t}: {l}");
+        }
+    }
+}

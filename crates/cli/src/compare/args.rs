@@ -141,6 +141,11 @@ pub struct CompareArgs {
     /// and refused when named.
     #[arg(long)]
     pub(super) insist: bool,
+    /// Say each part of a technique's frame as the GPU finishes it (G-buffer and light
+    /// clusters, shadows, lighting), as `render --stages`; on by itself for a frame whose
+    /// shadow work is estimated past 200 M (caster triangle, view) pairs.
+    #[arg(long)]
+    pub(super) stages: bool,
     #[command(flatten)]
     pub(super) gpu: GpuArgs,
 }

@@ -77,7 +77,20 @@ pub(super) fn score_variants(
             bar.inc(1);
             continue;
         };
-        let frame = renderer.render()?;
+        let frame = if setup.args.stages || crate::render::long_frame(&renderer) {
+            let (label, t0) = (v.label(), std::time::Instant::now());
+            renderer.render_reporting(&mut |part| {
+                multi.suspend(|| {
+                    eprintln!(
+                        "{label}: {} done after {:.1} s",
+                        part.describe(),
+                        t0.elapsed().as_secs_f64()
+                    )
+                })
+            })?
+        } else {
+            renderer.render()?
+        };
         if scored.reference.is_none() {
             bar.set_message("ray tracing the reference");
             scored.reference = Some(first_reference(multi, setup, &renderer, scene, &frame)?);
