@@ -61,6 +61,10 @@ pub struct DenoiseArgs {
     /// into a column).
     #[arg(long, default_value_t = 0.15)]
     pub orbit: f32,
+    /// Fly this path instead of orbiting: one camera per line, `PX PY PZ TX TY TZ` (as
+    /// `render --camera-path`); frame k takes line k, the last stays.
+    #[arg(long, value_name = "FILE")]
+    pub camera_path: Option<std::path::PathBuf>,
     /// Move no caster (with --orbit 0: still frames, as `render --still`).
     #[arg(long)]
     pub still: bool,
@@ -264,6 +268,16 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
         bail!("--orbit must be a finite number of degrees");
     }
     let reference = args.reference == "on";
+    let path = match &args.camera_path {
+        Some(p) => Some(
+            crate::args::parse_camera_path(
+                &std::fs::read_to_string(p)
+                    .map_err(|e| anyhow::anyhow!("reading {}: {e}", p.display()))?,
+            )
+            .map_err(|e| anyhow::anyhow!("--camera-path {}: {e}", p.display()))?,
+        ),
+        None => None,
+    };
     let h = Harness::start_unscheduled(&args.output)?;
     let per_frame = if reference { 3 } else { 2 };
     h.plan(args.lights.len() as u64 * u64::from(args.frames) * per_frame);
@@ -315,6 +329,15 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
             if let Some(e) = exact.as_mut() {
                 renderers.push(e);
             }
+            if let Some(path) = &path {
+                let c = path[(f as usize).min(path.len() - 1)];
+                let mut cam = scene.camera;
+                cam.position = glam::Vec3::new(c[0], c[1], c[2]);
+                cam.target = glam::Vec3::new(c[3], c[4], c[5]);
+                for r in renderers.iter_mut() {
+                    r.set_camera(cam)?;
+                }
+            }
             if f > 0 {
                 for r in renderers.iter_mut() {
                     if let Some(k) = mover {
@@ -327,7 +350,7 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
                             glam::Mat4::from_translation(offset) * scene.instances[k].transform,
                         )?;
                     }
-                    if args.orbit != 0.0 {
+                    if args.orbit != 0.0 && path.is_none() {
                         let mut cam = scene.camera;
                         let turn = glam::Quat::from_axis_angle(
                             cam.up.normalize(),
@@ -351,7 +374,7 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
                 None => None,
             };
             let trail_frames = match &e {
-                Some(e) if args.orbit == 0.0 && !args.still => {
+                Some(e) if args.orbit == 0.0 && !args.still && path.is_none() => {
                     let t = trail(&d.rgba, &e.rgba, &past);
                     past.push_front(e.rgba.clone());
                     past.truncate(TRAIL_FRAMES);
@@ -447,13 +470,17 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
 
 fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
     let opt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}"));
-    let mut t = format!(
-        "== bench denoise: {} at {}x{}, {} frames, camera {} deg/frame, {}; K = {}\n   adapter: {adapter}\n",
+    let camera = match &args.camera_path {
+        Some(p) => format!("camera along {}", p.display()),
+        None => format!("camera {} deg/frame", args.orbit),
+    };
+    let mut t =
+        format!(
+        "== bench denoise: {} at {}x{}, {} frames, {camera}, {}; K = {}\n   adapter: {adapter}\n",
         args.scene,
         args.width,
         args.height,
         args.frames,
-        args.orbit,
         if args.still { "no caster moving" } else { "a caster circling" },
         args.light_samples
     );

@@ -667,6 +667,28 @@ fn bench_denoise_scores_each_frame_of_a_sequence() {
         trail <= 2.0,
         "the denoised shadow trails by {trail} frames: {r}"
     );
+    // A fly path instead of an orbit: three cameras, the last kept.
+    let path = tmp("denoise-path").join("path.txt");
+    std::fs::write(&path, "0 4 9 0 1 0\n1 3.5 8 0 1 0\n2 3 7 0 0.5 0\n").unwrap();
+    let (path_dir, json) = bench_ok(
+        "denoise",
+        &format!(
+            "--scene cubes --lights 8 --frames 4 --width 64 --height 48 --camera-path {}",
+            path.display()
+        ),
+    );
+    let r = &records(&json)[0];
+    assert_eq!(r["frames"].as_array().unwrap().len(), 4, "{r}");
+    let text = std::fs::read_to_string(path_dir.join("results.txt")).unwrap();
+    assert!(text.contains("camera along"), "{text}");
+    std::fs::write(&path, "0 4 9\n").unwrap();
+    rejects(
+        &format!(
+            "denoise --scene cubes --lights 4 --camera-path {}",
+            path.display()
+        ),
+        "line 1",
+    );
     rejects("denoise --frames 0", "--frames");
     rejects(
         "denoise --scene cubes --lights 4 --frames 1 --width 32 --height 32 --move-instance 100000",

@@ -1,8 +1,7 @@
 //! The on-screen panel (egui), drawn over the frame: the controls' help; the technique,
 //! point-shadow, PCF, caching, budget, light-count and (for shadow rays) sampling and denoising
-//! choices; the shadow views, memory and
-//! times of the last frame; the pictures to show (the atlas and one light's visibility, each
-//! in a window of its own) and the light to follow. Each section is a function; what the
+//! choices; the shadow views, memory and times of the last frame; the pictures to show (the
+//! atlas and one light's visibility, each in a window of its own) and the light to follow. Each section is a function; what the
 //! panel changed is applied after it is drawn (a new choice rebuilds the renderer).
 
 use manyshadows::scene::light_space::PointShadows;
