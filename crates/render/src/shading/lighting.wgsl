@@ -324,26 +324,8 @@ fn random(acc: ptr<function, Acc>) -> f32 {
 // luminance of its unshadowed direct term (resampled importance sampling over the lights).
 fn visit(i: u32, s: Surface, acc: ptr<function, Acc>) {
     let k = ray_samples();
-    if (k == 0u) {
-        if (!DENOISE) {
-            (*acc).color = add_light((*acc).color, i, s);
-            return;
-        }
-        // Every light traced, its area samples new each frame: the direct light is kept
-        // apart from the ambient (resolve_samples adds it) and both "estimates" are exact
-        // but for those samples, which the denoiser accumulates over frames.
-        let t = light_terms(i, s);
-        if (!t.reaches) {
-            return;
-        }
-        (*acc).color = (*acc).color + t.ambient;
-        if (!t.facing) {
-            return;
-        }
-        let d = t.att * t.ds;
-        (*acc).unshadowed = (*acc).unshadowed + d;
-        (*acc).est_unshadowed = (*acc).est_unshadowed + d;
-        (*acc).est_shadowed = (*acc).est_shadowed + light_lit(i, s) * d;
+    if (k == 0u && !DENOISE) {
+        (*acc).color = add_light((*acc).color, i, s);
         return;
     }
     let t = light_terms(i, s);
@@ -356,6 +338,14 @@ fn visit(i: u32, s: Surface, acc: ptr<function, Acc>) {
     }
     if (DENOISE) {
         (*acc).unshadowed = (*acc).unshadowed + t.att * t.ds;
+    }
+    if (k == 0u) {
+        // Every light traced, its area samples new each frame: the direct light is kept
+        // apart from the ambient (resolve_samples adds it) and both "estimates" are exact
+        // but for those samples, which the denoiser accumulates over frames.
+        (*acc).est_unshadowed = (*acc).est_unshadowed + t.att * t.ds;
+        (*acc).est_shadowed = (*acc).est_shadowed + light_lit(i, s) * t.att * t.ds;
+        return;
     }
     let w = dot(t.att * t.ds, vec3<f32>(0.2126, 0.7152, 0.0722));
     if (w <= 0.0) {
