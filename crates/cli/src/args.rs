@@ -335,6 +335,14 @@ pub(crate) struct RenderArgs {
     /// 1/sqrt(N) up to 32 frames).
     #[arg(long)]
     pub(crate) denoise: bool,
+    /// With --light-samples K: reuse each pixel's sampled lights across frames (ReSTIR's
+    /// temporal reuse). Each frame a new light is drawn and weighed against the one the
+    /// pixel kept (found where the surface point was last frame) by its unshadowed light
+    /// times its visibility, both traced now (two rays per sample): lights that reach the
+    /// pixel are kept, so with --frames a still image's noise falls frame by frame. Unbiased
+    /// for a still camera and casters; combine with --denoise for the cleanest frames.
+    #[arg(long)]
+    pub(crate) reuse: bool,
     /// With shadow rays: rays per side of the stratified grid over each sized light's shape
     /// (N² rays per pixel and light when every light is traced; 0 counts as 1; at most 16).
     /// More: smoother penumbrae, at N² the cost of a hard shadow ray.
@@ -563,6 +571,7 @@ pub(crate) fn flag_error(e: manyshadows::RenderError) -> anyhow::Error {
         ("virtual_maps.max_side", "--virtual-side"),
         ("rays.light_samples", "--light-samples"),
         ("rays.denoise", "--denoise"),
+        ("rays.reuse", "--reuse"),
         ("rays.area_samples", "--area-samples"),
         ("shadow_budget", "--shadow-budget"),
         ("look.exposure", "--exposure"),
@@ -638,6 +647,7 @@ pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettin
             manyshadows::RayOptions::default()
                 .with_light_samples(args.light_samples)
                 .with_denoise(args.denoise)
+                .with_reuse(args.reuse)
                 .with_area_samples(args.area_samples)
                 .with_seed(args.ray_seed),
         )

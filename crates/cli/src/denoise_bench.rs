@@ -75,6 +75,10 @@ pub struct DenoiseArgs {
     /// Lights sampled per pixel (1 to 16).
     #[arg(long, default_value_t = 1)]
     pub light_samples: u32,
+    /// Both sampled renderers reuse their lights across frames (`render --reuse`): the plain
+    /// one then shows reuse alone, the denoised one reuse and the denoiser together.
+    #[arg(long)]
+    pub reuse: bool,
     /// Score against the exact image of every frame (on) or only time the frames (off).
     #[arg(long, default_value = "on", value_parser = ["on", "off"])]
     pub reference: String,
@@ -131,6 +135,7 @@ struct Fields<'a> {
     orbit_degrees_per_frame: f32,
     caster_moves: bool,
     light_samples: u32,
+    reuse: bool,
     records: Vec<Record>,
 }
 
@@ -287,7 +292,9 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
         let scene = seeded_scene(&args.scene, n, LightMix::All, None)?;
         let base = RenderSettings::new(args.width, args.height)
             .with_technique(crate::techniques::first_filling(manyshadows::Fills::Rays));
-        let sampled = RayOptions::default().with_light_samples(args.light_samples);
+        let sampled = RayOptions::default()
+            .with_light_samples(args.light_samples)
+            .with_reuse(args.reuse);
         let make = |rays: RayOptions| Renderer::new(&h.ctx, &scene, base.clone().with_rays(rays));
         let mut plain = make(sampled)?;
         let mut denoised = make(sampled.with_denoise(true))?;
@@ -462,6 +469,7 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
             orbit_degrees_per_frame: args.orbit,
             caster_moves: !args.still,
             light_samples: args.light_samples,
+            reuse: args.reuse,
             records,
         },
         figures,
@@ -476,13 +484,14 @@ fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
     };
     let mut t =
         format!(
-        "== bench denoise: {} at {}x{}, {} frames, {camera}, {}; K = {}\n   adapter: {adapter}\n",
+        "== bench denoise: {} at {}x{}, {} frames, {camera}, {}; K = {}{}\n   adapter: {adapter}\n",
         args.scene,
         args.width,
         args.height,
         args.frames,
         if args.still { "no caster moving" } else { "a caster circling" },
-        args.light_samples
+        args.light_samples,
+        if args.reuse { ", lights reused across frames (plain: reuse alone)" } else { "" }
     );
     t += "lights | RMSE plain: mean first last | denoised: mean first last | GPU ms plain denoised (its passes) | ratio\n";
     for r in records {

@@ -113,10 +113,16 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
                         .map_or("n/a".to_string(), |v| format!("{v:.2} ms"));
                     let history = (f + 1).min(manyshadows::shading::denoise::MAX_HISTORY);
                     let plural = if history == 1 { "" } else { "s" };
-                    let kept = if !rays.denoise {
+                    let reused = if rays.reuse {
+                        let m = (f + 1).min(manyshadows::shading::reuse::MAX_CONFIDENCE + 1);
+                        format!(", lights reused (reservoirs of up to {m} frames)")
+                    } else {
                         String::new()
+                    };
+                    let kept = if !rays.denoise {
+                        reused
                     } else if rays.light_samples > 0 {
-                        format!(", denoised (history up to {history} frame{plural})")
+                        format!("{reused}, denoised (history up to {history} frame{plural})")
                     } else {
                         format!(", area samples accumulated (up to {history} frame{plural})")
                     };

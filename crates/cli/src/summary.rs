@@ -43,6 +43,7 @@ pub(crate) fn summary(
         "soft": { "blocker_taps": r.settings().soft.blocker_taps, "filter_taps": r.settings().soft.filter_taps,
                   "max_penumbra": r.settings().soft.max_penumbra, "area_samples": r.settings().rays.area_samples,
                   "light_samples": r.settings().rays.light_samples, "denoise": r.settings().rays.denoise,
+                  "reuse": r.settings().rays.reuse,
                   "technique_softens": r.settings().technique.info().soft_shadows },
         "gpu_ms": frame.timings.gpu_ms,
         "cpu_record_ms": frame.timings.cpu_record_ms,
@@ -184,12 +185,15 @@ fn print_shadows(s: &serde_json::Value, fills: Option<manyshadows::Fills>) {
                         }
                     ),
                     _ => format!(
-                        "a sampled sized light is traced at one point of its shape{}",
-                        if denoise {
-                            ", new each frame, denoised"
+                        "a sampled sized light is traced at one point of its shape{}{}",
+                        if soft["reuse"].as_bool().unwrap_or(false) {
+                            ", new each frame, reused across frames"
+                        } else if denoise {
+                            ", new each frame"
                         } else {
                             ""
-                        }
+                        },
+                        if denoise { ", denoised" } else { "" }
                     ),
                 }
             })

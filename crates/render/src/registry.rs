@@ -156,6 +156,7 @@ mod tests {
                         emission: true,
                         emission_texture: true,
                         denoise: true,
+                        reuse: true,
                     },
                 ),
                 (
@@ -169,6 +170,7 @@ mod tests {
                         emission: false,
                         emission_texture: false,
                         denoise: false,
+                        reuse: false,
                     },
                 ),
             ] {

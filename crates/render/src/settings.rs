@@ -156,6 +156,13 @@ impl RenderSettings {
                 "shadow rays to denoise or accumulate: technique raytraced",
             ));
         }
+        if self.rays.reuse && self.technique.info().fills != crate::error::Fills::Rays {
+            return Err(bad(
+                "rays.reuse",
+                format!("on with technique {}", self.technique.name()),
+                "sampled shadow rays to reuse: technique raytraced",
+            ));
+        }
         self.clusters.validate()?;
         self.irregular.validate()?;
         self.virtual_maps.validate()?;

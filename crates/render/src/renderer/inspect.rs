@@ -210,6 +210,7 @@ impl Renderer {
                 clusters: &self.clusters,
                 shadows,
                 denoise: None,
+                reuse: None,
             };
             let consts = ShadingConsts {
                 emission_texture: self.gbuffer.emission.is_some(),

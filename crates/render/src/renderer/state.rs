@@ -75,7 +75,9 @@ pub struct Renderer {
     pub(super) dirty: bool,
     /// The denoiser of sampled shadow rays (`RayOptions::denoise`).
     pub(super) denoiser: Option<crate::shading::denoise::Denoiser>,
-    /// Frames the denoiser has seen (their rays' random numbers differ by it).
+    /// The reservoirs of reused light samples (`RayOptions::reuse`).
+    pub(super) reuse: Option<crate::shading::reuse::Reuse>,
+    /// Frames the denoiser or the reuse has seen (their rays' random numbers differ by it).
     pub(super) frames_denoised: u32,
     /// A light changed since the last frame (the denoiser's history follows it fast).
     pub(super) lights_changed: bool,
@@ -184,6 +186,18 @@ impl Renderer {
                     )
                 })
                 .transpose()?;
+            let reuse = settings
+                .rays
+                .reuse
+                .then(|| {
+                    crate::shading::reuse::Reuse::new(
+                        ctx,
+                        settings.width,
+                        settings.height,
+                        settings.rays.light_samples,
+                    )
+                })
+                .transpose()?;
             let inputs = LightingInputs {
                 frame: &frame_buffer,
                 lights: &lights,
@@ -192,6 +206,7 @@ impl Renderer {
                 clusters: &clusters,
                 shadows: source.output(),
                 denoise: denoiser.as_ref().map(|d| &d.buffers),
+                reuse: reuse.as_ref().map(|r| &r.buffers),
             };
             let lighting = LightingPass::new(
                 ctx,
@@ -200,6 +215,7 @@ impl Renderer {
                 &ShadingConsts {
                     emission_texture: gbuffer.emission.is_some(),
                     denoise: denoiser.is_some(),
+                    reuse: reuse.is_some(),
                     ..settings.look.resolve(scene).consts()
                 },
             );
@@ -217,6 +233,7 @@ impl Renderer {
                 gbuffer,
                 lighting,
                 denoiser,
+                reuse,
                 frames_denoised: 0,
                 lights_changed: false,
                 clusters,
@@ -353,6 +370,7 @@ impl Renderer {
                 clusters: &self.clusters,
                 shadows: self.source.output(),
                 denoise: self.denoiser.as_ref().map(|d| &d.buffers),
+                reuse: self.reuse.as_ref().map(|r| &r.buffers),
             },
         );
         let lights = scene.lights.len() as u32;
@@ -387,6 +405,21 @@ impl Renderer {
             if std::mem::take(&mut self.lights_changed) {
                 d.lights_changed();
             }
+        }
+        if let Some(r) = &mut self.reuse {
+            let cam = self.current.camera;
+            let aspect = self.settings.width as f32 / self.settings.height as f32;
+            r.prepare(
+                ctx,
+                (
+                    cam.projection(aspect) * cam.view(),
+                    cam.position,
+                    cam.fov_y_deg,
+                ),
+                self.current.lights.len(),
+            );
+        }
+        if self.denoiser.is_some() || self.reuse.is_some() {
             // New random numbers for the rays every frame (FrameUniforms::modes.y).
             self.frames_denoised = self.frames_denoised.wrapping_add(1);
             ctx.queue.write_buffer(
@@ -611,6 +644,7 @@ impl Renderer {
                         clusters: &self.clusters,
                         shadows: self.source.output(),
                         denoise: None,
+                        reuse: None,
                     };
                     let (mask, soft) = pass.run(ctx, &inputs, &self.timer, span)?;
                     (Some(mask), soft)

@@ -55,6 +55,8 @@ pub struct LightingInputs<'a> {
     pub shadows: ShadowOutput<'a>,
     /// The denoiser's buffers, when sampled rays are denoised (`ShadingConsts::denoise`).
     pub denoise: Option<&'a crate::shading::denoise::DenoiseBuffers>,
+    /// The reservoirs, when sampled lights are reused (`ShadingConsts::reuse`).
+    pub reuse: Option<&'a crate::shading::reuse::ReuseBuffers>,
 }
 
 impl LightingInputs<'_> {
@@ -186,6 +188,10 @@ impl LightingPass {
         if consts.denoise {
             entries.push(crate::gpu::pipelines::storage_rw_entry(40, frag));
             entries.push(crate::gpu::pipelines::storage_entry(41, frag));
+        }
+        if consts.reuse {
+            entries.push(crate::gpu::pipelines::uniform_entry(42, frag));
+            entries.push(crate::gpu::pipelines::storage_rw_entry(43, frag));
         }
         let layout = crate::gpu::pipelines::bind_group_layout(device, "lighting.layout", &entries);
         let linear = device.create_sampler(&wgpu::SamplerDescriptor {
@@ -371,6 +377,10 @@ fn bind(
     if let Some(d) = inputs.denoise {
         entries.push(crate::gpu::pipelines::whole_entry(40, &d.pixels));
         entries.push(crate::gpu::pipelines::whole_entry(41, &d.ratio));
+    }
+    if let Some(r) = inputs.reuse {
+        entries.push(crate::gpu::pipelines::whole_entry(42, &r.params));
+        entries.push(crate::gpu::pipelines::whole_entry(43, &r.reservoirs));
     }
     device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("lighting.bind_group"),

@@ -373,10 +373,17 @@ fn resolve_samples(s: Surface, acc: ptr<function, Acc>) {
         return;
     }
     if (k == 0u || (*acc).wsum <= 0.0) {
+        if (REUSE) {
+            reuse_store_point(s.px, s.p, false);
+        }
         return;
     }
     var direct = vec3<f32>(0.0);
     if ((*acc).count <= k) {
+        if (REUSE) {
+            // Exact: nothing to reuse, and the next frame starts anew here.
+            reuse_store_point(s.px, s.p, false);
+        }
         for (var j = 0u; j < (*acc).count; j = j + 1u) {
             let i = (*acc).first[j];
             let t = light_terms(i, s);
@@ -388,6 +395,10 @@ fn resolve_samples(s: Surface, acc: ptr<function, Acc>) {
             (*acc).est_shadowed = direct;
             (*acc).est_unshadowed = (*acc).unshadowed;
         }
+        return;
+    }
+    if (REUSE) {
+        resolve_reused(s, acc);
         return;
     }
     var unlit = vec3<f32>(0.0);
@@ -407,10 +418,95 @@ fn resolve_samples(s: Surface, acc: ptr<function, Acc>) {
     }
 }
 
+// Whether the point `jitter` (0..1², on the light's shape) of light `i` reaches `s` (its
+// centre for a light without size): one ray.
+fn light_lit_point(i: u32, s: Surface, jitter: vec2<f32>) -> f32 {
+    let light = lights[i];
+    if (light.diffuse.w > 0.0) {
+        return ray_lit_area(light, s.p, s.n, 1u, jitter);
+    }
+    return ray_lit(light, s.p, s.n);
+}
+
+// Temporal reuse (reuse.rs): each sample's new light (drawn in proportion to `f`, the
+// luminance of its unshadowed term, with `W = wsum / f`, and a new point on a sized light's
+// shape) and last frame's reservoir of the
+// same surface point are weighed by the target `f · V` here and now (both rays traced) with
+// confidence weights; the light kept, its `W` and the frames it stands for go to the next
+// frame, and the pixel's estimate is `f(y) V(y) W` (the sum of the two weights, in the kept
+// light's colour).
+fn resolve_reused(s: Surface, acc: ptr<function, Acc>) {
+    let k = ray_samples();
+    let luma = vec3<f32>(0.2126, 0.7152, 0.0722);
+    let r = reuse_history(s.p);
+    reuse_store_point(s.px, s.p, true);
+    var direct = vec3<f32>(0.0);
+    for (var j = 0u; j < k; j = j + 1u) {
+        let yn = (*acc).chosen[j];
+        let tn = light_terms(yn, s);
+        let f_new = tn.att * tn.ds;
+        let jn = soft_jitter(s.px, yn);
+        let vn = light_lit_point(yn, s, jn);
+        var m_old = 0.0;
+        var y_old = yn;
+        var j_old = jn;
+        var f_old = vec3<f32>(0.0);
+        var v_old = 0.0;
+        var w_old = 0.0;
+        if (r != 0xffffffffu) {
+            let h = reuse_load(r, j);
+            y_old = h.x;
+            j_old = unpack2x16unorm(h.w);
+            m_old = min(bitcast<f32>(h.z), reuse_cap());
+            let w_kept = bitcast<f32>(h.y);
+            if (y_old < frame.counts.x && w_kept > 0.0) {
+                let to = light_terms(y_old, s);
+                if (to.reaches && to.facing) {
+                    f_old = to.att * to.ds;
+                    let p_old = dot(f_old, luma);
+                    if (p_old > 0.0) {
+                        v_old = light_lit_point(y_old, s, j_old);
+                        w_old = p_old * v_old * w_kept;
+                    }
+                }
+            }
+        }
+        // The two weights m · p̂(y) · W: the new draw's W is wsum / f(y_n).
+        let a = (*acc).wsum * vn / (1.0 + m_old);
+        let b = w_old * m_old / (1.0 + m_old);
+        let total = a + b;
+        var y = yn;
+        var jy = jn;
+        var f_rgb = f_new;
+        var p_hat = dot(f_new, luma) * vn;
+        if (b > 0.0 && random(acc) * total < b) {
+            y = y_old;
+            jy = j_old;
+            f_rgb = f_old;
+            p_hat = dot(f_old, luma) * v_old;
+        }
+        var w = 0.0;
+        if (p_hat > 0.0) {
+            w = total / p_hat;
+            // f(y) V(y) W in the kept light's colour: f(y) · total / lum(f(y)).
+            direct = direct + f_rgb * (total / dot(f_rgb, luma));
+        }
+        reuse_store(s.px, j, y, w, min(m_old + 1.0, reuse_cap()), jy);
+    }
+    (*acc).color = (*acc).color + direct / f32(k);
+    if (DENOISE) {
+        (*acc).est_shadowed = direct / f32(k);
+        (*acc).est_unshadowed = (*acc).unshadowed;
+    }
+}
+
 fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     let gpos = textureLoad(gbuf_position, px, 0);
     let pos = bitcast<vec4<f32>>(gpos);
     if (!has_geometry(gpos)) {
+        if (REUSE) {
+            reuse_store_point(px, vec3<f32>(0.0), false);
+        }
         if (DENOISE) {
             denoise_store(px, vec4<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
         }

@@ -294,6 +294,9 @@ pub(crate) struct ShadingConsts {
     /// Whether sampled shadow rays are denoised (denoise.rs): the pass also writes each
     /// pixel's unshadowed light and shadow ratio, and `fs_composite` shades the filtered ratio.
     pub denoise: bool,
+    /// Whether sampled lights are reused across frames (reuse.rs): each pixel's reservoirs
+    /// are read from the last frame and written for the next.
+    pub reuse: bool,
 }
 
 impl Default for ShadingConsts {
@@ -307,6 +310,7 @@ impl Default for ShadingConsts {
             emission: false,
             emission_texture: false,
             denoise: false,
+            reuse: false,
         }
     }
 }
@@ -320,7 +324,7 @@ impl ShadingConsts {
              const LIGHT_SCALE: f32 = {:?}f;\nconst TONE_MAP: u32 = {}u;\n\
              const EXPOSURE_IS_FIXED: bool = {};\nconst FIXED_EXPOSURE: f32 = {:?}f;\n\
              const EMISSION: bool = {};\nconst EMISSION_TEXTURE: bool = {};\n\
-             const DENOISE: bool = {};\n",
+             const DENOISE: bool = {};\nconst REUSE: bool = {};\n",
             self.shading.code(),
             self.physical_falloff,
             self.light_scale,
@@ -330,12 +334,18 @@ impl ShadingConsts {
             self.emission,
             self.emission_texture,
             self.denoise,
+            self.reuse,
         );
+        let reuse = if self.reuse {
+            REUSE_WGSL
+        } else {
+            NO_REUSE_WGSL
+        };
         if self.denoise {
-            format!("{consts}{DENOISE_WGSL}")
+            format!("{consts}{reuse}{DENOISE_WGSL}")
         } else {
             format!(
-                "{consts}fn denoise_store(px: vec2<i32>, a: vec4<f32>, s: vec3<f32>, \
+                "{consts}{reuse}fn denoise_store(px: vec2<i32>, a: vec4<f32>, s: vec3<f32>, \
                  u: vec3<f32>, r: vec3<f32>) {{}}\n"
             )
         }
@@ -376,6 +386,85 @@ fn fs_composite(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     let rest = denoise_px[4u * i + 3u].rgb;
     return vec4<f32>(tone_map(rest + exact.rgb * clamp(r, vec3<f32>(0.0), vec3<f32>(1.0))), 1.0);
 }
+";
+
+/// The lighting pass's side of temporal reuse (reuse.rs): last frame's reservoirs of a
+/// surface point, and this frame's written for the next.
+const REUSE_WGSL: &str = "
+struct ReuseParams {
+    prev_view_proj: mat4x4<f32>,
+    // width, height, samples per pixel, most frames of confidence.
+    size: vec4<u32>,
+    // world size of a pixel at distance 1, 1 = no history this frame, the half read.
+    flags: vec4<f32>,
+    camera: vec4<f32>,
+}
+@group(0) @binding(42) var<uniform> reuse: ReuseParams;
+// Two halves (one read, one written per frame); per pixel 1 + K vec4: [surface point, 1 =
+// kept] (float bits), then per sample [light, W and M (float bits), point on a sized
+// light's shape (2 × unorm16)].
+@group(0) @binding(43) var<storage, read_write> reservoirs: array<vec4<u32>>;
+
+fn reuse_record(half: u32, px: vec2<u32>) -> u32 {
+    let stride = reuse.size.z + 1u;
+    return (half * reuse.size.x * reuse.size.y + px.y * reuse.size.x + px.x) * stride;
+}
+
+// Where last frame kept the reservoirs of the surface point `p` (a record index of the half
+// read), or 0xffffffff: the nearest pixel to where `p` was seen, if it saw a point within two
+// pixel footprints of `p`.
+fn reuse_history(p: vec3<f32>) -> u32 {
+    if (reuse.flags.y != 0.0) {
+        return 0xffffffffu;
+    }
+    let clip = reuse.prev_view_proj * vec4<f32>(p, 1.0);
+    if (clip.w <= 0.0) {
+        return 0xffffffffu;
+    }
+    let ndc = clip.xy / clip.w;
+    let q = floor(vec2<f32>((ndc.x * 0.5 + 0.5) * f32(reuse.size.x), (0.5 - ndc.y * 0.5) * f32(reuse.size.y)));
+    if (q.x < 0.0 || q.y < 0.0 || q.x >= f32(reuse.size.x) || q.y >= f32(reuse.size.y)) {
+        return 0xffffffffu;
+    }
+    let r = reuse_record(u32(reuse.flags.z), vec2<u32>(q));
+    let kept = bitcast<vec4<f32>>(reservoirs[r]);
+    let footprint = distance(p, reuse.camera.xyz) * reuse.flags.x;
+    if (kept.w == 0.0 || distance(kept.xyz, p) > 2.0 * footprint + 1e-6) {
+        return 0xffffffffu;
+    }
+    return r;
+}
+
+// Most frames a reservoir stands for.
+fn reuse_cap() -> f32 {
+    return f32(reuse.size.w);
+}
+
+// Sample `j` of the record `r` (from reuse_history): light, W, M, point.
+fn reuse_load(r: u32, j: u32) -> vec4<u32> {
+    return reservoirs[r + 1u + j];
+}
+
+// This frame's record of pixel `px`: its surface point (`kept` = 0: none kept, the next frame
+// starts anew there).
+fn reuse_store_point(px: vec2<i32>, p: vec3<f32>, kept: bool) {
+    let r = reuse_record(1u - u32(reuse.flags.z), vec2<u32>(px));
+    reservoirs[r] = bitcast<vec4<u32>>(vec4<f32>(p, select(0.0, 1.0, kept)));
+}
+
+fn reuse_store(px: vec2<i32>, j: u32, light: u32, w: f32, m: f32, point: vec2<f32>) {
+    let r = reuse_record(1u - u32(reuse.flags.z), vec2<u32>(px));
+    reservoirs[r + 1u + j] = vec4<u32>(light, bitcast<u32>(w), bitcast<u32>(m), pack2x16unorm(point));
+}
+";
+
+/// The same functions where nothing is reused (never called: `REUSE` is false).
+const NO_REUSE_WGSL: &str = "
+fn reuse_history(p: vec3<f32>) -> u32 { return 0xffffffffu; }
+fn reuse_load(r: u32, j: u32) -> vec4<u32> { return vec4<u32>(0u); }
+fn reuse_cap() -> f32 { return 0.0; }
+fn reuse_store_point(px: vec2<i32>, p: vec3<f32>, kept: bool) {}
+fn reuse_store(px: vec2<i32>, j: u32, light: u32, w: f32, m: f32, point: vec2<f32>) {}
 ";
 
 /// Incident-light meter calibration constant (lux · s at ISO 100).
@@ -456,6 +545,7 @@ impl ResolvedLook {
             emission: self.emission,
             emission_texture: false,
             denoise: false,
+            reuse: false,
         }
     }
 

@@ -7,4 +7,5 @@ pub(crate) mod blit;
 pub mod denoise;
 pub mod lighting;
 pub mod look;
+pub mod reuse;
 pub mod visibility;

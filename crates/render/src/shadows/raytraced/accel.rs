@@ -46,6 +46,11 @@ pub struct RayOptions {
     /// `light_samples` 0: accumulate the sized lights' area samples over frames (new points
     /// each frame, no filter), so still frames converge to the exact soft shadows.
     pub denoise: bool,
+    /// With `light_samples` K > 0: keep each pixel's sampled lights across frames and reuse
+    /// them (shading/reuse.rs: ReSTIR's temporal reuse, the target being the light's
+    /// unshadowed term times its visibility, two rays per sample and frame), so a still image
+    /// converges as frames pass. Unbiased for a still camera and casters; see the module.
+    pub reuse: bool,
 }
 
 impl Default for RayOptions {
@@ -55,6 +60,7 @@ impl Default for RayOptions {
             seed: 0,
             area_samples: DEFAULT_AREA_SAMPLES,
             denoise: false,
+            reuse: false,
         }
     }
 }
@@ -80,6 +86,13 @@ impl RayOptions {
                 "0 to 16 samples per side of a sized light's grid (256 rays)",
             ));
         }
+        if self.reuse && self.light_samples == 0 {
+            return Err(RenderError::invalid_option(
+                "rays.reuse",
+                "on with every light traced (light_samples 0)",
+                "sampled lights to reuse: light_samples 1 to 16",
+            ));
+        }
         Ok(())
     }
 }
@@ -89,6 +102,7 @@ with_setters!(RayOptions {
     with_seed: seed: u32,
     with_area_samples: area_samples: u32,
     with_denoise: denoise: bool,
+    with_reuse: reuse: bool,
 });
 
 /// `RayParams` of rays.wgsl.

@@ -1,0 +1,148 @@
+//! Temporal reuse of sampled shadow rays (`RayOptions::reuse`, `--reuse`): each pixel keeps,
+//! per sample, a reservoir across frames (ReSTIR DI, Bitterli et al. 2020), so one ray per
+//! pixel and frame gathers what many frames found.
+//!
+//! A sample is a light. Each frame the lighting pass draws a new one from the pixel's cluster
+//! with probability proportional to its unshadowed term `f` (exactly: every light of the loop
+//! is a candidate), and finds last frame's reservoir of the same surface point (the point
+//! projected into the last frame; a pixel there within two pixel footprints of it, else none:
+//! disocclusion). Both candidates are weighed by the **target `f · V` at this pixel**, their
+//! visibility traced now (two rays), with confidence weights `1 / (1 + M)` and `M / (1 + M)`
+//! (`M`: the frames the old reservoir stands for, at most [`MAX_CONFIDENCE`]); one is kept,
+//! with its unbiased contribution weight `W`, and the pixel's estimate of its shadowed direct
+//! light is `f(y) V(y) W`. As `M` grows the kept light is drawn nearly in proportion to
+//! `f · V`, where the new draw alone follows `f` and finds a shadowed light as often as the
+//! shadow covers: the estimate's noise falls with the frames instead of staying that of one
+//! ray.
+//!
+//! What is unbiased and what not: both targets are evaluated at this pixel with this frame's
+//! lights and casters (a moved or changed light is weighed anew; a light past the count is
+//! dropped; when the number of lights changes the history is dropped, since indices no longer
+//! name the same lights). With a still camera and still casters the old reservoir's lights
+//! are those the pixel sees now, the confidence weights sum to 1 over them, and the estimate
+//! is unbiased (`tests/reuse.rs` checks that its mean over seeds is the exact image). Where
+//! the point moved, or a caster uncovered a light the old reservoir could not hold, that
+//! light is found only by the new draw, with weight `1 / (1 + M)`: the estimate darkens there
+//! until the reservoir has drawn it (a few frames). A sized light's target uses one point of
+//! its shape per ray (the visibility of a fresh point each frame): unbiased in the mean over
+//! points, but not a fixed target.
+
+use crate::error::RenderError;
+use crate::gpu::context::GpuContext;
+
+/// Frames a reservoir may stand for (the weight of a new draw never falls below
+/// `1 / (1 + MAX_CONFIDENCE)`): ReSTIR's usual cap of 20 bounds how long a stale choice
+/// lasts.
+pub const MAX_CONFIDENCE: u32 = 20;
+
+/// `ReuseParams` of the lighting pass's reuse WGSL (look.rs).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct ReuseParams {
+    prev_view_proj: [[f32; 4]; 4],
+    /// width, height, samples per pixel, most frames of confidence.
+    size: [u32; 4],
+    /// world size of a pixel at distance 1, 1 = no history this frame, the half read (0 or
+    /// 1), unused.
+    flags: [f32; 4],
+    /// eye position (xyz).
+    camera: [f32; 4],
+}
+
+/// The buffers the lighting pass binds.
+pub struct ReuseBuffers {
+    /// `ReuseParams`.
+    pub params: wgpu::Buffer,
+    /// Two halves, one read and one written per frame, each per pixel `1 + K` `vec4<u32>`:
+    /// the surface point (float bits of xyz, w = 1.0 where the pixel kept reservoirs), then
+    /// per sample the light, `W` and `M` (float bits) and the point on a sized light's shape
+    /// (two unorm16).
+    pub reservoirs: wgpu::Buffer,
+}
+
+/// Reservoirs of one frame size and sample count, and what the next frame reuses.
+pub struct Reuse {
+    /// What the lighting pass binds.
+    pub buffers: ReuseBuffers,
+    width: u32,
+    height: u32,
+    samples: u32,
+    /// The half the next frame reads.
+    parity: u32,
+    /// Camera world → clip and light count of the last frame (`None`: no history).
+    prev: Option<(glam::Mat4, usize)>,
+}
+
+impl Reuse {
+    /// Reservoirs for a `w` × `h` frame with `samples` (1..=16) lights per pixel; buffers past
+    /// the device's storage-binding limit are [`RenderError::TooLarge`].
+    pub fn new(ctx: &GpuContext, w: u32, h: u32, samples: u32) -> Result<Self, RenderError> {
+        let bytes = 2 * u64::from(w) * u64::from(h) * u64::from(samples + 1) * 16;
+        let limits = ctx.limits();
+        let limit = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        if bytes > limit {
+            return Err(RenderError::TooLarge {
+                what: format!(
+                    "the reservoirs of a {w}x{h} frame with {samples} light samples per pixel"
+                ),
+                needed: bytes,
+                limit,
+                unit: "bytes",
+                limit_name: "max_storage_buffer_binding_size",
+            });
+        }
+        let device = &ctx.device;
+        let buffers = ReuseBuffers {
+            params: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("reuse.params"),
+                size: std::mem::size_of::<ReuseParams>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            reservoirs: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("reuse.reservoirs"),
+                size: bytes,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            }),
+        };
+        Ok(Self {
+            buffers,
+            width: w,
+            height: h,
+            samples,
+            parity: 0,
+            prev: None,
+        })
+    }
+
+    /// Writes the parameters of a frame seen through `view_proj` from `eye` with a vertical
+    /// field of view of `fov_y_deg`, lit by `lights` lights, before its lighting pass; the
+    /// next call reads what this frame writes.
+    pub fn prepare(
+        &mut self,
+        ctx: &GpuContext,
+        (view_proj, eye, fov_y_deg): (glam::Mat4, glam::Vec3, f32),
+        lights: usize,
+    ) {
+        let pixel = 2.0 * (0.5 * fov_y_deg).to_radians().tan() / self.height as f32;
+        let history = self.prev.filter(|&(_, n)| n == lights);
+        let params = ReuseParams {
+            prev_view_proj: history.map_or(view_proj, |(m, _)| m).to_cols_array_2d(),
+            size: [self.width, self.height, self.samples, MAX_CONFIDENCE],
+            flags: [
+                pixel,
+                if history.is_some() { 0.0 } else { 1.0 },
+                self.parity as f32,
+                0.0,
+            ],
+            camera: eye.extend(1.0).to_array(),
+        };
+        ctx.queue
+            .write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(&params));
+        self.parity = 1 - self.parity;
+        self.prev = Some((view_proj, lights));
+    }
+}
