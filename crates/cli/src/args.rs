@@ -305,6 +305,12 @@ pub(crate) struct RenderArgs {
     /// --virtual-lod).
     #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_DIRECTED_LOD)]
     pub(crate) virtual_directed_lod: f32,
+    /// --technique virtual: no face samples coarser than the tile the atlas techniques would
+    /// give the same view (`on`, default: virtual maps never misclassify more than the atlas
+    /// where the atlas is finer than the screen asks, e.g. few lights in a small frame), or
+    /// only what the screen's level of detail asks (`off`: fewer pages there).
+    #[arg(long, default_value = "on", value_parser = ["on", "off"])]
+    pub(crate) virtual_atlas_floor: String,
     /// --technique virtual's receiver bias as a fraction of --bias-constant, --bias-slope and
     /// --bias-normal (those count texels; a virtual page's texels match the screen pixel, and
     /// a whole texel of bias leaks light at contacts: 0.5 by default, 0 to 16).
@@ -640,6 +646,7 @@ pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettin
                 .with_max_side(args.virtual_side)
                 .with_lod(args.virtual_lod)
                 .with_directed_lod(args.virtual_directed_lod)
+                .with_atlas_floor(args.virtual_atlas_floor == "on")
                 .with_bias_scale(args.virtual_bias)
                 .with_tile_marking(args.virtual_marking == VirtualMarking::Tiles),
         )

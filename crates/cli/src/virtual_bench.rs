@@ -51,6 +51,10 @@ pub struct VirtualArgs {
     /// up), at least one page.
     #[arg(long)]
     pub page_pool: Option<u32>,
+    /// Virtual faces no coarser than the atlas's tiles (`on`, default) or as the screen asks
+    /// (`off`; `render --virtual-atlas-floor`).
+    #[arg(long, default_value = "on", value_parser = ["on", "off"])]
+    pub virtual_atlas_floor: String,
     /// Both paths keep what did not change (the atlas its unchanged views, the virtual maps
     /// their pages away from the change) while the scene's smallest caster moves each frame:
     /// what a frame costs when one thing moves, instead of every map drawn anew
@@ -143,9 +147,11 @@ pub fn virtual_maps(args: &VirtualArgs) -> Result<()> {
                 (u64::from(atlas_renderer.plan().layout.size).pow(2) * 4).max(page)
             }
         };
-        let virt = base
-            .with_technique(args.technique)
-            .with_virtual_maps(VirtualOptions::default().with_pool_bytes(pool_bytes));
+        let virt = base.with_technique(args.technique).with_virtual_maps(
+            VirtualOptions::default()
+                .with_pool_bytes(pool_bytes)
+                .with_atlas_floor(args.virtual_atlas_floor == "on"),
+        );
         let contenders = vec![
             Contender {
                 label: "atlas".into(),
@@ -191,6 +197,7 @@ pub fn virtual_maps(args: &VirtualArgs) -> Result<()> {
         "atlas_technique": args.atlas_technique.name(),
         "cache": args.cache,
         "page_pool_mib": args.page_pool,
+        "virtual_atlas_floor": args.virtual_atlas_floor,
         "records": records,
     });
     h.finish(table, fields, vec![figure])

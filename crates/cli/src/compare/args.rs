@@ -100,6 +100,12 @@ pub struct CompareArgs {
     /// Factor on --virtual-lod for spot and directional lights' faces (see render --help).
     #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_DIRECTED_LOD)]
     pub(super) virtual_directed_lod: f32,
+    /// --technique virtual: no face samples coarser than the tile the atlas techniques would
+    /// give the same view (`on`, default: virtual maps never misclassify more than the atlas
+    /// where the atlas is finer than the screen asks, e.g. few lights in a small frame), or
+    /// only what the screen's level of detail asks (`off`: fewer pages there).
+    #[arg(long, default_value = "on", value_parser = ["on", "off"])]
+    pub(super) virtual_atlas_floor: String,
     /// --techniques virtual's receiver bias as a fraction of the --bias-* texels (see render
     /// --help).
     #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_BIAS_SCALE)]

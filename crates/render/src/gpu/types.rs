@@ -268,7 +268,8 @@ pub struct VirtualFace {
     pub dirty: [f32; 4],
     /// x: shadow texels per screen pixel the face aims for (its level of detail:
     /// `VirtualOptions::lod`, times `VirtualOptions::directed_lod` for spot and directional
-    /// lights); y, z, w unused.
+    /// lights); y: the coarsest level a sample may take (the level as fine as the atlas's tile
+    /// of the same view); z, w unused.
     pub detail: [f32; 4],
 }
 

@@ -91,6 +91,12 @@ pub struct VirtualOptions {
     /// (pixel, light) pair: for measuring and for tests. Off as well where the device's
     /// storage bindings cannot hold the hand-off list (8 bytes per tile and up).
     pub tile_marking: bool,
+    /// No face samples coarser than the tile the atlas techniques give the same view (the
+    /// default atlas, fitted by importance): virtual maps are then never coarser than the
+    /// atlas where the atlas is finer than the screen asks (few lights, small frames), so they
+    /// misclassify no more than it does (docs/techniques.md has the table). Default on; off
+    /// asks only what the screen's level of detail asks.
+    pub atlas_floor: bool,
 }
 
 impl Default for VirtualOptions {
@@ -107,6 +113,7 @@ impl Default for VirtualOptions {
             receiver_cull: true,
             expand_bytes: 24 << 20,
             tile_marking: true,
+            atlas_floor: true,
         }
     }
 }
@@ -218,6 +225,23 @@ impl VirtualPlan {
         let mut sides = Vec::new();
         let mut lods = Vec::new();
         let mut light_views = vec![(0u32, 0u32); scene.lights.len()];
+        let mut floors = Vec::new();
+        // The tiles the atlas techniques give the same views (the default atlas, fitted by
+        // importance): no face samples coarser than its tile, so that virtual maps are never
+        // coarser than the atlas where the atlas is finer than the screen asks (few lights,
+        // small frames; issue 42's quality table).
+        let atlas = options
+            .atlas_floor
+            .then(|| {
+                crate::shadows::plan::ShadowPlan::new(
+                    scene,
+                    aspect,
+                    crate::shadows::plan::DEFAULT_MAX_ATLAS_SIZE,
+                    manyshadows_scene::atlas::FitPolicy::Prioritize,
+                )
+                .ok()
+            })
+            .flatten();
         let mut i = 0;
         while i < all.len() {
             let light = all[i].light;
@@ -234,7 +258,20 @@ impl VirtualPlan {
             let lod = face_lod(&scene.lights[light], options);
             light_views[light] = (views.len() as u32, n as u32);
             fit.lights += 1;
-            for v in group {
+            let tiles: Vec<u32> = atlas
+                .as_ref()
+                .map(|a| {
+                    let (first, count) = a.light_views[light];
+                    if count as usize == n {
+                        let f = first as usize;
+                        a.layout.tiles[f..f + n].iter().map(|t| t.size).collect()
+                    } else {
+                        Vec::new()
+                    }
+                })
+                .unwrap_or_default();
+            for (k, v) in group.iter().enumerate() {
+                let tile = tiles.get(k).copied().unwrap_or(0);
                 // A texel at distance r from the light spans 2·tan(half angle)·r / side; a
                 // pixel at camera distance D spans 2·D / (P11·height). Points in reach have
                 // r / D <= importance, so this side gives every one a texel no larger than
@@ -252,9 +289,16 @@ impl VirtualPlan {
                         max_side
                     }
                 };
+                // As fine as the atlas's tile at least (its texels span the same view).
+                let side = if tile > 0 {
+                    side.max(tile.next_power_of_two().clamp(PAGE_SIZE, max_side))
+                } else {
+                    side
+                };
                 views.push(*v);
                 sides.push(side);
                 lods.push(lod);
+                floors.push(tile);
             }
         }
         // Keep the page table within its cap: halve the largest sides first.
@@ -272,8 +316,16 @@ impl VirtualPlan {
         }
         let mut faces = Vec::with_capacity(views.len());
         let mut first = 0u32;
-        for ((v, &side), &lod) in views.iter().zip(&sides).zip(&lods) {
+        for (((v, &side), &lod), &tile) in views.iter().zip(&sides).zip(&lods).zip(&floors) {
             let finest = (side / PAGE_SIZE).trailing_zeros();
+            // The coarsest level whose side is no smaller than the atlas's tile (0: none).
+            let floor = if tile > PAGE_SIZE {
+                (tile.div_ceil(PAGE_SIZE))
+                    .next_power_of_two()
+                    .trailing_zeros()
+            } else {
+                0
+            };
             faces.push(VirtualFace {
                 view_proj: v.view_proj.to_cols_array_2d(),
                 eye: crate::shadows::plan::view_eye(v).to_array(),
@@ -286,7 +338,7 @@ impl VirtualPlan {
                 // w: last frame's first entry + 1 when its pages may be kept (set per frame).
                 table: [first, finest, side, 0],
                 dirty: NOTHING_MOVED,
-                detail: [lod, 0.0, 0.0, 0.0],
+                detail: [lod, floor.min(finest) as f32, 0.0, 0.0],
             });
             first = first.saturating_add(table_entries(side));
         }
@@ -474,6 +526,7 @@ with_setters!(VirtualOptions {
     with_max_side: max_side: u32,
     with_lod: lod: f32,
     with_directed_lod: directed_lod: f32,
+    with_atlas_floor: atlas_floor: bool,
     with_bias_scale: bias_scale: f32,
     with_max_table_entries: max_table_entries: u32,
     with_back_facing: back_facing: bool,

@@ -32,7 +32,8 @@ fn vsm_texel_world(face: VirtualFace, level: u32, ray: VsmRay) -> f32 {
 
 // The level a sample (camera view depth `view_depth`) needs: the coarsest whose texels are no
 // larger than the screen pixel there, divided by the face's level of detail (`detail.x`,
-// texels per pixel). Level 0 when even the finest level is coarser than that.
+// texels per pixel), and no coarser than the atlas's tile of the view (`vsm_floor`). Level 0
+// when even the finest level is coarser than that.
 fn vsm_level(face: VirtualFace, ray: VsmRay, view_depth: f32) -> u32 {
     let finest = face.table.y;
     let texel = vsm_texel_world(face, finest, ray);
@@ -40,7 +41,13 @@ fn vsm_level(face: VirtualFace, ray: VsmRay, view_depth: f32) -> u32 {
     // Level l has texels 2^(finest - l) times the finest: the coarsest level with
     // 2^(finest - l) · texel <= pixel is finest - floor(log2(pixel / texel)).
     let k = floor(log2(max(pixel, 1e-30) / max(texel, 1e-30)));
-    return finest - u32(clamp(k, 0.0, f32(finest)));
+    return vsm_floor(face, finest - u32(clamp(k, 0.0, f32(finest))));
+}
+
+// `level`, or the face's coarsest allowed level (`detail.y`: as fine as the tile the atlas
+// techniques give the same view) if that is finer.
+fn vsm_floor(face: VirtualFace, level: u32) -> u32 {
+    return max(level, min(u32(face.detail.y), face.table.y));
 }
 
 // A point in a face: continuous coordinates over the whole face (0..1, y down, as atlas

@@ -291,7 +291,7 @@ fn tile_light(i: u32, t: TileSamples) -> TilePage {
     if (clamp(k_hi, 0.0, f32(finest)) != steps) {
         return tile_outcome(TILE_UNSURE);
     }
-    let level = finest - u32(steps);
+    let level = vsm_floor(face, finest - u32(steps));
     let r = face_rect(face, level, t.lo, t.hi);
     if (!r.valid) {
         return tile_outcome(TILE_UNSURE);
