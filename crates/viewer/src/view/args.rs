@@ -48,6 +48,11 @@ pub struct ViewArgs {
     /// history follows the camera as it flies. The panel turns it on and off.
     #[arg(long)]
     pub(super) denoise: bool,
+    /// With shadow rays and --light-samples K: reuse each pixel's sampled lights across
+    /// frames, as `render --reuse` does (a still view's noise falls frame by frame without a
+    /// filter); the panel turns it on and off.
+    #[arg(long)]
+    pub(super) reuse: bool,
     /// Start with every shadow map drawn anew each frame (the panel's "keep unchanged maps"
     /// box unticked); by default the maps (pages) of views that saw no change are kept.
     #[arg(long, conflicts_with = "shadow_budget")]

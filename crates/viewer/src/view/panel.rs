@@ -222,6 +222,9 @@ fn shadow_options(ui: &mut egui::Ui, choice: &mut Choice) {
             "accumulate area samples over frames"
         };
         ui.checkbox(&mut choice.denoise, what);
+        if choice.light_samples > 0 {
+            ui.checkbox(&mut choice.reuse, "reuse the sampled lights across frames");
+        }
     }
     ui.checkbox(&mut choice.cache, "keep unchanged maps (cache)");
     ui.horizontal(|ui| {

@@ -36,6 +36,8 @@ pub(super) struct Choice {
     pub(super) light_samples: u32,
     /// Shadow rays denoised / accumulated over frames.
     pub(super) denoise: bool,
+    /// Sampled lights reused across frames.
+    pub(super) reuse: bool,
 }
 
 /// The open window and everything drawn into it.
@@ -91,7 +93,10 @@ fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
         .with_rays(
             RayOptions::default()
                 .with_light_samples(c.light_samples)
-                .with_denoise(c.denoise && c.technique.info().fills == Fills::Rays),
+                .with_denoise(c.denoise && c.technique.info().fills == Fills::Rays)
+                .with_reuse(
+                    c.reuse && c.light_samples > 0 && c.technique.info().fills == Fills::Rays,
+                ),
         )
 }
 
@@ -117,6 +122,7 @@ impl State {
             look: args.look.look(),
             light_samples: args.light_samples,
             denoise: args.denoise,
+            reuse: args.reuse,
         };
         let renderer = Renderer::new(&ctx, scene, settings(config.width, config.height, choice))?;
         if !args.insist {
