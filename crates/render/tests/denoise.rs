@@ -9,19 +9,11 @@ mod common;
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::{RayOptions, RenderError, RenderSettings, Renderer, Technique};
 
-/// The cubes under 48 seeded lights of every type: each pixel has more candidates than one
-/// sample.
-fn cubes_under_48_lights() -> manyshadows::scene::Scene {
-    let mut scene = builtin::build("cubes", &BuiltinOptions::default()).expect("scene");
-    scene.lights = builtin::scatter_lights(&scene, 48, 3, LightMix::All, None);
-    scene
-}
-
 /// The cubes under 48 lights, 160 × 120: plain K = 1 against denoised K = 1 over eight still frames.
 #[test]
 fn denoised_samples_are_close_to_every_light_and_converge() {
     let ctx = common::context();
-    let scene = cubes_under_48_lights();
+    let scene = common::cubes_under_48_lights();
     let base = RenderSettings::new(160, 120);
     let Some(mut exact) = common::raytraced(&ctx, &scene, base.clone()) else {
         return;
@@ -120,28 +112,23 @@ fn every_light_traced_accumulates_area_samples_over_still_frames() {
 /// refused, naming the option, on any device.
 #[test]
 fn denoising_without_shadow_rays_is_refused_by_name() {
-    let ctx = common::context();
     let scene = builtin::build("cubes", &BuiltinOptions::default()).expect("scene");
-    for settings in [
-        RenderSettings::new(32, 32)
-            .with_technique(Technique::default())
-            .with_rays(RayOptions::default().with_denoise(true)),
-        RenderSettings::new(32, 32)
-            .with_technique(Technique::default())
-            .with_rays(
-                RayOptions::default()
-                    .with_light_samples(1)
-                    .with_denoise(true),
-            ),
-    ] {
-        match Renderer::new(&ctx, &scene, settings) {
-            Err(e @ RenderError::InvalidOption { .. }) => {
-                assert!(e.to_string().contains("rays.denoise"), "{e}");
-            }
-            Err(e) => panic!("refused for another reason: {e}"),
-            Ok(_) => panic!("denoising without shadow rays was accepted"),
-        }
-    }
+    common::refused_naming(
+        &scene,
+        &[
+            RenderSettings::new(32, 32)
+                .with_technique(Technique::default())
+                .with_rays(RayOptions::default().with_denoise(true)),
+            RenderSettings::new(32, 32)
+                .with_technique(Technique::default())
+                .with_rays(
+                    RayOptions::default()
+                        .with_light_samples(1)
+                        .with_denoise(true),
+                ),
+        ],
+        "rays.denoise",
+    );
 }
 
 /// A sun switched off: its light leaves the frame at once (the unshadowed light is exact
@@ -152,7 +139,7 @@ fn denoising_without_shadow_rays_is_refused_by_name() {
 #[test]
 fn a_light_switched_off_leaves_the_frame_within_four_frames() {
     let ctx = common::context();
-    let scene = cubes_under_48_lights();
+    let scene = common::cubes_under_48_lights();
     let base = RenderSettings::new(160, 120);
     let Some(mut exact) = common::raytraced(&ctx, &scene, base.clone()) else {
         return;
@@ -212,7 +199,7 @@ fn a_light_switched_off_leaves_the_frame_within_four_frames() {
 #[test]
 fn a_frame_too_large_to_denoise_is_refused_by_name() {
     let ctx = common::context();
-    let scene = cubes_under_48_lights();
+    let scene = common::cubes_under_48_lights();
     let limits = ctx.limits();
     let limit = limits
         .max_storage_buffer_binding_size

@@ -6,17 +6,9 @@
 
 mod common;
 
-use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
+use manyshadows::scene::builtin::{self, BuiltinOptions};
 use manyshadows::shading::look::{Exposure, Look, ToneMap};
-use manyshadows::{RayOptions, RenderError, RenderSettings, Renderer, Technique};
-
-/// The cubes under 48 seeded lights of every type (sized: the built-in default sizes), so
-/// each pixel has far more candidates than one sample.
-fn cubes_under_48_lights() -> manyshadows::scene::Scene {
-    let mut scene = builtin::build("cubes", &BuiltinOptions::default()).expect("scene");
-    scene.lights = builtin::scatter_lights(&scene, 48, 3, LightMix::All, None);
-    scene
-}
+use manyshadows::{RayOptions, RenderSettings, Technique};
 
 /// Still frames, 160 × 120: plain K = 1 stays at its first frame's error, reused K = 1
 /// falls frame by frame (the reservoirs stand for up to 20 frames: a moving average of
@@ -24,7 +16,7 @@ fn cubes_under_48_lights() -> manyshadows::scene::Scene {
 #[test]
 fn reused_samples_converge_on_a_still_camera() {
     let ctx = common::context();
-    let scene = cubes_under_48_lights();
+    let scene = common::cubes_under_48_lights();
     let base = RenderSettings::new(160, 120);
     let Some(mut exact) = common::raytraced(&ctx, &scene, base.clone()) else {
         return;
@@ -77,7 +69,7 @@ fn linear(v: u8) -> f64 {
 /// and of one frame, as fractions of the exact image's mean.
 fn mean_over_seeds(rays: RayOptions, seeds: u32) -> Option<(f64, f64, f64)> {
     let ctx = common::context();
-    let scene = cubes_under_48_lights();
+    let scene = common::cubes_under_48_lights();
     let look = Look {
         tone_map: Some(ToneMap::Clamp),
         exposure: Some(Exposure::Scale(0.1)),
@@ -164,22 +156,17 @@ fn reuse_is_unbiased_on_a_still_camera() {
 /// refused naming the option, on any device.
 #[test]
 fn reuse_without_sampled_rays_is_refused_by_name() {
-    let ctx = common::context();
     let scene = builtin::build("cubes", &BuiltinOptions::default()).expect("scene");
-    for settings in [
-        RenderSettings::new(32, 32)
-            .with_technique(Technique::default())
-            .with_rays(RayOptions::default().with_light_samples(1).with_reuse(true)),
-        RenderSettings::new(32, 32)
-            .with_technique(Technique::RAYTRACED)
-            .with_rays(RayOptions::default().with_reuse(true)),
-    ] {
-        match Renderer::new(&ctx, &scene, settings) {
-            Err(e @ RenderError::InvalidOption { .. }) => {
-                assert!(e.to_string().contains("rays.reuse"), "{e}");
-            }
-            Err(e) => panic!("refused for another reason: {e}"),
-            Ok(_) => panic!("reuse without sampled rays was accepted"),
-        }
-    }
+    common::refused_naming(
+        &scene,
+        &[
+            RenderSettings::new(32, 32)
+                .with_technique(Technique::default())
+                .with_rays(RayOptions::default().with_light_samples(1).with_reuse(true)),
+            RenderSettings::new(32, 32)
+                .with_technique(Technique::RAYTRACED)
+                .with_rays(RayOptions::default().with_reuse(true)),
+        ],
+        "rays.reuse",
+    );
 }

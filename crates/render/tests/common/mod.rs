@@ -387,3 +387,25 @@ pub fn rmse(a: &manyshadows::Frame, b: &manyshadows::Frame) -> f64 {
         .sum();
     (s / n).sqrt()
 }
+
+/// The cubes under 48 seeded lights of every type (the built-in default sizes): each pixel has
+/// far more candidate lights than one sample (the sampled-ray tests' scene).
+pub fn cubes_under_48_lights() -> Scene {
+    let mut scene = builtin::build("cubes", &builtin::BuiltinOptions::default()).expect("scene");
+    scene.lights = builtin::scatter_lights(&scene, 48, 3, builtin::LightMix::All, None);
+    scene
+}
+
+/// Each of `settings` is refused as an invalid option naming `option`, on any device.
+pub fn refused_naming(scene: &Scene, settings: &[manyshadows::RenderSettings], option: &str) {
+    let ctx = context();
+    for s in settings {
+        match manyshadows::Renderer::new(&ctx, scene, s.clone()) {
+            Err(e @ manyshadows::RenderError::InvalidOption { .. }) => {
+                assert!(e.to_string().contains(option), "{e}");
+            }
+            Err(e) => panic!("refused for another reason: {e}"),
+            Ok(_) => panic!("{option}: accepted where it cannot apply"),
+        }
+    }
+}
