@@ -37,12 +37,14 @@ results.txt, results.json (every frame's numbers) and frames.png (error and time
 
 Needs ray queries (EXPERIMENTAL_RAY_QUERY: Vulkan with Mesa 25's lavapipe, or a GPU driver
 that has them). --reference off skips the exact frames (times only), for light counts whose
-exact frames take long on a CPU adapter.
+exact frames take long on a CPU adapter. --reuse makes both sampled renderers reuse their
+lights across frames (`render --reuse`): the plain column then shows reuse alone.
 
 Examples:
   manyshadows bench denoise                                    # atrium, 1,024 lights, 60 frames
   manyshadows bench denoise --still --frames 8                 # a still camera converging
-  manyshadows bench denoise --lights 1024,16384 --reference off --frames 10   # cost growth";
+  manyshadows bench denoise --lights 1024,16384 --reference off --frames 10   # cost growth
+  manyshadows bench denoise --reuse --still --orbit 0 --frames 32   # reuse, alone and denoised";
 
 /// Arguments of `manyshadows bench denoise`.
 #[derive(Args, Debug, Clone)]
