@@ -368,11 +368,12 @@ fn an_overflowing_triangle_expansion_draws_the_same_shadows() {
     let ctx = common::context();
     let scene = atrium_40();
     // Without the atlas floor: with it, 2 pixels of the PCF image differ by one level of 255
-    // (the mask is the same). Whole draws write texels the expansion leaves clear (read back:
-    // 21,643 pool texels without the floor, 72,321 with it, the same page table), outside
-    // what the samples read; with the floor two PCF taps reach such texels. Not the
-    // texel-centre cull (a quarter-texel margin leaves them) nor the tile marking (per-pixel
-    // marking too); not explained yet.
+    // (the mask is the same), and that is the expansion's back-face cull, which whole draws
+    // do not do: at a closed caster's silhouette a texel centre can fall inside a back face
+    // and outside every front face, so whole draws write the back face's depth there and the
+    // expansion leaves it clear (either is a valid rasterization of the silhouette; with the
+    // back-face cull turned off the two agree, seen). Not the texel-centre cull, the receiver
+    // bounds or the tile marking (each turned off or widened, the 2 pixels stay).
     let render = |expand_bytes: u64| {
         virtual_frame(
             &ctx,
