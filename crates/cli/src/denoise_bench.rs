@@ -305,15 +305,9 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
         } else {
             None
         };
-        let mover = match args.move_instance {
-            _ if args.still => None,
-            Some(k) if k >= scene.instances.len() => bail!(
-                "--move-instance {k}: the scene has {} instances",
-                scene.instances.len()
-            ),
-            Some(k) => Some(k),
-            None => seen_caster(&h.ctx, &scene)?,
-        };
+        let mover = crate::render::moving_instance(args.move_instance, args.still, &scene, || {
+            seen_caster(&h.ctx, &scene)
+        })?;
         let radius = mover.map_or(0.0, |k| 0.5 * caster_size(&scene, k));
         match mover {
             Some(k) => h.note(format!(

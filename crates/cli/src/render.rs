@@ -26,15 +26,9 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     if !args.insist {
         pb.suspend(|| check_shadow_work(&renderer))?;
     }
-    let mover = match args.move_instance {
-        _ if args.still => None,
-        Some(k) if k >= scene.instances.len() => bail!(
-            "--move-instance {k}: the scene has {} instances",
-            scene.instances.len()
-        ),
-        Some(k) => Some(k),
-        None => scene.smallest_caster(),
-    };
+    let mover = moving_instance(args.move_instance, args.still, &scene, || {
+        Ok(scene.smallest_caster())
+    })?;
     let path = match &args.camera_path {
         Some(p) => Some(
             crate::args::parse_camera_path(
@@ -243,6 +237,25 @@ pub(crate) fn write_visibility(
         .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
+}
+
+/// The instance a sequence moves: none with `--still`, `--move-instance` checked against the
+/// scene, else `default`'s choice.
+pub(crate) fn moving_instance(
+    asked: Option<usize>,
+    still: bool,
+    scene: &manyshadows::scene::Scene,
+    default: impl FnOnce() -> Result<Option<usize>>,
+) -> Result<Option<usize>> {
+    match asked {
+        _ if still => Ok(None),
+        Some(k) if k >= scene.instances.len() => bail!(
+            "--move-instance {k}: the scene has {} instances",
+            scene.instances.len()
+        ),
+        Some(k) => Ok(Some(k)),
+        None => default(),
+    }
 }
 
 /// Most (caster triangle, view) pairs a frame may take without `--insist`: 2 G. The layered

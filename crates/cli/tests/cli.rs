@@ -19,6 +19,17 @@ fn run(args: &[&str]) -> Output {
     bin().args(args).output().expect("run manyshadows")
 }
 
+/// `run`, which must succeed (its stderr is the failure message).
+fn run_ok(args: &[&str]) -> Output {
+    let out = run(args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 fn assert_clean_failure(out: &Output, code: i32, needle: &str) {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(code), "exit code; stderr: {stderr}");
@@ -777,38 +788,32 @@ fn a_camera_path_is_flown_frame_by_frame() {
         "72",
         "--no-cache",
     ];
-    let out = run(&[
-        &common[..],
+    run_ok(
         &[
-            "--frames",
-            "4",
-            "--still",
-            "--camera-path",
-            path.to_str().unwrap(),
-            "--out",
-            flown.to_str().unwrap(),
-        ],
-    ]
-    .concat());
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+            &common[..],
+            &[
+                "--frames",
+                "4",
+                "--still",
+                "--camera-path",
+                path.to_str().unwrap(),
+                "--out",
+                flown.to_str().unwrap(),
+            ],
+        ]
+        .concat(),
     );
-    let out = run(&[
-        &common[..],
+    run_ok(
         &[
-            "--camera",
-            "2,3,7,0,0.5,0",
-            "--out",
-            direct.to_str().unwrap(),
-        ],
-    ]
-    .concat());
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+            &common[..],
+            &[
+                "--camera",
+                "2,3,7,0,0.5,0",
+                "--out",
+                direct.to_str().unwrap(),
+            ],
+        ]
+        .concat(),
     );
     assert!(
         std::fs::read(&flown).unwrap() == std::fs::read(&direct).unwrap(),
@@ -816,16 +821,18 @@ fn a_camera_path_is_flown_frame_by_frame() {
     );
     // A first frame elsewhere: the path's first camera is not the scene's.
     let first = dir.join("first.png");
-    run(&[
-        &common[..],
+    run_ok(
         &[
-            "--camera-path",
-            path.to_str().unwrap(),
-            "--out",
-            first.to_str().unwrap(),
-        ],
-    ]
-    .concat());
+            &common[..],
+            &[
+                "--camera-path",
+                path.to_str().unwrap(),
+                "--out",
+                first.to_str().unwrap(),
+            ],
+        ]
+        .concat(),
+    );
     assert!(std::fs::read(&first).unwrap() != std::fs::read(&direct).unwrap());
     std::fs::write(&path, "0 4 9 0 1 0\n1 2 3\n").unwrap();
     let out = run(&[

@@ -231,7 +231,20 @@ impl ShadowPlan {
         fit: FitPolicy,
         points: PointShadows,
     ) -> Result<Self, RenderError> {
-        let mut views = light_space::shadow_views_with(scene, aspect, points);
+        let views = light_space::shadow_views_with(scene, aspect, points);
+        Self::from_views(scene, aspect, views, max_atlas, fit)
+    }
+
+    /// [`ShadowPlan::with_points`] over views already computed by
+    /// `light_space::shadow_views_with` for the same scene and aspect (virtual maps' plan
+    /// has them: it fits the atlas plan only to know each view's tile).
+    pub(crate) fn from_views(
+        scene: &Scene,
+        aspect: f32,
+        mut views: Vec<ShadowView>,
+        max_atlas: u32,
+        fit: FitPolicy,
+    ) -> Result<Self, RenderError> {
         let mut requests: Vec<u32> = views.iter().map(|v| v.resolution).collect();
         let shadowed = views
             .iter()

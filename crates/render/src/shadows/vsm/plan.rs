@@ -233,9 +233,10 @@ impl VirtualPlan {
         let atlas = options
             .atlas_floor
             .then(|| {
-                crate::shadows::plan::ShadowPlan::new(
+                crate::shadows::plan::ShadowPlan::from_views(
                     scene,
                     aspect,
+                    all.clone(),
                     crate::shadows::plan::DEFAULT_MAX_ATLAS_SIZE,
                     manyshadows_scene::atlas::FitPolicy::Prioritize,
                 )
