@@ -5,8 +5,8 @@ use clap::{Parser, Subcommand};
 
 use crate::args::{GpuArgs, RenderArgs};
 use crate::{
-    bench, compare, denoise_bench, irregular_bench, lights_bench, omni, shadows_bench, soak,
-    soft_bench, suite, viewer, virtual_bench,
+    bench, compare, denoise_bench, estimate_bench, irregular_bench, lights_bench, omni,
+    shadows_bench, soak, soft_bench, suite, viewer, virtual_bench,
 };
 
 pub(crate) const ABOUT: &str = "Render scenes lit by many shadow-casting lights, headless, to PNG.";
@@ -116,6 +116,12 @@ pub(crate) enum BenchCommand {
     #[command(long_about = denoise_bench::LONG_ABOUT)]
     #[command(mut_arg("out_dir", |a| a.default_value("bench-denoise").required(false)))]
     Denoise(Box<denoise_bench::DenoiseArgs>),
+    /// How well each technique's estimate of its frame (made before drawing it, as `render`,
+    /// `view` and `compare` say it) predicts the measured frame: per scene, light count and
+    /// method, GPU ms per stage estimated and measured and their ratio; table and results.json.
+    #[command(long_about = estimate_bench::LONG_ABOUT)]
+    #[command(mut_arg("out_dir", |a| a.default_value("bench-estimate").required(false)))]
+    Estimate(Box<estimate_bench::EstimateArgs>),
     /// Thousands of frames in which the camera, a caster, a light and the light count change:
     /// resident memory after a warm-up against its baseline (fails past --max-growth-mib),
     /// frame times per interval, any failed frame; table and results.json.

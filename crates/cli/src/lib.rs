@@ -32,6 +32,7 @@ mod bench;
 mod commands;
 mod compare;
 mod denoise_bench;
+mod estimate_bench;
 mod harness;
 mod info;
 mod irregular_bench;
@@ -114,6 +115,7 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
         Some(Command::Bench(BenchCommand::Soak(args))) => soak::soak(&args),
         Some(Command::Bench(BenchCommand::Shadows(args))) => shadows_bench::shadows(&args),
         Some(Command::Bench(BenchCommand::Soft(args))) => soft_bench::soft(&args),
+        Some(Command::Bench(BenchCommand::Estimate(args))) => estimate_bench::estimate(&args),
         Some(Command::Bench(BenchCommand::Denoise(args))) => denoise_bench::denoise(&args),
         Some(Command::Bench(BenchCommand::Suite(args))) => suite::suite(&args),
         None => render::render(&cli.render),

@@ -23,8 +23,19 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     let settings = render_settings(args, atlas_max);
     pb.set_message("uploading the scene and building pipelines");
     let mut renderer = Renderer::new(&ctx, &scene, settings)?;
+    pb.set_message("estimating the frame");
+    let estimate = renderer.estimate_frame();
     if !args.insist {
         pb.suspend(|| check_shadow_work(&renderer))?;
+    }
+    if estimate.total_ms() > LONG_FRAME_MS {
+        pb.suspend(|| {
+            eprintln!(
+                "estimate: {} this frame ({})",
+                describe_estimate(&estimate),
+                renderer.settings().technique
+            )
+        });
     }
     let mover = moving_instance(args.move_instance, args.still, &scene, || {
         Ok(scene.smallest_caster())
@@ -38,6 +49,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         ),
         None => None,
     };
+    let long = long_frame(&renderer, &estimate);
     let mut frame = None;
     for f in 0..args.frames {
         if let Some(path) = &path {
@@ -65,7 +77,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
                 renderer.set_camera(cam)?;
             }
         }
-        let fr = if args.stages || long_frame(&renderer) {
+        let fr = if args.stages || long {
             let t0 = std::time::Instant::now();
             let f = f + 1;
             pb.set_message(format!("frame {f}: G-buffer and light clusters"));
@@ -199,7 +211,15 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             );
         }
     }
-    let summary = summary(&ctx, &scene, &renderer, &frame, args, started.elapsed());
+    let summary = summary(
+        &ctx,
+        &scene,
+        &renderer,
+        &frame,
+        &estimate,
+        args,
+        started.elapsed(),
+    );
     print_summary(&summary);
     if let Some(path) = &args.json {
         std::fs::write(path, serde_json::to_string_pretty(&summary)?)
@@ -263,24 +283,61 @@ pub(crate) fn moving_instance(
 /// the default frame asks 21.6 M.
 pub(crate) const MAX_UNASKED_TRIANGLE_VIEWS: u64 = 2_000_000_000;
 
+/// Most milliseconds a frame may be estimated to take on a CPU adapter (whose costs the
+/// estimate was fitted on) without `--insist`: 10 minutes.
+pub(crate) const MAX_UNASKED_FRAME_MS: f64 = 600_000.0;
+
+/// An estimated frame past this says its estimate first and each part as it finishes: 2 s.
+pub(crate) const LONG_FRAME_MS: f64 = 2_000.0;
+
 /// Shadow work past which `render` says each part of a frame as it finishes (`--stages`).
 const STAGED_TRIANGLE_VIEWS: u64 = MAX_UNASKED_TRIANGLE_VIEWS / 10;
 
-/// Whether the frame's shadow work is estimated past [`STAGED_TRIANGLE_VIEWS`].
-pub(crate) fn long_frame(renderer: &Renderer) -> bool {
+/// Whether the frame's shadow work passes [`STAGED_TRIANGLE_VIEWS`] or its estimate
+/// [`LONG_FRAME_MS`].
+pub(crate) fn long_frame(renderer: &Renderer, estimate: &manyshadows::FrameEstimate) -> bool {
     renderer
         .shadow_work()
         .is_some_and(|w| w.triangle_views > STAGED_TRIANGLE_VIEWS)
+        || estimate.total_ms() > LONG_FRAME_MS
+}
+
+/// An estimate in words: `~3.2 min on this adapter (G-buffer 0.1 s, shadows 3.0 min, lighting
+/// 9.4 s)`, saying where the costs come from when the adapter is not a CPU one.
+pub(crate) fn describe_estimate(e: &manyshadows::FrameEstimate) -> String {
+    let t = |ms: f64| {
+        if ms >= 60_000.0 {
+            format!("{:.1} min", ms / 60_000.0)
+        } else if ms >= 1_000.0 {
+            format!("{:.1} s", ms / 1e3)
+        } else {
+            format!("{ms:.0} ms")
+        }
+    };
+    format!(
+        "~{} {} (G-buffer {}, shadows {}, lighting {})",
+        t(e.total_ms()),
+        if e.calibrated {
+            "on this adapter"
+        } else {
+            "at lavapipe's costs (this adapter is no CPU: likely far less)"
+        },
+        t(e.gbuffer_ms + e.clusters_ms),
+        t(e.shadows_ms),
+        t(e.lighting_ms)
+    )
 }
 
 /// Refuses, before any frame is drawn, a frame whose per-view shadow work passes
-/// [`MAX_UNASKED_TRIANGLE_VIEWS`], with the estimate and the techniques that scale.
+/// [`MAX_UNASKED_TRIANGLE_VIEWS`], with the estimate and the techniques that scale, or whose
+/// estimated time passes [`MAX_UNASKED_FRAME_MS`] on a CPU adapter, with the stage that costs
+/// most and what would shrink it.
 pub(crate) fn check_shadow_work(renderer: &Renderer) -> Result<()> {
     let Some(work) = renderer.shadow_work() else {
-        return Ok(());
+        return check_frame_time(renderer);
     };
     if work.triangle_views <= MAX_UNASKED_TRIANGLE_VIEWS {
-        return Ok(());
+        return check_frame_time(renderer);
     }
     let technique = renderer.settings().technique;
     let g = |n: u64| format!("{:.1} G", n as f64 / 1e9);
@@ -312,14 +369,59 @@ pub(crate) fn check_shadow_work(renderer: &Renderer) -> Result<()> {
     };
     bail!(
         "technique {technique} would take {} (caster triangle, view) pairs this frame ({} \
-         views; {how}), more than the {} this command starts unasked. Techniques that cull \
+         views; {how}; estimated {}), more than the {} this command starts unasked. Techniques that cull \
          whole instances or clusters per view first take at most {} here ({}); {} scale with \
          pixels and lights instead of views. Pass --insist to render it anyway.",
         g(work.triangle_views),
         work.views,
+        describe_estimate(&renderer.estimate_frame()),
         g(MAX_UNASKED_TRIANGLE_VIEWS),
         g(work.after_instance_culling),
         culled.join(", "),
         viewless.join(", ")
+    );
+}
+
+/// The time half of [`check_shadow_work`].
+fn check_frame_time(renderer: &Renderer) -> Result<()> {
+    let e = renderer.estimate_frame();
+    if !e.calibrated || e.total_ms() <= MAX_UNASKED_FRAME_MS {
+        return Ok(());
+    }
+    let technique = renderer.settings().technique;
+    let w = &e.work;
+    let m = |n: u64| format!("{:.1} M", n as f64 / 1e6);
+    let advice = if e.shadows_ms >= e.lighting_ms.max(e.gbuffer_ms) {
+        format!(
+            "most of it making shadows ({} (caster triangle, view) pairs, {} (pixel, light) \
+             samples): fewer lights, or a technique whose shadows scale with pixels (virtual, \
+             raytraced)",
+            m(w.triangle_views),
+            m(w.pixel_lights)
+        )
+    } else if e.lighting_ms >= e.gbuffer_ms {
+        let rays = if w.rays > 0 && renderer.settings().rays.light_samples == 0 {
+            "; --light-samples K traces K rays per pixel instead of one per light in reach"
+        } else {
+            ""
+        };
+        format!(
+            "most of it lighting {} (pixel, light) pairs in reach ({} shadow rays): fewer \
+             pixels or lights{rays}",
+            m(w.pixel_lights),
+            m(w.rays)
+        )
+    } else {
+        format!(
+            "most of it the camera's {} triangles over {} pixels: fewer pixels",
+            m(w.triangles),
+            m(w.pixels)
+        )
+    };
+    bail!(
+        "technique {technique} is estimated at {} for this frame, more than the {} min this \
+         command starts unasked; {advice}. Pass --insist to render it anyway.",
+        describe_estimate(&e),
+        MAX_UNASKED_FRAME_MS / 60_000.0
     );
 }

@@ -12,6 +12,7 @@ pub(crate) fn summary(
     scene: &Scene,
     r: &Renderer,
     frame: &Frame,
+    estimate: &manyshadows::FrameEstimate,
     args: &RenderArgs,
     total: Duration,
 ) -> serde_json::Value {
@@ -45,6 +46,8 @@ pub(crate) fn summary(
                   "light_samples": r.settings().rays.light_samples, "denoise": r.settings().rays.denoise,
                   "reuse": r.settings().rays.reuse,
                   "technique_softens": r.settings().technique.info().soft_shadows },
+        "estimate": estimate,
+        "estimate_text": crate::render::describe_estimate(estimate),
         "gpu_ms": frame.timings.gpu_ms,
         "cpu_record_ms": frame.timings.cpu_record_ms,
         "frame_wall_ms": frame.timings.wall_ms,
@@ -387,6 +390,9 @@ fn print_times(s: &serde_json::Value) {
             println!("GPU time     {}", parts.join(", "));
         }
         _ => println!("GPU time     (no timestamp queries on this adapter)"),
+    }
+    if let Some(e) = s["estimate_text"].as_str() {
+        println!("estimate     {e}, before the first frame");
     }
     println!(
         "CPU record   {:.2} ms; frame wall {:.1} ms; total {:.1} s",

@@ -120,7 +120,9 @@ pub use gpu::context::{
 pub use gpu::timing::{GpuTimes, Stage};
 pub use gpu_scene::caster_layout::CasterOptions;
 pub use renderer::{FramePart, Renderer};
-pub use report::{Frame, FrameTimings, ShadowLayout, ShadowWork, SubmittedFrame};
+pub use report::{
+    EstimatedWork, Frame, FrameEstimate, FrameTimings, ShadowLayout, ShadowWork, SubmittedFrame,
+};
 pub use settings::RenderSettings;
 pub use shading::look::{Exposure, Look, ResolvedLook, Shading, ToneMap};
 pub use shadows::descriptor::{Culling, Need, Requirement, TechniqueInfo};

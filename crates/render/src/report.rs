@@ -89,3 +89,75 @@ pub struct ShadowWork {
     /// Every caster triangle in every view.
     pub all_pairs: u64,
 }
+
+/// The work of the next frame, counted before it is drawn
+/// ([`Renderer::estimated_work`](crate::Renderer::estimated_work)).
+#[non_exhaustive]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct EstimatedWork {
+    /// Pixels of the frame.
+    pub pixels: u64,
+    /// Triangles the camera draws (every instance).
+    pub triangles: u64,
+    /// Triangles of the instances that cast shadows.
+    pub caster_triangles: u64,
+    /// Instances.
+    pub instances: usize,
+    /// Lights.
+    pub lights: usize,
+    /// (pixel, light) pairs in reach, estimated from a coarse grid of camera rays.
+    pub pixel_lights: u64,
+    /// (pixel, light) pairs the clustered light loop visits: lights whose reach meets the
+    /// pixel's cluster (estimated from the same grid).
+    pub cluster_lights: u64,
+    /// (caster triangle, view) pairs the shadow stage takes on (0 without views; for virtual
+    /// maps, after culling whole instances per face).
+    pub triangle_views: u64,
+    /// (caster instance, view) pairs left after culling whole instances per view: the draws
+    /// of the techniques that draw per instance and view.
+    pub instance_views: u64,
+    /// Shadow views (atlas tiles, virtual faces, irregular light views).
+    pub views: usize,
+    /// Atlas texels the views' tiles cover (atlas techniques).
+    pub atlas_texels: u64,
+    /// Texels of the whole atlas texture (atlas techniques).
+    pub atlas_area: u64,
+    /// Depth taps per (pixel, light) pair beyond one comparison: a sized light's blocker
+    /// search and filter, or a 3×3 PCF.
+    pub taps: u32,
+    /// Shadow rays the lighting pass traces (ray-traced shadows).
+    pub rays: u64,
+    /// Mean triangles a shadow ray tests before it is done (on a CPU BVH of the scene, from
+    /// a few lights in reach of each grid point).
+    pub ray_weight: f64,
+    /// Mean caster instances whose box a shadow ray crosses (the bottom-level structures it
+    /// enters), from the same rays.
+    pub ray_instances: f64,
+}
+
+/// What the next frame is estimated to cost
+/// ([`Renderer::estimate_frame`](crate::Renderer::estimate_frame)).
+#[non_exhaustive]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct FrameEstimate {
+    /// The work counted.
+    pub work: EstimatedWork,
+    /// Milliseconds of the camera's G-buffer.
+    pub gbuffer_ms: f64,
+    /// Milliseconds of the light clusters.
+    pub clusters_ms: f64,
+    /// Milliseconds of shadows (pages and acceleration structures included).
+    pub shadows_ms: f64,
+    /// Milliseconds of lighting (shadow rays and lookups included).
+    pub lighting_ms: f64,
+    /// Whether the costs were measured on an adapter of this kind (a CPU adapter: they were
+    /// fitted on lavapipe); otherwise the figures are lavapipe's, an upper bound for a GPU.
+    pub calibrated: bool,
+}
+
+impl FrameEstimate {
+    /// Milliseconds of the whole frame.
+    pub fn total_ms(&self) -> f64 {
+        self.gbuffer_ms + self.clusters_ms + self.shadows_ms + self.lighting_ms
+    }
+}

@@ -77,7 +77,18 @@ pub(super) fn score_variants(
             bar.inc(1);
             continue;
         };
-        let frame = if setup.args.stages || crate::render::long_frame(&renderer) {
+        let estimate = renderer.estimate_frame();
+        let long = crate::render::long_frame(&renderer, &estimate);
+        if long {
+            multi.suspend(|| {
+                eprintln!(
+                    "{}: estimate {}",
+                    v.label(),
+                    crate::render::describe_estimate(&estimate)
+                )
+            });
+        }
+        let frame = if setup.args.stages || long {
             let (label, t0) = (v.label(), std::time::Instant::now());
             renderer.render_reporting(&mut |part| {
                 multi.suspend(|| {

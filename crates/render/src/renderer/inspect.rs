@@ -30,7 +30,7 @@ impl Renderer {
     }
 
     /// The source as virtual maps, where the technique is `virtual`.
-    fn virtual_source(&self) -> Option<&VirtualSource> {
+    pub(super) fn virtual_source(&self) -> Option<&VirtualSource> {
         (&*self.source as &dyn std::any::Any).downcast_ref::<VirtualSource>()
     }
 
@@ -78,14 +78,7 @@ impl Renderer {
             .iter()
             .map(|d| u64::from(d.mesh.index_count / 3))
             .sum();
-        let mut culled = 0u64;
-        for v in views {
-            for d in &casters {
-                if v.sphere_visible(d.sphere.0, d.sphere.1) {
-                    culled += u64::from(d.mesh.index_count / 3);
-                }
-            }
-        }
+        let (culled, _) = self.instance_pairs(views);
         let all_pairs = per_view * views.len() as u64;
         Some(ShadowWork {
             views: views.len(),
@@ -96,6 +89,30 @@ impl Renderer {
             after_instance_culling: culled,
             all_pairs,
         })
+    }
+
+    /// (caster triangle, view) and (caster instance, view) pairs left after culling whole
+    /// instances per view by bounding sphere.
+    pub(super) fn instance_pairs(
+        &self,
+        views: &[manyshadows_scene::light_space::ShadowView],
+    ) -> (u64, u64) {
+        let casters: Vec<_> = self
+            .scene
+            .draws
+            .iter()
+            .filter(|d| d.casts_shadows)
+            .collect();
+        let (mut culled, mut draws) = (0u64, 0u64);
+        for v in views {
+            for d in &casters {
+                if v.sphere_visible(d.sphere.0, d.sphere.1) {
+                    culled += u64::from(d.mesh.index_count / 3);
+                    draws += 1;
+                }
+            }
+        }
+        (culled, draws)
     }
 
     /// A picture of the shadow maps as the last frame left them: the atlas with each view's

@@ -14,6 +14,8 @@
 //! `render_to`, GPU times); `inspect` what callers read of it (plans, estimates, read-backs,
 //! frames shaded with given visibility); `uniforms` the frame's uniform block.
 
+#[cfg(not(target_arch = "wasm32"))]
+mod estimate;
 mod inspect;
 mod state;
 mod uniforms;

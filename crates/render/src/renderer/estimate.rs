@@ -1,0 +1,490 @@
+//! What the next frame will cost, before it is drawn: the work each stage takes on (counted
+//! from the scene, the shadow plan and a coarse look at what the camera sees), and milliseconds
+//! from costs per unit of that work measured on lavapipe (`manyshadows bench estimate` measures
+//! them against real frames; docs/benchmarks.md has its table).
+//!
+//! The units per stage:
+//! - **G-buffer**: pixels, and every triangle of every instance (the camera's draw culls
+//!   nothing on the CPU).
+//! - **Lighting**: a 64×36 grid of camera rays is cast against every triangle of the scene
+//!   (a BVH from obvhs, built for the estimate) and, at each surface point, lights are
+//!   counted: those whose bounding sphere holds the point (directional lights hold
+//!   everything) are the (pixel, light) pairs in reach, each paying its shadow lookup (a PCF
+//!   comparison, a sized light's blocker search and filter, a virtual page read, a mask bit,
+//!   or shadow rays); those whose sphere meets the point's cluster are the pairs the
+//!   clustered loop visits. For ray-traced shadows, rays to a few lights in reach of each
+//!   point count the triangles a shadow ray tests.
+//! - **Shadows**: (caster triangle, view) pairs as the technique takes them
+//!   ([`ShadowWork`]) and atlas texels filled, for the atlas techniques; every pair and the
+//!   (pixel, light) samples put in lists, for irregular maps; the pairs after culling whole
+//!   instances per face and the samples marking pages, for virtual maps; the instances of the
+//!   acceleration structure, for rays.
+
+use super::state::Renderer;
+use crate::error::{Fills, Technique};
+use crate::frame::clusters::ClusterOptions;
+use crate::report::{EstimatedWork, FrameEstimate};
+use crate::shadows::descriptor::Culling;
+use glam::{Vec3, Vec3A};
+use manyshadows_scene::{LightKind, Scene};
+use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::cwbvh::CwBvh;
+use obvhs::ray::{Ray, RayHit};
+use obvhs::triangle::Triangle;
+use obvhs::BvhBuildParams;
+
+/// Columns and rows of the camera rays that find what the camera sees.
+const GRID: (u32, u32) = (64, 36);
+
+/// Milliseconds per unit of work on llvmpipe (LLVM 15, Mesa 25.0.7) through Vulkan with 2
+/// cores: least squares on the relative error of each stage over 189 measured frames
+/// (`manyshadows bench estimate`: the atrium, the courtyard and the terrain; 8, 64 and 1,024
+/// lights, soft and hard, at 320×180, and 64 lights at 640×360; every technique). Each row
+/// lists its units in order; a 0 is a unit the fit found no cost in.
+struct Costs {
+    /// G-buffer: pixels, camera triangles, fixed.
+    gbuffer: [f64; 3],
+    /// Clusters: pixels, lights, fixed.
+    clusters: [f64; 3],
+    /// Lighting with maps (atlas, pages): pixels, (pixel, light) pairs of the cluster loop,
+    /// fixed, pairs in reach, pairs in reach × extra depth taps.
+    lighting_maps: [f64; 5],
+    /// Lighting from a mask (irregular maps): pixels, loop pairs, fixed, pairs in reach.
+    lighting_mask: [f64; 4],
+    /// Lighting with shadow rays: pixels, loop pairs, fixed, rays, rays × triangles a ray
+    /// tests, rays × instance boxes it crosses, rays × (triangles a ray tests)².
+    lighting_rays: [f64; 7],
+    /// Atlas shadows, per kind of technique (culling whole instances, clusters, in the vertex
+    /// stage of one pass, in the vertex stage of multiview passes, per thread): (triangle,
+    /// view) pairs taken on, (instance, view) pairs, texels of the tiles, texels of the whole
+    /// atlas, views, fixed.
+    atlas: [[f64; 6]; 5],
+    /// Irregular shadows: (triangle, view) pairs, (instance, view) pairs, (pixel, light)
+    /// samples, fixed.
+    irregular: [f64; 4],
+    /// Virtual shadows (pages and drawing): (triangle, face) pairs after culling whole
+    /// instances, (instance, face) pairs, (pixel, light) pairs marked, those × extra taps
+    /// (penumbrae ask coarser pages), fixed.
+    virtual_maps: [f64; 5],
+    /// Acceleration structure: instances, fixed.
+    accel: [f64; 2],
+}
+
+const LAVAPIPE: Costs = Costs {
+    gbuffer: [3.51e-05, 1.42e-04, 4.19e-01],
+    clusters: [1.01e-05, 4.26e-04, 2.33e-01],
+    lighting_maps: [5.91e-05, 8.49e-06, 0.0, 6.19e-06, 2.41e-06],
+    lighting_mask: [7.92e-07, 5.32e-06, 2.63, 1.46e-06],
+    lighting_rays: [1.52e-04, 8.27e-06, 0.0, 1.14e-05, 0.0, 0.0, 4.43e-05],
+    atlas: [
+        [3.30e-05, 2.57e-02, 3.84e-06, 0.0, 0.0, 0.0],
+        [3.83e-06, 5.49e-03, 0.0, 9.67e-07, 0.0, 0.0],
+        [9.91e-05, 0.0, 0.0, 8.89e-07, 0.0, 0.0],
+        [7.27e-05, 8.92e-02, 4.47e-06, 0.0, 0.0, 0.0],
+        [1.59e-05, 4.45e-02, 2.90e-06, 4.98e-06, 0.0, 0.0],
+    ],
+    irregular: [2.60e-05, 5.06e-02, 3.29e-04, 1.58e+02],
+    virtual_maps: [1.13e-06, 4.49e-03, 3.03e-05, 9.82e-07, 1.41e+01],
+    accel: [0.0, 8.13e-02],
+};
+
+impl Renderer {
+    /// What the next frame is estimated to cost, per stage, before it is drawn: its work
+    /// (see [`EstimatedWork`]) and milliseconds on lavapipe. On another adapter the milliseconds
+    /// are lavapipe's (a GPU is typically 10–100× faster); `calibrated` says which.
+    pub fn estimate_frame(&self) -> FrameEstimate {
+        let work = self.estimated_work();
+        let c = &LAVAPIPE;
+        let technique = self.settings.technique;
+        let info = technique.info();
+        let w = &work;
+        let lin = |k: &[f64], x: &[f64]| k.iter().zip(x).map(|(k, x)| k * x).sum::<f64>();
+        let (px, pairs, rays) = (w.pixels as f64, w.pixel_lights as f64, w.rays as f64);
+        let (tv, iv) = (w.triangle_views as f64, w.instance_views as f64);
+        let lights = [px, w.cluster_lights as f64, 1.0];
+        let gbuffer_ms = lin(&c.gbuffer, &[px, w.triangles as f64, 1.0]);
+        let clusters_ms = lin(&c.clusters, &[px, w.lights as f64, 1.0]);
+        let taps = pairs * f64::from(w.taps);
+        let lighting_ms = match info.fills {
+            Fills::Rays => lin(
+                &c.lighting_rays,
+                &[
+                    lights[0],
+                    lights[1],
+                    lights[2],
+                    rays,
+                    rays * w.ray_weight,
+                    rays * w.ray_instances,
+                    rays * w.ray_weight * w.ray_weight,
+                ],
+            ),
+            Fills::Mask => lin(&c.lighting_mask, &[lights[0], lights[1], lights[2], pairs]),
+            _ => lin(
+                &c.lighting_maps,
+                &[lights[0], lights[1], lights[2], pairs, taps],
+            ),
+        };
+        let shadows_ms = match info.fills {
+            Fills::Atlas => {
+                let k = match info.culling {
+                    _ if technique == Technique::MULTIVIEW => 3,
+                    Culling::Instances | Culling::NoViews => 0,
+                    Culling::Clusters => 1,
+                    Culling::VertexStage => 2,
+                    Culling::Threads => 4,
+                };
+                lin(
+                    &c.atlas[k],
+                    &[
+                        tv,
+                        iv,
+                        w.atlas_texels as f64,
+                        w.atlas_area as f64,
+                        w.views as f64,
+                        1.0,
+                    ],
+                )
+            }
+            Fills::Mask => lin(&c.irregular, &[tv, iv, pairs, 1.0]),
+            Fills::Pages => lin(&c.virtual_maps, &[tv, iv, pairs, taps, 1.0]),
+            Fills::Rays => lin(&c.accel, &[w.instances as f64, 1.0]),
+        };
+        let calibrated = self.ctx.info.device_type == wgpu::DeviceType::Cpu;
+        FrameEstimate {
+            work,
+            gbuffer_ms,
+            clusters_ms,
+            shadows_ms,
+            lighting_ms,
+            calibrated,
+        }
+    }
+
+    /// The units [`Renderer::estimate_frame`] prices.
+    pub fn estimated_work(&self) -> EstimatedWork {
+        let s = &self.settings;
+        let scene = &self.current;
+        let technique = s.technique;
+        let info = technique.info();
+        let pixels = u64::from(s.width) * u64::from(s.height);
+        let sight = sight(scene, s.width, s.height, &s.clusters);
+        let pixel_lights = sight.pixel_lights;
+        let sized = scene.lights.iter().any(|l| l.size > 0.0 && l.casts_shadows);
+        // The views the technique fills: the atlas plan's, a virtual map's faces, irregular
+        // maps' light views; none for rays.
+        let faces = match (info.fills, self.virtual_source()) {
+            (Fills::Rays, _) => &[][..],
+            (Fills::Pages, Some(v)) => &v.plan().views[..],
+            _ => &self.source.plan().views[..],
+        };
+        let (after_instances, instance_views) = self.instance_pairs(faces);
+        let triangle_views = match (info.fills, self.shadow_work()) {
+            // Virtual maps: every face's casters after culling whole instances per face.
+            (Fills::Pages, _) => after_instances,
+            (_, None) => 0,
+            (_, Some(w)) => w.triangle_views,
+        };
+        let views = faces.len();
+        let (atlas_texels, atlas_area) = if info.fills == Fills::Atlas {
+            let layout = &self.source.plan().layout;
+            (
+                layout
+                    .tiles
+                    .iter()
+                    .map(|t| u64::from(t.size) * u64::from(t.size))
+                    .sum(),
+                u64::from(layout.size) * u64::from(layout.size),
+            )
+        } else {
+            (0, 0)
+        };
+        let taps = if sized && technique != Technique::IRREGULAR {
+            s.soft.blocker_taps + s.soft.filter_taps
+        } else if s.pcf == crate::shadows::options::Pcf::Pcf3x3 {
+            9
+        } else {
+            0
+        };
+        let rays = if info.fills != Fills::Rays {
+            0
+        } else if s.rays.light_samples > 0 {
+            // One point of each sampled light; reuse traces the kept sample too.
+            let reuse = if s.rays.reuse { 2 } else { 1 };
+            pixels * u64::from(s.rays.light_samples) * reuse
+        } else if sized {
+            // A stratified grid over each sized light's shape.
+            pixel_lights * u64::from(s.rays.area_samples.max(1).pow(2))
+        } else {
+            pixel_lights
+        };
+        EstimatedWork {
+            pixels,
+            triangles: self.scene.triangles,
+            caster_triangles: self
+                .scene
+                .draws
+                .iter()
+                .filter(|d| d.casts_shadows)
+                .map(|d| u64::from(d.mesh.index_count / 3))
+                .sum(),
+            instances: scene.instances.len(),
+            lights: scene.lights.len(),
+            pixel_lights,
+            cluster_lights: sight.cluster_lights,
+            triangle_views,
+            instance_views,
+            views,
+            atlas_texels,
+            atlas_area,
+            taps,
+            rays,
+            ray_weight: sight.ray_weight,
+            ray_instances: sight.ray_instances,
+        }
+    }
+}
+
+/// What the grid of camera rays finds: per-frame totals scaled from the grid to the pixels.
+struct Sight {
+    /// (pixel, light) pairs in reach.
+    pixel_lights: u64,
+    /// (pixel, light) pairs whose light's reach meets the pixel's cluster.
+    cluster_lights: u64,
+    /// Mean triangles a shadow ray towards a light in reach tests before it is done.
+    ray_weight: f64,
+    /// Mean caster instances whose box a shadow ray crosses (each a bottom-level structure
+    /// the ray enters).
+    ray_instances: f64,
+}
+
+/// Lights sampled per grid point for [`Sight::ray_weight`].
+const RAY_SAMPLES: usize = 4;
+
+/// Every triangle of the scene in world space, with a BVH over them.
+struct Geometry {
+    bvh: CwBvh,
+    /// In the BVH's primitive order.
+    triangles: Vec<Triangle>,
+    /// Diagonal of the scene's bounds.
+    diag: f32,
+}
+
+impl Geometry {
+    fn new(scene: &Scene) -> Option<Self> {
+        let mut triangles = Vec::new();
+        for inst in &scene.instances {
+            let Some(mesh) = scene.meshes.get(inst.mesh) else {
+                continue;
+            };
+            let world: Vec<Vec3A> = mesh
+                .positions
+                .iter()
+                .map(|&p| Vec3A::from(inst.transform.transform_point3(p)))
+                .collect();
+            for t in mesh.indices.chunks_exact(3) {
+                let v = |k: usize| world.get(t[k] as usize).copied();
+                if let (Some(v0), Some(v1), Some(v2)) = (v(0), v(1), v(2)) {
+                    if (v1 - v0).cross(v2 - v0).length_squared() > 0.0 && v0.is_finite() {
+                        triangles.push(Triangle { v0, v1, v2 });
+                    }
+                }
+            }
+        }
+        if triangles.is_empty() {
+            return None;
+        }
+        let bvh = build_cwbvh_from_tris(
+            &triangles,
+            BvhBuildParams::fastest_build(),
+            &mut std::time::Duration::default(),
+        );
+        let triangles: Vec<Triangle> = bvh
+            .primitive_indices
+            .iter()
+            .map(|&i| triangles[i as usize])
+            .collect();
+        let (lo, hi) = triangles.iter().fold(
+            (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
+            |(lo, hi), t| {
+                (
+                    lo.min(t.v0).min(t.v1).min(t.v2),
+                    hi.max(t.v0).max(t.v1).max(t.v2),
+                )
+            },
+        );
+        let diag = (hi - lo).length().max(1e-3);
+        Some(Self {
+            bvh,
+            triangles,
+            diag,
+        })
+    }
+
+    /// Distance to the nearest triangle along the ray, `None` past `far`.
+    fn nearest(&self, origin: Vec3, dir: Vec3, far: f32) -> Option<f32> {
+        let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, far);
+        let mut hit = RayHit::none();
+        self.bvh
+            .ray_traverse(ray, &mut hit, |r, id| self.triangles[id].intersect(r))
+            .then_some(hit.t)
+    }
+
+    /// Triangles tested by a shadow ray from `origin` over `len` (stopping at the first
+    /// hit, as shadow rays do).
+    fn tests(&self, origin: Vec3, dir: Vec3, len: f32) -> u32 {
+        let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, len);
+        let mut n = 0;
+        self.bvh.ray_traverse_miss(ray, |r, id| {
+            n += 1;
+            self.triangles[id].intersect(r)
+        });
+        n
+    }
+}
+
+/// Casts the grid of camera rays (see the module's notes).
+fn sight(scene: &Scene, width: u32, height: u32, clusters: &ClusterOptions) -> Sight {
+    let none = Sight {
+        pixel_lights: 0,
+        cluster_lights: 0,
+        ray_weight: 0.0,
+        ray_instances: 0.0,
+    };
+    let Some(geometry) = Geometry::new(scene) else {
+        return none;
+    };
+    let reach: Vec<Option<(Vec3, f32)>> = scene
+        .lights
+        .iter()
+        .map(|l| match l.kind {
+            LightKind::Directional { .. } => None,
+            _ => l.bounding_sphere(),
+        })
+        .collect();
+    // Where a shadow ray ends: the light's position, or beyond the scene against a
+    // directional light's direction.
+    let target = |k: usize, p: Vec3| match scene.lights[k].kind {
+        LightKind::Directional { direction, .. } => {
+            p - direction.normalize_or(Vec3::NEG_Y) * geometry.diag
+        }
+        LightKind::Point { position, .. } | LightKind::Spot { position, .. } => position,
+    };
+    let cam = &scene.camera;
+    let forward = (cam.target - cam.position).normalize_or(Vec3::NEG_Z);
+    let right = forward.cross(cam.up).normalize_or(Vec3::X);
+    let up = right.cross(forward);
+    let tan_y = (cam.fov_y_deg.to_radians() * 0.5).tan();
+    let aspect = width as f32 / height.max(1) as f32;
+    // A cluster at view depth z: `tile` pixels across, one exponential slice deep.
+    let slices = clusters.slices.max(1) as f32;
+    let slice_growth = ((cam.far / cam.near.max(1e-6)).max(1.0).ln() / slices).exp() - 1.0;
+    let pixel_at_1 = 2.0 * tan_y / height.max(1) as f32;
+    let offset = geometry.diag * 1e-5;
+    let boxes: Vec<(Vec3, Vec3)> = scene
+        .instances
+        .iter()
+        .filter(|i| i.casts_shadows)
+        .filter_map(|i| world_box(scene, i))
+        .collect();
+    let mut crossed = 0u64;
+    let (cols, rows) = GRID;
+    let (mut in_reach, mut in_cluster) = (0u64, 0u64);
+    let (mut tests, mut rays) = (0u64, 0u64);
+    let mut near = Vec::new();
+    for row in 0..rows {
+        for col in 0..cols {
+            let x = ((col as f32 + 0.5) / cols as f32 * 2.0 - 1.0) * tan_y * aspect;
+            let y = (1.0 - (row as f32 + 0.5) / rows as f32 * 2.0) * tan_y;
+            let dir = (forward + right * x + up * y).normalize();
+            let Some(t) = geometry.nearest(cam.position, dir, cam.far) else {
+                continue;
+            };
+            let p = cam.position + dir * t;
+            let z = (p - cam.position).dot(forward).max(cam.near);
+            let side = clusters.tile as f32 * pixel_at_1 * z;
+            let cluster_radius = 0.5 * (2.0 * side * side + (z * slice_growth).powi(2)).sqrt();
+            near.clear();
+            for (k, r) in reach.iter().enumerate() {
+                match r {
+                    None => {
+                        near.push(k);
+                        in_cluster += 1;
+                    }
+                    Some((c, rad)) => {
+                        let d2 = (p - *c).length_squared();
+                        if d2 <= rad * rad {
+                            near.push(k);
+                        }
+                        if d2 <= (rad + cluster_radius).powi(2) {
+                            in_cluster += 1;
+                        }
+                    }
+                }
+            }
+            in_reach += near.len() as u64;
+            // A few of the lights in reach, evenly spread over the list; the ray leaves the
+            // surface on the camera's side.
+            let from = p - dir * offset;
+            let step = near.len().div_ceil(RAY_SAMPLES).max(1);
+            for &k in near.iter().step_by(step) {
+                let seg = target(k, p) - from;
+                let len = seg.length();
+                if len > offset {
+                    let d = seg / len;
+                    tests += u64::from(geometry.tests(from, d, len - offset));
+                    crossed += boxes
+                        .iter()
+                        .filter(|(lo, hi)| {
+                            box_span(*lo, *hi, from, d)
+                                .is_some_and(|(a, b)| b >= a.max(0.0) && a < len)
+                        })
+                        .count() as u64;
+                    rays += 1;
+                }
+            }
+        }
+    }
+    let scale = (u64::from(width) * u64::from(height)) as f64 / f64::from(cols * rows);
+    Sight {
+        pixel_lights: (in_reach as f64 * scale).round() as u64,
+        cluster_lights: (in_cluster as f64 * scale).round() as u64,
+        ray_weight: if rays > 0 {
+            tests as f64 / rays as f64
+        } else {
+            0.0
+        },
+        ray_instances: if rays > 0 {
+            crossed as f64 / rays as f64
+        } else {
+            0.0
+        },
+    }
+}
+
+/// The instance's world-space box.
+fn world_box(scene: &Scene, i: &manyshadows_scene::Instance) -> Option<(Vec3, Vec3)> {
+    let (lo, hi) = scene.meshes.get(i.mesh)?.bounds()?;
+    let mut wlo = Vec3::splat(f32::INFINITY);
+    let mut whi = Vec3::splat(f32::NEG_INFINITY);
+    for k in 0..8 {
+        let c = Vec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x },
+            if k & 2 == 0 { lo.y } else { hi.y },
+            if k & 4 == 0 { lo.z } else { hi.z },
+        );
+        let w = i.transform.transform_point3(c);
+        wlo = wlo.min(w);
+        whi = whi.max(w);
+    }
+    (wlo.is_finite() && whi.is_finite()).then_some((wlo, whi))
+}
+
+/// Entry and exit distances of the line `origin + t·dir` through the box (the exit before
+/// the entry where the line misses it).
+fn box_span(lo: Vec3, hi: Vec3, origin: Vec3, dir: Vec3) -> Option<(f32, f32)> {
+    let inv = dir.recip();
+    let t0 = (lo - origin) * inv;
+    let t1 = (hi - origin) * inv;
+    let (near, exit) = (t0.min(t1).max_element(), t0.max(t1).min_element());
+    (near.is_finite() || exit.is_finite()).then_some((near, exit))
+}
