@@ -7,7 +7,7 @@
 use anyhow::{bail, Result};
 use clap::Args;
 use manyshadows::scene::builtin::{self, LightMix};
-use manyshadows::{EstimatedWork, FrameEstimate, RenderSettings, Renderer, Stage, Technique};
+use manyshadows::{FrameEstimate, RenderSettings, Renderer, Stage, Technique};
 use serde::Serialize;
 
 use crate::harness::{
@@ -77,7 +77,7 @@ struct Record {
     lights: usize,
     sizes: String,
     method: String,
-    work: EstimatedWork,
+    /// The estimate, with the work it counted.
     estimate: FrameEstimate,
     /// Measured GPU ms: G-buffer, clusters, shadows (pages and acceleration structure
     /// included), lighting (denoise included); `None` when skipped.
@@ -186,7 +186,6 @@ pub fn estimate(args: &EstimateArgs) -> Result<()> {
                             lights: n,
                             sizes: sizes.clone(),
                             method: label.clone(),
-                            work: estimate.work,
                             estimate,
                             measured: None,
                         };

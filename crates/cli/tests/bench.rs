@@ -695,3 +695,83 @@ fn bench_denoise_scores_each_frame_of_a_sequence() {
         "--move-instance",
     );
 }
+
+/// `bench estimate`: every configuration asked for is estimated before it is rendered and
+/// then measured, its estimate's stages adding up to its frame; `--estimate-only` renders
+/// nothing; a frame estimated past `--max-seconds` is skipped and said to be.
+#[test]
+fn bench_estimate_sets_each_estimate_beside_its_frame() {
+    let total = |e: &Value| {
+        ["gbuffer_ms", "clusters_ms", "shadows_ms", "lighting_ms"]
+            .iter()
+            .map(|k| e[k].as_f64().unwrap())
+            .sum::<f64>()
+    };
+    let (dir, json) = bench_ok(
+        "estimate",
+        "--scenes courtyard --lights 3,12 --screens 64x36 --sizes soft,hard \
+         --methods traditional,virtual --repeats 1 --warmup 0",
+    );
+    let records = records(&json);
+    assert_eq!(records.len(), 2 * 2 * 2, "{json}");
+    for r in records {
+        let e = &r["estimate"];
+        assert!(total(e) > 0.0, "{r}");
+        assert_eq!(r["estimate"]["work"]["pixels"], 64 * 36, "{r}");
+        assert!(
+            r["estimate"]["work"]["pixel_lights"].as_u64().unwrap() > 0,
+            "{r}"
+        );
+        let m = r["measured"].as_array().expect("measured stages");
+        assert_eq!(m.len(), 4, "{r}");
+        assert!(m.iter().all(|v| v.as_f64().unwrap() >= 0.0), "{r}");
+        assert!(
+            m.iter().map(|v| v.as_f64().unwrap()).sum::<f64>() > 0.0,
+            "{r}"
+        );
+    }
+    // Hard lights read no taps; the courtyard's sized lights read the blocker search and filter.
+    let taps = |sizes: &str| {
+        records
+            .iter()
+            .filter(|r| r["sizes"] == sizes && r["method"] == "traditional")
+            .map(|r| r["estimate"]["work"]["taps"].as_u64().unwrap())
+            .collect::<Vec<_>>()
+    };
+    assert!(taps("hard").iter().all(|&t| t == 0), "{json}");
+    assert!(taps("soft").iter().all(|&t| t > 0), "{json}");
+    let table = std::fs::read_to_string(dir.join("results.txt")).unwrap();
+    assert!(
+        table.contains("measured / estimated frame") || table.contains("x: measured"),
+        "{table}"
+    );
+
+    let (_, only) = bench_ok(
+        "estimate",
+        "--scenes cubes --lights 3 --screens 64x36 --methods traditional --estimate-only",
+    );
+    let r = &records_of(&only)[0];
+    assert!(
+        r["measured"].is_null() && total(&r["estimate"]) > 0.0,
+        "{r}"
+    );
+
+    let (_, skipped) = bench_ok(
+        "estimate",
+        "--scenes cubes --lights 3 --screens 64x36 --methods traditional --max-seconds 0.000001 \
+         --repeats 1 --warmup 0",
+    );
+    assert!(records_of(&skipped)[0]["measured"].is_null(), "{skipped}");
+    assert!(
+        skipped["notes"].to_string().contains("past --max-seconds"),
+        "{skipped}"
+    );
+    rejects("estimate --sizes medium", "--sizes 'medium'");
+    rejects("estimate --methods virtual:k2", "traces none");
+    rejects("estimate --methods raytraced:k0", "1 to 64");
+    rejects("estimate --max-seconds 0", "--max-seconds");
+}
+
+fn records_of(json: &Value) -> Vec<Value> {
+    records(json).clone()
+}
