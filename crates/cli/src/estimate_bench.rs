@@ -27,12 +27,13 @@ a long frame and refuse one past 10 minutes unless --insist. This bench renders 
 configuration (warm-up, then --repeats frames with every shadow map redrawn) and sets the
 measured GPU milliseconds per stage beside the estimate: `x` is measured over estimated.
 
-A method is a technique's name, or `raytraced:kN` for ray-traced shadows with N sampled lights
-per pixel. Configurations estimated past --max-seconds are skipped (and listed).
+A method is a technique's name (as --technique takes it), or NAME:kN for a technique that traces
+shadow rays, with N sampled lights per pixel (--light-samples N). Configurations estimated past
+--max-seconds are skipped (and listed).
 
 Examples:
   manyshadows bench estimate                                   # 3 scenes, 8/64/1,024 lights, 320x180
-  manyshadows bench estimate --methods traditional,virtual --sizes hard
+  manyshadows bench estimate --methods virtual --sizes soft,hard
   manyshadows bench estimate --scenes dragon --screens 640x360";
 
 /// Arguments of `manyshadows bench estimate`.
@@ -54,8 +55,9 @@ pub struct EstimateArgs {
     /// Light sizes: `soft` (the scene's sizes) and/or `hard` (every light at size 0).
     #[arg(long, default_value = "soft", value_delimiter = ',')]
     pub sizes: Vec<String>,
-    /// Methods, comma-separated: technique names, or raytraced:kN (default: every technique
-    /// and raytraced:k1; those the adapter cannot run are skipped with a note).
+    /// Methods, comma-separated: technique names, or NAME:kN for a technique that traces
+    /// shadow rays with N sampled lights per pixel (default: every technique, and each that
+    /// traces rays also at k1; those the adapter cannot run are skipped with a note).
     #[arg(long, value_delimiter = ',')]
     pub methods: Vec<String>,
     /// Skip configurations whose frame is estimated past this many seconds.

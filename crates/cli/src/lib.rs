@@ -22,7 +22,7 @@ pub use scenes::load_scene_for_view;
 /// past `render`'s bound, with the estimate and the techniques that scale), or `None`: what
 /// `render` and `compare` refuse without `--insist`, for the viewer to say on its panel.
 pub fn shadow_work_refusal(renderer: &manyshadows::Renderer) -> Option<String> {
-    render::check_shadow_work(renderer)
+    render::check_shadow_work(renderer, &renderer.estimate_frame())
         .err()
         .map(|e| e.to_string())
 }

@@ -26,13 +26,13 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     pb.set_message("estimating the frame");
     let estimate = renderer.estimate_frame();
     if !args.insist {
-        pb.suspend(|| check_shadow_work(&renderer))?;
+        pb.suspend(|| check_shadow_work(&renderer, &estimate))?;
     }
     if estimate.total_ms() > LONG_FRAME_MS {
         pb.suspend(|| {
             eprintln!(
                 "estimate: {} this frame ({})",
-                describe_estimate(&estimate),
+                crate::summary::describe_estimate(&estimate),
                 renderer.settings().technique
             )
         });
@@ -302,42 +302,19 @@ pub(crate) fn long_frame(renderer: &Renderer, estimate: &manyshadows::FrameEstim
         || estimate.total_ms() > LONG_FRAME_MS
 }
 
-/// An estimate in words: `~3.2 min on this adapter (G-buffer 0.1 s, shadows 3.0 min, lighting
-/// 9.4 s)`, saying where the costs come from when the adapter is not a CPU one.
-pub(crate) fn describe_estimate(e: &manyshadows::FrameEstimate) -> String {
-    let t = |ms: f64| {
-        if ms >= 60_000.0 {
-            format!("{:.1} min", ms / 60_000.0)
-        } else if ms >= 1_000.0 {
-            format!("{:.1} s", ms / 1e3)
-        } else {
-            format!("{ms:.0} ms")
-        }
-    };
-    format!(
-        "~{} {} (G-buffer {}, shadows {}, lighting {})",
-        t(e.total_ms()),
-        if e.calibrated {
-            "on this adapter"
-        } else {
-            "at lavapipe's costs (this adapter is no CPU: likely far less)"
-        },
-        t(e.gbuffer_ms + e.clusters_ms),
-        t(e.shadows_ms),
-        t(e.lighting_ms)
-    )
-}
-
 /// Refuses, before any frame is drawn, a frame whose per-view shadow work passes
 /// [`MAX_UNASKED_TRIANGLE_VIEWS`], with the estimate and the techniques that scale, or whose
 /// estimated time passes [`MAX_UNASKED_FRAME_MS`] on a CPU adapter, with the stage that costs
 /// most and what would shrink it.
-pub(crate) fn check_shadow_work(renderer: &Renderer) -> Result<()> {
+pub(crate) fn check_shadow_work(
+    renderer: &Renderer,
+    estimate: &manyshadows::FrameEstimate,
+) -> Result<()> {
     let Some(work) = renderer.shadow_work() else {
-        return check_frame_time(renderer);
+        return check_frame_time(renderer, estimate);
     };
     if work.triangle_views <= MAX_UNASKED_TRIANGLE_VIEWS {
-        return check_frame_time(renderer);
+        return check_frame_time(renderer, estimate);
     }
     let technique = renderer.settings().technique;
     let g = |n: u64| format!("{:.1} G", n as f64 / 1e9);
@@ -374,7 +351,7 @@ pub(crate) fn check_shadow_work(renderer: &Renderer) -> Result<()> {
          pixels and lights instead of views. Pass --insist to render it anyway.",
         g(work.triangle_views),
         work.views,
-        describe_estimate(&renderer.estimate_frame()),
+        crate::summary::describe_estimate(estimate),
         g(MAX_UNASKED_TRIANGLE_VIEWS),
         g(work.after_instance_culling),
         culled.join(", "),
@@ -383,8 +360,7 @@ pub(crate) fn check_shadow_work(renderer: &Renderer) -> Result<()> {
 }
 
 /// The time half of [`check_shadow_work`].
-fn check_frame_time(renderer: &Renderer) -> Result<()> {
-    let e = renderer.estimate_frame();
+fn check_frame_time(renderer: &Renderer, e: &manyshadows::FrameEstimate) -> Result<()> {
     if !e.calibrated || e.total_ms() <= MAX_UNASKED_FRAME_MS {
         return Ok(());
     }
@@ -392,12 +368,22 @@ fn check_frame_time(renderer: &Renderer) -> Result<()> {
     let w = &e.work;
     let m = |n: u64| format!("{:.1} M", n as f64 / 1e6);
     let advice = if e.shadows_ms >= e.lighting_ms.max(e.gbuffer_ms) {
+        let scaling: Vec<&str> = Technique::all()
+            .into_iter()
+            .filter(|t| {
+                matches!(
+                    t.info().fills,
+                    manyshadows::Fills::Pages | manyshadows::Fills::Rays
+                )
+            })
+            .map(|t| t.name())
+            .collect();
         format!(
             "most of it making shadows ({} (caster triangle, view) pairs, {} (pixel, light) \
-             samples): fewer lights, or a technique whose shadows scale with pixels (virtual, \
-             raytraced)",
+             samples): fewer lights, or a technique whose shadows scale with pixels ({})",
             m(w.triangle_views),
-            m(w.pixel_lights)
+            m(w.pixel_lights),
+            scaling.join(", ")
         )
     } else if e.lighting_ms >= e.gbuffer_ms {
         let rays = if w.rays > 0 && renderer.settings().rays.light_samples == 0 {
@@ -421,7 +407,7 @@ fn check_frame_time(renderer: &Renderer) -> Result<()> {
     bail!(
         "technique {technique} is estimated at {} for this frame, more than the {} min this \
          command starts unasked; {advice}. Pass --insist to render it anyway.",
-        describe_estimate(&e),
+        crate::summary::describe_estimate(e),
         MAX_UNASKED_FRAME_MS / 60_000.0
     );
 }

@@ -84,7 +84,7 @@ pub(super) fn score_variants(
                 eprintln!(
                     "{}: estimate {}",
                     v.label(),
-                    crate::render::describe_estimate(&estimate)
+                    crate::summary::describe_estimate(&estimate)
                 )
             });
         }
@@ -134,7 +134,7 @@ fn renderer_for(
         Ok(r) => {
             // A frame of minutes is estimated before it is drawn, as `render` does.
             if !args.insist {
-                if let Err(e) = crate::render::check_shadow_work(&r) {
+                if let Err(e) = crate::render::check_shadow_work(&r, &r.estimate_frame()) {
                     if args.techniques.is_empty() {
                         skipped.push((v.label(), e.to_string()));
                         return Ok(None);
