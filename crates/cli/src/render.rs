@@ -49,7 +49,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         ),
         None => None,
     };
-    let long = long_frame(&renderer, &estimate);
+    let long = long_frame(&estimate);
     let mut frame = None;
     for f in 0..args.frames {
         if let Some(path) = &path {
@@ -295,11 +295,8 @@ const STAGED_TRIANGLE_VIEWS: u64 = MAX_UNASKED_TRIANGLE_VIEWS / 10;
 
 /// Whether the frame's shadow work passes [`STAGED_TRIANGLE_VIEWS`] or its estimate
 /// [`LONG_FRAME_MS`].
-pub(crate) fn long_frame(renderer: &Renderer, estimate: &manyshadows::FrameEstimate) -> bool {
-    renderer
-        .shadow_work()
-        .is_some_and(|w| w.triangle_views > STAGED_TRIANGLE_VIEWS)
-        || estimate.total_ms() > LONG_FRAME_MS
+pub(crate) fn long_frame(estimate: &manyshadows::FrameEstimate) -> bool {
+    estimate.work.triangle_views > STAGED_TRIANGLE_VIEWS || estimate.total_ms() > LONG_FRAME_MS
 }
 
 /// Refuses, before any frame is drawn, a frame whose per-view shadow work passes
@@ -310,10 +307,14 @@ pub(crate) fn check_shadow_work(
     renderer: &Renderer,
     estimate: &manyshadows::FrameEstimate,
 ) -> Result<()> {
-    let Some(work) = renderer.shadow_work() else {
-        return check_frame_time(renderer, estimate);
-    };
-    if work.triangle_views <= MAX_UNASKED_TRIANGLE_VIEWS {
+    // The per-view bound holds for the techniques whose work is per (triangle, view) pair:
+    // atlas techniques and irregular maps (virtual maps and rays scale with pixels).
+    let work = &estimate.work;
+    let per_view = matches!(
+        renderer.settings().technique.info().fills,
+        manyshadows::Fills::Atlas | manyshadows::Fills::Mask
+    );
+    if !per_view || work.triangle_views <= MAX_UNASKED_TRIANGLE_VIEWS {
         return check_frame_time(renderer, estimate);
     }
     let technique = renderer.settings().technique;

@@ -113,6 +113,11 @@ pub struct EstimatedWork {
     /// (caster triangle, view) pairs the shadow stage takes on (0 without views; for virtual
     /// maps, after culling whole instances per face).
     pub triangle_views: u64,
+    /// (caster triangle, view) pairs left after culling whole instances per view by bounding
+    /// sphere.
+    pub after_instance_culling: u64,
+    /// Every caster triangle in every view.
+    pub all_pairs: u64,
     /// (caster instance, view) pairs left after culling whole instances per view: the draws
     /// of the techniques that draw per instance and view.
     pub instance_views: u64,

@@ -85,6 +85,42 @@ fn the_estimate_counts_what_the_technique_does() {
             .expect("renderer")
             .estimate_frame()
     };
+    // The estimate counts the views' pairs itself, as `shadow_work` does, for every technique
+    // with per-view work.
+    for t in manyshadows::Technique::all() {
+        let r = match Renderer::new(
+            &ctx,
+            &scene,
+            RenderSettings::default()
+                .with_technique(t)
+                .with_width(64)
+                .with_height(36),
+        ) {
+            Ok(r) => r,
+            Err(e) if e.is_unsupported() => continue,
+            Err(e) => panic!("{t}: {e}"),
+        };
+        let e = r.estimate_frame().work;
+        if let (Some(w), manyshadows::Fills::Atlas | manyshadows::Fills::Mask) =
+            (r.shadow_work(), t.info().fills)
+        {
+            assert_eq!(
+                (
+                    e.triangle_views,
+                    e.after_instance_culling,
+                    e.all_pairs,
+                    e.views
+                ),
+                (
+                    w.triangle_views,
+                    w.after_instance_culling,
+                    w.all_pairs,
+                    w.views
+                ),
+                "{t}"
+            );
+        }
+    }
     let atlas = work(RenderSettings::default());
     assert_eq!(atlas.work.pixels, 64 * 36);
     assert_eq!(atlas.work.rays, 0);

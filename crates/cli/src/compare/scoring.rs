@@ -78,7 +78,7 @@ pub(super) fn score_variants(
             continue;
         };
         let estimate = renderer.estimate_frame();
-        let long = crate::render::long_frame(&renderer, &estimate);
+        let long = crate::render::long_frame(&estimate);
         if long {
             multi.suspend(|| {
                 eprintln!(

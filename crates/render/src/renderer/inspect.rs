@@ -105,8 +105,9 @@ impl Renderer {
             .collect();
         let (mut culled, mut draws) = (0u64, 0u64);
         for v in views {
+            let visible = v.sphere_test();
             for d in &casters {
-                if v.sphere_visible(d.sphere.0, d.sphere.1) {
+                if visible(d.sphere.0, d.sphere.1) {
                     culled += u64::from(d.mesh.index_count / 3);
                     draws += 1;
                 }

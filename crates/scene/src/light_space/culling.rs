@@ -33,16 +33,33 @@ pub fn sphere_in_planes(planes: &[Vec4; 6], center: Vec3, radius: f32) -> bool {
 impl ShadowView {
     /// True if a world-space sphere may cover part of this view (conservative).
     pub fn sphere_visible(&self, center: Vec3, radius: f32) -> bool {
-        match self.kind {
+        self.sphere_test()(center, radius)
+    }
+
+    /// [`ShadowView::sphere_visible`] with the view's planes (or paraboloid axis) computed
+    /// once, for testing many spheres against one view.
+    pub fn sphere_test(&self) -> impl Fn(Vec3, f32) -> bool + '_ {
+        enum Test {
+            Planes([Vec4; 6]),
+            Hemisphere { eye: Vec3, axis: Vec3 },
+        }
+        let test = match self.kind {
             ViewKind::Paraboloid(_) => {
                 let inv = self.view.inverse();
-                let eye = inv.w_axis.truncate();
-                let axis = inv.transform_vector3(Vec3::NEG_Z);
-                let d = center - eye;
-                let dist = d.length();
-                dist - radius <= self.far && dist + radius >= self.near && d.dot(axis) >= -radius
+                Test::Hemisphere {
+                    eye: inv.w_axis.truncate(),
+                    axis: inv.transform_vector3(Vec3::NEG_Z),
+                }
             }
-            _ => sphere_in_planes(&frustum_planes(self.view_proj), center, radius),
+            _ => Test::Planes(frustum_planes(self.view_proj)),
+        };
+        move |center, radius| match &test {
+            Test::Hemisphere { eye, axis } => {
+                let d = center - *eye;
+                let dist = d.length();
+                dist - radius <= self.far && dist + radius >= self.near && d.dot(*axis) >= -radius
+            }
+            Test::Planes(planes) => sphere_in_planes(planes, center, radius),
         }
     }
 }
