@@ -329,17 +329,7 @@ pub(crate) fn check_shadow_work(
         })
         .map(|t| t.name())
         .collect();
-    // Techniques whose work is not per (triangle, view) pair: virtual pages and rays.
-    let viewless: Vec<&str> = Technique::all()
-        .into_iter()
-        .filter(|t| {
-            matches!(
-                t.info().fills,
-                manyshadows::Fills::Pages | manyshadows::Fills::Rays
-            )
-        })
-        .map(|t| t.name())
-        .collect();
+    let viewless = scaling_techniques();
     let how = if technique.info().fills == manyshadows::Fills::Mask {
         "it tests every caster triangle against every light view's grid of samples"
     } else {
@@ -360,6 +350,21 @@ pub(crate) fn check_shadow_work(
     );
 }
 
+/// Techniques whose work is not per (triangle, view) pair but scales with pixels and lights:
+/// virtual pages and rays.
+fn scaling_techniques() -> Vec<&'static str> {
+    Technique::all()
+        .into_iter()
+        .filter(|t| {
+            matches!(
+                t.info().fills,
+                manyshadows::Fills::Pages | manyshadows::Fills::Rays
+            )
+        })
+        .map(|t| t.name())
+        .collect()
+}
+
 /// The time half of [`check_shadow_work`].
 fn check_frame_time(renderer: &Renderer, e: &manyshadows::FrameEstimate) -> Result<()> {
     if !e.calibrated || e.total_ms() <= MAX_UNASKED_FRAME_MS {
@@ -369,16 +374,7 @@ fn check_frame_time(renderer: &Renderer, e: &manyshadows::FrameEstimate) -> Resu
     let w = &e.work;
     let m = |n: u64| format!("{:.1} M", n as f64 / 1e6);
     let advice = if e.shadows_ms >= e.lighting_ms.max(e.gbuffer_ms) {
-        let scaling: Vec<&str> = Technique::all()
-            .into_iter()
-            .filter(|t| {
-                matches!(
-                    t.info().fills,
-                    manyshadows::Fills::Pages | manyshadows::Fills::Rays
-                )
-            })
-            .map(|t| t.name())
-            .collect();
+        let scaling = scaling_techniques();
         format!(
             "most of it making shadows ({} (caster triangle, view) pairs, {} (pixel, light) \
              samples): fewer lights, or a technique whose shadows scale with pixels ({})",

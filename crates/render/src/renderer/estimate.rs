@@ -179,22 +179,13 @@ impl Renderer {
             _ => &self.source.plan().views[..],
         };
         // One count of the views' casters (at 36,499 views and 481 casters it is most of the
-        // estimate's time): the pairs left by culling whole instances, and every pair.
-        let (after_instances, instance_views) = self.instance_pairs(faces);
-        let caster_triangles: u64 = self
-            .scene
-            .draws
-            .iter()
-            .filter(|d| d.casts_shadows)
-            .map(|d| u64::from(d.mesh.index_count / 3))
-            .sum();
-        let all_pairs = caster_triangles * faces.len() as u64;
-        // The pairs the technique takes on, as `Renderer::shadow_work` counts them.
-        let triangle_views = match (info.fills, info.culling) {
-            (Fills::Rays, _) => 0,
-            (Fills::Pages, _) => after_instances,
-            (_, Culling::VertexStage | Culling::Threads | Culling::NoViews) => all_pairs,
-            _ => after_instances,
+        // estimate's time).
+        let (per_view, instance_views) = self.per_view_work(faces);
+        let triangle_views = match info.fills {
+            Fills::Rays => 0,
+            // Virtual maps: every face's casters after culling whole instances per face.
+            Fills::Pages => per_view.after_instance_culling,
+            _ => per_view.triangle_views,
         };
         let views = faces.len();
         let (atlas_texels, atlas_area) = if info.fills == Fills::Atlas {
@@ -236,14 +227,20 @@ impl Renderer {
         EstimatedWork {
             pixels,
             triangles: self.scene.triangles,
-            caster_triangles,
+            caster_triangles: self
+                .scene
+                .draws
+                .iter()
+                .filter(|d| d.casts_shadows)
+                .map(|d| u64::from(d.mesh.index_count / 3))
+                .sum(),
             instances: scene.instances.len(),
             lights: scene.lights.len(),
             pixel_lights,
             cluster_lights: sight.cluster_lights,
             triangle_views,
-            after_instance_culling: after_instances,
-            all_pairs,
+            after_instance_culling: per_view.after_instance_culling,
+            all_pairs: per_view.all_pairs,
             instance_views,
             views,
             atlas_texels,

@@ -68,35 +68,40 @@ impl Renderer {
         if (culling == Culling::NoViews && !per_pair_mask) || views.is_empty() {
             return None;
         }
-        let casters: Vec<_> = self
+        Some(self.per_view_work(views).0)
+    }
+
+    /// The per-view work of `views` as the technique takes it on ([`ShadowWork`]), and the
+    /// (caster instance, view) pairs left by culling whole instances (the draws).
+    pub(super) fn per_view_work(
+        &self,
+        views: &[manyshadows_scene::light_space::ShadowView],
+    ) -> (ShadowWork, u64) {
+        use crate::shadows::descriptor::Culling;
+        let per_view: u64 = self
             .scene
             .draws
             .iter()
             .filter(|d| d.casts_shadows)
-            .collect();
-        let per_view: u64 = casters
-            .iter()
             .map(|d| u64::from(d.mesh.index_count / 3))
             .sum();
-        let (culled, _) = self.instance_pairs(views);
+        let (culled, draws) = self.instance_pairs(views);
         let all_pairs = per_view * views.len() as u64;
-        Some(ShadowWork {
+        let work = ShadowWork {
             views: views.len(),
-            triangle_views: match culling {
+            triangle_views: match self.settings.technique.info().culling {
                 Culling::VertexStage | Culling::Threads | Culling::NoViews => all_pairs,
                 _ => culled,
             },
             after_instance_culling: culled,
             all_pairs,
-        })
+        };
+        (work, draws)
     }
 
     /// (caster triangle, view) and (caster instance, view) pairs left after culling whole
     /// instances per view by bounding sphere.
-    pub(super) fn instance_pairs(
-        &self,
-        views: &[manyshadows_scene::light_space::ShadowView],
-    ) -> (u64, u64) {
+    fn instance_pairs(&self, views: &[manyshadows_scene::light_space::ShadowView]) -> (u64, u64) {
         let casters: Vec<_> = self
             .scene
             .draws
