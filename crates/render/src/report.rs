@@ -135,9 +135,6 @@ pub struct EstimatedWork {
     /// Mean triangles a shadow ray tests before it is done (on a CPU BVH of the scene, from
     /// a few lights in reach of each grid point).
     pub ray_weight: f64,
-    /// Mean caster instances whose box a shadow ray crosses (the bottom-level structures it
-    /// enters), from the same rays.
-    pub ray_instances: f64,
 }
 
 /// What the next frame is estimated to cost

@@ -73,11 +73,11 @@ pub(super) fn score_variants(
     for v in variants {
         bar.set_message(format!("rendering {}", v.label()));
         let scene_v = variant_scene(scene, v);
-        let Some(mut renderer) = renderer_for(setup, &scene_v, v, &mut scored.skipped)? else {
+        let Some((mut renderer, estimate)) = renderer_for(setup, &scene_v, v, &mut scored.skipped)?
+        else {
             bar.inc(1);
             continue;
         };
-        let estimate = renderer.estimate_frame();
         let long = crate::render::long_frame(&estimate);
         if long {
             multi.suspend(|| {
@@ -116,14 +116,14 @@ pub(super) fn score_variants(
     Ok(scored)
 }
 
-/// The renderer of variant `v`, or `None` (with the reason pushed to `skipped`) when every
-/// technique was asked for and this adapter cannot run this one.
+/// The renderer of variant `v` with its frame estimate, or `None` (with the reason pushed to
+/// `skipped`) when every technique was asked for and this adapter cannot run this one.
 fn renderer_for(
     setup: &Setup,
     scene_v: &Scene,
     v: &Variant,
     skipped: &mut Vec<(String, String)>,
-) -> Result<Option<Renderer>> {
+) -> Result<Option<(Renderer, manyshadows::FrameEstimate)>> {
     let args = &setup.args;
     let soft_visibility = matches!(setup.soft, SoftPlan::Traced(_));
     match Renderer::new(
@@ -133,8 +133,9 @@ fn renderer_for(
     ) {
         Ok(r) => {
             // A frame of minutes is estimated before it is drawn, as `render` does.
+            let estimate = r.estimate_frame();
             if !args.insist {
-                if let Err(e) = crate::render::check_shadow_work(&r, &r.estimate_frame()) {
+                if let Err(e) = crate::render::check_shadow_work(&r, &estimate) {
                     if args.techniques.is_empty() {
                         skipped.push((v.label(), e.to_string()));
                         return Ok(None);
@@ -142,7 +143,7 @@ fn renderer_for(
                     return Err(e);
                 }
             }
-            Ok(Some(r))
+            Ok(Some((r, estimate)))
         }
         // Asked for every technique: run those this adapter can, say which it cannot.
         Err(e) if e.is_unsupported() && args.techniques.is_empty() => {

@@ -52,8 +52,9 @@ struct Costs {
     /// Lighting from a mask (irregular maps): pixels, loop pairs, fixed, pairs in reach.
     lighting_mask: [f64; 4],
     /// Lighting with shadow rays: pixels, loop pairs, fixed, rays, rays × triangles a ray
-    /// tests, rays × instance boxes it crosses, rays × (triangles a ray tests)².
-    lighting_rays: [f64; 7],
+    /// tests, rays × (triangles a ray tests)² (the fit found no cost in the linear term; a
+    /// term for the instance boxes a ray crosses found none either and was dropped).
+    lighting_rays: [f64; 6],
     /// Atlas shadows, per kind of technique (culling whole instances, clusters, in the vertex
     /// stage of one pass, in the vertex stage of multiview passes, per thread): (triangle,
     /// view) pairs taken on, (instance, view) pairs, texels of the tiles, texels of the whole
@@ -75,7 +76,7 @@ const LAVAPIPE: Costs = Costs {
     clusters: [1.01e-05, 4.26e-04, 2.33e-01],
     lighting_maps: [5.91e-05, 8.49e-06, 0.0, 6.19e-06, 2.41e-06],
     lighting_mask: [7.92e-07, 5.32e-06, 2.63, 1.46e-06],
-    lighting_rays: [1.52e-04, 8.27e-06, 0.0, 1.14e-05, 0.0, 0.0, 4.43e-05],
+    lighting_rays: [1.52e-04, 8.27e-06, 0.0, 1.14e-05, 0.0, 4.43e-05],
     atlas: [
         [3.30e-05, 2.57e-02, 3.84e-06, 0.0, 0.0, 0.0],
         [3.83e-06, 5.49e-03, 0.0, 9.67e-07, 0.0, 0.0],
@@ -114,7 +115,6 @@ impl Renderer {
                     lights[2],
                     rays,
                     rays * w.ray_weight,
-                    rays * w.ray_instances,
                     rays * w.ray_weight * w.ray_weight,
                 ],
             ),
@@ -248,7 +248,6 @@ impl Renderer {
             taps,
             rays,
             ray_weight: sight.ray_weight,
-            ray_instances: sight.ray_instances,
         }
     }
 }
@@ -261,9 +260,6 @@ struct Sight {
     cluster_lights: u64,
     /// Mean triangles a shadow ray towards a light in reach tests before it is done.
     ray_weight: f64,
-    /// Mean caster instances whose box a shadow ray crosses (each a bottom-level structure
-    /// the ray enters).
-    ray_instances: f64,
 }
 
 /// Lights sampled per grid point for [`Sight::ray_weight`].
@@ -285,6 +281,7 @@ impl Geometry {
             let Some(mesh) = scene.meshes.get(inst.mesh) else {
                 continue;
             };
+            // Finite: `Renderer::new` refused any scene with a non-finite position.
             let world: Vec<Vec3A> = mesh
                 .positions
                 .iter()
@@ -293,7 +290,7 @@ impl Geometry {
             for t in mesh.indices.chunks_exact(3) {
                 let v = |k: usize| world.get(t[k] as usize).copied();
                 if let (Some(v0), Some(v1), Some(v2)) = (v(0), v(1), v(2)) {
-                    if (v1 - v0).cross(v2 - v0).length_squared() > 0.0 && v0.is_finite() {
+                    if (v1 - v0).cross(v2 - v0).length_squared() > 0.0 {
                         triangles.push(Triangle { v0, v1, v2 });
                     }
                 }
@@ -357,7 +354,6 @@ fn sight(scene: &Scene, width: u32, height: u32, clusters: &ClusterOptions) -> S
         pixel_lights: 0,
         cluster_lights: 0,
         ray_weight: 0.0,
-        ray_instances: 0.0,
     };
     let Some(geometry) = Geometry::new(scene) else {
         return none;
@@ -389,13 +385,6 @@ fn sight(scene: &Scene, width: u32, height: u32, clusters: &ClusterOptions) -> S
     let slice_growth = ((cam.far / cam.near.max(1e-6)).max(1.0).ln() / slices).exp() - 1.0;
     let pixel_at_1 = 2.0 * tan_y / height.max(1) as f32;
     let offset = geometry.diag * 1e-5;
-    let boxes: Vec<(Vec3, Vec3)> = scene
-        .instances
-        .iter()
-        .filter(|i| i.casts_shadows)
-        .filter_map(|i| world_box(scene, i))
-        .collect();
-    let mut crossed = 0u64;
     let (cols, rows) = GRID;
     let (mut in_reach, mut in_cluster) = (0u64, 0u64);
     let (mut tests, mut rays) = (0u64, 0u64);
@@ -439,15 +428,7 @@ fn sight(scene: &Scene, width: u32, height: u32, clusters: &ClusterOptions) -> S
                 let seg = target(k, p) - from;
                 let len = seg.length();
                 if len > offset {
-                    let d = seg / len;
-                    tests += u64::from(geometry.tests(from, d, len - offset));
-                    crossed += boxes
-                        .iter()
-                        .filter(|(lo, hi)| {
-                            box_span(*lo, *hi, from, d)
-                                .is_some_and(|(a, b)| b >= a.max(0.0) && a < len)
-                        })
-                        .count() as u64;
+                    tests += u64::from(geometry.tests(from, seg / len, len - offset));
                     rays += 1;
                 }
             }
@@ -462,38 +443,5 @@ fn sight(scene: &Scene, width: u32, height: u32, clusters: &ClusterOptions) -> S
         } else {
             0.0
         },
-        ray_instances: if rays > 0 {
-            crossed as f64 / rays as f64
-        } else {
-            0.0
-        },
     }
-}
-
-/// The instance's world-space box.
-fn world_box(scene: &Scene, i: &manyshadows_scene::Instance) -> Option<(Vec3, Vec3)> {
-    let (lo, hi) = scene.meshes.get(i.mesh)?.bounds()?;
-    let mut wlo = Vec3::splat(f32::INFINITY);
-    let mut whi = Vec3::splat(f32::NEG_INFINITY);
-    for k in 0..8 {
-        let c = Vec3::new(
-            if k & 1 == 0 { lo.x } else { hi.x },
-            if k & 2 == 0 { lo.y } else { hi.y },
-            if k & 4 == 0 { lo.z } else { hi.z },
-        );
-        let w = i.transform.transform_point3(c);
-        wlo = wlo.min(w);
-        whi = whi.max(w);
-    }
-    (wlo.is_finite() && whi.is_finite()).then_some((wlo, whi))
-}
-
-/// Entry and exit distances of the line `origin + t·dir` through the box (the exit before
-/// the entry where the line misses it).
-fn box_span(lo: Vec3, hi: Vec3, origin: Vec3, dir: Vec3) -> Option<(f32, f32)> {
-    let inv = dir.recip();
-    let t0 = (lo - origin) * inv;
-    let t1 = (hi - origin) * inv;
-    let (near, exit) = (t0.min(t1).max_element(), t0.max(t1).min_element());
-    (near.is_finite() || exit.is_finite()).then_some((near, exit))
 }
