@@ -239,12 +239,24 @@ pub(crate) struct RenderArgs {
     /// Camera position and target, `PX,PY,PZ,TX,TY,TZ` (default: the scene's camera).
     #[arg(long, value_parser = parse_camera, allow_hyphen_values = true)]
     pub(crate) camera: Option<[f32; 6]>,
-    /// Image width.
+    /// Image width (with --stereo: of each eye; the image is twice as wide).
     #[arg(long, default_value_t = 1280)]
     pub(crate) width: u32,
     /// Image height.
     #[arg(long, default_value_t = 720)]
     pub(crate) height: u32,
+    /// Stereo: a left and a right eye this far apart (world units; a person's eyes are about
+    /// 0.065 m apart, the built-in scenes' units are metres), written side by side, each
+    /// --width wide. Both eyes are lit from the same shadow maps; see --stereo-passes for how
+    /// their G-buffers are drawn.
+    #[arg(long, value_name = "SEPARATION")]
+    pub(crate) stereo: Option<f32>,
+    /// With --stereo, how the two eyes' G-buffers are drawn: layered (default: one pass, one
+    /// draw per instance for both eyes, each copy clipped to its half; seed 000's layered
+    /// rendering) or per-eye (one pass per eye, the baseline).
+    #[arg(long, default_value = "layered", value_parser = parse_eye_passes,
+          value_name = "layered|per-eye", requires = "stereo")]
+    pub(crate) stereo_passes: manyshadows::EyePasses,
     /// Percentage-closer filtering: off, 2x2 or 3x3.
     #[arg(long, default_value = "2x2", value_parser = parse_pcf)]
     pub(crate) pcf: Pcf,
@@ -539,6 +551,11 @@ pub fn parse_pcf(s: &str) -> Result<Pcf, String> {
     s.parse()
 }
 
+/// `layered` or `per-eye`.
+pub(crate) fn parse_eye_passes(s: &str) -> Result<manyshadows::EyePasses, String> {
+    s.parse()
+}
+
 pub(crate) fn parse_light_loop(s: &str) -> Result<manyshadows::LightLoop, String> {
     s.parse()
 }
@@ -581,6 +598,8 @@ pub(crate) fn flag_error(e: manyshadows::RenderError) -> anyhow::Error {
         ("rays.area_samples", "--area-samples"),
         ("shadow_budget", "--shadow-budget"),
         ("look.exposure", "--exposure"),
+        ("stereo.separation", "--stereo"),
+        ("stereo", "--stereo"),
     ];
     if let manyshadows::RenderError::InvalidOption { option, .. } = &e {
         if let Some((_, flag)) = FLAGS.iter().find(|(o, _)| o == option) {
@@ -613,8 +632,16 @@ pub(crate) fn effective_atlas_max(ctx: &GpuContext, requested: u32) -> u32 {
 /// adapter.
 pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettings {
     RenderSettings::default()
-        .with_width(args.width)
+        .with_width(if args.stereo.is_some() {
+            args.width.saturating_mul(2)
+        } else {
+            args.width
+        })
         .with_height(args.height)
+        .with_stereo(
+            args.stereo
+                .map(|s| manyshadows::Stereo::new(s).with_passes(args.stereo_passes)),
+        )
         .with_technique(args.technique)
         .with_shadow(ShadowOptions::default().with_cull(args.cull).with_casters(
             manyshadows::CasterOptions::default().with_ignore_masks(!args.shadow_alpha),

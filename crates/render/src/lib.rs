@@ -111,6 +111,7 @@ pub use wgpu;
 // ------------------------------------------------------------------------------------------
 pub use error::{Fills, RenderError, Technique};
 pub use frame::clusters::{ClusterOptions, ClusterStats, LightLoop};
+pub use frame::eyes::{EyePasses, Eyes, Stereo};
 pub use frame::gbuffer_readback::GBufferData;
 pub use frame::visibility_mask::{MaskFileError, SoftVisibility, VisibilityMask};
 pub use gpu::context::{

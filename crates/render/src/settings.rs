@@ -9,6 +9,7 @@ use manyshadows_scene::atlas::FitPolicy;
 
 use crate::error::{RenderError, Technique};
 use crate::frame::clusters::{ClusterOptions, LightLoop};
+use crate::frame::eyes::Stereo;
 use crate::shading::look::Look;
 use crate::shadows::irregular::maps::IrregularOptions;
 use crate::shadows::options::{Pcf, ShadowBias, ShadowOptions, SoftShadows};
@@ -20,7 +21,7 @@ use crate::shadows::vsm::plan::VirtualOptions;
 #[derive(Clone, Debug)]
 #[non_exhaustive]
 pub struct RenderSettings {
-    /// Image width in pixels.
+    /// Image width in pixels (with [`Self::stereo`] both eyes side by side, each `width / 2`).
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
@@ -69,6 +70,8 @@ pub struct RenderSettings {
     pub clusters: ClusterOptions,
     /// Shading model, exposure and tone map (default: as the scene's lighting says).
     pub look: Look,
+    /// Two eyes side by side (`None`: one camera): [`crate::frame::eyes`].
+    pub stereo: Option<Stereo>,
 }
 
 impl Default for RenderSettings {
@@ -94,6 +97,7 @@ impl Default for RenderSettings {
             light_loop: LightLoop::default(),
             clusters: ClusterOptions::default(),
             look: Look::default(),
+            stereo: None,
         }
     }
 }
@@ -149,6 +153,16 @@ impl RenderSettings {
             }
         }
         self.soft.validate()?;
+        if let Some(stereo) = &self.stereo {
+            stereo.validate(self.width)?;
+            if self.rays.denoise || self.rays.reuse {
+                return Err(bad(
+                    "stereo",
+                    "on with rays.denoise or rays.reuse",
+                    "one camera: history is reprojected through one camera, not yet per eye",
+                ));
+            }
+        }
         if self.rays.denoise && self.technique.info().fills != crate::error::Fills::Rays {
             return Err(bad(
                 "rays.denoise",
@@ -193,6 +207,7 @@ with_setters!(RenderSettings {
     with_rays: rays: RayOptions,
     with_light_loop: light_loop: LightLoop,
     with_clusters: clusters: ClusterOptions,
+    with_stereo: stereo: Option<Stereo>,
 });
 
 impl RenderSettings {

@@ -493,6 +493,26 @@ impl Camera {
         Mat4::look_at_rh(self.position, self.target, self.up)
     }
 
+    /// The camera's right direction (unit; the view matrix's x axis in world space).
+    pub fn right(&self) -> Vec3 {
+        (self.target - self.position)
+            .normalize()
+            .cross(self.up)
+            .normalize()
+    }
+
+    /// The same camera moved `by` along its right direction, target and all: a stereo pair's
+    /// eye is `shifted(∓separation / 2)` (parallel eyes, no toe-in, so both eyes share the
+    /// view direction, the view depth of every point, and the projection).
+    pub fn shifted(&self, by: f32) -> Camera {
+        let d = self.right() * by;
+        Camera {
+            position: self.position + d,
+            target: self.target + d,
+            ..*self
+        }
+    }
+
     /// View-to-clip matrix for the given aspect ratio (wgpu depth range 0..1).
     pub fn projection(&self, aspect: f32) -> Mat4 {
         Mat4::perspective_rh(self.fov_y_deg.to_radians(), aspect, self.near, self.far)

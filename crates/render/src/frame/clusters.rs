@@ -39,6 +39,7 @@ use manyshadows_scene::Scene;
 use wgpu::util::DeviceExt;
 
 use crate::error::RenderError;
+use crate::frame::eyes::{Eyes, Stereo};
 use crate::frame::gbuffer::GBuffer;
 use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, Span};
@@ -186,6 +187,7 @@ pub struct LightClusters {
     data: ClusterUniforms,
     width: u32,
     height: u32,
+    stereo: Option<Stereo>,
     options: ClusterOptions,
     enabled: bool,
     light_capacity: usize,
@@ -207,13 +209,20 @@ impl LightClusters {
         lights: usize,
         options: ClusterOptions,
         enabled: bool,
+        stereo: Option<Stereo>,
     ) -> Result<Self, RenderError> {
         // The grid's ranges are checked by `RenderSettings::validate`.
         debug_assert!(options.tile > 0 && (1..=256).contains(&options.slices));
         let device = &ctx.device;
         let limit = ctx.limits().max_storage_buffer_binding_size;
         let pool_limit = options.pool_bytes.unwrap_or(DEFAULT_POOL_BYTES).min(limit);
-        let tiles = [width.div_ceil(options.tile), height.div_ceil(options.tile)];
+        // With two eyes each half has its own tile columns (a tile never straddles the eyes).
+        let eyes = if stereo.is_some() { 2 } else { 1 };
+        let eye_width = (width / eyes).max(1);
+        let tiles = [
+            eyes * eye_width.div_ceil(options.tile),
+            height.div_ceil(options.tile),
+        ];
         let clusters = tiles[0] as u64 * tiles[1] as u64 * options.slices as u64;
         if clusters * 4 > limit {
             return Err(RenderError::TooLarge {
@@ -296,11 +305,12 @@ impl LightClusters {
             stats: pipeline("cs_stats"),
             data: ClusterUniforms {
                 grid: [tiles[0], tiles[1], options.slices, options.tile],
-                counts: [0, 0, clusters as u32, 0],
+                counts: [0, 0, clusters as u32, eyes],
                 ..Default::default()
             },
             width,
             height,
+            stereo,
             options,
             enabled,
             light_capacity: 0,
@@ -379,22 +389,30 @@ impl LightClusters {
     pub fn update(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<bool, RenderError> {
         let replaced = self.resize(ctx, scene.lights.len())?;
         let cam = &scene.camera;
-        let aspect = self.width as f32 / self.height as f32;
+        // Parallel eyes share the view depth of every point: one slicing serves both.
+        let eyes = Eyes::new(cam, self.stereo, (self.width, self.height));
         let (lo, hi) = light_space::view_depth_range(cam, scene.world_bounds(false));
         let near = lo.max(cam.near);
         let far = hi.max(near * 1.01);
-        let proj = cam.projection(aspect);
+        let proj = cam.projection(eyes.aspect());
         self.data.depth = [
             near,
             self.options.slices as f32 / (far / near).ln(),
             cam.near,
             cam.far,
         ];
-        self.data.proj = [1.0 / proj.x_axis.x, 1.0 / proj.y_axis.y, 0.0, 0.0];
+        self.data.proj = [
+            1.0 / proj.x_axis.x,
+            1.0 / proj.y_axis.y,
+            eyes.eye_width as f32,
+            eyes.half_separation,
+        ];
 
         let (summary, words) = (self.data.words[0] as usize, self.data.words[1] as usize);
         let mut global = vec![0u32; summary + words];
-        let planes = light_space::frustum_planes(proj * cam.view());
+        let planes: Vec<_> = (0..eyes.cameras.len())
+            .map(|e| light_space::frustum_planes(eyes.view_proj(e)))
+            .collect();
         let mut index = Vec::new();
         let mut spheres: Vec<[f32; 4]> = Vec::new();
         for (i, light) in scene.lights.iter().enumerate() {
@@ -405,7 +423,10 @@ impl LightClusters {
                     global[w / 32] |= 1 << (w % 32);
                 }
                 Some((c, r)) => {
-                    if light_space::sphere_in_planes(&planes, c, r * 1.001 + 1e-4) {
+                    if planes
+                        .iter()
+                        .any(|p| light_space::sphere_in_planes(p, c, r * 1.001 + 1e-4))
+                    {
                         index.push(i as u32);
                         spheres.push(c.extend(r).to_array());
                     }

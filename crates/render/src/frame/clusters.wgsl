@@ -107,11 +107,26 @@ fn cs_assign(@builtin(global_invocation_id) gid: vec3<u32>) {
     let light_index = assign_index[gid.x];
     let sphere = assign_sphere[gid.x];
     let s = gid.z;
-    let centre = (frame.view * vec4<f32>(sphere.xyz, 1.0)).xyz;
+    let zr = slice_range(s);
+    let light = lights[light_index];
+    let is_spot = light.shadow.z == LIGHT_SPOT;
+    let eyes = max(c.counts.w, 1u);
+    let per_eye = c.grid.x / eyes;
+    // Each eye's view space is the centre camera's moved along x (frame/eyes.rs).
+    for (var eye = 0u; eye < eyes; eye = eye + 1u) {
+        let shift = vec3<f32>(select(0.0, (f32(eye) * 2.0 - 1.0) * c.proj.w, eyes > 1u), 0.0, 0.0);
+        assign_in_eye(light_index, sphere, light, is_spot, s, zr, shift, eye * per_eye, per_eye);
+    }
+}
+
+// Sets the light's bit in the occupied clusters of one eye's tile columns
+// (`first_tile`.. + `tiles_x`), in that eye's view space (the centre's minus `shift`).
+fn assign_in_eye(light_index: u32, sphere: vec4<f32>, light: LightData, is_spot: bool, s: u32, zr: vec2<f32>, shift: vec3<f32>, first_tile: u32, tiles_x: u32) {
+    let c = clusters;
+    let centre = (frame.view * vec4<f32>(sphere.xyz, 1.0)).xyz - shift;
     // Pad the radius against rounding of the view transform.
     let r = sphere.w * (1.0 + 1e-4) + 1e-5 * length(centre);
     let depth = -centre.z;
-    let zr = slice_range(s);
     if (depth + r < zr.x || depth - r > zr.y) {
         return;
     }
@@ -120,7 +135,7 @@ fn cs_assign(@builtin(global_invocation_id) gid: vec3<u32>) {
     // NDC rectangle of the sphere's box within the slab, then tiles.
     let nx = ratio_range(centre.x - r, centre.x + r, d0, d1) / c.proj.x;
     let ny = ratio_range(centre.y - r, centre.y + r, d0, d1) / c.proj.y;
-    let size = frame.viewport.xy;
+    let size = vec2<f32>(c.proj.z, frame.viewport.y);
     let tile = f32(c.grid.w);
     // Pixel x = (ndc.x + 1) / 2 · width; pixel y = (1 − ndc.y) / 2 · height.
     let px0 = (nx.x + 1.0) * 0.5 * size.x;
@@ -130,13 +145,11 @@ fn cs_assign(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (px1 < 0.0 || py1 < 0.0 || px0 > size.x || py0 > size.y) {
         return;
     }
-    let last = vec2<f32>(c.grid.xy - vec2<u32>(1u));
+    let last = vec2<f32>(vec2<u32>(tiles_x, c.grid.y) - vec2<u32>(1u));
     let t0 = vec2<u32>(clamp(floor(vec2<f32>(px0, py0) / tile), vec2<f32>(0.0), last));
     let t1 = vec2<u32>(clamp(floor(vec2<f32>(px1, py1) / tile), vec2<f32>(0.0), last));
 
-    let light = lights[light_index];
-    let is_spot = light.shadow.z == LIGHT_SPOT;
-    let apex = (frame.view * vec4<f32>(light.position.xyz, 1.0)).xyz;
+    let apex = (frame.view * vec4<f32>(light.position.xyz, 1.0)).xyz - shift;
     let axis = normalize((frame.view * vec4<f32>(light.direction.xyz, 0.0)).xyz);
     let word = light_index / 32u;
     let bit = 1u << (light_index % 32u);
@@ -145,7 +158,7 @@ fn cs_assign(@builtin(global_invocation_id) gid: vec3<u32>) {
     let stride = c.words.z;
     for (var ty = t0.y; ty <= t1.y; ty = ty + 1u) {
         for (var tx = t0.x; tx <= t1.x; tx = tx + 1u) {
-            let ci = (s * c.grid.y + ty) * c.grid.x + tx;
+            let ci = (s * c.grid.y + ty) * c.grid.x + first_tile + tx;
             let v = atomicLoad(&slots[ci]);
             if (v < CLUSTER_FIRST_SLOT || v == CLUSTER_OVERFLOW) {
                 continue;

@@ -2,6 +2,7 @@
 //! surface. Positions are stored directly (not reconstructed from depth) so the quality
 //! reference can ray-trace from exactly the points the frame shades.
 
+use crate::frame::eyes::EyePasses;
 use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu_scene::instances::{
@@ -35,9 +36,14 @@ pub struct GBuffer {
     /// Render-target views of position, normal, depth and emission, made once.
     views: Vec<wgpu::TextureView>,
     /// By (alpha-tested, face culling): the opaque and alpha-testing pipelines, and culling
-    /// variants where a material asks for them.
+    /// variants where a material asks for them. With stereo drawn layered, these are the
+    /// layered pipelines (both eyes per draw).
     pipelines: std::collections::HashMap<(bool, CameraCull), wgpu::RenderPipeline>,
     bind_group: wgpu::BindGroup,
+    /// With stereo: how the eyes are drawn.
+    stereo: Option<EyePasses>,
+    /// Width and height of the whole image.
+    size: (u32, u32),
 }
 
 fn target(
@@ -79,8 +85,15 @@ fn array_texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
 }
 
 impl GBuffer {
-    /// Creates `w`×`h` targets; `frame` is the frame-uniform buffer.
-    pub fn new(ctx: &GpuContext, scene: &GpuScene, frame: &wgpu::Buffer, w: u32, h: u32) -> Self {
+    /// Creates `w`×`h` targets; `frame` is the frame-uniform buffer; `stereo`: two eyes side by
+    /// side, drawn that way (its feature is checked by the caller: `Renderer::new`).
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        frame: &wgpu::Buffer,
+        (w, h): (u32, u32),
+        stereo: Option<EyePasses>,
+    ) -> Self {
         use wgpu::TextureUsages as U;
         let color_usage = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC;
         let position = target(ctx, "gbuffer.position", w, h, POSITION_FORMAT, color_usage);
@@ -118,7 +131,12 @@ impl GBuffer {
             U::RENDER_ATTACHMENT,
         );
         let device = &ctx.device;
-        let module = crate::gpu::shaders::module(device, "gbuffer.shader", &shader());
+        let layered = stereo == Some(EyePasses::Layered);
+        let module = if layered {
+            crate::gpu::shaders::module(device, "gbuffer.layered.shader", &layered_shader())
+        } else {
+            crate::gpu::shaders::module(device, "gbuffer.shader", &shader())
+        };
         let layout = crate::gpu::pipelines::bind_group_layout(
             device,
             "gbuffer.layout",
@@ -185,7 +203,7 @@ impl GBuffer {
                 layout: Some(&pipeline_layout),
                 vertex: wgpu::VertexState {
                     module: &module,
-                    entry_point: Some("vs_main"),
+                    entry_point: Some(if layered { "vs_layered" } else { "vs_main" }),
                     compilation_options: Default::default(),
                     buffers: &[Some(POSITION_LAYOUT), Some(NORMAL_LAYOUT), Some(UV_LAYOUT)],
                 },
@@ -252,11 +270,14 @@ impl GBuffer {
             views,
             pipelines,
             bind_group,
+            stereo,
+            size: (w, h),
         }
     }
 
     /// Records the pass: every instance, no culling (the camera sees a handful of instances
-    /// fewer at most; the shadow passes are where culling pays).
+    /// fewer at most; the shadow passes are where culling pays). Stereo: one pass per eye, or
+    /// one pass drawing both (`EyePasses`).
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -264,14 +285,47 @@ impl GBuffer {
         timer: &GpuTimer,
         span: Option<Span>,
     ) {
+        match self.stereo {
+            None => {
+                self.record_pass(encoder, scene, (timer, span, true, true), None, (1, 0..1));
+            }
+            Some(EyePasses::PerEye) => {
+                let eye_width = self.size.0 / 2;
+                for eye in 0..2u32 {
+                    let rect = [eye * eye_width, 0, eye_width, self.size.1];
+                    let writes = (timer, span, eye == 0, eye == 1);
+                    self.record_pass(encoder, scene, writes, Some(rect), (2, eye..eye + 1));
+                }
+            }
+            Some(EyePasses::Layered | EyePasses::Multiview) => {
+                self.record_pass(encoder, scene, (timer, span, true, true), None, (2, 0..2));
+            }
+        }
+    }
+
+    /// One render pass: the first (`writes.2`) clears; `rect` limits it to one eye's half;
+    /// each scene instance `i` is drawn as draw instances `eyes·i + copies`.
+    fn record_pass(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        (timer, span, first, last): (&GpuTimer, Option<Span>, bool, bool),
+        rect: Option<[u32; 4]>,
+        (eyes, copies): (u32, std::ops::Range<u32>),
+    ) {
         let (pv, nv, dv) = (&self.views[0], &self.views[1], &self.views[2]);
-        let clear = |view| {
+        let load = if first {
+            wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)
+        } else {
+            wgpu::LoadOp::Load
+        };
+        let target = |view| {
             Some(wgpu::RenderPassColorAttachment {
                 view,
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    load,
                     store: wgpu::StoreOp::Store,
                 },
             })
@@ -279,22 +333,35 @@ impl GBuffer {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("gbuffer.pass"),
             color_attachments: &if let Some(ev) = self.views.get(3) {
-                vec![clear(pv), clear(nv), clear(ev)]
+                vec![target(pv), target(nv), target(ev)]
             } else {
-                vec![clear(pv), clear(nv)]
+                vec![target(pv), target(nv)]
             },
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: dv,
                 depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Discard,
+                    // The first pass clears the whole image, the second eye's loads it.
+                    load: if first {
+                        wgpu::LoadOp::Clear(1.0)
+                    } else {
+                        wgpu::LoadOp::Load
+                    },
+                    store: if last {
+                        wgpu::StoreOp::Discard
+                    } else {
+                        wgpu::StoreOp::Store
+                    },
                 }),
                 stencil_ops: None,
             }),
-            timestamp_writes: timer.render_writes(span, true, true),
+            timestamp_writes: timer.render_writes(span, first, last),
             occlusion_query_set: None,
             multiview_mask: None,
         });
+        if let Some([x, y, w, h]) = rect {
+            pass.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
+            pass.set_scissor_rect(x, y, w, h);
+        }
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.set_vertex_buffer(0, scene.positions.slice(..));
         pass.set_vertex_buffer(1, scene.normals.slice(..));
@@ -313,7 +380,7 @@ impl GBuffer {
                 pass.draw_indexed(
                     m.first_index..m.first_index + m.index_count,
                     m.base_vertex,
-                    d.instance..d.instance + 1,
+                    eyes * d.instance + copies.start..eyes * d.instance + copies.end,
                 );
             }
         }
@@ -325,6 +392,17 @@ pub fn shader() -> String {
     crate::gpu::shaders::compose(&[crate::gpu::shaders::COMMON, include_str!("gbuffer.wgsl")])
 }
 
+/// The same with `vs_layered`: both eyes of a stereo frame in one draw (needs
+/// `CLIP_DISTANCES`).
+pub fn layered_shader() -> String {
+    crate::gpu::shaders::compose(&[
+        "enable clip_distances;",
+        crate::gpu::shaders::COMMON,
+        include_str!("gbuffer.wgsl"),
+        include_str!("gbuffer_layered.wgsl"),
+    ])
+}
+
 #[cfg(test)]
 mod shader_tests {
     /// What this module composes is WGSL a WebGPU device accepts.
@@ -334,6 +412,17 @@ mod shader_tests {
             "gbuffer",
             &super::shader(),
             wgpu::Features::empty(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+    }
+
+    /// The layered stereo variant too, with the feature it enables.
+    #[test]
+    fn layered_shader_validates_for_webgpu() {
+        crate::gpu::shaders::validate_for_webgpu(
+            "gbuffer layered",
+            &super::layered_shader(),
+            wgpu::Features::CLIP_DISTANCES,
         )
         .unwrap_or_else(|e| panic!("{e}"));
     }

@@ -16,8 +16,12 @@ struct VsOut {
     @location(1) normal: vec3<f32>,
     @location(2) @interpolate(flat) material: u32,
     @location(3) uv: vec2<f32>,
+    // The eye this copy of the triangle is drawn for (frame/eyes.rs; 0 when mono).
+    @location(4) @interpolate(flat) eye: u32,
 }
 
+// Instance `instance` of a draw is scene instance `instance / eyes`, seen by eye
+// `instance % eyes` (one eye per pass: each pass draws its eye's copies; layered: both).
 @vertex
 fn vs_main(
     @location(0) position: vec3<f32>,
@@ -25,14 +29,20 @@ fn vs_main(
     @location(2) uv: vec2<f32>,
     @builtin(instance_index) instance: u32,
 ) -> VsOut {
+    let eyes = max(u32(frame.eyes.y), 1u);
+    return surface_vertex(position, normal, uv, instance / eyes, instance % eyes);
+}
+
+fn surface_vertex(position: vec3<f32>, normal: vec3<f32>, uv: vec2<f32>, instance: u32, eye: u32) -> VsOut {
     let inst = instances[instance];
     let world = inst.model * vec4<f32>(position, 1.0);
     var out: VsOut;
-    out.clip = frame.view_proj * world;
+    out.clip = frame.eye_view_proj[eye] * world;
     out.world = world.xyz;
     out.normal = (inst.normal * vec4<f32>(normal, 0.0)).xyz;
     out.material = inst.material.x;
     out.uv = uv;
+    out.eye = eye;
     return out;
 }
 
@@ -171,7 +181,7 @@ fn surface(in: VsOut, front: bool, mat: MaterialData, base: vec4<f32>, d: Derivs
     // from its winding: scanned meshes have triangles wound against their neighbours whose
     // vertex normals still point outwards, and flipping those by winding shaded them as seen
     // from inside (black speckles). Winding decides only where the plane is degenerate.
-    let to_eye = frame.camera_pos.xyz - in.world;
+    let to_eye = frame.eye_pos[in.eye].xyz - in.world;
     var ng = cross(d.p_dx, d.p_dy);
     var facing = select(-1.0, 1.0, front);
     let ng_len = length(ng);

@@ -3,6 +3,7 @@
 //! read the sources' output are in [`crate::shading`]. Each pass's WGSL lies beside it.
 
 pub mod clusters;
+pub mod eyes;
 pub mod gbuffer;
 pub mod gbuffer_readback;
 pub mod visibility_mask;

@@ -31,6 +31,25 @@ struct FrameUniforms {
     look: vec4<f32>,
     // Tone map (TONE_*), unused ×3.
     modes: vec4<u32>,
+    // Stereo (frame/eyes.rs): each eye's world → clip and position (mono: both the camera's),
+    // and in `eyes` one eye's width in pixels (the whole width when mono), the eye count.
+    eye_view_proj: array<mat4x4<f32>, 2>,
+    eye_pos: array<vec4<f32>, 2>,
+    eyes: vec4<f32>,
+}
+
+// The eye whose half of the image holds pixel column `x` (0 when mono), from
+// `FrameUniforms::eyes`.
+fn eye_of(eyes: vec4<f32>, x: u32) -> u32 {
+    return min(x / max(u32(eyes.x), 1u), max(u32(eyes.y), 1u) - 1u);
+}
+
+// Pixel `px` counted from its eye's left edge: per-pixel noise (tap rotations, sample
+// jitter, random choices) hashes this, so each eye of a stereo frame is the mono frame from
+// that eye, noise and all.
+fn eye_local(eyes: vec4<f32>, px: vec2<i32>) -> vec2<i32> {
+    let e = eye_of(eyes, u32(max(px.x, 0)));
+    return vec2<i32>(px.x - i32(e * u32(eyes.x)), px.y);
 }
 
 const SHADING_PHONG: u32 = 0u;
@@ -149,9 +168,10 @@ struct ClusterUniforms {
     // view depths near·e^(s/per_ln) .. near·e^((s+1)/per_ln); the first and last slices reach
     // out to the camera's near and far planes.
     depth: vec4<f32>,
-    // View-space x and y per unit depth per NDC unit (1/P00, 1/P11), unused, unused.
+    // View-space x and y per unit depth per NDC unit (1/P00, 1/P11), one eye's width in
+    // pixels (the whole width when mono), half the eye separation (frame/eyes.rs).
     proj: vec4<f32>,
-    // Slot capacity, lights in the assignment list, clusters in the grid, unused.
+    // Slot capacity, lights in the assignment list, clusters in the grid, eyes (1 or 2).
     counts: vec4<u32>,
 }
 
@@ -162,9 +182,15 @@ fn cluster_slice(c: ClusterUniforms, view_depth: f32) -> u32 {
 }
 
 // Cluster index of pixel `px` at `view_depth`.
+// With two eyes each eye's half has its own `grid.x / 2` tile columns, counted from its edge.
 fn cluster_index(c: ClusterUniforms, px: vec2<u32>, view_depth: f32) -> u32 {
-    let t = min(px / c.grid.w, c.grid.xy - vec2<u32>(1u));
-    return (cluster_slice(c, view_depth) * c.grid.y + t.y) * c.grid.x + t.x;
+    let eyes = max(c.counts.w, 1u);
+    let per_eye = c.grid.x / eyes;
+    let eye_width = max(u32(c.proj.z), 1u);
+    let eye = min(px.x / eye_width, eyes - 1u);
+    let local = vec2<u32>(px.x - eye * eye_width, px.y);
+    let t = min(local / c.grid.w, vec2<u32>(per_eye, c.grid.y) - vec2<u32>(1u));
+    return (cluster_slice(c, view_depth) * c.grid.y + t.y) * c.grid.x + eye * per_eye + t.x;
 }
 
 // Slot values: 0 = no sample in the cluster, 1 = marked (before allocation), 2 + slot

@@ -38,6 +38,12 @@ pub struct FrameUniforms {
     pub look: [f32; 4],
     /// Tone map, unused ×3.
     pub modes: [u32; 4],
+    /// Each eye's world → clip (`frame::eyes`; mono: both the camera's `view_proj`).
+    pub eye_view_proj: [[[f32; 4]; 4]; 2],
+    /// Each eye's position (xyz; mono: both `camera_pos`).
+    pub eye_pos: [[f32; 4]; 2],
+    /// Width of one eye in pixels (the whole width when mono), eye count, unused ×2.
+    pub eyes: [f32; 4],
 }
 
 /// Per-instance data (`InstanceData`).
@@ -231,9 +237,10 @@ pub struct ClusterUniforms {
     pub words: [u32; 4],
     /// Slicing near depth, slices per unit of ln(depth), camera near, camera far.
     pub depth: [f32; 4],
-    /// 1/P00, 1/P11 of the camera projection, unused ×2.
+    /// 1/P00, 1/P11 of the (eye's) projection, one eye's width in pixels (the whole width
+    /// when mono), half the eye separation (`frame::eyes`).
     pub proj: [f32; 4],
-    /// Slot capacity, lights in the assignment list, clusters in the grid, unused.
+    /// Slot capacity, lights in the assignment list, clusters in the grid, eyes (1 or 2).
     pub counts: [u32; 4],
 }
 
@@ -386,7 +393,10 @@ mod tests {
             sky,
             soft,
             look,
-            modes
+            modes,
+            eye_view_proj,
+            eye_pos,
+            eyes
         );
         same_layout!(InstanceData, model, normal, material);
         same_layout!(

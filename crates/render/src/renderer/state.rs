@@ -10,6 +10,7 @@ use wgpu::util::DeviceExt;
 
 use crate::error::RenderError;
 use crate::frame::clusters::{LightClusters, LightLoop};
+use crate::frame::eyes::EyePasses;
 use crate::frame::gbuffer::GBuffer;
 use crate::frame::visibility_mask::{SoftVisibility, VisibilityMask};
 use crate::gpu::context::GpuContext;
@@ -118,6 +119,24 @@ impl Renderer {
                 max: max_dim,
             });
         }
+        if let Some(stereo) = settings.stereo {
+            if stereo.passes == EyePasses::Multiview {
+                return Err(RenderError::NotImplemented {
+                    what: "stereo drawn in one multiview pass",
+                    instead: "draw the eyes layered (the default) or per-eye",
+                });
+            }
+            if let Some((feature, why)) = stereo.passes.needs() {
+                if !ctx.has(feature) {
+                    return Err(RenderError::missing_feature(
+                        ctx,
+                        format!("stereo drawn {}", stereo.passes),
+                        format!("{feature:?} ({why})"),
+                        "draw the eyes per-eye",
+                    ));
+                }
+            }
+        }
         let max_atlas = settings
             .max_atlas_size
             .unwrap_or(DEFAULT_MAX_ATLAS_SIZE)
@@ -144,8 +163,8 @@ impl Renderer {
                 ctx,
                 &gpu_scene,
                 &frame_buffer,
-                settings.width,
-                settings.height,
+                (settings.width, settings.height),
+                settings.stereo.map(|s| s.passes),
             );
             let mut clusters = LightClusters::new(
                 ctx,
@@ -153,6 +172,7 @@ impl Renderer {
                 scene.lights.len(),
                 settings.clusters,
                 settings.light_loop == LightLoop::Clustered,
+                settings.stereo,
             )?;
             clusters.update(ctx, scene)?;
             clusters.bind(ctx, &frame_buffer, &lights, &gbuffer);

@@ -1,5 +1,6 @@
 //! The frame's uniform block and the lights buffer's records.
 
+use crate::frame::eyes::Eyes;
 use crate::gpu::types::{FrameUniforms, LightData};
 use crate::settings::RenderSettings;
 use glam::Vec3;
@@ -22,6 +23,8 @@ pub(super) fn frame_uniforms(scene: &Scene, s: &RenderSettings, atlas_size: u32)
     let view = cam.view();
     let proj = cam.projection(aspect);
     let (look, modes) = s.look.resolve(scene).uniforms();
+    let eyes = Eyes::new(cam, s.stereo, (s.width, s.height));
+    let eye = |i: usize| i.min(eyes.cameras.len() - 1);
     FrameUniforms {
         view_proj: (proj * view).to_cols_array_2d(),
         view: view.to_cols_array_2d(),
@@ -54,6 +57,9 @@ pub(super) fn frame_uniforms(scene: &Scene, s: &RenderSettings, atlas_size: u32)
         ],
         look,
         modes,
+        eye_view_proj: [0, 1].map(|i| eyes.view_proj(eye(i)).to_cols_array_2d()),
+        eye_pos: [0, 1].map(|i| eyes.cameras[eye(i)].position.extend(1.0).to_array()),
+        eyes: [eyes.eye_width as f32, eyes.cameras.len() as f32, 0.0, 0.0],
     }
 }
 

@@ -527,7 +527,7 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     let albedo = gbuffer_albedo(gpos);
     s.mat.ambient = vec4<f32>(s.mat.ambient.rgb * albedo, s.mat.ambient.w);
     s.mat.diffuse = vec4<f32>(s.mat.diffuse.rgb * albedo, s.mat.diffuse.w);
-    s.v = normalize(frame.camera_pos.xyz - s.p);
+    s.v = normalize(frame.eye_pos[eye_of(frame.eyes, u32(px.x))].xyz - s.p);
     s.view_depth = -(frame.view * vec4<f32>(s.p, 1.0)).z;
     s.px = px;
     s.mask = mask;
@@ -537,7 +537,8 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     acc.count = 0u;
     // `modes.y` is the frame's number when rays are denoised (new random numbers each frame),
     // else 0.
-    acc.rng = pcg(u32(px.x) + pcg(u32(px.y) + pcg(ray_seed() + frame.modes.y)));
+    let noise_px = eye_local(frame.eyes, px);
+    acc.rng = pcg(u32(noise_px.x) + pcg(u32(noise_px.y) + pcg(ray_seed() + frame.modes.y)));
     acc.unshadowed = vec3<f32>(0.0);
     acc.est_shadowed = vec3<f32>(0.0);
     acc.est_unshadowed = vec3<f32>(0.0);

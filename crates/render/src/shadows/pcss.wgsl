@@ -108,7 +108,8 @@ fn soft_shadow(size: f32, c: ShadowCoord, rot: f32) -> f32 {
 // pixel, the light, the rays' seed and the frame's number where frames accumulate
 // (`frame.modes.y`, 0 otherwise), so strata differ between neighbours and between the frames
 // a denoiser accumulates.
-fn soft_jitter(px: vec2<i32>, i: u32) -> vec2<f32> {
+fn soft_jitter(px_frame: vec2<i32>, i: u32) -> vec2<f32> {
+    let px = eye_local(frame.eyes, px_frame);
     var h = soft_hash(u32(px.x) ^ soft_hash(u32(px.y) ^ soft_hash(i ^ soft_hash(ray_seed() + frame.modes.y))));
     let a = f32(h >> 8u) / 16777216.0;
     h = soft_hash(h);
@@ -123,6 +124,6 @@ fn soft_hash(v: u32) -> u32 {
 
 // A pixel's angle for the taps: interleaved gradient noise (Jimenez 2014) of its position.
 fn soft_rotation(px: vec2<i32>) -> f32 {
-    let p = vec2<f32>(px);
+    let p = vec2<f32>(eye_local(frame.eyes, px));
     return 6.2831853 * fract(52.982919 * fract(0.06711056 * p.x + 0.00583715 * p.y));
 }
