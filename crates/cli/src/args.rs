@@ -249,13 +249,14 @@ pub(crate) struct RenderArgs {
     /// 0.065 m apart, the built-in scenes' units are metres), written side by side, each
     /// --width wide. Both eyes are lit from the same shadow maps; see --stereo-passes for how
     /// their G-buffers are drawn.
-    #[arg(long, value_name = "SEPARATION")]
+    #[arg(long, value_name = "SEPARATION", allow_hyphen_values = true)]
     pub(crate) stereo: Option<f32>,
     /// With --stereo, how the two eyes' G-buffers are drawn: layered (default: one pass, one
     /// draw per instance for both eyes, each copy clipped to its half; seed 000's layered
-    /// rendering) or per-eye (one pass per eye, the baseline).
-    #[arg(long, default_value = "layered", value_parser = parse_eye_passes,
-          value_name = "layered|per-eye", requires = "stereo")]
+    /// rendering), multiview (one multiview pass into a layer per eye, copied into the halves;
+    /// Vulkan) or per-eye (one pass per eye, the baseline).
+    #[arg(long, default_value_t = manyshadows::EyePasses::default(), value_parser = parse_eye_passes,
+          requires = "stereo")]
     pub(crate) stereo_passes: manyshadows::EyePasses,
     /// Percentage-closer filtering: off, 2x2 or 3x3.
     #[arg(long, default_value = "2x2", value_parser = parse_pcf)]
@@ -551,7 +552,7 @@ pub fn parse_pcf(s: &str) -> Result<Pcf, String> {
     s.parse()
 }
 
-/// `layered` or `per-eye`.
+/// `layered`, `multiview` or `per-eye`.
 pub(crate) fn parse_eye_passes(s: &str) -> Result<manyshadows::EyePasses, String> {
     s.parse()
 }

@@ -6,7 +6,7 @@ use clap::{Parser, Subcommand};
 use crate::args::{GpuArgs, RenderArgs};
 use crate::{
     bench, compare, denoise_bench, estimate_bench, irregular_bench, lights_bench, omni,
-    shadows_bench, soak, soft_bench, suite, viewer, virtual_bench,
+    shadows_bench, soak, soft_bench, stereo_bench, suite, viewer, virtual_bench,
 };
 
 pub(crate) const ABOUT: &str = "Render scenes lit by many shadow-casting lights, headless, to PNG.";
@@ -122,6 +122,11 @@ pub(crate) enum BenchCommand {
     #[command(long_about = estimate_bench::LONG_ABOUT)]
     #[command(mut_arg("out_dir", |a| a.default_value("bench-estimate").required(false)))]
     Estimate(Box<estimate_bench::EstimateArgs>),
+    /// Stereo frames: both eyes' G-buffers in one layered or multiview pass against one pass
+    /// per eye (and one mono eye for scale), per scene and eye size; G-buffer and whole-frame
+    /// GPU time, CPU time, ratios to per-eye; table, results.json and a plot.
+    #[command(mut_arg("out_dir", |a| a.default_value("bench-stereo").required(false)))]
+    Stereo(Box<stereo_bench::StereoArgs>),
     /// Thousands of frames in which the camera, a caster, a light and the light count change:
     /// resident memory after a warm-up against its baseline (fails past --max-growth-mib),
     /// frame times per interval, any failed frame; table and results.json.

@@ -45,6 +45,7 @@ mod scenes;
 mod shadows_bench;
 mod soak;
 mod soft_bench;
+mod stereo_bench;
 mod suite;
 mod summary;
 mod techniques;
@@ -115,6 +116,7 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
         Some(Command::Bench(BenchCommand::Soak(args))) => soak::soak(&args),
         Some(Command::Bench(BenchCommand::Shadows(args))) => shadows_bench::shadows(&args),
         Some(Command::Bench(BenchCommand::Soft(args))) => soft_bench::soft(&args),
+        Some(Command::Bench(BenchCommand::Stereo(args))) => stereo_bench::stereo(&args),
         Some(Command::Bench(BenchCommand::Estimate(args))) => estimate_bench::estimate(&args),
         Some(Command::Bench(BenchCommand::Denoise(args))) => denoise_bench::denoise(&args),
         Some(Command::Bench(BenchCommand::Suite(args))) => suite::suite(&args),

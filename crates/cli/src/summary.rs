@@ -25,6 +25,9 @@ pub(crate) fn summary(
         "technique": r.settings().technique.name(),
         "pcf": r.settings().pcf.name(),
         "resolution": [frame.width, frame.height],
+        "stereo": r.settings().stereo.map(|st| serde_json::json!({
+            "separation": st.separation, "passes": st.passes.name(),
+            "eye": [frame.width / 2, frame.height] })),
         "triangles": r.triangles(),
         "instances": scene.instances.len(),
         "lights": { "total": scene.lights.len(), "spot": count("spot"), "point": count("point"), "directional": count("directional"),
@@ -158,6 +161,18 @@ fn print_scene(s: &serde_json::Value) {
     );
     if let Some(look) = s["look"]["description"].as_str() {
         println!("look         {look}");
+    }
+    let st = &s["stereo"];
+    if let Some(passes) = st["passes"].as_str() {
+        println!(
+            "stereo       two eyes {} apart side by side, each {}x{}; G-buffer {}",
+            st["separation"].as_f64().unwrap_or(0.0) as f32,
+            st["eye"][0],
+            st["eye"][1],
+            passes
+                .parse::<manyshadows::EyePasses>()
+                .map_or("drawn in an unknown way", |p| p.describe())
+        );
     }
 }
 

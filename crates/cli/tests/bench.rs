@@ -252,6 +252,49 @@ fn bench_irregular_times_frames_against_traditional() {
 }
 
 #[test]
+fn bench_stereo_times_one_pass_against_one_per_eye() {
+    let (dir, json) = bench_ok(
+        "stereo",
+        "--scenes cubes --eyes 64x36 --lights 2 --repeats 1 --warmup 0",
+    );
+    let records = records(&json);
+    // A mono eye, per-eye, and each one-pass way the adapter has (layered: Vulkan and GL;
+    // multiview: Vulkan); the ones left out are noted by name.
+    let methods: Vec<&str> = records
+        .iter()
+        .map(|r| r["method"].as_str().unwrap())
+        .collect();
+    assert!(
+        methods.starts_with(&["mono (one eye)", "per-eye"]),
+        "{json}"
+    );
+    assert!(methods.contains(&"layered"), "{json}");
+    let notes = json["notes"].to_string();
+    assert!(
+        methods.contains(&"multiview") || notes.contains("multiview left out"),
+        "{json}"
+    );
+    // The G-buffer's and the frame's ratios are their medians over per-eye's.
+    assert_ratios(
+        records,
+        "gbuffer_gpu_ms",
+        "gbuffer_ratio_vs_per_eye",
+        "per-eye",
+        &["scene", "eye"],
+    );
+    assert_ratios(
+        records,
+        "frame_gpu_ms",
+        "frame_ratio_vs_per_eye",
+        "per-eye",
+        &["scene", "eye"],
+    );
+    assert!(dir.join("stereo-cubes.png").exists());
+    rejects("stereo --scenes nowhere", "not a built-in scene");
+    rejects("stereo --separation -1", "--separation");
+}
+
+#[test]
 fn bench_lights_reports_stages_clusters_and_fit_per_count() {
     let (dir, json) = bench_ok(
         "lights",

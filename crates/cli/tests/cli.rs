@@ -923,3 +923,65 @@ fn a_camera_path_is_flown_frame_by_frame() {
     .concat());
     assert_clean_failure(&out, 1, "line 2");
 }
+
+/// `render --stereo`: an image twice as wide as `--width`, whose halves are the two eyes
+/// (different pictures), a summary line and JSON naming how the G-buffer was drawn; a negative
+/// separation and `--stereo-passes` without `--stereo` refused.
+#[test]
+fn stereo_writes_both_eyes_side_by_side() {
+    let dir = tmp("stereo");
+    let frame = dir.join("stereo.png");
+    let json = dir.join("stereo.json");
+    let out = run_ok(&[
+        "render",
+        "--scene",
+        "cubes",
+        "--width",
+        "96",
+        "--height",
+        "54",
+        "--stereo",
+        "0.5",
+        "--stereo-passes",
+        "per-eye",
+        "-o",
+        frame.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("stereo       two eyes 0.5 apart side by side, each 96x54; G-buffer drawn in one pass per eye"),
+        "{stdout}"
+    );
+    let img = image::open(&frame).expect("stereo image").to_rgba8();
+    assert_eq!(img.dimensions(), (192, 54));
+    let differ = (0..54)
+        .flat_map(|y| (0..96).map(move |x| (x, y)))
+        .filter(|&(x, y)| img.get_pixel(x, y) != img.get_pixel(x + 96, y))
+        .count();
+    assert!(
+        differ > 100,
+        "the two eyes look the same ({differ} pixels differ)"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(summary["stereo"]["passes"], "per-eye", "{summary}");
+    assert_eq!(
+        summary["resolution"],
+        serde_json::json!([192, 54]),
+        "{summary}"
+    );
+    assert_clean_failure(
+        &run(&[
+            "render", "--scene", "cubes", "--width", "96", "--height", "54", "--stereo", "-1",
+        ]),
+        1,
+        "--stereo",
+    );
+    assert_clean_failure(
+        &run(&["render", "--scene", "cubes", "--stereo-passes", "layered"]),
+        2,
+        "--stereo",
+    );
+}

@@ -97,7 +97,7 @@ pub struct ShadowWork {
 pub struct EstimatedWork {
     /// Pixels of the frame.
     pub pixels: u64,
-    /// Triangles the camera draws (every instance).
+    /// Triangles the camera draws (every instance; with stereo, once per eye).
     pub triangles: u64,
     /// Triangles of the instances that cast shadows.
     pub caster_triangles: u64,

@@ -180,6 +180,20 @@ fn both_eyes_in_one_layered_pass_are_the_mono_frames_from_each_eye() {
 }
 
 #[test]
+fn both_eyes_in_one_multiview_pass_are_the_mono_frames_from_each_eye() {
+    let ctx = common::context();
+    if !ctx.has(manyshadows::wgpu::Features::MULTIVIEW) {
+        // OpenGL: refused by name (checked in the next test).
+        eprintln!(
+            "no MULTIVIEW on {}: the refusal is tested instead",
+            ctx.info.name
+        );
+        return;
+    }
+    eyes_match_mono(EyePasses::Multiview);
+}
+
+#[test]
 fn stereo_refuses_what_it_cannot_draw_by_name() {
     let ctx = common::context();
     let scene = scene("atrium", LightMix::Point);
@@ -208,10 +222,16 @@ fn stereo_refuses_what_it_cannot_draw_by_name() {
         )
         .with_stereo(Some(Stereo::new(0.1)));
     invalid(Renderer::new(&ctx, &scene, reuse), "stereo");
-    match with(320, Stereo::new(0.1).with_passes(EyePasses::Multiview)) {
-        Err(RenderError::NotImplemented { .. }) | Err(RenderError::MissingFeature { .. }) => {}
-        Err(e) => panic!("multiview stereo: unexpected error {e}"),
-        Ok(_) => panic!("multiview stereo is not built yet and must say so"),
+    // Where the adapter lacks a way's feature, the way is refused by name.
+    for passes in [EyePasses::Layered, EyePasses::Multiview] {
+        let (feature, _) = passes.needs().expect("a feature");
+        let r = with(320, Stereo::new(0.1).with_passes(passes));
+        match (ctx.has(feature), r) {
+            (true, Ok(_)) | (false, Err(RenderError::MissingFeature { .. })) => {}
+            (true, Err(e)) => panic!("stereo {passes}: {e}"),
+            (false, Err(e)) => panic!("stereo {passes} without {feature:?}: unexpected {e}"),
+            (false, Ok(_)) => panic!("stereo {passes} without {feature:?} must be refused"),
+        }
     }
 }
 

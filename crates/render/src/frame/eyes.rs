@@ -58,6 +58,19 @@ impl EyePasses {
         }
     }
 
+    /// How the G-buffer is drawn this way, in words (for summaries).
+    pub fn describe(self) -> &'static str {
+        match self {
+            EyePasses::PerEye => "drawn in one pass per eye",
+            EyePasses::Layered => {
+                "drawn in one layered pass (each instance once for both eyes, clipped to its half)"
+            }
+            EyePasses::Multiview => {
+                "drawn in one multiview pass (a layer per eye, copied into the halves)"
+            }
+        }
+    }
+
     /// The device feature this way needs, and what for.
     pub fn needs(self) -> Option<(wgpu::Features, &'static str)> {
         match self {

@@ -42,8 +42,17 @@ pub struct GBuffer {
     bind_group: wgpu::BindGroup,
     /// With stereo: how the eyes are drawn.
     stereo: Option<EyePasses>,
+    /// With stereo drawn multiview: two-layer targets (position, normal, depth, emission),
+    /// one layer per eye, copied into the halves after the pass.
+    multiview: Option<MultiviewTargets>,
     /// Width and height of the whole image.
     size: (u32, u32),
+}
+
+/// The two-layer targets of a multiview stereo pass, and their render views.
+struct MultiviewTargets {
+    textures: Vec<wgpu::Texture>,
+    views: Vec<wgpu::TextureView>,
 }
 
 fn target(
@@ -95,7 +104,12 @@ impl GBuffer {
         stereo: Option<EyePasses>,
     ) -> Self {
         use wgpu::TextureUsages as U;
-        let color_usage = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC;
+        let multiview = stereo == Some(EyePasses::Multiview);
+        let color_usage = if multiview {
+            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC | U::COPY_DST
+        } else {
+            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC
+        };
         let position = target(ctx, "gbuffer.position", w, h, POSITION_FORMAT, color_usage);
         let normal = target(ctx, "gbuffer.normal", w, h, NORMAL_FORMAT, color_usage);
         let bytes_needed = [POSITION_FORMAT, NORMAL_FORMAT, EMISSION_FORMAT]
@@ -134,6 +148,8 @@ impl GBuffer {
         let layered = stereo == Some(EyePasses::Layered);
         let module = if layered {
             crate::gpu::shaders::module(device, "gbuffer.layered.shader", &layered_shader())
+        } else if multiview {
+            crate::gpu::shaders::module(device, "gbuffer.multiview.shader", &multiview_shader())
         } else {
             crate::gpu::shaders::module(device, "gbuffer.shader", &shader())
         };
@@ -203,7 +219,13 @@ impl GBuffer {
                 layout: Some(&pipeline_layout),
                 vertex: wgpu::VertexState {
                     module: &module,
-                    entry_point: Some(if layered { "vs_layered" } else { "vs_main" }),
+                    entry_point: Some(if layered {
+                        "vs_layered"
+                    } else if multiview {
+                        "vs_multiview"
+                    } else {
+                        "vs_main"
+                    }),
                     compilation_options: Default::default(),
                     buffers: &[Some(POSITION_LAYOUT), Some(NORMAL_LAYOUT), Some(UV_LAYOUT)],
                 },
@@ -226,7 +248,11 @@ impl GBuffer {
                     compilation_options: Default::default(),
                     targets: &color_targets,
                 }),
-                multiview_mask: None,
+                multiview_mask: if multiview {
+                    std::num::NonZeroU32::new(0b11)
+                } else {
+                    None
+                },
                 cache: None,
             })
         };
@@ -263,6 +289,45 @@ impl GBuffer {
         .flatten()
         .map(|t| t.create_view(&Default::default()))
         .collect();
+        let multiview = multiview.then(|| {
+            let formats = [
+                Some(POSITION_FORMAT),
+                Some(NORMAL_FORMAT),
+                Some(DEPTH_FORMAT),
+                emission.as_ref().map(|_| EMISSION_FORMAT),
+            ];
+            let textures: Vec<wgpu::Texture> = formats
+                .into_iter()
+                .flatten()
+                .map(|format| {
+                    ctx.device.create_texture(&wgpu::TextureDescriptor {
+                        label: Some("gbuffer.multiview"),
+                        size: wgpu::Extent3d {
+                            width: (w / 2).max(1),
+                            height: h,
+                            depth_or_array_layers: 2,
+                        },
+                        mip_level_count: 1,
+                        sample_count: 1,
+                        dimension: wgpu::TextureDimension::D2,
+                        format,
+                        usage: U::RENDER_ATTACHMENT | U::COPY_SRC,
+                        view_formats: &[],
+                    })
+                })
+                .collect();
+            let views = textures
+                .iter()
+                .map(|t| {
+                    t.create_view(&wgpu::TextureViewDescriptor {
+                        dimension: Some(wgpu::TextureViewDimension::D2Array),
+                        array_layer_count: Some(2),
+                        ..Default::default()
+                    })
+                })
+                .collect();
+            MultiviewTargets { textures, views }
+        });
         Self {
             position,
             normal,
@@ -271,6 +336,7 @@ impl GBuffer {
             pipelines,
             bind_group,
             stereo,
+            multiview,
             size: (w, h),
         }
     }
@@ -297,8 +363,65 @@ impl GBuffer {
                     self.record_pass(encoder, scene, writes, Some(rect), (2, eye..eye + 1));
                 }
             }
-            Some(EyePasses::Layered | EyePasses::Multiview) => {
+            Some(EyePasses::Layered) => {
                 self.record_pass(encoder, scene, (timer, span, true, true), None, (2, 0..2));
+            }
+            Some(EyePasses::Multiview) => self.record_multiview(encoder, scene, timer, span),
+        }
+    }
+
+    /// Both eyes in one multiview pass into the two-layer targets, then each layer copied
+    /// into its eye's half (the depth is not needed after the pass).
+    fn record_multiview(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        timer: &GpuTimer,
+        span: Option<Span>,
+    ) {
+        let Some(mv) = &self.multiview else {
+            debug_assert!(false, "multiview targets are made with the pipelines");
+            return;
+        };
+        self.record_into(
+            encoder,
+            scene,
+            &mv.views,
+            (timer, span, true, true),
+            None,
+            (1, 0..1),
+        );
+        let eye_width = self.size.0 / 2;
+        // The layers' textures are position, normal, depth, emission (see `new`).
+        let pairs = [(0, &self.position), (1, &self.normal)]
+            .into_iter()
+            .chain(self.emission.as_ref().map(|e| (3, e)));
+        for (i, target) in pairs {
+            let layers = &mv.textures[i];
+            for eye in 0..2u32 {
+                encoder.copy_texture_to_texture(
+                    wgpu::TexelCopyTextureInfo {
+                        texture: layers,
+                        mip_level: 0,
+                        origin: wgpu::Origin3d { x: 0, y: 0, z: eye },
+                        aspect: wgpu::TextureAspect::All,
+                    },
+                    wgpu::TexelCopyTextureInfo {
+                        texture: target,
+                        mip_level: 0,
+                        origin: wgpu::Origin3d {
+                            x: eye * eye_width,
+                            y: 0,
+                            z: 0,
+                        },
+                        aspect: wgpu::TextureAspect::All,
+                    },
+                    wgpu::Extent3d {
+                        width: eye_width,
+                        height: self.size.1,
+                        depth_or_array_layers: 1,
+                    },
+                );
             }
         }
     }
@@ -313,7 +436,28 @@ impl GBuffer {
         rect: Option<[u32; 4]>,
         (eyes, copies): (u32, std::ops::Range<u32>),
     ) {
-        let (pv, nv, dv) = (&self.views[0], &self.views[1], &self.views[2]);
+        self.record_into(
+            encoder,
+            scene,
+            &self.views,
+            (timer, span, first, last),
+            rect,
+            (eyes, copies),
+        );
+    }
+
+    /// [`Self::record_pass`] into `views` (position, normal, depth, emission): the frame's
+    /// targets, or the multiview pass's two-layer ones.
+    fn record_into(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        views: &[wgpu::TextureView],
+        (timer, span, first, last): (&GpuTimer, Option<Span>, bool, bool),
+        rect: Option<[u32; 4]>,
+        (eyes, copies): (u32, std::ops::Range<u32>),
+    ) {
+        let (pv, nv, dv) = (&views[0], &views[1], &views[2]);
         let load = if first {
             wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)
         } else {
@@ -332,7 +476,7 @@ impl GBuffer {
         };
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("gbuffer.pass"),
-            color_attachments: &if let Some(ev) = self.views.get(3) {
+            color_attachments: &if let Some(ev) = views.get(3) {
                 vec![target(pv), target(nv), target(ev)]
             } else {
                 vec![target(pv), target(nv)]
@@ -356,7 +500,11 @@ impl GBuffer {
             }),
             timestamp_writes: timer.render_writes(span, first, last),
             occlusion_query_set: None,
-            multiview_mask: None,
+            multiview_mask: if self.multiview.is_some() {
+                std::num::NonZeroU32::new(0b11)
+            } else {
+                None
+            },
         });
         if let Some([x, y, w, h]) = rect {
             pass.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
@@ -392,6 +540,16 @@ pub fn shader() -> String {
     crate::gpu::shaders::compose(&[crate::gpu::shaders::COMMON, include_str!("gbuffer.wgsl")])
 }
 
+/// The same with `vs_multiview`: both eyes of a stereo frame in one multiview pass (needs
+/// `MULTIVIEW`).
+pub fn multiview_shader() -> String {
+    crate::gpu::shaders::compose(&[
+        crate::gpu::shaders::COMMON,
+        include_str!("gbuffer.wgsl"),
+        include_str!("gbuffer_multiview.wgsl"),
+    ])
+}
+
 /// The same with `vs_layered`: both eyes of a stereo frame in one draw (needs
 /// `CLIP_DISTANCES`).
 pub fn layered_shader() -> String {
@@ -412,6 +570,17 @@ mod shader_tests {
             "gbuffer",
             &super::shader(),
             wgpu::Features::empty(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+    }
+
+    /// The multiview stereo variant, with the feature it needs.
+    #[test]
+    fn multiview_shader_validates_for_webgpu() {
+        crate::gpu::shaders::validate_for_webgpu(
+            "gbuffer multiview",
+            &super::multiview_shader(),
+            wgpu::Features::MULTIVIEW,
         )
         .unwrap_or_else(|e| panic!("{e}"));
     }

@@ -23,7 +23,9 @@
 use super::state::Renderer;
 use crate::error::{Fills, Technique};
 use crate::frame::clusters::ClusterOptions;
+use crate::frame::eyes::Eyes;
 use crate::report::{EstimatedWork, FrameEstimate};
+use crate::settings::RenderSettings;
 use crate::shadows::descriptor::Culling;
 use glam::{Vec3, Vec3A};
 use manyshadows_scene::{LightKind, Scene};
@@ -168,7 +170,7 @@ impl Renderer {
         let info = technique.info();
         let pixels = u64::from(s.width) * u64::from(s.height);
         let t0 = web_time::Instant::now();
-        let sight = sight(scene, s.width, s.height, &s.clusters);
+        let sight = sight(scene, s, &s.clusters);
         let pixel_lights = sight.pixel_lights;
         let sized = scene.lights.iter().any(|l| l.size > 0.0 && l.casts_shadows);
         // The views the technique fills: the atlas plan's, a virtual map's faces, irregular
@@ -226,7 +228,8 @@ impl Renderer {
         );
         EstimatedWork {
             pixels,
-            triangles: self.scene.triangles,
+            // A stereo frame draws every triangle once per eye.
+            triangles: self.scene.triangles * if s.stereo.is_some() { 2 } else { 1 },
             caster_triangles: self
                 .scene
                 .draws
@@ -349,7 +352,8 @@ impl Geometry {
 }
 
 /// Casts the grid of camera rays (see the module's notes).
-fn sight(scene: &Scene, width: u32, height: u32, clusters: &ClusterOptions) -> Sight {
+fn sight(scene: &Scene, s: &RenderSettings, clusters: &ClusterOptions) -> Sight {
+    let (width, height) = (s.width, s.height);
     let none = Sight {
         pixel_lights: 0,
         cluster_lights: 0,
@@ -379,7 +383,10 @@ fn sight(scene: &Scene, width: u32, height: u32, clusters: &ClusterOptions) -> S
     let right = forward.cross(cam.up).normalize_or(Vec3::X);
     let up = right.cross(forward);
     let tan_y = (cam.fov_y_deg.to_radians() * 0.5).tan();
-    let aspect = width as f32 / height.max(1) as f32;
+    // With stereo the grid's columns are split between the eyes, each cast from its own eye.
+    let eyes = Eyes::new(cam, s.stereo, (width, height));
+    let aspect = eyes.aspect();
+    let eye_count = eyes.cameras.len() as u32;
     // A cluster at view depth z: `tile` pixels across, one exponential slice deep.
     let slices = clusters.slices.max(1) as f32;
     let slice_growth = ((cam.far / cam.near.max(1e-6)).max(1.0).ln() / slices).exp() - 1.0;
@@ -391,14 +398,18 @@ fn sight(scene: &Scene, width: u32, height: u32, clusters: &ClusterOptions) -> S
     let mut near = Vec::new();
     for row in 0..rows {
         for col in 0..cols {
-            let x = ((col as f32 + 0.5) / cols as f32 * 2.0 - 1.0) * tan_y * aspect;
+            let per_eye = cols / eye_count;
+            let eye = (col / per_eye).min(eye_count - 1);
+            let eye_col = col - eye * per_eye;
+            let origin = cam.position + right * eyes.offset(eye as usize);
+            let x = ((eye_col as f32 + 0.5) / per_eye as f32 * 2.0 - 1.0) * tan_y * aspect;
             let y = (1.0 - (row as f32 + 0.5) / rows as f32 * 2.0) * tan_y;
             let dir = (forward + right * x + up * y).normalize();
-            let Some(t) = geometry.nearest(cam.position, dir, cam.far) else {
+            let Some(t) = geometry.nearest(origin, dir, cam.far) else {
                 continue;
             };
-            let p = cam.position + dir * t;
-            let z = (p - cam.position).dot(forward).max(cam.near);
+            let p = origin + dir * t;
+            let z = (p - origin).dot(forward).max(cam.near);
             let side = clusters.tile as f32 * pixel_at_1 * z;
             let cluster_radius = 0.5 * (2.0 * side * side + (z * slice_growth).powi(2)).sqrt();
             near.clear();

@@ -10,7 +10,6 @@ use wgpu::util::DeviceExt;
 
 use crate::error::RenderError;
 use crate::frame::clusters::{LightClusters, LightLoop};
-use crate::frame::eyes::EyePasses;
 use crate::frame::gbuffer::GBuffer;
 use crate::frame::visibility_mask::{SoftVisibility, VisibilityMask};
 use crate::gpu::context::GpuContext;
@@ -120,19 +119,13 @@ impl Renderer {
             });
         }
         if let Some(stereo) = settings.stereo {
-            if stereo.passes == EyePasses::Multiview {
-                return Err(RenderError::NotImplemented {
-                    what: "stereo drawn in one multiview pass",
-                    instead: "draw the eyes layered (the default) or per-eye",
-                });
-            }
             if let Some((feature, why)) = stereo.passes.needs() {
                 if !ctx.has(feature) {
                     return Err(RenderError::missing_feature(
                         ctx,
                         format!("stereo drawn {}", stereo.passes),
                         format!("{feature:?} ({why})"),
-                        "draw the eyes per-eye",
+                        "draw the eyes per-eye, or layered where the adapter has CLIP_DISTANCES",
                     ));
                 }
             }
