@@ -77,12 +77,12 @@ pub fn stereo(args: &StereoArgs) -> Result<()> {
     let ways: Vec<EyePasses> = EyePasses::ALL
         .iter()
         .copied()
-        .filter(|p| match p.needs() {
-            Some((feature, _)) if !h.ctx.has(feature) => {
-                h.note(format!("{p} left out: {} lacks {feature:?}", h.adapter));
+        .filter(|&p| match Renderer::stereo_unmet(&h.ctx, p) {
+            Some(why) => {
+                h.note(format!("{p} left out: {} lacks {why}", h.adapter));
                 false
             }
-            _ => true,
+            None => true,
         })
         .collect();
     h.plan(h.units(args.scenes.len() * eyes.len() * (ways.len() + 1), 1));

@@ -10,6 +10,7 @@ use wgpu::util::DeviceExt;
 
 use crate::error::RenderError;
 use crate::frame::clusters::{LightClusters, LightLoop};
+use crate::frame::eyes::EyePasses;
 use crate::frame::gbuffer::GBuffer;
 use crate::frame::visibility_mask::{SoftVisibility, VisibilityMask};
 use crate::gpu::context::GpuContext;
@@ -119,15 +120,13 @@ impl Renderer {
             });
         }
         if let Some(stereo) = settings.stereo {
-            if let Some((feature, why)) = stereo.passes.needs() {
-                if !ctx.has(feature) {
-                    return Err(RenderError::missing_feature(
-                        ctx,
-                        format!("stereo drawn {}", stereo.passes),
-                        format!("{feature:?} ({why})"),
-                        "draw the eyes per-eye, or layered where the adapter has CLIP_DISTANCES",
-                    ));
-                }
+            if let Some(feature) = Self::stereo_unmet(ctx, stereo.passes) {
+                return Err(RenderError::missing_feature(
+                    ctx,
+                    format!("stereo drawn {}", stereo.passes),
+                    feature,
+                    "draw the eyes per-eye, or layered where the adapter has CLIP_DISTANCES",
+                ));
             }
         }
         let max_atlas = settings
@@ -257,6 +256,28 @@ impl Renderer {
                 current: scene.clone(),
                 dirty: false,
             })
+        })
+    }
+
+    /// What `ctx`'s device lacks to draw a stereo frame's eyes `passes`' way, and what for
+    /// (`None`: nothing). Multiview needs two views in one pass: the `MULTIVIEW` feature with a
+    /// view count of at least 2 (OpenGL's llvmpipe offers the feature with none; lavapipe
+    /// before Mesa 25 one, see `multiview::views_per_pass_on`).
+    pub fn stereo_unmet(ctx: &GpuContext, passes: EyePasses) -> Option<String> {
+        let (feature, why) = passes.needs()?;
+        let met = match passes {
+            EyePasses::Multiview => crate::shadows::atlas::multiview::views_per_pass_on(ctx) >= 2,
+            _ => ctx.has(feature),
+        };
+        (!met).then(|| {
+            if passes == EyePasses::Multiview {
+                format!(
+                    "{feature:?} with two views per pass ({why}; this device: {})",
+                    crate::shadows::atlas::multiview::views_per_pass_on(ctx)
+                )
+            } else {
+                format!("{feature:?} ({why})")
+            }
         })
     }
 
