@@ -232,6 +232,17 @@ pub(crate) struct RenderArgs {
     /// Shadow-map resolution per view (texels per side) for every light.
     #[arg(long)]
     pub(crate) shadow_resolution: Option<u32>,
+    /// Reflection probes: N seeded along the scene's longest side, each standing for its
+    /// slab of the scene's bounds (0: none). Default: the scene's own ([[probe]] in a TOML
+    /// scene; the atrium's two in the nave, with its floor, marble and bronze reflective;
+    /// none for the other built-in scenes and model files). Each probe's six faces are lit
+    /// like the frame and redrawn when a light or caster changes; surfaces mirror the nearest
+    /// (Phong: a material's `reflect`; glTF: metallic and roughness).
+    #[arg(long, value_name = "N")]
+    pub(crate) probes: Option<usize>,
+    /// Texels per side of each probe face (8 to 1024).
+    #[arg(long, default_value_t = manyshadows::scene::Probe::DEFAULT_RESOLUTION)]
+    pub(crate) probe_resolution: u32,
     #[command(flatten)]
     pub(crate) light_sizes: LightSizeArgs,
     #[command(flatten)]

@@ -37,6 +37,19 @@ pub fn load_scene_for_view(
 /// `--light-size`/`--sun-size`.
 pub(crate) fn load_scene(args: &RenderArgs) -> Result<Scene> {
     let mut scene = load_scene_unsubdivided(args)?;
+    if let Some(n) = args.probes {
+        if n > manyshadows::scene::Probe::MAX_COUNT {
+            bail!(
+                "--probes {n} is more than the supported {}",
+                manyshadows::scene::Probe::MAX_COUNT
+            );
+        }
+        scene.probes = scene.seeded_probes(n, args.probe_resolution);
+    } else {
+        for p in &mut scene.probes {
+            p.resolution = args.probe_resolution;
+        }
+    }
     if args.subdivide > 0 {
         scene.subdivide(args.subdivide)?;
     }
@@ -123,6 +136,7 @@ pub(crate) fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
         mesh,
         shadow_resolution: args.shadow_resolution,
         light_sizes,
+        default_probes: args.probes.is_none(),
     };
     Ok(builtin::build(&args.scene, &opts)?)
 }

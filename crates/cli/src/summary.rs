@@ -42,6 +42,7 @@ pub(crate) fn summary(
         "look": look_json(&r.look()),
         "light_loop": r.settings().light_loop.name(),
         "clusters": frame.clusters,
+        "probes": frame.probes,
         "virtual": frame.virtual_maps,
         "lists": r.irregular_stats(),
         "soft": { "blocker_taps": r.settings().soft.blocker_taps, "filter_taps": r.settings().soft.filter_taps,
@@ -161,6 +162,15 @@ fn print_scene(s: &serde_json::Value) {
     );
     if let Some(look) = s["look"]["description"].as_str() {
         println!("look         {look}");
+    }
+    let pr = &s["probes"];
+    if let Some(n) = pr["probes"].as_u64() {
+        let side = pr["side"].as_u64().unwrap_or(0);
+        println!(
+            "probes       {n} reflection probes, {side}x{side} per face ({:.1} MiB); {} faces drawn this frame",
+            pr["bytes"].as_f64().unwrap_or(0.0) / (1u64 << 20) as f64,
+            pr["faces_drawn"]
+        );
     }
     let st = &s["stereo"];
     if let Some(passes) = st["passes"].as_str() {

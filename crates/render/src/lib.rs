@@ -112,6 +112,7 @@ pub use wgpu;
 pub use error::{Fills, RenderError, Technique};
 pub use frame::clusters::{ClusterOptions, ClusterStats, LightLoop};
 pub use frame::eyes::{EyePasses, Eyes, Stereo};
+pub use shading::probes::ProbeMaps;
 pub use frame::gbuffer_readback::GBufferData;
 pub use frame::visibility_mask::{MaskFileError, SoftVisibility, VisibilityMask};
 pub use gpu::context::{
@@ -120,7 +121,7 @@ pub use gpu::context::{
 };
 pub use gpu::timing::{GpuTimes, Stage};
 pub use gpu_scene::caster_layout::CasterOptions;
-pub use renderer::{FramePart, Renderer};
+pub use renderer::{FramePart, ProbeStats, Renderer};
 pub use report::{
     EstimatedWork, Frame, FrameEstimate, FrameTimings, ShadowLayout, ShadowWork, SubmittedFrame,
 };

@@ -45,6 +45,8 @@ pub struct Frame {
     pub clusters: Option<ClusterStats>,
     /// Virtual shadow map counters (`None` for other techniques).
     pub virtual_maps: Option<VirtualStats>,
+    /// Reflection probe counters (`None` for scenes without probes).
+    pub probes: Option<crate::renderer::ProbeStats>,
 }
 
 /// What [`Renderer::render_to`](crate::Renderer::render_to) reports: the frame is submitted, not read back.

@@ -87,6 +87,7 @@ fn scene(meshes: Vec<Mesh>, lights: Vec<Light>) -> Scene {
         lights,
         camera: Camera::look_at(Vec3::new(0.0, 6.0, 8.0), Vec3::ZERO),
         lighting: Default::default(),
+        probes: Vec::new(),
     }
 }
 

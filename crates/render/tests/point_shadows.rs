@@ -190,6 +190,7 @@ fn light_inside_geometry_lights_nothing_outside() {
         // the hard test: a zero-thickness wall is its own shadow caster, and the bias lifts it).
         camera: Camera::look_at(Vec3::new(7.0, 4.0, 3.0), Vec3::new(7.0, 0.0, -1.0)),
         lighting: Default::default(),
+        probes: Vec::new(),
     };
     for points in PointShadows::ALL {
         for technique in [Technique::TRADITIONAL, Technique::LAYERED] {

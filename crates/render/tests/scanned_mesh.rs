@@ -72,6 +72,7 @@ fn scene(sphere: Mesh) -> Scene {
             ..Default::default()
         },
         lighting: Default::default(),
+        probes: Vec::new(),
     }
 }
 

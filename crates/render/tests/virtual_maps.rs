@@ -98,6 +98,7 @@ fn lamp_over_floor(
         }],
         camera,
         lighting: Default::default(),
+        probes: Vec::new(),
     }
 }
 

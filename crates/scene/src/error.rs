@@ -69,6 +69,14 @@ pub enum SceneError {
         /// What is wrong.
         reason: String,
     },
+    /// A reflection probe with a bad position, size or resolution.
+    #[error("probe {index} is invalid: {reason}")]
+    InvalidProbe {
+        /// Index into `Scene::probes`.
+        index: usize,
+        /// What is wrong.
+        reason: String,
+    },
     /// A texture has no pixels, too many, or a data length that does not match its size.
     #[error("texture {index} is invalid: {reason}")]
     InvalidTexture {

@@ -188,6 +188,12 @@ pub struct Material {
     /// candela per square metre, through the exposure like the lights). Default black.
     #[serde(default)]
     pub emissive: Vec3,
+    /// How much of the nearest reflection probe's light the surface mirrors at normal
+    /// incidence (0..=1; Schlick's Fresnel raises it towards 1 at grazing angles), for Phong
+    /// shading; 0 (default) mirrors nothing. The glTF BRDF derives its reflection from
+    /// metallic and roughness instead ([`Probe`]).
+    #[serde(default)]
+    pub reflect: f32,
 }
 
 impl Material {
@@ -237,6 +243,13 @@ impl Material {
         self
     }
 
+    /// The same material mirroring `reflect` of the nearest probe's light ([`Material::reflect`]).
+    pub fn reflecting(mut self, reflect: f32) -> Self {
+        self.reflect = reflect;
+        self
+    }
+
+
     /// This material alpha-masked at `cutoff` (double-sided, as foliage cards are).
     pub fn masked(mut self, cutoff: f32) -> Self {
         self.alpha_mode = AlphaMode::Mask;
@@ -264,6 +277,7 @@ impl Default for Material {
             cull_back_faces: false,
             pbr: None,
             emissive: Vec3::ZERO,
+            reflect: 0.0,
         }
     }
 }
@@ -547,6 +561,103 @@ impl Default for Camera {
     }
 }
 
+/// A reflection probe: a cube map of the lit scene as seen from `position`, which
+/// reflective surfaces near it sample (box-projected onto `size` when that is not zero).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Probe {
+    /// Where the cube map is seen from.
+    pub position: Vec3,
+    /// Edge lengths of the box whose walls the probe stands for: a reflected ray is followed
+    /// to the box's wall and the cube map looked up towards that point (parallax-corrected
+    /// reflections, right for a room the box fits). Zero: the surroundings are taken as far
+    /// away and the plain direction is looked up.
+    #[serde(default)]
+    pub size: Vec3,
+    /// The box's centre relative to `position` (default: the box is centred on the probe).
+    #[serde(default)]
+    pub offset: Vec3,
+    /// Texels per face side (8 to 1024).
+    #[serde(default = "Probe::default_resolution")]
+    pub resolution: u32,
+}
+
+impl Probe {
+    /// Default texels per face side.
+    pub const DEFAULT_RESOLUTION: u32 = 128;
+    /// Largest texels per face side.
+    pub const MAX_RESOLUTION: u32 = 1024;
+    /// Most probes in a scene.
+    pub const MAX_COUNT: usize = 64;
+
+    fn default_resolution() -> u32 {
+        Self::DEFAULT_RESOLUTION
+    }
+
+    /// A probe at `position` standing for a box of `size` centred on it, at the default
+    /// resolution.
+    pub fn new(position: Vec3, size: Vec3) -> Self {
+        Self {
+            position,
+            size,
+            offset: Vec3::ZERO,
+            resolution: Self::DEFAULT_RESOLUTION,
+        }
+    }
+
+    /// The same probe standing for the box of `size` whose lowest corner is `lo` (the probe
+    /// need not be at its centre).
+    pub fn with_box(self, lo: Vec3, size: Vec3) -> Self {
+        Self {
+            size,
+            offset: lo + 0.5 * size - self.position,
+            ..self
+        }
+    }
+
+    /// The six cameras of the cube's faces, in the order +X, −X, +Y, −Y, +Z, −Z: 90° field of
+    /// view, square, looking from `position` along each axis (the same cameras a caller can
+    /// render with to see what a face holds).
+    pub fn face_cameras(&self, near: f32, far: f32) -> [Camera; 6] {
+        let axes = [
+            (Vec3::X, Vec3::NEG_Y),
+            (Vec3::NEG_X, Vec3::NEG_Y),
+            (Vec3::Y, Vec3::Z),
+            (Vec3::NEG_Y, Vec3::NEG_Z),
+            (Vec3::Z, Vec3::NEG_Y),
+            (Vec3::NEG_Z, Vec3::NEG_Y),
+        ];
+        axes.map(|(forward, up)| Camera {
+            position: self.position,
+            target: self.position + forward,
+            up,
+            fov_y_deg: 90.0,
+            near,
+            far,
+        })
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        if !self.position.is_finite() {
+            return Err("position must be finite".into());
+        }
+        if !(self.size.is_finite() && self.size.min_element() >= 0.0) {
+            return Err("size must be finite and >= 0 on every axis".into());
+        }
+        if !self.offset.is_finite() {
+            return Err("offset must be finite".into());
+        }
+        if !(8..=Self::MAX_RESOLUTION).contains(&self.resolution) {
+            return Err(format!(
+                "resolution {} must be between 8 and {}",
+                self.resolution,
+                Self::MAX_RESOLUTION
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// A whole scene: what the renderer draws and lights.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Scene {
@@ -567,6 +678,8 @@ pub struct Scene {
     /// Units of the lights and the shading the scene's author meant (the renderer's defaults
     /// for shading, exposure and tone map).
     pub lighting: Lighting,
+    /// Reflection probes (none: no reflections).
+    pub probes: Vec<Probe>,
 }
 
 impl Scene {
@@ -659,11 +772,14 @@ impl Scene {
             let ok = m.ambient.is_finite()
                 && m.diffuse.is_finite()
                 && m.specular.is_finite()
+                && (0.0..=1.0).contains(&m.reflect)
                 && m.shininess.is_finite()
                 && m.shininess >= 0.0;
             let bad = |reason: String| SceneError::InvalidMaterial { index: i, reason };
             if !ok {
-                return Err(bad("colours must be finite and shininess >= 0".into()));
+                return Err(bad(
+                    "colours must be finite, shininess >= 0 and reflect 0..=1".into(),
+                ));
             }
             if !(m.base_alpha.is_finite() && m.alpha_cutoff.is_finite()) {
                 return Err(bad("base_alpha and alpha_cutoff must be finite".into()));
@@ -688,7 +804,48 @@ impl Scene {
         for (i, l) in self.lights.iter().enumerate() {
             validate_light(l).map_err(|reason| SceneError::InvalidLight { index: i, reason })?;
         }
+        if self.probes.len() > Probe::MAX_COUNT {
+            return Err(SceneError::InvalidProbe {
+                index: Probe::MAX_COUNT,
+                reason: format!(
+                    "{} probes; a scene holds at most {}",
+                    self.probes.len(),
+                    Probe::MAX_COUNT
+                ),
+            });
+        }
+        for (i, p) in self.probes.iter().enumerate() {
+            p.validate()
+                .map_err(|reason| SceneError::InvalidProbe { index: i, reason })?;
+        }
         self.camera.validate()
+    }
+
+    /// `count` probes seeded along the world bounds' longest horizontal axis, a quarter of
+    /// the way up from the bottom, each standing for its slab of the bounds (`--probes N`);
+    /// none without bounds.
+    pub fn seeded_probes(&self, count: usize, resolution: u32) -> Vec<Probe> {
+        let Some((lo, hi)) = self.world_bounds(false) else {
+            return Vec::new();
+        };
+        let ext = hi - lo;
+        let axis = if ext.x >= ext.z { Vec3::X } else { Vec3::Z };
+        let along = ext.dot(axis);
+        let step = along / count.max(1) as f32;
+        (0..count)
+            .map(|k| {
+                let mut position = (lo + hi) * 0.5;
+                position.y = lo.y + 0.25 * ext.y;
+                position += axis * (lo.dot(axis) + (k as f32 + 0.5) * step - position.dot(axis));
+                let size = ext - axis * (along - step);
+                Probe {
+                    position,
+                    size,
+                    offset: Vec3::new(0.0, 0.25 * ext.y, 0.0),
+                    resolution,
+                }
+            })
+            .collect()
     }
 }
 

@@ -41,6 +41,10 @@ pub const MAX_INSTANCES: usize = 100_000;
 /// Most `[[light]]` entries in one scene file (100 000).
 pub const MAX_LIGHTS: usize = 100_000;
 
+/// Most `[[probe]]` entries in one file (each is six faces drawn every frame something changes;
+/// the renderer's own limit is the same).
+pub const MAX_PROBES: usize = crate::model::Probe::MAX_COUNT;
+
 /// Largest `segments`, `rings` or `subdivisions` of a procedural primitive (1024: about two
 /// million triangles for the densest sphere or plane).
 pub const MAX_PRIMITIVE_SEGMENTS: u32 = 1024;
@@ -123,6 +127,8 @@ struct SceneDoc {
     instance: Vec<Spanned<InstanceDef>>,
     #[serde(default)]
     light: Vec<Spanned<LightDef>>,
+    #[serde(default)]
+    probe: Vec<crate::model::Probe>,
 }
 
 #[derive(Deserialize)]
@@ -134,6 +140,7 @@ struct MaterialDef {
     specular: Option<Vec3>,
     shininess: Option<f32>,
     cull_back_faces: Option<bool>,
+    reflect: Option<f32>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
@@ -300,6 +307,12 @@ fn parse(
             doc.light.len()
         )));
     }
+    if doc.probe.len() > MAX_PROBES {
+        return Err(cx.too_large(format!(
+            "{} [[probe]] entries; the limit is {MAX_PROBES}",
+            doc.probe.len()
+        )));
+    }
 
     // Materials, by name.
     let mut materials = Vec::with_capacity(doc.material.len() + 1);
@@ -320,6 +333,7 @@ fn parse(
             specular: m.specular.unwrap_or(d.specular),
             shininess: m.shininess.unwrap_or(d.shininess),
             cull_back_faces: m.cull_back_faces.unwrap_or(d.cull_back_faces),
+            reflect: m.reflect.unwrap_or(d.reflect),
             ..d
         });
     }
@@ -423,6 +437,7 @@ fn parse(
         lights,
         camera: doc.camera.unwrap_or_default(),
         lighting: Default::default(),
+        probes: doc.probe,
     };
     scene.validate()?;
     Ok(scene)

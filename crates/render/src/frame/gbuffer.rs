@@ -383,14 +383,8 @@ impl GBuffer {
             debug_assert!(false, "multiview targets are made with the pipelines");
             return;
         };
-        self.record_into(
-            encoder,
-            scene,
-            &mv.views,
-            (timer, span, true, true),
-            None,
-            (1, 0..1),
-        );
+        let writes = (timer, span, true, true);
+        self.record_into(encoder, scene, &mv.views, writes, true, None, (1, 0..1));
         let eye_width = self.size.0 / 2;
         // The layers' textures are position, normal, depth, emission (see `new`).
         let pairs = [(0, &self.position), (1, &self.normal)]
@@ -436,14 +430,22 @@ impl GBuffer {
         rect: Option<[u32; 4]>,
         (eyes, copies): (u32, std::ops::Range<u32>),
     ) {
-        self.record_into(
-            encoder,
-            scene,
-            &self.views,
-            (timer, span, first, last),
-            rect,
-            (eyes, copies),
-        );
+        let writes = (timer, span, first, last);
+        self.record_into(encoder, scene, &self.views, writes, first, rect, (eyes, copies));
+    }
+
+    /// A mono pass that clears and writes the span's first (`begin`) and last (`end`)
+    /// timestamps as asked: several frames' G-buffers drawn into the same targets one after
+    /// another (a reflection probe's faces), timed as one span.
+    pub(crate) fn record_timed(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        (timer, span): (&GpuTimer, Option<Span>),
+        (begin, end): (bool, bool),
+    ) {
+        let writes = (timer, span, begin, end);
+        self.record_into(encoder, scene, &self.views, writes, true, None, (1, 0..1));
     }
 
     /// [`Self::record_pass`] into `views` (position, normal, depth, emission): the frame's
@@ -454,11 +456,12 @@ impl GBuffer {
         scene: &GpuScene,
         views: &[wgpu::TextureView],
         (timer, span, first, last): (&GpuTimer, Option<Span>, bool, bool),
+        clear: bool,
         rect: Option<[u32; 4]>,
         (eyes, copies): (u32, std::ops::Range<u32>),
     ) {
         let (pv, nv, dv) = (&views[0], &views[1], &views[2]);
-        let load = if first {
+        let load = if clear {
             wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)
         } else {
             wgpu::LoadOp::Load
@@ -485,7 +488,7 @@ impl GBuffer {
                 view: dv,
                 depth_ops: Some(wgpu::Operations {
                     // The first pass clears the whole image, the second eye's loads it.
-                    load: if first {
+                    load: if clear {
                         wgpu::LoadOp::Clear(1.0)
                     } else {
                         wgpu::LoadOp::Load

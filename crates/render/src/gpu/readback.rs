@@ -62,6 +62,16 @@ pub fn read_texture(
     texture: &wgpu::Texture,
     bytes_per_pixel: u32,
 ) -> Result<Vec<u8>, RenderError> {
+    read_texture_layer(ctx, texture, bytes_per_pixel, 0)
+}
+
+/// Copies layer `layer` of a 2D texture or array (colour formats) to tightly packed bytes.
+pub fn read_texture_layer(
+    ctx: &GpuContext,
+    texture: &wgpu::Texture,
+    bytes_per_pixel: u32,
+    layer: u32,
+) -> Result<Vec<u8>, RenderError> {
     let (w, h) = (texture.width(), texture.height());
     let row = w * bytes_per_pixel;
     let padded =
@@ -78,7 +88,14 @@ pub fn read_texture(
             label: Some("readback.encoder"),
         });
     encoder.copy_texture_to_buffer(
-        texture.as_image_copy(),
+        wgpu::TexelCopyTextureInfo {
+            origin: wgpu::Origin3d {
+                x: 0,
+                y: 0,
+                z: layer,
+            },
+            ..texture.as_image_copy()
+        },
         wgpu::TexelCopyBufferInfo {
             buffer: &buffer,
             layout: wgpu::TexelCopyBufferLayout {
@@ -87,7 +104,11 @@ pub fn read_texture(
                 rows_per_image: Some(h),
             },
         },
-        texture.size(),
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
     );
     ctx.queue.submit([encoder.finish()]);
     let data = map_read(ctx, &buffer, 0..padded as u64 * h as u64)?;

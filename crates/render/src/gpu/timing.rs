@@ -54,6 +54,8 @@ pub enum Stage {
     Accel,
     /// Shadow generation: the atlas, the virtual pages, or irregular shadow maps' mask.
     Shadows,
+    /// Reflection probes: their faces' G-buffers and lighting.
+    Probes,
     /// Deferred lighting.
     Lighting,
     /// The denoiser of shadow rays: its temporal and spatial passes and the composite that
@@ -71,13 +73,14 @@ impl Stage {
         Stage::Pages,
         Stage::Accel,
         Stage::Shadows,
+        Stage::Probes,
         Stage::Lighting,
         Stage::Denoise,
         Stage::Visibility,
     ];
 
     /// The stage's name in reports and JSON (`gbuffer`, `clusters`, `pages`, `accel`,
-    /// `shadows`, `lighting`, `denoise`, `visibility`).
+    /// `shadows`, `probes`, `lighting`, `denoise`, `visibility`).
     pub fn name(self) -> &'static str {
         match self {
             Stage::GBuffer => "gbuffer",
@@ -85,6 +88,7 @@ impl Stage {
             Stage::Pages => "pages",
             Stage::Accel => "accel",
             Stage::Shadows => "shadows",
+            Stage::Probes => "probes",
             Stage::Lighting => "lighting",
             Stage::Denoise => "denoise",
             Stage::Visibility => "visibility",
@@ -487,6 +491,7 @@ mod tests {
                 "pages",
                 "accel",
                 "shadows",
+                "probes",
                 "lighting",
                 "denoise",
                 "visibility"

@@ -118,7 +118,7 @@ impl MaterialData {
         Self {
             ambient: m.ambient.extend(m.shininess).to_array(),
             diffuse: m.diffuse.extend(m.base_alpha).to_array(),
-            specular: m.specular.extend(0.0).to_array(),
+            specular: m.specular.extend(m.reflect).to_array(),
             texture: [
                 base_layer.map_or(0, |l| l + 1),
                 normal_layer.map_or(0, |l| l + 1),

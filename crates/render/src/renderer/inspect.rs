@@ -234,9 +234,11 @@ impl Renderer {
                 shadows,
                 denoise: None,
                 reuse: None,
+                probes: self.probes.as_ref().map(|p| &p.maps),
             };
             let consts = ShadingConsts {
                 emission_texture: self.gbuffer.emission.is_some(),
+                probes: self.probes.is_some(),
                 ..self.settings.look.resolve(&self.current).consts()
             };
             let pass = LightingPass::with_fractions(ctx, &inputs, (w, h), &consts);
@@ -249,6 +251,34 @@ impl Renderer {
             ctx.queue.submit([encoder.finish()]);
             crate::gpu::readback::read_texture(ctx, &pass.color, 4)
         })
+    }
+
+    /// Reads face `face` (+X, −X, +Y, −Y, +Z, −Z: `Probe::face_cameras`) of probe `probe` as
+    /// the last frame left it: linear radiance per texel, rows from the top, `side`² texels
+    /// (see [`crate::Frame::probes`]).
+    pub fn read_probe_face(&self, probe: usize, face: usize) -> Result<Vec<[f32; 4]>, RenderError> {
+        let Some(p) = &self.probes else {
+            return Err(RenderError::NotImplemented {
+                what: "reading a probe face of a scene without probes",
+                instead: "give the scene probes (Scene::probes)",
+            });
+        };
+        if probe >= p.maps.count || face >= 6 {
+            return Err(RenderError::InvalidOption {
+                option: "probe face",
+                value: format!("probe {probe} face {face}"),
+                expected: "an existing probe and a face 0..6",
+            });
+        }
+        let layer = crate::shading::probes::ProbeMaps::layer(probe, face);
+        let bytes = crate::gpu::readback::read_texture_layer(&self.ctx, &p.maps.faces, 8, layer)?;
+        Ok(bytes
+            .chunks_exact(8)
+            .map(|t| {
+                let h = |i: usize| f16_to_f32(u16::from_le_bytes([t[2 * i], t[2 * i + 1]]));
+                [h(0), h(1), h(2), h(3)]
+            })
+            .collect())
     }
 
     /// Reads the G-buffer of the last frame [`Renderer::render`] produced (before the first
@@ -296,5 +326,18 @@ impl Renderer {
                 .map(|i| i.technique.name())
                 .collect(),
         }
+    }
+}
+
+/// An IEEE half's value.
+fn f16_to_f32(h: u16) -> f32 {
+    let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };
+    let exp = i32::from((h >> 10) & 0x1f);
+    let frac = f32::from(h & 0x3ff);
+    sign * match exp {
+        0 => frac * 2f32.powi(-24),
+        31 if frac == 0.0 => f32::INFINITY,
+        31 => f32::NAN,
+        e => (1.0 + frac / 1024.0) * 2f32.powi(e - 15),
     }
 }

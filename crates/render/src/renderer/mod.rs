@@ -17,7 +17,9 @@
 #[cfg(not(target_arch = "wasm32"))]
 mod estimate;
 mod inspect;
+mod probes;
 mod state;
 mod uniforms;
 
+pub use probes::ProbeStats;
 pub use state::{FramePart, Renderer};

@@ -17,6 +17,7 @@ use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, GpuTimes, Stage};
 use crate::gpu::types::FrameUniforms;
 use crate::gpu_scene::instances::GpuScene;
+use super::probes::ProbeFrame;
 use crate::report::{Frame, FrameTimings, SubmittedFrame};
 use crate::settings::RenderSettings;
 use crate::shading::lighting::{LightingInputs, LightingPass};
@@ -82,6 +83,10 @@ pub struct Renderer {
     pub(super) frames_denoised: u32,
     /// A light changed since the last frame (the denoiser's history follows it fast).
     pub(super) lights_changed: bool,
+    /// The reflection probes' faces and passes (scenes with probes).
+    pub(super) probes: Option<ProbeFrame>,
+    /// Something the probes see changed since their faces were drawn.
+    pub(super) probes_stale: bool,
 }
 
 impl Renderer {
@@ -210,6 +215,30 @@ impl Renderer {
                     )
                 })
                 .transpose()?;
+            let look_consts = settings.look.resolve(scene).consts();
+            let mut probes = if scene.probes.is_empty() {
+                None
+            } else {
+                if info.fills == crate::error::Fills::Mask {
+                    return Err(RenderError::NotImplemented {
+                        what: "reflection probes with a technique whose shadows are a mask of \
+                               the camera's pixels",
+                        instead: "use a technique with shadow maps or rays, or no probes",
+                    });
+                }
+                Some(ProbeFrame::new(
+                    ctx,
+                    scene,
+                    &gpu_scene,
+                    &lights,
+                    &*source,
+                    look_consts,
+                )?)
+            };
+            if let Some(p) = &mut probes {
+                let frame = frame_uniforms(scene, &settings, shadow_side);
+                p.update(ctx, scene, &gpu_scene, (&lights, &*source), &frame, true)?;
+            }
             let inputs = LightingInputs {
                 frame: &frame_buffer,
                 lights: &lights,
@@ -219,6 +248,7 @@ impl Renderer {
                 shadows: source.output(),
                 denoise: denoiser.as_ref().map(|d| &d.buffers),
                 reuse: reuse.as_ref().map(|r| &r.buffers),
+                probes: probes.as_ref().map(|p| &p.maps),
             };
             let lighting = LightingPass::new(
                 ctx,
@@ -228,7 +258,8 @@ impl Renderer {
                     emission_texture: gbuffer.emission.is_some(),
                     denoise: denoiser.is_some(),
                     reuse: reuse.is_some(),
-                    ..settings.look.resolve(scene).consts()
+                    probes: probes.is_some(),
+                    ..look_consts
                 },
             );
             let visibility = visibility_pass(ctx, &settings, scene, &*source)?;
@@ -248,6 +279,8 @@ impl Renderer {
                 reuse,
                 frames_denoised: 0,
                 lights_changed: false,
+                probes,
+                probes_stale: false,
                 clusters,
                 visibility,
                 blit: None,
@@ -287,6 +320,10 @@ impl Renderer {
         camera.validate()?;
         self.current.camera = camera;
         self.dirty = true;
+        // Probes see the camera's shadows where those follow the camera: cascades, and
+        // virtual pages.
+        self.probes_stale |= self.settings.technique.info().fills == crate::error::Fills::Pages
+            || self.current.lights.iter().any(|l| matches!(l.kind, manyshadows_scene::LightKind::Directional { .. }));
         Ok(())
     }
 
@@ -307,6 +344,7 @@ impl Renderer {
             .map_err(|reason| SceneError::InvalidLight { index, reason })?;
         *slot = light;
         self.dirty = true;
+        self.probes_stale = true;
         self.lights_changed = true;
         Ok(())
     }
@@ -320,6 +358,7 @@ impl Renderer {
         }
         self.current.lights = lights;
         self.dirty = true;
+        self.probes_stale = true;
         self.lights_changed = true;
         Ok(())
     }
@@ -353,6 +392,7 @@ impl Renderer {
             self.source.note_moved(old.sphere, new);
         }
         self.dirty = true;
+        self.probes_stale = true;
         Ok(())
     }
 
@@ -394,6 +434,12 @@ impl Renderer {
                 self.source.output().depth_side,
             )),
         );
+        if let Some(p) = &mut self.probes {
+            let frame = frame_uniforms(scene, settings, self.source.output().depth_side);
+            let redraw = std::mem::take(&mut self.probes_stale);
+            let sources = (&self.lights, &*self.source);
+            p.update(ctx, scene, &self.scene, sources, &frame, redraw)?;
+        }
         self.lighting.rebind(
             ctx,
             &LightingInputs {
@@ -405,6 +451,7 @@ impl Renderer {
                 shadows: self.source.output(),
                 denoise: self.denoiser.as_ref().map(|d| &d.buffers),
                 reuse: self.reuse.as_ref().map(|r| &r.buffers),
+                probes: self.probes.as_ref().map(|p| &p.maps),
             },
         );
         let lights = scene.lights.len() as u32;
@@ -470,6 +517,12 @@ impl Renderer {
             .record(ctx, &self.scene, encoder, &mut self.timer);
         if let Some(b) = boundary {
             b(encoder, FramePart::Shadows)?;
+        }
+        if let Some(p) = self.probes.as_mut().filter(|p| p.dirty) {
+            let span = self.timer.span(Stage::Probes);
+            p.record(encoder, &self.scene, &self.timer, span);
+        } else if let Some(p) = &mut self.probes {
+            p.faces_drawn = 0;
         }
         let span = self.timer.span(Stage::Lighting);
         self.lighting.record(encoder, &self.timer, span);
@@ -679,6 +732,7 @@ impl Renderer {
                         shadows: self.source.output(),
                         denoise: None,
                         reuse: None,
+                        probes: None,
                     };
                     let (mask, soft) = pass.run(ctx, &inputs, &self.timer, span)?;
                     (Some(mask), soft)
@@ -713,6 +767,7 @@ impl Renderer {
                 shadow_stats,
                 clusters,
                 virtual_maps,
+                probes: self.probes.as_ref().map(|p| p.stats()),
             })
         })
     }

@@ -57,6 +57,8 @@ pub struct LightingInputs<'a> {
     pub denoise: Option<&'a crate::shading::denoise::DenoiseBuffers>,
     /// The reservoirs, when sampled lights are reused (`ShadingConsts::reuse`).
     pub reuse: Option<&'a crate::shading::reuse::ReuseBuffers>,
+    /// The reflection probes' faces, when surfaces mirror them (`ShadingConsts::probes`).
+    pub probes: Option<&'a crate::shading::probes::ProbeMaps>,
 }
 
 impl LightingInputs<'_> {
@@ -137,6 +139,12 @@ impl LightingPass {
         consts: &ShadingConsts,
     ) -> Self {
         let device = &ctx.device;
+        // A probe's faces keep linear radiance; the frame its tone-mapped colour.
+        let format = if consts.linear_out {
+            crate::shading::probes::FACE_FORMAT
+        } else {
+            COLOR_FORMAT
+        };
         let color = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("lighting.color"),
             size: wgpu::Extent3d {
@@ -147,7 +155,7 @@ impl LightingPass {
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
-            format: COLOR_FORMAT,
+            format,
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::COPY_SRC
                 | wgpu::TextureUsages::TEXTURE_BINDING,
@@ -193,6 +201,25 @@ impl LightingPass {
             entries.push(crate::gpu::pipelines::uniform_entry(42, frag));
             entries.push(crate::gpu::pipelines::storage_rw_entry(43, frag));
         }
+        if consts.probes {
+            entries.push(wgpu::BindGroupLayoutEntry {
+                binding: 44,
+                visibility: frag,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                    view_dimension: wgpu::TextureViewDimension::D2Array,
+                    multisampled: false,
+                },
+                count: None,
+            });
+            entries.push(wgpu::BindGroupLayoutEntry {
+                binding: 45,
+                visibility: frag,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                count: None,
+            });
+            entries.push(crate::gpu::pipelines::storage_entry(46, frag));
+        }
         let layout = crate::gpu::pipelines::bind_group_layout(device, "lighting.layout", &entries);
         let linear = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("lighting.cmp_linear"),
@@ -227,7 +254,7 @@ impl LightingPass {
                     module: &module,
                     entry_point: Some(entry),
                     compilation_options: Default::default(),
-                    targets: &[Some(COLOR_FORMAT.into())],
+                    targets: &[Some(format.into())],
                 }),
                 multiview_mask: None,
                 cache: None,
@@ -260,6 +287,17 @@ impl LightingPass {
             &self.pipeline,
             timer.render_writes(span, true, true),
         );
+    }
+
+    /// Records the pass, writing the span's first (`begin`) and last (`end`) timestamps as
+    /// asked (a probe's faces lit one after another, timed as one span).
+    pub(crate) fn record_timed(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (timer, span): (&GpuTimer, Option<Span>),
+        (begin, end): (bool, bool),
+    ) {
+        self.fullscreen_pass(encoder, &self.pipeline, timer.render_writes(span, begin, end));
     }
 
     /// With a denoiser: shades the filtered ratio into the frame (after the denoiser's passes),
@@ -382,6 +420,17 @@ fn bind(
         entries.push(crate::gpu::pipelines::whole_entry(42, &r.params));
         entries.push(crate::gpu::pipelines::whole_entry(43, &r.reservoirs));
     }
+    if let Some(p) = inputs.probes {
+        entries.push(wgpu::BindGroupEntry {
+            binding: 44,
+            resource: wgpu::BindingResource::TextureView(&p.view),
+        });
+        entries.push(wgpu::BindGroupEntry {
+            binding: 45,
+            resource: wgpu::BindingResource::Sampler(&p.sampler),
+        });
+        entries.push(crate::gpu::pipelines::whole_entry(46, &p.data));
+    }
     device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("lighting.bind_group"),
         layout,
@@ -401,5 +450,22 @@ mod shader_tests {
         );
         crate::gpu::shaders::validate_for_webgpu("lighting", &src, wgpu::Features::empty())
             .unwrap_or_else(|e| panic!("{e}"));
+    }
+
+    /// With reflection probes, and as a probe's faces are lit (linear output), too.
+    #[test]
+    fn shader_with_probes_validates_for_webgpu() {
+        for (probes, linear_out) in [(true, false), (false, true)] {
+            let src = super::shader(
+                &crate::shadows::lookup::ATLAS_LOOKUP,
+                &crate::shading::look::ShadingConsts {
+                    probes,
+                    linear_out,
+                    ..Default::default()
+                },
+            );
+            crate::gpu::shaders::validate_for_webgpu("lighting", &src, wgpu::Features::empty())
+                .unwrap_or_else(|e| panic!("probes {probes}, linear {linear_out}: {e}"));
+        }
     }
 }

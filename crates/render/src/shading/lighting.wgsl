@@ -571,6 +571,9 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     }
     let ambient = acc.color;
     resolve_samples(s, &acc);
+    if (PROBES) {
+        acc.color = acc.color + probe_reflection(s);
+    }
     if (EMISSION) {
         // Emitted radiance (times the emissive texel), through the exposure like reflected
         // light.
@@ -585,5 +588,24 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     } else if (DENOISE) {
         denoise_store(px, vec4<f32>(acc.unshadowed, 1.0), acc.est_shadowed, acc.est_unshadowed, ambient);
     }
+    if (LINEAR_OUT) {
+        return vec4<f32>(acc.color, 1.0);
+    }
     return vec4<f32>(tone_map(acc.color), 1.0);
+}
+
+// What the surface mirrors of the nearest probe (probes.wgsl): Phong materials their
+// `reflect` (specular.w) at normal incidence, the glTF BRDF its Fresnel reflectance (0.04 for
+// dielectrics, the base colour for metals); Schlick raises either towards 1 at grazing angles,
+// and the glTF BRDF scales it by the gloss (1 − roughness)².
+fn probe_reflection(s: Surface) -> vec3<f32> {
+    var f0 = vec3<f32>(s.mat.specular.w);
+    var gloss = 1.0;
+    if (SHADING_MODEL == SHADING_PBR) {
+        gloss = (1.0 - s.mat.pbr.y) * (1.0 - s.mat.pbr.y);
+        f0 = mix(vec3<f32>(0.04), s.mat.diffuse.rgb, s.mat.pbr.x);
+    } else if (s.mat.specular.w <= 0.0) {
+        return vec3<f32>(0.0);
+    }
+    return gloss * probe_fresnel(f0, s.n, s.v) * probe_reflected(s.p, s.n, s.v);
 }

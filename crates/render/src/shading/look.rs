@@ -297,6 +297,11 @@ pub(crate) struct ShadingConsts {
     /// Whether sampled lights are reused across frames (reuse.rs): each pixel's reservoirs
     /// are read from the last frame and written for the next.
     pub reuse: bool,
+    /// Whether surfaces mirror the nearest reflection probe (probes.rs; bindings 44–46).
+    pub probes: bool,
+    /// Whether the pass writes linear radiance (before exposure and tone map) into a float
+    /// target: a probe's faces.
+    pub linear_out: bool,
 }
 
 impl Default for ShadingConsts {
@@ -311,6 +316,8 @@ impl Default for ShadingConsts {
             emission_texture: false,
             denoise: false,
             reuse: false,
+            probes: false,
+            linear_out: false,
         }
     }
 }
@@ -324,7 +331,8 @@ impl ShadingConsts {
              const LIGHT_SCALE: f32 = {:?}f;\nconst TONE_MAP: u32 = {}u;\n\
              const EXPOSURE_IS_FIXED: bool = {};\nconst FIXED_EXPOSURE: f32 = {:?}f;\n\
              const EMISSION: bool = {};\nconst EMISSION_TEXTURE: bool = {};\n\
-             const DENOISE: bool = {};\nconst REUSE: bool = {};\n",
+             const DENOISE: bool = {};\nconst REUSE: bool = {};\n\
+             const PROBES: bool = {};\nconst LINEAR_OUT: bool = {};\n",
             self.shading.code(),
             self.physical_falloff,
             self.light_scale,
@@ -335,7 +343,14 @@ impl ShadingConsts {
             self.emission_texture,
             self.denoise,
             self.reuse,
+            self.probes,
+            self.linear_out,
         );
+        let consts = if self.probes {
+            format!("{consts}{}", crate::shading::probes::PROBES_WGSL)
+        } else {
+            format!("{consts}{NO_PROBES_WGSL}")
+        };
         let reuse = if self.reuse {
             REUSE_WGSL
         } else {
@@ -351,6 +366,12 @@ impl ShadingConsts {
         }
     }
 }
+
+/// Without probes: nothing to mirror (the calls sit behind `PROBES`, false).
+const NO_PROBES_WGSL: &str = "
+fn probe_reflected(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>) -> vec3<f32> { return vec3<f32>(0.0); }
+fn probe_fresnel(f0: vec3<f32>, n: vec3<f32>, v: vec3<f32>) -> vec3<f32> { return vec3<f32>(0.0); }
+";
 
 /// The lighting pass's side of the denoiser (denoise.rs): where it writes each pixel's
 /// unshadowed light and shadow ratio, and `fs_composite`, which shades the filtered ratio.

@@ -7,5 +7,6 @@ pub(crate) mod blit;
 pub mod denoise;
 pub mod lighting;
 pub mod look;
+pub mod probes;
 pub mod reuse;
 pub mod visibility;

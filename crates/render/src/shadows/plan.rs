@@ -87,7 +87,11 @@ fn prioritize(
         let n = views[i..].iter().take_while(|v| v.light == light).count();
         let range = i..i + n;
         i += n;
-        if let Some((c, r)) = scene.lights[light].bounding_sphere() {
+        // Reflection probes see all around them: with probes no light is off screen.
+        if let Some((c, r)) = scene.lights[light]
+            .bounding_sphere()
+            .filter(|_| scene.probes.is_empty())
+        {
             if !light_space::sphere_in_planes(&planes, c, r * 1.001 + 1e-4) {
                 report.off_screen += 1;
                 continue;

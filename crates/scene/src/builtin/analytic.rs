@@ -192,5 +192,6 @@ pub(crate) fn build(which: AnalyticLight, opts: &BuiltinOptions) -> Scene {
         lights: vec![which.light(opts.shadow_resolution)],
         camera: analytic_camera(),
         lighting: Default::default(),
+        probes: Vec::new(),
     }
 }

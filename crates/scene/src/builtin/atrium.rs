@@ -32,7 +32,7 @@ use glam::{Mat4, Quat, Vec2, Vec3};
 use super::lights::LightCounts;
 use super::lights::{self, density_dim, slanted_direction, tint, Rand, Tone};
 use super::options::{BuiltinOptions, LightMix};
-use crate::model::{Camera, Instance, Light, Material, Mesh, Scene};
+use crate::model::{Camera, Instance, Light, Material, Mesh, Probe, Scene};
 use crate::primitives;
 
 /// Length of the hall along X (inner faces of the end walls at `x = ±20`).
@@ -85,15 +85,17 @@ fn materials() -> Vec<Material> {
         shininess: e,
         ..Material::matte(c)
     };
+    // Polished floor, marble and bronze mirror a little of the probes' light (only where the
+    // scene has probes: `BuiltinOptions::default_probes`).
     vec![
-        shiny(Vec3::new(0.62, 0.57, 0.5), 0.25, 32.0),
+        shiny(Vec3::new(0.62, 0.57, 0.5), 0.25, 32.0).reflecting(0.12),
         Material::matte(Vec3::new(0.78, 0.72, 0.62)),
         Material::matte(Vec3::new(0.82, 0.77, 0.68)),
-        shiny(Vec3::new(0.55, 0.38, 0.2), 0.6, 48.0),
+        shiny(Vec3::new(0.55, 0.38, 0.2), 0.6, 48.0).reflecting(0.35),
         Material::matte(Vec3::new(0.72, 0.38, 0.25)),
         Material::matte(Vec3::new(0.22, 0.45, 0.18)),
         Material::matte(Vec3::new(0.45, 0.3, 0.18)),
-        shiny(Vec3::new(0.9, 0.89, 0.86), 0.5, 64.0),
+        shiny(Vec3::new(0.9, 0.89, 0.86), 0.5, 64.0).reflecting(0.25),
         Material::matte(Vec3::ONE).with_texture(0).masked(0.5),
     ]
 }
@@ -756,5 +758,23 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
         instances: h.instances,
         camera,
         lighting: Default::default(),
+        probes: if opts.default_probes {
+            atrium_probes()
+        } else {
+            Vec::new()
+        },
     }
+}
+
+/// The atrium's reflection probes: one in each half of the nave, 1.5 m up beside the
+/// fountain, each standing for its half of the hall (floor to roof, wall to wall).
+pub fn atrium_probes() -> Vec<Probe> {
+    let (hx, hz) = (0.5 * HALL_LENGTH, 0.5 * HALL_WIDTH);
+    [-1.0f32, 1.0]
+        .map(|side| {
+            let lo = Vec3::new(if side < 0.0 { -hx } else { 0.0 }, 0.0, -hz);
+            Probe::new(Vec3::new(side * 6.0, 1.5, 0.0), Vec3::ZERO)
+                .with_box(lo, Vec3::new(hx, HALL_HEIGHT, HALL_WIDTH))
+        })
+        .to_vec()
 }

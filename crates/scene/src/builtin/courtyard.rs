@@ -513,6 +513,7 @@ pub(crate) fn build(opts: &BuiltinOptions, masks: bool) -> Scene {
         lights: Vec::new(),
         camera: Camera::look_at(COURTYARD_CAMERA_POSITION, COURTYARD_CAMERA_TARGET),
         lighting: Default::default(),
+        probes: Vec::new(),
     };
     scene.camera.far = 80.0;
     scene.lights = if opts.lights.is_none() && opts.mix == LightMix::All {

@@ -143,6 +143,7 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
         lights: Vec::new(),
         camera: Camera::look_at(CUBES_CAMERA_POSITION, CUBES_CAMERA_TARGET),
         lighting: Default::default(),
+        probes: Vec::new(),
     };
     scene.camera.far = 60.0;
     scene.lights = if opts.lights.is_none() && opts.mix == LightMix::All {

@@ -222,5 +222,6 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Result<Scene, SceneError> {
         lights: dragon_lights(n, opts.seed, opts.mix, opts.shadow_resolution, &obstacles),
         camera,
         lighting: Default::default(),
+        probes: Vec::new(),
     })
 }

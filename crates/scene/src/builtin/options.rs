@@ -88,6 +88,10 @@ pub struct BuiltinOptions {
     /// 0.53°), except `cubes` and the `plane-*` scenes, whose lights are hard (size 0) for
     /// exact comparisons. [`LightSizes::HARD`] makes every light hard.
     pub light_sizes: LightSizes,
+    /// Place the scene's own reflection probes (the atrium: two in the nave, its floor and
+    /// fountain reflective; scenes without a set: none). Off by default, so a library caller
+    /// pays for probes only when asking; `manyshadows render` asks (`--probes`).
+    pub default_probes: bool,
 }
 
 impl Default for BuiltinOptions {
@@ -99,6 +103,7 @@ impl Default for BuiltinOptions {
             mesh: None,
             shadow_resolution: None,
             light_sizes: LightSizes::default(),
+            default_probes: false,
         }
     }
 }

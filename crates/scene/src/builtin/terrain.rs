@@ -346,5 +346,6 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
         lights: terrain_lights(n, opts.seed, opts.mix, opts.shadow_resolution),
         camera,
         lighting: Default::default(),
+        probes: Vec::new(),
     }
 }

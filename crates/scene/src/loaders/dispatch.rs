@@ -194,6 +194,7 @@ fn assemble(
         lights,
         camera: Camera::default(),
         lighting,
+        probes: Vec::new(),
     };
     scene.camera = camera.unwrap_or_else(|| default_camera(bounds));
     if scene.lights.is_empty() {

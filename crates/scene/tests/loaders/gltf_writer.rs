@@ -134,6 +134,7 @@ fn writer_scene() -> Scene {
             far: 300.0,
         },
         lighting: Default::default(),
+        probes: Vec::new(),
     }
 }
 

@@ -1,0 +1,274 @@
+//! Drawing the reflection probes' faces (seed 000's reflection cube maps) through the frame's
+//! own passes: each face is a small frame of its own (`Probe::face_cameras`: 90°, square),
+//! drawn into one G-buffer and lit by one lighting pass, both sized to a face, one face after
+//! another, with the frame's lights and its shadow source (the same maps the camera's pixels
+//! read). The lit face (linear radiance) is copied into its layer of
+//! [`ProbeMaps::faces`], which the frame's lighting then samples for reflections.
+//!
+//! **Per face** only the face's uniforms differ: they are copied, in the encoder, from a
+//! staging buffer that holds every face's into the one uniform buffer both passes read, so the
+//! faces' passes run in order in one submission.
+//!
+//! **What a face is not**: it has no light clusters (its pixels loop over every light: a
+//! face is at most a few hundred texels on a side) and no reflections of its own (one bounce);
+//! `FrameUniforms::view` stays the camera's, so a directional light's cascade is chosen by the
+//! camera's depth of the point, as the cascades were fitted to the camera.
+//!
+//! **Kept while nothing changes** (as shadow views are cached): the faces are redrawn in a
+//! frame only when a light, a caster or the light count changed since they were drawn, or the
+//! camera moved where the shadows depend on it (directional lights' cascades, virtual pages).
+
+use manyshadows_scene::Scene;
+
+use crate::error::RenderError;
+use crate::frame::clusters::LightClusters;
+use crate::frame::gbuffer::GBuffer;
+use crate::gpu::context::GpuContext;
+use crate::gpu::timing::{GpuTimer, Span};
+use crate::gpu::types::FrameUniforms;
+use crate::gpu_scene::instances::GpuScene;
+use crate::shading::lighting::{LightingInputs, LightingPass};
+use crate::shading::look::ShadingConsts;
+use crate::shading::probes::ProbeMaps;
+use crate::shadows::source::ShadowSource;
+
+/// Byte stride of the staging buffer's per-face uniforms (the copy offset alignment is 4;
+/// 256 keeps each face's block aligned as a dynamic uniform offset would want).
+const STRIDE: u64 = 256;
+
+/// What drawing the probes did in a frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[non_exhaustive]
+pub struct ProbeStats {
+    /// Probes in the scene.
+    pub probes: u32,
+    /// Texels per face side.
+    pub side: u32,
+    /// Faces drawn this frame (0 when every face was kept).
+    pub faces_drawn: u32,
+    /// Bytes of the faces (linear radiance, `Rgba16Float`).
+    pub bytes: u64,
+}
+
+/// The probes' faces and the passes that draw them.
+pub(crate) struct ProbeFrame {
+    /// What the frame's lighting samples.
+    pub(crate) maps: ProbeMaps,
+    /// `FrameUniforms` of the face being drawn.
+    uniforms: wgpu::Buffer,
+    /// Every face's `FrameUniforms`, `STRIDE` apart.
+    staging: wgpu::Buffer,
+    gbuffer: GBuffer,
+    clusters: LightClusters,
+    lighting: LightingPass,
+    consts: ShadingConsts,
+    /// The faces must be drawn in the next frame.
+    pub(crate) dirty: bool,
+    /// Faces drawn by the last frame.
+    pub(crate) faces_drawn: u32,
+}
+
+impl ProbeFrame {
+    /// The faces of `scene`'s probes (at least one) and their passes, lit with `lights` and
+    /// `source`'s shadows as `consts` shade the frame.
+    pub(crate) fn new(
+        ctx: &GpuContext,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        lights: &wgpu::Buffer,
+        source: &dyn ShadowSource,
+        consts: ShadingConsts,
+    ) -> Result<Self, RenderError> {
+        let maps = ProbeMaps::new(ctx, scene)?;
+        let side = maps.side;
+        let device = &ctx.device;
+        let size = std::mem::size_of::<FrameUniforms>() as u64;
+        debug_assert!(size <= STRIDE);
+        let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("probes.uniforms"),
+            size,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("probes.staging"),
+            size: STRIDE * 6 * maps.count as u64,
+            usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let gbuffer = GBuffer::new(ctx, gpu_scene, &uniforms, (side, side), None);
+        // No clusters (their uniforms stay zero: every light); the lighting pass binds their
+        // buffers all the same.
+        let clusters = LightClusters::new(
+            ctx,
+            (side, side),
+            scene.lights.len(),
+            Default::default(),
+            false,
+            None,
+        )?;
+        let consts = ShadingConsts {
+            emission_texture: gbuffer.emission.is_some(),
+            denoise: false,
+            reuse: false,
+            probes: false,
+            linear_out: true,
+            ..consts
+        };
+        let lighting = LightingPass::new(
+            ctx,
+            &Self::inputs(&uniforms, lights, gpu_scene, &gbuffer, &clusters, source),
+            (side, side),
+            &consts,
+        );
+        Ok(Self {
+            maps,
+            uniforms,
+            staging,
+            gbuffer,
+            clusters,
+            lighting,
+            consts,
+            dirty: true,
+            faces_drawn: 0,
+        })
+    }
+
+    fn inputs<'a>(
+        uniforms: &'a wgpu::Buffer,
+        lights: &'a wgpu::Buffer,
+        gpu_scene: &'a GpuScene,
+        gbuffer: &'a GBuffer,
+        clusters: &'a LightClusters,
+        source: &'a dyn ShadowSource,
+    ) -> LightingInputs<'a> {
+        LightingInputs {
+            frame: uniforms,
+            lights,
+            materials: &gpu_scene.materials,
+            gbuffer,
+            clusters,
+            shadows: source.output(),
+            denoise: None,
+            reuse: None,
+            probes: None,
+        }
+    }
+
+    /// After the frame's buffers or shadows were replaced (`Renderer::prepare`): binds them,
+    /// rewrites every face's uniforms from the frame's, and (when `redraw`) marks the faces
+    /// for drawing. `frame` is the camera's `FrameUniforms`.
+    pub(crate) fn update(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        (lights, source): (&wgpu::Buffer, &dyn ShadowSource),
+        frame: &FrameUniforms,
+        redraw: bool,
+    ) -> Result<(), RenderError> {
+        let inputs = Self::inputs(
+            &self.uniforms,
+            lights,
+            gpu_scene,
+            &self.gbuffer,
+            &self.clusters,
+            source,
+        );
+        self.lighting.rebind(ctx, &inputs);
+        let side = self.maps.side;
+        let mut bytes = vec![0u8; (STRIDE * 6 * self.maps.count as u64) as usize];
+        for (k, probe) in scene.probes.iter().enumerate() {
+            for (f, cam) in probe
+                .face_cameras(scene.camera.near, scene.camera.far)
+                .iter()
+                .enumerate()
+            {
+                let view_proj = (cam.projection(1.0) * cam.view()).to_cols_array_2d();
+                let pos = cam.position.extend(1.0).to_array();
+                let s = side as f32;
+                let u = FrameUniforms {
+                    view_proj,
+                    camera_pos: pos,
+                    viewport: [s, s, 1.0 / s, 1.0 / s],
+                    eye_view_proj: [view_proj; 2],
+                    eye_pos: [pos; 2],
+                    eyes: [s, 1.0, 0.0, 0.0],
+                    ..*frame
+                };
+                let at = (STRIDE as usize) * (6 * k + f);
+                bytes[at..at + std::mem::size_of::<FrameUniforms>()]
+                    .copy_from_slice(bytemuck::bytes_of(&u));
+            }
+        }
+        ctx.queue.write_buffer(&self.staging, 0, &bytes);
+        self.dirty |= redraw;
+        Ok(())
+    }
+
+    /// Draws every face when they must be, timed as `span`; returns the faces drawn.
+    pub(crate) fn record(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        gpu_scene: &GpuScene,
+        timer: &GpuTimer,
+        span: Option<Span>,
+    ) -> u32 {
+        if !std::mem::take(&mut self.dirty) {
+            self.faces_drawn = 0;
+            return 0;
+        }
+        let faces = 6 * self.maps.count;
+        let size = std::mem::size_of::<FrameUniforms>() as u64;
+        let side = self.maps.side;
+        for face in 0..faces {
+            encoder.copy_buffer_to_buffer(&self.staging, STRIDE * face as u64, &self.uniforms, 0, size);
+            let first = face == 0;
+            let last = face + 1 == faces;
+            self.gbuffer
+                .record_timed(encoder, gpu_scene, (timer, span), (first, false));
+            self.lighting
+                .record_timed(encoder, (timer, span), (false, last));
+            encoder.copy_texture_to_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &self.lighting.color,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d::ZERO,
+                    aspect: wgpu::TextureAspect::All,
+                },
+                wgpu::TexelCopyTextureInfo {
+                    texture: &self.maps.faces,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d {
+                        x: 0,
+                        y: 0,
+                        z: face as u32,
+                    },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                wgpu::Extent3d {
+                    width: side,
+                    height: side,
+                    depth_or_array_layers: 1,
+                },
+            );
+        }
+        self.faces_drawn = faces as u32;
+        self.faces_drawn
+    }
+
+    /// What the last frame did.
+    pub(crate) fn stats(&self) -> ProbeStats {
+        ProbeStats {
+            probes: self.maps.count as u32,
+            side: self.maps.side,
+            faces_drawn: self.faces_drawn,
+            bytes: self.maps.bytes(),
+        }
+    }
+
+    /// The shading constants the faces are lit with.
+    pub(crate) fn consts(&self) -> &ShadingConsts {
+        &self.consts
+    }
+}

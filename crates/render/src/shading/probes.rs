@@ -1,0 +1,203 @@
+//! Reflection probes, the part the lighting pass reads: every probe's six faces of linear
+//! radiance in one texture array, and each probe's position and box (seed 000's reflection
+//! cube maps; the faces are drawn by `renderer::probes` through the frame's own G-buffer,
+//! shadows and lighting code).
+//!
+//! A surface's reflection comes from the probe nearest it: its reflected view ray, followed to
+//! the wall of the box the probe stands for (parallax correction) where the probe has one, is
+//! looked up on the face it points at (`probes.wgsl`). How much is mirrored: Phong materials
+//! their `Material::reflect` at normal incidence, the glTF BRDF its Fresnel reflectance
+//! (0.04 for dielectrics, the base colour for metals) times the gloss `(1 − roughness)²`;
+//! Schlick's Fresnel raises either towards 1 at grazing angles. One bounce: the faces
+//! themselves are lit without reflections. The faces are sampled bilinearly at level 0 (sharp
+//! mirror images; no blur by roughness).
+
+use glam::Vec3;
+use manyshadows_scene::{Probe, Scene};
+
+use crate::error::RenderError;
+use crate::gpu::context::GpuContext;
+
+/// Format of the faces: linear radiance, before exposure and tone map.
+pub const FACE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// The probes' WGSL (bindings 44–46 of the lighting pass).
+pub(crate) const PROBES_WGSL: &str = include_str!("probes.wgsl");
+
+/// `ProbeData` of `probes.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct ProbeData {
+    /// xyz position, w the first layer.
+    pub position: [f32; 4],
+    /// The box's lowest corner, w 1 when there is a box.
+    pub box_lo: [f32; 4],
+    /// The box's highest corner.
+    pub box_hi: [f32; 4],
+}
+
+impl ProbeData {
+    fn new(k: usize, p: &Probe) -> Self {
+        let centre = p.position + p.offset;
+        let half = 0.5 * p.size;
+        let has_box = p.size.min_element() > 0.0;
+        Self {
+            position: p.position.extend((6 * k) as f32).to_array(),
+            box_lo: (centre - half).extend(if has_box { 1.0 } else { 0.0 }).to_array(),
+            box_hi: (centre + half).extend(0.0).to_array(),
+        }
+    }
+}
+
+/// The probes' faces and records, as the lighting pass binds them.
+pub struct ProbeMaps {
+    /// `6 × probes` layers of `side`² linear radiance.
+    pub faces: wgpu::Texture,
+    /// The array view the lighting pass samples.
+    pub(crate) view: wgpu::TextureView,
+    pub(crate) sampler: wgpu::Sampler,
+    /// `array<ProbeData>`.
+    pub(crate) data: wgpu::Buffer,
+    /// Texels per face side (the largest any probe asks for; every probe gets it).
+    pub side: u32,
+    /// Probes.
+    pub count: usize,
+}
+
+impl ProbeMaps {
+    /// Faces for `scene`'s probes (at least one), all at the largest resolution asked for, as
+    /// far as the device's texture limits allow.
+    pub fn new(ctx: &GpuContext, scene: &Scene) -> Result<Self, RenderError> {
+        let count = scene.probes.len();
+        let side = scene
+            .probes
+            .iter()
+            .map(|p| p.resolution)
+            .max()
+            .unwrap_or(Probe::DEFAULT_RESOLUTION);
+        let limits = ctx.limits();
+        if side > limits.max_texture_dimension_2d {
+            return Err(RenderError::TooLarge {
+                what: format!("probe faces of {side}² texels"),
+                needed: u64::from(side),
+                limit: u64::from(limits.max_texture_dimension_2d),
+                unit: "texels per side",
+                limit_name: "max_texture_dimension_2d",
+            });
+        }
+        let layers = 6 * count as u32;
+        if layers > limits.max_texture_array_layers {
+            return Err(RenderError::TooLarge {
+                what: format!("the {layers} faces of {count} probes"),
+                needed: u64::from(layers),
+                limit: u64::from(limits.max_texture_array_layers),
+                unit: "layers",
+                limit_name: "max_texture_array_layers",
+            });
+        }
+        let faces = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("probes.faces"),
+            size: wgpu::Extent3d {
+                width: side,
+                height: side,
+                depth_or_array_layers: layers.max(1),
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: FACE_FORMAT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_DST
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let view = faces.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let sampler = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("probes.sampler"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let records: Vec<ProbeData> = scene
+            .probes
+            .iter()
+            .enumerate()
+            .map(|(k, p)| ProbeData::new(k, p))
+            .collect();
+        let data = wgpu::util::DeviceExt::create_buffer_init(
+            &ctx.device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("probes.data"),
+                contents: bytemuck::cast_slice(&records),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            },
+        );
+        Ok(Self {
+            faces,
+            view,
+            sampler,
+            data,
+            side,
+            count,
+        })
+    }
+
+    /// Bytes the faces take.
+    pub fn bytes(&self) -> u64 {
+        let texel = FACE_FORMAT.block_copy_size(None).unwrap_or(8) as u64;
+        6 * self.count as u64 * u64::from(self.side) * u64::from(self.side) * texel
+    }
+
+    /// Where face `face` of probe `k` lies: its layer.
+    pub fn layer(k: usize, face: usize) -> u32 {
+        (6 * k + face) as u32
+    }
+}
+
+/// The direction a reflection looks up for a surface at `p` with normal `n` seen along `v`
+/// (towards the eye), through `probe` (the CPU twin of `probe_reflected`, for tests).
+pub fn reflected_direction(probe: &Probe, p: Vec3, n: Vec3, v: Vec3) -> Vec3 {
+    let r = -v - 2.0 * (-v).dot(n) * n;
+    if probe.size.min_element() <= 0.0 {
+        return r;
+    }
+    let centre = probe.position + probe.offset;
+    let (lo, hi) = (centre - 0.5 * probe.size, centre + 0.5 * probe.size);
+    let safe = Vec3::select(r.abs().cmplt(Vec3::splat(1e-20)), Vec3::splat(1e-20), r);
+    let far = ((hi - p) / safe).max((lo - p) / safe);
+    let t = far.min_element();
+    if t > 0.0 {
+        p + r * t - probe.position
+    } else {
+        r
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn data_matches_the_wgsl() {
+        use crate::gpu::types::layout::same_layout;
+        let src = crate::gpu::shaders::compose(&[PROBES_WGSL]);
+        same_layout!(in src, ProbeData, position, box_lo, box_hi);
+    }
+
+    /// A ray from the middle of a box's floor straight up reaches the ceiling above it: the
+    /// probe, off to the side and lower, looks up towards that point, not straight up.
+    #[test]
+    fn box_projection_follows_the_ray_to_the_wall() {
+        let probe = Probe::new(Vec3::new(2.0, 1.0, 0.0), Vec3::ZERO)
+            .with_box(Vec3::new(-5.0, 0.0, -5.0), Vec3::new(10.0, 4.0, 10.0));
+        let d = reflected_direction(&probe, Vec3::ZERO, Vec3::Y, Vec3::Y);
+        // The ceiling point (0, 4, 0) seen from (2, 1, 0).
+        assert!((d - Vec3::new(-2.0, 3.0, 0.0)).length() < 1e-5, "{d}");
+        // Without a box the plain reflection.
+        let far = Probe::new(Vec3::new(2.0, 1.0, 0.0), Vec3::ZERO);
+        assert_eq!(reflected_direction(&far, Vec3::ZERO, Vec3::Y, Vec3::Y), Vec3::Y);
+    }
+}
