@@ -112,7 +112,6 @@ pub use wgpu;
 pub use error::{Fills, RenderError, Technique};
 pub use frame::clusters::{ClusterOptions, ClusterStats, LightLoop};
 pub use frame::eyes::{EyePasses, Eyes, Stereo};
-pub use shading::probes::ProbeMaps;
 pub use frame::gbuffer_readback::GBufferData;
 pub use frame::visibility_mask::{MaskFileError, SoftVisibility, VisibilityMask};
 pub use gpu::context::{
@@ -127,6 +126,7 @@ pub use report::{
 };
 pub use settings::RenderSettings;
 pub use shading::look::{Exposure, Look, ResolvedLook, Shading, ToneMap};
+pub use shading::probes::ProbeMaps;
 pub use shadows::descriptor::{Culling, Need, Requirement, TechniqueInfo};
 pub use shadows::image::ShadowPicture;
 pub use shadows::irregular::maps::{IrregularOptions, IrregularStats};

@@ -157,6 +157,8 @@ mod tests {
                         emission_texture: true,
                         denoise: true,
                         reuse: true,
+                        probes: true,
+                        linear_out: false,
                     },
                 ),
                 (
@@ -171,6 +173,8 @@ mod tests {
                         emission_texture: false,
                         denoise: false,
                         reuse: false,
+                        probes: false,
+                        linear_out: true,
                     },
                 ),
             ] {

@@ -188,10 +188,9 @@ pub struct Material {
     /// candela per square metre, through the exposure like the lights). Default black.
     #[serde(default)]
     pub emissive: Vec3,
-    /// How much of the nearest reflection probe's light the surface mirrors at normal
-    /// incidence (0..=1; Schlick's Fresnel raises it towards 1 at grazing angles), for Phong
-    /// shading; 0 (default) mirrors nothing. The glTF BRDF derives its reflection from
-    /// metallic and roughness instead ([`Probe`]).
+    /// How much of the nearest reflection probe's light the surface mirrors (0..=1, the same
+    /// at every angle), for Phong shading; 0 (default) mirrors nothing. The glTF BRDF derives
+    /// its reflection from metallic and roughness instead ([`Probe`]).
     #[serde(default)]
     pub reflect: f32,
 }
@@ -248,7 +247,6 @@ impl Material {
         self.reflect = reflect;
         self
     }
-
 
     /// This material alpha-masked at `cutoff` (double-sided, as foliage cards are).
     pub fn masked(mut self, cutoff: f32) -> Self {

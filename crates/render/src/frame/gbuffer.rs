@@ -431,7 +431,15 @@ impl GBuffer {
         (eyes, copies): (u32, std::ops::Range<u32>),
     ) {
         let writes = (timer, span, first, last);
-        self.record_into(encoder, scene, &self.views, writes, first, rect, (eyes, copies));
+        self.record_into(
+            encoder,
+            scene,
+            &self.views,
+            writes,
+            first,
+            rect,
+            (eyes, copies),
+        );
     }
 
     /// A mono pass that clears and writes the span's first (`begin`) and last (`end`)

@@ -1,9 +1,9 @@
 //! Drawing the reflection probes' faces (seed 000's reflection cube maps) through the frame's
 //! own passes: each face is a small frame of its own (`Probe::face_cameras`: 90°, square),
-//! drawn into one G-buffer and lit by one lighting pass, both sized to a face, one face after
-//! another, with the frame's lights and its shadow source (the same maps the camera's pixels
-//! read). The lit face (linear radiance) is copied into its layer of
-//! [`ProbeMaps::faces`], which the frame's lighting then samples for reflections.
+//! drawn into one G-buffer sized to a face and lit, one face after another, with the frame's
+//! lights and its shadow source (the same maps the camera's pixels read), straight into its
+//! layer of [`ProbeMaps::faces`] (linear radiance), which the frame's lighting then samples
+//! for reflections.
 //!
 //! **Per face** only the face's uniforms differ: they are copied, in the encoder, from a
 //! staging buffer that holds every face's into the one uniform buffer both passes read, so the
@@ -32,9 +32,10 @@ use crate::shading::look::ShadingConsts;
 use crate::shading::probes::ProbeMaps;
 use crate::shadows::source::ShadowSource;
 
-/// Byte stride of the staging buffer's per-face uniforms (the copy offset alignment is 4;
-/// 256 keeps each face's block aligned as a dynamic uniform offset would want).
-const STRIDE: u64 = 256;
+/// Byte stride of the staging buffer's per-face uniforms: `FrameUniforms` rounded up to 256
+/// (the copy offset alignment is 4; 256 keeps each block aligned as a dynamic uniform offset
+/// would want).
+const STRIDE: u64 = (std::mem::size_of::<FrameUniforms>() as u64).next_multiple_of(256);
 
 /// What drawing the probes did in a frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -61,7 +62,6 @@ pub(crate) struct ProbeFrame {
     gbuffer: GBuffer,
     clusters: LightClusters,
     lighting: LightingPass,
-    consts: ShadingConsts,
     /// The faces must be drawn in the next frame.
     pub(crate) dirty: bool,
     /// Faces drawn by the last frame.
@@ -83,7 +83,6 @@ impl ProbeFrame {
         let side = maps.side;
         let device = &ctx.device;
         let size = std::mem::size_of::<FrameUniforms>() as u64;
-        debug_assert!(size <= STRIDE);
         let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("probes.uniforms"),
             size,
@@ -128,7 +127,6 @@ impl ProbeFrame {
             gbuffer,
             clusters,
             lighting,
-            consts,
             dirty: true,
             faces_drawn: 0,
         })
@@ -220,38 +218,21 @@ impl ProbeFrame {
         }
         let faces = 6 * self.maps.count;
         let size = std::mem::size_of::<FrameUniforms>() as u64;
-        let side = self.maps.side;
         for face in 0..faces {
-            encoder.copy_buffer_to_buffer(&self.staging, STRIDE * face as u64, &self.uniforms, 0, size);
+            encoder.copy_buffer_to_buffer(
+                &self.staging,
+                STRIDE * face as u64,
+                &self.uniforms,
+                0,
+                size,
+            );
             let first = face == 0;
             let last = face + 1 == faces;
             self.gbuffer
                 .record_timed(encoder, gpu_scene, (timer, span), (first, false));
+            let target = &self.maps.face_views[face];
             self.lighting
-                .record_timed(encoder, (timer, span), (false, last));
-            encoder.copy_texture_to_texture(
-                wgpu::TexelCopyTextureInfo {
-                    texture: &self.lighting.color,
-                    mip_level: 0,
-                    origin: wgpu::Origin3d::ZERO,
-                    aspect: wgpu::TextureAspect::All,
-                },
-                wgpu::TexelCopyTextureInfo {
-                    texture: &self.maps.faces,
-                    mip_level: 0,
-                    origin: wgpu::Origin3d {
-                        x: 0,
-                        y: 0,
-                        z: face as u32,
-                    },
-                    aspect: wgpu::TextureAspect::All,
-                },
-                wgpu::Extent3d {
-                    width: side,
-                    height: side,
-                    depth_or_array_layers: 1,
-                },
-            );
+                .record_into(encoder, target, (timer, span), (false, last));
         }
         self.faces_drawn = faces as u32;
         self.faces_drawn
@@ -265,10 +246,5 @@ impl ProbeFrame {
             faces_drawn: self.faces_drawn,
             bytes: self.maps.bytes(),
         }
-    }
-
-    /// The shading constants the faces are lit with.
-    pub(crate) fn consts(&self) -> &ShadingConsts {
-        &self.consts
     }
 }

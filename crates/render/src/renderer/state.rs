@@ -8,6 +8,7 @@ use web_time::Instant;
 use manyshadows_scene::{Camera, Light, Scene, SceneError};
 use wgpu::util::DeviceExt;
 
+use super::probes::ProbeFrame;
 use crate::error::RenderError;
 use crate::frame::clusters::{LightClusters, LightLoop};
 use crate::frame::eyes::EyePasses;
@@ -17,7 +18,6 @@ use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, GpuTimes, Stage};
 use crate::gpu::types::FrameUniforms;
 use crate::gpu_scene::instances::GpuScene;
-use super::probes::ProbeFrame;
 use crate::report::{Frame, FrameTimings, SubmittedFrame};
 use crate::settings::RenderSettings;
 use crate::shading::lighting::{LightingInputs, LightingPass};
@@ -323,7 +323,11 @@ impl Renderer {
         // Probes see the camera's shadows where those follow the camera: cascades, and
         // virtual pages.
         self.probes_stale |= self.settings.technique.info().fills == crate::error::Fills::Pages
-            || self.current.lights.iter().any(|l| matches!(l.kind, manyshadows_scene::LightKind::Directional { .. }));
+            || self
+                .current
+                .lights
+                .iter()
+                .any(|l| matches!(l.kind, manyshadows_scene::LightKind::Directional { .. }));
         Ok(())
     }
 

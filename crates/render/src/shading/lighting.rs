@@ -289,15 +289,18 @@ impl LightingPass {
         );
     }
 
-    /// Records the pass, writing the span's first (`begin`) and last (`end`) timestamps as
-    /// asked (a probe's faces lit one after another, timed as one span).
-    pub(crate) fn record_timed(
+    /// Records the pass into `target` (a view of the pass's format and size: a probe's face
+    /// layer), writing the span's first (`begin`) and last (`end`) timestamps as asked (a
+    /// probe's faces lit one after another, timed as one span).
+    pub(crate) fn record_into(
         &self,
         encoder: &mut wgpu::CommandEncoder,
+        target: &wgpu::TextureView,
         (timer, span): (&GpuTimer, Option<Span>),
         (begin, end): (bool, bool),
     ) {
-        self.fullscreen_pass(encoder, &self.pipeline, timer.render_writes(span, begin, end));
+        let writes = timer.render_writes(span, begin, end);
+        self.pass_into(encoder, target, &self.pipeline, writes);
     }
 
     /// With a denoiser: shades the filtered ratio into the frame (after the denoiser's passes),
@@ -319,10 +322,20 @@ impl LightingPass {
         pipeline: &wgpu::RenderPipeline,
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
+        self.pass_into(encoder, &self.color_view, pipeline, timestamp_writes);
+    }
+
+    fn pass_into(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &wgpu::TextureView,
+        pipeline: &wgpu::RenderPipeline,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("lighting.pass"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &self.color_view,
+                view: target,
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations {

@@ -595,17 +595,17 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
 }
 
 // What the surface mirrors of the nearest probe (probes.wgsl): Phong materials their
-// `reflect` (specular.w) at normal incidence, the glTF BRDF its Fresnel reflectance (0.04 for
-// dielectrics, the base colour for metals); Schlick raises either towards 1 at grazing angles,
-// and the glTF BRDF scales it by the gloss (1 − roughness)².
+// `reflect` (specular.w) at every angle; the glTF BRDF its Fresnel reflectance (0.04 for
+// dielectrics, the base colour for metals), raised by Schlick towards 1 at grazing angles and
+// scaled by the gloss (1 − roughness)².
 fn probe_reflection(s: Surface) -> vec3<f32> {
-    var f0 = vec3<f32>(s.mat.specular.w);
-    var gloss = 1.0;
     if (SHADING_MODEL == SHADING_PBR) {
-        gloss = (1.0 - s.mat.pbr.y) * (1.0 - s.mat.pbr.y);
-        f0 = mix(vec3<f32>(0.04), s.mat.diffuse.rgb, s.mat.pbr.x);
-    } else if (s.mat.specular.w <= 0.0) {
+        let gloss = (1.0 - s.mat.pbr.y) * (1.0 - s.mat.pbr.y);
+        let f0 = mix(vec3<f32>(0.04), s.mat.diffuse.rgb, s.mat.pbr.x);
+        return gloss * probe_fresnel(f0, s.n, s.v) * probe_reflected(s.p, s.n, s.v);
+    }
+    if (s.mat.specular.w <= 0.0) {
         return vec3<f32>(0.0);
     }
-    return gloss * probe_fresnel(f0, s.n, s.v) * probe_reflected(s.p, s.n, s.v);
+    return s.mat.specular.w * probe_reflected(s.p, s.n, s.v);
 }

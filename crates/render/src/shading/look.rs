@@ -567,6 +567,8 @@ impl ResolvedLook {
             emission_texture: false,
             denoise: false,
             reuse: false,
+            probes: false,
+            linear_out: false,
         }
     }
 

@@ -43,7 +43,9 @@ impl ProbeData {
         let has_box = p.size.min_element() > 0.0;
         Self {
             position: p.position.extend((6 * k) as f32).to_array(),
-            box_lo: (centre - half).extend(if has_box { 1.0 } else { 0.0 }).to_array(),
+            box_lo: (centre - half)
+                .extend(if has_box { 1.0 } else { 0.0 })
+                .to_array(),
             box_hi: (centre + half).extend(0.0).to_array(),
         }
     }
@@ -51,10 +53,12 @@ impl ProbeData {
 
 /// The probes' faces and records, as the lighting pass binds them.
 pub struct ProbeMaps {
-    /// `6 × probes` layers of `side`² linear radiance.
+    /// `6 × probes` layers of `side`² linear radiance (and a spare, see `new`).
     pub faces: wgpu::Texture,
     /// The array view the lighting pass samples.
     pub(crate) view: wgpu::TextureView,
+    /// One render-target view per face, by layer.
+    pub(crate) face_views: Vec<wgpu::TextureView>,
     pub(crate) sampler: wgpu::Sampler,
     /// `array<ProbeData>`.
     pub(crate) data: wgpu::Buffer,
@@ -85,7 +89,9 @@ impl ProbeMaps {
                 limit_name: "max_texture_dimension_2d",
             });
         }
-        let layers = 6 * count as u32;
+        // One spare layer: wgpu's OpenGL backend takes a square texture whose layers are a
+        // multiple of six for a cube map (array), and then its 2D-array views read nothing.
+        let layers = 6 * count as u32 + 1;
         if layers > limits.max_texture_array_layers {
             return Err(RenderError::TooLarge {
                 what: format!("the {layers} faces of {count} probes"),
@@ -100,14 +106,14 @@ impl ProbeMaps {
             size: wgpu::Extent3d {
                 width: side,
                 height: side,
-                depth_or_array_layers: layers.max(1),
+                depth_or_array_layers: layers,
             },
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: FACE_FORMAT,
             usage: wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_DST
+                | wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });
@@ -135,8 +141,21 @@ impl ProbeMaps {
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             },
         );
+        // One render view per face: the faces' lighting passes draw straight into them.
+        let face_views = (0..layers - 1)
+            .map(|layer| {
+                faces.create_view(&wgpu::TextureViewDescriptor {
+                    label: Some("probes.face"),
+                    dimension: Some(wgpu::TextureViewDimension::D2),
+                    base_array_layer: layer,
+                    array_layer_count: Some(1),
+                    ..Default::default()
+                })
+            })
+            .collect();
         Ok(Self {
             faces,
+            face_views,
             view,
             sampler,
             data,
@@ -198,6 +217,9 @@ mod tests {
         assert!((d - Vec3::new(-2.0, 3.0, 0.0)).length() < 1e-5, "{d}");
         // Without a box the plain reflection.
         let far = Probe::new(Vec3::new(2.0, 1.0, 0.0), Vec3::ZERO);
-        assert_eq!(reflected_direction(&far, Vec3::ZERO, Vec3::Y, Vec3::Y), Vec3::Y);
+        assert_eq!(
+            reflected_direction(&far, Vec3::ZERO, Vec3::Y, Vec3::Y),
+            Vec3::Y
+        );
     }
 }

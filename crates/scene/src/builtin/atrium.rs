@@ -91,11 +91,11 @@ fn materials() -> Vec<Material> {
         shiny(Vec3::new(0.62, 0.57, 0.5), 0.25, 32.0).reflecting(0.12),
         Material::matte(Vec3::new(0.78, 0.72, 0.62)),
         Material::matte(Vec3::new(0.82, 0.77, 0.68)),
-        shiny(Vec3::new(0.55, 0.38, 0.2), 0.6, 48.0).reflecting(0.35),
+        shiny(Vec3::new(0.55, 0.38, 0.2), 0.6, 48.0).reflecting(0.2),
         Material::matte(Vec3::new(0.72, 0.38, 0.25)),
         Material::matte(Vec3::new(0.22, 0.45, 0.18)),
         Material::matte(Vec3::new(0.45, 0.3, 0.18)),
-        shiny(Vec3::new(0.9, 0.89, 0.86), 0.5, 64.0).reflecting(0.25),
+        shiny(Vec3::new(0.9, 0.89, 0.86), 0.5, 64.0).reflecting(0.2),
         Material::matte(Vec3::ONE).with_texture(0).masked(0.5),
     ]
 }
@@ -766,14 +766,15 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
     }
 }
 
-/// The atrium's reflection probes: one in each half of the nave, 1.5 m up beside the
-/// fountain, each standing for its half of the hall (floor to roof, wall to wall).
+/// The atrium's reflection probes: one in the middle of each half of the nave, 3 m up (above
+/// the shrubs, which would fill a lower probe's view of the floor's reflections), each
+/// standing for its half of the hall (floor to roof, wall to wall).
 pub fn atrium_probes() -> Vec<Probe> {
     let (hx, hz) = (0.5 * HALL_LENGTH, 0.5 * HALL_WIDTH);
     [-1.0f32, 1.0]
         .map(|side| {
             let lo = Vec3::new(if side < 0.0 { -hx } else { 0.0 }, 0.0, -hz);
-            Probe::new(Vec3::new(side * 6.0, 1.5, 0.0), Vec3::ZERO)
+            Probe::new(Vec3::new(side * 10.0, 3.0, 0.0), Vec3::ZERO)
                 .with_box(lo, Vec3::new(hx, HALL_HEIGHT, HALL_WIDTH))
         })
         .to_vec()

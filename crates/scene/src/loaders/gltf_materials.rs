@@ -186,6 +186,8 @@ pub(super) fn read_materials(opened: &Opened, notes: &mut Vec<String>) -> Materi
                 roughness,
             }),
             emissive: emissive(&opened.json, i, m.emissive_factor(), &name, notes),
+            // The glTF BRDF derives its reflection from metallic and roughness.
+            reflect: 0.0,
         };
         let json = opened.json.get("materials").and_then(|m| m.get(i));
         let transform_of = |pointer: &str, what: &str, notes: &mut Vec<String>| {
