@@ -120,13 +120,13 @@ pub use gpu::context::{
 };
 pub use gpu::timing::{GpuTimes, Stage};
 pub use gpu_scene::caster_layout::CasterOptions;
-pub use renderer::{FramePart, ProbeStats, Renderer};
+pub use renderer::{FramePart, Renderer};
 pub use report::{
     EstimatedWork, Frame, FrameEstimate, FrameTimings, ShadowLayout, ShadowWork, SubmittedFrame,
 };
 pub use settings::RenderSettings;
 pub use shading::look::{Exposure, Look, ResolvedLook, Shading, ToneMap};
-pub use shading::probes::ProbeMaps;
+pub use shading::probes::{ProbeMaps, ProbeStats};
 pub use shadows::descriptor::{Culling, Need, Requirement, TechniqueInfo};
 pub use shadows::image::ShadowPicture;
 pub use shadows::irregular::maps::{IrregularOptions, IrregularStats};

@@ -6,6 +6,7 @@ use crate::error::Fills;
 use crate::frame::clusters::ClusterStats;
 use crate::frame::visibility_mask::{SoftVisibility, VisibilityMask};
 use crate::gpu::timing::GpuTimes;
+use crate::shading::probes::ProbeStats;
 use crate::shadows::source::ShadowStats;
 use crate::shadows::vsm::plan::VirtualStats;
 
@@ -46,7 +47,7 @@ pub struct Frame {
     /// Virtual shadow map counters (`None` for other techniques).
     pub virtual_maps: Option<VirtualStats>,
     /// Reflection probe counters (`None` for scenes without probes).
-    pub probes: Option<crate::renderer::ProbeStats>,
+    pub probes: Option<ProbeStats>,
 }
 
 /// What [`Renderer::render_to`](crate::Renderer::render_to) reports: the frame is submitted, not read back.

@@ -276,3 +276,145 @@ fn bad_probes_and_unsupported_techniques_are_refused_by_name() {
         "too many probes: {err:?}"
     );
 }
+
+/// A mirror sphere in a room whose six walls glow in six colours, each wall's two halves in
+/// two shades, the probe at the room's centre standing for the room: each of the sphere's
+/// pixels must show the colour of the wall and half its reflected view ray reaches, found on
+/// the CPU from the pixel's G-buffer point and normal by a ray-box crossing. This is
+/// independent of the probe's faces, their order and orientation, and the box projection: a
+/// wrong face, a mirrored face or a plain direction lookup shows another colour.
+#[test]
+fn a_mirror_shows_the_wall_its_reflected_ray_reaches() {
+    use glam::Mat4;
+    use manyshadows::scene::{primitives, Camera, Instance, Material};
+    let ctx = common::context();
+    let h = 4.0f32;
+    let colours = [
+        Vec3::new(0.6, 0.05, 0.05),
+        Vec3::new(0.05, 0.6, 0.05),
+        Vec3::new(0.05, 0.05, 0.6),
+        Vec3::new(0.6, 0.6, 0.05),
+        Vec3::new(0.05, 0.6, 0.6),
+        Vec3::new(0.6, 0.05, 0.6),
+    ];
+    // Wall `w` (+X, −X, +Y, −Y, +Z, −Z), half `b` (1: the half where the next axis is
+    // positive, in a darker shade).
+    let shade = |w: usize, b: usize| colours[w] * if b == 1 { 0.3 } else { 1.0 };
+    let black = Material {
+        ambient: Vec3::ZERO,
+        diffuse: Vec3::ZERO,
+        specular: Vec3::ZERO,
+        ..Material::default()
+    };
+    let mut materials = Vec::new();
+    let mut instances = Vec::new();
+    for w in 0..6 {
+        let (axis, sign) = (w / 2, if w % 2 == 0 { 1.0 } else { -1.0 });
+        let next = (axis + 1) % 3;
+        for b in 0..2 {
+            materials.push(Material {
+                emissive: shade(w, b),
+                ..black
+            });
+            // A thin slab: the wall's half, as a box (no rotation needed).
+            let mut size = Vec3::splat(2.0 * h);
+            size[axis] = 0.02;
+            size[next] = h;
+            let mut at = Vec3::ZERO;
+            at[axis] = sign * (h + 0.01);
+            at[next] = if b == 1 { 0.5 * h } else { -0.5 * h };
+            let t = Mat4::from_translation(at) * Mat4::from_scale(size);
+            instances.push(Instance::caster(0, materials.len() - 1, t));
+        }
+    }
+    materials.push(Material { ..black }.reflecting(1.0));
+    let mirror = materials.len() - 1;
+    let centre = Vec3::new(1.0, -1.0, 0.5);
+    instances.push(Instance::caster(1, mirror, Mat4::from_translation(centre)));
+    let mut camera = Camera::look_at(Vec3::new(-2.5, 1.5, -2.5), centre);
+    camera.fov_y_deg = 40.0;
+    let scene = Scene {
+        name: "mirror room".into(),
+        meshes: vec![
+            primitives::cuboid(Vec3::ONE),
+            primitives::uv_sphere(1.0, 64, 32),
+        ],
+        materials,
+        instances,
+        camera,
+        probes: vec![Probe {
+            resolution: 128,
+            ..Probe::new(Vec3::ZERO, Vec3::splat(2.0 * h))
+        }],
+        ..Default::default()
+    };
+    let (w, hh) = (160u32, 120u32);
+    let mut r =
+        Renderer::new(&ctx, &scene, settings().with_width(w).with_height(hh)).expect("mirror room");
+    let frame = r.render().expect("frame");
+    let g = r.read_gbuffer().expect("G-buffer");
+    let (mut compared, mut wrong) = (0usize, 0usize);
+    let mut halves = [0usize; 2];
+    let mut diff = frame.rgba.clone();
+    for k in 0..(w * hh) as usize {
+        diff[4 * k..4 * k + 3].copy_from_slice(&[0, 0, 0]);
+        if !g.covered[k] || g.material[k] as usize != mirror {
+            continue;
+        }
+        let (p, n) = (g.position[k], g.normal[k]);
+        let v = (scene.camera.position - p).normalize();
+        if n.dot(v) < 0.2 {
+            continue;
+        }
+        let ray = 2.0 * n.dot(v) * n - v;
+        // Where the reflected ray leaves the room.
+        let far = ((Vec3::splat(h) - p) / ray).max((Vec3::splat(-h) - p) / ray);
+        let axis = if far.x <= far.y && far.x <= far.z {
+            0
+        } else if far.y <= far.z {
+            1
+        } else {
+            2
+        };
+        let hit = p + ray * far[axis];
+        let next = (axis + 1) % 3;
+        // Away from the walls' edges and the halves' border (bilinear taps, faces' seams).
+        let off_edge = (0..3).all(|a| a == axis || hit[a].abs() < h - 0.3) && hit[next].abs() > 0.3;
+        // The probe sees that wall point past the sphere (a probe sees the room from its
+        // centre: where the sphere stands between them it sees the sphere, unlit, instead).
+        let d = hit.normalize();
+        let along = centre.dot(d);
+        let past = along < 0.0 || (centre - d * along).length() > 1.1;
+        if !off_edge || !past {
+            continue;
+        }
+        let wall = 2 * axis + usize::from(ray[axis] < 0.0);
+        let half = usize::from(hit[next] > 0.0);
+        let want: Vec<u8> = (0..3).map(|c| display(shade(wall, half)[c])).collect();
+        let got = &frame.rgba[4 * k..4 * k + 3];
+        compared += 1;
+        halves[half] += 1;
+        if got.iter().zip(&want).any(|(a, b)| a.abs_diff(*b) > 3) {
+            wrong += 1;
+            diff[4 * k..4 * k + 3].copy_from_slice(&[255, 0, 0]);
+        } else {
+            diff[4 * k..4 * k + 3].copy_from_slice(&[128, 128, 128]);
+        }
+    }
+    eprintln!(
+        "mirror: {wrong} of {compared} compared pixels show another colour ({halves:?} per half)"
+    );
+    if wrong * 100 > compared || std::env::var("SAVE").is_ok() {
+        save("probe-mirror.png", &frame.rgba, w, hh);
+        save("probe-mirror-diff.png", &diff, w, hh);
+    }
+    assert!(
+        compared > 1000 && halves.iter().all(|&n| n > 200),
+        "too few mirror pixels compared ({compared}, {halves:?} per half)"
+    );
+    assert!(
+        wrong * 100 <= compared,
+        "{wrong} of {compared} mirror pixels show another wall's colour (images in \
+         target/test-artifacts)"
+    );
+}

@@ -398,6 +398,24 @@ impl GpuContext {
         self.device.features().contains(f)
     }
 
+    /// Views one multiview pass renders on this device: the device's limit, at most
+    /// [`MAX_MULTIVIEW_VIEWS`], one where the driver loses clipped primitives' view index
+    /// ([`clips_into_layer_zero`]); 0 without multiview.
+    pub fn multiview_views_per_pass(&self) -> u32 {
+        if !self.has(wgpu::Features::MULTIVIEW) {
+            return 0;
+        }
+        let limit = self
+            .limits()
+            .max_multiview_view_count
+            .min(MAX_MULTIVIEW_VIEWS);
+        if clips_into_layer_zero(&self.info) {
+            limit.min(1)
+        } else {
+            limit
+        }
+    }
+
     /// The device's limits.
     pub fn limits(&self) -> wgpu::Limits {
         self.device.limits()
@@ -515,3 +533,27 @@ impl RenderError {
         }
     }
 }
+
+/// True for drivers whose multiview loses the view index of primitives that go through the
+/// clipper (they all land in layer 0): Mesa's lavapipe before 25 (22.3.6: a point light's
+/// cube faces, whose floor crosses the frustum, came out as the union of all six faces in
+/// layer 0, while groups whose triangles needed no clipping were exact). Mesa 25.0.7's
+/// lavapipe routes them right (`tests/equivalence.rs` renders six views per pass there).
+/// A lavapipe whose Mesa version cannot be read counts as affected.
+pub fn clips_into_layer_zero(info: &wgpu::AdapterInfo) -> bool {
+    info.backend == wgpu::Backend::Vulkan
+        && info.name.to_lowercase().contains("llvmpipe")
+        && mesa_major(&info.driver_info).is_none_or(|major| major < 25)
+}
+
+/// The major version of a Mesa driver's description ("Mesa 25.0.7-2~bpo12+1" → 25).
+pub(crate) fn mesa_major(driver_info: &str) -> Option<u32> {
+    let rest = &driver_info[driver_info.find("Mesa ")? + 5..];
+    rest.split('.').next()?.trim().parse().ok()
+}
+
+/// Most views of one pass. wgpu 30 takes a pipeline's view mask as "views 0..n" only when
+/// `mask + 1` is a power of two, which wraps to 0 for all 32 views and then asks for
+/// `SELECTIVE_MULTIVIEW` (an NVIDIA driver that offers 32 views failed so): 31 is the most
+/// views a mask of the plain `MULTIVIEW` feature can name.
+pub const MAX_MULTIVIEW_VIEWS: u32 = 31;

@@ -21,5 +21,4 @@ mod probes;
 mod state;
 mod uniforms;
 
-pub use probes::ProbeStats;
 pub use state::{FramePart, Renderer};

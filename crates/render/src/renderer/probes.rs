@@ -29,27 +29,13 @@ use crate::gpu::types::FrameUniforms;
 use crate::gpu_scene::instances::GpuScene;
 use crate::shading::lighting::{LightingInputs, LightingPass};
 use crate::shading::look::ShadingConsts;
-use crate::shading::probes::ProbeMaps;
+use crate::shading::probes::{ProbeMaps, ProbeStats};
 use crate::shadows::source::ShadowSource;
 
 /// Byte stride of the staging buffer's per-face uniforms: `FrameUniforms` rounded up to 256
 /// (the copy offset alignment is 4; 256 keeps each block aligned as a dynamic uniform offset
 /// would want).
 const STRIDE: u64 = (std::mem::size_of::<FrameUniforms>() as u64).next_multiple_of(256);
-
-/// What drawing the probes did in a frame.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
-#[non_exhaustive]
-pub struct ProbeStats {
-    /// Probes in the scene.
-    pub probes: u32,
-    /// Texels per face side.
-    pub side: u32,
-    /// Faces drawn this frame (0 when every face was kept).
-    pub faces_drawn: u32,
-    /// Bytes of the faces (linear radiance, `Rgba16Float`).
-    pub bytes: u64,
-}
 
 /// The probes' faces and the passes that draw them.
 pub(crate) struct ProbeFrame {

@@ -295,18 +295,18 @@ impl Renderer {
     /// What `ctx`'s device lacks to draw a stereo frame's eyes `passes`' way, and what for
     /// (`None`: nothing). Multiview needs two views in one pass: the `MULTIVIEW` feature with a
     /// view count of at least 2 (OpenGL's llvmpipe offers the feature with none; lavapipe
-    /// before Mesa 25 one, see `multiview::views_per_pass_on`).
+    /// before Mesa 25 one: `GpuContext::multiview_views_per_pass`).
     pub fn stereo_unmet(ctx: &GpuContext, passes: EyePasses) -> Option<String> {
         let (feature, why) = passes.needs()?;
         let met = match passes {
-            EyePasses::Multiview => crate::shadows::atlas::multiview::views_per_pass_on(ctx) >= 2,
+            EyePasses::Multiview => ctx.multiview_views_per_pass() >= 2,
             _ => ctx.has(feature),
         };
         (!met).then(|| {
             if passes == EyePasses::Multiview {
                 format!(
                     "{feature:?} with two views per pass ({why}; this device: {})",
-                    crate::shadows::atlas::multiview::views_per_pass_on(ctx)
+                    ctx.multiview_views_per_pass()
                 )
             } else {
                 format!("{feature:?} ({why})")

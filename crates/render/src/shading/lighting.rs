@@ -218,7 +218,7 @@ impl LightingPass {
                 ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
                 count: None,
             });
-            entries.push(crate::gpu::pipelines::storage_entry(46, frag));
+            entries.push(crate::gpu::pipelines::uniform_entry(46, frag));
         }
         let layout = crate::gpu::pipelines::bind_group_layout(device, "lighting.layout", &entries);
         let linear = device.create_sampler(&wgpu::SamplerDescriptor {

@@ -21,7 +21,8 @@ use crate::gpu::context::GpuContext;
 /// Format of the faces: linear radiance, before exposure and tone map.
 pub const FACE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
-/// The probes' WGSL (bindings 44–46 of the lighting pass).
+/// The probes' WGSL (bindings 44–46 of the lighting pass; 46 a uniform of at most
+/// `Probe::MAX_COUNT` records, which `probes.wgsl` spells as 64).
 pub(crate) const PROBES_WGSL: &str = include_str!("probes.wgsl");
 
 /// `ProbeData` of `probes.wgsl`.
@@ -51,6 +52,20 @@ impl ProbeData {
     }
 }
 
+/// What drawing the probes did in a frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[non_exhaustive]
+pub struct ProbeStats {
+    /// Probes in the scene.
+    pub probes: u32,
+    /// Texels per face side.
+    pub side: u32,
+    /// Faces drawn this frame (0 when every face was kept).
+    pub faces_drawn: u32,
+    /// Bytes of the faces (linear radiance, `Rgba16Float`).
+    pub bytes: u64,
+}
+
 /// The probes' faces and records, as the lighting pass binds them.
 pub struct ProbeMaps {
     /// `6 × probes` layers of `side`² linear radiance (and a spare, see `new`).
@@ -60,7 +75,7 @@ pub struct ProbeMaps {
     /// One render-target view per face, by layer.
     pub(crate) face_views: Vec<wgpu::TextureView>,
     pub(crate) sampler: wgpu::Sampler,
-    /// `array<ProbeData>`.
+    /// `ProbeList` (uniform).
     pub(crate) data: wgpu::Buffer,
     /// Texels per face side (the largest any probe asks for; every probe gets it).
     pub side: u32,
@@ -127,18 +142,20 @@ impl ProbeMaps {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        let records: Vec<ProbeData> = scene
-            .probes
-            .iter()
-            .enumerate()
-            .map(|(k, p)| ProbeData::new(k, p))
-            .collect();
+        // `ProbeList`: the count (a vec4<u32>), then `Probe::MAX_COUNT` records (the scene
+        // has at most that many: `Scene::validate`).
+        let mut records = vec![ProbeData::default(); Probe::MAX_COUNT];
+        for (k, p) in scene.probes.iter().take(Probe::MAX_COUNT).enumerate() {
+            records[k] = ProbeData::new(k, p);
+        }
+        let mut bytes = bytemuck::cast_slice::<u32, u8>(&[count as u32, 0, 0, 0]).to_vec();
+        bytes.extend_from_slice(bytemuck::cast_slice(&records));
         let data = wgpu::util::DeviceExt::create_buffer_init(
             &ctx.device,
             &wgpu::util::BufferInitDescriptor {
                 label: Some("probes.data"),
-                contents: bytemuck::cast_slice(&records),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                contents: &bytes,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             },
         );
         // One render view per face: the faces' lighting passes draw straight into them.
@@ -204,6 +221,12 @@ mod tests {
         use crate::gpu::types::layout::same_layout;
         let src = crate::gpu::shaders::compose(&[PROBES_WGSL]);
         same_layout!(in src, ProbeData, position, box_lo, box_hi);
+        // The uniform holds every probe a scene may have.
+        let list = format!("items: array<ProbeData, {}>", Probe::MAX_COUNT);
+        assert!(
+            PROBES_WGSL.contains(&list),
+            "probes.wgsl must declare {list}"
+        );
     }
 
     /// A ray from the middle of a box's floor straight up reaches the ceiling above it: the

@@ -11,9 +11,17 @@ struct ProbeData {
     box_hi: vec4<f32>,
 }
 
+// A uniform, not storage: WebGPU allows 8 storage buffers per stage, and the lighting pass
+// with a shadow source's own buffers is near that.
+struct ProbeList {
+    // x: probes.
+    count: vec4<u32>,
+    items: array<ProbeData, 64>,
+}
+
 @group(0) @binding(44) var probe_faces: texture_2d_array<f32>;
 @group(0) @binding(45) var probe_sampler: sampler;
-@group(0) @binding(46) var<storage, read> probes: array<ProbeData>;
+@group(0) @binding(46) var<uniform> probes: ProbeList;
 
 // The face cameras' forward and up directions, as `Probe::face_cameras` sets them.
 fn probe_face_axes(face: u32) -> array<vec3<f32>, 2> {
@@ -45,7 +53,7 @@ fn probe_radiance(k: u32, d: vec3<f32>) -> vec3<f32> {
     let z = dot(d, f);
     let ndc = vec2<f32>(dot(d, r), dot(d, u)) / z;
     let uv = vec2<f32>(0.5 + 0.5 * ndc.x, 0.5 - 0.5 * ndc.y);
-    let layer = u32(probes[k].position.w) + face;
+    let layer = u32(probes.items[k].position.w) + face;
     return textureSampleLevel(probe_faces, probe_sampler, uv, layer, 0.0).rgb;
 }
 
@@ -53,9 +61,9 @@ fn probe_radiance(k: u32, d: vec3<f32>) -> vec3<f32> {
 fn nearest_probe(p: vec3<f32>) -> u32 {
     var best = 0u;
     var best_d = 3.4e38;
-    let n = arrayLength(&probes);
+    let n = probes.count.x;
     for (var k = 0u; k < n; k = k + 1u) {
-        let v = probes[k].position.xyz - p;
+        let v = probes.items[k].position.xyz - p;
         let d = dot(v, v);
         if (d < best_d) {
             best_d = d;
@@ -70,7 +78,7 @@ fn nearest_probe(p: vec3<f32>) -> u32 {
 // up towards that point (parallax correction); else the direction alone.
 fn probe_reflected(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
     let k = nearest_probe(p);
-    let pr = probes[k];
+    let pr = probes.items[k];
     let r = reflect(-v, n);
     var dir = r;
     if (pr.box_lo.w > 0.5) {
