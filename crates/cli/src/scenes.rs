@@ -49,17 +49,6 @@ pub(crate) fn load_scene(args: &RenderArgs) -> Result<Scene> {
         for p in &mut scene.probes {
             p.resolution = args.probe_resolution;
         }
-        // The scene's own probes give way, with a note, where the technique cannot draw them
-        // (asked for with --probes, the renderer refuses by name).
-        if args.technique.info().fills == manyshadows::Fills::Mask && !scene.probes.is_empty() {
-            eprintln!(
-                "note: technique {} draws no reflection probes (its shadows are a mask of the \
-                 camera's pixels): the scene's {} probes are left out",
-                args.technique,
-                scene.probes.len()
-            );
-            scene.probes.clear();
-        }
     }
     if args.subdivide > 0 {
         scene.subdivide(args.subdivide)?;

@@ -9,7 +9,7 @@ use glam::Vec3;
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::scene::texture::linear_to_srgb;
 use manyshadows::scene::{Probe, Scene};
-use manyshadows::{Exposure, Look, RenderError, RenderSettings, Renderer, Technique, ToneMap};
+use manyshadows::{Exposure, Look, RenderSettings, Renderer, Technique, ToneMap};
 
 const SIDE: u32 = 64;
 
@@ -217,7 +217,7 @@ fn reflective_materials_and_only_they_mirror_the_probe() {
 }
 
 #[test]
-fn bad_probes_and_unsupported_techniques_are_refused_by_name() {
+fn bad_probes_are_refused_by_name_and_a_mask_technique_leaves_them_out() {
     let ctx = common::context();
     let mut scene = atrium(LightMix::Spot);
     let refused = |scene: &Scene, technique: Technique| {
@@ -231,10 +231,17 @@ fn bad_probes_and_unsupported_techniques_are_refused_by_name() {
         )
         .err()
     };
-    match refused(&scene, Technique::IRREGULAR) {
-        Some(RenderError::NotImplemented { .. }) => {}
-        other => panic!("irregular with probes: {other:?}"),
-    }
+    // Irregular maps' mask holds the camera's pixels only: the probes are left out (warned).
+    let mut r = Renderer::new(
+        &ctx,
+        &scene,
+        settings()
+            .with_technique(Technique::IRREGULAR)
+            .with_width(32)
+            .with_height(18),
+    )
+    .expect("irregular leaves the probes out");
+    assert_eq!(r.render().expect("frame").probes, None);
     let good = scene.probes[0];
     for bad in [
         Probe {

@@ -218,14 +218,16 @@ impl Renderer {
             let look_consts = settings.look.resolve(scene).consts();
             let mut probes = if scene.probes.is_empty() {
                 None
+            } else if info.fills == crate::error::Fills::Mask {
+                // A mask holds the camera's pixels only: nothing to light a probe's faces with.
+                log::warn!(
+                    "technique {} draws no reflection probes (its shadows are a mask of the \
+                     camera's pixels): the scene's {} probes are left out",
+                    info.technique,
+                    scene.probes.len()
+                );
+                None
             } else {
-                if info.fills == crate::error::Fills::Mask {
-                    return Err(RenderError::NotImplemented {
-                        what: "reflection probes with a technique whose shadows are a mask of \
-                               the camera's pixels",
-                        instead: "use a technique with shadow maps or rays, or no probes",
-                    });
-                }
                 Some(ProbeFrame::new(
                     ctx,
                     scene,
