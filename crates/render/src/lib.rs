@@ -126,7 +126,7 @@ pub use report::{
 };
 pub use settings::RenderSettings;
 pub use shading::look::{Exposure, Look, ResolvedLook, Shading, ToneMap};
-pub use shading::probes::{ProbeMaps, ProbeStats};
+pub use shading::probes::{ProbeMaps, ProbePasses, ProbeStats};
 pub use shadows::descriptor::{Culling, Need, Requirement, TechniqueInfo};
 pub use shadows::image::ShadowPicture;
 pub use shadows::irregular::maps::{IrregularOptions, IrregularStats};

@@ -11,6 +11,7 @@ use crate::error::{RenderError, Technique};
 use crate::frame::clusters::{ClusterOptions, LightLoop};
 use crate::frame::eyes::Stereo;
 use crate::shading::look::Look;
+use crate::shading::probes::ProbePasses;
 use crate::shadows::irregular::maps::IrregularOptions;
 use crate::shadows::options::{Pcf, ShadowBias, ShadowOptions, SoftShadows};
 use crate::shadows::raytraced::accel::RayOptions;
@@ -72,6 +73,8 @@ pub struct RenderSettings {
     pub look: Look,
     /// Two eyes side by side (`None`: one camera): [`crate::frame::eyes`].
     pub stereo: Option<Stereo>,
+    /// How reflection probes' face G-buffers are drawn (scenes with probes).
+    pub probe_passes: ProbePasses,
 }
 
 impl Default for RenderSettings {
@@ -98,6 +101,7 @@ impl Default for RenderSettings {
             clusters: ClusterOptions::default(),
             look: Look::default(),
             stereo: None,
+            probe_passes: ProbePasses::default(),
         }
     }
 }
@@ -208,6 +212,7 @@ with_setters!(RenderSettings {
     with_light_loop: light_loop: LightLoop,
     with_clusters: clusters: ClusterOptions,
     with_stereo: stereo: Option<Stereo>,
+    with_probe_passes: probe_passes: ProbePasses,
 });
 
 impl RenderSettings {

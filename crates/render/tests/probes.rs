@@ -425,3 +425,60 @@ fn a_mirror_shows_the_wall_its_reflected_ray_reaches() {
          target/test-artifacts)"
     );
 }
+
+/// The probes' faces drawn in one layered pass (each instance once per face, into its tile of
+/// an atlas G-buffer) against one pass per face: the same texels but where a triangle's edge
+/// or a shadow's edge tips (the tile offset changes the rasterizer's rounding), a measured
+/// handful, bounded here.
+#[test]
+fn faces_drawn_layered_match_faces_drawn_one_pass_each() {
+    let ctx = common::context();
+    let mut scene = atrium(LightMix::Spot);
+    scene.probes.push(Probe {
+        resolution: SIDE,
+        ..Probe::new(Vec3::new(-8.0, 3.0, 0.0), Vec3::new(20.0, 12.0, 16.0))
+    });
+    let faces = |passes: manyshadows::ProbePasses| {
+        let settings = settings()
+            .with_width(64)
+            .with_height(36)
+            .with_probe_passes(passes);
+        let mut r = Renderer::new(&ctx, &scene, settings);
+        if passes == manyshadows::ProbePasses::Layered
+            && !ctx.has(manyshadows::wgpu::Features::CLIP_DISTANCES)
+        {
+            assert!(matches!(r, Err(manyshadows::RenderError::MissingFeature { .. })));
+            return None;
+        }
+        let r = r.as_mut().expect("renderer");
+        assert_eq!(r.render().expect("frame").probes.unwrap().faces_drawn, 12);
+        Some(
+            (0..2)
+                .flat_map(|k| (0..6).map(move |f| (k, f)))
+                .map(|(k, f)| r.read_probe_face(k, f).expect("face"))
+                .collect::<Vec<_>>(),
+        )
+    };
+    let one = faces(manyshadows::ProbePasses::PerFace).expect("per face");
+    let Some(layered) = faces(manyshadows::ProbePasses::Layered) else {
+        return;
+    };
+    let (mut texels, mut differ) = (0usize, 0usize);
+    for (a, b) in one.iter().zip(&layered) {
+        for (x, y) in a.iter().zip(b) {
+            texels += 1;
+            let off = (0..3).any(|c| display(x[c]).abs_diff(display(y[c])) > 2);
+            differ += usize::from(off);
+        }
+    }
+    let share = differ as f64 / texels as f64;
+    eprintln!(
+        "layered faces: {differ} of {texels} texels differ by more than 2 levels ({:.3} %)",
+        100.0 * share
+    );
+    assert!(
+        share <= 0.005,
+        "layered faces differ from per-face ones in {:.2} % of texels",
+        100.0 * share
+    );
+}

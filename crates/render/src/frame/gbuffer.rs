@@ -42,11 +42,30 @@ pub struct GBuffer {
     bind_group: wgpu::BindGroup,
     /// With stereo: how the eyes are drawn.
     stereo: Option<EyePasses>,
+    /// With square views in tiles: how many (drawn layered).
+    faces: Option<u32>,
     /// With stereo drawn multiview: two-layer targets (position, normal, depth, emission),
     /// one layer per eye, copied into the halves after the pass.
     multiview: Option<MultiviewTargets>,
     /// Width and height of the whole image.
     size: (u32, u32),
+}
+
+/// Which views a G-buffer holds and how they are drawn.
+#[derive(Clone, Copy)]
+pub enum GBufferViews<'a> {
+    /// One camera (`FrameUniforms::eye_view_proj[0]`).
+    Mono,
+    /// Two eyes side by side, drawn that way (its feature is checked by `Renderer::new`).
+    Stereo(EyePasses),
+    /// Square views in tiles, all drawn in one layered pass (needs `CLIP_DISTANCES`):
+    /// `views` holds `FaceView`s (`gbuffer_faces.wgsl`), one per view.
+    Faces {
+        /// The views, `array<FaceView>`.
+        views: &'a wgpu::Buffer,
+        /// How many.
+        count: u32,
+    },
 }
 
 /// The two-layer targets of a multiview stereo pass, and their render views.
@@ -94,22 +113,26 @@ fn array_texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
 }
 
 impl GBuffer {
-    /// Creates `w`×`h` targets; `frame` is the frame-uniform buffer; `stereo`: two eyes side by
-    /// side, drawn that way (its feature is checked by the caller: `Renderer::new`).
+    /// Creates `w`×`h` targets holding `views`; `frame` is the frame-uniform buffer.
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
         frame: &wgpu::Buffer,
         (w, h): (u32, u32),
-        stereo: Option<EyePasses>,
+        views_drawn: GBufferViews<'_>,
     ) -> Self {
         use wgpu::TextureUsages as U;
-        let multiview = stereo == Some(EyePasses::Multiview);
-        let color_usage = if multiview {
-            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC | U::COPY_DST
-        } else {
-            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC
+        let stereo = match views_drawn {
+            GBufferViews::Stereo(p) => Some(p),
+            _ => None,
         };
+        let (faces, face_buffer) = match views_drawn {
+            GBufferViews::Faces { views, count } => (Some(count), Some(views)),
+            _ => (None, None),
+        };
+        let multiview = stereo == Some(EyePasses::Multiview);
+        // Copy targets too: a multiview pass's layers, a probe face's tile, are copied in.
+        let color_usage = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC | U::COPY_DST;
         let position = target(ctx, "gbuffer.position", w, h, POSITION_FORMAT, color_usage);
         let normal = target(ctx, "gbuffer.normal", w, h, NORMAL_FORMAT, color_usage);
         let bytes_needed = [POSITION_FORMAT, NORMAL_FORMAT, EMISSION_FORMAT]
@@ -146,7 +169,9 @@ impl GBuffer {
         );
         let device = &ctx.device;
         let layered = stereo == Some(EyePasses::Layered);
-        let module = if layered {
+        let module = if faces.is_some() {
+            crate::gpu::shaders::module(device, "gbuffer.faces.shader", &faces_shader())
+        } else if layered {
             crate::gpu::shaders::module(device, "gbuffer.layered.shader", &layered_shader())
         } else if multiview {
             crate::gpu::shaders::module(device, "gbuffer.multiview.shader", &multiview_shader())
@@ -168,7 +193,12 @@ impl GBuffer {
                     ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
                     count: None,
                 },
-            ],
+            ]
+            .into_iter()
+            .chain(face_buffer.map(|_| {
+                crate::gpu::pipelines::storage_entry(6, wgpu::ShaderStages::VERTEX_FRAGMENT)
+            }))
+            .collect::<Vec<_>>(),
         );
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("gbuffer.bind_group"),
@@ -198,7 +228,13 @@ impl GBuffer {
                     binding: 5,
                     resource: wgpu::BindingResource::Sampler(&scene.textures.sampler),
                 },
-            ],
+            ]
+            .into_iter()
+            .chain(face_buffer.map(|b| wgpu::BindGroupEntry {
+                binding: 6,
+                resource: b.as_entire_binding(),
+            }))
+            .collect::<Vec<_>>(),
         });
         let pipeline_layout =
             crate::gpu::pipelines::pipeline_layout(device, "gbuffer.pipeline_layout", &[&layout]);
@@ -219,7 +255,9 @@ impl GBuffer {
                 layout: Some(&pipeline_layout),
                 vertex: wgpu::VertexState {
                     module: &module,
-                    entry_point: Some(if layered {
+                    entry_point: Some(if faces.is_some() {
+                        "vs_faces"
+                    } else if layered {
                         "vs_layered"
                     } else if multiview {
                         "vs_multiview"
@@ -336,6 +374,7 @@ impl GBuffer {
             pipelines,
             bind_group,
             stereo,
+            faces,
             multiview,
             size: (w, h),
         }
@@ -345,6 +384,32 @@ impl GBuffer {
     /// fewer at most; the shadow passes are where culling pays). Stereo: one pass per eye, or
     /// one pass drawing both (`EyePasses`).
     pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        timer: &GpuTimer,
+        span: Option<Span>,
+    ) {
+        if let Some(n) = self.faces {
+            self.record_pass(encoder, scene, (timer, span, true, true), None, (n, 0..n));
+            return;
+        }
+        self.record_views(encoder, scene, timer, span);
+    }
+
+    /// Square views in tiles (`GBufferViews::Faces`) in their one pass, which begins the span
+    /// (passes recorded after it end it).
+    pub(crate) fn record_faces_begin(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        (timer, span): (&GpuTimer, Option<Span>),
+    ) {
+        let n = self.faces.unwrap_or(1);
+        self.record_pass(encoder, scene, (timer, span, true, false), None, (n, 0..n));
+    }
+
+    fn record_views(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         scene: &GpuScene,
@@ -546,9 +611,27 @@ impl GBuffer {
     }
 }
 
+/// Where the G-buffer's views are seen from, for one camera or two eyes.
+const EYES_OF_FRAME: &str = "fn eye_position(e: u32) -> vec3<f32> { return frame.eye_pos[e].xyz; }";
+
 /// The G-buffer pass's WGSL.
 pub fn shader() -> String {
-    crate::gpu::shaders::compose(&[crate::gpu::shaders::COMMON, include_str!("gbuffer.wgsl")])
+    crate::gpu::shaders::compose(&[
+        crate::gpu::shaders::COMMON,
+        include_str!("gbuffer.wgsl"),
+        EYES_OF_FRAME,
+    ])
+}
+
+/// The same with `vs_faces`: square views in tiles in one layered pass (needs
+/// `CLIP_DISTANCES`).
+pub fn faces_shader() -> String {
+    crate::gpu::shaders::compose(&[
+        "enable clip_distances;",
+        crate::gpu::shaders::COMMON,
+        include_str!("gbuffer.wgsl"),
+        include_str!("gbuffer_faces.wgsl"),
+    ])
 }
 
 /// The same with `vs_multiview`: both eyes of a stereo frame in one multiview pass (needs
@@ -558,6 +641,7 @@ pub fn multiview_shader() -> String {
         crate::gpu::shaders::COMMON,
         include_str!("gbuffer.wgsl"),
         include_str!("gbuffer_multiview.wgsl"),
+        EYES_OF_FRAME,
     ])
 }
 
@@ -569,6 +653,7 @@ pub fn layered_shader() -> String {
         crate::gpu::shaders::COMMON,
         include_str!("gbuffer.wgsl"),
         include_str!("gbuffer_layered.wgsl"),
+        EYES_OF_FRAME,
     ])
 }
 
@@ -581,6 +666,17 @@ mod shader_tests {
             "gbuffer",
             &super::shader(),
             wgpu::Features::empty(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+    }
+
+    /// The faces variant (probes drawn layered), with the feature it enables.
+    #[test]
+    fn faces_shader_validates_for_webgpu() {
+        crate::gpu::shaders::validate_for_webgpu(
+            "gbuffer faces",
+            &super::faces_shader(),
+            wgpu::Features::CLIP_DISTANCES,
         )
         .unwrap_or_else(|e| panic!("{e}"));
     }

@@ -181,7 +181,7 @@ fn surface(in: VsOut, front: bool, mat: MaterialData, base: vec4<f32>, d: Derivs
     // from its winding: scanned meshes have triangles wound against their neighbours whose
     // vertex normals still point outwards, and flipping those by winding shaded them as seen
     // from inside (black speckles). Winding decides only where the plane is degenerate.
-    let to_eye = frame.eye_pos[in.eye].xyz - in.world;
+    let to_eye = eye_position(in.eye) - in.world;
     var ng = cross(d.p_dx, d.p_dy);
     var facing = select(-1.0, 1.0, front);
     let ng_len = length(ng);

@@ -22,20 +22,31 @@ use manyshadows_scene::Scene;
 
 use crate::error::RenderError;
 use crate::frame::clusters::LightClusters;
-use crate::frame::gbuffer::GBuffer;
+use crate::frame::gbuffer::{GBuffer, GBufferViews};
 use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu::types::FrameUniforms;
 use crate::gpu_scene::instances::GpuScene;
 use crate::shading::lighting::{LightingInputs, LightingPass};
 use crate::shading::look::ShadingConsts;
-use crate::shading::probes::{ProbeMaps, ProbeStats};
+use crate::shading::probes::{FaceView, ProbeMaps, ProbePasses, ProbeStats};
 use crate::shadows::source::ShadowSource;
 
 /// Byte stride of the staging buffer's per-face uniforms: `FrameUniforms` rounded up to 256
 /// (the copy offset alignment is 4; 256 keeps each block aligned as a dynamic uniform offset
 /// would want).
 const STRIDE: u64 = (std::mem::size_of::<FrameUniforms>() as u64).next_multiple_of(256);
+
+/// The faces' G-buffers drawn in one layered pass ([`ProbePasses::Layered`]).
+struct LayeredFaces {
+    /// `FrameUniforms` of the atlas (its viewport is the atlas's size).
+    uniforms: wgpu::Buffer,
+    /// `array<FaceView>`.
+    views: wgpu::Buffer,
+    atlas: GBuffer,
+    /// Tiles per row.
+    cols: u32,
+}
 
 /// The probes' faces and the passes that draw them.
 pub(crate) struct ProbeFrame {
@@ -48,6 +59,8 @@ pub(crate) struct ProbeFrame {
     gbuffer: GBuffer,
     clusters: LightClusters,
     lighting: LightingPass,
+    /// Drawn layered: every face's G-buffer in one pass into its tile of this atlas.
+    layered: Option<LayeredFaces>,
     /// The faces must be drawn in the next frame.
     pub(crate) dirty: bool,
     /// Faces drawn by the last frame.
@@ -64,8 +77,13 @@ impl ProbeFrame {
         lights: &wgpu::Buffer,
         source: &dyn ShadowSource,
         consts: ShadingConsts,
+        passes: ProbePasses,
     ) -> Result<Self, RenderError> {
         let maps = ProbeMaps::new(ctx, scene)?;
+        let layered = match passes {
+            ProbePasses::PerFace => None,
+            ProbePasses::Layered => Some(LayeredFaces::new(ctx, gpu_scene, &maps)?),
+        };
         let side = maps.side;
         let device = &ctx.device;
         let size = std::mem::size_of::<FrameUniforms>() as u64;
@@ -81,7 +99,7 @@ impl ProbeFrame {
             usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let gbuffer = GBuffer::new(ctx, gpu_scene, &uniforms, (side, side), None);
+        let gbuffer = GBuffer::new(ctx, gpu_scene, &uniforms, (side, side), GBufferViews::Mono);
         // No clusters (their uniforms stay zero: every light); the lighting pass binds their
         // buffers all the same.
         let clusters = LightClusters::new(
@@ -113,6 +131,7 @@ impl ProbeFrame {
             gbuffer,
             clusters,
             lighting,
+            layered,
             dirty: true,
             faces_drawn: 0,
         })
@@ -186,6 +205,9 @@ impl ProbeFrame {
             }
         }
         ctx.queue.write_buffer(&self.staging, 0, &bytes);
+        if let Some(l) = &self.layered {
+            l.update(ctx, scene, frame, side);
+        }
         self.dirty |= redraw;
         Ok(())
     }
@@ -204,6 +226,10 @@ impl ProbeFrame {
         }
         let faces = 6 * self.maps.count;
         let size = std::mem::size_of::<FrameUniforms>() as u64;
+        if let Some(l) = &self.layered {
+            l.atlas
+                .record_faces_begin(encoder, gpu_scene, (timer, span));
+        }
         for face in 0..faces {
             encoder.copy_buffer_to_buffer(
                 &self.staging,
@@ -214,8 +240,14 @@ impl ProbeFrame {
             );
             let first = face == 0;
             let last = face + 1 == faces;
-            self.gbuffer
-                .record_timed(encoder, gpu_scene, (timer, span), (first, false));
+            match &self.layered {
+                None => {
+                    let writes = (first, false);
+                    self.gbuffer
+                        .record_timed(encoder, gpu_scene, (timer, span), writes);
+                }
+                Some(l) => l.copy_tile(encoder, face as u32, &self.gbuffer, self.maps.side),
+            }
             let target = &self.maps.face_views[face];
             self.lighting
                 .record_into(encoder, target, (timer, span), (false, last));
@@ -231,6 +263,122 @@ impl ProbeFrame {
             side: self.maps.side,
             faces_drawn: self.faces_drawn,
             bytes: self.maps.bytes(),
+        }
+    }
+}
+
+impl LayeredFaces {
+    /// The atlas of `maps`' faces (a grid of tiles as square as it goes) and its pass; needs
+    /// `CLIP_DISTANCES`, and an atlas within the device's largest texture.
+    fn new(ctx: &GpuContext, gpu_scene: &GpuScene, maps: &ProbeMaps) -> Result<Self, RenderError> {
+        if !ctx.has(wgpu::Features::CLIP_DISTANCES) {
+            return Err(RenderError::missing_feature(
+                ctx,
+                "probe faces drawn layered",
+                "CLIP_DISTANCES (to keep each face's copy of a triangle in its tile)",
+                "draw the probes' faces one pass per face",
+            ));
+        }
+        let faces = 6 * maps.count as u32;
+        let cols = (faces as f64).sqrt().ceil() as u32;
+        let rows = faces.div_ceil(cols);
+        let (w, h) = (cols * maps.side, rows * maps.side);
+        let max = ctx.limits().max_texture_dimension_2d;
+        if w.max(h) > max {
+            return Err(RenderError::TooLarge {
+                what: format!(
+                    "an atlas of {faces} probe faces of {}² ({w}x{h}) to draw them layered",
+                    maps.side
+                ),
+                needed: u64::from(w.max(h)),
+                limit: u64::from(max),
+                unit: "texels per side",
+                limit_name: "max_texture_dimension_2d",
+            });
+        }
+        let device = &ctx.device;
+        let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("probes.atlas_uniforms"),
+            size: std::mem::size_of::<FrameUniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let views = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("probes.face_views"),
+            size: u64::from(faces) * std::mem::size_of::<FaceView>() as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let atlas = GBuffer::new(
+            ctx,
+            gpu_scene,
+            &uniforms,
+            (w, h),
+            GBufferViews::Faces {
+                views: &views,
+                count: faces,
+            },
+        );
+        Ok(Self {
+            uniforms,
+            views,
+            atlas,
+            cols,
+        })
+    }
+
+    /// The faces' views and tiles, and the atlas's uniforms (the frame's, its viewport the
+    /// atlas).
+    fn update(&self, ctx: &GpuContext, scene: &Scene, frame: &FrameUniforms, side: u32) {
+        let mut views = Vec::new();
+        for probe in &scene.probes {
+            for cam in probe.face_cameras(scene.camera.near, scene.camera.far) {
+                let f = views.len() as u32;
+                let (x, y) = ((f % self.cols) * side, (f / self.cols) * side);
+                views.push(FaceView {
+                    view_proj: (cam.projection(1.0) * cam.view()).to_cols_array_2d(),
+                    eye: cam.position.extend(1.0).to_array(),
+                    tile: [x as f32, y as f32, side as f32, 0.0],
+                });
+            }
+        }
+        ctx.queue
+            .write_buffer(&self.views, 0, bytemuck::cast_slice(&views));
+        let (w, h) = (self.atlas.position.width(), self.atlas.position.height());
+        let (w, h) = (w as f32, h as f32);
+        let u = FrameUniforms {
+            viewport: [w, h, 1.0 / w, 1.0 / h],
+            ..*frame
+        };
+        ctx.queue
+            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
+    }
+
+    /// Copies face `face`'s tile of the atlas into `into`, the face G-buffer its lighting
+    /// reads.
+    fn copy_tile(&self, encoder: &mut wgpu::CommandEncoder, face: u32, into: &GBuffer, side: u32) {
+        let (x, y) = ((face % self.cols) * side, (face / self.cols) * side);
+        let pairs = [
+            (&self.atlas.position, &into.position),
+            (&self.atlas.normal, &into.normal),
+        ]
+        .into_iter()
+        .chain(self.atlas.emission.as_ref().zip(into.emission.as_ref()));
+        for (from, to) in pairs {
+            encoder.copy_texture_to_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: from,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d { x, y, z: 0 },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                to.as_image_copy(),
+                wgpu::Extent3d {
+                    width: side,
+                    height: side,
+                    depth_or_array_layers: 1,
+                },
+            );
         }
     }
 }

@@ -12,7 +12,7 @@ use super::probes::ProbeFrame;
 use crate::error::RenderError;
 use crate::frame::clusters::{LightClusters, LightLoop};
 use crate::frame::eyes::EyePasses;
-use crate::frame::gbuffer::GBuffer;
+use crate::frame::gbuffer::{GBuffer, GBufferViews};
 use crate::frame::visibility_mask::{SoftVisibility, VisibilityMask};
 use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, GpuTimes, Stage};
@@ -161,7 +161,9 @@ impl Renderer {
                 &gpu_scene,
                 &frame_buffer,
                 (settings.width, settings.height),
-                settings.stereo.map(|s| s.passes),
+                settings
+                    .stereo
+                    .map_or(GBufferViews::Mono, |s| GBufferViews::Stereo(s.passes)),
             );
             let mut clusters = LightClusters::new(
                 ctx,
@@ -235,6 +237,7 @@ impl Renderer {
                     &lights,
                     &*source,
                     look_consts,
+                    settings.probe_passes,
                 )?)
             };
             if let Some(p) = &mut probes {

@@ -52,6 +52,62 @@ impl ProbeData {
     }
 }
 
+/// How the probes' face G-buffers are drawn.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum ProbePasses {
+    /// One G-buffer pass per face (the baseline).
+    #[default]
+    PerFace,
+    /// Every face of every probe in one layered pass: each instance drawn once per face
+    /// (instance → face), into the face's tile of one atlas G-buffer, clip distances keeping
+    /// it there (seed 000's technique on colour targets; needs `CLIP_DISTANCES`); each tile is
+    /// then copied into the face G-buffer its lighting reads.
+    Layered,
+}
+
+impl ProbePasses {
+    /// Every way, baseline first.
+    pub const ALL: &'static [ProbePasses] = &[ProbePasses::PerFace, ProbePasses::Layered];
+
+    /// CLI name: `per-face` or `layered`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ProbePasses::PerFace => "per-face",
+            ProbePasses::Layered => "layered",
+        }
+    }
+}
+
+impl std::fmt::Display for ProbePasses {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for ProbePasses {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        ProbePasses::ALL
+            .iter()
+            .copied()
+            .find(|p| p.name() == s)
+            .ok_or_else(|| format!("unknown probe passes '{s}' (expected per-face or layered)"))
+    }
+}
+
+/// `FaceView` of `gbuffer_faces.wgsl`: a probe face drawn layered.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct FaceView {
+    /// World → clip.
+    pub view_proj: [[f32; 4]; 4],
+    /// xyz where the face is seen from.
+    pub eye: [f32; 4],
+    /// The tile: left and top pixel, side, unused.
+    pub tile: [f32; 4],
+}
+
 /// What drawing the probes did in a frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 #[non_exhaustive]
@@ -221,6 +277,7 @@ mod tests {
         use crate::gpu::types::layout::same_layout;
         let src = crate::gpu::shaders::compose(&[PROBES_WGSL]);
         same_layout!(in src, ProbeData, position, box_lo, box_hi);
+        same_layout!(in crate::frame::gbuffer::faces_shader(), FaceView, view_proj, eye, tile);
         // The uniform holds every probe a scene may have.
         let list = format!("items: array<ProbeData, {}>", Probe::MAX_COUNT);
         assert!(
