@@ -243,6 +243,12 @@ pub(crate) struct RenderArgs {
     /// Texels per side of each probe face (8 to 1024).
     #[arg(long, default_value_t = manyshadows::scene::Probe::DEFAULT_RESOLUTION)]
     pub(crate) probe_resolution: u32,
+    /// How the probes' face G-buffers are drawn: per-face (one pass each, the baseline) or
+    /// layered (every face of every probe in one instanced pass, each copy clipped to its
+    /// tile of an atlas; seed 000's layered rendering).
+    #[arg(long, default_value_t = manyshadows::ProbePasses::default(),
+          value_parser = parse_probe_passes)]
+    pub(crate) probe_passes: manyshadows::ProbePasses,
     #[command(flatten)]
     pub(crate) light_sizes: LightSizeArgs,
     #[command(flatten)]
@@ -563,6 +569,11 @@ pub fn parse_pcf(s: &str) -> Result<Pcf, String> {
     s.parse()
 }
 
+/// `per-face` or `layered`.
+pub(crate) fn parse_probe_passes(s: &str) -> Result<manyshadows::ProbePasses, String> {
+    s.parse()
+}
+
 /// `layered`, `multiview` or `per-eye`.
 pub(crate) fn parse_eye_passes(s: &str) -> Result<manyshadows::EyePasses, String> {
     s.parse()
@@ -654,6 +665,7 @@ pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettin
             args.stereo
                 .map(|s| manyshadows::Stereo::new(s).with_passes(args.stereo_passes)),
         )
+        .with_probe_passes(args.probe_passes)
         .with_technique(args.technique)
         .with_shadow(ShadowOptions::default().with_cull(args.cull).with_casters(
             manyshadows::CasterOptions::default().with_ignore_masks(!args.shadow_alpha),

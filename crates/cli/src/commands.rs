@@ -6,7 +6,7 @@ use clap::{Parser, Subcommand};
 use crate::args::{GpuArgs, RenderArgs};
 use crate::{
     bench, compare, denoise_bench, estimate_bench, irregular_bench, lights_bench, omni,
-    shadows_bench, soak, soft_bench, stereo_bench, suite, viewer, virtual_bench,
+    probes_bench, shadows_bench, soak, soft_bench, stereo_bench, suite, viewer, virtual_bench,
 };
 
 pub(crate) const ABOUT: &str = "Render scenes lit by many shadow-casting lights, headless, to PNG.";
@@ -122,6 +122,11 @@ pub(crate) enum BenchCommand {
     #[command(long_about = estimate_bench::LONG_ABOUT)]
     #[command(mut_arg("out_dir", |a| a.default_value("bench-estimate").required(false)))]
     Estimate(Box<estimate_bench::EstimateArgs>),
+    /// Reflection probes' faces: one G-buffer pass per face against every face in one layered
+    /// pass, per probe count and face size, a caster moving so every face is redrawn; probes
+    /// stage and whole-frame GPU time, CPU time, ratios; table, results.json and a plot.
+    #[command(mut_arg("out_dir", |a| a.default_value("bench-probes").required(false)))]
+    Probes(Box<probes_bench::ProbesArgs>),
     /// Stereo frames: both eyes' G-buffers in one layered or multiview pass against one pass
     /// per eye (and one mono eye for scale), per scene and eye size; G-buffer and whole-frame
     /// GPU time, CPU time, ratios to per-eye; table, results.json and a plot.

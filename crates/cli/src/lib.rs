@@ -39,6 +39,7 @@ mod irregular_bench;
 mod lights_bench;
 mod omni;
 mod plot;
+mod probes_bench;
 mod progress;
 mod render;
 mod scenes;
@@ -117,6 +118,7 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
         Some(Command::Bench(BenchCommand::Shadows(args))) => shadows_bench::shadows(&args),
         Some(Command::Bench(BenchCommand::Soft(args))) => soft_bench::soft(&args),
         Some(Command::Bench(BenchCommand::Stereo(args))) => stereo_bench::stereo(&args),
+        Some(Command::Bench(BenchCommand::Probes(args))) => probes_bench::probes(&args),
         Some(Command::Bench(BenchCommand::Estimate(args))) => estimate_bench::estimate(&args),
         Some(Command::Bench(BenchCommand::Denoise(args))) => denoise_bench::denoise(&args),
         Some(Command::Bench(BenchCommand::Suite(args))) => suite::suite(&args),

@@ -42,7 +42,9 @@ pub(crate) fn summary(
         "look": look_json(&r.look()),
         "light_loop": r.settings().light_loop.name(),
         "clusters": frame.clusters,
-        "probes": frame.probes,
+        "probes": frame.probes.map(|p| serde_json::json!({
+            "probes": p.probes, "side": p.side, "faces_drawn": p.faces_drawn, "bytes": p.bytes,
+            "passes": r.settings().probe_passes.name() })),
         "virtual": frame.virtual_maps,
         "lists": r.irregular_stats(),
         "soft": { "blocker_taps": r.settings().soft.blocker_taps, "filter_taps": r.settings().soft.filter_taps,
@@ -167,9 +169,13 @@ fn print_scene(s: &serde_json::Value) {
     if let Some(n) = pr["probes"].as_u64() {
         let side = pr["side"].as_u64().unwrap_or(0);
         println!(
-            "probes       {n} reflection probes, {side}x{side} per face ({:.1} MiB); {} faces drawn this frame",
+            "probes       {n} reflection probes, {side}x{side} per face ({:.1} MiB); {} faces drawn this frame ({})",
             pr["bytes"].as_f64().unwrap_or(0.0) / (1u64 << 20) as f64,
-            pr["faces_drawn"]
+            pr["faces_drawn"],
+            pr["passes"]
+                .as_str()
+                .and_then(|p| p.parse::<manyshadows::ProbePasses>().ok())
+                .map_or("drawn in an unknown way", |p| p.describe())
         );
     }
     let st = &s["stereo"];

@@ -295,6 +295,32 @@ fn bench_stereo_times_one_pass_against_one_per_eye() {
 }
 
 #[test]
+fn bench_probes_times_faces_per_face_and_layered() {
+    let (dir, json) = bench_ok(
+        "probes",
+        "--scene cubes --probes 1,2 --sides 16 --lights 2 --screen 48x27 --repeats 1 --warmup 0",
+    );
+    let records = records(&json);
+    // Per probe count: per-face, and layered where the adapter has CLIP_DISTANCES (Vulkan
+    // and GL here).
+    assert_eq!(records.len(), 4, "{json}");
+    for r in records {
+        // A caster moves every frame, so every face is drawn: the probes stage is timed.
+        assert!(r["probes_gpu_ms"].as_f64().is_some_and(|t| t > 0.0), "{r}");
+    }
+    assert_ratios(
+        records,
+        "probes_gpu_ms",
+        "probes_ratio_vs_per_face",
+        "per-face",
+        &["probes", "side"],
+    );
+    assert!(dir.join("probes-16x16.png").exists());
+    rejects("probes --sides 4", "8 to 1024");
+    rejects("probes --probes 65", "--probes");
+}
+
+#[test]
 fn bench_lights_reports_stages_clusters_and_fit_per_count() {
     let (dir, json) = bench_ok(
         "lights",

@@ -447,7 +447,10 @@ fn faces_drawn_layered_match_faces_drawn_one_pass_each() {
         if passes == manyshadows::ProbePasses::Layered
             && !ctx.has(manyshadows::wgpu::Features::CLIP_DISTANCES)
         {
-            assert!(matches!(r, Err(manyshadows::RenderError::MissingFeature { .. })));
+            assert!(matches!(
+                r,
+                Err(manyshadows::RenderError::MissingFeature { .. })
+            ));
             return None;
         }
         let r = r.as_mut().expect("renderer");

@@ -70,6 +70,14 @@ impl ProbePasses {
     /// Every way, baseline first.
     pub const ALL: &'static [ProbePasses] = &[ProbePasses::PerFace, ProbePasses::Layered];
 
+    /// How the faces' G-buffers are drawn this way, in words (for summaries).
+    pub fn describe(self) -> &'static str {
+        match self {
+            ProbePasses::PerFace => "G-buffers one pass per face",
+            ProbePasses::Layered => "G-buffers of every face in one layered pass",
+        }
+    }
+
     /// CLI name: `per-face` or `layered`.
     pub fn name(self) -> &'static str {
         match self {
