@@ -109,6 +109,25 @@ impl Renderer {
         }
         scene.validate()?;
         let info = settings.technique.info();
+        // A mask holds the camera's pixels only: nothing to light a probe's faces with. The
+        // probes are left out of everything (the shadow plan gives every light a map only
+        // for probes that are drawn).
+        let without_probes;
+        let scene = if info.fills == crate::error::Fills::Mask && !scene.probes.is_empty() {
+            log::warn!(
+                "technique {} draws no reflection probes (its shadows are a mask of the camera's \
+                 pixels): the scene's {} probes are left out",
+                info.technique,
+                scene.probes.len()
+            );
+            without_probes = Scene {
+                probes: Vec::new(),
+                ..scene.clone()
+            };
+            &without_probes
+        } else {
+            scene
+        };
         if !info.soft_shadows && scene.lights.iter().any(|l| l.size > 0.0) {
             log::warn!(
                 "technique {} renders hard shadows: the lights' sizes do not soften them",
@@ -219,15 +238,6 @@ impl Renderer {
                 .transpose()?;
             let look_consts = settings.look.resolve(scene).consts();
             let mut probes = if scene.probes.is_empty() {
-                None
-            } else if info.fills == crate::error::Fills::Mask {
-                // A mask holds the camera's pixels only: nothing to light a probe's faces with.
-                log::warn!(
-                    "technique {} draws no reflection probes (its shadows are a mask of the \
-                     camera's pixels): the scene's {} probes are left out",
-                    info.technique,
-                    scene.probes.len()
-                );
                 None
             } else {
                 Some(ProbeFrame::new(
