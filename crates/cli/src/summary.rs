@@ -447,7 +447,7 @@ pub(crate) fn describe_estimate(e: &manyshadows::FrameEstimate) -> String {
         }
     };
     format!(
-        "~{} {} (G-buffer {}, shadows {}, lighting {})",
+        "~{} {} (G-buffer {}, shadows {}, lighting {}{})",
         t(e.total_ms()),
         if e.calibrated {
             "on this adapter"
@@ -456,6 +456,11 @@ pub(crate) fn describe_estimate(e: &manyshadows::FrameEstimate) -> String {
         },
         t(e.gbuffer_ms + e.clusters_ms),
         t(e.shadows_ms),
-        t(e.lighting_ms)
+        t(e.lighting_ms),
+        if e.probes_ms > 0.0 {
+            format!(", probes {}", t(e.probes_ms))
+        } else {
+            String::new()
+        }
     )
 }

@@ -155,6 +155,10 @@ pub struct FrameEstimate {
     pub shadows_ms: f64,
     /// Milliseconds of lighting (shadow rays and lookups included).
     pub lighting_ms: f64,
+    /// Milliseconds of the reflection probes' faces when they are drawn (each face's
+    /// G-buffer and lighting, every light per texel, at the camera's shadow cost per pair);
+    /// 0 without probes.
+    pub probes_ms: f64,
     /// Whether the costs were measured on an adapter of this kind (a CPU adapter: they were
     /// fitted on lavapipe); otherwise the figures are lavapipe's, an upper bound for a GPU.
     pub calibrated: bool,
@@ -163,6 +167,6 @@ pub struct FrameEstimate {
 impl FrameEstimate {
     /// Milliseconds of the whole frame.
     pub fn total_ms(&self) -> f64 {
-        self.gbuffer_ms + self.clusters_ms + self.shadows_ms + self.lighting_ms
+        self.gbuffer_ms + self.clusters_ms + self.shadows_ms + self.lighting_ms + self.probes_ms
     }
 }

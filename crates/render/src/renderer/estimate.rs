@@ -151,6 +151,40 @@ impl Renderer {
             Fills::Pages => lin(&c.virtual_maps, &[tv, iv, pairs, taps, 1.0]),
             Fills::Rays => lin(&c.accel, &[w.instances as f64, 1.0]),
         };
+        // Probe faces: a G-buffer and a lighting pass each, over every light per texel (no
+        // clusters), the pairs in reach and rays at the camera's density per pixel.
+        let probes_ms = self.probes.as_ref().map_or(0.0, |p| {
+            let stats = p.stats();
+            let faces = 6.0 * f64::from(stats.probes);
+            let texels = faces * f64::from(stats.side).powi(2);
+            let k = texels / px.max(1.0);
+            let mono_triangles = w.triangles as f64
+                / if self.settings.stereo.is_some() {
+                    2.0
+                } else {
+                    1.0
+                };
+            let gbuffer = lin(&c.gbuffer, &[texels, faces * mono_triangles, faces]);
+            let every = texels * w.lights as f64;
+            let lighting = match info.fills {
+                Fills::Rays => lin(
+                    &c.lighting_rays,
+                    &[
+                        texels,
+                        every,
+                        faces,
+                        rays * k,
+                        rays * k * w.ray_weight,
+                        rays * k * w.ray_weight * w.ray_weight,
+                    ],
+                ),
+                _ => lin(
+                    &c.lighting_maps,
+                    &[texels, every, faces, pairs * k, taps * k],
+                ),
+            };
+            gbuffer + lighting
+        });
         let calibrated = self.ctx.info.device_type == wgpu::DeviceType::Cpu;
         FrameEstimate {
             work,
@@ -158,6 +192,7 @@ impl Renderer {
             clusters_ms,
             shadows_ms,
             lighting_ms,
+            probes_ms,
             calibrated,
         }
     }
