@@ -589,3 +589,75 @@ fn sampled_rays_are_denoised_in_the_window() {
     assert!(d < 0.5 * p, "denoised {d:.2} against plain {p:.2}");
     assert!(r < 0.5 * p, "reused {r:.2} against plain {p:.2}");
 }
+
+/// `--stereo` in the window: the two eyes side by side, the frame `render --stereo` makes
+/// (each eye half the window).
+#[test]
+fn the_window_shows_both_stereo_eyes_as_render_does() {
+    let (_server, display) = xvfb();
+    let dir = tmp("stereo");
+    let camera = "2,3,7,0,0.5,0";
+    let shot = view(
+        &display,
+        &[
+            "--scene",
+            "cubes",
+            "--width",
+            &W.to_string(),
+            "--height",
+            &H.to_string(),
+            "--camera",
+            camera,
+            "--stereo",
+            "0.6",
+            "--hide-panel",
+        ],
+        3,
+        (W, H),
+    );
+    let png = dir.join("stereo.png");
+    let args = [
+        "manyshadows",
+        "render",
+        "--scene",
+        "cubes",
+        "--camera",
+        camera,
+        "--width",
+        &(W / 2).to_string(),
+        "--height",
+        &H.to_string(),
+        "--stereo",
+        "0.6",
+        "--out",
+        png.to_str().unwrap(),
+    ];
+    manyshadows_cli::run(args.map(std::ffi::OsString::from)).expect("manyshadows render");
+    let reference = image::open(&png).unwrap().to_rgb8();
+    assert_eq!(reference.dimensions(), (W, H));
+    save(&shot, (W, H), "viewer-stereo.png");
+    let off = shot
+        .iter()
+        .zip(reference.pixels())
+        .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b.0[c]) > 2))
+        .count();
+    // The halves differ (two eyes, not one picture twice).
+    let half = W as usize / 2;
+    let eyes_differ = (0..H as usize)
+        .flat_map(|y| (0..half).map(move |x| (x, y)))
+        .filter(|&(x, y)| shot[y * W as usize + x] != shot[y * W as usize + x + half])
+        .count();
+    eprintln!(
+        "stereo window vs render: {off} of {} pixels differ; the eyes differ in {eyes_differ}",
+        shot.len()
+    );
+    assert!(
+        eyes_differ > 500,
+        "the two eyes look the same ({eyes_differ} pixels differ)"
+    );
+    assert!(
+        off * 200 <= shot.len(),
+        "the stereo window shows a different frame: {off} pixels differ (screenshot in \
+         target/test-artifacts/viewer-stereo.png)"
+    );
+}

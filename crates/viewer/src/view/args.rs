@@ -65,6 +65,12 @@ pub struct ViewArgs {
     /// counts them).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub(super) shadow_budget: Option<u32>,
+    /// Stereo: a left and a right eye this far apart (world units), side by side in the
+    /// window, each half its width, both G-buffers drawn in one layered pass (as `render
+    /// --stereo`). Not with --reuse or --denoise.
+    #[arg(long, value_name = "SEPARATION", allow_hyphen_values = true,
+          conflicts_with_all = ["reuse", "denoise"])]
+    pub(super) stereo: Option<f32>,
     /// Move the smallest caster in a circle and sway the first spot or point light (of two
     /// or more): only the shadow maps that see the caster or belong to that light are
     /// redrawn (unless --no-cache; the panel counts them).

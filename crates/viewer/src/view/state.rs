@@ -38,6 +38,8 @@ pub(super) struct Choice {
     pub(super) denoise: bool,
     /// Sampled lights reused across frames.
     pub(super) reuse: bool,
+    /// Stereo eyes this far apart, side by side (`--stereo`).
+    pub(super) stereo: Option<f32>,
 }
 
 /// The open window and everything drawn into it.
@@ -77,9 +79,16 @@ pub(super) struct State {
 /// The renderer's settings for a `width`×`height` frame with `c` (the budget only for
 /// techniques that fill an atlas).
 fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
+    // Two eyes split the window: an even width (an odd window's last column is scaled over).
+    let width = if c.stereo.is_some() {
+        (width & !1).max(2)
+    } else {
+        width
+    };
     RenderSettings::default()
         .with_width(width)
         .with_height(height)
+        .with_stereo(c.stereo.map(manyshadows::Stereo::new))
         .with_technique(c.technique)
         .with_point_shadows(c.point_shadows)
         .with_pcf(c.pcf)
@@ -93,9 +102,15 @@ fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
         .with_rays(
             RayOptions::default()
                 .with_light_samples(c.light_samples)
-                .with_denoise(c.denoise && c.technique.info().fills == Fills::Rays)
+                // Reuse and the denoiser follow one camera: not with stereo eyes.
+                .with_denoise(
+                    c.denoise && c.stereo.is_none() && c.technique.info().fills == Fills::Rays,
+                )
                 .with_reuse(
-                    c.reuse && c.light_samples > 0 && c.technique.info().fills == Fills::Rays,
+                    c.reuse
+                        && c.stereo.is_none()
+                        && c.light_samples > 0
+                        && c.technique.info().fills == Fills::Rays,
                 ),
         )
 }
@@ -123,6 +138,7 @@ impl State {
             light_samples: args.light_samples,
             denoise: args.denoise,
             reuse: args.reuse,
+            stereo: args.stereo,
         };
         let renderer = Renderer::new(&ctx, scene, settings(config.width, config.height, choice))?;
         if !args.insist {
