@@ -243,9 +243,10 @@ pub(crate) struct RenderArgs {
     /// Texels per side of each probe face (8 to 1024).
     #[arg(long, default_value_t = manyshadows::scene::Probe::DEFAULT_RESOLUTION)]
     pub(crate) probe_resolution: u32,
-    /// How the probes' face G-buffers are drawn: per-face (one pass each, the baseline) or
+    /// How the probes' face G-buffers are drawn: per-face (one pass each, the baseline),
     /// layered (every face of every probe in one instanced pass, each copy clipped to its
-    /// tile of an atlas; seed 000's layered rendering).
+    /// tile of an atlas; seed 000's layered rendering) or multiview (each probe's six faces in
+    /// one multiview pass; Vulkan).
     #[arg(long, default_value_t = manyshadows::ProbePasses::default(),
           value_parser = parse_probe_passes)]
     pub(crate) probe_passes: manyshadows::ProbePasses,
@@ -569,7 +570,7 @@ pub fn parse_pcf(s: &str) -> Result<Pcf, String> {
     s.parse()
 }
 
-/// `per-face` or `layered`.
+/// `per-face`, `layered` or `multiview`.
 pub(crate) fn parse_probe_passes(s: &str) -> Result<manyshadows::ProbePasses, String> {
     s.parse()
 }

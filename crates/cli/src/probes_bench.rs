@@ -1,7 +1,7 @@
 //! `manyshadows bench probes`: reflection probes' faces drawn one G-buffer pass per face
-//! against every face in one layered pass (seed 000 proposes layered rendering for reflection
-//! cube maps as for shadow maps), by probe count and face size; whole frames with a caster
-//! moving, so every frame redraws every face.
+//! against every face in one layered pass and each probe's six faces in one multiview pass
+//! (seed 000 proposes layered rendering for reflection cube maps as for shadow maps), by probe
+//! count and face size; whole frames with a caster moving, so every frame redraws every face.
 //!
 //! The contenders of one probe count and face size render interleaved, frame by frame (see
 //! [`crate::harness`]). The probes stage holds the faces' G-buffers (one pass each, or one
@@ -75,13 +75,12 @@ pub fn probes(args: &ProbesArgs) -> Result<()> {
     let ways: Vec<ProbePasses> = ProbePasses::ALL
         .iter()
         .copied()
-        .filter(|&p| {
-            let ok =
-                p != ProbePasses::Layered || h.ctx.has(manyshadows::wgpu::Features::CLIP_DISTANCES);
-            if !ok {
-                h.note(format!("{p} left out: {} lacks CLIP_DISTANCES", h.adapter));
+        .filter(|&p| match Renderer::probe_passes_unmet(&h.ctx, p) {
+            Some(why) => {
+                h.note(format!("{p} left out: {} lacks {why}", h.adapter));
+                false
             }
-            ok
+            None => true,
         })
         .collect();
     let base_name = ProbePasses::PerFace.name();

@@ -66,12 +66,20 @@ pub enum GBufferViews<'a> {
         /// How many.
         count: u32,
     },
+    /// Six square views (a probe's faces) per multiview pass, each into its layer of six-layer
+    /// targets at the origin (needs six views per multiview pass): `views` as for `Faces`.
+    FaceLayers {
+        /// The views, `array<FaceView>`.
+        views: &'a wgpu::Buffer,
+    },
 }
 
 /// The two-layer targets of a multiview stereo pass, and their render views.
 struct MultiviewTargets {
     textures: Vec<wgpu::Texture>,
     views: Vec<wgpu::TextureView>,
+    /// Layers (views per pass).
+    layers: u32,
 }
 
 fn target(
@@ -128,9 +136,17 @@ impl GBuffer {
         };
         let (faces, face_buffer) = match views_drawn {
             GBufferViews::Faces { views, count } => (Some(count), Some(views)),
+            GBufferViews::FaceLayers { views } => (None, Some(views)),
             _ => (None, None),
         };
-        let multiview = stereo == Some(EyePasses::Multiview);
+        let face_layers = matches!(views_drawn, GBufferViews::FaceLayers { .. });
+        // Views per multiview pass, and each view's target size.
+        let (layers, layer_width) = if face_layers {
+            (6, w)
+        } else {
+            (2, (w / 2).max(1))
+        };
+        let multiview = stereo == Some(EyePasses::Multiview) || face_layers;
         // Copy targets too: a multiview pass's layers, a probe face's tile, are copied in.
         let color_usage = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC | U::COPY_DST;
         let position = target(ctx, "gbuffer.position", w, h, POSITION_FORMAT, color_usage);
@@ -171,6 +187,8 @@ impl GBuffer {
         let layered = stereo == Some(EyePasses::Layered);
         let module = if faces.is_some() {
             crate::gpu::shaders::module(device, "gbuffer.faces.shader", &faces_shader())
+        } else if face_layers {
+            crate::gpu::shaders::module(device, "gbuffer.face_layers.shader", &face_layers_shader())
         } else if layered {
             crate::gpu::shaders::module(device, "gbuffer.layered.shader", &layered_shader())
         } else if multiview {
@@ -257,6 +275,8 @@ impl GBuffer {
                     module: &module,
                     entry_point: Some(if faces.is_some() {
                         "vs_faces"
+                    } else if face_layers {
+                        "vs_face_layers"
                     } else if layered {
                         "vs_layered"
                     } else if multiview {
@@ -287,7 +307,7 @@ impl GBuffer {
                     targets: &color_targets,
                 }),
                 multiview_mask: if multiview {
-                    std::num::NonZeroU32::new(0b11)
+                    std::num::NonZeroU32::new((1 << layers) - 1)
                 } else {
                     None
                 },
@@ -341,9 +361,9 @@ impl GBuffer {
                     ctx.device.create_texture(&wgpu::TextureDescriptor {
                         label: Some("gbuffer.multiview"),
                         size: wgpu::Extent3d {
-                            width: (w / 2).max(1),
+                            width: layer_width,
                             height: h,
-                            depth_or_array_layers: 2,
+                            depth_or_array_layers: layers,
                         },
                         mip_level_count: 1,
                         sample_count: 1,
@@ -359,12 +379,16 @@ impl GBuffer {
                 .map(|t| {
                     t.create_view(&wgpu::TextureViewDescriptor {
                         dimension: Some(wgpu::TextureViewDimension::D2Array),
-                        array_layer_count: Some(2),
+                        array_layer_count: Some(layers),
                         ..Default::default()
                     })
                 })
                 .collect();
-            MultiviewTargets { textures, views }
+            MultiviewTargets {
+                textures,
+                views,
+                layers,
+            }
         });
         Self {
             position,
@@ -395,6 +419,72 @@ impl GBuffer {
             return;
         }
         self.record_views(encoder, scene, timer, span);
+    }
+
+    /// A probe's six faces (`GBufferViews::FaceLayers`): probe `probe`'s multiview pass into
+    /// the six-layer targets (draw instances `probe · instances + i`), beginning the span when
+    /// `begin`; [`Self::copy_layer`] then hands each face on.
+    pub(crate) fn record_face_layers(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        (timer, span, begin): (&GpuTimer, Option<Span>, bool),
+        probe: u32,
+    ) {
+        let Some(mv) = &self.multiview else {
+            debug_assert!(false, "face layers are drawn into multiview targets");
+            return;
+        };
+        let base = probe * scene.draws.len() as u32;
+        let writes = (timer, span, begin, false);
+        self.record_into(
+            encoder,
+            scene,
+            &mv.views,
+            writes,
+            true,
+            None,
+            (1, base..base + 1),
+        );
+    }
+
+    /// Copies layer `layer` of the face-layer targets (position, normal, emission) into `into`.
+    pub(crate) fn copy_layer(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        layer: u32,
+        into: &GBuffer,
+    ) {
+        let Some(mv) = &self.multiview else {
+            return;
+        };
+        // The layers' textures are position, normal, depth, emission (see `new`).
+        let pairs = [(0, &into.position), (1, &into.normal)]
+            .into_iter()
+            .chain(into.emission.as_ref().map(|e| (3, e)));
+        for (i, target) in pairs {
+            let Some(layers) = mv.textures.get(i) else {
+                continue;
+            };
+            encoder.copy_texture_to_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: layers,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d {
+                        x: 0,
+                        y: 0,
+                        z: layer,
+                    },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                target.as_image_copy(),
+                wgpu::Extent3d {
+                    width: target.width(),
+                    height: target.height(),
+                    depth_or_array_layers: 1,
+                },
+            );
+        }
     }
 
     /// Square views in tiles (`GBufferViews::Faces`) in their one pass, which begins the span
@@ -576,11 +666,10 @@ impl GBuffer {
             }),
             timestamp_writes: timer.render_writes(span, first, last),
             occlusion_query_set: None,
-            multiview_mask: if self.multiview.is_some() {
-                std::num::NonZeroU32::new(0b11)
-            } else {
-                None
-            },
+            multiview_mask: self
+                .multiview
+                .as_ref()
+                .and_then(|mv| std::num::NonZeroU32::new((1 << mv.layers) - 1)),
         });
         if let Some([x, y, w, h]) = rect {
             pass.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
@@ -630,7 +719,19 @@ pub fn faces_shader() -> String {
         "enable clip_distances;",
         crate::gpu::shaders::COMMON,
         include_str!("gbuffer.wgsl"),
+        include_str!("gbuffer_face_views.wgsl"),
         include_str!("gbuffer_faces.wgsl"),
+    ])
+}
+
+/// The same with `vs_face_layers`: a probe's six faces in one multiview pass (needs
+/// `MULTIVIEW` with six views).
+pub fn face_layers_shader() -> String {
+    crate::gpu::shaders::compose(&[
+        crate::gpu::shaders::COMMON,
+        include_str!("gbuffer.wgsl"),
+        include_str!("gbuffer_face_views.wgsl"),
+        include_str!("gbuffer_face_layers.wgsl"),
     ])
 }
 
@@ -677,6 +778,17 @@ mod shader_tests {
             "gbuffer faces",
             &super::faces_shader(),
             wgpu::Features::CLIP_DISTANCES,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+    }
+
+    /// The probe faces' multiview variant, with the feature it needs.
+    #[test]
+    fn face_layers_shader_validates_for_webgpu() {
+        crate::gpu::shaders::validate_for_webgpu(
+            "gbuffer face layers",
+            &super::face_layers_shader(),
+            wgpu::Features::MULTIVIEW,
         )
         .unwrap_or_else(|e| panic!("{e}"));
     }

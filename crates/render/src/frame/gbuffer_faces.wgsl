@@ -4,20 +4,6 @@
 // the triangle there (seed 000's layered rendering on colour targets, as the layered shadow
 // technique does on depth).
 
-struct FaceView {
-    view_proj: mat4x4<f32>,
-    // xyz: where the view is seen from.
-    eye: vec4<f32>,
-    // The tile: left and top pixel, side in pixels, unused.
-    tile: vec4<f32>,
-}
-
-@group(0) @binding(6) var<storage, read> face_views: array<FaceView>;
-
-fn eye_position(e: u32) -> vec3<f32> {
-    return face_views[e].eye.xyz;
-}
-
 struct FacesVsOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) world: vec3<f32>,

@@ -61,6 +61,8 @@ pub(crate) struct ProbeFrame {
     lighting: LightingPass,
     /// Drawn layered: every face's G-buffer in one pass into its tile of this atlas.
     layered: Option<LayeredFaces>,
+    /// Drawn multiview: the faces' views and the six-layer G-buffer of one probe's pass.
+    multiview: Option<(wgpu::Buffer, GBuffer)>,
     /// The faces must be drawn in the next frame.
     pub(crate) dirty: bool,
     /// Faces drawn by the last frame.
@@ -81,8 +83,12 @@ impl ProbeFrame {
     ) -> Result<Self, RenderError> {
         let maps = ProbeMaps::new(ctx, scene)?;
         let layered = match passes {
-            ProbePasses::PerFace => None,
             ProbePasses::Layered => Some(LayeredFaces::new(ctx, gpu_scene, &maps)?),
+            _ => None,
+        };
+        let multiview = match passes {
+            ProbePasses::Multiview => Some(face_layers(ctx, gpu_scene, &maps)?),
+            _ => None,
         };
         let side = maps.side;
         let device = &ctx.device;
@@ -132,6 +138,7 @@ impl ProbeFrame {
             clusters,
             lighting,
             layered,
+            multiview,
             dirty: true,
             faces_drawn: 0,
         })
@@ -208,6 +215,11 @@ impl ProbeFrame {
         if let Some(l) = &self.layered {
             l.update(ctx, scene, frame, side);
         }
+        if let Some((views, _)) = &self.multiview {
+            let records = face_views(scene, side, 1, gpu_scene.draws.len() as u32);
+            ctx.queue
+                .write_buffer(views, 0, bytemuck::cast_slice(&records));
+        }
         self.dirty |= redraw;
         Ok(())
     }
@@ -240,13 +252,20 @@ impl ProbeFrame {
             );
             let first = face == 0;
             let last = face + 1 == faces;
-            match &self.layered {
-                None => {
+            match (&self.layered, &self.multiview) {
+                (Some(l), _) => l.copy_tile(encoder, face as u32, &self.gbuffer, self.maps.side),
+                (None, Some((_, layers))) => {
+                    if face % 6 == 0 {
+                        let probe = (face / 6) as u32;
+                        layers.record_face_layers(encoder, gpu_scene, (timer, span, first), probe);
+                    }
+                    layers.copy_layer(encoder, (face % 6) as u32, &self.gbuffer);
+                }
+                (None, None) => {
                     let writes = (first, false);
                     self.gbuffer
                         .record_timed(encoder, gpu_scene, (timer, span), writes);
                 }
-                Some(l) => l.copy_tile(encoder, face as u32, &self.gbuffer, self.maps.side),
             }
             let target = &self.maps.face_views[face];
             self.lighting
@@ -330,18 +349,7 @@ impl LayeredFaces {
     /// The faces' views and tiles, and the atlas's uniforms (the frame's, its viewport the
     /// atlas).
     fn update(&self, ctx: &GpuContext, scene: &Scene, frame: &FrameUniforms, side: u32) {
-        let mut views = Vec::new();
-        for probe in &scene.probes {
-            for cam in probe.face_cameras(scene.camera.near, scene.camera.far) {
-                let f = views.len() as u32;
-                let (x, y) = ((f % self.cols) * side, (f / self.cols) * side);
-                views.push(FaceView {
-                    view_proj: (cam.projection(1.0) * cam.view()).to_cols_array_2d(),
-                    eye: cam.position.extend(1.0).to_array(),
-                    tile: [x as f32, y as f32, side as f32, 0.0],
-                });
-            }
-        }
+        let views = face_views(scene, side, self.cols, 0);
         ctx.queue
             .write_buffer(&self.views, 0, bytemuck::cast_slice(&views));
         let (w, h) = (self.atlas.position.width(), self.atlas.position.height());
@@ -381,4 +389,61 @@ impl LayeredFaces {
             );
         }
     }
+}
+
+/// Every probe face's view, its tile in an atlas of `cols` tiles per row of `side`², and
+/// `instances` in `tile.w` (the multiview pass's instance encoding).
+fn face_views(scene: &Scene, side: u32, cols: u32, instances: u32) -> Vec<FaceView> {
+    let mut views = Vec::new();
+    for probe in &scene.probes {
+        for cam in probe.face_cameras(scene.camera.near, scene.camera.far) {
+            let f = views.len() as u32;
+            let (x, y) = ((f % cols) * side, (f / cols) * side);
+            views.push(FaceView {
+                view_proj: (cam.projection(1.0) * cam.view()).to_cols_array_2d(),
+                eye: cam.position.extend(1.0).to_array(),
+                tile: [x as f32, y as f32, side as f32, instances as f32],
+            });
+        }
+    }
+    views
+}
+
+/// The faces' views and the six-layer G-buffer a probe's multiview pass draws into; needs six
+/// views per multiview pass.
+fn face_layers(
+    ctx: &GpuContext,
+    gpu_scene: &GpuScene,
+    maps: &ProbeMaps,
+) -> Result<(wgpu::Buffer, GBuffer), RenderError> {
+    let per_pass = ctx.multiview_views_per_pass();
+    if per_pass < 6 {
+        return Err(RenderError::missing_feature(
+            ctx,
+            "probe faces drawn multiview",
+            format!("MULTIVIEW with six views per pass (this device: {per_pass})"),
+            "draw the probes' faces one pass per face, or layered",
+        ));
+    }
+    let views = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("probes.face_views"),
+        size: 6 * maps.count as u64 * std::mem::size_of::<FaceView>() as u64,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let side = maps.side;
+    let layers = GBuffer::new(
+        ctx,
+        gpu_scene,
+        // The faces' passes read no frame uniforms but the binding's.
+        &ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("probes.layers_uniforms"),
+            size: std::mem::size_of::<FrameUniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM,
+            mapped_at_creation: false,
+        }),
+        (side, side),
+        GBufferViews::FaceLayers { views: &views },
+    );
+    Ok((views, layers))
 }

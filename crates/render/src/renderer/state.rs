@@ -21,6 +21,7 @@ use crate::gpu_scene::instances::GpuScene;
 use crate::report::{Frame, FrameTimings, SubmittedFrame};
 use crate::settings::RenderSettings;
 use crate::shading::lighting::{LightingInputs, LightingPass};
+use crate::shading::probes::ProbePasses;
 use crate::shading::visibility::VisibilityPass;
 use crate::shadows::plan::DEFAULT_MAX_ATLAS_SIZE;
 use crate::shadows::source::{ShadowSource, ShadowStats, SourceInputs};
@@ -327,6 +328,21 @@ impl Renderer {
                 format!("{feature:?} ({why})")
             }
         })
+    }
+
+    /// What `ctx`'s device lacks to draw reflection probes' faces `passes`' way (`None`:
+    /// nothing): layered needs `CLIP_DISTANCES`, multiview six views per multiview pass.
+    pub fn probe_passes_unmet(ctx: &GpuContext, passes: ProbePasses) -> Option<String> {
+        match passes {
+            ProbePasses::Layered if !ctx.has(wgpu::Features::CLIP_DISTANCES) => {
+                Some("CLIP_DISTANCES".into())
+            }
+            ProbePasses::Multiview if ctx.multiview_views_per_pass() < 6 => Some(format!(
+                "MULTIVIEW with six views per pass (this device: {})",
+                ctx.multiview_views_per_pass()
+            )),
+            _ => None,
+        }
     }
 
     /// Moves the camera before the next frame. The next [`Renderer::render`] re-plans the

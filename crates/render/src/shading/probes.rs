@@ -64,25 +64,34 @@ pub enum ProbePasses {
     /// it there (seed 000's technique on colour targets; needs `CLIP_DISTANCES`); each tile is
     /// then copied into the face G-buffer its lighting reads.
     Layered,
+    /// A probe's six faces in one multiview pass (`view_index` → face) into six-layer targets,
+    /// each layer copied into the face G-buffer (needs six views per multiview pass).
+    Multiview,
 }
 
 impl ProbePasses {
     /// Every way, baseline first.
-    pub const ALL: &'static [ProbePasses] = &[ProbePasses::PerFace, ProbePasses::Layered];
+    pub const ALL: &'static [ProbePasses] = &[
+        ProbePasses::PerFace,
+        ProbePasses::Layered,
+        ProbePasses::Multiview,
+    ];
 
     /// How the faces' G-buffers are drawn this way, in words (for summaries).
     pub fn describe(self) -> &'static str {
         match self {
             ProbePasses::PerFace => "G-buffers one pass per face",
             ProbePasses::Layered => "G-buffers of every face in one layered pass",
+            ProbePasses::Multiview => "G-buffers of each probe's six faces in one multiview pass",
         }
     }
 
-    /// CLI name: `per-face` or `layered`.
+    /// CLI name: `per-face`, `layered` or `multiview`.
     pub fn name(self) -> &'static str {
         match self {
             ProbePasses::PerFace => "per-face",
             ProbePasses::Layered => "layered",
+            ProbePasses::Multiview => "multiview",
         }
     }
 }
@@ -100,7 +109,9 @@ impl std::str::FromStr for ProbePasses {
             .iter()
             .copied()
             .find(|p| p.name() == s)
-            .ok_or_else(|| format!("unknown probe passes '{s}' (expected per-face or layered)"))
+            .ok_or_else(|| {
+                format!("unknown probe passes '{s}' (expected per-face, layered or multiview)")
+            })
     }
 }
 
@@ -286,6 +297,7 @@ mod tests {
         let src = crate::gpu::shaders::compose(&[PROBES_WGSL]);
         same_layout!(in src, ProbeData, position, box_lo, box_hi);
         same_layout!(in crate::frame::gbuffer::faces_shader(), FaceView, view_proj, eye, tile);
+        same_layout!(in crate::frame::gbuffer::face_layers_shader(), FaceView, view_proj, eye, tile);
         // The uniform holds every probe a scene may have.
         let list = format!("items: array<ProbeData, {}>", Probe::MAX_COUNT);
         assert!(
