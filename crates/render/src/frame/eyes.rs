@@ -139,7 +139,7 @@ impl Stereo {
                 "a finite distance of at least 0",
             ));
         }
-        if width < 2 || width % 2 != 0 {
+        if width < 2 || !width.is_multiple_of(2) {
             return Err(RenderError::invalid_option(
                 "width",
                 width,

@@ -442,8 +442,7 @@ impl GBuffer {
             scene,
             &mv.views,
             writes,
-            true,
-            None,
+            (true, None),
             (1, base..base + 1),
         );
     }
@@ -539,7 +538,7 @@ impl GBuffer {
             return;
         };
         let writes = (timer, span, true, true);
-        self.record_into(encoder, scene, &mv.views, writes, true, None, (1, 0..1));
+        self.record_into(encoder, scene, &mv.views, writes, (true, None), (1, 0..1));
         let eye_width = self.size.0 / 2;
         // The layers' textures are position, normal, depth, emission (see `new`).
         let pairs = [(0, &self.position), (1, &self.normal)]
@@ -591,8 +590,7 @@ impl GBuffer {
             scene,
             &self.views,
             writes,
-            first,
-            rect,
+            (first, rect),
             (eyes, copies),
         );
     }
@@ -608,7 +606,7 @@ impl GBuffer {
         (begin, end): (bool, bool),
     ) {
         let writes = (timer, span, begin, end);
-        self.record_into(encoder, scene, &self.views, writes, true, None, (1, 0..1));
+        self.record_into(encoder, scene, &self.views, writes, (true, None), (1, 0..1));
     }
 
     /// [`Self::record_pass`] into `views` (position, normal, depth, emission): the frame's
@@ -619,8 +617,7 @@ impl GBuffer {
         scene: &GpuScene,
         views: &[wgpu::TextureView],
         (timer, span, first, last): (&GpuTimer, Option<Span>, bool, bool),
-        clear: bool,
-        rect: Option<[u32; 4]>,
+        (clear, rect): (bool, Option<[u32; 4]>),
         (eyes, copies): (u32, std::ops::Range<u32>),
     ) {
         let (pv, nv, dv) = (&views[0], &views[1], &views[2]);
