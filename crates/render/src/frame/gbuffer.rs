@@ -442,7 +442,7 @@ impl GBuffer {
             scene,
             &mv.views,
             writes,
-            (true, None),
+            (true, None, None),
             (1, base..base + 1),
         );
     }
@@ -538,7 +538,14 @@ impl GBuffer {
             return;
         };
         let writes = (timer, span, true, true);
-        self.record_into(encoder, scene, &mv.views, writes, (true, None), (1, 0..1));
+        self.record_into(
+            encoder,
+            scene,
+            &mv.views,
+            writes,
+            (true, None, None),
+            (1, 0..1),
+        );
         let eye_width = self.size.0 / 2;
         // The layers' textures are position, normal, depth, emission (see `new`).
         let pairs = [(0, &self.position), (1, &self.normal)]
@@ -590,23 +597,32 @@ impl GBuffer {
             scene,
             &self.views,
             writes,
-            (first, rect),
+            (first, rect, None),
             (eyes, copies),
         );
     }
 
     /// A mono pass that clears and writes the span's first (`begin`) and last (`end`)
     /// timestamps as asked: several frames' G-buffers drawn into the same targets one after
-    /// another (a reflection probe's faces), timed as one span.
+    /// another (a reflection probe's faces), timed as one span; `visible` (by draw) leaves out
+    /// the draws it marks false (culled by the caller against the view's frustum).
     pub(crate) fn record_timed(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         scene: &GpuScene,
         (timer, span): (&GpuTimer, Option<Span>),
         (begin, end): (bool, bool),
+        visible: Option<&[bool]>,
     ) {
         let writes = (timer, span, begin, end);
-        self.record_into(encoder, scene, &self.views, writes, (true, None), (1, 0..1));
+        self.record_into(
+            encoder,
+            scene,
+            &self.views,
+            writes,
+            (true, None, visible),
+            (1, 0..1),
+        );
     }
 
     /// [`Self::record_pass`] into `views` (position, normal, depth, emission): the frame's
@@ -617,7 +633,7 @@ impl GBuffer {
         scene: &GpuScene,
         views: &[wgpu::TextureView],
         (timer, span, first, last): (&GpuTimer, Option<Span>, bool, bool),
-        (clear, rect): (bool, Option<[u32; 4]>),
+        (clear, rect, visible): (bool, Option<[u32; 4]>, Option<&[bool]>),
         (eyes, copies): (u32, std::ops::Range<u32>),
     ) {
         let (pv, nv, dv) = (&views[0], &views[1], &views[2]);
@@ -680,7 +696,10 @@ impl GBuffer {
         // Opaque surfaces first (early depth testing), then the alpha-tested ones.
         for masked in [false, true] {
             let mut set = None;
-            for d in scene.draws.iter().filter(|d| d.masked == masked) {
+            let drawn = |(k, d): &(usize, &crate::gpu_scene::instances::DrawItem)| {
+                d.masked == masked && visible.is_none_or(|v| v.get(*k).copied().unwrap_or(true))
+            };
+            for (_, d) in scene.draws.iter().enumerate().filter(drawn) {
                 let key = (masked, d.camera_cull);
                 if set != Some(key) {
                     pass.set_pipeline(&self.pipelines[&key]);

@@ -18,6 +18,7 @@
 //! frame only when a light, a caster or the light count changed since they were drawn, or the
 //! camera moved where the shadows depend on it (directional lights' cascades, virtual pages).
 
+use manyshadows_scene::light_space;
 use manyshadows_scene::Scene;
 
 use crate::error::RenderError;
@@ -63,6 +64,9 @@ pub(crate) struct ProbeFrame {
     layered: Option<LayeredFaces>,
     /// Drawn multiview: the faces' views and the six-layer G-buffer of one probe's pass.
     multiview: Option<(wgpu::Buffer, GBuffer)>,
+    /// Drawn one pass per face: per face, per draw, whether its bounding sphere meets the
+    /// face's frustum (the others are not drawn into that face).
+    visible: Vec<Vec<bool>>,
     /// The faces must be drawn in the next frame.
     pub(crate) dirty: bool,
     /// Faces drawn by the last frame.
@@ -139,6 +143,7 @@ impl ProbeFrame {
             lighting,
             layered,
             multiview,
+            visible: Vec::new(),
             dirty: true,
             faces_drawn: 0,
         })
@@ -212,6 +217,20 @@ impl ProbeFrame {
             }
         }
         ctx.queue.write_buffer(&self.staging, 0, &bytes);
+        // Per-face culling of whole instances (one pass per face draws only what it sees).
+        self.visible = scene
+            .probes
+            .iter()
+            .flat_map(|p| p.face_cameras(scene.camera.near, scene.camera.far))
+            .map(|cam| {
+                let planes = light_space::frustum_planes(cam.projection(1.0) * cam.view());
+                gpu_scene
+                    .draws
+                    .iter()
+                    .map(|d| light_space::sphere_in_planes(&planes, d.sphere.0, d.sphere.1))
+                    .collect()
+            })
+            .collect();
         if let Some(l) = &self.layered {
             l.update(ctx, scene, frame, side);
         }
@@ -263,8 +282,9 @@ impl ProbeFrame {
                 }
                 (None, None) => {
                     let writes = (first, false);
+                    let visible = self.visible.get(face).map(|v| v.as_slice());
                     self.gbuffer
-                        .record_timed(encoder, gpu_scene, (timer, span), writes);
+                        .record_timed(encoder, gpu_scene, (timer, span), writes, visible);
                 }
             }
             let target = &self.maps.face_views[face];
