@@ -487,15 +487,25 @@ impl GBuffer {
     }
 
     /// Square views in tiles (`GBufferViews::Faces`) in their one pass, which begins the span
-    /// (passes recorded after it end it).
+    /// (passes recorded after it end it); `visible[draw · views + view]` false leaves that
+    /// instance out of that view (consecutive views still drawn, one draw per run).
     pub(crate) fn record_faces_begin(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         scene: &GpuScene,
         (timer, span): (&GpuTimer, Option<Span>),
+        visible: Option<&[bool]>,
     ) {
         let n = self.faces.unwrap_or(1);
-        self.record_pass(encoder, scene, (timer, span, true, false), None, (n, 0..n));
+        let writes = (timer, span, true, false);
+        self.record_into(
+            encoder,
+            scene,
+            &self.views,
+            writes,
+            (true, None, visible),
+            (n, 0..n),
+        );
     }
 
     fn record_views(
@@ -696,21 +706,41 @@ impl GBuffer {
         // Opaque surfaces first (early depth testing), then the alpha-tested ones.
         for masked in [false, true] {
             let mut set = None;
-            let drawn = |(k, d): &(usize, &crate::gpu_scene::instances::DrawItem)| {
-                d.masked == masked && visible.is_none_or(|v| v.get(*k).copied().unwrap_or(true))
-            };
-            for (_, d) in scene.draws.iter().enumerate().filter(drawn) {
-                let key = (masked, d.camera_cull);
-                if set != Some(key) {
-                    pass.set_pipeline(&self.pipelines[&key]);
-                    set = Some(key);
+            for (k, d) in scene.draws.iter().enumerate() {
+                if d.masked != masked {
+                    continue;
                 }
-                let m = d.mesh;
-                pass.draw_indexed(
-                    m.first_index..m.first_index + m.index_count,
-                    m.base_vertex,
-                    eyes * d.instance + copies.start..eyes * d.instance + copies.end,
-                );
+                // The draw's copies (views) to draw: all, or the runs `visible` marks (index
+                // `draw · eyes + copy`).
+                let shown = |c: u32| {
+                    visible.is_none_or(|v| {
+                        v.get(k * eyes as usize + c as usize)
+                            .copied()
+                            .unwrap_or(true)
+                    })
+                };
+                let mut c = copies.start;
+                while c < copies.end {
+                    if !shown(c) {
+                        c += 1;
+                        continue;
+                    }
+                    let run = c;
+                    while c < copies.end && shown(c) {
+                        c += 1;
+                    }
+                    let key = (masked, d.camera_cull);
+                    if set != Some(key) {
+                        pass.set_pipeline(&self.pipelines[&key]);
+                        set = Some(key);
+                    }
+                    let m = d.mesh;
+                    pass.draw_indexed(
+                        m.first_index..m.first_index + m.index_count,
+                        m.base_vertex,
+                        eyes * d.instance + run..eyes * d.instance + c,
+                    );
+                }
             }
         }
     }

@@ -64,9 +64,11 @@ pub(crate) struct ProbeFrame {
     layered: Option<LayeredFaces>,
     /// Drawn multiview: the faces' views and the six-layer G-buffer of one probe's pass.
     multiview: Option<(wgpu::Buffer, GBuffer)>,
-    /// Drawn one pass per face: per face, per draw, whether its bounding sphere meets the
-    /// face's frustum (the others are not drawn into that face).
+    /// Per face, per draw, whether its bounding sphere meets the face's frustum (the others
+    /// are not drawn into that face).
     visible: Vec<Vec<bool>>,
+    /// The same by draw then face (`draw · faces + face`), for the layered pass.
+    visible_by_draw: Vec<bool>,
     /// The faces must be drawn in the next frame.
     pub(crate) dirty: bool,
     /// Faces drawn by the last frame.
@@ -144,6 +146,7 @@ impl ProbeFrame {
             layered,
             multiview,
             visible: Vec::new(),
+            visible_by_draw: Vec::new(),
             dirty: true,
             faces_drawn: 0,
         })
@@ -231,6 +234,10 @@ impl ProbeFrame {
                     .collect()
             })
             .collect();
+        let faces = self.visible.len();
+        self.visible_by_draw = (0..gpu_scene.draws.len() * faces)
+            .map(|i| self.visible[i % faces][i / faces])
+            .collect();
         if let Some(l) = &self.layered {
             l.update(ctx, scene, frame, side);
         }
@@ -258,8 +265,9 @@ impl ProbeFrame {
         let faces = 6 * self.maps.count;
         let size = std::mem::size_of::<FrameUniforms>() as u64;
         if let Some(l) = &self.layered {
+            let visible = Some(self.visible_by_draw.as_slice());
             l.atlas
-                .record_faces_begin(encoder, gpu_scene, (timer, span));
+                .record_faces_begin(encoder, gpu_scene, (timer, span), visible);
         }
         for face in 0..faces {
             encoder.copy_buffer_to_buffer(
