@@ -34,10 +34,16 @@ fn vs_main(
 }
 
 fn surface_vertex(position: vec3<f32>, normal: vec3<f32>, uv: vec2<f32>, instance: u32, eye: u32) -> VsOut {
+    return surface_vertex_seen(position, normal, uv, instance, frame.eye_view_proj[eye], eye);
+}
+
+// The vertex of scene instance `instance` seen through `view_proj` by view `eye` (an eye of
+// the frame, or a probe face: `gbuffer_face_layers.wgsl`, `gbuffer_faces.wgsl`).
+fn surface_vertex_seen(position: vec3<f32>, normal: vec3<f32>, uv: vec2<f32>, instance: u32, view_proj: mat4x4<f32>, eye: u32) -> VsOut {
     let inst = instances[instance];
     let world = inst.model * vec4<f32>(position, 1.0);
     var out: VsOut;
-    out.clip = frame.eye_view_proj[eye] * world;
+    out.clip = view_proj * world;
     out.world = world.xyz;
     out.normal = (inst.normal * vec4<f32>(normal, 0.0)).xyz;
     out.material = inst.material.x;

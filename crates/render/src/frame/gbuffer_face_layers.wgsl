@@ -13,14 +13,5 @@ fn vs_face_layers(
 ) -> VsOut {
     let n = max(u32(face_views[0].tile.w), 1u);
     let f = 6u * (instance / n) + layer;
-    let inst = instances[instance % n];
-    let world = inst.model * vec4<f32>(position, 1.0);
-    var out: VsOut;
-    out.clip = face_views[f].view_proj * world;
-    out.world = world.xyz;
-    out.normal = (inst.normal * vec4<f32>(normal, 0.0)).xyz;
-    out.material = inst.material.x;
-    out.uv = uv;
-    out.eye = f;
-    return out;
+    return surface_vertex_seen(position, normal, uv, instance % n, face_views[f].view_proj, f);
 }

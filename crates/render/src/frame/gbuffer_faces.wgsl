@@ -23,9 +23,8 @@ fn vs_faces(
 ) -> FacesVsOut {
     let views = arrayLength(&face_views);
     let f = instance % views;
-    let inst = instances[instance / views];
-    let world = inst.model * vec4<f32>(position, 1.0);
-    let c = face_views[f].view_proj * world;
+    let v = surface_vertex_seen(position, normal, uv, instance / views, face_views[f].view_proj, f);
+    let c = v.clip;
     // The atlas's size in pixels is the frame's viewport.
     let tile = face_views[f].tile;
     let s = tile.z / frame.viewport.xy;
@@ -36,10 +35,10 @@ fn vs_faces(
     var out: FacesVsOut;
     out.clip = vec4<f32>(c.x * s.x + c.w * o.x, c.y * s.y + c.w * o.y, c.z, c.w);
     out.inside = array<f32, 4>(c.w + c.x, c.w - c.x, c.w + c.y, c.w - c.y);
-    out.world = world.xyz;
-    out.normal = (inst.normal * vec4<f32>(normal, 0.0)).xyz;
-    out.material = inst.material.x;
-    out.uv = uv;
+    out.world = v.world;
+    out.normal = v.normal;
+    out.material = v.material;
+    out.uv = v.uv;
     out.eye = f;
     return out;
 }
