@@ -3,6 +3,9 @@
 //! reference can ray-trace from exactly the points the frame shades.
 
 use crate::frame::eyes::EyePasses;
+pub use crate::frame::gbuffer_shaders::{
+    face_layers_shader, faces_shader, layered_shader, multiview_shader, shader,
+};
 use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu_scene::instances::{
@@ -743,121 +746,5 @@ impl GBuffer {
                 }
             }
         }
-    }
-}
-
-/// Where the G-buffer's views are seen from, for one camera or two eyes.
-const EYES_OF_FRAME: &str = "fn eye_position(e: u32) -> vec3<f32> { return frame.eye_pos[e].xyz; }";
-
-/// The G-buffer pass's WGSL.
-pub fn shader() -> String {
-    crate::gpu::shaders::compose(&[
-        crate::gpu::shaders::COMMON,
-        include_str!("gbuffer.wgsl"),
-        EYES_OF_FRAME,
-    ])
-}
-
-/// The same with `vs_faces`: square views in tiles in one layered pass (needs
-/// `CLIP_DISTANCES`).
-pub fn faces_shader() -> String {
-    crate::gpu::shaders::compose(&[
-        "enable clip_distances;",
-        crate::gpu::shaders::COMMON,
-        include_str!("gbuffer.wgsl"),
-        include_str!("gbuffer_face_views.wgsl"),
-        include_str!("gbuffer_faces.wgsl"),
-    ])
-}
-
-/// The same with `vs_face_layers`: a probe's six faces in one multiview pass (needs
-/// `MULTIVIEW` with six views).
-pub fn face_layers_shader() -> String {
-    crate::gpu::shaders::compose(&[
-        crate::gpu::shaders::COMMON,
-        include_str!("gbuffer.wgsl"),
-        include_str!("gbuffer_face_views.wgsl"),
-        include_str!("gbuffer_face_layers.wgsl"),
-    ])
-}
-
-/// The same with `vs_multiview`: both eyes of a stereo frame in one multiview pass (needs
-/// `MULTIVIEW`).
-pub fn multiview_shader() -> String {
-    crate::gpu::shaders::compose(&[
-        crate::gpu::shaders::COMMON,
-        include_str!("gbuffer.wgsl"),
-        include_str!("gbuffer_multiview.wgsl"),
-        EYES_OF_FRAME,
-    ])
-}
-
-/// The same with `vs_layered`: both eyes of a stereo frame in one draw (needs
-/// `CLIP_DISTANCES`).
-pub fn layered_shader() -> String {
-    crate::gpu::shaders::compose(&[
-        "enable clip_distances;",
-        crate::gpu::shaders::COMMON,
-        include_str!("gbuffer.wgsl"),
-        include_str!("gbuffer_layered.wgsl"),
-        EYES_OF_FRAME,
-    ])
-}
-
-#[cfg(test)]
-mod shader_tests {
-    /// What this module composes is WGSL a WebGPU device accepts.
-    #[test]
-    fn shader_validates_for_webgpu() {
-        crate::gpu::shaders::validate_for_webgpu(
-            "gbuffer",
-            &super::shader(),
-            wgpu::Features::empty(),
-        )
-        .unwrap_or_else(|e| panic!("{e}"));
-    }
-
-    /// The faces variant (probes drawn layered), with the feature it enables.
-    #[test]
-    fn faces_shader_validates_for_webgpu() {
-        crate::gpu::shaders::validate_for_webgpu(
-            "gbuffer faces",
-            &super::faces_shader(),
-            wgpu::Features::CLIP_DISTANCES,
-        )
-        .unwrap_or_else(|e| panic!("{e}"));
-    }
-
-    /// The probe faces' multiview variant, with the feature it needs.
-    #[test]
-    fn face_layers_shader_validates_for_webgpu() {
-        crate::gpu::shaders::validate_for_webgpu(
-            "gbuffer face layers",
-            &super::face_layers_shader(),
-            wgpu::Features::MULTIVIEW,
-        )
-        .unwrap_or_else(|e| panic!("{e}"));
-    }
-
-    /// The multiview stereo variant, with the feature it needs.
-    #[test]
-    fn multiview_shader_validates_for_webgpu() {
-        crate::gpu::shaders::validate_for_webgpu(
-            "gbuffer multiview",
-            &super::multiview_shader(),
-            wgpu::Features::MULTIVIEW,
-        )
-        .unwrap_or_else(|e| panic!("{e}"));
-    }
-
-    /// The layered stereo variant too, with the feature it enables.
-    #[test]
-    fn layered_shader_validates_for_webgpu() {
-        crate::gpu::shaders::validate_for_webgpu(
-            "gbuffer layered",
-            &super::layered_shader(),
-            wgpu::Features::CLIP_DISTANCES,
-        )
-        .unwrap_or_else(|e| panic!("{e}"));
     }
 }

@@ -6,4 +6,5 @@ pub mod clusters;
 pub mod eyes;
 pub mod gbuffer;
 pub mod gbuffer_readback;
+pub mod gbuffer_shaders;
 pub mod visibility_mask;

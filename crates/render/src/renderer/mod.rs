@@ -15,6 +15,7 @@
 //! frames shaded with given visibility); `uniforms` the frame's uniform block.
 
 #[cfg(not(target_arch = "wasm32"))]
+mod capabilities;
 mod estimate;
 mod inspect;
 mod probes;

@@ -11,7 +11,6 @@ use wgpu::util::DeviceExt;
 use super::probes::ProbeFrame;
 use crate::error::RenderError;
 use crate::frame::clusters::{LightClusters, LightLoop};
-use crate::frame::eyes::EyePasses;
 use crate::frame::gbuffer::{GBuffer, GBufferViews};
 use crate::frame::visibility_mask::{SoftVisibility, VisibilityMask};
 use crate::gpu::context::GpuContext;
@@ -21,7 +20,6 @@ use crate::gpu_scene::instances::GpuScene;
 use crate::report::{Frame, FrameTimings, SubmittedFrame};
 use crate::settings::RenderSettings;
 use crate::shading::lighting::{LightingInputs, LightingPass};
-use crate::shading::probes::ProbePasses;
 use crate::shading::visibility::VisibilityPass;
 use crate::shadows::plan::DEFAULT_MAX_ATLAS_SIZE;
 use crate::shadows::source::{ShadowSource, ShadowStats, SourceInputs};
@@ -306,43 +304,6 @@ impl Renderer {
                 dirty: false,
             })
         })
-    }
-
-    /// What `ctx`'s device lacks to draw a stereo frame's eyes `passes`' way, and what for
-    /// (`None`: nothing). Multiview needs two views in one pass: the `MULTIVIEW` feature with a
-    /// view count of at least 2 (OpenGL's llvmpipe offers the feature with none; lavapipe
-    /// before Mesa 25 one: `GpuContext::multiview_views_per_pass`).
-    pub fn stereo_unmet(ctx: &GpuContext, passes: EyePasses) -> Option<String> {
-        let (feature, why) = passes.needs()?;
-        let met = match passes {
-            EyePasses::Multiview => ctx.multiview_views_per_pass() >= 2,
-            _ => ctx.has(feature),
-        };
-        (!met).then(|| {
-            if passes == EyePasses::Multiview {
-                format!(
-                    "{feature:?} with two views per pass ({why}; this device: {})",
-                    ctx.multiview_views_per_pass()
-                )
-            } else {
-                format!("{feature:?} ({why})")
-            }
-        })
-    }
-
-    /// What `ctx`'s device lacks to draw reflection probes' faces `passes`' way (`None`:
-    /// nothing): layered needs `CLIP_DISTANCES`, multiview six views per multiview pass.
-    pub fn probe_passes_unmet(ctx: &GpuContext, passes: ProbePasses) -> Option<String> {
-        match passes {
-            ProbePasses::Layered if !ctx.has(wgpu::Features::CLIP_DISTANCES) => {
-                Some("CLIP_DISTANCES".into())
-            }
-            ProbePasses::Multiview if ctx.multiview_views_per_pass() < 6 => Some(format!(
-                "MULTIVIEW with six views per pass (this device: {})",
-                ctx.multiview_views_per_pass()
-            )),
-            _ => None,
-        }
     }
 
     /// Moves the camera before the next frame. The next [`Renderer::render`] re-plans the
