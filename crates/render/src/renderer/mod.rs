@@ -12,10 +12,11 @@
 //!
 //! `state` holds the renderer and the frame loop (creation, the setters, `render`,
 //! `render_to`, GPU times); `inspect` what callers read of it (plans, estimates, read-backs,
-//! frames shaded with given visibility); `uniforms` the frame's uniform block.
+//! frames shaded with given visibility); `uniforms` the frame's uniform block; `capabilities`
+//! what a device needs for stereo and probe faces in one pass.
 
-#[cfg(not(target_arch = "wasm32"))]
 mod capabilities;
+#[cfg(not(target_arch = "wasm32"))]
 mod estimate;
 mod inspect;
 mod probes;
