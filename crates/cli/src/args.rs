@@ -245,8 +245,9 @@ pub(crate) struct RenderArgs {
     pub(crate) probe_resolution: u32,
     /// How the probes' face G-buffers are drawn: per-face (one pass each, the baseline),
     /// layered (every face of every probe in one instanced pass, each copy clipped to its
-    /// tile of an atlas; seed 000's layered rendering) or multiview (each probe's six faces in
-    /// one multiview pass; Vulkan).
+    /// tile of an atlas; seed 000's layered rendering), multiview (each probe's six faces in
+    /// one multiview pass; Vulkan) or gpu-driven (triangle clusters culled per face by a
+    /// compute pass, drawn into the layered atlas's tiles by indirect multi-draws; seed 002).
     #[arg(long, default_value_t = manyshadows::ProbePasses::default(),
           value_parser = parse_probe_passes)]
     pub(crate) probe_passes: manyshadows::ProbePasses,
@@ -570,7 +571,7 @@ pub fn parse_pcf(s: &str) -> Result<Pcf, String> {
     s.parse()
 }
 
-/// `per-face`, `layered` or `multiview`.
+/// `per-face`, `layered`, `multiview` or `gpu-driven`.
 pub(crate) fn parse_probe_passes(s: &str) -> Result<manyshadows::ProbePasses, String> {
     s.parse()
 }

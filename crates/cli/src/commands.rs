@@ -123,8 +123,10 @@ pub(crate) enum BenchCommand {
     #[command(mut_arg("out_dir", |a| a.default_value("bench-estimate").required(false)))]
     Estimate(Box<estimate_bench::EstimateArgs>),
     /// Reflection probes' faces: one G-buffer pass per face against every face in one layered
-    /// pass, per probe count and face size, a caster moving so every face is redrawn; probes
-    /// stage and whole-frame GPU time, CPU time, ratios; table, results.json and a plot.
+    /// pass, six faces per multiview pass, and triangle clusters culled per face on the GPU
+    /// (indirect multi-draws), per probe count and face size, a caster moving so every face is
+    /// redrawn; probes stage and whole-frame GPU time, CPU time, ratios; table, results.json
+    /// and a plot.
     #[command(mut_arg("out_dir", |a| a.default_value("bench-probes").required(false)))]
     Probes(Box<probes_bench::ProbesArgs>),
     /// Stereo frames: both eyes' G-buffers in one layered or multiview pass against one pass

@@ -139,13 +139,13 @@ pub fn probes(args: &ProbesArgs) -> Result<()> {
     );
     let _ = writeln!(
         text,
-        "{:>6} | {:>5} | {:<9} | {:>10} | {:>6} | {:>9} | {:>7}",
+        "{:>6} | {:>5} | {:<10} | {:>10} | {:>6} | {:>9} | {:>7}",
         "probes", "side", "method", "probes ms", "ratio", "frame ms", "CPU ms"
     );
     for r in &records {
         let _ = writeln!(
             text,
-            "{:>6} | {:>5} | {:<9} | {:>10} | {:>6} | {:>9} | {:>7.2}",
+            "{:>6} | {:>5} | {:<10} | {:>10} | {:>6} | {:>9} | {:>7.2}",
             r.probes,
             r.side,
             r.method,

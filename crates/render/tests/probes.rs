@@ -427,12 +427,13 @@ fn a_mirror_shows_the_wall_its_reflected_ray_reaches() {
 }
 
 /// The probes' faces drawn in one layered pass (each instance once per face, into its tile of
-/// an atlas G-buffer) or one multiview pass per probe (each face in its layer, at the origin)
-/// against one pass per face: the same texels but where a triangle's edge or a shadow's edge
-/// tips under the layered tile offset (the rasterizer's rounding), a measured handful, bounded
-/// here; multiview draws each face as one pass would.
+/// an atlas G-buffer), one multiview pass per probe (each face in its layer, at the origin) or
+/// GPU-driven (triangle clusters culled per face in compute, indirect multi-draws into the
+/// layered way's tiles) against one pass per face: the same texels but where a triangle's edge
+/// or a shadow's edge tips under the tile offset (the rasterizer's rounding), a measured
+/// handful, bounded here; multiview draws each face as one pass would.
 #[test]
-fn faces_drawn_layered_or_multiview_match_faces_drawn_one_pass_each() {
+fn faces_drawn_in_one_pass_match_faces_drawn_one_pass_each() {
     use manyshadows::ProbePasses;
     let ctx = common::context();
     let mut scene = atrium(LightMix::Spot);
@@ -463,15 +464,19 @@ fn faces_drawn_layered_or_multiview_match_faces_drawn_one_pass_each() {
         )
     };
     let one = faces(ProbePasses::PerFace).expect("per face");
-    // Where the device has the features: layered everywhere here (Vulkan and GL),
-    // multiview on Vulkan.
+    // Where the device has the features: layered and GPU-driven everywhere here (Vulkan and
+    // GL), multiview on Vulkan.
     let expected = if ctx.info.backend == manyshadows::wgpu::Backend::Vulkan {
-        2
+        3
     } else {
-        1
+        2
     };
     let mut compared = 0;
-    for passes in [ProbePasses::Layered, ProbePasses::Multiview] {
+    for passes in [
+        ProbePasses::Layered,
+        ProbePasses::Multiview,
+        ProbePasses::Clusters,
+    ] {
         let Some(other) = faces(passes) else {
             continue;
         };
@@ -498,5 +503,104 @@ fn faces_drawn_layered_or_multiview_match_faces_drawn_one_pass_each() {
     assert_eq!(
         compared, expected,
         "a way was refused where the device has it"
+    );
+}
+
+/// A single-sided-able grid of `n` × `n` quads in the plane x = 0 (y, z in 0..1), its front
+/// (counter-clockwise winding, normals) facing +x.
+fn grid(n: u32) -> manyshadows::scene::Mesh {
+    let (mut positions, mut indices) = (Vec::new(), Vec::new());
+    for j in 0..=n {
+        for i in 0..=n {
+            positions.push(Vec3::new(0.0, j as f32 / n as f32, i as f32 / n as f32));
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let a = j * (n + 1) + i;
+            let (b, c, d) = (a + n + 1, a + 1, a + n + 2);
+            // (b − a) × (c − a) = +y × +z = +x.
+            indices.extend([a, b, c, c, b, d]);
+        }
+    }
+    manyshadows::scene::Mesh {
+        name: "grid".into(),
+        normals: vec![Vec3::X; positions.len()],
+        uvs: Vec::new(),
+        positions,
+        indices,
+    }
+}
+
+/// GPU-driven faces cull per face on the GPU, and only what a face cannot show: six 90° faces
+/// split the directions around the probe, so a cluster (a piece of a mesh) lies in one face's
+/// frustum, or two or three where it straddles their edges, and the cull keeps well under half
+/// of every cluster × every face. A grid of 8,192 triangles stands beside the probe, its front
+/// facing away: single-sided, each of its clusters faces away from the probe and is dropped
+/// from every face (at least one pair per cluster fewer kept). And the faces stay those one
+/// pass per face draws with the same materials (which culls whole instances and back faces).
+#[test]
+fn gpu_driven_faces_keep_only_the_clusters_a_face_can_show() {
+    use manyshadows::ProbePasses;
+    let ctx = common::context();
+    let grid_triangles: u64 = 2 * 64 * 64;
+    let run = |single_sided: bool, passes: ProbePasses| {
+        let mut scene = atrium(LightMix::Spot);
+        for m in &mut scene.materials {
+            m.cull_back_faces = single_sided;
+        }
+        scene.meshes.push(grid(64));
+        let transform = glam::Mat4::from_translation(Vec3::new(7.5, 0.5, -1.0))
+            * glam::Mat4::from_scale(Vec3::splat(2.0));
+        scene.instances.push(manyshadows::scene::Instance::caster(
+            scene.meshes.len() - 1,
+            0,
+            transform,
+        ));
+        let settings = settings()
+            .with_width(64)
+            .with_height(36)
+            .with_probe_passes(passes);
+        let mut r = Renderer::new(&ctx, &scene, settings).expect("renderer");
+        r.render().expect("frame");
+        let faces: Vec<Vec<[f32; 4]>> = (0..6)
+            .map(|f| r.read_probe_face(0, f).expect("face"))
+            .collect();
+        (r.probe_clusters_kept().expect("read-back"), faces)
+    };
+    let mut kept = Vec::new();
+    for single_sided in [false, true] {
+        let (counts, faces) = run(single_sided, ProbePasses::Clusters);
+        let (k, offered) = counts.expect("drawn GPU-driven");
+        eprintln!("single-sided {single_sided}: the cull kept {k} of {offered} cluster-face pairs");
+        assert!(offered > 0 && offered % 6 == 0, "offered {offered}");
+        assert!(
+            k > 0 && 2 * k < offered,
+            "kept {k} of {offered}: a cluster lies in a few of the six faces"
+        );
+        kept.push(k);
+        let (none, one) = run(single_sided, ProbePasses::PerFace);
+        assert_eq!(none, None, "per-face draws no clusters");
+        let (mut texels, mut differ) = (0usize, 0usize);
+        for (a, b) in faces.iter().zip(&one) {
+            for (x, y) in a.iter().zip(b) {
+                texels += 1;
+                differ += usize::from((0..3).any(|c| display(x[c]).abs_diff(display(y[c])) > 2));
+            }
+        }
+        eprintln!("  {differ} of {texels} texels differ from per-face by more than 2 levels");
+        assert!(
+            differ * 200 <= texels,
+            "single-sided {single_sided}: {differ} of {texels} texels differ from per-face"
+        );
+    }
+    // The grid's clusters: at most 256 triangles each (renderer/probe_clusters.rs).
+    let grid_clusters = grid_triangles.div_ceil(256);
+    assert!(
+        kept[1] + grid_clusters <= kept[0],
+        "single-sided, the grid's {grid_clusters} clusters face away from the probe and are \
+         dropped from every face (kept {} against {})",
+        kept[1],
+        kept[0]
     );
 }

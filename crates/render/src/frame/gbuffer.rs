@@ -4,7 +4,8 @@
 
 use crate::frame::eyes::EyePasses;
 pub use crate::frame::gbuffer_shaders::{
-    face_layers_shader, faces_shader, layered_shader, multiview_shader, shader,
+    face_clusters_shader, face_layers_shader, faces_shader, layered_shader, multiview_shader,
+    shader,
 };
 use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, Span};
@@ -45,7 +46,7 @@ pub struct GBuffer {
     bind_group: wgpu::BindGroup,
     /// With stereo: how the eyes are drawn.
     stereo: Option<EyePasses>,
-    /// With square views in tiles: how many (drawn layered).
+    /// With square views in tiles: how many (drawn layered, or from culled clusters).
     faces: Option<u32>,
     /// With stereo drawn multiview: two-layer targets (position, normal, depth, emission),
     /// one layer per eye, copied into the halves after the pass.
@@ -68,6 +69,17 @@ pub enum GBufferViews<'a> {
         views: &'a wgpu::Buffer,
         /// How many.
         count: u32,
+    },
+    /// Square views in tiles as for `Faces`, drawn from triangle clusters that a compute pass
+    /// culled per view, by indirect multi-draws (`record_face_clusters`); `pull` is the layout
+    /// of the draws' second bind group (`gbuffer_pull.rs`).
+    FaceClusters {
+        /// The views, `array<FaceView>`.
+        views: &'a wgpu::Buffer,
+        /// How many.
+        count: u32,
+        /// `gbuffer_pull::layout`.
+        pull: &'a wgpu::BindGroupLayout,
     },
     /// Six square views (a probe's faces) per multiview pass, each into its layer of six-layer
     /// targets at the origin (needs six views per multiview pass): `views` as for `Faces`.
@@ -139,10 +151,15 @@ impl GBuffer {
         };
         let (faces, face_buffer) = match views_drawn {
             GBufferViews::Faces { views, count } => (Some(count), Some(views)),
+            GBufferViews::FaceClusters { views, count, .. } => (Some(count), Some(views)),
             GBufferViews::FaceLayers { views } => (None, Some(views)),
             _ => (None, None),
         };
         let face_layers = matches!(views_drawn, GBufferViews::FaceLayers { .. });
+        let pull = match views_drawn {
+            GBufferViews::FaceClusters { pull, .. } => Some(pull),
+            _ => None,
+        };
         // Views per multiview pass, and each view's target size.
         let (layers, layer_width) = if face_layers {
             (6, w)
@@ -188,7 +205,13 @@ impl GBuffer {
         );
         let device = &ctx.device;
         let layered = stereo == Some(EyePasses::Layered);
-        let module = if faces.is_some() {
+        let module = if pull.is_some() {
+            crate::gpu::shaders::module(
+                device,
+                "gbuffer.face_clusters.shader",
+                &face_clusters_shader(),
+            )
+        } else if faces.is_some() {
             crate::gpu::shaders::module(device, "gbuffer.faces.shader", &faces_shader())
         } else if face_layers {
             crate::gpu::shaders::module(device, "gbuffer.face_layers.shader", &face_layers_shader())
@@ -257,8 +280,9 @@ impl GBuffer {
             }))
             .collect::<Vec<_>>(),
         });
+        let groups: Vec<&wgpu::BindGroupLayout> = std::iter::once(&layout).chain(pull).collect();
         let pipeline_layout =
-            crate::gpu::pipelines::pipeline_layout(device, "gbuffer.pipeline_layout", &[&layout]);
+            crate::gpu::pipelines::pipeline_layout(device, "gbuffer.pipeline_layout", &groups);
         let color_targets: Vec<Option<wgpu::ColorTargetState>> =
             [POSITION_FORMAT, NORMAL_FORMAT, EMISSION_FORMAT]
                 .into_iter()
@@ -276,7 +300,9 @@ impl GBuffer {
                 layout: Some(&pipeline_layout),
                 vertex: wgpu::VertexState {
                     module: &module,
-                    entry_point: Some(if faces.is_some() {
+                    entry_point: Some(if pull.is_some() {
+                        "vs_face_clusters"
+                    } else if faces.is_some() {
                         "vs_faces"
                     } else if face_layers {
                         "vs_face_layers"
@@ -288,7 +314,12 @@ impl GBuffer {
                         "vs_main"
                     }),
                     compilation_options: Default::default(),
-                    buffers: &[Some(POSITION_LAYOUT), Some(NORMAL_LAYOUT), Some(UV_LAYOUT)],
+                    // Clusters' vertices are read from storage.
+                    buffers: if pull.is_some() {
+                        &[]
+                    } else {
+                        &[Some(POSITION_LAYOUT), Some(NORMAL_LAYOUT), Some(UV_LAYOUT)]
+                    },
                 },
                 primitive: wgpu::PrimitiveState {
                     front_face,
@@ -649,54 +680,7 @@ impl GBuffer {
         (clear, rect, visible): (bool, Option<[u32; 4]>, Option<&[bool]>),
         (eyes, copies): (u32, std::ops::Range<u32>),
     ) {
-        let (pv, nv, dv) = (&views[0], &views[1], &views[2]);
-        let load = if clear {
-            wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)
-        } else {
-            wgpu::LoadOp::Load
-        };
-        let target = |view| {
-            Some(wgpu::RenderPassColorAttachment {
-                view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })
-        };
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("gbuffer.pass"),
-            color_attachments: &if let Some(ev) = views.get(3) {
-                vec![target(pv), target(nv), target(ev)]
-            } else {
-                vec![target(pv), target(nv)]
-            },
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: dv,
-                depth_ops: Some(wgpu::Operations {
-                    // The first pass clears the whole image, the second eye's loads it.
-                    load: if clear {
-                        wgpu::LoadOp::Clear(1.0)
-                    } else {
-                        wgpu::LoadOp::Load
-                    },
-                    store: if last {
-                        wgpu::StoreOp::Discard
-                    } else {
-                        wgpu::StoreOp::Store
-                    },
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: timer.render_writes(span, first, last),
-            occlusion_query_set: None,
-            multiview_mask: self
-                .multiview
-                .as_ref()
-                .and_then(|mv| std::num::NonZeroU32::new((1 << mv.layers) - 1)),
-        });
+        let mut pass = self.begin_pass(encoder, views, (timer, span, first, last), clear);
         if let Some([x, y, w, h]) = rect {
             pass.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
             pass.set_scissor_rect(x, y, w, h);
@@ -746,5 +730,88 @@ impl GBuffer {
                 }
             }
         }
+    }
+
+    /// One round of GPU-culled clusters (`GBufferViews::FaceClusters`): a pass into the
+    /// atlas (cleared when `clear`; the span's timestamps as `first` and `last` say) with the
+    /// pipeline of `key` (alpha test, face culling) and `pull` bound at `offset`, in which
+    /// `draw` records the round's indirect multi-draw.
+    pub(crate) fn record_face_clusters(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (timer, span, first, last): (&GpuTimer, Option<Span>, bool, bool),
+        clear: bool,
+        (pull, offset): (&wgpu::BindGroup, u32),
+        key: (bool, CameraCull),
+        draw: impl FnOnce(&mut wgpu::RenderPass<'_>),
+    ) {
+        let mut pass = self.begin_pass(encoder, &self.views, (timer, span, first, last), clear);
+        let Some(pipeline) = self.pipelines.get(&key) else {
+            debug_assert!(false, "no G-buffer pipeline for {key:?}");
+            return;
+        };
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.set_bind_group(1, pull, &[offset]);
+        draw(&mut pass);
+    }
+
+    /// A pass into `views` (position, normal, depth, emission), cleared when `clear`, its
+    /// timestamps as `first` and `last` say.
+    fn begin_pass<'e>(
+        &self,
+        encoder: &'e mut wgpu::CommandEncoder,
+        views: &[wgpu::TextureView],
+        (timer, span, first, last): (&GpuTimer, Option<Span>, bool, bool),
+        clear: bool,
+    ) -> wgpu::RenderPass<'e> {
+        let (pv, nv, dv) = (&views[0], &views[1], &views[2]);
+        let load = if clear {
+            wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)
+        } else {
+            wgpu::LoadOp::Load
+        };
+        let target = |view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        };
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("gbuffer.pass"),
+            color_attachments: &if let Some(ev) = views.get(3) {
+                vec![target(pv), target(nv), target(ev)]
+            } else {
+                vec![target(pv), target(nv)]
+            },
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: dv,
+                depth_ops: Some(wgpu::Operations {
+                    // The first pass clears the whole image, the second eye's loads it.
+                    load: if clear {
+                        wgpu::LoadOp::Clear(1.0)
+                    } else {
+                        wgpu::LoadOp::Load
+                    },
+                    store: if last {
+                        wgpu::StoreOp::Discard
+                    } else {
+                        wgpu::StoreOp::Store
+                    },
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timer.render_writes(span, first, last),
+            occlusion_query_set: None,
+            multiview_mask: self
+                .multiview
+                .as_ref()
+                .and_then(|mv| std::num::NonZeroU32::new((1 << mv.layers) - 1)),
+        })
     }
 }

@@ -23,7 +23,11 @@ fn vs_faces(
 ) -> FacesVsOut {
     let views = arrayLength(&face_views);
     let f = instance % views;
-    let v = surface_vertex_seen(position, normal, uv, instance / views, face_views[f].view_proj, f);
+    return into_face_tile(surface_vertex_seen(position, normal, uv, instance / views, face_views[f].view_proj, f), f);
+}
+
+// A vertex seen by view `f`, moved into the view's tile of the atlas.
+fn into_face_tile(v: VsOut, f: u32) -> FacesVsOut {
     let c = v.clip;
     // The atlas's size in pixels is the frame's viewport.
     let tile = face_views[f].tile;

@@ -25,6 +25,20 @@ pub fn faces_shader() -> String {
     ])
 }
 
+/// The same with `vs_face_clusters` too: square views in tiles drawn from GPU-culled triangle
+/// clusters by indirect multi-draws, the vertices read from storage (needs `CLIP_DISTANCES`).
+pub fn face_clusters_shader() -> String {
+    crate::gpu::shaders::compose(&[
+        "enable clip_distances;",
+        crate::gpu::shaders::COMMON,
+        include_str!("gbuffer.wgsl"),
+        include_str!("gbuffer_face_views.wgsl"),
+        include_str!("gbuffer_faces.wgsl"),
+        crate::frame::gbuffer_pull::PARAMS_WGSL,
+        include_str!("gbuffer_face_clusters.wgsl"),
+    ])
+}
+
 /// The same with `vs_face_layers`: a probe's six faces in one multiview pass (needs
 /// `MULTIVIEW` with six views).
 pub fn face_layers_shader() -> String {
@@ -80,6 +94,11 @@ mod shader_tests {
             (
                 "gbuffer faces",
                 super::faces_shader(),
+                wgpu::Features::CLIP_DISTANCES,
+            ),
+            (
+                "gbuffer face clusters",
+                super::face_clusters_shader(),
                 wgpu::Features::CLIP_DISTANCES,
             ),
             (

@@ -5,6 +5,7 @@
 pub mod clusters;
 pub mod eyes;
 pub mod gbuffer;
+pub mod gbuffer_pull;
 pub mod gbuffer_readback;
 pub mod gbuffer_shaders;
 pub mod visibility_mask;

@@ -275,12 +275,12 @@ impl GpuScene {
             normals: buf(
                 "scene.normals",
                 bytemuck::cast_slice(&normals),
-                wgpu::BufferUsages::VERTEX,
+                wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
             ),
             uvs: buf(
                 "scene.uvs",
                 bytemuck::cast_slice(&uvs),
-                wgpu::BufferUsages::VERTEX,
+                wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
             ),
             indices: buf(
                 "scene.indices",

@@ -31,11 +31,23 @@ impl Renderer {
     }
 
     /// What `ctx`'s device lacks to draw reflection probes' faces `passes`' way (`None`:
-    /// nothing): layered needs `CLIP_DISTANCES`, multiview six views per multiview pass.
+    /// nothing): layered needs `CLIP_DISTANCES`, multiview six views per multiview pass,
+    /// GPU-driven `CLIP_DISTANCES` and indirect execution.
     pub fn probe_passes_unmet(ctx: &GpuContext, passes: ProbePasses) -> Option<String> {
         match passes {
-            ProbePasses::Layered if !ctx.has(wgpu::Features::CLIP_DISTANCES) => {
+            ProbePasses::Layered | ProbePasses::Clusters
+                if !ctx.has(wgpu::Features::CLIP_DISTANCES) =>
+            {
                 Some("CLIP_DISTANCES".into())
+            }
+            ProbePasses::Clusters
+                if !ctx
+                    .adapter
+                    .get_downlevel_capabilities()
+                    .flags
+                    .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION) =>
+            {
+                Some("INDIRECT_EXECUTION".into())
             }
             ProbePasses::Multiview if ctx.multiview_views_per_pass() < 6 => Some(format!(
                 "MULTIVIEW with six views per pass (this device: {})",

@@ -281,6 +281,17 @@ impl Renderer {
             .collect())
     }
 
+    /// With probe faces drawn GPU-driven (`ProbePasses::Clusters`): of the triangle clusters
+    /// the last frame that drew the faces offered the GPU's cull (every cluster × every face),
+    /// how many it kept, and how many it was offered (`None` when the faces are drawn another
+    /// way). A read-back, for tests and inspection.
+    pub fn probe_clusters_kept(&self) -> Result<Option<(u64, u64)>, RenderError> {
+        match &self.probes {
+            Some(p) => p.clusters_kept(&self.ctx),
+            None => Ok(None),
+        }
+    }
+
     /// Reads the G-buffer of the last frame [`Renderer::render`] produced (before the first
     /// frame every pixel reads as uncovered).
     pub fn read_gbuffer(&self) -> Result<GBufferData, RenderError> {

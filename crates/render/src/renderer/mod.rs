@@ -19,6 +19,7 @@ mod capabilities;
 #[cfg(not(target_arch = "wasm32"))]
 mod estimate;
 mod inspect;
+mod probe_clusters;
 mod probes;
 mod state;
 mod uniforms;

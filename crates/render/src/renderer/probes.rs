@@ -33,12 +33,15 @@ use crate::shading::look::ShadingConsts;
 use crate::shading::probes::{FaceView, ProbeMaps, ProbePasses, ProbeStats};
 use crate::shadows::source::ShadowSource;
 
+use super::probe_clusters::FaceClusters;
+
 /// Byte stride of the staging buffer's per-face uniforms: `FrameUniforms` rounded up to 256
 /// (the copy offset alignment is 4; 256 keeps each block aligned as a dynamic uniform offset
 /// would want).
 const STRIDE: u64 = (std::mem::size_of::<FrameUniforms>() as u64).next_multiple_of(256);
 
-/// The faces' G-buffers drawn in one layered pass ([`ProbePasses::Layered`]).
+/// The faces' G-buffers drawn into the tiles of one atlas: in one layered pass
+/// ([`ProbePasses::Layered`]) or from GPU-culled clusters ([`ProbePasses::Clusters`]).
 struct LayeredFaces {
     /// `FrameUniforms` of the atlas (its viewport is the atlas's size).
     uniforms: wgpu::Buffer,
@@ -47,6 +50,8 @@ struct LayeredFaces {
     atlas: GBuffer,
     /// Tiles per row.
     cols: u32,
+    /// Drawn GPU-driven: the clusters and their cull.
+    clusters: Option<FaceClusters>,
 }
 
 /// The probes' faces and the passes that draw them.
@@ -89,7 +94,11 @@ impl ProbeFrame {
     ) -> Result<Self, RenderError> {
         let maps = ProbeMaps::new(ctx, scene)?;
         let layered = match passes {
-            ProbePasses::Layered => Some(LayeredFaces::new(ctx, gpu_scene, &maps)?),
+            ProbePasses::Layered => Some(LayeredFaces::new(ctx, gpu_scene, &maps, None)?),
+            ProbePasses::Clusters => {
+                let clusters = FaceClusters::new(ctx)?;
+                Some(LayeredFaces::new(ctx, gpu_scene, &maps, Some(clusters))?)
+            }
             _ => None,
         };
         let multiview = match passes {
@@ -238,8 +247,8 @@ impl ProbeFrame {
         self.visible_by_draw = (0..gpu_scene.draws.len() * faces)
             .map(|i| self.visible[i % faces][i / faces])
             .collect();
-        if let Some(l) = &self.layered {
-            l.update(ctx, scene, frame, side);
+        if let Some(l) = &mut self.layered {
+            l.update(ctx, scene, gpu_scene, frame, side)?;
         }
         if let Some((views, _)) = &self.multiview {
             let records = face_views(scene, side, 1, gpu_scene.draws.len() as u32);
@@ -265,9 +274,13 @@ impl ProbeFrame {
         let faces = 6 * self.maps.count;
         let size = std::mem::size_of::<FrameUniforms>() as u64;
         if let Some(l) = &self.layered {
-            let visible = Some(self.visible_by_draw.as_slice());
-            l.atlas
-                .record_faces_begin(encoder, gpu_scene, (timer, span), visible);
+            if let Some(c) = &l.clusters {
+                c.record_begin(encoder, gpu_scene, &l.atlas, (timer, span));
+            } else {
+                let visible = Some(self.visible_by_draw.as_slice());
+                l.atlas
+                    .record_faces_begin(encoder, gpu_scene, (timer, span), visible);
+            }
         }
         for face in 0..faces {
             encoder.copy_buffer_to_buffer(
@@ -303,6 +316,18 @@ impl ProbeFrame {
         self.faces_drawn
     }
 
+    /// Drawn GPU-driven: of the last frame that drew the faces, the cluster-face pairs the
+    /// cull kept and those it was offered (a read-back, for tests).
+    pub(crate) fn clusters_kept(
+        &self,
+        ctx: &GpuContext,
+    ) -> Result<Option<(u64, u64)>, RenderError> {
+        match self.layered.as_ref().and_then(|l| l.clusters.as_ref()) {
+            Some(c) => c.kept(ctx).map(Some),
+            None => Ok(None),
+        }
+    }
+
     /// What the last frame did.
     pub(crate) fn stats(&self) -> ProbeStats {
         ProbeStats {
@@ -315,13 +340,19 @@ impl ProbeFrame {
 }
 
 impl LayeredFaces {
-    /// The atlas of `maps`' faces (a grid of tiles as square as it goes) and its pass; needs
-    /// `CLIP_DISTANCES`, and an atlas within the device's largest texture.
-    fn new(ctx: &GpuContext, gpu_scene: &GpuScene, maps: &ProbeMaps) -> Result<Self, RenderError> {
+    /// The atlas of `maps`' faces (a grid of tiles as square as it goes) and its pass (from
+    /// `clusters`, when given); needs `CLIP_DISTANCES`, and an atlas within the device's
+    /// largest texture.
+    fn new(
+        ctx: &GpuContext,
+        gpu_scene: &GpuScene,
+        maps: &ProbeMaps,
+        clusters: Option<FaceClusters>,
+    ) -> Result<Self, RenderError> {
         if !ctx.has(wgpu::Features::CLIP_DISTANCES) {
             return Err(RenderError::missing_feature(
                 ctx,
-                "probe faces drawn layered",
+                "probe faces drawn into one atlas (layered or GPU-driven)",
                 "CLIP_DISTANCES (to keep each face's copy of a triangle in its tile)",
                 "draw the probes' faces one pass per face",
             ));
@@ -356,30 +387,43 @@ impl LayeredFaces {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let atlas = GBuffer::new(
-            ctx,
-            gpu_scene,
-            &uniforms,
-            (w, h),
-            GBufferViews::Faces {
+        let drawn = match &clusters {
+            Some(c) => GBufferViews::FaceClusters {
+                views: &views,
+                count: faces,
+                pull: &c.pull_layout,
+            },
+            None => GBufferViews::Faces {
                 views: &views,
                 count: faces,
             },
-        );
+        };
+        let atlas = GBuffer::new(ctx, gpu_scene, &uniforms, (w, h), drawn);
         Ok(Self {
             uniforms,
             views,
             atlas,
             cols,
+            clusters,
         })
     }
 
-    /// The faces' views and tiles, and the atlas's uniforms (the frame's, its viewport the
-    /// atlas).
-    fn update(&self, ctx: &GpuContext, scene: &Scene, frame: &FrameUniforms, side: u32) {
+    /// The faces' views and tiles, the atlas's uniforms (the frame's, its viewport the atlas)
+    /// and, drawn GPU-driven, the clusters of `gpu_scene`.
+    fn update(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        frame: &FrameUniforms,
+        side: u32,
+    ) -> Result<(), RenderError> {
         let views = face_views(scene, side, self.cols, 0);
         ctx.queue
             .write_buffer(&self.views, 0, bytemuck::cast_slice(&views));
+        if let Some(c) = &mut self.clusters {
+            c.prepare(ctx, scene, gpu_scene, (views.len() as u32, &self.views))?;
+        }
         let (w, h) = (self.atlas.position.width(), self.atlas.position.height());
         let (w, h) = (w as f32, h as f32);
         let u = FrameUniforms {
@@ -388,6 +432,7 @@ impl LayeredFaces {
         };
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
+        Ok(())
     }
 
     /// Copies face `face`'s tile of the atlas into `into`, the face G-buffer its lighting

@@ -67,6 +67,12 @@ pub enum ProbePasses {
     /// A probe's six faces in one multiview pass (`view_index` → face) into six-layer targets,
     /// each layer copied into the face G-buffer (needs six views per multiview pass).
     Multiview,
+    /// GPU-driven (seed 002's route): every instance's mesh cut into clusters of triangles,
+    /// a compute pass culling each cluster per face (its bounding sphere against the face's
+    /// frustum, its normal cone against the face's eye where the material shows only front
+    /// faces) and writing indirect commands, drawn into the tiles of the layered way's atlas
+    /// by one indirect multi-draw per round (needs `CLIP_DISTANCES` and indirect execution).
+    Clusters,
 }
 
 impl ProbePasses {
@@ -75,6 +81,7 @@ impl ProbePasses {
         ProbePasses::PerFace,
         ProbePasses::Layered,
         ProbePasses::Multiview,
+        ProbePasses::Clusters,
     ];
 
     /// How the faces' G-buffers are drawn this way, in words (for summaries).
@@ -83,15 +90,20 @@ impl ProbePasses {
             ProbePasses::PerFace => "G-buffers one pass per face",
             ProbePasses::Layered => "G-buffers of every face in one layered pass",
             ProbePasses::Multiview => "G-buffers of each probe's six faces in one multiview pass",
+            ProbePasses::Clusters => {
+                "G-buffers of every face from triangle clusters culled per face on the GPU, \
+                 indirect multi-draws"
+            }
         }
     }
 
-    /// CLI name: `per-face`, `layered` or `multiview`.
+    /// CLI name: `per-face`, `layered`, `multiview` or `gpu-driven`.
     pub fn name(self) -> &'static str {
         match self {
             ProbePasses::PerFace => "per-face",
             ProbePasses::Layered => "layered",
             ProbePasses::Multiview => "multiview",
+            ProbePasses::Clusters => "gpu-driven",
         }
     }
 }
@@ -110,7 +122,11 @@ impl std::str::FromStr for ProbePasses {
             .copied()
             .find(|p| p.name() == s)
             .ok_or_else(|| {
-                format!("unknown probe passes '{s}' (expected per-face, layered or multiview)")
+                let names: Vec<&str> = ProbePasses::ALL.iter().map(|p| p.name()).collect();
+                format!(
+                    "unknown probe passes '{s}' (expected one of: {})",
+                    names.join(", ")
+                )
             })
     }
 }
