@@ -295,25 +295,27 @@ fn bench_stereo_times_one_pass_against_one_per_eye() {
 }
 
 #[test]
-fn bench_probes_times_faces_per_face_and_layered() {
+fn bench_probes_times_every_way_of_drawing_the_faces() {
     let (dir, json) = bench_ok(
         "probes",
         "--scene cubes --probes 1,2 --sides 16 --lights 2 --screen 48x27 --repeats 1 --warmup 0",
     );
     let records = records(&json);
-    // Per probe count: per-face, layered (CLIP_DISTANCES: Vulkan and GL here) and multiview
-    // where six views fit one pass (Vulkan here), or a note that says why not.
+    // Per probe count: per-face, layered (CLIP_DISTANCES: Vulkan and GL here), multiview
+    // where six views fit one pass (Vulkan here), or a note that says why not, and
+    // gpu-driven (CLIP_DISTANCES and indirect draws: Vulkan and GL here).
     let methods: Vec<&str> = records
         .iter()
         .map(|r| r["method"].as_str().unwrap())
         .collect();
     assert!(methods.starts_with(&["per-face", "layered"]), "{json}");
+    assert!(methods.contains(&"gpu-driven"), "{json}");
     let multiview = methods.contains(&"multiview");
     assert!(
         multiview || json["notes"].to_string().contains("multiview left out"),
         "{json}"
     );
-    assert_eq!(records.len(), if multiview { 6 } else { 4 }, "{json}");
+    assert_eq!(records.len(), if multiview { 8 } else { 6 }, "{json}");
     for r in records {
         // A caster moves every frame, so every face is drawn: the probes stage is timed.
         assert!(r["probes_gpu_ms"].as_f64().is_some_and(|t| t > 0.0), "{r}");
