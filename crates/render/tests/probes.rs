@@ -538,7 +538,9 @@ fn grid(n: u32) -> manyshadows::scene::Mesh {
 /// of every cluster × every face. A grid of 8,192 triangles stands beside the probe, its front
 /// facing away: single-sided, each of its clusters faces away from the probe and is dropped
 /// from every face (at least one pair per cluster fewer kept). And the faces stay those one
-/// pass per face draws with the same materials (which culls whole instances and back faces).
+/// pass per face draws with the same materials (which culls whole instances and back faces),
+/// also after the fountain moves from the probe's −x face into its +z face (the clusters'
+/// spheres follow their instance on the GPU).
 #[test]
 fn gpu_driven_faces_keep_only_the_clusters_a_face_can_show() {
     use manyshadows::ProbePasses;
@@ -563,10 +565,27 @@ fn gpu_driven_faces_keep_only_the_clusters_a_face_can_show() {
             .with_probe_passes(passes);
         let mut r = Renderer::new(&ctx, &scene, settings).expect("renderer");
         r.render().expect("frame");
-        let faces: Vec<Vec<[f32; 4]>> = (0..6)
-            .map(|f| r.read_probe_face(0, f).expect("face"))
-            .collect();
-        (r.probe_clusters_kept().expect("read-back"), faces)
+        let read = |r: &Renderer| -> Vec<Vec<[f32; 4]>> {
+            (0..6)
+                .map(|f| r.read_probe_face(0, f).expect("face"))
+                .collect()
+        };
+        let mut faces = read(&r);
+        let kept = r.probe_clusters_kept().expect("read-back");
+        let fountain = scene
+            .instances
+            .iter()
+            .position(|i| scene.meshes[i.mesh].name == "fountain")
+            .expect("the atrium's fountain");
+        let t = scene.instances[fountain].transform;
+        r.set_instance_transform(
+            fountain,
+            glam::Mat4::from_translation(Vec3::new(6.0, 0.0, 4.0)) * t,
+        )
+        .expect("move");
+        assert_eq!(r.render().expect("frame").probes.unwrap().faces_drawn, 6);
+        faces.extend(read(&r));
+        (kept, faces)
     };
     let mut kept = Vec::new();
     for single_sided in [false, true] {

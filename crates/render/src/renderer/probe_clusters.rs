@@ -85,6 +85,9 @@ pub(crate) struct FaceClusters {
     bound: Option<Bound>,
     /// Cluster-face pairs offered to the cull per frame.
     pub(crate) offered: u64,
+    /// What the bound buffers were made from: the clusters, the faces, and the views and
+    /// instance buffers (a frame that changes none of them, a caster moving say, keeps them).
+    made_from: Option<(Vec<ProbeCluster>, u32, [wgpu::Buffer; 2])>,
 }
 
 struct Bound {
@@ -150,6 +153,7 @@ impl FaceClusters {
             rounds: Vec::new(),
             bound: None,
             offered: 0,
+            made_from: None,
         })
     }
 
@@ -209,16 +213,27 @@ impl FaceClusters {
             }));
         }
         let mut clusters = Vec::new();
-        self.rounds.clear();
+        let mut rounds = Vec::new();
         for (key, group) in groups {
             let first = clusters.len() as u32;
             let n = group.len() as u32;
             for mut r in plan_rounds(faces, n, n, stride as u32, self.max_round_commands) {
                 r.first_cluster += first;
-                self.rounds.push((r, key));
+                rounds.push((r, key));
             }
             clusters.extend(group);
         }
+        let buffers = [views.clone(), gpu_scene.instances.clone()];
+        if self.bound.is_some()
+            && self.made_from.as_ref().is_some_and(|(c, f, b)| {
+                *f == faces
+                    && *b == buffers
+                    && bytemuck::cast_slice::<_, u8>(c) == bytemuck::cast_slice::<_, u8>(&clusters)
+            })
+        {
+            return Ok(());
+        }
+        self.rounds = rounds;
         self.offered = clusters.len() as u64 * u64::from(faces);
         let records: Vec<u8> = self
             .rounds
@@ -286,6 +301,7 @@ impl FaceClusters {
         });
         let pull_group =
             crate::frame::gbuffer_pull::bind_group(device, &self.pull_layout, gpu_scene, &params);
+        self.made_from = Some((clusters, faces, buffers));
         self.bound = Some(Bound {
             commands,
             counter,
