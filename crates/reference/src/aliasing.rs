@@ -152,12 +152,13 @@ pub struct PlannedViews<'a> {
     /// view's requested resolution when the atlas was shrunk to fit). For virtual shadow maps,
     /// each face's virtual side.
     pub tile_sizes: &'a [u32],
-    /// Virtual shadow maps with these levels of detail (texels per pixel, in view order): a
-    /// pixel reads the level the lookup picks, the coarsest whose texel is no wider than
-    /// `pixel / lod` of its face, between the 128-texel level 0 and the face's virtual side
-    /// (pages denied for lack of pool room, which fall back to coarser levels, are not
-    /// modelled).
-    pub virtual_lods: Option<&'a [f32]>,
+    /// Virtual shadow maps with these levels of detail and floors (in view order: texels per
+    /// pixel, and the coarsest level the face may use, `VirtualFace::detail`): a pixel reads
+    /// the level the lookup picks, the coarsest whose texel is no wider than `pixel / lod` of
+    /// its face, between the 128-texel level 0 and the face's virtual side, and no coarser than
+    /// the floor (pages denied for lack of pool room, which fall back to coarser levels, are
+    /// not modelled).
+    pub virtual_lods: Option<&'a [[f32; 2]]>,
 }
 
 /// Side of a virtual shadow map page (level 0 spans the face with one page).
@@ -270,13 +271,16 @@ pub fn footprints(
                 texel *= clip.w;
             }
             if let Some(lods) = planned.virtual_lods {
-                let lod = lods[vi];
-                // As vsm_level in shaders/vsm_common.wgsl: 2^k finest texels per level texel.
+                let [lod, floor] = lods[vi];
+                // As vsm_level and vsm_floor in vsm_common.wgsl: 2^k finest texels per level
+                // texel, the level (finest − k) no coarser than the floor.
                 let finest = (planned.tile_sizes[vi] / VIRTUAL_PAGE)
                     .max(1)
                     .trailing_zeros();
                 let k = (pixel_world / lod / texel).log2().floor();
-                texel *= 2f32.powi(k.clamp(0.0, finest as f32) as i32);
+                let k = k.clamp(0.0, finest as f32) as u32;
+                let level = (finest - k).max((floor as u32).min(finest));
+                texel *= 2f32.powi((finest - level) as i32);
             }
             out[li].add(texel / pixel_world);
         }

@@ -249,7 +249,11 @@ fn footprints(renderer: &Renderer, scene_v: &Scene, r: &Reference) -> Result<Vec
     Ok(match renderer.virtual_plan() {
         Some(vp) => {
             let sides: Vec<u32> = vp.faces.iter().map(|f| f.table[2]).collect();
-            let lods: Vec<f32> = vp.faces.iter().map(|f| f.detail[0]).collect();
+            let lods: Vec<[f32; 2]> = vp
+                .faces
+                .iter()
+                .map(|f| [f.detail[0], f.detail[1]])
+                .collect();
             aliasing::footprints(
                 scene_v,
                 &PlannedViews {
