@@ -15,6 +15,18 @@ pub(crate) fn spinner(msg: &str) -> ProgressBar {
     pb
 }
 
+/// A bar of `len` steps named `what` ("frames"), with the step's message and the time left.
+pub(crate) fn bar(len: u64, what: &str) -> ProgressBar {
+    let pb = ProgressBar::new(len);
+    pb.set_style(
+        ProgressStyle::with_template(&format!(
+            "{{bar:30}} {{pos}}/{{len}} {what}, {{msg}} [{{elapsed}}, ~{{eta}} left]"
+        ))
+        .expect("valid template"),
+    );
+    pb
+}
+
 /// Progress of a reference traced row by row (`compare`): on a terminal a bar with the rays
 /// so far (at most: pairs out of reach trace none), rays per second and the time left; where stderr is no terminal (a log) the same as
 /// a line at every tenth of the rows.

@@ -51,32 +51,14 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     };
     let long = long_frame(&estimate);
     let mut frame = None;
+    let sequence = Sequence {
+        path: path.as_deref(),
+        orbit: args.orbit,
+        mover,
+    };
     for f in 0..args.frames {
-        if let Some(path) = &path {
-            let c = path[(f as usize).min(path.len() - 1)];
-            let mut cam = renderer.scene().camera;
-            cam.position = glam::Vec3::new(c[0], c[1], c[2]);
-            cam.target = glam::Vec3::new(c[3], c[4], c[5]);
-            renderer.set_camera(cam)?;
-        }
         pb.set_message(format!("rendering frame {}/{}", f + 1, args.frames));
-        if f > 0 {
-            if let Some(k) = mover {
-                // A small circle in the ground plane, one step per frame.
-                let a = f as f32 * 0.35;
-                let offset = glam::Vec3::new(0.3 * a.cos() - 0.3, 0.0, 0.3 * a.sin());
-                renderer.set_instance_transform(
-                    k,
-                    glam::Mat4::from_translation(offset) * scene.instances[k].transform,
-                )?;
-            }
-            if args.orbit != 0.0 {
-                let mut cam = renderer.scene().camera;
-                let turn = glam::Quat::from_axis_angle(cam.up.normalize(), args.orbit.to_radians());
-                cam.position = cam.target + turn * (cam.position - cam.target);
-                renderer.set_camera(cam)?;
-            }
-        }
+        sequence.step(f, &scene, &mut [&mut renderer])?;
         let fr = if args.stages || long {
             let t0 = std::time::Instant::now();
             let f = f + 1;
@@ -257,6 +239,61 @@ pub(crate) fn write_visibility(
         .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
+}
+
+/// How a `--frames` sequence changes from frame to frame (`render`, `compare --frames`).
+pub(crate) struct Sequence<'a> {
+    /// `--camera-path`: frame k takes camera k, the last stays.
+    pub(crate) path: Option<&'a [[f32; 6]]>,
+    /// `--orbit`: degrees the camera turns about its target per frame (without a path).
+    pub(crate) orbit: f32,
+    /// The instance that moves ([`moving_instance`]).
+    pub(crate) mover: Option<usize>,
+}
+
+impl Sequence<'_> {
+    /// Sets frame `f` (from 0) of `scene`'s sequence on every renderer alike: the path's
+    /// camera, and after the first frame the moving instance one step further along its
+    /// circle (0.3 wide in the ground plane, 0.35 radians a frame) and the camera turned.
+    pub(crate) fn step(
+        &self,
+        f: u32,
+        scene: &Scene,
+        renderers: &mut [&mut Renderer],
+    ) -> Result<()> {
+        let Some(first) = renderers.first() else {
+            return Ok(());
+        };
+        let mut cam = first.scene().camera;
+        let mut moved = false;
+        if let Some(path) = self.path.filter(|p| !p.is_empty()) {
+            let c = path[(f as usize).min(path.len() - 1)];
+            cam.position = glam::Vec3::new(c[0], c[1], c[2]);
+            cam.target = glam::Vec3::new(c[3], c[4], c[5]);
+            moved = true;
+        } else if f > 0 && self.orbit != 0.0 {
+            let turn = glam::Quat::from_axis_angle(cam.up.normalize(), self.orbit.to_radians());
+            cam.position = cam.target + turn * (cam.position - cam.target);
+            moved = true;
+        }
+        let instance = self.mover.filter(|_| f > 0).map(|k| {
+            let a = f as f32 * 0.35;
+            let offset = glam::Vec3::new(0.3 * a.cos() - 0.3, 0.0, 0.3 * a.sin());
+            (
+                k,
+                glam::Mat4::from_translation(offset) * scene.instances[k].transform,
+            )
+        });
+        for r in renderers.iter_mut() {
+            if let Some((k, m)) = instance {
+                r.set_instance_transform(k, m)?;
+            }
+            if moved {
+                r.set_camera(cam)?;
+            }
+        }
+        Ok(())
+    }
 }
 
 /// The instance a sequence moves: none with `--still`, `--move-instance` checked against the

@@ -147,6 +147,36 @@ pub struct CompareArgs {
     /// and refused when named.
     #[arg(long)]
     pub(super) insist: bool,
+    /// Score a sequence of this many frames instead of one frame: each technique renders
+    /// every frame (keeping what it keeps across frames: cached maps, reused lights, the
+    /// denoiser's history), and each frame is scored against the exact image of that same
+    /// frame (every cluster light traced). See "Sequences" in --help.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub(super) frames: u32,
+    /// With --frames: degrees the camera turns about its target per frame.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub(super) orbit: f32,
+    /// With --frames: a fly path, one camera per line, `PX PY PZ TX TY TZ` (as `render
+    /// --camera-path`).
+    #[arg(long, value_name = "FILE", conflicts_with = "orbit")]
+    pub(super) camera_path: Option<PathBuf>,
+    /// With --frames: the instance that moves (default: the smallest shadow caster).
+    #[arg(long, conflicts_with = "still")]
+    pub(super) move_instance: Option<usize>,
+    /// With --frames: move no caster.
+    #[arg(long)]
+    pub(super) still: bool,
+    /// With --frames, for the techniques that cast shadow rays: trace K lights per pixel
+    /// picked by importance (`render --light-samples`; 0: every cluster light).
+    #[arg(long, default_value_t = 0)]
+    pub(super) light_samples: u32,
+    /// With --frames and --light-samples: reuse each pixel's lights across frames (`render
+    /// --reuse`).
+    #[arg(long)]
+    pub(super) reuse: bool,
+    /// With --frames and shadow rays: the denoiser (`render --denoise`).
+    #[arg(long)]
+    pub(super) denoise: bool,
     /// Say each part of a technique's frame as the GPU finishes it (G-buffer and light
     /// clusters, shadows, lighting), as `render --stages`; on by itself for a frame whose
     /// shadow work is estimated past 200 M (caster triangle, view) pairs.
@@ -196,8 +226,20 @@ hard (size 0) against the same soft reference, --soft on,off runs each technique
 reference too, with the ray-traced technique's shadow rays (at most 256 per pair). --soft-
 samples 0 skips them (hard scores only; the hard scores never change with these flags).
 
+Sequences (--frames N). The camera turns --orbit degrees a frame (or flies --camera-path)
+and a caster circles (the smallest, --move-instance, none with --still), as for `render
+--frames`; every technique renders every frame, keeping what it keeps from frame to frame,
+and so does the exact renderer: every cluster light traced (sized lights by their area
+samples). Per frame and technique: the RMSE of the 8-bit RGB channels against the exact
+frame, and FLIP; per technique the mean, first, last and largest. The techniques that cast
+rays take --light-samples, --reuse and --denoise. Writes sequence.png (error and GPU time
+per frame), the last frame of each technique and of the exact renderer, and with --json
+every frame's numbers. No CPU reference is traced.
+
 Examples:
   manyshadows compare                                          # atrium, 8 lights, all techniques
   manyshadows compare --scene plane-spot --shadow-resolutions 256,1024,2048
   manyshadows compare --scene atrium --lights 16 --shadow-resolutions 512 --json q.json
-  manyshadows compare --scene courtyard --width 320 --height 180 --soft on,off   # PCSS vs hard";
+  manyshadows compare --scene courtyard --width 320 --height 180 --soft on,off   # PCSS vs hard
+  manyshadows compare --lights 1024 --techniques raytraced --frames 30 --orbit 0.15 \
+      --light-samples 1 --reuse --denoise --width 640 --height 360   # sampled rays, moving";

@@ -14,7 +14,8 @@
 //! steps, per scene), `setup` (checks, scene, variants, settings, GPU and BVH), `scoring`
 //! (each variant rendered and scored), `reference` (traced once, on the CPU or the GPU),
 //! `soft` (the soft reference and the soft scores), `images` (the frame, the reference mask,
-//! the difference images and ꟻLIP maps), `report` (the JSON) and `table` (what is printed).
+//! the difference images and ꟻLIP maps), `report` (the JSON) and `table` (what is printed);
+//! `sequence` scores `--frames N` frames instead, each against the exact image of that frame.
 
 mod args;
 mod images;
@@ -22,6 +23,7 @@ mod reference;
 mod report;
 mod run;
 mod scoring;
+mod sequence;
 mod setup;
 mod soft;
 mod table;

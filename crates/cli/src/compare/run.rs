@@ -54,8 +54,12 @@ pub fn run(args: &CompareArgs) -> Result<()> {
 
 /// Scores the techniques on `args.scene`; returns the JSON report.
 fn run_scene(args: &CompareArgs) -> Result<serde_json::Value> {
+    if args.frames > 1 {
+        return crate::compare::sequence::run_sequence(args);
+    }
     let started = Instant::now();
     check_flags(args)?;
+    crate::compare::sequence::check_sequence_flags(args)?;
     let multi = MultiProgress::new();
     let pb = multi.add(crate::progress::spinner("loading the scene"));
     let scene = load(args)?;

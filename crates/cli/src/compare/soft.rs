@@ -197,7 +197,7 @@ pub(super) fn score(
 }
 
 /// Root mean square difference of the R, G and B bytes of two RGBA8 images (alpha ignored).
-fn rmse_rgb(a: &[u8], b: &[u8]) -> f64 {
+pub(super) fn rmse_rgb(a: &[u8], b: &[u8]) -> f64 {
     let mut sum = 0.0f64;
     let mut n = 0u64;
     for (pa, pb) in a.chunks_exact(4).zip(b.chunks_exact(4)) {

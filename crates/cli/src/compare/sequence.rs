@@ -1,0 +1,347 @@
+//! `compare --frames N`: techniques scored over a sequence, each frame against the exact image
+//! of that same frame.
+//!
+//! The sequence is `render --frames`' ([`crate::render::Sequence`]: the camera orbits or flies
+//! a path, a caster circles). Each technique keeps one renderer for the whole sequence, so
+//! what it carries from frame to frame (cached shadow maps, lights reused in reservoirs, the
+//! denoiser's history) is what is scored; the exact renderer traces every cluster light of
+//! every pixel each frame. Per frame: RMSE of the 8-bit RGB channels and ꟻLIP against the exact
+//! frame, and the GPU time.
+
+use anyhow::{bail, Context, Result};
+use manyshadows::{Fills, Frame, RayOptions, RenderSettings, Renderer, Technique};
+use serde::Serialize;
+use serde_json::json;
+
+use crate::compare::args::CompareArgs;
+use crate::compare::images::image_out;
+use crate::compare::setup::{check_flags, load};
+use crate::compare::soft::rmse_rgb;
+use crate::render::{moving_instance, Sequence};
+
+/// One technique's sequence.
+#[derive(Serialize)]
+struct Scored {
+    technique: String,
+    /// Per frame: RMSE against the exact frame (RGB, 0-255).
+    rmse: Vec<f64>,
+    /// Per frame: mean ꟻLIP against the exact frame.
+    flip: Vec<f64>,
+    /// Per frame: GPU ms of the whole frame (where timestamps exist).
+    gpu_ms: Vec<Option<f64>>,
+    mean_rmse: f64,
+    max_rmse: f64,
+    mean_flip: f64,
+}
+
+/// The flags only a sequence takes, refused without `--frames` past 1.
+pub(super) fn check_sequence_flags(args: &CompareArgs) -> Result<()> {
+    if args.frames == 0 {
+        bail!("--frames must be at least 1");
+    }
+    if args.frames > MAX_FRAMES {
+        bail!("--frames {}: at most {MAX_FRAMES}", args.frames);
+    }
+    if !args.orbit.is_finite() {
+        bail!(
+            "--orbit must be a finite number of degrees, not {}",
+            args.orbit
+        );
+    }
+    if args.frames == 1 {
+        let used = [
+            ("--orbit", args.orbit != 0.0),
+            ("--camera-path", args.camera_path.is_some()),
+            ("--move-instance", args.move_instance.is_some()),
+            ("--still", args.still),
+            ("--light-samples", args.light_samples != 0),
+            ("--reuse", args.reuse),
+            ("--denoise", args.denoise),
+        ];
+        if let Some((name, _)) = used.iter().find(|(_, on)| *on) {
+            bail!(
+                "{name} scores a sequence: give --frames N (N > 1); one frame is scored against \
+                 the CPU reference's visibility instead"
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Most frames of a sequence.
+const MAX_FRAMES: u32 = 10_000;
+
+/// Renders and scores the sequence of `args.scene`; returns the JSON report.
+pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
+    check_flags(args)?;
+    check_sequence_flags(args)?;
+    let pb = crate::progress::spinner("loading the scene");
+    let scene = load(args)?;
+    let path = match &args.camera_path {
+        Some(p) => Some(
+            crate::args::parse_camera_path(
+                &std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?,
+            )
+            .with_context(|| format!("--camera-path {}", p.display()))?,
+        ),
+        None => None,
+    };
+    let mover = moving_instance(args.move_instance, args.still, &scene, || {
+        Ok(scene.smallest_caster())
+    })?;
+    pb.set_message("opening the GPU");
+    let ctx = manyshadows::GpuContext::new(&args.gpu.request())?;
+    let args = CompareArgs {
+        atlas_max: pb.suspend(|| crate::args::effective_atlas_max(&ctx, args.atlas_max)),
+        ..args.clone()
+    };
+    std::fs::create_dir_all(&args.out_dir)
+        .with_context(|| format!("creating {}", args.out_dir.display()))?;
+    let settings = |t: Technique, rays: RayOptions| -> RenderSettings {
+        // The frame people see: PCF as the technique's default, no visibility masks.
+        crate::compare::setup::settings(&args, t, false)
+            .with_pcf(manyshadows::Pcf::default())
+            .with_visibility(false)
+            .with_rays(rays)
+    };
+    pb.set_message("building the exact renderer");
+    let exact_technique = crate::techniques::first_filling(Fills::Rays);
+    let mut exact = Renderer::new(
+        &ctx,
+        &scene,
+        settings(exact_technique, RayOptions::default()),
+    )
+    .with_context(|| {
+        format!(
+            "the exact frames of a sequence trace every light with {exact_technique}, which \
+                 needs ray queries (EXPERIMENTAL_RAY_QUERY: Vulkan with Mesa 25's lavapipe, or a \
+                 GPU driver that has them)"
+        )
+    })?;
+    let named = !args.techniques.is_empty();
+    let asked = if named {
+        args.techniques.clone()
+    } else {
+        Technique::all()
+    };
+    let sampled = RayOptions::default()
+        .with_light_samples(args.light_samples)
+        .with_reuse(args.reuse)
+        .with_denoise(args.denoise);
+    let mut contenders: Vec<(String, Renderer)> = Vec::new();
+    for t in asked {
+        pb.set_message(format!("building {t}"));
+        let rays = if t.info().fills == Fills::Rays {
+            sampled
+        } else {
+            RayOptions::default()
+        };
+        let made = Renderer::new(&ctx, &scene, settings(t, rays)).map(|r| {
+            let e = r.estimate_frame();
+            (r, e)
+        });
+        let checked = made.map_err(anyhow::Error::from).and_then(|(r, e)| {
+            if !args.insist {
+                crate::render::check_shadow_work(&r, &e)?;
+            }
+            Ok(r)
+        });
+        match checked {
+            Ok(r) => contenders.push((label(t, &args), r)),
+            Err(e) if !named => pb.suspend(|| eprintln!("note: {t} left out: {e:#}")),
+            Err(e) => return Err(e.context(format!("technique {t}"))),
+        }
+    }
+    pb.finish_and_clear();
+    if contenders.is_empty() {
+        bail!("no technique could run on this adapter");
+    }
+    let sequence = Sequence {
+        path: path.as_deref(),
+        orbit: args.orbit,
+        mover,
+    };
+    let bar = crate::progress::bar(
+        u64::from(args.frames) * (contenders.len() as u64 + 1),
+        "frames",
+    );
+    let mut scored: Vec<Scored> = contenders
+        .iter()
+        .map(|(name, _)| Scored {
+            technique: name.clone(),
+            rmse: Vec::new(),
+            flip: Vec::new(),
+            gpu_ms: Vec::new(),
+            mean_rmse: 0.0,
+            max_rmse: 0.0,
+            mean_flip: 0.0,
+        })
+        .collect();
+    let mut last: Vec<Frame> = Vec::new();
+    for f in 0..args.frames {
+        {
+            let mut all: Vec<&mut Renderer> = std::iter::once(&mut exact)
+                .chain(contenders.iter_mut().map(|(_, r)| r))
+                .collect();
+            sequence.step(f, &scene, &mut all)?;
+        }
+        bar.set_message(format!("frame {}/{}: exact", f + 1, args.frames));
+        let e = exact.render()?;
+        bar.inc(1);
+        last.clear();
+        for ((name, r), s) in contenders.iter_mut().zip(&mut scored) {
+            bar.set_message(format!("frame {}/{}: {name}", f + 1, args.frames));
+            let fr = r.render()?;
+            bar.inc(1);
+            s.rmse.push(rmse_rgb(&e.rgba, &fr.rgba));
+            s.flip.push(
+                manyshadows_reference::flip_rgba8(&e.rgba, &fr.rgba, e.width, e.height)?.mean,
+            );
+            s.gpu_ms.push(fr.timings.gpu_ms.total());
+            last.push(fr);
+        }
+        if f + 1 == args.frames {
+            image_out(
+                &args.out_dir.join("exact-last.png"),
+                e.width,
+                e.height,
+                &e.rgba,
+            )?;
+        }
+    }
+    bar.finish_and_clear();
+    for (s, fr) in scored.iter_mut().zip(&last) {
+        let n = s.rmse.len().max(1) as f64;
+        s.mean_rmse = s.rmse.iter().sum::<f64>() / n;
+        s.max_rmse = s.rmse.iter().copied().fold(0.0, f64::max);
+        s.mean_flip = s.flip.iter().sum::<f64>() / n;
+        let file = format!("{}-last.png", s.technique);
+        image_out(&args.out_dir.join(file), fr.width, fr.height, &fr.rgba)?;
+    }
+    print_table(&args, &ctx.info.name, exact_technique, mover, &scored);
+    let plot = args.out_dir.join("sequence.png");
+    plot_sequence(&plot, &args, &scored)?;
+    eprintln!(
+        "wrote      {} (sequence.png, exact-last.png, <technique>-last.png)",
+        args.out_dir.display()
+    );
+    let report = json!({
+        "scene": scene.name,
+        "adapter": ctx.info.name,
+        "width": args.width,
+        "height": args.height,
+        "frames": args.frames,
+        "orbit_degrees_per_frame": args.orbit,
+        "camera_path": args.camera_path,
+        "moving_instance": mover,
+        "light_samples": args.light_samples,
+        "reuse": args.reuse,
+        "denoise": args.denoise,
+        "exact": exact_technique.to_string(),
+        "techniques": scored,
+    });
+    if let Some(p) = &args.json {
+        crate::compare::report::write_json(p, &report)?;
+    }
+    Ok(report)
+}
+
+/// The technique's row name: with its ray options when it casts rays.
+fn label(t: Technique, args: &CompareArgs) -> String {
+    if t.info().fills != Fills::Rays || args.light_samples == 0 {
+        return t.to_string();
+    }
+    let mut s = format!("{t}-k{}", args.light_samples);
+    if args.reuse {
+        s.push_str("-reuse");
+    }
+    if args.denoise {
+        s.push_str("-denoise");
+    }
+    s
+}
+
+fn print_table(
+    args: &CompareArgs,
+    adapter: &str,
+    exact: Technique,
+    mover: Option<usize>,
+    scored: &[Scored],
+) {
+    let camera = match (&args.camera_path, args.orbit) {
+        (Some(p), _) => format!("camera along {}", p.display()),
+        (None, o) if o != 0.0 => format!("camera turning {o}° a frame"),
+        _ => "camera still".to_string(),
+    };
+    let caster = mover.map_or("no caster moving".to_string(), |k| {
+        format!("instance {k} circling")
+    });
+    println!(
+        "{} frames of {}x{}, {camera}, {caster}; each against every cluster light traced by {exact} \
+         ({adapter})",
+        args.frames, args.width, args.height
+    );
+    println!(
+        "{:<28} {:>10} {:>8} {:>8} {:>8} {:>10} {:>12}",
+        "technique", "mean RMSE", "first", "last", "max", "mean FLIP", "median GPU ms"
+    );
+    for s in scored {
+        let mut ms: Vec<f64> = s.gpu_ms.iter().flatten().copied().collect();
+        ms.sort_by(f64::total_cmp);
+        let median = ms
+            .get(ms.len() / 2)
+            .map_or("n/a".to_string(), |m| format!("{m:.1}"));
+        println!(
+            "{:<28} {:>10.2} {:>8.2} {:>8.2} {:>8.2} {:>10.4} {:>12}",
+            s.technique,
+            s.mean_rmse,
+            s.rmse.first().copied().unwrap_or(0.0),
+            s.rmse.last().copied().unwrap_or(0.0),
+            s.max_rmse,
+            s.mean_flip,
+            median
+        );
+    }
+    println!(
+        "RMSE of the 8-bit RGB channels (0-255) and FLIP against the exact frame of each frame"
+    );
+}
+
+fn plot_sequence(path: &std::path::Path, args: &CompareArgs, scored: &[Scored]) -> Result<()> {
+    let series = |pick: &dyn Fn(&Scored, usize) -> Option<f64>| -> Vec<crate::plot::Series> {
+        scored
+            .iter()
+            .map(|s| {
+                let points = (0..s.rmse.len())
+                    .filter_map(|k| pick(s, k).map(|v| ((k + 1) as f64, v)))
+                    .collect();
+                (s.technique.clone(), points)
+            })
+            .collect()
+    };
+    crate::plot::panels(
+        path,
+        &format!(
+            "compare --frames {}: {} {}x{}",
+            args.frames, args.scene, args.width, args.height
+        ),
+        "frame",
+        &[
+            (
+                "RMSE against the exact frame".to_string(),
+                "RMSE (0-255)".to_string(),
+                series(&|s, k| Some(s.rmse[k])),
+            ),
+            (
+                "FLIP against the exact frame".to_string(),
+                "mean FLIP".to_string(),
+                series(&|s, k| Some(s.flip[k])),
+            ),
+            (
+                "GPU time per frame".to_string(),
+                "ms".to_string(),
+                series(&|s, k| s.gpu_ms[k]),
+            ),
+        ],
+    )
+}
