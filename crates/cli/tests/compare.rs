@@ -811,21 +811,32 @@ fn compare_over_a_sequence_scores_each_frame_against_its_exact_image() {
         assert_clean_failure_compare(&out, "EXPERIMENTAL_RAY_QUERY");
         return;
     }
-    let (moving, dir) = compare(
-        "sequence-moving",
+    let dir = tmp("sequence-moving");
+    let json = dir.join("score.json");
+    let out = run(&[
         &[
-            &frame[..],
-            &[
-                "--frames",
-                "4",
-                "--orbit",
-                "3",
-                "--techniques",
-                "raytraced,traditional",
-            ],
-        ]
-        .concat(),
-    );
+            "compare",
+            "--out-dir",
+            dir.to_str().unwrap(),
+            "--json",
+            json.to_str().unwrap(),
+        ],
+        &frame[..],
+        &[
+            "--frames",
+            "4",
+            "--orbit",
+            "3",
+            "--techniques",
+            "raytraced,traditional",
+        ],
+    ]
+    .concat());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    // Progress in a log (stderr is no terminal here): a line per tenth of the frames.
+    assert!(stderr.contains("frame 4/4 scored after"), "{stderr}");
+    let moving: Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
     assert_eq!(moving["frames"], 4);
     assert!(moving["moving_instance"].is_u64(), "{moving}");
     let rows = moving["techniques"].as_array().expect("techniques");

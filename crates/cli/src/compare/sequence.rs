@@ -178,6 +178,9 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
         })
         .collect();
     let mut last: Vec<Frame> = Vec::new();
+    // Where stderr is no terminal (a log) the bar draws nothing: a line every tenth instead.
+    let plain = !std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let started = std::time::Instant::now();
     for f in 0..args.frames {
         {
             let mut all: Vec<&mut Renderer> = std::iter::once(&mut exact)
@@ -207,6 +210,15 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
                 e.height,
                 &e.rgba,
             )?;
+        }
+        if plain && (f + 1) % args.frames.div_ceil(10) == 0 {
+            let t = started.elapsed().as_secs_f64();
+            let left = t / f64::from(f + 1) * f64::from(args.frames - f - 1);
+            eprintln!(
+                "frame {}/{} scored after {t:.0} s, ~{left:.0} s left",
+                f + 1,
+                args.frames
+            );
         }
     }
     bar.finish_and_clear();
