@@ -525,6 +525,21 @@ pub fn parse_ground(s: &str) -> Result<Ground, String> {
     s.parse()
 }
 
+/// The cameras of the `--camera-path` file `path`, if one is given (`render`, `compare`,
+/// `bench denoise`): read and parsed by [`parse_camera_path`], errors naming the file.
+pub(crate) fn read_camera_path(
+    path: Option<&std::path::Path>,
+) -> anyhow::Result<Option<Vec<[f32; 6]>>> {
+    use anyhow::Context;
+    let Some(p) = path else {
+        return Ok(None);
+    };
+    let text = std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
+    parse_camera_path(&text)
+        .with_context(|| format!("--camera-path {}", p.display()))
+        .map(Some)
+}
+
 /// The cameras of a camera path (`render --camera-path`, the viewer's `--script`): one per
 /// line that is not empty once its `#` comment is cut, each as [`parse_camera`] reads it; a bad
 /// line is named by its number, a path without cameras refused.

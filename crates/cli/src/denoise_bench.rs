@@ -275,16 +275,7 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
         bail!("--orbit must be a finite number of degrees");
     }
     let reference = args.reference == "on";
-    let path = match &args.camera_path {
-        Some(p) => Some(
-            crate::args::parse_camera_path(
-                &std::fs::read_to_string(p)
-                    .map_err(|e| anyhow::anyhow!("reading {}: {e}", p.display()))?,
-            )
-            .map_err(|e| anyhow::anyhow!("--camera-path {}: {e}", p.display()))?,
-        ),
-        None => None,
-    };
+    let path = crate::args::read_camera_path(args.camera_path.as_deref())?;
     let h = Harness::start_unscheduled(&args.output)?;
     let per_frame = if reference { 3 } else { 2 };
     h.plan(args.lights.len() as u64 * u64::from(args.frames) * per_frame);

@@ -40,15 +40,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     let mover = moving_instance(args.move_instance, args.still, &scene, || {
         Ok(scene.smallest_caster())
     })?;
-    let path = match &args.camera_path {
-        Some(p) => Some(
-            crate::args::parse_camera_path(
-                &std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?,
-            )
-            .with_context(|| format!("--camera-path {}", p.display()))?,
-        ),
-        None => None,
-    };
+    let path = crate::args::read_camera_path(args.camera_path.as_deref())?;
     let long = long_frame(&estimate);
     let mut frame = None;
     let sequence = Sequence {

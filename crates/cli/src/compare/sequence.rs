@@ -77,15 +77,7 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
     check_sequence_flags(args)?;
     let pb = crate::progress::spinner("loading the scene");
     let scene = load(args)?;
-    let path = match &args.camera_path {
-        Some(p) => Some(
-            crate::args::parse_camera_path(
-                &std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?,
-            )
-            .with_context(|| format!("--camera-path {}", p.display()))?,
-        ),
-        None => None,
-    };
+    let path = crate::args::read_camera_path(args.camera_path.as_deref())?;
     let mover = moving_instance(args.move_instance, args.still, &scene, || {
         Ok(scene.smallest_caster())
     })?;
