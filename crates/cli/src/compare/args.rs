@@ -241,5 +241,5 @@ Examples:
   manyshadows compare --scene plane-spot --shadow-resolutions 256,1024,2048
   manyshadows compare --scene atrium --lights 16 --shadow-resolutions 512 --json q.json
   manyshadows compare --scene courtyard --width 320 --height 180 --soft on,off   # PCSS vs hard
-  manyshadows compare --lights 1024 --techniques raytraced --frames 30 --orbit 0.15 \
-      --light-samples 1 --reuse --denoise --width 640 --height 360   # sampled rays, moving";
+  manyshadows compare --lights 1024 --frames 30 --orbit 0.15 --light-samples 1 --reuse \
+      --denoise --width 640 --height 360   # a moving sequence, rays sampled and denoised";
