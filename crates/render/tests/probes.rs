@@ -623,3 +623,60 @@ fn gpu_driven_faces_keep_only_the_clusters_a_face_can_show() {
         kept[0]
     );
 }
+
+/// GPU-driven faces split over many cull + draw rounds (each round some faces, or some of a
+/// pipeline's clusters: what many probes or a large scene need within the device's limits)
+/// draw the faces one round per pipeline draws (the test hook caps the commands of a round).
+#[test]
+fn gpu_driven_faces_in_many_rounds_match_few_rounds() {
+    use manyshadows::ProbePasses;
+    let ctx = common::context();
+    let mut scene = atrium(LightMix::Spot);
+    scene.probes.push(Probe {
+        resolution: SIDE,
+        ..Probe::new(Vec3::new(-8.0, 3.0, 0.0), Vec3::new(20.0, 12.0, 16.0))
+    });
+    let settings = settings()
+        .with_width(64)
+        .with_height(36)
+        .with_probe_passes(ProbePasses::Clusters);
+    let read = |r: &Renderer| -> Vec<Vec<[f32; 4]>> {
+        (0..2)
+            .flat_map(|k| (0..6).map(move |f| (k, f)))
+            .map(|(k, f)| r.read_probe_face(k, f).expect("face"))
+            .collect()
+    };
+    let mut r = Renderer::new(&ctx, &scene, settings.clone()).expect("renderer");
+    r.render().expect("frame");
+    let few = r.probe_cluster_rounds().expect("drawn GPU-driven");
+    let (_, offered) = r.probe_clusters_kept().expect("read-back").expect("counts");
+    let clusters = offered / 12;
+    let want = read(&r);
+    // Two faces' commands of every cluster per round, then rounds that split the clusters.
+    for cap in [2 * clusters, clusters / 3 + 1] {
+        let mut r = Renderer::new(&ctx, &scene, settings.clone()).expect("renderer");
+        assert!(r.cap_probe_cluster_rounds(cap));
+        r.render().expect("frame");
+        let rounds = r.probe_cluster_rounds().expect("drawn GPU-driven");
+        assert!(
+            rounds >= few + 4,
+            "{rounds} rounds of at most {cap} commands against {few}"
+        );
+        let got = read(&r);
+        let (mut texels, mut differ) = (0usize, 0usize);
+        for (a, b) in want.iter().zip(&got) {
+            for (x, y) in a.iter().zip(b) {
+                texels += 1;
+                differ += usize::from((0..3).any(|c| display(x[c]).abs_diff(display(y[c])) > 2));
+            }
+        }
+        eprintln!(
+            "{rounds} rounds of at most {cap} commands ({few} uncapped): {differ} of {texels} \
+             texels differ by more than 2 levels"
+        );
+        assert!(
+            differ * 200 <= texels,
+            "{differ} of {texels} texels differ between {rounds} rounds and {few}"
+        );
+    }
+}

@@ -292,6 +292,26 @@ impl Renderer {
         }
     }
 
+    /// With probe faces drawn GPU-driven: the cull + draw rounds the last frame that drew
+    /// them ran (`None` when the faces are drawn another way).
+    pub fn probe_cluster_rounds(&self) -> Option<usize> {
+        Some(self.probes.as_ref()?.face_clusters()?.rounds())
+    }
+
+    /// Test only (feature `test-hooks`): caps the indirect commands of one round of
+    /// GPU-driven probe faces (more rounds, faces split between them) and redraws the faces
+    /// in the next frame; false when the faces are drawn another way.
+    #[cfg(feature = "test-hooks")]
+    pub fn cap_probe_cluster_rounds(&mut self, commands: u64) -> bool {
+        let Some(c) = self.probes.as_mut().and_then(|p| p.face_clusters_mut()) else {
+            return false;
+        };
+        c.cap_round_commands(commands);
+        self.dirty = true;
+        self.probes_stale = true;
+        true
+    }
+
     /// Reads the G-buffer of the last frame [`Renderer::render`] produced (before the first
     /// frame every pixel reads as uncovered).
     pub fn read_gbuffer(&self) -> Result<GBufferData, RenderError> {

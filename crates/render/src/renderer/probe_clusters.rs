@@ -377,6 +377,19 @@ impl FaceClusters {
 }
 
 impl FaceClusters {
+    /// Test only (feature `test-hooks`): caps the commands of one round below what the
+    /// adapter allows (more rounds, faces split between them), from the next `prepare`.
+    #[cfg(feature = "test-hooks")]
+    pub(crate) fn cap_round_commands(&mut self, commands: u64) {
+        self.max_round_commands = self.max_round_commands.min(commands.max(1));
+        self.made_from = None;
+    }
+
+    /// Cull + draw rounds of the last `prepare`.
+    pub(crate) fn rounds(&self) -> usize {
+        self.rounds.len()
+    }
+
     /// Of the last frame's rounds: the cluster-face pairs the cull kept, and those it was
     /// offered (a read-back, for tests).
     pub(crate) fn kept(&self, ctx: &GpuContext) -> Result<(u64, u64), RenderError> {

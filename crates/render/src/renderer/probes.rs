@@ -322,10 +322,21 @@ impl ProbeFrame {
         &self,
         ctx: &GpuContext,
     ) -> Result<Option<(u64, u64)>, RenderError> {
-        match self.layered.as_ref().and_then(|l| l.clusters.as_ref()) {
+        match self.face_clusters() {
             Some(c) => c.kept(ctx).map(Some),
             None => Ok(None),
         }
+    }
+
+    /// Drawn GPU-driven: the clusters and their cull.
+    pub(crate) fn face_clusters(&self) -> Option<&FaceClusters> {
+        self.layered.as_ref().and_then(|l| l.clusters.as_ref())
+    }
+
+    /// The same, to change (test hooks).
+    #[cfg(feature = "test-hooks")]
+    pub(crate) fn face_clusters_mut(&mut self) -> Option<&mut FaceClusters> {
+        self.layered.as_mut().and_then(|l| l.clusters.as_mut())
     }
 
     /// What the last frame did.
