@@ -312,6 +312,7 @@ fn bad_input_is_a_clear_error() {
             "reference rays",
         ),
         (&["--soft", "maybe"], 2, "neither on nor off"),
+        (&["--probes", "65"], 1, "--probes 65"),
         (
             &[
                 "--soft-samples",
@@ -829,6 +830,8 @@ fn compare_over_a_sequence_scores_each_frame_against_its_exact_image() {
             "3",
             "--techniques",
             "raytraced,traditional",
+            "--probes",
+            "2",
         ],
     ]
     .concat());
@@ -838,6 +841,8 @@ fn compare_over_a_sequence_scores_each_frame_against_its_exact_image() {
     assert!(stderr.contains("frame 4/4 scored after"), "{stderr}");
     let moving: Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
     assert_eq!(moving["frames"], 4);
+    // Two seeded probes, lit (and reflected) alike by the exact renderer and the technique.
+    assert_eq!(moving["probes"], 2);
     assert!(moving["moving_instance"].is_u64(), "{moving}");
     let rows = moving["techniques"].as_array().expect("techniques");
     let rmse = |name: &str| -> Vec<f64> {

@@ -47,6 +47,11 @@ pub struct CompareArgs {
     pub(super) light_sizes: LightSizeArgs,
     #[command(flatten)]
     pub(super) model: crate::args::ModelArgs,
+    /// Reflection probes, seeded as `render --probes N` does (0: none); default the scene's
+    /// own (the atrium's two). Their faces are lit like the frame and reflected into it, so
+    /// they are part of the frames scored (and of a frame's cost).
+    #[arg(long, value_name = "N")]
+    pub(super) probes: Option<usize>,
     /// Point-light shadows: cube or dual-paraboloid (scored by the same reference).
     #[arg(long, default_value = "cube", value_parser = crate::args::parse_point_shadows)]
     pub(super) point_shadows: manyshadows::scene::light_space::PointShadows,

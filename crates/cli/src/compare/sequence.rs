@@ -235,6 +235,7 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
         "width": args.width,
         "height": args.height,
         "frames": args.frames,
+        "probes": scene.probes.len(),
         "orbit_degrees_per_frame": args.orbit,
         "camera_path": args.camera_path,
         "moving_instance": mover,

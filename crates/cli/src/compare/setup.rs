@@ -144,6 +144,7 @@ pub(super) fn load(args: &CompareArgs) -> Result<Scene> {
         model: args.model,
         mesh: args.mesh.clone(),
         subdivide: args.subdivide,
+        probes: args.probes,
         ..RenderArgs::default()
     };
     crate::scenes::load_scene(&ra)
