@@ -282,6 +282,21 @@ fn bad_probes_are_refused_by_name_and_a_mask_technique_leaves_them_out() {
             .is_some_and(|e| e.to_string().contains("at most 64")),
         "too many probes: {err:?}"
     );
+    // 64 probes of 1024² need 3 GiB of faces: made where the device has the memory, else
+    // refused naming the probes (lavapipe: out of memory), never a later validation error.
+    scene.probes = vec![
+        Probe {
+            resolution: 1024,
+            ..good
+        };
+        Probe::MAX_COUNT
+    ];
+    if let Some(e) = refused(&scene, Technique::TRADITIONAL) {
+        assert!(
+            e.to_string().contains("faces of 64 probes"),
+            "3 GiB of faces: {e}"
+        );
+    }
 }
 
 /// A mirror sphere in a room whose six walls glow in six colours, each wall's two halves in

@@ -207,22 +207,33 @@ impl ProbeMaps {
                 limit_name: "max_texture_array_layers",
             });
         }
-        let faces = ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("probes.faces"),
-            size: wgpu::Extent3d {
-                width: side,
-                height: side,
-                depth_or_array_layers: layers,
+        // A texture too large for the device's memory is invalid, and only the views made
+        // from it would say so: ask now, naming the probes.
+        let mib = (u64::from(side) * u64::from(side) * u64::from(layers) * 8) >> 20;
+        let faces = ctx.scoped(
+            &format!(
+                "allocating the faces of {count} probes ({layers} layers of {side}², {mib} MiB; \
+                 fewer probes or a smaller resolution need less)"
+            ),
+            || {
+                Ok(ctx.device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some("probes.faces"),
+                    size: wgpu::Extent3d {
+                        width: side,
+                        height: side,
+                        depth_or_array_layers: layers,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: FACE_FORMAT,
+                    usage: wgpu::TextureUsages::TEXTURE_BINDING
+                        | wgpu::TextureUsages::RENDER_ATTACHMENT
+                        | wgpu::TextureUsages::COPY_SRC,
+                    view_formats: &[],
+                }))
             },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: FACE_FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        )?;
         let view = faces.create_view(&wgpu::TextureViewDescriptor {
             dimension: Some(wgpu::TextureViewDimension::D2Array),
             ..Default::default()
