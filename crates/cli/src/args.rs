@@ -587,7 +587,7 @@ pub fn parse_pcf(s: &str) -> Result<Pcf, String> {
 }
 
 /// `per-face`, `layered`, `multiview` or `gpu-driven`.
-pub(crate) fn parse_probe_passes(s: &str) -> Result<manyshadows::ProbePasses, String> {
+pub fn parse_probe_passes(s: &str) -> Result<manyshadows::ProbePasses, String> {
     s.parse()
 }
 

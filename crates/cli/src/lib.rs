@@ -13,10 +13,10 @@ use clap::Parser;
 use crate::commands::{BenchCommand, Cli, Command};
 
 pub use args::{
-    parse_camera, parse_camera_path, parse_ground, parse_pcf, parse_point_shadows, parse_technique,
-    GpuArgs, LightSizeArgs, LookArgs, ModelArgs,
+    parse_camera, parse_camera_path, parse_ground, parse_pcf, parse_point_shadows,
+    parse_probe_passes, parse_technique, GpuArgs, LightSizeArgs, LookArgs, ModelArgs,
 };
-pub use scenes::load_scene_for_view;
+pub use scenes::{load_scene_for_view, ViewScene};
 
 /// Why a frame of `renderer` would take far longer than the rest (its per-view shadow work
 /// past `render`'s bound, with the estimate and the techniques that scale), or `None`: what

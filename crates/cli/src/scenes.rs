@@ -8,27 +8,40 @@ use anyhow::{bail, Result};
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::scene::Scene;
 
+/// What the viewer asks of its scene, as `render`'s flags of the same names.
+#[derive(Clone, Debug)]
+pub struct ViewScene {
+    /// A built-in name, a TOML file or a model file.
+    pub scene: String,
+    /// Mesh file for the dragon scene.
+    pub mesh: Option<PathBuf>,
+    /// Seeded lights instead of the scene's own.
+    pub lights: Option<usize>,
+    /// Seed of the light layout.
+    pub seed: u64,
+    /// The lights' sizes.
+    pub light_sizes: LightSizeArgs,
+    /// The camera, `PX,PY,PZ,TX,TY,TZ`.
+    pub camera: Option<[f32; 6]>,
+    /// How a model file is loaded (paths outside its folder, the ground plane).
+    pub model: ModelArgs,
+    /// Seeded reflection probes instead of the scene's own (0: none).
+    pub probes: Option<usize>,
+}
+
 /// Loads a scene as `render` does: a built-in name, a TOML file or a model file (loaded as
-/// `model` asks: paths outside its folder, the ground plane), with `lights` seeded lights
-/// instead of its own when given, the light sizes `light_sizes` asks for and the camera at
-/// `camera` (`PX,PY,PZ,TX,TY,TZ`) when given (what the viewer shows).
-pub fn load_scene_for_view(
-    scene: &str,
-    mesh: Option<PathBuf>,
-    lights: Option<usize>,
-    seed: u64,
-    light_sizes: LightSizeArgs,
-    camera: Option<[f32; 6]>,
-    model: ModelArgs,
-) -> Result<Scene> {
+/// `v.model` asks), with seeded lights instead of its own when given, the light sizes asked
+/// for, the camera when given and seeded probes when asked (what the viewer shows).
+pub fn load_scene_for_view(v: ViewScene) -> Result<Scene> {
     load_scene(&RenderArgs {
-        scene: scene.to_string(),
-        mesh,
-        lights,
-        seed,
-        light_sizes,
-        camera,
-        model,
+        scene: v.scene,
+        mesh: v.mesh,
+        lights: v.lights,
+        seed: v.seed,
+        light_sizes: v.light_sizes,
+        camera: v.camera,
+        model: v.model,
+        probes: v.probes,
         ..RenderArgs::default()
     })
 }

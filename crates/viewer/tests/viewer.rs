@@ -661,3 +661,64 @@ fn the_window_shows_both_stereo_eyes_as_render_does() {
          target/test-artifacts/viewer-stereo.png)"
     );
 }
+
+/// `--probes` and `--probe-passes` in the window: the atrium with two reflection probes whose
+/// faces are drawn GPU-driven shows the frame `render` makes with the same flags, and its
+/// reflective floor differs from the frame without probes.
+#[test]
+fn the_window_shows_the_probes_as_render_does() {
+    let (_server, display) = xvfb();
+    let dir = tmp("probes");
+    let probes = ["--probes", "2", "--probe-passes", "gpu-driven"];
+    let common = [
+        "--scene",
+        "atrium",
+        "--lights",
+        "8",
+        "--width",
+        &W.to_string(),
+        "--height",
+        &H.to_string(),
+    ];
+    let shot = view(
+        &display,
+        &[&common[..], &probes[..], &["--hide-panel"]].concat(),
+        3,
+        (W, H),
+    );
+    save(&shot, (W, H), "viewer-probes.png");
+    let rendered = |name: &str, extra: &[&str]| {
+        let png = dir.join(name);
+        let args: Vec<&str> = [
+            &["manyshadows", "render"][..],
+            &common[..],
+            extra,
+            &["--out", png.to_str().unwrap()],
+        ]
+        .concat();
+        manyshadows_cli::run(args.into_iter().map(std::ffi::OsString::from))
+            .expect("manyshadows render");
+        image::open(&png).unwrap().to_rgb8()
+    };
+    let off = |image: &image::RgbImage| {
+        shot.iter()
+            .zip(image.pixels())
+            .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b.0[c]) > 2))
+            .count()
+    };
+    let with = off(&rendered("with.png", &probes));
+    let without = off(&rendered("without.png", &["--probes", "0"]));
+    eprintln!(
+        "probes window vs render: {with} of {} pixels differ; vs render without probes: \
+         {without}",
+        shot.len()
+    );
+    assert!(
+        with * 200 <= shot.len(),
+        "the window's probes differ from render's: {with} pixels"
+    );
+    assert!(
+        without > 100,
+        "the probes change nothing in the window ({without} pixels)"
+    );
+}

@@ -61,15 +61,16 @@ pub(crate) fn run(args: &ViewArgs) -> Result<()> {
 }
 
 fn load(args: &ViewArgs) -> Result<Scene> {
-    manyshadows_cli::load_scene_for_view(
-        &args.scene,
-        args.mesh.clone(),
-        args.lights,
-        args.seed,
-        args.light_sizes,
-        args.camera,
-        args.model,
-    )
+    manyshadows_cli::load_scene_for_view(manyshadows_cli::ViewScene {
+        scene: args.scene.clone(),
+        mesh: args.mesh.clone(),
+        lights: args.lights,
+        seed: args.seed,
+        light_sizes: args.light_sizes,
+        camera: args.camera,
+        model: args.model,
+        probes: args.probes,
+    })
 }
 
 /// The event loop's application: the flags, the camera script, the scene as loaded, and the

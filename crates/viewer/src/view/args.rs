@@ -30,6 +30,15 @@ pub struct ViewArgs {
     pub(super) model: manyshadows_cli::ModelArgs,
     #[command(flatten)]
     pub(super) look: manyshadows_cli::LookArgs,
+    /// Reflection probes seeded along the scene's longest side (0: none); default the
+    /// scene's own (the atrium's two), as `render --probes`.
+    #[arg(long, value_name = "N")]
+    pub(super) probes: Option<usize>,
+    /// How the probes' face G-buffers are drawn: per-face, layered, multiview or gpu-driven
+    /// (as `render --probe-passes`).
+    #[arg(long, default_value_t = manyshadows::ProbePasses::default(),
+          value_parser = manyshadows_cli::parse_probe_passes)]
+    pub(super) probe_passes: manyshadows::ProbePasses,
     /// Shadow technique to start with (as for `render`; the panel switches it).
     #[arg(long, default_value_t = Technique::default(), value_parser = manyshadows_cli::parse_technique)]
     pub(super) technique: Technique,

@@ -40,6 +40,8 @@ pub(super) struct Choice {
     pub(super) reuse: bool,
     /// Stereo eyes this far apart, side by side (`--stereo`).
     pub(super) stereo: Option<f32>,
+    /// How the probes' faces are drawn (`--probe-passes`).
+    pub(super) probe_passes: manyshadows::ProbePasses,
 }
 
 /// The open window and everything drawn into it.
@@ -89,6 +91,7 @@ fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
         .with_width(width)
         .with_height(height)
         .with_stereo(c.stereo.map(manyshadows::Stereo::new))
+        .with_probe_passes(c.probe_passes)
         .with_technique(c.technique)
         .with_point_shadows(c.point_shadows)
         .with_pcf(c.pcf)
@@ -139,6 +142,7 @@ impl State {
             denoise: args.denoise,
             reuse: args.reuse,
             stereo: args.stereo,
+            probe_passes: args.probe_passes,
         };
         let renderer = Renderer::new(&ctx, scene, settings(config.width, config.height, choice))?;
         if !args.insist {
