@@ -4,73 +4,74 @@
 /// Where the G-buffer's views are seen from, for one camera or two eyes.
 const EYES_OF_FRAME: &str = "fn eye_position(e: u32) -> vec3<f32> { return frame.eye_pos[e].xyz; }";
 
+/// The pass's WGSL: (with `clip`, clip distances enabled) the common declarations, the
+/// pass itself, then `parts` (a way's vertex stage and what it needs).
+fn composed(clip: bool, parts: &[&str]) -> String {
+    let clip: &[&str] = if clip {
+        &["enable clip_distances;"]
+    } else {
+        &[]
+    };
+    let base = [crate::gpu::shaders::COMMON, include_str!("gbuffer.wgsl")];
+    crate::gpu::shaders::compose(&[clip, &base[..], parts].concat())
+}
+
 /// The G-buffer pass's WGSL.
 pub fn shader() -> String {
-    crate::gpu::shaders::compose(&[
-        crate::gpu::shaders::COMMON,
-        include_str!("gbuffer.wgsl"),
-        EYES_OF_FRAME,
-    ])
+    composed(false, &[EYES_OF_FRAME])
 }
 
 /// The same with `vs_faces`: square views in tiles in one layered pass (needs
 /// `CLIP_DISTANCES`).
 pub fn faces_shader() -> String {
-    crate::gpu::shaders::compose(&[
-        "enable clip_distances;",
-        crate::gpu::shaders::COMMON,
-        include_str!("gbuffer.wgsl"),
-        include_str!("gbuffer_face_views.wgsl"),
-        include_str!("gbuffer_faces.wgsl"),
-    ])
+    composed(
+        true,
+        &[
+            include_str!("gbuffer_face_views.wgsl"),
+            include_str!("gbuffer_faces.wgsl"),
+        ],
+    )
 }
 
 /// The same with `vs_face_clusters` too: square views in tiles drawn from GPU-culled triangle
 /// clusters by indirect multi-draws, the vertices read from storage (needs `CLIP_DISTANCES`).
 pub fn face_clusters_shader() -> String {
-    crate::gpu::shaders::compose(&[
-        "enable clip_distances;",
-        crate::gpu::shaders::COMMON,
-        include_str!("gbuffer.wgsl"),
-        include_str!("gbuffer_face_views.wgsl"),
-        include_str!("gbuffer_faces.wgsl"),
-        crate::frame::gbuffer_pull::PARAMS_WGSL,
-        include_str!("gbuffer_face_clusters.wgsl"),
-    ])
+    composed(
+        true,
+        &[
+            include_str!("gbuffer_face_views.wgsl"),
+            include_str!("gbuffer_faces.wgsl"),
+            crate::frame::gbuffer_pull::PARAMS_WGSL,
+            include_str!("gbuffer_face_clusters.wgsl"),
+        ],
+    )
 }
 
 /// The same with `vs_face_layers`: a probe's six faces in one multiview pass (needs
 /// `MULTIVIEW` with six views).
 pub fn face_layers_shader() -> String {
-    crate::gpu::shaders::compose(&[
-        crate::gpu::shaders::COMMON,
-        include_str!("gbuffer.wgsl"),
-        include_str!("gbuffer_face_views.wgsl"),
-        include_str!("gbuffer_face_layers.wgsl"),
-    ])
+    composed(
+        false,
+        &[
+            include_str!("gbuffer_face_views.wgsl"),
+            include_str!("gbuffer_face_layers.wgsl"),
+        ],
+    )
 }
 
 /// The same with `vs_multiview`: both eyes of a stereo frame in one multiview pass (needs
 /// `MULTIVIEW`).
 pub fn multiview_shader() -> String {
-    crate::gpu::shaders::compose(&[
-        crate::gpu::shaders::COMMON,
-        include_str!("gbuffer.wgsl"),
-        include_str!("gbuffer_multiview.wgsl"),
-        EYES_OF_FRAME,
-    ])
+    composed(
+        false,
+        &[include_str!("gbuffer_multiview.wgsl"), EYES_OF_FRAME],
+    )
 }
 
 /// The same with `vs_layered`: both eyes of a stereo frame in one draw (needs
 /// `CLIP_DISTANCES`).
 pub fn layered_shader() -> String {
-    crate::gpu::shaders::compose(&[
-        "enable clip_distances;",
-        crate::gpu::shaders::COMMON,
-        include_str!("gbuffer.wgsl"),
-        include_str!("gbuffer_layered.wgsl"),
-        EYES_OF_FRAME,
-    ])
+    composed(true, &[include_str!("gbuffer_layered.wgsl"), EYES_OF_FRAME])
 }
 
 #[cfg(test)]

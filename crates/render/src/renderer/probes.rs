@@ -229,7 +229,16 @@ impl ProbeFrame {
             }
         }
         ctx.queue.write_buffer(&self.staging, 0, &bytes);
-        // Per-face culling of whole instances (one pass per face draws only what it sees).
+        // Per-face culling of whole instances on the CPU (one pass per face draws only what it
+        // sees, the layered pass each instance only into the faces it meets); multiview culls
+        // nothing and GPU-driven faces cull clusters on the GPU.
+        let per_face = self.layered.is_none() && self.multiview.is_none();
+        let layered = self.layered.as_ref().is_some_and(|l| l.clusters.is_none());
+        self.visible.clear();
+        self.visible_by_draw.clear();
+        if !(per_face || layered) {
+            return self.update_ways(ctx, scene, gpu_scene, frame, redraw);
+        }
         self.visible = scene
             .probes
             .iter()
@@ -243,10 +252,26 @@ impl ProbeFrame {
                     .collect()
             })
             .collect();
-        let faces = self.visible.len();
-        self.visible_by_draw = (0..gpu_scene.draws.len() * faces)
-            .map(|i| self.visible[i % faces][i / faces])
-            .collect();
+        if layered {
+            let faces = self.visible.len();
+            self.visible_by_draw = (0..gpu_scene.draws.len() * faces)
+                .map(|i| self.visible[i % faces][i / faces])
+                .collect();
+        }
+        self.update_ways(ctx, scene, gpu_scene, frame, redraw)
+    }
+
+    /// The layered (or GPU-driven) atlas's and the multiview pass's views, and the redraw
+    /// mark (the rest of [`Self::update`]).
+    fn update_ways(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        frame: &FrameUniforms,
+        redraw: bool,
+    ) -> Result<(), RenderError> {
+        let side = self.maps.side;
         if let Some(l) = &mut self.layered {
             l.update(ctx, scene, gpu_scene, frame, side)?;
         }
