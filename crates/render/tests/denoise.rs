@@ -227,3 +227,64 @@ fn a_frame_too_large_to_denoise_is_refused_by_name() {
         ),
     }
 }
+
+/// The denoised frame keeps what the lighting pass adds besides direct light: with every light
+/// traced and every light a point (no noise at all) it is the plain frame, reflections of a
+/// probe included (the composite once shaded ambient, emission and the denoised direct light
+/// only, and the atrium's marble lost its mirror images).
+#[test]
+fn the_denoised_frame_keeps_the_probes_reflections() {
+    let ctx = common::context();
+    let mut scene = builtin::build(
+        "atrium",
+        &BuiltinOptions {
+            lights: Some(8),
+            seed: 2,
+            mix: LightMix::Point,
+            shadow_resolution: Some(256),
+            ..Default::default()
+        },
+    )
+    .expect("atrium");
+    for l in &mut scene.lights {
+        l.size = 0.0;
+    }
+    scene.probes = vec![manyshadows::scene::Probe {
+        resolution: 32,
+        ..manyshadows::scene::Probe::new(glam::Vec3::new(6.0, 1.5, 0.0), glam::Vec3::ZERO)
+    }];
+    let base = RenderSettings::new(160, 90);
+    let Some(mut plain) = common::raytraced(&ctx, &scene, base.clone()) else {
+        return;
+    };
+    let plain = plain.render().expect("frame");
+    let mut denoised = common::raytraced(
+        &ctx,
+        &scene,
+        base.clone()
+            .with_rays(RayOptions::default().with_denoise(true)),
+    )
+    .expect("same device");
+    let denoised = denoised.render().expect("frame");
+    let (differing, largest, _) = common::frame_differences(&plain, &denoised);
+    // The same frame without the probe, to know the test sees reflections at all.
+    let mut bare = scene.clone();
+    bare.probes.clear();
+    let bare = common::raytraced(&ctx, &bare, base)
+        .expect("same device")
+        .render()
+        .expect("frame");
+    let (reflecting, _, _) = common::frame_differences(&plain, &bare);
+    eprintln!(
+        "denoised against plain: {differing} pixels differ (largest {largest}); the probe changes \
+         {reflecting}"
+    );
+    assert!(
+        reflecting > 1000,
+        "the probe shows in too few pixels: {reflecting}"
+    );
+    assert!(
+        differing * 200 < reflecting && largest <= 2,
+        "the denoised frame is not the plain frame: {differing} pixels differ, by up to {largest}"
+    );
+}

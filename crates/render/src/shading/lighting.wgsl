@@ -569,10 +569,14 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
             }
         }
     }
-    let ambient = acc.color;
+    // What the denoiser's composite adds to the denoised direct light: ambient, the probes'
+    // reflections and emission.
+    var ambient = acc.color;
     resolve_samples(s, &acc);
     if (PROBES) {
-        acc.color = acc.color + probe_reflection(s);
+        let mirrored = probe_reflection(s);
+        acc.color = acc.color + mirrored;
+        ambient = ambient + mirrored;
     }
     if (EMISSION) {
         // Emitted radiance (times the emissive texel), through the exposure like reflected
