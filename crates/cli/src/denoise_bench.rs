@@ -81,6 +81,9 @@ pub struct DenoiseArgs {
     /// one then shows reuse alone, the denoised one reuse and the denoiser together.
     #[arg(long)]
     pub reuse: bool,
+    /// With --reuse: spatial reuse too (`render --spatial`: off, biased or unbiased).
+    #[arg(long, default_value = "off", value_parser = crate::args::parse_spatial)]
+    pub spatial: manyshadows::SpatialReuse,
     /// Score against the exact image of every frame (on) or only time the frames (off).
     #[arg(long, default_value = "on", value_parser = ["on", "off"])]
     pub reference: String,
@@ -138,6 +141,7 @@ struct Fields<'a> {
     caster_moves: bool,
     light_samples: u32,
     reuse: bool,
+    spatial: &'static str,
     records: Vec<Record>,
 }
 
@@ -287,7 +291,8 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
             .with_technique(crate::techniques::first_filling(manyshadows::Fills::Rays));
         let sampled = RayOptions::default()
             .with_light_samples(args.light_samples)
-            .with_reuse(args.reuse);
+            .with_reuse(args.reuse)
+            .with_spatial(args.spatial);
         let make = |rays: RayOptions| Renderer::new(&h.ctx, &scene, base.clone().with_rays(rays));
         let mut plain = make(sampled)?;
         let mut denoised = make(sampled.with_denoise(true))?;
@@ -457,6 +462,7 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
             caster_moves: !args.still,
             light_samples: args.light_samples,
             reuse: args.reuse,
+            spatial: args.spatial.name(),
             records,
         },
         figures,
@@ -469,16 +475,27 @@ fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
         Some(p) => format!("camera along {}", p.display()),
         None => format!("camera {} deg/frame", args.orbit),
     };
-    let mut t =
-        format!(
+    let mut t = format!(
         "== bench denoise: {} at {}x{}, {} frames, {camera}, {}; K = {}{}\n   adapter: {adapter}\n",
         args.scene,
         args.width,
         args.height,
         args.frames,
-        if args.still { "no caster moving" } else { "a caster circling" },
+        if args.still {
+            "no caster moving"
+        } else {
+            "a caster circling"
+        },
         args.light_samples,
-        if args.reuse { ", lights reused across frames (plain: reuse alone)" } else { "" }
+        match (args.reuse, args.spatial) {
+            (false, _) => String::new(),
+            (true, manyshadows::SpatialReuse::Off) =>
+                ", lights reused across frames (plain: reuse alone)".to_string(),
+            (true, m) => format!(
+                ", lights reused across frames and between neighbours ({}; plain: reuse alone)",
+                m.name()
+            ),
+        }
     );
     t += "lights | RMSE plain: mean first last | denoised: mean first last | GPU ms plain denoised (its passes) | ratio\n";
     for r in records {

@@ -95,7 +95,11 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
                     let plural = if history == 1 { "" } else { "s" };
                     let reused = if rays.reuse {
                         let m = (f + 1).min(manyshadows::shading::reuse::MAX_CONFIDENCE + 1);
-                        format!(", lights reused (reservoirs of up to {m} frames)")
+                        let spatial = match rays.spatial {
+                            manyshadows::SpatialReuse::Off => String::new(),
+                            mode => format!(" and between neighbours ({})", mode.name()),
+                        };
+                        format!(", lights reused (reservoirs of up to {m} frames){spatial}")
                     } else {
                         String::new()
                     };

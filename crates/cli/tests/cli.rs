@@ -988,3 +988,52 @@ fn stereo_writes_both_eyes_side_by_side() {
         "--stereo",
     );
 }
+
+/// `render --spatial`: with `--reuse` the frames say they reuse between neighbours (where ray
+/// queries exist; elsewhere the technique is refused naming the feature); without `--reuse`
+/// it is refused naming both flags, and an unknown mode lists the modes.
+#[test]
+fn spatial_reuse_is_said_and_refused_without_temporal_reuse() {
+    let dir = tmp("spatial");
+    let out_png = dir.join("spatial.png");
+    let common = [
+        "render",
+        "--scene",
+        "cubes",
+        "--lights",
+        "16",
+        "--technique",
+        "raytraced",
+        "--light-samples",
+        "1",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--out",
+        out_png.to_str().unwrap(),
+    ];
+    let out = run(&[
+        &common[..],
+        &["--reuse", "--spatial", "unbiased", "--frames", "2"],
+    ]
+    .concat());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if stderr.contains("EXPERIMENTAL_RAY_QUERY") {
+        assert_clean_failure(&out, 1, "EXPERIMENTAL_RAY_QUERY");
+    } else {
+        assert!(out.status.success(), "{stderr}");
+        assert!(
+            stderr.contains(
+                "lights reused (reservoirs of up to 2 frames) and between neighbours (unbiased)"
+            ),
+            "{stderr}"
+        );
+        assert!(std::fs::metadata(&out_png).is_ok());
+    }
+    let out = run(&[&common[..], &["--spatial", "biased"]].concat());
+    assert_clean_failure(&out, 1, "--spatial");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--reuse"));
+    let out = run(&[&common[..], &["--reuse", "--spatial", "sideways"]].concat());
+    assert_clean_failure(&out, 2, "off, biased, unbiased");
+}

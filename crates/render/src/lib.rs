@@ -132,6 +132,6 @@ pub use shadows::image::ShadowPicture;
 pub use shadows::irregular::maps::{IrregularOptions, IrregularStats};
 pub use shadows::options::{CullMode, Pcf, ShadowBias, ShadowOptions, SoftShadows};
 pub use shadows::plan::DEFAULT_MAX_ATLAS_SIZE;
-pub use shadows::raytraced::accel::{RayOptions, DEFAULT_AREA_SAMPLES};
+pub use shadows::raytraced::accel::{RayOptions, SpatialReuse, DEFAULT_AREA_SAMPLES};
 pub use shadows::source::ShadowStats;
 pub use shadows::vsm::plan::{TileMarking, VirtualOptions, VirtualStats};

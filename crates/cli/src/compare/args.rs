@@ -179,6 +179,9 @@ pub struct CompareArgs {
     /// --reuse`).
     #[arg(long)]
     pub(super) reuse: bool,
+    /// With --reuse: spatial reuse too (`render --spatial`: off, biased or unbiased).
+    #[arg(long, default_value = "off", value_parser = crate::args::parse_spatial)]
+    pub(super) spatial: manyshadows::SpatialReuse,
     /// With --frames and shadow rays: the denoiser (`render --denoise`).
     #[arg(long)]
     pub(super) denoise: bool,

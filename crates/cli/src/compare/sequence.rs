@@ -56,6 +56,7 @@ pub(super) fn check_sequence_flags(args: &CompareArgs) -> Result<()> {
             ("--still", args.still),
             ("--light-samples", args.light_samples != 0),
             ("--reuse", args.reuse),
+            ("--spatial", args.spatial != manyshadows::SpatialReuse::Off),
             ("--denoise", args.denoise),
         ];
         if let Some((name, _)) = used.iter().find(|(_, on)| *on) {
@@ -119,6 +120,7 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
     let sampled = RayOptions::default()
         .with_light_samples(args.light_samples)
         .with_reuse(args.reuse)
+        .with_spatial(args.spatial)
         .with_denoise(args.denoise);
     let mut contenders: Vec<(String, Renderer)> = Vec::new();
     for t in asked {
@@ -241,6 +243,7 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
         "moving_instance": mover,
         "light_samples": args.light_samples,
         "reuse": args.reuse,
+        "spatial": args.spatial.name(),
         "denoise": args.denoise,
         "exact": exact_technique.to_string(),
         "techniques": scored,
@@ -259,6 +262,10 @@ fn label(t: Technique, args: &CompareArgs) -> String {
     let mut s = format!("{t}-k{}", args.light_samples);
     if args.reuse {
         s.push_str("-reuse");
+    }
+    if args.spatial != manyshadows::SpatialReuse::Off {
+        s.push_str("-spatial-");
+        s.push_str(args.spatial.name());
     }
     if args.denoise {
         s.push_str("-denoise");

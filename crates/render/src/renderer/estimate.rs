@@ -248,8 +248,15 @@ impl Renderer {
         let rays = if info.fills != Fills::Rays {
             0
         } else if s.rays.light_samples > 0 {
-            // One point of each sampled light; reuse traces the kept sample too.
-            let reuse = if s.rays.reuse { 2 } else { 1 };
+            // One point of each sampled light; reuse traces the kept sample too, spatial
+            // reuse each neighbour's light from here (unbiased: from every pixel involved).
+            let n = u64::from(crate::shading::reuse::SPATIAL_NEIGHBOURS);
+            let spatial = match s.rays.spatial {
+                crate::SpatialReuse::Off => 0,
+                crate::SpatialReuse::Biased => n,
+                crate::SpatialReuse::Unbiased => n + n * n,
+            };
+            let reuse = if s.rays.reuse { 2 + spatial } else { 1 };
             pixels * u64::from(s.rays.light_samples) * reuse
         } else if sized {
             // A stratified grid over each sized light's shape.

@@ -135,6 +135,7 @@ impl ProbeFrame {
             emission_texture: gbuffer.emission.is_some(),
             denoise: false,
             reuse: false,
+            spatial: 0,
             probes: false,
             linear_out: true,
             ..consts

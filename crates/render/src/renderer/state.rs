@@ -232,6 +232,7 @@ impl Renderer {
                         settings.width,
                         settings.height,
                         settings.rays.light_samples,
+                        settings.rays.spatial != crate::SpatialReuse::Off,
                     )
                 })
                 .transpose()?;
@@ -272,6 +273,11 @@ impl Renderer {
                     emission_texture: gbuffer.emission.is_some(),
                     denoise: denoiser.is_some(),
                     reuse: reuse.is_some(),
+                    spatial: if reuse.is_some() {
+                        settings.rays.spatial.code()
+                    } else {
+                        0
+                    },
                     probes: probes.is_some(),
                     ..look_consts
                 },

@@ -32,6 +32,8 @@ pub struct LightingPass {
     pipeline: wgpu::RenderPipeline,
     /// `fs_composite` over `color`, after the denoiser (only when rays are denoised).
     composite: Option<wgpu::RenderPipeline>,
+    /// `fs_spatial` over `color`, after the pass (only with spatial reuse).
+    spatial: Option<wgpu::RenderPipeline>,
     layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
     no_emission: wgpu::TextureView,
@@ -262,11 +264,13 @@ impl LightingPass {
         };
         let pipeline = fullscreen(entry);
         let composite = consts.denoise.then(|| fullscreen("fs_composite"));
+        let spatial = (consts.reuse && consts.spatial != 0).then(|| fullscreen("fs_spatial"));
         Self {
             color_view: color.create_view(&Default::default()),
             color,
             pipeline,
             composite,
+            spatial,
             layout,
             sampler: linear,
             no_emission,
@@ -281,12 +285,17 @@ impl LightingPass {
 
     /// Records the pass (with a denoiser, the first of the span: [`LightingPass::record_composite`]
     /// ends it).
+    /// With spatial reuse its pass follows, in the same span.
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: &GpuTimer, span: Option<Span>) {
+        let last = self.spatial.is_none();
         self.fullscreen_pass(
             encoder,
             &self.pipeline,
-            timer.render_writes(span, true, true),
+            timer.render_writes(span, true, last),
         );
+        if let Some(spatial) = &self.spatial {
+            self.fullscreen_pass(encoder, spatial, timer.render_writes(span, false, true));
+        }
     }
 
     /// Records the pass into `target` (a view of the pass's format and size: a probe's face

@@ -305,6 +305,8 @@ struct Acc {
     unshadowed: vec3<f32>,
     est_shadowed: vec3<f32>,
     est_unshadowed: vec3<f32>,
+    // Whether the samples went through temporal reuse (resolve_reused).
+    reused: bool,
 }
 
 fn pcg(v: u32) -> u32 {
@@ -438,6 +440,7 @@ fn light_lit_point(i: u32, s: Surface, jitter: vec2<f32>) -> f32 {
 fn resolve_reused(s: Surface, acc: ptr<function, Acc>) {
     let k = ray_samples();
     let luma = vec3<f32>(0.2126, 0.7152, 0.0722);
+    (*acc).reused = true;
     let r = reuse_history(s.p);
     reuse_store_point(s.px, s.p, true);
     var direct = vec3<f32>(0.0);
@@ -500,18 +503,168 @@ fn resolve_reused(s: Surface, acc: ptr<function, Acc>) {
     }
 }
 
-fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
-    let gpos = textureLoad(gbuf_position, px, 0);
-    let pos = bitcast<vec4<f32>>(gpos);
-    if (!has_geometry(gpos)) {
-        if (REUSE) {
-            reuse_store_point(px, vec3<f32>(0.0), false);
-        }
-        if (DENOISE) {
-            denoise_store(px, vec4<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
-        }
-        return vec4<f32>(frame.sky.rgb, 1.0);
+// Spatial reuse (reuse.rs), after the lighting pass: each pixel's samples after temporal
+// reuse resample those of up to SPATIAL_NEIGHBOURS pixels drawn from a disc of
+// SPATIAL_RADIUS pixels around it (those of similar view depth and normal, their samples
+// new this frame); the light drawn is shaded here (the next frame's temporal reuse starts from
+// the pixel's own reservoir: reuse.rs says why).
+@fragment
+fn fs_spatial(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
+    let px = vec2<i32>(frag.xy);
+    let rest = spatial_rest(px);
+    let color = bitcast<vec3<f32>>(rest.xyz);
+    if (rest.w == SPATIAL_SKY) {
+        return vec4<f32>(color, 1.0);
     }
+    if (rest.w == SPATIAL_WHOLE) {
+        return vec4<f32>(tone_map(color), 1.0);
+    }
+    let s = surface_at(px, textureLoad(gbuf_position, px, 0), MASK_NONE);
+    let direct = spatial_resolve(s);
+    if (DENOISE) {
+        denoise_set_shadowed(px, direct);
+    }
+    return vec4<f32>(tone_map(color + direct), 1.0);
+}
+
+// A pixel's target at light `y` (point `jit` on its shape): the luminance of the light's
+// unshadowed term, times its visibility where `trace` (one ray; else taken as seen), and
+// the term itself.
+struct SpatialTarget {
+    p: f32,
+    f: vec3<f32>,
+}
+
+fn spatial_target(s: Surface, y: u32, jit: vec2<f32>, trace: bool) -> SpatialTarget {
+    var out: SpatialTarget;
+    out.p = 0.0;
+    out.f = vec3<f32>(0.0);
+    if (y >= frame.counts.x) {
+        return out;
+    }
+    let t = light_terms(y, s);
+    if (!t.reaches || !t.facing) {
+        return out;
+    }
+    out.f = t.att * t.ds;
+    out.p = dot(out.f, vec3<f32>(0.2126, 0.7152, 0.0722));
+    if (out.p > 0.0 && trace) {
+        out.p = out.p * light_lit_point(y, s, jit);
+    }
+    return out;
+}
+
+// Uniform in [0, 1) from a generator's state, which it advances.
+fn spatial_random(rng: ptr<function, u32>) -> f32 {
+    *rng = pcg(*rng);
+    return f32(*rng >> 8u) / 16777216.0;
+}
+
+// The pixel's direct light from its and its neighbours' samples (see fs_spatial). Each
+// candidate `i` (pixel `i`'s light y_i with weight W_i standing for M_i frames) is drawn with
+// weight m_i · p̂(y_i) · W_i, p̂ this pixel's target f · V (a ray per neighbour's light; the
+// pixel's own light was seen: W > 0 only where its ray reached it), m_i its MIS weight:
+// biased, c_i / Σ c; unbiased, the generalized balance heuristic c_i p̂_i(y_i) / Σ_o c_o
+// p̂_o(y_i) over every pixel o resampled (rays from each), with confidences c: this pixel's
+// M, 1 for a neighbour (spatial_confidence). The light drawn is shaded with W = Σ w / p̂(y).
+fn spatial_confidence(c: vec4<u32>, i: u32) -> f32 {
+    if (i == 0u) {
+        return bitcast<f32>(c.z);
+    }
+    return min(bitcast<f32>(c.z), 1.0);
+}
+
+fn spatial_resolve(s: Surface) -> vec3<f32> {
+    let k = ray_samples();
+    let luma = vec3<f32>(0.2126, 0.7152, 0.0722);
+    let noise_px = eye_local(frame.eyes, s.px);
+    var rng = pcg(u32(noise_px.x) + pcg(u32(noise_px.y) + pcg(ray_seed() + frame.modes.y + 0x5bd1e995u)));
+    // The pixels resampled: this one first, then the neighbours that pass.
+    var pxs: array<vec2<i32>, SPATIAL_SLOTS>;
+    var surfs: array<Surface, SPATIAL_SLOTS>;
+    pxs[0] = s.px;
+    surfs[0] = s;
+    var n = 1u;
+    let size = vec2<i32>(frame.viewport.xy);
+    for (var t = 0u; t < SPATIAL_NEIGHBOURS; t = t + 1u) {
+        let r = SPATIAL_RADIUS * sqrt(spatial_random(&rng));
+        let a = 6.2831853 * spatial_random(&rng);
+        let q = s.px + vec2<i32>(round(r * vec2<f32>(cos(a), sin(a))));
+        if (any(q < vec2<i32>(0)) || any(q >= size) || all(q == s.px)) {
+            continue;
+        }
+        if (spatial_rest(q).w != SPATIAL_SAMPLED) {
+            continue;
+        }
+        let sq = surface_at(q, textureLoad(gbuf_position, q, 0), MASK_NONE);
+        if (abs(sq.view_depth - s.view_depth) > 0.1 * s.view_depth || dot(sq.n, s.n) < 0.9) {
+            continue;
+        }
+        pxs[n] = q;
+        surfs[n] = sq;
+        n = n + 1u;
+    }
+    var direct = vec3<f32>(0.0);
+    for (var j = 0u; j < k; j = j + 1u) {
+        // Confidence: this pixel's reservoir the frames it stands for, a neighbour's one.
+        var m_total = 0.0;
+        for (var i = 0u; i < n; i = i + 1u) {
+            m_total = m_total + spatial_confidence(spatial_load(pxs[i], j), i);
+        }
+        var kept_f = vec3<f32>(0.0);
+        var kept_p = 0.0;
+        var total = 0.0;
+        for (var i = 0u; i < n; i = i + 1u) {
+            let c = spatial_load(pxs[i], j);
+            let w_i = bitcast<f32>(c.y);
+            let m_i = spatial_confidence(c, i);
+            if (w_i <= 0.0 || m_i <= 0.0) {
+                continue;
+            }
+            let jit = unpack2x16unorm(c.w);
+            let here = spatial_target(s, c.x, jit, i != 0u);
+            if (here.p <= 0.0) {
+                continue;
+            }
+            var mis = m_i / m_total;
+            if (SPATIAL == 2u) {
+                var num = 0.0;
+                var den = 0.0;
+                for (var o = 0u; o < n; o = o + 1u) {
+                    let m_o = spatial_confidence(spatial_load(pxs[o], j), o);
+                    var p_o = here.p;
+                    if (o != 0u) {
+                        // Pixel i's own light was seen from it (W > 0).
+                        p_o = spatial_target(surfs[o], c.x, jit, o != i).p;
+                    }
+                    den = den + m_o * p_o;
+                    if (o == i) {
+                        num = m_o * p_o;
+                    }
+                }
+                mis = select(0.0, num / den, den > 0.0);
+            }
+            let w = mis * here.p * w_i;
+            if (w <= 0.0) {
+                continue;
+            }
+            total = total + w;
+            if (spatial_random(&rng) * total < w) {
+                kept_f = here.f;
+                kept_p = here.p;
+            }
+        }
+        if (total > 0.0 && kept_p > 0.0) {
+            direct = direct + kept_f * (total / dot(kept_f, luma));
+        }
+    }
+    return direct / f32(k);
+}
+
+// The surface point pixel `px` of the G-buffer holds (`gpos`: its position texel, which has
+// geometry), its shadows found as `mask` says.
+fn surface_at(px: vec2<i32>, gpos: vec4<u32>, mask: u32) -> Surface {
+    let pos = bitcast<vec4<f32>>(gpos);
     let nm = textureLoad(gbuf_normal, px, 0);
     var s: Surface;
     s.p = pos.xyz;
@@ -531,6 +684,25 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     s.view_depth = -(frame.view * vec4<f32>(s.p, 1.0)).z;
     s.px = px;
     s.mask = mask;
+    return s;
+}
+
+fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
+    let gpos = textureLoad(gbuf_position, px, 0);
+    let pos = bitcast<vec4<f32>>(gpos);
+    if (!has_geometry(gpos)) {
+        if (REUSE) {
+            reuse_store_point(px, vec3<f32>(0.0), false);
+        }
+        if (DENOISE) {
+            denoise_store(px, vec4<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
+        }
+        if (SPATIAL != 0u) {
+            spatial_store_rest(px, frame.sky.rgb, SPATIAL_SKY);
+        }
+        return vec4<f32>(frame.sky.rgb, 1.0);
+    }
+    let s = surface_at(px, gpos, mask);
     var acc: Acc;
     acc.color = vec3<f32>(0.0);
     acc.wsum = 0.0;
@@ -542,6 +714,7 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     acc.unshadowed = vec3<f32>(0.0);
     acc.est_shadowed = vec3<f32>(0.0);
     acc.est_unshadowed = vec3<f32>(0.0);
+    acc.reused = false;
     var slot = CLUSTER_OVERFLOW;
     if (clusters.words.w != 0u) {
         slot = cluster_slots[cluster_index(clusters, vec2<u32>(px), s.view_depth)];
@@ -569,14 +742,14 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
             }
         }
     }
-    // What the denoiser's composite adds to the denoised direct light: ambient, the probes'
-    // reflections and emission.
-    var ambient = acc.color;
+    // What the denoiser's composite and spatial reuse add to the direct light they estimate:
+    // ambient, the probes' reflections and emission.
+    var rest = acc.color;
     resolve_samples(s, &acc);
     if (PROBES) {
         let mirrored = probe_reflection(s);
         acc.color = acc.color + mirrored;
-        ambient = ambient + mirrored;
+        rest = rest + mirrored;
     }
     if (EMISSION) {
         // Emitted radiance (times the emissive texel), through the exposure like reflected
@@ -586,11 +759,17 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
             emitted = emitted * textureLoad(gbuf_emission, px, 0).rgb;
         }
         acc.color = acc.color + emitted;
-        if (DENOISE) {
-            denoise_store(px, vec4<f32>(acc.unshadowed, 1.0), acc.est_shadowed, acc.est_unshadowed, ambient + emitted);
+        rest = rest + emitted;
+    }
+    if (DENOISE) {
+        denoise_store(px, vec4<f32>(acc.unshadowed, 1.0), acc.est_shadowed, acc.est_unshadowed, rest);
+    }
+    if (SPATIAL != 0u) {
+        if (acc.reused) {
+            spatial_store_rest(px, rest, SPATIAL_SAMPLED);
+        } else {
+            spatial_store_rest(px, acc.color, SPATIAL_WHOLE);
         }
-    } else if (DENOISE) {
-        denoise_store(px, vec4<f32>(acc.unshadowed, 1.0), acc.est_shadowed, acc.est_unshadowed, ambient);
     }
     if (LINEAR_OUT) {
         return vec4<f32>(acc.color, 1.0);

@@ -297,6 +297,10 @@ pub(crate) struct ShadingConsts {
     /// Whether sampled lights are reused across frames (reuse.rs): each pixel's reservoirs
     /// are read from the last frame and written for the next.
     pub reuse: bool,
+    /// With `reuse`: spatial reuse after the lighting pass (reuse.rs; `SpatialReuse::code`:
+    /// 0 off, 1 biased, 2 unbiased): the lighting pass keeps each pixel's reservoirs and the
+    /// rest of its colour apart, and `fs_spatial` resamples neighbours' and shades.
+    pub spatial: u32,
     /// Whether surfaces mirror the nearest reflection probe (probes.rs; bindings 44–46).
     pub probes: bool,
     /// Whether the pass writes linear radiance (before exposure and tone map) into a float
@@ -316,6 +320,7 @@ impl Default for ShadingConsts {
             emission_texture: false,
             denoise: false,
             reuse: false,
+            spatial: 0,
             probes: false,
             linear_out: false,
         }
@@ -332,7 +337,9 @@ impl ShadingConsts {
              const EXPOSURE_IS_FIXED: bool = {};\nconst FIXED_EXPOSURE: f32 = {:?}f;\n\
              const EMISSION: bool = {};\nconst EMISSION_TEXTURE: bool = {};\n\
              const DENOISE: bool = {};\nconst REUSE: bool = {};\n\
-             const PROBES: bool = {};\nconst LINEAR_OUT: bool = {};\n",
+             const PROBES: bool = {};\nconst LINEAR_OUT: bool = {};\n\
+             const SPATIAL: u32 = {}u;\nconst SPATIAL_NEIGHBOURS: u32 = {}u;\n\
+             const SPATIAL_RADIUS: f32 = {:?}f;\nconst SPATIAL_SLOTS: u32 = {}u;\n",
             self.shading.code(),
             self.physical_falloff,
             self.light_scale,
@@ -345,6 +352,10 @@ impl ShadingConsts {
             self.reuse,
             self.probes,
             self.linear_out,
+            self.spatial,
+            crate::shading::reuse::SPATIAL_NEIGHBOURS,
+            crate::shading::reuse::SPATIAL_RADIUS,
+            crate::shading::reuse::SPATIAL_NEIGHBOURS + 1,
         );
         let consts = if self.probes {
             format!("{consts}{}", crate::shading::probes::PROBES_WGSL)
@@ -361,7 +372,8 @@ impl ShadingConsts {
         } else {
             format!(
                 "{consts}{reuse}fn denoise_store(px: vec2<i32>, a: vec4<f32>, s: vec3<f32>, \
-                 u: vec3<f32>, r: vec3<f32>) {{}}\n"
+                 u: vec3<f32>, r: vec3<f32>) {{}}\n\
+                 fn denoise_set_shadowed(px: vec2<i32>, s: vec3<f32>) {{}}\n"
             )
         }
     }
@@ -387,6 +399,12 @@ fn denoise_store(px: vec2<i32>, a: vec4<f32>, shadowed: vec3<f32>, unshadowed: v
     denoise_px[i + 1u] = vec4<f32>(shadowed, 0.0);
     denoise_px[i + 2u] = vec4<f32>(unshadowed, 0.0);
     denoise_px[i + 3u] = vec4<f32>(rest, 0.0);
+}
+
+// Replaces the pixel's estimate with shadows (spatial reuse's, after the lighting pass's).
+fn denoise_set_shadowed(px: vec2<i32>, shadowed: vec3<f32>) {
+    let i = 4u * (u32(px.y) * u32(frame.viewport.x) + u32(px.x));
+    denoise_px[i + 1u] = vec4<f32>(shadowed, 0.0);
 }
 
 @fragment
@@ -473,10 +491,41 @@ fn reuse_store_point(px: vec2<i32>, p: vec3<f32>, kept: bool) {
     reservoirs[r] = bitcast<vec4<u32>>(vec4<f32>(p, select(0.0, 1.0, kept)));
 }
 
+// Sample `j` of pixel `px` for the next frame, and with spatial reuse for `fs_spatial` too
+// (the third part, SPATIAL_SCRATCH, where neighbours read it this frame).
 fn reuse_store(px: vec2<i32>, j: u32, light: u32, w: f32, m: f32, point: vec2<f32>) {
-    let r = reuse_record(1u - u32(reuse.flags.z), vec2<u32>(px));
-    reservoirs[r + 1u + j] = vec4<u32>(light, bitcast<u32>(w), bitcast<u32>(m), pack2x16unorm(point));
+    let sample = vec4<u32>(light, bitcast<u32>(w), bitcast<u32>(m), pack2x16unorm(point));
+    reservoirs[reuse_record(1u - u32(reuse.flags.z), vec2<u32>(px)) + 1u + j] = sample;
+    if (SPATIAL != 0u) {
+        reservoirs[reuse_record(SPATIAL_SCRATCH, vec2<u32>(px)) + 1u + j] = sample;
+    }
 }
+
+// Spatial reuse (reuse.rs): the third part of `reservoirs` holds per pixel what the lighting
+// pass leaves to `fs_spatial`: [the colour but its sampled direct light (linear, float
+// bits), SPATIAL_* what it is], then the pixel's samples after temporal reuse.
+const SPATIAL_SCRATCH: u32 = 2u;
+// The colour is whole (no samples: every light of the pixel traced, or none sampled).
+const SPATIAL_WHOLE: u32 = 0u;
+// The colour lacks the sampled direct light: fs_spatial resamples and adds it.
+const SPATIAL_SAMPLED: u32 = 1u;
+// No geometry: the sky, as it is.
+const SPATIAL_SKY: u32 = 2u;
+
+fn spatial_store_rest(px: vec2<i32>, rest: vec3<f32>, what: u32) {
+    let r = reuse_record(SPATIAL_SCRATCH, vec2<u32>(px));
+    reservoirs[r] = vec4<u32>(bitcast<vec3<u32>>(rest), what);
+}
+
+fn spatial_rest(px: vec2<i32>) -> vec4<u32> {
+    return reservoirs[reuse_record(SPATIAL_SCRATCH, vec2<u32>(px))];
+}
+
+// Sample `j` of pixel `px` after temporal reuse: light, W, M, point.
+fn spatial_load(px: vec2<i32>, j: u32) -> vec4<u32> {
+    return reservoirs[reuse_record(SPATIAL_SCRATCH, vec2<u32>(px)) + 1u + j];
+}
+
 ";
 
 /// The same functions where nothing is reused (never called: `REUSE` is false).
@@ -486,6 +535,12 @@ fn reuse_load(r: u32, j: u32) -> vec4<u32> { return vec4<u32>(0u); }
 fn reuse_cap() -> f32 { return 0.0; }
 fn reuse_store_point(px: vec2<i32>, p: vec3<f32>, kept: bool) {}
 fn reuse_store(px: vec2<i32>, j: u32, light: u32, w: f32, m: f32, point: vec2<f32>) {}
+const SPATIAL_WHOLE: u32 = 0u;
+const SPATIAL_SAMPLED: u32 = 1u;
+const SPATIAL_SKY: u32 = 2u;
+fn spatial_store_rest(px: vec2<i32>, rest: vec3<f32>, what: u32) {}
+fn spatial_rest(px: vec2<i32>) -> vec4<u32> { return vec4<u32>(0u); }
+fn spatial_load(px: vec2<i32>, j: u32) -> vec4<u32> { return vec4<u32>(0u); }
 ";
 
 /// Incident-light meter calibration constant (lux · s at ISO 100).
@@ -567,6 +622,7 @@ impl ResolvedLook {
             emission_texture: false,
             denoise: false,
             reuse: false,
+            spatial: 0,
             probes: false,
             linear_out: false,
         }

@@ -62,6 +62,9 @@ pub struct ViewArgs {
     /// filter); the panel turns it on and off.
     #[arg(long)]
     pub(super) reuse: bool,
+    /// With --reuse: spatial reuse too, as `render --spatial` (off, biased or unbiased).
+    #[arg(long, default_value = "off", value_parser = manyshadows_cli::parse_spatial)]
+    pub(super) spatial: manyshadows::SpatialReuse,
     /// Start with every shadow map drawn anew each frame (the panel's "keep unchanged maps"
     /// box unticked); by default the maps (pages) of views that saw no change are kept.
     #[arg(long, conflicts_with = "shadow_budget")]

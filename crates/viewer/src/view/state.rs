@@ -38,6 +38,8 @@ pub(super) struct Choice {
     pub(super) denoise: bool,
     /// Sampled lights reused across frames.
     pub(super) reuse: bool,
+    /// With `reuse`: between neighbours too (`--spatial`).
+    pub(super) spatial: manyshadows::SpatialReuse,
     /// Stereo eyes this far apart, side by side (`--stereo`).
     pub(super) stereo: Option<f32>,
     /// How the probes' faces are drawn (`--probe-passes`).
@@ -81,6 +83,10 @@ pub(super) struct State {
 /// The renderer's settings for a `width`×`height` frame with `c` (the budget only for
 /// techniques that fill an atlas).
 fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
+    let reused = c.reuse
+        && c.stereo.is_none()
+        && c.light_samples > 0
+        && c.technique.info().fills == Fills::Rays;
     // Two eyes split the window: an even width (an odd window's last column is scaled over).
     let width = if c.stereo.is_some() {
         (width & !1).max(2)
@@ -109,12 +115,12 @@ fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
                 .with_denoise(
                     c.denoise && c.stereo.is_none() && c.technique.info().fills == Fills::Rays,
                 )
-                .with_reuse(
-                    c.reuse
-                        && c.stereo.is_none()
-                        && c.light_samples > 0
-                        && c.technique.info().fills == Fills::Rays,
-                ),
+                .with_reuse(reused)
+                .with_spatial(if reused {
+                    c.spatial
+                } else {
+                    manyshadows::SpatialReuse::Off
+                }),
         )
 }
 
@@ -141,6 +147,7 @@ impl State {
             light_samples: args.light_samples,
             denoise: args.denoise,
             reuse: args.reuse,
+            spatial: args.spatial,
             stereo: args.stereo,
             probe_passes: args.probe_passes,
         };

@@ -51,6 +51,51 @@ pub struct RayOptions {
     /// unshadowed term times its visibility, two rays per sample and frame), so a still image
     /// converges as frames pass. Unbiased for a still camera and casters; see the module.
     pub reuse: bool,
+    /// With `reuse`: each pixel's reservoirs also resample those of a few neighbours after
+    /// temporal reuse (ReSTIR's spatial reuse, shading/reuse.rs), in one pass after the
+    /// lighting pass. [`SpatialReuse::Unbiased`] weighs each neighbour's light by where
+    /// every pixel involved could have drawn it (rays from each), [`SpatialReuse::Biased`]
+    /// by their frame counts alone (cheaper, darker where neighbours see different lights).
+    pub spatial: SpatialReuse,
+}
+
+/// Spatial reuse of sampled lights ([`RayOptions::spatial`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum SpatialReuse {
+    /// Temporal reuse only.
+    #[default]
+    Off,
+    /// Neighbours' lights weighed by their reservoirs' frame counts (`1/M` weights among
+    /// pixels of similar depth and normal): one ray per neighbour; biased where a neighbour
+    /// could not have drawn a light this pixel sees (shadow edges).
+    Biased,
+    /// Neighbours' lights weighed by the generalized balance heuristic over every pixel
+    /// involved (each pixel's target `f · V` at each light: rays from every pixel): unbiased.
+    Unbiased,
+}
+
+impl SpatialReuse {
+    /// Every mode, in the order the CLI lists them.
+    pub const ALL: [SpatialReuse; 3] = [Self::Off, Self::Biased, Self::Unbiased];
+
+    /// The mode's name (the CLI's value).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Off => "off",
+            Self::Biased => "biased",
+            Self::Unbiased => "unbiased",
+        }
+    }
+
+    /// The mode named `name`, if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// The shader's code (0 off, 1 biased, 2 unbiased).
+    pub(crate) fn code(self) -> u32 {
+        self as u32
+    }
 }
 
 impl Default for RayOptions {
@@ -61,6 +106,7 @@ impl Default for RayOptions {
             area_samples: DEFAULT_AREA_SAMPLES,
             denoise: false,
             reuse: false,
+            spatial: SpatialReuse::Off,
         }
     }
 }
@@ -93,6 +139,13 @@ impl RayOptions {
                 "sampled lights to reuse: light_samples 1 to 16",
             ));
         }
+        if self.spatial != SpatialReuse::Off && !self.reuse {
+            return Err(RenderError::invalid_option(
+                "rays.spatial",
+                format!("{} without rays.reuse", self.spatial.name()),
+                "spatial reuse resamples the reservoirs temporal reuse keeps: rays.reuse on",
+            ));
+        }
         Ok(())
     }
 }
@@ -103,6 +156,7 @@ with_setters!(RayOptions {
     with_area_samples: area_samples: u32,
     with_denoise: denoise: bool,
     with_reuse: reuse: bool,
+    with_spatial: spatial: SpatialReuse,
 });
 
 /// `RayParams` of rays.wgsl.
