@@ -492,7 +492,7 @@ fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
             (true, manyshadows::SpatialReuse::Off) =>
                 ", lights reused across frames (plain: reuse alone)".to_string(),
             (true, m) => format!(
-                ", lights reused across frames and between neighbours ({}; plain: reuse alone)",
+                ", lights reused across frames and between neighbours ({}; plain: without the denoiser)",
                 m.name()
             ),
         }

@@ -252,9 +252,9 @@ impl Renderer {
             // reuse each neighbour's light from here (unbiased: from every pixel involved).
             let n = u64::from(crate::shading::reuse::SPATIAL_NEIGHBOURS);
             let spatial = match s.rays.spatial {
-                crate::SpatialReuse::Off => 0,
-                crate::SpatialReuse::Biased => n,
-                crate::SpatialReuse::Unbiased => n + n * n,
+                crate::shadows::raytraced::accel::SpatialReuse::Off => 0,
+                crate::shadows::raytraced::accel::SpatialReuse::Biased => n,
+                crate::shadows::raytraced::accel::SpatialReuse::Unbiased => n + n * n,
             };
             let reuse = if s.rays.reuse { 2 + spatial } else { 1 };
             pixels * u64::from(s.rays.light_samples) * reuse

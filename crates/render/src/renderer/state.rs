@@ -232,7 +232,8 @@ impl Renderer {
                         settings.width,
                         settings.height,
                         settings.rays.light_samples,
-                        settings.rays.spatial != crate::SpatialReuse::Off,
+                        settings.rays.spatial
+                            != crate::shadows::raytraced::accel::SpatialReuse::Off,
                     )
                 })
                 .transpose()?;
