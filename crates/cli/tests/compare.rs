@@ -923,3 +923,60 @@ fn compare_over_a_sequence_scores_each_frame_against_its_exact_image() {
         assert_clean_failure_compare(&out, needle);
     }
 }
+
+/// Issue 42's quality table, its two cells that were worse (one false-shadow pair each):
+/// with hard lights at 320 × 180 on the atrium and the courtyard, virtual maps misclassify no
+/// more (pixel, light) pairs outside the edge band than the atlas, for every light type. Their
+/// spot faces sample the atlas floor there, whose texels are the atlas tile's; with half the
+/// atlas's receiver bias (before) each scene's spot lights had one false-shadow pair the atlas
+/// has not (0.003 % and 0.004 % against 0.000 %). The whole table is in
+/// docs/bench/virtual-vs-atlas-quality-lavapipe.txt.
+#[test]
+fn virtual_maps_misclassify_no_more_than_the_atlas_in_small_frames() {
+    for scene in ["atrium", "courtyard"] {
+        let (v, _) = compare(
+            &format!("virtual-vs-atlas-{scene}"),
+            &[
+                "--scene",
+                scene,
+                "--techniques",
+                "traditional,virtual",
+                "--light-size",
+                "0",
+                "--sun-size",
+                "0",
+                "--width",
+                "320",
+                "--height",
+                "180",
+            ],
+        );
+        let variant = |t: &str| {
+            v["variants"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|x| x["technique"] == t)
+                .unwrap_or_else(|| panic!("{t} not scored: {v}"))
+                .clone()
+        };
+        let (atlas, virt) = (variant("traditional"), variant("virtual"));
+        for kind in ["spot", "point", "directional"] {
+            let wrong = |x: &Value| {
+                let t = &x["by_type"][kind];
+                u(&t["false_shadow"]) + u(&t["false_light"])
+            };
+            eprintln!(
+                "{scene} {kind}: atlas {} pairs, virtual {} pairs misclassified outside the band",
+                wrong(&atlas),
+                wrong(&virt)
+            );
+            assert!(
+                wrong(&virt) <= wrong(&atlas),
+                "{scene}, {kind} lights: virtual {} against the atlas's {}",
+                wrong(&virt),
+                wrong(&atlas)
+            );
+        }
+    }
+}

@@ -53,8 +53,9 @@ fn misclassified_with(
 
 /// The virtual mask against the reference: under 0.05 % outside the edge band (the issue
 /// asked for 0.2 %), and better than the atlas (`traditional`, default maps) on the same
-/// frame. Measured (lavapipe and llvmpipe GL): virtual 0.022 % (0.038 % before faces got the
-/// atlas floor, `VirtualOptions::atlas_floor`), traditional 0.430 % (at
+/// frame. Measured (lavapipe and llvmpipe GL): virtual 0.021 % (0.038 % before faces got the
+/// atlas floor, `VirtualOptions::atlas_floor`; 0.022 % before spot faces took the atlas's whole
+/// bias at their floor, and 0.11 % with every face taking it there), traditional 0.430 % (at
 /// 960x540 `compare` measures 0.011 % against 0.412 % with 64 lights: at 320x180 a pixel,
 /// hence a page texel, is 3 times wider). Every face at lod 1 (`directed_lod` 1, the default
 /// before) gave 0.025 %; every face at lod 0.8 gives 0.221 % (seen failing: the coarser

@@ -218,8 +218,9 @@ struct VirtualFace {
     // The part of the face (uv min xy, max xy) where casters moved since the last frame:
     // kept pages overlapping it are drawn anew. Empty (min > max) when nothing moved there.
     dirty: vec4<f32>,
-    // x: shadow texels per screen pixel the face aims for (its level of detail); y, z, w
-    // unused.
+    // x: shadow texels per screen pixel the face aims for (its level of detail); y: the
+    // atlas floor's level; z: a spot face's receiver bias there over the scaled one (0: none);
+    // w unused.
     detail: vec4<f32>,
 }
 

@@ -276,7 +276,10 @@ pub struct VirtualFace {
     /// x: shadow texels per screen pixel the face aims for (its level of detail:
     /// `VirtualOptions::lod`, times `VirtualOptions::directed_lod` for spot and directional
     /// lights); y: the coarsest level a sample may take (the level as fine as the atlas's tile
-    /// of the same view); z, w unused.
+    /// of the same view); z: a spot face's receiver bias at that level over the one other
+    /// levels take (`1 / VirtualOptions::bias_scale`, at least 1: the atlas's whole bias; 0
+    /// without a floor and for other faces), so that where a spot face samples its floor the
+    /// lookup is the atlas's; w unused.
     pub detail: [f32; 4],
 }
 

@@ -62,7 +62,15 @@ struct VsmPoint {
 }
 
 fn vsm_project(light: LightData, face: VirtualFace, ray: VsmRay, level: u32) -> VsmPoint {
-    return vsm_project_texel(light, face, ray, vsm_texel_world(face, level, ray));
+    return vsm_project_texel(light, face, ray, vsm_texel_world(face, level, ray) * vsm_bias_factor(face, level));
+}
+
+// The receiver bias of `level` over the scaled one `ray.d` carries: at a spot face's atlas
+// floor (`detail.y`, texels as large as the atlas tile's) the atlas's whole bias (`detail.z`
+// = 1 / VirtualOptions::bias_scale, at least 1; plan.rs says why spots only), so that there
+// the lookup is the atlas's; 1 elsewhere.
+fn vsm_bias_factor(face: VirtualFace, level: u32) -> f32 {
+    return select(1.0, face.detail.z, face.detail.z > 0.0 && level == u32(face.detail.y));
 }
 
 // As `vsm_project`, biased for texels of world size `texel` (a quarter page's are twice its

@@ -130,7 +130,7 @@ fn face_rect(face: VirtualFace, level: u32, lo: vec3<f32>, hi: vec3<f32>) -> Fac
     // How far the bias moves a sample: towards the light by texel · (b.x + tan · b.y),
     // tan <= MAX_TAN, which scales a perspective face's clip position by 1 - (that / the
     // distance), at least kappa; along the normal by texel · b.z.
-    let b = abs(frame.bias.xyz) * vsm.lod.w;
+    let b = abs(frame.bias.xyz) * (vsm.lod.w * vsm_bias_factor(face, level));
     var kappa = 1.0;
     if (face.params.w < 0.5) {
         let w = dot(vec4<f32>(m[0][3], m[1][3], m[2][3], m[3][3]), vec4<f32>(c, 1.0))
@@ -343,7 +343,7 @@ fn box_key(face: VirtualFace, level: u32, c: vec3<f32>, e: vec3<f32>) -> u32 {
     if (persp) {
         texel = texel * max(dot(row.xyz, c) + row.w + dot(abs(row.xyz), e), 0.0);
     }
-    let b = abs(frame.bias.xyz) * vsm.lod.w;
+    let b = abs(frame.bias.xyz) * (vsm.lod.w * vsm_bias_factor(face, level));
     let toward = min(frame.bias.x, frame.bias.x + MAX_TAN * frame.bias.y);
     let moved = texel * (1.0 + 1e-5) * select(b.x + MAX_TAN * b.y + b.z, b.z, toward >= 0.0);
     // (With a few ulps of the terms for the samples' own rounding.)
