@@ -413,8 +413,9 @@ fn an_overflowing_triangle_expansion_draws_the_same_shadows() {
 /// `casters_beyond_a_pages_farthest_receiver_are_skipped_without_changing_a_pixel`. Once with
 /// the visibility mask (pages for samples facing away too) and once for the lighting alone
 /// (facing tests on), on the atrium (every light type), the terrain (cascades over long
-/// slopes) and the atrium moved 3,000 units from the origin (coordinates rounding 300 times
-/// coarser: the tiles' margins grow with them). Each of the tiles' ways (no page, one page marked once, a known page checked per
+/// slopes), the atrium moved 3,000 units from the origin (coordinates rounding 300 times
+/// coarser: the tiles' margins grow with them) and the atrium with every other light sized
+/// (their tiles show only where no sample needs a page; the rest is marked per pixel). Each of the tiles' ways (no page, one page marked once, a known page checked per
 /// pixel, per pixel) must have been taken; in the atrium's lighting-only frames some tiles also
 /// find the jobs' room full and do their per-pixel work themselves (seen with a counter). The
 /// page tables are compared entry by entry: the same pages in the same pool places. (Seen failing: the level margin at -0.2, the asked
@@ -452,10 +453,20 @@ fn tile_marking_asks_exactly_the_pages_per_pixel_marking_asks() {
     }
     far.camera.position += offset;
     far.camera.target += offset;
+    // Every other spot and point light sized: their samples are marked per pixel (their
+    // filters reach pages beside their own) but for tiles no sample of which needs a page.
+    let mut sized = atrium_40();
+    for (k, l) in sized.lights.iter_mut().enumerate() {
+        if k % 2 == 0 && l.type_name() != "directional" {
+            l.size = 0.1;
+        }
+    }
+    assert!(sized.lights.iter().any(|l| l.size > 0.0));
     for (name, scene) in [
         ("atrium", atrium_40()),
         ("terrain", terrain),
         ("far atrium", far),
+        ("half-sized atrium", sized),
     ] {
         for visibility in [true, false] {
             for receiver_cull in [false, true] {

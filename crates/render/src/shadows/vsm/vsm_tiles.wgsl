@@ -182,10 +182,6 @@ fn tile_light(i: u32, t: TileSamples) -> TilePage {
     if (light.shadow.y == 0u) {
         return tile_outcome(TILE_NONE);
     }
-    // A sized light's samples ask for the pages their soft filter reaches: per pixel.
-    if (light.diffuse.w > 0.0) {
-        return tile_outcome(TILE_UNSURE);
-    }
     let c = 0.5 * (t.lo + t.hi);
     let e = 0.5 * (t.hi - t.lo);
     let radius = length(e);
@@ -311,6 +307,13 @@ fn tile_light(i: u32, t: TileSamples) -> TilePage {
     let page = min(vec2<u32>(uv_lo * f32(pages)), vec2<u32>(pages - 1u));
     let last = min(vec2<u32>(clamp(r.uv_hi, vec2<f32>(0.0), vec2<f32>(1.0)) * f32(pages)), vec2<u32>(pages - 1u));
     if (any(last != page)) {
+        return tile_outcome(TILE_UNSURE);
+    }
+    // A sized light's samples ask for the pages their soft filter reaches, with bounds from
+    // their own planes: per pixel. (Where no sample needs a page, the tests above show it
+    // for them as for any light: their marking starts with the same reach, facing and view
+    // tests.)
+    if (light.diffuse.w > 0.0) {
         return tile_outcome(TILE_UNSURE);
     }
     var out = tile_outcome(select(TILE_SOME, TILE_ALL, every));
