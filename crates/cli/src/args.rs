@@ -73,6 +73,50 @@ impl GpuArgs {
     }
 }
 
+/// `--soft-taps`, `--max-penumbra`: the shadow maps' percentage-closer soft shadows of sized
+/// lights (shared by `render` and `compare`).
+#[derive(Args, Debug, Clone, Copy)]
+pub struct SoftArgs {
+    /// Taps of the shadow maps' soft shadows of sized lights: `B,F` depths read by the blocker
+    /// search and comparisons by the penumbra filter, or one number for both (1 to 64 each).
+    ///
+    /// Each sized light's shadow at a pixel reads B depths around it to find the casters
+    /// between it and the light (their mean distance sets the penumbra's width) and then F
+    /// comparisons over that width: fewer taps are faster and noisier (`bench soft --taps`
+    /// measures what they cost). Hard lights and shadow rays ignore it.
+    #[arg(long, default_value = "16,16", value_parser = parse_soft_taps)]
+    pub(crate) soft_taps: (u32, u32),
+    /// Largest penumbra radius the shadow maps filter, in shadow texels (1 to 256): wider
+    /// penumbrae are clamped in the atlas and filtered at coarser levels by virtual maps.
+    #[arg(long, default_value_t = manyshadows::SoftShadows::default().max_penumbra)]
+    pub(crate) max_penumbra: f32,
+}
+
+impl SoftArgs {
+    /// The renderer's soft-shadow settings.
+    pub(crate) fn soft(&self) -> manyshadows::SoftShadows {
+        manyshadows::SoftShadows::default()
+            .with_blocker_taps(self.soft_taps.0)
+            .with_filter_taps(self.soft_taps.1)
+            .with_max_penumbra(self.max_penumbra)
+    }
+}
+
+/// `--soft-taps`: `B,F` or one number for both.
+fn parse_soft_taps(s: &str) -> Result<(u32, u32), String> {
+    let bad =
+        || format!("'{s}': blocker and filter taps as B,F (e.g. 8,16) or one number for both");
+    let n: Vec<u32> = s
+        .split(',')
+        .map(|t| t.trim().parse::<u32>().map_err(|_| bad()))
+        .collect::<Result<_, _>>()?;
+    match n[..] {
+        [b] => Ok((b, b)),
+        [b, f] => Ok((b, f)),
+        _ => Err(bad()),
+    }
+}
+
 /// `--light-size`, `--sun-size`: every light's size instead of the scene's own (shared by
 /// `render`, `compare` and the viewer, and applied wherever they load a scene).
 #[derive(Args, Debug, Clone, Copy, Default)]
@@ -253,6 +297,8 @@ pub(crate) struct RenderArgs {
     pub(crate) probe_passes: manyshadows::ProbePasses,
     #[command(flatten)]
     pub(crate) light_sizes: LightSizeArgs,
+    #[command(flatten)]
+    pub(crate) soft: SoftArgs,
     #[command(flatten)]
     pub(crate) look: LookArgs,
     /// Camera position and target, `PX,PY,PZ,TX,TY,TZ` (default: the scene's camera).
@@ -655,6 +701,9 @@ pub(crate) fn flag_error(e: manyshadows::RenderError) -> anyhow::Error {
         ("rays.denoise", "--denoise"),
         ("rays.reuse", "--reuse"),
         ("rays.spatial", "--spatial"),
+        ("soft.blocker_taps", "--soft-taps (blocker)"),
+        ("soft.filter_taps", "--soft-taps (filter)"),
+        ("soft.max_penumbra", "--max-penumbra"),
         ("rays.area_samples", "--area-samples"),
         ("shadow_budget", "--shadow-budget"),
         ("look.exposure", "--exposure"),
@@ -708,6 +757,7 @@ pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettin
                 .map(|s| manyshadows::Stereo::new(s).with_passes(args.stereo_passes)),
         )
         .with_probe_passes(args.probe_passes)
+        .with_soft(args.soft.soft())
         .with_technique(args.technique)
         .with_shadow(ShadowOptions::default().with_cull(args.cull).with_casters(
             manyshadows::CasterOptions::default().with_ignore_masks(!args.shadow_alpha),

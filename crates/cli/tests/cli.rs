@@ -1037,3 +1037,50 @@ fn spatial_reuse_is_said_and_refused_without_temporal_reuse() {
     let out = run(&[&common[..], &["--reuse", "--spatial", "sideways"]].concat());
     assert_clean_failure(&out, 2, "off, biased, unbiased");
 }
+
+/// `--soft-taps B,F` and `--max-penumbra`: the summary says what the shadow maps' soft shadows
+/// read; one number sets both counts; out-of-range values are refused naming the flag, a
+/// malformed list says the form.
+#[test]
+fn soft_taps_and_the_largest_penumbra_are_chosen_and_said() {
+    let dir = tmp("soft-taps");
+    let png = dir.join("soft.png");
+    let common = [
+        "render",
+        "--scene",
+        "cubes",
+        "--light-size",
+        "0.2",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--out",
+        png.to_str().unwrap(),
+    ];
+    let said = |extra: &[&str]| {
+        let out = run_ok(&[&common[..], extra].concat());
+        // The summary, wherever it is printed.
+        format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        )
+    };
+    let stderr = said(&["--soft-taps", "8,16", "--max-penumbra", "24"]);
+    assert!(
+        stderr.contains("PCSS, 8 blocker and 16 filter taps, penumbrae up to 24.0 texels"),
+        "{stderr}"
+    );
+    let stderr = said(&["--soft-taps", "4"]);
+    assert!(
+        stderr.contains("PCSS, 4 blocker and 4 filter taps, penumbrae up to 32.0 texels"),
+        "{stderr}"
+    );
+    let out = run(&[&common[..], &["--soft-taps", "8,65"]].concat());
+    assert_clean_failure(&out, 1, "--soft-taps (filter)");
+    let out = run(&[&common[..], &["--max-penumbra", "0"]].concat());
+    assert_clean_failure(&out, 1, "--max-penumbra");
+    let out = run(&[&common[..], &["--soft-taps", "8,9,10"]].concat());
+    assert_clean_failure(&out, 2, "B,F");
+}

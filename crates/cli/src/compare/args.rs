@@ -46,6 +46,8 @@ pub struct CompareArgs {
     #[command(flatten)]
     pub(super) light_sizes: LightSizeArgs,
     #[command(flatten)]
+    pub(super) soft_maps: crate::args::SoftArgs,
+    #[command(flatten)]
     pub(super) model: crate::args::ModelArgs,
     /// Reflection probes, seeded as `render --probes N` does (0: none); default the scene's
     /// own (the atrium's two). Their faces are lit like the frame and reflected into it, so

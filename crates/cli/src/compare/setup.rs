@@ -268,6 +268,7 @@ pub(super) fn settings(
         })
         .with_visibility(true)
         .with_soft_visibility(soft_visibility)
+        .with_soft(args.soft_maps.soft())
         .with_point_shadows(args.point_shadows)
         .with_shadow(manyshadows::ShadowOptions::default().with_casters(
             manyshadows::CasterOptions::default().with_ignore_masks(!args.shadow_alpha),
