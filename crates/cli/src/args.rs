@@ -85,16 +85,16 @@ pub struct SoftArgs {
     /// comparisons over that width: fewer taps are faster and noisier (`bench soft --taps`
     /// measures what they cost). Hard lights and shadow rays ignore it.
     #[arg(long, default_value = "16,16", value_parser = parse_soft_taps)]
-    pub(crate) soft_taps: (u32, u32),
+    pub soft_taps: (u32, u32),
     /// Largest penumbra radius the shadow maps filter, in shadow texels (1 to 256): wider
     /// penumbrae are clamped in the atlas and filtered at coarser levels by virtual maps.
     #[arg(long, default_value_t = manyshadows::SoftShadows::default().max_penumbra)]
-    pub(crate) max_penumbra: f32,
+    pub max_penumbra: f32,
 }
 
 impl SoftArgs {
     /// The renderer's soft-shadow settings.
-    pub(crate) fn soft(&self) -> manyshadows::SoftShadows {
+    pub fn soft(&self) -> manyshadows::SoftShadows {
         manyshadows::SoftShadows::default()
             .with_blocker_taps(self.soft_taps.0)
             .with_filter_taps(self.soft_taps.1)

@@ -15,7 +15,7 @@ use crate::commands::{BenchCommand, Cli, Command};
 pub use args::{
     parse_camera, parse_camera_path, parse_ground, parse_pcf, parse_point_shadows,
     parse_probe_passes, parse_spatial, parse_technique, GpuArgs, LightSizeArgs, LookArgs,
-    ModelArgs,
+    ModelArgs, SoftArgs,
 };
 pub use scenes::{load_scene_for_view, ViewScene};
 

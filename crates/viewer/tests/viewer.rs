@@ -722,3 +722,90 @@ fn the_window_shows_the_probes_as_render_does() {
         "the probes change nothing in the window ({without} pixels)"
     );
 }
+
+/// `--soft-taps` and `--max-penumbra` in the window: the cubes under sized lights with 2 + 2
+/// taps and penumbrae of at most 8 texels show the frame `render` makes with the same flags,
+/// which differs from the default taps' frame (so the flags reach the renderer).
+#[test]
+fn the_window_takes_the_soft_shadow_taps_as_render_does() {
+    let (_server, display) = xvfb();
+    let dir = tmp("soft-taps");
+    let camera = "2,3,7,0,0.5,0";
+    let soft = [
+        "--light-size",
+        "0.4",
+        "--soft-taps",
+        "2,2",
+        "--max-penumbra",
+        "8",
+    ];
+    let (w, h) = (W.to_string(), H.to_string());
+    let shot = view(
+        &display,
+        &[
+            &[
+                "--scene",
+                "cubes",
+                "--width",
+                &w,
+                "--height",
+                &h,
+                "--camera",
+                camera,
+                "--hide-panel",
+            ][..],
+            &soft[..],
+        ]
+        .concat(),
+        3,
+        (W, H),
+    );
+    let frame = |name: &str, extra: &[&str]| {
+        let png = dir.join(name);
+        let out = png.to_str().unwrap().to_string();
+        let args = [
+            &[
+                "manyshadows",
+                "render",
+                "--scene",
+                "cubes",
+                "--camera",
+                camera,
+                "--width",
+                &w,
+                "--height",
+                &h,
+                "--out",
+                &out,
+            ][..],
+            extra,
+        ]
+        .concat();
+        manyshadows_cli::run(args.iter().map(std::ffi::OsString::from)).expect("render");
+        image::open(&png).unwrap().to_rgb8()
+    };
+    let reference = frame("soft.png", &soft);
+    let default_taps = frame("default-taps.png", &["--light-size", "0.4"]);
+    save(&shot, (W, H), "viewer-soft-taps.png");
+    let differing = |img: &image::RgbImage| {
+        shot.iter()
+            .zip(img.pixels())
+            .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b.0[c]) > 2))
+            .count()
+    };
+    let (off, from_default) = (differing(&reference), differing(&default_taps));
+    eprintln!(
+        "soft taps window vs render: {off} of {} pixels differ; vs the default taps' frame \
+         {from_default}",
+        shot.len()
+    );
+    assert!(
+        from_default > 200,
+        "the taps change too few pixels to tell: {from_default}"
+    );
+    assert!(
+        off * 200 <= shot.len(),
+        "the window shows a different frame: {off} pixels differ (screenshot in \
+         target/test-artifacts/viewer-soft-taps.png)"
+    );
+}

@@ -26,6 +26,9 @@ pub struct ViewArgs {
     pub(super) seed: u64,
     #[command(flatten)]
     pub(super) light_sizes: manyshadows_cli::LightSizeArgs,
+    /// `--soft-taps B,F`, `--max-penumbra T`: the shadow maps' soft shadows, as `render`.
+    #[command(flatten)]
+    pub(super) soft: manyshadows_cli::SoftArgs,
     #[command(flatten)]
     pub(super) model: manyshadows_cli::ModelArgs,
     #[command(flatten)]

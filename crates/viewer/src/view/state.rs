@@ -38,6 +38,9 @@ pub(super) struct Choice {
     pub(super) denoise: bool,
     /// Sampled lights reused across frames.
     pub(super) reuse: bool,
+    /// The shadow maps' soft-shadow taps and largest penumbra (`--soft-taps`,
+    /// `--max-penumbra`).
+    pub(super) soft: manyshadows::SoftShadows,
     /// With `reuse`: between neighbours too (`--spatial`).
     pub(super) spatial: manyshadows::SpatialReuse,
     /// Stereo eyes this far apart, side by side (`--stereo`).
@@ -108,6 +111,7 @@ fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
         )
         .with_visibility(c.visibility)
         .with_look(c.look)
+        .with_soft(c.soft)
         .with_rays(
             RayOptions::default()
                 .with_light_samples(c.light_samples)
@@ -147,6 +151,7 @@ impl State {
             light_samples: args.light_samples,
             denoise: args.denoise,
             reuse: args.reuse,
+            soft: args.soft.soft(),
             spatial: args.spatial,
             stereo: args.stereo,
             probe_passes: args.probe_passes,
