@@ -37,6 +37,7 @@ mod estimate_bench;
 mod harness;
 mod info;
 mod irregular_bench;
+mod light_args;
 mod lights_bench;
 mod omni;
 mod plot;

@@ -165,25 +165,45 @@ fn view(display: &str, args: &[&str], frames: u64, size: (u32, u32)) -> Vec<[u8;
     screenshot(display, size)
 }
 
-fn render(dir: &Path, camera: &str, (w, h): (u32, u32)) -> image::RgbImage {
+fn render(dir: &Path, camera: &str, size: (u32, u32)) -> image::RgbImage {
+    render_with(dir, "render.png", camera, size, &[])
+}
+
+/// `render` with `extra` flags, written to `name` in `dir`.
+fn render_with(
+    dir: &Path,
+    name: &str,
+    camera: &str,
+    (w, h): (u32, u32),
+    extra: &[&str],
+) -> image::RgbImage {
     // `manyshadows render`, run in this process through the CLI's library (the same code as
     // the program).
-    let png = dir.join("render.png");
+    let png = dir.join(name);
+    let (w, h, out) = (
+        w.to_string(),
+        h.to_string(),
+        png.to_str().unwrap().to_string(),
+    );
     let args = [
-        "manyshadows",
-        "render",
-        "--scene",
-        "cubes",
-        "--camera",
-        camera,
-        "--width",
-        &w.to_string(),
-        "--height",
-        &h.to_string(),
-        "--out",
-        png.to_str().unwrap(),
-    ];
-    manyshadows_cli::run(args.map(std::ffi::OsString::from)).expect("manyshadows render");
+        &[
+            "manyshadows",
+            "render",
+            "--scene",
+            "cubes",
+            "--camera",
+            camera,
+            "--width",
+            &w,
+            "--height",
+            &h,
+            "--out",
+            &out,
+        ][..],
+        extra,
+    ]
+    .concat();
+    manyshadows_cli::run(args.iter().map(std::ffi::OsString::from)).expect("manyshadows render");
     image::open(&png).unwrap().to_rgb8()
 }
 
@@ -760,32 +780,14 @@ fn the_window_takes_the_soft_shadow_taps_as_render_does() {
         3,
         (W, H),
     );
-    let frame = |name: &str, extra: &[&str]| {
-        let png = dir.join(name);
-        let out = png.to_str().unwrap().to_string();
-        let args = [
-            &[
-                "manyshadows",
-                "render",
-                "--scene",
-                "cubes",
-                "--camera",
-                camera,
-                "--width",
-                &w,
-                "--height",
-                &h,
-                "--out",
-                &out,
-            ][..],
-            extra,
-        ]
-        .concat();
-        manyshadows_cli::run(args.iter().map(std::ffi::OsString::from)).expect("render");
-        image::open(&png).unwrap().to_rgb8()
-    };
-    let reference = frame("soft.png", &soft);
-    let default_taps = frame("default-taps.png", &["--light-size", "0.4"]);
+    let reference = render_with(&dir, "soft.png", camera, (W, H), &soft);
+    let default_taps = render_with(
+        &dir,
+        "default-taps.png",
+        camera,
+        (W, H),
+        &["--light-size", "0.4"],
+    );
     save(&shot, (W, H), "viewer-soft-taps.png");
     let differing = |img: &image::RgbImage| {
         shot.iter()
