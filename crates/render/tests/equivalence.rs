@@ -3,8 +3,10 @@
 //! triangle edges (different vertex arithmetic rounds edge coverage differently).
 //!
 //! Depths are compared exactly where both sides cover a texel with the same triangle; a texel
-//! "differs" if its depth differs by more than [`DEPTH_TOL`]. Each scene's budget of differing
-//! texels is stated beside it with its reason.
+//! "differs" if its depth differs by more than `common::ATLAS_DEPTH_TOL`. On a CPU rasterizer
+//! (lavapipe, llvmpipe: CI) each scene's budget of differing texels is stated beside it with its
+//! reason; a hardware rasterizer rounds depths and tips edges by its own rules and is held to
+//! `AtlasDiff::within_hardware_rules` instead (every surface where `traditional` has it).
 
 mod common;
 
@@ -15,17 +17,6 @@ use manyshadows::scene::Scene;
 use manyshadows::shadows::atlas::generator::ShadowGenerator;
 use manyshadows::shadows::plan::ShadowPlan;
 use manyshadows::{CullMode, GpuContext, ShadowOptions, Technique};
-
-/// Depth difference that counts as a different texel: a few ULPs of depth near 1 (the model
-/// transform runs in a compute pass instead of the vertex shader, so fused multiply-adds may
-/// round differently).
-const DEPTH_TOL: f32 = 2e-6;
-
-struct Diff {
-    differing: usize,
-    covered: usize,
-    max_depth_diff: f32,
-}
 
 fn atlas(
     ctx: &GpuContext,
@@ -43,27 +34,6 @@ fn atlas(
     ctx.queue.submit([encoder.finish()]);
     assert_eq!(stats.views_drawn as usize, generator.plan.views.len());
     generator.read_atlas(ctx).expect("read atlas")
-}
-
-fn diff(a: &[f32], b: &[f32]) -> Diff {
-    assert_eq!(a.len(), b.len());
-    let mut d = Diff {
-        differing: 0,
-        covered: 0,
-        max_depth_diff: 0.0,
-    };
-    for (&x, &y) in a.iter().zip(b) {
-        if x < 1.0 || y < 1.0 {
-            d.covered += 1;
-        }
-        let e = (x - y).abs();
-        if e > DEPTH_TOL {
-            d.differing += 1;
-        } else {
-            d.max_depth_diff = d.max_depth_diff.max(e);
-        }
-    }
-    d
 }
 
 fn scene(name: &str, lights: Option<usize>, mix: LightMix, res: u32) -> Scene {
@@ -84,6 +54,7 @@ fn scene(name: &str, lights: Option<usize>, mix: LightMix, res: u32) -> Scene {
 /// `budget` differing texels.
 fn check(ctx: &GpuContext, label: &str, scene: &Scene, technique: Technique, budget: usize) {
     let reference = atlas(ctx, scene, Technique::TRADITIONAL, ShadowOptions::default());
+    let strict = common::cpu_rasterizer(ctx);
     let covered = reference.iter().filter(|&&d| d < 1.0).count();
     assert!(
         covered > 1000,
@@ -92,20 +63,25 @@ fn check(ctx: &GpuContext, label: &str, scene: &Scene, technique: Technique, bud
     for &cull in CullMode::ALL {
         let options = ShadowOptions::default().with_cull(cull);
         let got = atlas(ctx, scene, technique, options);
-        let d = diff(&reference, &got);
+        let d = common::atlas_diff(&reference, &got);
         eprintln!(
-            "{label}: {technique} --cull {}: {} of {} covered texels differ (budget {budget}), \
-             max depth difference elsewhere {:e}",
-            cull.name(),
-            d.differing,
-            d.covered,
-            d.max_depth_diff
+            "{label}: {technique} --cull {}: {d} (budget {budget} on a CPU rasterizer)",
+            cull.name()
         );
+        let ok = if strict {
+            d.differing <= budget
+        } else {
+            d.within_hardware_rules()
+        };
         assert!(
-            d.differing <= budget,
-            "{label}: {technique} --cull {} differs from traditional in {} texels (budget {budget})",
+            ok,
+            "{label}: {technique} --cull {} differs from traditional: {d} ({})",
             cull.name(),
-            d.differing
+            if strict {
+                format!("budget {budget}")
+            } else {
+                "hardware rules".into()
+            }
         );
     }
 }
@@ -324,17 +300,19 @@ fn gpu_driven_splits_views_and_clusters_into_rounds() {
             assert_eq!(stats.draws, views as u64 * clusters);
             let got = manyshadows::shadows::image::read_depth(&ctx, &p.atlas).expect("read");
             assert_eq!(ctx.take_uncaptured(), None, "GPU errors");
-            let d = diff(&reference, &got);
+            let d = common::atlas_diff(&reference, &got);
             eprintln!(
-                "cubes: gpu-driven in {} rounds of <= {max} commands, --cull {}: {} of {} \
-                 covered texels differ",
+                "cubes: gpu-driven in {} rounds of <= {max} commands, --cull {}: {d}",
                 rounds.len(),
-                cull.name(),
-                d.differing,
-                d.covered
+                cull.name()
             );
             // Measured: 2 (as the single-round run), every round size and cull mode.
-            assert!(d.differing <= 4, "{} texels differ", d.differing);
+            let ok = if common::cpu_rasterizer(&ctx) {
+                d.differing <= 4
+            } else {
+                d.within_hardware_rules()
+            };
+            assert!(ok, "{d}");
         }
     }
 }
@@ -383,6 +361,60 @@ fn partial_draw_lists_clear_only_listed_tiles() {
         eprintln!(
             "{technique}: {} of {views} tiles cleared and redrawn, others kept",
             odd.len()
+        );
+    }
+}
+
+/// The looser rules a hardware rasterizer is held to still see what a broken technique does:
+/// one tile left empty, or every tile's contents shifted by a texel (a viewport transform off by
+/// one), fails them.
+#[test]
+fn hardware_rules_see_a_lost_or_shifted_tile() {
+    let ctx = common::context();
+    let cubes = scene("cubes", Some(6), LightMix::All, 256);
+    let reference = atlas(
+        &ctx,
+        &cubes,
+        Technique::TRADITIONAL,
+        ShadowOptions::default(),
+    );
+    let plan = ShadowPlan::new(&cubes, 16.0 / 9.0, 4096, FitPolicy::Shrink).expect("plan");
+    let side = plan.layout.size as usize;
+    assert_eq!(side * side, reference.len());
+    let same = common::atlas_diff(&reference, &reference);
+    assert!(
+        same.within_hardware_rules() && same.differing == 0,
+        "{same}"
+    );
+    // A tile's contents moved `dx` texels left (what enters from outside is empty).
+    let shift = |atlas: &mut Vec<f32>, t: &manyshadows::scene::atlas::Tile, dx: usize| {
+        let (x0, y0, n) = (t.x as usize, t.y as usize, t.size as usize);
+        for y in y0..y0 + n {
+            for x in x0..x0 + n {
+                atlas[y * side + x] = if x + dx < x0 + n {
+                    reference[y * side + x + dx]
+                } else {
+                    1.0
+                };
+            }
+        }
+    };
+    let first = plan.layout.tiles[0];
+    let mut lost = reference.clone();
+    shift(&mut lost, &first, first.size as usize);
+    let d = common::atlas_diff(&reference, &lost);
+    eprintln!("the first tile lost: {d}");
+    assert!(!d.within_hardware_rules(), "a lost tile passes: {d}");
+    for dx in [1, 2, 4] {
+        let mut shifted = reference.clone();
+        for t in &plan.layout.tiles {
+            shift(&mut shifted, t, dx);
+        }
+        let d = common::atlas_diff(&reference, &shifted);
+        eprintln!("every tile shifted by {dx}: {d}");
+        assert!(
+            !d.within_hardware_rules(),
+            "tiles shifted by {dx} texel pass: {d}"
         );
     }
 }

@@ -51,10 +51,12 @@ fn half(rgba: &[u8], width: u32, x0: u32, w: u32) -> Vec<u8> {
         .collect()
 }
 
-/// Pixels that differ, and the largest channel difference.
-fn differences(a: &[u8], b: &[u8]) -> (usize, u8) {
+/// Pixels that differ, the largest channel difference, and pixels differing by more than one
+/// step of 8 bits.
+fn differences(a: &[u8], b: &[u8]) -> (usize, u8, usize) {
     let mut n = 0;
     let mut worst = 0;
+    let mut big = 0;
     for (p, q) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
         let d = p
             .iter()
@@ -66,8 +68,9 @@ fn differences(a: &[u8], b: &[u8]) -> (usize, u8) {
             n += 1;
             worst = worst.max(d);
         }
+        big += usize::from(d > 1);
     }
-    (n, worst)
+    (n, worst, big)
 }
 
 fn save(name: &str, rgba: &[u8], w: u32, h: u32) {
@@ -102,11 +105,18 @@ fn eyes_and_stereo(
     ([left, right], frame.rgba)
 }
 
-/// Largest share of an eye's pixels that may differ from the mono frame from that eye.
-/// Measured on lavapipe and llvmpipe GL (docs/tests.md): at most 0.10 % (14 of 14,400 pixels).
-/// An eye drawn into the wrong half, with the other eye's camera or position, or a cluster
-/// grid that loses a light in one eye differs in thousands.
+/// Largest share of an eye's pixels that may differ from the mono frame from that eye by more
+/// than one step of 8 bits. Measured on lavapipe and llvmpipe GL (docs/tests.md): at most
+/// 0.10 % (14 of 14,400 pixels) differ at all. An eye drawn into the wrong half, with the other
+/// eye's camera or position, or a cluster grid that loses a light in one eye differs in
+/// thousands, by far more than one step.
 const MAX_DIFFERING: f64 = 0.0025;
+
+/// Largest share that may differ by one step: a pixel whose exact colour lies within rounding
+/// of a half step tips either way when its inputs round differently, and soft shadows' and
+/// specular gradients hold many such pixels. On NVIDIA's driver (H200, 580.159) 0.53 % of the
+/// courtyard's left eye differs, every pixel by one step.
+const MAX_TIPPED: f64 = 0.02;
 
 /// Each half of a stereo frame drawn `passes`' way against the mono frames from each eye.
 fn eyes_match_mono(passes: EyePasses) {
@@ -126,14 +136,17 @@ fn eyes_match_mono(passes: EyePasses) {
         );
         for (eye, mono) in [(0, &left), (1, &right)] {
             let got = half(&stereo, 2 * EYE_W, eye * EYE_W, EYE_W);
-            let (n, worst) = differences(&got, mono);
-            let share = n as f64 / (EYE_W * H) as f64;
+            let (n, worst, big) = differences(&got, mono);
+            let pixels = (EYE_W * H) as f64;
+            let (share, tipped) = (big as f64 / pixels, n as f64 / pixels);
             eprintln!(
-                "{name} eye {eye} ({passes}): {n} pixels differ ({:.3} %), largest {worst}",
+                "{name} eye {eye} ({passes}): {n} pixels differ ({:.3} %), {big} by more than one \
+                 step ({:.3} %), largest {worst}",
+                100.0 * tipped,
                 100.0 * share
             );
             worst_share = worst_share.max(share);
-            if share > MAX_DIFFERING {
+            if share > MAX_DIFFERING || tipped > MAX_TIPPED {
                 save(
                     &format!("stereo-{name}-{passes}.png"),
                     &stereo,
@@ -143,15 +156,17 @@ fn eyes_match_mono(passes: EyePasses) {
                 save(&format!("stereo-{name}-mono-{eye}.png"), mono, EYE_W, H);
             }
             assert!(
-                share <= MAX_DIFFERING,
+                share <= MAX_DIFFERING && tipped <= MAX_TIPPED,
                 "{name}: eye {eye} drawn {passes} differs from the mono frame from that eye in \
-                 {n} pixels ({:.2} %; images in target/test-artifacts)",
+                 {n} pixels ({:.2} %), {big} by more than one step ({:.2} %; images in \
+                 target/test-artifacts)",
+                100.0 * tipped,
                 100.0 * share
             );
         }
     }
     eprintln!(
-        "stereo {passes}: at most {:.3} % of an eye's pixels differ",
+        "stereo {passes}: at most {:.3} % of an eye's pixels differ by more than one step",
         100.0 * worst_share
     );
 }
@@ -262,7 +277,7 @@ fn each_eyes_clusters_hold_every_light_that_reaches_it() {
         let all = frame(manyshadows::LightLoop::All);
         let stats = clustered.clusters.expect("cluster statistics");
         assert_eq!(stats.overflowed, 0, "{name}: clusters overflowed");
-        let (n, worst) = differences(&clustered.rgba, &all.rgba);
+        let (n, worst, _) = differences(&clustered.rgba, &all.rgba);
         if n > 0 {
             save(
                 &format!("stereo-{name}-clustered.png"),

@@ -409,3 +409,101 @@ pub fn refused_naming(scene: &Scene, settings: &[manyshadows::RenderSettings], o
         }
     }
 }
+
+/// Depth difference that counts as a different texel where the rasterizer's arithmetic is the
+/// same IEEE arithmetic in every pass (lavapipe, llvmpipe): a few ULPs of depth near 1.
+pub const ATLAS_DEPTH_TOL: f32 = 2e-6;
+/// Depth difference beyond which two texels hold different surfaces (or one holds none).
+pub const ATLAS_COVERAGE_TOL: f32 = 1e-4;
+
+/// Whether the adapter rasterizes on the CPU (lavapipe, llvmpipe: the adapters CI runs), where
+/// two passes over the same triangles agree to a few ULPs and the equivalence tests hold each
+/// technique to a measured handful of texels. A hardware rasterizer is held to what Vulkan
+/// fixes: depth interpolation precision and the snapping of clipped or guard-band vertices are
+/// the implementation's, so drawing through another viewport transform (an atlas-wide viewport,
+/// multiview, a compute shader) moves depths in their last bits and tips edge texels. Measured
+/// on NVIDIA's driver (H200, 580.159): depths up to 2e-5 apart (1e-4 in the compute
+/// rasterizer) and up to 0.35 % of covered texels tipped on edges (slivers and huge triangles).
+pub fn cpu_rasterizer(ctx: &GpuContext) -> bool {
+    ctx.info.device_type == wgpu::DeviceType::Cpu
+}
+
+/// How two square depth atlases of the same views differ.
+#[derive(Debug, Default, Clone)]
+pub struct AtlasDiff {
+    /// Texels covered (depth < 1) in either.
+    pub covered: usize,
+    /// Texels whose depth differs by more than [`ATLAS_DEPTH_TOL`].
+    pub differing: usize,
+    /// Of those, texels differing by more than [`ATLAS_COVERAGE_TOL`]: different surfaces or
+    /// coverage.
+    pub coverage: usize,
+    /// Of those, texels inside a surface: the reference's 3 x 3 neighbourhood all covered (or
+    /// all empty) and one plane. A rasterization rule may tip a texel on an edge, never one
+    /// inside a triangle.
+    pub coverage_inside: usize,
+    /// Largest difference below [`ATLAS_COVERAGE_TOL`]: the same surface, rounded differently.
+    pub max_rounding: f32,
+}
+
+impl AtlasDiff {
+    /// What a hardware rasterizer is held to (see [`cpu_rasterizer`]): every surface where the
+    /// reference has it. Edge texels may tip (at most 1 % of the covered texels) and a handful
+    /// inside surfaces (1 in 100,000 covered: NVIDIA's compute-rasterized atrium, 18 of 11 M);
+    /// a lost triangle, view or tile, or a misplaced one, tips whole surfaces.
+    pub fn within_hardware_rules(&self) -> bool {
+        self.coverage * 100 <= self.covered && self.coverage_inside * 100_000 <= self.covered
+    }
+}
+
+impl std::fmt::Display for AtlasDiff {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} of {} covered texels differ by more than {ATLAS_DEPTH_TOL:e}, {} by more than \
+             {ATLAS_COVERAGE_TOL:e} (coverage; {} inside a surface), the others by at most {:e}",
+            self.differing, self.covered, self.coverage, self.coverage_inside, self.max_rounding
+        )
+    }
+}
+
+/// Compares `got` with `reference`, square depth atlases (cleared to 1.0), texel by texel.
+pub fn atlas_diff(reference: &[f32], got: &[f32]) -> AtlasDiff {
+    assert_eq!(reference.len(), got.len(), "atlases of different sizes");
+    let side = (reference.len() as f64).sqrt() as usize;
+    assert_eq!(side * side, reference.len(), "atlas not square");
+    let at = |x: isize, y: isize| -> Option<f32> {
+        (x >= 0 && y >= 0 && (x as usize) < side && (y as usize) < side)
+            .then(|| reference[y as usize * side + x as usize])
+    };
+    let mut d = AtlasDiff::default();
+    for (i, (&r, &g)) in reference.iter().zip(got).enumerate() {
+        d.covered += usize::from(r < 1.0 || g < 1.0);
+        let e = (r - g).abs();
+        if e <= ATLAS_DEPTH_TOL {
+            continue;
+        }
+        d.differing += 1;
+        if e <= ATLAS_COVERAGE_TOL {
+            d.max_rounding = d.max_rounding.max(e);
+            continue;
+        }
+        d.coverage += 1;
+        // An edge: a neighbour in the reference uncovered where this texel is covered (or the
+        // other way), or a neighbourhood that is not one plane (depth is affine in window
+        // coordinates across a triangle, so across one the second differences vanish).
+        let (x, y) = ((i % side) as isize, (i / side) as isize);
+        let coverage_edge = (-1..=1).any(|dy| {
+            (-1..=1).any(|dx| at(x + dx, y + dy).is_some_and(|n| (n < 1.0) != (r < 1.0)))
+        });
+        let bent = [(1, 0), (0, 1), (1, 1), (1, -1)].iter().any(|&(dx, dy)| {
+            match (at(x - dx, y - dy), at(x + dx, y + dy)) {
+                (Some(a), Some(b)) => (a + b - 2.0 * r).abs() > ATLAS_COVERAGE_TOL,
+                _ => false,
+            }
+        });
+        let edge = coverage_edge || bent;
+        d.coverage_inside += usize::from(!edge);
+    }
+    d
+}
