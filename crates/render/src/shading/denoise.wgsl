@@ -194,7 +194,7 @@ fn atrous(@builtin(global_invocation_id) gid: vec3<u32>) {
             let rq = ratio_of(q0.rgb, q1.rgb);
             let rm = clamp(0.5 * (r + rq), 0.0, 1.0);
             let variance = max(0.5 * (c0.w + q0.w), rm * (1.0 - rm));
-            let tol = max(p.pixel.y * sqrt(variance / frames) + 0.5 / frames, 1e-3);
+            let tol = max((p.pixel.y * sqrt(variance) + 0.5) / frames, 1e-3);
             let wr = exp(-abs(rq - r) / tol);
             let wt = kernel[abs(dx)] * kernel[abs(dy)] * wn * wp * wr;
             sum_s = sum_s + wt * q0.rgb;

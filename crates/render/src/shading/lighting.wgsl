@@ -307,7 +307,19 @@ struct Acc {
     est_unshadowed: vec3<f32>,
     // Whether the samples went through temporal reuse (resolve_reused).
     reused: bool,
+    // Where frames are denoised: the pixel's first point of its low-discrepancy sequence
+    // (`sample_point`), and every CHECKPOINT_EVERY-th weighed light with the running sum
+    // before it, from which `pick_stratified` finds the light a point of the sum falls on.
+    u0: f32,
+    marks: u32,
+    mark_light: array<u32, CHECKPOINTS>,
+    mark_sum: array<f32, CHECKPOINTS>,
 }
+
+// Checkpoints of the running sum (a pixel's 64 · 16 = 1,024 first weighed lights; past them
+// the last stretch is longer, never wrong).
+const CHECKPOINTS: u32 = 32u;
+const CHECKPOINT_EVERY: u32 = 4u;
 
 fn pcg(v: u32) -> u32 {
     let state = v * 747796405u + 2891336453u;
@@ -358,11 +370,101 @@ fn visit(i: u32, s: Surface, acc: ptr<function, Acc>) {
         (*acc).first[(*acc).count] = i;
     }
     (*acc).count = (*acc).count + 1u;
+    if (DENOISE) {
+        // Drawn after the loop, once the sum is known (pick_stratified).
+        let n = (*acc).count - 1u;
+        if (n % CHECKPOINT_EVERY == 0u && (*acc).marks < CHECKPOINTS) {
+            (*acc).mark_light[(*acc).marks] = i;
+            (*acc).mark_sum[(*acc).marks] = (*acc).wsum - w;
+            (*acc).marks = (*acc).marks + 1u;
+        }
+        return;
+    }
+    // A single frame: weighted reservoir sampling in one pass (no total needed).
     for (var j = 0u; j < k; j = j + 1u) {
         if (random(acc) * (*acc).wsum < w) {
             (*acc).chosen[j] = i;
             (*acc).weight[j] = w;
         }
+    }
+}
+
+// Sample `j`'s point in [0, 1) this frame: the golden-ratio sequence (Weyl, R1) from the
+// pixel's own start, so a pixel's points over frames (and its K points in one frame) are
+// spread evenly over the weights instead of independently, and neighbours start apart
+// (interleaved gradient noise) for the denoiser's filter. Each point alone is uniform.
+fn sample_point(acc: ptr<function, Acc>, j: u32) -> f32 {
+    let n = frame.modes.y * ray_samples() + j;
+    return fract((*acc).u0 + f32(n) * 0.6180339887);
+}
+
+// The luminance of light `i`'s unshadowed direct term at `s` (0 beyond reach or facing away):
+// the weight `visit` samples it by.
+fn light_weight(i: u32, s: Surface) -> f32 {
+    let t = light_terms(i, s);
+    if (!t.reaches || !t.facing) {
+        return 0.0;
+    }
+    return max(dot(t.att * t.ds, vec3<f32>(0.2126, 0.7152, 0.0722)), 0.0);
+}
+
+// Where frames are denoised, each sample is drawn once the loop's sum is known: the light
+// whose stretch of the running sum holds the sample's point of it (inverting the weights'
+// distribution), found from the last checkpoint before that point by weighing again at most
+// CHECKPOINT_EVERY lights in the loop's order (a point the sum never reaches, as rounding
+// might leave one, keeps the last light weighed). Over frames the points follow the
+// golden-ratio sequence, so a pixel's samples cover its lights evenly (stratified).
+fn pick_stratified(s: Surface, slot: u32, acc: ptr<function, Acc>) {
+    for (var j = 0u; j < ray_samples(); j = j + 1u) {
+        let point = sample_point(acc, j) * (*acc).wsum;
+        var m = 0u;
+        for (var c = 1u; c < (*acc).marks; c = c + 1u) {
+            if ((*acc).mark_sum[c] <= point) {
+                m = c;
+            }
+        }
+        let first_light = (*acc).mark_light[m];
+        var sum = (*acc).mark_sum[m];
+        var picked = first_light;
+        var weight = 0.0;
+        if (slot < CLUSTER_FIRST_SLOT || slot == CLUSTER_OVERFLOW) {
+            for (var i = first_light; i < frame.counts.x; i = i + 1u) {
+                let w = light_weight(i, s);
+                if (w > 0.0) {
+                    picked = i;
+                    weight = w;
+                    sum = sum + w;
+                    if (sum > point) {
+                        break;
+                    }
+                }
+            }
+        } else {
+            let base = (slot - CLUSTER_FIRST_SLOT) * clusters.words.z;
+            var done = false;
+            for (var wi = first_light / 32u; wi < clusters.words.y && !done; wi = wi + 1u) {
+                var bits = cluster_masks[base + clusters.words.x + wi];
+                if (wi == first_light / 32u) {
+                    bits = bits & ~((1u << (first_light % 32u)) - 1u);
+                }
+                while (bits != 0u) {
+                    let i = wi * 32u + firstTrailingBit(bits);
+                    bits = bits & (bits - 1u);
+                    let w = light_weight(i, s);
+                    if (w > 0.0) {
+                        picked = i;
+                        weight = w;
+                        sum = sum + w;
+                        if (sum > point) {
+                            done = true;
+                            break;
+                        }
+                    }
+                }
+            }
+        }
+        (*acc).chosen[j] = picked;
+        (*acc).weight[j] = weight;
     }
 }
 
@@ -719,6 +821,13 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     if (clusters.words.w != 0u) {
         slot = cluster_slots[cluster_index(clusters, vec2<u32>(px), s.view_depth)];
     }
+    acc.u0 = 0.0;
+    acc.marks = 0u;
+    if (ray_samples() > 0u && DENOISE) {
+        let p = vec2<f32>(noise_px);
+        let ign = fract(52.982919 * fract(0.06711056 * p.x + 0.00583715 * p.y));
+        acc.u0 = fract(ign + f32(pcg(ray_seed()) >> 8u) / 16777216.0);
+    }
     if (slot < CLUSTER_FIRST_SLOT || slot == CLUSTER_OVERFLOW) {
         // Every light: the reference loop, and the fallback of clusters without a slot.
         let count = frame.counts.x;
@@ -745,6 +854,9 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     // What the denoiser's composite and spatial reuse add to the direct light they estimate:
     // ambient, the probes' reflections and emission.
     var rest = acc.color;
+    if (DENOISE && ray_samples() > 0u && acc.count > ray_samples()) {
+        pick_stratified(s, slot, &acc);
+    }
     resolve_samples(s, &acc);
     if (PROBES) {
         let mirrored = probe_reflection(s);
