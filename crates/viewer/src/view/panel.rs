@@ -6,7 +6,7 @@
 
 use manyshadows::scene::light_space::PointShadows;
 use manyshadows::scene::Scene;
-use manyshadows::{wgpu, Fills, GpuTimes, Pcf, ShadowLayout, Technique};
+use manyshadows::{wgpu, Fills, GpuTimes, Pcf, ShadowLayout, SoftShadows, SpatialReuse, Technique};
 
 use crate::view::args::CONTROLS;
 use crate::view::overlays::Overlays;
@@ -211,7 +211,10 @@ fn shadow_options(ui: &mut egui::Ui, choice: &mut Choice) {
         egui::Slider::new(&mut choice.light_size, 0.0..=4.0)
             .text("light size × (soft shadows; 0 = hard)"),
     );
-    if choice.technique.info().fills == manyshadows::Fills::Rays {
+    if choice.technique.info().fills != Fills::Rays {
+        soft_taps(ui, &mut choice.soft);
+    }
+    if choice.technique.info().fills == Fills::Rays {
         ui.add(
             egui::Slider::new(&mut choice.light_samples, 0..=16)
                 .text("lights traced per pixel (0 = every light)"),
@@ -224,6 +227,15 @@ fn shadow_options(ui: &mut egui::Ui, choice: &mut Choice) {
         ui.checkbox(&mut choice.denoise, what);
         if choice.light_samples > 0 {
             ui.checkbox(&mut choice.reuse, "reuse the sampled lights across frames");
+            if choice.reuse {
+                egui::ComboBox::from_label("and between neighbours (spatial reuse)")
+                    .selected_text(choice.spatial.name())
+                    .show_ui(ui, |ui| {
+                        for s in SpatialReuse::ALL {
+                            ui.selectable_value(&mut choice.spatial, s, s.name());
+                        }
+                    });
+            }
         }
     }
     ui.checkbox(&mut choice.cache, "keep unchanged maps (cache)");
@@ -238,6 +250,20 @@ fn shadow_options(ui: &mut egui::Ui, choice: &mut Choice) {
                 .text("views per frame (atlas)"),
         );
         choice.budget = on.then_some(n);
+    });
+}
+
+/// The shadow maps' soft-shadow taps (`--soft-taps`, `--max-penumbra`), folded away by
+/// default; the ranges are those the options accept.
+fn soft_taps(ui: &mut egui::Ui, soft: &mut SoftShadows) {
+    egui::CollapsingHeader::new("soft-shadow taps (PCSS)").show(ui, |ui| {
+        ui.add(egui::Slider::new(&mut soft.blocker_taps, 1..=64).text("blocker search taps"));
+        ui.add(egui::Slider::new(&mut soft.filter_taps, 1..=64).text("filter taps"));
+        ui.add(
+            egui::Slider::new(&mut soft.max_penumbra, 1.0..=256.0)
+                .logarithmic(true)
+                .text("largest penumbra (texels)"),
+        );
     });
 }
 
