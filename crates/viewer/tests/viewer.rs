@@ -528,7 +528,7 @@ fn a_frame_of_minutes_is_refused_at_start() {
 /// Shadow rays sampled and denoised in the window as `render` does them: the cubes under 48
 /// lights, one light traced per pixel. After 8 presented frames of a still camera the window
 /// with `--denoise` must be far closer to every light traced (`render`) than the window
-/// without it (measured on lavapipe: 1.63 against 14.50, RMSE of 8-bit channels), and so must
+/// without it (measured on lavapipe: 0.99 against 14.50, RMSE of 8-bit channels), and so must
 /// the window with `--reuse` (its lights reused across the frames, no filter: 5.96). Without ray
 /// queries (OpenGL) the technique is refused naming the feature.
 #[test]
