@@ -389,6 +389,19 @@ fn visit(i: u32, s: Surface, acc: ptr<function, Acc>) {
     }
 }
 
+// One light of `pick_stratified`'s walk: a light that weighs anything becomes the pick and
+// adds its weight to the running sum; true once the sum has passed `point`.
+fn weigh_past(i: u32, s: Surface, point: f32, sum: ptr<function, f32>, picked: ptr<function, u32>, weight: ptr<function, f32>) -> bool {
+    let w = light_weight(i, s);
+    if (w <= 0.0) {
+        return false;
+    }
+    *picked = i;
+    *weight = w;
+    *sum = *sum + w;
+    return *sum > point;
+}
+
 // Sample `j`'s point in [0, 1) this frame: the golden-ratio sequence (Weyl, R1) from the
 // pixel's own start, so a pixel's points over frames (and its K points in one frame) are
 // spread evenly over the weights instead of independently, and neighbours start apart
@@ -429,14 +442,8 @@ fn pick_stratified(s: Surface, slot: u32, acc: ptr<function, Acc>) {
         var weight = 0.0;
         if (slot < CLUSTER_FIRST_SLOT || slot == CLUSTER_OVERFLOW) {
             for (var i = first_light; i < frame.counts.x; i = i + 1u) {
-                let w = light_weight(i, s);
-                if (w > 0.0) {
-                    picked = i;
-                    weight = w;
-                    sum = sum + w;
-                    if (sum > point) {
-                        break;
-                    }
+                if (weigh_past(i, s, point, &sum, &picked, &weight)) {
+                    break;
                 }
             }
         } else {
@@ -450,15 +457,9 @@ fn pick_stratified(s: Surface, slot: u32, acc: ptr<function, Acc>) {
                 while (bits != 0u) {
                     let i = wi * 32u + firstTrailingBit(bits);
                     bits = bits & (bits - 1u);
-                    let w = light_weight(i, s);
-                    if (w > 0.0) {
-                        picked = i;
-                        weight = w;
-                        sum = sum + w;
-                        if (sum > point) {
-                            done = true;
-                            break;
-                        }
+                    if (weigh_past(i, s, point, &sum, &picked, &weight)) {
+                        done = true;
+                        break;
                     }
                 }
             }
