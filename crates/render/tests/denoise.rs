@@ -135,11 +135,16 @@ fn denoising_without_shadow_rays_is_refused_by_name() {
 }
 
 /// A sun switched off: its light leaves the frame at once (the unshadowed light is exact
-/// every frame) and the shadow ratio's history follows within a few frames. Measured (cubes,
-/// 48 lights): the exact image changes by 17.0; the denoised error after the switch 2.15,
-/// 2.05, 1.97, 1.78, where a denoiser started without the sun is at 1.98 after four frames
-/// and 0.89 after 16. (Before the light samples were stratified over frames: 2.00, 1.86, 1.71,
-/// 1.63 against a steady 1.39; the weights tried then, in denoise.rs.)
+/// every frame) and the shadow ratio's history is corrected for it in the frame of the switch
+/// (denoise.rs: the sun's unshadowed light and its visibility, traced once, taken out of the
+/// history's means). Measured (cubes, 48 lights, lavapipe): the exact image changes by 17.0;
+/// the denoised error after the switch 1.16, 1.14, 1.11, 1.04, where a denoiser started
+/// without the sun is at 1.98 after four frames and 0.89 after 16 (1.17x; issue 39 asks
+/// 1.1x). Without the correction (the history followed fast, as a change of more lights
+/// than `MAX_LIGHT_FIXES` still is): 2.15, 2.05, 1.97, 1.78 (2.0x); the correction without
+/// the history's frames cut to its samples of the lights that stay: 1.10 after four (1.25x).
+/// (Before the light samples were stratified over frames: 2.00, 1.86, 1.71, 1.63 against a
+/// steady 1.39.)
 #[test]
 fn a_light_switched_off_leaves_the_frame_within_four_frames() {
     let ctx = common::context();
@@ -194,15 +199,18 @@ fn a_light_switched_off_leaves_the_frame_within_four_frames() {
     );
     // Four frames after the switch the history from before it helps rather than hurts: the
     // frame is closer to the exact one than a denoiser that never saw the light, four frames
-    // in (lavapipe: 1.78 against 1.98; with the history followed at 1/frames only,
-    // CHANGED_WEIGHT 0, 2.03 fails). Both stay above the steady error after 16 frames (0.89):
-    // the stratified samples keep converging, so issue 39's goal (within 10 % of it in four
-    // frames) is not met (2.0x; 1.17x before the samples were stratified, against a steady
-    // error of 1.39).
+    // in (lavapipe: 1.04 against 1.98), and within a quarter of the steady error after 16
+    // frames (1.17x). Without the correction 1.78 (2.0x) fails the second.
     assert!(
         after[3] <= fresh4,
         "four frames after the switch: {} vs {fresh4} for a denoiser started without the light",
         after[3]
+    );
+    assert!(
+        after[3] <= 1.25 * steady,
+        "four frames after the switch: {} vs a steady {steady} ({:.2}x, at most 1.25x)",
+        after[3],
+        after[3] / steady
     );
 }
 

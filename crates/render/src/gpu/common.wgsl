@@ -29,7 +29,9 @@ struct FrameUniforms {
     soft: vec4<f32>,
     // Exposure scale (linear colour times it before the tone map), unused ×3 (look.rs).
     look: vec4<f32>,
-    // Tone map (TONE_*), unused ×3.
+    // Tone map (TONE_*); the frame number where rays are denoised or reused (else 0); in a
+    // denoised frame whose lights changed, where the changed lights' records start in the
+    // lights buffer and how many went | how many came << 16 (lighting.wgsl `denoise_fix`).
     modes: vec4<u32>,
     // Stereo (frame/eyes.rs): each eye's world → clip and position (mono: both the camera's),
     // and in `eyes` one eye's width in pixels (the whole width when mono), the eye count.

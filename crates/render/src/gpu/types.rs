@@ -36,7 +36,9 @@ pub struct FrameUniforms {
     pub soft: [f32; 4],
     /// Exposure scale, unused ×3 (`ResolvedLook::uniforms`).
     pub look: [f32; 4],
-    /// Tone map, unused ×3.
+    /// Tone map; the frame number where rays are denoised or reused (else 0); with the
+    /// denoiser, in a frame whose lights changed: where the changed lights' records start in
+    /// the lights buffer and how many went | how many came << 16 (else 0, 0).
     pub modes: [u32; 4],
     /// Each eye's world → clip (`frame::eyes`; mono: both the camera's `view_proj`).
     pub eye_view_proj: [[[f32; 4]; 4]; 2],

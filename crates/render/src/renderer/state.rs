@@ -80,8 +80,14 @@ pub struct Renderer {
     pub(super) reuse: Option<crate::shading::reuse::Reuse>,
     /// Frames the denoiser or the reuse has seen (their rays' random numbers differ by it).
     pub(super) frames_denoised: u32,
-    /// A light changed since the last frame (the denoiser's history follows it fast).
+    /// A light changed since the last frame (the denoiser's history follows it).
     pub(super) lights_changed: bool,
+    /// With the denoiser: the light records of the last frame it saw, and this frame's
+    /// correction of its history (`frame.modes.zw`: where the changed lights' records start
+    /// in the lights buffer, how many went | how many came << 16), when the lights changed
+    /// by few enough records (`denoise::light_fixes`).
+    pub(super) denoised_lights: Vec<crate::gpu::types::LightData>,
+    pub(super) light_fix: Option<[u32; 2]>,
     /// The reflection probes' faces and passes (scenes with probes).
     pub(super) probes: Option<ProbeFrame>,
     /// Something the probes see changed since their faces were drawn.
@@ -159,6 +165,11 @@ impl Renderer {
         ctx.scoped("creating the renderer", || {
             let gpu_scene = GpuScene::new(ctx, scene)?;
             let mut source = crate::registry::create(ctx, scene, &gpu_scene, &settings, max_atlas)?;
+            let denoised_lights = if settings.rays.denoise {
+                source.light_data(scene)
+            } else {
+                Vec::new()
+            };
             let light_data = lights_or_placeholder(source.light_data(scene));
             let lights = ctx
                 .device
@@ -300,6 +311,8 @@ impl Renderer {
                 reuse,
                 frames_denoised: 0,
                 lights_changed: false,
+                denoised_lights,
+                light_fix: None,
                 probes,
                 probes_stale: false,
                 clusters,
@@ -410,7 +423,24 @@ impl Renderer {
         let scene = &self.current;
         let settings = &self.settings;
         self.source.update(ctx, scene)?;
-        let light_data = lights_or_placeholder(self.source.light_data(scene));
+        let records = self.source.light_data(scene);
+        let fixes = if self.denoiser.is_some() && self.lights_changed {
+            let fixes = crate::shading::denoise::light_fixes(&self.denoised_lights, &records);
+            self.denoised_lights.clone_from(&records);
+            fixes
+        } else {
+            None
+        };
+        let mut light_data = lights_or_placeholder(records);
+        // The denoiser's history is corrected for the lights that changed: their old and new
+        // records follow the frame's lights for this frame's lighting pass.
+        self.light_fix = fixes.map(|(gone, came)| {
+            let first = light_data.len() as u32;
+            let counts = gone.len() as u32 | ((came.len() as u32) << 16);
+            light_data.extend(gone);
+            light_data.extend(came);
+            [first, counts]
+        });
         let bytes: &[u8] = bytemuck::cast_slice(&light_data);
         crate::gpu::buffers::grow_buffer(ctx, &mut self.lights, bytes.len() as u64, "lights")?;
         ctx.queue.write_buffer(&self.lights, 0, bytes);
@@ -487,7 +517,7 @@ impl Renderer {
         }
         if let Some(d) = &mut self.denoiser {
             if std::mem::take(&mut self.lights_changed) {
-                d.lights_changed();
+                d.lights_changed(self.light_fix.is_some());
             }
         }
         if let Some(r) = &mut self.reuse {
@@ -506,10 +536,12 @@ impl Renderer {
         if self.denoiser.is_some() || self.reuse.is_some() {
             // New random numbers for the rays every frame (FrameUniforms::modes.y).
             self.frames_denoised = self.frames_denoised.wrapping_add(1);
+            // modes.zw: the denoiser's correction for changed lights, this frame only.
+            let [first, counts] = self.light_fix.take().unwrap_or([0, 0]);
             ctx.queue.write_buffer(
                 &self.frame_buffer,
                 (std::mem::offset_of!(FrameUniforms, modes) + 4) as u64,
-                bytemuck::bytes_of(&self.frames_denoised),
+                bytemuck::cast_slice(&[self.frames_denoised, first, counts]),
             );
         }
         if let Some(b) = boundary.as_deref_mut() {

@@ -16,7 +16,8 @@ struct DenoiseParams {
     // 1 = no history this frame, least weight of this frame's estimates (after a change of
     // lights: the history follows fast while its frame count keeps the filter narrow).
     pixel: vec4<f32>,
-    // eye position (xyz).
+    // eye position (xyz); w (temporal pass): 1 = the lights changed and the lighting pass
+    // left in `ratio_out` each pixel's correction of the history for them.
     camera: vec4<f32>,
 }
 
@@ -52,6 +53,8 @@ fn ratio_of(s: vec3<f32>, u: vec3<f32>) -> f32 {
 @group(0) @binding(4) var<storage, read> hist_in: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> hist_out: array<vec4<f32>>;
 // Per pixel: [estimate with shadows, variance of the ratio], [estimate without, frames].
+// In a frame whose lights changed it first holds, from the lighting pass, per pixel what the
+// changed lights add to the mean estimates with and without shadows: [with, 0], [without, 0].
 @group(0) @binding(6) var<storage, read_write> ratio_out: array<vec4<f32>>;
 
 @compute @workgroup_size(8, 8)
@@ -72,6 +75,12 @@ fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let pos = s.xyz;
+    var fix_s = vec3<f32>(0.0);
+    var fix_u = vec4<f32>(0.0);
+    if (p.camera.w != 0.0) {
+        fix_s = ratio_out[2u * i].rgb;
+        fix_u = ratio_out[2u * i + 1u];
+    }
     var shadowed = px_in[4u * i + 1u].rgb;
     var unshadowed = px_in[4u * i + 2u].rgb;
     let r = ratio_of(shadowed, unshadowed);
@@ -116,6 +125,24 @@ fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
             h0 = h0 / wsum;
             h1 = h1 / wsum;
             h2 = h2 / wsum;
+            if (p.camera.w != 0.0) {
+                // The lights changed: the means become those of the new lights by what the
+                // lights that went took and those that came add, traced here once (their
+                // visibility as the history's samples would have found it on average); the
+                // mean ratio moves with them, its spread kept.
+                // The samples of the lights that went are lost to the mean: the history
+                // counts as many frames as its samples of the lights that stay (what their
+                // share of the unshadowed light sampled them with).
+                let before = ratio_of(h0.rgb, h1.rgb);
+                let stays = clamp(1.0 - fix_u.w / max(dot(h1.rgb, LUMA), 1e-30), 0.0, 1.0);
+                h0.w = max(floor(h0.w * stays), 1.0);
+                h1 = vec4<f32>(max(h1.rgb + fix_u.rgb, vec3<f32>(0.0)), h1.w);
+                h0 = vec4<f32>(clamp(h0.rgb + fix_s, vec3<f32>(0.0), h1.rgb), h0.w);
+                let shift = ratio_of(h0.rgb, h1.rgb) - before;
+                let moved = clamp(h1.w + shift, 0.0, 1.0);
+                h2 = max(h2 + moved * moved - h1.w * h1.w, moved * moved);
+                h1.w = moved;
+            }
             frames = min(round(h0.w) + 1.0, f32(p.size.w));
             let a = max(1.0 / frames, p.pixel.w);
             shadowed = mix(h0.rgb, shadowed, a);

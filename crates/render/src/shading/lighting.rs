@@ -197,7 +197,7 @@ impl LightingPass {
         entries.extend(inputs.shadows.extra_layout(SOURCE_FIRST_BINDING, frag));
         if consts.denoise {
             entries.push(crate::gpu::pipelines::storage_rw_entry(40, frag));
-            entries.push(crate::gpu::pipelines::storage_entry(41, frag));
+            entries.push(crate::gpu::pipelines::storage_rw_entry(41, frag));
         }
         if consts.reuse {
             entries.push(crate::gpu::pipelines::uniform_entry(42, frag));

@@ -151,8 +151,11 @@ fn gltf_brdf(base: vec3<f32>, metallic: f32, roughness: f32, n: vec3<f32>, l: ve
 }
 
 fn light_terms(i: u32, s: Surface) -> Terms {
+    return light_terms_of(lights[i], s);
+}
+
+fn light_terms_of(light: LightData, s: Surface) -> Terms {
     var t: Terms;
-    let light = lights[i];
     t.reaches = in_reach(light, s.p);
     if (!t.reaches) {
         return t;
@@ -876,6 +879,9 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     }
     if (DENOISE) {
         denoise_store(px, vec4<f32>(acc.unshadowed, 1.0), acc.est_shadowed, acc.est_unshadowed, rest);
+        if (frame.modes.w != 0u) {
+            denoise_fix(s);
+        }
     }
     if (SPATIAL != 0u) {
         if (acc.reused) {
@@ -888,6 +894,46 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
         return vec4<f32>(acc.color, 1.0);
     }
     return vec4<f32>(tone_map(acc.color), 1.0);
+}
+
+// Samples per side of a sized light's grid when the denoiser's history is corrected for it:
+// the correction stays in the history for many frames, so its noise should be below a
+// frame's.
+const FIX_SIDE: u32 = 4u;
+
+// The lights changed since the last frame (denoise.rs, `light_fixes`): their records follow
+// the frame's lights in the lights buffer from `frame.modes.z`, first the old records of those
+// that went (`frame.modes.w & 0xffff` of them), then the new ones of those that came. What
+// each adds at `s` to the estimates with and without shadows (its unshadowed direct term,
+// times its visibility traced here on a fine grid), those that went negated, is written for
+// the denoiser's temporal pass, which adds it to the history's means; with the luminance of
+// what went (the history's samples of it are lost: it counts fewer frames).
+fn denoise_fix(s: Surface) {
+    let gone = frame.modes.w & 0xffffu;
+    let count = gone + (frame.modes.w >> 16u);
+    var with_shadows = vec3<f32>(0.0);
+    var without = vec3<f32>(0.0);
+    var went = 0.0;
+    for (var c = 0u; c < count; c = c + 1u) {
+        let light = lights[frame.modes.z + c];
+        let t = light_terms_of(light, s);
+        if (!t.reaches || !t.facing) {
+            continue;
+        }
+        var lit = 1.0;
+        if (light.diffuse.w > 0.0) {
+            lit = ray_lit_area(light, s.p, s.n, max(ray_area_side(), FIX_SIDE), soft_jitter(s.px, 0x9e3779b9u + c));
+        } else {
+            lit = ray_lit(light, s.p, s.n);
+        }
+        let sign = select(1.0, -1.0, c < gone);
+        without = without + sign * t.att * t.ds;
+        with_shadows = with_shadows + sign * lit * t.att * t.ds;
+        if (c < gone) {
+            went = went + max(dot(t.att * t.ds, vec3<f32>(0.2126, 0.7152, 0.0722)), 0.0);
+        }
+    }
+    denoise_store_fix(s.px, with_shadows, without, went);
 }
 
 // What the surface mirrors of the nearest probe (probes.wgsl): Phong materials their

@@ -373,7 +373,8 @@ impl ShadingConsts {
             format!(
                 "{consts}{reuse}fn denoise_store(px: vec2<i32>, a: vec4<f32>, s: vec3<f32>, \
                  u: vec3<f32>, r: vec3<f32>) {{}}\n\
-                 fn denoise_set_shadowed(px: vec2<i32>, s: vec3<f32>) {{}}\n"
+                 fn denoise_set_shadowed(px: vec2<i32>, s: vec3<f32>) {{}}\n\
+                 fn denoise_store_fix(px: vec2<i32>, s: vec3<f32>, u: vec3<f32>, g: f32) {{}}\n"
             )
         }
     }
@@ -389,7 +390,9 @@ fn probe_fresnel(f0: vec3<f32>, n: vec3<f32>, v: vec3<f32>) -> vec3<f32> { retur
 /// unshadowed light and shadow ratio, and `fs_composite`, which shades the filtered ratio.
 const DENOISE_WGSL: &str = "
 @group(0) @binding(40) var<storage, read_write> denoise_px: array<vec4<f32>>;
-@group(0) @binding(41) var<storage, read> denoise_ratio: array<vec4<f32>>;
+// The filtered ratio the composite reads; written by the lighting pass only in a frame whose
+// lights changed, with the history's correction for the temporal pass (denoise_store_fix).
+@group(0) @binding(41) var<storage, read_write> denoise_ratio: array<vec4<f32>>;
 
 // Per pixel: [exact unshadowed direct light, 1 = geometry], [estimate with shadows, 0],
 // [the same estimate without, 0], [ambient + emission, 0].
@@ -405,6 +408,15 @@ fn denoise_store(px: vec2<i32>, a: vec4<f32>, shadowed: vec3<f32>, unshadowed: v
 fn denoise_set_shadowed(px: vec2<i32>, shadowed: vec3<f32>) {
     let i = 4u * (u32(px.y) * u32(frame.viewport.x) + u32(px.x));
     denoise_px[i + 1u] = vec4<f32>(shadowed, 0.0);
+}
+
+// What the lights that changed add to the pixel's estimates with and without shadows, and
+// the luminance of the unshadowed light that went (denoise_fix), for the denoiser's temporal
+// pass.
+fn denoise_store_fix(px: vec2<i32>, shadowed: vec3<f32>, unshadowed: vec3<f32>, went: f32) {
+    let i = 2u * (u32(px.y) * u32(frame.viewport.x) + u32(px.x));
+    denoise_ratio[i] = vec4<f32>(shadowed, 0.0);
+    denoise_ratio[i + 1u] = vec4<f32>(unshadowed, went);
 }
 
 @fragment
