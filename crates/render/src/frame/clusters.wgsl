@@ -15,7 +15,10 @@
 @group(0) @binding(0) var<uniform> frame: FrameUniforms;
 @group(0) @binding(1) var<uniform> clusters: ClusterUniforms;
 @group(0) @binding(2) var gbuf_position: texture_2d<u32>;
-// Per cluster: CLUSTER_EMPTY, CLUSTER_MARKED, CLUSTER_FIRST_SLOT + slot, or CLUSTER_OVERFLOW.
+// Per cluster: CLUSTER_EMPTY, CLUSTER_MARKED, CLUSTER_FIRST_SLOT + slot, or CLUSTER_OVERFLOW;
+// then, for the `counts.z` clusters again, the farthest view depth of the cluster's samples
+// (float bits: positive floats order as their bits) and the nearest one's bits inverted (so
+// that both start at 0 and grow by atomicMax).
 @group(0) @binding(3) var<storage, read_write> slots: array<atomic<u32>>;
 // `counts.x` slots of `words.z` words.
 @group(0) @binding(4) var<storage, read_write> masks: array<atomic<u32>>;
@@ -41,7 +44,20 @@ fn cs_mark(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let view_depth = -(frame.view * vec4<f32>(pos.xyz, 1.0)).z;
-    atomicStore(&slots[cluster_index(clusters, gid.xy, view_depth)], CLUSTER_MARKED);
+    let ci = cluster_index(clusters, gid.xy, view_depth);
+    atomicStore(&slots[ci], CLUSTER_MARKED);
+    let bits = bitcast<u32>(max(view_depth, 0.0));
+    atomicMax(&slots[clusters.counts.z + ci], bits);
+    atomicMax(&slots[2u * clusters.counts.z + ci], ~bits);
+}
+
+// The view depths the samples of cluster `ci` span (cs_mark), padded like `slice_range`: the
+// cluster's box need only hold its samples, not its whole slice (Olsson et al.'s explicit
+// bounds: a far slice is metres deep where the surfaces a tile sees in it are not).
+fn sample_range(ci: u32) -> vec2<f32> {
+    let far = bitcast<f32>(atomicLoad(&slots[clusters.counts.z + ci]));
+    let near = bitcast<f32>(~atomicLoad(&slots[2u * clusters.counts.z + ci]));
+    return vec2<f32>(near * (1.0 - 1e-3), far * (1.0 + 1e-3));
 }
 
 @compute @workgroup_size(64, 1, 1)
@@ -163,17 +179,18 @@ fn assign_in_eye(light_index: u32, sphere: vec4<f32>, light: LightData, is_spot:
             if (v < CLUSTER_FIRST_SLOT || v == CLUSTER_OVERFLOW) {
                 continue;
             }
-            // The cluster's view-space box: the tile's pixel rectangle at depths z0..z1
-            // (padded like the slice).
+            // The cluster's view-space box: the tile's pixel rectangle at the depths its
+            // samples span (padded like the slice).
+            let zc = sample_range(ci);
             let p0 = vec2<f32>(f32(tx), f32(ty)) * tile;
             let p1 = min(p0 + vec2<f32>(tile), size);
             let ndc_x = vec2<f32>(p0.x, p1.x) / size.x * 2.0 - 1.0;
             let ndc_y = 1.0 - vec2<f32>(p1.y, p0.y) / size.y * 2.0;
-            let xs = vec4<f32>(ndc_x.x * zr.x, ndc_x.x * zr.y, ndc_x.y * zr.x, ndc_x.y * zr.y) * c.proj.x;
-            let ys = vec4<f32>(ndc_y.x * zr.x, ndc_y.x * zr.y, ndc_y.y * zr.x, ndc_y.y * zr.y) * c.proj.y;
-            let pad = 1e-3 * zr.y;
-            let lo = vec3<f32>(min(min(xs.x, xs.y), min(xs.z, xs.w)) - pad, min(min(ys.x, ys.y), min(ys.z, ys.w)) - pad, -zr.y);
-            let hi = vec3<f32>(max(max(xs.x, xs.y), max(xs.z, xs.w)) + pad, max(max(ys.x, ys.y), max(ys.z, ys.w)) + pad, -zr.x);
+            let xs = vec4<f32>(ndc_x.x * zc.x, ndc_x.x * zc.y, ndc_x.y * zc.x, ndc_x.y * zc.y) * c.proj.x;
+            let ys = vec4<f32>(ndc_y.x * zc.x, ndc_y.x * zc.y, ndc_y.y * zc.x, ndc_y.y * zc.y) * c.proj.y;
+            let pad = 1e-3 * zc.y;
+            let lo = vec3<f32>(min(min(xs.x, xs.y), min(xs.z, xs.w)) - pad, min(min(ys.x, ys.y), min(ys.z, ys.w)) - pad, -zc.y);
+            let hi = vec3<f32>(max(max(xs.x, xs.y), max(xs.z, xs.w)) + pad, max(max(ys.x, ys.y), max(ys.z, ys.w)) + pad, -zc.x);
             let nearest = clamp(centre, lo, hi);
             if (dot(nearest - centre, nearest - centre) > r * r) {
                 continue;
