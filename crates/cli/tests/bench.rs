@@ -694,6 +694,12 @@ fn bench_denoise_scores_each_frame_of_a_sequence() {
         return;
     }
     let (dir, json) = bench_ok("denoise", &args["denoise ".len()..]);
+    // The exact image's grid over each sized light is said (its own noise is in every score).
+    assert_eq!(
+        json["reference_area_samples"].as_u64(),
+        Some(u64::from(manyshadows::DEFAULT_AREA_SAMPLES)),
+        "{json}"
+    );
     let rows = records(&json);
     assert_eq!(rows.len(), 1, "{json}");
     let r = &rows[0];
