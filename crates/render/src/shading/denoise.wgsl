@@ -13,8 +13,9 @@ struct DenoiseParams {
     // width, height, à-trous step (pixels), most frames of history.
     size: vec4<u32>,
     // world size of a pixel at distance 1, ratio tolerance in standard deviations,
-    // 1 = no history this frame, least weight of this frame's estimates (after a change of
-    // lights: the history follows fast while its frame count keeps the filter narrow).
+    // 1 = no history this frame, 1 = the lights changed and nothing corrected the history for
+    // them (the temporal pass cuts each pixel's frame count by the change of its unshadowed
+    // light).
     pixel: vec4<f32>,
     // eye position (xyz); w (temporal pass): 1 = the lights changed and the lighting pass
     // left in `ratio_out` each pixel's correction of the history for them.
@@ -143,8 +144,18 @@ fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
                 h2 = max(h2 + moved * moved - h1.w * h1.w, moved * moved);
                 h1.w = moved;
             }
+            if (p.pixel.w != 0.0) {
+                // The lights changed more than the lighting pass corrects for: the history
+                // counts as many frames as the share of its unshadowed light (the mean of
+                // estimates whose luminance is the exact sum each frame) that this frame's
+                // exact unshadowed light keeps.
+                let now = dot(px_in[4u * i].rgb, LUMA);
+                let was = dot(h1.rgb, LUMA);
+                let stays = clamp(1.0 - abs(now - was) / max(max(now, was), 1e-30), 0.0, 1.0);
+                h0.w = max(floor(h0.w * stays * stays), 1.0);
+            }
             frames = min(round(h0.w) + 1.0, f32(p.size.w));
-            let a = max(1.0 / frames, p.pixel.w);
+            let a = 1.0 / frames;
             shadowed = mix(h0.rgb, shadowed, a);
             unshadowed = mix(h1.rgb, unshadowed, a);
             mean = mix(h1.w, r, a);
