@@ -149,70 +149,38 @@ fn denoising_without_shadow_rays_is_refused_by_name() {
 /// steady 1.39.)
 #[test]
 fn a_light_switched_off_leaves_the_frame_within_four_frames() {
-    let ctx = common::context();
-    let scene = common::cubes_under_48_lights();
-    let base = RenderSettings::new(160, 120);
-    let Some(mut exact) = common::raytraced(&ctx, &scene, base.clone()) else {
+    // A sun goes dark (it lights every pixel).
+    let Some(s) = switch_off(|scene| vec![sun_of(scene)], 16) else {
         return;
     };
-    let exact_before = exact.render().expect("frame");
-    // A sun goes dark (it lights every pixel).
-    let off = scene
-        .lights
-        .iter()
-        .position(|l| l.type_name() == "directional")
-        .expect("the layout has a directional light");
-    let mut dark = scene.lights[off];
-    dark.diffuse = glam::Vec3::ZERO;
-    dark.specular = glam::Vec3::ZERO;
-    dark.ambient = glam::Vec3::ZERO;
-    exact.set_light(off, dark).expect("light");
-    let exact_after = exact.render().expect("frame");
-    let moved = common::rmse(&exact_before, &exact_after);
-    let one = RayOptions::default()
-        .with_light_samples(1)
-        .with_denoise(true);
-    // The steady error of the scene without the light: 16 frames of a fresh denoiser.
-    let mut without = scene.clone();
-    without.lights[off] = dark;
-    let mut fresh =
-        common::raytraced(&ctx, &without, base.clone().with_rays(one)).expect("same device");
-    let fresh_errors: Vec<f64> = (0..16)
-        .map(|_| common::rmse(&fresh.render().expect("frame"), &exact_after))
-        .collect();
-    let (fresh4, steady) = (fresh_errors[3], fresh_errors[15]);
-    let mut r = common::raytraced(&ctx, &scene, base.with_rays(one)).expect("same device");
-    for _ in 0..16 {
-        r.render().expect("frame");
-    }
-    r.set_light(off, dark).expect("light");
-    let after: Vec<f64> = (0..4)
-        .map(|_| common::rmse(&r.render().expect("frame"), &exact_after))
-        .collect();
+    let (fresh4, steady) = (s.fresh[3], s.fresh[15]);
     eprintln!(
-        "switching light {off} off changes the exact image by {moved:.2}; denoised after the \
-         switch: {after:.2?}; a denoiser started without it: {fresh4:.2} after 4 frames, \
-         steady {steady:.2} after 16 ({:.2}x)",
-        after[3] / steady
+        "switching the sun off changes the exact image by {:.2}; denoised after the switch: \
+         {:.2?}; a denoiser started without it: {fresh4:.2} after 4 frames, steady {steady:.2} \
+         after 16 ({:.2}x)",
+        s.moved,
+        s.after,
+        s.after[3] / steady
     );
     assert!(
-        moved > 4.0 * steady,
-        "the switch must matter: {moved} vs {steady}"
+        s.moved > 4.0 * steady,
+        "the switch must matter: {} vs {steady}",
+        s.moved
     );
     // Four frames after the switch the history from before it helps rather than hurts: the
     // frame is closer to the exact one than a denoiser that never saw the light, four frames
     // in (lavapipe: 1.04 against 1.98), and within a quarter of the steady error after 16
     // frames (1.17x). Without the correction 1.77 (2.0x) fails the second.
     assert!(
-        after[3] <= fresh4,
+        s.after[3] <= fresh4,
         "four frames after the switch: {} vs {fresh4} for a denoiser started without the light",
-        after[3]
+        s.after[3]
     );
     assert!(
-        after[3] <= 1.25 * steady,
+        s.after[3] <= 1.25 * steady,
         "four frames after the switch: {} vs a steady {steady} ({:.2}x, at most 1.25x)",
-        after[3],
-        after[3] / steady
+        s.after[3],
+        s.after[3] / steady
     );
 }
 
@@ -226,25 +194,66 @@ fn a_light_switched_off_leaves_the_frame_within_four_frames() {
 /// 1.46.)
 #[test]
 fn many_lights_switched_at_once_fall_back_and_still_follow() {
-    let ctx = common::context();
-    let scene = common::cubes_under_48_lights();
-    let base = RenderSettings::new(160, 120);
-    let Some(mut exact) = common::raytraced(&ctx, &scene, base.clone()) else {
+    // The sun (it lights every pixel) and eleven more.
+    let pick = |scene: &manyshadows::scene::Scene| {
+        let sun = sun_of(scene);
+        let off: Vec<usize> = std::iter::once(sun)
+            .chain((0..scene.lights.len()).filter(|&i| i != sun).take(11))
+            .collect();
+        assert!(2 * off.len() > manyshadows::shading::denoise::MAX_LIGHT_FIXES);
+        off
+    };
+    let Some(s) = switch_off(pick, 4) else {
         return;
     };
-    let exact_before = exact.render().expect("frame");
-    // The sun (it lights every pixel) and eleven more.
-    let sun = scene
+    eprintln!(
+        "switching 12 lights off changes the exact image by {:.2}; denoised after the switch: \
+         {:.2?}; a denoiser started without them: {:.2} after 4 frames",
+        s.moved, s.after, s.fresh[3]
+    );
+    assert!(s.moved > 2.0, "the switch must matter: {}", s.moved);
+    assert!(
+        s.after[3] <= s.fresh[3],
+        "four frames after the switch: {} vs {} for a denoiser started without the lights",
+        s.after[3],
+        s.fresh[3]
+    );
+}
+
+/// The cubes' directional light.
+fn sun_of(scene: &manyshadows::scene::Scene) -> usize {
+    scene
         .lights
         .iter()
         .position(|l| l.type_name() == "directional")
-        .expect("the layout has a directional light");
-    let off: Vec<usize> = std::iter::once(sun)
-        .chain((0..scene.lights.len()).filter(|&i| i != sun).take(11))
-        .collect();
-    assert!(2 * off.len() > manyshadows::shading::denoise::MAX_LIGHT_FIXES);
+        .expect("the layout has a directional light")
+}
+
+/// What switching lights off does to the denoised frames (the tests above).
+struct Switch {
+    /// RMSE between the exact images before and after.
+    moved: f64,
+    /// A denoiser started without those lights: its first frames' errors.
+    fresh: Vec<f64>,
+    /// A denoiser that saw 16 frames with them: its four frames' errors after the switch.
+    after: Vec<f64>,
+}
+
+/// Switches the lights `pick` names dark (colours zero) on the cubes under 48 lights at
+/// 160 x 120, K = 1 denoised, after 16 frames, each frame scored against the exact image
+/// without them; a fresh denoiser of the scene without them runs `fresh_frames` frames.
+/// `None` where shadow rays are refused (by name: `common::raytraced`).
+fn switch_off(
+    pick: impl Fn(&manyshadows::scene::Scene) -> Vec<usize>,
+    fresh_frames: usize,
+) -> Option<Switch> {
+    let ctx = common::context();
+    let scene = common::cubes_under_48_lights();
+    let base = RenderSettings::new(160, 120);
+    let mut exact = common::raytraced(&ctx, &scene, base.clone())?;
+    let exact_before = exact.render().expect("frame");
     let mut without = scene.clone();
-    for &i in &off {
+    for i in pick(&scene) {
         let l = &mut without.lights[i];
         l.diffuse = glam::Vec3::ZERO;
         l.specular = glam::Vec3::ZERO;
@@ -252,13 +261,12 @@ fn many_lights_switched_at_once_fall_back_and_still_follow() {
     }
     exact.set_lights(without.lights.clone()).expect("lights");
     let exact_after = exact.render().expect("frame");
-    let moved = common::rmse(&exact_before, &exact_after);
     let one = RayOptions::default()
         .with_light_samples(1)
         .with_denoise(true);
     let mut fresh =
         common::raytraced(&ctx, &without, base.clone().with_rays(one)).expect("same device");
-    let fresh_errors: Vec<f64> = (0..4)
+    let fresh = (0..fresh_frames)
         .map(|_| common::rmse(&fresh.render().expect("frame"), &exact_after))
         .collect();
     let mut r = common::raytraced(&ctx, &scene, base.with_rays(one)).expect("same device");
@@ -266,22 +274,14 @@ fn many_lights_switched_at_once_fall_back_and_still_follow() {
         r.render().expect("frame");
     }
     r.set_lights(without.lights.clone()).expect("lights");
-    let after: Vec<f64> = (0..4)
+    let after = (0..4)
         .map(|_| common::rmse(&r.render().expect("frame"), &exact_after))
         .collect();
-    eprintln!(
-        "switching {} lights off changes the exact image by {moved:.2}; denoised after the \
-         switch: {after:.2?}; a denoiser started without them: {:.2} after 4 frames",
-        off.len(),
-        fresh_errors[3]
-    );
-    assert!(moved > 2.0, "the switch must matter: {moved}");
-    assert!(
-        after[3] <= fresh_errors[3],
-        "four frames after the switch: {} vs {} for a denoiser started without the lights",
-        after[3],
-        fresh_errors[3]
-    );
+    Some(Switch {
+        moved: common::rmse(&exact_before, &exact_after),
+        fresh,
+        after,
+    })
 }
 
 /// A frame whose denoiser buffers (64 bytes a pixel) pass the device's storage-binding limit
