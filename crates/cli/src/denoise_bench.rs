@@ -94,6 +94,12 @@ pub struct DenoiseArgs {
     #[arg(long, default_value_t = manyshadows::DEFAULT_AREA_SAMPLES,
           value_parser = clap::value_parser!(u32).range(1..=16))]
     pub reference_area_samples: u32,
+    /// Cluster tile side in pixels for all three renderers (`render --cluster-tile`). The
+    /// lighting loop of the denoised frame visits each pixel's cluster lights, so the growth
+    /// from 1,024 to 16,384 lights depends on it (docs/techniques.md).
+    #[arg(long, default_value_t = manyshadows::ClusterOptions::default().tile,
+          value_parser = clap::value_parser!(u32).range(1..))]
+    pub cluster_tile: u32,
     /// Image width.
     #[arg(long, default_value_t = 640)]
     pub width: u32,
@@ -297,7 +303,8 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
         h.message(format!("{}, {n} lights: building", args.scene));
         let scene = seeded_scene(&args.scene, n, LightMix::All, None)?;
         let base = RenderSettings::new(args.width, args.height)
-            .with_technique(crate::techniques::first_filling(manyshadows::Fills::Rays));
+            .with_technique(crate::techniques::first_filling(manyshadows::Fills::Rays))
+            .with_clusters(manyshadows::ClusterOptions::default().with_tile(args.cluster_tile));
         let sampled = RayOptions::default()
             .with_light_samples(args.light_samples)
             .with_reuse(args.reuse)
