@@ -80,14 +80,8 @@ pub struct Renderer {
     pub(super) reuse: Option<crate::shading::reuse::Reuse>,
     /// Frames the denoiser or the reuse has seen (their rays' random numbers differ by it).
     pub(super) frames_denoised: u32,
-    /// A light changed since the last frame (the denoiser's history follows it).
+    /// A light changed since the last prepared frame (the denoiser's history follows it).
     pub(super) lights_changed: bool,
-    /// With the denoiser: the light records of the last frame it saw, and this frame's
-    /// correction of its history (`frame.modes.zw`: where the changed lights' records start
-    /// in the lights buffer, how many went | how many came << 16), when the lights changed
-    /// by few enough records (`denoise::light_fixes`).
-    pub(super) denoised_lights: Vec<crate::gpu::types::LightData>,
-    pub(super) light_fix: Option<[u32; 2]>,
     /// The reflection probes' faces and passes (scenes with probes).
     pub(super) probes: Option<ProbeFrame>,
     /// Something the probes see changed since their faces were drawn.
@@ -165,11 +159,6 @@ impl Renderer {
         ctx.scoped("creating the renderer", || {
             let gpu_scene = GpuScene::new(ctx, scene)?;
             let mut source = crate::registry::create(ctx, scene, &gpu_scene, &settings, max_atlas)?;
-            let denoised_lights = if settings.rays.denoise {
-                source.light_data(scene)
-            } else {
-                Vec::new()
-            };
             let light_data = lights_or_placeholder(source.light_data(scene));
             let lights = ctx
                 .device
@@ -231,6 +220,7 @@ impl Renderer {
                         settings.width,
                         settings.height,
                         settings.rays.light_samples > 0,
+                        source.light_data(scene),
                     )
                 })
                 .transpose()?;
@@ -311,8 +301,6 @@ impl Renderer {
                 reuse,
                 frames_denoised: 0,
                 lights_changed: false,
-                denoised_lights,
-                light_fix: None,
                 probes,
                 probes_stale: false,
                 clusters,
@@ -424,23 +412,13 @@ impl Renderer {
         let settings = &self.settings;
         self.source.update(ctx, scene)?;
         let records = self.source.light_data(scene);
-        let fixes = if self.denoiser.is_some() && self.lights_changed {
-            let fixes = crate::shading::denoise::light_fixes(&self.denoised_lights, &records);
-            self.denoised_lights.clone_from(&records);
-            fixes
-        } else {
-            None
-        };
+        let count = records.len();
         let mut light_data = lights_or_placeholder(records);
-        // The denoiser's history is corrected for the lights that changed: their old and new
-        // records follow the frame's lights for this frame's lighting pass.
-        self.light_fix = fixes.map(|(gone, came)| {
-            let first = light_data.len() as u32;
-            let counts = gone.len() as u32 | ((came.len() as u32) << 16);
-            light_data.extend(gone);
-            light_data.extend(came);
-            [first, counts]
-        });
+        if let Some(d) = self.denoiser.as_mut().filter(|_| self.lights_changed) {
+            // The records of the lights that changed may follow the frame's for the
+            // denoiser's correction of its history.
+            d.follow_lights(&mut light_data, count);
+        }
         let bytes: &[u8] = bytemuck::cast_slice(&light_data);
         crate::gpu::buffers::grow_buffer(ctx, &mut self.lights, bytes.len() as u64, "lights")?;
         ctx.queue.write_buffer(&self.lights, 0, bytes);
@@ -496,6 +474,7 @@ impl Renderer {
             self.visibility = visibility_pass(ctx, settings, scene, &*self.source)?;
         }
         self.dirty = false;
+        self.lights_changed = false;
         Ok(())
     }
 
@@ -515,11 +494,6 @@ impl Renderer {
             let span = self.timer.span(Stage::Clusters);
             self.clusters.record(encoder, &self.timer, span);
         }
-        if let Some(d) = &mut self.denoiser {
-            if std::mem::take(&mut self.lights_changed) {
-                d.lights_changed(self.light_fix.is_some());
-            }
-        }
         if let Some(r) = &mut self.reuse {
             let cam = self.current.camera;
             let aspect = self.settings.width as f32 / self.settings.height as f32;
@@ -537,7 +511,7 @@ impl Renderer {
             // New random numbers for the rays every frame (FrameUniforms::modes.y).
             self.frames_denoised = self.frames_denoised.wrapping_add(1);
             // modes.zw: the denoiser's correction for changed lights, this frame only.
-            let [first, counts] = self.light_fix.take().unwrap_or([0, 0]);
+            let [first, counts] = self.denoiser.as_ref().map_or([0, 0], |d| d.light_fix());
             ctx.queue.write_buffer(
                 &self.frame_buffer,
                 (std::mem::offset_of!(FrameUniforms, modes) + 4) as u64,

@@ -176,12 +176,24 @@ pub struct Denoiser {
     parity: usize,
     /// Camera world → clip of the last frame denoised (`None`: no history yet).
     prev_view_proj: Option<glam::Mat4>,
-    /// The lights changed and nothing corrects the history for them this frame: the
-    /// temporal pass cuts each pixel's frame count by the change of its unshadowed light.
-    relit: bool,
-    /// This frame's lighting pass wrote each pixel's correction of the history for the
-    /// lights that changed (`light_fixes`); the temporal pass applies it.
-    fixing: bool,
+    /// The light records of the last frame denoised, which a change of lights is compared
+    /// with ([`light_fixes`]).
+    seen_lights: Vec<LightData>,
+    /// What [`Denoiser::follow_lights`] found for the next frame; [`Denoiser::record`] takes
+    /// it (a frame prepared but never recorded keeps it for the next).
+    change: Option<LightChange>,
+}
+
+/// A change of lights the next denoised frame follows.
+struct LightChange {
+    /// This frame's light records, the last seen once the frame is recorded.
+    lights: Vec<LightData>,
+    /// Where the records that went and came begin in the lights buffer, and how many went
+    /// (low 16 bits) and came (high 16 bits) (`FrameUniforms::modes.zw`): the lighting pass
+    /// writes each pixel's correction of the history for them, which the temporal pass
+    /// adds. `None`: more changed than are corrected for, and the temporal pass cuts each
+    /// pixel's frame count by the change of its unshadowed light.
+    fix: Option<[u32; 2]>,
 }
 
 fn storage(ctx: &GpuContext, label: &str, bytes: u64) -> wgpu::Buffer {
@@ -204,6 +216,7 @@ impl Denoiser {
         w: u32,
         h: u32,
         spatial: bool,
+        lights: Vec<LightData>,
     ) -> Result<Self, RenderError> {
         let device = &ctx.device;
         let pixels = u64::from(w) * u64::from(h);
@@ -314,21 +327,37 @@ impl Denoiser {
             spatial,
             parity: 0,
             prev_view_proj: None,
-            relit: false,
-            fixing: false,
+            seen_lights: lights,
+            change: None,
         })
     }
 
-    /// The lights changed. `fixed`: this frame's lighting pass writes the history's
-    /// correction for them (`light_fixes`), which the temporal pass adds; else the temporal
-    /// pass cuts each pixel's history by how much its unshadowed light changed. (The
-    /// unshadowed light is exact at once; only the shadow ratio's history is old.)
-    pub fn lights_changed(&mut self, fixed: bool) {
-        if fixed {
-            self.fixing = true;
-        } else {
-            self.relit = true;
-        }
+    /// The lights changed: `buffer` is what the lights buffer will hold, this frame's
+    /// `count` light records first (then a placeholder where there are none). Where few
+    /// enough records went or came since the last frame denoised ([`light_fixes`]), they are
+    /// appended to `buffer` for this frame's lighting pass, which writes the history's
+    /// correction for them; else the temporal pass cuts each pixel's history by how much its
+    /// unshadowed light changed. (The unshadowed light is exact at once; only the shadow
+    /// ratio's history is old.)
+    pub fn follow_lights(&mut self, buffer: &mut Vec<LightData>, count: usize) {
+        let records = buffer[..count].to_vec();
+        let fix = light_fixes(&self.seen_lights, &records).map(|(gone, came)| {
+            let first = buffer.len() as u32;
+            let counts = gone.len() as u32 | ((came.len() as u32) << 16);
+            buffer.extend(gone);
+            buffer.extend(came);
+            [first, counts]
+        });
+        self.change = Some(LightChange {
+            lights: records,
+            fix,
+        });
+    }
+
+    /// `FrameUniforms::modes.zw` for the next frame: where the changed lights' records
+    /// begin in the lights buffer and how many went and came (0, 0: none to correct for).
+    pub fn light_fix(&self) -> [u32; 2] {
+        self.change.as_ref().and_then(|c| c.fix).unwrap_or([0, 0])
     }
 
     /// Records the temporal and à-trous passes of a frame seen through `view_proj` from
@@ -344,7 +373,12 @@ impl Denoiser {
     ) {
         let pixel = 2.0 * (0.5 * fov_y_deg).to_radians().tan() / self.height as f32;
         let fresh = self.prev_view_proj.is_none();
-        let relit = std::mem::take(&mut self.relit);
+        let change = self.change.take();
+        let fixing = change.as_ref().is_some_and(|c| c.fix.is_some());
+        let relit = change.as_ref().is_some_and(|c| c.fix.is_none());
+        if let Some(c) = change {
+            self.seen_lights = c.lights;
+        }
         let prev = self.prev_view_proj.unwrap_or(view_proj);
         for (k, buffer) in self.params.iter().enumerate() {
             let step = if k == 0 { 0 } else { 1u32 << (k - 1) };
@@ -358,7 +392,7 @@ impl Denoiser {
                     if relit && k == 0 { 1.0 } else { 0.0 },
                 ],
                 camera: eye
-                    .extend(if k == 0 && self.fixing { 1.0 } else { 0.0 })
+                    .extend(if k == 0 && fixing { 1.0 } else { 0.0 })
                     .to_array(),
             };
             ctx.queue
@@ -382,7 +416,6 @@ impl Denoiser {
         drop(pass);
         self.parity = 1 - self.parity;
         self.prev_view_proj = Some(view_proj);
-        self.fixing = false;
     }
 }
 
