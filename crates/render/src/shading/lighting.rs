@@ -19,7 +19,12 @@ pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrg
 /// The lighting pass's WGSL, shadows found through `lookup` (its declarations from
 /// `SOURCE_FIRST_BINDING`), shading as `consts` say.
 pub(crate) fn shader(lookup: &LookupWgsl, consts: &ShadingConsts) -> String {
-    let pass = format!("{}{}", consts.wgsl(), include_str!("lighting.wgsl"));
+    let pass = format!(
+        "{}{}{}",
+        consts.wgsl(),
+        include_str!("lighting.wgsl"),
+        include_str!("sampled.wgsl")
+    );
     compose_reader(lookup, SOURCE_FIRST_BINDING, &pass)
 }
 

@@ -29,7 +29,7 @@
 
 //!
 //! **Spatial reuse** (`RayOptions::spatial`, `--spatial`): after the lighting pass, a second
-//! pass (`fs_spatial`, lighting.wgsl) resamples each pixel's reservoir, as temporal reuse
+//! pass (`fs_spatial`, sampled.wgsl) resamples each pixel's reservoir, as temporal reuse
 //! left it, together with those of up to [`SPATIAL_NEIGHBOURS`] pixels drawn from a disc of
 //! [`SPATIAL_RADIUS`] pixels (pixels whose view depth is within 10 % and whose normals are
 //! within 26°: the choice depends on geometry only). Each candidate light `y_i` is weighed by

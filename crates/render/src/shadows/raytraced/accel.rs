@@ -22,7 +22,7 @@ use crate::error::RenderError;
 use crate::gpu::context::GpuContext;
 use crate::gpu_scene::instances::GpuScene;
 
-/// Most lights one pixel may sample (`MAX_SAMPLES` in lighting.wgsl).
+/// Most lights one pixel may sample (`MAX_SAMPLES` in sampled.wgsl).
 pub const MAX_LIGHT_SAMPLES: u32 = 16;
 
 /// Knobs of ray-traced shadows.
