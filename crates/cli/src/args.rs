@@ -356,9 +356,11 @@ pub(crate) struct RenderArgs {
     /// reference the clustered image must equal, and slow past a few hundred lights).
     #[arg(long, default_value = "clustered", value_parser = parse_light_loop)]
     pub(crate) light_loop: manyshadows::LightLoop,
-    /// Cluster tile side in pixels.
-    #[arg(long, default_value_t = manyshadows::ClusterOptions::default().tile)]
-    pub(crate) cluster_tile: u32,
+    /// Cluster tile side in pixels [default: 16 where the slot pool holds every cluster of
+    /// that grid (128 MiB: e.g. 640x360 with up to 16,384 lights, 1280x720 with up to ~6,000),
+    /// else 32].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub(crate) cluster_tile: Option<u32>,
     /// Exponential depth slices of the cluster grid (1 to 256).
     #[arg(long, default_value_t = manyshadows::ClusterOptions::default().slices)]
     pub(crate) cluster_slices: u32,
@@ -712,9 +714,11 @@ pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettin
         )
         .with_look(args.look.look())
         .with_light_loop(args.light_loop)
-        .with_clusters(
-            manyshadows::ClusterOptions::default()
-                .with_tile(args.cluster_tile)
-                .with_slices(args.cluster_slices),
-        )
+        .with_clusters({
+            let c = manyshadows::ClusterOptions::default().with_slices(args.cluster_slices);
+            match args.cluster_tile {
+                Some(t) => c.with_tile(t),
+                None => c,
+            }
+        })
 }

@@ -94,12 +94,12 @@ pub struct DenoiseArgs {
     #[arg(long, default_value_t = manyshadows::DEFAULT_AREA_SAMPLES,
           value_parser = clap::value_parser!(u32).range(1..=16))]
     pub reference_area_samples: u32,
-    /// Cluster tile side in pixels for all three renderers (`render --cluster-tile`). The
-    /// lighting loop of the denoised frame visits each pixel's cluster lights, so the growth
-    /// from 1,024 to 16,384 lights depends on it (docs/techniques.md).
-    #[arg(long, default_value_t = manyshadows::ClusterOptions::default().tile,
-          value_parser = clap::value_parser!(u32).range(1..))]
-    pub cluster_tile: u32,
+    /// Cluster tile side in pixels for all three renderers (`render --cluster-tile`; by
+    /// default chosen as there: 16 where the slot pool holds every cluster of that grid, else
+    /// 32). The lighting loop of the denoised frame visits each pixel's cluster lights, so
+    /// the growth from 1,024 to 16,384 lights depends on it (docs/techniques.md).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub cluster_tile: Option<u32>,
     /// Image width.
     #[arg(long, default_value_t = 640)]
     pub width: u32,
@@ -283,36 +283,39 @@ fn mean(v: impl Iterator<Item = f64>) -> Option<f64> {
     (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
 }
 
-/// Runs `manyshadows bench denoise`.
-pub fn denoise(args: &DenoiseArgs) -> Result<()> {
-    check_counts("--lights", &args.lights, builtin::MAX_LIGHTS, "")?;
-    check_scene("--scene", &args.scene)?;
-    if args.frames == 0 {
-        bail!("--frames must be at least 1");
-    }
-    if !args.orbit.is_finite() {
-        bail!("--orbit must be a finite number of degrees");
-    }
-    let reference = args.reference == "on";
-    let path = crate::args::read_camera_path(args.camera_path.as_deref())?;
-    let h = Harness::start_unscheduled(&args.output)?;
-    let per_frame = if reference { 3 } else { 2 };
-    h.plan(args.lights.len() as u64 * u64::from(args.frames) * per_frame);
-    let mut records = Vec::new();
-    for &n in &args.lights {
-        h.message(format!("{}, {n} lights: building", args.scene));
+/// One light count's renderers and the rows of its frames so far.
+struct Sequence {
+    lights: usize,
+    /// The scene's own instance transforms and camera (what the frames move from).
+    scene: manyshadows::scene::Scene,
+    plain: Renderer,
+    denoised: Renderer,
+    exact: Option<Renderer>,
+    /// The caster that circles, and the circle's radius.
+    mover: Option<usize>,
+    radius: f32,
+    rows: Vec<FrameRow>,
+    /// The last exact frames, newest first (for the trail).
+    past: std::collections::VecDeque<Vec<u8>>,
+}
+
+impl Sequence {
+    fn new(h: &Harness, args: &DenoiseArgs, n: usize, reference: bool) -> Result<Self> {
         let scene = seeded_scene(&args.scene, n, LightMix::All, None)?;
         let base = RenderSettings::new(args.width, args.height)
             .with_technique(crate::techniques::first_filling(manyshadows::Fills::Rays))
-            .with_clusters(manyshadows::ClusterOptions::default().with_tile(args.cluster_tile));
+            .with_clusters(match args.cluster_tile {
+                Some(t) => manyshadows::ClusterOptions::default().with_tile(t),
+                None => manyshadows::ClusterOptions::default(),
+            });
         let sampled = RayOptions::default()
             .with_light_samples(args.light_samples)
             .with_reuse(args.reuse)
             .with_spatial(args.spatial);
         let make = |rays: RayOptions| Renderer::new(&h.ctx, &scene, base.clone().with_rays(rays));
-        let mut plain = make(sampled)?;
-        let mut denoised = make(sampled.with_denoise(true))?;
-        let mut exact = if reference {
+        let plain = make(sampled)?;
+        let denoised = make(sampled.with_denoise(true))?;
+        let exact = if reference {
             Some(make(
                 RayOptions::default().with_area_samples(args.reference_area_samples),
             )?)
@@ -332,90 +335,107 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
             )),
             None => {}
         }
-        let mut rows = Vec::new();
-        // The last exact frames, newest first (for the trail).
-        let mut past: std::collections::VecDeque<Vec<u8>> = Default::default();
-        for f in 0..args.frames {
-            h.message(format!(
-                "{}, {n} lights: frame {}/{}",
-                args.scene,
-                f + 1,
-                args.frames
-            ));
-            let mut renderers: Vec<&mut Renderer> = vec![&mut plain, &mut denoised];
-            if let Some(e) = exact.as_mut() {
-                renderers.push(e);
+        Ok(Self {
+            lights: n,
+            scene,
+            plain,
+            denoised,
+            exact,
+            mover,
+            radius,
+            rows: Vec::new(),
+            past: Default::default(),
+        })
+    }
+
+    /// Frame `f` (from 0): the camera and caster set alike on every renderer, each rendered,
+    /// the row kept.
+    fn frame(
+        &mut self,
+        h: &Harness,
+        args: &DenoiseArgs,
+        path: Option<&[[f32; 6]]>,
+        f: u32,
+    ) -> Result<()> {
+        let scene = &self.scene;
+        let mut renderers: Vec<&mut Renderer> = vec![&mut self.plain, &mut self.denoised];
+        if let Some(e) = self.exact.as_mut() {
+            renderers.push(e);
+        }
+        if let Some(path) = path {
+            let c = path[(f as usize).min(path.len() - 1)];
+            let mut cam = scene.camera;
+            cam.position = glam::Vec3::new(c[0], c[1], c[2]);
+            cam.target = glam::Vec3::new(c[3], c[4], c[5]);
+            for r in renderers.iter_mut() {
+                r.set_camera(cam)?;
             }
-            if let Some(path) = &path {
-                let c = path[(f as usize).min(path.len() - 1)];
-                let mut cam = scene.camera;
-                cam.position = glam::Vec3::new(c[0], c[1], c[2]);
-                cam.target = glam::Vec3::new(c[3], c[4], c[5]);
-                for r in renderers.iter_mut() {
+        }
+        if f > 0 {
+            for r in renderers.iter_mut() {
+                if let Some(k) = self.mover {
+                    // A circle in the ground plane of half the caster's size, a step of 0.35
+                    // radians a frame.
+                    let a = f as f32 * 0.35;
+                    let offset = self.radius * glam::Vec3::new(a.cos() - 1.0, 0.0, a.sin());
+                    r.set_instance_transform(
+                        k,
+                        glam::Mat4::from_translation(offset) * scene.instances[k].transform,
+                    )?;
+                }
+                if args.orbit != 0.0 && path.is_none() {
+                    let mut cam = scene.camera;
+                    let turn = glam::Quat::from_axis_angle(
+                        cam.up.normalize(),
+                        (args.orbit * f as f32).to_radians(),
+                    );
+                    cam.position = cam.target + turn * (cam.position - cam.target);
                     r.set_camera(cam)?;
                 }
             }
-            if f > 0 {
-                for r in renderers.iter_mut() {
-                    if let Some(k) = mover {
-                        // A circle in the ground plane of half the caster's size, a step
-                        // of 0.35 radians a frame.
-                        let a = f as f32 * 0.35;
-                        let offset = radius * glam::Vec3::new(a.cos() - 1.0, 0.0, a.sin());
-                        r.set_instance_transform(
-                            k,
-                            glam::Mat4::from_translation(offset) * scene.instances[k].transform,
-                        )?;
-                    }
-                    if args.orbit != 0.0 && path.is_none() {
-                        let mut cam = scene.camera;
-                        let turn = glam::Quat::from_axis_angle(
-                            cam.up.normalize(),
-                            (args.orbit * f as f32).to_radians(),
-                        );
-                        cam.position = cam.target + turn * (cam.position - cam.target);
-                        r.set_camera(cam)?;
-                    }
-                }
-            }
-            let p = plain.render()?;
-            h.advance(1);
-            let d = denoised.render()?;
-            h.advance(1);
-            let e = match exact.as_mut() {
-                Some(r) => {
-                    let e = r.render()?;
-                    h.advance(1);
-                    Some(e)
-                }
-                None => None,
-            };
-            let trail_frames = match &e {
-                Some(e) if args.orbit == 0.0 && !args.still && path.is_none() => {
-                    let t = trail(&d.rgba, &e.rgba, &past);
-                    past.push_front(e.rgba.clone());
-                    past.truncate(TRAIL_FRAMES);
-                    t
-                }
-                _ => None,
-            };
-            rows.push(FrameRow {
-                frame: f + 1,
-                trail_frames,
-                plain_rmse: e.as_ref().map(|e| rmse_rgb(&p, e)),
-                denoised_rmse: e.as_ref().map(|e| rmse_rgb(&d, e)),
-                plain_ms: p.timings.gpu_ms.total(),
-                denoised_ms: d.timings.gpu_ms.total(),
-                denoised_lighting_ms: d.timings.gpu_ms.get(Stage::Lighting),
-                denoise_ms: d.timings.gpu_ms.get(Stage::Denoise),
-                exact_ms: e.as_ref().and_then(|e| e.timings.gpu_ms.total()),
-            });
         }
+        let p = self.plain.render()?;
+        h.advance(1);
+        let d = self.denoised.render()?;
+        h.advance(1);
+        let e = match self.exact.as_mut() {
+            Some(r) => {
+                let e = r.render()?;
+                h.advance(1);
+                Some(e)
+            }
+            None => None,
+        };
+        let trail_frames = match &e {
+            Some(e) if args.orbit == 0.0 && !args.still && path.is_none() => {
+                let t = trail(&d.rgba, &e.rgba, &self.past);
+                self.past.push_front(e.rgba.clone());
+                self.past.truncate(TRAIL_FRAMES);
+                t
+            }
+            _ => None,
+        };
+        self.rows.push(FrameRow {
+            frame: f + 1,
+            trail_frames,
+            plain_rmse: e.as_ref().map(|e| rmse_rgb(&p, e)),
+            denoised_rmse: e.as_ref().map(|e| rmse_rgb(&d, e)),
+            plain_ms: p.timings.gpu_ms.total(),
+            denoised_ms: d.timings.gpu_ms.total(),
+            denoised_lighting_ms: d.timings.gpu_ms.get(Stage::Lighting),
+            denoise_ms: d.timings.gpu_ms.get(Stage::Denoise),
+            exact_ms: e.as_ref().and_then(|e| e.timings.gpu_ms.total()),
+        });
+        Ok(())
+    }
+
+    fn record(self) -> Record {
+        let rows = self.rows;
         let med = |v: Vec<f64>| (!v.is_empty()).then(|| median(&v));
         let plain_median_ms = med(rows.iter().filter_map(|r| r.plain_ms).collect());
         let denoised_median_ms = med(rows.iter().filter_map(|r| r.denoised_ms).collect());
-        records.push(Record {
-            lights: n,
+        Record {
+            lights: self.lights,
             plain_mean_rmse: mean(rows.iter().filter_map(|r| r.plain_rmse)),
             denoised_mean_rmse: mean(rows.iter().filter_map(|r| r.denoised_rmse)),
             cost_ratio: crate::harness::ratio(denoised_median_ms, plain_median_ms),
@@ -424,8 +444,46 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
             plain_median_ms,
             denoised_median_ms,
             frames: rows,
-        });
+        }
     }
+}
+
+/// Runs `manyshadows bench denoise`.
+pub fn denoise(args: &DenoiseArgs) -> Result<()> {
+    check_counts("--lights", &args.lights, builtin::MAX_LIGHTS, "")?;
+    check_scene("--scene", &args.scene)?;
+    if args.frames == 0 {
+        bail!("--frames must be at least 1");
+    }
+    if !args.orbit.is_finite() {
+        bail!("--orbit must be a finite number of degrees");
+    }
+    let reference = args.reference == "on";
+    let path = crate::args::read_camera_path(args.camera_path.as_deref())?;
+    let h = Harness::start_unscheduled(&args.output)?;
+    let per_frame = if reference { 3 } else { 2 };
+    h.plan(args.lights.len() as u64 * u64::from(args.frames) * per_frame);
+    // Every light count's renderers first, then the frames in turn across them (frame 1 of
+    // each count, frame 2 of each, ...), so that a drift of the machine's speed during the run
+    // weighs on every count alike and the growth between counts is a same-run ratio.
+    let mut sequences = Vec::new();
+    for &n in &args.lights {
+        h.message(format!("{}, {n} lights: building", args.scene));
+        sequences.push(Sequence::new(&h, args, n, reference)?);
+    }
+    for f in 0..args.frames {
+        for q in sequences.iter_mut() {
+            h.message(format!(
+                "{}, {} lights: frame {}/{}",
+                args.scene,
+                q.lights,
+                f + 1,
+                args.frames
+            ));
+            q.frame(&h, args, path.as_deref(), f)?;
+        }
+    }
+    let records: Vec<Record> = sequences.into_iter().map(Sequence::record).collect();
     let table = table(args, &h.adapter, &records);
     type Pick = fn(&FrameRow) -> Option<f64>;
     let per_frame = |picks: &[(&str, Pick)]| {
@@ -548,8 +606,21 @@ fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
     }
     if let (Some(a), Some(b)) = (records.first(), records.last()) {
         if records.len() > 1 {
+            // The frames of the counts alternate, so frame k of each saw the machine alike:
+            // the median of the frame-by-frame ratios is the steadier figure.
+            type Pick = fn(&FrameRow) -> Option<f64>;
+            let paired = |pick: Pick| {
+                let v: Vec<f64> = a
+                    .frames
+                    .iter()
+                    .zip(&b.frames)
+                    .filter_map(|(x, y)| crate::harness::ratio(pick(y), pick(x)))
+                    .collect();
+                (!v.is_empty()).then(|| median(&v))
+            };
             t += &format!(
-                "growth from {} to {} lights: plain {}x, denoised {}x (median frames)\n",
+                "growth from {} to {} lights: plain {}x, denoised {}x (median frames); frame by \
+                 frame plain {}x, denoised {}x (median of each frame's ratio)\n",
                 a.lights,
                 b.lights,
                 opt(crate::harness::ratio(b.plain_median_ms, a.plain_median_ms)),
@@ -557,6 +628,28 @@ fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
                     b.denoised_median_ms,
                     a.denoised_median_ms
                 )),
+                opt(paired(|x| x.plain_ms)),
+                opt(paired(|x| x.denoised_ms)),
+            );
+            // What the denoiser (and reuse, with --reuse) adds to the plain frame: the same
+            // frame's difference, whose growth is the denoiser's own.
+            let added = |r: &Record| {
+                let v: Vec<f64> = r
+                    .frames
+                    .iter()
+                    .filter_map(|x| Some(x.denoised_ms? - x.plain_ms?))
+                    .collect();
+                (!v.is_empty()).then(|| median(&v))
+            };
+            t += &format!(
+                "what the denoiser{} adds to the plain frame (median of each frame's \
+                 difference): {} ms at {} lights, {} ms at {} ({}x)\n",
+                if args.reuse { " and reuse" } else { "" },
+                ms(added(a)),
+                a.lights,
+                ms(added(b)),
+                b.lights,
+                opt(crate::harness::ratio(added(b), added(a))),
             );
         }
     }

@@ -399,8 +399,8 @@ fn print_clusters(s: &serde_json::Value) {
     }
     let overflow = c["overflowed"].as_u64().unwrap_or(0);
     println!(
-        "clusters     {}x{}x{} grid, {} occupied, lights per cluster {:.1} mean / {} max, {} of {} lights in view{}",
-        c["tiles"][0], c["tiles"][1], c["slices"], c["occupied"],
+        "clusters     {}x{}x{} grid ({} px tiles), {} occupied, lights per cluster {:.1} mean / {} max, {} of {} lights in view{}",
+        c["tiles"][0], c["tiles"][1], c["slices"], c["tile"], c["occupied"],
         c["mean_lights"].as_f64().unwrap_or(0.0), c["max_lights"], c["lights_in_view"], s["lights"]["total"],
         if overflow > 0 {
             format!("; {overflow} clusters overflowed the {} KiB list pool and looped over every light", c["pool_bytes"].as_u64().unwrap_or(0) / 1024)

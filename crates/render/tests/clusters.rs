@@ -63,6 +63,9 @@ fn clustered_image_equals_the_loop_over_every_light() {
         let stats = clustered.clusters.expect("cluster stats");
         eprintln!("{name}, {n} lights: {stats:?}");
         assert_eq!(stats.overflowed, 0);
+        // The default tile at this size (every cluster of the 16-pixel grid has a slot).
+        assert_eq!(stats.tile, 16);
+        assert_eq!(stats.tiles, [20, 12]);
         assert!(stats.occupied > 0 && stats.lights_in_view > 0);
         // The point of clustering: a cluster sees a small part of the lights.
         assert!(

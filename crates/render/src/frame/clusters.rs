@@ -52,8 +52,18 @@ use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu::types::ClusterUniforms;
 
-/// Default tile side in pixels.
+/// Tile side in pixels where every cluster of the grid has a slot in the pool at
+/// [`SMALL_TILE`] no more (large frames with many lights).
 pub const DEFAULT_TILE: u32 = 32;
+/// Tile side in pixels by default where the pool holds a slot for every cluster of that grid
+/// ([`ClusterOptions::tile_for`]). Smaller tiles cut the lights a pixel visits that do not
+/// reach it: the atrium at 640 × 360, 24 slices, `bench denoise --lights 1024,16384
+/// --reference off --still --orbit 0 --frames 16`, three runs each way alternating (lavapipe):
+/// the denoised frame 330–335 / 387–389 ms at 1,024 / 16,384 lights against 336–368 / 443–477
+/// with 32-pixel tiles, its growth 1.15–1.17× (frame by frame) against 1.25–1.30×; 32 lights at
+/// 1280 × 720 (the default frame) neither gain nor lose beyond the runs' spread (lights per
+/// cluster 5.7 → 5.2, the clusters pass 12–13 → 14–15 ms).
+pub const SMALL_TILE: u32 = 16;
 /// Default number of depth slices.
 pub const DEFAULT_SLICES: u32 = 24;
 /// Default budget of the slot pool (further capped by the adapter's storage-binding limit).
@@ -98,8 +108,9 @@ impl std::str::FromStr for LightLoop {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[non_exhaustive]
 pub struct ClusterOptions {
-    /// Tile side in pixels (at least 1).
-    pub tile: u32,
+    /// Tile side in pixels (at least 1); `None` = chosen for the frame and lights
+    /// ([`ClusterOptions::tile_for`]).
+    pub tile: Option<u32>,
     /// Depth slices (1..=256).
     pub slices: u32,
     /// Budget of the slot pool in bytes (capped by the adapter's storage-binding limit);
@@ -111,11 +122,11 @@ impl ClusterOptions {
     /// Checks every value that has a range of its own ([`RenderError::InvalidOption`] names
     /// the first one out of range, as `RenderSettings` names the field).
     pub fn validate(&self) -> Result<(), RenderError> {
-        if self.tile == 0 {
+        if self.tile == Some(0) {
             return Err(RenderError::invalid_option(
                 "clusters.tile",
-                self.tile,
-                "at least 1 pixel",
+                0,
+                "at least 1 pixel, or None to choose by the frame and lights",
             ));
         }
         if !(1..=256).contains(&self.slices) {
@@ -134,12 +145,39 @@ impl ClusterOptions {
         }
         Ok(())
     }
+
+    /// The tile side a `width` × `height` frame (of `eyes` side-by-side eyes) with `lights`
+    /// lights gets: the one set, else [`SMALL_TILE`] where a pool of `pool_limit` bytes (the
+    /// budget, capped by the device) holds a slot for every cluster of that grid, so no
+    /// cluster can overflow that the default tile's grid would not, else [`DEFAULT_TILE`].
+    pub fn tile_for(
+        &self,
+        (width, height): (u32, u32),
+        eyes: u32,
+        lights: usize,
+        pool_limit: u64,
+    ) -> u32 {
+        if let Some(tile) = self.tile {
+            return tile;
+        }
+        let eyes = eyes.max(1);
+        let eye_width = (width / eyes).max(1);
+        let clusters = u64::from(eyes * eye_width.div_ceil(SMALL_TILE))
+            * u64::from(height.div_ceil(SMALL_TILE))
+            * u64::from(self.slices);
+        let (summary, words) = slot_words(lights);
+        if clusters * u64::from(summary + words) * 4 <= pool_limit {
+            SMALL_TILE
+        } else {
+            DEFAULT_TILE
+        }
+    }
 }
 
 impl Default for ClusterOptions {
     fn default() -> Self {
         Self {
-            tile: DEFAULT_TILE,
+            tile: None,
             slices: DEFAULT_SLICES,
             pool_bytes: None,
         }
@@ -152,6 +190,8 @@ impl Default for ClusterOptions {
 pub struct ClusterStats {
     /// Tiles across and down.
     pub tiles: [u32; 2],
+    /// Tile side in pixels.
+    pub tile: u32,
     /// Depth slices.
     pub slices: u32,
     /// Clusters in the grid.
@@ -220,17 +260,15 @@ impl LightClusters {
         stereo: Option<Stereo>,
     ) -> Result<Self, RenderError> {
         // The grid's ranges are checked by `RenderSettings::validate`.
-        debug_assert!(options.tile > 0 && (1..=256).contains(&options.slices));
+        debug_assert!(options.tile != Some(0) && (1..=256).contains(&options.slices));
         let device = &ctx.device;
         let limit = ctx.limits().max_storage_buffer_binding_size;
         let pool_limit = options.pool_bytes.unwrap_or(DEFAULT_POOL_BYTES).min(limit);
         // With two eyes each half has its own tile columns (a tile never straddles the eyes).
         let eyes = if stereo.is_some() { 2 } else { 1 };
+        let tile = options.tile_for((width, height), eyes, lights, pool_limit);
         let eye_width = (width / eyes).max(1);
-        let tiles = [
-            eyes * eye_width.div_ceil(options.tile),
-            height.div_ceil(options.tile),
-        ];
+        let tiles = [eyes * eye_width.div_ceil(tile), height.div_ceil(tile)];
         let clusters = tiles[0] as u64 * tiles[1] as u64 * options.slices as u64;
         // Per cluster its slot, then the depths its samples span (clusters.wgsl).
         let slot_bytes = clusters * 12;
@@ -314,7 +352,7 @@ impl LightClusters {
             assign: pipeline("cs_assign"),
             stats: pipeline("cs_stats"),
             data: ClusterUniforms {
-                grid: [tiles[0], tiles[1], options.slices, options.tile],
+                grid: [tiles[0], tiles[1], options.slices, tile],
                 counts: [0, 0, clusters as u32, eyes],
                 ..Default::default()
             },
@@ -521,6 +559,7 @@ impl LightClusters {
         let d = &self.data;
         let mut stats = ClusterStats {
             tiles: [d.grid[0], d.grid[1]],
+            tile: d.grid[3],
             slices: d.grid[2],
             clusters: d.counts[2],
             capacity: d.counts[0],
@@ -559,10 +598,41 @@ mod tests {
         assert_eq!(slot_words(1025), (2, 33));
         assert_eq!(slot_words(16384), (16, 512));
     }
+
+    #[test]
+    fn the_small_tile_only_where_every_cluster_has_a_slot() {
+        let auto = ClusterOptions::default();
+        let pool = DEFAULT_POOL_BYTES;
+        // 640 x 360, 24 slices: 40 x 23 x 24 = 22,080 clusters; at 16,384 lights a slot is
+        // 528 words, 46.6 MB in all.
+        assert_eq!(auto.tile_for((640, 360), 1, 16384, pool), SMALL_TILE);
+        // 1280 x 720: 86,400 clusters, 182 MB at 16,384 lights; 11.4 MB at 1,024.
+        assert_eq!(auto.tile_for((1280, 720), 1, 16384, pool), DEFAULT_TILE);
+        assert_eq!(auto.tile_for((1280, 720), 1, 1024, pool), SMALL_TILE);
+        // Exactly full fits; a byte less does not.
+        let need = 22_080 * 528 * 4;
+        assert_eq!(auto.tile_for((640, 360), 1, 16384, need), SMALL_TILE);
+        assert_eq!(auto.tile_for((640, 360), 1, 16384, need - 1), DEFAULT_TILE);
+        // Two eyes: each half its own columns (2 x 20 x 23 x 24).
+        assert_eq!(
+            auto.tile_for((640, 360), 2, 16384, 22_080 * 528 * 4),
+            SMALL_TILE
+        );
+        // A tile set is kept whatever the pool.
+        assert_eq!(auto.with_tile(8).tile_for((1280, 720), 1, 16384, 16), 8);
+    }
+}
+
+impl ClusterOptions {
+    /// Sets [`ClusterOptions::tile`] to `tile` pixels.
+    #[must_use]
+    pub fn with_tile(mut self, tile: u32) -> Self {
+        self.tile = Some(tile);
+        self
+    }
 }
 
 with_setters!(ClusterOptions {
-    with_tile: tile: u32,
     with_slices: slices: u32,
     with_pool_bytes: pool_bytes: Option<u64>,
 });

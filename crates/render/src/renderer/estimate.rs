@@ -433,6 +433,16 @@ fn sight(scene: &Scene, s: &RenderSettings, clusters: &ClusterOptions) -> Sight 
     let slices = clusters.slices.max(1) as f32;
     let slice_growth = ((cam.far / cam.near.max(1e-6)).max(1.0).ln() / slices).exp() - 1.0;
     let pixel_at_1 = 2.0 * tan_y / height.max(1) as f32;
+    // The tile the renderer will choose (the pool at its budget: the device's cap is not
+    // known here).
+    let tile = clusters.tile_for(
+        (width, height),
+        eye_count,
+        scene.lights.len(),
+        clusters
+            .pool_bytes
+            .unwrap_or(crate::frame::clusters::DEFAULT_POOL_BYTES),
+    );
     let offset = geometry.diag * 1e-5;
     let (cols, rows) = GRID;
     let (mut in_reach, mut in_cluster) = (0u64, 0u64);
@@ -452,7 +462,7 @@ fn sight(scene: &Scene, s: &RenderSettings, clusters: &ClusterOptions) -> Sight 
             };
             let p = origin + dir * t;
             let z = (p - origin).dot(forward).max(cam.near);
-            let side = clusters.tile as f32 * pixel_at_1 * z;
+            let side = tile as f32 * pixel_at_1 * z;
             let cluster_radius = 0.5 * (2.0 * side * side + (z * slice_growth).powi(2)).sqrt();
             near.clear();
             for (k, r) in reach.iter().enumerate() {
