@@ -723,14 +723,35 @@ fn bench_denoise_scores_each_frame_of_a_sequence() {
         r,
     );
     assert!(dir.join("frames.png").exists());
-    let (_, json) = bench_ok(
+    // Two light counts, their frames alternating: each keeps its own sequence, and the
+    // growth between them is given both ways with what the denoiser adds.
+    let (off_dir, json) = bench_ok(
         "denoise",
-        "--scene cubes --lights 8 --frames 2 --width 64 --height 48 --reference off",
+        "--scene cubes --lights 8,16 --frames 2 --width 64 --height 48 --reference off",
     );
-    let f = &records(&json)[0]["frames"][0];
+    let rows = records(&json);
+    assert_eq!(rows.len(), 2, "{json}");
+    for (r, n) in rows.iter().zip([8, 16]) {
+        assert_eq!(r["lights"].as_u64(), Some(n), "{r}");
+        let frames: Vec<u64> = r["frames"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| f["frame"].as_u64().unwrap())
+            .collect();
+        assert_eq!(frames, [1, 2], "{r}");
+    }
+    let f = &rows[0]["frames"][0];
     assert!(
         f["plain_rmse"].is_null() && f["denoised_ms"].is_number(),
         "{f}"
+    );
+    let text = std::fs::read_to_string(off_dir.join("results.txt")).unwrap();
+    assert!(
+        text.contains("growth from 8 to 16 lights")
+            && text.contains("frame by frame")
+            && text.contains("what the denoiser adds"),
+        "{text}"
     );
     // A still camera and a moving caster: the bench picks a caster whose move shows, says
     // which, and measures how far the denoised shadow trails (issue 39: at most 2 frames).
