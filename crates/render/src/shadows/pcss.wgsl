@@ -12,7 +12,6 @@
 // `soft_coarser(c, k)` gives the coordinate `k` times halved in resolution where it can.
 // Needs `frame: FrameUniforms` (`soft`: taps and the largest radius) and `ShadowCoord`.
 
-const GOLDEN_ANGLE: f32 = 2.3999632;
 
 // Distance from the light of a depth of the view (`lin`: near, far, texel size, projection):
 // along the view's axis for a perspective view, from the view's origin plane for an
@@ -49,11 +48,21 @@ fn soft_radius(size: f32, d_b: f32, d_r: f32, lin: vec4<f32>) -> f32 {
     return size * max(1.0 / max(d_b, 1e-6) - 1.0 / max(d_r, 1e-6), 0.0) / lin.z;
 }
 
-// Tap `i` of `n` on the unit Vogel disc, turned by `rot` radians.
-fn vogel(i: u32, n: u32, rot: f32) -> vec2<f32> {
-    let r = sqrt((f32(i) + 0.5) / f32(n));
-    let a = f32(i) * GOLDEN_ANGLE + rot;
-    return r * vec2<f32>(cos(a), sin(a));
+// Tap `i` of `n` on the unit Vogel disc whose direction is `dir` (the first tap's, turned by
+// the golden angle once per tap: see `vogel_next`).
+fn vogel(i: u32, n: u32, dir: vec2<f32>) -> vec2<f32> {
+    return sqrt((f32(i) + 0.5) / f32(n)) * dir;
+}
+
+// cos and sin of GOLDEN_ANGLE, and of 1 radian (the filter's taps turned from the search's).
+const GOLDEN_TURN: vec2<f32> = vec2<f32>(-0.73736886, 0.67549032);
+const ONE_RADIAN_TURN: vec2<f32> = vec2<f32>(0.54030231, 0.84147098);
+
+// `dir` turned by the angle whose cosine and sine are `turn`: the next tap's direction by a
+// complex product, where a cos and a sin a tap cost a software rasterizer more than the tap's
+// own read.
+fn vogel_next(dir: vec2<f32>, turn: vec2<f32>) -> vec2<f32> {
+    return vec2<f32>(dir.x * turn.x - dir.y * turn.y, dir.x * turn.y + dir.y * turn.x);
 }
 
 // The depth a tap `off` texels from the receiver compares against: the receiver's tangent
@@ -74,8 +83,11 @@ fn soft_shadow(size: f32, c: ShadowCoord, rot: f32) -> f32 {
     let nb = u32(frame.soft.x);
     var sum = 0.0;
     var blockers = 0.0;
+    let first = vec2<f32>(cos(rot), sin(rot));
+    var dir = first;
     for (var i = 0u; i < nb; i = i + 1u) {
-        let off = vogel(i, nb, rot) * search;
+        let off = vogel(i, nb, dir) * search;
+        dir = vogel_next(dir, GOLDEN_TURN);
         let t = floor(c.soft.xy + off) + vec2<f32>(0.5);
         let z = soft_tap_depth(c, t);
         if (z < soft_reference(c, d_r, t - c.soft.xy)) {
@@ -97,8 +109,10 @@ fn soft_shadow(size: f32, c: ShadowCoord, rot: f32) -> f32 {
     radius = clamp(radius, 0.5, max_r);
     let nf = u32(frame.soft.y);
     var lit = 0.0;
+    dir = vogel_next(first, ONE_RADIAN_TURN);
     for (var i = 0u; i < nf; i = i + 1u) {
-        let off = vogel(i, nf, rot + 1.0) * radius;
+        let off = vogel(i, nf, dir) * radius;
+        dir = vogel_next(dir, GOLDEN_TURN);
         lit = lit + soft_tap_compare(f, f.soft.xy + off, soft_reference(f, d_r, off));
     }
     return lit / f32(nf);
