@@ -139,6 +139,9 @@ struct Record {
     denoised_median_ms: Option<f64>,
     /// Denoised frame over plain frame, medians of the same sequence.
     cost_ratio: Option<f64>,
+    /// The median of each frame's denoised over plain (the two alternate, so each pair saw
+    /// the machine alike).
+    cost_ratio_paired: Option<f64>,
     /// Median of the denoiser's own passes and composite.
     denoise_median_ms: Option<f64>,
     /// Mean of the frames' trails (still camera, moving caster).
@@ -439,6 +442,10 @@ impl Sequence {
             plain_mean_rmse: mean(rows.iter().filter_map(|r| r.plain_rmse)),
             denoised_mean_rmse: mean(rows.iter().filter_map(|r| r.denoised_rmse)),
             cost_ratio: crate::harness::ratio(denoised_median_ms, plain_median_ms),
+            cost_ratio_paired: med(rows
+                .iter()
+                .filter_map(|r| crate::harness::ratio(r.denoised_ms, r.plain_ms))
+                .collect()),
             denoise_median_ms: med(rows.iter().filter_map(|r| r.denoise_ms).collect()),
             mean_trail_frames: mean(rows.iter().filter_map(|r| r.trail_frames.map(f64::from))),
             plain_median_ms,
@@ -574,12 +581,12 @@ fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
             ),
         }
     );
-    t += "lights | RMSE plain: mean first last | denoised: mean first last | GPU ms plain denoised (its passes) | ratio\n";
+    t += "lights | RMSE plain: mean first last | denoised: mean first last | GPU ms plain denoised (its passes) | ratio paired\n";
     for r in records {
         let first = r.frames.first();
         let last = r.frames.last();
         t += &format!(
-            "{:>6} | {:>16} {:>5} {:>5} | {:>14} {:>5} {:>5} | {:>14} {:>8} ({:>6}) | {:>5}\n",
+            "{:>6} | {:>16} {:>5} {:>5} | {:>14} {:>5} {:>5} | {:>14} {:>8} ({:>6}) | {:>5} {:>6}\n",
             r.lights,
             opt(r.plain_mean_rmse),
             opt(first.and_then(|x| x.plain_rmse)),
@@ -591,6 +598,7 @@ fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
             ms(r.denoised_median_ms),
             ms(r.denoise_median_ms),
             opt(r.cost_ratio),
+            opt(r.cost_ratio_paired),
         );
     }
     for r in records {
@@ -656,7 +664,8 @@ fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
     t += &format!(
         "   RMSE: sRGB channels 0-255 against every cluster light traced in the same frame \
          ({0}x{0} rays over each sized light); GPU ms: median over the frames of each \
-         renderer's frame (the denoised one includes its passes).\n",
+         renderer's frame (the denoised one includes its passes); ratio: denoised over plain, of \
+         the medians and (paired) the median of each frame's.\n",
         args.reference_area_samples
     );
     t

@@ -722,6 +722,19 @@ fn bench_denoise_scores_each_frame_of_a_sequence() {
         &r["plain_median_ms"],
         r,
     );
+    // The paired ratio is the median of the frames' own ratios: within their range.
+    let own: Vec<f64> = frames
+        .iter()
+        .map(|f| f["denoised_ms"].as_f64().unwrap() / f["plain_ms"].as_f64().unwrap())
+        .collect();
+    let paired = r["cost_ratio_paired"].as_f64().expect("paired ratio");
+    let (lo, hi) = own
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+    assert!(
+        lo - 1e-9 <= paired && paired <= hi + 1e-9,
+        "{paired} outside {own:?}"
+    );
     assert!(dir.join("frames.png").exists());
     // Two light counts, their frames alternating: each keeps its own sequence, and the
     // growth between them is given both ways with what the denoiser adds.
