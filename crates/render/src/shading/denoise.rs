@@ -57,9 +57,10 @@
 //! an unbiased estimate of the sum over the old lights, whatever distribution sampled it —
 //! and cuts the history's frame count to its share of samples of the lights that stay (the
 //! samples that fell on a light that went are lost to the mean). Cubes, a sun of 48 lights
-//! switched off after 16 frames, four frames after: error **1.04**, where a denoiser started
-//! without the sun has 1.98 and, after 16 frames, 0.89 (1.17×); the correction without the
-//! frame count cut 1.10; without any correction 1.77. Not kept: extra samples in the frame
+//! switched off after 16 frames, four frames after: error **1.05**, where a denoiser started
+//! without the sun has 1.73 and, after 16 frames, 0.90 (1.17×; with the à-trous's 3 × 3 taps
+//! before: 1.04, 1.98, 0.89); the correction without the frame count cut 1.10; without any
+//! correction 1.77 (figures of the 3 × 3 taps from here on). Not kept: extra samples in the frame
 //! of the change (1.06), restarting the history where a light that went was in penumbra
 //! (1.04), the frame count cut by the share squared (1.05). Against an 8 × 8 exact image
 //! the frame reaches the fresh denoiser's 16-frame error about 12 frames after the switch;
@@ -68,11 +69,13 @@
 //!
 //! More records at once (a new scene's lights) fall back: in the frame of the change each
 //! pixel's history counts as many frames as the share of its unshadowed light that this
-//! frame's exact unshadowed light keeps, squared (a pixel the change did not reach keeps its
+//! frame's exact unshadowed light keeps, cubed (a pixel the change did not reach keeps its
 //! history whole). Cubes, twelve lights switched off at once, four frames after: eleven local
-//! lights and the sun 1.98 against a fresh denoiser's 2.14 (the share unsquared 2.18, keeping
-//! the history 2.42); twelve local lights 1.05 against 2.23 (unsquared 1.05, keeping it
-//! 1.07); the sun alone through this rule 1.77. The rule before it, each frame weighing at
+//! lights and the sun 1.79 against a fresh denoiser's 1.87 (the share squared 1.90, to the
+//! first power 2.18, keeping the history 2.43; to the fourth 1.78). With the à-trous's 3 × 3
+//! taps before its five on the cross the fresh denoiser read 2.14 and the squared share 1.98;
+//! then twelve local lights 1.05 against 2.23 (unsquared 1.05, keeping it 1.07) and the sun
+//! alone through this rule 1.77. The rule before it, each frame weighing at
 //! least 0.2 for four frames: twelve local lights 1.46, the sun alone 1.78 (0.5 or 0.34,
 //! with the filter's tolerance widened to match, 2.87 and 2.51 for the sun). A moving
 //! caster's old shadows stay in the ratio where the surface did not move: detecting that
@@ -117,11 +120,17 @@ pub fn light_fixes(
     Some((gone, came))
 }
 
-/// À-trous passes (steps 1, 2, 4, 8 pixels: a 31-pixel footprint). Of 3 × 3 taps each:
-/// measured on the atrium (1,024 lights, 640 × 360, K = 1, still, before the samples were
-/// stratified), 5 × 5 taps gave 7.80 on the first frame and 4.21 after 8 for 157 ms of
-/// denoising, 3 × 3 gives 7.61 and 4.04 for 66 ms; 2 passes of 3 × 3: 11.9 and 5.4, 6
-/// passes: 9.3 and 4.9 (more blur than noise removed).
+/// À-trous passes (steps 1, 2, 4, 8 pixels: a 31-pixel footprint). Of five taps each, the
+/// pixel and its four neighbours along the axes (the 3-tap B-spline on the cross: the
+/// diagonals come from the passes' composition): measured on the atrium (1,024 lights,
+/// 640 × 360, K = 1, stratified samples), against the 3 × 3 taps before, first frame / after 8
+/// still frames 6.86 / 2.81 against 6.98 / 2.86, 32 still frames mean 2.63 (2.64), the
+/// 60-frame moving sequence mean 4.68 (4.68), the circling caster's 2.73 (2.75) and trail
+/// 0.33 (0.33); the denoiser's passes about 54–56 ms instead of 70–74 (arms weighted as the
+/// centre: 6.81 / 2.83; at half the B-spline's: 8.89 / 3.21). Earlier, before the samples
+/// were stratified: 5 × 5 taps gave 7.80 and 4.21 for 157 ms of denoising, 3 × 3 7.61 and
+/// 4.04 for 66 ms; 2 passes of 3 × 3: 11.9 and 5.4, 6 passes: 9.3 and 4.9 (more blur than
+/// noise removed).
 pub const ATROUS_STEPS: u32 = 4;
 
 const _: () = assert!(

@@ -148,11 +148,12 @@ fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
                 // The lights changed more than the lighting pass corrects for: the history
                 // counts as many frames as the share of its unshadowed light (the mean of
                 // estimates whose luminance is the exact sum each frame) that this frame's
-                // exact unshadowed light keeps.
+                // exact unshadowed light keeps, cubed (measured: denoise.rs, "When lights
+                // change").
                 let now = dot(px_in[4u * i].rgb, LUMA);
                 let was = dot(h1.rgb, LUMA);
                 let stays = clamp(1.0 - abs(now - was) / max(max(now, was), 1e-30), 0.0, 1.0);
-                h0.w = max(floor(h0.w * stays * stays), 1.0);
+                h0.w = max(floor(h0.w * stays * stays * stays), 1.0);
             }
             frames = min(round(h0.w) + 1.0, f32(p.size.w));
             let a = 1.0 / frames;
@@ -201,45 +202,49 @@ fn atrous(@builtin(global_invocation_id) gid: vec3<u32>) {
     // few rays all came out alike has an estimated variance of 0, and would never average
     // with its neighbours), and wide while the history is short.
     let frames = max(c1.w, 1.0);
-    // The 3-tap B-spline (1/4, 1/2, 1/4) per axis: 3 × 3 taps (denoise.rs: as good as 5 × 5
-    // here at 40 % of the cost).
-    var kernel = array<f32, 2>(0.5, 0.25);
+    // The plane distance that weighs a tap 1/e.
+    let reach = 1.0 / (footprint * f32(step) + 1e-6);
     var sum_s = vec3<f32>(0.0);
     var sum_u = vec3<f32>(0.0);
     var vsum = 0.0;
     var wsum = 0.0;
-    for (var dy = -1; dy <= 1; dy = dy + 1) {
-        for (var dx = -1; dx <= 1; dx = dx + 1) {
-            let q = vec2<i32>(gid.xy) + vec2<i32>(dx, dy) * step;
-            if (q.x < 0 || q.y < 0 || q.x >= i32(w) || q.y >= i32(h)) {
-                continue;
-            }
-            let qs = surface_at(vec2<u32>(q));
-            if (qs.w == 0.0) {
-                continue;
-            }
-            let j = u32(q.y) * w + u32(q.x);
-            let q0 = ratio_in[2u * j];
-            let q1 = ratio_in[2u * j + 1u];
-            // cos³² by five squarings (pow is an exp and a log).
-            var wn = max(dot(n, normal_at(vec2<u32>(q))), 0.0);
-            wn = wn * wn;
-            wn = wn * wn;
-            wn = wn * wn;
-            wn = wn * wn;
-            wn = wn * wn;
-            let wp = exp(-abs(dot(n, qs.xyz - pos)) / (footprint * f32(step) + 1e-6));
-            let rq = ratio_of(q0.rgb, q1.rgb);
-            let rm = clamp(0.5 * (r + rq), 0.0, 1.0);
-            let variance = max(0.5 * (c0.w + q0.w), rm * (1.0 - rm));
-            let tol = max((p.pixel.y * sqrt(variance) + 0.5) / frames, 1e-3);
-            let wr = exp(-abs(rq - r) / tol);
-            let wt = kernel[abs(dx)] * kernel[abs(dy)] * wn * wp * wr;
-            sum_s = sum_s + wt * q0.rgb;
-            sum_u = sum_u + wt * q1.rgb;
-            vsum = vsum + wt * wt * q0.w;
-            wsum = wsum + wt;
+    // Five taps: the pixel and its four neighbours `step` pixels along the axes (the
+    // diagonals left out: denoise.rs, ATROUS_STEPS).
+    for (var k = 0; k < 5; k = k + 1) {
+        let dx = select(0, 2 * (k & 1) - 1, k > 0 && k < 3);
+        let dy = select(0, 2 * (k & 1) - 1, k >= 3);
+        let q = vec2<i32>(gid.xy) + vec2<i32>(dx, dy) * step;
+        if (q.x < 0 || q.y < 0 || q.x >= i32(w) || q.y >= i32(h)) {
+            continue;
         }
+        let qs = surface_at(vec2<u32>(q));
+        if (qs.w == 0.0) {
+            continue;
+        }
+        let j = u32(q.y) * w + u32(q.x);
+        let q0 = ratio_in[2u * j];
+        let q1 = ratio_in[2u * j + 1u];
+        // cos³² by five squarings (pow is an exp and a log).
+        var wn = max(dot(n, normal_at(vec2<u32>(q))), 0.0);
+        wn = wn * wn;
+        wn = wn * wn;
+        wn = wn * wn;
+        wn = wn * wn;
+        wn = wn * wn;
+        let rq = ratio_of(q0.rgb, q1.rgb);
+        let rm = clamp(0.5 * (r + rq), 0.0, 1.0);
+        let variance = max(0.5 * (c0.w + q0.w), rm * (1.0 - rm));
+        let tol = max((p.pixel.y * sqrt(variance) + 0.5) / frames, 1e-3);
+        // The 3-tap B-spline (1/4, 1/2, 1/4) per axis, on the cross; the plane's and the
+        // ratio's weights in one exp (a software rasterizer pays for each exp, and for an
+        // array indexed per tap).
+        let kernel = select(0.25, 0.5, dx == 0) * select(0.25, 0.5, dy == 0);
+        let wpr = exp(-(abs(dot(n, qs.xyz - pos)) * reach + abs(rq - r) / tol));
+        let wt = kernel * wn * wpr;
+        sum_s = sum_s + wt * q0.rgb;
+        sum_u = sum_u + wt * q1.rgb;
+        vsum = vsum + wt * wt * q0.w;
+        wsum = wsum + wt;
     }
     // The centre tap always counts (its weights are all 1 but the kernel's).
     ratio_filtered[2u * i] = vec4<f32>(sum_s / wsum, vsum / (wsum * wsum));
