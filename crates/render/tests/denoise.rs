@@ -138,11 +138,11 @@ fn denoising_without_shadow_rays_is_refused_by_name() {
 /// every frame) and the shadow ratio's history is corrected for it in the frame of the switch
 /// (denoise.rs: the sun's unshadowed light and its visibility, traced once, taken out of the
 /// history's means). Measured (cubes, 48 lights, lavapipe): the exact image changes by 17.0;
-/// the denoised error after the switch 1.17, 1.16, 1.12, 1.05, where a denoiser started
-/// without the sun is at 1.73 after four frames and 0.90 after 16 (1.17x; issue 39 asks
+/// the denoised error after the switch 1.12, 1.12, 1.08, 1.01, where a denoiser started
+/// without the sun is at 1.90 after four frames and 0.87 after 16 (1.16x; issue 39 asks
 /// 1.1x). Without the correction (the fallback for more lights than `MAX_LIGHT_FIXES`, the
-/// history cut by the change of each pixel's unshadowed light): 2.04, 1.90, 1.78, 1.64
-/// (1.82x). With the à-trous's 3 × 3 taps before its five: 1.04 against 1.98 and 0.89;
+/// history cut by the change of each pixel's unshadowed light): 2.11, 1.95, 1.81, 1.66
+/// (1.91x). With the à-trous's 3 × 3 taps before its five: 1.04 against 1.98 and 0.89;
 /// without the correction 1.77 (2.0x; the rule before it, each frame weighing at least 0.2,
 /// 1.78); the correction without the history's frames cut to its samples of the lights that
 /// stay: 1.10 after four (1.25x).
@@ -170,8 +170,8 @@ fn a_light_switched_off_leaves_the_frame_within_four_frames() {
     );
     // Four frames after the switch the history from before it helps rather than hurts: the
     // frame is closer to the exact one than a denoiser that never saw the light, four frames
-    // in (lavapipe: 1.05 against 1.73), and within a quarter of the steady error after 16
-    // frames (1.17x). Without the correction 1.64 (1.82x) fails the second.
+    // in (lavapipe: 1.01 against 1.90), and within a quarter of the steady error after 16
+    // frames (1.16x). Without the correction 1.66 (1.91x) fails the second.
     assert!(
         s.after[3] <= fresh4,
         "four frames after the switch: {} vs {fresh4} for a denoiser started without the light",
@@ -189,8 +189,8 @@ fn a_light_switched_off_leaves_the_frame_within_four_frames() {
 /// twelve lights switched off are 24): each pixel's history is cut by how much of its
 /// unshadowed light the change kept (cubed), and four frames later the frame is no further
 /// from the exact one than a denoiser started without those lights. Measured (cubes, the sun
-/// and eleven local lights off, lavapipe): 2.76, 2.41, 2.04, 1.79 against 1.87; the cut by the
-/// share squared 1.90, to the first power 2.18 and the history kept whole 2.43 fail. (Twelve local lights without the sun:
+/// and eleven local lights off, lavapipe): 2.88, 2.58, 2.24, 1.96 against 2.03; the cut by the
+/// share to the first power 2.17 and the history kept whole 2.42 fail (squared: 1.96). (Twelve local lights without the sun:
 /// 1.05 against 2.23; the rule before, each frame weighing at least 0.2 for four frames,
 /// 1.46.)
 #[test]

@@ -57,10 +57,10 @@
 //! an unbiased estimate of the sum over the old lights, whatever distribution sampled it —
 //! and cuts the history's frame count to its share of samples of the lights that stay (the
 //! samples that fell on a light that went are lost to the mean). Cubes, a sun of 48 lights
-//! switched off after 16 frames, four frames after: error **1.05**, where a denoiser started
-//! without the sun has 1.73 and, after 16 frames, 0.90 (1.17×; with the à-trous's 3 × 3 taps
-//! before: 1.04, 1.98, 0.89); the correction without the frame count cut 1.10; without any
-//! correction 1.77 (figures of the 3 × 3 taps from here on). Not kept: extra samples in the frame
+//! switched off after 16 frames, four frames after: error **1.01**, where a denoiser started
+//! without the sun has 1.90 and, after 16 frames, 0.87 (1.16×; without the correction 1.66,
+//! 1.91×; with the à-trous's 3 × 3 taps before: 1.04, 1.98, 0.89); the correction without the
+//! frame count cut 1.10; without any correction 1.77 (figures of the 3 × 3 taps from here on). Not kept: extra samples in the frame
 //! of the change (1.06), restarting the history where a light that went was in penumbra
 //! (1.04), the frame count cut by the share squared (1.05). Against an 8 × 8 exact image
 //! the frame reaches the fresh denoiser's 16-frame error about 12 frames after the switch;
@@ -71,8 +71,9 @@
 //! pixel's history counts as many frames as the share of its unshadowed light that this
 //! frame's exact unshadowed light keeps, cubed (a pixel the change did not reach keeps its
 //! history whole). Cubes, twelve lights switched off at once, four frames after: eleven local
-//! lights and the sun 1.79 against a fresh denoiser's 1.87 (the share squared 1.90, to the
-//! first power 2.18, keeping the history 2.43; to the fourth 1.78). With the à-trous's 3 × 3
+//! lights and the sun 1.96 against a fresh denoiser's 2.03 (squared the same, to the first
+//! power 2.17, keeping the history 2.42; with `RATIO_SIGMAS` 1: cubed 1.79 against 1.87,
+//! squared 1.90, which missed, to the fourth 1.78). With the à-trous's 3 × 3
 //! taps before its five on the cross the fresh denoiser read 2.14 and the squared share 1.98;
 //! then twelve local lights 1.05 against 2.23 (unsquared 1.05, keeping it 1.07) and the sun
 //! alone through this rule 1.77. The rule before it, each frame weighing at
@@ -123,7 +124,8 @@ pub fn light_fixes(
 /// À-trous passes (steps 1, 2, 4, 8 pixels: a 31-pixel footprint). Of five taps each, the
 /// pixel and its four neighbours along the axes (the 3-tap B-spline on the cross: the
 /// diagonals come from the passes' composition): measured on the atrium (1,024 lights,
-/// 640 × 360, K = 1, stratified samples), against the 3 × 3 taps before, first frame / after 8
+/// 640 × 360, K = 1, stratified samples, `RATIO_SIGMAS` 1), against the 3 × 3 taps before,
+/// first frame / after 8
 /// still frames 6.86 / 2.81 against 6.98 / 2.86, 32 still frames mean 2.63 (2.64), the
 /// 60-frame moving sequence mean 4.68 (4.68), the circling caster's 2.73 (2.75) and trail
 /// 0.33 (0.33); the denoiser's passes about 54–56 ms instead of 70–74 (arms weighted as the
@@ -142,8 +144,11 @@ const _: () = assert!(
 /// (atrium as above, first frame / 8 frames, with independent samples and the tolerance over
 /// √n: 0.5: 8.21 / 4.73, 1.0: 7.61 / 4.04, 1.5: 7.41 / 4.27, 2.5: 7.28 / 4.86; stratified,
 /// over √n: 0.5: 7.35 / 2.92, 1.0: 6.98 / 3.44; over n, 1.0: 6.98 / 2.86, over n^1.5: 4.33
-/// after 8, the noise back).
-const RATIO_SIGMAS: f32 = 1.0;
+/// after 8, the noise back; with the five-tap à-trous, over n: 0.75: 7.05 / 2.91, 1.0: 6.86 /
+/// 2.81, 1.5: 6.68 / 2.77, 2.0: 6.60 / 2.83, 3.0: 6.54 / 3.09; at 1.5 the 32 still frames' mean
+/// 2.63 → 2.57 and last 1.74 → 1.72, the 60-frame moving sequence's mean 4.68 → 4.64, the
+/// circling caster's 2.73 → 2.67, trail 0.33 both).
+const RATIO_SIGMAS: f32 = 1.5;
 
 /// `DenoiseParams` in denoise.wgsl.
 #[repr(C)]
