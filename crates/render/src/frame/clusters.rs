@@ -160,11 +160,8 @@ impl ClusterOptions {
         if let Some(tile) = self.tile {
             return tile;
         }
-        let eyes = eyes.max(1);
-        let eye_width = (width / eyes).max(1);
-        let clusters = u64::from(eyes * eye_width.div_ceil(SMALL_TILE))
-            * u64::from(height.div_ceil(SMALL_TILE))
-            * u64::from(self.slices);
+        let [across, down] = grid_tiles((width, height), eyes, SMALL_TILE);
+        let clusters = u64::from(across) * u64::from(down) * u64::from(self.slices);
         let (summary, words) = slot_words(lights);
         if clusters * u64::from(summary + words) * 4 <= pool_limit {
             SMALL_TILE
@@ -242,6 +239,14 @@ pub struct LightClusters {
     pool_limit: u64,
 }
 
+/// Tiles across and down of a `width` × `height` frame of `eyes` side-by-side eyes at `tile`
+/// pixels a side: each eye has its own columns (a tile never straddles the eyes).
+fn grid_tiles((width, height): (u32, u32), eyes: u32, tile: u32) -> [u32; 2] {
+    let eyes = eyes.max(1);
+    let eye_width = (width / eyes).max(1);
+    [eyes * eye_width.div_ceil(tile), height.div_ceil(tile)]
+}
+
 /// Light words and summary words of a slot for `lights` lights.
 fn slot_words(lights: usize) -> (u32, u32) {
     let words = (lights as u32).div_ceil(32).max(1);
@@ -267,8 +272,7 @@ impl LightClusters {
         // With two eyes each half has its own tile columns (a tile never straddles the eyes).
         let eyes = if stereo.is_some() { 2 } else { 1 };
         let tile = options.tile_for((width, height), eyes, lights, pool_limit);
-        let eye_width = (width / eyes).max(1);
-        let tiles = [eyes * eye_width.div_ceil(tile), height.div_ceil(tile)];
+        let tiles = grid_tiles((width, height), eyes, tile);
         let clusters = tiles[0] as u64 * tiles[1] as u64 * options.slices as u64;
         // Per cluster its slot, then the depths its samples span (clusters.wgsl).
         let slot_bytes = clusters * 12;

@@ -202,7 +202,7 @@ fn atrous(@builtin(global_invocation_id) gid: vec3<u32>) {
     // few rays all came out alike has an estimated variance of 0, and would never average
     // with its neighbours), and wide while the history is short.
     let frames = max(c1.w, 1.0);
-    // The plane distance that weighs a tap 1/e.
+    // One over the distance from the pixel's plane that weighs a tap 1/e.
     let reach = 1.0 / (footprint * f32(step) + 1e-6);
     var sum_s = vec3<f32>(0.0);
     var sum_u = vec3<f32>(0.0);
