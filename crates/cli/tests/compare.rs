@@ -519,12 +519,13 @@ fn soft_class(variant: &Value, class: &str) -> (u64, f64) {
 /// them), and its frame must be closer to the frame shaded with the reference.
 ///
 /// Measured on lavapipe (Vulkan) and llvmpipe (OpenGL), Mesa 25.0.7, 160×90, 8 lights, 4,848
-/// penumbra pairs (4,844 on OpenGL): mean penumbra error 0.132 for every atlas technique
-/// against 0.309 hard, virtual 0.156 against 0.312, raytraced (4 area rays, Vulkan only)
-/// 0.136 against 0.278; image RMSE (8-bit) 4.60 against 6.28 (atlas), 5.27 against 7.08
-/// (virtual), 1.73 against 3.76 (raytraced). Bounds: at most 0.2, and at most 0.7 times the
-/// hard error (measured ratios 0.43 to 0.50); image RMSE below 0.9 times the hard frame's
-/// (measured 0.46 to 0.74). The mutation "PCSS filter off" (the filter radius set to 0 in
+/// penumbra pairs (4,844 on OpenGL): mean penumbra error 0.105 for every atlas technique
+/// against 0.309 hard, virtual 0.089 against 0.296, raytraced (4 area rays, Vulkan only)
+/// 0.136 against 0.278; image RMSE (8-bit) 4.60 against 6.28 (atlas), 4.37 against 5.91
+/// (virtual), 1.73 against 3.76 (raytraced). (Before PCSS's comparisons were capped at the
+/// receiver's depth, pcss.wgsl's `soft_reference`: atlas 0.132, virtual 0.156.) Bounds: at
+/// most 0.2, and at most 0.7 times the hard error (measured ratios 0.30 to 0.49); image RMSE
+/// below 0.9 times the hard frame's (measured 0.46 to 0.74). The mutation "PCSS filter off" (the filter radius set to 0 in
 /// `pcss.wgsl`, the blocker search kept) fails it, as seen by hand: traditional 0.251
 /// against 0.309, a ratio of 0.81. irregular renders every light hard, so both ways give
 /// the same numbers (0.278, as rays at size 0 do); the hard scores never depend on the sizes,

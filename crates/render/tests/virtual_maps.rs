@@ -545,6 +545,84 @@ fn tile_marking_asks_exactly_the_pages_per_pixel_marking_asks() {
     }
 }
 
+/// Sized lights through the tile marking: a tile all of whose samples need one page marks it
+/// once, and with it the pages beside that every sample's soft filter reaches (the corners of
+/// its reach, when each falls in one page for the whole tile). On frames so small that each
+/// page is needed by only a few tiles, so that a page or a bound one tile misses shows in
+/// the page table (on the 320×180 frame of the test above other samples ask for every page
+/// beside: there, a tile marking nothing at all for a sized light changed no entry), every
+/// entry must equal per-pixel marking's. Seen failing: the pages beside not marked by tiles
+/// (a frame's entries differ), nothing marked by a sized light's tile.
+#[test]
+fn sized_lights_tiles_ask_the_pages_their_filters_reach() {
+    let ctx = common::context();
+    // Every light sized (the built-in sizes: 2 % of each range, the sun 0.53°).
+    let scene = builtin::build(
+        "atrium",
+        &BuiltinOptions {
+            lights: Some(40),
+            ..Default::default()
+        },
+    )
+    .expect("atrium");
+    assert!(scene.lights.iter().all(|l| l.size > 0.0));
+    let (mut whole_tiles, mut bounded) = (0, 0);
+    for (width, height) in [(16, 16), (40, 24), (96, 54), (160, 90)] {
+        for max_penumbra in [32.0, 64.0] {
+            let render = |tiles: bool| {
+                let settings = RenderSettings::default()
+                    .with_width(width)
+                    .with_height(height)
+                    .with_technique(Technique::VIRTUAL)
+                    .with_soft(manyshadows::SoftShadows::default().with_max_penumbra(max_penumbra))
+                    .with_virtual_maps(
+                        manyshadows::VirtualOptions::default().with_tile_marking(tiles),
+                    );
+                let mut r = Renderer::new(&ctx, &scene, settings).expect("renderer");
+                let frame = r.render().expect("frame");
+                let table = r.read_page_table().expect("page table");
+                (frame.virtual_maps.expect("stats"), table)
+            };
+            let ((t, t_table), (p, p_table)) = (render(true), render(false));
+            let case = format!("{width}x{height}, penumbrae up to {max_penumbra} texels");
+            eprintln!("{case}: {:?}, {} pages asked", t.tiles, t.asked_total());
+            whole_tiles += t.tiles.one_page;
+            assert_eq!((t.asked, t.needed), (p.asked, p.needed), "{case}");
+            let entries = t.fit.table_entries as usize;
+            assert_eq!(p.fit.table_entries as usize, entries, "{case}");
+            let differing = (0..entries).filter(|&k| t_table[k] != p_table[k]).count();
+            assert_eq!(differing, 0, "{case}: page-table entries that differ");
+            assert_eq!((t.drawn, t.denied), (p.drawn, p.denied), "{case}");
+            // The receiver bounds after the entries (vsm_table.wgsl: each page's farthest
+            // depth key, then its cells): a tile's bound its samples' box, so at least what
+            // the samples themselves ask (keys are positive floats: their bits order them).
+            assert!(
+                t_table.len() >= 3 * entries,
+                "{case}: entries, keys and cells"
+            );
+            let short = (0..entries)
+                .filter(|&k| {
+                    let (tk, pk) = (t_table[entries + k], p_table[entries + k]);
+                    let (tc, pc) = (t_table[2 * entries + k], p_table[2 * entries + k]);
+                    tk < pk || pc & !tc != 0
+                })
+                .count();
+            bounded += (0..entries)
+                .filter(|&k| p_table[2 * entries + k] != 0)
+                .count();
+            assert_eq!(
+                short, 0,
+                "{case}: pages whose tile bounds miss what samples ask"
+            );
+        }
+    }
+    assert!(
+        whole_tiles > 0,
+        "no sized light's tile marked its pages once"
+    );
+    assert!(bounded > 100, "only {bounded} pages bounded");
+}
+
 /// The atrium with 40 hard lights of every type (two mask words per pixel): these tests
 /// check which pages are drawn and what they hold, where sized lights' soft filters would also
 /// read pages beside the asked ones (soft virtual maps: `soft_shadows.rs`).

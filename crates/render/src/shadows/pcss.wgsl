@@ -67,10 +67,17 @@ fn vogel_next(dir: vec2<f32>, turn: vec2<f32>) -> vec2<f32> {
 
 // The depth a tap `off` texels from the receiver compares against: the receiver's tangent
 // plane there, moved one texel towards the light, so the receiver's own surface never
-// shadows its filter.
+// shadows its filter; but never past the receiver's own depth (where the plane falls away
+// from the light, that depth itself: the surface lies beyond it there). Whatever hides part
+// of the light from the receiver lies on a segment from it to a point of the light, and a
+// view's depth along such a segment never passes the receiver's (it is linear along the
+// segment in the world for a perspective or orthographic view, and a distance from the light
+// for a paraboloid; the light's points lie nearer than the receiver). So a caster beyond the
+// receiver is no blocker, and the receiver's own depth bounds every comparison (what lets
+// virtual maps bound a page at its samples' depth).
 fn soft_reference(c: ShadowCoord, d_r: f32, off: vec2<f32>) -> f32 {
     let one = c.depth - soft_depth(max(d_r - soft_texel_world(d_r, c.lin), c.lin.x), c.lin);
-    return c.depth + dot(c.grad, off) - one;
+    return min(c.depth + dot(c.grad, off) - one, c.depth);
 }
 
 // Fraction of a light of size `size` that reaches the receiver at `c` (0 in umbra, 1 lit);

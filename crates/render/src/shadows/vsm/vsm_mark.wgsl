@@ -88,7 +88,7 @@ fn mark_light(i: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
     }
     let e = vsm_entry(face, level, q.uv);
     if (light.diffuse.w > 0.0) {
-        mark_soft(face, level, q, e, soft_key_bound(light, face, level, ray, p, n, q));
+        mark_soft(face, level, q, e);
         return;
     }
     if (vsm.counts.w != 0u) {
@@ -101,12 +101,11 @@ fn mark_light(i: u32, p: vec3<f32>, n: vec3<f32>, view_depth: f32) {
 // A sized light's sample: its soft filter's taps reach up to the largest penumbra (and a
 // texel) from it, so the pages within that reach are asked for too, with bounds over the
 // cells the taps reach (in a page beside the sample's, those along the border it faces) and
-// the depth bound
-// `key` of the receiver's plane extended that far (`soft_key_bound`): taps compare against
-// that plane, which may lie beyond every sample.
-fn mark_soft(face: VirtualFace, level: u32, q: VsmPoint, e: u32, bound: f32) {
+// the sample's own depth key: no tap compares against a depth past the receiver's
+// (pcss.wgsl's `soft_reference`).
+fn mark_soft(face: VirtualFace, level: u32, q: VsmPoint, e: u32) {
     let reach = frame.soft.z + 1.0;
-    let key = bitcast<u32>(max(bound, 0.0));
+    let key = bitcast<u32>(max(q.key, 0.0));
     if (vsm.counts.w != 0u) {
         bound_page(e, key, tap_cells_within(q.uv, level, reach));
     }
@@ -123,30 +122,6 @@ fn mark_soft(face: VirtualFace, level: u32, q: VsmPoint, e: u32, bound: f32) {
             ask_page(face, level, uv, n);
         }
     }
-}
-
-// The farthest distance key a sized light's taps around sample `q` (of `face` at `level`)
-// compare against: the receiver's tangent plane (the lookup's gradient, vsm_lookup.wgsl)
-// extended by the largest penumbra and a texel, its slope doubled for the two computations'
-// rounding; no bound (3.4e38) where that passes the far plane.
-fn soft_key_bound(light: LightData, face: VirtualFace, level: u32, ray: VsmRay, p: vec3<f32>, n: vec3<f32>, q: VsmPoint) -> f32 {
-    let tw = vsm_texel_world(face, level, ray);
-    let t = plane_tangents(n) * tw;
-    let r1 = vsm_ray(light, face, p + t[0], n);
-    let r2 = vsm_ray(light, face, p + t[1], n);
-    let full = f32(1u << level) * f32(vsm.pool.z);
-    let g = plane_gradient(view_uvz(ray.p + tw * ray.d), view_uvz(r1.p + tw * r1.d), view_uvz(r2.p + tw * r2.d)) / full;
-    let depth = q.depth + 2.0 * (abs(g.x) + abs(g.y)) * (frame.soft.z + 1.0);
-    if (depth >= 1.0) {
-        return 3.4e38;
-    }
-    if (face.params.w > 0.5) {
-        // Orthographic: the key is the depth.
-        return max(depth, q.key);
-    }
-    let near = face.params.x;
-    let far = face.params.y;
-    return max(near * far / max(far - depth * (far - near), 1e-20), q.key);
 }
 
 // Widens page `e`'s receiver bounds to depth key `key` and the cells `cells`.

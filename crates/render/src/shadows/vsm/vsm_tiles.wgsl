@@ -11,13 +11,16 @@
 //   every normal facing away);
 // - TILE_ALL: every sample needs the same page of the same level (in reach and facing, one
 //   face, one level over the depth and distance ranges, one page under the projected box):
-//   the page is marked once, with the box's receiver bounds, which hold every sample's;
+//   the page is marked once, with the box's receiver bounds, which hold every sample's (a
+//   sized light: and the pages beside it that every sample's filter reaches, the same for
+//   every sample);
 // - TILE_SOME: as TILE_ALL, but some samples may be out of reach or face away;
 // - TILE_UNSURE: nothing certain.
 // TILE_SOME and TILE_UNSURE lights are handed on to cs_mark_pixels in one job per tile, one
 // thread per pixel: it marks an unsure light exactly as cs_mark does (mark_light), and a
 // TILE_SOME light's known page where the sample passes mark_light's reach and facing tests,
-// with mark_light's receiver bounds. A tile spread over too many clusters, or handing on more
+// with mark_light's receiver bounds (a sized light's: with the pages beside it that the
+// sample's filter reaches, as mark_light marks them). A tile spread over too many clusters, or handing on more
 // than JOB_LIGHTS lights, is handed on whole: cs_mark's loop over its pixels' clusters. So
 // exactly the pages cs_mark asks for are asked.
 //
@@ -101,6 +104,10 @@ struct TilePage {
     entry: u32,
     uv_lo: vec2<f32>,
     uv_hi: vec2<f32>,
+    // A sized light (its filter's reach asks pages beside), and the pages (column, row) its
+    // samples' reach's corners fall in (TILE_ALL: every sample's the same).
+    soft: bool,
+    corners: array<vec2<u32>, 4>,
 }
 
 fn tile_outcome(outcome: u32) -> TilePage {
@@ -309,13 +316,6 @@ fn tile_light(i: u32, t: TileSamples) -> TilePage {
     if (any(last != page)) {
         return tile_outcome(TILE_UNSURE);
     }
-    // A sized light's samples ask for the pages their soft filter reaches, with bounds from
-    // their own planes: per pixel. (Where no sample needs a page, the tests above show it
-    // for them as for any light: their marking starts with the same reach, facing and view
-    // tests.)
-    if (light.diffuse.w > 0.0) {
-        return tile_outcome(TILE_UNSURE);
-    }
     var out = tile_outcome(select(TILE_SOME, TILE_ALL, every));
     out.face = u32(fi);
     out.level = level;
@@ -323,15 +323,42 @@ fn tile_light(i: u32, t: TileSamples) -> TilePage {
     out.entry = vsm_entry(face, level, uv_lo);
     out.uv_lo = uv_lo;
     out.uv_hi = clamp(r.uv_hi, vec2<f32>(0.0), vec2<f32>(1.0));
+    out.soft = light.diffuse.w > 0.0;
+    if (out.soft) {
+        // A sized light's sample also asks the pages of the four corners of the square its
+        // filter's taps reach (vsm_mark.wgsl's mark_soft). The tile marks them once only
+        // where each corner falls in one page for every sample (a page border seldom lies
+        // within the tile's few texels of a corner's path); else each sample marks its own
+        // with the tile's page known.
+        let reach = vec2<f32>((frame.soft.z + 1.0) / (f32(pages) * f32(vsm.pool.z)));
+        for (var k = 0u; k < 4u; k = k + 1u) {
+            let corner = vec2<f32>(f32(k & 1u), f32(k >> 1u)) * 2.0 - vec2<f32>(1.0);
+            let a = soft_corner_page(r.uv_lo + corner * reach, pages);
+            let b = soft_corner_page(r.uv_hi + corner * reach, pages);
+            out.corners[k] = a;
+            if (any(a != b)) {
+                out.outcome = TILE_SOME;
+            }
+        }
+    }
     return out;
 }
 
-// The cells the filter taps of the tile's samples reach in its page.
-fn tile_cells(q: TilePage) -> u32 {
+// The page (column, row) of `pages` per side holding a corner of a sized light's sample's
+// reach: as mark_soft clamps it into the face.
+fn soft_corner_page(uv: vec2<f32>, pages: u32) -> vec2<u32> {
+    let c = clamp(uv, vec2<f32>(0.0), vec2<f32>(1.0 - 1e-6));
+    return min(vec2<u32>(c * f32(pages)), vec2<u32>(pages - 1u));
+}
+
+// The cells the filter taps of the tile's samples reach in its page (`page`: its own or, for
+// a sized light, one beside it that its reach's corners fall in).
+fn tile_cells(q: TilePage, page: vec2<u32>) -> u32 {
     let pages = f32(1u << q.level);
-    let at = vec2<f32>(q.page);
+    let at = vec2<f32>(page);
     let side = f32(vsm.pool.z);
-    return cells_between((q.uv_lo * pages - at) * side, (q.uv_hi * pages - at) * side);
+    let reach = select(TAP_REACH, frame.soft.z + 1.0, q.soft);
+    return cells_reached((q.uv_lo * pages - at) * side, (q.uv_hi * pages - at) * side, reach);
 }
 
 // The farthest depth key of a biased sample in the box of centre `c` and half extent `e` at
@@ -356,13 +383,35 @@ fn box_key(face: VirtualFace, level: u32, c: vec3<f32>, e: vec3<f32>) -> u32 {
 }
 
 // Marks a tile's page every sample of the tile (in the box `lo`..`hi`) needs, with the
-// tile's receiver bounds.
+// tile's receiver bounds; for a sized light also the pages beside it its samples' filters
+// reach.
 fn mark_tile_page(q: TilePage, lo: vec3<f32>, hi: vec3<f32>) {
     let face = vsm_faces[q.face];
+    let key = box_key(face, q.level, 0.5 * (lo + hi), 0.5 * (hi - lo));
     if (vsm.counts.w != 0u) {
-        bound_page(q.entry, box_key(face, q.level, 0.5 * (lo + hi), 0.5 * (hi - lo)), tile_cells(q));
+        bound_page(q.entry, key, tile_cells(q, q.page));
     }
-    ask_page(face, q.level, (vec2<f32>(q.page) + vec2<f32>(0.5)) / f32(1u << q.level), q.entry);
+    let pages = 1u << q.level;
+    ask_page(face, q.level, (vec2<f32>(q.page) + vec2<f32>(0.5)) / f32(pages), q.entry);
+    if (!q.soft) {
+        return;
+    }
+    for (var k = 0u; k < 4u; k = k + 1u) {
+        let c = q.corners[k];
+        var seen = all(c == q.page);
+        for (var j = 0u; j < k; j = j + 1u) {
+            seen = seen || all(c == q.corners[j]);
+        }
+        if (seen) {
+            continue;
+        }
+        let uv = (vec2<f32>(c) + vec2<f32>(0.5)) / f32(pages);
+        let e = vsm_entry(face, q.level, uv);
+        if (vsm.counts.w != 0u) {
+            bound_page(e, key, tile_cells(q, c));
+        }
+        ask_page(face, q.level, uv, e);
+    }
 }
 
 // A tile's account of its lights.
@@ -577,6 +626,11 @@ fn mark_job_light(light: u32, e: u32, fi: u32, p: vec3<f32>, n: vec3<f32>, view_
         return;
     }
     let face = vsm_faces[fi];
+    if (l.diffuse.w > 0.0) {
+        let level = level_of(e - face.table.x);
+        mark_soft(face, level, vsm_project(l, face, vsm_ray(l, face, p, n), level), e);
+        return;
+    }
     if (vsm.counts.w != 0u) {
         let level = level_of(e - face.table.x);
         let q = vsm_project(l, face, vsm_ray(l, face, p, n), level);
