@@ -110,10 +110,8 @@ fn mark_soft(face: VirtualFace, level: u32, q: VsmPoint, e: u32) {
         bound_page(e, key, tap_cells_within(q.uv, level, reach));
     }
     ask_page(face, level, q.uv, e);
-    let r = vec2<f32>(reach / (f32(1u << level) * f32(vsm.pool.z)));
     for (var k = 0u; k < 4u; k = k + 1u) {
-        let corner = vec2<f32>(f32(k & 1u), f32(k >> 1u)) * 2.0 - vec2<f32>(1.0);
-        let uv = clamp(q.uv + corner * r, vec2<f32>(0.0), vec2<f32>(1.0 - 1e-6));
+        let uv = reach_corner(q.uv, level, k);
         let n = vsm_entry(face, level, uv);
         if (n != e) {
             if (vsm.counts.w != 0u) {
@@ -122,6 +120,16 @@ fn mark_soft(face: VirtualFace, level: u32, q: VsmPoint, e: u32) {
             ask_page(face, level, uv, n);
         }
     }
+}
+
+// Corner `k` of the square a sized light's filter taps reach around a sample at `uv` in the
+// face at `level` (the largest penumbra and a texel away), clamped into the face. The tile
+// marking (vsm_tiles.wgsl) computes the same corners of its samples' rectangle with it, so
+// that both find the same pages.
+fn reach_corner(uv: vec2<f32>, level: u32, k: u32) -> vec2<f32> {
+    let r = vec2<f32>((frame.soft.z + 1.0) / (f32(1u << level) * f32(vsm.pool.z)));
+    let corner = vec2<f32>(f32(k & 1u), f32(k >> 1u)) * 2.0 - vec2<f32>(1.0);
+    return clamp(uv + corner * r, vec2<f32>(0.0), vec2<f32>(1.0 - 1e-6));
 }
 
 // Widens page `e`'s receiver bounds to depth key `key` and the cells `cells`.

@@ -311,8 +311,8 @@ fn tile_light(i: u32, t: TileSamples) -> TilePage {
     }
     let pages = 1u << level;
     let uv_lo = clamp(r.uv_lo, vec2<f32>(0.0), vec2<f32>(1.0));
-    let page = min(vec2<u32>(uv_lo * f32(pages)), vec2<u32>(pages - 1u));
-    let last = min(vec2<u32>(clamp(r.uv_hi, vec2<f32>(0.0), vec2<f32>(1.0)) * f32(pages)), vec2<u32>(pages - 1u));
+    let page = page_at(uv_lo, pages);
+    let last = page_at(clamp(r.uv_hi, vec2<f32>(0.0), vec2<f32>(1.0)), pages);
     if (any(last != page)) {
         return tile_outcome(TILE_UNSURE);
     }
@@ -330,11 +330,9 @@ fn tile_light(i: u32, t: TileSamples) -> TilePage {
         // where each corner falls in one page for every sample (a page border seldom lies
         // within the tile's few texels of a corner's path); else each sample marks its own
         // with the tile's page known.
-        let reach = vec2<f32>((frame.soft.z + 1.0) / (f32(pages) * f32(vsm.pool.z)));
         for (var k = 0u; k < 4u; k = k + 1u) {
-            let corner = vec2<f32>(f32(k & 1u), f32(k >> 1u)) * 2.0 - vec2<f32>(1.0);
-            let a = soft_corner_page(r.uv_lo + corner * reach, pages);
-            let b = soft_corner_page(r.uv_hi + corner * reach, pages);
+            let a = page_at(reach_corner(r.uv_lo, level, k), pages);
+            let b = page_at(reach_corner(r.uv_hi, level, k), pages);
             out.corners[k] = a;
             if (any(a != b)) {
                 out.outcome = TILE_SOME;
@@ -344,11 +342,10 @@ fn tile_light(i: u32, t: TileSamples) -> TilePage {
     return out;
 }
 
-// The page (column, row) of `pages` per side holding a corner of a sized light's sample's
-// reach: as mark_soft clamps it into the face.
-fn soft_corner_page(uv: vec2<f32>, pages: u32) -> vec2<u32> {
-    let c = clamp(uv, vec2<f32>(0.0), vec2<f32>(1.0 - 1e-6));
-    return min(vec2<u32>(c * f32(pages)), vec2<u32>(pages - 1u));
+// The page (column, row) of `pages` per side holding face coordinates `uv` (in the face), as
+// vsm_entry finds it.
+fn page_at(uv: vec2<f32>, pages: u32) -> vec2<u32> {
+    return min(vec2<u32>(uv * f32(pages)), vec2<u32>(pages - 1u));
 }
 
 // The cells the filter taps of the tile's samples reach in its page (`page`: its own or, for
