@@ -237,6 +237,7 @@ pub struct LightClusters {
     enabled: bool,
     light_capacity: usize,
     pool_limit: u64,
+    fence: crate::gpu::raster_fence::RasterFence,
 }
 
 /// Tiles across and down of a `width` × `height` frame of `eyes` side-by-side eyes at `tile`
@@ -341,6 +342,7 @@ impl LightClusters {
             crate::gpu::pipelines::compute_pipeline(device, entry, &pipeline_layout, &module, entry)
         };
         let mut me = Self {
+            fence: ctx.raster_fence().clone(),
             uniforms,
             slots,
             masks: buffer("clusters.masks", 16, storage),
@@ -536,6 +538,8 @@ impl LightClusters {
         };
         encoder.clear_buffer(&self.slots, 0, None);
         encoder.clear_buffer(&self.control, 0, None);
+        // The marking reads the G-buffer just drawn.
+        self.fence.record(encoder);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("clusters.pass"),

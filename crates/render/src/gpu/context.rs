@@ -149,6 +149,8 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// GPU errors nobody captured in an error scope (they would otherwise panic).
     uncaptured: Arc<Mutex<Vec<String>>>,
+    /// The fence every compute pass of a frame records first (inert but on OpenGL).
+    raster_fence: super::raster_fence::RasterFence,
 }
 
 impl std::fmt::Debug for GpuContext {
@@ -378,6 +380,7 @@ impl GpuContext {
             });
         }
         let uncaptured = Arc::new(Mutex::new(Vec::new()));
+        let raster_fence = super::raster_fence::RasterFence::new(&device, info.backend);
         Ok(Self {
             instance,
             adapter,
@@ -385,7 +388,15 @@ impl GpuContext {
             queue,
             info,
             uncaptured,
+            raster_fence,
         })
+    }
+
+    /// What every compute pass of a frame records first, so that the draws recorded before it
+    /// are finished (OpenGL: llvmpipe runs a dispatch before the draws before it; see
+    /// `gpu::raster_fence`); inert on other backends.
+    pub(crate) fn raster_fence(&self) -> &super::raster_fence::RasterFence {
+        &self.raster_fence
     }
 
     /// One line naming the adapter: name, backend, type and driver.

@@ -71,6 +71,7 @@ fn shader() -> String {
 
 /// The clusters of every instance, the cull and the buffers its rounds use.
 pub(crate) struct FaceClusters {
+    fence: crate::gpu::raster_fence::RasterFence,
     cull: wgpu::ComputePipeline,
     cull_layout: wgpu::BindGroupLayout,
     /// The G-buffer's second bind group's layout (`gbuffer_pull`).
@@ -141,6 +142,7 @@ impl FaceClusters {
         );
         let limits = ctx.limits();
         Ok(Self {
+            fence: ctx.raster_fence().clone(),
             cull,
             cull_layout,
             pull_layout: crate::frame::gbuffer_pull::layout(device),
@@ -345,6 +347,8 @@ impl FaceClusters {
             if self.compact {
                 encoder.clear_buffer(&b.counter, 0, None);
             }
+            // The cull rewrites the commands the last round's draws read.
+            self.fence.record(encoder);
             {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("probes.cull_faces"),

@@ -413,6 +413,8 @@ impl Denoiser {
                 .write_buffer(buffer, 0, bytemuck::bytes_of(&params));
         }
         let groups = (self.width.div_ceil(8), self.height.div_ceil(8));
+        // The filter reads the lit image and the G-buffer the frame drew.
+        ctx.raster_fence().record(encoder);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("denoise"),
             timestamp_writes: timer.compute_writes(span, true, false),

@@ -208,6 +208,8 @@ impl VisibilityPass {
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("visibility.encoder"),
             });
+            // The pass reads the G-buffer and the maps the frame drew.
+            ctx.raster_fence().record(&mut encoder);
             {
                 let last = first + count >= self.words;
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {

@@ -146,6 +146,8 @@ pub fn read_depth_view(
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("atlas_copy.encoder"),
         });
+        // The copy reads the atlas the frame drew.
+        ctx.raster_fence().record(&mut encoder);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("atlas_copy.pass"),

@@ -548,6 +548,8 @@ impl ShadowTechnique for Compute {
             let copy_bind_group = slot.copy_bind_group.clone().expect("made by slot()");
             if r == 0 {
                 // The first pass opens the timer span (a fill records no timestamps).
+                // Draws recorded before may still read what this pass rewrites (gpu::raster_fence).
+                g.input.ctx.raster_fence().record(g.encoder);
                 let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("compute.transform"),
                     timestamp_writes: g.timer.compute_writes(g.span, true, false),
@@ -561,6 +563,8 @@ impl ShadowTechnique for Compute {
             g.encoder.clear_buffer(&depth, 0, Some(round_texels * 4));
             if casters.triangles > 0 {
                 {
+                    // Draws recorded before may still read what this pass rewrites (gpu::raster_fence).
+                    g.input.ctx.raster_fence().record(g.encoder);
                     let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                         label: Some("compute.setup"),
                         timestamp_writes: None,
@@ -591,6 +595,8 @@ impl ShadowTechnique for Compute {
                     stats.passes += 1;
                 }
                 if !discard {
+                    // Draws recorded before may still read what this pass rewrites (gpu::raster_fence).
+                    g.input.ctx.raster_fence().record(g.encoder);
                     let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                         label: Some("compute.large"),
                         timestamp_writes: None,

@@ -338,6 +338,8 @@ impl ShadowTechnique for GpuDriven {
         if rounds.is_empty() {
             // No casters: the transform (a no-op) and a pass that clears the listed tiles.
             {
+                // Draws recorded before may still read what this pass rewrites (gpu::raster_fence).
+                g.input.ctx.raster_fence().record(g.encoder);
                 let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("gpu_driven.transform"),
                     timestamp_writes: g.timer.compute_writes(g.span, true, false),
@@ -371,6 +373,8 @@ impl ShadowTechnique for GpuDriven {
                 g.encoder.clear_buffer(&self.counter, 0, None);
             }
             {
+                // Draws recorded before may still read what this pass rewrites (gpu::raster_fence).
+                g.input.ctx.raster_fence().record(g.encoder);
                 let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("gpu_driven.cull"),
                     timestamp_writes: g.timer.compute_writes(g.span, first, false),

@@ -169,6 +169,8 @@ impl ShadowTechnique for Layered {
 
         g.encoder.push_debug_group("layered");
         {
+            // Draws recorded before may still read what this pass rewrites (gpu::raster_fence).
+            g.input.ctx.raster_fence().record(g.encoder);
             let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("layered.transform"),
                 timestamp_writes: g.timer.compute_writes(g.span, true, false),

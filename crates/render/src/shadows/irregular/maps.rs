@@ -241,6 +241,7 @@ pub struct IrregularShadows {
     /// `cs_insert`, `cs_triangles`, `cs_args`, `cs_tiles`.
     pipelines: [wgpu::ComputePipeline; 4],
     last: IrregularStats,
+    fence: crate::gpu::raster_fence::RasterFence,
 }
 
 /// Everything the passes read that the renderer owns.
@@ -528,6 +529,7 @@ impl IrregularShadows {
             .collect();
         let [insert, triangles_pass, args, tiles_pass] = passes.map(|(p, _)| p);
         Ok(Self {
+            fence: ctx.raster_fence().clone(),
             tile_queue,
             width: w,
             height: h,
@@ -569,6 +571,8 @@ impl IrregularShadows {
         encoder.clear_buffer(&self.heads, self.cut_index * 4, Some(4));
         let pixel_groups =
             crate::gpu::pipelines::dispatch_2d(self.width as u64 * self.height as u64, 65535);
+        // The samples come from the G-buffer just drawn.
+        self.fence.record(encoder);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("irregular.init"),

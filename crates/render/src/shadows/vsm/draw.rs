@@ -81,6 +81,7 @@ pub(crate) struct PageBuffers<'a> {
 
 /// The page-render rounds, their command buffers and pipelines.
 pub(crate) struct PageDraw {
+    fence: crate::gpu::raster_fence::RasterFence,
     shadow: ShadowOptions,
     compact: bool,
     rounds: Vec<Round>,
@@ -316,6 +317,7 @@ impl PageDraw {
         let clear =
             crate::shadows::depth::clear_pipeline(device, &clear_pl, &draw_module, "vs_clear");
         Self {
+            fence: ctx.raster_fence().clone(),
             shadow,
             compact,
             rounds,
@@ -473,6 +475,8 @@ impl PageDraw {
             if self.compact {
                 encoder.clear_buffer(&self.command_count, 0, None);
             }
+            // The cull rewrites the commands the last round's draws read.
+            self.fence.record(encoder);
             {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("vsm.cull"),

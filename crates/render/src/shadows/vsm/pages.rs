@@ -80,6 +80,7 @@ pub struct VirtualShadows {
     bound: bool,
     /// The page rendering: rounds, command buffers, pipelines.
     draw: PageDraw,
+    fence: crate::gpu::raster_fence::RasterFence,
 }
 
 impl VirtualShadows {
@@ -138,6 +139,7 @@ impl VirtualShadows {
         );
         let (page_views, args) = draw_buffers(ctx, slots, &draw);
         let mut this = Self {
+            fence: ctx.raster_fence().clone(),
             plan,
             options,
             pool_view,
@@ -415,6 +417,9 @@ impl VirtualShadows {
         encoder.clear_buffer(&self.counters, 0, None);
         encoder.clear_buffer(&self.scratch, 0, None);
         self.tiles.clear(encoder);
+        // The marking reads the G-buffer; the allocation rewrites what last frame's page
+        // draws read.
+        self.fence.record(encoder);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("vsm.pages"),
