@@ -60,10 +60,10 @@ pub struct SoftArgs {
     /// techniques that fill a page pool).
     #[arg(long, value_delimiter = ',', value_parser = crate::args::parse_technique)]
     pub techniques: Vec<Technique>,
-    /// Taps of the blocker search and of the filter (each), comma-separated: one PCSS
-    /// contender per count (1 to 64; the renderer's default is 16).
-    #[arg(long, default_value = "16", value_delimiter = ',')]
-    pub taps: Vec<u32>,
+    /// Taps of the blocker search and of the filter, comma-separated: one PCSS contender per
+    /// entry, `N` for N of each or `B/F` (1 to 64 each; the renderer's default is 16).
+    #[arg(long, default_value = "16", value_delimiter = ',', value_parser = parse_tap_pair)]
+    pub taps: Vec<(u32, u32)>,
     /// Largest penumbra radius, shadow texels (1 to 256).
     #[arg(long, default_value_t = SoftShadows::default().max_penumbra)]
     pub max_penumbra: f32,
@@ -85,7 +85,8 @@ struct Side {
     /// `hard` or `pcss-<taps>`.
     method: String,
     /// Taps of the search and of the filter; 0 for hard.
-    taps: u32,
+    blocker_taps: u32,
+    filter_taps: u32,
     pages_ms: Option<f64>,
     shadows_ms: Option<f64>,
     lighting_ms: Option<f64>,
@@ -113,12 +114,12 @@ pub fn soft(args: &SoftArgs) -> Result<()> {
     if args.taps.is_empty() {
         bail!("--taps needs at least one count");
     }
-    for &t in &args.taps {
+    for &(b, f) in &args.taps {
         SoftShadows::default()
-            .with_blocker_taps(t)
-            .with_filter_taps(t)
+            .with_blocker_taps(b)
+            .with_filter_taps(f)
             .validate()
-            .map_err(|e| anyhow::anyhow!("--taps {t}: {e}"))?;
+            .map_err(|e| anyhow::anyhow!("--taps {}: {e}", tap_label(b, f)))?;
     }
     SoftShadows::default()
         .with_max_penumbra(args.max_penumbra)
@@ -177,9 +178,12 @@ pub fn soft(args: &SoftArgs) -> Result<()> {
                 Some("hard"),
             )?;
             let base_lighting = out[0].runs.stage(Stage::Lighting);
+            // The contenders: hard, then one per `--taps` entry in order.
+            let taps = std::iter::once((0, 0)).chain(args.taps.iter().copied());
             let sides = out
                 .iter()
-                .map(|o| side(&o.label, &o.runs, o.gpu_ratio, base_lighting))
+                .zip(taps)
+                .map(|(o, t)| side(&o.label, t, &o.runs, o.gpu_ratio, base_lighting))
                 .collect();
             records.push(Record {
                 technique: technique.name().into(),
@@ -220,14 +224,14 @@ fn contenders_for(
             Renderer::new(&h.ctx, hard, base.clone()).map_err(crate::args::flag_error)?,
         ),
     }];
-    for &t in &args.taps {
+    for &(b, f) in &args.taps {
         let soft = SoftShadows::default()
-            .with_blocker_taps(t)
-            .with_filter_taps(t)
+            .with_blocker_taps(b)
+            .with_filter_taps(f)
             .with_max_penumbra(args.max_penumbra);
         let settings = base.clone().with_soft(soft);
         out.push(Contender {
-            label: format!("pcss-{t}"),
+            label: format!("pcss-{}", tap_label(b, f)),
             subject: FrameSubject::new(
                 Renderer::new(&h.ctx, sized, settings).map_err(crate::args::flag_error)?,
             ),
@@ -236,8 +240,32 @@ fn contenders_for(
     Ok(out)
 }
 
+/// `--taps`' entry: `N` (both) or `B/F`.
+fn parse_tap_pair(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("'{s}': taps as N (search and filter) or B/F (e.g. 32/16)");
+    let n: Vec<u32> = s
+        .split('/')
+        .map(|t| t.trim().parse::<u32>().map_err(|_| bad()))
+        .collect::<Result<_, _>>()?;
+    match n[..] {
+        [t] => Ok((t, t)),
+        [b, f] => Ok((b, f)),
+        _ => Err(bad()),
+    }
+}
+
+/// `16` for 16 of each, `32/16` otherwise.
+fn tap_label(b: u32, f: u32) -> String {
+    if b == f {
+        b.to_string()
+    } else {
+        format!("{b}/{f}")
+    }
+}
+
 fn side(
     label: &str,
+    taps: (u32, u32),
     runs: &Runs<FrameCounters>,
     ratio: Option<f64>,
     base_lighting: Option<f64>,
@@ -245,10 +273,8 @@ fn side(
     let lighting_ms = runs.stage(Stage::Lighting);
     Side {
         method: label.into(),
-        taps: label
-            .strip_prefix("pcss-")
-            .and_then(|t| t.parse().ok())
-            .unwrap_or(0),
+        blocker_taps: taps.0,
+        filter_taps: taps.1,
         pages_ms: runs.stage(Stage::Pages),
         shadows_ms: runs.stage(Stage::Shadows),
         lighting_ms,
@@ -269,7 +295,7 @@ fn table(records: &[Record], adapter: &str, args: &SoftArgs) -> String {
     );
     let _ = writeln!(
         t,
-        "{:<12} {:>6} {:>6} | {:<8} | {:>9} {:>9} {:>9} | {:>6} {:>8}",
+        "{:<12} {:>6} {:>6} | {:<11} | {:>9} {:>9} {:>9} | {:>6} {:>8}",
         "technique",
         "lights",
         "sized",
@@ -289,7 +315,7 @@ fn table(records: &[Record], adapter: &str, args: &SoftArgs) -> String {
             let ratio = |v: Option<f64>| v.map_or("n/a".into(), |v| format!("{v:.2}"));
             let _ = writeln!(
                 t,
-                "{:<12} {:>6} {:>6} | {:<8} | {:>9} {:>9} {:>9} | {:>6} {:>8}",
+                "{:<12} {:>6} {:>6} | {:<11} | {:>9} {:>9} {:>9} | {:>6} {:>8}",
                 r.technique,
                 r.lights,
                 r.sized_lights,
@@ -304,8 +330,8 @@ fn table(records: &[Record], adapter: &str, args: &SoftArgs) -> String {
     }
     let _ = writeln!(
         t,
-        "   hard: every light at size 0, 2x2 PCF; pcss-N: the lights' sizes, N blocker and N \
-         filter taps; shadows: the maps (virtual: pages + their drawing); frame: sum of the \
+        "   hard: every light at size 0, 2x2 PCF; pcss-B/F (pcss-N: N of each): the lights' \
+         sizes, B depths of the blocker search and F filter taps; shadows: the maps (virtual: pages + their drawing); frame: sum of the \
          stages; ratio: frame / the hard frame, lighting: lighting / the hard lighting, same run."
     );
     t
