@@ -524,14 +524,14 @@ fn bench_shadows_puts_every_kind_of_shadow_side_by_side() {
 }
 
 /// `bench soft` on a tiny frame: per technique and light count the hard frame and one PCSS
-/// frame per `--taps` count, in one run, with ratios from the same run's medians; sizes from
+/// frame per `--taps` entry (N of each, or B/F), in one run, with ratios from the same run's medians; sizes from
 /// the flags (`cubes` is hard of its own); bad tap counts are refused naming the flag.
 #[test]
 fn bench_soft_times_pcss_against_hard_frames() {
     let (_, json) = bench_ok(
         "soft",
         "--scene cubes --lights 3,12 --width 96 --height 54 --light-size 0.1 --sun-size 1 \
-         --taps 4,16 --repeats 1 --warmup 0",
+         --taps 4,16/8 --repeats 1 --warmup 0",
     );
     let records = records(&json);
     let cells: Vec<(String, u64)> = records
@@ -555,9 +555,15 @@ fn bench_soft_times_pcss_against_hard_frames() {
             .iter()
             .map(|s| s["method"].as_str().unwrap())
             .collect();
-        assert_eq!(methods, ["hard", "pcss-4", "pcss-16"], "{r}");
-        let taps: Vec<u64> = sides.iter().map(|s| s["taps"].as_u64().unwrap()).collect();
-        assert_eq!(taps, [0, 4, 16], "{r}");
+        assert_eq!(methods, ["hard", "pcss-4", "pcss-16/8"], "{r}");
+        let taps: Vec<(u64, u64)> = sides
+            .iter()
+            .map(|s| {
+                let t = |k: &str| s[k].as_u64().unwrap();
+                (t("blocker_taps"), t("filter_taps"))
+            })
+            .collect();
+        assert_eq!(taps, [(0, 0), (4, 4), (16, 8)], "{r}");
         for s in sides {
             assert_ratio(&s["ratio"], &s["frame_ms"], &sides[0]["frame_ms"], s);
             assert_ratio(
@@ -570,6 +576,15 @@ fn bench_soft_times_pcss_against_hard_frames() {
     }
     rejects("soft --taps 0", "--taps 0");
     rejects("soft --taps 65", "--taps 65");
+    rejects("soft --taps 16/65", "--taps 16/65");
+    // Not a count or a pair: clap's usage error (exit 2), naming the value.
+    let out = bench("soft --taps 16/8/4", &[]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("'16/8/4'") && stderr.contains("B/F"),
+        "{stderr}"
+    );
     rejects("soft --max-penumbra 0.5", "--max-penumbra");
 }
 
