@@ -21,7 +21,8 @@ pub struct SoftArgs {
     #[arg(long, default_value = "16,16", value_parser = parse_soft_taps)]
     pub soft_taps: (u32, u32),
     /// Largest penumbra radius the shadow maps filter, in shadow texels (1 to 256): wider
-    /// penumbrae are clamped in the atlas and filtered at coarser levels by virtual maps.
+    /// penumbrae are clamped in the atlas and filtered at coarser levels by virtual maps,
+    /// which read at most 63 texels at one level (what their page marking reaches).
     #[arg(long, default_value_t = manyshadows::SoftShadows::default().max_penumbra)]
     pub max_penumbra: f32,
 }

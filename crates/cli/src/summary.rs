@@ -48,7 +48,7 @@ pub(crate) fn summary(
         "virtual": frame.virtual_maps,
         "lists": r.irregular_stats(),
         "soft": { "blocker_taps": r.settings().soft.blocker_taps, "filter_taps": r.settings().soft.filter_taps,
-                  "max_penumbra": r.settings().soft.max_penumbra, "area_samples": r.settings().rays.area_samples,
+                  "max_penumbra": r.max_penumbra(), "area_samples": r.settings().rays.area_samples,
                   "light_samples": r.settings().rays.light_samples, "denoise": r.settings().rays.denoise,
                   "reuse": r.settings().rays.reuse, "spatial": r.settings().rays.spatial.name(),
                   "technique_softens": r.settings().technique.info().soft_shadows },

@@ -324,3 +324,45 @@ fn virtual_soft_shadows_keep_what_their_filter_reads() {
         );
     }
 }
+
+/// Virtual maps filter penumbrae up to `MAX_SOFT_PENUMBRA` (63 texels) at a sample's level:
+/// the page marking asks for the pages at the corners of the taps' reach, all the pages the
+/// reach touches only while it spans at most a page. A wider `max_penumbra` is clamped there
+/// (wider penumbrae go to coarser levels), so the frame at 200 is the frame at 63; the atlas,
+/// whose taps read one tile, keeps 200 (its frames differ: the clamp is the virtual maps').
+#[test]
+fn virtual_maps_clamp_the_penumbra_to_what_their_marking_reaches() {
+    use manyshadows::shadows::vsm::plan::{MAX_SOFT_PENUMBRA, PAGE_SIZE};
+    assert!(2.0 * (MAX_SOFT_PENUMBRA + 1.0) <= PAGE_SIZE as f32);
+    let ctx = common::context();
+    let mut scene = manyshadows::scene::builtin::build(
+        "atrium",
+        &manyshadows::scene::builtin::BuiltinOptions {
+            lights: Some(8),
+            ..Default::default()
+        },
+    )
+    .expect("atrium");
+    // Wide lights, so that penumbrae pass 63 texels.
+    for l in &mut scene.lights {
+        l.size *= 4.0;
+    }
+    let render = |technique: Technique, max_penumbra: f32| {
+        Renderer::new(
+            &ctx,
+            &scene,
+            RenderSettings::new(240, 135)
+                .with_technique(technique)
+                .with_soft(manyshadows::SoftShadows::default().with_max_penumbra(max_penumbra)),
+        )
+        .expect("renderer")
+        .render()
+        .expect("frame")
+    };
+    let at = |t| (render(t, MAX_SOFT_PENUMBRA), render(t, 200.0));
+    let (a, b) = at(Technique::VIRTUAL);
+    assert_eq!(common::frame_differences(&a, &b), (0, 0, 0), "virtual maps");
+    let (a, b) = at(Technique::TRADITIONAL);
+    let (differing, _, _) = common::frame_differences(&a, &b);
+    assert!(differing > 100, "the atlas: {differing} pixels differ");
+}

@@ -134,6 +134,13 @@ impl Renderer {
         &self.settings
     }
 
+    /// The widest penumbra radius, in shadow texels, the soft filter reads at one level:
+    /// `SoftShadows::max_penumbra`, clamped to what the technique's lookup reaches (virtual
+    /// maps: 63 texels, wider penumbrae filtered at coarser levels).
+    pub fn max_penumbra(&self) -> f32 {
+        self.shadow_side().1.min(self.settings.soft.max_penumbra)
+    }
+
     /// The shading model, exposure and tone map of the next frame: the settings' [`Look`]
     /// decided for the current scene and camera (a metered exposure follows the camera).
     ///

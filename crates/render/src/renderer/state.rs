@@ -204,7 +204,7 @@ impl Renderer {
                     instances: &gpu_scene.instances,
                 },
             )?;
-            let shadow_side = source.output().depth_side;
+            let shadow_side = (source.output().depth_side, source.output().max_penumbra);
             ctx.queue.write_buffer(
                 &frame_buffer,
                 0,
@@ -400,6 +400,13 @@ impl Renderer {
         Ok(())
     }
 
+    /// The side of the texture shadows are read from and the widest penumbra its lookup
+    /// filters at one level (the frame uniforms').
+    pub(super) fn shadow_side(&self) -> (u32, f32) {
+        let out = self.source.output();
+        (out.depth_side, out.max_penumbra)
+    }
+
     /// Derives this frame's GPU state from [`Renderer::scene`] after a change: a new shadow
     /// plan, re-decided caster culling, and the atlas, light, frame and cluster buffers
     /// rewritten in place (replaced only when they must grow or the atlas side changed).
@@ -436,17 +443,10 @@ impl Renderer {
                 instances: &self.scene.instances,
             },
         )?;
-        ctx.queue.write_buffer(
-            &self.frame_buffer,
-            0,
-            bytemuck::bytes_of(&frame_uniforms(
-                scene,
-                settings,
-                self.source.output().depth_side,
-            )),
-        );
+        let frame = frame_uniforms(scene, settings, self.shadow_side());
+        ctx.queue
+            .write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&frame));
         if let Some(p) = &mut self.probes {
-            let frame = frame_uniforms(scene, settings, self.source.output().depth_side);
             let redraw = std::mem::take(&mut self.probes_stale);
             let sources = (&self.lights, &*self.source);
             p.update(ctx, scene, &self.scene, sources, &frame, redraw)?;

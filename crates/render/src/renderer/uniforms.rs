@@ -16,8 +16,13 @@ pub(super) fn lights_or_placeholder(mut data: Vec<LightData>) -> Vec<LightData> 
 }
 
 /// The frame's uniforms; `atlas_size` is the side of the texture shadows are read from (the
-/// atlas, or the virtual maps' page pool).
-pub(super) fn frame_uniforms(scene: &Scene, s: &RenderSettings, atlas_size: u32) -> FrameUniforms {
+/// atlas, or the virtual maps' page pool) and `max_penumbra` the widest penumbra its lookup
+/// filters at one level (`ShadowOutput::max_penumbra`).
+pub(super) fn frame_uniforms(
+    scene: &Scene,
+    s: &RenderSettings,
+    (atlas_size, max_penumbra): (u32, f32),
+) -> FrameUniforms {
     let cam = &scene.camera;
     let aspect = s.width as f32 / s.height as f32;
     let view = cam.view();
@@ -52,7 +57,7 @@ pub(super) fn frame_uniforms(scene: &Scene, s: &RenderSettings, atlas_size: u32)
         soft: [
             s.soft.blocker_taps as f32,
             s.soft.filter_taps as f32,
-            s.soft.max_penumbra,
+            s.soft.max_penumbra.min(max_penumbra),
             0.0,
         ],
         look,

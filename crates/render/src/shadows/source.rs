@@ -91,6 +91,9 @@ pub struct ShadowOutput<'a> {
     pub lookup: LookupWgsl,
     /// The bindings [`ShadowOutput::lookup`] declares, in order from its first binding.
     pub bindings: Vec<(wgpu::BindingType, wgpu::BindingResource<'a>)>,
+    /// The widest penumbra radius, in texels, the lookup's soft filter reads at one level
+    /// (what `SoftShadows::max_penumbra` is clamped to for it; unbounded for the atlas).
+    pub max_penumbra: f32,
 }
 
 impl<'a> ShadowOutput<'a> {
@@ -104,6 +107,7 @@ impl<'a> ShadowOutput<'a> {
             mask: None,
             lookup,
             bindings: Vec::new(),
+            max_penumbra: f32::INFINITY,
         }
     }
 

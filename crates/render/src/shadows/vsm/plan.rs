@@ -12,6 +12,13 @@ pub const VSM_COMMON: &str = include_str!("vsm_common.wgsl");
 
 /// Side of a page in texels.
 pub const PAGE_SIZE: u32 = 128;
+
+/// The widest penumbra radius in texels a sized light's soft filter reads at one level:
+/// the page marking asks for the pages at the four corners of the taps' reach (this and a
+/// texel around the sample), which are all the pages the reach touches while it spans at most
+/// a page (63 + 1 texels each way of 128). `SoftShadows::max_penumbra` is clamped to it here;
+/// wider penumbrae are filtered at coarser levels.
+pub const MAX_SOFT_PENUMBRA: f32 = (PAGE_SIZE / 2 - 1) as f32;
 /// Levels a face can have (level 7 of 128² pages is 16,384² texels).
 pub const MAX_LEVELS: u32 = 8;
 /// Largest virtual side of a face.

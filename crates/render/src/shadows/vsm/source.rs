@@ -210,6 +210,7 @@ impl ShadowSource for VirtualSource {
                     self.maps.table().as_entire_binding(),
                 ),
             ],
+            max_penumbra: super::plan::MAX_SOFT_PENUMBRA,
             ..ShadowOutput::from_views(&self.table.views, INFO.lookup)
         }
     }
