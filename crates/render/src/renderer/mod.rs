@@ -10,18 +10,21 @@
 //! Nothing here depends on the technique: the source's [`crate::shadows::source::ShadowOutput`]
 //! says what the lighting and visibility passes read.
 //!
-//! `state` holds the renderer and the frame loop (creation, the setters, `render`,
-//! `render_to`, GPU times); `inspect` what callers read of it (plans, estimates, read-backs,
+//! `state` holds the renderer (creation, the setters, deriving the GPU state from changes);
+//! `frame_loop` records, submits and reads back its frames (`render`, `render_to`, GPU
+//! times); `inspect` what callers read of it (plans, estimates, read-backs,
 //! frames shaded with given visibility); `uniforms` the frame's uniform block; `capabilities`
 //! what a device needs for stereo and probe faces in one pass.
 
 mod capabilities;
 #[cfg(not(target_arch = "wasm32"))]
 mod estimate;
+mod frame_loop;
 mod inspect;
 mod probe_clusters;
 mod probes;
 mod state;
 mod uniforms;
 
-pub use state::{FramePart, Renderer};
+pub use frame_loop::FramePart;
+pub use state::Renderer;

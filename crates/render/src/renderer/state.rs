@@ -1,9 +1,8 @@
-//! The renderer: creation, the frame's state and its setters, and the frame loop.
+//! The renderer: creation, the frame's state and its setters, and deriving the GPU state
+//! from their changes (the frames themselves: `frame_loop`).
 
-// `std::time::Instant` panics in a browser; web-time is std's on native targets.
 use super::uniforms::{frame_uniforms, lights_or_placeholder};
 use crate::shading::look::ShadingConsts;
-use web_time::Instant;
 
 use manyshadows_scene::{Camera, Light, Scene, SceneError};
 use wgpu::util::DeviceExt;
@@ -12,27 +11,24 @@ use super::probes::ProbeFrame;
 use crate::error::RenderError;
 use crate::frame::clusters::{LightClusters, LightLoop};
 use crate::frame::gbuffer::{GBuffer, GBufferViews};
-use crate::frame::visibility_mask::{SoftVisibility, VisibilityMask};
 use crate::gpu::context::GpuContext;
-use crate::gpu::timing::{GpuTimer, GpuTimes, Stage};
+use crate::gpu::timing::GpuTimer;
 use crate::gpu::types::FrameUniforms;
 use crate::gpu_scene::instances::GpuScene;
-use crate::report::{Frame, FrameTimings, SubmittedFrame};
 use crate::settings::RenderSettings;
 use crate::shading::lighting::{LightingInputs, LightingPass};
 use crate::shading::visibility::VisibilityPass;
 use crate::shadows::plan::DEFAULT_MAX_ATLAS_SIZE;
-use crate::shadows::source::{ShadowSource, ShadowStats, SourceInputs};
-use crate::shadows::vsm::plan::VirtualStats;
+use crate::shadows::source::{ShadowSource, SourceInputs};
 
 /// Timestamp copies of submitted frames on their way back: mapped asynchronously, decoded
 /// when the GPU has finished them, never waited for.
 #[derive(Default)]
-struct TimingsInFlight {
+pub(super) struct TimingsInFlight {
     /// Oldest first.
-    pending: std::collections::VecDeque<StagedTimes>,
+    pub(super) pending: std::collections::VecDeque<StagedTimes>,
     /// Unmapped staging buffers to reuse.
-    free: Vec<wgpu::Buffer>,
+    pub(super) free: Vec<wgpu::Buffer>,
 }
 
 /// One frame's timestamps on their way back: the staging buffer, the spans to decode it with,
@@ -44,10 +40,10 @@ type StagedTimes = (
 );
 
 /// Most frames whose timings may be in flight; a frame beyond them is not timed.
-const MAX_TIMINGS_IN_FLIGHT: usize = 3;
-const MAP_PENDING: u8 = 0;
-const MAP_DONE: u8 = 1;
-const MAP_FAILED: u8 = 2;
+pub(super) const MAX_TIMINGS_IN_FLIGHT: usize = 3;
+pub(super) const MAP_PENDING: u8 = 0;
+pub(super) const MAP_DONE: u8 = 1;
+pub(super) const MAP_FAILED: u8 = 2;
 
 /// A scene uploaded and ready to render frames.
 pub struct Renderer {
@@ -68,7 +64,7 @@ pub struct Renderer {
     /// Copies frames into callers' textures ([`Renderer::render_to`]); built on first use.
     pub(super) blit: Option<crate::shading::blit::Blit>,
     /// GPU times of frames drawn by `render_to`, read back without waiting (oldest first).
-    timings: TimingsInFlight,
+    pub(super) timings: TimingsInFlight,
     pub(super) timer: GpuTimer,
     /// The frame's state (camera, lights, instance transforms) as last set.
     pub(super) current: Scene,
@@ -410,7 +406,7 @@ impl Renderer {
     /// Derives this frame's GPU state from [`Renderer::scene`] after a change: a new shadow
     /// plan, re-decided caster culling, and the atlas, light, frame and cluster buffers
     /// rewritten in place (replaced only when they must grow or the atlas side changed).
-    fn prepare(&mut self) -> Result<(), RenderError> {
+    pub(super) fn prepare(&mut self) -> Result<(), RenderError> {
         if !self.dirty {
             return Ok(());
         }
@@ -477,309 +473,6 @@ impl Renderer {
         self.lights_changed = false;
         Ok(())
     }
-
-    /// Records one frame up to the lit image (G-buffer, clusters, shadows, lighting) after
-    /// deriving the GPU state from any change; returns the shadow work counters.
-    fn record_frame(
-        &mut self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        mut boundary: Option<&mut Boundary<'_>>,
-    ) -> Result<ShadowStats, RenderError> {
-        self.prepare()?;
-        self.timer.reset();
-        let span = self.timer.span(Stage::GBuffer);
-        self.gbuffer.record(encoder, &self.scene, &self.timer, span);
-        if self.clusters.enabled() {
-            let span = self.timer.span(Stage::Clusters);
-            self.clusters.record(encoder, &self.timer, span);
-        }
-        if let Some(r) = &mut self.reuse {
-            let cam = self.current.camera;
-            let aspect = self.settings.width as f32 / self.settings.height as f32;
-            r.prepare(
-                ctx,
-                (
-                    cam.projection(aspect) * cam.view(),
-                    cam.position,
-                    cam.fov_y_deg,
-                ),
-                self.current.lights.len(),
-            );
-        }
-        if self.denoiser.is_some() || self.reuse.is_some() {
-            // New random numbers for the rays every frame (FrameUniforms::modes.y).
-            self.frames_denoised = self.frames_denoised.wrapping_add(1);
-            // modes.zw: the denoiser's correction for changed lights, this frame only.
-            let [first, counts] = self.denoiser.as_ref().map_or([0, 0], |d| d.light_fix());
-            ctx.queue.write_buffer(
-                &self.frame_buffer,
-                (std::mem::offset_of!(FrameUniforms, modes) + 4) as u64,
-                bytemuck::cast_slice(&[self.frames_denoised, first, counts]),
-            );
-        }
-        if let Some(b) = boundary.as_deref_mut() {
-            b(encoder, FramePart::Camera)?;
-        }
-        let shadow_stats = self
-            .source
-            .record(ctx, &self.scene, encoder, &mut self.timer);
-        if let Some(b) = boundary {
-            b(encoder, FramePart::Shadows)?;
-        }
-        if let Some(p) = self.probes.as_mut().filter(|p| p.dirty) {
-            let span = self.timer.span(Stage::Probes);
-            p.record(encoder, &self.scene, &self.timer, span);
-        } else if let Some(p) = &mut self.probes {
-            p.faces_drawn = 0;
-        }
-        let span = self.timer.span(Stage::Lighting);
-        self.lighting.record(encoder, &self.timer, span);
-        if let Some(d) = &mut self.denoiser {
-            let cam = self.current.camera;
-            let aspect = self.settings.width as f32 / self.settings.height as f32;
-            let view_proj = cam.projection(aspect) * cam.view();
-            let span = self.timer.span(Stage::Denoise);
-            d.record(
-                ctx,
-                encoder,
-                (view_proj, cam.position, cam.fov_y_deg),
-                &self.timer,
-                span,
-            );
-            self.lighting.record_composite(encoder, &self.timer, span);
-        }
-        Ok(shadow_stats)
-    }
-
-    /// Starts a frame: a new encoder with the frame recorded up to the lit image.
-    fn begin_frame<'p>(
-        &mut self,
-        ctx: &GpuContext,
-        progress: Option<&mut (dyn FnMut(FramePart) + 'p)>,
-    ) -> Result<(Instant, wgpu::CommandEncoder, ShadowStats), RenderError> {
-        let start = Instant::now();
-        let new_encoder = || {
-            ctx.device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("frame.encoder"),
-                })
-        };
-        let mut encoder = new_encoder();
-        let shadow_stats = match progress {
-            None => self.record_frame(ctx, &mut encoder, None)?,
-            Some(progress) => {
-                // Each part is submitted and waited for before the next is recorded.
-                let mut boundary = |enc: &mut wgpu::CommandEncoder, part: FramePart| {
-                    let done = std::mem::replace(enc, new_encoder());
-                    ctx.queue.submit([done.finish()]);
-                    ctx.wait_idle()?;
-                    progress(part);
-                    Ok(())
-                };
-                self.record_frame(ctx, &mut encoder, Some(&mut boundary))?
-            }
-        };
-        Ok((start, encoder, shadow_stats))
-    }
-
-    /// Resolves the timer queries of the last frame and reads them (waits for it).
-    fn resolve_timings(&self, ctx: &GpuContext) -> Result<GpuTimes, RenderError> {
-        let mut encoder = ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("timer.encoder"),
-            });
-        self.timer.resolve(&mut encoder);
-        ctx.queue.submit([encoder.finish()]);
-        self.timer.read(ctx)
-    }
-
-    /// Renders one frame into `target`, a texture the caller owns (created with
-    /// `RENDER_ATTACHMENT` usage; any size — the frame is scaled to it, nearest texel — and
-    /// any normalized or float colour format, sRGB or not: a window's surface texture, say),
-    /// and submits it without reading anything back. The caller presents or samples the
-    /// texture after this returns; [`Renderer::render`] is the same frame read back to the CPU.
-    /// With [`Technique::IRREGULAR`](crate::error::Technique::IRREGULAR) this waits for the
-    /// frame's overflow check (an overflowed frame is an error, never a wrong image).
-    pub fn render_to(&mut self, target: &wgpu::Texture) -> Result<SubmittedFrame, RenderError> {
-        let ctx = &*self.ctx.clone();
-        ctx.scoped("rendering a frame into the caller's texture", || {
-            let (start, mut encoder, shadow_stats) = self.begin_frame(ctx, None)?;
-            let blit = self
-                .blit
-                .get_or_insert_with(|| crate::shading::blit::Blit::new(ctx));
-            blit.record(ctx, &mut encoder, &self.lighting.color, target)?;
-            // The frame's timestamps go to a staging buffer mapped without waiting
-            // (`poll_gpu_timings`); `read_gpu_timings` can still resolve them afterwards.
-            let bytes = self.timer.resolved_bytes();
-            let staged =
-                (bytes > 0 && self.timings.pending.len() < MAX_TIMINGS_IN_FLIGHT).then(|| {
-                    let staging = match self.timings.free.iter().position(|b| b.size() >= bytes) {
-                        Some(i) => self.timings.free.swap_remove(i),
-                        None => ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                            label: Some("renderer.timings"),
-                            size: bytes.max(256),
-                            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                            mapped_at_creation: false,
-                        }),
-                    };
-                    let spans = self.timer.resolve_to(&mut encoder, &staging);
-                    (staging, spans)
-                });
-            ctx.queue.submit([encoder.finish()]);
-            if let Some((staging, spans)) = staged {
-                let state = std::sync::Arc::new(std::sync::atomic::AtomicU8::new(MAP_PENDING));
-                let done = state.clone();
-                staging.map_async(wgpu::MapMode::Read, .., move |r| {
-                    done.store(
-                        if r.is_ok() { MAP_DONE } else { MAP_FAILED },
-                        std::sync::atomic::Ordering::Release,
-                    );
-                });
-                self.timings.pending.push_back((staging, spans, state));
-            }
-            self.source.finish(ctx)?;
-            Ok(SubmittedFrame {
-                shadow_stats,
-                cpu_record_ms: start.elapsed().as_secs_f64() * 1e3,
-            })
-        })
-    }
-
-    /// GPU milliseconds per stage of the last frame [`Renderer::render_to`] submitted (empty
-    /// without timestamp queries). Waits for that frame to finish.
-    pub fn read_gpu_timings(&mut self) -> Result<GpuTimes, RenderError> {
-        let ctx = &*self.ctx.clone();
-        ctx.scoped("reading the frame's GPU times", || {
-            self.resolve_timings(ctx)
-        })
-    }
-
-    /// GPU milliseconds per stage of the newest frame [`Renderer::render_to`] submitted whose
-    /// GPU work has finished, or `None` while none has since the last call. Never waits for
-    /// the GPU (it only polls the device): an interactive loop calls it every frame and shows
-    /// times a frame or two old, where [`Renderer::read_gpu_timings`] would wait for the frame
-    /// just submitted.
-    pub fn poll_gpu_timings(&mut self) -> Option<GpuTimes> {
-        use std::sync::atomic::Ordering;
-        let _ = self.ctx.device.poll(wgpu::PollType::Poll);
-        let mut newest = None;
-        while let Some((_, _, state)) = self.timings.pending.front() {
-            match state.load(Ordering::Acquire) {
-                MAP_PENDING => break,
-                s => {
-                    let (staging, spans, _) = self.timings.pending.pop_front().expect("front");
-                    if s == MAP_DONE {
-                        if let Ok(view) = staging.get_mapped_range(..) {
-                            let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&view);
-                            drop(view);
-                            newest = Some(self.timer.decode(&spans, &ticks));
-                        }
-                        staging.unmap();
-                        self.timings.free.push(staging);
-                    }
-                }
-            }
-        }
-        newest
-    }
-
-    /// Renders one frame and reads it back.
-    pub fn render(&mut self) -> Result<Frame, RenderError> {
-        self.render_frame(None)
-    }
-
-    /// [`Renderer::render`], telling `progress` each part of the frame as the GPU finishes it
-    /// (the camera's G-buffer and light clusters, the shadows, the lighting): each part is
-    /// submitted and waited for before the next is recorded, so a frame that takes minutes
-    /// says where it is. The image is the one `render` gives, byte for byte; only the CPU
-    /// record time and the wall time include the waits.
-    pub fn render_reporting(
-        &mut self,
-        progress: &mut dyn FnMut(FramePart),
-    ) -> Result<Frame, RenderError> {
-        self.render_frame(Some(progress))
-    }
-
-    fn render_frame<'p>(
-        &mut self,
-        mut progress: Option<&mut (dyn FnMut(FramePart) + 'p)>,
-    ) -> Result<Frame, RenderError> {
-        let ctx = &*self.ctx.clone();
-        ctx.scoped("rendering a frame", || {
-            let (start, encoder, shadow_stats) = self.begin_frame(ctx, progress.as_deref_mut())?;
-            ctx.queue.submit([encoder.finish()]);
-            let cpu_record_ms = start.elapsed().as_secs_f64() * 1e3;
-            let rgba = crate::gpu::readback::read_texture(ctx, &self.lighting.color, 4)?;
-            if let Some(p) = progress {
-                p(FramePart::Lighting);
-            }
-            let wall_ms = start.elapsed().as_secs_f64() * 1e3;
-            let clusters = if self.clusters.enabled() {
-                Some(self.clusters.read_stats(ctx)?)
-            } else {
-                None
-            };
-            // A source whose frame went wrong (irregular's full node pool) makes it an error,
-            // never a wrong image.
-            self.source.finish(ctx)?;
-            let virtual_maps = self
-                .source
-                .technique_stats(ctx)?
-                .and_then(|s| s.downcast::<VirtualStats>().ok())
-                .map(|s| *s);
-            let (visibility, soft_visibility) = match &self.visibility {
-                Some(pass) => {
-                    let span = self.timer.span(Stage::Visibility);
-                    let inputs = LightingInputs {
-                        frame: &self.frame_buffer,
-                        lights: &self.lights,
-                        materials: &self.scene.materials,
-                        gbuffer: &self.gbuffer,
-                        clusters: &self.clusters,
-                        shadows: self.source.output(),
-                        denoise: None,
-                        reuse: None,
-                        probes: None,
-                    };
-                    let (mask, soft) = pass.run(ctx, &inputs, &self.timer, span)?;
-                    (Some(mask), soft)
-                }
-                // The source's output is the mask itself: a hard answer, also as soft
-                // visibility.
-                None if self.settings.visibility || self.settings.soft_visibility => {
-                    let mask = self.source.read_mask(ctx)?;
-                    let soft = mask
-                        .as_ref()
-                        .filter(|_| self.settings.soft_visibility)
-                        .map(SoftVisibility::from_mask);
-                    (mask, soft)
-                }
-                None => (None, None),
-            };
-            let gpu_ms = self.resolve_timings(ctx)?;
-            debug_assert!(visibility
-                .as_ref()
-                .is_none_or(|v: &VisibilityMask| v.lights as usize == self.current.lights.len()));
-            Ok(Frame {
-                width: self.settings.width,
-                height: self.settings.height,
-                rgba,
-                visibility,
-                soft_visibility,
-                timings: FrameTimings {
-                    gpu_ms,
-                    cpu_record_ms,
-                    wall_ms,
-                },
-                shadow_stats,
-                clusters,
-                virtual_maps,
-                probes: self.probes.as_ref().map(|p| p.stats()),
-            })
-        })
-    }
 }
 
 /// The visibility pass of `scene`'s lights when the settings ask for the mask and the source
@@ -804,29 +497,3 @@ fn visibility_pass(
     )
     .map(Some)
 }
-
-/// The parts of a frame [`Renderer::render_reporting`] reports as the GPU finishes them.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum FramePart {
-    /// The camera's G-buffer and the light clusters.
-    Camera,
-    /// The shadows: maps, pages, lists or the acceleration structure (the technique's
-    /// source).
-    Shadows,
-    /// The lighting (and the denoiser) and the image read back.
-    Lighting,
-}
-
-impl FramePart {
-    /// A few words for progress lines.
-    pub fn describe(self) -> &'static str {
-        match self {
-            FramePart::Camera => "G-buffer and light clusters",
-            FramePart::Shadows => "shadows",
-            FramePart::Lighting => "lighting",
-        }
-    }
-}
-
-/// Submits the frame recorded so far and starts a new encoder at a part's end.
-type Boundary<'a> = dyn FnMut(&mut wgpu::CommandEncoder, FramePart) -> Result<(), RenderError> + 'a;

@@ -12,7 +12,6 @@
 //! themselves are lit without reflections. The faces are sampled bilinearly at level 0 (sharp
 //! mirror images; no blur by roughness).
 
-use glam::Vec3;
 use manyshadows_scene::{Probe, Scene};
 
 use crate::error::RenderError;
@@ -295,28 +294,29 @@ impl ProbeMaps {
     }
 }
 
-/// The direction a reflection looks up for a surface at `p` with normal `n` seen along `v`
-/// (towards the eye), through `probe` (the CPU twin of `probe_reflected`, for tests).
-pub fn reflected_direction(probe: &Probe, p: Vec3, n: Vec3, v: Vec3) -> Vec3 {
-    let r = -v - 2.0 * (-v).dot(n) * n;
-    if probe.size.min_element() <= 0.0 {
-        return r;
-    }
-    let centre = probe.position + probe.offset;
-    let (lo, hi) = (centre - 0.5 * probe.size, centre + 0.5 * probe.size);
-    let safe = Vec3::select(r.abs().cmplt(Vec3::splat(1e-20)), Vec3::splat(1e-20), r);
-    let far = ((hi - p) / safe).max((lo - p) / safe);
-    let t = far.min_element();
-    if t > 0.0 {
-        p + r * t - probe.position
-    } else {
-        r
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
+
+    /// The direction a reflection looks up for a surface at `p` with normal `n` seen along `v`
+    /// (towards the eye), through `probe` (the CPU twin of `probe_reflected`, for tests).
+    fn reflected_direction(probe: &Probe, p: Vec3, n: Vec3, v: Vec3) -> Vec3 {
+        let r = -v - 2.0 * (-v).dot(n) * n;
+        if probe.size.min_element() <= 0.0 {
+            return r;
+        }
+        let centre = probe.position + probe.offset;
+        let (lo, hi) = (centre - 0.5 * probe.size, centre + 0.5 * probe.size);
+        let safe = Vec3::select(r.abs().cmplt(Vec3::splat(1e-20)), Vec3::splat(1e-20), r);
+        let far = ((hi - p) / safe).max((lo - p) / safe);
+        let t = far.min_element();
+        if t > 0.0 {
+            p + r * t - probe.position
+        } else {
+            r
+        }
+    }
 
     #[test]
     fn data_matches_the_wgsl() {
