@@ -15,6 +15,7 @@
 pub mod atlas;
 pub mod builtin;
 pub mod error;
+mod light;
 pub mod light_size;
 pub mod light_space;
 pub mod loaders;
