@@ -7,5 +7,6 @@ pub mod eyes;
 pub mod gbuffer;
 pub mod gbuffer_pull;
 pub mod gbuffer_readback;
+mod gbuffer_record;
 pub mod gbuffer_shaders;
 pub mod visibility_mask;
