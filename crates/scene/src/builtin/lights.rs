@@ -373,8 +373,8 @@ pub(crate) fn scatter(
 }
 
 /// Above this many lights a built-in layout keeps a fixed set of large "architectural" lights
-/// and turns every further spot and point light into a *local* light ([`local`]): bounded
-/// range near a floor, as real many-light scenes use. Up to this count every layout is the
+/// and turns every further spot and point light into a *local* light (see [`local_range`]):
+/// bounded range near a floor, as real many-light scenes use. Up to this count every layout is the
 /// scene's hand-made one, unchanged.
 pub const LOCAL_LAYOUT_ABOVE: usize = 64;
 

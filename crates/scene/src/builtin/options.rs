@@ -8,16 +8,18 @@ use crate::error::SceneError;
 use crate::light_size::LightSizes;
 use crate::model::Mesh;
 
-/// The most lights a built-in scene or [`scatter_lights`] layout may ask for; more is a
-/// [`SceneError::InvalidRequest`]. Layouts above [`LOCAL_LAYOUT_ABOVE`] lights are local
-/// lights of bounded range, so a frame stays readable at any count up to this one.
+/// The most lights a built-in scene or [`scatter_lights`](super::scatter_lights) layout may
+/// ask for; more is a [`SceneError::InvalidRequest`]. Layouts above
+/// [`LOCAL_LAYOUT_ABOVE`](super::LOCAL_LAYOUT_ABOVE) lights are local lights of bounded
+/// range, so a frame stays readable at any count up to this one.
 pub const MAX_LIGHTS: usize = 16384;
 
 /// Which light types a seeded layout uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum LightMix {
     /// Mostly spots (≈ 60 %), some points (≈ 30 %) and one directional light per 64 lights
-    /// (at least one when there are 3 or more lights, at most two); see [`LightCounts::split`].
+    /// (at least one when there are 3 or more lights, at most two); see
+    /// [`LightCounts::split`](super::LightCounts::split).
     #[default]
     All,
     /// Spot lights only.
