@@ -39,14 +39,23 @@ impl SoftArgs {
 
 /// `--soft-taps`: `B,F` or one number for both.
 fn parse_soft_taps(s: &str) -> Result<(u32, u32), String> {
-    let bad =
-        || format!("'{s}': blocker and filter taps as B,F (e.g. 8,16) or one number for both");
+    tap_pair(
+        s,
+        ',',
+        "blocker and filter taps as B,F (e.g. 8,16) or one number for both",
+    )
+}
+
+/// Blocker and filter taps from `B<sep>F`, or one number for both; `usage` says the form in
+/// the error. `--soft-taps` (`B,F`) and `bench soft --taps` (`B/F`, its list split at commas).
+pub(crate) fn tap_pair(s: &str, sep: char, usage: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("'{s}': {usage}");
     let n: Vec<u32> = s
-        .split(',')
+        .split(sep)
         .map(|t| t.trim().parse::<u32>().map_err(|_| bad()))
         .collect::<Result<_, _>>()?;
     match n[..] {
-        [b] => Ok((b, b)),
+        [t] => Ok((t, t)),
         [b, f] => Ok((b, f)),
         _ => Err(bad()),
     }

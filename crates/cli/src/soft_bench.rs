@@ -242,16 +242,7 @@ fn contenders_for(
 
 /// `--taps`' entry: `N` (both) or `B/F`.
 fn parse_tap_pair(s: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("'{s}': taps as N (search and filter) or B/F (e.g. 32/16)");
-    let n: Vec<u32> = s
-        .split('/')
-        .map(|t| t.trim().parse::<u32>().map_err(|_| bad()))
-        .collect::<Result<_, _>>()?;
-    match n[..] {
-        [t] => Ok((t, t)),
-        [b, f] => Ok((b, f)),
-        _ => Err(bad()),
-    }
+    crate::light_args::tap_pair(s, '/', "taps as N (search and filter) or B/F (e.g. 32/16)")
 }
 
 /// `16` for 16 of each, `32/16` otherwise.

@@ -539,12 +539,14 @@ impl LightClusters {
         encoder.clear_buffer(&self.slots, 0, None);
         encoder.clear_buffer(&self.control, 0, None);
         // The marking reads the G-buffer just drawn.
-        self.fence.record(encoder);
         {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("clusters.pass"),
-                timestamp_writes: timer.compute_writes(span, true, true),
-            });
+            let mut pass = self.fence.begin_compute_pass(
+                encoder,
+                &wgpu::ComputePassDescriptor {
+                    label: Some("clusters.pass"),
+                    timestamp_writes: timer.compute_writes(span, true, true),
+                },
+            );
             pass.set_bind_group(0, bind_group, &[]);
             pass.set_pipeline(&self.mark);
             pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);

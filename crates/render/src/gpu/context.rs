@@ -149,7 +149,7 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// GPU errors nobody captured in an error scope (they would otherwise panic).
     uncaptured: Arc<Mutex<Vec<String>>>,
-    /// The fence every compute pass of a frame records first (inert but on OpenGL).
+    /// The fence every compute pass of a frame begins through (inert but on OpenGL).
     raster_fence: super::raster_fence::RasterFence,
 }
 
@@ -392,8 +392,8 @@ impl GpuContext {
         })
     }
 
-    /// What every compute pass of a frame records first, so that the draws recorded before it
-    /// are finished (OpenGL: llvmpipe runs a dispatch before the draws before it; see
+    /// What every compute pass of a frame begins through, so that the draws recorded before
+    /// it are finished (OpenGL: llvmpipe runs a dispatch before the draws before it; see
     /// `gpu::raster_fence`); inert on other backends.
     pub(crate) fn raster_fence(&self) -> &super::raster_fence::RasterFence {
         &self.raster_fence

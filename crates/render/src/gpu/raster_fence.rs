@@ -10,11 +10,12 @@
 //! frame of a renderer differed from its first in 12 of 200 renderers; the clusters' marking
 //! read a G-buffer whose last draws had not landed.
 //!
-//! [`RasterFence::record`] is a compute pass of two dispatches that write one word of a
-//! storage buffer: between the two, wgpu sees a storage write followed by another and emits
-//! the barrier in place, after everything recorded before. Every compute pass of a frame
-//! records it first (`GpuContext::raster_fence`, which passes keep a clone of); on other backends the context holds none and
-//! records nothing (Vulkan's barriers come from wgpu's usage tracking).
+//! The fence is a compute pass of two dispatches that write one word of a storage buffer:
+//! between the two, wgpu sees a storage write followed by another and emits the barrier in
+//! place, after everything recorded before. Every compute pass of a frame begins through
+//! [`RasterFence::begin_compute_pass`] (`GpuContext::raster_fence`, which passes keep a clone
+//! of), which records the fence first; on other backends it records the pass alone (Vulkan's
+//! barriers come from wgpu's usage tracking).
 
 const SOURCE: &str = "
 @group(0) @binding(0) var<storage, read_write> word: array<u32, 1>;
@@ -41,12 +42,18 @@ impl RasterFence {
         Self((backend == wgpu::Backend::Gl).then(|| std::sync::Arc::new(Fence::new(device))))
     }
 
-    /// Records the fence: everything recorded before it in `encoder` is finished before
-    /// anything recorded after it runs (nothing where the fence is inert).
-    pub(crate) fn record(&self, encoder: &mut wgpu::CommandEncoder) {
+    /// Begins a compute pass of the frame after the fence: everything recorded before it in
+    /// `encoder` is finished before the pass runs (only the pass where the fence is inert).
+    /// Every compute pass of a frame begins here.
+    pub(crate) fn begin_compute_pass<'e>(
+        &self,
+        encoder: &'e mut wgpu::CommandEncoder,
+        desc: &wgpu::ComputePassDescriptor<'_>,
+    ) -> wgpu::ComputePass<'e> {
         if let Some(f) = &self.0 {
             f.record(encoder);
         }
+        encoder.begin_compute_pass(desc)
     }
 }
 

@@ -348,12 +348,14 @@ impl FaceClusters {
                 encoder.clear_buffer(&b.counter, 0, None);
             }
             // The cull rewrites the commands the last round's draws read.
-            self.fence.record(encoder);
             {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("probes.cull_faces"),
-                    timestamp_writes: timer.compute_writes(span, first, false),
-                });
+                let mut pass = self.fence.begin_compute_pass(
+                    encoder,
+                    &wgpu::ComputePassDescriptor {
+                        label: Some("probes.cull_faces"),
+                        timestamp_writes: timer.compute_writes(span, first, false),
+                    },
+                );
                 pass.set_pipeline(&self.cull);
                 pass.set_bind_group(0, &b.cull_group, &[offset]);
                 pass.dispatch_workgroups(r.clusters.div_ceil(64), r.views, 1);

@@ -414,11 +414,13 @@ impl Denoiser {
         }
         let groups = (self.width.div_ceil(8), self.height.div_ceil(8));
         // The filter reads the lit image and the G-buffer the frame drew.
-        ctx.raster_fence().record(encoder);
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("denoise"),
-            timestamp_writes: timer.compute_writes(span, true, false),
-        });
+        let mut pass = ctx.raster_fence().begin_compute_pass(
+            encoder,
+            &wgpu::ComputePassDescriptor {
+                label: Some("denoise"),
+                timestamp_writes: timer.compute_writes(span, true, false),
+            },
+        );
         pass.set_pipeline(&self.temporal);
         pass.set_bind_group(0, &self.temporal_groups[self.parity], &[]);
         pass.dispatch_workgroups(groups.0, groups.1, 1);

@@ -209,13 +209,15 @@ impl VisibilityPass {
                 label: Some("visibility.encoder"),
             });
             // The pass reads the G-buffer and the maps the frame drew.
-            ctx.raster_fence().record(&mut encoder);
             {
                 let last = first + count >= self.words;
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("visibility.pass"),
-                    timestamp_writes: timer.compute_writes(span, first == 0, last),
-                });
+                let mut pass = ctx.raster_fence().begin_compute_pass(
+                    &mut encoder,
+                    &wgpu::ComputePassDescriptor {
+                        label: Some("visibility.pass"),
+                        timestamp_writes: timer.compute_writes(span, first == 0, last),
+                    },
+                );
                 pass.set_pipeline(&self.pipeline);
                 pass.set_bind_group(0, &bind_group, &[]);
                 pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);

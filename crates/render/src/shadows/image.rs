@@ -147,12 +147,14 @@ pub fn read_depth_view(
             label: Some("atlas_copy.encoder"),
         });
         // The copy reads the atlas the frame drew.
-        ctx.raster_fence().record(&mut encoder);
         {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("atlas_copy.pass"),
-                timestamp_writes: None,
-            });
+            let mut pass = ctx.raster_fence().begin_compute_pass(
+                &mut encoder,
+                &wgpu::ComputePassDescriptor {
+                    label: Some("atlas_copy.pass"),
+                    timestamp_writes: None,
+                },
+            );
             pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, &bind_group, &[]);
             pass.dispatch_workgroups(size.div_ceil(16), rows.div_ceil(16), 1);

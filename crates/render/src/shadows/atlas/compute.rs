@@ -548,12 +548,13 @@ impl ShadowTechnique for Compute {
             let copy_bind_group = slot.copy_bind_group.clone().expect("made by slot()");
             if r == 0 {
                 // The first pass opens the timer span (a fill records no timestamps).
-                // Draws recorded before may still read what this pass rewrites (gpu::raster_fence).
-                g.input.ctx.raster_fence().record(g.encoder);
-                let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("compute.transform"),
-                    timestamp_writes: g.timer.compute_writes(g.span, true, false),
-                });
+                let mut pass = g.input.ctx.raster_fence().begin_compute_pass(
+                    g.encoder,
+                    &wgpu::ComputePassDescriptor {
+                        label: Some("compute.transform"),
+                        timestamp_writes: g.timer.compute_writes(g.span, true, false),
+                    },
+                );
                 let s = g.timer.begin_compute_stats(&mut pass);
                 casters.record(&mut pass, false);
                 g.timer.end_compute_stats(&mut pass, s);
@@ -563,12 +564,13 @@ impl ShadowTechnique for Compute {
             g.encoder.clear_buffer(&depth, 0, Some(round_texels * 4));
             if casters.triangles > 0 {
                 {
-                    // Draws recorded before may still read what this pass rewrites (gpu::raster_fence).
-                    g.input.ctx.raster_fence().record(g.encoder);
-                    let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                        label: Some("compute.setup"),
-                        timestamp_writes: None,
-                    });
+                    let mut pass = g.input.ctx.raster_fence().begin_compute_pass(
+                        g.encoder,
+                        &wgpu::ComputePassDescriptor {
+                            label: Some("compute.setup"),
+                            timestamp_writes: None,
+                        },
+                    );
                     let s = g.timer.begin_compute_stats(&mut pass);
                     pass.set_bind_group(0, &bind_group, &[]);
                     // Alpha-tested triangles, then the opaque ones, each with its pipeline (the
@@ -595,12 +597,13 @@ impl ShadowTechnique for Compute {
                     stats.passes += 1;
                 }
                 if !discard {
-                    // Draws recorded before may still read what this pass rewrites (gpu::raster_fence).
-                    g.input.ctx.raster_fence().record(g.encoder);
-                    let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                        label: Some("compute.large"),
-                        timestamp_writes: None,
-                    });
+                    let mut pass = g.input.ctx.raster_fence().begin_compute_pass(
+                        g.encoder,
+                        &wgpu::ComputePassDescriptor {
+                            label: Some("compute.large"),
+                            timestamp_writes: None,
+                        },
+                    );
                     let s = g.timer.begin_compute_stats(&mut pass);
                     // Chunks of alpha-tested triangles say so; only a scene with some needs the
                     // pipeline that looks.

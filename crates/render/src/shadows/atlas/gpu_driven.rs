@@ -338,12 +338,13 @@ impl ShadowTechnique for GpuDriven {
         if rounds.is_empty() {
             // No casters: the transform (a no-op) and a pass that clears the listed tiles.
             {
-                // Draws recorded before may still read what this pass rewrites (gpu::raster_fence).
-                g.input.ctx.raster_fence().record(g.encoder);
-                let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("gpu_driven.transform"),
-                    timestamp_writes: g.timer.compute_writes(g.span, true, false),
-                });
+                let mut pass = g.input.ctx.raster_fence().begin_compute_pass(
+                    g.encoder,
+                    &wgpu::ComputePassDescriptor {
+                        label: Some("gpu_driven.transform"),
+                        timestamp_writes: g.timer.compute_writes(g.span, true, false),
+                    },
+                );
                 let s = g.timer.begin_compute_stats(&mut pass);
                 casters.record(&mut pass, true);
                 g.timer.end_compute_stats(&mut pass, s);
@@ -373,12 +374,13 @@ impl ShadowTechnique for GpuDriven {
                 g.encoder.clear_buffer(&self.counter, 0, None);
             }
             {
-                // Draws recorded before may still read what this pass rewrites (gpu::raster_fence).
-                g.input.ctx.raster_fence().record(g.encoder);
-                let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("gpu_driven.cull"),
-                    timestamp_writes: g.timer.compute_writes(g.span, first, false),
-                });
+                let mut pass = g.input.ctx.raster_fence().begin_compute_pass(
+                    g.encoder,
+                    &wgpu::ComputePassDescriptor {
+                        label: Some("gpu_driven.cull"),
+                        timestamp_writes: g.timer.compute_writes(g.span, first, false),
+                    },
+                );
                 let s = g.timer.begin_compute_stats(&mut pass);
                 if first {
                     // The per-frame transform and cluster spheres, once for every round.

@@ -426,12 +426,13 @@ impl ShadowTechnique for Multiview {
 
         g.encoder.push_debug_group("multiview");
         {
-            // Draws recorded before may still read what this pass rewrites (gpu::raster_fence).
-            g.input.ctx.raster_fence().record(g.encoder);
-            let mut pass = g.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("multiview.transform"),
-                timestamp_writes: g.timer.compute_writes(g.span, true, false),
-            });
+            let mut pass = g.input.ctx.raster_fence().begin_compute_pass(
+                g.encoder,
+                &wgpu::ComputePassDescriptor {
+                    label: Some("multiview.transform"),
+                    timestamp_writes: g.timer.compute_writes(g.span, true, false),
+                },
+            );
             let s = g.timer.begin_compute_stats(&mut pass);
             casters.record(&mut pass, false);
             g.timer.end_compute_stats(&mut pass, s);

@@ -572,12 +572,14 @@ impl IrregularShadows {
         let pixel_groups =
             crate::gpu::pipelines::dispatch_2d(self.width as u64 * self.height as u64, 65535);
         // The samples come from the G-buffer just drawn.
-        self.fence.record(encoder);
         {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("irregular.init"),
-                timestamp_writes: timer.compute_writes(span, true, false),
-            });
+            let mut pass = self.fence.begin_compute_pass(
+                encoder,
+                &wgpu::ComputePassDescriptor {
+                    label: Some("irregular.init"),
+                    timestamp_writes: timer.compute_writes(span, true, false),
+                },
+            );
             casters.record(&mut pass, false);
             pass.set_pipeline(&self.init.0);
             pass.set_bind_group(0, &self.init.1, &[]);

@@ -476,12 +476,14 @@ impl PageDraw {
                 encoder.clear_buffer(&self.command_count, 0, None);
             }
             // The cull rewrites the commands the last round's draws read.
-            self.fence.record(encoder);
             {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("vsm.cull"),
-                    timestamp_writes: timer.compute_writes(span, first, false),
-                });
+                let mut pass = self.fence.begin_compute_pass(
+                    encoder,
+                    &wgpu::ComputePassDescriptor {
+                        label: Some("vsm.cull"),
+                        timestamp_writes: timer.compute_writes(span, first, false),
+                    },
+                );
                 pass.set_pipeline(&self.cull);
                 pass.set_bind_group(0, &g.cull, &offset);
                 if self.compact {

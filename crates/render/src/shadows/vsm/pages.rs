@@ -419,12 +419,14 @@ impl VirtualShadows {
         self.tiles.clear(encoder);
         // The marking reads the G-buffer; the allocation rewrites what last frame's page
         // draws read.
-        self.fence.record(encoder);
         {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("vsm.pages"),
-                timestamp_writes: timer.compute_writes(pages_span, true, true),
-            });
+            let mut pass = self.fence.begin_compute_pass(
+                encoder,
+                &wgpu::ComputePassDescriptor {
+                    label: Some("vsm.pages"),
+                    timestamp_writes: timer.compute_writes(pages_span, true, true),
+                },
+            );
             casters.record(&mut pass, true);
             let entries = self.plan.fit.table_entries;
             if !self.plan.faces.is_empty() {
