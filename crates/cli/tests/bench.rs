@@ -1,6 +1,8 @@
 //! `manyshadows bench layered` end to end on a tiny configuration: it measures every method it
 //! was asked for, writes consistent JSON, a table and plots, and rejects bad arguments cleanly.
 
+mod shared_gpu;
+
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
@@ -496,7 +498,7 @@ fn bench_shadows_puts_every_kind_of_shadow_side_by_side() {
         "shadows",
         "--scene cubes --lights 4,40 --width 96 --height 54 --light-samples 2 --repeats 1 --warmup 0",
     );
-    let ctx = manyshadows::GpuContext::new(&Default::default()).expect("adapter");
+    let ctx = shared_gpu::context();
     let rays_here = manyshadows::Technique::all()
         .iter()
         .any(|t| t.info().fills == manyshadows::Fills::Rays && t.info().unmet(&ctx).is_empty());
@@ -699,7 +701,7 @@ fn bench_progress_is_printed_as_lines_in_a_log() {
 #[test]
 fn bench_denoise_scores_each_frame_of_a_sequence() {
     let args = "denoise --scene cubes --lights 48 --frames 4 --width 96 --height 72";
-    let ctx = manyshadows::GpuContext::new(&Default::default()).expect("adapter");
+    let ctx = shared_gpu::context();
     let rays_here = manyshadows::Technique::RAYTRACED
         .info()
         .unmet(&ctx)

@@ -19,6 +19,8 @@
 //!   surface, so it shadows itself) gives 78 % false shadow on `plane-spot`; the test requires
 //!   more than 50 %, against 0 with the default bias, so the score cannot miss acne.
 
+mod shared_gpu;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -71,8 +73,7 @@ fn compare(name: &str, extra: &[&str]) -> (Value, PathBuf) {
 /// something the technique declares it needs (and the skip says which). A skip of a technique
 /// the adapter can run, or a technique neither scored nor skipped, fails.
 fn every_technique_scored_or_honestly_skipped(v: &Value, scene: &str) {
-    let ctx = manyshadows::GpuContext::new(&Default::default())
-        .expect("an adapter (install mesa-vulkan-drivers, or libegl1 + libgl1-mesa-dri)");
+    let ctx = shared_gpu::context();
     let scored: Vec<&str> = v["variants"]
         .as_array()
         .unwrap()
@@ -450,7 +451,7 @@ fn differing_bits(a: &manyshadows::VisibilityMask, b: &manyshadows::VisibilityMa
 /// 10,000 lit bits. Without ray queries the GPU reference is refused by name.
 #[test]
 fn the_gpu_reference_agrees_with_the_cpu_reference() {
-    let ctx = manyshadows::GpuContext::new(&Default::default()).expect("an adapter");
+    let ctx = shared_gpu::context();
     let rays_here = manyshadows::Technique::all()
         .iter()
         .any(|t| t.info().fills == manyshadows::Fills::Rays && t.info().unmet(&ctx).is_empty());
@@ -631,7 +632,7 @@ fn soft_shadows_beat_hard_ones_in_the_penumbra() {
 /// the error within 0.01. Without ray queries the GPU reference is refused by name.
 #[test]
 fn the_gpu_soft_reference_agrees_with_the_cpu_one() {
-    let ctx = manyshadows::GpuContext::new(&Default::default()).expect("an adapter");
+    let ctx = shared_gpu::context();
     let rays_here = manyshadows::Technique::all()
         .iter()
         .any(|t| t.info().fills == manyshadows::Fills::Rays && t.info().unmet(&ctx).is_empty());
@@ -792,7 +793,7 @@ fn compare_tells_each_frame_in_stages() {
 /// come closer to it frame by frame. Without ray queries it is refused by name.
 #[test]
 fn compare_over_a_sequence_scores_each_frame_against_its_exact_image() {
-    let ctx = manyshadows::GpuContext::new(&Default::default()).expect("an adapter");
+    let ctx = shared_gpu::context();
     let rays_here = manyshadows::Technique::all()
         .iter()
         .any(|t| t.info().fills == manyshadows::Fills::Rays && t.info().unmet(&ctx).is_empty());

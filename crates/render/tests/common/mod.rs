@@ -9,21 +9,32 @@ use manyshadows::{AdapterRequest, GpuContext};
 /// The GPU context every GPU test runs on: the adapter `GpuContext::new` picks, narrowed by
 /// `WGPU_BACKEND` (CI runs the suite once with `vulkan` and once with `gl`). Never skips: with
 /// no adapter the test fails and says what to install.
+///
+/// One device per test process, made by the first test that asks and shared (cloned) by every
+/// test after it; it is never dropped. NVIDIA's Linux Vulkan driver (580.159.04) crashes or
+/// deadlocks now and then when several threads create and destroy devices at once (wgpu
+/// issues 8365 and 10010; seen here as a segfault and as a binary stalled after its last
+/// check, in `--test-threads 8` runs, never in one-thread runs: docs/benchmarks.md), and
+/// one device per test was exactly that. Error scopes are per thread in wgpu, so a test's
+/// scoped errors stay its own.
 pub fn context() -> GpuContext {
-    match GpuContext::new(&AdapterRequest::default()) {
-        Ok(ctx) => {
-            eprintln!(
-                "GPU test adapter: {}",
-                manyshadows::gpu::context::describe_adapter(&ctx.info)
-            );
-            ctx
-        }
-        Err(e) => panic!(
-            "GPU tests need a graphics adapter and none was usable: {e}\n\
-             Install one: `apt-get install -y mesa-vulkan-drivers` (Vulkan lavapipe) or \
-             `apt-get install -y libegl1 libgl1-mesa-dri` (OpenGL llvmpipe)."
-        ),
-    }
+    static SHARED: std::sync::OnceLock<GpuContext> = std::sync::OnceLock::new();
+    SHARED
+        .get_or_init(|| match GpuContext::new(&AdapterRequest::default()) {
+            Ok(ctx) => {
+                eprintln!(
+                    "GPU test adapter: {}",
+                    manyshadows::gpu::context::describe_adapter(&ctx.info)
+                );
+                ctx
+            }
+            Err(e) => panic!(
+                "GPU tests need a graphics adapter and none was usable: {e}\n\
+                 Install one: `apt-get install -y mesa-vulkan-drivers` (Vulkan lavapipe) or \
+                 `apt-get install -y libegl1 libgl1-mesa-dri` (OpenGL llvmpipe)."
+            ),
+        })
+        .clone()
 }
 
 /// Where failing tests write their images.
