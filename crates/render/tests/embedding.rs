@@ -57,6 +57,7 @@ fn texture(ctx: &GpuContext, w: u32, h: u32, format: wgpu::TextureFormat) -> wgp
 
 #[test]
 fn render_to_a_callers_texture_gives_the_frame_render_reads_back() {
+    let _own = common::own_device_lock();
     let ctx = callers_device();
     let scene = builtin::build("cubes", &BuiltinOptions::default()).unwrap();
     // Every frame drawn whole (with the default caching the second frame keeps every map and
@@ -114,6 +115,7 @@ fn render_to_a_callers_texture_gives_the_frame_render_reads_back() {
 
 #[test]
 fn render_to_refuses_a_texture_it_cannot_draw_into() {
+    let _own = common::own_device_lock();
     let ctx = callers_device();
     let scene = builtin::build("plane-spot", &BuiltinOptions::default()).unwrap();
     let mut r = Renderer::new(
@@ -163,6 +165,7 @@ fn render_to_refuses_a_texture_it_cannot_draw_into() {
 
 #[test]
 fn a_callers_device_below_the_minimum_is_refused() {
+    let _own = common::own_device_lock();
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle().with_env();
     desc.backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::all());
     let instance = wgpu::Instance::new(desc);
@@ -186,6 +189,7 @@ fn a_callers_device_below_the_minimum_is_refused() {
 /// hands them to the renderer instead, which then reports them.
 #[test]
 fn the_hosts_error_handler_stays_unless_it_asks() {
+    let _own = common::own_device_lock();
     use std::sync::atomic::{AtomicUsize, Ordering};
     use std::sync::Arc;
     let ctx = callers_device();
@@ -237,6 +241,7 @@ fn the_hosts_error_handler_stays_unless_it_asks() {
 /// has finished them, without waiting: the same stages `read_gpu_timings` reads.
 #[test]
 fn gpu_timings_come_back_without_a_wait() {
+    let _own = common::own_device_lock();
     let ctx = common::context();
     assert!(
         ctx.has(wgpu::Features::TIMESTAMP_QUERY),
@@ -274,6 +279,7 @@ fn gpu_timings_come_back_without_a_wait() {
 /// nothing is timed, and both ways of reading the times say so without waiting for ever.
 #[test]
 fn gpu_timings_are_empty_without_timestamp_queries() {
+    let _own = common::own_device_lock();
     let ctx = callers_device();
     assert!(!ctx.has(wgpu::Features::TIMESTAMP_QUERY));
     let scene = builtin::build("cubes", &BuiltinOptions::default()).unwrap();

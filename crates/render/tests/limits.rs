@@ -38,6 +38,7 @@ fn settings(technique: Technique) -> RenderSettings {
 /// needs more than WebGPU offers, is refused with an error that says so.
 #[test]
 fn every_technique_renders_on_the_minimum_limits_as_on_the_full_adapter() {
+    let _own = common::own_device_lock();
     let full = common::context();
     let small = small_device();
     assert_eq!(small.limits().max_storage_buffers_per_shader_stage, 8);
@@ -89,6 +90,7 @@ fn every_technique_renders_on_the_minimum_limits_as_on_the_full_adapter() {
 
 #[test]
 fn a_device_below_the_minimum_is_refused_naming_the_limit() {
+    let _own = common::own_device_lock();
     let err = context_with(wgpu::Limits {
         max_storage_buffers_per_shader_stage: 4,
         ..required_limits()
@@ -107,6 +109,7 @@ fn a_device_below_the_minimum_is_refused_naming_the_limit() {
 
 #[test]
 fn limits_beyond_the_adapter_are_refused_naming_the_limit() {
+    let _own = common::own_device_lock();
     let have = common::context().adapter.limits();
     let err = context_with(wgpu::Limits {
         max_texture_dimension_2d: have.max_texture_dimension_2d + 1,
@@ -166,6 +169,7 @@ fn grid_scene(n: u32) -> Scene {
 /// grid renders.
 #[test]
 fn casters_beyond_one_storage_binding_are_a_clear_error() {
+    let _own = common::own_device_lock();
     let big_buffers = context_with(wgpu::Limits {
         max_buffer_size: 64 << 20,
         ..required_limits()
@@ -216,6 +220,7 @@ fn casters_beyond_one_storage_binding_are_a_clear_error() {
 /// 2048 wide renders; an atlas asked bigger than the device allows is capped to it.
 #[test]
 fn frames_and_atlases_at_the_texture_limit() {
+    let _own = common::own_device_lock();
     let small = small_device();
     let scene = builtin::build("cubes", &BuiltinOptions::default()).unwrap();
     let wide = |width: u32, height: u32| {
@@ -244,6 +249,7 @@ fn frames_and_atlases_at_the_texture_limit() {
 /// frame is refused with a clear error; never a GPU error.
 #[test]
 fn thousands_of_lights_on_the_minimum_limits() {
+    let _own = common::own_device_lock();
     let small = small_device();
     let scene = builtin::build(
         "atrium",
