@@ -10,41 +10,44 @@ use manyshadows::{AdapterRequest, GpuContext};
 /// `WGPU_BACKEND` (CI runs the suite once with `vulkan` and once with `gl`). Never skips: with
 /// no adapter the test fails and says what to install.
 ///
-/// One device per test process, made by the first test that asks and shared (cloned) by every
-/// test after it; it is never dropped. NVIDIA's Linux Vulkan driver (580.159.04) crashes or
-/// deadlocks now and then when several threads create and destroy devices at once (wgpu
-/// issues 8365 and 10010; seen here as a segfault and as a binary stalled after its last
-/// check, in `--test-threads 8` runs, never in one-thread runs: docs/benchmarks.md), and
-/// one device per test was exactly that. Error scopes are per thread in wgpu, so a test's
-/// scoped errors stay its own.
+/// On Vulkan (and Metal, DX12) one device per test process, made by the first test that asks
+/// and shared (cloned) by every test after it; it is never dropped. NVIDIA's Linux Vulkan
+/// driver (580.159.04) crashes or deadlocks now and then when several threads create and
+/// destroy devices at once (wgpu issues 8365 and 10010; seen here as a segfault and as a
+/// binary stalled after its last check, in `--test-threads 8` runs, never in one-thread
+/// runs: docs/benchmarks.md), and one device per test was exactly that. Error scopes are per
+/// thread in wgpu, so a test's scoped errors stay its own. On OpenGL every test still makes
+/// its own: wgpu's GL device has one context behind a lock that a thread gives up on after
+/// 6 s (a panic), and with the device shared a test thread did, once in four runs of
+/// analytic.rs on llvmpipe, while another held it.
 pub fn context() -> GpuContext {
     static SHARED: std::sync::OnceLock<GpuContext> = std::sync::OnceLock::new();
-    SHARED
-        .get_or_init(|| match GpuContext::new(&AdapterRequest::default()) {
-            Ok(ctx) => {
-                eprintln!(
-                    "GPU test adapter: {}",
-                    manyshadows::gpu::context::describe_adapter(&ctx.info)
-                );
-                ctx
-            }
-            Err(e) => panic!(
-                "GPU tests need a graphics adapter and none was usable: {e}\n\
-                 Install one: `apt-get install -y mesa-vulkan-drivers` (Vulkan lavapipe) or \
-                 `apt-get install -y libegl1 libgl1-mesa-dri` (OpenGL llvmpipe)."
-            ),
-        })
-        .clone()
+    let mut made_here = false;
+    let shared = SHARED.get_or_init(|| {
+        made_here = true;
+        new_context()
+    });
+    if shared.info.backend == manyshadows::wgpu::Backend::Gl && !made_here {
+        return new_context();
+    }
+    shared.clone()
 }
 
-/// Held by a test for as long as it makes, uses and drops devices of its own (besides the
-/// shared one of [`context`]: `limits.rs`'s smaller devices, `embedding.rs`'s host-made
-/// ones), so that one thread at a time creates or destroys a device (the driver trouble
-/// [`context`] describes). Take it first in the test, so that it is dropped last.
-pub fn own_device_lock() -> std::sync::MutexGuard<'static, ()> {
-    static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
-    // A test that failed while holding it leaves it poisoned; the next may still run.
-    LOCK.lock().unwrap_or_else(|e| e.into_inner())
+fn new_context() -> GpuContext {
+    match GpuContext::new(&AdapterRequest::default()) {
+        Ok(ctx) => {
+            eprintln!(
+                "GPU test adapter: {}",
+                manyshadows::gpu::context::describe_adapter(&ctx.info)
+            );
+            ctx
+        }
+        Err(e) => panic!(
+            "GPU tests need a graphics adapter and none was usable: {e}\n\
+             Install one: `apt-get install -y mesa-vulkan-drivers` (Vulkan lavapipe) or \
+             `apt-get install -y libegl1 libgl1-mesa-dri` (OpenGL llvmpipe)."
+        ),
+    }
 }
 
 /// Where failing tests write their images.
