@@ -137,15 +137,16 @@ fn denoising_without_shadow_rays_is_refused_by_name() {
 /// A sun switched off: its light leaves the frame at once (the unshadowed light is exact
 /// every frame) and the shadow ratio's history is corrected for it in the frame of the switch
 /// (denoise.rs: the sun's unshadowed light and its visibility, traced once, taken out of the
-/// history's means). Measured (cubes, 48 lights, lavapipe): the exact image changes by 17.0;
-/// the denoised error after the switch 1.12, 1.12, 1.08, 1.01, where a denoiser started
-/// without the sun is at 1.90 after four frames and 0.87 after 16 (1.16x; issue 39 asks
-/// 1.1x). Without the correction (the fallback for more lights than `MAX_LIGHT_FIXES`, the
-/// history cut by the change of each pixel's unshadowed light): 2.11, 1.95, 1.81, 1.66
-/// (1.91x). With the à-trous's 3 × 3 taps before its five: 1.04 against 1.98 and 0.89;
-/// without the correction 1.77 (2.0x; the rule before it, each frame weighing at least 0.2,
-/// 1.78); the correction without the history's frames cut to its samples of the lights that
-/// stay: 1.10 after four (1.25x).
+/// history's means; the history's frame count cut to its samples of the lights that stay,
+/// and that frame drawing the lost share of a full history's samples again,
+/// lighting.wgsl `catch_up_samples`). Measured (cubes, 48 lights, lavapipe): the exact image
+/// changes by 17.0; the denoised error after the switch 0.927, 0.901, 0.895, 0.879, where a
+/// denoiser started without the sun is at 1.90 after four frames and 0.869 after 16 (1.07x,
+/// 1.04x, 1.03x, 1.01x; issue 39 asks 1.1x within four frames). Without the catch-up (K
+/// samples in that frame too) 1.12, 1.12, 1.08, 1.01 (1.29x ... 1.16x), which fails;
+/// drawing the lost share of 16 frames again 1.02, 1.00, 0.98, 0.96 (1.18x ... 1.10x).
+/// Without the correction (the fallback for more lights than `MAX_LIGHT_FIXES`, the history
+/// cut by the change of each pixel's unshadowed light): 2.11, 1.95, 1.81, 1.66 (1.91x).
 /// (Before the light samples were stratified over frames: 2.00, 1.86, 1.71, 1.63 against a
 /// steady 1.39.)
 #[test]
@@ -157,8 +158,8 @@ fn a_light_switched_off_leaves_the_frame_within_four_frames() {
     let (fresh4, steady) = (s.fresh[3], s.fresh[15]);
     eprintln!(
         "switching the sun off changes the exact image by {:.2}; denoised after the switch: \
-         {:.2?}; a denoiser started without it: {fresh4:.2} after 4 frames, steady {steady:.2} \
-         after 16 ({:.2}x)",
+         {:.3?}; a denoiser started without it: {fresh4:.3} after 4 frames, steady {steady:.3} \
+         after 16 ({:.3}x)",
         s.moved,
         s.after,
         s.after[3] / steady
@@ -170,19 +171,22 @@ fn a_light_switched_off_leaves_the_frame_within_four_frames() {
     );
     // Four frames after the switch the history from before it helps rather than hurts: the
     // frame is closer to the exact one than a denoiser that never saw the light, four frames
-    // in (lavapipe: 1.01 against 1.90), and within a quarter of the steady error after 16
-    // frames (1.16x). Without the correction 1.66 (1.91x) fails the second.
+    // in (lavapipe: 0.879 against 1.90), and every frame after the switch is within 10 % of
+    // the steady error after 16 frames (lavapipe: at most 1.07x). Without the catch-up the
+    // first frame after is 1.29x; without the correction 1.91x four frames after.
     assert!(
         s.after[3] <= fresh4,
         "four frames after the switch: {} vs {fresh4} for a denoiser started without the light",
         s.after[3]
     );
-    assert!(
-        s.after[3] <= 1.25 * steady,
-        "four frames after the switch: {} vs a steady {steady} ({:.2}x, at most 1.25x)",
-        s.after[3],
-        s.after[3] / steady
-    );
+    for (k, e) in s.after.iter().enumerate() {
+        assert!(
+            *e <= 1.10 * steady,
+            "frame {} after the switch: {e} vs a steady {steady} ({:.3}x, at most 1.10x)",
+            k + 1,
+            e / steady
+        );
+    }
 }
 
 /// More lights changed at once than the history is corrected for (`MAX_LIGHT_FIXES` records:

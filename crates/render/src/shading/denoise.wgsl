@@ -87,7 +87,10 @@ fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
     let r = ratio_of(shadowed, unshadowed);
     var mean = r;
     var m2 = r * r;
-    var frames = 1.0;
+    // The frames of samples this frame's estimate stands for (more than 1 where the frame
+    // of a light change drew more: lighting.wgsl `catch_up_samples`).
+    let weight = max(px_in[4u * i + 1u].w, 1.0);
+    var frames = weight;
     let clip = p.prev_view_proj * vec4<f32>(pos, 1.0);
     if (p.pixel.z == 0.0 && clip.w > 0.0) {
         let ndc = clip.xy / clip.w;
@@ -155,8 +158,8 @@ fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
                 let stays = clamp(1.0 - abs(now - was) / max(max(now, was), 1e-30), 0.0, 1.0);
                 h0.w = max(floor(h0.w * stays * stays * stays), 1.0);
             }
-            frames = min(round(h0.w) + 1.0, f32(p.size.w));
-            let a = 1.0 / frames;
+            frames = min(round(h0.w) + weight, f32(p.size.w));
+            let a = min(weight / frames, 1.0);
             shadowed = mix(h0.rgb, shadowed, a);
             unshadowed = mix(h1.rgb, unshadowed, a);
             mean = mix(h1.w, r, a);

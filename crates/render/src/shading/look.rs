@@ -372,7 +372,7 @@ impl ShadingConsts {
         } else {
             format!(
                 "{consts}{reuse}fn denoise_store(px: vec2<i32>, a: vec4<f32>, s: vec3<f32>, \
-                 u: vec3<f32>, r: vec3<f32>) {{}}\n\
+                 u: vec3<f32>, r: vec3<f32>, f: f32) {{}}\n\
                  fn denoise_set_shadowed(px: vec2<i32>, s: vec3<f32>) {{}}\n\
                  fn denoise_store_fix(px: vec2<i32>, s: vec3<f32>, u: vec3<f32>, g: f32) {{}}\n"
             )
@@ -394,12 +394,13 @@ const DENOISE_WGSL: &str = "
 // lights changed, with the history's correction for the temporal pass (denoise_store_fix).
 @group(0) @binding(41) var<storage, read_write> denoise_ratio: array<vec4<f32>>;
 
-// Per pixel: [exact unshadowed direct light, 1 = geometry], [estimate with shadows, 0],
-// [the same estimate without, 0], [ambient + emission, 0].
-fn denoise_store(px: vec2<i32>, a: vec4<f32>, shadowed: vec3<f32>, unshadowed: vec3<f32>, rest: vec3<f32>) {
+// Per pixel: [exact unshadowed direct light, 1 = geometry], [estimate with shadows, the
+// frames of samples it stands for (0 = 1)], [the same estimate without, 0], [ambient +
+// emission, 0].
+fn denoise_store(px: vec2<i32>, a: vec4<f32>, shadowed: vec3<f32>, unshadowed: vec3<f32>, rest: vec3<f32>, frames: f32) {
     let i = 4u * (u32(px.y) * u32(frame.viewport.x) + u32(px.x));
     denoise_px[i] = a;
-    denoise_px[i + 1u] = vec4<f32>(shadowed, 0.0);
+    denoise_px[i + 1u] = vec4<f32>(shadowed, frames);
     denoise_px[i + 2u] = vec4<f32>(unshadowed, 0.0);
     denoise_px[i + 3u] = vec4<f32>(rest, 0.0);
 }

@@ -19,6 +19,8 @@ struct Acc {
     chosen: array<u32, MAX_SAMPLES>,
     weight: array<f32, MAX_SAMPLES>,
     count: u32,
+    // Samples drawn (K, more in a frame whose lights changed: catch_up_samples).
+    k: u32,
     first: array<u32, MAX_SAMPLES>,
     rng: u32,
     // With DENOISE: the unshadowed direct light of every light visited, and the sampled
@@ -128,6 +130,11 @@ fn weigh_past(i: u32, s: Surface, point: f32, sum: ptr<function, f32>, picked: p
 // spread evenly over the weights instead of independently, and neighbours start apart
 // (interleaved gradient noise) for the denoiser's filter. Each point alone is uniform.
 fn sample_point(acc: ptr<function, Acc>, j: u32) -> f32 {
+    if ((*acc).k != ray_samples()) {
+        // A catch-up frame: its samples spread evenly from the sequence's point of this frame.
+        let n0 = frame.modes.y * ray_samples();
+        return fract((*acc).u0 + f32(n0) * 0.6180339887 + f32(j) / f32((*acc).k));
+    }
     let n = frame.modes.y * ray_samples() + j;
     return fract((*acc).u0 + f32(n) * 0.6180339887);
 }
@@ -149,7 +156,7 @@ fn light_weight(i: u32, s: Surface) -> f32 {
 // might leave one, keeps the last light weighed). Over frames the points follow the
 // golden-ratio sequence, so a pixel's samples cover its lights evenly (stratified).
 fn pick_stratified(s: Surface, slot: u32, acc: ptr<function, Acc>) {
-    for (var j = 0u; j < ray_samples(); j = j + 1u) {
+    for (var j = 0u; j < (*acc).k; j = j + 1u) {
         let point = sample_point(acc, j) * (*acc).wsum;
         var m = 0u;
         for (var c = 1u; c < (*acc).marks; c = c + 1u) {
@@ -228,7 +235,8 @@ fn resolve_samples(s: Surface, acc: ptr<function, Acc>) {
         return;
     }
     var unlit = vec3<f32>(0.0);
-    for (var j = 0u; j < k; j = j + 1u) {
+    let n = (*acc).k;
+    for (var j = 0u; j < n; j = j + 1u) {
         let i = (*acc).chosen[j];
         let t = light_terms(i, s);
         let term = t.att * t.ds * ((*acc).wsum / (*acc).weight[j]);
@@ -237,10 +245,10 @@ fn resolve_samples(s: Surface, acc: ptr<function, Acc>) {
             unlit = unlit + term;
         }
     }
-    (*acc).color = (*acc).color + direct / f32(k);
+    (*acc).color = (*acc).color + direct / f32(n);
     if (DENOISE) {
-        (*acc).est_shadowed = direct / f32(k);
-        (*acc).est_unshadowed = unlit / f32(k);
+        (*acc).est_shadowed = direct / f32(n);
+        (*acc).est_unshadowed = unlit / f32(n);
     }
 }
 
