@@ -50,6 +50,16 @@ fn new_context() -> GpuContext {
     }
 }
 
+/// Held by a test for as long as it makes, uses and drops devices of its own (besides the
+/// shared one of [`context`]: `limits.rs`'s smaller devices, `embedding.rs`'s host-made
+/// ones), so that one thread at a time creates or destroys a device (the driver trouble
+/// [`context`] describes). Take it first in the test, so that it is dropped last.
+pub fn own_device_lock() -> std::sync::MutexGuard<'static, ()> {
+    static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    // A test that failed while holding it leaves it poisoned; the next may still run.
+    LOCK.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 /// Where failing tests write their images.
 pub fn artifacts_dir() -> std::path::PathBuf {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/test-artifacts");
