@@ -71,7 +71,7 @@ pub struct RenderSettings {
     pub clusters: ClusterOptions,
     /// Shading model, exposure and tone map (default: as the scene's lighting says).
     pub look: Look,
-    /// Two eyes side by side (`None`: one camera): [`crate::frame::eyes`].
+    /// Two eyes side by side (`None`: one camera): `frame::eyes`.
     pub stereo: Option<Stereo>,
     /// How reflection probes' face G-buffers are drawn (scenes with probes).
     pub probe_passes: ProbePasses,

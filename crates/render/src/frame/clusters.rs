@@ -53,7 +53,7 @@ use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu::types::ClusterUniforms;
 
 /// Tile side in pixels where every cluster of the grid has a slot in the pool at
-/// [`SMALL_TILE`] no more (large frames with many lights).
+/// `SMALL_TILE` no more (large frames with many lights).
 pub const DEFAULT_TILE: u32 = 32;
 /// Tile side in pixels by default where the pool holds a slot for every cluster of that grid
 /// ([`ClusterOptions::tile_for`]). Smaller tiles cut the lights a pixel visits that do not
@@ -147,9 +147,9 @@ impl ClusterOptions {
     }
 
     /// The tile side a `width` × `height` frame (of `eyes` side-by-side eyes) with `lights`
-    /// lights gets: the one set, else [`SMALL_TILE`] where a pool of `pool_limit` bytes (the
+    /// lights gets: the one set, else `SMALL_TILE` where a pool of `pool_limit` bytes (the
     /// budget, capped by the device) holds a slot for every cluster of that grid, so no
-    /// cluster can overflow that the default tile's grid would not, else [`DEFAULT_TILE`].
+    /// cluster can overflow that the default tile's grid would not, else `DEFAULT_TILE`.
     pub fn tile_for(
         &self,
         (width, height): (u32, u32),

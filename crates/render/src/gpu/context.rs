@@ -410,8 +410,8 @@ impl GpuContext {
     }
 
     /// Views one multiview pass renders on this device: the device's limit, at most
-    /// [`MAX_MULTIVIEW_VIEWS`], one where the driver loses clipped primitives' view index
-    /// ([`clips_into_layer_zero`]); 0 without multiview.
+    /// `MAX_MULTIVIEW_VIEWS`, one where the driver loses clipped primitives' view index
+    /// (`clips_into_layer_zero`); 0 without multiview.
     pub fn multiview_views_per_pass(&self) -> u32 {
         if !self.has(wgpu::Features::MULTIVIEW) {
             return 0;

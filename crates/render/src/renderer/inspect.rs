@@ -194,8 +194,8 @@ impl Renderer {
 
     /// The last frame [`Renderer::render`] produced, shaded again with `visibility` instead
     /// of the technique's shadows (the fraction of each light reaching each pixel, as
-    /// [`Frame::soft_visibility`] holds it): the image a technique would give if its
-    /// visibility were `visibility`, such as the reference's. sRGB RGBA8, as [`Frame::rgba`].
+    /// [`crate::Frame::soft_visibility`] holds it): the image a technique would give if its
+    /// visibility were `visibility`, such as the reference's. sRGB RGBA8, as [`crate::Frame::rgba`].
     pub fn shade_with(&self, visibility: &SoftVisibility) -> Result<Vec<u8>, RenderError> {
         let (w, h) = (self.settings.width, self.settings.height);
         let lights = self.current.lights.len() as u32;
