@@ -471,13 +471,11 @@ fn denoise_fix(s: Surface) -> DenoiseFix {
     return DenoiseFix(with_shadows, without, went);
 }
 
-// Frames of history at most (denoise.rs `MAX_HISTORY`): the most a change can take from it.
-const CATCH_UP_FRAMES: f32 = 32.0;
-
 // Samples a pixel draws in the frame its lights changed. The history loses its samples of the
 // lights that went (the temporal pass cuts its frame count to the share that stays), so the
 // lights that stay are left with fewer samples than a history of them alone would hold: this
-// frame draws the lost share of the most frames a history holds again (up to MAX_SAMPLES),
+// frame draws the lost share of the most frames a history holds (`CATCH_UP_FRAMES`, the
+// denoiser's `MAX_HISTORY`, composed by look.rs) again (up to MAX_SAMPLES),
 // spread evenly over the weights (`sample_point`), and its estimate counts as that many
 // frames. Cubes, the sun switched off after 16 frames (test
 // `a_light_switched_off_leaves_the_frame_within_four_frames`): the frames after it err by

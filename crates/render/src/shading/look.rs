@@ -329,7 +329,8 @@ impl Default for ShadingConsts {
 
 impl ShadingConsts {
     /// The WGSL constants (`SHADING_MODEL`, `PHYSICAL_FALLOFF`, `LIGHT_SCALE`, `TONE_MAP`,
-    /// `EXPOSURE_IS_FIXED`, `FIXED_EXPOSURE`, `EMISSION`, `EMISSION_TEXTURE`).
+    /// `EXPOSURE_IS_FIXED`, `FIXED_EXPOSURE`, `EMISSION`, `EMISSION_TEXTURE`, the denoiser's,
+    /// reuse's and `CATCH_UP_FRAMES`, the denoiser's most frames of history).
     pub(crate) fn wgsl(&self) -> String {
         let consts = format!(
             "const SHADING_MODEL: u32 = {}u;\nconst PHYSICAL_FALLOFF: bool = {};\n\
@@ -339,7 +340,8 @@ impl ShadingConsts {
              const DENOISE: bool = {};\nconst REUSE: bool = {};\n\
              const PROBES: bool = {};\nconst LINEAR_OUT: bool = {};\n\
              const SPATIAL: u32 = {}u;\nconst SPATIAL_NEIGHBOURS: u32 = {}u;\n\
-             const SPATIAL_RADIUS: f32 = {:?}f;\nconst SPATIAL_SLOTS: u32 = {}u;\n",
+             const SPATIAL_RADIUS: f32 = {:?}f;\nconst SPATIAL_SLOTS: u32 = {}u;\n\
+             const CATCH_UP_FRAMES: f32 = {:?}f;\n",
             self.shading.code(),
             self.physical_falloff,
             self.light_scale,
@@ -356,6 +358,7 @@ impl ShadingConsts {
             crate::shading::reuse::SPATIAL_NEIGHBOURS,
             crate::shading::reuse::SPATIAL_RADIUS,
             crate::shading::reuse::SPATIAL_NEIGHBOURS + 1,
+            crate::shading::denoise::MAX_HISTORY as f32,
         );
         let consts = if self.probes {
             format!("{consts}{}", crate::shading::probes::PROBES_WGSL)
