@@ -25,13 +25,15 @@
 //!    the point was seen there (within two pixel footprints) its history — mean and second
 //!    moment of `r`, frame count up to [`MAX_HISTORY`] — is blended with this frame's `r`,
 //!    else it starts anew (disocclusion). The rays' random numbers change every frame.
-//! 2. **spatial**: [`ATROUS_STEPS`] passes of a 3 × 3 à-trous wavelet (steps 1, 2, 4, 8 pixels)
-//!    whose weights stop at edges of geometry (normal, distance to the pixel's plane) and of
-//!    the ratio itself (a tolerance of a standard deviation of the samples plus a half, over
-//!    the frames of history: it narrows as 1/n, as the stratified mean converges; as 1/√n,
-//!    the rate of independent samples, still frames stay blurred: atrium as above, eighth
-//!    still frame 3.44 against 2.86, first 6.98; with independent samples and 1/n the noise
-//!    stays: 5.53), in the spirit of SVGF.
+//! 2. **spatial**: [`ATROUS_STEPS`] passes of a five-tap à-trous wavelet (steps 1, 2, 4, 8
+//!    pixels) whose weights stop at edges of geometry (normal, distance to the pixel's plane)
+//!    and of the ratio itself (a tolerance of [`RATIO_SIGMAS`] standard deviations of the
+//!    samples plus a half, over the frames of history to the ¾: it narrows about as the
+//!    stratified mean converges; over n^½, the rate of independent samples, still frames stay
+//!    blurred: atrium as above, eighth still frame 3.44 against 2.86, first 6.98; with
+//!    independent samples and 1/n the noise stays: 5.53), in the spirit of SVGF. Pixels with
+//!    [`SETTLED_FRAMES`] or more frames of history skip the passes of step 4 and 8: their own
+//!    mean is better than the wide passes' blur.
 //! 3. **composite**: the lighting pass's `fs_composite` shades `ambient + emission + U · r̄`
 //!    and tone-maps it into the frame.
 //!
@@ -61,8 +63,10 @@
 //! [`MAX_HISTORY`] frames in samples (K times 1 + that, at most 16), spread evenly over its
 //! lights' weights, and its estimate counts as that many frames (lighting.wgsl
 //! `catch_up_samples`). Cubes, a sun of 48 lights switched off after 16 frames: the four frames
-//! after it err by **0.927, 0.901, 0.895, 0.879**, where a denoiser started without the sun has
-//! 1.90 after four frames and 0.869 after 16 (**1.07× to 1.01×**); without the catch-up 1.115,
+//! after it err by **0.829, 0.811, 0.795, 0.780**, where a denoiser started without the sun has
+//! 1.37 after four frames and 0.768 after 16 (**1.08× to 1.02×**; without the catch-up 0.977
+//! first, 1.27×). Before [`SETTLED_FRAMES`]: 0.927, 0.901, 0.895, 0.879 against 1.90 and 0.869
+//! (1.07× to 1.01×); without the catch-up then 1.115,
 //! 1.116, 1.081, 1.014 (1.28× to 1.17×), drawing the lost share of 16 frames again 1.022 …
 //! 0.960 (1.18× to 1.10×); without the correction 1.66 four frames after (1.91×). The frame of
 //! a change pays for it: the atrium's sun switched off (1,024 lights, 640×360, lavapipe), its
@@ -76,9 +80,11 @@
 //!
 //! More records at once (a new scene's lights) fall back: in the frame of the change each
 //! pixel's history counts as many frames as the share of its unshadowed light that this
-//! frame's exact unshadowed light keeps, cubed (a pixel the change did not reach keeps its
-//! history whole). Cubes, twelve lights switched off at once, four frames after: eleven local
-//! lights and the sun 1.96 against a fresh denoiser's 2.03 (squared the same, to the first
+//! frame's exact unshadowed light keeps, to the fourth power (a pixel the change did not
+//! reach keeps its history whole). Cubes, twelve lights switched off at once, four frames
+//! after: eleven local lights and the sun **1.45** against a fresh denoiser's 1.47 (cubed
+//! 1.50, which fails; to the fifth 1.45; since [`SETTLED_FRAMES`], which took the fresh
+//! denoiser from 2.03 to 1.47). Before it: cubed 1.96 against 2.03 (squared the same, to the first
 //! power 2.17, keeping the history 2.42; with `RATIO_SIGMAS` 1: cubed 1.79 against 1.87,
 //! squared 1.90, which missed, to the fourth 1.78). With the à-trous's 3 × 3
 //! taps before its five on the cross the fresh denoiser read 2.14 and the squared share 1.98;
@@ -154,8 +160,28 @@ const _: () = assert!(
 /// after 8, the noise back; with the five-tap à-trous, over n: 0.75: 7.05 / 2.91, 1.0: 6.86 /
 /// 2.81, 1.5: 6.68 / 2.77, 2.0: 6.60 / 2.83, 3.0: 6.54 / 3.09; at 1.5 the 32 still frames' mean
 /// 2.63 → 2.57 and last 1.74 → 1.72, the 60-frame moving sequence's mean 4.68 → 4.64, the
-/// circling caster's 2.73 → 2.67, trail 0.33 both).
+/// circling caster's 2.73 → 2.67, trail 0.33 both). Since [`SETTLED_FRAMES`] the tolerance is
+/// over frames^¾ instead of frames (see there).
 const RATIO_SIGMAS: f32 = 1.5;
+
+/// Frames of history from which a pixel skips the à-trous passes of step
+/// [`SETTLED_STEP`] and wider (its own mean, over 4 or more stratified frames, is better
+/// than their blur; the two narrow passes still filter it), with the ratio's tolerance over
+/// frames^¾ instead of frames. Atrium, 1,024 lights, 640 × 360, K = 1, still frames, RMSE
+/// against an 8 × 8 exact image through `render` (lavapipe): after 1 / 2 / 4 / 8 / 16 / 32
+/// frames **6.47 / 5.18 / 3.79 / 2.31 / 1.78 / 1.39** against 6.47 / 5.13 / 3.77 / 2.55 /
+/// 1.97 / 1.50 with every pass and the tolerance over frames. Explored partly with the
+/// normal weight at cos¹⁶ (alone 2.54 after 8): the tolerance over frames^0.6 / ^0.7 / ^0.8 with the
+/// skip 2.31 / 2.28 / 2.32 after 8, 1.82 / 1.77 / 1.80 after 16; the skip from 8 frames: 4.07
+/// after 4 (3.64 from 4); either change alone does little: the tolerance over frames with
+/// steps 4 and 8 skipped 2.65 after 8, only step 8 skipped 2.46; every pass with the
+/// tolerance over frames^0.75 or ^1.25 2.93 / 2.95 (the temporal mean alone after 8 / 16 / 32
+/// frames: 4.62 / 2.89 / 1.83). The 60-frame moving sequence (`bench denoise`, against 2 × 2)
+/// 4.60 against 4.62. A skipped pass costs a copy.
+const SETTLED_FRAMES: u32 = 4;
+
+/// The narrowest à-trous step (pixels) that [`SETTLED_FRAMES`] skips.
+const SETTLED_STEP: u32 = 4;
 
 /// `DenoiseParams` in denoise.wgsl.
 #[repr(C)]
@@ -409,7 +435,11 @@ impl Denoiser {
                 pixel: [
                     pixel,
                     RATIO_SIGMAS,
-                    if fresh { 1.0 } else { 0.0 },
+                    match k {
+                        0 => f32::from(u8::from(fresh)),
+                        _ if step >= SETTLED_STEP => SETTLED_FRAMES as f32,
+                        _ => 0.0,
+                    },
                     if relit && k == 0 { 1.0 } else { 0.0 },
                 ],
                 camera: eye

@@ -12,10 +12,11 @@ struct DenoiseParams {
     prev_view_proj: mat4x4<f32>,
     // width, height, à-trous step (pixels), most frames of history.
     size: vec4<u32>,
-    // world size of a pixel at distance 1, ratio tolerance in standard deviations,
-    // 1 = no history this frame, 1 = the lights changed and nothing corrected the history for
-    // them (the temporal pass cuts each pixel's frame count by the change of its unshadowed
-    // light).
+    // world size of a pixel at distance 1, ratio tolerance in standard deviations; z: the
+    // temporal pass: 1 = no history this frame, an à-trous pass: the frames of history from
+    // which it leaves a pixel as it is (0 = never); w: the temporal pass: 1 = the lights
+    // changed and nothing corrected the history for them (it cuts each pixel's frame count by
+    // the change of its unshadowed light).
     pixel: vec4<f32>,
     // eye position (xyz); w (temporal pass): 1 = the lights changed and the lighting pass
     // left in `ratio_out` each pixel's correction of the history for them.
@@ -151,12 +152,13 @@ fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
                 // The lights changed more than the lighting pass corrects for: the history
                 // counts as many frames as the share of its unshadowed light (the mean of
                 // estimates whose luminance is the exact sum each frame) that this frame's
-                // exact unshadowed light keeps, cubed (measured: denoise.rs, "When lights
-                // change").
+                // exact unshadowed light keeps, to the fourth power (measured: denoise.rs,
+                // "When lights change").
                 let now = dot(px_in[4u * i].rgb, LUMA);
                 let was = dot(h1.rgb, LUMA);
                 let stays = clamp(1.0 - abs(now - was) / max(max(now, was), 1e-30), 0.0, 1.0);
-                h0.w = max(floor(h0.w * stays * stays * stays), 1.0);
+                let kept = stays * stays;
+                h0.w = max(floor(h0.w * kept * kept), 1.0);
             }
             frames = min(round(h0.w) + weight, f32(p.size.w));
             let a = min(weight / frames, 1.0);
@@ -189,8 +191,11 @@ fn atrous(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.y * w + gid.x;
     let c0 = ratio_in[2u * i];
     let c1 = ratio_in[2u * i + 1u];
+    // The wide passes leave a pixel with a settled history as it is (denoise.rs,
+    // SETTLED_FRAMES): its own mean is better than their blur.
+    let frames = max(c1.w, 1.0);
     let s = surface_at(gid.xy);
-    if (s.w == 0.0) {
+    if (s.w == 0.0 || (p.pixel.z > 0.0 && frames >= p.pixel.z)) {
         ratio_filtered[2u * i] = c0;
         ratio_filtered[2u * i + 1u] = c1;
         return;
@@ -203,8 +208,9 @@ fn atrous(@builtin(global_invocation_id) gid: vec3<u32>) {
     // How far a neighbour's ratio may differ: a few standard deviations of the two pixels'
     // mean ratios, with the variance at least a coin's of their mean ratio (a pixel whose
     // few rays all came out alike has an estimated variance of 0, and would never average
-    // with its neighbours), and wide while the history is short.
-    let frames = max(c1.w, 1.0);
+    // with its neighbours), and wide while the history is short: over frames^¾ (denoise.rs,
+    // RATIO_SIGMAS).
+    let narrow = sqrt(frames) * sqrt(sqrt(frames));
     // One over the distance from the pixel's plane that weighs a tap 1/e.
     let reach = 1.0 / (footprint * f32(step) + 1e-6);
     var sum_s = vec3<f32>(0.0);
@@ -237,7 +243,7 @@ fn atrous(@builtin(global_invocation_id) gid: vec3<u32>) {
         let rq = ratio_of(q0.rgb, q1.rgb);
         let rm = clamp(0.5 * (r + rq), 0.0, 1.0);
         let variance = max(0.5 * (c0.w + q0.w), rm * (1.0 - rm));
-        let tol = max((p.pixel.y * sqrt(variance) + 0.5) / frames, 1e-3);
+        let tol = max((p.pixel.y * sqrt(variance) + 0.5) / narrow, 1e-3);
         // The 3-tap B-spline (1/4, 1/2, 1/4) per axis, on the cross; the plane's and the
         // ratio's weights in one exp (a software rasterizer pays for each exp, and for an
         // array indexed per tap).
