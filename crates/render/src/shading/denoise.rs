@@ -80,11 +80,14 @@
 //!
 //! More records at once (a new scene's lights) fall back: in the frame of the change each
 //! pixel's history counts as many frames as the share of its unshadowed light that this
-//! frame's exact unshadowed light keeps, to the fourth power (a pixel the change did not
-//! reach keeps its history whole). Cubes, twelve lights switched off at once, four frames
-//! after: eleven local lights and the sun **1.45** against a fresh denoiser's 1.47 (cubed
-//! 1.50, which fails; to the fifth 1.45; since [`SETTLED_FRAMES`], which took the fresh
-//! denoiser from 2.03 to 1.47). Before it: cubed 1.96 against 2.03 (squared the same, to the first
+//! frame's exact unshadowed light keeps, to the fourth power, and a history cut below one
+//! frame is dropped (a pixel the change did not reach keeps its history whole). Cubes, twelve
+//! lights switched off at once, four frames after: eleven local lights and the sun **1.33**
+//! against a fresh denoiser's 1.45 (with the ratio's Gaussian weight, [`RATIO_SIGMAS`]; at
+//! least one frame kept: 1.48, which fails, to the fifth or sixth power the same 1.48).
+//! With the Laplacian weight and [`SETTLED_FRAMES`]: to the fourth power with a frame kept
+//! 1.45 against 1.47, cubed 1.50 (SETTLED_FRAMES took the fresh denoiser from 2.03 to 1.47).
+//! Before it: cubed 1.96 against 2.03 (squared the same, to the first
 //! power 2.17, keeping the history 2.42; with `RATIO_SIGMAS` 1: cubed 1.79 against 1.87,
 //! squared 1.90, which missed, to the fourth 1.78). With the à-trous's 3 × 3
 //! taps before its five on the cross the fresh denoiser read 2.14 and the squared share 1.98;
@@ -161,7 +164,15 @@ const _: () = assert!(
 /// 2.81, 1.5: 6.68 / 2.77, 2.0: 6.60 / 2.83, 3.0: 6.54 / 3.09; at 1.5 the 32 still frames' mean
 /// 2.63 → 2.57 and last 1.74 → 1.72, the 60-frame moving sequence's mean 4.68 → 4.64, the
 /// circling caster's 2.73 → 2.67, trail 0.33 both). Since [`SETTLED_FRAMES`] the tolerance is
-/// over frames^¾ instead of frames (see there).
+/// over frames^¾ instead of frames (see there). Since then too, the ratio's weight is a
+/// Gaussian of the difference over 1.2 tolerances, `exp(−(Δr / 1.2 tol)²)`, instead of
+/// `exp(−|Δr| / tol)`: differences within it, mostly noise, average almost fully, those past
+/// it, mostly shadows' edges, hardly. `render`'s still frames against the 8 × 8 exact image
+/// (as at `SETTLED_FRAMES`), after 1 / 2 / 4 / 8 / 16 / 32 frames: **6.40 / 5.39 / 3.47 /
+/// 2.21 / 1.74 / 1.40** against 6.47 / 5.18 / 3.79 / 2.31 / 1.78 / 1.39; the Gaussian over
+/// 1.0 / 1.4 / 1.6 / 1.8 / 2.2 tolerances 2.29 / 2.23 / 2.28 / 2.35 / 2.50 after 8; at 1.2,
+/// sigmas 1.0 / 2.0 / 3.0: 2.31 / 2.23 / 2.39; the tolerance's exponent and scale trade along
+/// a ridge (frames^0.65 and 1.0 tolerances 2.21, ^0.85 and 1.5 2.21, ^1 and 1.8 2.25).
 const RATIO_SIGMAS: f32 = 1.5;
 
 /// Frames of history from which a pixel skips the à-trous passes of step

@@ -157,8 +157,9 @@ fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
                 let now = dot(px_in[4u * i].rgb, LUMA);
                 let was = dot(h1.rgb, LUMA);
                 let stays = clamp(1.0 - abs(now - was) / max(max(now, was), 1e-30), 0.0, 1.0);
+                // A history cut below one frame is dropped (the frame's own estimate alone).
                 let kept = stays * stays;
-                h0.w = max(floor(h0.w * kept * kept), 1.0);
+                h0.w = floor(h0.w * kept * kept);
             }
             frames = min(round(h0.w) + weight, f32(p.size.w));
             let a = min(weight / frames, 1.0);
@@ -209,8 +210,10 @@ fn atrous(@builtin(global_invocation_id) gid: vec3<u32>) {
     // mean ratios, with the variance at least a coin's of their mean ratio (a pixel whose
     // few rays all came out alike has an estimated variance of 0, and would never average
     // with its neighbours), and wide while the history is short: over frames^¾ (denoise.rs,
-    // RATIO_SIGMAS).
-    let narrow = sqrt(frames) * sqrt(sqrt(frames));
+    // RATIO_SIGMAS). The ratio's weight falls as a Gaussian of the difference over 1.2 times
+    // that (1/e there): differences well within it, mostly noise, average almost fully,
+    // those past it, mostly shadows, hardly (denoise.rs, RATIO_SIGMAS).
+    let narrow = sqrt(frames) * sqrt(sqrt(frames)) / 1.2;
     // One over the distance from the pixel's plane that weighs a tap 1/e.
     let reach = 1.0 / (footprint * f32(step) + 1e-6);
     var sum_s = vec3<f32>(0.0);
@@ -248,7 +251,8 @@ fn atrous(@builtin(global_invocation_id) gid: vec3<u32>) {
         // ratio's weights in one exp (a software rasterizer pays for each exp, and for an
         // array indexed per tap).
         let kernel = select(0.25, 0.5, dx == 0) * select(0.25, 0.5, dy == 0);
-        let wpr = exp(-(abs(dot(n, qs.xyz - pos)) * reach + abs(rq - r) / tol));
+        let dr = (rq - r) / tol;
+        let wpr = exp(-(abs(dot(n, qs.xyz - pos)) * reach + dr * dr));
         let wt = kernel * wn * wpr;
         sum_s = sum_s + wt * q0.rgb;
         sum_u = sum_u + wt * q1.rgb;
