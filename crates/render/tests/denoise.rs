@@ -52,6 +52,15 @@ fn denoised_samples_are_close_to_every_light_and_converge() {
         "eight still frames do not converge: {errors:?}"
     );
     assert!(errors[7] < 0.3 * plain, "{} vs {plain}", errors[7]);
+    // Pixels with a settled history skip the wide à-trous passes (denoise.rs SETTLED_FRAMES;
+    // lavapipe: the eighth frame 0.88, 0.063x plain; with every pass 1.45, 0.10x, which fails
+    // this and the bound above; with every pass and the ratio's earlier Laplacian weight 1.06,
+    // 0.076x).
+    assert!(
+        errors[7] < 0.07 * plain,
+        "the eighth still frame keeps the wide passes' blur: {} vs plain {plain}",
+        errors[7]
+    );
 }
 
 /// Every light traced, one area sample per sized light and pixel: still frames accumulate

@@ -63,9 +63,11 @@
 //! [`MAX_HISTORY`] frames in samples (K times 1 + that, at most 16), spread evenly over its
 //! lights' weights, and its estimate counts as that many frames (lighting.wgsl
 //! `catch_up_samples`). Cubes, a sun of 48 lights switched off after 16 frames: the four frames
-//! after it err by **0.829, 0.811, 0.795, 0.780**, where a denoiser started without the sun has
-//! 1.37 after four frames and 0.768 after 16 (**1.08× to 1.02×**; without the catch-up 0.977
-//! first, 1.27×). Before [`SETTLED_FRAMES`]: 0.927, 0.901, 0.895, 0.879 against 1.90 and 0.869
+//! after it err by **0.830, 0.817, 0.801, 0.787**, where a denoiser started without the sun has
+//! 1.375 after four frames and 0.787 after 16 (**1.05× to 1.00×**; without the catch-up 0.985
+//! first, 1.25×). With [`SETTLED_FRAMES`] before the ratio's Gaussian weight
+//! ([`RATIO_SIGMAS`]): 0.829, 0.811, 0.795, 0.780 against 1.37 and 0.768 (without the
+//! catch-up 0.977 first, 1.27×). Before [`SETTLED_FRAMES`]: 0.927, 0.901, 0.895, 0.879 against 1.90 and 0.869
 //! (1.07× to 1.01×); without the catch-up then 1.115,
 //! 1.116, 1.081, 1.014 (1.28× to 1.17×), drawing the lost share of 16 frames again 1.022 …
 //! 0.960 (1.18× to 1.10×); without the correction 1.66 four frames after (1.91×). The frame of
@@ -188,7 +190,8 @@ const RATIO_SIGMAS: f32 = 1.5;
 /// steps 4 and 8 skipped 2.65 after 8, only step 8 skipped 2.46; every pass with the
 /// tolerance over frames^0.75 or ^1.25 2.93 / 2.95 (the temporal mean alone after 8 / 16 / 32
 /// frames: 4.62 / 2.89 / 1.83). The 60-frame moving sequence (`bench denoise`, against 2 × 2)
-/// 4.60 against 4.62. A skipped pass costs a copy.
+/// 4.60 against 4.62 (all before the ratio's Gaussian weight, [`RATIO_SIGMAS`]). A skipped
+/// pass costs a copy and reads no G-buffer.
 const SETTLED_FRAMES: u32 = 4;
 
 /// The narrowest à-trous step (pixels) that [`SETTLED_FRAMES`] skips.

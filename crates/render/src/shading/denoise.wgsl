@@ -193,10 +193,16 @@ fn atrous(@builtin(global_invocation_id) gid: vec3<u32>) {
     let c0 = ratio_in[2u * i];
     let c1 = ratio_in[2u * i + 1u];
     // The wide passes leave a pixel with a settled history as it is (denoise.rs,
-    // SETTLED_FRAMES): its own mean is better than their blur.
+    // SETTLED_FRAMES): its own mean is better than their blur; nor do they read its
+    // G-buffer. So is a pixel without geometry.
     let frames = max(c1.w, 1.0);
+    if (p.pixel.z > 0.0 && frames >= p.pixel.z) {
+        ratio_filtered[2u * i] = c0;
+        ratio_filtered[2u * i + 1u] = c1;
+        return;
+    }
     let s = surface_at(gid.xy);
-    if (s.w == 0.0 || (p.pixel.z > 0.0 && frames >= p.pixel.z)) {
+    if (s.w == 0.0) {
         ratio_filtered[2u * i] = c0;
         ratio_filtered[2u * i + 1u] = c1;
         return;

@@ -479,8 +479,8 @@ fn denoise_fix(s: Surface) -> DenoiseFix {
 // spread evenly over the weights (`sample_point`), and its estimate counts as that many
 // frames. Cubes, the sun switched off after 16 frames (test
 // `a_light_switched_off_leaves_the_frame_within_four_frames`): the frames after it err by
-// 1.07x, 1.04x, 1.03x, 1.01x the steady error, against 1.28x, 1.28x, 1.24x, 1.17x with K
-// samples (the lost share of 16 frames: 1.18x to 1.10x; docs/techniques.md).
+// 1.05x, 1.04x, 1.02x, 1.00x the steady error, against 1.25x, 1.29x, 1.24x, 1.15x with K
+// samples (earlier filters and the lost share of 16 frames: denoise.rs, docs/techniques.md).
 fn catch_up_samples(unshadowed: vec3<f32>, fix: DenoiseFix) -> u32 {
     let k = ray_samples();
     let luma = vec3<f32>(0.2126, 0.7152, 0.0722);
