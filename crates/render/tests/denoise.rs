@@ -53,11 +53,12 @@ fn denoised_samples_are_close_to_every_light_and_converge() {
     );
     assert!(errors[7] < 0.3 * plain, "{} vs {plain}", errors[7]);
     // Pixels with a settled history skip the wide à-trous passes (denoise.rs SETTLED_FRAMES;
-    // lavapipe: the eighth frame 0.88, 0.063x plain; with every pass 1.45, 0.10x, which fails
-    // this and the bound above; with every pass and the ratio's earlier Laplacian weight 1.06,
-    // 0.076x).
+    // lavapipe: the eighth frame 0.98, 0.070x plain, since the samples' van der Corput points
+    // start in fifths (0.88, 0.063x, before: docs/bench/denoise-order-lavapipe.txt); with
+    // every pass 1.47, 0.105x, which fails this (seen failing); before the points changed, every pass read 1.45,
+    // 0.10x, and with the ratio's earlier Laplacian weight 1.06, 0.076x).
     assert!(
-        errors[7] < 0.07 * plain,
+        errors[7] < 0.08 * plain,
         "the eighth still frame keeps the wide passes' blur: {} vs plain {plain}",
         errors[7]
     );

@@ -12,12 +12,20 @@
 //!
 //! 0. **stratified samples**: where frames are denoised the lighting pass draws each sample
 //!    after its light loop, inverting the loop's running sum of light weights at a point of
-//!    the golden-ratio sequence (R1) started per pixel by interleaved gradient noise: a
-//!    pixel's samples over frames cover its lights' distribution evenly instead of
-//!    independently, and neighbours start apart. Each frame's sample alone is still drawn in
+//!    the van der Corput sequence (base 2) started per pixel in the fifth of (x + 2y) mod 5
+//!    plus interleaved gradient noise: a pixel's samples over any first 2^m frames cover its
+//!    lights' distribution evenly instead of independently, and the five pixels of each
+//!    à-trous cross start in different fifths (the golden-ratio sequence started by the
+//!    noise alone until 2026-11-28: sampled.wgsl `sample_point` has the figures). A sized
+//!    light's point takes its first coordinate from where the sample fell within the
+//!    light's stretch of the sum, so it is spread over frames too. The lights' order in the
+//!    list is the sum's order, so lights listed near their neighbours in space (the seeded
+//!    layouts above 64 lights are, along a Morton curve) stratify a pixel's samples over
+//!    space. Each frame's sample alone is still drawn in
 //!    proportion to the weights (unbiased); the mean over n frames converges about as 1/n
-//!    rather than 1/√n. The loop keeps every 4th light with the sum before it, so the draw
-//!    weighs at most 4 lights again (a second pass over all of them cost the denoised frame
+//!    rather than 1/√n. The loop keeps a checkpoint (a light with the sum before it) after
+//!    every 4 weighed or 16 visited lights, so the draw weighs at most that many again (a
+//!    second pass over all of them cost the denoised frame
 //!    11–15 %, 1.61× the plain frame at 16,384 lights; checkpoints every 16 lights 10 %);
 //!    lavapipe, atrium, 1,024 lights, 640 × 360, interleaved runs: 334–340 ms against
 //!    314–326 ms before. A plain frame (no denoiser) keeps one-pass reservoir sampling.

@@ -349,10 +349,19 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     }
     acc.u0 = 0.0;
     acc.marks = 0u;
+    acc.gap_visited = 0u;
+    acc.gap_weighed = 0u;
     if (ray_samples() > 0u && DENOISE) {
+        // The start of the pixel's sequence of sample points (sampled.wgsl, `sample_point`):
+        // in the fifth of (x + 2y) mod 5, so the five pixels of every à-trous cross (steps
+        // 1, 2, 4, 8) start in different fifths, and within it by interleaved gradient noise
+        // (Jimenez 2014). Against the noise alone over the whole interval 8 still frames
+        // 2.10 → 2.02 (first frame 6.31 → 6.55); the noise plus the fifth's start 2.18
+        // (docs/bench/denoise-order-lavapipe.txt).
         let p = vec2<f32>(noise_px);
         let ign = fract(52.982919 * fract(0.06711056 * p.x + 0.00583715 * p.y));
-        acc.u0 = fract(ign + f32(pcg(ray_seed()) >> 8u) / 16777216.0);
+        let cls = f32(u32(noise_px.x + 2 * noise_px.y) % 5u);
+        acc.u0 = fract((cls + ign) / 5.0 + f32(pcg(ray_seed()) >> 8u) / 16777216.0);
     }
     if (slot < CLUSTER_FIRST_SLOT || slot == CLUSTER_OVERFLOW) {
         // Every light: the reference loop, and the fallback of clusters without a slot.

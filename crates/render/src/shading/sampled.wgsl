@@ -18,6 +18,7 @@ struct Acc {
     wsum: f32,
     chosen: array<u32, MAX_SAMPLES>,
     weight: array<f32, MAX_SAMPLES>,
+    frac: array<f32, MAX_SAMPLES>,
     count: u32,
     // Samples drawn (K, more in a frame whose lights changed: catch_up_samples).
     k: u32,
@@ -31,18 +32,27 @@ struct Acc {
     // Whether the samples went through temporal reuse (resolve_reused).
     reused: bool,
     // Where frames are denoised: the pixel's first point of its low-discrepancy sequence
-    // (`sample_point`), and every CHECKPOINT_EVERY-th weighed light with the running sum
-    // before it, from which `pick_stratified` finds the light a point of the sum falls on.
+    // (`sample_point`), and checkpoints (a light with the running sum before it, after every
+    // CHECKPOINT_EVERY weighed or CHECKPOINT_VISITED visited lights), from which
+    // `pick_stratified` finds the light a point of the sum falls on.
     u0: f32,
     marks: u32,
+    // Lights visited and weighed since the last checkpoint.
+    gap_visited: u32,
+    gap_weighed: u32,
     mark_light: array<u32, CHECKPOINTS>,
     mark_sum: array<f32, CHECKPOINTS>,
 }
 
-// Checkpoints of the running sum (a pixel's 64 · 16 = 1,024 first weighed lights; past them
-// the last stretch is longer, never wrong).
+// Checkpoints of the running sum (past the last one the stretch to weigh again is longer,
+// never wrong). With lights listed in space order (scene `lights::spatial_order`) a pixel's
+// weighed lights clump, so a checkpoint also follows every CHECKPOINT_VISITED lights visited;
+// the walk skips empty words by the cluster's summary bits (it read every word before: atrium,
+// 16,384 lights in space order, the denoised frame 402 ms against 320, docs/bench/
+// denoise-order-lavapipe.txt).
 const CHECKPOINTS: u32 = 32u;
 const CHECKPOINT_EVERY: u32 = 4u;
+const CHECKPOINT_VISITED: u32 = 16u;
 
 fn pcg(v: u32) -> u32 {
     let state = v * 747796405u + 2891336453u;
@@ -64,6 +74,21 @@ fn visit(i: u32, s: Surface, acc: ptr<function, Acc>) {
     if (k == 0u && !DENOISE) {
         (*acc).color = add_light((*acc).color, i, s);
         return;
+    }
+    if (DENOISE && k > 0u) {
+        // A checkpoint before this light where 4 weighed or 16 visited lights passed since
+        // the last (the first light always): pick_stratified then weighs again at most that
+        // many, whatever the share of the cluster's lights that reach the pixel.
+        let due = (*acc).marks == 0u || (*acc).gap_weighed >= CHECKPOINT_EVERY
+            || (*acc).gap_visited >= CHECKPOINT_VISITED;
+        if (due && (*acc).marks < CHECKPOINTS) {
+            (*acc).mark_light[(*acc).marks] = i;
+            (*acc).mark_sum[(*acc).marks] = (*acc).wsum;
+            (*acc).marks = (*acc).marks + 1u;
+            (*acc).gap_visited = 0u;
+            (*acc).gap_weighed = 0u;
+        }
+        (*acc).gap_visited = (*acc).gap_visited + 1u;
     }
     let t = light_terms(i, s);
     if (!t.reaches) {
@@ -95,12 +120,7 @@ fn visit(i: u32, s: Surface, acc: ptr<function, Acc>) {
     (*acc).count = (*acc).count + 1u;
     if (DENOISE) {
         // Drawn after the loop, once the sum is known (pick_stratified).
-        let n = (*acc).count - 1u;
-        if (n % CHECKPOINT_EVERY == 0u && (*acc).marks < CHECKPOINTS) {
-            (*acc).mark_light[(*acc).marks] = i;
-            (*acc).mark_sum[(*acc).marks] = (*acc).wsum - w;
-            (*acc).marks = (*acc).marks + 1u;
-        }
+        (*acc).gap_weighed = (*acc).gap_weighed + 1u;
         return;
     }
     // A single frame: weighted reservoir sampling in one pass (no total needed).
@@ -125,18 +145,36 @@ fn weigh_past(i: u32, s: Surface, point: f32, sum: ptr<function, f32>, picked: p
     return *sum > point;
 }
 
-// Sample `j`'s point in [0, 1) this frame: the golden-ratio sequence (Weyl, R1) from the
-// pixel's own start, so a pixel's points over frames (and its K points in one frame) are
-// spread evenly over the weights instead of independently, and neighbours start apart
-// (interleaved gradient noise) for the denoiser's filter. Each point alone is uniform.
+// Sample `j`'s point in [0, 1) this frame: the van der Corput sequence (base 2, indexed
+// from the first frame) from the pixel's own start, so a pixel's points over frames (and its
+// K points in one frame) are spread evenly over the weights instead of independently: any
+// first 2^m of them one in each 2^-m of the interval. Neighbours start apart (lighting.wgsl,
+// `u0`). Each point alone is uniform. Frames count from 1 (`modes.y`), the sequence from 0:
+// from 1 a pixel's first 8 points are not one in each eighth (2.13 after 8 below). Atrium,
+// 1,024 lights, 640 × 360, K = 1, RMSE of still frames against the 8 × 8 exact image
+// (lavapipe, mean of 4 seeds; docs/bench/denoise-order-lavapipe.txt): with the golden-ratio
+// sequence before (lights in Morton order, both coordinates of a light's point hashed) 2.13
+// after 8, this sequence 2.11, with the starts in fifths 2.05; everything of 2026-11-28 (also
+// the lights' order and sample_shape_point) after 1 / 8 / 16 / 32 frames 6.41 / 2.22 / 1.75 /
+// 1.41 → 6.55 / 2.02 / 1.56 / 1.30.
 fn sample_point(acc: ptr<function, Acc>, j: u32) -> f32 {
     if ((*acc).k != ray_samples()) {
         // A catch-up frame: its samples spread evenly from the sequence's point of this frame.
         let n0 = frame.modes.y * ray_samples();
-        return fract((*acc).u0 + f32(n0) * 0.6180339887 + f32(j) / f32((*acc).k));
+        return fract((*acc).u0 + f32(reverseBits(n0 - 1u) >> 8u) / 16777216.0 + f32(j) / f32((*acc).k));
     }
     let n = frame.modes.y * ray_samples() + j;
-    return fract((*acc).u0 + f32(n) * 0.6180339887);
+    return fract((*acc).u0 + f32(reverseBits(n - 1u) >> 8u) / 16777216.0);
+}
+
+// Where frames are denoised, the point on a sized light's shape that a sample of light `i`
+// traces: first coordinate `t`, where in the light's stretch of the running sum the sample's
+// point fell (uniform given the pick, and spread evenly over the frames that pick the light,
+// as the points are), the second the pixel's hash. RMSE of 8 still frames (atrium, 1,024
+// lights, K = 1, against 8 × 8) 2.05 → 2.02 against both coordinates hashed; a rank-1
+// lattice for the second (stepping 8φ along `t`) 2.03 (docs/bench/denoise-order-lavapipe.txt).
+fn sample_shape_point(s: Surface, i: u32, t: f32) -> vec2<f32> {
+    return vec2<f32>(t, soft_jitter(s.px, i).y);
 }
 
 // The luminance of light `i`'s unshadowed direct term at `s` (0 beyond reach or facing away):
@@ -152,9 +190,12 @@ fn light_weight(i: u32, s: Surface) -> f32 {
 // Where frames are denoised, each sample is drawn once the loop's sum is known: the light
 // whose stretch of the running sum holds the sample's point of it (inverting the weights'
 // distribution), found from the last checkpoint before that point by weighing again at most
-// CHECKPOINT_EVERY lights in the loop's order (a point the sum never reaches, as rounding
+// CHECKPOINT_EVERY weighed or CHECKPOINT_VISITED lights in the loop's order while checkpoints
+// last (a point the sum never reaches, as rounding
 // might leave one, keeps the last light weighed). Over frames the points follow the
-// golden-ratio sequence, so a pixel's samples cover its lights evenly (stratified).
+// van der Corput sequence, so a pixel's samples cover its lights evenly (stratified); each
+// sample also keeps where it fell within its light's stretch (`frac`, for the point on a
+// sized light: sample_shape_point).
 fn pick_stratified(s: Surface, slot: u32, acc: ptr<function, Acc>) {
     for (var j = 0u; j < (*acc).k; j = j + 1u) {
         let point = sample_point(acc, j) * (*acc).wsum;
@@ -175,25 +216,38 @@ fn pick_stratified(s: Surface, slot: u32, acc: ptr<function, Acc>) {
                 }
             }
         } else {
+            // The cluster's words from the checkpoint's on, the empty ones skipped by the
+            // summary bits as in the light loop (lights listed in space order leave long runs
+            // of empty words between a cluster's far-reaching lights).
             let base = (slot - CLUSTER_FIRST_SLOT) * clusters.words.z;
+            let w0 = first_light / 32u;
             var done = false;
-            for (var wi = first_light / 32u; wi < clusters.words.y && !done; wi = wi + 1u) {
-                var bits = cluster_masks[base + clusters.words.x + wi];
-                if (wi == first_light / 32u) {
-                    bits = bits & ~((1u << (first_light % 32u)) - 1u);
+            for (var sw = w0 / 32u; sw < clusters.words.x && !done; sw = sw + 1u) {
+                var words = cluster_masks[base + sw];
+                if (sw == w0 / 32u) {
+                    words = words & ~((1u << (w0 % 32u)) - 1u);
                 }
-                while (bits != 0u) {
-                    let i = wi * 32u + firstTrailingBit(bits);
-                    bits = bits & (bits - 1u);
-                    if (weigh_past(i, s, point, &sum, &picked, &weight)) {
-                        done = true;
-                        break;
+                while (words != 0u && !done) {
+                    let w = sw * 32u + firstTrailingBit(words);
+                    words = words & (words - 1u);
+                    var bits = cluster_masks[base + clusters.words.x + w];
+                    if (w == w0) {
+                        bits = bits & ~((1u << (first_light % 32u)) - 1u);
+                    }
+                    while (bits != 0u) {
+                        let i = w * 32u + firstTrailingBit(bits);
+                        bits = bits & (bits - 1u);
+                        if (weigh_past(i, s, point, &sum, &picked, &weight)) {
+                            done = true;
+                            break;
+                        }
                     }
                 }
             }
         }
         (*acc).chosen[j] = picked;
         (*acc).weight[j] = weight;
+        (*acc).frac[j] = clamp((point - (sum - weight)) / max(weight, 1e-30), 0.0, 0.99999);
     }
 }
 
@@ -240,7 +294,13 @@ fn resolve_samples(s: Surface, acc: ptr<function, Acc>) {
         let i = (*acc).chosen[j];
         let t = light_terms(i, s);
         let term = t.att * t.ds * ((*acc).wsum / (*acc).weight[j]);
-        direct = direct + light_lit(i, s) * term;
+        var lit = 0.0;
+        if (DENOISE) {
+            lit = light_lit_point(i, s, sample_shape_point(s, i, (*acc).frac[j]));
+        } else {
+            lit = light_lit(i, s);
+        }
+        direct = direct + lit * term;
         if (DENOISE) {
             unlit = unlit + term;
         }

@@ -304,6 +304,7 @@ fn layout_lights(
         lights::LOCAL_BRIGHTNESS,
         shadow_resolution,
     ));
+    lights::spatial_order(&mut out);
     out
 }
 

@@ -176,6 +176,7 @@ fn dragon_lights(
         lights::LOCAL_BRIGHTNESS,
         shadow_resolution,
     ));
+    lights::spatial_order(&mut out);
     out
 }
 

@@ -330,6 +330,7 @@ pub(crate) fn scatter(
             LOCAL_BRIGHTNESS,
             resolution,
         ));
+        spatial_order(&mut out);
         return out;
     }
     let mut k = 0;
@@ -503,6 +504,42 @@ pub(crate) fn local(
         }
     }
     out
+}
+
+/// Sorts lights along a Morton (Z-order) curve of their positions, each axis scaled to the
+/// lights' bounds: lights near each other come near each other in the list (directional
+/// lights, which have no position, first, in their order). The ray-traced technique's
+/// sampled lights are stratified over each pixel's lights in list order
+/// (`--light-samples K` with `--denoise`), so in this order a pixel's samples over frames
+/// spread over the space around it rather than over the list's arbitrary order: atrium,
+/// 1,024 lights, 640 × 360, K = 1, 8 still frames denoised, RMSE against the 8 × 8 exact
+/// image 2.10 → 2.02 (lavapipe, docs/bench/denoise-order-lavapipe.txt; with an earlier
+/// sampling a Hilbert curve read 2.07 against Morton's 2.05, Morton over a cube instead of
+/// the bounds 2.09). The sequence the positions come from spreads consecutive lights apart,
+/// the opposite. Used by the layouts above [`LOCAL_LAYOUT_ABOVE`] lights (every light of
+/// the list but the suns); the hand-made ones keep their order.
+pub(crate) fn spatial_order(lights: &mut [Light]) {
+    let centre = |l: &Light| l.bounding_sphere().map(|(c, _)| c);
+    let (lo, hi) = lights.iter().filter_map(centre).fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), c| (lo.min(c), hi.max(c)),
+    );
+    let extent = (hi - lo).max(Vec3::splat(1e-6));
+    let key = |l: &Light| -> u64 {
+        let Some(c) = centre(l) else { return 0 };
+        let u = ((c - lo) / extent).clamp(Vec3::ZERO, Vec3::ONE) * 1023.0;
+        let axes = [u.x as u64, u.y as u64, u.z as u64];
+        // Interleave 10 bits of each axis (bit b of axis a at 3b + a), past the 0 of the
+        // directional lights.
+        let mut code = 0u64;
+        for b in 0..10 {
+            for (a, &v) in axes.iter().enumerate() {
+                code |= ((v >> b) & 1) << (3 * b + a);
+            }
+        }
+        code + 1
+    };
+    lights.sort_by_cached_key(key);
 }
 
 /// World-space bounding boxes of a scene's instances (for [`local`]'s obstacles).
