@@ -26,6 +26,7 @@ mod normals;
 pub mod primitives;
 pub mod scene_file;
 pub mod texture;
+pub mod zorder;
 
 pub use error::SceneError;
 pub use look::{Lighting, Pbr};

@@ -359,14 +359,6 @@ pub(crate) fn morton_order(mesh: &Mesh) -> Vec<u32> {
         return mesh.indices.clone();
     };
     let extent = (hi - lo).max(Vec3::splat(1e-12));
-    let spread = |v: u32| -> u32 {
-        // 10 bits → every third bit of 30.
-        let mut x = v & 0x3ff;
-        x = (x | (x << 16)) & 0x0300_00ff;
-        x = (x | (x << 8)) & 0x0300_f00f;
-        x = (x | (x << 4)) & 0x030c_30c3;
-        (x | (x << 2)) & 0x0924_9249
-    };
     let mut keyed: Vec<(u32, usize)> = mesh
         .indices
         .chunks_exact(3)
@@ -377,9 +369,7 @@ pub(crate) fn morton_order(mesh: &Mesh) -> Vec<u32> {
                 .map(|&v| mesh.positions[v as usize])
                 .sum::<Vec3>()
                 / 3.0;
-            let q = ((c - lo) / extent * 1023.0).clamp(Vec3::ZERO, Vec3::splat(1023.0));
-            let key = spread(q.x as u32) | (spread(q.y as u32) << 1) | (spread(q.z as u32) << 2);
-            (key, t)
+            (manyshadows_scene::zorder::key3((c - lo) / extent), t)
         })
         .collect();
     keyed.sort_by_key(|&(k, t)| (k, t));

@@ -149,8 +149,9 @@ fn weigh_past(i: u32, s: Surface, point: f32, sum: ptr<function, f32>, picked: p
 // from the first frame) from the pixel's own start, so a pixel's points over frames (and its
 // K points in one frame) are spread evenly over the weights instead of independently: any
 // first 2^m of them one in each 2^-m of the interval. Neighbours start apart (lighting.wgsl,
-// `u0`). Each point alone is uniform. Frames count from 1 (`modes.y`), the sequence from 0:
-// from 1 a pixel's first 8 points are not one in each eighth (2.13 after 8 below). Atrium,
+// `u0`). Each point alone is uniform. Frames count from 1 (`modes.y`), the sequence from 0
+// (frame f's K points are its (f − 1)K-th to fK − 1-th): from 1 a pixel's first 8 points are
+// not one in each eighth (2.13 after 8 below). Atrium,
 // 1,024 lights, 640 × 360, K = 1, RMSE of still frames against the 8 × 8 exact image
 // (lavapipe, mean of 4 seeds; docs/bench/denoise-order-lavapipe.txt): with the golden-ratio
 // sequence before (lights in Morton order, both coordinates of a light's point hashed) 2.13
@@ -160,11 +161,11 @@ fn weigh_past(i: u32, s: Surface, point: f32, sum: ptr<function, f32>, picked: p
 fn sample_point(acc: ptr<function, Acc>, j: u32) -> f32 {
     if ((*acc).k != ray_samples()) {
         // A catch-up frame: its samples spread evenly from the sequence's point of this frame.
-        let n0 = frame.modes.y * ray_samples();
-        return fract((*acc).u0 + f32(reverseBits(n0 - 1u) >> 8u) / 16777216.0 + f32(j) / f32((*acc).k));
+        let n0 = (frame.modes.y - 1u) * ray_samples();
+        return fract((*acc).u0 + f32(reverseBits(n0) >> 8u) / 16777216.0 + f32(j) / f32((*acc).k));
     }
-    let n = frame.modes.y * ray_samples() + j;
-    return fract((*acc).u0 + f32(reverseBits(n - 1u) >> 8u) / 16777216.0);
+    let n = (frame.modes.y - 1u) * ray_samples() + j;
+    return fract((*acc).u0 + f32(reverseBits(n) >> 8u) / 16777216.0);
 }
 
 // Where frames are denoised, the point on a sized light's shape that a sample of light `i`

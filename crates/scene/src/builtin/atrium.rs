@@ -304,7 +304,6 @@ fn layout_lights(
         lights::LOCAL_BRIGHTNESS,
         shadow_resolution,
     ));
-    lights::spatial_order(&mut out);
     out
 }
 

@@ -176,7 +176,6 @@ fn dragon_lights(
         lights::LOCAL_BRIGHTNESS,
         shadow_resolution,
     ));
-    lights::spatial_order(&mut out);
     out
 }
 

@@ -330,7 +330,6 @@ pub(crate) fn scatter(
             LOCAL_BRIGHTNESS,
             resolution,
         ));
-        spatial_order(&mut out);
         return out;
     }
     let mut k = 0;
@@ -516,8 +515,9 @@ pub(crate) fn local(
 /// image 2.10 → 2.02 (lavapipe, docs/bench/denoise-order-lavapipe.txt; with an earlier
 /// sampling a Hilbert curve read 2.07 against Morton's 2.05, Morton over a cube instead of
 /// the bounds 2.09). The sequence the positions come from spreads consecutive lights apart,
-/// the opposite. Used by the layouts above [`LOCAL_LAYOUT_ABOVE`] lights (every light of
-/// the list but the suns); the hand-made ones keep their order.
+/// the opposite. Applied to every seeded layout above [`LOCAL_LAYOUT_ABOVE`] lights, once,
+/// where the layout leaves the module (`builtin::build`, `builtin::scatter_lights`); the
+/// hand-made layouts keep their order.
 pub(crate) fn spatial_order(lights: &mut [Light]) {
     let centre = |l: &Light| l.bounding_sphere().map(|(c, _)| c);
     let (lo, hi) = lights.iter().filter_map(centre).fold(
@@ -525,20 +525,8 @@ pub(crate) fn spatial_order(lights: &mut [Light]) {
         |(lo, hi), c| (lo.min(c), hi.max(c)),
     );
     let extent = (hi - lo).max(Vec3::splat(1e-6));
-    let key = |l: &Light| -> u64 {
-        let Some(c) = centre(l) else { return 0 };
-        let u = ((c - lo) / extent).clamp(Vec3::ZERO, Vec3::ONE) * 1023.0;
-        let axes = [u.x as u64, u.y as u64, u.z as u64];
-        // Interleave 10 bits of each axis (bit b of axis a at 3b + a), past the 0 of the
-        // directional lights.
-        let mut code = 0u64;
-        for b in 0..10 {
-            for (a, &v) in axes.iter().enumerate() {
-                code |= ((v >> b) & 1) << (3 * b + a);
-            }
-        }
-        code + 1
-    };
+    // Past the 0 of the directional lights.
+    let key = |l: &Light| centre(l).map_or(0, |c| 1 + crate::zorder::key3((c - lo) / extent));
     lights.sort_by_cached_key(key);
 }
 

@@ -65,7 +65,9 @@ pub const SCENE_NAMES: &[&str] = &[
     "courtyard-opaque",
 ];
 
-/// Builds the built-in scene `name` (one of [`SCENE_NAMES`]).
+/// Builds the built-in scene `name` (one of [`SCENE_NAMES`]). With more than
+/// [`LOCAL_LAYOUT_ABOVE`] seeded lights (`opts.lights`) the list follows a Morton curve
+/// through their positions, suns first (`lights::spatial_order` says why).
 ///
 /// Errors: [`SceneError::UnknownScene`] listing the names; [`SceneError::InvalidRequest`] for
 /// more than [`MAX_LIGHTS`] lights, a shadow resolution outside `1..=16384` or light sizes
@@ -102,6 +104,9 @@ pub fn build(name: &str, opts: &BuiltinOptions) -> Result<Scene, SceneError> {
         "courtyard-opaque" => courtyard::build(opts, false),
         _ => unreachable!("checked against SCENE_NAMES above"),
     };
+    if opts.lights.is_some_and(|n| n > LOCAL_LAYOUT_ABOVE) {
+        lights::spatial_order(&mut scene.lights);
+    }
     opts.light_sizes.apply(&mut scene.lights);
     scene.validate()?;
     Ok(scene)
@@ -114,7 +119,8 @@ pub fn build(name: &str, opts: &BuiltinOptions) -> Result<Scene, SceneError> {
 /// half, directional lights slant in at 35–65° elevation; positions follow a jittered
 /// low-discrepancy sequence so any `n` covers the area evenly. Ranges shrink as `n` grows so
 /// each light affects a neighbourhood, not the whole scene. A scene with no geometry gets a
-/// layout over a 10 m square. The lights have the default sizes ([`crate::light_size`]). The
+/// layout over a 10 m square. Above [`LOCAL_LAYOUT_ABOVE`] lights the list follows a Morton
+/// curve through their positions, as every seeded layout's does ([`build`]). The lights have the default sizes ([`crate::light_size`]). The
 /// caller checks `n` against [`MAX_LIGHTS`] (see
 /// [`check_light_count`]); this function produces whatever it is asked for.
 pub fn scatter_lights(
@@ -124,5 +130,9 @@ pub fn scatter_lights(
     mix: LightMix,
     shadow_resolution: Option<u32>,
 ) -> Vec<Light> {
-    lights::scatter(scene, n, seed, mix, shadow_resolution)
+    let mut out = lights::scatter(scene, n, seed, mix, shadow_resolution);
+    if n > LOCAL_LAYOUT_ABOVE {
+        lights::spatial_order(&mut out);
+    }
+    out
 }

@@ -243,7 +243,6 @@ pub fn terrain_lights(
             lights::LOCAL_BRIGHTNESS,
             shadow_resolution,
         ));
-        lights::spatial_order(&mut out);
         return out;
     }
     let mut k = 0;
