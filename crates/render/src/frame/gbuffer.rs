@@ -26,6 +26,10 @@ pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// have emissive textures, on devices whose colour attachments may hold more than the 32
 /// bytes per pixel of position and normal (every native adapter; not a browser's WebGPU).
 pub const EMISSION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// The scene instance seen, plus one (0: no geometry), only for a camera whose frames keep
+/// histories that follow moving instances ([`GBufferViews::MonoMoving`], motion.rs), on
+/// devices whose colour attachments hold it beside the others.
+pub const INSTANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 
 /// G-buffer targets and the pipeline that fills them.
 pub struct GBuffer {
@@ -36,7 +40,11 @@ pub struct GBuffer {
     /// Emissive texels (see [`EMISSION_FORMAT`]); `None` where no material has an emissive
     /// texture or the device cannot hold a third target (the factor alone is used then).
     pub emission: Option<wgpu::Texture>,
-    /// Render-target views of position, normal, depth and emission, made once.
+    /// The instance seen per pixel (see [`INSTANCE_FORMAT`]); `None` unless the views are
+    /// [`GBufferViews::MonoMoving`] and the device can hold it.
+    pub instance: Option<wgpu::Texture>,
+    /// Render-target views of position, normal, depth, then emission and instance where
+    /// they exist, made once.
     pub(super) views: Vec<wgpu::TextureView>,
     /// By (alpha-tested, face culling): the opaque and alpha-testing pipelines, and culling
     /// variants where a material asks for them. With stereo drawn layered, these are the
@@ -59,6 +67,9 @@ pub struct GBuffer {
 pub enum GBufferViews<'a> {
     /// One camera (`FrameUniforms::eye_view_proj[0]`).
     Mono,
+    /// One camera, and per pixel the instance seen (`GBuffer::instance`): for frames whose
+    /// denoiser or reservoirs follow surfaces of moving instances (motion.rs).
+    MonoMoving,
     /// Two eyes side by side, drawn that way (its feature is checked by `Renderer::new`).
     Stereo(EyePasses),
     /// Square views in tiles, all drawn in one layered pass (needs `CLIP_DISTANCES`):
@@ -174,9 +185,10 @@ impl GBuffer {
             .iter()
             .map(|f| f.target_pixel_byte_cost().unwrap_or(16))
             .sum::<u32>();
+        let attachment_bytes = ctx.limits().max_color_attachment_bytes_per_sample;
         let emission = if !scene.textures.has_emissive() {
             None
-        } else if ctx.limits().max_color_attachment_bytes_per_sample >= bytes_needed {
+        } else if attachment_bytes >= bytes_needed {
             Some(target(
                 ctx,
                 "gbuffer.emission",
@@ -190,7 +202,33 @@ impl GBuffer {
                 "emissive textures are not shown on this device (its colour attachments hold \
                  {} bytes per pixel, the G-buffer would need {bytes_needed}): their materials \
                  emit their factor",
-                ctx.limits().max_color_attachment_bytes_per_sample
+                attachment_bytes
+            );
+            None
+        };
+        let instance_bytes = bytes_needed
+            - if emission.is_some() {
+                0
+            } else {
+                EMISSION_FORMAT.target_pixel_byte_cost().unwrap_or(4)
+            }
+            + INSTANCE_FORMAT.target_pixel_byte_cost().unwrap_or(4);
+        let instance = if !matches!(views_drawn, GBufferViews::MonoMoving) {
+            None
+        } else if attachment_bytes >= instance_bytes {
+            Some(target(
+                ctx,
+                "gbuffer.instance",
+                w,
+                h,
+                INSTANCE_FORMAT,
+                color_usage,
+            ))
+        } else {
+            log::warn!(
+                "surfaces of moving instances restart their denoised and reused histories on \
+                 this device (its colour attachments hold {attachment_bytes} bytes per pixel, \
+                 the G-buffer with the instance seen would need {instance_bytes})"
             );
             None
         };
@@ -282,12 +320,16 @@ impl GBuffer {
         let groups: Vec<&wgpu::BindGroupLayout> = std::iter::once(&layout).chain(pull).collect();
         let pipeline_layout =
             crate::gpu::pipelines::pipeline_layout(device, "gbuffer.pipeline_layout", &groups);
-        let color_targets: Vec<Option<wgpu::ColorTargetState>> =
-            [POSITION_FORMAT, NORMAL_FORMAT, EMISSION_FORMAT]
-                .into_iter()
-                .take(if emission.is_some() { 3 } else { 2 })
-                .map(|f| Some(f.into()))
-                .collect();
+        let color_targets: Vec<Option<wgpu::ColorTargetState>> = [
+            Some(POSITION_FORMAT),
+            Some(NORMAL_FORMAT),
+            emission.as_ref().map(|_| EMISSION_FORMAT),
+            instance.as_ref().map(|_| INSTANCE_FORMAT),
+        ]
+        .into_iter()
+        .flatten()
+        .map(|f| Some(f.into()))
+        .collect();
         let pipeline = |fragment: &str, cull: CameraCull| {
             let (front_face, cull_mode) = match cull {
                 CameraCull::None => (wgpu::FrontFace::Ccw, None),
@@ -361,11 +403,15 @@ impl GBuffer {
         let mut pipelines = std::collections::HashMap::new();
         for masked in [false, true] {
             for &cull in culls {
-                let fragment = match (masked, emission.is_some()) {
-                    (false, false) => "fs_main",
-                    (true, false) => "fs_masked",
-                    (false, true) => "fs_main_emission",
-                    (true, true) => "fs_masked_emission",
+                let fragment = match (masked, emission.is_some(), instance.is_some()) {
+                    (false, false, false) => "fs_main",
+                    (true, false, false) => "fs_masked",
+                    (false, true, false) => "fs_main_emission",
+                    (true, true, false) => "fs_masked_emission",
+                    (false, false, true) => "fs_main_moving",
+                    (true, false, true) => "fs_masked_moving",
+                    (false, true, true) => "fs_main_emission_moving",
+                    (true, true, true) => "fs_masked_emission_moving",
                 };
                 pipelines.insert((masked, cull), pipeline(fragment, cull));
             }
@@ -375,6 +421,7 @@ impl GBuffer {
             Some(&normal),
             Some(&depth),
             emission.as_ref(),
+            instance.as_ref(),
         ]
         .into_iter()
         .flatten()
@@ -427,6 +474,7 @@ impl GBuffer {
             position,
             normal,
             emission,
+            instance,
             views,
             pipelines,
             bind_group,

@@ -18,6 +18,8 @@ struct VsOut {
     @location(3) uv: vec2<f32>,
     // The eye this copy of the triangle is drawn for (frame/eyes.rs; 0 when mono).
     @location(4) @interpolate(flat) eye: u32,
+    // The scene instance drawn (the `_moving` entry points keep it per pixel: motion.rs).
+    @location(5) @interpolate(flat) instance: u32,
 }
 
 // Instance `instance` of a draw is scene instance `instance / eyes`, seen by eye
@@ -49,6 +51,7 @@ fn surface_vertex_seen(position: vec3<f32>, normal: vec3<f32>, uv: vec2<f32>, in
     out.material = inst.material.x;
     out.uv = uv;
     out.eye = eye;
+    out.instance = instance;
     return out;
 }
 
@@ -129,6 +132,22 @@ struct GBufferOutEmission {
     @location(2) emission: vec4<f32>,
 }
 
+// With the instance seen (motion.rs: histories that follow moving instances): the scene
+// instance + 1 (the clear value 0: no geometry).
+struct GBufferOutMoving {
+    @location(0) position: vec4<u32>,
+    @location(1) normal_material: vec4<u32>,
+    @location(2) instance: u32,
+}
+
+// Both.
+struct GBufferOutEmissionMoving {
+    @location(0) position: vec4<u32>,
+    @location(1) normal_material: vec4<u32>,
+    @location(2) emission: vec4<f32>,
+    @location(3) instance: u32,
+}
+
 fn emission_texel(mat: MaterialData, uv: vec2<f32>, d: Derivs) -> vec4<f32> {
     let bits = bitcast<u32>(mat.emissive.w);
     let layer1 = bits & 0xffffffu;
@@ -138,27 +157,14 @@ fn emission_texel(mat: MaterialData, uv: vec2<f32>, d: Derivs) -> vec4<f32> {
     return vec4<f32>(sample_layer(colour_tex, layer1, bits >> 24u, uv, d).rgb, 1.0);
 }
 
-fn with_emission(g: GBufferOut, e: vec4<f32>) -> GBufferOutEmission {
-    return GBufferOutEmission(g.position, g.normal_material, e);
-}
-
-@fragment
-fn fs_main_emission(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOutEmission {
-    let d = derivs(in);
-    let mat = materials[in.material];
-    let g = surface(in, front, mat, base_colour(mat, in.uv, d), d);
-    return with_emission(g, emission_texel(mat, in.uv, d));
-}
-
-@fragment
-fn fs_masked_emission(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOutEmission {
-    let d = derivs(in);
-    let mat = materials[in.material];
-    let base = base_colour(mat, in.uv, d);
+// The base colour of an alpha-tested material at the fragment; texels whose alpha is below
+// the cutoff are holes (discarded).
+fn masked_base(mat: MaterialData, uv: vec2<f32>, d: Derivs) -> vec4<f32> {
+    let base = base_colour(mat, uv, d);
     if ((mat.texture.z & MATERIAL_ALPHA_TEST) != 0u && base.a < bitcast<f32>(mat.texture.w)) {
         discard;
     }
-    return with_emission(surface(in, front, mat, base, d), emission_texel(mat, in.uv, d));
+    return base;
 }
 
 @fragment
@@ -168,17 +174,63 @@ fn fs_main(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOut {
     return surface(in, front, mat, base_colour(mat, in.uv, d), d);
 }
 
-// Alpha-tested materials: texels whose alpha is below the cutoff are holes. A separate entry
-// point (and pipeline) so that opaque surfaces keep early depth testing.
+// Alpha-tested materials. A separate entry point (and pipeline) so that opaque surfaces keep
+// early depth testing.
 @fragment
 fn fs_masked(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOut {
     let d = derivs(in);
     let mat = materials[in.material];
-    let base = base_colour(mat, in.uv, d);
-    if ((mat.texture.z & MATERIAL_ALPHA_TEST) != 0u && base.a < bitcast<f32>(mat.texture.w)) {
-        discard;
-    }
-    return surface(in, front, mat, base, d);
+    return surface(in, front, mat, masked_base(mat, in.uv, d), d);
+}
+
+@fragment
+fn fs_main_emission(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOutEmission {
+    let d = derivs(in);
+    let mat = materials[in.material];
+    let g = surface(in, front, mat, base_colour(mat, in.uv, d), d);
+    return GBufferOutEmission(g.position, g.normal_material, emission_texel(mat, in.uv, d));
+}
+
+@fragment
+fn fs_masked_emission(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOutEmission {
+    let d = derivs(in);
+    let mat = materials[in.material];
+    let g = surface(in, front, mat, masked_base(mat, in.uv, d), d);
+    return GBufferOutEmission(g.position, g.normal_material, emission_texel(mat, in.uv, d));
+}
+
+@fragment
+fn fs_main_moving(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOutMoving {
+    let d = derivs(in);
+    let mat = materials[in.material];
+    let g = surface(in, front, mat, base_colour(mat, in.uv, d), d);
+    return GBufferOutMoving(g.position, g.normal_material, in.instance + 1u);
+}
+
+@fragment
+fn fs_masked_moving(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOutMoving {
+    let d = derivs(in);
+    let mat = materials[in.material];
+    let g = surface(in, front, mat, masked_base(mat, in.uv, d), d);
+    return GBufferOutMoving(g.position, g.normal_material, in.instance + 1u);
+}
+
+@fragment
+fn fs_main_emission_moving(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOutEmissionMoving {
+    let d = derivs(in);
+    let mat = materials[in.material];
+    let g = surface(in, front, mat, base_colour(mat, in.uv, d), d);
+    let e = emission_texel(mat, in.uv, d);
+    return GBufferOutEmissionMoving(g.position, g.normal_material, e, in.instance + 1u);
+}
+
+@fragment
+fn fs_masked_emission_moving(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOutEmissionMoving {
+    let d = derivs(in);
+    let mat = materials[in.material];
+    let g = surface(in, front, mat, masked_base(mat, in.uv, d), d);
+    let e = emission_texel(mat, in.uv, d);
+    return GBufferOutEmissionMoving(g.position, g.normal_material, e, in.instance + 1u);
 }
 
 fn surface(in: VsOut, front: bool, mat: MaterialData, base: vec4<f32>, d: Derivs) -> GBufferOut {

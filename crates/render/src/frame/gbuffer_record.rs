@@ -326,7 +326,8 @@ impl GBuffer {
         draw(&mut pass);
     }
 
-    /// A pass into `views` (position, normal, depth, emission), cleared when `clear`, its
+    /// A pass into `views` (position, normal, depth, then emission and instance where the
+    /// G-buffer has them), cleared when `clear`, its
     /// timestamps as `first` and `last` say.
     fn begin_pass<'e>(
         &self,
@@ -354,11 +355,11 @@ impl GBuffer {
         };
         encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("gbuffer.pass"),
-            color_attachments: &if let Some(ev) = views.get(3) {
-                vec![target(pv), target(nv), target(ev)]
-            } else {
-                vec![target(pv), target(nv)]
-            },
+            // Then the emission and instance targets, where the G-buffer has them.
+            color_attachments: &[target(pv), target(nv)]
+                .into_iter()
+                .chain(views[3..].iter().map(target))
+                .collect::<Vec<_>>(),
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: dv,
                 depth_ops: Some(wgpu::Operations {

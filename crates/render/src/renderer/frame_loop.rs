@@ -34,6 +34,10 @@ impl Renderer {
             let span = self.timer.span(Stage::Clusters);
             self.clusters.record(encoder, &self.timer, span);
         }
+        if let Some(m) = &mut self.motion {
+            let instances = &self.current.instances;
+            m.upload(&ctx.queue, |i| instances[i].transform);
+        }
         if let Some(r) = &mut self.reuse {
             let cam = self.current.camera;
             let aspect = self.settings.width as f32 / self.settings.height as f32;

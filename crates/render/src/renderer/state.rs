@@ -74,6 +74,9 @@ pub struct Renderer {
     pub(super) denoiser: Option<crate::shading::denoise::Denoiser>,
     /// The reservoirs of reused light samples (`RayOptions::reuse`).
     pub(super) reuse: Option<crate::shading::reuse::Reuse>,
+    /// Moving instances' motion between frames, which the denoiser's and the reservoirs'
+    /// histories follow (only with either).
+    pub(super) motion: Option<crate::frame::motion::InstanceMotion>,
     /// Frames the denoiser or the reuse has seen (their rays' random numbers differ by it).
     pub(super) frames_denoised: u32,
     /// A light changed since the last prepared frame (the denoiser's history follows it).
@@ -170,6 +173,14 @@ impl Renderer {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
+            // Histories of surface points (the denoiser's, the reservoirs') follow moving
+            // instances by the instance each pixel sees (stereo refuses both).
+            let histories = settings.rays.denoise || settings.rays.reuse;
+            let mono = if histories {
+                GBufferViews::MonoMoving
+            } else {
+                GBufferViews::Mono
+            };
             let gbuffer = GBuffer::new(
                 ctx,
                 &gpu_scene,
@@ -177,8 +188,10 @@ impl Renderer {
                 (settings.width, settings.height),
                 settings
                     .stereo
-                    .map_or(GBufferViews::Mono, |s| GBufferViews::Stereo(s.passes)),
+                    .map_or(mono, |s| GBufferViews::Stereo(s.passes)),
             );
+            let motion = histories
+                .then(|| crate::frame::motion::InstanceMotion::new(ctx, gpu_scene.draws.len()));
             let mut clusters = LightClusters::new(
                 ctx,
                 (settings.width, settings.height),
@@ -217,6 +230,7 @@ impl Renderer {
                         settings.height,
                         settings.rays.light_samples > 0,
                         source.light_data(scene),
+                        motion.as_ref().expect("made with the denoiser"),
                     )
                 })
                 .transpose()?;
@@ -231,6 +245,7 @@ impl Renderer {
                         settings.rays.light_samples,
                         settings.rays.spatial
                             != crate::shadows::raytraced::accel::SpatialReuse::Off,
+                        (&gbuffer, motion.as_ref().expect("made with the reuse")),
                     )
                 })
                 .transpose()?;
@@ -295,6 +310,7 @@ impl Renderer {
                 lighting,
                 denoiser,
                 reuse,
+                motion,
                 frames_denoised: 0,
                 lights_changed: false,
                 probes,
@@ -383,6 +399,9 @@ impl Renderer {
         };
         if !transform.is_finite() || transform.determinant().abs() < 1e-12 {
             return Err(bad("transform must be finite and invertible".into()).into());
+        }
+        if let Some(m) = &mut self.motion {
+            m.note(instance, self.current.instances[instance].transform);
         }
         self.scene
             .set_instance_transform(&self.ctx.queue, instance, transform);

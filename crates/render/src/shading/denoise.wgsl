@@ -58,6 +58,59 @@ fn ratio_of(s: vec3<f32>, u: vec3<f32>) -> f32 {
 // In a frame whose lights changed it first holds, from the lighting pass, per pixel what the
 // changed lights add to the mean estimates with and without shadows: [with, 0], [without, 0].
 @group(0) @binding(6) var<storage, read_write> ratio_out: array<vec4<f32>>;
+// The instance seen per pixel and per instance its motion since the last frame
+// (frame/motion.rs: `last_frame_position`).
+@group(0) @binding(9) var gbuf_instance: texture_2d<u32>;
+@group(0) @binding(10) var<storage, read> motion_back: array<mat4x4<f32>>;
+
+// Last frame's history where the point `was` lies (`footprint`: a pixel's world size at
+// the point), bilinearly from the four pixels around where it was seen that saw it (within
+// two pixel footprints): the sums weighed and the weight (0: none saw it). Taking the nearest
+// pixel instead rounds a slow camera's sub-pixel motion away frame after frame, and the
+// history drifts by pixels against the image (atrium, camera turning 0.15 degrees a frame:
+// error 7.8 after 30 frames).
+struct History {
+    h0: vec4<f32>,
+    h1: vec4<f32>,
+    h2: f32,
+    weight: f32,
+}
+
+fn history_at(was: vec3<f32>, footprint: f32) -> History {
+    var out = History(vec4<f32>(0.0), vec4<f32>(0.0), 0.0, 0.0);
+    let w = p.size.x;
+    let h = p.size.y;
+    let clip = p.prev_view_proj * vec4<f32>(was, 1.0);
+    if (p.pixel.z != 0.0 || clip.w <= 0.0) {
+        return out;
+    }
+    let ndc = clip.xy / clip.w;
+    let q = vec2<f32>((ndc.x * 0.5 + 0.5) * f32(w), (0.5 - ndc.y * 0.5) * f32(h));
+    let f = q - vec2<f32>(0.5);
+    let b = floor(f);
+    let t = f - b;
+    for (var k = 0u; k < 4u; k = k + 1u) {
+        let o = vec2<f32>(f32(k & 1u), f32(k >> 1u));
+        let at = b + o;
+        if (at.x < 0.0 || at.y < 0.0 || at.x >= f32(w) || at.y >= f32(h)) {
+            continue;
+        }
+        let j = u32(at.y) * w + u32(at.x);
+        let hp = hist_in[4u * j + 3u];
+        if (hp.w == 0.0 || distance(hp.xyz, was) > 2.0 * footprint + 1e-6) {
+            continue;
+        }
+        let wt = mix(1.0 - t.x, t.x, o.x) * mix(1.0 - t.y, t.y, o.y);
+        out.h0 = out.h0 + wt * hist_in[4u * j];
+        out.h1 = out.h1 + wt * hist_in[4u * j + 1u];
+        out.h2 = out.h2 + wt * hist_in[4u * j + 2u].x;
+        out.weight = out.weight + wt;
+    }
+    if (out.weight <= 1e-3) {
+        out.weight = 0.0;
+    }
+    return out;
+}
 
 @compute @workgroup_size(8, 8)
 fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -92,82 +145,54 @@ fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
     // of a light change drew more: lighting.wgsl `catch_up_samples`).
     let weight = max(px_in[4u * i + 1u].w, 1.0);
     var frames = weight;
-    let clip = p.prev_view_proj * vec4<f32>(pos, 1.0);
-    if (p.pixel.z == 0.0 && clip.w > 0.0) {
-        let ndc = clip.xy / clip.w;
-        let q = vec2<f32>((ndc.x * 0.5 + 0.5) * f32(w), (0.5 - ndc.y * 0.5) * f32(h));
-        // The history where the point was, bilinearly from the four pixels around it that
-        // saw the same surface (within two pixel footprints). Taking the nearest pixel
-        // instead rounds a slow camera's sub-pixel motion away frame after frame, and the
-        // history drifts by pixels against the image (atrium, camera turning 0.15 degrees a
-        // frame: error 7.8 after 30 frames).
-        let f = q - vec2<f32>(0.5);
-        let b = floor(f);
-        let t = f - b;
-        let footprint = distance(pos, p.camera.xyz) * p.pixel.x;
-        var h0 = vec4<f32>(0.0);
-        var h1 = vec4<f32>(0.0);
-        var h2 = 0.0;
-        var wsum = 0.0;
-        for (var k = 0u; k < 4u; k = k + 1u) {
-            let o = vec2<f32>(f32(k & 1u), f32(k >> 1u));
-            let at = b + o;
-            if (at.x < 0.0 || at.y < 0.0 || at.x >= f32(w) || at.y >= f32(h)) {
-                continue;
-            }
-            let j = u32(at.y) * w + u32(at.x);
-            let hp = hist_in[4u * j + 3u];
-            if (hp.w == 0.0 || distance(hp.xyz, pos) > 2.0 * footprint + 1e-6) {
-                continue;
-            }
-            let wt = mix(1.0 - t.x, t.x, o.x) * mix(1.0 - t.y, t.y, o.y);
-            h0 = h0 + wt * hist_in[4u * j];
-            h1 = h1 + wt * hist_in[4u * j + 1u];
-            h2 = h2 + wt * hist_in[4u * j + 2u].x;
-            wsum = wsum + wt;
+    // The history of the same point where it was last frame (its instance's motion taken
+    // back, frame/motion.rs). A point that moved keeps at most MOVING_HISTORY frames
+    // (denoise.rs): the light on a moving surface changes.
+    let footprint = distance(pos, p.camera.xyz) * p.pixel.x;
+    let was = last_frame_position(gid.xy, pos);
+    let moved = any(was != pos);
+    let g = history_at(was, footprint);
+    if (g.weight > 0.0) {
+        var h0 = g.h0 / g.weight;
+        var h1 = g.h1 / g.weight;
+        var h2 = g.h2 / g.weight;
+        if (p.camera.w != 0.0) {
+            // The lights changed: the means become those of the new lights by what the
+            // lights that went took and those that came add, traced here once (their
+            // visibility as the history's samples would have found it on average); the
+            // mean ratio moves with them, its spread kept.
+            // The samples of the lights that went are lost to the mean: the history
+            // counts as many frames as its samples of the lights that stay (what their
+            // share of the unshadowed light sampled them with).
+            let before = ratio_of(h0.rgb, h1.rgb);
+            let stays = clamp(1.0 - fix_u.w / max(dot(h1.rgb, LUMA), 1e-30), 0.0, 1.0);
+            h0.w = max(floor(h0.w * stays), 1.0);
+            h1 = vec4<f32>(max(h1.rgb + fix_u.rgb, vec3<f32>(0.0)), h1.w);
+            h0 = vec4<f32>(clamp(h0.rgb + fix_s, vec3<f32>(0.0), h1.rgb), h0.w);
+            let shift = ratio_of(h0.rgb, h1.rgb) - before;
+            let shifted = clamp(h1.w + shift, 0.0, 1.0);
+            h2 = max(h2 + shifted * shifted - h1.w * h1.w, shifted * shifted);
+            h1.w = shifted;
         }
-        if (wsum > 1e-3) {
-            h0 = h0 / wsum;
-            h1 = h1 / wsum;
-            h2 = h2 / wsum;
-            if (p.camera.w != 0.0) {
-                // The lights changed: the means become those of the new lights by what the
-                // lights that went took and those that came add, traced here once (their
-                // visibility as the history's samples would have found it on average); the
-                // mean ratio moves with them, its spread kept.
-                // The samples of the lights that went are lost to the mean: the history
-                // counts as many frames as its samples of the lights that stay (what their
-                // share of the unshadowed light sampled them with).
-                let before = ratio_of(h0.rgb, h1.rgb);
-                let stays = clamp(1.0 - fix_u.w / max(dot(h1.rgb, LUMA), 1e-30), 0.0, 1.0);
-                h0.w = max(floor(h0.w * stays), 1.0);
-                h1 = vec4<f32>(max(h1.rgb + fix_u.rgb, vec3<f32>(0.0)), h1.w);
-                h0 = vec4<f32>(clamp(h0.rgb + fix_s, vec3<f32>(0.0), h1.rgb), h0.w);
-                let shift = ratio_of(h0.rgb, h1.rgb) - before;
-                let moved = clamp(h1.w + shift, 0.0, 1.0);
-                h2 = max(h2 + moved * moved - h1.w * h1.w, moved * moved);
-                h1.w = moved;
-            }
-            if (p.pixel.w != 0.0) {
-                // The lights changed more than the lighting pass corrects for: the history
-                // counts as many frames as the share of its unshadowed light (the mean of
-                // estimates whose luminance is the exact sum each frame) that this frame's
-                // exact unshadowed light keeps, to the fourth power (measured: denoise.rs,
-                // "When lights change").
-                let now = dot(px_in[4u * i].rgb, LUMA);
-                let was = dot(h1.rgb, LUMA);
-                let stays = clamp(1.0 - abs(now - was) / max(max(now, was), 1e-30), 0.0, 1.0);
-                // A history cut below one frame is dropped (the frame's own estimate alone).
-                let kept = stays * stays;
-                h0.w = floor(h0.w * kept * kept);
-            }
-            frames = min(round(h0.w) + weight, f32(p.size.w));
-            let a = min(weight / frames, 1.0);
-            shadowed = mix(h0.rgb, shadowed, a);
-            unshadowed = mix(h1.rgb, unshadowed, a);
-            mean = mix(h1.w, r, a);
-            m2 = mix(h2, r * r, a);
+        if (p.pixel.w != 0.0) {
+            // The lights changed more than the lighting pass corrects for: the history
+            // counts as many frames as the share of its unshadowed light (the mean of
+            // estimates whose luminance is the exact sum each frame) that this frame's
+            // exact unshadowed light keeps, to the fourth power (measured: denoise.rs,
+            // "When lights change").
+            let now = dot(px_in[4u * i].rgb, LUMA);
+            let then = dot(h1.rgb, LUMA);
+            let stays = clamp(1.0 - abs(now - then) / max(max(now, then), 1e-30), 0.0, 1.0);
+            // A history cut below one frame is dropped (the frame's own estimate alone).
+            let kept = stays * stays;
+            h0.w = floor(h0.w * kept * kept);
         }
+        frames = min(round(h0.w) + weight, select(f32(p.size.w), MOVING_HISTORY, moved));
+        let a = min(weight / frames, 1.0);
+        shadowed = mix(h0.rgb, shadowed, a);
+        unshadowed = mix(h1.rgb, unshadowed, a);
+        mean = mix(h1.w, r, a);
+        m2 = mix(h2, r * r, a);
     }
     hist_out[4u * i] = vec4<f32>(shadowed, frames);
     hist_out[4u * i + 1u] = vec4<f32>(unshadowed, mean);

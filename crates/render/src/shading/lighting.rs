@@ -207,6 +207,12 @@ impl LightingPass {
         if consts.reuse {
             entries.push(crate::gpu::pipelines::uniform_entry(42, frag));
             entries.push(crate::gpu::pipelines::storage_rw_entry(43, frag));
+            entries.push(crate::gpu::pipelines::texture_entry(
+                47,
+                wgpu::TextureSampleType::Uint,
+                frag,
+            ));
+            entries.push(crate::gpu::pipelines::storage_entry(48, frag));
         }
         if consts.probes {
             entries.push(wgpu::BindGroupLayoutEntry {
@@ -446,6 +452,11 @@ fn bind(
     if let Some(r) = inputs.reuse {
         entries.push(crate::gpu::pipelines::whole_entry(42, &r.params));
         entries.push(crate::gpu::pipelines::whole_entry(43, &r.reservoirs));
+        entries.push(wgpu::BindGroupEntry {
+            binding: 47,
+            resource: wgpu::BindingResource::TextureView(&r.instance),
+        });
+        entries.push(crate::gpu::pipelines::whole_entry(48, &r.motion_back));
     }
     if let Some(p) = inputs.probes {
         entries.push(wgpu::BindGroupEntry {

@@ -366,9 +366,13 @@ impl ShadingConsts {
             format!("{consts}{NO_PROBES_WGSL}")
         };
         let reuse = if self.reuse {
-            REUSE_WGSL
+            format!(
+                "const MOVING_CONFIDENCE: f32 = {:?}f;\n{REUSE_WGSL}{}",
+                crate::shading::reuse::MOVING_CONFIDENCE as f32,
+                crate::frame::motion::WGSL
+            )
         } else {
-            NO_REUSE_WGSL
+            NO_REUSE_WGSL.to_string()
         };
         if self.denoise {
             format!("{consts}{reuse}{DENOISE_WGSL}")
@@ -459,20 +463,26 @@ struct ReuseParams {
 // kept] (float bits), then per sample [light, W and M (float bits), point on a sized
 // light's shape (2 × unorm16)].
 @group(0) @binding(43) var<storage, read_write> reservoirs: array<vec4<u32>>;
+// The instance seen per pixel and per instance its motion since the last frame
+// (frame/motion.rs: `last_frame_position`).
+@group(0) @binding(47) var gbuf_instance: texture_2d<u32>;
+@group(0) @binding(48) var<storage, read> motion_back: array<mat4x4<f32>>;
 
 fn reuse_record(half: u32, px: vec2<u32>) -> u32 {
     let stride = reuse.size.z + 1u;
     return (half * reuse.size.x * reuse.size.y + px.y * reuse.size.x + px.x) * stride;
 }
 
-// Where last frame kept the reservoirs of the surface point `p` (a record index of the half
-// read), or 0xffffffff: the nearest pixel to where `p` was seen, if it saw a point within two
-// pixel footprints of `p`.
-fn reuse_history(p: vec3<f32>) -> u32 {
+// Where last frame kept the reservoirs of the surface point `p` seen at pixel `px` (a record
+// index of the half read), or 0xffffffff: the nearest pixel to where `p` was seen (where it
+// was, if its instance moved), if it saw a point within two pixel footprints of that.
+fn reuse_history(px: vec2<i32>, p: vec3<f32>) -> u32 {
     if (reuse.flags.y != 0.0) {
         return 0xffffffffu;
     }
-    let clip = reuse.prev_view_proj * vec4<f32>(p, 1.0);
+    let was = last_frame_position(vec2<u32>(px), p);
+    reuse_moved = any(was != p);
+    let clip = reuse.prev_view_proj * vec4<f32>(was, 1.0);
     if (clip.w <= 0.0) {
         return 0xffffffffu;
     }
@@ -484,15 +494,19 @@ fn reuse_history(p: vec3<f32>) -> u32 {
     let r = reuse_record(u32(reuse.flags.z), vec2<u32>(q));
     let kept = bitcast<vec4<f32>>(reservoirs[r]);
     let footprint = distance(p, reuse.camera.xyz) * reuse.flags.x;
-    if (kept.w == 0.0 || distance(kept.xyz, p) > 2.0 * footprint + 1e-6) {
+    if (kept.w == 0.0 || distance(kept.xyz, was) > 2.0 * footprint + 1e-6) {
         return 0xffffffffu;
     }
     return r;
 }
 
-// Most frames a reservoir stands for.
+// Whether the point `reuse_history` last looked for moved with its instance.
+var<private> reuse_moved: bool;
+
+// Most frames a reservoir stands for (fewer on a surface that moved: reuse.rs
+// MOVING_CONFIDENCE).
 fn reuse_cap() -> f32 {
-    return f32(reuse.size.w);
+    return select(f32(reuse.size.w), MOVING_CONFIDENCE, reuse_moved);
 }
 
 // Sample `j` of the record `r` (from reuse_history): light, W, M, point.
@@ -546,7 +560,7 @@ fn spatial_load(px: vec2<i32>, j: u32) -> vec4<u32> {
 
 /// The same functions where nothing is reused (never called: `REUSE` is false).
 const NO_REUSE_WGSL: &str = "
-fn reuse_history(p: vec3<f32>) -> u32 { return 0xffffffffu; }
+fn reuse_history(px: vec2<i32>, p: vec3<f32>) -> u32 { return 0xffffffffu; }
 fn reuse_load(r: u32, j: u32) -> vec4<u32> { return vec4<u32>(0u); }
 fn reuse_cap() -> f32 { return 0.0; }
 fn reuse_store_point(px: vec2<i32>, p: vec3<f32>, kept: bool) {}

@@ -334,7 +334,7 @@ fn resolve_reused(s: Surface, acc: ptr<function, Acc>) {
     let k = ray_samples();
     let luma = vec3<f32>(0.2126, 0.7152, 0.0722);
     (*acc).reused = true;
-    let r = reuse_history(s.p);
+    let r = reuse_history(s.px, s.p);
     reuse_store_point(s.px, s.p, true);
     var direct = vec3<f32>(0.0);
     for (var j = 0u; j < k; j = j + 1u) {
