@@ -23,9 +23,11 @@
 //! is unbiased (`tests/reuse.rs` checks that its mean over seeds is the exact image). Where
 //! the point moved, or a caster uncovered a light the old reservoir could not hold, that
 //! light is found only by the new draw, with weight `1 / (1 + M)`: the estimate darkens there
-//! until the reservoir has drawn it (a few frames). A sized light's target uses one point of
-//! its shape per ray (the visibility of a fresh point each frame): unbiased in the mean over
-//! points, but not a fixed target.
+//! until the reservoir has drawn it (a few frames). A point on an instance that moved is
+//! looked for where it was last frame (frame/motion.rs), and its old reservoir stands for at
+//! most [`MOVING_CONFIDENCE`] frames: what lit it there may not light it here. A sized
+//! light's target uses one point of its shape per ray (the visibility of a fresh point each
+//! frame): unbiased in the mean over points, but not a fixed target.
 
 //!
 //! **Spatial reuse** (`RayOptions::spatial`, `--spatial`): after the lighting pass, a second
