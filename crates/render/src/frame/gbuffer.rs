@@ -351,6 +351,8 @@ impl GBuffer {
                         "vs_layered"
                     } else if multiview {
                         "vs_multiview"
+                    } else if instance.is_some() {
+                        "vs_moving"
                     } else {
                         "vs_main"
                     }),

@@ -18,8 +18,22 @@ struct VsOut {
     @location(3) uv: vec2<f32>,
     // The eye this copy of the triangle is drawn for (frame/eyes.rs; 0 when mono).
     @location(4) @interpolate(flat) eye: u32,
-    // The scene instance drawn (the `_moving` entry points keep it per pixel: motion.rs).
+}
+
+// The same with the scene instance drawn, which the `_moving` entry points keep per pixel
+// (motion.rs): one camera only (`vs_moving`).
+struct MovingVsOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) @interpolate(flat) material: u32,
+    @location(3) uv: vec2<f32>,
+    @location(4) @interpolate(flat) eye: u32,
     @location(5) @interpolate(flat) instance: u32,
+}
+
+fn without_instance(v: MovingVsOut) -> VsOut {
+    return VsOut(v.clip, v.world, v.normal, v.material, v.uv, v.eye);
 }
 
 // Instance `instance` of a draw is scene instance `instance / eyes`, seen by eye
@@ -33,6 +47,18 @@ fn vs_main(
 ) -> VsOut {
     let eyes = max(u32(frame.eyes.y), 1u);
     return surface_vertex(position, normal, uv, instance / eyes, instance % eyes);
+}
+
+// One camera, the instance drawn kept (`MovingVsOut`).
+@vertex
+fn vs_moving(
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @builtin(instance_index) instance: u32,
+) -> MovingVsOut {
+    let v = surface_vertex(position, normal, uv, instance, 0u);
+    return MovingVsOut(v.clip, v.world, v.normal, v.material, v.uv, v.eye, instance);
 }
 
 fn surface_vertex(position: vec3<f32>, normal: vec3<f32>, uv: vec2<f32>, instance: u32, eye: u32) -> VsOut {
@@ -51,7 +77,6 @@ fn surface_vertex_seen(position: vec3<f32>, normal: vec3<f32>, uv: vec2<f32>, in
     out.material = inst.material.x;
     out.uv = uv;
     out.eye = eye;
-    out.instance = instance;
     return out;
 }
 
@@ -200,37 +225,41 @@ fn fs_masked_emission(in: VsOut, @builtin(front_facing) front: bool) -> GBufferO
 }
 
 @fragment
-fn fs_main_moving(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOutMoving {
+fn fs_main_moving(moving: MovingVsOut, @builtin(front_facing) front: bool) -> GBufferOutMoving {
+    let in = without_instance(moving);
     let d = derivs(in);
     let mat = materials[in.material];
     let g = surface(in, front, mat, base_colour(mat, in.uv, d), d);
-    return GBufferOutMoving(g.position, g.normal_material, in.instance + 1u);
+    return GBufferOutMoving(g.position, g.normal_material, moving.instance + 1u);
 }
 
 @fragment
-fn fs_masked_moving(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOutMoving {
+fn fs_masked_moving(moving: MovingVsOut, @builtin(front_facing) front: bool) -> GBufferOutMoving {
+    let in = without_instance(moving);
     let d = derivs(in);
     let mat = materials[in.material];
     let g = surface(in, front, mat, masked_base(mat, in.uv, d), d);
-    return GBufferOutMoving(g.position, g.normal_material, in.instance + 1u);
+    return GBufferOutMoving(g.position, g.normal_material, moving.instance + 1u);
 }
 
 @fragment
-fn fs_main_emission_moving(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOutEmissionMoving {
+fn fs_main_emission_moving(moving: MovingVsOut, @builtin(front_facing) front: bool) -> GBufferOutEmissionMoving {
+    let in = without_instance(moving);
     let d = derivs(in);
     let mat = materials[in.material];
     let g = surface(in, front, mat, base_colour(mat, in.uv, d), d);
     let e = emission_texel(mat, in.uv, d);
-    return GBufferOutEmissionMoving(g.position, g.normal_material, e, in.instance + 1u);
+    return GBufferOutEmissionMoving(g.position, g.normal_material, e, moving.instance + 1u);
 }
 
 @fragment
-fn fs_masked_emission_moving(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOutEmissionMoving {
+fn fs_masked_emission_moving(moving: MovingVsOut, @builtin(front_facing) front: bool) -> GBufferOutEmissionMoving {
+    let in = without_instance(moving);
     let d = derivs(in);
     let mat = materials[in.material];
     let g = surface(in, front, mat, masked_base(mat, in.uv, d), d);
     let e = emission_texel(mat, in.uv, d);
-    return GBufferOutEmissionMoving(g.position, g.normal_material, e, in.instance + 1u);
+    return GBufferOutEmissionMoving(g.position, g.normal_material, e, moving.instance + 1u);
 }
 
 fn surface(in: VsOut, front: bool, mat: MaterialData, base: vec4<f32>, d: Derivs) -> GBufferOut {
