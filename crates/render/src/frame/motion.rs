@@ -119,20 +119,51 @@ pub fn back_transform(then: Mat4, now: Mat4) -> Mat4 {
     }
 }
 
-/// The WGSL both histories use: the surface point `p` seen at pixel `px` where it was last
-/// frame. Needs `gbuf_instance: texture_2d<u32>` and `motion_back: array<mat4x4<f32>>`
-/// declared by the includer.
+/// The WGSL both histories use: per pixel `px`, the instance's motion back to the last frame
+/// (`instance_back`, the identity where the pixel's instance did not move or none is kept),
+/// and a point's and a normal's place through it. Needs `gbuf_instance: texture_2d<u32>` and
+/// `motion_back: array<mat4x4<f32>>` declared by the includer. (The normal is turned by the
+/// matrix itself: right for rigid motions and uniform scaling, which is what moves; a
+/// non-uniform scale would want its inverse transpose.)
 pub const WGSL: &str = "
-fn last_frame_position(px: vec2<u32>, p: vec3<f32>) -> vec3<f32> {
+fn instance_back(px: vec2<u32>) -> mat4x4<f32> {
     // The stand-in target is 1 x 1 (motion.rs `still`).
     let at = min(px, textureDimensions(gbuf_instance) - vec2<u32>(1u));
     let k = textureLoad(gbuf_instance, vec2<i32>(at), 0).x;
     if (k == 0u) {
-        return p;
+        return mat4x4<f32>(vec4<f32>(1.0, 0.0, 0.0, 0.0), vec4<f32>(0.0, 1.0, 0.0, 0.0),
+                           vec4<f32>(0.0, 0.0, 1.0, 0.0), vec4<f32>(0.0, 0.0, 0.0, 1.0));
     }
-    return (motion_back[k - 1u] * vec4<f32>(p, 1.0)).xyz;
+    return motion_back[k - 1u];
+}
+
+// Where the surface point `p` was last frame (`back`: `instance_back` of its pixel).
+fn last_frame_position(back: mat4x4<f32>, p: vec3<f32>) -> vec3<f32> {
+    return (back * vec4<f32>(p, 1.0)).xyz;
+}
+
+// Which way the unit normal `n` faced last frame.
+fn last_frame_normal(back: mat4x4<f32>, n: vec3<f32>) -> vec3<f32> {
+    return normalize((back * vec4<f32>(n, 0.0)).xyz);
+}
+
+// Whether a history point whose surface faced `then` may stand for one facing `now` (both
+// unit; HISTORY_NORMAL_COS, frame/motion.rs): a surface seen from its other side, or the
+// other face of a crease, starts anew.
+fn same_facing(then: vec3<f32>, now: vec3<f32>) -> bool {
+    return dot(then, now) >= HISTORY_NORMAL_COS;
 }
 ";
+
+/// The cosine of the widest angle between the normal a history was kept for and a point's
+/// normal (taken back to last frame) for the history to stand for the point (the denoiser's
+/// and the reservoirs': disocclusion by normal, beside the test of position).
+pub const HISTORY_NORMAL_COS: f32 = 0.9;
+
+/// [`WGSL`] with the constant it reads.
+pub fn wgsl() -> String {
+    format!("const HISTORY_NORMAL_COS: f32 = {HISTORY_NORMAL_COS:?}f;\n{WGSL}")
+}
 
 #[cfg(test)]
 mod tests {

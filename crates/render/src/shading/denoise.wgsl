@@ -51,7 +51,7 @@ fn ratio_of(s: vec3<f32>, u: vec3<f32>) -> f32 {
 // shadows], [the same without], [ambient + emission].
 @group(0) @binding(3) var<storage, read> px_in: array<vec4<f32>>;
 // Per pixel: [mean estimate with shadows, frames], [mean estimate without, mean ratio],
-// [mean ratio², 0, 0, 0], [world position, 1 = valid].
+// [mean ratio², unit normal], [world position, 1 = valid].
 @group(0) @binding(4) var<storage, read> hist_in: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> hist_out: array<vec4<f32>>;
 // Per pixel: [estimate with shadows, variance of the ratio], [estimate without, frames].
@@ -63,9 +63,10 @@ fn ratio_of(s: vec3<f32>, u: vec3<f32>) -> f32 {
 @group(0) @binding(9) var gbuf_instance: texture_2d<u32>;
 @group(0) @binding(10) var<storage, read> motion_back: array<mat4x4<f32>>;
 
-// Last frame's history where the point `was` lies (`footprint`: a pixel's world size at
-// the point), bilinearly from the four pixels around where it was seen that saw it (within
-// two pixel footprints): the sums weighed and the weight (0: none saw it). Taking the nearest
+// Last frame's history where the point `was` lies, its surface facing `facing` (`footprint`:
+// a pixel's world size at the point), bilinearly from the four pixels around where it was
+// seen that saw it (within two pixel footprints, facing the same way: `same_facing`): the
+// sums weighed and the weight (0: none saw it). Taking the nearest
 // pixel instead rounds a slow camera's sub-pixel motion away frame after frame, and the
 // history drifts by pixels against the image (atrium, camera turning 0.15 degrees a frame:
 // error 7.8 after 30 frames).
@@ -76,7 +77,7 @@ struct History {
     weight: f32,
 }
 
-fn history_at(was: vec3<f32>, footprint: f32) -> History {
+fn history_at(was: vec3<f32>, facing: vec3<f32>, footprint: f32) -> History {
     var out = History(vec4<f32>(0.0), vec4<f32>(0.0), 0.0, 0.0);
     let w = p.size.x;
     let h = p.size.y;
@@ -100,10 +101,14 @@ fn history_at(was: vec3<f32>, footprint: f32) -> History {
         if (hp.w == 0.0 || distance(hp.xyz, was) > 2.0 * footprint + 1e-6) {
             continue;
         }
+        let h2 = hist_in[4u * j + 2u];
+        if (!same_facing(h2.yzw, facing)) {
+            continue;
+        }
         let wt = mix(1.0 - t.x, t.x, o.x) * mix(1.0 - t.y, t.y, o.y);
         out.h0 = out.h0 + wt * hist_in[4u * j];
         out.h1 = out.h1 + wt * hist_in[4u * j + 1u];
-        out.h2 = out.h2 + wt * hist_in[4u * j + 2u].x;
+        out.h2 = out.h2 + wt * h2.x;
         out.weight = out.weight + wt;
     }
     if (out.weight <= 1e-3) {
@@ -149,9 +154,11 @@ fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
     // back, frame/motion.rs). A point that moved keeps at most MOVING_HISTORY frames
     // (denoise.rs): the light on a moving surface changes.
     let footprint = distance(pos, p.camera.xyz) * p.pixel.x;
-    let was = last_frame_position(gid.xy, pos);
+    let back = instance_back(gid.xy);
+    let was = last_frame_position(back, pos);
     let moved = any(was != pos);
-    let g = history_at(was, footprint);
+    let n = normal_at(gid.xy);
+    let g = history_at(was, last_frame_normal(back, n), footprint);
     if (g.weight > 0.0) {
         var h0 = g.h0 / g.weight;
         var h1 = g.h1 / g.weight;
@@ -196,7 +203,7 @@ fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     hist_out[4u * i] = vec4<f32>(shadowed, frames);
     hist_out[4u * i + 1u] = vec4<f32>(unshadowed, mean);
-    hist_out[4u * i + 2u] = vec4<f32>(m2, 0.0, 0.0, 0.0);
+    hist_out[4u * i + 2u] = vec4<f32>(m2, n);
     hist_out[4u * i + 3u] = vec4<f32>(pos, 1.0);
     ratio_out[2u * i] = vec4<f32>(shadowed, max(m2 - mean * mean, 0.0));
     ratio_out[2u * i + 1u] = vec4<f32>(unshadowed, frames);

@@ -319,7 +319,7 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     let pos = bitcast<vec4<f32>>(gpos);
     if (!has_geometry(gpos)) {
         if (REUSE) {
-            reuse_store_point(px, vec3<f32>(0.0), false);
+            reuse_store_point(px, vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0), false);
         }
         if (DENOISE) {
             denoise_store(px, vec4<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0.0);

@@ -369,7 +369,7 @@ impl ShadingConsts {
             format!(
                 "const MOVING_CONFIDENCE: f32 = {:?}f;\n{REUSE_WGSL}{}",
                 crate::shading::reuse::MOVING_CONFIDENCE as f32,
-                crate::frame::motion::WGSL
+                crate::frame::motion::wgsl()
             )
         } else {
             NO_REUSE_WGSL.to_string()
@@ -459,9 +459,9 @@ struct ReuseParams {
     camera: vec4<f32>,
 }
 @group(0) @binding(42) var<uniform> reuse: ReuseParams;
-// Two halves (one read, one written per frame); per pixel 1 + K vec4: [surface point, 1 =
-// kept] (float bits), then per sample [light, W and M (float bits), point on a sized
-// light's shape (2 × unorm16)].
+// Two halves (one read, one written per frame); per pixel 1 + K vec4: [surface point (float
+// bits), its normal as four signed bytes (0: none kept)], then per sample [light, W and M
+// (float bits), point on a sized light's shape (2 × unorm16)].
 @group(0) @binding(43) var<storage, read_write> reservoirs: array<vec4<u32>>;
 // The instance seen per pixel and per instance its motion since the last frame
 // (frame/motion.rs: `last_frame_position`).
@@ -473,14 +473,16 @@ fn reuse_record(half: u32, px: vec2<u32>) -> u32 {
     return (half * reuse.size.x * reuse.size.y + px.y * reuse.size.x + px.x) * stride;
 }
 
-// Where last frame kept the reservoirs of the surface point `p` seen at pixel `px` (a record
-// index of the half read), or 0xffffffff: the nearest pixel to where `p` was seen (where it
-// was, if its instance moved), if it saw a point within two pixel footprints of that.
-fn reuse_history(px: vec2<i32>, p: vec3<f32>) -> u32 {
+// Where last frame kept the reservoirs of the surface point `p` with unit normal `n` seen at
+// pixel `px` (a record index of the half read), or 0xffffffff: the nearest pixel to where
+// `p` was seen (where it was, if its instance moved), if it saw a point within two pixel
+// footprints of that whose surface faced the same way (`same_facing`).
+fn reuse_history(px: vec2<i32>, p: vec3<f32>, n: vec3<f32>) -> u32 {
     if (reuse.flags.y != 0.0) {
         return 0xffffffffu;
     }
-    let was = last_frame_position(vec2<u32>(px), p);
+    let back = instance_back(vec2<u32>(px));
+    let was = last_frame_position(back, p);
     reuse_moved = any(was != p);
     let clip = reuse.prev_view_proj * vec4<f32>(was, 1.0);
     if (clip.w <= 0.0) {
@@ -492,9 +494,12 @@ fn reuse_history(px: vec2<i32>, p: vec3<f32>) -> u32 {
         return 0xffffffffu;
     }
     let r = reuse_record(u32(reuse.flags.z), vec2<u32>(q));
-    let kept = bitcast<vec4<f32>>(reservoirs[r]);
+    let kept = reservoirs[r];
     let footprint = distance(p, reuse.camera.xyz) * reuse.flags.x;
-    if (kept.w == 0.0 || distance(kept.xyz, was) > 2.0 * footprint + 1e-6) {
+    if (kept.w == 0u || distance(bitcast<vec3<f32>>(kept.xyz), was) > 2.0 * footprint + 1e-6) {
+        return 0xffffffffu;
+    }
+    if (!same_facing(unpack4x8snorm(kept.w).xyz, last_frame_normal(back, n))) {
         return 0xffffffffu;
     }
     return r;
@@ -514,11 +519,13 @@ fn reuse_load(r: u32, j: u32) -> vec4<u32> {
     return reservoirs[r + 1u + j];
 }
 
-// This frame's record of pixel `px`: its surface point (`kept` = 0: none kept, the next frame
-// starts anew there).
-fn reuse_store_point(px: vec2<i32>, p: vec3<f32>, kept: bool) {
+// This frame's record of pixel `px`: its surface point and unit normal (`kept` false: none
+// kept, the next frame starts anew there).
+fn reuse_store_point(px: vec2<i32>, p: vec3<f32>, n: vec3<f32>, kept: bool) {
     let r = reuse_record(1u - u32(reuse.flags.z), vec2<u32>(px));
-    reservoirs[r] = bitcast<vec4<u32>>(vec4<f32>(p, select(0.0, 1.0, kept)));
+    // The normal as four signed bytes, the fourth 1 (never 0: 0 marks none kept).
+    let facing = select(0u, pack4x8snorm(vec4<f32>(n, 1.0)), kept);
+    reservoirs[r] = vec4<u32>(bitcast<vec3<u32>>(p), facing);
 }
 
 // Sample `j` of pixel `px` for the next frame, and with spatial reuse for `fs_spatial` too
@@ -560,10 +567,10 @@ fn spatial_load(px: vec2<i32>, j: u32) -> vec4<u32> {
 
 /// The same functions where nothing is reused (never called: `REUSE` is false).
 const NO_REUSE_WGSL: &str = "
-fn reuse_history(px: vec2<i32>, p: vec3<f32>) -> u32 { return 0xffffffffu; }
+fn reuse_history(px: vec2<i32>, p: vec3<f32>, n: vec3<f32>) -> u32 { return 0xffffffffu; }
 fn reuse_load(r: u32, j: u32) -> vec4<u32> { return vec4<u32>(0u); }
 fn reuse_cap() -> f32 { return 0.0; }
-fn reuse_store_point(px: vec2<i32>, p: vec3<f32>, kept: bool) {}
+fn reuse_store_point(px: vec2<i32>, p: vec3<f32>, n: vec3<f32>, kept: bool) {}
 fn reuse_store(px: vec2<i32>, j: u32, light: u32, w: f32, m: f32, point: vec2<f32>) {}
 const SPATIAL_WHOLE: u32 = 0u;
 const SPATIAL_SAMPLED: u32 = 1u;

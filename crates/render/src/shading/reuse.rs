@@ -5,8 +5,8 @@
 //! A sample is a light. Each frame the lighting pass draws a new one from the pixel's cluster
 //! with probability proportional to its unshadowed term `f` (exactly: every light of the loop
 //! is a candidate), and finds last frame's reservoir of the same surface point (the point
-//! projected into the last frame; a pixel there within two pixel footprints of it, else none:
-//! disocclusion). Both candidates are weighed by the **target `f · V` at this pixel**, their
+//! projected into the last frame; a pixel there within two pixel footprints of it whose
+//! surface faced within 26° of the same way, else none: disocclusion). Both candidates are weighed by the **target `f · V` at this pixel**, their
 //! visibility traced now (two rays), with confidence weights `1 / (1 + M)` and `M / (1 + M)`
 //! (`M`: the frames the old reservoir stands for, at most [`MAX_CONFIDENCE`]); one is kept,
 //! with its unbiased contribution weight `W`, and the pixel's estimate of its shadowed direct
@@ -106,7 +106,8 @@ pub struct ReuseBuffers {
     /// `ReuseParams`.
     pub params: wgpu::Buffer,
     /// Two halves, one read and one written per frame, each per pixel `1 + K` `vec4<u32>`:
-    /// the surface point (float bits of xyz, w = 1.0 where the pixel kept reservoirs), then
+    /// the surface point (float bits of xyz; w its unit normal as four signed bytes, the
+    /// fourth 1, and 0 where the pixel kept no reservoirs), then
     /// per sample the light, `W` and `M` (float bits) and the point on a sized light's shape
     /// (two unorm16). With spatial reuse a third part of the same layout: the pixel's colour
     /// less its sampled direct light and the samples after temporal reuse, which the

@@ -262,7 +262,7 @@ fn resolve_samples(s: Surface, acc: ptr<function, Acc>) {
     }
     if (k == 0u || (*acc).wsum <= 0.0) {
         if (REUSE) {
-            reuse_store_point(s.px, s.p, false);
+            reuse_store_point(s.px, s.p, s.n, false);
         }
         return;
     }
@@ -270,7 +270,7 @@ fn resolve_samples(s: Surface, acc: ptr<function, Acc>) {
     if ((*acc).count <= k) {
         if (REUSE) {
             // Exact: nothing to reuse, and the next frame starts anew here.
-            reuse_store_point(s.px, s.p, false);
+            reuse_store_point(s.px, s.p, s.n, false);
         }
         for (var j = 0u; j < (*acc).count; j = j + 1u) {
             let i = (*acc).first[j];
@@ -334,8 +334,8 @@ fn resolve_reused(s: Surface, acc: ptr<function, Acc>) {
     let k = ray_samples();
     let luma = vec3<f32>(0.2126, 0.7152, 0.0722);
     (*acc).reused = true;
-    let r = reuse_history(s.px, s.p);
-    reuse_store_point(s.px, s.p, true);
+    let r = reuse_history(s.px, s.p, s.n);
+    reuse_store_point(s.px, s.p, s.n, true);
     var direct = vec3<f32>(0.0);
     for (var j = 0u; j < k; j = j + 1u) {
         let yn = (*acc).chosen[j];
