@@ -174,11 +174,14 @@ fn save_png(path: &Path, rgb: &[u8], w: u32, h: u32) -> Result<()> {
     .map_err(|e| anyhow!("writing {}: {e}", path.display()))
 }
 
-/// One picture of four panels sharing a count axis (log scale): `(caption, y unit, series)`
-/// each, where a series is `(name, [(x, y)])`.
+/// One picture of panels sharing a count axis (log scale), two side by side per row, as
+/// many rows as they need: `(caption, y unit, series)` each, where a series is
+/// `(name, [(x, y)])`. A panel whose values span more than a factor [`LOG_SPAN`] has a
+/// logarithmic y axis too.
 pub fn panels(path: &Path, title: &str, x_name: &str, specs: &[Panel]) -> Result<()> {
     ensure_font();
-    let (w, h) = (1400u32, 1000u32);
+    let rows = specs.len().div_ceil(2).max(1);
+    let (w, h) = (1400u32, 50 + 475 * rows as u32);
     let mut pixels = vec![0u8; (w * h * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut pixels, (w, h)).into_drawing_area();
@@ -186,8 +189,8 @@ pub fn panels(path: &Path, title: &str, x_name: &str, specs: &[Panel]) -> Result
         let (top, body) = root.split_vertically(50);
         top.titled(title, ("sans-serif", 20))
             .map_err(|e| anyhow!("plot: {e}"))?;
-        for (area, (caption, unit, data)) in body.split_evenly((2, 2)).iter().zip(specs) {
-            panel_with_unit(area, caption, x_name, unit, data)?;
+        for (area, (caption, unit, data)) in body.split_evenly((rows, 2)).iter().zip(specs) {
+            panel_with_unit(area, caption, x_name, unit, data, true)?;
         }
         root.present().map_err(|e| anyhow!("plot: {e}"))?;
     }
@@ -200,7 +203,8 @@ fn panel<DB: DrawingBackend>(
     x_name: &str,
     data: &[Series],
 ) -> Result<()> {
-    panel_with_unit(area, caption, x_name, "ms", data)
+    // Linear, as the seed's figures.
+    panel_with_unit(area, caption, x_name, "ms", data, false)
 }
 
 fn panel_with_unit<DB: DrawingBackend>(
@@ -209,6 +213,7 @@ fn panel_with_unit<DB: DrawingBackend>(
     x_name: &str,
     unit: &str,
     data: &[Series],
+    log_y: bool,
 ) -> Result<()> {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("plot: {e}");
     let all: Vec<(f64, f64)> = data.iter().flat_map(|s| s.1.iter().copied()).collect();
@@ -219,32 +224,69 @@ fn panel_with_unit<DB: DrawingBackend>(
     }
     let xmax = all.iter().map(|p| p.0).fold(1.0, f64::max).max(2.0);
     let ymax = all.iter().map(|p| p.1).fold(0.0, f64::max).max(1e-3) * 1.1;
-    let mut chart = ChartBuilder::on(area)
-        .caption(caption, ("sans-serif", 18))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(60)
-        .build_cartesian_2d((1.0..xmax).log_scale(), 0.0..ymax)
-        .map_err(err)?;
-    chart
-        .configure_mesh()
-        .x_desc(x_name)
-        .y_desc(unit)
-        .x_label_formatter(&|x| format!("{x:.0}"))
-        .light_line_style(TRANSPARENT)
-        .label_style(("sans-serif", 13))
-        .draw()
-        .map_err(err)?;
+    let ymin = all.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+    let builder = |area| {
+        let mut b = ChartBuilder::on(area);
+        b.caption(caption, ("sans-serif", 18))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(60);
+        b
+    };
+    // With `log_y`, values spanning more than a factor LOG_SPAN (a denoised error beside a
+    // plain one) on a log scale, so the small ones are not flattened against the axis.
+    if log_y && ymin > 0.0 && ymax > LOG_SPAN * ymin {
+        let mut chart = builder(area)
+            .build_cartesian_2d((1.0..xmax).log_scale(), (0.9 * ymin..ymax).log_scale())
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc(x_name)
+            .y_desc(format!("{unit} (log scale)"))
+            .x_label_formatter(&|x| format!("{x:.0}"))
+            .y_label_formatter(&|y| format!("{y:.3}"))
+            .light_line_style(TRANSPARENT)
+            .label_style(("sans-serif", 13))
+            .draw()
+            .map_err(err)?;
+        draw_lines(&mut chart, data).map_err(err)
+    } else {
+        let mut chart = builder(area)
+            .build_cartesian_2d((1.0..xmax).log_scale(), 0.0..ymax)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc(x_name)
+            .y_desc(unit)
+            .x_label_formatter(&|x| format!("{x:.0}"))
+            .light_line_style(TRANSPARENT)
+            .label_style(("sans-serif", 13))
+            .draw()
+            .map_err(err)?;
+        draw_lines(&mut chart, data).map_err(err)
+    }
+}
+
+/// How many times its smallest value a panel's largest may be before its y axis turns
+/// logarithmic.
+const LOG_SPAN: f64 = 20.0;
+
+/// The series as lines with dots, and their legend.
+fn draw_lines<DB: DrawingBackend, X, Y>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
+    data: &[Series],
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>>
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
     for (i, (name, pts)) in data.iter().enumerate() {
         let c = COLOURS[i % COLOURS.len()];
         chart
-            .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(2)))
-            .map_err(err)?
+            .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(2)))?
             .label(name.clone())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
-        chart
-            .draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))
-            .map_err(err)?;
+        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))?;
     }
     chart
         .configure_series_labels()
@@ -253,6 +295,4 @@ fn panel_with_unit<DB: DrawingBackend>(
         .border_style(BLACK)
         .label_font(("sans-serif", 13))
         .draw()
-        .map_err(err)?;
-    Ok(())
 }
