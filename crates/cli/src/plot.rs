@@ -272,8 +272,8 @@ fn panel_with_unit<DB: DrawingBackend>(
 const LOG_SPAN: f64 = 20.0;
 
 /// The series as lines with dots, and their legend.
-fn draw_lines<DB: DrawingBackend, X, Y>(
-    chart: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
+fn draw_lines<'a, DB: DrawingBackend + 'a, X, Y>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
     data: &[Series],
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>>
 where
