@@ -237,14 +237,22 @@ fn panel_with_unit<DB: DrawingBackend>(
     // plain one) on a log scale, so the small ones are not flattened against the axis.
     if log_y && ymin > 0.0 && ymax > LOG_SPAN * ymin {
         let mut chart = builder(area)
-            .build_cartesian_2d((1.0..xmax).log_scale(), (0.9 * ymin..ymax).log_scale())
+            // Powers of two: a decade has one labelled line, too few under 10.
+            .build_cartesian_2d(
+                (1.0..xmax).log_scale(),
+                (0.9 * ymin..ymax).log_scale().base(2.0),
+            )
             .map_err(err)?;
         chart
             .configure_mesh()
             .x_desc(x_name)
             .y_desc(format!("{unit} (log scale)"))
             .x_label_formatter(&|x| format!("{x:.0}"))
-            .y_label_formatter(&|y| format!("{y:.3}"))
+            .y_label_formatter(&|y| match *y {
+                y if y >= 10.0 => format!("{y:.0}"),
+                y if y >= 1.0 => format!("{y:.1}"),
+                y => format!("{y:.3}"),
+            })
             .light_line_style(TRANSPARENT)
             .label_style(("sans-serif", 13))
             .draw()
@@ -269,7 +277,7 @@ fn panel_with_unit<DB: DrawingBackend>(
 
 /// How many times its smallest value a panel's largest may be before its y axis turns
 /// logarithmic.
-const LOG_SPAN: f64 = 20.0;
+const LOG_SPAN: f64 = 8.0;
 
 /// The series as lines with dots, and their legend.
 fn draw_lines<'a, DB: DrawingBackend + 'a, X, Y>(
