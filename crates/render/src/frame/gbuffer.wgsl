@@ -192,74 +192,79 @@ fn masked_base(mat: MaterialData, uv: vec2<f32>, d: Derivs) -> vec4<f32> {
     return base;
 }
 
-@fragment
-fn fs_main(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOut {
-    let d = derivs(in);
-    let mat = materials[in.material];
-    return surface(in, front, mat, base_colour(mat, in.uv, d), d);
+// A fragment's surface, the material and the derivatives it was shaded with (the emissive
+// texel reads them too).
+struct Shaded {
+    g: GBufferOut,
+    mat: MaterialData,
+    d: Derivs,
 }
 
-// Alpha-tested materials. A separate entry point (and pipeline) so that opaque surfaces keep
-// early depth testing.
-@fragment
-fn fs_masked(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOut {
+fn opaque(in: VsOut, front: bool) -> Shaded {
     let d = derivs(in);
     let mat = materials[in.material];
-    return surface(in, front, mat, masked_base(mat, in.uv, d), d);
+    return Shaded(surface(in, front, mat, base_colour(mat, in.uv, d), d), mat, d);
+}
+
+// Alpha-tested materials: their own entry points (and pipelines), so that opaque surfaces
+// keep early depth testing (a shader that may discard loses it).
+fn masked(in: VsOut, front: bool) -> Shaded {
+    let d = derivs(in);
+    let mat = materials[in.material];
+    return Shaded(surface(in, front, mat, masked_base(mat, in.uv, d), d), mat, d);
+}
+
+fn with_emission(s: Shaded, uv: vec2<f32>) -> GBufferOutEmission {
+    return GBufferOutEmission(s.g.position, s.g.normal_material, emission_texel(s.mat, uv, s.d));
+}
+
+fn with_instance(s: Shaded, v: MovingVsOut) -> GBufferOutMoving {
+    return GBufferOutMoving(s.g.position, s.g.normal_material, v.instance + 1u);
+}
+
+fn with_both(s: Shaded, v: MovingVsOut) -> GBufferOutEmissionMoving {
+    let e = emission_texel(s.mat, v.uv, s.d);
+    return GBufferOutEmissionMoving(s.g.position, s.g.normal_material, e, v.instance + 1u);
+}
+
+@fragment
+fn fs_main(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOut {
+    return opaque(in, front).g;
+}
+
+@fragment
+fn fs_masked(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOut {
+    return masked(in, front).g;
 }
 
 @fragment
 fn fs_main_emission(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOutEmission {
-    let d = derivs(in);
-    let mat = materials[in.material];
-    let g = surface(in, front, mat, base_colour(mat, in.uv, d), d);
-    return GBufferOutEmission(g.position, g.normal_material, emission_texel(mat, in.uv, d));
+    return with_emission(opaque(in, front), in.uv);
 }
 
 @fragment
 fn fs_masked_emission(in: VsOut, @builtin(front_facing) front: bool) -> GBufferOutEmission {
-    let d = derivs(in);
-    let mat = materials[in.material];
-    let g = surface(in, front, mat, masked_base(mat, in.uv, d), d);
-    return GBufferOutEmission(g.position, g.normal_material, emission_texel(mat, in.uv, d));
+    return with_emission(masked(in, front), in.uv);
 }
 
 @fragment
-fn fs_main_moving(moving: MovingVsOut, @builtin(front_facing) front: bool) -> GBufferOutMoving {
-    let in = without_instance(moving);
-    let d = derivs(in);
-    let mat = materials[in.material];
-    let g = surface(in, front, mat, base_colour(mat, in.uv, d), d);
-    return GBufferOutMoving(g.position, g.normal_material, moving.instance + 1u);
+fn fs_main_moving(v: MovingVsOut, @builtin(front_facing) front: bool) -> GBufferOutMoving {
+    return with_instance(opaque(without_instance(v), front), v);
 }
 
 @fragment
-fn fs_masked_moving(moving: MovingVsOut, @builtin(front_facing) front: bool) -> GBufferOutMoving {
-    let in = without_instance(moving);
-    let d = derivs(in);
-    let mat = materials[in.material];
-    let g = surface(in, front, mat, masked_base(mat, in.uv, d), d);
-    return GBufferOutMoving(g.position, g.normal_material, moving.instance + 1u);
+fn fs_masked_moving(v: MovingVsOut, @builtin(front_facing) front: bool) -> GBufferOutMoving {
+    return with_instance(masked(without_instance(v), front), v);
 }
 
 @fragment
-fn fs_main_emission_moving(moving: MovingVsOut, @builtin(front_facing) front: bool) -> GBufferOutEmissionMoving {
-    let in = without_instance(moving);
-    let d = derivs(in);
-    let mat = materials[in.material];
-    let g = surface(in, front, mat, base_colour(mat, in.uv, d), d);
-    let e = emission_texel(mat, in.uv, d);
-    return GBufferOutEmissionMoving(g.position, g.normal_material, e, moving.instance + 1u);
+fn fs_main_emission_moving(v: MovingVsOut, @builtin(front_facing) front: bool) -> GBufferOutEmissionMoving {
+    return with_both(opaque(without_instance(v), front), v);
 }
 
 @fragment
-fn fs_masked_emission_moving(moving: MovingVsOut, @builtin(front_facing) front: bool) -> GBufferOutEmissionMoving {
-    let in = without_instance(moving);
-    let d = derivs(in);
-    let mat = materials[in.material];
-    let g = surface(in, front, mat, masked_base(mat, in.uv, d), d);
-    let e = emission_texel(mat, in.uv, d);
-    return GBufferOutEmissionMoving(g.position, g.normal_material, e, moving.instance + 1u);
+fn fs_masked_emission_moving(v: MovingVsOut, @builtin(front_facing) front: bool) -> GBufferOutEmissionMoving {
+    return with_both(masked(without_instance(v), front), v);
 }
 
 fn surface(in: VsOut, front: bool, mat: MaterialData, base: vec4<f32>, d: Derivs) -> GBufferOut {
