@@ -22,81 +22,109 @@ pub struct InstanceMotion {
     /// A 1 × 1 instance target holding 0 ("no instance": nothing moves), bound where the
     /// G-buffer keeps no instance (the device cannot hold the target beside the others).
     pub still: wgpu::TextureView,
-    /// Instances moved since the last frame recorded, with their transform at that frame.
-    pending: Vec<(usize, Mat4)>,
-    /// Instances whose `back` is not the identity (moved between the last two frames).
+    table: MotionTable,
+}
+
+/// What [`InstanceMotion::back`] holds, kept on the CPU, and the moves it has yet to take in.
+#[derive(Debug)]
+struct MotionTable {
+    /// Per instance, `last · now⁻¹` as `back` holds it.
+    mirror: Vec<[f32; 16]>,
+    /// Per instance, its transform at the last frame recorded if it moved since.
+    was: Vec<Option<Mat4>>,
+    /// The instances `was` holds a transform for.
+    pending: Vec<usize>,
+    /// Instances whose matrix is not the identity (moved between the last two frames).
     written: Vec<usize>,
+}
+
+impl MotionTable {
+    fn new(instances: usize) -> Self {
+        Self {
+            mirror: vec![Mat4::IDENTITY.to_cols_array(); instances.max(1)],
+            was: vec![None; instances],
+            pending: Vec::new(),
+            written: Vec::new(),
+        }
+    }
+
+    /// See [`InstanceMotion::note`].
+    fn note(&mut self, instance: usize, was: Mat4) {
+        if let Some(slot @ None) = self.was.get_mut(instance) {
+            *slot = Some(was);
+            self.pending.push(instance);
+        }
+    }
+
+    /// Takes the moves in (`now(i)`: instance `i`'s transform this frame): each instance
+    /// moved since the last frame gets `last · now⁻¹`, each moved before it but not since the
+    /// identity again. Returns the range of instances whose matrix changed, if any.
+    fn update(&mut self, now: impl Fn(usize) -> Mat4) -> Option<std::ops::Range<usize>> {
+        // The lowest and one past the highest instance changed.
+        let (mut lo, mut hi) = (usize::MAX, 0);
+        let mut set = |mirror: &mut Vec<[f32; 16]>, i: usize, m: Mat4| {
+            mirror[i] = m.to_cols_array();
+            (lo, hi) = (lo.min(i), hi.max(i + 1));
+        };
+        for i in std::mem::take(&mut self.written) {
+            if self.was[i].is_none() {
+                set(&mut self.mirror, i, Mat4::IDENTITY);
+            }
+        }
+        for i in std::mem::take(&mut self.pending) {
+            let Some(was) = self.was[i].take() else {
+                continue;
+            };
+            let m = back_transform(was, now(i));
+            set(&mut self.mirror, i, m);
+            if m != Mat4::IDENTITY {
+                self.written.push(i);
+            }
+        }
+        (lo < hi).then_some(lo..hi)
+    }
 }
 
 impl InstanceMotion {
     /// Identity transforms for `instances` instances.
     pub fn new(ctx: &GpuContext, instances: usize) -> Self {
         use wgpu::util::DeviceExt;
-        let identity = vec![Mat4::IDENTITY.to_cols_array(); instances.max(1)];
+        let table = MotionTable::new(instances);
         let back = ctx
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("motion.back"),
-                contents: bytemuck::cast_slice(&identity),
+                contents: bytemuck::cast_slice(&table.mirror),
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             });
-        // Zero-initialized.
-        let still = ctx
-            .device
-            .create_texture(&wgpu::TextureDescriptor {
-                label: Some("motion.still"),
-                size: wgpu::Extent3d {
-                    width: 1,
-                    height: 1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: crate::frame::gbuffer::INSTANCE_FORMAT,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
-            .create_view(&Default::default());
         Self {
             back,
-            still,
-            pending: Vec::new(),
-            written: Vec::new(),
+            still: crate::gpu::pipelines::one_texel_view(
+                ctx,
+                "motion.still",
+                crate::frame::gbuffer::INSTANCE_FORMAT,
+            ),
+            table,
         }
     }
 
     /// Instance `instance`, whose transform was `was`, moves before the next frame (only its
     /// first move since the last frame counts: `was` is then the transform that frame drew).
     pub fn note(&mut self, instance: usize, was: Mat4) {
-        if !self.pending.iter().any(|&(i, _)| i == instance) {
-            self.pending.push((instance, was));
-        }
+        self.table.note(instance, was);
     }
 
     /// Before a frame's passes: each instance moved since the last frame gets `last · now⁻¹`
     /// (`now(i)`: its transform this frame), and those moved before it but not since get the
-    /// identity again.
+    /// identity again; the range of instances that changed is written in one copy (nothing
+    /// when nothing moved).
     pub fn upload(&mut self, queue: &wgpu::Queue, now: impl Fn(usize) -> Mat4) {
-        let write = |i: usize, m: Mat4| {
+        if let Some(range) = self.table.update(now) {
             queue.write_buffer(
                 &self.back,
-                (i * std::mem::size_of::<[f32; 16]>()) as u64,
-                bytemuck::cast_slice(&m.to_cols_array()),
+                (range.start * std::mem::size_of::<[f32; 16]>()) as u64,
+                bytemuck::cast_slice(&self.table.mirror[range]),
             );
-        };
-        for &i in &self.written {
-            if !self.pending.iter().any(|&(j, _)| j == i) {
-                write(i, Mat4::IDENTITY);
-            }
-        }
-        self.written.clear();
-        for (i, was) in self.pending.drain(..) {
-            let m = back_transform(was, now(i));
-            write(i, m);
-            if m != Mat4::IDENTITY {
-                self.written.push(i);
-            }
         }
     }
 
@@ -186,5 +214,41 @@ mod tests {
         assert!(p.distance(was) > 0.5, "the motion must move the point");
         assert!(back.transform_point3(p).distance(was) < 1e-5);
         assert_eq!(back_transform(now, now), Mat4::IDENTITY);
+    }
+
+    /// An instance's matrix is its move since the last frame while it moves, the identity
+    /// again the frame after it stops; its first move between two frames is the one that
+    /// counts; and only the instances that changed are written.
+    #[test]
+    fn the_table_follows_moves_and_stops() {
+        let at = |x: f32| Mat4::from_translation(Vec3::X * x);
+        let mut t = MotionTable::new(4);
+        let now = |i: usize| if i == 2 { at(3.0) } else { Mat4::IDENTITY };
+        assert_eq!(t.update(now), None, "nothing moved");
+        // Instance 2 moves twice before the frame: from 0 (what the last frame drew) to 3.
+        t.note(2, at(0.0));
+        t.note(2, at(1.0));
+        assert_eq!(t.update(now), Some(2..3));
+        let back = Mat4::from_cols_array(&t.mirror[2]);
+        assert!(back
+            .transform_point3(Vec3::new(3.0, 0.0, 0.0))
+            .abs_diff_eq(Vec3::ZERO, 1e-6));
+        assert_eq!(t.mirror[1], Mat4::IDENTITY.to_cols_array());
+        // It stops: the identity again, once.
+        assert_eq!(t.update(now), Some(2..3));
+        assert_eq!(t.mirror[2], Mat4::IDENTITY.to_cols_array());
+        assert_eq!(t.update(now), None);
+        // Two instances, one set back where it was: the range spans both, the identity kept.
+        t.note(0, Mat4::IDENTITY);
+        t.note(3, at(5.0));
+        assert_eq!(
+            t.update(|i| if i == 3 { at(5.0) } else { at(-1.0) }),
+            Some(0..4)
+        );
+        assert_eq!(t.mirror[3], Mat4::IDENTITY.to_cols_array());
+        assert_eq!(t.written, vec![0]);
+        // An unknown instance is ignored.
+        t.note(9, at(1.0));
+        assert_eq!(t.update(now), Some(0..1));
     }
 }

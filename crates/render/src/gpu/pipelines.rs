@@ -201,6 +201,31 @@ pub(crate) fn dispatch_2d(items: u64, max_groups: u32) -> (u32, u32) {
     (x as u32, groups.div_ceil(x) as u32)
 }
 
+/// A 1 × 1 texture of `format`, zero-initialized, bound where a pass declares a texture it
+/// never reads in this configuration (or reads as "nothing").
+pub(crate) fn one_texel_view(
+    ctx: &crate::gpu::context::GpuContext,
+    label: &str,
+    format: wgpu::TextureFormat,
+) -> wgpu::TextureView {
+    ctx.device
+        .create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: 1,
+                height: 1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        })
+        .create_view(&Default::default())
+}
+
 /// A bind-group layout entry for a non-multisampled 2D texture.
 pub(crate) fn texture_entry(
     binding: u32,

@@ -241,7 +241,13 @@ impl LightingPass {
             compare: Some(wgpu::CompareFunction::LessEqual),
             ..Default::default()
         });
-        let no_emission = no_emission(ctx);
+        // Bound where the G-buffer keeps no emissive texels (never read then:
+        // `EMISSION_TEXTURE` is false); made once per pass, not per bind.
+        let no_emission = crate::gpu::pipelines::one_texel_view(
+            ctx,
+            "lighting.no_emission",
+            crate::frame::gbuffer::EMISSION_FORMAT,
+        );
         let bind_group = bind(ctx, &layout, &linear, &no_emission, inputs);
         let module = crate::gpu::shaders::module(
             device,
@@ -372,27 +378,6 @@ impl LightingPass {
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.draw(0..3, 0..1);
     }
-}
-
-/// One white texel bound where the G-buffer keeps no emissive texels (never read then:
-/// `EMISSION_TEXTURE` is false); made once per pass, not per bind.
-fn no_emission(ctx: &GpuContext) -> wgpu::TextureView {
-    ctx.device
-        .create_texture(&wgpu::TextureDescriptor {
-            label: Some("lighting.no_emission"),
-            size: wgpu::Extent3d {
-                width: 1,
-                height: 1,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: crate::frame::gbuffer::EMISSION_FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        })
-        .create_view(&Default::default())
 }
 
 fn bind(

@@ -87,7 +87,7 @@ pub const SPATIAL_NEIGHBOURS: u32 = 3;
 /// Radius, in pixels, of the disc spatial reuse draws neighbours from.
 pub const SPATIAL_RADIUS: f32 = 6.0;
 
-/// `ReuseParams` of the lighting pass's reuse WGSL (look.rs).
+/// `ReuseParams` of the lighting pass's reuse WGSL ([`lighting_wgsl`]).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct ReuseParams {
@@ -136,7 +136,7 @@ impl Reuse {
     /// Reservoirs for a `w` × `h` frame with `samples` (1..=16) lights per pixel; buffers past
     /// the device's storage-binding limit are [`RenderError::TooLarge`].
     /// With `spatial` a third part holds what the lighting pass leaves to spatial reuse
-    /// (look.rs: `SPATIAL_SCRATCH`). Surfaces of moving instances are followed by `motion`
+    /// (`SPATIAL_SCRATCH` below). Surfaces of moving instances are followed by `motion`
     /// through the instance `gbuffer` keeps (frame/motion.rs).
     pub fn new(
         ctx: &GpuContext,
@@ -221,3 +221,151 @@ impl Reuse {
         self.prev = Some((view_proj, lights));
     }
 }
+
+/// The lighting pass's WGSL for reuse (`REUSE`): with it, the reservoirs' bindings and
+/// functions and what finds a moving instance's point where it was (frame/motion.rs);
+/// without, the same functions doing nothing (never called).
+pub(crate) fn lighting_wgsl(reuse: bool) -> String {
+    if reuse {
+        format!(
+            "const MOVING_CONFIDENCE: f32 = {:?}f;\n{REUSE_WGSL}{}",
+            MOVING_CONFIDENCE as f32,
+            crate::frame::motion::wgsl()
+        )
+    } else {
+        NO_REUSE_WGSL.to_string()
+    }
+}
+
+/// The lighting pass's side of temporal reuse: last frame's reservoirs of a
+/// surface point, and this frame's written for the next.
+const REUSE_WGSL: &str = "
+struct ReuseParams {
+    prev_view_proj: mat4x4<f32>,
+    // width, height, samples per pixel, most frames of confidence.
+    size: vec4<u32>,
+    // world size of a pixel at distance 1, 1 = no history this frame, the half read.
+    flags: vec4<f32>,
+    camera: vec4<f32>,
+}
+@group(0) @binding(42) var<uniform> reuse: ReuseParams;
+// Two halves (one read, one written per frame); per pixel 1 + K vec4: [surface point (float
+// bits), its normal as four signed bytes (0: none kept)], then per sample [light, W and M
+// (float bits), point on a sized light's shape (2 × unorm16)].
+@group(0) @binding(43) var<storage, read_write> reservoirs: array<vec4<u32>>;
+// The instance seen per pixel and per instance its motion since the last frame
+// (frame/motion.rs: `last_frame_position`).
+@group(0) @binding(47) var gbuf_instance: texture_2d<u32>;
+@group(0) @binding(48) var<storage, read> motion_back: array<mat4x4<f32>>;
+
+fn reuse_record(half: u32, px: vec2<u32>) -> u32 {
+    let stride = reuse.size.z + 1u;
+    return (half * reuse.size.x * reuse.size.y + px.y * reuse.size.x + px.x) * stride;
+}
+
+// Where last frame kept the reservoirs of the surface point `p` with unit normal `n` seen at
+// pixel `px` (a record index of the half read), or 0xffffffff: the nearest pixel to where
+// `p` was seen (where it was, if its instance moved), if it saw a point within two pixel
+// footprints of that whose surface faced the same way (`same_facing`).
+fn reuse_history(px: vec2<i32>, p: vec3<f32>, n: vec3<f32>) -> u32 {
+    if (reuse.flags.y != 0.0) {
+        return 0xffffffffu;
+    }
+    let back = instance_back(vec2<u32>(px));
+    let was = last_frame_position(back, p);
+    reuse_moved = any(was != p);
+    let clip = reuse.prev_view_proj * vec4<f32>(was, 1.0);
+    if (clip.w <= 0.0) {
+        return 0xffffffffu;
+    }
+    let ndc = clip.xy / clip.w;
+    let q = floor(vec2<f32>((ndc.x * 0.5 + 0.5) * f32(reuse.size.x), (0.5 - ndc.y * 0.5) * f32(reuse.size.y)));
+    if (q.x < 0.0 || q.y < 0.0 || q.x >= f32(reuse.size.x) || q.y >= f32(reuse.size.y)) {
+        return 0xffffffffu;
+    }
+    let r = reuse_record(u32(reuse.flags.z), vec2<u32>(q));
+    let kept = reservoirs[r];
+    let footprint = distance(p, reuse.camera.xyz) * reuse.flags.x;
+    if (kept.w == 0u || distance(bitcast<vec3<f32>>(kept.xyz), was) > 2.0 * footprint + 1e-6) {
+        return 0xffffffffu;
+    }
+    if (!same_facing(unpack4x8snorm(kept.w).xyz, last_frame_normal(back, n))) {
+        return 0xffffffffu;
+    }
+    return r;
+}
+
+// Whether the point `reuse_history` last looked for moved with its instance.
+var<private> reuse_moved: bool;
+
+// Most frames a reservoir stands for (fewer on a surface that moved: reuse.rs
+// MOVING_CONFIDENCE).
+fn reuse_cap() -> f32 {
+    return select(f32(reuse.size.w), MOVING_CONFIDENCE, reuse_moved);
+}
+
+// Sample `j` of the record `r` (from reuse_history): light, W, M, point.
+fn reuse_load(r: u32, j: u32) -> vec4<u32> {
+    return reservoirs[r + 1u + j];
+}
+
+// This frame's record of pixel `px`: its surface point and unit normal (`kept` false: none
+// kept, the next frame starts anew there).
+fn reuse_store_point(px: vec2<i32>, p: vec3<f32>, n: vec3<f32>, kept: bool) {
+    let r = reuse_record(1u - u32(reuse.flags.z), vec2<u32>(px));
+    // The normal as four signed bytes, the fourth 1 (never 0: 0 marks none kept).
+    let facing = select(0u, pack4x8snorm(vec4<f32>(n, 1.0)), kept);
+    reservoirs[r] = vec4<u32>(bitcast<vec3<u32>>(p), facing);
+}
+
+// Sample `j` of pixel `px` for the next frame, and with spatial reuse for `fs_spatial` too
+// (the third part, SPATIAL_SCRATCH, where neighbours read it this frame).
+fn reuse_store(px: vec2<i32>, j: u32, light: u32, w: f32, m: f32, point: vec2<f32>) {
+    let sample = vec4<u32>(light, bitcast<u32>(w), bitcast<u32>(m), pack2x16unorm(point));
+    reservoirs[reuse_record(1u - u32(reuse.flags.z), vec2<u32>(px)) + 1u + j] = sample;
+    if (SPATIAL != 0u) {
+        reservoirs[reuse_record(SPATIAL_SCRATCH, vec2<u32>(px)) + 1u + j] = sample;
+    }
+}
+
+// Spatial reuse (reuse.rs): the third part of `reservoirs` holds per pixel what the lighting
+// pass leaves to `fs_spatial`: [the colour but its sampled direct light (linear, float
+// bits), SPATIAL_* what it is], then the pixel's samples after temporal reuse.
+const SPATIAL_SCRATCH: u32 = 2u;
+// The colour is whole (no samples: every light of the pixel traced, or none sampled).
+const SPATIAL_WHOLE: u32 = 0u;
+// The colour lacks the sampled direct light: fs_spatial resamples and adds it.
+const SPATIAL_SAMPLED: u32 = 1u;
+// No geometry: the sky, as it is.
+const SPATIAL_SKY: u32 = 2u;
+
+fn spatial_store_rest(px: vec2<i32>, rest: vec3<f32>, what: u32) {
+    let r = reuse_record(SPATIAL_SCRATCH, vec2<u32>(px));
+    reservoirs[r] = vec4<u32>(bitcast<vec3<u32>>(rest), what);
+}
+
+fn spatial_rest(px: vec2<i32>) -> vec4<u32> {
+    return reservoirs[reuse_record(SPATIAL_SCRATCH, vec2<u32>(px))];
+}
+
+// Sample `j` of pixel `px` after temporal reuse: light, W, M, point.
+fn spatial_load(px: vec2<i32>, j: u32) -> vec4<u32> {
+    return reservoirs[reuse_record(SPATIAL_SCRATCH, vec2<u32>(px)) + 1u + j];
+}
+
+";
+
+/// The same functions where nothing is reused (never called: `REUSE` is false).
+const NO_REUSE_WGSL: &str = "
+fn reuse_history(px: vec2<i32>, p: vec3<f32>, n: vec3<f32>) -> u32 { return 0xffffffffu; }
+fn reuse_load(r: u32, j: u32) -> vec4<u32> { return vec4<u32>(0u); }
+fn reuse_cap() -> f32 { return 0.0; }
+fn reuse_store_point(px: vec2<i32>, p: vec3<f32>, n: vec3<f32>, kept: bool) {}
+fn reuse_store(px: vec2<i32>, j: u32, light: u32, w: f32, m: f32, point: vec2<f32>) {}
+const SPATIAL_WHOLE: u32 = 0u;
+const SPATIAL_SAMPLED: u32 = 1u;
+const SPATIAL_SKY: u32 = 2u;
+fn spatial_store_rest(px: vec2<i32>, rest: vec3<f32>, what: u32) {}
+fn spatial_rest(px: vec2<i32>) -> vec4<u32> { return vec4<u32>(0u); }
+fn spatial_load(px: vec2<i32>, j: u32) -> vec4<u32> { return vec4<u32>(0u); }
+";
