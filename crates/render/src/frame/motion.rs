@@ -100,7 +100,7 @@ impl InstanceMotion {
         Self {
             back,
             still: crate::gpu::pipelines::one_texel_view(
-                ctx,
+                &ctx.device,
                 "motion.still",
                 crate::frame::gbuffer::INSTANCE_FORMAT,
             ),

@@ -204,11 +204,11 @@ pub(crate) fn dispatch_2d(items: u64, max_groups: u32) -> (u32, u32) {
 /// A 1 × 1 texture of `format`, zero-initialized, bound where a pass declares a texture it
 /// never reads in this configuration (or reads as "nothing").
 pub(crate) fn one_texel_view(
-    ctx: &crate::gpu::context::GpuContext,
+    device: &wgpu::Device,
     label: &str,
     format: wgpu::TextureFormat,
 ) -> wgpu::TextureView {
-    ctx.device
+    device
         .create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
             size: wgpu::Extent3d {

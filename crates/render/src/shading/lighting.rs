@@ -244,7 +244,7 @@ impl LightingPass {
         // Bound where the G-buffer keeps no emissive texels (never read then:
         // `EMISSION_TEXTURE` is false); made once per pass, not per bind.
         let no_emission = crate::gpu::pipelines::one_texel_view(
-            ctx,
+            &ctx.device,
             "lighting.no_emission",
             crate::frame::gbuffer::EMISSION_FORMAT,
         );
