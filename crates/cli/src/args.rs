@@ -581,6 +581,36 @@ pub(crate) fn check_render_args(args: &RenderArgs) -> Result<()> {
     if args.frames == 0 {
         bail!("--frames must be at least 1");
     }
+    if !args.orbit.is_finite() {
+        bail!(
+            "--orbit {}: must be a finite number of degrees per frame",
+            args.orbit
+        );
+    }
+    // Where the results go, before minutes of rendering: files that are not folders, a
+    // folder that is not a file.
+    for (flag, path) in [
+        ("-o", Some(&args.out)),
+        ("--atlas-out", args.atlas_out.as_ref()),
+    ] {
+        if let Some(p) = path.filter(|p| p.is_dir()) {
+            bail!(
+                "{flag} {}: that is a folder; give the PNG file to write",
+                p.display()
+            );
+        }
+    }
+    if let Some(p) = args
+        .visibility_out
+        .as_ref()
+        .filter(|p| p.exists() && !p.is_dir())
+    {
+        bail!(
+            "--visibility-out {}: that is a file; give a folder (made if missing) for the \
+             visibility mask and one image per light",
+            p.display()
+        );
+    }
     args.light_sizes.sizes()?;
     // The renderer checks every option's range itself; asking it here refuses a bad value
     // before anything is loaded, and names the flag that set it.

@@ -87,9 +87,26 @@ pub(crate) fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
         .iter()
         .any(|ext| lower.ends_with(ext));
     // A built-in name wins over a same-named file in the working directory.
-    let is_file = lower.ends_with(".toml")
-        || model
-        || (path.is_file() && !builtin::SCENE_NAMES.contains(&args.scene.as_str()));
+    let builtin_name = builtin::SCENE_NAMES.contains(&args.scene.as_str());
+    let is_file = lower.ends_with(".toml") || model || (path.is_file() && !builtin_name);
+    if !builtin_name && path.is_dir() {
+        bail!(
+            "--scene {}: that is a folder; give a scene file (.toml), a model file (.obj, \
+             .ply, .ply.gz, .gltf, .glb) or a built-in scene ({})",
+            args.scene,
+            builtin::SCENE_NAMES.join(", ")
+        );
+    }
+    if is_file && !model && !lower.ends_with(".toml") {
+        if let Some(ext) = path.extension() {
+            bail!(
+                "--scene {}: manyshadows reads no '.{}' files; a scene file is TOML (.toml), \
+                 a model .obj, .ply, .ply.gz, .gltf or .glb",
+                args.scene,
+                ext.to_string_lossy()
+            );
+        }
+    }
     let load_options = args.model.options();
     if is_file {
         let mut scene = if model {

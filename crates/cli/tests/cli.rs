@@ -1084,3 +1084,69 @@ fn soft_taps_and_the_largest_penumbra_are_chosen_and_said() {
     let out = run(&[&common[..], &["--soft-taps", "8,9,10"]].concat());
     assert_clean_failure(&out, 2, "B,F");
 }
+
+/// Paths and values that would only fail after the frame (or never, rendering infinities) are
+/// refused first, naming the flag and what it wants: a folder or a foreign file as the scene,
+/// a folder as the image, a file as a folder, a NaN orbit, a scene whose values are finite
+/// one by one but not together, a light past the largest coordinate.
+#[test]
+fn bad_paths_and_overflowing_scenes_are_refused_by_name() {
+    let dir = tmp("bad-paths");
+    let picture = dir.join("picture.png");
+    std::fs::write(&picture, "not a scene").unwrap();
+    let file = dir.join("afile");
+    std::fs::write(&file, "").unwrap();
+    let huge = dir.join("huge.toml");
+    std::fs::write(
+        &huge,
+        "[[mesh]]\nname = \"b\"\nprimitive = \"cube\"\nsize = 1e30\n\
+         [[instance]]\nmesh = \"b\"\nscale = 1e30\n",
+    )
+    .unwrap();
+    let far = dir.join("far.toml");
+    std::fs::write(
+        &far,
+        "[[light]]\ntype = \"point\"\nposition = [0, 1e38, 0]\nrange = 10\n",
+    )
+    .unwrap();
+    let (d, p, f) = (
+        dir.to_str().unwrap(),
+        picture.to_str().unwrap(),
+        file.to_str().unwrap(),
+    );
+    let out = dir.join("o.png");
+    let o = out.to_str().unwrap();
+    for (args, needle) in [
+        (vec!["render", "--scene", d, "-o", o], "that is a folder"),
+        (
+            vec!["render", "--scene", p, "-o", o],
+            "reads no '.png' files",
+        ),
+        (
+            vec![
+                "render", "--scene", "cubes", "--frames", "2", "--orbit", "nan", "-o", o,
+            ],
+            "--orbit NaN",
+        ),
+        (vec!["render", "--scene", "cubes", "-o", d], "-o "),
+        (
+            vec!["render", "--scene", "cubes", "--visibility-out", f, "-o", o],
+            "--visibility-out",
+        ),
+        (
+            vec!["render", "--scene", huge.to_str().unwrap(), "-o", o],
+            "past the largest coordinate",
+        ),
+        (
+            vec!["render", "--scene", far.to_str().unwrap(), "-o", o],
+            "at most 1e9 in magnitude",
+        ),
+        (
+            vec!["compare", "--scene", "cubes", "--out-dir", f],
+            "--out-dir",
+        ),
+    ] {
+        assert_clean_failure(&run(&args), 1, needle);
+        assert!(!out.exists(), "{args:?} wrote an image before refusing");
+    }
+}

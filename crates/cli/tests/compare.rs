@@ -313,6 +313,19 @@ fn bad_input_is_a_clear_error() {
             "reference rays",
         ),
         (&["--soft", "maybe"], 2, "neither on nor off"),
+        // Out of range for every technique, not only where rays read it.
+        (
+            &[
+                "--techniques",
+                "traditional",
+                "--frames",
+                "2",
+                "--light-samples",
+                "99",
+            ],
+            1,
+            "--light-samples",
+        ),
         (&["--probes", "65"], 1, "--probes 65"),
         (
             &[

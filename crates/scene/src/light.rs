@@ -76,6 +76,11 @@ pub enum LightKind {
     },
 }
 
+/// Largest magnitude of a world coordinate, a light's range or size (world units): the
+/// shaders square distances in f32, which stays finite (and a position keeps some precision)
+/// well inside this; a scene past it is refused rather than rendered as infinities.
+pub const MAX_COORDINATE: f32 = 1e9;
+
 /// Largest angular diameter of a directional light, degrees (a cone of 90° half-angle would
 /// light from the whole hemisphere; soft-shadow filters are meant for the sun's half degree).
 pub const MAX_ANGULAR_SIZE_DEG: f32 = 30.0;
@@ -189,12 +194,29 @@ pub(crate) fn validate_light(l: &Light) -> Result<(), String> {
         }
     };
     let range_ok = |r: f32| -> Result<(), String> {
-        if r.is_finite() && r > 0.0 {
+        if r.is_finite() && r > 0.0 && r <= MAX_COORDINATE {
             Ok(())
         } else {
-            Err(format!("range {r} must be finite and > 0"))
+            Err(format!(
+                "range {r} must be finite, > 0 and at most {MAX_COORDINATE:e}"
+            ))
         }
     };
+    let position_ok = |p: Vec3| -> Result<(), String> {
+        if p.is_finite() && p.abs().max_element() <= MAX_COORDINATE {
+            Ok(())
+        } else {
+            Err(format!(
+                "position {p} must be finite, each coordinate at most {MAX_COORDINATE:e} in magnitude"
+            ))
+        }
+    };
+    if !matches!(l.kind, LightKind::Directional { .. }) && l.size > MAX_COORDINATE {
+        return Err(format!(
+            "size {} must be at most {MAX_COORDINATE:e}",
+            l.size
+        ));
+    }
     match l.kind {
         LightKind::Directional {
             direction,
@@ -221,9 +243,7 @@ pub(crate) fn validate_light(l: &Light) -> Result<(), String> {
             cutoff_deg,
             range,
         } => {
-            if !position.is_finite() {
-                return Err("position must be finite".into());
-            }
+            position_ok(position)?;
             unit(direction, "direction")?;
             if !(cutoff_deg > 0.0 && cutoff_deg < 89.0) {
                 return Err(format!(
@@ -233,9 +253,7 @@ pub(crate) fn validate_light(l: &Light) -> Result<(), String> {
             range_ok(range)?;
         }
         LightKind::Point { position, range } => {
-            if !position.is_finite() {
-                return Err("position must be finite".into());
-            }
+            position_ok(position)?;
             range_ok(range)?;
         }
     }

@@ -11,7 +11,7 @@ use crate::texture::{AlphaMode, Texture, TextureRef};
 
 use crate::error::SceneError;
 use crate::light::validate_light;
-pub use crate::light::{Attenuation, Light, LightKind, MAX_ANGULAR_SIZE_DEG};
+pub use crate::light::{Attenuation, Light, LightKind, MAX_ANGULAR_SIZE_DEG, MAX_COORDINATE};
 
 /// An indexed triangle mesh in object space.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -620,6 +620,27 @@ impl Scene {
                     index: i,
                     reason: "transform must be finite and invertible".into(),
                 });
+            }
+            // Each value may be finite while their product is not (a huge mesh scaled up).
+            if let Some((lo, hi)) = self.meshes[inst.mesh].bounds() {
+                let max = crate::light::MAX_COORDINATE;
+                for k in 0..8 {
+                    let corner = Vec3::new(
+                        if k & 1 == 0 { lo.x } else { hi.x },
+                        if k & 2 == 0 { lo.y } else { hi.y },
+                        if k & 4 == 0 { lo.z } else { hi.z },
+                    );
+                    let w = inst.transform.transform_point3(corner);
+                    if !(w.is_finite() && w.abs().max_element() <= max) {
+                        return Err(SceneError::InvalidInstance {
+                            index: i,
+                            reason: format!(
+                                "its mesh reaches {w} in the world, past the largest coordinate \
+                                 {max:e} (world units)"
+                            ),
+                        });
+                    }
+                }
             }
         }
         for (i, m) in self.materials.iter().enumerate() {

@@ -774,8 +774,17 @@ impl Scene {
         const MAX: u64 = 20_000_000;
         let after = (self.triangle_count() as u64).saturating_mul(4u64.saturating_pow(levels));
         if levels > 12 || after > MAX {
+            // (4^levels times the triangles; said as a power of ten past u64's reach.)
+            let count = if levels > 12 || after == u64::MAX {
+                format!(
+                    "about 10^{:.0}",
+                    (self.triangle_count().max(1) as f64).log10() + levels as f64 * 4f64.log10()
+                )
+            } else {
+                after.to_string()
+            };
             return Err(SceneError::InvalidRequest(format!(
-                "subdividing {levels} times would make {after} triangles (at most {MAX})"
+                "subdividing {levels} times would make {count} triangles (at most {MAX})"
             )));
         }
         for m in &mut self.meshes {

@@ -22,6 +22,12 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     if args.scenes.is_empty() {
         bail!("--scene needs at least one scene");
     }
+    if args.out_dir.exists() && !args.out_dir.is_dir() {
+        bail!(
+            "--out-dir {}: that is a file; give a folder (made if missing) for the images",
+            args.out_dir.display()
+        );
+    }
     if args.atlas_max < manyshadows::scene::atlas::MIN_TILE {
         bail!(
             "--atlas-max {}: the atlas must hold at least one {}-texel tile",

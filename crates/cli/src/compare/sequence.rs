@@ -122,6 +122,11 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
         .with_reuse(args.reuse)
         .with_spatial(args.spatial)
         .with_denoise(args.denoise);
+    // Checked once for every technique, not only where rays use them: a value out of range
+    // is refused, not silently dropped for the map techniques.
+    let mut check = manyshadows::RenderSettings::default();
+    check.rays = sampled;
+    check.validate().map_err(crate::args::flag_error)?;
     let mut contenders: Vec<(String, Renderer)> = Vec::new();
     for t in asked {
         pb.set_message(format!("building {t}"));

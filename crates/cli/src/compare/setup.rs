@@ -50,6 +50,13 @@ pub(super) fn soft_plan(args: &CompareArgs, scene: &Scene) -> Result<SoftPlan> {
         return Ok(SoftPlan::Skipped("--soft-samples 0"));
     }
     let n = manyshadows_reference::soft::grid_side(args.soft_samples);
+    if args.soft_samples > manyshadows_reference::soft::MAX_SAMPLES {
+        eprintln!(
+            "note: --soft-samples {} is clamped to {} (a {n}x{n} grid per pixel and sized light)",
+            args.soft_samples,
+            n * n
+        );
+    }
     if args.reference == ReferenceTracer::Gpu && n > 16 {
         bail!(
             "--soft-samples {}: the GPU reference traces at most 256 rays per (pixel, sized \
