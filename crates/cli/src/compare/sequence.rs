@@ -34,6 +34,16 @@ struct Scored {
     mean_flip: f64,
 }
 
+/// The ray options the sequence's ray techniques render with (`--light-samples`, `--reuse`,
+/// `--spatial`, `--denoise`).
+fn sampled_rays(args: &CompareArgs) -> RayOptions {
+    RayOptions::default()
+        .with_light_samples(args.light_samples)
+        .with_reuse(args.reuse)
+        .with_spatial(args.spatial)
+        .with_denoise(args.denoise)
+}
+
 /// The flags only a sequence takes, refused without `--frames` past 1.
 pub(super) fn check_sequence_flags(args: &CompareArgs) -> Result<()> {
     if args.frames == 0 {
@@ -47,6 +57,17 @@ pub(super) fn check_sequence_flags(args: &CompareArgs) -> Result<()> {
             "--orbit must be a finite number of degrees, not {}",
             args.orbit
         );
+    }
+    // The sampled rays' flags, checked as a ray technique reads them whatever the techniques
+    // asked (and before any device): out of range is refused, not dropped for map techniques.
+    if let Some(rays) = Technique::all()
+        .into_iter()
+        .find(|t| t.info().fills == Fills::Rays)
+    {
+        let mut check = RenderSettings::default();
+        check.technique = rays;
+        check.rays = sampled_rays(args);
+        check.validate().map_err(crate::args::flag_error)?;
     }
     if args.frames == 1 {
         let used = [
@@ -117,16 +138,7 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
     } else {
         Technique::all()
     };
-    let sampled = RayOptions::default()
-        .with_light_samples(args.light_samples)
-        .with_reuse(args.reuse)
-        .with_spatial(args.spatial)
-        .with_denoise(args.denoise);
-    // Checked once for every technique, not only where rays use them: a value out of range
-    // is refused, not silently dropped for the map techniques.
-    let mut check = manyshadows::RenderSettings::default();
-    check.rays = sampled;
-    check.validate().map_err(crate::args::flag_error)?;
+    let sampled = sampled_rays(&args);
     let mut contenders: Vec<(String, Renderer)> = Vec::new();
     for t in asked {
         pb.set_message(format!("building {t}"));
