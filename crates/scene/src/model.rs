@@ -536,6 +536,17 @@ pub struct Scene {
     pub probes: Vec<Probe>,
 }
 
+/// The eight corners of the box from `lo` to `hi`.
+fn box_corners(lo: Vec3, hi: Vec3) -> [Vec3; 8] {
+    std::array::from_fn(|i| {
+        Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        )
+    })
+}
+
 impl Scene {
     /// The shadow caster with the smallest mesh (bounding-box diagonal times the instance's
     /// largest scale): moving it changes the fewest shadow views. `None` without casters.
@@ -572,12 +583,7 @@ impl Scene {
             let Some((lo, hi)) = self.meshes.get(inst.mesh).and_then(Mesh::bounds) else {
                 continue;
             };
-            for i in 0..8 {
-                let corner = Vec3::new(
-                    if i & 1 == 0 { lo.x } else { hi.x },
-                    if i & 2 == 0 { lo.y } else { hi.y },
-                    if i & 4 == 0 { lo.z } else { hi.z },
-                );
+            for corner in box_corners(lo, hi) {
                 let p = inst.transform.transform_point3(corner);
                 out = Some(match out {
                     None => (p, p),
@@ -624,12 +630,7 @@ impl Scene {
             // Each value may be finite while their product is not (a huge mesh scaled up).
             if let Some((lo, hi)) = self.meshes[inst.mesh].bounds() {
                 let max = crate::light::MAX_COORDINATE;
-                for k in 0..8 {
-                    let corner = Vec3::new(
-                        if k & 1 == 0 { lo.x } else { hi.x },
-                        if k & 2 == 0 { lo.y } else { hi.y },
-                        if k & 4 == 0 { lo.z } else { hi.z },
-                    );
+                for corner in box_corners(lo, hi) {
                     let w = inst.transform.transform_point3(corner);
                     if !(w.is_finite() && w.abs().max_element() <= max) {
                         return Err(SceneError::InvalidInstance {
