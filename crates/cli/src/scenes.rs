@@ -78,22 +78,24 @@ pub(crate) fn load_scene(args: &RenderArgs) -> Result<Scene> {
     Ok(scene)
 }
 
+/// The file endings read as model files (the rest as TOML scenes).
+const MODEL_EXTENSIONS: [&str; 5] = [".obj", ".gltf", ".glb", ".ply", ".ply.gz"];
+
 pub(crate) fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
     let mix: LightMix = args.light_types.parse()?;
     let light_sizes = args.light_sizes.sizes()?;
     let path = Path::new(&args.scene);
     let lower = args.scene.to_ascii_lowercase();
-    let model = [".obj", ".gltf", ".glb", ".ply", ".ply.gz"]
-        .iter()
-        .any(|ext| lower.ends_with(ext));
+    let model = MODEL_EXTENSIONS.iter().any(|ext| lower.ends_with(ext));
     // A built-in name wins over a same-named file in the working directory.
     let builtin_name = builtin::SCENE_NAMES.contains(&args.scene.as_str());
     let is_file = lower.ends_with(".toml") || model || (path.is_file() && !builtin_name);
     if !builtin_name && path.is_dir() {
         bail!(
-            "--scene {}: that is a folder; give a scene file (.toml), a model file (.obj, \
-             .ply, .ply.gz, .gltf, .glb) or a built-in scene ({})",
+            "--scene {}: that is a folder; give a scene file (.toml), a model file ({}) or a \
+             built-in scene ({})",
             args.scene,
+            MODEL_EXTENSIONS.join(", "),
             builtin::SCENE_NAMES.join(", ")
         );
     }
@@ -101,9 +103,10 @@ pub(crate) fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
         if let Some(ext) = path.extension() {
             bail!(
                 "--scene {}: manyshadows reads no '.{}' files; a scene file is TOML (.toml), \
-                 a model .obj, .ply, .ply.gz, .gltf or .glb",
+                 a model {}",
                 args.scene,
-                ext.to_string_lossy()
+                ext.to_string_lossy(),
+                MODEL_EXTENSIONS.join(", ")
             );
         }
     }
