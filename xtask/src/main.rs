@@ -68,7 +68,12 @@ const VIEWER_TESTS: &[&str] = &[
     "the_panel_draws_over_the_frame",
     "animation_with_caching_redraws_only_what_moved",
     "the_virtual_maps_page_pool_is_shown",
+    "a_shadow_budget_caps_the_views_each_frame_draws",
     "a_frame_of_minutes_is_refused_at_start",
+    "sampled_rays_are_denoised_in_the_window",
+    "the_window_shows_both_stereo_eyes_as_render_does",
+    "the_window_shows_the_probes_as_render_does",
+    "the_window_takes_the_soft_shadow_taps_as_render_does",
 ];
 const WEB_TESTS: &[&str] = &["the_page_renders_the_native_frame_and_its_controls_work"];
 const THREE_TESTS: &[&str] = &["gltf_models_render_as_three_js_renders_them"];
@@ -233,17 +238,18 @@ fn main() -> ExitCode {
             continue;
         }
         println!("\n=== cargo test --release --workspace with WGPU_BACKEND={backend} ===");
-        let mut cmd = Command::new(cargo());
+        let refusals = root.join(format!("target/xtask/refusals-{backend}.tsv"));
+        let _ = std::fs::create_dir_all(refusals.parent().expect("in target/xtask"));
+        let _ = std::fs::remove_file(&refusals);
+        let mut cmd = test_command(backend, &skip, &extra);
         cmd.current_dir(&root)
-            .args(["test", "--release", "--workspace", "--no-fail-fast", "--"])
-            .arg("--include-ignored")
-            .env("WGPU_BACKEND", backend)
-            .env("XDG_RUNTIME_DIR", &xdg);
-        for name in &skip {
-            cmd.args(["--skip", name, "--exact"]);
-        }
-        cmd.args(&extra);
-        results.insert(backend, run_counting(cmd));
+            .env("XDG_RUNTIME_DIR", &xdg)
+            .env(manyshadows_testkit::REFUSALS_VAR, &refusals);
+        let mut counts = run_counting(cmd);
+        counts.refusals = std::fs::read_to_string(&refusals)
+            .map(|t| manyshadows_testkit::read_refusals(&t))
+            .unwrap_or_default();
+        results.insert(backend, counts);
     }
 
     // 4. One summary.
@@ -267,6 +273,18 @@ fn main() -> ExitCode {
         );
         for f in &c.failures {
             println!("          FAILED {f}");
+        }
+        if c.refusals.is_empty() {
+            println!("          no test checked a refusal instead of running");
+        } else {
+            println!(
+                "          {} tests checked a refusal instead of running (this backend lacks \
+                 what they need):",
+                c.refusals.len()
+            );
+            for (test, need, _) in &c.refusals {
+                println!("            {test} (no {need})");
+            }
         }
         ok &= c.failed == 0 && c.exit_ok;
     }
@@ -624,6 +642,47 @@ fn quiet(program: &str, args: &[&str], env: &[(&str, &str)]) -> Result<(), Strin
     Err(tail.into_iter().rev().collect::<Vec<_>>().join(" / "))
 }
 
+/// What each backend of the run must offer, by the names wgpu gives them (read by the tests
+/// through `manyshadows_testkit`): a test that would only check a refusal for one of them
+/// fails instead. The Vulkan run is on Mesa 25's lavapipe (installed above: ray queries,
+/// multiview with six views per pass, clip distances, indirect execution); the OpenGL run on
+/// llvmpipe's GL, whose wgpu device has clip distances and indirect execution but neither
+/// ray queries nor multiview.
+fn expected_features(backend: &str) -> &'static [&'static str] {
+    match backend {
+        "vulkan" => &[
+            "EXPERIMENTAL_RAY_QUERY",
+            "MULTIVIEW",
+            "CLIP_DISTANCES",
+            "INDIRECT_EXECUTION",
+        ],
+        "gl" => &["CLIP_DISTANCES", "INDIRECT_EXECUTION"],
+        _ => &[],
+    }
+}
+
+/// The suite's command on `backend`: every test, the ignored ones included, but those in
+/// `skip` (libtest takes `--skip` once per name and `--exact` once: a repeated `--exact` is
+/// refused, and every test binary would fail to start), then `extra`.
+fn test_command(backend: &str, skip: &[&str], extra: &[String]) -> Command {
+    let mut cmd = Command::new(cargo());
+    cmd.args(["test", "--release", "--workspace", "--no-fail-fast", "--"])
+        .arg("--include-ignored")
+        .env("WGPU_BACKEND", backend)
+        .env(
+            manyshadows_testkit::EXPECT_VAR,
+            expected_features(backend).join(","),
+        );
+    for name in skip {
+        cmd.args(["--skip", name]);
+    }
+    if !skip.is_empty() {
+        cmd.arg("--exact");
+    }
+    cmd.args(extra);
+    cmd
+}
+
 /// Test counts of one run.
 #[derive(Default)]
 struct Counts {
@@ -632,6 +691,8 @@ struct Counts {
     ignored: u64,
     failures: Vec<String>,
     exit_ok: bool,
+    /// Tests that checked a refusal instead of running: (test, requirement, message).
+    refusals: Vec<(String, String, String)>,
 }
 
 /// Runs `cmd`, passing its output through, and adds up libtest's result lines.
@@ -683,28 +744,115 @@ mod tests {
         );
     }
 
+    /// The `#[test]` functions of a test file: (name, its attributes, its body up to the next
+    /// test).
+    fn tests_of(text: &str) -> Vec<(String, String, String)> {
+        let starts: Vec<usize> = text.match_indices("#[test]").map(|(i, _)| i).collect();
+        starts
+            .iter()
+            .enumerate()
+            .map(|(k, &at)| {
+                let end = starts.get(k + 1).copied().unwrap_or(text.len());
+                let chunk = &text[at..end];
+                let fn_at = chunk.find("fn ").expect("a test function");
+                let name: String = chunk[fn_at + 3..]
+                    .chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect();
+                (name, chunk[..fn_at].to_string(), chunk[fn_at..].to_string())
+            })
+            .collect()
+    }
+
     #[test]
-    fn every_skippable_test_exists_and_is_ignored_by_default() {
-        // The names xtask skips must be real tests marked #[ignore = "..."], or a renamed
-        // test would silently run without its tools (or never be skipped).
+    fn every_test_that_needs_a_tool_is_ignored_and_listed_and_every_listed_test_does() {
+        // Both ways: a name xtask skips must be a real test marked #[ignore = "..."] (or a
+        // renamed test would run without its tools, or never be skipped), and a test that
+        // starts what a tool gives (Xvfb, Chromium) must be ignored by plain `cargo test` and
+        // listed here (or it would fail wherever the tool is missing instead of being skipped
+        // by name).
         let root = workspace_root();
-        for (file, names) in [
-            ("crates/viewer/tests/viewer.rs", VIEWER_TESTS),
-            ("crates/cli/tests/web.rs", WEB_TESTS),
-            ("crates/cli/tests/threejs.rs", THREE_TESTS),
+        for (file, names, needs_tool) in [
+            ("crates/viewer/tests/viewer.rs", VIEWER_TESTS, "xvfb()"),
+            ("crates/cli/tests/web.rs", WEB_TESTS, "Browser::start("),
+            (
+                "crates/cli/tests/threejs.rs",
+                THREE_TESTS,
+                "Browser::start(",
+            ),
         ] {
             let text = std::fs::read_to_string(root.join(file)).unwrap();
+            let tests = tests_of(&text);
             for name in names {
-                let at = text
-                    .find(&format!("fn {name}()"))
+                let (_, attrs, _) = tests
+                    .iter()
+                    .find(|(n, _, _)| n == name)
                     .unwrap_or_else(|| panic!("{file} has no test {name}"));
-                let before = &text[..at];
-                let attrs = &before[before.rfind("#[test]").expect("a #[test]")..];
                 assert!(
                     attrs.contains("#[ignore = \""),
                     "{file}: {name} must be #[ignore = \"needs ...\"]"
                 );
             }
+            let mut using = 0;
+            for (name, attrs, body) in &tests {
+                if !body.contains(needs_tool) {
+                    continue;
+                }
+                using += 1;
+                assert!(
+                    attrs.contains("#[ignore = \"") && names.contains(&name.as_str()),
+                    "{file}: {name} calls {needs_tool}: it must be #[ignore = \"needs ...\"] and \
+                     listed for xtask to skip by name where the tool is missing"
+                );
+            }
+            assert!(
+                using > 0,
+                "{file}: no test calls {needs_tool} (is the marker stale?)"
+            );
         }
+    }
+
+    #[test]
+    fn the_test_command_skips_by_exact_name_with_one_exact_flag() {
+        let args = |cmd: &Command| -> Vec<String> {
+            cmd.get_args()
+                .map(|a| a.to_string_lossy().into_owned())
+                .collect()
+        };
+        let env = |cmd: &Command, key: &str| {
+            cmd.get_envs()
+                .find(|(k, _)| *k == key)
+                .and_then(|(_, v)| v)
+                .map(|v| v.to_string_lossy().into_owned())
+        };
+        let skip = ["a_test", "another_test", "a_third"];
+        let extra = vec!["--test-threads".to_string(), "2".to_string()];
+        let cmd = test_command("vulkan", &skip, &extra);
+        let a = args(&cmd);
+        // libtest refuses a flag given twice ("Option 'exact' given more than once").
+        assert_eq!(a.iter().filter(|x| *x == "--exact").count(), 1, "{a:?}");
+        for name in skip {
+            assert!(
+                a.windows(2).any(|w| w[0] == "--skip" && w[1] == name),
+                "{name} not skipped: {a:?}"
+            );
+        }
+        let sep = a.iter().position(|x| x == "--").expect("--");
+        assert!(a[sep + 1..].contains(&"--include-ignored".to_string()));
+        assert_eq!(&a[a.len() - 2..], &extra[..], "extra arguments last");
+        assert_eq!(env(&cmd, "WGPU_BACKEND").as_deref(), Some("vulkan"));
+        let expect = env(&cmd, manyshadows_testkit::EXPECT_VAR).expect("expectations");
+        assert!(expect.contains("EXPERIMENTAL_RAY_QUERY"), "{expect}");
+        assert!(expect.contains("MULTIVIEW"), "{expect}");
+        let gl = test_command("gl", &[], &[]);
+        assert!(
+            !args(&gl).contains(&"--exact".to_string()),
+            "nothing to skip"
+        );
+        let expect = env(&gl, manyshadows_testkit::EXPECT_VAR).expect("expectations");
+        assert!(
+            !expect.contains("RAY_QUERY"),
+            "llvmpipe GL has no ray queries: {expect}"
+        );
     }
 }

@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 
 pub use crate::light_args::{LightSizeArgs, SoftArgs};
+pub(crate) use crate::technique_args::{parse_on_off, parse_spatial};
 use anyhow::{bail, Result};
 use clap::{Args, Parser, ValueEnum};
 use manyshadows::scene::atlas::FitPolicy;
@@ -32,15 +33,6 @@ pub struct GpuArgs {
     /// bindings) — how the renderer behaves on a small device, without one.
     #[arg(long, value_enum)]
     pub(crate) limits: Option<Limits>,
-}
-
-/// `--virtual-marking`.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum VirtualMarking {
-    /// By 4x4-pixel tiles, per pixel where the tile's bounds leave it uncertain.
-    Tiles,
-    /// Every (pixel, light) pair.
-    Pixels,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -71,15 +63,6 @@ impl GpuArgs {
             .with_limits(self.limits.map(|l| match l {
                 Limits::Webgpu => manyshadows::webgpu_default_limits(),
             }))
-    }
-}
-
-/// `on` / `off` (also yes/no, true/false, 1/0).
-pub(crate) fn parse_on_off(s: &str) -> Result<bool, String> {
-    match s.trim().to_ascii_lowercase().as_str() {
-        "on" | "yes" | "true" | "1" => Ok(true),
-        "off" | "no" | "false" | "0" => Ok(false),
-        _ => Err(format!("'{s}' is neither on nor off")),
     }
 }
 
@@ -261,96 +244,8 @@ pub(crate) struct RenderArgs {
     /// the summary counts each.
     #[arg(long)]
     pub(crate) strict_atlas: bool,
-    /// Grid side (texels) of each light view for --technique irregular (default: the view's
-    /// shadow resolution, at most 512). Changes speed, not the result.
-    #[arg(long)]
-    pub(crate) irregular_grid: Option<u32>,
-    /// Multimap hash of --technique irregular: N texels share a list head (seed 001's
-    /// equalising hash; default: one list per texel). Changes speed, not the result.
-    #[arg(long)]
-    pub(crate) irregular_hash: Option<u32>,
-    /// Page pool of --technique virtual, MiB of 32-bit depth: the largest square of whole 128²
-    /// pages that fits (256 = an 8192² pool of 4,096 pages, 512 = 11520² of 8,100 pages), at
-    /// most the adapter's largest texture; the summary says when that is less than asked.
-    /// Pages that do not fit fall back to coarser levels, counted in the summary.
-    #[arg(long, default_value_t = (manyshadows::shadows::vsm::plan::DEFAULT_POOL_BYTES >> 20) as u32)]
-    pub(crate) page_pool: u32,
-    /// Largest virtual side of a face for --technique virtual (rounded to a power of two and
-    /// clamped to 128..=16384 texels).
-    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::MAX_SIDE)]
-    pub(crate) virtual_side: u32,
-    /// Shadow texels per screen pixel that --technique virtual aims for (1 = no texel wider
-    /// than the pixel footprint; 2 = twice as fine, four times the pages; 0.7 about 0.6 times
-    /// the pages, with more misclassified pixels where pixels are wide): point lights' cube
-    /// faces get it, spot and directional lights' faces it times --virtual-directed-lod.
-    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_LOD)]
-    pub(crate) virtual_lod: f32,
-    /// Factor on --virtual-lod for the faces of spot and directional lights (0.8 by default:
-    /// their texels up to 1.25 pixels, which costs them few misclassified pixels while point
-    /// lights' cube faces, seeing walls near the light, keep --virtual-lod; 1 gives every face
-    /// --virtual-lod).
-    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_DIRECTED_LOD)]
-    pub(crate) virtual_directed_lod: f32,
-    /// --technique virtual: no face samples coarser than the tile the atlas techniques would
-    /// give the same view (`on`, default: virtual maps never misclassify more than the atlas
-    /// where the atlas is finer than the screen asks, e.g. few lights in a small frame), or
-    /// only what the screen's level of detail asks (`off`: fewer pages there).
-    #[arg(long, default_value = "on", value_parser = ["on", "off"])]
-    pub(crate) virtual_atlas_floor: String,
-    /// --technique virtual's receiver bias as a fraction of --bias-constant, --bias-slope and
-    /// --bias-normal (those count texels; a virtual page's texels match the screen pixel, and
-    /// a whole texel of bias leaks light at contacts: 0.5 by default, 0 to 16).
-    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_BIAS_SCALE)]
-    pub(crate) virtual_bias: f32,
-    /// How --technique virtual finds the pages the samples need: `tiles` bounds the samples
-    /// of 4x4-pixel tiles and marks a light's page once where every sample needing one needs
-    /// the same page, per pixel elsewhere; `pixels` marks every (pixel, light) pair. The same
-    /// pages either way (the summary's `marking` line says how the tiles went); `pixels` is
-    /// for measuring.
-    #[arg(long, value_enum, default_value_t = VirtualMarking::Tiles)]
-    pub(crate) virtual_marking: VirtualMarking,
-    /// With shadow rays (a technique that casts them, see --technique): trace K lights per
-    /// pixel, picked among the pixel's cluster lights by importance (their unshadowed
-    /// contribution) and weighted so the image stays unbiased — noisy, at a cost that does
-    /// not grow with the light count. 0 (default) traces every cluster light: exact.
-    #[arg(long, default_value_t = 0)]
-    pub(crate) light_samples: u32,
-    /// With --light-samples K: denoise the sampled rays. The exact unshadowed light of every
-    /// cluster light times the rays' shadow ratio, accumulated over frames at each surface
-    /// point (reprojected when the camera moves) and filtered by an edge-stopping wavelet
-    /// (one pass for all lights). Biased where a pixel's lights are shadowed differently; with
-    /// --frames it converges as the frames go by.
-    ///
-    /// Without --light-samples (every light traced): accumulate the sized lights' area
-    /// samples over frames, new points on each light every frame and no filter, so
-    /// `--frames N --still` converges to the exact soft shadows (unbiased; the error falls as
-    /// 1/sqrt(N) up to 32 frames).
-    #[arg(long)]
-    pub(crate) denoise: bool,
-    /// With --light-samples K: reuse each pixel's sampled lights across frames (ReSTIR's
-    /// temporal reuse). Each frame a new light is drawn and weighed against the one the
-    /// pixel kept (found where the surface point was last frame) by its unshadowed light
-    /// times its visibility, both traced now (two rays per sample): lights that reach the
-    /// pixel are kept, so with --frames a still image's noise falls frame by frame. Unbiased
-    /// for a still camera and casters; combine with --denoise for the cleanest frames.
-    #[arg(long)]
-    pub(crate) reuse: bool,
-    /// With --reuse: after temporal reuse each pixel also resamples the lights of 3
-    /// neighbours within 6 pixels (ReSTIR's spatial reuse; pixels of similar depth and
-    /// normal): the first frames are far less noisy. `unbiased` weighs each neighbour's light
-    /// by how every pixel involved could have drawn it (rays from each: up to 12 more per
-    /// sample), `biased` by one count per neighbour (3 more rays; darker where neighbours see
-    /// other lights: 1.6% of the image on the cubes); `off`: temporal reuse only.
-    #[arg(long, default_value = "off", value_parser = parse_spatial)]
-    pub(crate) spatial: manyshadows::SpatialReuse,
-    /// With shadow rays: rays per side of the stratified grid over each sized light's shape
-    /// (N² rays per pixel and light when every light is traced; 0 counts as 1; at most 16).
-    /// More: smoother penumbrae, at N² the cost of a hard shadow ray.
-    #[arg(long, default_value_t = manyshadows::DEFAULT_AREA_SAMPLES)]
-    pub(crate) area_samples: u32,
-    /// Seed of --light-samples' choices (the same seed gives the same image).
-    #[arg(long, default_value_t = 0)]
-    pub(crate) ray_seed: u32,
+    #[command(flatten)]
+    pub(crate) per_technique: crate::technique_args::TechniqueArgs,
     /// Which lights each pixel visits: clustered (the lights assigned to its cluster of a
     /// tiles x depth-slices grid, built on the GPU each frame) or all (every light: the
     /// reference the clustered image must equal, and slow past a few hundred lights).
@@ -564,17 +459,6 @@ pub(crate) fn parse_light_loop(s: &str) -> Result<manyshadows::LightLoop, String
     s.parse()
 }
 
-/// `--spatial`: a spatial reuse mode by name.
-pub fn parse_spatial(s: &str) -> Result<manyshadows::SpatialReuse, String> {
-    manyshadows::SpatialReuse::from_name(s).ok_or_else(|| {
-        let names: Vec<&str> = manyshadows::SpatialReuse::ALL
-            .iter()
-            .map(|m| m.name())
-            .collect();
-        format!("unknown spatial reuse '{s}': one of {}", names.join(", "))
-    })
-}
-
 /// Refuses option values that could only be changed silently; checked before anything is
 /// loaded or uploaded.
 pub(crate) fn check_render_args(args: &RenderArgs) -> Result<()> {
@@ -685,7 +569,7 @@ pub(crate) fn effective_atlas_max(ctx: &GpuContext, requested: u32) -> u32 {
 /// The renderer settings `args` ask for, with the atlas cap already checked against the
 /// adapter.
 pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettings {
-    RenderSettings::default()
+    let settings = RenderSettings::default()
         .with_width(if args.stereo.is_some() {
             args.width.saturating_mul(2)
         } else {
@@ -718,30 +602,6 @@ pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettin
             FitPolicy::Prioritize
         })
         .with_visibility(args.visibility_out.is_some())
-        .with_irregular(
-            manyshadows::IrregularOptions::default()
-                .with_grid(args.irregular_grid)
-                .with_hash(args.irregular_hash),
-        )
-        .with_virtual_maps(
-            manyshadows::VirtualOptions::default()
-                .with_pool_bytes(u64::from(args.page_pool) << 20)
-                .with_max_side(args.virtual_side)
-                .with_lod(args.virtual_lod)
-                .with_directed_lod(args.virtual_directed_lod)
-                .with_atlas_floor(args.virtual_atlas_floor == "on")
-                .with_bias_scale(args.virtual_bias)
-                .with_tile_marking(args.virtual_marking == VirtualMarking::Tiles),
-        )
-        .with_rays(
-            manyshadows::RayOptions::default()
-                .with_light_samples(args.light_samples)
-                .with_denoise(args.denoise)
-                .with_reuse(args.reuse)
-                .with_spatial(args.spatial)
-                .with_area_samples(args.area_samples)
-                .with_seed(args.ray_seed),
-        )
         .with_look(args.look.look())
         .with_light_loop(args.light_loop)
         .with_clusters({
@@ -750,5 +610,6 @@ pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettin
                 Some(t) => c.with_tile(t),
                 None => c,
             }
-        })
+        });
+    args.per_technique.apply(settings)
 }

@@ -4,10 +4,7 @@
 use clap::{Parser, Subcommand};
 
 use crate::args::{GpuArgs, RenderArgs};
-use crate::{
-    bench, compare, denoise_bench, estimate_bench, irregular_bench, lights_bench, omni,
-    probes_bench, shadows_bench, soak, soft_bench, stereo_bench, suite, viewer, virtual_bench,
-};
+use crate::{bench, compare, viewer};
 
 pub(crate) const ABOUT: &str = "Render scenes lit by many shadow-casting lights, headless, to PNG.";
 
@@ -73,77 +70,77 @@ pub(crate) enum BenchCommand {
     /// results.txt, results.json and one plot per variant and resolution into --out-dir.
     #[command(mut_arg("repeats", |a| a.default_value("5")))]
     #[command(mut_arg("out_dir", |a| a.default_value("bench-layered").required(false)))]
-    Layered(Box<bench::LayeredArgs>),
+    Layered(Box<bench::layered::LayeredArgs>),
     /// Point-light shadows in the atrium: cube maps (six passes, or one) against dual
     /// paraboloids (two passes, or one), for 1..N lights: GPU and CPU time per light and
     /// atlas memory per light, as a table, results.json and plots (seed 003's comparison).
     #[command(mut_arg("repeats", |a| a.default_value("5")))]
     #[command(mut_arg("out_dir", |a| a.default_value("bench-omni").required(false)))]
-    Omni(Box<omni::OmniArgs>),
+    Omni(Box<bench::omni::OmniArgs>),
     /// Alias-free irregular shadows against traditional shadow maps: frame GPU time by number
     /// of lights and screen resolution, as a table, results.json and plots.
     #[command(mut_arg("out_dir", |a| a.default_value("bench-irregular").required(false)))]
-    Irregular(Box<irregular_bench::IrregularArgs>),
+    Irregular(Box<bench::irregular::IrregularArgs>),
     /// Whole frames from 16 to 16,384 lights with clustered shading: GPU time per stage
     /// (G-buffer, clusters, shadows, lighting; lighting also over every light up to
     /// --reference-up-to), lights per cluster, shadow-map fit and memory; table, results.json
     /// and one plot per scene and screen.
     #[command(mut_arg("out_dir", |a| a.default_value("bench-lights").required(false)))]
-    Lights(Box<lights_bench::LightsArgs>),
+    Lights(Box<bench::lights::LightsArgs>),
     /// Virtual shadow maps against the atlas path, 16 to 4,096 lights, interleaved in the same
     /// run: GPU time per stage, shadow memory kept, pages needed / rendered / denied; table,
     /// results.json and a plot.
     #[command(mut_arg("out_dir", |a| a.default_value("bench-virtual").required(false)))]
-    Virtual(Box<virtual_bench::VirtualArgs>),
+    Virtual(Box<bench::virtual_maps::VirtualArgs>),
     /// Every kind of shadow side by side from 64 to 16,384 lights, one caster moving: the
     /// atlas, virtual pages, and shadow rays (every cluster light, and K sampled lights per
     /// pixel) where the device has ray queries; GPU time per stage with the acceleration
     /// structure's rebuild apart, renderer setup time; table, results.json and a plot.
     #[command(mut_arg("repeats", |a| a.default_value("3")))]
     #[command(mut_arg("out_dir", |a| a.default_value("bench-shadows").required(false)))]
-    Shadows(Box<shadows_bench::ShadowsArgs>),
+    Shadows(Box<bench::shadows::ShadowsArgs>),
     /// What soft shadows cost: whole frames with percentage-closer soft shadows against the
     /// same lights rendered hard (2x2 PCF), per technique (traditional and virtual) and light
     /// count, interleaved in the same run; GPU time per stage and ratios; table and
     /// results.json.
-    #[command(long_about = soft_bench::LONG_ABOUT)]
+    #[command(long_about = bench::soft::LONG_ABOUT)]
     #[command(mut_arg("out_dir", |a| a.default_value("bench-soft").required(false)))]
-    Soft(Box<soft_bench::SoftArgs>),
+    Soft(Box<bench::soft::SoftArgs>),
     /// Sampled shadow rays and their denoiser over a sequence (the camera turning, a caster
     /// moving), each frame scored against the exact image of that frame: RMSE per frame, GPU
     /// time of the plain and the denoised frames and their ratio, per light count; table,
     /// results.json and a plot.
-    #[command(long_about = denoise_bench::LONG_ABOUT)]
+    #[command(long_about = bench::denoise::LONG_ABOUT)]
     #[command(mut_arg("out_dir", |a| a.default_value("bench-denoise").required(false)))]
-    Denoise(Box<denoise_bench::DenoiseArgs>),
+    Denoise(Box<bench::denoise::DenoiseArgs>),
     /// How well each technique's estimate of its frame (made before drawing it, as `render`,
     /// `view` and `compare` say it) predicts the measured frame: per scene, light count and
     /// method, GPU ms per stage estimated and measured and their ratio; table and results.json.
-    #[command(long_about = estimate_bench::LONG_ABOUT)]
+    #[command(long_about = bench::estimate::LONG_ABOUT)]
     #[command(mut_arg("out_dir", |a| a.default_value("bench-estimate").required(false)))]
-    Estimate(Box<estimate_bench::EstimateArgs>),
+    Estimate(Box<bench::estimate::EstimateArgs>),
     /// Reflection probes' faces: one G-buffer pass per face against every face in one layered
     /// pass, six faces per multiview pass, and triangle clusters culled per face on the GPU
     /// (indirect multi-draws), per probe count and face size, a caster moving so every face is
     /// redrawn; probes stage and whole-frame GPU time, CPU time, ratios; table, results.json
     /// and a plot.
     #[command(mut_arg("out_dir", |a| a.default_value("bench-probes").required(false)))]
-    Probes(Box<probes_bench::ProbesArgs>),
+    Probes(Box<bench::probes::ProbesArgs>),
     /// Stereo frames: both eyes' G-buffers in one layered or multiview pass against one pass
     /// per eye (and one mono eye for scale), per scene and eye size; G-buffer and whole-frame
     /// GPU time, CPU time, ratios to per-eye; table, results.json and a plot.
     #[command(mut_arg("out_dir", |a| a.default_value("bench-stereo").required(false)))]
-    Stereo(Box<stereo_bench::StereoArgs>),
+    Stereo(Box<bench::stereo::StereoArgs>),
     /// Thousands of frames in which the camera, a caster, a light and the light count change:
     /// resident memory after a warm-up against its baseline (fails past --max-growth-mib),
     /// frame times per interval, any failed frame; table and results.json.
     #[command(mut_arg("out_dir", |a| a.default_value("bench-soak")
         .required(false)
         .help("Directory for results.json and results.txt")))]
-    Soak(Box<soak::SoakArgs>),
+    Soak(Box<bench::soak::SoakArgs>),
     /// The headline measurements in one command, for a GPU: `bench layered` (seed 000's
     /// sweep), `bench omni` and `bench shadows` at 1080p from 16 to 16,384 lights, each its own
     /// run; then suite.txt (their tables in order, each naming the adapter) and suite.json.
     /// `--quick` runs tiny sizes to check that everything runs.
-    Suite(suite::SuiteArgs),
+    Suite(bench::suite::SuiteArgs),
 }

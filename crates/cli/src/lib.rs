@@ -14,10 +14,10 @@ use crate::commands::{BenchCommand, Cli, Command};
 
 pub use args::{
     parse_camera, parse_camera_path, parse_ground, parse_pcf, parse_point_shadows,
-    parse_probe_passes, parse_spatial, parse_technique, GpuArgs, LightSizeArgs, LookArgs,
-    ModelArgs, SoftArgs,
+    parse_probe_passes, parse_technique, GpuArgs, LightSizeArgs, LookArgs, ModelArgs, SoftArgs,
 };
 pub use scenes::{load_scene_for_view, ViewScene};
+pub use technique_args::{parse_spatial, TechniqueArgs, VirtualMarking};
 
 /// Why a frame of `renderer` would take far longer than the rest (its per-view shadow work
 /// past `render`'s bound, with the estimate and the techniques that scale), or `None`: what
@@ -32,28 +32,15 @@ mod args;
 mod bench;
 mod commands;
 mod compare;
-mod denoise_bench;
-mod estimate_bench;
-mod harness;
 mod info;
-mod irregular_bench;
 mod light_args;
-mod lights_bench;
-mod omni;
-mod plot;
-mod probes_bench;
 mod progress;
 mod render;
 mod scenes;
-mod shadows_bench;
-mod soak;
-mod soft_bench;
-mod stereo_bench;
-mod suite;
 mod summary;
+mod technique_args;
 mod techniques;
 mod viewer;
-mod virtual_bench;
 
 /// The GL backend probes for a Wayland display, and libwayland prints a misleading
 /// "XDG_RUNTIME_DIR is invalid" error on headless machines where that variable is unset. Give
@@ -111,19 +98,21 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
         Some(Command::Info(args)) => info::info(&args),
         Some(Command::View(args)) => viewer::run(&args),
         Some(Command::Compare(args)) => compare::run(&args),
-        Some(Command::Bench(BenchCommand::Layered(args))) => bench::layered(&args),
-        Some(Command::Bench(BenchCommand::Omni(args))) => omni::omni(&args),
-        Some(Command::Bench(BenchCommand::Irregular(args))) => irregular_bench::irregular(&args),
-        Some(Command::Bench(BenchCommand::Lights(args))) => lights_bench::lights(&args),
-        Some(Command::Bench(BenchCommand::Virtual(args))) => virtual_bench::virtual_maps(&args),
-        Some(Command::Bench(BenchCommand::Soak(args))) => soak::soak(&args),
-        Some(Command::Bench(BenchCommand::Shadows(args))) => shadows_bench::shadows(&args),
-        Some(Command::Bench(BenchCommand::Soft(args))) => soft_bench::soft(&args),
-        Some(Command::Bench(BenchCommand::Stereo(args))) => stereo_bench::stereo(&args),
-        Some(Command::Bench(BenchCommand::Probes(args))) => probes_bench::probes(&args),
-        Some(Command::Bench(BenchCommand::Estimate(args))) => estimate_bench::estimate(&args),
-        Some(Command::Bench(BenchCommand::Denoise(args))) => denoise_bench::denoise(&args),
-        Some(Command::Bench(BenchCommand::Suite(args))) => suite::suite(&args),
+        Some(Command::Bench(BenchCommand::Layered(args))) => bench::layered::layered(&args),
+        Some(Command::Bench(BenchCommand::Omni(args))) => bench::omni::omni(&args),
+        Some(Command::Bench(BenchCommand::Irregular(args))) => bench::irregular::irregular(&args),
+        Some(Command::Bench(BenchCommand::Lights(args))) => bench::lights::lights(&args),
+        Some(Command::Bench(BenchCommand::Virtual(args))) => {
+            bench::virtual_maps::virtual_maps(&args)
+        }
+        Some(Command::Bench(BenchCommand::Soak(args))) => bench::soak::soak(&args),
+        Some(Command::Bench(BenchCommand::Shadows(args))) => bench::shadows::shadows(&args),
+        Some(Command::Bench(BenchCommand::Soft(args))) => bench::soft::soft(&args),
+        Some(Command::Bench(BenchCommand::Stereo(args))) => bench::stereo::stereo(&args),
+        Some(Command::Bench(BenchCommand::Probes(args))) => bench::probes::probes(&args),
+        Some(Command::Bench(BenchCommand::Estimate(args))) => bench::estimate::estimate(&args),
+        Some(Command::Bench(BenchCommand::Denoise(args))) => bench::denoise::denoise(&args),
+        Some(Command::Bench(BenchCommand::Suite(args))) => bench::suite::suite(&args),
         None => render::render(&cli.render),
     }
 }

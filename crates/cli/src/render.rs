@@ -91,10 +91,10 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
                         .gpu_ms
                         .get(manyshadows::Stage::Lighting)
                         .map_or("n/a".to_string(), |v| format!("{v:.2} ms"));
-                    let history = (f + 1).min(manyshadows::shading::denoise::MAX_HISTORY);
+                    let history = manyshadows::RayOptions::denoise_history(f + 1);
                     let plural = if history == 1 { "" } else { "s" };
                     let reused = if rays.reuse {
-                        let m = (f + 1).min(manyshadows::shading::reuse::MAX_CONFIDENCE + 1);
+                        let m = manyshadows::RayOptions::reuse_confidence(f + 1);
                         let spatial = match rays.spatial {
                             manyshadows::SpatialReuse::Off => String::new(),
                             mode => format!(" and between neighbours ({})", mode.name()),
@@ -168,12 +168,12 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     }
     pb.finish_and_clear();
     if let Some(v) = &frame.virtual_maps {
-        let asked = u64::from(args.page_pool) << 20;
+        let asked = u64::from(args.per_technique.page_pool) << 20;
         if v.pool_bytes != asked {
             eprintln!(
                 "note: --page-pool {} MiB is used as a {}² pool of {} pages, {:.2} MiB (a square \
                  of whole 128² pages{})",
-                args.page_pool,
+                args.per_technique.page_pool,
                 v.pool_side,
                 v.pool_pages,
                 v.pool_bytes as f64 / (1 << 20) as f64,

@@ -499,9 +499,7 @@ fn bench_shadows_puts_every_kind_of_shadow_side_by_side() {
         "--scene cubes --lights 4,40 --width 96 --height 54 --light-samples 2 --repeats 1 --warmup 0",
     );
     let ctx = shared_gpu::context();
-    let rays_here = manyshadows::Technique::all()
-        .iter()
-        .any(|t| t.info().fills == manyshadows::Fills::Rays && t.info().unmet(&ctx).is_empty());
+    let rays_here = shared_gpu::rays_here(&ctx);
     let records = records(&json);
     assert_eq!(records.len(), 2, "{json}");
     for r in records {
@@ -702,10 +700,7 @@ fn bench_progress_is_printed_as_lines_in_a_log() {
 fn bench_denoise_scores_each_frame_of_a_sequence() {
     let args = "denoise --scene cubes --lights 48 --frames 4 --width 96 --height 72";
     let ctx = shared_gpu::context();
-    let rays_here = manyshadows::Technique::RAYTRACED
-        .info()
-        .unmet(&ctx)
-        .is_empty();
+    let rays_here = shared_gpu::rays_here(&ctx);
     if !rays_here {
         rejects(args, "EXPERIMENTAL_RAY_QUERY");
         return;

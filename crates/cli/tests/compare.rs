@@ -114,7 +114,10 @@ fn every_technique_scored_or_honestly_skipped(v: &Value, scene: &str) {
             "{scene}: the skip of {t} should name {}: {why}",
             unmet[0].name()
         );
-        eprintln!("{scene}: {t} skipped on {}: {why}", ctx.describe());
+        manyshadows_testkit::refused(
+            &unmet[0].name(),
+            &format!("compare on {scene} skipped {t}: {why}"),
+        );
     }
 }
 
@@ -465,9 +468,7 @@ fn differing_bits(a: &manyshadows::VisibilityMask, b: &manyshadows::VisibilityMa
 #[test]
 fn the_gpu_reference_agrees_with_the_cpu_reference() {
     let ctx = shared_gpu::context();
-    let rays_here = manyshadows::Technique::all()
-        .iter()
-        .any(|t| t.info().fills == manyshadows::Fills::Rays && t.info().unmet(&ctx).is_empty());
+    let rays_here = shared_gpu::rays_here(&ctx);
     for (scene, size) in [
         ("atrium", ["480", "270"]),
         ("plane-spot", ["256", "256"]),
@@ -646,9 +647,7 @@ fn soft_shadows_beat_hard_ones_in_the_penumbra() {
 #[test]
 fn the_gpu_soft_reference_agrees_with_the_cpu_one() {
     let ctx = shared_gpu::context();
-    let rays_here = manyshadows::Technique::all()
-        .iter()
-        .any(|t| t.info().fills == manyshadows::Fills::Rays && t.info().unmet(&ctx).is_empty());
+    let rays_here = shared_gpu::rays_here(&ctx);
     let common = [
         "--scene",
         "courtyard",
@@ -807,9 +806,7 @@ fn compare_tells_each_frame_in_stages() {
 #[test]
 fn compare_over_a_sequence_scores_each_frame_against_its_exact_image() {
     let ctx = shared_gpu::context();
-    let rays_here = manyshadows::Technique::all()
-        .iter()
-        .any(|t| t.info().fills == manyshadows::Fills::Rays && t.info().unmet(&ctx).is_empty());
+    let rays_here = shared_gpu::rays_here(&ctx);
     let frame = ["--scene", "cubes", "--width", "160", "--height", "90"];
     if !rays_here {
         let dir = tmp("sequence-refused");

@@ -1,9 +1,9 @@
 //! Perspective aliasing in numbers: how many screen pixels one shadow texel covers.
 //!
 //! For each pixel and each light that reaches it, the shadow view the renderer would read is
-//! selected exactly as `select_shadow_view` in `shaders/shadow_lookup.wgsl` does (the spot's one
-//! view; the point light's cube face by the major axis; the first cascade whose far split lies
-//! beyond the pixel's camera depth). The **footprint** is then
+//! selected exactly as `select_shadow_view` in `crates/render/src/shadows/shadow_lookup.wgsl`
+//! does (the spot's one view; the point light's cube face by the major axis; the first cascade
+//! whose far split lies beyond the pixel's camera depth). The **footprint** is then
 //!
 //! ```text
 //! footprint = texel_world(p) / pixel_world(p)

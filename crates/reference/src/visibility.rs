@@ -1,10 +1,10 @@
 //! Exact hard-shadow visibility per pixel and light.
 //!
-//! The bit means what the renderer's visibility mask bit means (`shaders/visibility.wgsl`):
-//! the surface point is **within the light's reach** and **unoccluded**. Reach is decided by
-//! [`in_reach`], a line-for-line copy of the shader's `in_reach` (range for spot and point
-//! lights, the cone for spots, everywhere for directional lights), evaluated at the G-buffer
-//! point itself, as the shader does.
+//! The bit means what the renderer's visibility mask bit means
+//! (`crates/render/src/shading/visibility.wgsl`): the surface point is **within the light's
+//! reach** and **unoccluded**. Reach is decided by [`in_reach`], a line-for-line copy of the
+//! shader's `in_reach` (range for spot and point lights, the cone for spots, everywhere for
+//! directional lights), evaluated at the G-buffer point itself, as the shader does.
 //!
 //! Occlusion is one ray per pixel and light, from the G-buffer point moved [`ray_offset`] along
 //! its normal (so the ray cannot hit the triangle it starts on through rounding), towards the
@@ -41,7 +41,7 @@ pub fn ray_offset(p: Vec3) -> f32 {
 }
 
 /// Whether `p` lies within the light's range and cone. Keep in sync with `in_reach` in
-/// `crates/render/src/shaders/shadow_lookup.wgsl` (and the packing in `gpu_types.rs`: the cone
+/// `crates/render/src/shadows/shadow_lookup.wgsl` (and the packing in `gpu/types.rs`: the cone
 /// is `cos(cutoff)` of the normalised axis).
 pub fn in_reach(light: &Light, p: Vec3) -> bool {
     match light.kind {

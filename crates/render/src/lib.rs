@@ -88,11 +88,19 @@ pub mod gpu_scene;
 #[cfg(not(feature = "internals"))]
 pub(crate) mod gpu_scene;
 #[cfg(feature = "internals")]
+pub mod probes;
+#[cfg(not(feature = "internals"))]
+pub(crate) mod probes;
+#[cfg(feature = "internals")]
 pub mod registry;
 #[cfg(not(feature = "internals"))]
 pub(crate) mod registry;
 mod renderer;
 mod report;
+#[cfg(feature = "internals")]
+pub mod sampled;
+#[cfg(not(feature = "internals"))]
+pub(crate) mod sampled;
 mod settings;
 #[cfg(feature = "internals")]
 pub mod shading;
@@ -120,18 +128,69 @@ pub use gpu::context::{
 };
 pub use gpu::timing::{GpuTimes, Stage};
 pub use gpu_scene::caster_layout::CasterOptions;
+pub use probes::maps::{ProbeMaps, ProbePasses, ProbeStats};
 pub use renderer::{FramePart, Renderer};
-pub use report::{
-    EstimatedWork, Frame, FrameEstimate, FrameTimings, ShadowLayout, ShadowWork, SubmittedFrame,
-};
+pub use report::{Frame, FrameEstimate, FrameTimings, ShadowLayout, ShadowWork, SubmittedFrame};
+pub use sampled::options::{RayOptions, SpatialReuse, DEFAULT_AREA_SAMPLES};
 pub use settings::RenderSettings;
 pub use shading::look::{Exposure, Look, ResolvedLook, Shading, ToneMap};
-pub use shading::probes::{ProbeMaps, ProbePasses, ProbeStats};
+pub use shadows::cost::{Cost, EstimatedWork, LightingRead};
 pub use shadows::descriptor::{Culling, Need, Requirement, TechniqueInfo};
 pub use shadows::image::ShadowPicture;
 pub use shadows::irregular::maps::{IrregularOptions, IrregularStats};
 pub use shadows::options::{CullMode, Pcf, ShadowBias, ShadowOptions, SoftShadows};
 pub use shadows::plan::DEFAULT_MAX_ATLAS_SIZE;
-pub use shadows::raytraced::accel::{RayOptions, SpatialReuse, DEFAULT_AREA_SAMPLES};
 pub use shadows::source::ShadowStats;
 pub use shadows::vsm::plan::{TileMarking, VirtualOptions, VirtualStats};
+
+// ------------------------------------------------------------------------------------------
+// What one technique alone keeps, read through the renderer (the renderer itself names no
+// technique: it drives every source through `ShadowSource`).
+// ------------------------------------------------------------------------------------------
+impl Renderer {
+    /// Counters of the last frame of irregular shadow maps
+    /// ([`Technique::IRREGULAR`]; `None` for other techniques).
+    pub fn irregular_stats(&self) -> Option<IrregularStats> {
+        self.technique_stats::<IrregularStats>()
+    }
+
+    /// The faces of [`Technique::VIRTUAL`] (`None` for other techniques).
+    #[cfg(feature = "internals")]
+    pub fn virtual_plan(&self) -> Option<&shadows::vsm::plan::VirtualPlan> {
+        self.source_as::<shadows::vsm::source::VirtualSource>()
+            .map(shadows::vsm::source::VirtualSource::plan)
+    }
+
+    /// Reads the virtual maps' page pool back: `(side, side² depths)`, row-major from the
+    /// top-left texel, as the last frame left it. Only [`Technique::VIRTUAL`] has one.
+    pub fn read_page_pool(&self) -> Result<(u32, Vec<f32>), RenderError> {
+        match self.source_as::<shadows::vsm::source::VirtualSource>() {
+            Some(v) => v.read_pool(self.context()),
+            None => Err(self.no_page_pool()),
+        }
+    }
+
+    /// Reads the virtual maps' page table back as the last frame left it: first, per entry
+    /// (`VirtualStats::fit.table_entries` of them), the page it got — a pool page, or a marker
+    /// for none or denied — then per entry the farthest receiver's depth key, then the drawn
+    /// cells (the buffer may hold more words than that). Equal tables mean the same pages in
+    /// the same pool places. Only [`Technique::VIRTUAL`] has one.
+    pub fn read_page_table(&self) -> Result<Vec<u32>, RenderError> {
+        match self.source_as::<shadows::vsm::source::VirtualSource>() {
+            Some(v) => v.read_table(self.context()),
+            None => Err(self.no_page_pool()),
+        }
+    }
+
+    /// [`RenderError::NoPagePool`] for this renderer's technique, naming those with a pool.
+    fn no_page_pool(&self) -> RenderError {
+        RenderError::NoPagePool {
+            technique: self.settings().technique,
+            with_pool: registry::TECHNIQUES
+                .iter()
+                .filter(|i| i.fills == Fills::Pages)
+                .map(|i| i.technique.name())
+                .collect(),
+        }
+    }
+}

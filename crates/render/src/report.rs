@@ -6,7 +6,8 @@ use crate::error::Fills;
 use crate::frame::clusters::ClusterStats;
 use crate::frame::visibility_mask::{SoftVisibility, VisibilityMask};
 use crate::gpu::timing::GpuTimes;
-use crate::shading::probes::ProbeStats;
+use crate::probes::maps::ProbeStats;
+use crate::shadows::cost::EstimatedWork;
 use crate::shadows::source::ShadowStats;
 use crate::shadows::vsm::plan::VirtualStats;
 
@@ -91,53 +92,6 @@ pub struct ShadowWork {
     pub after_instance_culling: u64,
     /// Every caster triangle in every view.
     pub all_pairs: u64,
-}
-
-/// The work of the next frame, counted before it is drawn
-/// ([`Renderer::estimated_work`](crate::Renderer::estimated_work)).
-#[non_exhaustive]
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
-pub struct EstimatedWork {
-    /// Pixels of the frame.
-    pub pixels: u64,
-    /// Triangles the camera draws (every instance; with stereo, once per eye).
-    pub triangles: u64,
-    /// Triangles of the instances that cast shadows.
-    pub caster_triangles: u64,
-    /// Instances.
-    pub instances: usize,
-    /// Lights.
-    pub lights: usize,
-    /// (pixel, light) pairs in reach, estimated from a coarse grid of camera rays.
-    pub pixel_lights: u64,
-    /// (pixel, light) pairs the clustered light loop visits: lights whose reach meets the
-    /// pixel's cluster (estimated from the same grid).
-    pub cluster_lights: u64,
-    /// (caster triangle, view) pairs the shadow stage takes on (0 without views; for virtual
-    /// maps, after culling whole instances per face).
-    pub triangle_views: u64,
-    /// (caster triangle, view) pairs left after culling whole instances per view by bounding
-    /// sphere.
-    pub after_instance_culling: u64,
-    /// Every caster triangle in every view.
-    pub all_pairs: u64,
-    /// (caster instance, view) pairs left after culling whole instances per view: the draws
-    /// of the techniques that draw per instance and view.
-    pub instance_views: u64,
-    /// Shadow views (atlas tiles, virtual faces, irregular light views).
-    pub views: usize,
-    /// Atlas texels the views' tiles cover (atlas techniques).
-    pub atlas_texels: u64,
-    /// Texels of the whole atlas texture (atlas techniques).
-    pub atlas_area: u64,
-    /// Depth taps per (pixel, light) pair beyond one comparison: a sized light's blocker
-    /// search and filter, or a 3×3 PCF.
-    pub taps: u32,
-    /// Shadow rays the lighting pass traces (ray-traced shadows).
-    pub rays: u64,
-    /// Mean triangles a shadow ray tests before it is done (on a CPU BVH of the scene, from
-    /// a few lights in reach of each grid point).
-    pub ray_weight: f64,
 }
 
 /// What the next frame is estimated to cost

@@ -10,11 +10,11 @@ use manyshadows_scene::atlas::FitPolicy;
 use crate::error::{RenderError, Technique};
 use crate::frame::clusters::{ClusterOptions, LightLoop};
 use crate::frame::eyes::Stereo;
+use crate::probes::maps::ProbePasses;
+use crate::sampled::options::RayOptions;
 use crate::shading::look::Look;
-use crate::shading::probes::ProbePasses;
 use crate::shadows::irregular::maps::IrregularOptions;
 use crate::shadows::options::{Pcf, ShadowBias, ShadowOptions, SoftShadows};
-use crate::shadows::raytraced::accel::RayOptions;
 use crate::shadows::source::SourceSettings;
 use crate::shadows::vsm::plan::VirtualOptions;
 

@@ -152,11 +152,10 @@ fn check_all_techniques(name: &str) {
             .with_visibility(true);
         let mut r = match Renderer::new(&ctx, &scene, settings) {
             Ok(r) => r,
-            Err(e) if e.is_unsupported() => {
-                eprintln!("{name}: {technique} cannot run here: {e}");
+            Err(e) => {
+                common::check_refusal(&ctx, technique, &e);
                 continue;
             }
-            Err(e) => panic!("{name}: {technique}: {e}"),
         };
         let frame = r.render().expect("frame");
         let vis = frame.visibility.as_ref().expect("visibility");

@@ -181,10 +181,9 @@ fn degenerate_triangles_render() {
     let mut ran = 0;
     for technique in manyshadows::Technique::all() {
         let settings = small().with_technique(technique);
-        let frame = |scene: &Scene| match Renderer::new(&ctx, scene, settings.clone()) {
-            Ok(mut r) => Some(r.render().unwrap()),
-            Err(e) if e.is_unsupported() => None,
-            Err(e) => panic!("{technique}: {e}"),
+        let frame = |scene: &Scene| {
+            common::renderer_or_refusal(&ctx, scene, settings.clone())
+                .map(|mut r| r.render().unwrap())
         };
         let (Some(a), Some(b)) = (frame(&plain), frame(&with_line)) else {
             continue;

@@ -225,7 +225,7 @@ fn many_lights_switched_at_once_fall_back_and_still_follow() {
         let off: Vec<usize> = std::iter::once(sun)
             .chain((0..scene.lights.len()).filter(|&i| i != sun).take(11))
             .collect();
-        assert!(2 * off.len() > manyshadows::shading::denoise::MAX_LIGHT_FIXES);
+        assert!(2 * off.len() > manyshadows::sampled::denoise::MAX_LIGHT_FIXES);
         off
     };
     let Some(s) = switch_off(pick, 4) else {
@@ -333,7 +333,9 @@ fn a_frame_too_large_to_denoise_is_refused_by_name() {
         Err(e @ RenderError::TooLarge { .. }) => {
             assert!(e.to_string().contains("denoiser"), "{e}");
         }
-        Err(e @ RenderError::MissingFeature { .. }) => eprintln!("refused here, by name: {e}"),
+        Err(e @ RenderError::MissingFeature { .. }) => {
+            common::check_refusal(&ctx, Technique::RAYTRACED, &e)
+        }
         Err(e) => panic!("refused for another reason: {e}"),
         Ok(_) => assert!(
             u64::from(w) * u64::from(h) * 64 <= limit,

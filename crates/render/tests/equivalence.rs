@@ -129,6 +129,7 @@ fn multiview_matches_traditional_or_says_unsupported() {
             msg.contains("MULTIVIEW") && msg.contains("layered"),
             "unclear message: {msg}"
         );
+        manyshadows_testkit::refused("MULTIVIEW", &msg);
         return;
     }
     let per_pass = manyshadows::shadows::atlas::multiview::Multiview::new(&ctx)
@@ -329,8 +330,9 @@ fn partial_draw_lists_clear_only_listed_tiles() {
     let all: Vec<u32> = (0..views).collect();
     let odd: Vec<u32> = (1..views).step_by(2).collect();
     let mut techniques = vec![Technique::GPU_DRIVEN];
-    if Technique::MULTIVIEW.info().unmet(&ctx).is_empty() {
-        techniques.push(Technique::MULTIVIEW);
+    match Technique::MULTIVIEW.create(&ctx) {
+        Ok(_) => techniques.push(Technique::MULTIVIEW),
+        Err(e) => common::check_refusal(&ctx, Technique::MULTIVIEW, &e),
     }
     for technique in techniques {
         let mut t = technique.create(&ctx).expect("technique");

@@ -61,7 +61,8 @@ fn every_technique_renders_on_the_minimum_limits_as_on_the_full_adapter() {
                 continue;
             }
         }
-        if !t.info().unmet(&full).is_empty() {
+        if let Some(need) = t.info().unmet(&full).first() {
+            manyshadows_testkit::refused(&need.name(), &format!("{t} on the full adapter"));
             continue;
         }
         let on_small = on_small.unwrap_or_else(|e| panic!("{t:?} on the minimum limits: {e}"));

@@ -462,10 +462,15 @@ fn faces_drawn_in_one_pass_match_faces_drawn_one_pass_each() {
             .with_height(36)
             .with_probe_passes(passes);
         let mut r = match Renderer::new(&ctx, &scene, settings) {
-            Err(manyshadows::RenderError::MissingFeature { feature, .. })
+            Err(e @ manyshadows::RenderError::MissingFeature { .. })
                 if passes != ProbePasses::PerFace =>
             {
-                eprintln!("{passes}: refused, {} lacks {feature}", ctx.info.name);
+                let why = Renderer::probe_passes_unmet(&ctx, passes).expect("refused for a lack");
+                let need = ["MULTIVIEW", "CLIP_DISTANCES", "INDIRECT_EXECUTION"]
+                    .into_iter()
+                    .find(|n| why.contains(n))
+                    .unwrap_or_else(|| panic!("{passes}: an unknown need: {why}"));
+                manyshadows_testkit::refused(need, &format!("probe faces {passes}: {e}"));
                 return None;
             }
             other => other.expect("renderer"),

@@ -6,7 +6,7 @@
 //! exponential tone map. glTF files are physical: `KHR_lights_punctual` gives candela (point
 //! and spot lights) and lux (directional), and materials are metallic-roughness. The renderer
 //! picks its default shading, exposure and tone map from [`Scene::lighting`](crate::Scene);
-//! every choice can be overridden (`manyshadows_render::Look`).
+//! every choice can be overridden (`manyshadows::Look`).
 
 /// The units of a scene's lights and the shading its author meant.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]

@@ -97,26 +97,11 @@ pub struct CompareArgs {
     /// Fail when the shadow maps don't fit the atlas, instead of shrinking them.
     #[arg(long)]
     pub(super) strict_atlas: bool,
-    /// Page pool of --techniques virtual, MiB (compare at equal memory by setting it to the
-    /// atlas size the other variants report).
-    #[arg(long, default_value_t = (manyshadows::shadows::vsm::plan::DEFAULT_POOL_BYTES >> 20) as u32)]
-    pub(super) page_pool: u32,
-    /// Shadow texels per screen pixel that --techniques virtual aims for (see render --help).
-    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_LOD)]
-    pub(super) virtual_lod: f32,
-    /// Factor on --virtual-lod for spot and directional lights' faces (see render --help).
-    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_DIRECTED_LOD)]
-    pub(super) virtual_directed_lod: f32,
-    /// --technique virtual: no face samples coarser than the tile the atlas techniques would
-    /// give the same view (`on`, default: virtual maps never misclassify more than the atlas
-    /// where the atlas is finer than the screen asks, e.g. few lights in a small frame), or
-    /// only what the screen's level of detail asks (`off`: fewer pages there).
-    #[arg(long, default_value = "on", value_parser = ["on", "off"])]
-    pub(super) virtual_atlas_floor: String,
-    /// --techniques virtual's receiver bias as a fraction of the --bias-* texels (see render
-    /// --help).
-    #[arg(long, default_value_t = manyshadows::shadows::vsm::plan::DEFAULT_BIAS_SCALE)]
-    pub(super) virtual_bias: f32,
+    /// Options of one technique or another (irregular, virtual, shadow rays), as `render`
+    /// takes them; the sampled rays' (--light-samples, --reuse, --spatial, --denoise) score a
+    /// sequence only (--frames).
+    #[command(flatten)]
+    pub(super) per_technique: crate::technique_args::TechniqueArgs,
     /// Who traces the exact reference: cpu (default, the truth every technique is scored
     /// against) or gpu (ray queries; needs EXPERIMENTAL_RAY_QUERY, for frames and light counts
     /// the CPU would take too long for). It traces the soft reference too, with at most 256
@@ -173,20 +158,6 @@ pub struct CompareArgs {
     /// With --frames: move no caster.
     #[arg(long)]
     pub(super) still: bool,
-    /// With --frames, for the techniques that cast shadow rays: trace K lights per pixel
-    /// picked by importance (`render --light-samples`; 0: every cluster light).
-    #[arg(long, default_value_t = 0)]
-    pub(super) light_samples: u32,
-    /// With --frames and --light-samples: reuse each pixel's lights across frames (`render
-    /// --reuse`).
-    #[arg(long)]
-    pub(super) reuse: bool,
-    /// With --reuse: spatial reuse too (`render --spatial`: off, biased or unbiased).
-    #[arg(long, default_value = "off", value_parser = crate::args::parse_spatial)]
-    pub(super) spatial: manyshadows::SpatialReuse,
-    /// With --frames and shadow rays: the denoiser (`render --denoise`).
-    #[arg(long)]
-    pub(super) denoise: bool,
     /// Say each part of a technique's frame as the GPU finishes it (G-buffer and light
     /// clusters, shadows, lighting), as `render --stages`; on by itself for a frame whose
     /// shadow work is estimated past 200 M (caster triangle, view) pairs.

@@ -232,7 +232,7 @@ fn report(
         "lights": { "total": scene.lights.len(), "by_type": by_kind },
         "probes": scene.probes.len(),
         "bias_texels": { "constant": args.bias_constant, "slope": args.bias_slope, "normal": args.bias_normal },
-        "virtual_maps": { "lod": args.virtual_lod, "directed_lod": args.virtual_directed_lod, "bias_scale": args.virtual_bias, "page_pool_mib": args.page_pool, "atlas_floor": args.virtual_atlas_floor == "on" },
+        "virtual_maps": { "lod": args.per_technique.virtual_lod, "directed_lod": args.per_technique.virtual_directed_lod, "bias_scale": args.per_technique.virtual_bias, "page_pool_mib": args.per_technique.page_pool, "atlas_floor": args.per_technique.virtual_atlas_floor },
         "edge_band_px": args.edge_band,
         "reference": {
             "triangles": tracer.triangle_count(),

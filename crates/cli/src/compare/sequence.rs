@@ -35,13 +35,9 @@ struct Scored {
 }
 
 /// The ray options the sequence's ray techniques render with (`--light-samples`, `--reuse`,
-/// `--spatial`, `--denoise`).
+/// `--spatial`, `--denoise`, `--area-samples`, `--ray-seed`).
 fn sampled_rays(args: &CompareArgs) -> RayOptions {
-    RayOptions::default()
-        .with_light_samples(args.light_samples)
-        .with_reuse(args.reuse)
-        .with_spatial(args.spatial)
-        .with_denoise(args.denoise)
+    args.per_technique.rays()
 }
 
 /// The flags only a sequence takes, refused without `--frames` past 1.
@@ -75,10 +71,13 @@ pub(super) fn check_sequence_flags(args: &CompareArgs) -> Result<()> {
             ("--camera-path", args.camera_path.is_some()),
             ("--move-instance", args.move_instance.is_some()),
             ("--still", args.still),
-            ("--light-samples", args.light_samples != 0),
-            ("--reuse", args.reuse),
-            ("--spatial", args.spatial != manyshadows::SpatialReuse::Off),
-            ("--denoise", args.denoise),
+            ("--light-samples", args.per_technique.light_samples != 0),
+            ("--reuse", args.per_technique.reuse),
+            (
+                "--spatial",
+                args.per_technique.spatial != manyshadows::SpatialReuse::Off,
+            ),
+            ("--denoise", args.per_technique.denoise),
         ];
         if let Some((name, _)) = used.iter().find(|(_, on)| *on) {
             bail!(
@@ -258,10 +257,10 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
         "orbit_degrees_per_frame": args.orbit,
         "camera_path": args.camera_path,
         "moving_instance": mover,
-        "light_samples": args.light_samples,
-        "reuse": args.reuse,
-        "spatial": args.spatial.name(),
-        "denoise": args.denoise,
+        "light_samples": args.per_technique.light_samples,
+        "reuse": args.per_technique.reuse,
+        "spatial": args.per_technique.spatial.name(),
+        "denoise": args.per_technique.denoise,
         "exact": exact_technique.to_string(),
         "techniques": scored,
     });
@@ -273,18 +272,18 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
 
 /// The technique's row name: with its ray options when it casts rays.
 fn label(t: Technique, args: &CompareArgs) -> String {
-    if t.info().fills != Fills::Rays || args.light_samples == 0 {
+    if t.info().fills != Fills::Rays || args.per_technique.light_samples == 0 {
         return t.to_string();
     }
-    let mut s = format!("{t}-k{}", args.light_samples);
-    if args.reuse {
+    let mut s = format!("{t}-k{}", args.per_technique.light_samples);
+    if args.per_technique.reuse {
         s.push_str("-reuse");
     }
-    if args.spatial != manyshadows::SpatialReuse::Off {
+    if args.per_technique.spatial != manyshadows::SpatialReuse::Off {
         s.push_str("-spatial-");
-        s.push_str(args.spatial.name());
+        s.push_str(args.per_technique.spatial.name());
     }
-    if args.denoise {
+    if args.per_technique.denoise {
         s.push_str("-denoise");
     }
     s
@@ -337,7 +336,7 @@ fn print_table(
 }
 
 fn plot_sequence(path: &std::path::Path, args: &CompareArgs, scored: &[Scored]) -> Result<()> {
-    let series = |pick: &dyn Fn(&Scored, usize) -> Option<f64>| -> Vec<crate::plot::Series> {
+    let series = |pick: &dyn Fn(&Scored, usize) -> Option<f64>| -> Vec<crate::bench::plot::Series> {
         scored
             .iter()
             .map(|s| {
@@ -348,7 +347,7 @@ fn plot_sequence(path: &std::path::Path, args: &CompareArgs, scored: &[Scored]) 
             })
             .collect()
     };
-    crate::plot::panels(
+    crate::bench::plot::panels(
         path,
         &format!(
             "compare --frames {}: {} {}x{}",

@@ -257,7 +257,7 @@ pub(super) fn settings(
 ) -> RenderSettings {
     // The score reads the hard visibility mask, which PCF does not touch; the frame under
     // the difference images shows the hard edges that are being scored.
-    RenderSettings::default()
+    let settings = RenderSettings::default()
         .with_width(args.width)
         .with_height(args.height)
         .with_technique(technique)
@@ -279,14 +279,8 @@ pub(super) fn settings(
         .with_point_shadows(args.point_shadows)
         .with_shadow(manyshadows::ShadowOptions::default().with_casters(
             manyshadows::CasterOptions::default().with_ignore_masks(!args.shadow_alpha),
-        ))
-        .with_virtual_maps(
-            manyshadows::VirtualOptions::default()
-                .with_pool_bytes(u64::from(args.page_pool) << 20)
-                .with_lod(args.virtual_lod)
-                .with_directed_lod(args.virtual_directed_lod)
-                .with_bias_scale(args.virtual_bias),
-        )
+        ));
+    args.per_technique.apply(settings)
 }
 
 /// What one scene's scoring runs on: the GPU, the flags as that GPU takes them, and the BVH

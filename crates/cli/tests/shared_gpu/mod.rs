@@ -18,3 +18,22 @@ pub fn context() -> manyshadows::GpuContext {
         })
         .clone()
 }
+
+/// Whether `ctx`'s device runs ray-traced shadows. Where it does not, the test goes on to check
+/// the refusal instead: that is recorded (`manyshadows_testkit::refused`), and fails the test
+/// where the test command says the backend must offer ray queries.
+#[allow(dead_code)]
+#[track_caller]
+pub fn rays_here(ctx: &manyshadows::GpuContext) -> bool {
+    let unmet = manyshadows::Technique::RAYTRACED.info().unmet(ctx);
+    match unmet.first() {
+        None => true,
+        Some(need) => {
+            manyshadows_testkit::refused(
+                &need.name(),
+                &format!("ray-traced shadows on {}", ctx.describe()),
+            );
+            false
+        }
+    }
+}

@@ -24,11 +24,8 @@
 //! set with `atomicOr`, so the result does not depend on thread order. The box spans only the
 //! view depths of the cluster's own samples, which the marking keeps per cluster (Olsson et
 //! al.'s explicit bounds; a far slice is metres deep where the surfaces a tile sees in it are
-//! not): the atrium at 640 × 360, 24 slices, lights per cluster 18.0 → 13.7 mean at 1,024
-//! lights, 46.8 → 36.0 at 16,384, and `bench denoise --lights 1024,16384 --reference off
-//! --frames 24` (lavapipe, two interleaved runs each) the denoised frame 355.5 / 342.7 →
-//! 340.9 / 337.0 ms at 1,024 lights, 447.9 / 452.8 → 420.7 / 433.5 ms at 16,384 (64 slices
-//! instead cut the lighting pass about as much and cost the clusters pass twice).
+//! not), which cuts the lights per cluster and with them the lighting pass, more cheaply than
+//! finer slices (docs/decisions.md, "Cluster boxes cut to their samples' depths").
 //!
 //! **Shading** (`lighting.wgsl`, `visibility.wgsl`) walks a slot's set bits in ascending
 //! order — summary word, then light word, then bit — and applies the same per-light code as
@@ -57,12 +54,8 @@ use crate::gpu::types::ClusterUniforms;
 pub const DEFAULT_TILE: u32 = 32;
 /// Tile side in pixels by default where the pool holds a slot for every cluster of that grid
 /// ([`ClusterOptions::tile_for`]). Smaller tiles cut the lights a pixel visits that do not
-/// reach it: the atrium at 640 × 360, 24 slices, `bench denoise --lights 1024,16384
-/// --reference off --still --orbit 0 --frames 16`, three runs each way alternating (lavapipe):
-/// the denoised frame 330–335 / 387–389 ms at 1,024 / 16,384 lights against 336–368 / 443–477
-/// with 32-pixel tiles, its growth 1.15–1.17× (frame by frame) against 1.25–1.30×; 32 lights at
-/// 1280 × 720 (the default frame) neither gain nor lose beyond the runs' spread (lights per
-/// cluster 5.7 → 5.2, the clusters pass 12–13 → 14–15 ms).
+/// reach it, so the lighting pass grows less with the light count; chosen by measurement
+/// (docs/decisions.md, "Cluster tile size").
 pub const SMALL_TILE: u32 = 16;
 /// Default number of depth slices.
 pub const DEFAULT_SLICES: u32 = 24;

@@ -27,8 +27,8 @@ pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// bytes per pixel of position and normal (every native adapter; not a browser's WebGPU).
 pub const EMISSION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 /// The scene instance seen, plus one (0: no geometry), only for a camera whose frames keep
-/// histories that follow moving instances ([`GBufferViews::MonoMoving`], motion.rs), on
-/// devices whose colour attachments hold it beside the others.
+/// histories that follow moving instances ([`GBufferViews::MonoMoving`],
+/// sampled/motion.rs), on devices whose colour attachments hold it beside the others.
 pub const INSTANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 
 /// G-buffer targets and the pipeline that fills them.
@@ -68,7 +68,7 @@ pub enum GBufferViews<'a> {
     /// One camera (`FrameUniforms::eye_view_proj[0]`).
     Mono,
     /// One camera, and per pixel the instance seen (`GBuffer::instance`): for frames whose
-    /// denoiser or reservoirs follow surfaces of moving instances (motion.rs).
+    /// denoiser or reservoirs follow surfaces of moving instances (sampled/motion.rs).
     MonoMoving,
     /// Two eyes side by side, drawn that way (its feature is checked by `Renderer::new`).
     Stereo(EyePasses),

@@ -21,7 +21,7 @@ struct VsOut {
 }
 
 // The same with the scene instance drawn, which the `_moving` entry points keep per pixel
-// (motion.rs): one camera only (`vs_moving`).
+// (sampled/motion.rs): one camera only (`vs_moving`).
 struct MovingVsOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) world: vec3<f32>,
@@ -157,8 +157,8 @@ struct GBufferOutEmission {
     @location(2) emission: vec4<f32>,
 }
 
-// With the instance seen (motion.rs: histories that follow moving instances): the scene
-// instance + 1 (the clear value 0: no geometry).
+// With the instance seen (sampled/motion.rs: histories that follow moving instances): the
+// scene instance + 1 (the clear value 0: no geometry).
 struct GBufferOutMoving {
     @location(0) position: vec4<u32>,
     @location(1) normal_material: vec4<u32>,

@@ -1,4 +1,4 @@
-// Probe faces drawn from GPU-culled triangle clusters (renderer/probe_clusters.rs): a compute
+// Probe faces drawn from GPU-culled triangle clusters (probes/clusters.rs): a compute
 // pass keeps each (cluster, face) pair whose cluster may be seen by the face and writes an
 // indexed-indirect command for it; one multi-draw per round draws them into the faces' tiles
 // of the atlas, as `vs_faces` does for whole instances.

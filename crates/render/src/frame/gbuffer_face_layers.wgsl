@@ -1,4 +1,4 @@
-// A probe's six faces in one multiview pass (renderer/probes.rs): view `view_index` of the
+// A probe's six faces in one multiview pass (probes/faces.rs): view `view_index` of the
 // pass is face `6 · probe + view_index`; draw instance `probe · instances + i` is scene
 // instance `i` (instances in `face_views[0].tile.w`). Each face lands in its layer of
 // six-layer targets, at the origin, as one pass per face would draw it.

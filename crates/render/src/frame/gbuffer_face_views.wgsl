@@ -1,5 +1,5 @@
 // The views of a G-buffer that holds many square views (reflection probes' faces,
-// renderer/probes.rs): each view's projection, where it is seen from and its tile.
+// probes/faces.rs): each view's projection, where it is seen from and its tile.
 
 struct FaceView {
     view_proj: mat4x4<f32>,

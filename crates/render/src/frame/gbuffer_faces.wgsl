@@ -1,4 +1,4 @@
-// Many square views in one layered pass (reflection probes' faces, renderer/probes.rs): every
+// Many square views in one layered pass (reflection probes' faces, probes/faces.rs): every
 // view is a tile of one atlas G-buffer. Instance `i` is scene instance `i / views` seen by view
 // `i % views`; its clip position is moved into the view's tile and four clip distances keep
 // the triangle there (seed 000's layered rendering on colour targets, as the layered shadow

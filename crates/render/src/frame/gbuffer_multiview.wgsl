@@ -1,6 +1,6 @@
 // Stereo in one multiview pass (frame/eyes.rs): the pass draws into layer `view_index` of
-// two-layer targets, one per eye, each at the origin (gbuffer.rs then copies each layer into
-// its eye's half). Instance `i` is scene instance `i`, drawn once for both views.
+// two-layer targets, one per eye, each at the origin (gbuffer_record.rs then copies each layer
+// into its eye's half). Instance `i` is scene instance `i`, drawn once for both views.
 
 @vertex
 fn vs_multiview(

@@ -1,5 +1,5 @@
 // One round of the probe faces' cluster cull and its draw (gbuffer_pull.rs), shared by the
-// cull (renderer/probe_clusters.wgsl) and the G-buffer's vertex shader
+// cull (probes/clusters.wgsl) and the G-buffer's vertex shader
 // (gbuffer_face_clusters.wgsl).
 struct FaceDrawParams {
     // first face of the round, faces in the round, first cluster of the round, clusters in it

@@ -9,5 +9,4 @@ pub mod gbuffer_pull;
 pub mod gbuffer_readback;
 mod gbuffer_record;
 pub mod gbuffer_shaders;
-pub mod motion;
 pub mod visibility_mask;

@@ -546,11 +546,9 @@ impl RenderError {
 }
 
 /// True for drivers whose multiview loses the view index of primitives that go through the
-/// clipper (they all land in layer 0): Mesa's lavapipe before 25 (22.3.6: a point light's
-/// cube faces, whose floor crosses the frustum, came out as the union of all six faces in
-/// layer 0, while groups whose triangles needed no clipping were exact). Mesa 25.0.7's
-/// lavapipe routes them right (`tests/equivalence.rs` renders six views per pass there).
-/// A lavapipe whose Mesa version cannot be read counts as affected.
+/// clipper (they all land in layer 0): Mesa's lavapipe before Mesa 25, which then gets one
+/// view per multiview pass. A lavapipe whose Mesa version cannot be read counts as affected
+/// (docs/decisions.md, "Multiview: lavapipe's clipper and at most 31 views").
 pub fn clips_into_layer_zero(info: &wgpu::AdapterInfo) -> bool {
     info.backend == wgpu::Backend::Vulkan
         && info.name.to_lowercase().contains("llvmpipe")
@@ -565,6 +563,7 @@ pub(crate) fn mesa_major(driver_info: &str) -> Option<u32> {
 
 /// Most views of one pass. wgpu 30 takes a pipeline's view mask as "views 0..n" only when
 /// `mask + 1` is a power of two, which wraps to 0 for all 32 views and then asks for
-/// `SELECTIVE_MULTIVIEW` (an NVIDIA driver that offers 32 views failed so): 31 is the most
-/// views a mask of the plain `MULTIVIEW` feature can name.
+/// `SELECTIVE_MULTIVIEW`, which the renderer does not enable: 31 is the most views a mask of
+/// the plain `MULTIVIEW` feature can name (docs/decisions.md, "Multiview: lavapipe's clipper
+/// and at most 31 views").
 pub const MAX_MULTIVIEW_VIEWS: u32 = 31;

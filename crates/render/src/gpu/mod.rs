@@ -6,6 +6,7 @@
 //! the WGSL files beside the modules that own them ([`shaders`]), and the fence that orders
 //! draws before compute passes on OpenGL (`raster_fence`).
 
+pub mod bindings;
 pub(crate) mod buffers;
 pub mod context;
 pub(crate) mod pipelines;

@@ -6,9 +6,9 @@
 //! writes a buffer a pending draw reads can change it under the draw. wgpu's OpenGL backend
 //! emits `glMemoryBarrier` only after storage writes (WebGPU's rules need none between a
 //! render attachment and a later read), and llvmpipe's `glMemoryBarrier` finishes every
-//! pending draw. Measured (cubes, 8 lights, 320×180, llvmpipe GL, Mesa 25.0.7): the second
-//! frame of a renderer differed from its first in 12 of 200 renderers; the clusters' marking
-//! read a G-buffer whose last draws had not landed.
+//! pending draw. Without the fence a renderer's second frame could differ from its first:
+//! the clusters' marking read a G-buffer whose last draws had not landed (docs/decisions.md,
+//! "On OpenGL every compute pass of a frame starts with a fence").
 //!
 //! The fence is a compute pass of two dispatches that write one word of a storage buffer:
 //! between the two, wgpu sees a storage write followed by another and emits the barrier in

@@ -1,7 +1,7 @@
-// Alpha-tested shadow casters (casters.rs, manyshadows_scene::masks): whether a caster's
+// Alpha-tested shadow casters (caster_layout.rs, manyshadows_scene::masks): whether a caster's
 // surface exists at a point. Composed after common.wgsl into the shaders of every technique;
 // each declares `corners: array<u32>`, the caster corner buffer, whose *mask tail* holds what
-// is read here (casters.rs `mask_tail`): per masked caster vertex its texture coordinate and
+// is read here (caster_layout.rs `mask_tail`): per masked caster vertex its texture coordinate and
 // material, per material a mask record, the coverage bits, and a header in the last 4 words.
 // The lookup is the nearest texel of the wrapped coordinate at full resolution, the same
 // arithmetic as `MaskSet::covered` in Rust (the CPU reference).

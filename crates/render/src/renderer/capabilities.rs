@@ -5,7 +5,7 @@
 use super::state::Renderer;
 use crate::frame::eyes::EyePasses;
 use crate::gpu::context::GpuContext;
-use crate::shading::probes::ProbePasses;
+use crate::probes::maps::ProbePasses;
 
 impl Renderer {
     /// What `ctx`'s device lacks to draw a stereo frame's eyes `passes`' way, and what for

@@ -21,12 +21,12 @@
 //!   acceleration structure, for rays.
 
 use super::state::Renderer;
-use crate::error::{Fills, Technique};
 use crate::frame::clusters::ClusterOptions;
 use crate::frame::eyes::Eyes;
-use crate::report::{EstimatedWork, FrameEstimate};
+use crate::report::FrameEstimate;
+use crate::sampled::options::SpatialReuse;
 use crate::settings::RenderSettings;
-use crate::shadows::descriptor::Culling;
+use crate::shadows::cost::{price, EstimatedWork, LightingRead};
 use glam::{Vec3, Vec3A};
 use manyshadows_scene::{LightKind, Scene};
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
@@ -38,11 +38,12 @@ use obvhs::BvhBuildParams;
 /// Columns and rows of the camera rays that find what the camera sees.
 const GRID: (u32, u32) = (64, 36);
 
-/// Milliseconds per unit of work on llvmpipe (LLVM 15, Mesa 25.0.7) through Vulkan with 2
-/// cores: least squares on the relative error of each stage over 189 measured frames
-/// (`manyshadows bench estimate`: the atrium, the courtyard and the terrain; 8, 64 and 1,024
-/// lights, soft and hard, at 320×180, and 64 lights at 640×360; every technique). Each row
-/// lists its units in order; a 0 is a unit the fit found no cost in.
+/// Milliseconds per unit of work of the stages every technique shares, on llvmpipe (LLVM 15,
+/// Mesa 25.0.7) through Vulkan with 2 cores: least squares on the relative error of each stage
+/// over frames of every technique (`manyshadows bench estimate`; docs/benchmarks.md, "The
+/// frame estimate"). Each technique's shadow stage is priced by its own declaration
+/// (`TechniqueInfo::cost`). Each row lists its units in order; a 0 is a unit the fit found no
+/// cost in.
 struct Costs {
     /// G-buffer: pixels, camera triangles, fixed.
     gbuffer: [f64; 3],
@@ -51,26 +52,12 @@ struct Costs {
     /// Lighting with maps (atlas, pages): pixels, (pixel, light) pairs of the cluster loop,
     /// fixed, pairs in reach, pairs in reach × extra depth taps.
     lighting_maps: [f64; 5],
-    /// Lighting from a mask (irregular maps): pixels, loop pairs, fixed, pairs in reach.
+    /// Lighting from a mask: pixels, loop pairs, fixed, pairs in reach.
     lighting_mask: [f64; 4],
     /// Lighting with shadow rays: pixels, loop pairs, fixed, rays, rays × triangles a ray
     /// tests, rays × (triangles a ray tests)² (the fit found no cost in the linear term; a
     /// term for the instance boxes a ray crosses found none either and was dropped).
     lighting_rays: [f64; 6],
-    /// Atlas shadows, per kind of technique (culling whole instances, clusters, in the vertex
-    /// stage of one pass, in the vertex stage of multiview passes, per thread): (triangle,
-    /// view) pairs taken on, (instance, view) pairs, texels of the tiles, texels of the whole
-    /// atlas, views, fixed.
-    atlas: [[f64; 6]; 5],
-    /// Irregular shadows: (triangle, view) pairs, (instance, view) pairs, (pixel, light)
-    /// samples, fixed.
-    irregular: [f64; 4],
-    /// Virtual shadows (pages and drawing): (triangle, face) pairs after culling whole
-    /// instances, (instance, face) pairs, (pixel, light) pairs marked, those × extra taps
-    /// (penumbrae ask coarser pages), fixed.
-    virtual_maps: [f64; 5],
-    /// Acceleration structure: instances, fixed.
-    accel: [f64; 2],
 }
 
 const LAVAPIPE: Costs = Costs {
@@ -79,17 +66,38 @@ const LAVAPIPE: Costs = Costs {
     lighting_maps: [5.91e-05, 8.49e-06, 0.0, 6.19e-06, 2.41e-06],
     lighting_mask: [7.92e-07, 5.32e-06, 2.63, 1.46e-06],
     lighting_rays: [1.52e-04, 8.27e-06, 0.0, 1.14e-05, 0.0, 4.43e-05],
-    atlas: [
-        [3.30e-05, 2.57e-02, 3.84e-06, 0.0, 0.0, 0.0],
-        [3.83e-06, 5.49e-03, 0.0, 9.67e-07, 0.0, 0.0],
-        [9.91e-05, 0.0, 0.0, 8.89e-07, 0.0, 0.0],
-        [7.27e-05, 8.92e-02, 4.47e-06, 0.0, 0.0, 0.0],
-        [1.59e-05, 4.45e-02, 2.90e-06, 4.98e-06, 0.0, 0.0],
-    ],
-    irregular: [2.60e-05, 5.06e-02, 3.29e-04, 1.58e+02],
-    virtual_maps: [1.13e-06, 4.49e-03, 3.03e-05, 9.82e-07, 1.41e+01],
-    accel: [0.0, 8.13e-02],
 };
+
+impl Costs {
+    /// The lighting pass over `pixels` with `loop_pairs` visited, `pairs` in reach paying
+    /// `tap_pairs` extra taps, or `rays` testing `ray_weight` triangles each, as `read` says.
+    fn lighting(
+        &self,
+        read: LightingRead,
+        (pixels, loop_pairs, fixed): (f64, f64, f64),
+        (pairs, tap_pairs): (f64, f64),
+        (rays, ray_weight): (f64, f64),
+    ) -> f64 {
+        match read {
+            LightingRead::Rays => price(
+                &self.lighting_rays,
+                &[
+                    pixels,
+                    loop_pairs,
+                    fixed,
+                    rays,
+                    rays * ray_weight,
+                    rays * ray_weight * ray_weight,
+                ],
+            ),
+            LightingRead::Mask => price(&self.lighting_mask, &[pixels, loop_pairs, fixed, pairs]),
+            LightingRead::Maps => price(
+                &self.lighting_maps,
+                &[pixels, loop_pairs, fixed, pairs, tap_pairs],
+            ),
+        }
+    }
+}
 
 impl Renderer {
     /// What the next frame is estimated to cost, per stage, before it is drawn: its work
@@ -98,62 +106,21 @@ impl Renderer {
     pub fn estimate_frame(&self) -> FrameEstimate {
         let work = self.estimated_work();
         let c = &LAVAPIPE;
-        let technique = self.settings.technique;
-        let info = technique.info();
+        let cost = self.settings.technique.info().cost;
         let w = &work;
-        let lin = |k: &[f64], x: &[f64]| k.iter().zip(x).map(|(k, x)| k * x).sum::<f64>();
         let (px, pairs, rays) = (w.pixels as f64, w.pixel_lights as f64, w.rays as f64);
-        let (tv, iv) = (w.triangle_views as f64, w.instance_views as f64);
-        let lights = [px, w.cluster_lights as f64, 1.0];
-        let gbuffer_ms = lin(&c.gbuffer, &[px, w.triangles as f64, 1.0]);
-        let clusters_ms = lin(&c.clusters, &[px, w.lights as f64, 1.0]);
-        let taps = pairs * f64::from(w.taps);
-        let lighting_ms = match info.fills {
-            Fills::Rays => lin(
-                &c.lighting_rays,
-                &[
-                    lights[0],
-                    lights[1],
-                    lights[2],
-                    rays,
-                    rays * w.ray_weight,
-                    rays * w.ray_weight * w.ray_weight,
-                ],
-            ),
-            Fills::Mask => lin(&c.lighting_mask, &[lights[0], lights[1], lights[2], pairs]),
-            _ => lin(
-                &c.lighting_maps,
-                &[lights[0], lights[1], lights[2], pairs, taps],
-            ),
-        };
-        let shadows_ms = match info.fills {
-            Fills::Atlas => {
-                let k = match info.culling {
-                    _ if technique == Technique::MULTIVIEW => 3,
-                    Culling::Instances | Culling::NoViews => 0,
-                    Culling::Clusters => 1,
-                    Culling::VertexStage => 2,
-                    Culling::Threads => 4,
-                };
-                lin(
-                    &c.atlas[k],
-                    &[
-                        tv,
-                        iv,
-                        w.atlas_texels as f64,
-                        w.atlas_area as f64,
-                        w.views as f64,
-                        1.0,
-                    ],
-                )
-            }
-            Fills::Mask => lin(&c.irregular, &[tv, iv, pairs, 1.0]),
-            Fills::Pages => lin(&c.virtual_maps, &[tv, iv, pairs, taps, 1.0]),
-            Fills::Rays => lin(&c.accel, &[w.instances as f64, 1.0]),
-        };
+        let gbuffer_ms = price(&c.gbuffer, &[px, w.triangles as f64, 1.0]);
+        let clusters_ms = price(&c.clusters, &[px, w.lights as f64, 1.0]);
+        let lighting_ms = c.lighting(
+            cost.lighting,
+            (px, w.cluster_lights as f64, 1.0),
+            (pairs, w.tap_pairs()),
+            (rays, w.ray_weight),
+        );
+        let shadows_ms = (cost.shadows_ms)(w);
         // Probe faces: a G-buffer and a lighting pass each, over every light per texel (no
         // clusters), the pairs in reach and rays at the camera's density per pixel.
-        let probes_ms = self.probes.as_ref().map_or(0.0, |p| {
+        let probes_ms = self.parts.probes.as_ref().map_or(0.0, |p| {
             let stats = p.stats();
             let faces = 6.0 * f64::from(stats.probes);
             let texels = faces * f64::from(stats.side).powi(2);
@@ -164,25 +131,18 @@ impl Renderer {
                 } else {
                     1.0
                 };
-            let gbuffer = lin(&c.gbuffer, &[texels, faces * mono_triangles, faces]);
-            let every = texels * w.lights as f64;
-            let lighting = match info.fills {
-                Fills::Rays => lin(
-                    &c.lighting_rays,
-                    &[
-                        texels,
-                        every,
-                        faces,
-                        rays * k,
-                        rays * k * w.ray_weight,
-                        rays * k * w.ray_weight * w.ray_weight,
-                    ],
-                ),
-                _ => lin(
-                    &c.lighting_maps,
-                    &[texels, every, faces, pairs * k, taps * k],
-                ),
+            let gbuffer = price(&c.gbuffer, &[texels, faces * mono_triangles, faces]);
+            // A face's shadows are read as the camera's are (a mask source draws no faces).
+            let read = match cost.lighting {
+                LightingRead::Mask => LightingRead::Maps,
+                read => read,
             };
+            let lighting = c.lighting(
+                read,
+                (texels, texels * w.lights as f64, faces),
+                (pairs * k, w.tap_pairs() * k),
+                (rays * k, w.ray_weight),
+            );
             gbuffer + lighting
         });
         let calibrated = self.ctx.info.device_type == wgpu::DeviceType::Cpu;
@@ -201,32 +161,20 @@ impl Renderer {
     pub fn estimated_work(&self) -> EstimatedWork {
         let s = &self.settings;
         let scene = &self.current;
-        let technique = s.technique;
-        let info = technique.info();
+        let info = s.technique.info();
         let pixels = u64::from(s.width) * u64::from(s.height);
         let t0 = web_time::Instant::now();
         let sight = sight(scene, s, &s.clusters);
         let pixel_lights = sight.pixel_lights;
         let sized = scene.lights.iter().any(|l| l.size > 0.0 && l.casts_shadows);
+        let source = &self.parts.source;
         // The views the technique fills: the atlas plan's, a virtual map's faces, irregular
-        // maps' light views; none for rays.
-        let faces = match (info.fills, self.virtual_source()) {
-            (Fills::Rays, _) => &[][..],
-            (Fills::Pages, Some(v)) => &v.plan().views[..],
-            _ => &self.source.plan().views[..],
-        };
-        // One count of the views' casters (at 36,499 views and 481 casters it is most of the
-        // estimate's time).
+        // maps' light views; none for rays. One count of the views' casters (at 36,499 views
+        // and 481 casters it is most of the estimate's time).
+        let faces = source.views_filled();
         let (per_view, instance_views) = self.per_view_work(faces);
-        let triangle_views = match info.fills {
-            Fills::Rays => 0,
-            // Virtual maps: every face's casters after culling whole instances per face.
-            Fills::Pages => per_view.after_instance_culling,
-            _ => per_view.triangle_views,
-        };
-        let views = faces.len();
-        let (atlas_texels, atlas_area) = if info.fills == Fills::Atlas {
-            let layout = &self.source.plan().layout;
+        let (atlas_texels, atlas_area) = if source.fills_atlas() {
+            let layout = &source.plan().layout;
             (
                 layout
                     .tiles
@@ -238,23 +186,23 @@ impl Renderer {
         } else {
             (0, 0)
         };
-        let taps = if sized && technique != Technique::IRREGULAR {
+        let taps = if sized && info.soft_shadows {
             s.soft.blocker_taps + s.soft.filter_taps
         } else if s.pcf == crate::shadows::options::Pcf::Pcf3x3 {
             9
         } else {
             0
         };
-        let rays = if info.fills != Fills::Rays {
+        let rays = if info.cost.lighting != LightingRead::Rays {
             0
         } else if s.rays.light_samples > 0 {
             // One point of each sampled light; reuse traces the kept sample too, spatial
             // reuse each neighbour's light from here (unbiased: from every pixel involved).
-            let n = u64::from(crate::shading::reuse::SPATIAL_NEIGHBOURS);
+            let n = u64::from(crate::sampled::reuse::SPATIAL_NEIGHBOURS);
             let spatial = match s.rays.spatial {
-                crate::shadows::raytraced::accel::SpatialReuse::Off => 0,
-                crate::shadows::raytraced::accel::SpatialReuse::Biased => n,
-                crate::shadows::raytraced::accel::SpatialReuse::Unbiased => n + n * n,
+                SpatialReuse::Off => 0,
+                SpatialReuse::Biased => n,
+                SpatialReuse::Unbiased => n + n * n,
             };
             let reuse = if s.rays.reuse { 2 + spatial } else { 1 };
             pixels * u64::from(s.rays.light_samples) * reuse
@@ -271,8 +219,9 @@ impl Renderer {
         EstimatedWork {
             pixels,
             // A stereo frame draws every triangle once per eye.
-            triangles: self.scene.triangles * if s.stereo.is_some() { 2 } else { 1 },
+            triangles: self.parts.scene.triangles * if s.stereo.is_some() { 2 } else { 1 },
             caster_triangles: self
+                .parts
                 .scene
                 .draws
                 .iter()
@@ -283,11 +232,11 @@ impl Renderer {
             lights: scene.lights.len(),
             pixel_lights,
             cluster_lights: sight.cluster_lights,
-            triangle_views,
+            triangle_views: per_view.triangle_views,
             after_instance_culling: per_view.after_instance_culling,
             all_pairs: per_view.all_pairs,
             instance_views,
-            views,
+            views: faces.len(),
             atlas_texels,
             atlas_area,
             taps,

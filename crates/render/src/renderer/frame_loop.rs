@@ -11,15 +11,14 @@ use crate::error::RenderError;
 use crate::frame::visibility_mask::{SoftVisibility, VisibilityMask};
 use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimes, Stage};
-use crate::gpu::types::FrameUniforms;
 use crate::report::{Frame, FrameTimings, SubmittedFrame};
-use crate::shading::lighting::LightingInputs;
 use crate::shadows::source::ShadowStats;
-use crate::shadows::vsm::plan::VirtualStats;
 
 impl Renderer {
-    /// Records one frame up to the lit image (G-buffer, clusters, shadows, lighting) after
-    /// deriving the GPU state from any change; returns the shadow work counters.
+    /// Records one frame after deriving the GPU state from any change, pass by pass in the
+    /// order of the algorithm: the G-buffer, the light clusters, the shadows, the probes'
+    /// faces, the lighting (with what follows it), the denoiser and its composite, the
+    /// visibility mask; returns the shadow work counters.
     fn record_frame(
         &mut self,
         ctx: &GpuContext,
@@ -28,72 +27,83 @@ impl Renderer {
     ) -> Result<ShadowStats, RenderError> {
         self.prepare()?;
         self.timer.reset();
+        self.begin_histories(ctx);
+        self.parts.write_uniforms(ctx);
         let span = self.timer.span(Stage::GBuffer);
-        self.gbuffer.record(encoder, &self.scene, &self.timer, span);
-        if self.clusters.enabled() {
+        let parts = &mut self.parts;
+        parts
+            .gbuffer
+            .record(encoder, &parts.scene, &self.timer, span);
+        if parts.clusters.enabled() {
             let span = self.timer.span(Stage::Clusters);
-            self.clusters.record(encoder, &self.timer, span);
-        }
-        if let Some(m) = &mut self.motion {
-            let instances = &self.current.instances;
-            m.upload(&ctx.queue, |i| instances[i].transform);
-        }
-        if let Some(r) = &mut self.reuse {
-            let cam = self.current.camera;
-            let aspect = self.settings.width as f32 / self.settings.height as f32;
-            r.prepare(
-                ctx,
-                (
-                    cam.projection(aspect) * cam.view(),
-                    cam.position,
-                    cam.fov_y_deg,
-                ),
-                self.current.lights.len(),
-            );
-        }
-        if self.denoiser.is_some() || self.reuse.is_some() {
-            // New random numbers for the rays every frame (FrameUniforms::modes.y).
-            self.frames_denoised = self.frames_denoised.wrapping_add(1);
-            // modes.zw: the denoiser's correction for changed lights, this frame only.
-            let [first, counts] = self.denoiser.as_ref().map_or([0, 0], |d| d.light_fix());
-            ctx.queue.write_buffer(
-                &self.frame_buffer,
-                (std::mem::offset_of!(FrameUniforms, modes) + 4) as u64,
-                bytemuck::cast_slice(&[self.frames_denoised, first, counts]),
-            );
+            parts.clusters.record(encoder, &self.timer, span);
         }
         if let Some(b) = boundary.as_deref_mut() {
             b(encoder, FramePart::Camera)?;
         }
-        let shadow_stats = self
+        let parts = &mut self.parts;
+        let shadow_stats = parts
             .source
-            .record(ctx, &self.scene, encoder, &mut self.timer);
+            .record(ctx, &parts.scene, encoder, &mut self.timer);
         if let Some(b) = boundary {
             b(encoder, FramePart::Shadows)?;
         }
-        if let Some(p) = self.probes.as_mut().filter(|p| p.dirty) {
+        let parts = &mut self.parts;
+        if let Some(p) = parts.probes.as_mut().filter(|p| p.dirty) {
             let span = self.timer.span(Stage::Probes);
-            p.record(encoder, &self.scene, &self.timer, span);
-        } else if let Some(p) = &mut self.probes {
+            p.record(encoder, &parts.scene, &self.timer, span);
+        } else if let Some(p) = &mut parts.probes {
             p.faces_drawn = 0;
         }
         let span = self.timer.span(Stage::Lighting);
         self.lighting.record(encoder, &self.timer, span);
-        if let Some(d) = &mut self.denoiser {
-            let cam = self.current.camera;
-            let aspect = self.settings.width as f32 / self.settings.height as f32;
-            let view_proj = cam.projection(aspect) * cam.view();
+        if let Some(d) = &mut self.parts.denoiser {
             let span = self.timer.span(Stage::Denoise);
             d.record(
                 ctx,
                 encoder,
-                (view_proj, cam.position, cam.fov_y_deg),
+                camera_of(&self.current, &self.settings),
                 &self.timer,
                 span,
             );
-            self.lighting.record_composite(encoder, &self.timer, span);
+            self.lighting.record_own(
+                crate::sampled::denoise::COMPOSITE,
+                encoder,
+                &self.timer,
+                span,
+            );
+        }
+        if let Some(v) = &mut self.visibility {
+            let span = self.timer.span(Stage::Visibility);
+            v.record(ctx, encoder, &self.timer, span);
         }
         Ok(shadow_stats)
+    }
+
+    /// Before a frame's passes: the sampled lights' histories take in what moved (the
+    /// instances' motion, the camera the reservoirs reproject from) and the frame's numbers
+    /// for their rays (`FrameUniforms::modes.yzw`: the frame's number, new random numbers
+    /// each frame, and the denoiser's correction for changed lights, this frame only).
+    fn begin_histories(&mut self, ctx: &GpuContext) {
+        let parts = &mut self.parts;
+        if let Some(m) = &mut parts.motion {
+            let instances = &self.current.instances;
+            m.upload(&ctx.queue, |i| instances[i].transform);
+        }
+        if let Some(r) = &mut parts.reuse {
+            r.prepare(
+                ctx,
+                camera_of(&self.current, &self.settings),
+                self.current.lights.len(),
+            );
+        }
+        if parts.denoiser.is_some() || parts.reuse.is_some() {
+            self.frames_denoised = self.frames_denoised.wrapping_add(1);
+            let [first, counts] = parts.denoiser.as_ref().map_or([0, 0], |d| d.light_fix());
+            parts.uniforms.modes[1] = self.frames_denoised;
+            parts.uniforms.modes[2] = first;
+            parts.uniforms.modes[3] = counts;
+        }
     }
 
     /// Starts a frame: a new encoder with the frame recorded up to the lit image.
@@ -144,8 +154,8 @@ impl Renderer {
     /// any normalized or float colour format, sRGB or not: a window's surface texture, say),
     /// and submits it without reading anything back. The caller presents or samples the
     /// texture after this returns; [`Renderer::render`] is the same frame read back to the CPU.
-    /// With [`Technique::IRREGULAR`](crate::error::Technique::IRREGULAR) this waits for the
-    /// frame's overflow check (an overflowed frame is an error, never a wrong image).
+    /// A source that checks its frame after submission (irregular maps' node pool) waits for
+    /// it here (an overflowed frame is an error, never a wrong image).
     pub fn render_to(&mut self, target: &wgpu::Texture) -> Result<SubmittedFrame, RenderError> {
         let ctx = &*self.ctx.clone();
         ctx.scoped("rendering a frame into the caller's texture", || {
@@ -183,7 +193,7 @@ impl Renderer {
                 });
                 self.timings.pending.push_back((staging, spans, state));
             }
-            self.source.finish(ctx)?;
+            self.parts.source.finish(ctx)?;
             Ok(SubmittedFrame {
                 shadow_stats,
                 cpu_record_ms: start.elapsed().as_secs_f64() * 1e3,
@@ -229,6 +239,36 @@ impl Renderer {
         newest
     }
 
+    /// The last submitted frame's hard visibility mask, one bit per pixel and light, and how
+    /// much of each light reaches each pixel, where [`RenderSettings::visibility`] and
+    /// [`RenderSettings::soft_visibility`] ask for them (`None` otherwise): from the frame's
+    /// visibility pass, or the source's own mask (a hard answer, also as soft visibility).
+    /// [`Renderer::render`] reads them into its [`Frame`]; after [`Renderer::render_to`] this
+    /// reads them (waiting for that frame).
+    ///
+    /// [`RenderSettings::visibility`]: crate::RenderSettings::visibility
+    /// [`RenderSettings::soft_visibility`]: crate::RenderSettings::soft_visibility
+    pub fn read_visibility(
+        &self,
+    ) -> Result<(Option<VisibilityMask>, Option<SoftVisibility>), RenderError> {
+        let ctx = &*self.ctx;
+        Ok(match &self.visibility {
+            Some(pass) => match pass.read(ctx)? {
+                Some((mask, soft)) => (Some(mask), soft),
+                None => (None, None),
+            },
+            None if self.settings.visibility || self.settings.soft_visibility => {
+                let mask = self.parts.source.read_mask(ctx)?;
+                let soft = mask
+                    .as_ref()
+                    .filter(|_| self.settings.soft_visibility)
+                    .map(SoftVisibility::from_mask);
+                (mask, soft)
+            }
+            None => (None, None),
+        })
+    }
+
     /// Renders one frame and reads it back.
     pub fn render(&mut self) -> Result<Frame, RenderError> {
         self.render_frame(None)
@@ -260,48 +300,21 @@ impl Renderer {
                 p(FramePart::Lighting);
             }
             let wall_ms = start.elapsed().as_secs_f64() * 1e3;
-            let clusters = if self.clusters.enabled() {
-                Some(self.clusters.read_stats(ctx)?)
+            let clusters = if self.parts.clusters.enabled() {
+                Some(self.parts.clusters.read_stats(ctx)?)
             } else {
                 None
             };
             // A source whose frame went wrong (irregular's full node pool) makes it an error,
             // never a wrong image.
-            self.source.finish(ctx)?;
+            self.parts.source.finish(ctx)?;
             let virtual_maps = self
+                .parts
                 .source
                 .technique_stats(ctx)?
-                .and_then(|s| s.downcast::<VirtualStats>().ok())
+                .and_then(|s| s.downcast().ok())
                 .map(|s| *s);
-            let (visibility, soft_visibility) = match &self.visibility {
-                Some(pass) => {
-                    let span = self.timer.span(Stage::Visibility);
-                    let inputs = LightingInputs {
-                        frame: &self.frame_buffer,
-                        lights: &self.lights,
-                        materials: &self.scene.materials,
-                        gbuffer: &self.gbuffer,
-                        clusters: &self.clusters,
-                        shadows: self.source.output(),
-                        denoise: None,
-                        reuse: None,
-                        probes: None,
-                    };
-                    let (mask, soft) = pass.run(ctx, &inputs, &self.timer, span)?;
-                    (Some(mask), soft)
-                }
-                // The source's output is the mask itself: a hard answer, also as soft
-                // visibility.
-                None if self.settings.visibility || self.settings.soft_visibility => {
-                    let mask = self.source.read_mask(ctx)?;
-                    let soft = mask
-                        .as_ref()
-                        .filter(|_| self.settings.soft_visibility)
-                        .map(SoftVisibility::from_mask);
-                    (mask, soft)
-                }
-                None => (None, None),
-            };
+            let (visibility, soft_visibility) = self.read_visibility()?;
             let gpu_ms = self.resolve_timings(ctx)?;
             debug_assert!(visibility
                 .as_ref()
@@ -320,7 +333,7 @@ impl Renderer {
                 shadow_stats,
                 clusters,
                 virtual_maps,
-                probes: self.probes.as_ref().map(|p| p.stats()),
+                probes: self.parts.probes.as_ref().map(|p| p.stats()),
             })
         })
     }
@@ -347,6 +360,21 @@ impl FramePart {
             FramePart::Lighting => "lighting",
         }
     }
+}
+
+/// The camera's world → clip, position and vertical field of view (what the histories
+/// reproject with).
+fn camera_of(
+    scene: &manyshadows_scene::Scene,
+    s: &crate::settings::RenderSettings,
+) -> (glam::Mat4, glam::Vec3, f32) {
+    let cam = scene.camera;
+    let aspect = s.width as f32 / s.height as f32;
+    (
+        cam.projection(aspect) * cam.view(),
+        cam.position,
+        cam.fov_y_deg,
+    )
 }
 
 /// Submits the frame recorded so far and starts a new encoder at a part's end.

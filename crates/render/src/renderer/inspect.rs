@@ -8,10 +8,8 @@ use crate::frame::visibility_mask::SoftVisibility;
 use crate::gpu::context::GpuContext;
 use crate::report::{ShadowLayout, ShadowWork};
 use crate::settings::RenderSettings;
-use crate::shading::lighting::{LightingInputs, LightingPass};
-use crate::shading::look::ShadingConsts;
+use crate::shading::lighting::LightingPass;
 use crate::shadows::image::ShadowPicture;
-use crate::shadows::vsm::source::VirtualSource;
 use manyshadows_scene::Scene;
 use wgpu::util::DeviceExt;
 
@@ -19,37 +17,43 @@ impl Renderer {
     /// The shadow views and atlas layout.
     #[cfg(feature = "internals")]
     pub fn plan(&self) -> &crate::shadows::plan::ShadowPlan {
-        self.source.plan()
+        self.parts.source.plan()
     }
 
-    /// The faces of [`Technique::VIRTUAL`](crate::error::Technique::VIRTUAL) (`None` for
-    /// other techniques).
-    #[cfg(feature = "internals")]
-    pub fn virtual_plan(&self) -> Option<&crate::shadows::vsm::plan::VirtualPlan> {
-        self.virtual_source().map(VirtualSource::plan)
+    /// The frame's shadow source as `T`, where the technique's source is one (the facade's
+    /// accessors of one technique's own read-backs use it).
+    pub(crate) fn source_as<T: 'static>(&self) -> Option<&T> {
+        (&*self.parts.source as &dyn std::any::Any).downcast_ref::<T>()
     }
 
-    /// The source as virtual maps, where the technique is `virtual`.
-    pub(super) fn virtual_source(&self) -> Option<&VirtualSource> {
-        (&*self.source as &dyn std::any::Any).downcast_ref::<VirtualSource>()
+    /// The technique's own counters of the last frame as `T` (its declaration's type of them:
+    /// `VirtualStats`, `IrregularStats`), or `None` where the technique keeps none of that type
+    /// or reading them failed.
+    pub fn technique_stats<T: std::any::Any + Copy>(&self) -> Option<T> {
+        self.parts
+            .source
+            .technique_stats(&self.ctx)
+            .ok()
+            .flatten()
+            .and_then(|s| s.downcast::<T>().ok())
+            .map(|s| *s)
     }
 
     /// Shadow views of the current plan: every atlas tile, or every virtual face (a spot
     /// light's frustum, a cube face, a cascade).
     pub fn shadow_views(&self) -> usize {
-        self.source.view_count()
+        self.parts.source.view_count()
     }
 
     /// What holds the shadows: the kind, how many views, and the side of the texture they
     /// are read from.
     pub fn shadow_layout(&self) -> ShadowLayout {
-        let fills = self.settings.technique.info().fills;
-        let plan = self.source.plan();
+        let source = &self.parts.source;
         ShadowLayout {
-            fills,
+            fills: self.settings.technique.info().fills,
             views: self.shadow_views(),
-            side: self.source.output().depth_side,
-            atlas_fill: (fills == crate::error::Fills::Atlas).then(|| plan.fill() as f32),
+            side: source.output().depth_side,
+            atlas_fill: source.fills_atlas().then(|| source.plan().fill() as f32),
         }
     }
 
@@ -60,12 +64,8 @@ impl Renderer {
     /// thread per pair), so they count every pair too. `None` for techniques whose work is not
     /// per view: rays, and virtual pages made on the GPU.
     pub fn shadow_work(&self) -> Option<ShadowWork> {
-        use crate::shadows::descriptor::Culling;
-        let info = self.settings.technique.info();
-        let culling = info.culling;
-        let views = &self.source.plan().views;
-        let per_pair_mask = culling == Culling::NoViews && info.fills == crate::error::Fills::Mask;
-        if (culling == Culling::NoViews && !per_pair_mask) || views.is_empty() {
+        let views = &self.parts.source.plan().views;
+        if views.is_empty() {
             return None;
         }
         Some(self.per_view_work(views).0)
@@ -79,6 +79,7 @@ impl Renderer {
     ) -> (ShadowWork, u64) {
         use crate::shadows::descriptor::Culling;
         let per_view: u64 = self
+            .parts
             .scene
             .draws
             .iter()
@@ -103,6 +104,7 @@ impl Renderer {
     /// instances per view by bounding sphere.
     fn instance_pairs(&self, views: &[manyshadows_scene::light_space::ShadowView]) -> (u64, u64) {
         let casters: Vec<_> = self
+            .parts
             .scene
             .draws
             .iter()
@@ -126,7 +128,7 @@ impl Renderer {
     /// dark blue), at most 2048² (larger ones are shown every n-th texel). A technique that
     /// keeps neither answers [`RenderError::NoAtlas`].
     pub fn shadow_picture(&self) -> Result<ShadowPicture, RenderError> {
-        self.source.picture(&self.ctx)
+        self.parts.source.picture(&self.ctx)
     }
 
     /// The settings in use.
@@ -151,7 +153,7 @@ impl Renderer {
 
     /// Triangles in the scene (over all instances).
     pub fn triangles(&self) -> u64 {
-        self.scene.triangles
+        self.parts.scene.triangles
     }
 
     /// The GPU context.
@@ -162,34 +164,19 @@ impl Renderer {
     /// The world-space shadow-caster geometry (its back-face culling decisions included).
     #[cfg(feature = "internals")]
     pub fn casters(&self) -> &crate::gpu_scene::casters::CasterGeometry {
-        self.source.casters()
+        self.parts.source.casters()
     }
 
     /// The shadow atlas.
     #[cfg(feature = "internals")]
     pub fn atlas(&self) -> &crate::shadows::storage::ShadowAtlas {
-        self.source.atlas()
+        self.parts.source.atlas()
     }
 
     /// The scene as the next frame will render it (camera, lights and instance transforms as
     /// last set).
     pub fn scene(&self) -> &Scene {
         &self.current
-    }
-
-    /// Counters of the last frame of irregular shadow maps
-    /// ([`Technique::IRREGULAR`](crate::error::Technique::IRREGULAR); `None` for other
-    /// techniques).
-    pub fn irregular_stats(&self) -> Option<crate::shadows::irregular::maps::IrregularStats> {
-        self.source
-            .technique_stats(&self.ctx)
-            .ok()
-            .flatten()
-            .and_then(|s| {
-                s.downcast::<crate::shadows::irregular::maps::IrregularStats>()
-                    .ok()
-            })
-            .map(|s| *s)
     }
 
     /// The last frame [`Renderer::render`] produced, shaded again with `visibility` instead
@@ -230,24 +217,14 @@ impl Renderer {
                     contents: &bytes,
                     usage: wgpu::BufferUsages::STORAGE,
                 });
-            let mut shadows = self.source.output();
-            shadows.mask = Some(&fractions);
-            let inputs = LightingInputs {
-                frame: &self.frame_buffer,
-                lights: &self.lights,
-                materials: &self.scene.materials,
-                gbuffer: &self.gbuffer,
-                clusters: &self.clusters,
-                shadows,
-                denoise: None,
-                reuse: None,
-                probes: self.probes.as_ref().map(|p| &p.maps),
-            };
-            let consts = ShadingConsts {
-                emission_texture: self.gbuffer.emission.is_some(),
-                probes: self.probes.is_some(),
-                ..self.settings.look.resolve(&self.current).consts()
-            };
+            let mut inputs = self.parts.lighting();
+            inputs.frame.shadows.mask = Some(&fractions);
+            // A frame shaded with given fractions: no sampled lights, their histories are
+            // the frame's own (the probes' reflections stay).
+            let probes = inputs.parts.pop().expect("the probes' part is last");
+            inputs.parts = crate::sampled::lighting_parts(None, None);
+            inputs.parts.push(probes);
+            let consts = self.parts.shading_consts(&self.current, &self.settings);
             let pass = LightingPass::with_fractions(ctx, &inputs, (w, h), &consts);
             let mut encoder = ctx
                 .device
@@ -264,7 +241,7 @@ impl Renderer {
     /// the last frame left it: linear radiance per texel, rows from the top, `side`² texels
     /// (see [`crate::Frame::probes`]).
     pub fn read_probe_face(&self, probe: usize, face: usize) -> Result<Vec<[f32; 4]>, RenderError> {
-        let Some(p) = &self.probes else {
+        let Some(p) = &self.parts.probes else {
             return Err(RenderError::NotImplemented {
                 what: "reading a probe face of a scene without probes",
                 instead: "give the scene probes (Scene::probes)",
@@ -277,7 +254,7 @@ impl Renderer {
                 expected: "an existing probe and a face 0..6",
             });
         }
-        let layer = crate::shading::probes::ProbeMaps::layer(probe, face);
+        let layer = crate::probes::maps::ProbeMaps::layer(probe, face);
         let bytes = crate::gpu::readback::read_texture_layer(&self.ctx, &p.maps.faces, 8, layer)?;
         Ok(bytes
             .chunks_exact(8)
@@ -293,7 +270,7 @@ impl Renderer {
     /// how many it kept, and how many it was offered (`None` when the faces are drawn another
     /// way). A read-back, for tests and inspection.
     pub fn probe_clusters_kept(&self) -> Result<Option<(u64, u64)>, RenderError> {
-        match &self.probes {
+        match &self.parts.probes {
             Some(p) => p.clusters_kept(&self.ctx),
             None => Ok(None),
         }
@@ -302,7 +279,7 @@ impl Renderer {
     /// With probe faces drawn GPU-driven: the cull + draw rounds the last frame that drew
     /// them ran (`None` when the faces are drawn another way).
     pub fn probe_cluster_rounds(&self) -> Option<usize> {
-        Some(self.probes.as_ref()?.face_clusters()?.rounds())
+        Some(self.parts.probes.as_ref()?.face_clusters()?.rounds())
     }
 
     /// Test only (feature `test-hooks`): caps the indirect commands of one round of
@@ -310,7 +287,12 @@ impl Renderer {
     /// in the next frame; false when the faces are drawn another way.
     #[cfg(feature = "test-hooks")]
     pub fn cap_probe_cluster_rounds(&mut self, commands: u64) -> bool {
-        let Some(c) = self.probes.as_mut().and_then(|p| p.face_clusters_mut()) else {
+        let Some(c) = self
+            .parts
+            .probes
+            .as_mut()
+            .and_then(|p| p.face_clusters_mut())
+        else {
             return false;
         };
         c.cap_round_commands(commands);
@@ -322,48 +304,13 @@ impl Renderer {
     /// Reads the G-buffer of the last frame [`Renderer::render`] produced (before the first
     /// frame every pixel reads as uncovered).
     pub fn read_gbuffer(&self) -> Result<GBufferData, RenderError> {
-        GBufferData::read(self.context(), &self.gbuffer)
+        GBufferData::read(self.context(), &self.parts.gbuffer)
     }
 
     /// Reads the depth atlas back (`size`² floats, row-major); techniques that fill no atlas
     /// (`irregular`, `virtual`) answer [`RenderError::NoAtlas`].
     pub fn read_atlas(&self) -> Result<Vec<f32>, RenderError> {
-        self.source.read_atlas(&self.ctx)
-    }
-
-    /// Reads the virtual maps' page pool back: `(side, side² depths)`, row-major from the
-    /// top-left texel, as the last frame left it. Only
-    /// [`Technique::VIRTUAL`](crate::error::Technique::VIRTUAL) has one.
-    pub fn read_page_pool(&self) -> Result<(u32, Vec<f32>), RenderError> {
-        match self.virtual_source() {
-            Some(v) => v.read_pool(&self.ctx),
-            None => Err(self.no_page_pool()),
-        }
-    }
-
-    /// Reads the virtual maps' page table back as the last frame left it: first, per entry
-    /// (`VirtualStats::fit.table_entries` of them), the page it got — a pool page, or a marker
-    /// for none or denied — then per entry the farthest receiver's depth key, then the drawn
-    /// cells (the buffer may hold more words than that). Equal tables mean the same pages in
-    /// the same pool places. Only [`Technique::VIRTUAL`](crate::error::Technique::VIRTUAL)
-    /// has one.
-    pub fn read_page_table(&self) -> Result<Vec<u32>, RenderError> {
-        match self.virtual_source() {
-            Some(v) => v.read_table(&self.ctx),
-            None => Err(self.no_page_pool()),
-        }
-    }
-
-    /// [`RenderError::NoPagePool`] for this renderer's technique, naming those with a pool.
-    fn no_page_pool(&self) -> RenderError {
-        RenderError::NoPagePool {
-            technique: self.settings.technique,
-            with_pool: crate::registry::TECHNIQUES
-                .iter()
-                .filter(|i| i.fills == crate::error::Fills::Pages)
-                .map(|i| i.technique.name())
-                .collect(),
-        }
+        self.parts.source.read_atlas(&self.ctx)
     }
 }
 

@@ -21,8 +21,7 @@ mod capabilities;
 mod estimate;
 mod frame_loop;
 mod inspect;
-mod probe_clusters;
-mod probes;
+mod parts;
 mod state;
 mod uniforms;
 

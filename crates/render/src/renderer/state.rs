@@ -1,22 +1,15 @@
 //! The renderer: creation, the frame's state and its setters, and deriving the GPU state
 //! from their changes (the frames themselves: `frame_loop`).
 
-use super::uniforms::{frame_uniforms, lights_or_placeholder};
-use crate::shading::look::ShadingConsts;
-
 use manyshadows_scene::{Camera, Light, Scene, SceneError};
-use wgpu::util::DeviceExt;
 
-use super::probes::ProbeFrame;
+use super::parts::FrameParts;
+use super::uniforms::{frame_uniforms, lights_or_placeholder};
 use crate::error::RenderError;
-use crate::frame::clusters::{LightClusters, LightLoop};
-use crate::frame::gbuffer::{GBuffer, GBufferViews};
 use crate::gpu::context::GpuContext;
 use crate::gpu::timing::GpuTimer;
-use crate::gpu::types::FrameUniforms;
-use crate::gpu_scene::instances::GpuScene;
 use crate::settings::RenderSettings;
-use crate::shading::lighting::{LightingInputs, LightingPass};
+use crate::shading::lighting::LightingPass;
 use crate::shading::visibility::VisibilityPass;
 use crate::shadows::plan::DEFAULT_MAX_ATLAS_SIZE;
 use crate::shadows::source::{ShadowSource, SourceInputs};
@@ -51,14 +44,9 @@ pub struct Renderer {
     /// increment per frame, no copy of the adapter's description).
     pub(super) ctx: std::sync::Arc<GpuContext>,
     pub(super) settings: RenderSettings,
-    pub(super) scene: GpuScene,
-    /// Where the frame's shadows come from (atlas, page pool or visibility mask).
-    pub(super) source: Box<dyn ShadowSource>,
-    pub(super) frame_buffer: wgpu::Buffer,
-    pub(super) lights: wgpu::Buffer,
-    pub(super) gbuffer: GBuffer,
+    /// Everything the frame's passes read (`parts.rs`).
+    pub(super) parts: FrameParts,
     pub(super) lighting: LightingPass,
-    pub(super) clusters: LightClusters,
     /// The visibility pass, when asked for and the source's output is not the mask itself.
     pub(super) visibility: Option<VisibilityPass>,
     /// Copies frames into callers' textures ([`Renderer::render_to`]); built on first use.
@@ -70,19 +58,10 @@ pub struct Renderer {
     pub(super) current: Scene,
     /// True when `current` changed since the GPU state was last derived from it.
     pub(super) dirty: bool,
-    /// The denoiser of sampled shadow rays (`RayOptions::denoise`).
-    pub(super) denoiser: Option<crate::shading::denoise::Denoiser>,
-    /// The reservoirs of reused light samples (`RayOptions::reuse`).
-    pub(super) reuse: Option<crate::shading::reuse::Reuse>,
-    /// Moving instances' motion between frames, which the denoiser's and the reservoirs'
-    /// histories follow (only with either).
-    pub(super) motion: Option<crate::frame::motion::InstanceMotion>,
     /// Frames the denoiser or the reuse has seen (their rays' random numbers differ by it).
     pub(super) frames_denoised: u32,
     /// A light changed since the last prepared frame (the denoiser's history follows it).
     pub(super) lights_changed: bool,
-    /// The reflection probes' faces and passes (scenes with probes).
-    pub(super) probes: Option<ProbeFrame>,
     /// Something the probes see changed since their faces were drawn.
     pub(super) probes_stale: bool,
 }
@@ -96,9 +75,8 @@ impl Renderer {
         settings: RenderSettings,
     ) -> Result<Self, RenderError> {
         settings.validate()?;
-        if settings.shadow_budget.is_some()
-            && settings.technique.info().fills != crate::error::Fills::Atlas
-        {
+        let info = settings.technique.info();
+        if settings.shadow_budget.is_some() && !info.takes_shadow_budget() {
             return Err(RenderError::NotImplemented {
                 what: "a shadow budget with a technique that fills no atlas",
                 instead: "use an atlas technique, or caching alone (virtual maps redraw only \
@@ -106,12 +84,11 @@ impl Renderer {
             });
         }
         scene.validate()?;
-        let info = settings.technique.info();
-        // A mask holds the camera's pixels only: nothing to light a probe's faces with. The
+        // Shadows of the camera's pixels only: nothing to light a probe's faces with. The
         // probes are left out of everything (the shadow plan gives every light a map only
         // for probes that are drawn).
         let without_probes;
-        let scene = if info.fills == crate::error::Fills::Mask && !scene.probes.is_empty() {
+        let scene = if info.camera_pixels_only && !scene.probes.is_empty() {
             log::warn!(
                 "technique {} draws no reflection probes (its shadows are a mask of the camera's \
                  pixels): the scene's {} probes are left out",
@@ -156,167 +133,29 @@ impl Renderer {
             .unwrap_or(DEFAULT_MAX_ATLAS_SIZE)
             .min(max_dim);
         ctx.scoped("creating the renderer", || {
-            let gpu_scene = GpuScene::new(ctx, scene)?;
-            let mut source = crate::registry::create(ctx, scene, &gpu_scene, &settings, max_atlas)?;
-            let light_data = lights_or_placeholder(source.light_data(scene));
-            let lights = ctx
-                .device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("scene.lights"),
-                    contents: bytemuck::cast_slice(&light_data),
-                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-                });
-            // Written once the source is bound and its output (the shadow texture's side) known.
-            let frame_buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("frame.uniforms"),
-                size: std::mem::size_of::<FrameUniforms>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            // Histories of surface points (the denoiser's, the reservoirs') follow moving
-            // instances by the instance each pixel sees (stereo refuses both).
-            let histories = settings.rays.denoise || settings.rays.reuse;
-            let mono = if histories {
-                GBufferViews::MonoMoving
-            } else {
-                GBufferViews::Mono
-            };
-            let gbuffer = GBuffer::new(
-                ctx,
-                &gpu_scene,
-                &frame_buffer,
-                (settings.width, settings.height),
-                settings
-                    .stereo
-                    .map_or(mono, |s| GBufferViews::Stereo(s.passes)),
-            );
-            let motion = histories
-                .then(|| crate::frame::motion::InstanceMotion::new(ctx, gpu_scene.draws.len()));
-            let mut clusters = LightClusters::new(
-                ctx,
-                (settings.width, settings.height),
-                scene.lights.len(),
-                settings.clusters,
-                settings.light_loop == LightLoop::Clustered,
-                settings.stereo,
-            )?;
-            clusters.update(ctx, scene)?;
-            clusters.bind(ctx, &frame_buffer, &lights, &gbuffer);
-            source.bind(
-                ctx,
-                &SourceInputs {
-                    scene,
-                    frame: &frame_buffer,
-                    lights: &lights,
-                    gbuffer: &gbuffer,
-                    clusters: &clusters,
-                    instances: &gpu_scene.instances,
-                },
-            )?;
-            let shadow_side = (source.output().depth_side, source.output().max_penumbra);
-            ctx.queue.write_buffer(
-                &frame_buffer,
-                0,
-                bytemuck::bytes_of(&frame_uniforms(scene, &settings, shadow_side)),
-            );
-            let denoiser = settings
-                .rays
-                .denoise
-                .then(|| {
-                    crate::shading::denoise::Denoiser::new(
-                        ctx,
-                        &gbuffer,
-                        settings.width,
-                        settings.height,
-                        settings.rays.light_samples > 0,
-                        source.light_data(scene),
-                        motion.as_ref().expect("made with the denoiser"),
-                    )
-                })
-                .transpose()?;
-            let reuse = settings
-                .rays
-                .reuse
-                .then(|| {
-                    crate::shading::reuse::Reuse::new(
-                        ctx,
-                        settings.width,
-                        settings.height,
-                        settings.rays.light_samples,
-                        settings.rays.spatial
-                            != crate::shadows::raytraced::accel::SpatialReuse::Off,
-                        (&gbuffer, motion.as_ref().expect("made with the reuse")),
-                    )
-                })
-                .transpose()?;
-            let look_consts = settings.look.resolve(scene).consts();
-            let mut probes = if scene.probes.is_empty() {
-                None
-            } else {
-                Some(ProbeFrame::new(
-                    ctx,
-                    scene,
-                    &gpu_scene,
-                    &lights,
-                    &*source,
-                    look_consts,
-                    settings.probe_passes,
-                )?)
-            };
-            if let Some(p) = &mut probes {
-                let frame = frame_uniforms(scene, &settings, shadow_side);
-                p.update(ctx, scene, &gpu_scene, (&lights, &*source), &frame, true)?;
-            }
-            let inputs = LightingInputs {
-                frame: &frame_buffer,
-                lights: &lights,
-                materials: &gpu_scene.materials,
-                gbuffer: &gbuffer,
-                clusters: &clusters,
-                shadows: source.output(),
-                denoise: denoiser.as_ref().map(|d| &d.buffers),
-                reuse: reuse.as_ref().map(|r| &r.buffers),
-                probes: probes.as_ref().map(|p| &p.maps),
-            };
+            let parts = FrameParts::new(ctx, scene, &settings, max_atlas)?;
             let lighting = LightingPass::new(
                 ctx,
-                &inputs,
+                &parts.lighting(),
                 (settings.width, settings.height),
-                &ShadingConsts {
-                    emission_texture: gbuffer.emission.is_some(),
-                    denoise: denoiser.is_some(),
-                    reuse: reuse.is_some(),
-                    spatial: if reuse.is_some() {
-                        settings.rays.spatial.code()
-                    } else {
-                        0
-                    },
-                    probes: probes.is_some(),
-                    ..look_consts
-                },
+                &parts.shading_consts(scene, &settings),
             );
-            let visibility = visibility_pass(ctx, &settings, scene, &*source)?;
+            let mut visibility = visibility_pass(ctx, &settings, scene, &*parts.source)?;
+            if let Some(v) = &mut visibility {
+                v.bind(ctx, &parts.frame_inputs());
+            }
             Ok(Self {
                 // In a browser wgpu's handles are not Send; the Arc only shares, never crosses
                 // threads there.
                 #[allow(clippy::arc_with_non_send_sync)]
                 ctx: std::sync::Arc::new(ctx.clone()),
                 settings,
-                scene: gpu_scene,
-                source,
-                frame_buffer,
-                lights,
-                gbuffer,
+                parts,
                 lighting,
-                denoiser,
-                reuse,
-                motion,
+                visibility,
                 frames_denoised: 0,
                 lights_changed: false,
-                probes,
                 probes_stale: false,
-                clusters,
-                visibility,
                 blit: None,
                 timings: TimingsInFlight::default(),
                 timer: GpuTimer::new(ctx),
@@ -326,6 +165,23 @@ impl Renderer {
         })
     }
 
+    /// Test only (feature `test-hooks`): rebuilds the lighting pass with sized lights' soft
+    /// shadows compiled out, so a test can check that lights of size 0 give the frame the
+    /// pass gives without them, byte for byte, in one run.
+    #[cfg(feature = "test-hooks")]
+    pub fn compile_out_soft_shadows(&mut self) {
+        let consts = crate::shading::look::ShadingConsts {
+            soft_shadows: false,
+            ..self.parts.shading_consts(&self.current, &self.settings)
+        };
+        self.lighting = LightingPass::new(
+            &self.ctx,
+            &self.parts.lighting(),
+            (self.settings.width, self.settings.height),
+            &consts,
+        );
+    }
+
     /// Moves the camera before the next frame. The next [`Renderer::render`] re-plans the
     /// shadows (cascades follow the view; lights that leave the screen give up their maps).
     pub fn set_camera(&mut self, camera: Camera) -> Result<(), RenderError> {
@@ -333,8 +189,8 @@ impl Renderer {
         self.current.camera = camera;
         self.dirty = true;
         // Probes see the camera's shadows where those follow the camera: cascades, and
-        // virtual pages.
-        self.probes_stale |= self.settings.technique.info().fills == crate::error::Fills::Pages
+        // a technique's own (virtual pages).
+        self.probes_stale |= self.settings.technique.info().follows_camera
             || self
                 .current
                 .lights
@@ -394,21 +250,22 @@ impl Renderer {
             index: instance,
             reason,
         };
-        let Some(old) = self.scene.draws.get(instance).copied() else {
+        let Some(old) = self.parts.scene.draws.get(instance).copied() else {
             return Err(bad(format!("no such instance (the scene has {count})")).into());
         };
         if !transform.is_finite() || transform.determinant().abs() < 1e-12 {
             return Err(bad("transform must be finite and invertible".into()).into());
         }
-        if let Some(m) = &mut self.motion {
+        if let Some(m) = &mut self.parts.motion {
             m.note(instance, self.current.instances[instance].transform);
         }
-        self.scene
+        self.parts
+            .scene
             .set_instance_transform(&self.ctx.queue, instance, transform);
         self.current.instances[instance].transform = transform;
         if old.casts_shadows {
-            let new = self.scene.draws[instance].sphere;
-            self.source.note_moved(old.sphere, new);
+            let new = self.parts.scene.draws[instance].sphere;
+            self.parts.source.note_moved(old.sphere, new);
         }
         self.dirty = true;
         self.probes_stale = true;
@@ -418,13 +275,14 @@ impl Renderer {
     /// The side of the texture shadows are read from and the widest penumbra its lookup
     /// filters at one level (the frame uniforms').
     pub(super) fn shadow_side(&self) -> (u32, f32) {
-        let out = self.source.output();
+        let out = self.parts.source.output();
         (out.depth_side, out.max_penumbra)
     }
 
     /// Derives this frame's GPU state from [`Renderer::scene`] after a change: a new shadow
-    /// plan, re-decided caster culling, and the atlas, light, frame and cluster buffers
-    /// rewritten in place (replaced only when they must grow or the atlas side changed).
+    /// plan, re-decided caster culling, the frame's uniforms, and the atlas, light and
+    /// cluster buffers rewritten in place (replaced only when they must grow or the atlas
+    /// side changed); every pass is bound to what changed.
     pub(super) fn prepare(&mut self) -> Result<(), RenderError> {
         if !self.dirty {
             return Ok(());
@@ -432,61 +290,52 @@ impl Renderer {
         let ctx = &*self.ctx.clone();
         let scene = &self.current;
         let settings = &self.settings;
-        self.source.update(ctx, scene)?;
-        let records = self.source.light_data(scene);
+        let parts = &mut self.parts;
+        parts.source.update(ctx, scene)?;
+        let records = parts.source.light_data(scene);
         let count = records.len();
         let mut light_data = lights_or_placeholder(records);
-        if let Some(d) = self.denoiser.as_mut().filter(|_| self.lights_changed) {
+        if let Some(d) = parts.denoiser.as_mut().filter(|_| self.lights_changed) {
             // The records of the lights that changed may follow the frame's for the
             // denoiser's correction of its history.
             d.follow_lights(&mut light_data, count);
         }
         let bytes: &[u8] = bytemuck::cast_slice(&light_data);
-        crate::gpu::buffers::grow_buffer(ctx, &mut self.lights, bytes.len() as u64, "lights")?;
-        ctx.queue.write_buffer(&self.lights, 0, bytes);
-        self.clusters.update(ctx, scene)?;
-        self.clusters
-            .bind(ctx, &self.frame_buffer, &self.lights, &self.gbuffer);
-        self.source.bind(
+        crate::gpu::buffers::grow_buffer(ctx, &mut parts.lights, bytes.len() as u64, "lights")?;
+        ctx.queue.write_buffer(&parts.lights, 0, bytes);
+        parts.clusters.update(ctx, scene)?;
+        parts
+            .clusters
+            .bind(ctx, &parts.frame_buffer, &parts.lights, &parts.gbuffer);
+        parts.source.bind(
             ctx,
             &SourceInputs {
                 scene,
-                frame: &self.frame_buffer,
-                lights: &self.lights,
-                gbuffer: &self.gbuffer,
-                clusters: &self.clusters,
-                instances: &self.scene.instances,
+                frame: &parts.frame_buffer,
+                lights: &parts.lights,
+                gbuffer: &parts.gbuffer,
+                clusters: &parts.clusters,
+                instances: &parts.scene.instances,
             },
         )?;
-        let frame = frame_uniforms(scene, settings, self.shadow_side());
-        ctx.queue
-            .write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&frame));
-        if let Some(p) = &mut self.probes {
+        let out = parts.source.output();
+        parts.uniforms = frame_uniforms(scene, settings, (out.depth_side, out.max_penumbra));
+        if let Some(p) = &mut parts.probes {
             let redraw = std::mem::take(&mut self.probes_stale);
-            let sources = (&self.lights, &*self.source);
-            p.update(ctx, scene, &self.scene, sources, &frame, redraw)?;
+            let sources = (&parts.lights, &*parts.source);
+            p.update(ctx, scene, &parts.scene, sources, &parts.uniforms, redraw)?;
         }
-        self.lighting.rebind(
-            ctx,
-            &LightingInputs {
-                frame: &self.frame_buffer,
-                lights: &self.lights,
-                materials: &self.scene.materials,
-                gbuffer: &self.gbuffer,
-                clusters: &self.clusters,
-                shadows: self.source.output(),
-                denoise: self.denoiser.as_ref().map(|d| &d.buffers),
-                reuse: self.reuse.as_ref().map(|r| &r.buffers),
-                probes: self.probes.as_ref().map(|p| &p.maps),
-            },
-        );
+        self.lighting.rebind(ctx, &parts.lighting());
         let lights = scene.lights.len() as u32;
         if self
             .visibility
             .as_ref()
             .is_some_and(|v| v.lights() != lights)
         {
-            self.visibility = visibility_pass(ctx, settings, scene, &*self.source)?;
+            self.visibility = visibility_pass(ctx, settings, scene, &*parts.source)?;
+        }
+        if let Some(v) = &mut self.visibility {
+            v.bind(ctx, &parts.frame_inputs());
         }
         self.dirty = false;
         self.lights_changed = false;
@@ -508,10 +357,9 @@ fn visibility_pass(
     }
     VisibilityPass::new(
         ctx,
-        settings.width,
-        settings.height,
+        (settings.width, settings.height),
         scene.lights.len() as u32,
-        &shadows,
+        &shadows.lookup,
         settings.soft_visibility,
     )
     .map(Some)

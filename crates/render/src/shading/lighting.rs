@@ -1,31 +1,84 @@
-//! The deferred Phong lighting pass (seed 004): reads the G-buffer, the pixel's light cluster
-//! and the frame's shadows (through the source's lookup, or its mask), writes the final
-//! colour.
+//! The deferred lighting pass (seed 004): reads the G-buffer, the pixel's light cluster and
+//! the frame's shadows (through the source's lookup, or its mask), writes the final colour.
+//!
+//! Its bindings are declared once, here ([`LIGHTING`]) and by what plugs into it: the frame's
+//! inputs (`inputs.rs`), the shadow source's lookup, then each part the renderer hands it
+//! (sampled lights and their histories, reflection probes: `gpu::bindings::Part`, made in their
+//! own folders). `gpu::bindings` numbers them in that order and writes their WGSL
+//! declarations; `lighting.wgsl` and the parts' WGSL only use the names.
 
-use crate::frame::gbuffer::GBuffer;
+use std::collections::HashMap;
+
+use crate::gpu::bindings::{Binding, BindingList, Part};
 use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, Span};
+use crate::shading::inputs::{pass_bindings, FrameInputs, CLUSTERS, FRAME, GBUFFER};
 use crate::shading::look::ShadingConsts;
 use crate::shadows::lookup::{compose_reader, LookupWgsl};
-use crate::shadows::source::ShadowOutput;
-
-/// First binding of a shadow source's own declarations (the virtual maps' page table, the
-/// ray-traced scene) in the lighting and visibility passes.
-pub(crate) const SOURCE_FIRST_BINDING: u32 = 14;
 
 /// Output colour format (sRGB-encoded on write).
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 
-/// The lighting pass's WGSL, shadows found through `lookup` (its declarations from
-/// `SOURCE_FIRST_BINDING`), shading as `consts` say.
-pub(crate) fn shader(lookup: &LookupWgsl, consts: &ShadingConsts) -> String {
-    let pass = format!(
-        "{}{}{}",
-        consts.wgsl(),
-        include_str!("lighting.wgsl"),
-        include_str!("sampled.wgsl")
-    );
-    compose_reader(lookup, SOURCE_FIRST_BINDING, &pass)
+/// Output format of linear radiance (`ShadingConsts::linear_out`: a probe's faces).
+pub const LINEAR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// The lighting pass's own bindings beside the frame's inputs (`FRAME` first, then these in
+/// order, then `CLUSTERS`, then [`LIGHTING_AFTER_CLUSTERS`]).
+pub const LIGHTING: &[Binding] = &[Binding::storage("materials", "array<MaterialData>")];
+
+/// The shadow texture for comparison sampling; the one comparison sampler of every PCF mode
+/// (OpenGL cannot pair one texture with two samplers; at a texel centre bilinear weights are
+/// (1, 0, 0, 0), so a lookup there compares exactly one texel, as a nearest-filtered one
+/// would); and the visibility computed elsewhere (`fs_mask`: `counts.w` words per pixel, bit
+/// set = lit; `fs_fraction`: a byte per pixel and light, 255 = all of the light; `fs_main`
+/// binds a dummy).
+pub const LIGHTING_SHADOWS: &[Binding] = &[
+    Binding::texture_depth("atlas"),
+    Binding::sampler_comparison("cmp_linear"),
+    Binding::storage("vis_mask", "array<u32>"),
+];
+
+/// The shadow texture's raw depths for the soft shadows' blocker search (the same texture
+/// read as floats: OpenGL cannot pair one texture with two samplers), and the emissive texel
+/// of each pixel's material (a white texel where the G-buffer keeps none; `EMISSION_TEXTURE`
+/// is false then).
+pub const LIGHTING_AFTER_CLUSTERS: &[Binding] = &[
+    Binding::texture_f32("atlas_depth"),
+    Binding::texture_f32("gbuf_emission"),
+];
+
+/// The lighting pass's bindings with `lookup` and `parts`.
+fn bindings(lookup: &LookupWgsl, parts: &[Part<'_>]) -> BindingList {
+    pass_bindings(
+        &[
+            FRAME,
+            LIGHTING,
+            GBUFFER,
+            LIGHTING_SHADOWS,
+            CLUSTERS,
+            LIGHTING_AFTER_CLUSTERS,
+        ],
+        lookup.bindings,
+        parts,
+    )
+}
+
+/// The lighting pass's WGSL, shadows found through `lookup`, with `parts`, shading as `consts`
+/// say.
+pub fn shader(lookup: &LookupWgsl, consts: &ShadingConsts, parts: &[Part<'_>]) -> String {
+    let mut pass = format!("{}{}", consts.wgsl(), include_str!("lighting.wgsl"));
+    for p in parts {
+        pass.push_str(&p.wgsl);
+    }
+    compose_reader(lookup, &bindings(lookup, parts), &pass)
+}
+
+/// What the lighting pass reads: the frame's inputs and the parts plugged into it.
+pub struct LightingInputs<'a> {
+    /// The frame's uniforms, lights, G-buffer, clusters and shadows.
+    pub frame: FrameInputs<'a>,
+    /// What plugs into the pass besides the shadow source (the renderer's list).
+    pub parts: Vec<Part<'a>>,
 }
 
 /// The lighting pass and its output image.
@@ -35,91 +88,27 @@ pub struct LightingPass {
     /// Render-target view of `color`, made once.
     color_view: wgpu::TextureView,
     pipeline: wgpu::RenderPipeline,
-    /// `fs_composite` over `color`, after the denoiser (only when rays are denoised).
-    composite: Option<wgpu::RenderPipeline>,
-    /// `fs_spatial` over `color`, after the pass (only with spatial reuse).
-    spatial: Option<wgpu::RenderPipeline>,
+    /// The parts' entry points drawn right after the pass's own, in order.
+    follow: Vec<wgpu::RenderPipeline>,
+    /// The parts' entry points their owners draw, by name.
+    own: HashMap<&'static str, wgpu::RenderPipeline>,
     layout: wgpu::BindGroupLayout,
+    /// The declarations the layout was made from (a rebind must bring the same).
+    bindings: BindingList,
     sampler: wgpu::Sampler,
     no_emission: wgpu::TextureView,
     bind_group: wgpu::BindGroup,
 }
 
-/// Buffers the lighting and visibility passes read.
-pub struct LightingInputs<'a> {
-    /// `FrameUniforms`.
-    pub frame: &'a wgpu::Buffer,
-    /// `array<LightData>`.
-    pub lights: &'a wgpu::Buffer,
-    /// `array<MaterialData>`.
-    pub materials: &'a wgpu::Buffer,
-    /// G-buffer.
-    pub gbuffer: &'a GBuffer,
-    /// The clustered light lists.
-    pub clusters: &'a crate::frame::clusters::LightClusters,
-    /// What the frame's shadow source produced: an atlas, a page pool (both read with the
-    /// shadow test, `fs_main`) or a visibility mask (shaded with directly, `fs_mask`).
-    pub shadows: ShadowOutput<'a>,
-    /// The denoiser's buffers, when sampled rays are denoised (`ShadingConsts::denoise`).
-    pub denoise: Option<&'a crate::shading::denoise::DenoiseBuffers>,
-    /// The reservoirs, when sampled lights are reused (`ShadingConsts::reuse`).
-    pub reuse: Option<&'a crate::shading::reuse::ReuseBuffers>,
-    /// The reflection probes' faces, when surfaces mirror them (`ShadingConsts::probes`).
-    pub probes: Option<&'a crate::shading::probes::ProbeMaps>,
-}
-
-impl LightingInputs<'_> {
-    /// The depth texture shadows are read from: the virtual maps' page pool or the atlas.
-    pub fn shadow_texture(&self) -> &wgpu::TextureView {
-        self.shadows.depth
-    }
-
-    /// The bind-group entries the lighting and the visibility pass both declare, at the same
-    /// bindings: frame 0, lights 1, shadow views 2, G-buffer position 4 (`position`) and
-    /// normal 5 (`normal`), the shadow texture 6, the visibility mask 8 (`mask`), the light
-    /// clusters 9–11 and the shadow source's own declarations from `SOURCE_FIRST_BINDING`. Bindings 3
-    /// and 7 are each pass's own.
-    pub(crate) fn shared_entries<'s>(
-        &'s self,
-        position: &'s wgpu::TextureView,
-        normal: &'s wgpu::TextureView,
-        mask: &'s wgpu::Buffer,
-    ) -> Vec<wgpu::BindGroupEntry<'s>> {
-        let mut entries = vec![
-            crate::gpu::pipelines::whole_entry(0, self.frame),
-            crate::gpu::pipelines::whole_entry(1, self.lights),
-            crate::gpu::pipelines::whole_entry(2, self.shadows.view_table),
-            wgpu::BindGroupEntry {
-                binding: 4,
-                resource: wgpu::BindingResource::TextureView(position),
-            },
-            wgpu::BindGroupEntry {
-                binding: 5,
-                resource: wgpu::BindingResource::TextureView(normal),
-            },
-            wgpu::BindGroupEntry {
-                binding: 6,
-                resource: wgpu::BindingResource::TextureView(self.shadow_texture()),
-            },
-            crate::gpu::pipelines::whole_entry(8, mask),
-            crate::gpu::pipelines::whole_entry(9, &self.clusters.uniforms),
-            crate::gpu::pipelines::whole_entry(10, &self.clusters.slots),
-            crate::gpu::pipelines::whole_entry(11, &self.clusters.masks),
-        ];
-        entries.extend(self.shadows.extra_entries(SOURCE_FIRST_BINDING));
-        entries
-    }
-}
-
 impl LightingPass {
     /// Creates the output texture and pipeline.
-    pub(crate) fn new(
+    pub fn new(
         ctx: &GpuContext,
         inputs: &LightingInputs<'_>,
         (w, h): (u32, u32),
         consts: &ShadingConsts,
     ) -> Self {
-        let entry = if inputs.shadows.mask.is_some() {
+        let entry = if inputs.frame.shadows.mask.is_some() {
             "fs_mask"
         } else {
             "fs_main"
@@ -127,9 +116,9 @@ impl LightingPass {
         Self::with_entry(ctx, inputs, (w, h), entry, consts)
     }
 
-    /// The pass shading with given fractions per pixel and light (`inputs.shadows.mask` holds
-    /// them, a byte each) instead of the shadow source's answer.
-    pub(crate) fn with_fractions(
+    /// The pass shading with given fractions per pixel and light (`inputs.frame.shadows.mask`
+    /// holds them, a byte each) instead of the shadow source's answer.
+    pub fn with_fractions(
         ctx: &GpuContext,
         inputs: &LightingInputs<'_>,
         (w, h): (u32, u32),
@@ -148,7 +137,7 @@ impl LightingPass {
         let device = &ctx.device;
         // A probe's faces keep linear radiance; the frame its tone-mapped colour.
         let format = if consts.linear_out {
-            crate::shading::probes::FACE_FORMAT
+            LINEAR_FORMAT
         } else {
             COLOR_FORMAT
         };
@@ -168,72 +157,13 @@ impl LightingPass {
                 | wgpu::TextureUsages::TEXTURE_BINDING,
             view_formats: &[],
         });
-        let frag = wgpu::ShaderStages::FRAGMENT;
-        let cmp = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: frag,
-            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
-            count: None,
-        };
-        let mut entries = vec![
-            crate::gpu::pipelines::uniform_entry(0, frag),
-            crate::gpu::pipelines::storage_entry(1, frag),
-            crate::gpu::pipelines::storage_entry(2, frag),
-            crate::gpu::pipelines::storage_entry(3, frag),
-            crate::gpu::pipelines::texture_entry(4, wgpu::TextureSampleType::Uint, frag),
-            crate::gpu::pipelines::texture_entry(5, wgpu::TextureSampleType::Uint, frag),
-            crate::gpu::pipelines::texture_entry(6, wgpu::TextureSampleType::Depth, frag),
-            cmp(7),
-            crate::gpu::pipelines::storage_entry(8, frag),
-            crate::gpu::pipelines::uniform_entry(9, frag),
-            crate::gpu::pipelines::storage_entry(10, frag),
-            crate::gpu::pipelines::storage_entry(11, frag),
-            crate::gpu::pipelines::texture_entry(
-                12,
-                wgpu::TextureSampleType::Float { filterable: false },
-                frag,
-            ),
-            crate::gpu::pipelines::texture_entry(
-                13,
-                wgpu::TextureSampleType::Float { filterable: false },
-                frag,
-            ),
-        ];
-        entries.extend(inputs.shadows.extra_layout(SOURCE_FIRST_BINDING, frag));
-        if consts.denoise {
-            entries.push(crate::gpu::pipelines::storage_rw_entry(40, frag));
-            entries.push(crate::gpu::pipelines::storage_rw_entry(41, frag));
-        }
-        if consts.reuse {
-            entries.push(crate::gpu::pipelines::uniform_entry(42, frag));
-            entries.push(crate::gpu::pipelines::storage_rw_entry(43, frag));
-            entries.push(crate::gpu::pipelines::texture_entry(
-                47,
-                wgpu::TextureSampleType::Uint,
-                frag,
-            ));
-            entries.push(crate::gpu::pipelines::storage_entry(48, frag));
-        }
-        if consts.probes {
-            entries.push(wgpu::BindGroupLayoutEntry {
-                binding: 44,
-                visibility: frag,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                    view_dimension: wgpu::TextureViewDimension::D2Array,
-                    multisampled: false,
-                },
-                count: None,
-            });
-            entries.push(wgpu::BindGroupLayoutEntry {
-                binding: 45,
-                visibility: frag,
-                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                count: None,
-            });
-            entries.push(crate::gpu::pipelines::uniform_entry(46, frag));
-        }
-        let layout = crate::gpu::pipelines::bind_group_layout(device, "lighting.layout", &entries);
+        let lookup = &inputs.frame.shadows.lookup;
+        let bindings = bindings(lookup, &inputs.parts);
+        let layout = crate::gpu::pipelines::bind_group_layout(
+            device,
+            "lighting.layout",
+            &bindings.layout(wgpu::ShaderStages::FRAGMENT),
+        );
         let linear = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("lighting.cmp_linear"),
             mag_filter: wgpu::FilterMode::Linear,
@@ -248,11 +178,11 @@ impl LightingPass {
             "lighting.no_emission",
             crate::frame::gbuffer::EMISSION_FORMAT,
         );
-        let bind_group = bind(ctx, &layout, &linear, &no_emission, inputs);
+        let bind_group = bind(ctx, &layout, &bindings, &linear, &no_emission, inputs);
         let module = crate::gpu::shaders::module(
             device,
             "lighting.shader",
-            &shader(&inputs.shadows.lookup, consts),
+            &shader(lookup, consts, &inputs.parts),
         );
         let pipeline_layout =
             crate::gpu::pipelines::pipeline_layout(device, "lighting.pipeline_layout", &[&layout]);
@@ -280,38 +210,59 @@ impl LightingPass {
             })
         };
         let pipeline = fullscreen(entry);
-        let composite = consts.denoise.then(|| fullscreen("fs_composite"));
-        let spatial = (consts.reuse && consts.spatial != 0).then(|| fullscreen("fs_spatial"));
+        let follow = inputs
+            .parts
+            .iter()
+            .flat_map(|p| p.follow)
+            .map(|e| fullscreen(e))
+            .collect();
+        let own = inputs
+            .parts
+            .iter()
+            .flat_map(|p| p.own)
+            .map(|&e| (e, fullscreen(e)))
+            .collect();
         Self {
             color_view: color.create_view(&Default::default()),
             color,
             pipeline,
-            composite,
-            spatial,
+            follow,
+            own,
             layout,
+            bindings,
             sampler: linear,
             no_emission,
             bind_group,
         }
     }
 
-    /// Binds new inputs (after a frame's update replaced a buffer or the atlas).
+    /// Binds new inputs (after a frame's update replaced a buffer or the atlas); they declare
+    /// the bindings the pass was made with.
     pub fn rebind(&mut self, ctx: &GpuContext, inputs: &LightingInputs<'_>) {
-        self.bind_group = bind(ctx, &self.layout, &self.sampler, &self.no_emission, inputs);
+        let declared = bindings(&inputs.frame.shadows.lookup, &inputs.parts);
+        assert_eq!(
+            declared, self.bindings,
+            "the lighting pass rebound with other bindings than it was made with"
+        );
+        self.bind_group = bind(
+            ctx,
+            &self.layout,
+            &self.bindings,
+            &self.sampler,
+            &self.no_emission,
+            inputs,
+        );
     }
 
-    /// Records the pass (with a denoiser, the first of the span: [`LightingPass::record_composite`]
-    /// ends it).
-    /// With spatial reuse its pass follows, in the same span.
+    /// Records the pass, then the parts' entry points that follow it (spatial reuse), as one
+    /// timing span.
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: &GpuTimer, span: Option<Span>) {
-        let last = self.spatial.is_none();
-        self.fullscreen_pass(
-            encoder,
-            &self.pipeline,
-            timer.render_writes(span, true, last),
-        );
-        if let Some(spatial) = &self.spatial {
-            self.fullscreen_pass(encoder, spatial, timer.render_writes(span, false, true));
+        let passes: Vec<&wgpu::RenderPipeline> = std::iter::once(&self.pipeline)
+            .chain(&self.follow)
+            .collect();
+        for (i, pipeline) in passes.iter().enumerate() {
+            let writes = timer.render_writes(span, i == 0, i + 1 == passes.len());
+            self.pass_into(encoder, &self.color_view, pipeline, writes);
         }
     }
 
@@ -329,26 +280,20 @@ impl LightingPass {
         self.pass_into(encoder, target, &self.pipeline, writes);
     }
 
-    /// With a denoiser: shades the filtered ratio into the frame (after the denoiser's passes),
-    /// ending the denoiser's span (`Stage::Denoise`, begun by its passes).
-    pub fn record_composite(
+    /// Records a part's own entry point `entry` over the frame (the denoiser's composite,
+    /// after its passes), ending `span` (begun by the part's own passes); nothing where no
+    /// part brought it.
+    pub fn record_own(
         &self,
+        entry: &str,
         encoder: &mut wgpu::CommandEncoder,
         timer: &GpuTimer,
         span: Option<Span>,
     ) {
-        if let Some(composite) = &self.composite {
-            self.fullscreen_pass(encoder, composite, timer.render_writes(span, false, true));
+        if let Some(pipeline) = self.own.get(entry) {
+            let writes = timer.render_writes(span, false, true);
+            self.pass_into(encoder, &self.color_view, pipeline, writes);
         }
-    }
-
-    fn fullscreen_pass(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        pipeline: &wgpu::RenderPipeline,
-        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
-    ) {
-        self.pass_into(encoder, &self.color_view, pipeline, timestamp_writes);
     }
 
     fn pass_into(
@@ -383,14 +328,16 @@ impl LightingPass {
 fn bind(
     ctx: &GpuContext,
     layout: &wgpu::BindGroupLayout,
+    bindings: &BindingList,
     sampler: &wgpu::Sampler,
     no_emission: &wgpu::TextureView,
     inputs: &LightingInputs<'_>,
 ) -> wgpu::BindGroup {
     let device = &ctx.device;
-    // `fs_main` never reads the mask, but one layout serves both entry points.
+    let f = &inputs.frame;
+    // `fs_main` never reads the mask, but one layout serves every entry point.
     let dummy_mask;
-    let mask = match inputs.shadows.mask {
+    let mask = match f.shadows.mask {
         Some(m) => m,
         None => {
             dummy_mask = device.create_buffer(&wgpu::BufferDescriptor {
@@ -402,93 +349,33 @@ fn bind(
             &dummy_mask
         }
     };
-    let pv = inputs.gbuffer.position.create_view(&Default::default());
-    let nv = inputs.gbuffer.normal.create_view(&Default::default());
-    // The G-buffer's emissive texels, or the white texel where it keeps none.
-    let ev = inputs
-        .gbuffer
-        .emission
-        .as_ref()
-        .map(|t| t.create_view(&Default::default()));
-    let ev = ev.as_ref().unwrap_or(no_emission);
-    let mut entries = inputs.shared_entries(&pv, &nv, mask);
-    entries.extend([
-        wgpu::BindGroupEntry {
-            binding: 3,
-            resource: inputs.materials.as_entire_binding(),
-        },
-        wgpu::BindGroupEntry {
-            binding: 7,
-            resource: wgpu::BindingResource::Sampler(sampler),
-        },
-        wgpu::BindGroupEntry {
-            binding: 12,
-            resource: wgpu::BindingResource::TextureView(inputs.shadow_texture()),
-        },
-        wgpu::BindGroupEntry {
-            binding: 13,
-            resource: wgpu::BindingResource::TextureView(ev),
-        },
+    let g = f.gbuffer_views();
+    let depth = wgpu::BindingResource::TextureView(f.shadows.depth);
+    let mut resources = f.frame_resources();
+    resources.extend([
+        // LIGHTING
+        f.materials.as_entire_binding(),
+        // GBUFFER
+        wgpu::BindingResource::TextureView(&g.position),
+        wgpu::BindingResource::TextureView(&g.normal),
+        // LIGHTING_SHADOWS
+        depth.clone(),
+        wgpu::BindingResource::Sampler(sampler),
+        mask.as_entire_binding(),
     ]);
-    if let Some(d) = inputs.denoise {
-        entries.push(crate::gpu::pipelines::whole_entry(40, &d.pixels));
-        entries.push(crate::gpu::pipelines::whole_entry(41, &d.ratio));
-    }
-    if let Some(r) = inputs.reuse {
-        entries.push(crate::gpu::pipelines::whole_entry(42, &r.params));
-        entries.push(crate::gpu::pipelines::whole_entry(43, &r.reservoirs));
-        entries.push(wgpu::BindGroupEntry {
-            binding: 47,
-            resource: wgpu::BindingResource::TextureView(&r.instance),
-        });
-        entries.push(crate::gpu::pipelines::whole_entry(48, &r.motion_back));
-    }
-    if let Some(p) = inputs.probes {
-        entries.push(wgpu::BindGroupEntry {
-            binding: 44,
-            resource: wgpu::BindingResource::TextureView(&p.view),
-        });
-        entries.push(wgpu::BindGroupEntry {
-            binding: 45,
-            resource: wgpu::BindingResource::Sampler(&p.sampler),
-        });
-        entries.push(crate::gpu::pipelines::whole_entry(46, &p.data));
+    resources.extend(f.cluster_resources());
+    resources.extend([
+        // LIGHTING_AFTER_CLUSTERS: the emissive texels, or the white texel.
+        depth,
+        wgpu::BindingResource::TextureView(g.emission.as_ref().unwrap_or(no_emission)),
+    ]);
+    resources.extend(f.shadows.resources.iter().cloned());
+    for p in &inputs.parts {
+        resources.extend(p.resources.iter().cloned());
     }
     device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("lighting.bind_group"),
         layout,
-        entries: &entries,
+        entries: &bindings.entries(resources),
     })
-}
-
-#[cfg(test)]
-mod shader_tests {
-    /// With the atlas lookup the pass is WGSL a WebGPU device accepts (every technique's own
-    /// lookup is checked by the registry's tests).
-    #[test]
-    fn shader_validates_for_webgpu() {
-        let src = super::shader(
-            &crate::shadows::lookup::ATLAS_LOOKUP,
-            &crate::shading::look::ShadingConsts::default(),
-        );
-        crate::gpu::shaders::validate_for_webgpu("lighting", &src, wgpu::Features::empty())
-            .unwrap_or_else(|e| panic!("{e}"));
-    }
-
-    /// With reflection probes, and as a probe's faces are lit (linear output), too.
-    #[test]
-    fn shader_with_probes_validates_for_webgpu() {
-        for (probes, linear_out) in [(true, false), (false, true)] {
-            let src = super::shader(
-                &crate::shadows::lookup::ATLAS_LOOKUP,
-                &crate::shading::look::ShadingConsts {
-                    probes,
-                    linear_out,
-                    ..Default::default()
-                },
-            );
-            crate::gpu::shaders::validate_for_webgpu("lighting", &src, wgpu::Features::empty())
-                .unwrap_or_else(|e| panic!("probes {probes}, linear {linear_out}: {e}"));
-        }
-    }
 }

@@ -4,31 +4,10 @@
 // emission, exposure and a tone map (look.rs). Shadows by comparison sampling of the atlas
 // with PCF off / 2x2 / 3x3, never reading outside the view's tile.
 
-@group(0) @binding(0) var<uniform> frame: FrameUniforms;
-@group(0) @binding(1) var<storage, read> lights: array<LightData>;
-@group(0) @binding(2) var<storage, read> shadow_views: array<ShadowViewData>;
-@group(0) @binding(3) var<storage, read> materials: array<MaterialData>;
-@group(0) @binding(4) var gbuf_position: texture_2d<u32>;
-@group(0) @binding(5) var gbuf_normal: texture_2d<u32>;
-@group(0) @binding(6) var atlas: texture_depth_2d;
-// One bilinear comparison sampler for every PCF mode: OpenGL cannot pair one texture with two
-// samplers. At a texel centre bilinear weights are (1, 0, 0, 0), so a lookup there compares
-// exactly one texel, as a nearest-filtered one would.
-@group(0) @binding(7) var cmp_linear: sampler_comparison;
-// Visibility computed elsewhere: for `fs_mask` (irregular shadow maps) `counts.w` words per
-// pixel, bit set = lit; for `fs_fraction` (a frame shaded with a given visibility) a byte per
-// pixel and light, four to a word, 255 = all of the light. `fs_main` is bound to a dummy.
-@group(0) @binding(8) var<storage, read> vis_mask: array<u32>;
-// The clustered light lists (clusters.rs): per cluster a slot value, and the slot pool.
-@group(0) @binding(9) var<uniform> clusters: ClusterUniforms;
-@group(0) @binding(10) var<storage, read> cluster_slots: array<u32>;
-@group(0) @binding(11) var<storage, read> cluster_masks: array<u32>;
-// The shadow texture's raw depths for the soft shadows' blocker search: `atlas` again, read
-// as floats (on OpenGL one texture cannot be paired with two samplers).
-@group(0) @binding(12) var atlas_depth: texture_2d<f32>;
-// The emissive texel of each pixel's material (gbuffer.rs; a white texel where the G-buffer
-// keeps none, and then EMISSION_TEXTURE is false).
-@group(0) @binding(13) var gbuf_emission: texture_2d<f32>;
+// The bindings (frame, lights, shadow_views, materials, gbuf_position, gbuf_normal, atlas,
+// cmp_linear, vis_mask, clusters, cluster_slots, cluster_masks, atlas_depth, gbuf_emission,
+// then the shadow source's and the parts') are declared in lighting.rs and inputs.rs, which
+// say what each holds.
 
 fn shadow_depth_at(texel: vec2<i32>) -> f32 {
     return textureLoad(atlas_depth, texel, 0).r;
@@ -268,7 +247,7 @@ fn light_lit(i: u32, s: Surface) -> f32 {
         return ray_lit(light, s.p, s.n);
     }
     let c = shadow_coord(light, s.p, s.n, s.view_depth);
-    if (light.diffuse.w > 0.0 && c.valid) {
+    if (SOFT_SHADOWS && light.diffuse.w > 0.0 && c.valid) {
         return soft_shadow(light.diffuse.w, c, soft_rotation(s.px));
     }
     return shadow_factor(c);

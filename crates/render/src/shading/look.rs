@@ -274,8 +274,10 @@ impl Look {
 /// The lighting shader's compile-time choices: constants rather than uniforms, so the Phong
 /// scenes' shader is the very code it was before there was a choice (a branch on a uniform
 /// would change how the compiler fuses its multiply-adds, and a few pixels by one level).
+/// What plugs into the pass (sampled lights, their histories, probes) brings its own
+/// constants with its part.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct ShadingConsts {
+pub struct ShadingConsts {
     /// Phong or the glTF BRDF.
     pub shading: Shading,
     /// glTF's falloff (inverse square and range window) instead of the lights' attenuation.
@@ -291,21 +293,12 @@ pub(crate) struct ShadingConsts {
     pub emission: bool,
     /// Whether the G-buffer keeps emissive texels to multiply emission by.
     pub emission_texture: bool,
-    /// Whether sampled shadow rays are denoised (denoise.rs): the pass also writes each
-    /// pixel's unshadowed light and shadow ratio, and `fs_composite` shades the filtered ratio.
-    pub denoise: bool,
-    /// Whether sampled lights are reused across frames (reuse.rs): each pixel's reservoirs
-    /// are read from the last frame and written for the next.
-    pub reuse: bool,
-    /// With `reuse`: spatial reuse after the lighting pass (reuse.rs; `SpatialReuse::code`:
-    /// 0 off, 1 biased, 2 unbiased): the lighting pass keeps each pixel's reservoirs and the
-    /// rest of its colour apart, and `fs_spatial` resamples neighbours' and shades.
-    pub spatial: u32,
-    /// Whether surfaces mirror the nearest reflection probe (probes.rs; bindings 44–46).
-    pub probes: bool,
     /// Whether the pass writes linear radiance (before exposure and tone map) into a float
     /// target: a probe's faces.
     pub linear_out: bool,
+    /// Whether sized lights' soft shadows are compiled in (always, but for the test that
+    /// lights of size 0 give the frame the pass gives without them, byte for byte).
+    pub soft_shadows: bool,
 }
 
 impl Default for ShadingConsts {
@@ -318,30 +311,23 @@ impl Default for ShadingConsts {
             fixed_exposure: Some(PHONG_EXPOSURE),
             emission: false,
             emission_texture: false,
-            denoise: false,
-            reuse: false,
-            spatial: 0,
-            probes: false,
             linear_out: false,
+            soft_shadows: true,
         }
     }
 }
 
 impl ShadingConsts {
     /// The WGSL constants (`SHADING_MODEL`, `PHYSICAL_FALLOFF`, `LIGHT_SCALE`, `TONE_MAP`,
-    /// `EXPOSURE_IS_FIXED`, `FIXED_EXPOSURE`, `EMISSION`, `EMISSION_TEXTURE`, the denoiser's,
-    /// reuse's and `CATCH_UP_FRAMES`, the denoiser's most frames of history).
+    /// `EXPOSURE_IS_FIXED`, `FIXED_EXPOSURE`, `EMISSION`, `EMISSION_TEXTURE`, `LINEAR_OUT`,
+    /// `SOFT_SHADOWS`).
     pub(crate) fn wgsl(&self) -> String {
-        let consts = format!(
+        format!(
             "const SHADING_MODEL: u32 = {}u;\nconst PHYSICAL_FALLOFF: bool = {};\n\
              const LIGHT_SCALE: f32 = {:?}f;\nconst TONE_MAP: u32 = {}u;\n\
              const EXPOSURE_IS_FIXED: bool = {};\nconst FIXED_EXPOSURE: f32 = {:?}f;\n\
              const EMISSION: bool = {};\nconst EMISSION_TEXTURE: bool = {};\n\
-             const DENOISE: bool = {};\nconst REUSE: bool = {};\n\
-             const PROBES: bool = {};\nconst LINEAR_OUT: bool = {};\n\
-             const SPATIAL: u32 = {}u;\nconst SPATIAL_NEIGHBOURS: u32 = {}u;\n\
-             const SPATIAL_RADIUS: f32 = {:?}f;\nconst SPATIAL_SLOTS: u32 = {}u;\n\
-             const CATCH_UP_FRAMES: f32 = {:?}f;\n",
+             const LINEAR_OUT: bool = {};\nconst SOFT_SHADOWS: bool = {};\n",
             self.shading.code(),
             self.physical_falloff,
             self.light_scale,
@@ -350,94 +336,11 @@ impl ShadingConsts {
             self.fixed_exposure.unwrap_or(1.0),
             self.emission,
             self.emission_texture,
-            self.denoise,
-            self.reuse,
-            self.probes,
             self.linear_out,
-            self.spatial,
-            crate::shading::reuse::SPATIAL_NEIGHBOURS,
-            crate::shading::reuse::SPATIAL_RADIUS,
-            crate::shading::reuse::SPATIAL_NEIGHBOURS + 1,
-            crate::shading::denoise::MAX_HISTORY as f32,
-        );
-        let consts = if self.probes {
-            format!("{consts}{}", crate::shading::probes::PROBES_WGSL)
-        } else {
-            format!("{consts}{NO_PROBES_WGSL}")
-        };
-        let reuse = crate::shading::reuse::lighting_wgsl(self.reuse);
-        if self.denoise {
-            format!("{consts}{reuse}{DENOISE_WGSL}")
-        } else {
-            format!(
-                "{consts}{reuse}fn denoise_store(px: vec2<i32>, a: vec4<f32>, s: vec3<f32>, \
-                 u: vec3<f32>, r: vec3<f32>, f: f32) {{}}\n\
-                 fn denoise_set_shadowed(px: vec2<i32>, s: vec3<f32>) {{}}\n\
-                 fn denoise_store_fix(px: vec2<i32>, s: vec3<f32>, u: vec3<f32>, g: f32) {{}}\n"
-            )
-        }
+            self.soft_shadows,
+        )
     }
 }
-
-/// Without probes: nothing to mirror (the calls sit behind `PROBES`, false).
-const NO_PROBES_WGSL: &str = "
-fn probe_reflected(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>) -> vec3<f32> { return vec3<f32>(0.0); }
-fn probe_fresnel(f0: vec3<f32>, n: vec3<f32>, v: vec3<f32>) -> vec3<f32> { return vec3<f32>(0.0); }
-";
-
-/// The lighting pass's side of the denoiser (denoise.rs): where it writes each pixel's
-/// unshadowed light and shadow ratio, and `fs_composite`, which shades the filtered ratio.
-const DENOISE_WGSL: &str = "
-@group(0) @binding(40) var<storage, read_write> denoise_px: array<vec4<f32>>;
-// The filtered ratio the composite reads; written by the lighting pass only in a frame whose
-// lights changed, with the history's correction for the temporal pass (denoise_store_fix).
-@group(0) @binding(41) var<storage, read_write> denoise_ratio: array<vec4<f32>>;
-
-// Per pixel: [exact unshadowed direct light, 1 = geometry], [estimate with shadows, the
-// frames of samples it stands for (0 = 1)], [the same estimate without, 0], [ambient +
-// emission, 0].
-fn denoise_store(px: vec2<i32>, a: vec4<f32>, shadowed: vec3<f32>, unshadowed: vec3<f32>, rest: vec3<f32>, frames: f32) {
-    let i = 4u * (u32(px.y) * u32(frame.viewport.x) + u32(px.x));
-    denoise_px[i] = a;
-    denoise_px[i + 1u] = vec4<f32>(shadowed, frames);
-    denoise_px[i + 2u] = vec4<f32>(unshadowed, 0.0);
-    denoise_px[i + 3u] = vec4<f32>(rest, 0.0);
-}
-
-// Replaces the pixel's estimate with shadows (spatial reuse's, after the lighting pass's).
-fn denoise_set_shadowed(px: vec2<i32>, shadowed: vec3<f32>) {
-    let i = 4u * (u32(px.y) * u32(frame.viewport.x) + u32(px.x));
-    denoise_px[i + 1u] = vec4<f32>(shadowed, 0.0);
-}
-
-// What the lights that changed add to the pixel's estimates with and without shadows, and
-// the luminance of the unshadowed light that went (denoise_fix), for the denoiser's temporal
-// pass.
-fn denoise_store_fix(px: vec2<i32>, shadowed: vec3<f32>, unshadowed: vec3<f32>, went: f32) {
-    let i = 2u * (u32(px.y) * u32(frame.viewport.x) + u32(px.x));
-    denoise_ratio[i] = vec4<f32>(shadowed, 0.0);
-    denoise_ratio[i + 1u] = vec4<f32>(unshadowed, went);
-}
-
-@fragment
-fn fs_composite(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
-    let px = vec2<i32>(frag.xy);
-    let i = u32(px.y) * u32(frame.viewport.x) + u32(px.x);
-    let exact = denoise_px[4u * i];
-    if (exact.w == 0.0) {
-        return vec4<f32>(frame.sky.rgb, 1.0);
-    }
-    // Per channel: the filtered estimate with shadows over the same without, where that
-    // channel carries light (else the luminance ratio).
-    let s = denoise_ratio[2u * i].rgb;
-    let u = denoise_ratio[2u * i + 1u].rgb;
-    let luma = vec3<f32>(0.2126, 0.7152, 0.0722);
-    let r_lum = dot(s, luma) / max(dot(u, luma), 1e-30);
-    let r = select(vec3<f32>(r_lum), s / max(u, vec3<f32>(1e-30)), u > vec3<f32>(1e-6 * dot(u, luma)));
-    let rest = denoise_px[4u * i + 3u].rgb;
-    return vec4<f32>(tone_map(rest + exact.rgb * clamp(r, vec3<f32>(0.0), vec3<f32>(1.0))), 1.0);
-}
-";
 
 /// Incident-light meter calibration constant (lux · s at ISO 100).
 const METER_CALIBRATION: f32 = 250.0;
@@ -516,11 +419,8 @@ impl ResolvedLook {
             fixed_exposure: self.metered.is_none().then_some(self.exposure_scale),
             emission: self.emission,
             emission_texture: false,
-            denoise: false,
-            reuse: false,
-            spatial: 0,
-            probes: false,
             linear_out: false,
+            soft_shadows: true,
         }
     }
 

@@ -11,23 +11,9 @@ struct VisibilityParams {
     _pad1: u32,
 }
 
-@group(0) @binding(0) var<uniform> frame: FrameUniforms;
-@group(0) @binding(1) var<storage, read> lights: array<LightData>;
-@group(0) @binding(2) var<storage, read> shadow_views: array<ShadowViewData>;
-// Bindings as in the lighting pass (one entry list serves both); 3 is unused here.
-@group(0) @binding(4) var gbuf_position: texture_2d<u32>;
-@group(0) @binding(5) var gbuf_normal: texture_2d<u32>;
-// The depth atlas read as plain floats: compute shaders on GL cannot load depth textures.
-@group(0) @binding(6) var atlas: texture_2d<f32>;
-@group(0) @binding(7) var<uniform> params: VisibilityParams;
-@group(0) @binding(8) var<storage, read_write> mask: array<u32>;
-// The clustered light lists (clusters.rs), as in the lighting pass.
-@group(0) @binding(9) var<uniform> clusters: ClusterUniforms;
-@group(0) @binding(10) var<storage, read> cluster_slots: array<u32>;
-@group(0) @binding(11) var<storage, read> cluster_masks: array<u32>;
-// The fraction of each light reaching each pixel, one byte per light (0..255), four lights per
-// word: per pixel, 8 words per 32-light word of the chunk (a 4-byte dummy without `soft`).
-@group(0) @binding(12) var<storage, read_write> soft_out: array<u32>;
+// The bindings (frame, lights, shadow_views, gbuf_position, gbuf_normal, atlas read as
+// floats, params, mask, clusters, cluster_slots, cluster_masks, soft_out, then the shadow
+// source's) are declared in visibility.rs and inputs.rs, which say what each holds.
 
 fn shadow_depth_at(texel: vec2<i32>) -> f32 {
     return textureLoad(atlas, texel, 0).r;

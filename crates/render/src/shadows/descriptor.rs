@@ -9,6 +9,7 @@ use manyshadows_scene::Scene;
 use crate::error::{Fills, RenderError, Technique};
 use crate::gpu::context::GpuContext;
 use crate::gpu_scene::instances::GpuScene;
+use crate::shadows::cost::Cost;
 use crate::shadows::lookup::LookupWgsl;
 use crate::shadows::source::{PlanParams, ShadowSource, SourceSettings};
 use crate::shadows::technique::ShadowTechnique;
@@ -188,6 +189,15 @@ pub struct TechniqueInfo {
     /// Whether sized lights soften its shadows (false: it answers lit or not at the light's
     /// centre, whatever the light's size, and says so).
     pub soft_shadows: bool,
+    /// Its price list for the frame estimate (`Renderer::estimate_frame`): how its lighting
+    /// pass reads shadows and what its shadow stage costs.
+    pub cost: Cost,
+    /// Whether its shadows answer for the camera's pixels only (a visibility mask): no other
+    /// view can be lit with them, so a scene's reflection probes are left out, with a note.
+    pub camera_pixels_only: bool,
+    /// Whether what it keeps of the shadows follows the camera (virtual pages): views lit
+    /// with them (the probes' faces) are redrawn when the camera moves.
+    pub follows_camera: bool,
     /// What to use where it cannot run.
     pub instead: &'static str,
     /// How the lighting and visibility passes read its shadows (the atlas techniques share
@@ -245,6 +255,12 @@ impl TechniqueInfo {
                 fills: self.fills,
             }),
         }
+    }
+
+    /// Whether a shadow budget applies to it (`RenderSettings::shadow_budget`): the atlas
+    /// techniques, whose views the caching generator draws.
+    pub fn takes_shadow_budget(&self) -> bool {
+        matches!(self.build, Build::Atlas(_))
     }
 
     /// The technique's composed WGSL.

@@ -4,6 +4,7 @@
 //! `shadow_coord` and the ray functions, with its own bindings. A source that fills something
 //! new writes its lookup beside itself; the passes compose whatever they are handed.
 
+use crate::gpu::bindings::{Binding, BindingList};
 use crate::gpu::shaders::COMMON;
 
 /// Shadow-view selection, receiver bias and atlas addressing.
@@ -42,21 +43,24 @@ pub const NO_RAYS: &str = "const SHADOW_RAYS: bool = false;\n\
 
 /// A source's part of the shadow-reading passes' WGSL. It defines `shadow_coord(light, p, n,
 /// view_depth) -> ShadowCoord`, `SHADOW_RAYS`, `ray_lit`, `ray_samples` and `ray_seed`, after
-/// `common.wgsl`, `paraboloid.wgsl` and `shadow_lookup.wgsl`; its own declarations take the
-/// bindings from `first` on, in the order of the source's
-/// [`ShadowOutput::bindings`](crate::shadows::source::ShadowOutput::bindings).
+/// `common.wgsl`, `paraboloid.wgsl` and `shadow_lookup.wgsl`. Its own bindings are declared
+/// once, in [`LookupWgsl::bindings`]: the pass that composes it numbers them after its own and
+/// generates their WGSL declarations (`gpu::bindings`), and the source hands their resources
+/// in the same order ([`ShadowOutput::resources`](crate::shadows::source::ShadowOutput::resources)).
 #[derive(Clone, Copy, Debug)]
 pub struct LookupWgsl {
     /// `enable` directives it needs, placed first in the shader ("" for none).
     pub enables: &'static str,
-    /// Its WGSL, declarations from binding `first` on.
-    pub source: fn(first: u32) -> String,
+    /// Its bindings, in order.
+    pub bindings: &'static [Binding],
+    /// Its WGSL, without the bindings' declarations.
+    pub source: fn() -> String,
     /// The device features it compiles only with (the registry's shader test reads them).
     #[cfg_attr(not(test), allow(dead_code))]
     pub features: wgpu::Features,
 }
 
-fn atlas_lookup(_first: u32) -> String {
+fn atlas_lookup() -> String {
     format!("{ATLAS_COORD}\n{ATLAS_TAPS}\n{NO_RAYS}")
 }
 
@@ -64,6 +68,7 @@ fn atlas_lookup(_first: u32) -> String {
 /// sources whose output is the mask: their passes never call `shadow_coord`).
 pub const ATLAS_LOOKUP: LookupWgsl = LookupWgsl {
     enables: "",
+    bindings: &[],
     source: atlas_lookup,
     features: wgpu::Features::empty(),
 };
@@ -74,18 +79,19 @@ pub fn atlas_coord() -> &'static str {
     ATLAS_COORD
 }
 
-/// A shadow-reading pass: `lookup`'s enables, the shared parts (with the soft-shadow filter),
-/// `lookup` with its declarations
-/// from binding `first`, then `pass` (the pass's own WGSL, which declares bindings below
-/// `first`).
-pub fn compose_reader(lookup: &LookupWgsl, first: u32, pass: &str) -> String {
+/// A shadow-reading pass: `lookup`'s enables, the declarations of `bindings` (the pass's own,
+/// then the lookup's, then those of the parts plugged into it: `gpu::bindings` numbers them in
+/// that order), the shared parts (with the soft-shadow filter), `lookup`'s WGSL, then `pass`
+/// (the pass's own WGSL and its parts', which declare no bindings of their own).
+pub fn compose_reader(lookup: &LookupWgsl, bindings: &BindingList, pass: &str) -> String {
     [
         lookup.enables,
+        &bindings.wgsl(),
         COMMON,
         PARABOLOID,
         SHADOW_LOOKUP,
         PCSS,
-        &(lookup.source)(first),
+        &(lookup.source)(),
         pass,
     ]
     .join("\n")

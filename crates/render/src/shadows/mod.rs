@@ -7,9 +7,12 @@
 //!   share (with their WGSL); [`image`]: depth read-back and pictures;
 //! - [`source`]: the [`ShadowSource`](source::ShadowSource) trait the renderer drives, its
 //!   output, and the view table of the sources that fill no atlas;
-//! - one folder per kind of source: [`atlas`] (the atlas, its techniques, their registry and
-//!   generator), [`irregular`] (a visibility mask), [`vsm`] (virtual shadow maps: a page pool);
-//! - `create`: the one place a technique becomes a source.
+//! - [`descriptor`]: how a technique declares itself (`TechniqueInfo`), with its price list for
+//!   the frame estimate ([`cost`]) and how the lighting pass reads it ([`lookup`]);
+//! - one folder per kind of source: [`atlas`] (the atlas, its techniques, the caching
+//!   generator), [`irregular`] (a visibility mask), [`vsm`] (virtual shadow maps: a page pool),
+//!   [`raytraced`] (acceleration structures and shadow rays); the registry (`crate::registry`)
+//!   is the one place a technique becomes a source.
 //!
 //! `shadow_lookup.wgsl` (view selection, bias, atlas addressing) and `paraboloid.wgsl` (the
 //! dual-paraboloid warp) lie here too: every pass that reads shadows composes them
@@ -17,6 +20,7 @@
 
 pub mod atlas;
 pub mod cluster_draw;
+pub mod cost;
 pub mod depth;
 pub mod descriptor;
 pub mod image;

@@ -15,7 +15,7 @@
 
 use glam::Vec3;
 use manyshadows_scene::atlas::FitPolicy;
-use manyshadows_scene::light_space::PointShadows;
+use manyshadows_scene::light_space::{PointShadows, ShadowView};
 use manyshadows_scene::Scene;
 
 use crate::error::{RenderError, Technique};
@@ -73,9 +73,8 @@ pub struct SourceInputs<'a> {
 
 /// What a source leaves for the lighting and visibility passes: the view table, the depth
 /// texture they sample (the atlas, a page pool, or a 1×1 placeholder), the mask where the
-/// source computed it, and its lookup: the WGSL that finds a point's shadow
-/// ([`LookupWgsl`]) and that WGSL's own bindings, which the passes place from their first
-/// free binding on.
+/// source computed it, and its lookup: the WGSL that finds a point's shadow ([`LookupWgsl`],
+/// which declares its bindings) and those bindings' resources.
 #[derive(Clone)]
 pub struct ShadowOutput<'a> {
     /// `array<ShadowViewData>`.
@@ -89,8 +88,8 @@ pub struct ShadowOutput<'a> {
     pub mask: Option<&'a wgpu::Buffer>,
     /// The source's WGSL for the passes.
     pub lookup: LookupWgsl,
-    /// The bindings [`ShadowOutput::lookup`] declares, in order from its first binding.
-    pub bindings: Vec<(wgpu::BindingType, wgpu::BindingResource<'a>)>,
+    /// The resources of [`LookupWgsl::bindings`], in their order.
+    pub resources: Vec<wgpu::BindingResource<'a>>,
     /// The widest penumbra radius, in texels, the lookup's soft filter reads at one level
     /// (what `SoftShadows::max_penumbra` is clamped to for it; unbounded for the atlas).
     pub max_penumbra: f32,
@@ -106,37 +105,9 @@ impl<'a> ShadowOutput<'a> {
             depth_side: views.size,
             mask: None,
             lookup,
-            bindings: Vec::new(),
+            resources: Vec::new(),
             max_penumbra: f32::INFINITY,
         }
-    }
-
-    /// Layout entries of the lookup's bindings from `first` on.
-    pub(crate) fn extra_layout(
-        &self,
-        first: u32,
-        visibility: wgpu::ShaderStages,
-    ) -> Vec<wgpu::BindGroupLayoutEntry> {
-        (first..)
-            .zip(&self.bindings)
-            .map(|(binding, (ty, _))| wgpu::BindGroupLayoutEntry {
-                binding,
-                visibility,
-                ty: *ty,
-                count: None,
-            })
-            .collect()
-    }
-
-    /// Bind-group entries of the lookup's bindings from `first` on.
-    pub(crate) fn extra_entries(&self, first: u32) -> Vec<wgpu::BindGroupEntry<'a>> {
-        (first..)
-            .zip(&self.bindings)
-            .map(|(binding, (_, resource))| wgpu::BindGroupEntry {
-                binding,
-                resource: resource.clone(),
-            })
-            .collect()
     }
 }
 
@@ -225,7 +196,18 @@ pub trait ShadowSource: std::any::Any {
     /// Shadow views of the current plan: every atlas tile, or every face of a source that
     /// lays out views of its own (a spot light's frustum, a cube face, a cascade).
     fn view_count(&self) -> usize {
-        self.plan().views.len()
+        self.views_filled().len()
+    }
+
+    /// The views whose casters the source draws or lists: the plan's (atlas tiles, irregular
+    /// light views), a source's own faces (virtual maps), or none (rays).
+    fn views_filled(&self) -> &[ShadowView] {
+        &self.plan().views
+    }
+
+    /// Whether it fills the plan's atlas tiles (the plan's layout is then the atlas's).
+    fn fills_atlas(&self) -> bool {
+        false
     }
 
     /// The technique's own counters of the last frame (virtual maps' pages, irregular maps'

@@ -377,8 +377,9 @@ pub fn differing_pixels(
     differing
 }
 
-/// A ray-traced renderer (`settings` with technique raytraced), or `None` after checking that a device without ray queries refuses the
-/// technique by name.
+/// A ray-traced renderer (`settings` with technique raytraced), or `None` after checking that
+/// a device without ray queries refuses the technique by name. Where the test command says the
+/// backend must offer ray queries, a refusal fails the test ([`check_refusal`]).
 pub fn raytraced(
     ctx: &GpuContext,
     scene: &Scene,
@@ -394,19 +395,55 @@ pub fn raytraced(
             assert!(unmet.is_empty(), "rendered without {unmet:?}");
             Some(r)
         }
-        Err(e @ manyshadows::RenderError::MissingFeature { .. }) => {
-            assert!(
-                !unmet.is_empty(),
-                "refused on a device that has ray queries: {e}"
-            );
-            assert!(
-                e.to_string().contains("EXPERIMENTAL_RAY_QUERY"),
-                "the refusal names the feature: {e}"
-            );
-            eprintln!("refused here, by name: {e}");
+        Err(e) => {
+            check_refusal(ctx, manyshadows::Technique::RAYTRACED, &e);
             None
         }
-        Err(e) => panic!("{e}"),
+    }
+}
+
+/// `e` is `technique`'s refusal on `ctx`'s device: the device lacks one of its needs, and the
+/// refusal names it. The refusal is recorded as a test that checked a refusal instead of
+/// running, and fails the test where the test command says the backend must offer the need
+/// (`manyshadows_testkit::refused`).
+#[track_caller]
+pub fn check_refusal(
+    ctx: &GpuContext,
+    technique: manyshadows::Technique,
+    e: &manyshadows::RenderError,
+) {
+    let unmet = technique.info().unmet(ctx);
+    assert!(
+        !unmet.is_empty() && e.is_unsupported(),
+        "{technique} failed on an adapter that has all it needs: {e}"
+    );
+    let need = unmet[0].name();
+    assert!(
+        e.to_string().contains(&need),
+        "the refusal of {technique} names {need}: {e}"
+    );
+    manyshadows_testkit::refused(&need, &format!("technique {technique}: {e}"));
+}
+
+/// Renders with `settings` on `ctx`, or `None` where the device refuses its technique for a
+/// need it lacks (checked and recorded by [`check_refusal`]). Any other error fails the test.
+#[track_caller]
+pub fn renderer_or_refusal(
+    ctx: &GpuContext,
+    scene: &Scene,
+    settings: manyshadows::RenderSettings,
+) -> Option<manyshadows::Renderer> {
+    let technique = settings.technique;
+    match manyshadows::Renderer::new(ctx, scene, settings) {
+        Ok(r) => {
+            let unmet = technique.info().unmet(ctx);
+            assert!(unmet.is_empty(), "{technique} rendered without {unmet:?}");
+            Some(r)
+        }
+        Err(e) => {
+            check_refusal(ctx, technique, &e);
+            None
+        }
     }
 }
 

@@ -41,10 +41,10 @@ use graph::{
 
 /// The render crate's registry module: the list of the technique declarations.
 const REGISTRY: &str = "registry";
-/// The modules that may import a technique's module: the registry, and the renderer's
-/// `inspect` part, whose public API reads what one technique alone keeps (the virtual maps'
-/// page pool and table).
-const TECHNIQUE_IMPORTERS: [&str; 2] = [REGISTRY, "renderer::inspect"];
+/// The modules that may import a technique's module: the registry, and the crate root, whose
+/// facade reads what one technique alone keeps (the virtual maps' page pool and table, the
+/// irregular maps' counters). The renderer names none.
+const TECHNIQUE_IMPORTERS: [&str; 2] = [REGISTRY, ROOT];
 /// The registry's file.
 const REGISTRY_FILE: &str = "registry.rs";
 
@@ -189,6 +189,114 @@ fn no_import_circles_in_any_crate_between_modules_or_folders() {
          crate root instead of the defining module; move the shared piece down):\n{}",
         failures.join("\n")
     );
+}
+
+/// The render crate's floors as intended, bottom up: each entry is one floor, its units the
+/// folders (and files directly in `src/`) that stand on it. A unit imports only units of lower
+/// floors, so two folders cannot swap floors unseen, and a new folder fails this test until
+/// it is given its floor here (and in ARCHITECTURE.md, which lists the same order).
+const DECLARED_FLOORS: &[&[&str]] = &[
+    &["error"],
+    &["gpu"],
+    &["gpu_scene"],
+    &["frame"],
+    &["sampled"],
+    &["shadows"],
+    &[
+        "shadows::atlas",
+        "shadows::irregular",
+        "shadows::raytraced",
+        "shadows::vsm",
+    ],
+    &["shading"],
+    &["probes"],
+    &["settings"],
+    &["registry"],
+    &["report"],
+    &["renderer"],
+    &[ROOT],
+];
+
+/// Where `unit` stands in [`DECLARED_FLOORS`].
+fn declared_floor(unit: &str) -> Option<usize> {
+    DECLARED_FLOORS.iter().position(|f| f.contains(&unit))
+}
+
+/// The imports of `folders` (a crate's folder graph) that do not go down the declared floors,
+/// and the units the declaration does not place.
+fn floor_violations(folders: &Graph) -> Vec<String> {
+    let mut bad = Vec::new();
+    for (from, edges) in folders {
+        let Some(a) = declared_floor(from) else {
+            bad.push(format!("{from} has no declared floor"));
+            continue;
+        };
+        for to in edges {
+            match declared_floor(to) {
+                None => bad.push(format!("{to} has no declared floor")),
+                Some(b) if b >= a => bad.push(format!(
+                    "{from} (floor {a}) imports {to} (floor {b}): only lower floors may be imported"
+                )),
+                Some(_) => {}
+            }
+        }
+    }
+    for floor in DECLARED_FLOORS {
+        for unit in *floor {
+            if !folders.contains_key(*unit) {
+                bad.push(format!("the declared unit {unit} is not in the crate"));
+            }
+        }
+    }
+    bad.sort();
+    bad.dedup();
+    bad
+}
+
+#[test]
+fn the_render_crate_keeps_its_declared_floors() {
+    let render = render();
+    let bad = floor_violations(&render.folders);
+    assert!(
+        bad.is_empty(),
+        "the render crate's folders against DECLARED_FLOORS (bottom up: {:?}):\n{}",
+        DECLARED_FLOORS,
+        bad.join("\n")
+    );
+}
+
+#[test]
+fn checker_finds_a_swap_of_two_declared_floors() {
+    // `frame` importing `shading` is a circle-free graph (so the circle check passes it), but
+    // it puts frame above shading: the declared floors fail it.
+    let mut folders: Graph = DECLARED_FLOORS
+        .iter()
+        .flat_map(|f| f.iter())
+        .map(|u| (u.to_string(), BTreeSet::new()))
+        .collect();
+    folders
+        .get_mut(ROOT)
+        .expect("root")
+        .extend(["renderer".to_string(), "error".to_string()]);
+    assert!(
+        floor_violations(&folders).is_empty(),
+        "{:?}",
+        floor_violations(&folders)
+    );
+    folders
+        .get_mut("frame")
+        .expect("frame")
+        .insert("shading".to_string());
+    assert!(circles_of(&folders).is_empty());
+    let bad = floor_violations(&folders);
+    assert!(
+        bad.len() == 1 && bad[0].starts_with("frame (floor 3) imports shading"),
+        "{bad:?}"
+    );
+    folders.insert("newcomer".to_string(), BTreeSet::new());
+    assert!(floor_violations(&folders)
+        .iter()
+        .any(|b| b.contains("newcomer has no declared floor")));
 }
 
 /// The modules that declare a technique (`pub const INFO: TechniqueInfo`).

@@ -1,7 +1,7 @@
 //! The `dragon` scene: seed 000's benchmark, one model on a floor ringed by shadow-casting
 //! lights.
 //!
-//! Why: seed 000 measured layered shadow-map generation on the Stanford dragon (35,577
+//! Why: seed 000 times layered shadow-map generation on the Stanford dragon (35,577
 //! triangles) lit by a growing number of lights. This scene reproduces that setup: the model
 //! (`opts.mesh`, normalised to stand [`DRAGON_HEIGHT`] m tall at the origin) or, when none is
 //! given, a procedural stand-in of the same size class ([`dragon_stand_in`]: a bumpy trefoil

@@ -510,14 +510,13 @@ pub(crate) fn local(
 /// lights, which have no position, first, in their order). The ray-traced technique's
 /// sampled lights are stratified over each pixel's lights in list order
 /// (`--light-samples K` with `--denoise`), so in this order a pixel's samples over frames
-/// spread over the space around it rather than over the list's arbitrary order: atrium,
-/// 1,024 lights, 640 × 360, K = 1, 8 still frames denoised, RMSE against the 8 × 8 exact
-/// image 2.10 → 2.02 (lavapipe, docs/bench/denoise-order-lavapipe.txt; with an earlier
-/// sampling a Hilbert curve read 2.07 against Morton's 2.05, Morton over a cube instead of
-/// the bounds 2.09). The sequence the positions come from spreads consecutive lights apart,
-/// the opposite. Applied to every seeded layout above [`LOCAL_LAYOUT_ABOVE`] lights, once,
-/// where the layout leaves the module (`builtin::build`, `builtin::scatter_lights`); the
-/// hand-made layouts keep their order.
+/// spread over the space around it rather than over the list's arbitrary order, which lowers
+/// the denoised error of still frames; of the curves tried, a Morton curve over the lights'
+/// bounds did best (docs/decisions.md, "Lights listed in space order"). The sequence the
+/// positions come from spreads consecutive lights apart, the opposite. Applied to every
+/// seeded layout above [`LOCAL_LAYOUT_ABOVE`] lights, once, where the layout leaves the
+/// module (`builtin::build`, `builtin::scatter_lights`); the hand-made layouts keep their
+/// order.
 pub(crate) fn spatial_order(lights: &mut [Light]) {
     let centre = |l: &Light| l.bounding_sphere().map(|(c, _)| c);
     let (lo, hi) = lights.iter().filter_map(centre).fold(

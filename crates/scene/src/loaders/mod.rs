@@ -51,7 +51,7 @@
 //! glTF lights are physical: candela (lm/sr) for point and spot lights, lux (lm/m²) for
 //! directional ones, falling off with the inverse square of distance. A loaded glTF scene is
 //! [`Lighting::Physical`](crate::Lighting): its lights keep those units and the renderer
-//! shades it with the glTF BRDF through an exposure (see `manyshadows_render::Look`). The
+//! shades it with the glTF BRDF through an exposure (see `manyshadows::Look`). The
 //! mapping:
 //!
 //! - diffuse = specular = `color × intensity` (candela or lux); ambient = 0 (the file's

@@ -51,23 +51,10 @@ pub struct ViewArgs {
     /// Filtering to start with: off, 2x2 or 3x3.
     #[arg(long, default_value = "2x2", value_parser = manyshadows_cli::parse_pcf)]
     pub(super) pcf: Pcf,
-    /// With shadow rays (--technique raytraced): trace K lights per pixel, picked by
-    /// importance (0: every light of the pixel's cluster, exactly); the panel changes it.
-    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=16))]
-    pub(super) light_samples: u32,
-    /// With shadow rays: denoise the sampled rays (with --light-samples K), or accumulate the
-    /// sized lights' area samples over frames (without), as `render --denoise` does; the
-    /// history follows the camera as it flies. The panel turns it on and off.
-    #[arg(long)]
-    pub(super) denoise: bool,
-    /// With shadow rays and --light-samples K: reuse each pixel's sampled lights across
-    /// frames, as `render --reuse` does (a still view's noise falls frame by frame without a
-    /// filter); the panel turns it on and off.
-    #[arg(long)]
-    pub(super) reuse: bool,
-    /// With --reuse: spatial reuse too, as `render --spatial` (off, biased or unbiased).
-    #[arg(long, default_value = "off", value_parser = manyshadows_cli::parse_spatial)]
-    pub(super) spatial: manyshadows::SpatialReuse,
+    /// The options of one technique or another, as `render` takes them; the panel changes
+    /// --light-samples, --denoise, --reuse and --spatial at run time.
+    #[command(flatten)]
+    pub(super) per_technique: manyshadows_cli::TechniqueArgs,
     /// Start with every shadow map drawn anew each frame (the panel's "keep unchanged maps"
     /// box unticked); by default the maps (pages) of views that saw no change are kept.
     #[arg(long, conflicts_with = "shadow_budget")]

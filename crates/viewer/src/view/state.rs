@@ -10,7 +10,7 @@ use anyhow::Result;
 use manyshadows::scene::light_size::LightSizes;
 use manyshadows::scene::light_space::PointShadows;
 use manyshadows::scene::Scene;
-use manyshadows::{wgpu, Fills, GpuContext, Pcf, RayOptions, RenderSettings, Renderer, Technique};
+use manyshadows::{wgpu, Fills, GpuContext, Pcf, RenderSettings, Renderer, Technique};
 use winit::window::Window;
 
 use crate::view::args::ViewArgs;
@@ -47,6 +47,10 @@ pub(super) struct Choice {
     pub(super) stereo: Option<f32>,
     /// How the probes' faces are drawn (`--probe-passes`).
     pub(super) probe_passes: manyshadows::ProbePasses,
+    /// The technique options of the flags (irregular and virtual maps, the rays' area
+    /// samples and seed); the panel's light samples, denoiser and reuse above take the place
+    /// of theirs.
+    pub(super) options: manyshadows_cli::TechniqueArgs,
 }
 
 /// The open window and everything drawn into it.
@@ -112,8 +116,11 @@ fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
         .with_visibility(c.visibility)
         .with_look(c.look)
         .with_soft(c.soft)
+        .with_irregular(c.options.irregular())
+        .with_virtual_maps(c.options.virtual_maps())
         .with_rays(
-            RayOptions::default()
+            c.options
+                .rays()
                 .with_light_samples(c.light_samples)
                 // Reuse and the denoiser follow one camera: not with stereo eyes.
                 .with_denoise(
@@ -148,11 +155,12 @@ impl State {
             visibility: args.show_visibility.is_some(),
             light_size: 1.0,
             look: args.look.look(),
-            light_samples: args.light_samples,
-            denoise: args.denoise,
-            reuse: args.reuse,
+            light_samples: args.per_technique.light_samples,
+            denoise: args.per_technique.denoise,
+            reuse: args.per_technique.reuse,
             soft: args.soft.soft(),
-            spatial: args.spatial,
+            spatial: args.per_technique.spatial,
+            options: args.per_technique,
             stereo: args.stereo,
             probe_passes: args.probe_passes,
         };

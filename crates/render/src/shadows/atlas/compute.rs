@@ -1,6 +1,7 @@
 //! `compute`: a software rasterizer in compute shaders fills every listed view's tile, without
-//! the fixed-function pipeline (UE5 Nanite's idea for dense geometry; on an H100 only two TPCs
-//! can run graphics work at all).
+//! the fixed-function pipeline (UE5 Nanite's idea for dense geometry, and a way round GPUs on
+//! which few units run graphics work: docs/techniques.md, "A compute rasterizer:
+//! `--technique compute`").
 //!
 //! Per generation ([`compute.wgsl`](compute.wgsl)): the caster transform writes world positions
 //! once; then per *round* (below) a storage buffer of one `u32` per texel of the round's tiles
@@ -11,7 +12,8 @@
 //! chunks of 32² texels that one 8×8 workgroup each rasterizes (an indirect dispatch). Depth is
 //! written as `atomicMax(1.0's bits − depth's bits)`: `atomicMin` on the float's bits (depths in
 //! [0, 1] order like their bits) turned around so that far is 0 and a zero fill clears the
-//! buffer (on lavapipe a clear shader cost as much as the whole setup).
+//! buffer (far cheaper than a clear shader on a software driver: docs/decisions.md, "Compute
+//! rasterizer: a zero fill and a chunk list 16 times the texels").
 //! A render pass finally copies the buffer into the atlas tiles with `frag_depth` (GL can
 //! neither copy into depth textures nor store to them from compute).
 //!
@@ -23,7 +25,7 @@
 //! edge's lexicographically first end so neighbours agree exactly (no cracks).
 //!
 //! **No silent drops**: the chunk list is sized from the round's texels (every texel covered by
-//! large triangles four times over); when it is full anyway, the setup thread rasterizes the
+//! large triangles 16 times over); when it is full anyway, the setup thread rasterizes the
 //! chunk itself (correct, slower) and counts it ([`Compute::overflowed`] reads the count).
 //!
 //! **Memory**: the depth buffer covers only the drawn tiles (an offset per *entry*). When they
@@ -38,6 +40,7 @@ use crate::error::Technique;
 use crate::gpu::context::GpuContext;
 use crate::gpu::shaders::{compose, COMMON};
 use crate::gpu_scene::casters::ALPHA_MASK;
+use crate::shadows::cost::{price, Cost, LightingRead};
 use crate::shadows::depth::CULL;
 use crate::shadows::descriptor::{Build, Culling, TechniqueInfo, Wgsl};
 use crate::shadows::lookup::ATLAS_LOOKUP;
@@ -60,6 +63,20 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     point_shadows: &[PointShadows::Cube],
     needs: &[],
     soft_shadows: true,
+    // Milliseconds of its shadow stage per (triangle, view) pair taken on, (instance, view) pair,
+    // texel of the tiles, texel of the whole atlas, view, and fixed, on lavapipe
+    // (docs/benchmarks.md, "The frame estimate").
+    cost: Cost {
+        lighting: LightingRead::Maps,
+        shadows_ms: |w| {
+            price(
+                &[1.59e-05, 4.45e-02, 2.90e-06, 4.98e-06, 0.0, 0.0],
+                &w.atlas_units(),
+            )
+        },
+    },
+    camera_pixels_only: false,
+    follows_camera: false,
     instead: "",
     lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(Compute::new(ctx)?))),
@@ -488,10 +505,10 @@ impl ShadowTechnique for Compute {
             .max()
             .unwrap_or(1);
         // Room for every texel of the round to be covered by large triangles 16 times over
-        // (chunks are rarely full). The atrium's 84 views at 32 lights ask for 102k chunks,
-        // 8 for each of its 12.6 M texels: at 4 times over, a third fell back to their setup
-        // threads, whose loops over many chunks llvmpipe cuts short (its 65,535-iteration budget
-        // per invocation), and large casters lost texels. 64 bytes a chunk: 12.6 MiB there.
+        // (chunks are rarely full). With less room a crowded frame's chunks fall back to their
+        // setup threads, whose loops over many chunks llvmpipe cuts short (its loop budget per
+        // invocation), and large casters lose texels (docs/decisions.md, "Compute rasterizer: a
+        // zero fill and a chunk list 16 times the texels").
         let chunks_wanted = ((most_texels / 64) as u32).max(MIN_CHUNKS);
         self.pending_read = false;
         self.ensure_buffers(ctx, most_texels, chunks_wanted);

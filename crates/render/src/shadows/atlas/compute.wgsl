@@ -28,7 +28,7 @@ struct ComputeParams {
     sizes: vec4<u32>,
 }
 
-// Alpha-tested triangles (casters.rs puts them last) test each covered texel's centre against
+// Alpha-tested triangles (caster_layout.rs puts them last) test each covered texel's centre against
 // their coverage mask (alpha_mask.wgsl) before writing depth; opaque ones skip the test.
 
 // A chunk of a large triangle: its snapped corners (fixed point, positive orientation), its
@@ -76,7 +76,7 @@ struct RoundEntries {
 
 @group(1) @binding(0) var<storage, read_write> args: array<u32, 4>;
 
-// The pipeline for alpha-tested triangles (casters.rs puts them last): its cs_setup threads
+// The pipeline for alpha-tested triangles (caster_layout.rs puts them last): its cs_setup threads
 // cover only those, and it tests masks. The opaque pipeline (false) compiles without any
 // alpha test, so opaque casters rasterize exactly as before masks existed.
 override ALPHA_TESTED: bool = false;

@@ -6,8 +6,9 @@
 @group(0) @binding(0) var<uniform> copy_atlas: vec4<f32>;
 @group(0) @binding(1) var<storage, read> copy_views: array<ShadowViewData>;
 // Per round entry: view, first texel in `copy_depth`, first tile row, rows. A uniform, as in
-// the raster passes: llvmpipe's OpenGL did not order a fragment shader's storage reads of it
-// before the next frame's `write_buffer` into it (wrong texels after cached frames).
+// the raster passes: llvmpipe's OpenGL does not order a fragment shader's storage reads of it
+// before the next frame's `write_buffer` into it, which left wrong texels after cached frames
+// (docs/decisions.md, "Frames that change, buffers that stay").
 @group(0) @binding(2) var<uniform> copy_entries: array<vec4<u32>, 4096>;
 @group(0) @binding(3) var<storage, read> copy_depth: array<u32>;
 

@@ -34,6 +34,7 @@ use crate::gpu_scene::casters::ALPHA_MASK;
 use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear, UniformRecords};
 use crate::shadows::cluster_draw::CLUSTER_CULL;
 use crate::shadows::cluster_draw::{plan_rounds, Round, COMMAND_SIZE};
+use crate::shadows::cost::{price, Cost, LightingRead};
 use crate::shadows::depth::depth_pipeline;
 use crate::shadows::depth::{CULL, TILE, TILE_MASK};
 use crate::shadows::descriptor::{Build, Culling, Need, TechniqueInfo, Wgsl};
@@ -64,6 +65,20 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
         Need::indirect("indirect draws"),
     ],
     soft_shadows: true,
+    // Milliseconds of its shadow stage per (triangle, view) pair taken on, (instance, view) pair,
+    // texel of the tiles, texel of the whole atlas, view, and fixed, on lavapipe
+    // (docs/benchmarks.md, "The frame estimate").
+    cost: Cost {
+        lighting: LightingRead::Maps,
+        shadows_ms: |w| {
+            price(
+                &[3.83e-06, 5.49e-03, 0.0, 9.67e-07, 0.0, 0.0],
+                &w.atlas_units(),
+            )
+        },
+    },
+    camera_pixels_only: false,
+    follows_camera: false,
     instead: "use technique layered",
     lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(GpuDriven::new(ctx)?))),

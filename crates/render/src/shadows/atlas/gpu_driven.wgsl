@@ -46,7 +46,7 @@ fn cs_cull(@builtin(global_invocation_id) gid: vec3<u32>) {
     if ((bits & CULL_FRUSTUM) != 0u && sphere_outside(views[view_id].view_proj, sphere)) {
         visible = false;
     }
-    // Clusters never straddle the cullable range (casters.rs builds them per class).
+    // Clusters never straddle the cullable range (caster_layout.rs builds them per class).
     if (visible && (bits & CULL_BACKFACE) != 0u && cl.first_triangle < gparams.counts.y
         && cluster_faces_away(cl, instances[cl.instance].normal, sphere, eyes[view_id])) {
         visible = false;

@@ -21,6 +21,7 @@ use crate::gpu::context::GpuContext;
 use crate::gpu::shaders::{compose, COMMON};
 use crate::gpu_scene::casters::ALPHA_MASK;
 use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear};
+use crate::shadows::cost::{price, Cost, LightingRead};
 use crate::shadows::depth::{depth_pipeline, masked_depth_pipeline};
 use crate::shadows::depth::{CULL, TILE, TILE_MASK};
 use crate::shadows::descriptor::{Build, Culling, Need, TechniqueInfo, Wgsl};
@@ -47,6 +48,15 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
         "to keep each view inside its atlas tile",
     )],
     soft_shadows: true,
+    // Milliseconds of its shadow stage per (triangle, view) pair taken on, (instance, view) pair,
+    // texel of the tiles, texel of the whole atlas, view, and fixed, on lavapipe
+    // (docs/benchmarks.md, "The frame estimate").
+    cost: Cost {
+        lighting: LightingRead::Maps,
+        shadows_ms: |w| price(&[9.91e-05, 0.0, 0.0, 8.89e-07, 0.0, 0.0], &w.atlas_units()),
+    },
+    camera_pixels_only: false,
+    follows_camera: false,
     instead: "use technique traditional",
     lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(Layered::new(ctx)?))),
@@ -195,7 +205,7 @@ impl ShadowTechnique for Layered {
             pass.set_scissor_rect(0, 0, 0, 0);
         }
         pass.set_bind_group(0, bind_group, &[]);
-        // Opaque casters, then the alpha-tested ones (casters.rs puts them last).
+        // Opaque casters, then the alpha-tested ones (caster_layout.rs puts them last).
         let opaque = 3 * casters.first_masked_triangle;
         let corners = 3 * casters.triangles;
         let ranges = [

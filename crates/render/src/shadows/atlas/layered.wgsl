@@ -64,7 +64,7 @@ fn vs_pulled(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> 
     return pulled(v, i);
 }
 
-// The alpha-tested range of the caster triangles (casters.rs), drawn with `fs_alpha`.
+// The alpha-tested range of the caster triangles (caster_layout.rs), drawn with `fs_alpha`.
 @vertex
 fn vs_indexed_masked(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> MaskedTileOut {
     return masked_tile_out(indexed(v, i), mask_tail(), v);

@@ -32,6 +32,7 @@ use crate::gpu::pipelines::dynamic_uniform_entry;
 use crate::gpu::shaders::{compose, COMMON};
 use crate::gpu_scene::casters::ALPHA_MASK;
 use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear, UniformRecords};
+use crate::shadows::cost::{price, Cost, LightingRead};
 use crate::shadows::depth::CULL;
 use crate::shadows::depth::{layered_depth_pipeline, masked_depth_pipeline};
 use crate::shadows::descriptor::{Build, Culling, Need, TechniqueInfo, Wgsl};
@@ -58,6 +59,20 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
         "one render pass per group of up to 6-32 equal-size shadow views",
     )],
     soft_shadows: true,
+    // Milliseconds of its shadow stage per (triangle, view) pair taken on, (instance, view) pair,
+    // texel of the tiles, texel of the whole atlas, view, and fixed, on lavapipe
+    // (docs/benchmarks.md, "The frame estimate").
+    cost: Cost {
+        lighting: LightingRead::Maps,
+        shadows_ms: |w| {
+            price(
+                &[7.27e-05, 8.92e-02, 4.47e-06, 0.0, 0.0, 0.0],
+                &w.atlas_units(),
+            )
+        },
+    },
+    camera_pixels_only: false,
+    follows_camera: false,
     instead: "use technique layered, which fills the same atlas with one instanced draw",
     lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(Multiview::new(ctx)?))),
@@ -438,7 +453,7 @@ impl ShadowTechnique for Multiview {
             g.timer.end_compute_stats(&mut pass, s);
             stats.passes += 1;
         }
-        // Opaque casters, then the alpha-tested ones (casters.rs puts them last).
+        // Opaque casters, then the alpha-tested ones (caster_layout.rs puts them last).
         let opaque = 3 * casters.first_masked_triangle;
         let corners = 3 * casters.triangles;
         for (group, &(first, n)) in groups.iter().enumerate() {

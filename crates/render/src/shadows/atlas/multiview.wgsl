@@ -20,7 +20,8 @@ struct MultiviewParams {
 @group(0) @binding(5) var<storage, read> draw_list: array<u32>;
 
 // Where all three corners of a culled triangle go: zero area, and inside the clip volume so
-// the triangle never reaches the clipper (lavapipe's clipper loses the view index).
+// the triangle never reaches the clipper (lavapipe's clipper before Mesa 25 loses the view
+// index: `clips_into_layer_zero`).
 const MV_CULLED: vec4<f32> = vec4<f32>(0.0, 0.0, 0.5, 1.0);
 
 // No culling: an indexed draw of the caster corners (post-transform vertex reuse applies).
@@ -40,7 +41,7 @@ fn vs_pulled(@builtin(vertex_index) v: u32, @builtin(view_index) layer: u32) -> 
     return pulled(v, layer);
 }
 
-// The alpha-tested range of the caster triangles (casters.rs), drawn with `fs_alpha`.
+// The alpha-tested range of the caster triangles (caster_layout.rs), drawn with `fs_alpha`.
 struct MaskedOut {
     @builtin(position) position: vec4<f32>,
     @location(0) uv: vec2<f32>,

@@ -177,8 +177,8 @@ impl UniformRecords {
         }
         let needed = self.bytes.len() as u64;
         if let Err(e) = crate::gpu::buffers::grow_buffer(ctx, &mut self.buffer, needed, self.what) {
-            // Over the device's buffer limit: what a per-frame buffer of this size did before
-            // (a GPU error the frame reports), not a silent truncation.
+            // Over the device's buffer limit: a buffer of the full size anyway, so the frame
+            // reports a GPU error rather than silently truncating the records.
             log::error!("{e}");
             self.buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(self.what),

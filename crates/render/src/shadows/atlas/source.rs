@@ -92,6 +92,10 @@ impl ShadowSource for AtlasSource {
         ShadowOutput::from_views(&self.generator.atlas, self.info.lookup)
     }
 
+    fn fills_atlas(&self) -> bool {
+        true
+    }
+
     fn picture(&self, ctx: &GpuContext) -> Result<ShadowPicture, RenderError> {
         ShadowPicture::of_atlas(ctx, &self.generator.atlas, &self.generator.plan)
     }

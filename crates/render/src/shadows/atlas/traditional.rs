@@ -14,6 +14,7 @@ use crate::gpu_scene::casters::ALPHA_MASK;
 use crate::gpu_scene::instances::{POSITION_LAYOUT, UV_LAYOUT_1};
 use crate::gpu_scene::skinning::{MAX_BONES, SKIN_LAYOUT};
 use crate::shadows::atlas::shared::{atlas_attachment, TileClear};
+use crate::shadows::cost::{price, Cost, LightingRead};
 use crate::shadows::descriptor::{Build, Culling, TechniqueInfo, Wgsl};
 use crate::shadows::lookup::ATLAS_LOOKUP;
 use crate::shadows::lookup::PARABOLOID;
@@ -35,6 +36,20 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     point_shadows: &[PointShadows::Cube, PointShadows::DualParaboloid],
     needs: &[],
     soft_shadows: true,
+    // Milliseconds of its shadow stage per (triangle, view) pair taken on, (instance, view) pair,
+    // texel of the tiles, texel of the whole atlas, view, and fixed, on lavapipe
+    // (docs/benchmarks.md, "The frame estimate").
+    cost: Cost {
+        lighting: LightingRead::Maps,
+        shadows_ms: |w| {
+            price(
+                &[3.30e-05, 2.57e-02, 3.84e-06, 0.0, 0.0, 0.0],
+                &w.atlas_units(),
+            )
+        },
+    },
+    camera_pixels_only: false,
+    follows_camera: false,
     instead: "",
     lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(Traditional::new(ctx)))),

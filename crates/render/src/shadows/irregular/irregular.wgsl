@@ -54,7 +54,7 @@ const C_ARGS: u32 = 8u;          // x, y, z workgroups of cs_tiles
 // Tiles are TILE x TILE texels; footprints up to INLINE_TEXELS texels are walked in place.
 const TILE: u32 = 8u;
 const INLINE_TEXELS: u32 = 16u;
-// Scenes with alpha-tested casters (casters.rs puts them last) compile this with true: a hit
+// Scenes with alpha-tested casters (caster_layout.rs puts them last) compile this with true: a hit
 // on such a triangle counts only where its mask is solid. Without, no mask code is compiled.
 override ALPHA_TESTED: bool = false;
 
@@ -67,7 +67,7 @@ const F32_MAX: f32 = 3.0e38;
 
 @group(0) @binding(0) var<uniform> frame: FrameUniforms;
 @group(0) @binding(1) var<storage, read> lights: array<LightData>;
-// Declared for shadow_lookup.wgsl's `shadow_coord`, which these entry points never call.
+// Declared for shadow_lookup.wgsl's `atlas_coord`, which these entry points never call.
 @group(0) @binding(2) var<storage, read> shadow_views: array<ShadowViewData>;
 @group(0) @binding(3) var gbuf_position: texture_2d<u32>;
 @group(0) @binding(4) var gbuf_normal: texture_2d<u32>;

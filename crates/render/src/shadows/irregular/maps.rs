@@ -39,7 +39,7 @@
 //!
 //! **llvmpipe's loop budget.** Mesa's software driver (GL and Vulkan) ends every loop of an
 //! invocation once that invocation has run 65535 loop iterations in all; a thread that walked
-//! a large footprint lost tests silently (found by the analytic point-light test). So every
+//! a large footprint lost tests silently (docs/decisions.md, "llvmpipe's loop budget"). So every
 //! invocation walks little: one list per `cs_tiles` thread, at most 16 lists per
 //! `cs_triangles` thread, at most `(1024/8)²` tile flags ([`GRID_LIMIT`]); a walk that still
 //! ends early (a list longer than the budget, e.g. `--irregular-grid 1`) is counted and the
@@ -60,7 +60,10 @@
 //!
 //! **Grid resolution** is a knob ([`IrregularOptions::grid`], `--irregular-grid`): the view's
 //! tile size capped at 512 by default, at most [`GRID_LIMIT`]. It changes speed (list lengths
-//! versus texels visited), never the answer. The paper's sample-equalising hash is not done.
+//! versus texels visited), never the answer. The paper's sample-equalising multimap hash is
+//! an option ([`IrregularOptions::hash`], `--irregular-hash`), off by default: it keeps the
+//! answer exact but lengthens the lists each texel visit walks (docs/techniques.md,
+//! "Alias-free shadows: `--technique irregular`").
 //!
 //! **Memory.** Each pixel lands in at most one view per light, so a batch of `k` shadowed
 //! lights needs at most `k · width · height` nodes (20 bytes each). Lights are split into

@@ -10,6 +10,7 @@ use crate::gpu::context::GpuContext;
 use crate::gpu::timing::GpuTimer;
 use crate::gpu::types::LightData;
 use crate::gpu_scene::instances::GpuScene;
+use crate::shadows::cost::{price, Cost, LightingRead};
 use crate::shadows::descriptor::{Build, Culling, TechniqueInfo, Wgsl};
 use crate::shadows::image::ShadowPicture;
 use crate::shadows::irregular::maps::{IrregularInputs, IrregularOptions, IrregularShadows};
@@ -35,6 +36,24 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     point_shadows: &[PointShadows::Cube],
     needs: &[],
     soft_shadows: false,
+    // Milliseconds of its lists per (triangle, view) pair, (instance, view) pair, (pixel, light)
+    // sample, and fixed, on lavapipe (docs/benchmarks.md, "The frame estimate").
+    cost: Cost {
+        lighting: LightingRead::Mask,
+        shadows_ms: |w| {
+            price(
+                &[2.60e-05, 5.06e-02, 3.29e-04, 1.58e+02],
+                &[
+                    w.triangle_views as f64,
+                    w.instance_views as f64,
+                    w.pixel_lights as f64,
+                    1.0,
+                ],
+            )
+        },
+    },
+    camera_pixels_only: true,
+    follows_camera: false,
     instead: "",
     // The passes shade with the mask and never call `shadow_coord`.
     lookup: ATLAS_LOOKUP,

@@ -7,10 +7,10 @@
 // front or back, the parts of alpha-masked surfaces their mask keeps — shadows the point. No
 // shadow-map bias applies: there is no sampling error to hide.
 //
-// Bindings (`first` = 13): the top-level acceleration structure, the ray geometry (per TLAS
-// instance its masked-triangle table base and material, per masked triangle its three texture
-// coordinates, then the mask tail of alpha_mask.wgsl: records, coverage bits, header) and the
-// sampling parameters.
+// Bindings (declared in source.rs's lookup, numbered by the pass): `scene_tlas`, the top-level
+// acceleration structure; `corners`, the ray geometry (per TLAS instance its masked-triangle
+// table base and material, per masked triangle its three texture coordinates, then the mask
+// tail of alpha_mask.wgsl: records, coverage bits, header); `rays`, the sampling parameters.
 
 const SHADOW_RAYS: bool = true;
 
@@ -19,9 +19,6 @@ struct RayParams {
     samples: vec4<u32>,
 }
 
-@group(0) @binding(RT_FIRST) var scene_tlas: acceleration_structure;
-@group(0) @binding(RT_SECOND) var<storage, read> corners: array<u32>;
-@group(0) @binding(RT_THIRD) var<uniform> rays: RayParams;
 
 // The start offset of the reference (RAY_OFFSET_RELATIVE in the reference crate).
 const RAY_OFFSET_RELATIVE: f32 = 1e-4;

@@ -8,17 +8,19 @@ use manyshadows_scene::light_space::PointShadows;
 use manyshadows_scene::Scene;
 
 use crate::error::{Fills, RenderError, Technique};
+use crate::gpu::bindings::Binding;
 use crate::gpu::context::GpuContext;
-use crate::gpu::pipelines::{storage_entry, uniform_entry};
 use crate::gpu::timing::{GpuTimer, Stage};
 use crate::gpu::types::LightData;
 use crate::gpu_scene::casters::ALPHA_MASK;
 use crate::gpu_scene::instances::GpuScene;
+use crate::sampled::options::RayOptions;
+use crate::shadows::cost::{price, Cost, LightingRead};
 use crate::shadows::descriptor::{Build, Culling, Need, TechniqueInfo};
 use crate::shadows::image::ShadowPicture;
 use crate::shadows::lookup::{atlas_coord, LookupWgsl, ATLAS_TAPS};
 use crate::shadows::plan::ShadowPlan;
-use crate::shadows::raytraced::accel::{RayAccel, RayOptions};
+use crate::shadows::raytraced::accel::RayAccel;
 use crate::shadows::source::{
     ShadowOutput, ShadowSource, ShadowStats, SourceInputs, SourceSettings, ViewTable, Views,
 };
@@ -43,6 +45,14 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
         "ray queries in the lighting and visibility passes",
     )],
     soft_shadows: true,
+    // Milliseconds of its acceleration structure per instance, and fixed, on lavapipe
+    // (docs/benchmarks.md, "The frame estimate").
+    cost: Cost {
+        lighting: LightingRead::Rays,
+        shadows_ms: |w| price(&[0.0, 8.13e-02], &[w.instances as f64, 1.0]),
+    },
+    camera_pixels_only: false,
+    follows_camera: false,
     instead: "use technique irregular for exact shadows without ray queries",
     lookup: RAYS_LOOKUP,
     build: Build::Source(|a| {
@@ -59,12 +69,17 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
 /// ray geometry and the sampling parameters.
 const RAYS_LOOKUP: LookupWgsl = LookupWgsl {
     enables: "enable wgpu_ray_query;",
-    source: |first| {
-        let rays = include_str!("rays.wgsl")
-            .replace("RT_FIRST", &first.to_string())
-            .replace("RT_SECOND", &(first + 1).to_string())
-            .replace("RT_THIRD", &(first + 2).to_string());
-        format!("{}\n{ATLAS_TAPS}\n{ALPHA_MASK}\n{rays}", atlas_coord())
+    bindings: &[
+        Binding::acceleration_structure("scene_tlas"),
+        Binding::storage("corners", "array<u32>"),
+        Binding::uniform("rays", "RayParams"),
+    ],
+    source: || {
+        format!(
+            "{}\n{ATLAS_TAPS}\n{ALPHA_MASK}\n{}",
+            atlas_coord(),
+            include_str!("rays.wgsl")
+        )
     },
     features: wgpu::Features::EXPERIMENTAL_RAY_QUERY,
 };
@@ -153,21 +168,11 @@ impl ShadowSource for RaytracedSource {
     }
 
     fn output(&self) -> ShadowOutput<'_> {
-        let any = wgpu::ShaderStages::empty();
-        let tlas = wgpu::BindingType::AccelerationStructure {
-            vertex_return: false,
-        };
         ShadowOutput {
-            bindings: vec![
-                (tlas, self.accel.tlas().as_binding()),
-                (
-                    storage_entry(0, any).ty,
-                    self.accel.geometry.as_entire_binding(),
-                ),
-                (
-                    uniform_entry(0, any).ty,
-                    self.accel.params.as_entire_binding(),
-                ),
+            resources: vec![
+                self.accel.tlas().as_binding(),
+                self.accel.geometry.as_entire_binding(),
+                self.accel.params.as_entire_binding(),
             ],
             ..ShadowOutput::from_views(&self.table.views, INFO.lookup)
         }

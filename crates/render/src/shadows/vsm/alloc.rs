@@ -12,6 +12,7 @@ use crate::gpu::pipelines::{
 use crate::gpu::shaders::{compose, module, COMMON};
 use crate::shadows::vsm::draw::group_decl;
 use crate::shadows::vsm::table::{entry_groups, TableBuffers, PAGE_TABLE};
+use crate::shadows::vsm::types::VSM_TYPES;
 
 /// Page-table entries per allocation thread (`BLOCK` in `vsm_alloc.wgsl`).
 pub(crate) const ALLOC_BLOCK: u64 = 32;
@@ -20,6 +21,7 @@ pub(crate) const ALLOC_BLOCK: u64 = 32;
 pub(crate) fn shader() -> String {
     compose(&[
         COMMON,
+        VSM_TYPES,
         PAGE_TABLE,
         &group_decl(),
         include_str!("vsm_alloc.wgsl"),

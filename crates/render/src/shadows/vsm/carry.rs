@@ -19,14 +19,20 @@ use crate::gpu::pipelines::{
     uniform_entry, whole_entry,
 };
 use crate::gpu::shaders::{compose, module, COMMON};
-use crate::gpu::types::VirtualFace;
 use crate::shadows::vsm::moved::{camera_matrix, moved_rect, screen_rect, union};
 use crate::shadows::vsm::plan::{VirtualPlan, NOTHING_MOVED};
 use crate::shadows::vsm::table::{entry_groups, TableBuffers, PAGE_TABLE};
+use crate::shadows::vsm::types::VirtualFace;
+use crate::shadows::vsm::types::VSM_TYPES;
 
 /// Carrying last frame's needs over: `cs_carry`.
 pub(crate) fn shader() -> String {
-    compose(&[COMMON, PAGE_TABLE, include_str!("vsm_carry.wgsl")])
+    compose(&[
+        COMMON,
+        VSM_TYPES,
+        PAGE_TABLE,
+        include_str!("vsm_carry.wgsl"),
+    ])
 }
 
 /// How a frame marks the pages its samples need.

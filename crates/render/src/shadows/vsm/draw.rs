@@ -13,7 +13,6 @@ use crate::gpu::context::GpuContext;
 use crate::gpu::pipelines::whole_entry;
 use crate::gpu::shaders::{compose, COMMON};
 use crate::gpu::timing::{GpuTimer, Span};
-use crate::gpu::types::VsmRound;
 use crate::gpu_scene::caster_layout::{CLUSTER_PARTS, CLUSTER_TRIANGLES};
 use crate::gpu_scene::casters::CasterGeometry;
 use crate::gpu_scene::casters::ALPHA_MASK;
@@ -21,6 +20,8 @@ use crate::shadows::cluster_draw::CLUSTER_CULL;
 use crate::shadows::cluster_draw::{plan_rounds, Round, COMMAND_SIZE};
 use crate::shadows::depth::{CULL, TILE, TILE_MASK};
 use crate::shadows::options::ShadowOptions;
+use crate::shadows::vsm::types::VsmRound;
+use crate::shadows::vsm::types::VSM_TYPES;
 
 /// Consecutive clusters per cull group (one cull thread per group and page).
 pub(crate) const CULL_GROUP: u32 = crate::gpu_scene::caster_layout::CLUSTER_GROUP;
@@ -49,6 +50,7 @@ pub(crate) fn shader() -> String {
         "enable clip_distances;",
         &group_decl(),
         COMMON,
+        VSM_TYPES,
         CULL,
         TILE,
         CLUSTER_CULL,

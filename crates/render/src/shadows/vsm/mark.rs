@@ -16,6 +16,7 @@ use crate::gpu::shaders::{compose, module, COMMON};
 use crate::shadows::lookup::{PARABOLOID, SHADOW_LOOKUP};
 use crate::shadows::vsm::plan::VSM_COMMON;
 use crate::shadows::vsm::table::{TableBuffers, PAGE_TABLE};
+use crate::shadows::vsm::types::VSM_TYPES;
 
 /// The marking's WGSL (after `vsm_table.wgsl`): its bindings of the frame, the marking of a
 /// sample's pages and `cs_mark`.
@@ -25,6 +26,7 @@ pub(crate) const MARK: &str = include_str!("vsm_mark.wgsl");
 pub(crate) fn shader() -> String {
     compose(&[
         COMMON,
+        VSM_TYPES,
         PARABOLOID,
         SHADOW_LOOKUP,
         VSM_COMMON,

@@ -68,3 +68,4 @@ pub mod plan;
 pub mod source;
 pub mod table;
 pub mod tiles;
+pub mod types;

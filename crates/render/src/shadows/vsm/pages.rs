@@ -16,7 +16,7 @@ use crate::frame::gbuffer::GBuffer;
 use crate::gpu::buffers::buffer;
 use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, Span};
-use crate::gpu::types::{LightData, ShadowViewData, VirtualFace, VsmUniforms};
+use crate::gpu::types::{LightData, ShadowViewData};
 use crate::gpu_scene::casters::CasterGeometry;
 use crate::shadows::options::ShadowOptions;
 use crate::shadows::vsm::alloc::{AllocBuffers, AllocPass, ALLOC_BLOCK};
@@ -28,6 +28,7 @@ use crate::shadows::vsm::plan::{
 };
 use crate::shadows::vsm::table::{TableBuffers, COUNTERS, TABLE_WORDS};
 use crate::shadows::vsm::tiles::TilePass;
+use crate::shadows::vsm::types::{VirtualFace, VsmUniforms};
 
 /// What the virtual shadow maps read from the rest of the frame.
 pub struct VsmInputs<'a> {

@@ -5,7 +5,8 @@ use manyshadows_scene::light_space::{self, PointShadows, ShadowView};
 use manyshadows_scene::Scene;
 
 use crate::error::RenderError;
-use crate::gpu::types::{LightData, VirtualFace};
+use crate::gpu::types::LightData;
+use crate::shadows::vsm::types::VirtualFace;
 
 /// Level and page selection, shared by the page marking and the lookups.
 pub const VSM_COMMON: &str = include_str!("vsm_common.wgsl");
@@ -126,10 +127,13 @@ impl Default for VirtualOptions {
 }
 
 impl VirtualOptions {
+    /// Bytes of one page of the pool (32-bit depth): the smallest pool.
+    pub const PAGE_BYTES: u64 = PAGE_SIZE as u64 * PAGE_SIZE as u64 * 4;
+
     /// Checks every value that has a range of its own ([`RenderError::InvalidOption`] names
     /// the first one out of range, as `RenderSettings` names the field).
     pub fn validate(&self) -> Result<(), RenderError> {
-        let page_bytes = u64::from(PAGE_SIZE) * u64::from(PAGE_SIZE) * 4;
+        let page_bytes = Self::PAGE_BYTES;
         if self.pool_bytes < page_bytes {
             return Err(RenderError::invalid_option(
                 "virtual_maps.pool_bytes",

@@ -2,15 +2,16 @@
 //! caster geometry and [`VirtualShadows`]; the output is the page pool with its table.
 
 use glam::Vec3;
-use manyshadows_scene::light_space::PointShadows;
+use manyshadows_scene::light_space::{PointShadows, ShadowView};
 use manyshadows_scene::Scene;
 
 use crate::error::{Fills, RenderError, Technique};
+use crate::gpu::bindings::Binding;
 use crate::gpu::context::GpuContext;
-use crate::gpu::pipelines::{storage_entry, uniform_entry};
 use crate::gpu::timing::GpuTimer;
 use crate::gpu::types::LightData;
 use crate::gpu_scene::instances::GpuScene;
+use crate::shadows::cost::{price, Cost, LightingRead};
 use crate::shadows::descriptor::{Build, Culling, Need, TechniqueInfo, Wgsl};
 use crate::shadows::image::{read_depth_view, ShadowPicture};
 use crate::shadows::lookup::{LookupWgsl, NO_RAYS};
@@ -21,6 +22,7 @@ use crate::shadows::source::{
 };
 use crate::shadows::vsm::pages::{VirtualShadows, VsmInputs};
 use crate::shadows::vsm::plan::{VirtualOptions, VirtualPlan, PAGE_SIZE, VSM_COMMON};
+use crate::shadows::vsm::types::VSM_TYPES;
 
 impl Technique {
     /// Virtual shadow maps (seed 002).
@@ -44,6 +46,27 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
         Need::indirect("indirect dispatches and draws (to allocate and draw its pages)"),
     ],
     soft_shadows: true,
+    // Milliseconds of its pages and drawing per (triangle, face) pair after culling whole
+    // instances, (instance, face) pair, (pixel, light) pair marked, those times extra taps
+    // (penumbrae ask coarser pages), and fixed, on lavapipe (docs/benchmarks.md, "The frame
+    // estimate").
+    cost: Cost {
+        lighting: LightingRead::Maps,
+        shadows_ms: |w| {
+            price(
+                &[1.13e-06, 4.49e-03, 3.03e-05, 9.82e-07, 1.41e+01],
+                &[
+                    w.triangle_views as f64,
+                    w.instance_views as f64,
+                    w.pixel_lights as f64,
+                    w.tap_pairs(),
+                    1.0,
+                ],
+            )
+        },
+    },
+    camera_pixels_only: false,
+    follows_camera: true,
     instead: "use technique traditional",
     lookup: VSM_LOOKUP,
     build: Build::Source(|a| {
@@ -70,15 +93,14 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
 /// Its declarations: the uniforms, the faces and the page table.
 const VSM_LOOKUP: LookupWgsl = LookupWgsl {
     enables: "",
-    source: |first| {
+    bindings: &[
+        Binding::uniform("vsm", "VsmUniforms"),
+        Binding::storage("vsm_faces", "array<VirtualFace>"),
+        Binding::storage("vsm_table", "array<u32>"),
+    ],
+    source: || {
         format!(
-            "{NO_RAYS}\n{VSM_COMMON}\n\
-             @group(0) @binding({}) var<uniform> vsm: VsmUniforms;\n\
-             @group(0) @binding({}) var<storage, read> vsm_faces: array<VirtualFace>;\n\
-             @group(0) @binding({}) var<storage, read> vsm_table: array<u32>;\n{}",
-            first,
-            first + 1,
-            first + 2,
+            "{NO_RAYS}\n{VSM_TYPES}\n{VSM_COMMON}\n{}",
             include_str!("vsm_lookup.wgsl")
         )
     },
@@ -192,31 +214,21 @@ impl ShadowSource for VirtualSource {
     }
 
     fn output(&self) -> ShadowOutput<'_> {
-        let any = wgpu::ShaderStages::empty();
         ShadowOutput {
             depth: &self.maps.pool_view,
             depth_side: self.maps.pool_side(),
-            bindings: vec![
-                (
-                    uniform_entry(0, any).ty,
-                    self.maps.uniforms().as_entire_binding(),
-                ),
-                (
-                    storage_entry(0, any).ty,
-                    self.maps.faces().as_entire_binding(),
-                ),
-                (
-                    storage_entry(0, any).ty,
-                    self.maps.table().as_entire_binding(),
-                ),
+            resources: vec![
+                self.maps.uniforms().as_entire_binding(),
+                self.maps.faces().as_entire_binding(),
+                self.maps.table().as_entire_binding(),
             ],
             max_penumbra: super::plan::MAX_SOFT_PENUMBRA,
             ..ShadowOutput::from_views(&self.table.views, INFO.lookup)
         }
     }
 
-    fn view_count(&self) -> usize {
-        self.maps.plan.faces.len()
+    fn views_filled(&self) -> &[ShadowView] {
+        &self.maps.plan.views
     }
 
     fn picture(&self, ctx: &GpuContext) -> Result<ShadowPicture, RenderError> {

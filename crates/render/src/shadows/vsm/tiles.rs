@@ -18,6 +18,7 @@ use crate::shadows::lookup::{PARABOLOID, SHADOW_LOOKUP};
 use crate::shadows::vsm::mark::{sample_group, sample_layout, Samples, MARK};
 use crate::shadows::vsm::plan::VSM_COMMON;
 use crate::shadows::vsm::table::{TableBuffers, PAGE_TABLE};
+use crate::shadows::vsm::types::VSM_TYPES;
 
 /// Pixels per side of a tile of the tile marking (`MARK_TILE` in `vsm_tiles.wgsl`).
 const MARK_TILE: u32 = 4;
@@ -44,6 +45,7 @@ fn mark_list_bytes(width: u32, height: u32, limit: u64) -> u64 {
 pub(crate) fn shader() -> String {
     compose(&[
         COMMON,
+        VSM_TYPES,
         PARABOLOID,
         SHADOW_LOOKUP,
         VSM_COMMON,

@@ -1,6 +1,6 @@
-// Shadow lookups through the virtual shadow maps' page table (vsm.rs), for the lighting and
-// visibility passes. The includer declares `vsm: VsmUniforms`, `vsm_faces` and `vsm_table`
-// (vsm.rs composes the declarations with the pass's binding numbers).
+// Shadow lookups through the virtual shadow maps' page table, for the lighting and visibility
+// passes. Its bindings `vsm: VsmUniforms`, `vsm_faces` and `vsm_table` are declared by
+// source.rs's lookup and numbered by the pass that composes it.
 
 // Where `p` falls in the page pool for `light`: the page of the level the point needs, or, if
 // that page is not resident (the pool was full), the nearest coarser resident page. Taps of

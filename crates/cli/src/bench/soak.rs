@@ -18,7 +18,7 @@ use manyshadows::scene::LightKind;
 use manyshadows::{RenderSettings, Renderer, Technique};
 use serde::Serialize;
 
-use crate::harness::{median, Harness, OutputArgs};
+use crate::bench::harness::{median, Harness, OutputArgs};
 
 /// Arguments of `manyshadows bench soak`.
 #[derive(Args, Debug, Clone)]

@@ -7,7 +7,7 @@
 //! per view (`@512`: equal grid resolution, `@2048`: the best quality that still fits the
 //! atlas for a few dozen lights; the renderer shrinks maps that do not fit and says so).
 //! The methods of one screen and light count render interleaved, frame by frame (see
-//! [`crate::harness`]), so drift on the machine hits all of them alike.
+//! [`crate::bench::harness`]), so drift on the machine hits all of them alike.
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
@@ -16,10 +16,10 @@ use manyshadows::Stage;
 use manyshadows::{RenderSettings, Renderer, Technique};
 use serde::Serialize;
 
-use crate::harness::{
+use crate::bench::harness::{
     check_counts, ms, parse_screen, seeded_scene, Contender, Figure, FrameSubject, Harness, RunArgs,
 };
-use crate::plot::PlotPoint;
+use crate::bench::plot::PlotPoint;
 
 /// Arguments of `manyshadows bench irregular`.
 #[derive(Args, Debug, Clone)]

@@ -1,4 +1,4 @@
-// Reflections from probes (probes.rs): each probe's six faces are layers 6·k .. 6·k + 5 of
+// Reflections from probes (maps.rs): each probe's six faces are layers 6·k .. 6·k + 5 of
 // `probe_faces`, linear radiance, drawn through `Probe::face_cameras` (+X, −X, +Y, −Y, +Z,
 // −Z; 90°, square). A surface mirrors the nearest probe's light along its reflected view
 // ray, box-projected where the probe stands for a box.
@@ -11,17 +11,14 @@ struct ProbeData {
     box_hi: vec4<f32>,
 }
 
-// A uniform, not storage: WebGPU allows 8 storage buffers per stage, and the lighting pass
-// with a shadow source's own buffers is near that.
+// A uniform, not storage (maps.rs says why).
 struct ProbeList {
     // x: probes.
     count: vec4<u32>,
     items: array<ProbeData, 64>,
 }
 
-@group(0) @binding(44) var probe_faces: texture_2d_array<f32>;
-@group(0) @binding(45) var probe_sampler: sampler;
-@group(0) @binding(46) var<uniform> probes: ProbeList;
+// Bindings (maps.rs `LIGHTING_BINDINGS`): `probe_faces`, `probe_sampler`, `probes: ProbeList`.
 
 // The face cameras' forward and up directions, as `Probe::face_cameras` sets them.
 fn probe_face_axes(face: u32) -> array<vec3<f32>, 2> {

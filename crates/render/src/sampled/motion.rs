@@ -1,5 +1,5 @@
 //! Motion of instances between frames, for the histories that follow surfaces: the
-//! denoiser's (shading/denoise.rs) and the reservoirs' (shading/reuse.rs).
+//! denoiser's (denoise.rs) and the reservoirs' (reuse.rs).
 //!
 //! Both find last frame's record of a pixel's surface point by projecting the point with the
 //! last frame's camera and comparing it with the point kept there. A point on an instance
@@ -176,7 +176,7 @@ fn last_frame_normal(back: mat4x4<f32>, n: vec3<f32>) -> vec3<f32> {
 }
 
 // Whether a history point whose surface faced `then` may stand for one facing `now` (both
-// unit; HISTORY_NORMAL_COS, frame/motion.rs): a surface seen from its other side, or the
+// unit; HISTORY_NORMAL_COS, motion.rs): a surface seen from its other side, or the
 // other face of a crease, starts anew.
 fn same_facing(then: vec3<f32>, now: vec3<f32>) -> bool {
     return dot(then, now) >= HISTORY_NORMAL_COS;

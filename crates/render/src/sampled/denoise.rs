@@ -30,7 +30,7 @@
 //!    lavapipe, atrium, 1,024 lights, 640 × 360, interleaved runs: 334–340 ms against
 //!    314–326 ms before. A plain frame (no denoiser) keeps one-pass reservoir sampling.
 //! 1. **temporal**: each pixel's surface point is projected into the previous frame (where
-//!    it was, if its instance moved: frame/motion.rs); where the point was seen there
+//!    it was, if its instance moved: motion.rs); where the point was seen there
 //!    (within two pixel footprints, its surface facing within 26°) its history — mean and
 //!    second moment of `r`, frame count up to [`MAX_HISTORY`] — is blended with this
 //!    frame's `r`, else it starts anew (disocclusion). The rays' random numbers change every
@@ -112,14 +112,14 @@
 
 use crate::error::RenderError;
 use crate::frame::gbuffer::GBuffer;
+use crate::gpu::bindings::{Binding, Part};
 use crate::gpu::context::GpuContext;
 use crate::gpu::types::LightData;
 
-/// Frames of history at most (the weight of a new frame never drops below 1/32).
-pub const MAX_HISTORY: u32 = 32;
+pub use crate::sampled::options::MAX_HISTORY;
 
 /// Frames of history at most for a point whose instance moved since the last frame (its
-/// history found where it was: frame/motion.rs): the light on a moving surface changes, and
+/// history found where it was: motion.rs): the light on a moving surface changes, and
 /// a long history lags it. Measured on the cubes' largest box moving under 48 lights (K = 1,
 /// 160 × 120, lavapipe, the mean error on the box over frames 5 to 12, eight motions from
 /// 0.003 a frame to 0.15, turning 0° to 6° a frame): the sum over the eight 29.5 with 4 and
@@ -138,7 +138,7 @@ fn shader_source() -> String {
         "const MOVING_HISTORY: f32 = {:?}f;\n{}{}",
         MOVING_HISTORY as f32,
         include_str!("denoise.wgsl"),
-        crate::frame::motion::wgsl()
+        crate::sampled::motion::wgsl()
     )
 }
 
@@ -241,6 +241,53 @@ struct DenoiseParams {
     camera: [f32; 4],
 }
 
+/// The lighting pass's bindings of the denoiser (declared in `denoise_lighting.wgsl`'s order).
+const LIGHTING_BINDINGS: &[Binding] = &[
+    Binding::storage_rw("denoise_px", "array<vec4<f32>>"),
+    Binding::storage_rw("denoise_ratio", "array<vec4<f32>>"),
+];
+
+/// The fragment entry point that shades the filtered ratio into the frame, drawn by the
+/// renderer after the denoiser's passes.
+pub const COMPOSITE: &str = "fs_composite";
+
+/// The denoiser's part of the lighting pass: with `buffers`, `DENOISE` and what writes them
+/// (and [`COMPOSITE`]); without, the same functions doing nothing (never called: `DENOISE`
+/// is false). Either way `CATCH_UP_FRAMES`, the most frames of samples a frame whose lights
+/// changed draws again ([`MAX_HISTORY`]).
+pub fn lighting_part(buffers: Option<&DenoiseBuffers>) -> Part<'_> {
+    let mut part = lighting_part_declared(buffers.is_some());
+    if let Some(b) = buffers {
+        part.resources = vec![b.pixels.as_entire_binding(), b.ratio.as_entire_binding()];
+    }
+    part
+}
+
+/// [`lighting_part`]'s WGSL and bindings alone (no resources), with the denoiser `on` or
+/// not: what a shader is composed of.
+pub fn lighting_part_declared(on: bool) -> Part<'static> {
+    let consts = format!(
+        "const DENOISE: bool = {on};\nconst CATCH_UP_FRAMES: f32 = {:?}f;\n",
+        MAX_HISTORY as f32
+    );
+    if on {
+        Part {
+            wgsl: format!("{consts}{}", include_str!("denoise_lighting.wgsl")),
+            bindings: LIGHTING_BINDINGS,
+            resources: Vec::new(),
+            follow: &[],
+            own: &[COMPOSITE],
+        }
+    } else {
+        Part::wgsl(format!(
+            "{consts}fn denoise_store(px: vec2<i32>, a: vec4<f32>, s: vec3<f32>, \
+                 u: vec3<f32>, r: vec3<f32>, f: f32) {{}}\n\
+                 fn denoise_set_shadowed(px: vec2<i32>, s: vec3<f32>) {{}}\n\
+                 fn denoise_store_fix(px: vec2<i32>, s: vec3<f32>, u: vec3<f32>, g: f32) {{}}\n"
+        ))
+    }
+}
+
 /// The buffers the lighting pass writes and its composite reads.
 pub struct DenoiseBuffers {
     /// Per pixel two `vec4<f32>`: `[U.rgb, r]`, `[ambient + emission, 1 = geometry]`.
@@ -303,7 +350,7 @@ fn storage(ctx: &GpuContext, label: &str, bytes: u64) -> wgpu::Buffer {
 impl Denoiser {
     /// Buffers and pipelines for a `w` × `h` frame whose G-buffer is `gbuffer`, filtering in
     /// space too where `spatial` (sampled lights; else frames only accumulate), following
-    /// moving instances' surfaces by `motion` (frame/motion.rs); a frame
+    /// moving instances' surfaces by `motion` (motion.rs); a frame
     /// whose per-pixel buffers (64 bytes a pixel) pass the device's storage-binding limit is
     /// [`RenderError::TooLarge`].
     pub fn new(
@@ -313,7 +360,7 @@ impl Denoiser {
         h: u32,
         spatial: bool,
         lights: Vec<LightData>,
-        motion: &crate::frame::motion::InstanceMotion,
+        motion: &crate::sampled::motion::InstanceMotion,
     ) -> Result<Self, RenderError> {
         let device = &ctx.device;
         let pixels = u64::from(w) * u64::from(h);

@@ -18,10 +18,10 @@ use manyshadows::shadows::plan::ShadowPlan;
 use manyshadows::{RenderError, ShadowOptions, Technique};
 use serde::Serialize;
 
-use crate::harness::{
+use crate::bench::harness::{
     check_counts, seeded_scene, Contender, Figure, Harness, RunArgs, ShadowSubject,
 };
-use crate::plot::{PlotPoint, CPU_TIME};
+use crate::bench::plot::{PlotPoint, CPU_TIME};
 
 /// Arguments of `manyshadows bench omni`.
 #[derive(Args, Debug, Clone)]

@@ -2,7 +2,8 @@
 //! ([`Renderer::estimate_frame`]) predicts the frame. Per scene, screen, light count, light
 //! size and method it renders whole frames (shadows redrawn every frame) and sets the GPU
 //! milliseconds of each stage beside the estimate made before the first frame; the table gives
-//! the ratio of the two, the figure the issue asks to keep within 3×.
+//! the ratio of the two, whose goal is within 3× either way (docs/benchmarks.md, "What a frame
+//! will cost: `bench estimate`").
 
 use anyhow::{bail, Result};
 use clap::Args;
@@ -10,7 +11,7 @@ use manyshadows::scene::builtin::{self, LightMix};
 use manyshadows::{FrameEstimate, RenderSettings, Renderer, Stage, Technique};
 use serde::Serialize;
 
-use crate::harness::{
+use crate::bench::harness::{
     check_counts, check_scene, ms, parse_screen, seeded_scene, Contender, FrameSubject, Harness,
     RunArgs,
 };

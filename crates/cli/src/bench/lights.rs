@@ -6,7 +6,7 @@
 //! maximum), how the shadow maps were fitted (full, reduced, unshadowed, off screen) and the
 //! memory of the atlas and the cluster lists. Up to `--reference-up-to` lights it also times
 //! the lighting pass looping over every light (`--light-loop all`) in the same run, frame by
-//! frame interleaved with the clustered one (see [`crate::harness`]), so the ratio clustered /
+//! frame interleaved with the clustered one (see [`crate::bench::harness`]), so the ratio clustered /
 //! all is measured, not inferred.
 
 use anyhow::Result;
@@ -17,11 +17,11 @@ use manyshadows::Stage;
 use manyshadows::{RenderSettings, Renderer, Technique};
 use serde::Serialize;
 
-use crate::harness::{
+use crate::bench::harness::{
     check_counts, check_scene, ms, parse_screen, seeded_scene, Contender, Figure, FrameSubject,
     Harness, RunArgs,
 };
-use crate::plot::series;
+use crate::bench::plot::series;
 
 /// Arguments of `manyshadows bench lights`.
 #[derive(Args, Debug, Clone)]

@@ -2,7 +2,7 @@
 //! rendered with the lights' sizes (percentage-closer soft shadows: a blocker search and a
 //! filter of `--taps` taps each per shadowed pixel and sized light) against the same lights
 //! rendered hard (size 0, the default 2×2 PCF), per technique and light count, interleaved
-//! frame by frame in one run (see [`crate::harness`]), so the ratio PCSS / hard is measured,
+//! frame by frame in one run (see [`crate::bench::harness`]), so the ratio PCSS / hard is measured,
 //! not inferred.
 //!
 //! The shadow maps are the same both ways (PCSS reads the depth the hard test reads); the
@@ -17,7 +17,7 @@ use manyshadows::{RenderSettings, Renderer, SoftShadows, Stage, Technique};
 use serde::Serialize;
 
 use crate::args::LightSizeArgs;
-use crate::harness::{
+use crate::bench::harness::{
     check_counts, check_scene, ms, seeded_scene, Contender, FrameCounters, FrameSubject, Harness,
     RunArgs, Runs,
 };

@@ -16,7 +16,9 @@
 //!
 //! What is measured is a [`Subject`]: a shadow generator alone ([`ShadowSubject`]: `bench
 //! layered`, `bench omni`) or whole frames of a renderer ([`FrameSubject`]: `bench irregular`,
-//! `bench lights`, `bench virtual`, `bench shadows`; with a moving caster for the last two).
+//! `bench lights`, `bench virtual`, `bench shadows`, `bench soft`, `bench stereo`, `bench
+//! probes`, `bench estimate`; with a moving caster in `bench virtual`, `bench shadows` and
+//! `bench probes`).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -36,7 +38,7 @@ use manyshadows::{GpuContext, Renderer, ShadowStats};
 use serde::Serialize;
 
 use crate::args::GpuArgs;
-use crate::plot::{Panel, PlotPoint};
+use crate::bench::plot::{Panel, PlotPoint};
 
 /// The options every comparison bench takes. Each `bench` subcommand sets its own default of
 /// `--out-dir` and, where it differs, of `--repeats` (main.rs).
@@ -182,18 +184,18 @@ pub(crate) struct Outcome<S: Subject> {
 /// A figure [`Harness::finish`] draws.
 pub(crate) enum Figure {
     /// Time against a count, one line per method, one PNG per (variant, resolution):
-    /// `<prefix>-<variant>[-<resolution>].png` (see [`crate::plot::plots`]).
+    /// `<prefix>-<variant>[-<resolution>].png` (see [`crate::bench::plot::plots`]).
     ByMethod {
         /// File-name prefix and the bench's name in titles.
         prefix: &'static str,
         /// The count on the x axis (plural, e.g. `shadow maps`).
         x_name: &'static str,
-        /// What the lower panels show (e.g. [`crate::plot::CPU_TIME`]).
+        /// What the lower panels show (e.g. [`crate::bench::plot::CPU_TIME`]).
         second: &'static str,
         /// The records' medians.
         points: Vec<PlotPoint>,
     },
-    /// Four panels on one picture (see [`crate::plot::panels`]); the adapter is added to the
+    /// Four panels on one picture (see [`crate::bench::plot::panels`]); the adapter is added to the
     /// title.
     Panels {
         /// File name inside `--out-dir`.
@@ -392,7 +394,7 @@ impl Harness {
                     x_name,
                     second,
                     points,
-                } => crate::plot::plots(
+                } => crate::bench::plot::plots(
                     &points,
                     &self.adapter,
                     &self.out_dir,
@@ -407,7 +409,7 @@ impl Harness {
                     panels,
                 } => {
                     let path = self.out_dir.join(file);
-                    crate::plot::panels(
+                    crate::bench::plot::panels(
                         &path,
                         &format!("{title} — {}", self.adapter),
                         x_name,

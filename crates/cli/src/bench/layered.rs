@@ -28,10 +28,10 @@ use manyshadows::CasterOptions;
 use manyshadows::{CullMode, GpuContext, ShadowOptions, ShadowStats, Technique};
 use serde::Serialize;
 
-use crate::harness::{
+use crate::bench::harness::{
     check_counts, Contender, Figure, Harness, Run, RunArgs, ShadowSubject, Subject,
 };
-use crate::plot::{PlotPoint, CPU_TIME};
+use crate::bench::plot::{PlotPoint, CPU_TIME};
 
 /// Arguments of `manyshadows bench layered`.
 #[derive(Args, Debug, Clone)]
@@ -629,7 +629,7 @@ fn replot(path: &std::path::Path, out_dir: &std::path::Path) -> Result<()> {
         .with_context(|| format!("{}: a record lacks a field", path.display()))?;
     std::fs::create_dir_all(out_dir)?;
     let adapter = json["adapter"].as_str().unwrap_or("unknown adapter");
-    for p in crate::plot::plots(&points, adapter, out_dir, PLOT_PREFIX, PLOT_X, CPU_TIME)? {
+    for p in crate::bench::plot::plots(&points, adapter, out_dir, PLOT_PREFIX, PLOT_X, CPU_TIME)? {
         eprintln!("wrote {}", p.display());
     }
     Ok(())

@@ -4,7 +4,7 @@
 //! count and face size; whole frames with a caster moving, so every frame redraws every face.
 //!
 //! The contenders of one probe count and face size render interleaved, frame by frame (see
-//! [`crate::harness`]). The probes stage holds the faces' G-buffers (one pass each, or one
+//! [`crate::bench::harness`]). The probes stage holds the faces' G-buffers (one pass each, or one
 //! pass and a copy of each tile) and their lighting (the same in both).
 
 use anyhow::Result;
@@ -13,11 +13,11 @@ use manyshadows::scene::builtin::LightMix;
 use manyshadows::{ProbePasses, RenderSettings, Renderer, Stage};
 use serde::Serialize;
 
-use crate::harness::{
+use crate::bench::harness::{
     check_counts, check_scene, ms, ratio, seeded_scene, Contender, Figure, FrameSubject, Harness,
     RunArgs,
 };
-use crate::plot::PlotPoint;
+use crate::bench::plot::PlotPoint;
 
 /// Arguments of `manyshadows bench probes`.
 #[derive(Args, Debug, Clone)]
@@ -70,7 +70,7 @@ pub fn probes(args: &ProbesArgs) -> Result<()> {
     {
         anyhow::bail!("--sides {s}: a probe face is 8 to 1024 texels on a side");
     }
-    let (w, hh) = crate::harness::parse_screen(&args.screen)?;
+    let (w, hh) = crate::bench::harness::parse_screen(&args.screen)?;
     let h = Harness::start(&args.run)?;
     let ways: Vec<ProbePasses> = ProbePasses::ALL
         .iter()
@@ -179,7 +179,7 @@ pub fn probes(args: &ProbesArgs) -> Result<()> {
         vec![Figure::ByMethod {
             prefix: "probes",
             x_name: "probes",
-            second: crate::plot::CPU_TIME,
+            second: crate::bench::plot::CPU_TIME,
             points,
         }],
     )

@@ -16,11 +16,11 @@ use manyshadows::{RenderSettings, Renderer, Technique};
 use manyshadows::{VirtualOptions, VirtualStats};
 use serde::Serialize;
 
-use crate::harness::{
+use crate::bench::harness::{
     check_counts, check_scene, ms, seeded_scene, Contender, Figure, FrameCounters, FrameSubject,
     Harness, RunArgs, Runs,
 };
-use crate::plot::series;
+use crate::bench::plot::series;
 
 /// Arguments of `manyshadows bench virtual`.
 #[derive(Args, Debug, Clone)]
@@ -142,10 +142,8 @@ pub fn virtual_maps(args: &VirtualArgs) -> Result<()> {
         // Equal memory unless --page-pool says otherwise: the pool gets the atlas's bytes.
         let pool_bytes = match args.page_pool {
             Some(mib) => u64::from(mib) << 20,
-            None => {
-                let page = u64::from(manyshadows::shadows::vsm::plan::PAGE_SIZE).pow(2) * 4;
-                (u64::from(atlas_renderer.plan().layout.size).pow(2) * 4).max(page)
-            }
+            None => (u64::from(atlas_renderer.plan().layout.size).pow(2) * 4)
+                .max(VirtualOptions::PAGE_BYTES),
         };
         let virt = base.with_technique(args.technique).with_virtual_maps(
             VirtualOptions::default()

@@ -59,7 +59,7 @@ fn ratio_of(s: vec3<f32>, u: vec3<f32>) -> f32 {
 // changed lights add to the mean estimates with and without shadows: [with, 0], [without, 0].
 @group(0) @binding(6) var<storage, read_write> ratio_out: array<vec4<f32>>;
 // The instance seen per pixel and per instance its motion since the last frame
-// (frame/motion.rs: `last_frame_position`).
+// (motion.rs: `last_frame_position`).
 @group(0) @binding(9) var gbuf_instance: texture_2d<u32>;
 @group(0) @binding(10) var<storage, read> motion_back: array<mat4x4<f32>>;
 
@@ -151,7 +151,7 @@ fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
     let weight = max(px_in[4u * i + 1u].w, 1.0);
     var frames = weight;
     // The history of the same point where it was last frame (its instance's motion taken
-    // back, frame/motion.rs). A point that moved keeps at most MOVING_HISTORY frames
+    // back, motion.rs). A point that moved keeps at most MOVING_HISTORY frames
     // (denoise.rs): the light on a moving surface changes.
     let footprint = distance(pos, p.camera.xyz) * p.pixel.x;
     let back = instance_back(gid.xy);

@@ -5,7 +5,7 @@
 //! Every contender renders the same scene and lights; shadows are kept between frames (the
 //! scene does not change), so after the warm-up a frame is G-buffer, clusters and lighting,
 //! and the G-buffer stage is where the ways differ. The contenders of one scene and eye size
-//! render interleaved, frame by frame (see [`crate::harness`]).
+//! render interleaved, frame by frame (see [`crate::bench::harness`]).
 
 use anyhow::Result;
 use clap::Args;
@@ -13,11 +13,11 @@ use manyshadows::scene::builtin::LightMix;
 use manyshadows::{EyePasses, RenderSettings, Renderer, Stage, Stereo};
 use serde::Serialize;
 
-use crate::harness::{
+use crate::bench::harness::{
     check_counts, check_scene, ms, parse_screen, ratio, seeded_scene, Contender, Figure,
     FrameSubject, Harness, RunArgs,
 };
-use crate::plot::PlotPoint;
+use crate::bench::plot::PlotPoint;
 
 /// Arguments of `manyshadows bench stereo`.
 #[derive(Args, Debug, Clone)]

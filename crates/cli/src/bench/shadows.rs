@@ -1,7 +1,7 @@
 //! `manyshadows bench shadows`: every kind of shadow side by side as the lights grow — the
 //! default technique's atlas, the first technique of the registry that fills a page pool (virtual
 //! maps), and the first that casts shadow rays, tracing every cluster light and `K` sampled
-//! lights per pixel — interleaved frame by frame in one run (see [`crate::harness`]).
+//! lights per pixel — interleaved frame by frame in one run (see [`crate::bench::harness`]).
 //!
 //! One shadow caster moves a little every frame (back and forth), as in a scene that lives: the
 //! rays' top-level acceleration structure is rebuilt each frame (its own stage, `accel`), the
@@ -15,11 +15,11 @@ use manyshadows::scene::builtin::{self, LightMix};
 use manyshadows::{Fills, RayOptions, RenderSettings, Renderer, Stage, Technique};
 use serde::Serialize;
 
-use crate::harness::{
+use crate::bench::harness::{
     check_counts, check_scene, ms, seeded_scene, Contender, Figure, FrameCounters, FrameSubject,
     Harness, RunArgs, Runs,
 };
-use crate::plot::series;
+use crate::bench::plot::series;
 
 /// Arguments of `manyshadows bench shadows`.
 #[derive(Args, Debug, Clone)]

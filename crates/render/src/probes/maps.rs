@@ -1,11 +1,11 @@
 //! Reflection probes, the part the lighting pass reads: every probe's six faces of linear
 //! radiance in one texture array, and each probe's position and box (seed 000's reflection
-//! cube maps; the faces are drawn by `renderer::probes` through the frame's own G-buffer,
+//! cube maps; the faces are drawn by `faces.rs` through the frame's own G-buffer,
 //! shadows and lighting code).
 //!
 //! A surface's reflection comes from the probe nearest it: its reflected view ray, followed to
 //! the wall of the box the probe stands for (parallax correction) where the probe has one, is
-//! looked up on the face it points at (`probes.wgsl`). How much is mirrored: Phong materials
+//! looked up on the face it points at (`maps.wgsl`). How much is mirrored: Phong materials
 //! their `Material::reflect` at normal incidence, the glTF BRDF its Fresnel reflectance
 //! (0.04 for dielectrics, the base colour for metals) times the gloss `(1 − roughness)²`;
 //! Schlick's Fresnel raises either towards 1 at grazing angles. One bounce: the faces
@@ -15,16 +15,63 @@
 use manyshadows_scene::{Probe, Scene};
 
 use crate::error::RenderError;
+use crate::gpu::bindings::{Binding, Part};
 use crate::gpu::context::GpuContext;
 
-/// Format of the faces: linear radiance, before exposure and tone map.
-pub const FACE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// Format of the faces: linear radiance, before exposure and tone map (what the lighting pass
+/// writes with `ShadingConsts::linear_out`).
+pub const FACE_FORMAT: wgpu::TextureFormat = crate::shading::lighting::LINEAR_FORMAT;
 
-/// The probes' WGSL (bindings 44–46 of the lighting pass; 46 a uniform of at most
-/// `Probe::MAX_COUNT` records, which `probes.wgsl` spells as 64).
-pub(crate) const PROBES_WGSL: &str = include_str!("probes.wgsl");
+/// The probes' WGSL: the reflection's lookups, without the bindings' declarations.
+pub(crate) const PROBES_WGSL: &str = include_str!("maps.wgsl");
 
-/// `ProbeData` of `probes.wgsl`.
+/// The lighting pass's bindings of the probes: every face (layers `6·k .. 6·k + 5` of probe
+/// `k`, linear radiance), its sampler, and the probes' records (a uniform of at most
+/// `Probe::MAX_COUNT` records, which `maps.wgsl` spells as 64: WebGPU allows 8 storage buffers
+/// per stage, and the lighting pass with a shadow source's own buffers is near that).
+const LIGHTING_BINDINGS: &[Binding] = &[
+    Binding::texture_array("probe_faces"),
+    Binding::sampler("probe_sampler"),
+    Binding::uniform("probes", "ProbeList"),
+];
+
+/// Without probes: nothing to mirror (the calls sit behind `PROBES`, false).
+const NO_PROBES_WGSL: &str = "
+fn probe_reflected(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>) -> vec3<f32> { return vec3<f32>(0.0); }
+fn probe_fresnel(f0: vec3<f32>, n: vec3<f32>, v: vec3<f32>) -> vec3<f32> { return vec3<f32>(0.0); }
+";
+
+/// The probes' part of the lighting pass: with `maps`, `PROBES` and the reflection's lookups
+/// of their faces; without, functions that mirror nothing (never called: `PROBES` is false).
+pub fn lighting_part(maps: Option<&ProbeMaps>) -> Part<'_> {
+    let mut part = lighting_part_declared(maps.is_some());
+    if let Some(m) = maps {
+        part.resources = vec![
+            wgpu::BindingResource::TextureView(&m.view),
+            wgpu::BindingResource::Sampler(&m.sampler),
+            m.data.as_entire_binding(),
+        ];
+    }
+    part
+}
+
+/// [`lighting_part`]'s WGSL and bindings alone (no resources), with probes or without: what a
+/// shader is composed of.
+pub fn lighting_part_declared(on: bool) -> Part<'static> {
+    if on {
+        Part {
+            wgsl: format!("const PROBES: bool = true;\n{PROBES_WGSL}"),
+            bindings: LIGHTING_BINDINGS,
+            resources: Vec::new(),
+            follow: &[],
+            own: &[],
+        }
+    } else {
+        Part::wgsl(format!("const PROBES: bool = false;\n{NO_PROBES_WGSL}"))
+    }
+}
+
+/// `ProbeData` of `maps.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct ProbeData {
@@ -321,16 +368,14 @@ mod tests {
     #[test]
     fn data_matches_the_wgsl() {
         use crate::gpu::types::layout::same_layout;
-        let src = crate::gpu::shaders::compose(&[PROBES_WGSL]);
+        let declarations = crate::gpu::bindings::BindingList::new(LIGHTING_BINDINGS).wgsl();
+        let src = crate::gpu::shaders::compose(&[&declarations, PROBES_WGSL]);
         same_layout!(in src, ProbeData, position, box_lo, box_hi);
         same_layout!(in crate::frame::gbuffer::faces_shader(), FaceView, view_proj, eye, tile);
         same_layout!(in crate::frame::gbuffer::face_layers_shader(), FaceView, view_proj, eye, tile);
         // The uniform holds every probe a scene may have.
         let list = format!("items: array<ProbeData, {}>", Probe::MAX_COUNT);
-        assert!(
-            PROBES_WGSL.contains(&list),
-            "probes.wgsl must declare {list}"
-        );
+        assert!(PROBES_WGSL.contains(&list), "maps.wgsl must declare {list}");
     }
 
     /// A ray from the middle of a box's floor straight up reaches the ceiling above it: the

@@ -27,7 +27,7 @@ pub struct PlotPoint {
 /// What [`PlotPoint::cpu_ms`] holds in the benchmarks of shadow generation.
 pub const CPU_TIME: &str = "CPU ms (record + submit)";
 
-static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 
 fn ensure_font() {
     static ONCE: std::sync::Once = std::sync::Once::new();

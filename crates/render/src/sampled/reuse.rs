@@ -24,7 +24,7 @@
 //! the point moved, or a caster uncovered a light the old reservoir could not hold, that
 //! light is found only by the new draw, with weight `1 / (1 + M)`: the estimate darkens there
 //! until the reservoir has drawn it (a few frames). A point on an instance that moved is
-//! looked for where it was last frame (frame/motion.rs), and its old reservoir stands for at
+//! looked for where it was last frame (motion.rs), and its old reservoir stands for at
 //! most [`MOVING_CONFIDENCE`] frames: what lit it there may not light it here. A sized
 //! light's target uses one point of its shape per ray (the visibility of a fresh point each
 //! frame): unbiased in the mean over points, but not a fixed target.
@@ -61,15 +61,14 @@
 //! improved by 13 % instead of 46 %.
 
 use crate::error::RenderError;
+use crate::gpu::bindings::{Binding, Part};
 use crate::gpu::context::GpuContext;
+use crate::sampled::options::SpatialReuse;
 
-/// Frames a reservoir may stand for (the weight of a new draw never falls below
-/// `1 / (1 + MAX_CONFIDENCE)`): ReSTIR's usual cap of 20 bounds how long a stale choice
-/// lasts.
-pub const MAX_CONFIDENCE: u32 = 20;
+pub use crate::sampled::options::MAX_CONFIDENCE;
 
 /// Frames a reservoir may stand for at a point whose instance moved since the last frame
-/// (its reservoirs found where it was: frame/motion.rs): one, so the old light weighs as
+/// (its reservoirs found where it was: motion.rs): one, so the old light weighs as
 /// much as the new draw. A light that lit the point where it was may be shadowed or
 /// turned away now, and one that lights it now may never have been drawn: with the full
 /// confidence the moving surface darkens and stays noisy. Measured on the cubes' largest
@@ -113,7 +112,7 @@ pub struct ReuseBuffers {
     /// less its sampled direct light and the samples after temporal reuse, which the
     /// spatial pass resamples with its neighbours'.
     pub reservoirs: wgpu::Buffer,
-    /// The G-buffer's instance per pixel (frame/motion.rs `InstanceMotion::instance_view`).
+    /// The G-buffer's instance per pixel (motion.rs `InstanceMotion::instance_view`).
     pub instance: wgpu::TextureView,
     /// Per instance, this frame's world → last frame's (`InstanceMotion::back`).
     pub motion_back: wgpu::Buffer,
@@ -126,6 +125,8 @@ pub struct Reuse {
     width: u32,
     height: u32,
     samples: u32,
+    /// Spatial reuse after the lighting pass.
+    spatial: SpatialReuse,
     /// The half the next frame reads.
     parity: u32,
     /// Camera world → clip and light count of the last frame (`None`: no history).
@@ -137,19 +138,19 @@ impl Reuse {
     /// the device's storage-binding limit are [`RenderError::TooLarge`].
     /// With `spatial` a third part holds what the lighting pass leaves to spatial reuse
     /// (`SPATIAL_SCRATCH` below). Surfaces of moving instances are followed by `motion`
-    /// through the instance `gbuffer` keeps (frame/motion.rs).
+    /// through the instance `gbuffer` keeps (motion.rs).
     pub fn new(
         ctx: &GpuContext,
         w: u32,
         h: u32,
         samples: u32,
-        spatial: bool,
+        spatial: SpatialReuse,
         (gbuffer, motion): (
             &crate::frame::gbuffer::GBuffer,
-            &crate::frame::motion::InstanceMotion,
+            &crate::sampled::motion::InstanceMotion,
         ),
     ) -> Result<Self, RenderError> {
-        let parts = if spatial { 3 } else { 2 };
+        let parts = if spatial == SpatialReuse::Off { 2 } else { 3 };
         let bytes = parts * u64::from(w) * u64::from(h) * u64::from(samples + 1) * 16;
         let limits = ctx.limits();
         let limit = limits
@@ -188,6 +189,7 @@ impl Reuse {
             width: w,
             height: h,
             samples,
+            spatial,
             parity: 0,
             prev: None,
         })
@@ -222,18 +224,69 @@ impl Reuse {
     }
 }
 
-/// The lighting pass's WGSL for reuse (`REUSE`): with it, the reservoirs' bindings and
-/// functions and what finds a moving instance's point where it was (frame/motion.rs);
-/// without, the same functions doing nothing (never called).
-pub(crate) fn lighting_wgsl(reuse: bool) -> String {
-    if reuse {
-        format!(
-            "const MOVING_CONFIDENCE: f32 = {:?}f;\n{REUSE_WGSL}{}",
+/// The lighting pass's bindings of reuse (`REUSE_WGSL` names them): the parameters, the
+/// reservoirs (two halves, one read and one written per frame; per pixel 1 + K vec4: [surface
+/// point (float bits), its normal as four signed bytes (0: none kept)], then per sample
+/// [light, W and M (float bits), point on a sized light's shape (2 × unorm16)]), the instance
+/// seen per pixel and per instance its motion since the last frame (motion.rs:
+/// `last_frame_position`).
+const LIGHTING_BINDINGS: &[Binding] = &[
+    Binding::uniform("reuse", "ReuseParams"),
+    Binding::storage_rw("reservoirs", "array<vec4<u32>>"),
+    Binding::texture_u32("gbuf_instance"),
+    Binding::storage("motion_back", "array<mat4x4<f32>>"),
+];
+
+/// The fragment entry point of spatial reuse, drawn right after the lighting pass.
+const SPATIAL_PASS: &str = "fs_spatial";
+
+/// Reuse's part of the lighting pass: with `reuse`, `REUSE`, the reservoirs' bindings and
+/// functions, what finds a moving instance's point where it was (motion.rs) and, with spatial
+/// reuse, its pass; without, the same functions doing nothing (never called: `REUSE` is
+/// false). Either way the spatial constants (`SPATIAL`: 0 off, 1 biased, 2 unbiased).
+pub fn lighting_part(reuse: Option<&Reuse>) -> Part<'_> {
+    let mut part = lighting_part_declared(reuse.map(|r| r.spatial));
+    if let Some(r) = reuse {
+        part.resources = vec![
+            r.buffers.params.as_entire_binding(),
+            r.buffers.reservoirs.as_entire_binding(),
+            wgpu::BindingResource::TextureView(&r.buffers.instance),
+            r.buffers.motion_back.as_entire_binding(),
+        ];
+    }
+    part
+}
+
+/// [`lighting_part`]'s WGSL and bindings alone (no resources): with reuse and its spatial
+/// mode, or without (`None`): what a shader is composed of.
+pub fn lighting_part_declared(reuse: Option<SpatialReuse>) -> Part<'static> {
+    let spatial = reuse.unwrap_or(SpatialReuse::Off);
+    let consts = format!(
+        "const REUSE: bool = {};\nconst SPATIAL: u32 = {}u;\nconst SPATIAL_NEIGHBOURS: u32 = {}u;\n\
+         const SPATIAL_RADIUS: f32 = {:?}f;\nconst SPATIAL_SLOTS: u32 = {}u;\n",
+        reuse.is_some(),
+        spatial.code(),
+        SPATIAL_NEIGHBOURS,
+        SPATIAL_RADIUS,
+        SPATIAL_NEIGHBOURS + 1,
+    );
+    if reuse.is_none() {
+        return Part::wgsl(format!("{consts}{NO_REUSE_WGSL}"));
+    }
+    Part {
+        wgsl: format!(
+            "{consts}const MOVING_CONFIDENCE: f32 = {:?}f;\n{REUSE_WGSL}{}",
             MOVING_CONFIDENCE as f32,
-            crate::frame::motion::wgsl()
-        )
-    } else {
-        NO_REUSE_WGSL.to_string()
+            crate::sampled::motion::wgsl()
+        ),
+        bindings: LIGHTING_BINDINGS,
+        resources: Vec::new(),
+        follow: if spatial == SpatialReuse::Off {
+            &[]
+        } else {
+            &[SPATIAL_PASS]
+        },
+        own: &[],
     }
 }
 
@@ -248,16 +301,6 @@ struct ReuseParams {
     flags: vec4<f32>,
     camera: vec4<f32>,
 }
-@group(0) @binding(42) var<uniform> reuse: ReuseParams;
-// Two halves (one read, one written per frame); per pixel 1 + K vec4: [surface point (float
-// bits), its normal as four signed bytes (0: none kept)], then per sample [light, W and M
-// (float bits), point on a sized light's shape (2 × unorm16)].
-@group(0) @binding(43) var<storage, read_write> reservoirs: array<vec4<u32>>;
-// The instance seen per pixel and per instance its motion since the last frame
-// (frame/motion.rs: `last_frame_position`).
-@group(0) @binding(47) var gbuf_instance: texture_2d<u32>;
-@group(0) @binding(48) var<storage, read> motion_back: array<mat4x4<f32>>;
-
 fn reuse_record(half: u32, px: vec2<u32>) -> u32 {
     let stride = reuse.size.z + 1u;
     return (half * reuse.size.x * reuse.size.y + px.y * reuse.size.x + px.x) * stride;

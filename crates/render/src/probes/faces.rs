@@ -28,12 +28,13 @@ use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, Span};
 use crate::gpu::types::FrameUniforms;
 use crate::gpu_scene::instances::GpuScene;
+use crate::probes::maps::{FaceView, ProbeMaps, ProbePasses, ProbeStats};
+use crate::shading::inputs::FrameInputs;
 use crate::shading::lighting::{LightingInputs, LightingPass};
 use crate::shading::look::ShadingConsts;
-use crate::shading::probes::{FaceView, ProbeMaps, ProbePasses, ProbeStats};
 use crate::shadows::source::ShadowSource;
 
-use super::probe_clusters::FaceClusters;
+use crate::probes::clusters::FaceClusters;
 
 /// Byte stride of the staging buffer's per-face uniforms: `FrameUniforms` rounded up to 256
 /// (the copy offset alignment is 4; 256 keeps each block aligned as a dynamic uniform offset
@@ -133,10 +134,6 @@ impl ProbeFrame {
         )?;
         let consts = ShadingConsts {
             emission_texture: gbuffer.emission.is_some(),
-            denoise: false,
-            reuse: false,
-            spatial: 0,
-            probes: false,
             linear_out: true,
             ..consts
         };
@@ -162,6 +159,8 @@ impl ProbeFrame {
         })
     }
 
+    /// What a face's lighting reads: the face's G-buffer and clusters, the frame's lights,
+    /// materials and shadows; no sampled lights and no reflections of its own (one bounce).
     fn inputs<'a>(
         uniforms: &'a wgpu::Buffer,
         lights: &'a wgpu::Buffer,
@@ -170,16 +169,18 @@ impl ProbeFrame {
         clusters: &'a LightClusters,
         source: &'a dyn ShadowSource,
     ) -> LightingInputs<'a> {
+        let mut parts = crate::sampled::lighting_parts(None, None);
+        parts.push(crate::probes::maps::lighting_part(None));
         LightingInputs {
-            frame: uniforms,
-            lights,
-            materials: &gpu_scene.materials,
-            gbuffer,
-            clusters,
-            shadows: source.output(),
-            denoise: None,
-            reuse: None,
-            probes: None,
+            frame: FrameInputs {
+                frame: uniforms,
+                lights,
+                materials: &gpu_scene.materials,
+                gbuffer,
+                clusters,
+                shadows: source.output(),
+            },
+            parts,
         }
     }
 

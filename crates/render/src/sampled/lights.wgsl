@@ -1,4 +1,4 @@
-// The lighting pass's sampled lights (lighting.rs composes this after lighting.wgsl): with
+// The lighting pass's sampled lights (mod.rs hands this to the lighting pass as a part): with
 // `ray_samples() > 0` each pixel's light loop (`visit`) draws K lights in proportion to the
 // luminance of their unshadowed terms and traces one ray to each (`resolve_samples`); where
 // frames are denoised the draws are stratified over frames (`pick_stratified`); with reuse
@@ -6,8 +6,8 @@
 // neighbours' (`fs_spatial`). The loop itself, the terms and the shadow lookups are in
 // lighting.wgsl.
 
-// Most lights a pixel samples (RayOptions::light_samples).
-const MAX_SAMPLES: u32 = 16u;
+// MAX_SAMPLES, the most lights a pixel samples (RayOptions::light_samples), is composed
+// before this file (mod.rs).
 
 // What a pixel's light loop accumulates: the colour, and with sampled lights (`ray_samples()
 // > 0`) one weighted reservoir per sample over the lights' unshadowed direct terms, and the

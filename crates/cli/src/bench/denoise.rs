@@ -16,7 +16,7 @@ use manyshadows::scene::builtin::{self, LightMix};
 use manyshadows::{Frame, RayOptions, RenderSettings, Renderer, Stage};
 use serde::Serialize;
 
-use crate::harness::{check_counts, check_scene, median, ms, seeded_scene, Figure, Harness};
+use crate::bench::harness::{check_counts, check_scene, median, ms, seeded_scene, Figure, Harness};
 
 /// `manyshadows bench denoise --help`.
 pub const LONG_ABOUT: &str = "\
@@ -88,9 +88,9 @@ pub struct DenoiseArgs {
     #[arg(long, default_value = "on", value_parser = ["on", "off"])]
     pub reference: String,
     /// Rays per side of the exact image's grid over each sized light (`render
-    /// --area-samples`, 1 to 16). The exact image's penumbrae carry its own sampling noise:
-    /// on the atrium at 1,024 lights the default 2 × 2 rays are 1.07 RMSE from 8 × 8, which
-    /// every score against it includes; 8 takes 16 × the reference's rays.
+    /// --area-samples`, 1 to 16). The exact image's penumbrae carry its own sampling noise,
+    /// which every score against it includes (docs/techniques.md, "The exact image's own
+    /// noise"); 8 takes 16 × the reference's rays.
     #[arg(long, default_value_t = manyshadows::DEFAULT_AREA_SAMPLES,
           value_parser = clap::value_parser!(u32).range(1..=16))]
     pub reference_area_samples: u32,
@@ -107,7 +107,7 @@ pub struct DenoiseArgs {
     #[arg(long, default_value_t = 360)]
     pub height: u32,
     #[command(flatten)]
-    pub output: crate::harness::OutputArgs,
+    pub output: crate::bench::harness::OutputArgs,
 }
 
 /// One frame's numbers.
@@ -441,10 +441,10 @@ impl Sequence {
             lights: self.lights,
             plain_mean_rmse: mean(rows.iter().filter_map(|r| r.plain_rmse)),
             denoised_mean_rmse: mean(rows.iter().filter_map(|r| r.denoised_rmse)),
-            cost_ratio: crate::harness::ratio(denoised_median_ms, plain_median_ms),
+            cost_ratio: crate::bench::harness::ratio(denoised_median_ms, plain_median_ms),
             cost_ratio_paired: med(rows
                 .iter()
-                .filter_map(|r| crate::harness::ratio(r.denoised_ms, r.plain_ms))
+                .filter_map(|r| crate::bench::harness::ratio(r.denoised_ms, r.plain_ms))
                 .collect()),
             denoise_median_ms: med(rows.iter().filter_map(|r| r.denoise_ms).collect()),
             mean_trail_frames: mean(rows.iter().filter_map(|r| r.trail_frames.map(f64::from))),
@@ -622,17 +622,18 @@ fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
                     .frames
                     .iter()
                     .zip(&b.frames)
-                    .filter_map(|(x, y)| crate::harness::ratio(pick(y), pick(x)))
+                    .filter_map(|(x, y)| crate::bench::harness::ratio(pick(y), pick(x)))
                     .collect();
                 (!v.is_empty()).then(|| median(&v))
             };
-            t += &format!(
+            t +=
+                &format!(
                 "growth from {} to {} lights: plain {}x, denoised {}x (median frames); frame by \
                  frame plain {}x, denoised {}x (median of each frame's ratio)\n",
                 a.lights,
                 b.lights,
-                opt(crate::harness::ratio(b.plain_median_ms, a.plain_median_ms)),
-                opt(crate::harness::ratio(
+                opt(crate::bench::harness::ratio(b.plain_median_ms, a.plain_median_ms)),
+                opt(crate::bench::harness::ratio(
                     b.denoised_median_ms,
                     a.denoised_median_ms
                 )),
@@ -657,7 +658,7 @@ fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
                 a.lights,
                 ms(added(b)),
                 b.lights,
-                opt(crate::harness::ratio(added(b), added(a))),
+                opt(crate::bench::harness::ratio(added(b), added(a))),
             );
         }
     }

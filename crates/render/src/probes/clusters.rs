@@ -36,7 +36,7 @@ use crate::shadows::cluster_draw::{plan_rounds, Round, CLUSTER_CULL, COMMAND_SIZ
 /// 128, 0.80× of 256, 0.85× of 512; docs/bench/probes-cluster-size-lavapipe.txt).
 pub(crate) const CLUSTER_TRIANGLES: usize = 256;
 
-/// `ProbeCluster` of `probe_clusters.wgsl`.
+/// `ProbeCluster` of `clusters.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 struct ProbeCluster {
@@ -65,7 +65,7 @@ fn shader() -> String {
         PARAMS_WGSL,
         include_str!("../frame/gbuffer_face_views.wgsl"),
         CLUSTER_CULL,
-        include_str!("probe_clusters.wgsl"),
+        include_str!("clusters.wgsl"),
     ])
 }
 
