@@ -276,3 +276,41 @@ fn thousands_of_lights_on_the_minimum_limits() {
         }
     }
 }
+
+/// What the test command says this backend must offer (`MANYSHADOWS_EXPECT`, set by `cargo
+/// xtask test`: on Vulkan with Mesa 25's lavapipe ray queries, multiview of at least two views
+/// per pass, clip distances and indirect execution), the adapter offers: a driver too old for
+/// ray queries, or a regression of feature detection, fails here by name instead of turning
+/// the ray-query tests into checks of a refusal. Without the test command nothing is expected.
+/// Seen failing with `MANYSHADOWS_WITHOUT_FEATURES=EXPERIMENTAL_RAY_QUERY` on Vulkan.
+#[test]
+fn the_adapter_offers_what_the_test_command_expects() {
+    let ctx = common::context();
+    let expected = manyshadows_testkit::expected();
+    let mut missing = Vec::new();
+    for need in &expected {
+        let met = match need.as_str() {
+            "INDIRECT_EXECUTION" => ctx
+                .adapter
+                .get_downlevel_capabilities()
+                .flags
+                .contains(manyshadows::wgpu::DownlevelFlags::INDIRECT_EXECUTION),
+            "MULTIVIEW" => ctx.multiview_views_per_pass() >= 2,
+            name => {
+                let feature = manyshadows::wgpu::Features::from_name(name)
+                    .unwrap_or_else(|| panic!("{name} is no wgpu feature"));
+                ctx.has(feature)
+            }
+        };
+        if !met {
+            missing.push(need.clone());
+        }
+    }
+    eprintln!("{}: expected {expected:?}", ctx.describe());
+    assert!(
+        missing.is_empty(),
+        "{} lacks {missing:?}, which the test command says this backend must offer; on \
+         Debian 12 install Mesa 25 from bookworm-backports (`cargo xtask test` does)",
+        ctx.describe()
+    );
+}

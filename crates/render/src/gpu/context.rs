@@ -258,10 +258,33 @@ pub fn feature_use(features: wgpu::Features) -> Vec<FeatureUse> {
         .collect()
 }
 
+/// The environment variable naming optional features the device is made without
+/// (comma-separated, as wgpu spells them: `EXPERIMENTAL_RAY_QUERY,MULTIVIEW`): to see how the
+/// renderer and its tests behave on a device that lacks them, on one that has them.
+pub const WITHOUT_FEATURES_VAR: &str = "MANYSHADOWS_WITHOUT_FEATURES";
+
+/// The features [`WITHOUT_FEATURES_VAR`] names (none when unset); a name wgpu does not know
+/// is an error naming it.
+fn masked_features() -> Result<wgpu::Features, RenderError> {
+    let Ok(list) = std::env::var(WITHOUT_FEATURES_VAR) else {
+        return Ok(wgpu::Features::empty());
+    };
+    let mut out = wgpu::Features::empty();
+    for name in list.split(',').map(str::trim).filter(|n| !n.is_empty()) {
+        out |= wgpu::Features::from_name(name).ok_or_else(|| RenderError::InvalidOption {
+            option: "MANYSHADOWS_WITHOUT_FEATURES",
+            value: name.to_string(),
+            expected: "wgpu feature names, comma-separated (EXPERIMENTAL_RAY_QUERY, MULTIVIEW, \
+                       CLIP_DISTANCES, ...)",
+        })?;
+    }
+    Ok(out)
+}
+
 impl GpuContext {
     /// Picks the best adapter for `req` and creates a device with the adapter's full limits and
-    /// the optional features the renderer uses. Fails with an error that says what to install
-    /// when there is no adapter at all.
+    /// the optional features the renderer uses (but those [`WITHOUT_FEATURES_VAR`] names).
+    /// Fails with an error that says what to install when there is no adapter at all.
     pub fn new(req: &AdapterRequest) -> Result<Self, RenderError> {
         let instance = new_instance(requested_backends(req));
         Self::with_instance(instance, req, None)
@@ -313,7 +336,7 @@ impl GpuContext {
         let wanted = OPTIONAL_FEATURES
             .iter()
             .fold(wgpu::Features::empty(), |acc, &(f, _, _)| acc | f);
-        let features = adapter.features() & wanted;
+        let features = adapter.features() & wanted & !masked_features()?;
         let adapter_limits = adapter.limits();
         let limits = match &req.limits {
             None => adapter_limits.clone(),
