@@ -76,76 +76,8 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             renderer.render()?
         };
         if args.frames > 1 {
-            let shadow_ms = fr
-                .timings
-                .gpu_ms
-                .get(manyshadows::Stage::Shadows)
-                .map_or("n/a".to_string(), |v| format!("{v:.2} ms"));
-            let info = renderer.settings().technique.info();
-            let line = match &fr.virtual_maps {
-                // No maps: the rays are traced in the lighting pass.
-                None if info.fills == manyshadows::Fills::Rays => {
-                    let rays = renderer.settings().rays;
-                    let lighting_ms = fr
-                        .timings
-                        .gpu_ms
-                        .get(manyshadows::Stage::Lighting)
-                        .map_or("n/a".to_string(), |v| format!("{v:.2} ms"));
-                    let history = manyshadows::RayOptions::denoise_history(f + 1);
-                    let plural = if history == 1 { "" } else { "s" };
-                    let reused = if rays.reuse {
-                        let m = manyshadows::RayOptions::reuse_confidence(f + 1);
-                        let spatial = match rays.spatial {
-                            manyshadows::SpatialReuse::Off => String::new(),
-                            mode => format!(" and between neighbours ({})", mode.name()),
-                        };
-                        format!(", lights reused (reservoirs of up to {m} frames){spatial}")
-                    } else {
-                        String::new()
-                    };
-                    let kept = if !rays.denoise {
-                        reused
-                    } else if rays.light_samples > 0 {
-                        format!("{reused}, denoised (history up to {history} frame{plural})")
-                    } else {
-                        format!(", area samples accumulated (up to {history} frame{plural})")
-                    };
-                    format!(
-                        "frame {:>3}: shadow rays in the lighting pass{kept}, lighting GPU time {lighting_ms}",
-                        f + 1
-                    )
-                }
-                // Sample lists: every view's are built anew each frame (nothing is kept).
-                None if info.fills == manyshadows::Fills::Mask => format!(
-                    "frame {:>3}: sample lists of all {} light views built anew, shadow GPU time {shadow_ms}",
-                    f + 1,
-                    renderer.plan().views.len()
-                ),
-                Some(v) => format!(
-                    "frame {:>3}: {:>4} of {} resident pages drawn ({} kept), shadow GPU time {shadow_ms}",
-                    f + 1,
-                    v.drawn,
-                    v.resident,
-                    v.kept
-                ),
-                None => {
-                    let st = &fr.shadow_stats;
-                    let waiting = if args.shadow_budget.is_some() {
-                        format!(
-                            " ({} stale, oldest {} frames; {} waiting, unshadowed)",
-                            st.views_stale, st.stale_frames, st.views_waiting
-                        )
-                    } else {
-                        String::new()
-                    };
-                    format!(
-                        "frame {:>3}: {:>4} of {} shadow views redrawn{waiting}, shadow GPU time {shadow_ms}",
-                        f + 1,
-                        st.views_drawn,
-                        renderer.plan().views.len()
-                    )
-                }
-            };
+            // The technique's own words for the frame (its declaration's report).
+            let line = format!("frame {:>3}: {}", f + 1, fr.report.frame);
             pb.suspend(|| eprintln!("{line}"));
         }
         frame = Some(fr);
@@ -311,9 +243,9 @@ pub(crate) fn moving_instance(
     }
 }
 
-/// Most (caster triangle, view) pairs a frame may take without `--insist`: 2 G. The layered
-/// technique with the atrium's 16,384 lights asks 9.4 G and ran past ten minutes on lavapipe;
-/// the default frame asks 21.6 M.
+/// Most (caster triangle, view) pairs a frame may take without `--insist`: 2 G, far above
+/// what the default frame asks and below the frames that run for many minutes on a CPU
+/// adapter (docs/benchmarks.md, "What a frame will cost: `bench estimate`").
 pub(crate) const MAX_UNASKED_TRIANGLE_VIEWS: u64 = 2_000_000_000;
 
 /// Most milliseconds a frame may be estimated to take on a CPU adapter (whose costs the

@@ -5,7 +5,7 @@ use std::time::Duration;
 use crate::args::RenderArgs;
 use manyshadows::gpu::context::describe_adapter;
 use manyshadows::scene::Scene;
-use manyshadows::{Frame, GpuContext, Renderer, Technique};
+use manyshadows::{Frame, GpuContext, Renderer};
 
 pub(crate) fn summary(
     ctx: &GpuContext,
@@ -47,6 +47,7 @@ pub(crate) fn summary(
             "passes": r.settings().probe_passes.name() })),
         "virtual": frame.virtual_maps,
         "lists": r.irregular_stats(),
+        "report": frame.report.lines,
         "soft": { "blocker_taps": r.settings().soft.blocker_taps, "filter_taps": r.settings().soft.filter_taps,
                   "max_penumbra": r.max_penumbra(), "area_samples": r.settings().rays.area_samples,
                   "light_samples": r.settings().rays.light_samples, "denoise": r.settings().rays.denoise,
@@ -128,16 +129,13 @@ fn describe_sizes(sizes: &serde_json::Value) -> String {
 
 pub(crate) fn print_summary(s: &serde_json::Value) {
     print_scene(s);
-    let technique = s["technique"]
-        .as_str()
-        .and_then(|t| t.parse::<Technique>().ok());
-    let fills = technique.map(|t| t.info().fills);
-    print_shadows(s, fills);
-    match fills {
-        Some(manyshadows::Fills::Pages) => print_virtual(s),
-        Some(manyshadows::Fills::Mask) => print_irregular(s),
-        Some(manyshadows::Fills::Rays) => print_rays(s),
-        _ => print_atlas(s, technique),
+    // The shadows in the technique's own words (its declaration's report).
+    for line in s["report"].as_array().into_iter().flatten() {
+        println!(
+            "{:<12} {}",
+            line["label"].as_str().unwrap_or("?"),
+            line["text"].as_str().unwrap_or("")
+        );
     }
     print_clusters(s);
     print_times(s);
@@ -190,204 +188,6 @@ fn print_scene(s: &serde_json::Value) {
                 .map_or("drawn in an unknown way", |p| p.describe())
         );
     }
-}
-
-/// The technique, its views, how it filters, and what sized lights get from it.
-fn print_shadows(s: &serde_json::Value, fills: Option<manyshadows::Fills>) {
-    let technique = s["technique"].as_str().unwrap_or("?");
-    let sized = s["lights"]["sizes"]
-        .as_object()
-        .is_some_and(|m| m.values().any(|r| r[1].as_f64().is_some_and(|hi| hi > 0.0)));
-    let soft = &s["soft"];
-    let (views, filter, softness) = match fills {
-        Some(manyshadows::Fills::Mask) => (
-            "exact samples in per-light lists".to_string(),
-            "no filter (exact, hard)".to_string(),
-            "hard: answers at each light's centre, sizes ignored".to_string(),
-        ),
-        Some(manyshadows::Fills::Rays) => {
-            ("no shadow views".to_string(), "no filter".to_string(), {
-                let denoise = soft["denoise"].as_bool().unwrap_or(false);
-                match soft["light_samples"].as_u64().unwrap_or(0) {
-                    0 => format!(
-                        "sized lights traced with {0}x{0} samples of their shape per pixel{1}",
-                        soft["area_samples"].as_u64().unwrap_or(0).max(1),
-                        if denoise {
-                            ", new each frame and accumulated over still frames"
-                        } else {
-                            ""
-                        }
-                    ),
-                    _ => format!(
-                        "a sampled sized light is traced at one point of its shape{}{}",
-                        if soft["reuse"].as_bool().unwrap_or(false) {
-                            ", new each frame, reused across frames"
-                        } else if denoise {
-                            ", new each frame"
-                        } else {
-                            ""
-                        },
-                        if denoise { ", denoised" } else { "" }
-                    ),
-                }
-            })
-        }
-        _ => (
-            format!("{} views", s["shadow_views"]),
-            format!("PCF {}", s["pcf"].as_str().unwrap_or("?")),
-            format!(
-                "sized lights: PCSS, {} blocker and {} filter taps, penumbrae up to {} texels",
-                soft["blocker_taps"], soft["filter_taps"], soft["max_penumbra"]
-            ),
-        ),
-    };
-    println!("shadows      {views}, technique {technique}, {filter}");
-    if sized {
-        println!("soft         {softness}");
-    }
-}
-
-/// Virtual maps: faces, pages, marking and the drawing's work.
-fn print_virtual(s: &serde_json::Value) {
-    let v = &s["virtual"];
-    if !v.is_object() {
-        return;
-    }
-    let fit = &v["fit"];
-    let capped = fit["capped_side"].as_u64().unwrap_or(0);
-    let prev = v["prev_table_bytes"].as_u64().unwrap_or(0);
-    println!(
-        "virtual      {} faces of {} lights ({} off screen, no faces; {} faces needed by a sample, the rest get no pages), page table {} entries ({} KiB{}){}",
-        fit["faces"], fit["lights"], fit["off_screen"], v["faces_in_use"], fit["table_entries"],
-        v["table_bytes"].as_u64().unwrap_or(0) / 1024,
-        if prev > 0 { format!(", and {} KiB for last frame's, kept for caching", prev / 1024) } else { String::new() },
-        if capped > 0 { format!(", virtual sides capped at {capped}² to fit it") } else { String::new() }
-    );
-    let per_level = |key: &str| -> String {
-        v[key]
-            .as_array()
-            .map(|a| a.iter().map(|x| x.to_string()).collect::<Vec<_>>())
-            .unwrap_or_default()
-            .join("/")
-    };
-    let denied = v["denied"].as_u64().unwrap_or(0);
-    let unshadowed = v["unshadowed_faces"].as_u64().unwrap_or(0);
-    let quarter = v["quarter_faces"].as_u64().unwrap_or(0);
-    let mut tail = String::new();
-    if denied > 0 {
-        tail +=
-            &format!("; {denied} pages did not fit the pool, their samples used coarser levels");
-    }
-    if quarter > 0 {
-        tail += &format!("; {quarter} faces share pool pages four to one at half resolution (the pool has fewer pages than faces in use)");
-    }
-    if unshadowed > 0 {
-        tail += &format!(
-            "; {unshadowed} faces had no room even for a quarter page: unshadowed; raise --page-pool"
-        );
-    }
-    println!(
-        "pages        {} resident in a pool of {} ({} drawn, {} kept from the last frame; {}x{} texels, {} MiB); asked by samples per level (coarsest first) {} (with their ancestors {}){tail}",
-        v["resident"], v["pool_pages"], v["drawn"], v["kept"], v["pool_side"], v["pool_side"],
-        v["pool_bytes"].as_u64().unwrap_or(0) >> 20,
-        per_level("asked"),
-        per_level("needed"),
-    );
-    let t = &v["tiles"];
-    let count = |k: &str| t[k].as_u64().unwrap_or(0);
-    if count("empty") + count("one_page") + count("known_page") + count("per_pixel") > 0 {
-        println!(
-            "marking      by 4x4-pixel tiles, (tile, light) pairs: {} need no page, {} one page marked once, {} a known page checked per pixel, {} marked per pixel ({} tiles whole)",
-            count("empty"),
-            count("one_page"),
-            count("known_page"),
-            count("per_pixel"),
-            count("whole_tiles"),
-        );
-    }
-    // Pages are chosen, culled and drawn on the GPU: their counts are the pages line's.
-    println!(
-        "shadow work  {} pages drawn ({} kept from the last frame): {} (cluster, page) pairs \
-         past the cluster cull, {} triangles drawn (culled per page on the GPU: clusters, then \
-         triangles where the adapter counts draws)",
-        v["drawn"], v["kept"], v["cluster_draws"], v["triangles"]
-    );
-}
-
-/// Irregular maps: their own work, no atlas and no passes of shadow maps.
-fn print_irregular(s: &serde_json::Value) {
-    let i = &s["lists"];
-    if !i.is_object() {
-        return;
-    }
-    println!(
-        "lists        {} batch(es) of lights, the largest holding {} of {} list nodes (camera \
-         samples in light-space lists); up to {} 8x8-texel tiles queued for the triangle \
-         tests{}",
-        i["batches"],
-        i["peak_nodes"],
-        i["node_capacity"],
-        i["peak_tiles"],
-        match i["unmapped"].as_u64().unwrap_or(0) {
-            0 => String::new(),
-            n => format!("; {n} samples outside every view of their light (counted lit)"),
-        }
-    );
-}
-
-/// Shadow rays: the acceleration structure's rebuilds, no map.
-fn print_rays(s: &serde_json::Value) {
-    println!(
-        "shadow work  no shadow map: rays per pixel and light of its cluster (or per sampled \
-         light) in the lighting pass; {} top-level structure build(s)",
-        s["shadow_work"]["passes"]
-    );
-}
-
-/// The atlas and the passes that filled it.
-fn print_atlas(s: &serde_json::Value, technique: Option<Technique>) {
-    let a = &s["atlas"];
-    let w = &s["shadow_work"];
-    let shrink = a["shrink_steps"].as_u64().unwrap_or(0);
-    println!(
-        "atlas        {0}x{0}, {1:.0}% filled{2}",
-        a["size"],
-        a["fill"].as_f64().unwrap_or(0.0) * 100.0,
-        if shrink > 0 {
-            format!(", maps shrunk {}x per side to fit", 1u64 << shrink)
-        } else {
-            String::new()
-        }
-    );
-    let fit = &a["fit"];
-    if fit["reduced"].as_u64().unwrap_or(0)
-        + fit["unshadowed"].as_u64().unwrap_or(0)
-        + fit["off_screen"].as_u64().unwrap_or(0)
-        > 0
-    {
-        println!(
-            "shadow fit   {} lights at full resolution, {} with smaller maps, {} unshadowed (no room), {} off screen (no maps needed)",
-            fit["full"], fit["reduced"], fit["unshadowed"], fit["off_screen"]
-        );
-    }
-    // What the triangle count is: drawn (after instance culling), or handed to a stage that
-    // culls each (triangle, view) itself.
-    let what = match technique.map(|t| t.info().culling) {
-        Some(manyshadows::Culling::VertexStage) => {
-            "triangle-views submitted (each culled per view in the vertex stage)"
-        }
-        Some(manyshadows::Culling::Threads) => {
-            "triangle-views submitted (each culled per view by its setup thread)"
-        }
-        Some(manyshadows::Culling::Clusters) => {
-            "triangle-views submitted (clusters culled per view in compute before drawing)"
-        }
-        _ => "triangles drawn",
-    };
-    println!(
-        "shadow work  {} passes, {} draws ({} instance-views culled on the CPU), {} {what}",
-        w["passes"], w["draws"], w["culled_draws"], w["triangles"]
-    );
 }
 
 /// The light clusters.

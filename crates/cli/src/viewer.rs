@@ -1,11 +1,11 @@
 //! `manyshadows view`: runs the window viewer, the separate `manyshadows-view` program.
 //!
 //! Why separate: its window and panel libraries (winit, egui and their font and Wayland/X11
-//! stacks) were 41 % of the compile work of a first `cargo run --release` (388 of 954 CPU
-//! seconds, `cargo build --timings`), for a command most runs never use. So the default build
-//! leaves them out, and `manyshadows view` runs `manyshadows-view` from beside its own
-//! executable; from the source tree it builds it first (once, with the same profile), so the
-//! command works as before with no second install step.
+//! stacks) were a large share of the compile work of a first `cargo run --release`
+//! (docs/decisions.md, "The viewer, a program of its own"), for a command most runs never
+//! use. So the default build leaves them out, and `manyshadows view` runs `manyshadows-view`
+//! from beside its own executable; from the source tree it builds it first (once, with the
+//! same profile), so the command works as before with no second install step.
 
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};

@@ -89,9 +89,9 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
 /// Benchmark subcommands named after the technique they study, by file, and their name as
 /// their output files' prefix (and `bench suite`, which runs `bench layered` by that name).
 const BENCH_NAMES: &[(&str, &str)] = &[
-    ("bench.rs", "layered"),
-    ("irregular_bench.rs", "irregular"),
-    ("suite.rs", "layered"),
+    ("bench/layered.rs", "layered"),
+    ("bench/irregular.rs", "irregular"),
+    ("bench/suite.rs", "layered"),
 ];
 
 fn technique_names() -> Vec<&'static str> {

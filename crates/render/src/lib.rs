@@ -140,6 +140,7 @@ pub use shadows::image::ShadowPicture;
 pub use shadows::irregular::maps::{IrregularOptions, IrregularStats};
 pub use shadows::options::{CullMode, Pcf, ShadowBias, ShadowOptions, SoftShadows};
 pub use shadows::plan::DEFAULT_MAX_ATLAS_SIZE;
+pub use shadows::report::{ReportLine, ShadowText};
 pub use shadows::source::ShadowStats;
 pub use shadows::vsm::plan::{TileMarking, VirtualOptions, VirtualStats};
 

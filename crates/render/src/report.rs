@@ -8,6 +8,7 @@ use crate::frame::visibility_mask::{SoftVisibility, VisibilityMask};
 use crate::gpu::timing::GpuTimes;
 use crate::probes::maps::ProbeStats;
 use crate::shadows::cost::EstimatedWork;
+use crate::shadows::report::ShadowText;
 use crate::shadows::source::ShadowStats;
 use crate::shadows::vsm::plan::VirtualStats;
 
@@ -49,6 +50,9 @@ pub struct Frame {
     pub virtual_maps: Option<VirtualStats>,
     /// Reflection probe counters (`None` for scenes without probes).
     pub probes: Option<ProbeStats>,
+    /// The frame's shadows in words, as the technique writes them: a few labelled lines (what
+    /// `manyshadows render` prints under its summary) and the frame's line among a sequence's.
+    pub report: ShadowText,
 }
 
 /// What [`Renderer::render_to`](crate::Renderer::render_to) reports: the frame is submitted, not read back.

@@ -15,7 +15,7 @@ use crate::sampled::options::RayOptions;
 use crate::shading::look::Look;
 use crate::shadows::irregular::maps::IrregularOptions;
 use crate::shadows::options::{Pcf, ShadowBias, ShadowOptions, SoftShadows};
-use crate::shadows::source::SourceSettings;
+use crate::shadows::source::{SourceSettings, TechniqueOptions};
 use crate::shadows::vsm::plan::VirtualOptions;
 
 /// How a frame is rendered.
@@ -75,6 +75,9 @@ pub struct RenderSettings {
     pub stereo: Option<Stereo>,
     /// How reflection probes' face G-buffers are drawn (scenes with probes).
     pub probe_passes: ProbePasses,
+    /// Options of techniques without a field here (one added beside the built-in ones),
+    /// one per type: [`RenderSettings::with_technique_options`].
+    pub technique_options: Vec<std::sync::Arc<dyn TechniqueOptions>>,
 }
 
 impl Default for RenderSettings {
@@ -102,6 +105,7 @@ impl Default for RenderSettings {
             look: Look::default(),
             stereo: None,
             probe_passes: ProbePasses::default(),
+            technique_options: Vec::new(),
         }
     }
 }
@@ -185,6 +189,9 @@ impl RenderSettings {
         self.irregular.validate()?;
         self.virtual_maps.validate()?;
         self.rays.validate()?;
+        for o in &self.technique_options {
+            o.validate()?;
+        }
         self.look.validate()?;
         Ok(())
     }
@@ -229,12 +236,86 @@ impl RenderSettings {
             visibility: self.visibility,
             point_shadows: self.point_shadows,
             fit: self.fit,
-            options: vec![&self.irregular, &self.virtual_maps, &self.rays],
+            options: [
+                &self.irregular as &(dyn std::any::Any + Send + Sync),
+                &self.virtual_maps,
+                &self.rays,
+            ]
+            .into_iter()
+            .chain(self.technique_options.iter().map(|o| o.as_any()))
+            .collect(),
         }
+    }
+
+    /// These settings with `options` for the technique that reads them (replacing options of
+    /// the same type): how a technique without a field here gets its options
+    /// ([`TechniqueOptions`]).
+    #[must_use]
+    pub fn with_technique_options<T: TechniqueOptions>(mut self, options: T) -> Self {
+        self.technique_options
+            .retain(|o| o.as_any().type_id() != std::any::TypeId::of::<T>());
+        self.technique_options.push(std::sync::Arc::new(options));
+        self
     }
 
     /// Default settings at `width`×`height`.
     pub fn new(width: u32, height: u32) -> Self {
         Self::default().with_width(width).with_height(height)
+    }
+}
+
+#[cfg(test)]
+mod technique_options_tests {
+    use super::*;
+
+    /// The options of a technique added beside the built-in ones.
+    #[derive(Clone, Debug, Default)]
+    struct Cones {
+        spread: f32,
+    }
+
+    impl TechniqueOptions for Cones {
+        fn validate(&self) -> Result<(), RenderError> {
+            if self.spread.is_finite() && self.spread > 0.0 {
+                Ok(())
+            } else {
+                Err(RenderError::invalid_option(
+                    "cones.spread",
+                    self.spread,
+                    "a finite spread above 0",
+                ))
+            }
+        }
+
+        fn as_any(&self) -> &(dyn std::any::Any + Send + Sync) {
+            self
+        }
+    }
+
+    #[test]
+    fn options_without_a_field_are_found_by_type_and_checked() {
+        let s = RenderSettings::default()
+            .with_technique_options(Cones { spread: 2.0 })
+            .with_technique_options(Cones { spread: 3.0 });
+        assert_eq!(s.technique_options.len(), 1, "one per type");
+        assert_eq!(s.source_settings().options::<Cones>().spread, 3.0);
+        assert_eq!(
+            s.source_settings().options::<VirtualOptions>(),
+            VirtualOptions::default(),
+            "the built-in ones are still found"
+        );
+        assert!(s.validate().is_ok());
+        let bad = s.with_technique_options(Cones { spread: f32::NAN });
+        assert!(
+            matches!(
+                bad.validate(),
+                Err(RenderError::InvalidOption {
+                    option: "cones.spread",
+                    ..
+                })
+            ),
+            "{:?}",
+            bad.validate()
+        );
     }
 }

@@ -97,7 +97,8 @@ pub struct DenoiseArgs {
     /// Cluster tile side in pixels for all three renderers (`render --cluster-tile`; by
     /// default chosen as there: 16 where the slot pool holds every cluster of that grid, else
     /// 32). The lighting loop of the denoised frame visits each pixel's cluster lights, so
-    /// the growth from 1,024 to 16,384 lights depends on it (docs/techniques.md).
+    /// the growth from 1,024 to 16,384 lights depends on it (docs/techniques.md, "Ray-traced
+    /// shadows: `--technique raytraced`").
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub cluster_tile: Option<u32>,
     /// Image width.

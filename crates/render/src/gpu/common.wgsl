@@ -1,5 +1,5 @@
 // Shared declarations for every manyshadows shader.
-// Keep in sync with crates/render/src/gpu_types.rs (a test compares the layouts naga computes
+// Keep in sync with crates/render/src/gpu/types.rs (a test compares the layouts naga computes
 // for these structs with the Rust structs' sizes).
 
 const LIGHT_DIRECTIONAL: u32 = 0u;

@@ -30,10 +30,9 @@ use crate::gpu_scene::instances::{morton_order, CameraCull, GpuScene};
 use crate::shadows::cluster_draw::{plan_rounds, Round, CLUSTER_CULL, COMMAND_SIZE};
 
 /// Most triangles per cluster: small enough that a 90° face leaves many of an instance's
-/// clusters out, large enough that the commands stay few. Chosen by measurement (16 probes of
-/// 64² in the atrium on lavapipe, which pays for every indirect command as for a draw: GPU
-/// ms of the probes stage against per-face 1.00× with clusters of 64 triangles, 0.88× of
-/// 128, 0.80× of 256, 0.85× of 512; docs/bench/probes-cluster-size-lavapipe.txt).
+/// clusters out, large enough that the commands stay few. Chosen by measurement (lavapipe
+/// pays for every indirect command as for a draw, and 256 was the fastest of 64 to 512;
+/// docs/techniques.md, "Reflection probes (`--probes`)").
 pub(crate) const CLUSTER_TRIANGLES: usize = 256;
 
 /// `ProbeCluster` of `clusters.wgsl`.

@@ -1,4 +1,4 @@
-// The probe faces' cluster cull (probe_clusters.rs): one thread per (cluster, face of the
+// The probe faces' cluster cull (clusters.rs): one thread per (cluster, face of the
 // round). A cluster is a run of triangles of one instance's mesh; it is drawn into a face
 // unless its bounding sphere lies wholly outside the face's frustum, or the instance's
 // material shows only front faces and the cluster's normal cone proves every triangle faces

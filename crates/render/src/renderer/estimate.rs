@@ -1,7 +1,8 @@
 //! What the next frame will cost, before it is drawn: the work each stage takes on (counted
 //! from the scene, the shadow plan and a coarse look at what the camera sees), and milliseconds
 //! from costs per unit of that work measured on lavapipe (`manyshadows bench estimate` measures
-//! them against real frames; docs/benchmarks.md has its table).
+//! them against real frames; docs/benchmarks.md, "What a frame will cost: `bench estimate`",
+//! has its table).
 //!
 //! The units per stage:
 //! - **G-buffer**: pixels, and every triangle of every instance (the camera's draw culls
@@ -40,10 +41,10 @@ const GRID: (u32, u32) = (64, 36);
 
 /// Milliseconds per unit of work of the stages every technique shares, on llvmpipe (LLVM 15,
 /// Mesa 25.0.7) through Vulkan with 2 cores: least squares on the relative error of each stage
-/// over frames of every technique (`manyshadows bench estimate`; docs/benchmarks.md, "The
-/// frame estimate"). Each technique's shadow stage is priced by its own declaration
-/// (`TechniqueInfo::cost`). Each row lists its units in order; a 0 is a unit the fit found no
-/// cost in.
+/// over frames of every technique (`manyshadows bench estimate`; docs/benchmarks.md, "What a
+/// frame will cost: `bench estimate`"). Each technique's shadow stage is priced by its own
+/// declaration (`TechniqueInfo::cost`). Each row lists its units in order; a 0 is a unit the
+/// fit found no cost in.
 struct Costs {
     /// G-buffer: pixels, camera triangles, fixed.
     gbuffer: [f64; 3],

@@ -12,6 +12,7 @@ use crate::frame::visibility_mask::{SoftVisibility, VisibilityMask};
 use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimes, Stage};
 use crate::report::{Frame, FrameTimings, SubmittedFrame};
+use crate::shadows::report::{ShadowReport, ShadowText};
 use crate::shadows::source::ShadowStats;
 
 impl Renderer {
@@ -269,6 +270,39 @@ impl Renderer {
         })
     }
 
+    /// The frame's shadows in words, as the technique writes them (its declaration's `report`)
+    /// from the frame's work, its GPU times and the technique's own counters `own`.
+    fn report(
+        &self,
+        stats: &ShadowStats,
+        own: Option<&(dyn std::any::Any + Send + Sync)>,
+        gpu_ms: &GpuTimes,
+    ) -> ShadowText {
+        let s = &self.settings;
+        let info = s.technique.info();
+        (info.report)(&ShadowReport {
+            technique: s.technique,
+            views: self.shadow_views(),
+            pcf: s.pcf,
+            soft: crate::shadows::options::SoftShadows {
+                max_penumbra: self.max_penumbra(),
+                ..s.soft
+            },
+            rays: s.rays,
+            sized: self
+                .current
+                .lights
+                .iter()
+                .any(|l| l.size > 0.0 && l.casts_shadows),
+            stats: *stats,
+            plan: self.parts.source.plan(),
+            own,
+            gpu_ms,
+            frames: self.frames_read,
+            budget: s.shadow_budget.is_some(),
+        })
+    }
+
     /// Renders one frame and reads it back.
     pub fn render(&mut self) -> Result<Frame, RenderError> {
         self.render_frame(None)
@@ -308,14 +342,12 @@ impl Renderer {
             // A source whose frame went wrong (irregular's full node pool) makes it an error,
             // never a wrong image.
             self.parts.source.finish(ctx)?;
-            let virtual_maps = self
-                .parts
-                .source
-                .technique_stats(ctx)?
-                .and_then(|s| s.downcast().ok())
-                .map(|s| *s);
+            let own = self.parts.source.technique_stats(ctx)?;
             let (visibility, soft_visibility) = self.read_visibility()?;
             let gpu_ms = self.resolve_timings(ctx)?;
+            self.frames_read = self.frames_read.saturating_add(1);
+            let report = self.report(&shadow_stats, own.as_deref(), &gpu_ms);
+            let virtual_maps = own.and_then(|s| s.downcast().ok()).map(|s| *s);
             debug_assert!(visibility
                 .as_ref()
                 .is_none_or(|v: &VisibilityMask| v.lights as usize == self.current.lights.len()));
@@ -334,6 +366,7 @@ impl Renderer {
                 clusters,
                 virtual_maps,
                 probes: self.parts.probes.as_ref().map(|p| p.stats()),
+                report,
             })
         })
     }

@@ -60,6 +60,8 @@ pub struct Renderer {
     pub(super) dirty: bool,
     /// Frames the denoiser or the reuse has seen (their rays' random numbers differ by it).
     pub(super) frames_denoised: u32,
+    /// Frames rendered and read back (`render`), which the frames' reports count.
+    pub(super) frames_read: u32,
     /// A light changed since the last prepared frame (the denoiser's history follows it).
     pub(super) lights_changed: bool,
     /// Something the probes see changed since their faces were drawn.
@@ -154,6 +156,7 @@ impl Renderer {
                 lighting,
                 visibility,
                 frames_denoised: 0,
+                frames_read: 0,
                 lights_changed: false,
                 probes_stale: false,
                 blit: None,

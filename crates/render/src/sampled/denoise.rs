@@ -12,23 +12,14 @@
 //!
 //! 0. **stratified samples**: where frames are denoised the lighting pass draws each sample
 //!    after its light loop, inverting the loop's running sum of light weights at a point of
-//!    the van der Corput sequence (base 2) started per pixel in the fifth of (x + 2y) mod 5
-//!    plus interleaved gradient noise: a pixel's samples over any first 2^m frames cover its
-//!    lights' distribution evenly instead of independently, and the five pixels of each
-//!    à-trous cross start in different fifths (the golden-ratio sequence started by the
-//!    noise alone until 2026-11-28: sampled.wgsl `sample_point` has the figures). A sized
-//!    light's point takes its first coordinate from where the sample fell within the
-//!    light's stretch of the sum, so it is spread over frames too. The lights' order in the
-//!    list is the sum's order, so lights listed near their neighbours in space (the seeded
-//!    layouts above 64 lights are, along a Morton curve) stratify a pixel's samples over
-//!    space. Each frame's sample alone is still drawn in
-//!    proportion to the weights (unbiased); the mean over n frames converges about as 1/n
-//!    rather than 1/√n. The loop keeps a checkpoint (a light with the sum before it) after
-//!    every 4 weighed or 16 visited lights, so the draw weighs at most that many again (a
-//!    second pass over all of them cost the denoised frame
-//!    11–15 %, 1.61× the plain frame at 16,384 lights; checkpoints every 16 lights 10 %);
-//!    lavapipe, atrium, 1,024 lights, 640 × 360, interleaved runs: 334–340 ms against
-//!    314–326 ms before. A plain frame (no denoiser) keeps one-pass reservoir sampling.
+//!    a low-discrepancy sequence started apart per pixel (`lights.wgsl`, `sample_point`): a
+//!    pixel's samples over frames cover its lights' distribution evenly instead of
+//!    independently, so their mean over n frames converges about as 1/n rather than 1/√n,
+//!    while each frame's sample alone is still drawn in proportion to the weights
+//!    (unbiased). A sized light's point is spread over frames the same way, and lights
+//!    listed near their neighbours in space (the seeded layouts above 64 lights are) spread
+//!    a pixel's samples over space. Checkpoints of the running sum bound what the draw
+//!    weighs again. A plain frame (no denoiser) keeps one-pass reservoir sampling.
 //! 1. **temporal**: each pixel's surface point is projected into the previous frame (where
 //!    it was, if its instance moved: motion.rs); where the point was seen there
 //!    (within two pixel footprints, its surface facing within 26°) its history — mean and
@@ -38,14 +29,15 @@
 //! 2. **spatial**: [`ATROUS_STEPS`] passes of a five-tap à-trous wavelet (steps 1, 2, 4, 8
 //!    pixels) whose weights stop at edges of geometry (normal, distance to the pixel's plane)
 //!    and of the ratio itself (a tolerance of [`RATIO_SIGMAS`] standard deviations of the
-//!    samples plus a half, over the frames of history to the ¾: it narrows about as the
-//!    stratified mean converges; over n^½, the rate of independent samples, still frames stay
-//!    blurred: atrium as above, eighth still frame 3.44 against 2.86, first 6.98; with
-//!    independent samples and 1/n the noise stays: 5.53), in the spirit of SVGF. Pixels with
-//!    [`SETTLED_FRAMES`] or more frames of history skip the passes of step 4 and 8: their own
-//!    mean is better than the wide passes' blur.
+//!    samples plus a half, over the frames of history to the ¾, so that it narrows about as
+//!    the stratified mean converges), in the spirit of SVGF. Pixels with [`SETTLED_FRAMES`]
+//!    or more frames of history skip the passes of step 4 and 8: their own mean is better
+//!    than the wide passes' blur.
 //! 3. **composite**: the lighting pass's `fs_composite` shades `ambient + emission + U · r̄`
 //!    and tone-maps it into the frame.
+//!
+//! These choices were measured: docs/techniques.md, "The denoiser's stratified samples" and
+//! "The denoiser's filter".
 //!
 //! Where every light is traced (`light_samples` 0) the only noise is the sized lights' area
 //! samples, new each frame: there the denoiser only accumulates (no spatial pass), and with
@@ -60,55 +52,25 @@
 //! a change of casters until it is replaced.
 //!
 //! **When lights change** the unshadowed light is exact at once, and the history is
-//! corrected in the same frame: the renderer compares the lights' records with those of the
-//! last frame slot by slot ([`light_fixes`]); where at most [`MAX_LIGHT_FIXES`] records went
-//! or came, they follow the frame's lights in the lights buffer, and the lighting pass traces
-//! each of them once at every pixel (a sized light on a 4 × 4 grid) and writes what it adds
-//! to the estimates with and without shadows (those that went negated). The temporal pass
-//! adds that to the history's means — exact in expectation: the history's mean estimate is
-//! an unbiased estimate of the sum over the old lights, whatever distribution sampled it —
-//! and cuts the history's frame count to its share of samples of the lights that stay (the
-//! samples that fell on a light that went are lost to the mean). The frame of the change then
-//! draws those samples again: each pixel takes the lost share of a full history's
-//! [`MAX_HISTORY`] frames in samples (K times 1 + that, at most 16), spread evenly over its
-//! lights' weights, and its estimate counts as that many frames (lighting.wgsl
-//! `catch_up_samples`). Cubes, a sun of 48 lights switched off after 16 frames: the four frames
-//! after it err by **0.830, 0.817, 0.801, 0.787**, where a denoiser started without the sun has
-//! 1.375 after four frames and 0.787 after 16 (**1.05× to 1.00×**; without the catch-up 0.985
-//! first, 1.25×). With [`SETTLED_FRAMES`] before the ratio's Gaussian weight
-//! ([`RATIO_SIGMAS`]): 0.829, 0.811, 0.795, 0.780 against 1.37 and 0.768 (without the
-//! catch-up 0.977 first, 1.27×). Before [`SETTLED_FRAMES`]: 0.927, 0.901, 0.895, 0.879 against 1.90 and 0.869
-//! (1.07× to 1.01×); without the catch-up then 1.115,
-//! 1.116, 1.081, 1.014 (1.28× to 1.17×), drawing the lost share of 16 frames again 1.022 …
-//! 0.960 (1.18× to 1.10×); without the correction 1.66 four frames after (1.91×). The frame of
-//! a change pays for it: the atrium's sun switched off (1,024 lights, 640×360, lavapipe), its
-//! lighting pass 1,318 ms against 102–171 ms in the frames around it, of which the
-//! correction's trace of the sun on a 4 × 4 grid is 1,043 (without the catch-up); one local
-//! light switched off costs nothing measurable. A light that changes every frame pays that
-//! every frame (not avoided). Earlier, without the catch-up, not kept: extra samples in that
-//! frame (1.06 with the 3 × 3 à-trous; how they were weighed is not recorded), restarting
-//! the history where a light that went was in penumbra (1.04), the frame count cut by the
-//! share squared (1.05).
+//! corrected in the same frame: where at most [`MAX_LIGHT_FIXES`] records went or came since
+//! the last frame ([`light_fixes`], slot by slot), they follow the frame's lights in the
+//! lights buffer, the lighting pass traces each once at every pixel (a sized light on a
+//! 4 × 4 grid), and the temporal pass adds what the lights that came add to the history's
+//! means and takes away what those that went took (exact in expectation, whatever
+//! distribution drew the history's samples). The history's frame count is cut to its share
+//! of samples of the lights that stay, and that frame draws the lost share of a full
+//! history's [`MAX_HISTORY`] frames in samples again (K times 1 + that, at most 16; its
+//! estimate counts as that many frames: lighting.wgsl `catch_up_samples`), so the lights
+//! that stay are not left with fewer samples than a history of them alone. The frame of a
+//! change pays for these rays; a light that changes every frame pays every frame.
 //!
 //! More records at once (a new scene's lights) fall back: in the frame of the change each
 //! pixel's history counts as many frames as the share of its unshadowed light that this
 //! frame's exact unshadowed light keeps, to the fourth power, and a history cut below one
-//! frame is dropped (a pixel the change did not reach keeps its history whole). Cubes, twelve
-//! lights switched off at once, four frames after: eleven local lights and the sun **1.33**
-//! against a fresh denoiser's 1.45 (with the ratio's Gaussian weight, [`RATIO_SIGMAS`]; at
-//! least one frame kept: 1.48, which fails, to the fifth or sixth power the same 1.48).
-//! With the Laplacian weight and [`SETTLED_FRAMES`]: to the fourth power with a frame kept
-//! 1.45 against 1.47, cubed 1.50 (SETTLED_FRAMES took the fresh denoiser from 2.03 to 1.47).
-//! Before it: cubed 1.96 against 2.03 (squared the same, to the first
-//! power 2.17, keeping the history 2.42; with `RATIO_SIGMAS` 1: cubed 1.79 against 1.87,
-//! squared 1.90, which missed, to the fourth 1.78). With the à-trous's 3 × 3
-//! taps before its five on the cross the fresh denoiser read 2.14 and the squared share 1.98;
-//! then twelve local lights 1.05 against 2.23 (unsquared 1.05, keeping it 1.07) and the sun
-//! alone through this rule 1.77. The rule before it, each frame weighing at
-//! least 0.2 for four frames: twelve local lights 1.46, the sun alone 1.78 (0.5 or 0.34,
-//! with the filter's tolerance widened to match, 2.87 and 2.51 for the sun). A moving
-//! caster's old shadows stay in the ratio where the surface did not move: detecting that
-//! (temporal gradients, A-SVGF) is not done.
+//! frame is dropped (a pixel the change did not reach keeps its history whole). How these
+//! rules measured, and what was tried before them: docs/techniques.md, "The denoiser when
+//! lights change". A moving caster's old shadows stay in the ratio where the surface did not
+//! move: detecting that (temporal gradients, A-SVGF) is not done.
 
 use crate::error::RenderError;
 use crate::frame::gbuffer::GBuffer;
@@ -120,16 +82,8 @@ pub use crate::sampled::options::MAX_HISTORY;
 
 /// Frames of history at most for a point whose instance moved since the last frame (its
 /// history found where it was: motion.rs): the light on a moving surface changes, and
-/// a long history lags it. Measured on the cubes' largest box moving under 48 lights (K = 1,
-/// 160 × 120, lavapipe, the mean error on the box over frames 5 to 12, eight motions from
-/// 0.003 a frame to 0.15, turning 0° to 6° a frame): the sum over the eight 29.5 with 4 and
-/// 32.0 with 1 (no history: the spatial filter alone); over the four slowest 13.9 with 4,
-/// 14.2 with 8, 16.9 with 2. Looked for where the point is now, with the whole history as
-/// before, 31.8 (and 29.7 capped at 4 there: a box turning in place favours that, one
-/// sliding the history that follows it). In the
-/// sliding-scene test (tests/motion.rs) following the instances settles at 0.61x the first
-/// frame's error; looked for where the point is now, 1.26x. (The eight motions were measured
-/// before histories were also tested by normal, `motion::HISTORY_NORMAL_COS`.)
+/// a long history lags it. Chosen by measurement on a moving box (4 frames erred less than
+/// 1, 2, 8 or the whole history); docs/techniques.md, "Histories under motion".
 pub const MOVING_HISTORY: u32 = 4;
 
 /// The denoiser's WGSL: its passes and what `last_frame_position` needs.
@@ -175,16 +129,9 @@ pub fn light_fixes(
 
 /// À-trous passes (steps 1, 2, 4, 8 pixels: a 31-pixel footprint). Of five taps each, the
 /// pixel and its four neighbours along the axes (the 3-tap B-spline on the cross: the
-/// diagonals come from the passes' composition): measured on the atrium (1,024 lights,
-/// 640 × 360, K = 1, stratified samples, `RATIO_SIGMAS` 1), against the 3 × 3 taps before,
-/// first frame / after 8
-/// still frames 6.86 / 2.81 against 6.98 / 2.86, 32 still frames mean 2.63 (2.64), the
-/// 60-frame moving sequence mean 4.68 (4.68), the circling caster's 2.73 (2.75) and trail
-/// 0.33 (0.33); the denoiser's passes about 54–56 ms instead of 70–74 (arms weighted as the
-/// centre: 6.81 / 2.83; at half the B-spline's: 8.89 / 3.21). Earlier, before the samples
-/// were stratified: 5 × 5 taps gave 7.80 and 4.21 for 157 ms of denoising, 3 × 3 7.61 and
-/// 4.04 for 66 ms; 2 passes of 3 × 3: 11.9 and 5.4, 6 passes: 9.3 and 4.9 (more blur than
-/// noise removed).
+/// diagonals come from the passes' composition). Chosen by measurement: the cross filters as
+/// well as 3 × 3 taps at less cost, and fewer or more passes left more error (more blur than
+/// noise removed); docs/techniques.md, "The denoiser's filter".
 pub const ATROUS_STEPS: u32 = 4;
 
 const _: () = assert!(
@@ -192,40 +139,21 @@ const _: () = assert!(
     "the last à-trous pass must write DenoiseBuffers::ratio"
 );
 
-/// Ratio tolerance of the à-trous weights, in standard deviations of the temporal variance
-/// (atrium as above, first frame / 8 frames, with independent samples and the tolerance over
-/// √n: 0.5: 8.21 / 4.73, 1.0: 7.61 / 4.04, 1.5: 7.41 / 4.27, 2.5: 7.28 / 4.86; stratified,
-/// over √n: 0.5: 7.35 / 2.92, 1.0: 6.98 / 3.44; over n, 1.0: 6.98 / 2.86, over n^1.5: 4.33
-/// after 8, the noise back; with the five-tap à-trous, over n: 0.75: 7.05 / 2.91, 1.0: 6.86 /
-/// 2.81, 1.5: 6.68 / 2.77, 2.0: 6.60 / 2.83, 3.0: 6.54 / 3.09; at 1.5 the 32 still frames' mean
-/// 2.63 → 2.57 and last 1.74 → 1.72, the 60-frame moving sequence's mean 4.68 → 4.64, the
-/// circling caster's 2.73 → 2.67, trail 0.33 both). Since [`SETTLED_FRAMES`] the tolerance is
-/// over frames^¾ instead of frames (see there). Since then too, the ratio's weight is a
-/// Gaussian of the difference over 1.2 tolerances, `exp(−(Δr / 1.2 tol)²)`, instead of
-/// `exp(−|Δr| / tol)`: differences within it, mostly noise, average almost fully, those past
-/// it, mostly shadows' edges, hardly. `render`'s still frames against the 8 × 8 exact image
-/// (as at `SETTLED_FRAMES`), after 1 / 2 / 4 / 8 / 16 / 32 frames: **6.40 / 5.39 / 3.47 /
-/// 2.21 / 1.74 / 1.40** against 6.47 / 5.18 / 3.79 / 2.31 / 1.78 / 1.39; the Gaussian over
-/// 1.0 / 1.4 / 1.6 / 1.8 / 2.2 tolerances 2.29 / 2.23 / 2.28 / 2.35 / 2.50 after 8; at 1.2,
-/// sigmas 1.0 / 2.0 / 3.0: 2.31 / 2.23 / 2.39; the tolerance's exponent and scale trade along
-/// a ridge (frames^0.65 and 1.0 tolerances 2.21, ^0.85 and 1.5 2.21, ^1 and 1.8 2.25).
+/// Ratio tolerance of the à-trous weights, in standard deviations of the temporal variance,
+/// over frames^¾ of history ([`SETTLED_FRAMES`]). The ratio's weight is a Gaussian of the
+/// difference over 1.2 tolerances, `exp(−(Δr / 1.2 tol)²)`, rather than `exp(−|Δr| / tol)`:
+/// differences within it, mostly noise, average almost fully, those past it, mostly
+/// shadows' edges, hardly. The tolerance, its exponent and the Gaussian's width were chosen
+/// by sweeps of the still and moving sequences' error; docs/techniques.md, "The denoiser's
+/// filter".
 const RATIO_SIGMAS: f32 = 1.5;
 
 /// Frames of history from which a pixel skips the à-trous passes of step
 /// [`SETTLED_STEP`] and wider (its own mean, over 4 or more stratified frames, is better
 /// than their blur; the two narrow passes still filter it), with the ratio's tolerance over
-/// frames^¾ instead of frames. Atrium, 1,024 lights, 640 × 360, K = 1, still frames, RMSE
-/// against an 8 × 8 exact image through `render` (lavapipe): after 1 / 2 / 4 / 8 / 16 / 32
-/// frames **6.47 / 5.18 / 3.79 / 2.31 / 1.78 / 1.39** against 6.47 / 5.13 / 3.77 / 2.55 /
-/// 1.97 / 1.50 with every pass and the tolerance over frames. Explored partly with the
-/// normal weight at cos¹⁶ (alone 2.54 after 8): the tolerance over frames^0.6 / ^0.7 / ^0.8 with the
-/// skip 2.31 / 2.28 / 2.32 after 8, 1.82 / 1.77 / 1.80 after 16; the skip from 8 frames: 4.07
-/// after 4 (3.64 from 4); either change alone does little: the tolerance over frames with
-/// steps 4 and 8 skipped 2.65 after 8, only step 8 skipped 2.46; every pass with the
-/// tolerance over frames^0.75 or ^1.25 2.93 / 2.95 (the temporal mean alone after 8 / 16 / 32
-/// frames: 4.62 / 2.89 / 1.83). The 60-frame moving sequence (`bench denoise`, against 2 × 2)
-/// 4.60 against 4.62 (all before the ratio's Gaussian weight, [`RATIO_SIGMAS`]). A skipped
-/// pass costs a copy and reads no G-buffer.
+/// frames^¾ instead of frames. Together the two lower the still frames' error, where either
+/// alone does little (measured: docs/techniques.md, "The denoiser's filter"). A skipped pass
+/// costs a copy and reads no G-buffer.
 const SETTLED_FRAMES: u32 = 4;
 
 /// The narrowest à-trous step (pixels) that [`SETTLED_FRAMES`] skips.

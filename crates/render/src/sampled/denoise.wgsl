@@ -68,8 +68,7 @@ fn ratio_of(s: vec3<f32>, u: vec3<f32>) -> f32 {
 // seen that saw it (within two pixel footprints, facing the same way: `same_facing`): the
 // sums weighed and the weight (0: none saw it). Taking the nearest
 // pixel instead rounds a slow camera's sub-pixel motion away frame after frame, and the
-// history drifts by pixels against the image (atrium, camera turning 0.15 degrees a frame:
-// error 7.8 after 30 frames).
+// history drifts by pixels against the image (docs/techniques.md, "Histories under motion").
 struct History {
     h0: vec4<f32>,
     h1: vec4<f32>,
@@ -185,8 +184,8 @@ fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
             // The lights changed more than the lighting pass corrects for: the history
             // counts as many frames as the share of its unshadowed light (the mean of
             // estimates whose luminance is the exact sum each frame) that this frame's
-            // exact unshadowed light keeps, to the fourth power (measured: denoise.rs,
-            // "When lights change").
+            // exact unshadowed light keeps, to the fourth power (measured: docs/techniques.md,
+            // "The denoiser when lights change").
             let now = dot(px_in[4u * i].rgb, LUMA);
             let then = dot(h1.rgb, LUMA);
             let stays = clamp(1.0 - abs(now - then) / max(max(now, then), 1e-30), 0.0, 1.0);

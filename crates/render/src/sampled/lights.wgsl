@@ -47,9 +47,9 @@ struct Acc {
 // Checkpoints of the running sum (past the last one the stretch to weigh again is longer,
 // never wrong). With lights listed in space order (scene `lights::spatial_order`) a pixel's
 // weighed lights clump, so a checkpoint also follows every CHECKPOINT_VISITED lights visited;
-// the walk skips empty words by the cluster's summary bits (it read every word before: atrium,
-// 16,384 lights in space order, the denoised frame 402 ms against 320, docs/bench/
-// denoise-order-lavapipe.txt).
+// the walk skips empty words by the cluster's summary bits (reading every word made the
+// denoised frame markedly dearer at 16,384 lights: docs/techniques.md, "The denoiser's
+// stratified samples").
 const CHECKPOINTS: u32 = 32u;
 const CHECKPOINT_EVERY: u32 = 4u;
 const CHECKPOINT_VISITED: u32 = 16u;
@@ -150,14 +150,9 @@ fn weigh_past(i: u32, s: Surface, point: f32, sum: ptr<function, f32>, picked: p
 // K points in one frame) are spread evenly over the weights instead of independently: any
 // first 2^m of them one in each 2^-m of the interval. Neighbours start apart (lighting.wgsl,
 // `u0`). Each point alone is uniform. Frames count from 1 (`modes.y`), the sequence from 0
-// (frame f's K points are its (f − 1)K-th to fK − 1-th): from 1 a pixel's first 8 points are
-// not one in each eighth (2.13 after 8 below). Atrium,
-// 1,024 lights, 640 × 360, K = 1, RMSE of still frames against the 8 × 8 exact image
-// (lavapipe, mean of 4 seeds; docs/bench/denoise-order-lavapipe.txt): with the golden-ratio
-// sequence before (lights in Morton order, both coordinates of a light's point hashed) 2.13
-// after 8, this sequence 2.11, with the starts in fifths 2.05; everything of 2026-11-28 (also
-// the lights' order and sample_shape_point) after 1 / 8 / 16 / 32 frames 6.41 / 2.22 / 1.75 /
-// 1.41 → 6.55 / 2.02 / 1.56 / 1.30.
+// (frame f's K points are its (f − 1)K-th to fK − 1-th): from 1 a pixel's first 8 points
+// would not be one in each eighth. Chosen by measurement over the golden-ratio sequence it
+// replaced (docs/techniques.md, "The denoiser's stratified samples").
 fn sample_point(acc: ptr<function, Acc>, j: u32) -> f32 {
     if ((*acc).k != ray_samples()) {
         // A catch-up frame: its samples spread evenly from the sequence's point of this frame.
@@ -171,9 +166,8 @@ fn sample_point(acc: ptr<function, Acc>, j: u32) -> f32 {
 // Where frames are denoised, the point on a sized light's shape that a sample of light `i`
 // traces: first coordinate `t`, where in the light's stretch of the running sum the sample's
 // point fell (uniform given the pick, and spread evenly over the frames that pick the light,
-// as the points are), the second the pixel's hash. RMSE of 8 still frames (atrium, 1,024
-// lights, K = 1, against 8 × 8) 2.05 → 2.02 against both coordinates hashed; a rank-1
-// lattice for the second (stepping 8φ along `t`) 2.03 (docs/bench/denoise-order-lavapipe.txt).
+// as the points are), the second the pixel's hash: lower error than both coordinates hashed
+// or a lattice for the second (docs/techniques.md, "The denoiser's stratified samples").
 fn sample_shape_point(s: Surface, i: u32, t: f32) -> vec2<f32> {
     return vec2<f32>(t, soft_jitter(s.px, i).y);
 }

@@ -6,8 +6,9 @@
 //! with probability proportional to its unshadowed term `f` (exactly: every light of the loop
 //! is a candidate), and finds last frame's reservoir of the same surface point (the point
 //! projected into the last frame; a pixel there within two pixel footprints of it whose
-//! surface faced within 26° of the same way, else none: disocclusion). Both candidates are weighed by the **target `f · V` at this pixel**, their
-//! visibility traced now (two rays), with confidence weights `1 / (1 + M)` and `M / (1 + M)`
+//! surface faced within 26° of the same way, else none: disocclusion). Both candidates are
+//! weighed by the **target `f · V` at this pixel**, their visibility traced now (two rays),
+//! with confidence weights `1 / (1 + M)` and `M / (1 + M)`
 //! (`M`: the frames the old reservoir stands for, at most [`MAX_CONFIDENCE`]); one is kept,
 //! with its unbiased contribution weight `W`, and the pixel's estimate of its shadowed direct
 //! light is `f(y) V(y) W`. As `M` grows the kept light is drawn nearly in proportion to
@@ -28,10 +29,9 @@
 //! most [`MOVING_CONFIDENCE`] frames: what lit it there may not light it here. A sized
 //! light's target uses one point of its shape per ray (the visibility of a fresh point each
 //! frame): unbiased in the mean over points, but not a fixed target.
-
 //!
 //! **Spatial reuse** (`RayOptions::spatial`, `--spatial`): after the lighting pass, a second
-//! pass (`fs_spatial`, sampled.wgsl) resamples each pixel's reservoir, as temporal reuse
+//! pass (`fs_spatial`, lights.wgsl) resamples each pixel's reservoir, as temporal reuse
 //! left it, together with those of up to [`SPATIAL_NEIGHBOURS`] pixels drawn from a disc of
 //! [`SPATIAL_RADIUS`] pixels (pixels whose view depth is within 10 % and whose normals are
 //! within 26°: the choice depends on geometry only). Each candidate light `y_i` is weighed by
@@ -41,24 +41,23 @@
 //! - **unbiased**: the generalized balance heuristic `c_i p̂_i(y_i) / Σ_o c_o p̂_o(y_i)` over
 //!   every pixel resampled, each neighbour's target at each candidate traced from that
 //!   neighbour (`n + n²` rays for `n` neighbours). They sum to one wherever any of the
-//!   pixels could have drawn the light, so the estimate stays unbiased (`tests/reuse.rs`:
-//!   the mean over 24 seeds is the exact image within +0.0011 of its mean).
+//!   pixels could have drawn the light, so the estimate stays unbiased (`tests/reuse.rs`
+//!   checks that the mean over seeds is the exact image).
 //! - **biased**: `c_i / Σ c` (`n` rays). Where a neighbour cannot draw a light this pixel
 //!   sees (the light is shadowed there), its weight is still counted: the image darkens near
-//!   shadow edges (measured on the cubes under 48 lights: −1.6 % of the image's mean).
+//!   shadow edges.
 //!
 //! The confidences `c_i`: this pixel's reservoir counts the frames it stands for (`M`), a
 //! neighbour's counts one. Counting the neighbours' `M` too (ReSTIR's usual weights) made a
 //! still image worse as its reservoirs converged: a neighbour's light stands for that
 //! neighbour's sum, and its ratio `p̂(y_i) / p̂_i(y_i)` at one light is a far noisier
-//! estimate of this pixel's than this pixel's own 20 frames (cubes, 160 × 120, eighth frame:
-//! 4.65 against temporal reuse's 3.68; with neighbours counting one, 3.54). For the same
-//! reason the light spatial reuse draws is shaded but not kept: the next frame's temporal
-//! reuse starts from each pixel's own reservoir (fed back, the image grew noisier frame by
-//! frame, 5.5 → 5.8 unbiased and 5.9 → 7.8 biased over eight still frames, as neighbours' lights
-//! spread and repeated across the image). The disc is small (6 pixels): at 24 pixels most
-//! neighbours failed the depth test on the cubes' floor at 160 × 120 and the first frame
-//! improved by 13 % instead of 46 %.
+//! estimate of this pixel's than this pixel's own frames. For the same reason the light
+//! spatial reuse draws is shaded but not kept: the next frame's temporal reuse starts from
+//! each pixel's own reservoir (fed back, the image grew noisier frame by frame as
+//! neighbours' lights spread and repeated). The disc is small: in a wider one most
+//! neighbours fail the depth test on a floor. The figures: docs/techniques.md, "Ray-traced
+//! shadows: `--technique raytraced`" (its `--spatial` paragraph), and docs/decisions.md
+//! ("Spatial reuse: neighbours count one, and the drawn light is not fed back").
 
 use crate::error::RenderError;
 use crate::gpu::bindings::{Binding, Part};
@@ -71,12 +70,9 @@ pub use crate::sampled::options::MAX_CONFIDENCE;
 /// (its reservoirs found where it was: motion.rs): one, so the old light weighs as
 /// much as the new draw. A light that lit the point where it was may be shadowed or
 /// turned away now, and one that lights it now may never have been drawn: with the full
-/// confidence the moving surface darkens and stays noisy. Measured on the cubes' largest
-/// box moving under 48 lights (K = 1, 160 × 120, lavapipe, the mean error on the box over
-/// frames 5 to 12, five motions from 0.01 a frame to 0.15, turning 0° to 6°): the sum 57.5
-/// with 1 and 79.7 with 4; with 20, as before, 91.7, and 86.7 looked for where the point is
-/// now. Looked for where it is now and capped, 55.3 with 1 and 61.1 with 2: which point
-/// the reservoirs come from matters little next to the cap.
+/// confidence the moving surface darkens and stays noisy. Chosen by measurement on a moving
+/// box (of caps of 1, 2, 4 and the usual 20, 1 erred least); docs/techniques.md, "Histories
+/// under motion".
 pub const MOVING_CONFIDENCE: u32 = 1;
 
 /// Neighbours each pixel's spatial reuse draws (`RayOptions::spatial`; those failing the
@@ -86,7 +82,7 @@ pub const SPATIAL_NEIGHBOURS: u32 = 3;
 /// Radius, in pixels, of the disc spatial reuse draws neighbours from.
 pub const SPATIAL_RADIUS: f32 = 6.0;
 
-/// `ReuseParams` of the lighting pass's reuse WGSL ([`lighting_wgsl`]).
+/// `ReuseParams` of the lighting pass's reuse WGSL (`REUSE_WGSL`, in [`lighting_part`]).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct ReuseParams {

@@ -331,12 +331,11 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     acc.gap_visited = 0u;
     acc.gap_weighed = 0u;
     if (ray_samples() > 0u && DENOISE) {
-        // The start of the pixel's sequence of sample points (sampled.wgsl, `sample_point`):
-        // in the fifth of (x + 2y) mod 5, so the five pixels of every à-trous cross (steps
-        // 1, 2, 4, 8) start in different fifths, and within it by interleaved gradient noise
-        // (Jimenez 2014). Against the noise alone over the whole interval 8 still frames
-        // 2.10 → 2.02 (first frame 6.31 → 6.55); the noise plus the fifth's start 2.18
-        // (docs/bench/denoise-order-lavapipe.txt).
+        // The start of the pixel's sequence of sample points (sampled/lights.wgsl,
+        // `sample_point`): in the fifth of (x + 2y) mod 5, so the five pixels of every
+        // à-trous cross (steps 1, 2, 4, 8) start in different fifths, and within it by
+        // interleaved gradient noise (Jimenez 2014). Chosen by measurement over the noise
+        // alone (docs/techniques.md, "The denoiser's stratified samples").
         let p = vec2<f32>(noise_px);
         let ign = fract(52.982919 * fract(0.06711056 * p.x + 0.00583715 * p.y));
         let cls = f32(u32(noise_px.x + 2 * noise_px.y) % 5u);
@@ -463,12 +462,12 @@ fn denoise_fix(s: Surface) -> DenoiseFix {
 // lights that went (the temporal pass cuts its frame count to the share that stays), so the
 // lights that stay are left with fewer samples than a history of them alone would hold: this
 // frame draws the lost share of the most frames a history holds (`CATCH_UP_FRAMES`, the
-// denoiser's `MAX_HISTORY`, composed by look.rs) again (up to MAX_SAMPLES),
+// denoiser's `MAX_HISTORY`, composed by sampled/denoise.rs) again (up to MAX_SAMPLES),
 // spread evenly over the weights (`sample_point`), and its estimate counts as that many
-// frames. Cubes, the sun switched off after 16 frames (test
-// `a_light_switched_off_leaves_the_frame_within_four_frames`): the frames after it err by
-// 1.05x, 1.04x, 1.02x, 1.00x the steady error, against 1.25x, 1.29x, 1.24x, 1.15x with K
-// samples (earlier filters and the lost share of 16 frames: denoise.rs, docs/techniques.md).
+// frames. With it a light switched off leaves the frames after it near the steady error at
+// once, where K samples alone stay well above it for four frames (test
+// `a_light_switched_off_leaves_the_frame_within_four_frames`; docs/techniques.md, "The
+// denoiser when lights change").
 fn catch_up_samples(unshadowed: vec3<f32>, fix: DenoiseFix) -> u32 {
     let k = ray_samples();
     let luma = vec3<f32>(0.2126, 0.7152, 0.0722);
@@ -478,7 +477,7 @@ fn catch_up_samples(unshadowed: vec3<f32>, fix: DenoiseFix) -> u32 {
     return min(k * (1u + frames), MAX_SAMPLES);
 }
 
-// What the surface mirrors of the nearest probe (probes.wgsl): Phong materials their
+// What the surface mirrors of the nearest probe (probes/maps.wgsl): Phong materials their
 // `reflect` (specular.w) at every angle; the glTF BRDF its Fresnel reflectance (0.04 for
 // dielectrics, the base colour for metals), raised by Schlick towards 1 at grazing angles and
 // scaled by the gloss (1 − roughness)².

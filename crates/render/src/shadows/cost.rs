@@ -3,7 +3,8 @@
 //! with it ([`Cost`] in its `TechniqueInfo`): how its lighting pass reads shadows (which row of
 //! the lighting pass's costs applies) and the milliseconds of its shadow stage for a frame's
 //! work, from costs per unit measured on lavapipe (`manyshadows bench estimate` measures them
-//! against real frames; docs/benchmarks.md, "The frame estimate", has its table).
+//! against real frames; docs/benchmarks.md, "What a frame will cost: `bench estimate`", has
+//! its table).
 
 /// The work of the next frame, counted before it is drawn
 /// ([`Renderer::estimated_work`](crate::Renderer::estimated_work)).

@@ -11,6 +11,7 @@ use crate::gpu::context::GpuContext;
 use crate::gpu_scene::instances::GpuScene;
 use crate::shadows::cost::Cost;
 use crate::shadows::lookup::LookupWgsl;
+use crate::shadows::report::{ShadowReport, ShadowText};
 use crate::shadows::source::{PlanParams, ShadowSource, SourceSettings};
 use crate::shadows::technique::ShadowTechnique;
 
@@ -198,6 +199,10 @@ pub struct TechniqueInfo {
     /// Whether what it keeps of the shadows follows the camera (virtual pages): views lit
     /// with them (the probes' faces) are redrawn when the camera moves.
     pub follows_camera: bool,
+    /// What a frame says of its shadows in words (`Frame::report`: the lines `render` prints
+    /// under its summary, and its line per frame of a sequence): the atlas techniques share
+    /// `atlas/shared.rs`'s `atlas_report`.
+    pub report: fn(&ShadowReport<'_>) -> ShadowText,
     /// What to use where it cannot run.
     pub instead: &'static str,
     /// How the lighting and visibility passes read its shadows (the atlas techniques share

@@ -29,6 +29,7 @@ pub mod lookup;
 pub mod options;
 pub mod plan;
 pub mod raytraced;
+pub mod report;
 pub mod source;
 pub mod storage;
 pub mod technique;

@@ -112,7 +112,8 @@ fn soft_shadow(size: f32, c: ShadowCoord, rot: f32) -> f32 {
     if (blockers == f32(nb) && radius <= search) {
         // Every tap of the search found a blocker, and the filter's disc lies within the
         // search's: the umbra (its taps would all be shadowed; skipping them cost nothing in
-        // the error against the reference, docs/benchmarks.md).
+        // the error against the reference: docs/benchmarks.md, "What soft shadows cost:
+        // `bench soft`").
         return 0.0;
     }
     if (radius > max_r) {

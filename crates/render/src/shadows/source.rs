@@ -226,6 +226,20 @@ pub trait ShadowSource: std::any::Any {
 /// technique defines (`VirtualStats`, `IrregularStats`).
 pub type TechniqueStats = Box<dyn std::any::Any + Send + Sync>;
 
+/// A technique's own options, as `RenderSettings` holds them for it: any type that checks its
+/// own ranges. The built-in techniques' have fields of their own in `RenderSettings`
+/// (`irregular`, `virtual_maps`, `rays`); a technique added beside them brings its options
+/// with `RenderSettings::with_technique_options`, and its source finds them by type
+/// ([`SourceSettings::options`]), so the settings are not edited for it.
+pub trait TechniqueOptions: std::any::Any + std::fmt::Debug + Send + Sync {
+    /// Checks every value that has a range of its own ([`RenderError::InvalidOption`] names
+    /// the first one out of range).
+    fn validate(&self) -> Result<(), RenderError>;
+
+    /// The options as `Any`, to be found by type.
+    fn as_any(&self) -> &(dyn std::any::Any + Send + Sync);
+}
+
 /// What a source reads of the frame's settings: the choices every source honours and, for
 /// each technique, its own options, found by type ([`SourceSettings::options`]).
 /// `RenderSettings::source_settings` makes it.

@@ -40,6 +40,7 @@ use crate::error::Technique;
 use crate::gpu::context::GpuContext;
 use crate::gpu::shaders::{compose, COMMON};
 use crate::gpu_scene::casters::ALPHA_MASK;
+use crate::shadows::atlas::shared::atlas_report;
 use crate::shadows::cost::{price, Cost, LightingRead};
 use crate::shadows::depth::CULL;
 use crate::shadows::descriptor::{Build, Culling, TechniqueInfo, Wgsl};
@@ -65,7 +66,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     soft_shadows: true,
     // Milliseconds of its shadow stage per (triangle, view) pair taken on, (instance, view) pair,
     // texel of the tiles, texel of the whole atlas, view, and fixed, on lavapipe
-    // (docs/benchmarks.md, "The frame estimate").
+    // (docs/benchmarks.md, "What a frame will cost: `bench estimate`").
     cost: Cost {
         lighting: LightingRead::Maps,
         shadows_ms: |w| {
@@ -77,6 +78,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     },
     camera_pixels_only: false,
     follows_camera: false,
+    report: |r| atlas_report(r, Culling::Threads),
     instead: "",
     lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(Compute::new(ctx)?))),

@@ -31,6 +31,7 @@ use crate::gpu::context::GpuContext;
 use crate::gpu::pipelines::{dynamic_uniform_entry, whole_entry};
 use crate::gpu::shaders::{compose, COMMON};
 use crate::gpu_scene::casters::ALPHA_MASK;
+use crate::shadows::atlas::shared::atlas_report;
 use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear, UniformRecords};
 use crate::shadows::cluster_draw::CLUSTER_CULL;
 use crate::shadows::cluster_draw::{plan_rounds, Round, COMMAND_SIZE};
@@ -67,7 +68,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     soft_shadows: true,
     // Milliseconds of its shadow stage per (triangle, view) pair taken on, (instance, view) pair,
     // texel of the tiles, texel of the whole atlas, view, and fixed, on lavapipe
-    // (docs/benchmarks.md, "The frame estimate").
+    // (docs/benchmarks.md, "What a frame will cost: `bench estimate`").
     cost: Cost {
         lighting: LightingRead::Maps,
         shadows_ms: |w| {
@@ -79,6 +80,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     },
     camera_pixels_only: false,
     follows_camera: false,
+    report: |r| atlas_report(r, Culling::Clusters),
     instead: "use technique layered",
     lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(GpuDriven::new(ctx)?))),

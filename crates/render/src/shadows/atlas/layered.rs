@@ -20,6 +20,7 @@ use crate::error::Technique;
 use crate::gpu::context::GpuContext;
 use crate::gpu::shaders::{compose, COMMON};
 use crate::gpu_scene::casters::ALPHA_MASK;
+use crate::shadows::atlas::shared::atlas_report;
 use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear};
 use crate::shadows::cost::{price, Cost, LightingRead};
 use crate::shadows::depth::{depth_pipeline, masked_depth_pipeline};
@@ -50,13 +51,14 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     soft_shadows: true,
     // Milliseconds of its shadow stage per (triangle, view) pair taken on, (instance, view) pair,
     // texel of the tiles, texel of the whole atlas, view, and fixed, on lavapipe
-    // (docs/benchmarks.md, "The frame estimate").
+    // (docs/benchmarks.md, "What a frame will cost: `bench estimate`").
     cost: Cost {
         lighting: LightingRead::Maps,
         shadows_ms: |w| price(&[9.91e-05, 0.0, 0.0, 8.89e-07, 0.0, 0.0], &w.atlas_units()),
     },
     camera_pixels_only: false,
     follows_camera: false,
+    report: |r| atlas_report(r, Culling::VertexStage),
     instead: "use technique traditional",
     lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(Layered::new(ctx)?))),

@@ -5,7 +5,10 @@
 //! pages use them too).
 
 use crate::gpu::context::GpuContext;
+use crate::gpu::timing::Stage;
 use crate::shadows::depth::clear_pipeline;
+use crate::shadows::descriptor::Culling;
+use crate::shadows::report::{ReportLine, ShadowReport, ShadowText};
 use crate::shadows::technique::ShadowInput;
 
 /// Clears only the tiles of the views in [`ShadowInput::draw_list`] (to depth 1), for
@@ -245,5 +248,74 @@ mod shader_tests {
             wgpu::Features::empty(),
         )
         .unwrap_or_else(|e| panic!("{e}"));
+    }
+}
+
+/// The report of a technique that fills the atlas and culls casters where `culling` says: the
+/// opening, the atlas, how the maps were fitted where they did not all fit at full size, and
+/// the passes that filled it.
+pub fn atlas_report(r: &ShadowReport<'_>, culling: Culling) -> ShadowText {
+    let mut lines = r.maps_opening();
+    let layout = &r.plan.layout;
+    let shrink = layout.shrink_steps;
+    lines.push(ReportLine::new(
+        "atlas",
+        format!(
+            "{0}x{0}, {1:.0}% filled{2}",
+            layout.size,
+            r.plan.fill() * 100.0,
+            if shrink > 0 {
+                format!(", maps shrunk {}x per side to fit", 1u64 << shrink)
+            } else {
+                String::new()
+            }
+        ),
+    ));
+    let fit = &r.plan.fit;
+    if fit.reduced + fit.unshadowed + fit.off_screen > 0 {
+        lines.push(ReportLine::new(
+            "shadow fit",
+            format!(
+                "{} lights at full resolution, {} with smaller maps, {} unshadowed (no room), {} off screen (no maps needed)",
+                fit.full, fit.reduced, fit.unshadowed, fit.off_screen
+            ),
+        ));
+    }
+    // What the triangle count is: drawn (after instance culling), or handed to a stage that
+    // culls each (triangle, view) itself.
+    let what = match culling {
+        Culling::VertexStage => {
+            "triangle-views submitted (each culled per view in the vertex stage)"
+        }
+        Culling::Threads => "triangle-views submitted (each culled per view by its setup thread)",
+        Culling::Clusters => {
+            "triangle-views submitted (clusters culled per view in compute before drawing)"
+        }
+        _ => "triangles drawn",
+    };
+    let s = &r.stats;
+    lines.push(ReportLine::new(
+        "shadow work",
+        format!(
+            "{} passes, {} draws ({} instance-views culled on the CPU), {} {what}",
+            s.passes, s.draws, s.culled, s.triangles
+        ),
+    ));
+    let waiting = if r.budget {
+        format!(
+            " ({} stale, oldest {} frames; {} waiting, unshadowed)",
+            s.views_stale, s.stale_frames, s.views_waiting
+        )
+    } else {
+        String::new()
+    };
+    ShadowText {
+        lines,
+        frame: format!(
+            "{:>4} of {} shadow views redrawn{waiting}, shadow GPU time {}",
+            s.views_drawn,
+            r.plan.views.len(),
+            r.gpu_time(Stage::Shadows)
+        ),
     }
 }

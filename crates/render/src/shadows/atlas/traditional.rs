@@ -13,6 +13,7 @@ use crate::gpu::types::VIEW_UNIFORM_STRIDE;
 use crate::gpu_scene::casters::ALPHA_MASK;
 use crate::gpu_scene::instances::{POSITION_LAYOUT, UV_LAYOUT_1};
 use crate::gpu_scene::skinning::{MAX_BONES, SKIN_LAYOUT};
+use crate::shadows::atlas::shared::atlas_report;
 use crate::shadows::atlas::shared::{atlas_attachment, TileClear};
 use crate::shadows::cost::{price, Cost, LightingRead};
 use crate::shadows::descriptor::{Build, Culling, TechniqueInfo, Wgsl};
@@ -38,7 +39,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     soft_shadows: true,
     // Milliseconds of its shadow stage per (triangle, view) pair taken on, (instance, view) pair,
     // texel of the tiles, texel of the whole atlas, view, and fixed, on lavapipe
-    // (docs/benchmarks.md, "The frame estimate").
+    // (docs/benchmarks.md, "What a frame will cost: `bench estimate`").
     cost: Cost {
         lighting: LightingRead::Maps,
         shadows_ms: |w| {
@@ -50,6 +51,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     },
     camera_pixels_only: false,
     follows_camera: false,
+    report: |r| atlas_report(r, Culling::Instances),
     instead: "",
     lookup: ATLAS_LOOKUP,
     build: Build::Atlas(|ctx| Ok(Box::new(Traditional::new(ctx)))),

@@ -7,14 +7,17 @@ use manyshadows_scene::Scene;
 use crate::error::{Fills, RenderError, Technique};
 use crate::frame::visibility_mask::VisibilityMask;
 use crate::gpu::context::GpuContext;
-use crate::gpu::timing::GpuTimer;
+use crate::gpu::timing::{GpuTimer, Stage};
 use crate::gpu::types::LightData;
 use crate::gpu_scene::instances::GpuScene;
 use crate::shadows::cost::{price, Cost, LightingRead};
 use crate::shadows::descriptor::{Build, Culling, TechniqueInfo, Wgsl};
 use crate::shadows::image::ShadowPicture;
-use crate::shadows::irregular::maps::{IrregularInputs, IrregularOptions, IrregularShadows};
+use crate::shadows::irregular::maps::{
+    IrregularInputs, IrregularOptions, IrregularShadows, IrregularStats,
+};
 use crate::shadows::lookup::ATLAS_LOOKUP;
+use crate::shadows::report::{ReportLine, ShadowReport, ShadowText};
 use crate::shadows::source::{
     PlanParams, ShadowOutput, ShadowSource, ShadowStats, SourceInputs, SourceSettings,
     TechniqueStats, ViewTable, Views,
@@ -37,7 +40,8 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     needs: &[],
     soft_shadows: false,
     // Milliseconds of its lists per (triangle, view) pair, (instance, view) pair, (pixel, light)
-    // sample, and fixed, on lavapipe (docs/benchmarks.md, "The frame estimate").
+    // sample, and fixed, on lavapipe (docs/benchmarks.md, "What a frame will cost: `bench
+    // estimate`").
     cost: Cost {
         lighting: LightingRead::Mask,
         shadows_ms: |w| {
@@ -54,6 +58,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     },
     camera_pixels_only: true,
     follows_camera: false,
+    report: report,
     instead: "",
     // The passes shade with the mask and never call `shadow_coord`.
     lookup: ATLAS_LOOKUP,
@@ -193,5 +198,42 @@ impl ShadowSource for IrregularSource {
             .passes
             .as_ref()
             .map(|p| Box::new(p.stats()) as TechniqueStats))
+    }
+}
+
+/// Irregular maps' report: exact samples in lists, their own work (no atlas, no passes of
+/// shadow maps).
+fn report(r: &ShadowReport<'_>) -> ShadowText {
+    let mut lines = r.opening(
+        "exact samples in per-light lists",
+        "no filter (exact, hard)",
+        "hard: answers at each light's centre, sizes ignored",
+    );
+    if let Some(i) = r.own::<IrregularStats>() {
+        lines.push(ReportLine::new(
+            "lists",
+            format!(
+                "{} batch(es) of lights, the largest holding {} of {} list nodes (camera \
+                 samples in light-space lists); up to {} 8x8-texel tiles queued for the triangle \
+                 tests{}",
+                i.batches,
+                i.peak_nodes,
+                i.node_capacity,
+                i.peak_tiles,
+                match i.unmapped {
+                    0 => String::new(),
+                    n => format!("; {n} samples outside every view of their light (counted lit)"),
+                }
+            ),
+        ));
+    }
+    // Sample lists: every view's are built anew each frame (nothing is kept).
+    ShadowText {
+        lines,
+        frame: format!(
+            "sample lists of all {} light views built anew, shadow GPU time {}",
+            r.plan.views.len(),
+            r.gpu_time(Stage::Shadows)
+        ),
     }
 }

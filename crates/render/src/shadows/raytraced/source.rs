@@ -21,6 +21,7 @@ use crate::shadows::image::ShadowPicture;
 use crate::shadows::lookup::{atlas_coord, LookupWgsl, ATLAS_TAPS};
 use crate::shadows::plan::ShadowPlan;
 use crate::shadows::raytraced::accel::RayAccel;
+use crate::shadows::report::{ReportLine, ShadowReport, ShadowText};
 use crate::shadows::source::{
     ShadowOutput, ShadowSource, ShadowStats, SourceInputs, SourceSettings, ViewTable, Views,
 };
@@ -46,13 +47,14 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     )],
     soft_shadows: true,
     // Milliseconds of its acceleration structure per instance, and fixed, on lavapipe
-    // (docs/benchmarks.md, "The frame estimate").
+    // (docs/benchmarks.md, "What a frame will cost: `bench estimate`").
     cost: Cost {
         lighting: LightingRead::Rays,
         shadows_ms: |w| price(&[0.0, 8.13e-02], &[w.instances as f64, 1.0]),
     },
     camera_pixels_only: false,
     follows_camera: false,
+    report: report,
     instead: "use technique irregular for exact shadows without ray queries",
     lookup: RAYS_LOOKUP,
     build: Build::Source(|a| {
@@ -190,5 +192,69 @@ impl ShadowSource for RaytracedSource {
             technique: INFO.technique,
             fills: INFO.fills,
         })
+    }
+}
+
+/// Ray-traced shadows' report: no views and no filter, how sized lights are traced, and the
+/// acceleration structure's builds.
+fn report(r: &ShadowReport<'_>) -> ShadowText {
+    let rays = &r.rays;
+    let softness = match rays.light_samples {
+        0 => format!(
+            "sized lights traced with {0}x{0} samples of their shape per pixel{1}",
+            rays.area_samples.max(1),
+            if rays.denoise {
+                ", new each frame and accumulated over still frames"
+            } else {
+                ""
+            }
+        ),
+        _ => format!(
+            "a sampled sized light is traced at one point of its shape{}{}",
+            if rays.reuse {
+                ", new each frame, reused across frames"
+            } else if rays.denoise {
+                ", new each frame"
+            } else {
+                ""
+            },
+            if rays.denoise { ", denoised" } else { "" }
+        ),
+    };
+    let mut lines = r.opening("no shadow views", "no filter", &softness);
+    lines.push(ReportLine::new(
+        "shadow work",
+        format!(
+            "no shadow map: rays per pixel and light of its cluster (or per sampled light) in \
+             the lighting pass; {} top-level structure build(s)",
+            r.stats.passes
+        ),
+    ));
+    // No maps: the rays are traced in the lighting pass, and what their histories hold.
+    let history = RayOptions::denoise_history(r.frames);
+    let plural = if history == 1 { "" } else { "s" };
+    let reused = if rays.reuse {
+        let m = RayOptions::reuse_confidence(r.frames);
+        let spatial = match rays.spatial {
+            crate::sampled::options::SpatialReuse::Off => String::new(),
+            mode => format!(" and between neighbours ({})", mode.name()),
+        };
+        format!(", lights reused (reservoirs of up to {m} frames){spatial}")
+    } else {
+        String::new()
+    };
+    let kept = if !rays.denoise {
+        reused
+    } else if rays.light_samples > 0 {
+        format!("{reused}, denoised (history up to {history} frame{plural})")
+    } else {
+        format!(", area samples accumulated (up to {history} frame{plural})")
+    };
+    ShadowText {
+        lines,
+        frame: format!(
+            "shadow rays in the lighting pass{kept}, lighting GPU time {}",
+            r.gpu_time(Stage::Lighting)
+        ),
     }
 }

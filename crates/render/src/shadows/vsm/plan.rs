@@ -50,7 +50,8 @@ pub struct VirtualOptions {
     /// Shadow texels wanted per screen pixel (default 1, `DEFAULT_LOD`: no texel wider
     /// than the pixel footprint) by point lights' cube faces, and, times
     /// [`Self::directed_lod`], by spot and directional lights' faces. Lower values draw fewer
-    /// pages and misclassify more where pixels are wide (docs/techniques.md).
+    /// pages and misclassify more where pixels are wide (docs/techniques.md, "Virtual shadow
+    /// maps (`--technique virtual`)").
     pub lod: f32,
     /// Factor on [`Self::lod`] for the faces of spot and directional lights (default 0.8,
     /// `DEFAULT_DIRECTED_LOD`: their texels up to 1.25 pixels). Coarser texels cost point
@@ -61,8 +62,8 @@ pub struct VirtualOptions {
     /// The receiver bias of virtual maps as a fraction of [`crate::ShadowBias`] (which
     /// counts texels; default 0.5, `DEFAULT_BIAS_SCALE`). A page's texels match the screen
     /// pixel, not a fixed atlas tile, so a whole texel of bias per term moves samples further
-    /// than the texel's depth steps need and leaks light at contacts (docs/decisions.md has
-    /// the measurements).
+    /// than the texel's depth steps need and leaks light at contacts (docs/decisions.md,
+    /// "Receiver-side bias, not rasterizer depth bias", has the measurements).
     pub bias_scale: f32,
     /// Cap on page-table entries: when the faces' tables would exceed it, the largest
     /// virtual sides are halved until they fit (reported in `VirtualFit::capped_side`).
@@ -102,8 +103,9 @@ pub struct VirtualOptions {
     /// No face samples coarser than the tile the atlas techniques give the same view (the
     /// default atlas, fitted by importance): virtual maps are then never coarser than the
     /// atlas where the atlas is finer than the screen asks (few lights, small frames), so they
-    /// misclassify no more than it does (docs/techniques.md has the table). Default on; off
-    /// asks only what the screen's level of detail asks.
+    /// misclassify no more than it does (docs/techniques.md, "Virtual shadow maps (`--technique
+    /// virtual`)", has the table). Default on; off asks only what the screen's level of
+    /// detail asks.
     pub atlas_floor: bool,
 }
 
@@ -242,7 +244,8 @@ impl VirtualPlan {
         // The tiles the atlas techniques give the same views (the default atlas, fitted by
         // importance): no face samples coarser than its tile, so that virtual maps are never
         // coarser than the atlas where the atlas is finer than the screen asks (few lights,
-        // small frames; issue 42's quality table).
+        // small frames: docs/techniques.md, "Virtual shadow maps (`--technique virtual`)",
+        // "Never coarser than the atlas").
         let atlas = options
             .atlas_floor
             .then(|| {
@@ -347,12 +350,11 @@ impl VirtualPlan {
                 0
             };
             // A spot face at its floor samples exactly the atlas tile's texels: there it takes
-            // the atlas's whole receiver bias, so that the lookup is the atlas's (issue 42:
-            // with half of it, one false-shadow pair in each of the atrium's and the
-            // courtyard's spot lights at 320x180 was worse than the atlas). Cube and cascade
-            // faces keep half at their floors too, where it measured better than the atlas
-            // (the atrium's sun at 320x180: 0.013 % misclassified against the atlas's 0.151 %;
-            // the whole bias makes it the atlas's 0.151 %).
+            // the atlas's whole receiver bias, so that the lookup is the atlas's (with half of
+            // it, spot lights at their floors left false shadows the atlas has not). Cube and
+            // cascade faces keep half at their floors too, where it measured better than the
+            // atlas (docs/decisions.md, "Spot faces take the atlas's whole receiver bias at
+            // their floor, other faces half").
             let floor_bias = if spot && floor > 0 && options.bias_scale > 0.0 {
                 (1.0 / options.bias_scale).max(1.0)
             } else {

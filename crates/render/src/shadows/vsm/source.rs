@@ -8,7 +8,7 @@ use manyshadows_scene::Scene;
 use crate::error::{Fills, RenderError, Technique};
 use crate::gpu::bindings::Binding;
 use crate::gpu::context::GpuContext;
-use crate::gpu::timing::GpuTimer;
+use crate::gpu::timing::{GpuTimer, Stage};
 use crate::gpu::types::LightData;
 use crate::gpu_scene::instances::GpuScene;
 use crate::shadows::cost::{price, Cost, LightingRead};
@@ -16,12 +16,13 @@ use crate::shadows::descriptor::{Build, Culling, Need, TechniqueInfo, Wgsl};
 use crate::shadows::image::{read_depth_view, ShadowPicture};
 use crate::shadows::lookup::{LookupWgsl, NO_RAYS};
 use crate::shadows::plan::ShadowPlan;
+use crate::shadows::report::{ReportLine, ShadowReport, ShadowText};
 use crate::shadows::source::{
     ShadowOutput, ShadowSource, ShadowStats, SourceInputs, SourceSettings, TechniqueStats,
     ViewTable, Views,
 };
 use crate::shadows::vsm::pages::{VirtualShadows, VsmInputs};
-use crate::shadows::vsm::plan::{VirtualOptions, VirtualPlan, PAGE_SIZE, VSM_COMMON};
+use crate::shadows::vsm::plan::{VirtualOptions, VirtualPlan, VirtualStats, PAGE_SIZE, VSM_COMMON};
 use crate::shadows::vsm::types::VSM_TYPES;
 
 impl Technique {
@@ -48,8 +49,8 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     soft_shadows: true,
     // Milliseconds of its pages and drawing per (triangle, face) pair after culling whole
     // instances, (instance, face) pair, (pixel, light) pair marked, those times extra taps
-    // (penumbrae ask coarser pages), and fixed, on lavapipe (docs/benchmarks.md, "The frame
-    // estimate").
+    // (penumbrae ask coarser pages), and fixed, on lavapipe (docs/benchmarks.md, "What a frame
+    // will cost: `bench estimate`").
     cost: Cost {
         lighting: LightingRead::Maps,
         shadows_ms: |w| {
@@ -67,6 +68,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     },
     camera_pixels_only: false,
     follows_camera: true,
+    report: report,
     instead: "use technique traditional",
     lookup: VSM_LOOKUP,
     build: Build::Source(|a| {
@@ -268,5 +270,113 @@ impl VirtualSource {
             bytemuck::cast_slice(&crate::gpu::readback::read_buffer(ctx, self.maps.table())?)
                 .to_vec(),
         )
+    }
+}
+
+/// Virtual maps' report: the opening, the faces and the page table, the pages, how the
+/// marking went by tiles, and the pages' drawing.
+fn report(r: &ShadowReport<'_>) -> ShadowText {
+    let mut lines = r.maps_opening();
+    let Some(v) = r.own::<VirtualStats>() else {
+        return ShadowText {
+            lines,
+            frame: format!("shadow GPU time {}", r.gpu_time(Stage::Shadows)),
+        };
+    };
+    let fit = &v.fit;
+    let prev = v.prev_table_bytes;
+    lines.push(ReportLine::new(
+        "virtual",
+        format!(
+            "{} faces of {} lights ({} off screen, no faces; {} faces needed by a sample, the rest get no pages), page table {} entries ({} KiB{}){}",
+            fit.faces,
+            fit.lights,
+            fit.off_screen,
+            v.faces_in_use,
+            fit.table_entries,
+            v.table_bytes / 1024,
+            if prev > 0 {
+                format!(", and {} KiB for last frame's, kept for caching", prev / 1024)
+            } else {
+                String::new()
+            },
+            if fit.capped_side > 0 {
+                format!(", virtual sides capped at {}² to fit it", fit.capped_side)
+            } else {
+                String::new()
+            }
+        ),
+    ));
+    let per_level = |levels: &[u32]| {
+        levels
+            .iter()
+            .map(|x| x.to_string())
+            .collect::<Vec<_>>()
+            .join("/")
+    };
+    let mut tail = String::new();
+    if v.denied > 0 {
+        tail += &format!(
+            "; {} pages did not fit the pool, their samples used coarser levels",
+            v.denied
+        );
+    }
+    if v.quarter_faces > 0 {
+        tail += &format!(
+            "; {} faces share pool pages four to one at half resolution (the pool has fewer \
+             pages than faces in use)",
+            v.quarter_faces
+        );
+    }
+    if v.unshadowed_faces > 0 {
+        tail += &format!(
+            "; {} faces had no room even for a quarter page: unshadowed; raise --page-pool",
+            v.unshadowed_faces
+        );
+    }
+    lines.push(ReportLine::new(
+        "pages",
+        format!(
+            "{} resident in a pool of {} ({} drawn, {} kept from the last frame; {}x{} texels, {} MiB); asked by samples per level (coarsest first) {} (with their ancestors {}){tail}",
+            v.resident,
+            v.pool_pages,
+            v.drawn,
+            v.kept,
+            v.pool_side,
+            v.pool_side,
+            v.pool_bytes >> 20,
+            per_level(&v.asked),
+            per_level(&v.needed),
+        ),
+    ));
+    let t = &v.tiles;
+    if t.empty + t.one_page + t.known_page + t.per_pixel > 0 {
+        lines.push(ReportLine::new(
+            "marking",
+            format!(
+                "by 4x4-pixel tiles, (tile, light) pairs: {} need no page, {} one page marked once, {} a known page checked per pixel, {} marked per pixel ({} tiles whole)",
+                t.empty, t.one_page, t.known_page, t.per_pixel, t.whole_tiles
+            ),
+        ));
+    }
+    // Pages are chosen, culled and drawn on the GPU: their counts are the pages line's.
+    lines.push(ReportLine::new(
+        "shadow work",
+        format!(
+            "{} pages drawn ({} kept from the last frame): {} (cluster, page) pairs past the \
+             cluster cull, {} triangles drawn (culled per page on the GPU: clusters, then \
+             triangles where the adapter counts draws)",
+            v.drawn, v.kept, v.cluster_draws, v.triangles
+        ),
+    ));
+    ShadowText {
+        lines,
+        frame: format!(
+            "{:>4} of {} resident pages drawn ({} kept), shadow GPU time {}",
+            v.drawn,
+            v.resident,
+            v.kept,
+            r.gpu_time(Stage::Shadows)
+        ),
     }
 }
