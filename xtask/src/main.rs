@@ -246,16 +246,17 @@ fn main() -> ExitCode {
         for f in &c.failures {
             println!("          FAILED {f}");
         }
-        if c.refusals.is_empty() {
+        let refused = refusals_by_test(&c.refusals);
+        if refused.is_empty() {
             println!("          no test checked a refusal instead of running");
         } else {
             println!(
-                "          {} tests checked a refusal instead of running (this backend lacks \
-                 what they need):",
-                c.refusals.len()
+                "          {} tests checked a refusal instead of running all or part of what \
+                 they cover (this backend lacks what it needs):",
+                refused.len()
             );
-            for (test, need, _) in &c.refusals {
-                println!("            {test} (no {need})");
+            for (test, needs) in &refused {
+                println!("            {test} (no {})", needs.join(", no "));
             }
         }
         ok &= c.failed == 0 && c.exit_ok;
@@ -326,6 +327,18 @@ fn test_command(backend: &str, skip: &[&str], extra: &[String]) -> Command {
     }
     cmd.args(extra);
     cmd
+}
+
+/// The refusals of a run by test: each test once, with every requirement it found missing.
+fn refusals_by_test(refusals: &[(String, String, String)]) -> Vec<(String, Vec<String>)> {
+    let mut by: BTreeMap<String, Vec<String>> = BTreeMap::new();
+    for (test, need, _) in refusals {
+        let needs = by.entry(test.clone()).or_default();
+        if !needs.contains(need) {
+            needs.push(need.clone());
+        }
+    }
+    by.into_iter().collect()
 }
 
 /// Test counts of one run.
@@ -456,6 +469,30 @@ mod tests {
                 "{file}: no test calls {needs_tool} (is the marker stale?)"
             );
         }
+    }
+
+    #[test]
+    fn refusals_are_listed_once_per_test_with_every_need() {
+        let r = |t: &str, n: &str| (t.to_string(), n.to_string(), String::new());
+        let by = refusals_by_test(&[
+            r("b", "MULTIVIEW"),
+            r("a", "EXPERIMENTAL_RAY_QUERY"),
+            r("b", "EXPERIMENTAL_RAY_QUERY"),
+            r("b", "MULTIVIEW"),
+        ]);
+        assert_eq!(
+            by,
+            vec![
+                ("a".to_string(), vec!["EXPERIMENTAL_RAY_QUERY".to_string()]),
+                (
+                    "b".to_string(),
+                    vec![
+                        "MULTIVIEW".to_string(),
+                        "EXPERIMENTAL_RAY_QUERY".to_string()
+                    ]
+                ),
+            ]
+        );
     }
 
     #[test]

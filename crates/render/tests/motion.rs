@@ -1,4 +1,4 @@
-//! Histories that follow moving instances (frame/motion.rs): the denoiser's history and the
+//! Histories that follow moving instances (sampled/motion.rs): the denoiser's history and the
 //! reservoirs of a point on an instance that moved are found where the point was last frame
 //! (its instance's motion taken back), however far it moved, and count at most a few frames
 //! (lighting changes on a moving surface). Where the adapter has no ray queries (OpenGL,

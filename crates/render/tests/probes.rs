@@ -633,7 +633,7 @@ fn gpu_driven_faces_keep_only_the_clusters_a_face_can_show() {
             "single-sided {single_sided}: {differ} of {texels} texels differ from per-face"
         );
     }
-    // The grid's clusters: at most 256 triangles each (renderer/probe_clusters.rs).
+    // The grid's clusters: at most 256 triangles each (probes/clusters.rs).
     let grid_clusters = grid_triangles.div_ceil(256);
     assert!(
         kept[1] + grid_clusters <= kept[0],

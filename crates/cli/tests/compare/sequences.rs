@@ -6,7 +6,7 @@ use crate::helpers::{assert_clean_failure_compare, compare, run, tmp};
 use crate::shared_gpu;
 
 /// `compare --stages` says each part of every technique's frame as the GPU finishes it, in
-/// order (as `render --stages`, whose frames are checked byte for byte in cli.rs).
+/// order (as `render --stages`, whose frames are checked byte for byte in cli/frames.rs).
 #[test]
 fn compare_tells_each_frame_in_stages() {
     let dir = tmp("stages");

@@ -1,5 +1,5 @@
 // Culling whole triangle clusters of casters.wgsl against a view, shared by `gpu-driven` and
-// the virtual shadow maps' page rendering (vsm.rs): frustum by the cluster's bounding sphere,
+// the virtual shadow maps' page rendering (vsm/draw.rs): frustum by the cluster's bounding sphere,
 // back faces by its normal cone.
 
 // A cluster of casters.wgsl: a run of triangles of one instance and its object-space normal

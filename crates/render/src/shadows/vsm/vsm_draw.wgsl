@@ -1,4 +1,4 @@
-// Virtual shadow maps (vsm.rs), rendering the resident pages: every page is an ordinary
+// Virtual shadow maps (draw.rs), rendering the resident pages: every page is an ordinary
 // shadow view (the face's projection cropped to the page, one tile of the pool), so pages are
 // drawn the `gpu-driven` way: a compute pass culls caster clusters against each page's
 // frustum slice and writes indexed-indirect commands, one multi-draw renders the survivors
