@@ -235,6 +235,13 @@ pub(crate) struct RenderArgs {
     /// would draw them; the camera still sees the holes).
     #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub(crate) shadow_alpha: bool,
+    /// What single-sided surfaces (glTF's default, `double_sided = false` in TOML) shadow:
+    /// front (only where a light sees their front, as a camera placed at the light would see
+    /// them: outline shells and floors lit from below cast nothing; closed meshes cast as
+    /// always) or both (every face casts, as a renderer that ignores the material's sides
+    /// does). Double-sided and alpha-tested surfaces always cast from both sides.
+    #[arg(long, default_value_t = manyshadows::SingleSidedShadows::default())]
+    pub(crate) single_sided_shadows: manyshadows::SingleSidedShadows,
     /// Largest shadow-atlas side in texels (clamped to the adapter's limit).
     #[arg(long, default_value_t = manyshadows::DEFAULT_MAX_ATLAS_SIZE)]
     pub(crate) atlas_max: u32,
@@ -583,9 +590,13 @@ pub(crate) fn render_settings(args: &RenderArgs, atlas_max: u32) -> RenderSettin
         .with_probe_passes(args.probe_passes)
         .with_soft(args.soft.soft())
         .with_technique(args.technique)
-        .with_shadow(ShadowOptions::default().with_cull(args.cull).with_casters(
-            manyshadows::CasterOptions::default().with_ignore_masks(!args.shadow_alpha),
-        ))
+        .with_shadow(
+            ShadowOptions::default().with_cull(args.cull).with_casters(
+                manyshadows::CasterOptions::default()
+                    .with_ignore_masks(!args.shadow_alpha)
+                    .with_single_sided(args.single_sided_shadows),
+            ),
+        )
         .with_cache_shadows(!args.no_cache)
         .with_shadow_budget(args.shadow_budget)
         .with_point_shadows(args.point_shadows)

@@ -11,7 +11,7 @@ use std::time::Duration;
 
 use glam::{Vec2, Vec3, Vec3A};
 use manyshadows_scene::masks::MaskSet;
-use manyshadows_scene::Scene;
+use manyshadows_scene::{Scene, SingleSidedShadows};
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::{builder::build_cwbvh, CwBvh};
 use obvhs::ray::Ray;
@@ -39,6 +39,10 @@ struct MaskedTriangle {
 /// ray only where their mask is solid at the hit: the hit's barycentric weights interpolate
 /// the corners' texture coordinates and [`MaskSet::covered`] answers, with the same nearest-
 /// texel rule the renderer's shadow passes use. A rejected hit lets the ray go on.
+///
+/// Single-sided opaque casters follow the scene's rule ([`SingleSidedShadows`]): under the
+/// default one a triangle blocks a ray towards a light only where the light sees its front
+/// (its front, counter-clockwise in the mesh as the camera takes it, faces along the ray).
 pub struct Tracer {
     /// `None` when the scene casts no shadow at all.
     bvh: Option<CwBvh>,
@@ -46,6 +50,10 @@ pub struct Tracer {
     triangles: Vec<[Vec3; 3]>,
     /// Per triangle (BVH order): an index into `masked`, or [`OPAQUE`].
     alpha: Vec<u32>,
+    /// Per triangle (BVH order): 0 where it blocks from both sides; +1 or −1 where it blocks
+    /// only rays along its front, the sign turning its world winding's normal into the front
+    /// (−1 under a mirroring transform).
+    facing: Vec<f32>,
     masked: Vec<MaskedTriangle>,
     masks: MaskSet,
 }
@@ -55,14 +63,30 @@ impl Tracer {
     /// passes draw), transformed to world space, and builds the BVH. Zero-area triangles are
     /// left out: they rasterize to nothing, so they cast no shadow in any technique either.
     pub fn new(scene: &Scene) -> Result<Self, ReferenceError> {
+        Self::with_rule(scene, SingleSidedShadows::default())
+    }
+
+    /// [`Tracer::new`] with single-sided casters shadowing as `rule` says.
+    pub fn with_rule(scene: &Scene, rule: SingleSidedShadows) -> Result<Self, ReferenceError> {
         scene.validate()?;
         let masks = MaskSet::new(scene);
         let mut triangles = Vec::with_capacity(scene.triangle_count());
         let mut alpha = Vec::with_capacity(scene.triangle_count());
+        let mut facing = Vec::with_capacity(scene.triangle_count());
         let mut masked = Vec::new();
         for inst in scene.instances.iter().filter(|i| i.casts_shadows) {
             let mesh = &scene.meshes[inst.mesh];
             let tested = masks.is_masked(inst.material);
+            let front_only = !tested
+                && scene
+                    .materials
+                    .get(inst.material)
+                    .is_some_and(|m| m.casts_front_only(rule));
+            let sign = match (front_only, inst.transform.determinant() < 0.0) {
+                (false, _) => 0.0,
+                (true, false) => 1.0,
+                (true, true) => -1.0,
+            };
             let world: Vec<Vec3> = mesh
                 .positions
                 .iter()
@@ -76,6 +100,7 @@ impl Tracer {
                 ];
                 if (tri[1] - tri[0]).cross(tri[2] - tri[0]).length_squared() > 0.0 {
                     triangles.push(tri);
+                    facing.push(sign);
                     if tested {
                         let uv =
                             |k: usize| mesh.uvs.get(t[k] as usize).copied().unwrap_or_default();
@@ -97,6 +122,11 @@ impl Tracer {
                 .iter()
                 .map(|&i| alpha[i as usize])
                 .collect();
+            tracer.facing = bvh
+                .primitive_indices
+                .iter()
+                .map(|&i| facing[i as usize])
+                .collect();
         }
         tracer.masked = masked;
         tracer.masks = masks;
@@ -106,11 +136,13 @@ impl Tracer {
     /// A tracer over the given world-space triangles (all opaque).
     pub fn from_triangles(triangles: Vec<[Vec3; 3]>) -> Self {
         let alpha = vec![OPAQUE; triangles.len()];
+        let facing = vec![0.0; triangles.len()];
         if triangles.is_empty() {
             return Self {
                 bvh: None,
                 triangles,
                 alpha,
+                facing,
                 masked: Vec::new(),
                 masks: MaskSet::default(),
             };
@@ -144,6 +176,7 @@ impl Tracer {
             bvh: Some(bvh),
             triangles: ordered,
             alpha,
+            facing,
             masked: Vec::new(),
             masks: MaskSet::default(),
         }
@@ -168,7 +201,13 @@ impl Tracer {
         let shear = Shear::new(origin, dir);
         let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, t_max);
         !bvh.ray_traverse_miss(ray, |r, id| {
-            let (t, b) = shear.hit(&self.triangles[id], r.tmax);
+            let tri = &self.triangles[id];
+            let f = self.facing[id];
+            // A front-only triangle is passed where its front faces back along the ray.
+            if f != 0.0 && f * (tri[1] - tri[0]).cross(tri[2] - tri[0]).dot(dir) <= 0.0 {
+                return f32::INFINITY;
+            }
+            let (t, b) = shear.hit(tri, r.tmax);
             match self.alpha[id] {
                 OPAQUE => t,
                 _ if t == f32::INFINITY => t,

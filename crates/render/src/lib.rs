@@ -128,6 +128,7 @@ pub use gpu::context::{
 };
 pub use gpu::timing::{GpuTimes, Stage};
 pub use gpu_scene::caster_layout::CasterOptions;
+pub use manyshadows_scene::SingleSidedShadows;
 pub use probes::maps::{ProbeMaps, ProbePasses, ProbeStats};
 pub use renderer::{FramePart, Renderer};
 pub use report::{Frame, FrameEstimate, FrameTimings, ShadowLayout, ShadowWork, SubmittedFrame};

@@ -283,7 +283,7 @@ fn gpu_driven_splits_views_and_clusters_into_rounds() {
         let rounds = plan_rounds(
             views,
             clusters as u32,
-            p.casters.first_masked_cluster,
+            (0, p.casters.first_masked_cluster),
             p.casters.vertices,
             max,
         );

@@ -198,7 +198,64 @@ pub struct Material {
     pub reflect: f32,
 }
 
+/// What a single-sided surface (a material the camera sees only from the front,
+/// [`Material::cull_back_faces`], and not [`Material::double_sided`]) shadows. glTF defines
+/// single-sided materials for the camera only, so a renderer must choose; every shadow
+/// technique of manyshadows and its exact references choose the same way (docs/decisions.md,
+/// "What a single-sided surface shadows").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum SingleSidedShadows {
+    /// A single-sided surface blocks a light only where that light, looking as a camera would,
+    /// sees its front: a shadow ray from a point towards a light passes single-sided triangles
+    /// whose front faces the point. An outline shell (an inverted hull around an object) casts
+    /// nothing, a closed mesh casts as ever, a single-sided floor lit from below casts nothing.
+    #[default]
+    Front,
+    /// Every triangle blocks light from either side, single-sided or not (the rule before
+    /// there was a choice).
+    Both,
+}
+
+impl SingleSidedShadows {
+    /// Every rule, the default first.
+    pub const ALL: [SingleSidedShadows; 2] = [Self::Front, Self::Both];
+
+    /// Its name on the command line and in summaries.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Front => "front",
+            Self::Both => "both",
+        }
+    }
+}
+
+impl std::fmt::Display for SingleSidedShadows {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for SingleSidedShadows {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL
+            .into_iter()
+            .find(|r| r.name() == s.trim())
+            .ok_or_else(|| {
+                format!("unknown single-sided shadow rule '{s}' (expected front or both)")
+            })
+    }
+}
+
 impl Material {
+    /// Whether this material's triangles block light only where a light sees their front,
+    /// under `rule`: single-sided for the camera (`cull_back_faces`, not `double_sided`) and
+    /// the rule [`SingleSidedShadows::Front`]. Alpha-tested casters keep blocking from both
+    /// sides wherever their mask is solid: the caller leaves them out.
+    pub fn casts_front_only(&self, rule: SingleSidedShadows) -> bool {
+        rule == SingleSidedShadows::Front && self.cull_back_faces && !self.double_sided
+    }
+
     fn default_ambient() -> Vec3 {
         Vec3::splat(0.8)
     }

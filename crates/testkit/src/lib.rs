@@ -38,7 +38,7 @@ fn parse_list(v: &str) -> Vec<String> {
 /// Whether the test command says this backend must offer `need` (a name as wgpu spells it).
 pub fn must_offer(need: &str) -> bool {
     let need = need.trim().to_ascii_uppercase();
-    expected().iter().any(|e| *e == need)
+    expected().contains(&need)
 }
 
 /// The name of the running test (libtest names each test's thread after it).

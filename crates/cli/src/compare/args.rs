@@ -91,6 +91,12 @@ pub struct CompareArgs {
     /// that mistake).
     #[arg(long, default_value = "on", value_parser = crate::args::parse_on_off, action = clap::ArgAction::Set)]
     pub(super) shadow_alpha: bool,
+    /// What single-sided surfaces shadow, in every technique and in the reference alike: front
+    /// (only where a light sees their front: outline shells and floors lit from below cast
+    /// nothing) or both (every face casts). Double-sided and alpha-tested surfaces always cast
+    /// from both sides.
+    #[arg(long, default_value_t = manyshadows::SingleSidedShadows::default())]
+    pub(super) single_sided_shadows: manyshadows::SingleSidedShadows,
     /// Largest shadow-atlas side in texels (clamped to the adapter's limit).
     #[arg(long, default_value_t = manyshadows::DEFAULT_MAX_ATLAS_SIZE)]
     pub(super) atlas_max: u32,

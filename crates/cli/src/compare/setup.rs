@@ -277,9 +277,13 @@ pub(super) fn settings(
         .with_soft_visibility(soft_visibility)
         .with_soft(args.soft_maps.soft())
         .with_point_shadows(args.point_shadows)
-        .with_shadow(manyshadows::ShadowOptions::default().with_casters(
-            manyshadows::CasterOptions::default().with_ignore_masks(!args.shadow_alpha),
-        ));
+        .with_shadow(
+            manyshadows::ShadowOptions::default().with_casters(
+                manyshadows::CasterOptions::default()
+                    .with_ignore_masks(!args.shadow_alpha)
+                    .with_single_sided(args.single_sided_shadows),
+            ),
+        );
     args.per_technique.apply(settings)
 }
 
@@ -312,7 +316,7 @@ pub(super) fn open(
     };
     pb.set_message("building the BVH of the shadow casters");
     let t = Instant::now();
-    let tracer = Tracer::new(scene)?;
+    let tracer = Tracer::with_rule(scene, args.single_sided_shadows)?;
     let bvh_ms = t.elapsed().as_secs_f64() * 1e3;
     std::fs::create_dir_all(&args.out_dir)
         .with_context(|| format!("creating {}", args.out_dir.display()))?;

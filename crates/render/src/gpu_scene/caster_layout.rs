@@ -34,7 +34,7 @@ use std::collections::HashMap;
 
 use glam::{Mat4, Vec3};
 use manyshadows_scene::masks::MaskSet;
-use manyshadows_scene::{LightKind, Mesh, Scene};
+use manyshadows_scene::{LightKind, Mesh, Scene, SingleSidedShadows};
 
 use crate::gpu_scene::instances::morton_order;
 
@@ -62,6 +62,10 @@ pub struct CasterOptions {
     /// what a renderer that ignores alpha in its shadow passes draws. For comparisons
     /// (`compare --shadow-alpha off`), not for pictures.
     pub ignore_masks: bool,
+    /// What single-sided opaque casters shadow (`Material::casts_front_only`): by default only
+    /// where a light sees their front, which every technique applies exactly, as back-face
+    /// culling of those triangles for every light and view.
+    pub single_sided: SingleSidedShadows,
 }
 
 /// CPU record of a cluster.
@@ -89,6 +93,7 @@ pub const CLUSTER_MASKED: u32 = 1;
 with_setters!(CasterOptions {
     with_assume_closed: assume_closed: bool,
     with_ignore_masks: ignore_masks: bool,
+    with_single_sided: single_sided: SingleSidedShadows,
 });
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -182,6 +187,10 @@ pub(crate) struct Decision {
     pub(crate) cone_ok: bool,
     /// Its material is alpha-tested.
     pub(crate) masked: bool,
+    /// Its material is single-sided and casts only where a light sees its front: its
+    /// triangles are culled by their facing for every light (and laid out with the cullable
+    /// ones, wound as its mesh is, mirrored transforms turned back).
+    pub(crate) front_only: bool,
 }
 
 /// The CPU side of the caster buffers.
@@ -190,9 +199,14 @@ pub(crate) struct Layout {
     pub(crate) corners: Vec<u32>,
     pub(crate) clusters: Vec<ClusterData>,
     pub(crate) cullable_triangles: u32,
+    /// Clusters from here on are not cullable (the cullable ones come first).
+    pub(crate) cullable_clusters: u32,
     pub(crate) first_masked_triangle: u32,
     pub(crate) first_masked_cluster: u32,
     pub(crate) first_masked_vertex: u32,
+    /// Some cullable triangles are single-sided ones that cast only where a light sees their
+    /// front: the cullable class must then be culled by facing in every view.
+    pub(crate) front_only: bool,
 }
 
 /// Per-mesh facts that never change: closure and Morton order, computed on first use.
@@ -261,6 +275,21 @@ impl MeshCache {
                 }
                 let mesh = &scene.meshes[inst.mesh];
                 let masked = masks.is_masked(inst.material);
+                let front_only = !masked
+                    && scene
+                        .materials
+                        .get(inst.material)
+                        .is_some_and(|m| m.casts_front_only(options.single_sided));
+                if front_only {
+                    return Decision {
+                        cullable: true,
+                        flip: false,
+                        mirrored: inst.transform.determinant() < 0.0,
+                        cone_ok: !skinned && is_similarity(inst.transform),
+                        masked: false,
+                        front_only: true,
+                    };
+                }
                 // Seed 000's "every mesh is closed" never applies to double-sided materials:
                 // they are culled only where culling is exact.
                 let assume_closed = options.assume_closed
@@ -282,6 +311,7 @@ impl MeshCache {
                     mirrored: inst.transform.determinant() < 0.0,
                     cone_ok: cullable && !skinned && is_similarity(inst.transform),
                     masked,
+                    front_only: false,
                 }
             })
             .collect()
@@ -317,6 +347,7 @@ impl MeshCache {
                 mirrored,
                 cone_ok,
                 masked,
+                front_only: _,
             } = decisions[i];
             if !masked {
                 first_masked_vertex = sources.len() as u32 + mesh.positions.len() as u32;
@@ -360,6 +391,12 @@ impl MeshCache {
             }
         }
         let cullable_triangles = (corners[0].len() / 3) as u32;
+        let cullable_clusters = clusters[0].len() as u32;
+        let front_only = scene
+            .instances
+            .iter()
+            .zip(decisions)
+            .any(|(inst, d)| inst.casts_shadows && d.front_only);
         let first_masked_triangle = cullable_triangles + (corners[1].len() / 3) as u32;
         let [mut all_corners, open, masked] = corners;
         let [mut all_clusters, open_clusters, masked_clusters] = clusters;
@@ -379,6 +416,8 @@ impl MeshCache {
             corners: all_corners,
             clusters: all_clusters,
             cullable_triangles,
+            cullable_clusters,
+            front_only,
             first_masked_triangle,
             first_masked_cluster,
             first_masked_vertex,

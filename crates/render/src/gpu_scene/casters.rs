@@ -49,6 +49,13 @@ pub struct CasterGeometry {
     pub triangles: u32,
     /// The first `cullable_triangles` triangles may be back-face culled.
     pub cullable_triangles: u32,
+    /// The first `cullable_clusters` clusters hold the cullable triangles.
+    pub cullable_clusters: u32,
+    /// Some of the cullable triangles are single-sided and cast only where a light sees
+    /// their front (`CasterOptions::single_sided`): every technique then culls the cullable
+    /// triangles by facing, for every light and in every kind of view (exact for the closed
+    /// meshes among them too).
+    pub front_only: bool,
     /// Triangles from here on are alpha-tested (`triangles` when none are).
     pub first_masked_triangle: u32,
     /// Clusters from here on are alpha-tested (`clusters.len()` when none are).
@@ -109,6 +116,8 @@ impl CasterGeometry {
             corners: mut all_corners,
             clusters: mut all_clusters,
             cullable_triangles,
+            cullable_clusters,
+            front_only,
             first_masked_triangle,
             first_masked_cluster,
             ..
@@ -252,6 +261,8 @@ impl CasterGeometry {
             vertices,
             triangles,
             cullable_triangles,
+            cullable_clusters,
+            front_only,
             first_masked_triangle,
             first_masked_cluster,
             masks,
@@ -300,6 +311,8 @@ impl CasterGeometry {
             );
         }
         self.cullable_triangles = layout.cullable_triangles;
+        self.cullable_clusters = layout.cullable_clusters;
+        self.front_only = layout.front_only;
         self.clusters = layout.clusters;
         self.decisions = decisions;
         true
@@ -308,6 +321,14 @@ impl CasterGeometry {
     /// True if `material`'s casters are alpha-tested in the shadow passes.
     pub fn is_masked(&self, material: u32) -> bool {
         self.masks.is_masked(material as usize)
+    }
+
+    /// True if scene instance `instance` is a single-sided caster that casts only where a light
+    /// sees its front (`CasterOptions::single_sided`).
+    pub fn casts_front_only(&self, instance: u32) -> bool {
+        self.decisions
+            .get(instance as usize)
+            .is_some_and(|d| d.front_only)
     }
 
     /// True if world positions come from the skin.

@@ -218,7 +218,7 @@ impl FaceClusters {
         for (key, group) in groups {
             let first = clusters.len() as u32;
             let n = group.len() as u32;
-            for mut r in plan_rounds(faces, n, n, stride as u32, self.max_round_commands) {
+            for mut r in plan_rounds(faces, n, (0, n), stride as u32, self.max_round_commands) {
                 r.first_cluster += first;
                 rounds.push((r, key));
             }

@@ -29,6 +29,9 @@ pub struct Round {
     /// The clusters are alpha-tested ones (a round never mixes them with opaque clusters, so
     /// it is drawn with one pipeline).
     pub masked: bool,
+    /// The clusters' triangles are culled by facing when drawn (the rasterizer's back-face
+    /// culling: cullable triangles where culling them is the rule).
+    pub culled: bool,
 }
 
 impl Round {
@@ -40,11 +43,12 @@ impl Round {
 
 /// Splits `views` listed views × `clusters` clusters into rounds of at most `max_commands`
 /// commands whose slots keep `slot · vertices` below 2³¹ (and within dispatch limits). No
-/// round straddles `first_masked` (the first alpha-tested cluster).
+/// round straddles `culled` (the clusters before it are drawn culled by facing) or
+/// `first_masked` (the first alpha-tested cluster).
 pub fn plan_rounds(
     views: u32,
     clusters: u32,
-    first_masked: u32,
+    (culled, first_masked): (u32, u32),
     vertices: u32,
     max_commands: u64,
 ) -> Vec<Round> {
@@ -59,11 +63,12 @@ pub fn plan_rounds(
         .min(by_vertex)
         .clamp(1, MAX_GROUPS) as u32;
     let split = first_masked.min(clusters);
+    let culled = culled.min(split);
     let mut rounds = Vec::new();
     let mut first_view = 0;
     while first_view < views {
         let n = batch.min(views - first_view);
-        for (lo, hi) in [(0, split), (split, clusters)] {
+        for (lo, hi) in [(0, culled), (culled, split), (split, clusters)] {
             let mut first_cluster = lo;
             while first_cluster < hi {
                 let c = chunk.min(hi - first_cluster);
@@ -73,6 +78,7 @@ pub fn plan_rounds(
                     first_cluster,
                     clusters: c,
                     masked: first_cluster >= split,
+                    culled: first_cluster < culled,
                 });
                 first_cluster += c;
             }
@@ -111,24 +117,29 @@ mod tests {
             (1, 1, 1, 1),
         ] {
             for split in [0, clusters / 3, clusters] {
-                let rounds = plan_rounds(views, clusters, split, vertices, max);
-                assert!(
-                    covered(&rounds, views, clusters),
-                    "{views} {clusters} {vertices} {max}"
-                );
-                for r in &rounds {
-                    assert!(r.commands() <= max);
-                    assert!((r.views as u64) * (vertices as u64) <= 1 << 31);
-                    // Alpha-tested clusters never share a round with opaque ones.
-                    assert_eq!(r.masked, r.first_cluster >= split);
-                    assert!(r.masked || r.first_cluster + r.clusters <= split);
+                for culled in [0, split / 2, split] {
+                    let rounds = plan_rounds(views, clusters, (culled, split), vertices, max);
+                    assert!(
+                        covered(&rounds, views, clusters),
+                        "{views} {clusters} {vertices} {max}"
+                    );
+                    for r in &rounds {
+                        assert!(r.commands() <= max);
+                        assert!((r.views as u64) * (vertices as u64) <= 1 << 31);
+                        // Alpha-tested clusters never share a round with opaque ones, nor
+                        // culled clusters with others.
+                        assert_eq!(r.masked, r.first_cluster >= split);
+                        assert!(r.masked || r.first_cluster + r.clusters <= split);
+                        assert_eq!(r.culled, r.first_cluster < culled);
+                        assert!(!r.culled || r.first_cluster + r.clusters <= culled);
+                    }
                 }
             }
         }
         // One round when everything fits; 2^29 vertices allow four slots per round.
-        assert_eq!(plan_rounds(24, 374, 374, 30_000, u64::MAX).len(), 1);
-        assert_eq!(plan_rounds(24, 374, 100, 30_000, u64::MAX).len(), 2);
-        assert_eq!(plan_rounds(7, 5, 5, 1 << 29, u64::MAX).len(), 2);
-        assert!(plan_rounds(0, 5, 5, 10, 10).is_empty());
+        assert_eq!(plan_rounds(24, 374, (0, 374), 30_000, u64::MAX).len(), 1);
+        assert_eq!(plan_rounds(24, 374, (0, 100), 30_000, u64::MAX).len(), 2);
+        assert_eq!(plan_rounds(7, 5, (0, 5), 1 << 29, u64::MAX).len(), 2);
+        assert!(plan_rounds(0, 5, (0, 5), 10, 10).is_empty());
     }
 }

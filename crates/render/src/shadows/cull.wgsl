@@ -3,6 +3,9 @@
 
 const CULL_FRUSTUM: u32 = 1u;
 const CULL_BACKFACE: u32 = 2u;
+// Back-face culling of the cullable triangles is the rule (single-sided casters cast only where
+// a light sees their front): applied in every kind of view, dual-paraboloid ones too.
+const CULL_ALWAYS: u32 = 4u;
 
 // True if the triangle's three clip-space corners are all outside one clip plane (wgpu clip
 // space: -w <= x, y <= w, 0 <= z <= w): conservative, never drops a visible triangle.

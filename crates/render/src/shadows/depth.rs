@@ -82,7 +82,58 @@ pub(crate) fn layered_depth_pipeline(
     buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
     multiview_mask: Option<std::num::NonZeroU32>,
 ) -> wgpu::RenderPipeline {
-    depth_pipeline_with(device, layout, module, entry, None, buffers, multiview_mask)
+    depth_pipeline_with(
+        device,
+        layout,
+        module,
+        (entry, None),
+        buffers,
+        multiview_mask,
+        None,
+    )
+}
+
+/// [`depth_pipeline`] that culls triangles whose front (counter-clockwise in the view, as
+/// world space winds the cullable casters: their front) faces away from the light: the
+/// rasterizer's back-face culling, exactly the world-space test `faces_away` of cull.wgsl for
+/// a view whose centre of projection is the light (spot, cube face, cascade).
+pub(crate) fn culled_depth_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+) -> wgpu::RenderPipeline {
+    depth_pipeline_with(
+        device,
+        layout,
+        module,
+        (entry, None),
+        buffers,
+        None,
+        Some(wgpu::FrontFace::Ccw),
+    )
+}
+
+/// [`culled_depth_pipeline`] for triangles wound `front` in the view (`Cw`: a mirroring
+/// instance transform drawn from its mesh's own indices).
+pub(crate) fn culled_depth_pipeline_facing(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+    front: wgpu::FrontFace,
+) -> wgpu::RenderPipeline {
+    depth_pipeline_with(
+        device,
+        layout,
+        module,
+        (entry, None),
+        buffers,
+        None,
+        Some(front),
+    )
 }
 
 /// [`depth_pipeline`] for alpha-tested casters: the vertex entry `entry` passes the texture
@@ -100,21 +151,23 @@ pub(crate) fn masked_depth_pipeline(
         device,
         layout,
         module,
-        entry,
-        Some("fs_alpha"),
+        (entry, Some("fs_alpha")),
         buffers,
         multiview_mask,
+        None,
     )
 }
 
+/// A depth-only pipeline: vertex `entry`, a fragment stage where given, culling back faces
+/// (fronts wound as `cull` says) where asked.
 fn depth_pipeline_with(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
-    entry: &str,
-    fragment: Option<&str>,
+    (entry, fragment): (&str, Option<&str>),
     buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
     multiview_mask: Option<std::num::NonZeroU32>,
+    cull: Option<wgpu::FrontFace>,
 ) -> wgpu::RenderPipeline {
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(entry),
@@ -127,8 +180,8 @@ fn depth_pipeline_with(
         },
         primitive: wgpu::PrimitiveState {
             topology: wgpu::PrimitiveTopology::TriangleList,
-            front_face: wgpu::FrontFace::Ccw,
-            cull_mode: None,
+            front_face: cull.unwrap_or(wgpu::FrontFace::Ccw),
+            cull_mode: cull.map(|_| wgpu::Face::Back),
             ..Default::default()
         },
         depth_stencil: Some(wgpu::DepthStencilState {

@@ -5,6 +5,7 @@
 
 use crate::error::RenderError;
 use crate::gpu_scene::caster_layout::CasterOptions;
+use crate::gpu_scene::casters::CasterGeometry;
 
 /// Which triangles single-pass techniques drop per view before rasterization (seed 000
 /// Listings 19.9 and 19.10).
@@ -56,7 +57,24 @@ impl CullMode {
     pub fn bits(self) -> u32 {
         u32::from(self.frustum()) | (u32::from(self.backface()) << 1)
     }
+
+    /// The bits of a pass that culls `casters` per view as this mode asks: back-face culling
+    /// forced on, with [`CULL_ALWAYS`] (in every kind of view, dual-paraboloid ones too), where
+    /// single-sided casters cast only where a light sees their front
+    /// (`CasterGeometry::front_only`): then culling the cullable triangles by facing is the
+    /// rule, not a choice.
+    pub fn bits_for(self, casters: &CasterGeometry) -> u32 {
+        if casters.front_only {
+            self.bits() | CullMode::Backface.bits() | CULL_ALWAYS
+        } else {
+            self.bits()
+        }
+    }
 }
+
+/// Cull bit (`CULL_ALWAYS` in `cull.wgsl`): back-face culling of the cullable triangles is the
+/// rule for single-sided casters, applied in every kind of view.
+pub const CULL_ALWAYS: u32 = 4;
 
 impl std::str::FromStr for CullMode {
     type Err = String;

@@ -265,8 +265,13 @@ pub fn reference_errors(
     vis: &manyshadows::VisibilityMask,
     band: u32,
 ) -> ReferenceErrors {
-    use manyshadows_reference::{score, SurfacePoint, Surfaces, Tracer};
-    let (w, h) = (vis.width, vis.height);
+    reference_errors_with(r, scene, vis, band, Default::default())
+}
+
+/// The surfaces of `r`'s G-buffer, as the CPU reference traces them.
+pub fn gbuffer_surfaces(r: &manyshadows::Renderer) -> manyshadows_reference::Surfaces {
+    use manyshadows_reference::{SurfacePoint, Surfaces};
+    let (w, h) = (r.settings().width, r.settings().height);
     let g = r.read_gbuffer().expect("gbuffer");
     let points = (0..g.position.len())
         .map(|i| {
@@ -276,16 +281,51 @@ pub fn reference_errors(
             })
         })
         .collect();
-    let surfaces = Surfaces::new(w, h, points).expect("surfaces");
-    let tracer = Tracer::new(scene).expect("tracer");
-    let reference = manyshadows_reference::reference_visibility(
+    Surfaces::new(w, h, points).expect("surfaces")
+}
+
+/// The CPU reference of `scene`'s lights at `surfaces`, single-sided casters shadowing as
+/// `rule` says.
+pub fn trace_reference(
+    scene: &Scene,
+    surfaces: &manyshadows_reference::Surfaces,
+    rule: manyshadows::SingleSidedShadows,
+) -> manyshadows_reference::ReferenceVisibility {
+    let tracer = manyshadows_reference::Tracer::with_rule(scene, rule).expect("tracer");
+    manyshadows_reference::reference_visibility(
         &tracer,
         &scene.lights,
-        &surfaces,
+        surfaces,
         &|| {},
         &Default::default(),
     )
-    .expect("reference");
+    .expect("reference")
+}
+
+/// [`reference_errors`] with single-sided casters shadowing as `rule` says in the reference.
+pub fn reference_errors_with(
+    r: &manyshadows::Renderer,
+    scene: &Scene,
+    vis: &manyshadows::VisibilityMask,
+    band: u32,
+    rule: manyshadows::SingleSidedShadows,
+) -> ReferenceErrors {
+    let surfaces = gbuffer_surfaces(r);
+    let reference = trace_reference(scene, &surfaces, rule);
+    errors_against(&reference, &surfaces, vis, band)
+}
+
+/// How `vis` compares with `reference` (traced at `surfaces`), errors within `band` pixels of
+/// a reference edge apart.
+pub fn errors_against(
+    reference: &manyshadows_reference::ReferenceVisibility,
+    surfaces: &manyshadows_reference::Surfaces,
+    vis: &manyshadows::VisibilityMask,
+    band: u32,
+) -> ReferenceErrors {
+    use manyshadows_reference::score;
+    let (w, h) = (vis.width, vis.height);
+    let lights = vis.lights;
     let edge = score::edge_band(&reference.lit, &surfaces.covered(), band);
     let mask = manyshadows_reference::Mask {
         width: vis.width,
@@ -295,13 +335,13 @@ pub fn reference_errors(
         words: vis.words.clone(),
     };
     let mut e = ReferenceErrors {
-        counts: score::score(&reference, &edge, &mask)
+        counts: score::score(reference, &edge, &mask)
             .expect("score")
             .total(|_| true),
         ..Default::default()
     };
     for p in 0..(w * h) as usize {
-        for l in 0..scene.lights.len() as u32 {
+        for l in 0..lights {
             let want = reference.lit.get(p, l);
             let got = vis.lit(p as u32 % w, p as u32 / w, l);
             e.pairs += 1;

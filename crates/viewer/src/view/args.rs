@@ -51,6 +51,11 @@ pub struct ViewArgs {
     /// Filtering to start with: off, 2x2 or 3x3.
     #[arg(long, default_value = "2x2", value_parser = manyshadows_cli::parse_pcf)]
     pub(super) pcf: Pcf,
+    /// What single-sided surfaces shadow: front (only where a light sees their front: outline
+    /// shells and floors lit from below cast nothing) or both (every face casts), as for
+    /// `render`.
+    #[arg(long, default_value_t = manyshadows::SingleSidedShadows::default())]
+    pub(super) single_sided_shadows: manyshadows::SingleSidedShadows,
     /// The options of one technique or another, as `render` takes them; the panel changes
     /// --light-samples, --denoise, --reuse and --spatial at run time.
     #[command(flatten)]

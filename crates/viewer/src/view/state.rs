@@ -51,6 +51,8 @@ pub(super) struct Choice {
     /// samples and seed); the panel's light samples, denoiser and reuse above take the place
     /// of theirs.
     pub(super) options: manyshadows_cli::TechniqueArgs,
+    /// What single-sided surfaces shadow (`--single-sided-shadows`).
+    pub(super) single_sided: manyshadows::SingleSidedShadows,
 }
 
 /// The open window and everything drawn into it.
@@ -108,6 +110,11 @@ fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
         .with_technique(c.technique)
         .with_point_shadows(c.point_shadows)
         .with_pcf(c.pcf)
+        .with_shadow(
+            manyshadows::ShadowOptions::default().with_casters(
+                manyshadows::CasterOptions::default().with_single_sided(c.single_sided),
+            ),
+        )
         .with_cache_shadows(c.cache)
         .with_shadow_budget(
             c.budget
@@ -163,6 +170,7 @@ impl State {
             options: args.per_technique,
             stereo: args.stereo,
             probe_passes: args.probe_passes,
+            single_sided: args.single_sided_shadows,
         };
         let renderer = Renderer::new(&ctx, scene, settings(config.width, config.height, choice))?;
         if !args.insist {

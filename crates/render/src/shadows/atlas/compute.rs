@@ -548,7 +548,7 @@ impl ShadowTechnique for Compute {
                 counts: [
                     casters.triangles,
                     casters.cullable_triangles,
-                    input.options.cull.bits(),
+                    input.options.cull.bits_for(casters),
                     round.len() as u32,
                 ],
                 sizes: [

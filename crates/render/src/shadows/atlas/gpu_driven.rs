@@ -36,7 +36,7 @@ use crate::shadows::atlas::shared::{atlas_attachment, CachedGroup, TileClear, Un
 use crate::shadows::cluster_draw::CLUSTER_CULL;
 use crate::shadows::cluster_draw::{plan_rounds, Round, COMMAND_SIZE};
 use crate::shadows::cost::{price, Cost, LightingRead};
-use crate::shadows::depth::depth_pipeline;
+use crate::shadows::depth::{culled_depth_pipeline, depth_pipeline};
 use crate::shadows::depth::{CULL, TILE, TILE_MASK};
 use crate::shadows::descriptor::{Build, Culling, Need, TechniqueInfo, Wgsl};
 use crate::shadows::lookup::ATLAS_LOOKUP;
@@ -128,6 +128,9 @@ pub struct GpuDriven {
     draw: wgpu::RenderPipeline,
     /// Rounds of alpha-tested clusters (`fs_alpha`).
     draw_masked: wgpu::RenderPipeline,
+    /// Rounds of cullable clusters whose triangles' facing decides what they cast (back
+    /// faces culled by the rasterizer).
+    draw_culled: wgpu::RenderPipeline,
     cull_layout: wgpu::BindGroupLayout,
     draw_layout: wgpu::BindGroupLayout,
     clear: TileClear,
@@ -193,6 +196,8 @@ impl GpuDriven {
             "cs_cull",
         );
         let draw = depth_pipeline(device, &draw_pipeline_layout, &module, "vs_draw", &[]);
+        let draw_culled =
+            culled_depth_pipeline(device, &draw_pipeline_layout, &module, "vs_draw", &[]);
         let draw_masked = crate::shadows::depth::masked_depth_pipeline(
             device,
             &draw_pipeline_layout,
@@ -218,6 +223,7 @@ impl GpuDriven {
             cull,
             draw,
             draw_masked,
+            draw_culled,
             cull_layout,
             draw_layout,
             clear: TileClear::new(ctx),
@@ -261,10 +267,17 @@ impl ShadowTechnique for GpuDriven {
         let views = input.draw_list.len() as u32;
         let ctx = input.ctx;
         let casters = input.casters;
+        // Single-sided casters cast only where a light sees their front: a cluster kept by the
+        // cull may still hold triangles facing away, which the rasterizer then culls.
+        let culled = if casters.front_only {
+            casters.cullable_clusters
+        } else {
+            0
+        };
         let rounds = plan_rounds(
             views,
             casters.clusters.len() as u32,
-            casters.first_masked_cluster,
+            (culled, casters.first_masked_cluster),
             casters.vertices,
             self.max_round_commands,
         );
@@ -279,7 +292,7 @@ impl ShadowTechnique for GpuDriven {
                 counts: [
                     casters.vertices,
                     casters.cullable_triangles,
-                    input.options.cull.bits(),
+                    input.options.cull.bits_for(casters),
                     r.clusters,
                 ],
                 round: [
@@ -426,6 +439,8 @@ impl ShadowTechnique for GpuDriven {
             }
             pass.set_pipeline(if r.masked {
                 &self.draw_masked
+            } else if r.culled {
+                &self.draw_culled
             } else {
                 &self.draw
             });

@@ -161,7 +161,7 @@ impl ShadowTechnique for Layered {
         let cull = input.options.cull;
         let atlas = input.atlas.size as f32;
         let params = LayeredParams {
-            counts: [casters.cullable_triangles, cull.bits(), 0, 0],
+            counts: [casters.cullable_triangles, cull.bits_for(casters), 0, 0],
             atlas: [atlas, 1.0 / atlas, 0.0, 0.0],
         };
         ctx.queue

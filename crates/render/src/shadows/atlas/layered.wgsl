@@ -84,10 +84,12 @@ fn pulled(v: u32, i: u32) -> TileOut {
     let p1 = world[corners[3u * tri + 1u]];
     let p2 = world[corners[3u * tri + 2u]];
     let bits = lparams.counts.y;
-    // Back-face test first: world space, no projection needed. Not for paraboloid views: the
-    // warp's interpolation error can put a back face's depth in front of the front face it
-    // hides, so dropping back faces would change the map there.
-    if ((bits & CULL_BACKFACE) != 0u && tri < lparams.counts.x && view.params.w < 1.5
+    // Back-face test first: world space, no projection needed. Not for paraboloid views but
+    // where it is the rule (CULL_ALWAYS): the warp's interpolation error can put a back
+    // face's depth in front of the front face it hides, so dropping back faces would change
+    // the map there.
+    if ((bits & CULL_BACKFACE) != 0u && tri < lparams.counts.x
+        && (view.params.w < 1.5 || (bits & CULL_ALWAYS) != 0u)
         && faces_away(p0.xyz, p1.xyz, p2.xyz, eyes[view_id])) {
         return culled_vertex();
     }

@@ -375,7 +375,7 @@ impl ShadowTechnique for Multiview {
         let records: Vec<MultiviewParams> = groups
             .iter()
             .map(|&(first, _)| MultiviewParams {
-                counts: [first, casters.cullable_triangles, cull.bits(), 0],
+                counts: [first, casters.cullable_triangles, cull.bits_for(casters), 0],
                 atlas: [input.atlas.size as f32, 0.0, 0.0, 0.0],
             })
             .collect();

@@ -237,20 +237,6 @@ fn tile_clear_shader() -> String {
     crate::gpu::shaders::compose(&[crate::gpu::shaders::COMMON, include_str!("tile_clear.wgsl")])
 }
 
-#[cfg(test)]
-mod shader_tests {
-    /// What this module composes is WGSL a WebGPU device accepts.
-    #[test]
-    fn shader_validates_for_webgpu() {
-        crate::gpu::shaders::validate_for_webgpu(
-            "tile_clear",
-            &super::tile_clear_shader(),
-            wgpu::Features::empty(),
-        )
-        .unwrap_or_else(|e| panic!("{e}"));
-    }
-}
-
 /// The report of a technique that fills the atlas and culls casters where `culling` says: the
 /// opening, the atlas, how the maps were fitted where they did not all fit at full size, and
 /// the passes that filled it.
@@ -317,5 +303,19 @@ pub fn atlas_report(r: &ShadowReport<'_>, culling: Culling) -> ShadowText {
             r.plan.views.len(),
             r.gpu_time(Stage::Shadows)
         ),
+    }
+}
+
+#[cfg(test)]
+mod shader_tests {
+    /// What this module composes is WGSL a WebGPU device accepts.
+    #[test]
+    fn shader_validates_for_webgpu() {
+        crate::gpu::shaders::validate_for_webgpu(
+            "tile_clear",
+            &super::tile_clear_shader(),
+            wgpu::Features::empty(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
     }
 }

@@ -100,6 +100,46 @@ pub struct Traditional {
     layout: wgpu::BindGroupLayout,
     clear: TileClear,
     no_bones: wgpu::Buffer,
+    /// What the culled pipelines of single-sided casters are built from, on first need.
+    pipeline_layout: wgpu::PipelineLayout,
+    module: wgpu::ShaderModule,
+    dp_module: Option<wgpu::ShaderModule>,
+    /// Single-sided casters that cast only where a light sees their front
+    /// (`CasterGeometry::front_only`), drawn with the rasterizer's back-face culling: by
+    /// (vertex entry, winding of their front), built when a scene first has them.
+    culled: std::collections::HashMap<(&'static str, Class), wgpu::RenderPipeline>,
+}
+
+/// Which pipeline a caster of a view is drawn with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Class {
+    /// Opaque, both faces drawn.
+    Opaque,
+    /// Alpha-tested.
+    Masked,
+    /// Single-sided, casting only where the light sees its front: back faces culled, fronts
+    /// counter-clockwise in the view (every shadow view keeps world-space winding: right-handed
+    /// look-to views, unmirrored projections).
+    FrontCcw,
+    /// The same under a mirroring instance transform: fronts clockwise.
+    FrontCw,
+}
+
+impl Class {
+    fn of(input: &ShadowInput<'_>, d: &crate::gpu_scene::instances::DrawItem) -> Class {
+        use crate::gpu_scene::instances::CameraCull;
+        if input.casters.is_masked(d.material) {
+            Class::Masked
+        } else if input.casters.casts_front_only(d.instance) {
+            // `camera_cull` follows the instance's current transform (mirrored or not).
+            match d.camera_cull {
+                CameraCull::BackCw => Class::FrontCw,
+                _ => Class::FrontCcw,
+            }
+        } else {
+            Class::Opaque
+        }
+    }
 }
 
 impl Traditional {
@@ -171,6 +211,58 @@ impl Traditional {
             layout,
             clear: TileClear::new(ctx),
             no_bones,
+            pipeline_layout,
+            module,
+            dp_module,
+            culled: std::collections::HashMap::new(),
+        }
+    }
+
+    /// Builds, on first need, the culled pipelines `record` will ask for this frame.
+    fn prepare_culled(&mut self, device: &wgpu::Device, input: &ShadowInput<'_>) {
+        if !input.casters.front_only {
+            return;
+        }
+        let skinned = input.scene.skin.is_some();
+        let mut wanted: Vec<(&'static str, Class)> = Vec::new();
+        for class in [Class::FrontCcw, Class::FrontCw] {
+            if !input
+                .scene
+                .draws
+                .iter()
+                .any(|d| d.casts_shadows && Class::of(input, d) == class)
+            {
+                continue;
+            }
+            wanted.push((if skinned { "vs_skinned" } else { "vs_depth" }, class));
+            if self.dp_module.is_some() && !skinned {
+                wanted.push(("vs_paraboloid", class));
+            }
+        }
+        for key in wanted {
+            if self.culled.contains_key(&key) {
+                continue;
+            }
+            let (entry, class) = key;
+            let (module, vertex) = match entry {
+                "vs_paraboloid" => (self.dp_module.as_ref().unwrap(), POSITION_LAYOUT),
+                "vs_skinned" => (&self.module, SKIN_LAYOUT),
+                _ => (&self.module, POSITION_LAYOUT),
+            };
+            let front = if class == Class::FrontCw {
+                wgpu::FrontFace::Cw
+            } else {
+                wgpu::FrontFace::Ccw
+            };
+            let pipeline = crate::shadows::depth::culled_depth_pipeline_facing(
+                device,
+                &self.pipeline_layout,
+                module,
+                entry,
+                &[Some(vertex)],
+                front,
+            );
+            self.culled.insert(key, pipeline);
         }
     }
 
@@ -209,18 +301,17 @@ impl Traditional {
     }
 }
 
-/// Records one draw per visible caster of `view` whose material is (`masked`) or is not
-/// alpha-tested; the culled count goes with the opaque call.
+/// Records one draw per visible caster of `view` drawn with the pipeline of `class`; the
+/// culled count of that class goes with it.
 fn draw_casters(
     pass: &mut wgpu::RenderPass<'_>,
     input: &ShadowInput<'_>,
     view: &manyshadows_scene::light_space::ShadowView,
-    masked: bool,
+    class: Class,
     stats: &mut ShadowStats,
 ) {
     let scene = input.scene;
-    let is_masked =
-        |d: &&crate::gpu_scene::instances::DrawItem| input.casters.is_masked(d.material) == masked;
+    let is_masked = |d: &&crate::gpu_scene::instances::DrawItem| Class::of(input, d) == class;
     let mut drawn = 0u64;
     for d in visible_casters(scene, view).filter(is_masked) {
         let m = d.mesh;
@@ -246,6 +337,7 @@ impl ShadowTechnique for Traditional {
     fn record(&mut self, g: Generation<'_>) -> ShadowStats {
         let input = g.input;
         let bind_group = self.bind_group(input.ctx, input);
+        self.prepare_culled(&input.ctx.device, input);
         let mut stats = ShadowStats::default();
         let n = input.draw_list.len();
         let (pipeline, vertices) = match &input.scene.skin {
@@ -285,6 +377,11 @@ impl ShadowTechnique for Traditional {
                 pass.set_scissor_rect(tile.x, tile.y, tile.size, tile.size);
             }
             let paraboloid = matches!(view.kind, ViewKind::Paraboloid(_));
+            let entry = match (paraboloid, input.scene.skin.is_some()) {
+                (true, _) => "vs_paraboloid",
+                (false, true) => "vs_skinned",
+                (false, false) => "vs_depth",
+            };
             let (opaque, masked) = if paraboloid {
                 match (&self.paraboloid, &input.scene.skin) {
                     (Some((p, m)), None) => (p, m),
@@ -301,12 +398,19 @@ impl ShadowTechnique for Traditional {
             pass.set_bind_group(0, &bind_group, &[(i as u64 * VIEW_UNIFORM_STRIDE) as u32]);
             pass.set_vertex_buffer(0, vertices.slice(..));
             pass.set_index_buffer(input.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-            draw_casters(&mut pass, input, view, false, &mut stats);
+            draw_casters(&mut pass, input, view, Class::Opaque, &mut stats);
+            for class in [Class::FrontCcw, Class::FrontCw] {
+                // Single-sided casters that cast only where the light sees their front.
+                if let Some(culled) = self.culled.get(&(entry, class)) {
+                    pass.set_pipeline(culled);
+                    draw_casters(&mut pass, input, view, class, &mut stats);
+                }
+            }
             if input.casters.first_masked_triangle < input.casters.triangles {
                 // Alpha-tested casters (never skinned: CasterGeometry refuses that).
                 pass.set_pipeline(masked);
                 pass.set_vertex_buffer(1, input.scene.uvs.slice(..));
-                draw_casters(&mut pass, input, view, true, &mut stats);
+                draw_casters(&mut pass, input, view, Class::Masked, &mut stats);
             }
             if paraboloid {
                 self.clear.reset_clip_distances(&mut pass);

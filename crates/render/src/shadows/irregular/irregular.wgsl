@@ -37,7 +37,9 @@ struct Batch {
     lights_views: vec4<u32>,
     // Node capacity, tile-queue capacity, caster triangles, visibility words per pixel.
     caps: vec4<u32>,
-    // x: index in `heads` of the frame's count of cut-short walks (see `walk`).
+    // x: index in `heads` of the frame's count of cut-short walks (see `walk`); y: the triangles
+    // below it cast only where the light sees their front (single-sided casters and the closed
+    // meshes laid out with them; 0 when the scene has no single-sided caster).
     extra: vec4<u32>,
 }
 
@@ -458,6 +460,15 @@ fn cs_triangles(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     let f = footprint(tri, v);
     if (f.lo.x > f.hi.x || f.lo.y > f.hi.y) {
         return;
+    }
+    // A triangle the light sees from behind blocks no segment towards it (the rule for
+    // single-sided casters, the CPU reference's): the segment from its front side would leave
+    // through its back.
+    if (tri < batch.extra.y) {
+        let to_light = select(-v.light.xyz, v.light.xyz - f.p0, v.light.w > 0.5);
+        if (dot(cross(f.p1 - f.p0, f.p2 - f.p0), to_light) < 0.0) {
+            return;
+        }
     }
     let size = vec2<u32>(f.hi - f.lo) + vec2<u32>(1u);
     if (size.x * size.y <= INLINE_TEXELS) {

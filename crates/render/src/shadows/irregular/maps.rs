@@ -508,13 +508,21 @@ impl IrregularShadows {
             (pipeline("cs_tiles"), &[5, 6, 7, 8, 9, 10, 12, 13]),
         ];
         let triangles = inputs.casters.triangles;
+        // Single-sided casters cast only where a light sees their front: the walks skip the
+        // cullable triangles a light sees from behind (all of them exact for the closed meshes
+        // among them too).
+        let culled = if inputs.casters.front_only {
+            inputs.casters.cullable_triangles
+        } else {
+            0
+        };
         let batches = ranges
             .iter()
             .map(|&((a, b), views, heads)| {
                 let data = BatchData {
                     lights_views: [a, b, views.0, views.1],
                     caps: [capacity as u32, tile_queue as u32, triangles, words],
-                    extra: [cut_index as u32, 0, 0, 0],
+                    extra: [cut_index as u32, culled, 0, 0],
                 };
                 let buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("irregular.batch"),

@@ -58,7 +58,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     },
     camera_pixels_only: true,
     follows_camera: false,
-    report: report,
+    report,
     instead: "",
     // The passes shade with the mask and never call `shadow_coord`.
     lookup: ATLAS_LOOKUP,

@@ -10,12 +10,18 @@
 //! mesh's texture-coordinate triples and its material, per masked mesh three coordinates per
 //! triangle, then the coverage masks in the mask-tail layout `alpha_mask.wgsl` reads.
 //!
+//! Single-sided casters that cast only where a light sees their front
+//! (`SingleSidedShadows::Front`, the default) get a BLAS without the `OPAQUE` flag too: their
+//! candidate hits reach the shader, which keeps those where the ray meets the triangle's back,
+//! so the ray leaves the triangle's back side towards a light on its front side (the CPU
+//! reference's rule). Their instance's material word carries [`FRONT_ONLY`].
+//!
 //! Skinned casters exist only in the atlas benchmark's workloads (`GpuScene::attach_skin`),
 //! never in a [`crate::Renderer`] frame, so no BLAS here is ever deformed.
 
 use glam::Mat4;
 use manyshadows_scene::masks::MaskSet;
-use manyshadows_scene::Scene;
+use manyshadows_scene::{Scene, SingleSidedShadows};
 use wgpu::util::DeviceExt;
 
 use crate::error::RenderError;
@@ -29,6 +35,21 @@ use crate::sampled::options::RayOptions;
 pub(crate) struct RayParams {
     /// Samples per pixel, seed, samples per side of a sized light's grid, unused.
     pub(crate) samples: [u32; 4],
+}
+
+/// Bit of an instance's material word (`FRONT_ONLY` in rays.wgsl): a single-sided caster whose
+/// candidate hits count only where the ray meets its back.
+pub(crate) const FRONT_ONLY: u32 = 1 << 31;
+
+/// How the rays treat a BLAS's triangles.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    /// Every hit blocks (committed by the driver).
+    Opaque,
+    /// Alpha-tested: a hit blocks where its mask is solid.
+    Masked,
+    /// Single-sided: a hit blocks where the ray meets the triangle's back.
+    FrontOnly,
 }
 
 /// One TLAS instance: the scene instance and its BLAS.
@@ -68,18 +89,29 @@ impl RayAccel {
         gpu: &GpuScene,
         masks: &MaskSet,
         options: RayOptions,
+        single_sided: SingleSidedShadows,
     ) -> Result<Self, RenderError> {
         let device = &ctx.device;
         let limits = ctx.limits();
-        // (mesh, masked) → BLAS index.
-        let mut keys: Vec<(usize, bool)> = Vec::new();
+        // (mesh, kind) → BLAS index.
+        let mut keys: Vec<(usize, Kind)> = Vec::new();
         let mut items = Vec::new();
         for (i, inst) in scene.instances.iter().enumerate() {
             if !inst.casts_shadows || scene.meshes[inst.mesh].indices.is_empty() {
                 continue;
             }
-            let masked = masks.is_masked(inst.material);
-            let key = (inst.mesh, masked);
+            let kind = if masks.is_masked(inst.material) {
+                Kind::Masked
+            } else if scene
+                .materials
+                .get(inst.material)
+                .is_some_and(|m| m.casts_front_only(single_sided))
+            {
+                Kind::FrontOnly
+            } else {
+                Kind::Opaque
+            };
+            let key = (inst.mesh, kind);
             let blas = match keys.iter().position(|k| *k == key) {
                 Some(b) => b,
                 None => {
@@ -134,17 +166,17 @@ impl RayAccel {
         // The BLASes, built from copies of the meshes' triangles (BLAS input buffers).
         let sizes: Vec<wgpu::BlasTriangleGeometrySizeDescriptor> = keys
             .iter()
-            .map(|&(m, masked)| {
+            .map(|&(m, kind)| {
                 let mesh = &scene.meshes[m];
                 wgpu::BlasTriangleGeometrySizeDescriptor {
                     vertex_format: wgpu::VertexFormat::Float32x3,
                     vertex_count: mesh.positions.len() as u32,
                     index_format: Some(wgpu::IndexFormat::Uint32),
                     index_count: Some(mesh.indices.len() as u32),
-                    flags: if masked {
-                        wgpu::AccelerationStructureGeometryFlags::empty()
-                    } else {
+                    flags: if kind == Kind::Opaque {
                         wgpu::AccelerationStructureGeometryFlags::OPAQUE
+                    } else {
+                        wgpu::AccelerationStructureGeometryFlags::empty()
                     },
                 }
             })
@@ -219,8 +251,14 @@ impl RayAccel {
         let mut uv_start: Vec<Option<u32>> = vec![None; scene.meshes.len()];
         for (k, item) in items.iter().enumerate() {
             let inst = &scene.instances[item.instance];
-            words[2 * k + 1] = inst.material as u32;
-            if !keys[item.blas].1 {
+            let kind = keys[item.blas].1;
+            words[2 * k + 1] = inst.material as u32
+                | if kind == Kind::FrontOnly {
+                    FRONT_ONLY
+                } else {
+                    0
+                };
+            if kind != Kind::Masked {
                 continue;
             }
             let start = *uv_start[inst.mesh].get_or_insert_with(|| {

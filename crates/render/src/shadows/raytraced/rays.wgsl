@@ -4,7 +4,8 @@
 // the exact CPU reference's conventions (crates/reference/src/visibility.rs): it starts
 // `1e-4 · max(1, |p|∞)` off the surface along the normal, runs to the light's position (spot,
 // point) or without end against its direction (directional), and any surface it crosses —
-// front or back, the parts of alpha-masked surfaces their mask keeps — shadows the point. No
+// front or back, the parts of alpha-masked surfaces their mask keeps, single-sided surfaces
+// where it leaves through their back (the light sees their front) — shadows the point. No
 // shadow-map bias applies: there is no sampling error to hide.
 //
 // Bindings (declared in source.rs's lookup, numbered by the pass): `scene_tlas`, the top-level
@@ -23,13 +24,24 @@ struct RayParams {
 // The start offset of the reference (RAY_OFFSET_RELATIVE in the reference crate).
 const RAY_OFFSET_RELATIVE: f32 = 1e-4;
 
-// Whether the candidate triangle hit `c` is solid there: always for opaque geometry (whose
-// hits never reach here), by its mask for alpha-tested instances.
+// Bit of an instance's material word: a single-sided caster (accel.rs FRONT_ONLY).
+const FRONT_ONLY: u32 = 0x80000000u;
+
+// Whether the candidate triangle hit `c` blocks the ray: always for opaque geometry (whose
+// hits never reach here), by its mask for alpha-tested instances, and for single-sided ones
+// only where the ray meets the triangle's back (it starts on the back side, the light lies on
+// the front side). Vulkan, like DXR, calls a triangle front-facing when it appears clockwise
+// from the ray's origin, in object space (mirroring instance transforms keep the mesh's
+// front); scene fronts are counter-clockwise, so meeting the back is `front_face`.
 fn candidate_solid(c: RayIntersection) -> bool {
     // Per instance (custom data): first word of its triangles' texture coordinates, material.
     let rec = 2u * c.instance_custom_data;
     let first = corners[rec];
-    let material = corners[rec + 1u];
+    let word = corners[rec + 1u];
+    if ((word & FRONT_ONLY) != 0u) {
+        return !c.front_face;
+    }
+    let material = word;
     let base = first + 6u * c.primitive_index;
     let uv0 = vec2<f32>(bitcast<f32>(corners[base]), bitcast<f32>(corners[base + 1u]));
     let uv1 = vec2<f32>(bitcast<f32>(corners[base + 2u]), bitcast<f32>(corners[base + 3u]));

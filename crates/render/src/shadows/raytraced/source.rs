@@ -54,7 +54,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     },
     camera_pixels_only: false,
     follows_camera: false,
-    report: report,
+    report,
     instead: "use technique irregular for exact shadows without ray queries",
     lookup: RAYS_LOOKUP,
     build: Build::Source(|a| {
@@ -111,7 +111,14 @@ impl RaytracedSource {
         } else {
             gpu.masks.clone()
         };
-        let accel = RayAccel::new(ctx, scene, gpu, &masks, settings.options::<RayOptions>())?;
+        let accel = RayAccel::new(
+            ctx,
+            scene,
+            gpu,
+            &masks,
+            settings.options::<RayOptions>(),
+            settings.shadow.casters.single_sided,
+        )?;
         Ok(Self { table, accel })
     }
 }

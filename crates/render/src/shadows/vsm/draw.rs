@@ -107,23 +107,37 @@ pub(crate) struct PageDraw {
     draw: wgpu::RenderPipeline,
     /// Rounds of alpha-tested clusters (`fs_alpha`).
     draw_masked: wgpu::RenderPipeline,
+    /// Rounds of cullable clusters whose triangles' facing decides what they cast (back
+    /// faces culled by the rasterizer: a cluster the cull keeps may still hold some).
+    draw_culled: wgpu::RenderPipeline,
     clear: wgpu::RenderPipeline,
     cull_layout: wgpu::BindGroupLayout,
     draw_layout: wgpu::BindGroupLayout,
     clear_layout: wgpu::BindGroupLayout,
     groups: Option<Groups>,
     /// The caster layout the rounds were planned for ([`Self::made_for`]).
-    layout: [u32; 4],
+    layout: [u32; 5],
 }
 
 /// What the rounds' records take from the caster layout.
-fn caster_layout(casters: &CasterGeometry) -> [u32; 4] {
+fn caster_layout(casters: &CasterGeometry) -> [u32; 5] {
     [
         casters.clusters.len() as u32,
         casters.first_masked_cluster,
         casters.vertices,
         casters.cullable_triangles,
+        culled_clusters(casters),
     ]
+}
+
+/// The clusters drawn culled by facing: the cullable ones where single-sided casters cast only
+/// where a light sees their front (none otherwise).
+fn culled_clusters(casters: &CasterGeometry) -> u32 {
+    if casters.front_only {
+        casters.cullable_clusters
+    } else {
+        0
+    }
 }
 
 struct Groups {
@@ -159,7 +173,7 @@ impl PageDraw {
         let rounds = plan_rounds(
             pool_pages,
             casters.clusters.len() as u32,
-            casters.first_masked_cluster,
+            (culled_clusters(casters), casters.first_masked_cluster),
             casters.vertices,
             max_commands,
         );
@@ -210,7 +224,7 @@ impl PageDraw {
                 counts: [
                     casters.vertices,
                     casters.cullable_triangles,
-                    shadow.cull.bits() | if group_cull { 0 } else { FLAT_CULL },
+                    shadow.cull.bits_for(casters) | if group_cull { 0 } else { FLAT_CULL },
                     if compact { capacity as u32 } else { 0 },
                 ],
             })
@@ -315,6 +329,13 @@ impl PageDraw {
             &[],
             None,
         );
+        let draw_culled = crate::shadows::depth::culled_depth_pipeline(
+            device,
+            &draw_pl,
+            &draw_module,
+            "vs_draw",
+            &[],
+        );
         let clear_pl = pipeline_layout("vsm.clear_pipeline_layout", &clear_layout);
         let clear =
             crate::shadows::depth::clear_pipeline(device, &clear_pl, &draw_module, "vs_clear");
@@ -339,6 +360,7 @@ impl PageDraw {
             cull,
             draw,
             draw_masked,
+            draw_culled,
             clear,
             cull_layout,
             draw_layout,
@@ -517,6 +539,8 @@ impl PageDraw {
             }
             pass.set_pipeline(if r.masked {
                 &self.draw_masked
+            } else if r.culled {
+                &self.draw_culled
             } else {
                 &self.draw
             });

@@ -68,7 +68,7 @@ pub const INFO: TechniqueInfo = TechniqueInfo {
     },
     camera_pixels_only: false,
     follows_camera: true,
-    report: report,
+    report,
     instead: "use technique traditional",
     lookup: VSM_LOOKUP,
     build: Build::Source(|a| {
