@@ -130,18 +130,7 @@ pub(crate) fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
                     builtin::MAX_LIGHTS
                 );
             }
-            scene.lights =
-                builtin::scatter_lights(&scene, n, args.seed, mix, args.shadow_resolution);
-            if scene.lighting == manyshadows::scene::Lighting::Physical {
-                // The layout's lights are in Phong units: 10 cd (or lx) each, as a model
-                // file's seeded lights.
-                let k = 1.0 / manyshadows::scene::loaders::PHONG_PER_LUX;
-                for l in &mut scene.lights {
-                    l.ambient *= k;
-                    l.diffuse *= k;
-                    l.specular *= k;
-                }
-            }
+            builtin::seed_lights(&mut scene, n, args.seed, mix, args.shadow_resolution)?;
         } else if let Some(r) = args.shadow_resolution {
             for l in &mut scene.lights {
                 l.shadow_resolution = r;

@@ -269,3 +269,346 @@ fn the_page_renders_the_native_frame_and_its_controls_work() {
         let _ = std::fs::remove_dir_all(d);
     }
 }
+
+/// Standard base64 with padding (files handed to the page).
+fn encode_base64(bytes: &[u8]) -> String {
+    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            *chunk.get(1).unwrap_or(&0),
+            *chunk.get(2).unwrap_or(&0),
+        ];
+        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
+        for i in 0..4 {
+            if i <= chunk.len() {
+                out.push(A[(n >> (18 - 6 * i) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+/// A model as a user would have it: a checker-textured box and a sphere apart on no floor
+/// (their undersides cover less than the quarter of the footprint that makes a floor), with its
+/// own camera and no lights (so the loader adds the rig and the ground, in the page as in
+/// `render`).
+fn user_model() -> manyshadows_scene::Scene {
+    use glam::{Mat4, Quat, Vec3};
+    use manyshadows_scene::primitives::{cuboid, uv_sphere};
+    use manyshadows_scene::{
+        Camera, Instance, Lighting, Material, Pbr, Scene, Texture, TextureRef,
+    };
+    let pbr = |base: Vec3, metallic: f32, roughness: f32| Material {
+        diffuse: base,
+        pbr: Some(Pbr {
+            metallic,
+            roughness,
+        }),
+        ..Material::default()
+    };
+    let mut s = Scene {
+        name: "user-model".into(),
+        lighting: Lighting::Physical,
+        camera: Camera::look_at(Vec3::new(3.6, 2.6, 4.6), Vec3::new(0.9, 0.3, 0.6)),
+        ..Default::default()
+    };
+    s.textures.push(Texture::from_fn("checker", 64, 64, |x, y| {
+        if (x / 8 + y / 8) % 2 == 0 {
+            [220, 180, 60, 255]
+        } else {
+            [40, 90, 160, 255]
+        }
+    }));
+    s.meshes.push(cuboid(Vec3::ONE));
+    s.meshes.push(uv_sphere(0.45, 32, 16));
+    s.materials.push(Material {
+        base_color_texture: Some(TextureRef::repeat(0)),
+        ..pbr(Vec3::ONE, 0.0, 0.6)
+    });
+    s.materials.push(pbr(Vec3::new(0.8, 0.3, 0.2), 0.0, 0.4));
+    s.instances.push(Instance::caster(
+        0,
+        0,
+        Mat4::from_rotation_translation(Quat::from_rotation_y(0.5), Vec3::new(0.0, 0.5, 0.0)),
+    ));
+    s.instances.push(Instance::caster(
+        1,
+        1,
+        Mat4::from_translation(Vec3::new(2.0, 0.45, 1.5)),
+    ));
+    s
+}
+
+/// Writes `scene` as a .gltf whose buffer and image live in files beside it (`NAME.bin`,
+/// `NAME-image-N.png`): the layout a user's exported .gltf has. Returns the files' names.
+fn write_split_gltf(scene: &manyshadows_scene::Scene, dir: &Path, name: &str) -> Vec<String> {
+    let embedded = dir.join(format!("{name}-embedded.gltf"));
+    manyshadows_scene::loaders::write_gltf(scene, &embedded).unwrap();
+    let mut json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&embedded).unwrap()).unwrap();
+    std::fs::remove_file(&embedded).unwrap();
+    let mut names = vec![format!("{name}.gltf")];
+    let mut split = |item: &mut serde_json::Value, file: String| {
+        let uri = item["uri"].as_str().expect("an embedded URI").to_string();
+        let data = uri.split_once(',').expect("a data: URI").1;
+        std::fs::write(dir.join(&file), base64(data)).unwrap();
+        item["uri"] = json!(file);
+        names.push(file);
+    };
+    for b in json["buffers"].as_array_mut().unwrap() {
+        split(b, format!("{name}.bin"));
+    }
+    let images = json["images"]
+        .as_array_mut()
+        .expect("the model has an image");
+    for (i, im) in images.iter_mut().enumerate() {
+        split(im, format!("{name}-image-{i}.png"));
+    }
+    std::fs::write(
+        dir.join(format!("{name}.gltf")),
+        serde_json::to_vec_pretty(&json).unwrap(),
+    )
+    .unwrap();
+    names
+}
+
+/// Drops `files` (names in `dir`, each given under the name `as`) on the page through its own
+/// drop handler; returns the status line.
+fn drop_files(browser: &mut Browser, dir: &Path, files: &[(&str, &str)]) -> String {
+    let list: Vec<serde_json::Value> = files
+        .iter()
+        .map(|(file, name)| {
+            json!({"name": name, "base64": encode_base64(&std::fs::read(dir.join(file)).unwrap())})
+        })
+        .collect();
+    let status = browser.eval(
+        &format!(
+            "window.manyshadows.drop({})",
+            serde_json::Value::Array(list)
+        ),
+        900,
+    );
+    status.as_str().unwrap_or("").to_string()
+}
+
+/// The mean ꟻLIP of the page's frame against `render`'s; both and the error map go to
+/// target/test-artifacts/web-NAME-*.png.
+fn flip_against(rgba: &[u8], native: &image::RgbImage, name: &str) -> f64 {
+    assert_eq!(rgba.len(), (W * H * 4) as usize, "the page's frame size");
+    let ours: Vec<u8> = native
+        .pixels()
+        .flat_map(|p| [p.0[0], p.0[1], p.0[2], 255])
+        .collect();
+    let flip = manyshadows_reference::flip_rgba8(rgba, &ours, W, H).unwrap();
+    let artifacts = repo().join("target/test-artifacts");
+    std::fs::create_dir_all(&artifacts).unwrap();
+    let page = image::RgbaImage::from_raw(W, H, rgba.to_vec()).unwrap();
+    page.save(artifacts.join(format!("web-{name}-page.png")))
+        .unwrap();
+    native
+        .save(artifacts.join(format!("web-{name}-native.png")))
+        .unwrap();
+    image::RgbImage::from_raw(W, H, flip.error_map.clone())
+        .unwrap()
+        .save(artifacts.join(format!("web-{name}-flip.png")))
+        .unwrap();
+    flip.mean
+}
+
+/// The bound of issue 63 on a dropped model's frame against `render`'s.
+const DROP_MAX_FLIP: f64 = 0.05;
+
+#[test]
+#[ignore = "needs Chromium, the wasm32 target and wasm-bindgen-cli: run `cargo xtask test`, which installs them"]
+fn dropped_models_render_as_render_renders_the_files() {
+    let chromium_dir = tmp("chromium-drop");
+    let pkg = tmp("pkg-drop");
+    build_page(&pkg);
+    let models = tmp("models");
+    let scene = user_model();
+    manyshadows_scene::loaders::write_gltf(&scene, &models.join("box.glb")).unwrap();
+    let split = write_split_gltf(&scene, &models, "split");
+    assert_eq!(split.len(), 3, "a .gltf, its .bin and one image: {split:?}");
+    std::fs::write(models.join("broken.glb"), b"glTF\x02\0\0\0 not really").unwrap();
+    let port = serve(
+        repo().join("web/index.html"),
+        vec![("pkg", pkg.clone()), ("models", models.clone())],
+    );
+    let mut browser = Browser::start(&chromium_dir, &[]);
+    let dir = tmp("native-drop");
+
+    // A small built-in scene first; the drop replaces it.
+    open_page(
+        &mut browser,
+        &format!("http://127.0.0.1:{port}/?w={W}&h={H}&scene=plane-spot"),
+    );
+    let status = browser.eval("window.manyshadows.ready", 900);
+    assert!(
+        !status.as_str().unwrap_or("").starts_with("not applied"),
+        "the page failed: {status}\npage log:\n{}",
+        browser.log.join("\n")
+    );
+
+    // A .glb, at the page's defaults, against `render` of the same file.
+    let status = drop_files(&mut browser, &models, &[("box.glb", "box.glb")]);
+    assert!(
+        !status.starts_with("not"),
+        "box.glb: {status}\n{}",
+        browser.log.join("\n")
+    );
+    let notes = browser.eval("window.manyshadows.notes()", 10);
+    let notes = notes.as_str().unwrap_or("");
+    eprintln!("box.glb: {status}\n{notes}");
+    assert!(
+        notes.contains("box.glb") && notes.contains("light rig") && notes.contains("ground"),
+        "the loader's notes are not shown: {notes}"
+    );
+    let glb = frame(&mut browser);
+    let model = models.join("box.glb");
+    let native = render_native(&dir, "box", &["--scene", model.to_str().unwrap()]);
+    assert!(
+        mean_level(&glb) > 30.0,
+        "the dropped model's frame is black"
+    );
+    let f = flip_against(&glb, &native, "drop-glb");
+    eprintln!("dropped .glb vs render: mean FLIP {f:.4}");
+    assert!(f <= DROP_MAX_FLIP, "dropped .glb: mean FLIP {f:.4}");
+
+    // With 256 seeded lights, as `render --lights 256`.
+    let status = browser.eval("window.manyshadows.set({lights: '256'})", 900);
+    let status = status.as_str().unwrap_or("");
+    assert!(!status.starts_with("not"), "256 lights: {status}");
+    let many = frame(&mut browser);
+    let native = render_native(
+        &dir,
+        "box-256",
+        &["--scene", model.to_str().unwrap(), "--lights", "256"],
+    );
+    let f = flip_against(&many, &native, "drop-glb-256");
+    eprintln!("dropped .glb, 256 lights, vs render: mean FLIP {f:.4}");
+    assert!(
+        f <= DROP_MAX_FLIP,
+        "dropped .glb with 256 lights: mean FLIP {f:.4}"
+    );
+    browser.eval("window.manyshadows.set({lights: ''})", 900);
+
+    // A broken file: its name and what is wrong on the page, the last frame kept; the page
+    // opens the next file.
+    let status = drop_files(&mut browser, &models, &[("broken.glb", "broken.glb")]);
+    eprintln!("broken.glb: {status}");
+    assert!(
+        status.starts_with("not opened") && status.contains("broken.glb"),
+        "broken.glb: {status}"
+    );
+    assert!(
+        frame(&mut browser) == glb,
+        "a refused file changed the frame"
+    );
+
+    // A .gltf with its .bin and image dropped together (in a folder, as a folder drop names
+    // them), against `render` of the same files.
+    let named: Vec<(String, String)> = split
+        .iter()
+        .map(|f| (f.clone(), format!("export/{f}")))
+        .collect();
+    let pairs: Vec<(&str, &str)> = named
+        .iter()
+        .map(|(a, b)| (a.as_str(), b.as_str()))
+        .collect();
+    let status = drop_files(&mut browser, &models, &pairs);
+    assert!(!status.starts_with("not"), "split .gltf: {status}");
+    let gltf = frame(&mut browser);
+    let file = models.join("split.gltf");
+    let native = render_native(&dir, "split", &["--scene", file.to_str().unwrap()]);
+    let f = flip_against(&gltf, &native, "drop-gltf");
+    eprintln!("dropped .gltf + .bin + image vs render: mean FLIP {f:.4}");
+    assert!(f <= DROP_MAX_FLIP, "dropped .gltf: mean FLIP {f:.4}");
+
+    // Without its image: opened untextured, the note naming the image (as `render` says).
+    let status = drop_files(
+        &mut browser,
+        &models,
+        &[(&split[0], &split[0]), (&split[1], &split[1])],
+    );
+    assert!(!status.starts_with("not"), "without the image: {status}");
+    let notes = browser.eval("window.manyshadows.notes()", 10);
+    let notes = notes.as_str().unwrap_or("");
+    eprintln!("without the image: {notes}");
+    assert!(
+        notes.contains(&split[2]),
+        "no note names the missing image: {notes}"
+    );
+    let untextured = frame(&mut browser);
+    let changed = untextured
+        .chunks(4)
+        .zip(gltf.chunks(4))
+        .filter(|(a, b)| a != b)
+        .count();
+    eprintln!("without the image: {changed} pixels differ from the textured frame");
+    assert!(
+        changed > 1000,
+        "the texture made no difference: {changed} pixels"
+    );
+
+    // Without its .bin: the buffer's file is named, and said to be missing from the drop.
+    let status = drop_files(
+        &mut browser,
+        &models,
+        &[(&split[0], &split[0]), (&split[2], &split[2])],
+    );
+    eprintln!("without the .bin: {status}");
+    assert!(
+        status.starts_with("not opened")
+            && status.contains("split.bin")
+            && status.contains("not among the files given"),
+        "a .gltf without its .bin: {status}"
+    );
+    // A URI that leaves the dropped files is refused by name.
+    let mut json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&file).unwrap()).unwrap();
+    json["buffers"][0]["uri"] = json!("../split.bin");
+    std::fs::write(
+        models.join("escape.gltf"),
+        serde_json::to_vec(&json).unwrap(),
+    )
+    .unwrap();
+    let status = drop_files(
+        &mut browser,
+        &models,
+        &[
+            ("escape.gltf", "export/escape.gltf"),
+            ("split.bin", "split.bin"),
+        ],
+    );
+    eprintln!("a URI out of the folder: {status}");
+    assert!(
+        status.starts_with("not opened") && status.contains("'../split.bin'"),
+        "a URI leaving the dropped files: {status}"
+    );
+    assert!(
+        frame(&mut browser) == untextured,
+        "a refused file changed the frame"
+    );
+
+    // `?model=URL`: the .gltf served beside the page, its .bin and image fetched beside it.
+    open_page(
+        &mut browser,
+        &format!("http://127.0.0.1:{port}/?w={W}&h={H}&model=models/split.gltf"),
+    );
+    let status = browser.eval("window.manyshadows.ready", 900);
+    let status = status.as_str().unwrap_or("");
+    assert!(!status.starts_with("not"), "?model=: {status}");
+    assert!(
+        frame(&mut browser) == gltf,
+        "?model= gives another frame than the drop"
+    );
+
+    drop(browser);
+    for d in [chromium_dir, pkg, dir, models] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}

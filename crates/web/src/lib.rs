@@ -4,17 +4,98 @@
 //!
 //! Settings travel as a query string (`scene=atrium&technique=layered&lights=64&pcf=3x3`), the
 //! same text the page's URL and its controls use; see [`WebSettings`].
+//!
+//! A user's own model arrives as files (dropped, picked, or fetched by the page for
+//! `?model=URL`) and is loaded from memory ([`MemoryFiles`]) by the same loader `render --scene
+//! FILE` uses: its URIs resolve only among those files, and the scene gets the same light rig,
+//! framing camera and ground. `scene=model` then means that model.
 #![cfg(target_arch = "wasm32")]
 
-use manyshadows::scene::builtin::{self, BuiltinOptions};
+use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::scene::light_space::PointShadows;
-use manyshadows::scene::Camera;
+use manyshadows::scene::loaders::{load_scene_from_memory, Ground, LoadOptions, MemoryFiles};
+use manyshadows::scene::{Camera, Scene};
 use manyshadows::LightLoop;
 use manyshadows::{wgpu, GpuContext, Pcf, RenderSettings, Renderer, Technique};
 use wasm_bindgen::prelude::*;
+use wasm_bindgen::JsCast;
 
 fn err(e: impl std::fmt::Display) -> JsValue {
     JsValue::from_str(&e.to_string())
+}
+
+/// The `scene` value that names the model opened from files.
+const MODEL_SCENE: &str = "model";
+
+/// A model read from files, as loaded (its own or the default lights; `lights=N` replaces them
+/// per build).
+struct Model {
+    scene: Scene,
+    /// The model file's name among the files.
+    name: String,
+    /// What the loader said about it (lights added, extensions ignored, …).
+    notes: Vec<String>,
+}
+
+impl Model {
+    /// Loads `name` among `files` as `render --scene FILE` loads a file (ground `auto`).
+    fn load(files: &MemoryFiles, name: &str) -> Result<Self, String> {
+        let options = LoadOptions {
+            ground: Ground::Auto,
+            ..Default::default()
+        };
+        let loaded = load_scene_from_memory(files, name, &options).map_err(|e| e.to_string())?;
+        Ok(Self {
+            scene: loaded.scene,
+            name: name.to_string(),
+            notes: loaded.notes,
+        })
+    }
+}
+
+/// The model file among `files` to open: `wanted` if given, else the only model file; several
+/// are refused with their names, none with what the files are.
+fn choose_model(files: &MemoryFiles, wanted: Option<&str>) -> Result<String, String> {
+    if let Some(w) = wanted {
+        return files
+            .get(w)
+            .map(|_| w.to_string())
+            .ok_or_else(|| format!("{w} is not among the files given"));
+    }
+    let models = files.models();
+    match models.as_slice() {
+        [one] => Ok(one.to_string()),
+        [] => Err(format!(
+            "none of the files given ({}) is a model file (.gltf, .glb, .obj, .ply, .ply.gz)",
+            files.names().collect::<Vec<_>>().join(", ")
+        )),
+        several => Err(format!(
+            "the files hold {} model files ({}): give one at a time, with the files it uses",
+            several.len(),
+            several.join(", ")
+        )),
+    }
+}
+
+/// The files of two parallel JS arrays (names, `Uint8Array`s).
+fn files_of(names: &js_sys::Array, data: &js_sys::Array) -> Result<MemoryFiles, String> {
+    if names.length() != data.length() {
+        return Err(format!(
+            "{} names for {} files",
+            names.length(),
+            data.length()
+        ));
+    }
+    let mut files = MemoryFiles::new();
+    for (n, d) in names.iter().zip(data.iter()) {
+        let name = n.as_string().ok_or("a file name is not a string")?;
+        let bytes = d
+            .dyn_into::<js_sys::Uint8Array>()
+            .map_err(|_| format!("{name}: its content is not a Uint8Array"))?
+            .to_vec();
+        files.insert(&name, bytes)?;
+    }
+    Ok(files)
 }
 
 /// What the page can change. Unknown keys and bad values are errors (named), not ignored.
@@ -134,6 +215,28 @@ fn orbit(base: &Camera, deg: f32) -> Camera {
     c
 }
 
+#[wasm_bindgen]
+extern "C" {
+    #[wasm_bindgen(js_namespace = console, js_name = error)]
+    fn console_error(s: &str);
+}
+
+/// Runs when the module is initialised: a panic (a bug: every error the page can meet is
+/// returned as a message) is written to the console and to `globalThis.manyshadowsPanic`, so
+/// that the page can show it instead of a blank canvas.
+#[wasm_bindgen(start)]
+fn start() {
+    std::panic::set_hook(Box::new(|info| {
+        let message = format!("the renderer stopped on a bug: {info}");
+        console_error(&message);
+        let _ = js_sys::Reflect::set(
+            &js_sys::global(),
+            &JsValue::from_str("manyshadowsPanic"),
+            &JsValue::from_str(&message),
+        );
+    }));
+}
+
 /// The registry's technique names, one per line, the default first: the page's technique menu
 /// is made of them.
 #[wasm_bindgen]
@@ -153,13 +256,29 @@ pub struct WebRenderer {
     base_camera: Camera,
     renderer: Renderer,
     target: wgpu::Texture,
+    /// The model opened from files, if any (`scene=model`).
+    model: Option<Model>,
 }
 
 #[wasm_bindgen]
 impl WebRenderer {
-    /// Opens the browser's WebGPU adapter and builds the scene `query` describes.
-    pub async fn create(query: String) -> Result<WebRenderer, JsValue> {
-        let settings = WebSettings::parse(&query).map_err(err)?;
+    /// Opens the browser's WebGPU adapter and builds the scene `query` describes: with files
+    /// (`names` and their `data` as `Uint8Array`s, parallel arrays; empty for a built-in
+    /// scene), the model among them (`scene=model` is implied), else the built-in `scene`.
+    pub async fn create(
+        query: String,
+        names: js_sys::Array,
+        data: js_sys::Array,
+    ) -> Result<WebRenderer, JsValue> {
+        let mut settings = WebSettings::parse(&query).map_err(err)?;
+        let model = if names.length() > 0 {
+            let files = files_of(&names, &data).map_err(err)?;
+            let name = choose_model(&files, None).map_err(err)?;
+            settings.scene = MODEL_SCENE.into();
+            Some(Model::load(&files, &name).map_err(err)?)
+        } else {
+            None
+        };
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
         desc.backends = wgpu::Backends::BROWSER_WEBGPU;
         let instance = wgpu::Instance::new(desc);
@@ -187,26 +306,38 @@ impl WebRenderer {
         // This page is the host: GPU errors outside the renderer's calls are reported through
         // `render`, not thrown by wgpu's default handler.
         ctx.capture_uncaptured_errors();
-        let (renderer, base_camera, target) = Self::build(&ctx, &settings)?;
+        let (renderer, base_camera, target) = Self::build(&ctx, &settings, model.as_ref())?;
         Ok(WebRenderer {
             ctx,
             settings,
             base_camera,
             renderer,
             target,
+            model,
         })
     }
 
     fn build(
         ctx: &GpuContext,
         s: &WebSettings,
+        model: Option<&Model>,
     ) -> Result<(Renderer, Camera, wgpu::Texture), JsValue> {
-        let opts = BuiltinOptions {
-            lights: s.lights,
-            seed: s.seed,
-            ..Default::default()
+        let mut scene = if s.scene == MODEL_SCENE {
+            let m = model.ok_or_else(|| err("no model is open: drop a model file on the page"))?;
+            let mut scene = m.scene.clone();
+            if let Some(n) = s.lights {
+                builtin::seed_lights(&mut scene, n, s.seed, LightMix::default(), None)
+                    .map_err(err)?;
+            }
+            scene
+        } else {
+            let opts = BuiltinOptions {
+                lights: s.lights,
+                seed: s.seed,
+                ..Default::default()
+            };
+            builtin::build(&s.scene, &opts).map_err(err)?
         };
-        let mut scene = builtin::build(&s.scene, &opts).map_err(err)?;
         for l in &mut scene.lights {
             l.size *= s.light_size;
             if matches!(l.kind, manyshadows::scene::LightKind::Directional { .. }) {
@@ -247,13 +378,66 @@ impl WebRenderer {
                 .set_camera(orbit(&self.base_camera, next.orbit_deg))
                 .map_err(err)?;
         } else {
-            let (renderer, base_camera, target) = Self::build(&self.ctx, &next)?;
+            let (renderer, base_camera, target) =
+                Self::build(&self.ctx, &next, self.model.as_ref())?;
             self.renderer = renderer;
             self.base_camera = base_camera;
             self.target = target;
         }
         self.settings = next;
         Ok(())
+    }
+
+    /// Opens a model from files (`names` and their `data`, parallel arrays: a .glb; a .gltf
+    /// with its .bin and images; an .obj with its .mtl and textures; a .ply): the model file
+    /// among them, or `main` where several are. The scene becomes that model, with the other
+    /// settings of `query`. Returns the loader's notes, one per line. On an error (naming the
+    /// file and what is wrong) the previous scene, model and settings stay.
+    pub fn open_files(
+        &mut self,
+        query: String,
+        names: js_sys::Array,
+        data: js_sys::Array,
+        main: Option<String>,
+    ) -> Result<String, JsValue> {
+        let mut next = WebSettings::parse(&query).map_err(err)?;
+        next.scene = MODEL_SCENE.into();
+        let files = files_of(&names, &data).map_err(err)?;
+        let name = choose_model(&files, main.as_deref()).map_err(err)?;
+        let model = Model::load(&files, &name).map_err(err)?;
+        let (renderer, base_camera, target) = Self::build(&self.ctx, &next, Some(&model))?;
+        self.renderer = renderer;
+        self.base_camera = base_camera;
+        self.target = target;
+        self.settings = next;
+        let notes = self.notes_of(&model);
+        self.model = Some(model);
+        Ok(notes)
+    }
+
+    fn notes_of(&self, model: &Model) -> String {
+        model
+            .notes
+            .iter()
+            .map(|n| format!("note: {}: {n}", model.name))
+            .collect::<Vec<_>>()
+            .join("\n")
+    }
+
+    /// The open model's notes (as `open_files` returned them), empty without a model.
+    pub fn notes(&self) -> String {
+        self.model
+            .as_ref()
+            .map(|m| self.notes_of(m))
+            .unwrap_or_default()
+    }
+
+    /// The open model's file name, empty without one.
+    pub fn model_name(&self) -> String {
+        self.model
+            .as_ref()
+            .map(|m| m.name.clone())
+            .unwrap_or_default()
     }
 
     /// Renders a frame and returns its RGBA8 (sRGB) pixels, row-major from the top-left.
@@ -328,7 +512,11 @@ impl WebRenderer {
             } else {
                 adapter
             },
-            self.settings.scene,
+            if self.settings.scene == MODEL_SCENE {
+                self.model_name()
+            } else {
+                self.settings.scene.clone()
+            },
             self.renderer.scene().lights.len(),
             layout.views,
             layout.fills.describe(),

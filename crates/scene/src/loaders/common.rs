@@ -2,7 +2,6 @@
 //! parts a loader returns, error constructors and size checks, and baking a transform into a
 //! mesh. The loaders and their dispatch (`dispatch.rs`) import these from here.
 
-use std::fs::File;
 use std::path::Path;
 
 use glam::{Mat3, Mat4, Vec3};
@@ -201,9 +200,7 @@ pub(crate) fn too_large(path: &Path, reason: impl Into<String>) -> SceneError {
 /// Refuses files over [`MAX_FILE_BYTES`] from their metadata alone (also gives the `Io` error
 /// for a missing file).
 pub(crate) fn check_file_size(path: &Path) -> Result<u64, SceneError> {
-    let len = std::fs::metadata(path)
-        .map_err(|e| io_error(path, e))?
-        .len();
+    let len = super::files::len(path).map_err(|e| io_error(path, e))?;
     if len > MAX_FILE_BYTES {
         return Err(too_large(
             path,
@@ -215,9 +212,11 @@ pub(crate) fn check_file_size(path: &Path) -> Result<u64, SceneError> {
 
 /// Opens a file for reading, never yielding more than [`MAX_FILE_BYTES`] + 1 bytes even if the
 /// file grows after [`check_file_size`].
-pub(crate) fn open_limited(path: &Path) -> Result<std::io::Take<File>, SceneError> {
+pub(crate) fn open_limited(
+    path: &Path,
+) -> Result<std::io::Take<Box<dyn std::io::Read>>, SceneError> {
     use std::io::Read;
-    let file = File::open(path).map_err(|e| io_error(path, e))?;
+    let file = super::files::open(path).map_err(|e| io_error(path, e))?;
     Ok(file.take(MAX_FILE_BYTES + 1))
 }
 

@@ -36,6 +36,12 @@ fn format_of(path: &Path) -> Option<Format> {
     }
 }
 
+/// Whether `path` ends as a model file this module reads (`.gltf`, `.glb`, `.obj`, `.ply`,
+/// `.ply.gz`, any case).
+pub(crate) fn is_model_file(path: &Path) -> bool {
+    format_of(path).is_some()
+}
+
 /// Loads every triangle mesh in a file, choosing the format by extension (case-insensitive):
 ///
 /// - `.obj`: one [`Mesh`] per OBJ object / group (polygons fan-triangulated, normals from `vn`
@@ -145,6 +151,21 @@ pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<LoadedScene
         };
         assemble(path, parts, options, lighting)
     })
+}
+
+/// [`load_scene_with`] on a set of files held in memory (a web page's dropped files): `name`
+/// is the model file's name in `files`, and every path the model names (glTF buffers and
+/// images, an OBJ's material library and textures) resolves only among `files`, relative to
+/// the model's folder in the set; a path that names none of them is an [`SceneError::Io`]
+/// error naming the path and listing the files given. The options apply as on disk (a path
+/// that climbs above the model's folder is refused unless
+/// [`LoadOptions::allow_outside_paths`], and even then it stays inside the set).
+pub fn load_scene_from_memory(
+    files: &super::MemoryFiles,
+    name: &str,
+    options: &LoadOptions,
+) -> Result<LoadedScene, SceneError> {
+    super::files::with_memory(files, || load_scene_with(Path::new(name), options))
 }
 
 /// Checks the meshes, places them, adds default lights, camera and ground where the file has

@@ -260,9 +260,7 @@ pub(super) fn read_uri(base: &Path, uri: &str, allow_outside: bool) -> Result<Ve
     let decoded = percent_decode(name)
         .ok_or_else(|| format!("URI '{uri}' is not valid percent-encoded UTF-8"))?;
     let file: PathBuf = resolve(base, base, &decoded, &format!("URI '{uri}'"), allow_outside)?;
-    let len = std::fs::metadata(&file)
-        .map_err(|e| io_error(&file, e).to_string())?
-        .len();
+    let len = super::files::len(&file).map_err(|e| io_error(&file, e).to_string())?;
     if len > MAX_FILE_BYTES {
         return Err(too_large(
             &file,

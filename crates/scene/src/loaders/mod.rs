@@ -218,6 +218,7 @@
 mod base64;
 pub(crate) mod common;
 mod dispatch;
+mod files;
 mod framing;
 mod gltf;
 mod gltf_accessors;
@@ -241,7 +242,10 @@ pub use common::{
     CREASE_ANGLE_DEG, DEFAULT_LIGHT_COUNT, GLTF_SIZE_EXTRA, MAX_DECOMPRESSED_BYTES, MAX_FILE_BYTES,
     MAX_TRIANGLES, PHONG_PER_LUX,
 };
-pub use dispatch::{load_mesh, load_mesh_with, load_scene, load_scene_with, LoadedScene};
+pub use dispatch::{
+    load_mesh, load_mesh_with, load_scene, load_scene_from_memory, load_scene_with, LoadedScene,
+};
+pub use files::MemoryFiles;
 pub use gltf_write::write_gltf;
 pub use obj::{write_obj, MAX_MTL_BYTES};
 pub use options::{Ground, LoadOptions};

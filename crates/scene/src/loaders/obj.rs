@@ -119,14 +119,14 @@ pub(super) fn load_scene(path: &Path, options: &LoadOptions) -> Result<Parts, Sc
 
 /// Reads a material library, held to [`MAX_MTL_BYTES`]; the error is the reason in words.
 fn read_mtl(file: &Path) -> Result<Vec<u8>, String> {
-    let len = std::fs::metadata(file).map_err(|e| e.to_string())?.len();
+    let len = super::files::len(file).map_err(|e| e.to_string())?;
     if len > MAX_MTL_BYTES {
         return Err(format!(
             "it is {len} bytes; the limit is {MAX_MTL_BYTES} bytes"
         ));
     }
     let mut bytes = Vec::new();
-    std::fs::File::open(file)
+    super::files::open(file)
         .map_err(|e| e.to_string())?
         .take(MAX_MTL_BYTES)
         .read_to_end(&mut bytes)

@@ -64,7 +64,10 @@ pub(crate) fn resolve(
     }
     // Through symbolic links: where the file really is (a missing file is left for the
     // caller's read to report).
-    if let (Ok(real_root), Ok(real)) = (root.canonicalize(), joined.canonicalize()) {
+    if let (Ok(real_root), Ok(real)) = (
+        super::files::canonicalize(root),
+        super::files::canonicalize(&joined),
+    ) {
         if !real.starts_with(&real_root) {
             return Err(refuse(&format!(
                 "leads through a symbolic link to {}",

@@ -19,6 +19,7 @@ mod gltf_extensions;
 mod gltf_geometry;
 mod gltf_scene;
 mod gltf_writer;
+mod memory_files;
 mod obj;
 mod ply;
 mod safe_paths;
