@@ -9,4 +9,4 @@ out="${1:-web/pkg}"
 cargo build --release -p manyshadows-web --target wasm32-unknown-unknown
 wasm-bindgen --target web --out-dir "$out" \
     "${CARGO_TARGET_DIR:-target}/wasm32-unknown-unknown/release/manyshadows_web.wasm"
-echo "built $out; serve web/ with: python3 -m http.server --directory web 8000  (then open http://127.0.0.1:8000/)"
+echo "built $out; serve web/ with any static server (cargo xtask web builds and serves it at http://127.0.0.1:8000/)"

@@ -21,10 +21,17 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode, Stdio};
 
 mod setup;
+mod web;
 
 use setup::{dpkg_installed, Install, Outcome, Prerequisite, Setup};
 
 const USAGE: &str = "\
+cargo xtask web [--port N] [--no-install]
+
+  Builds the web page (the renderer for wasm32 into web/pkg; installs the wasm32 target and
+  wasm-bindgen-cli first where missing) and serves web/ at http://127.0.0.1:8000/ (or port N).
+  The built page is a static folder: web/index.html and web/pkg/ are what a host serves.
+
 cargo xtask test [--no-install] [--backend vulkan|gl|both] [-- <extra test arguments>]
 
   Installs what the tests need (as root: apt-get; rustup; cargo install), then runs
@@ -47,7 +54,10 @@ const VIEWER_TESTS: &[&str] = &[
     "the_window_shows_the_probes_as_render_does",
     "the_window_takes_the_soft_shadow_taps_as_render_does",
 ];
-const WEB_TESTS: &[&str] = &["the_page_renders_the_native_frame_and_its_controls_work"];
+const WEB_TESTS: &[&str] = &[
+    "the_page_renders_the_native_frame_and_its_controls_work",
+    "dropped_models_render_as_render_renders_the_files",
+];
 const THREE_TESTS: &[&str] = &["gltf_models_render_as_three_js_renders_them"];
 
 /// three.js, the independent renderer the glTF look is checked against (its version is
@@ -130,6 +140,27 @@ fn main() -> ExitCode {
     let mut it = ours.iter();
     match it.next().map(String::as_str) {
         Some("test") => {}
+        Some("web") => {
+            let mut port = 8000u16;
+            let mut no_install = false;
+            while let Some(a) = it.next() {
+                match a.as_str() {
+                    "--port" => match it.next().and_then(|p| p.parse().ok()) {
+                        Some(p) => port = p,
+                        None => {
+                            eprintln!("--port takes a port number\n\n{USAGE}");
+                            return ExitCode::from(2);
+                        }
+                    },
+                    "--no-install" => no_install = true,
+                    other => {
+                        eprintln!("unknown option '{other}' of web\n\n{USAGE}");
+                        return ExitCode::from(2);
+                    }
+                }
+            }
+            return web::build_and_serve(&workspace_root(), port, no_install);
+        }
         Some("-h" | "--help" | "help") => {
             println!("{USAGE}");
             return ExitCode::SUCCESS;

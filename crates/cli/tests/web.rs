@@ -343,6 +343,48 @@ fn user_model() -> manyshadows_scene::Scene {
     s
 }
 
+/// `user_model` with lights of its own: a spot and a point light, in candela (the loader makes
+/// every light of a file cast shadows).
+fn lit_user_model() -> manyshadows_scene::Scene {
+    use glam::Vec3;
+    use manyshadows_scene::{Attenuation, Light, LightKind};
+    let light = |kind, cd: f32| Light {
+        kind,
+        ambient: Vec3::ZERO,
+        diffuse: Vec3::splat(cd),
+        specular: Vec3::splat(cd),
+        attenuation: Attenuation {
+            constant: 0.0,
+            linear: 0.0,
+            quadratic: 1.0,
+        },
+        casts_shadows: true,
+        shadow_resolution: 512,
+        size: 0.0,
+    };
+    let mut s = user_model();
+    s.name = "lit-user-model".into();
+    s.lights = vec![
+        light(
+            LightKind::Spot {
+                position: Vec3::new(-1.5, 4.0, 2.5),
+                direction: Vec3::new(0.45, -1.0, -0.5).normalize(),
+                cutoff_deg: 40.0,
+                range: 20.0,
+            },
+            40.0,
+        ),
+        light(
+            LightKind::Point {
+                position: Vec3::new(2.5, 2.5, -1.0),
+                range: 15.0,
+            },
+            12.0,
+        ),
+    ];
+    s
+}
+
 /// Writes `scene` as a .gltf whose buffer and image live in files beside it (`NAME.bin`,
 /// `NAME-image-N.png`): the layout a user's exported .gltf has. Returns the files' names.
 fn write_split_gltf(scene: &manyshadows_scene::Scene, dir: &Path, name: &str) -> Vec<String> {
@@ -431,7 +473,7 @@ fn dropped_models_render_as_render_renders_the_files() {
     let models = tmp("models");
     let scene = user_model();
     manyshadows_scene::loaders::write_gltf(&scene, &models.join("box.glb")).unwrap();
-    let split = write_split_gltf(&scene, &models, "split");
+    let split = write_split_gltf(&lit_user_model(), &models, "split");
     assert_eq!(split.len(), 3, "a .gltf, its .bin and one image: {split:?}");
     std::fs::write(models.join("broken.glb"), b"glTF\x02\0\0\0 not really").unwrap();
     let port = serve(
@@ -605,6 +647,71 @@ fn dropped_models_render_as_render_renders_the_files() {
     assert!(
         frame(&mut browser) == gltf,
         "?model= gives another frame than the drop"
+    );
+
+    // Synthetic pointer drags on the canvas move the camera as `render --camera` places it,
+    // and while only the camera moves no spot or point light's map is drawn again.
+    let start = browser.eval("window.manyshadows.camera()", 10);
+    let drag = |dx: f64, dy: f64, button: u32| {
+        format!(
+            "(async () => {{ const c = document.getElementById('frame'); const r = c.getBoundingClientRect(); \
+             const x = r.left + r.width / 2, y = r.top + r.height / 2; \
+             const at = (i, buttons) => ({{pointerId: 7, pointerType: 'mouse', button: {button}, buttons, bubbles: true, \
+               clientX: x + {dx} * i / 8, clientY: y + {dy} * i / 8}}); \
+             c.dispatchEvent(new PointerEvent('pointerdown', at(0, 1))); \
+             for (let i = 1; i <= 8; i++) c.dispatchEvent(new PointerEvent('pointermove', at(i, 1))); \
+             c.dispatchEvent(new PointerEvent('pointerup', at(8, 0))); \
+             return window.manyshadows.settled(); }})()"
+        )
+    };
+    for (what, dx, dy, button) in [("orbit", 120.0, 40.0, 0), ("pan", -60.0, 25.0, 2)] {
+        let status = browser.eval(&drag(dx, dy, button), 900);
+        let status = status.as_str().unwrap_or("");
+        let camera = browser.eval("window.manyshadows.camera()", 10);
+        let camera = camera.as_str().unwrap_or("").to_string();
+        let views = browser.eval("window.manyshadows.viewsDrawn()", 10);
+        eprintln!("{what} drag: {status}; camera {camera}; views drawn / all / following the camera: {views}");
+        assert!(!status.starts_with("not"), "{what} drag: {status}");
+        assert_ne!(
+            json!(camera),
+            start,
+            "the {what} drag did not move the camera"
+        );
+        assert_eq!(
+            views[0],
+            json!(0),
+            "a camera-only move redrew shadow maps: {views}"
+        );
+        assert_eq!(
+            views[2],
+            json!(0),
+            "the model's lights follow no camera: {views}"
+        );
+        assert!(
+            status.contains("shadow views drawn 0 of"),
+            "the page does not report it: {status}"
+        );
+        let moved = frame(&mut browser);
+        let native = render_native(
+            &dir,
+            &format!("split-{what}"),
+            &["--scene", file.to_str().unwrap(), "--camera", &camera],
+        );
+        let f = flip_against(&moved, &native, &format!("drag-{what}"));
+        eprintln!("after the {what} drag vs render --camera: mean FLIP {f:.4}");
+        assert!(
+            f <= DROP_MAX_FLIP,
+            "after the {what} drag: mean FLIP {f:.4}"
+        );
+    }
+    // A double-click goes back to the model's camera: the first frame again, bit for bit.
+    browser.eval(
+        "document.getElementById('frame').dispatchEvent(new MouseEvent('dblclick', {bubbles: true})); window.manyshadows.settled()",
+        900,
+    );
+    assert!(
+        frame(&mut browser) == gltf,
+        "a double-click does not frame the model again"
     );
 
     drop(browser);

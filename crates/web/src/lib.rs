@@ -110,8 +110,9 @@ struct WebSettings {
     lights: Option<usize>,
     seed: u64,
     light_loop: LightLoop,
-    /// Camera turned about the scene's target by this many degrees (the page's orbit slider).
-    orbit_deg: f32,
+    /// Where the camera is, relative to the scene's own camera (the page's orbit slider, its
+    /// mouse, touch and keys).
+    view: View,
     /// Every light's size times this (the page's light-size slider: 1 = the scene's sizes,
     /// 0 = hard shadows).
     light_size: f32,
@@ -129,7 +130,7 @@ impl Default for WebSettings {
             lights: None,
             seed: 1,
             light_loop: LightLoop::default(),
-            orbit_deg: 0.0,
+            view: View::default(),
             light_size: 1.0,
         }
     }
@@ -167,13 +168,24 @@ impl WebSettings {
                 }
                 "seed" => s.seed = num("seed")?,
                 "loop" | "light_loop" => s.light_loop = v.parse()?,
-                "orbit" => {
-                    s.orbit_deg = v
-                        .parse::<f32>()
-                        .ok()
-                        .filter(|d| d.is_finite())
-                        .ok_or_else(|| format!("orbit '{v}' is not a number of degrees"))?
+                "orbit" => s.view.yaw_deg = finite(v, "orbit", "a number of degrees")?,
+                "pitch" => {
+                    s.view.pitch_deg = finite(v, "pitch", "a number of degrees")?;
+                    if s.view.pitch_deg.abs() > 180.0 {
+                        return Err(format!("pitch '{v}' is not between -180 and 180 degrees"));
+                    }
                 }
+                "zoom" => {
+                    s.view.zoom = finite(v, "zoom", "a factor")?;
+                    if !(ZOOM_RANGE.0..=ZOOM_RANGE.1).contains(&s.view.zoom) {
+                        return Err(format!(
+                            "zoom '{v}' is not a factor from {} to {}",
+                            ZOOM_RANGE.0, ZOOM_RANGE.1
+                        ));
+                    }
+                }
+                "pan_x" => s.view.pan[0] = finite(v, "pan_x", "a number")?,
+                "pan_y" => s.view.pan[1] = finite(v, "pan_y", "a number")?,
                 "size" => {
                     s.light_size = v
                         .parse::<f32>()
@@ -207,12 +219,64 @@ impl WebSettings {
     }
 }
 
-/// The camera of `base` turned `deg` degrees about its target's vertical axis.
-fn orbit(base: &Camera, deg: f32) -> Camera {
-    let mut c = *base;
-    let rot = glam::Mat3::from_rotation_y(deg.to_radians());
-    c.position = base.target + rot * (base.position - base.target);
-    c
+fn finite(v: &str, key: &str, what: &str) -> Result<f32, String> {
+    v.parse::<f32>()
+        .ok()
+        .filter(|x| x.is_finite())
+        .ok_or_else(|| format!("{key} '{v}' is not {what}"))
+}
+
+/// How far the page zooms: the camera's distance to its target times this, at most.
+const ZOOM_RANGE: (f32, f32) = (0.02, 50.0);
+
+/// The camera relative to the scene's own: turned about the target (yaw about the vertical,
+/// pitch up and down), its distance to the target times `zoom`, and the target moved across
+/// the view by `pan` (in units of the scene camera's distance to its target).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct View {
+    yaw_deg: f32,
+    pitch_deg: f32,
+    zoom: f32,
+    pan: [f32; 2],
+}
+
+impl Default for View {
+    fn default() -> Self {
+        Self {
+            yaw_deg: 0.0,
+            pitch_deg: 0.0,
+            zoom: 1.0,
+            pan: [0.0; 2],
+        }
+    }
+}
+
+impl View {
+    /// The camera of `base` moved by this view; `base` itself, bit for bit, for the default.
+    fn camera(&self, base: &Camera) -> Camera {
+        if *self == View::default() {
+            return *base;
+        }
+        let offset = base.position - base.target;
+        let dist = offset.length().max(1e-6);
+        let base_yaw = offset.x.atan2(offset.z);
+        let base_pitch = (offset.y / dist).clamp(-1.0, 1.0).asin();
+        // Short of straight up or down, where the view's up vector would flip.
+        let limit = 89.0f32.to_radians();
+        let pitch = (base_pitch + self.pitch_deg.to_radians()).clamp(-limit, limit);
+        let yaw = base_yaw + self.yaw_deg.to_radians();
+        let dir = glam::Vec3::new(
+            pitch.cos() * yaw.sin(),
+            pitch.sin(),
+            pitch.cos() * yaw.cos(),
+        );
+        let right = (-dir).cross(glam::Vec3::Y).normalize_or_zero();
+        let up = right.cross(-dir);
+        let mut c = *base;
+        c.target = base.target + (right * self.pan[0] + up * self.pan[1]) * dist;
+        c.position = c.target + dir * dist * self.zoom;
+        c
+    }
 }
 
 #[wasm_bindgen]
@@ -258,6 +322,8 @@ pub struct WebRenderer {
     target: wgpu::Texture,
     /// The model opened from files, if any (`scene=model`).
     model: Option<Model>,
+    /// Shadow views the last frame drew (the others were kept from earlier frames).
+    views_drawn: u32,
 }
 
 #[wasm_bindgen]
@@ -314,6 +380,7 @@ impl WebRenderer {
             renderer,
             target,
             model,
+            views_drawn: 0,
         })
     }
 
@@ -345,7 +412,7 @@ impl WebRenderer {
             }
         }
         let base_camera = scene.camera;
-        scene.camera = orbit(&base_camera, s.orbit_deg);
+        scene.camera = s.view.camera(&base_camera);
         let renderer = Renderer::new(ctx, &scene, s.render_settings()).map_err(err)?;
         let target = ctx.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("web.frame"),
@@ -370,12 +437,12 @@ impl WebRenderer {
     pub fn configure(&mut self, query: String) -> Result<(), JsValue> {
         let next = WebSettings::parse(&query).map_err(err)?;
         let camera_only = WebSettings {
-            orbit_deg: self.settings.orbit_deg,
+            view: self.settings.view,
             ..next.clone()
         } == self.settings;
         if camera_only {
             self.renderer
-                .set_camera(orbit(&self.base_camera, next.orbit_deg))
+                .set_camera(next.view.camera(&self.base_camera))
                 .map_err(err)?;
         } else {
             let (renderer, base_camera, target) =
@@ -442,13 +509,51 @@ impl WebRenderer {
 
     /// Renders a frame and returns its RGBA8 (sRGB) pixels, row-major from the top-left.
     pub async fn render(&mut self) -> Result<Vec<u8>, JsValue> {
-        self.renderer.render_to(&self.target).map_err(err)?;
+        let submitted = self.renderer.render_to(&self.target).map_err(err)?;
+        self.views_drawn = submitted.shadow_stats.views_drawn;
         let pixels = read_back(&self.ctx, &self.target).await?;
         // Errors the browser reported while the frame ran (none are expected).
         if let Some(e) = self.ctx.take_uncaptured() {
             return Err(err(format!("WebGPU error: {e}")));
         }
         Ok(pixels)
+    }
+
+    /// Shadow views the last frame drew; the other views' maps were kept from earlier frames
+    /// (while only the camera moves, every map but the cascades that follow the view).
+    pub fn shadow_views_drawn(&self) -> u32 {
+        self.views_drawn
+    }
+
+    /// Shadow views of the frame in all.
+    pub fn shadow_views(&self) -> u32 {
+        self.renderer.shadow_layout().views as u32
+    }
+
+    /// Shadow views that follow the camera (directional lights' cascades), redrawn whenever it
+    /// moves.
+    pub fn camera_views(&self) -> u32 {
+        let scene = self.renderer.scene();
+        scene
+            .lights
+            .iter()
+            .filter(|l| l.casts_shadows)
+            .map(|l| match l.kind {
+                manyshadows::scene::LightKind::Directional { cascades, .. } => cascades,
+                _ => 0,
+            })
+            .sum()
+    }
+
+    /// The camera, `px,py,pz,tx,ty,tz` (as `render --camera` takes it).
+    pub fn camera(&self) -> String {
+        let c = self.renderer.scene().camera;
+        [c.position, c.target]
+            .iter()
+            .flat_map(|v| v.to_array())
+            .map(|x| format!("{x}"))
+            .collect::<Vec<_>>()
+            .join(",")
     }
 
     /// Frame width in pixels.
