@@ -130,7 +130,13 @@ pub(crate) fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
                     builtin::MAX_LIGHTS
                 );
             }
-            builtin::seed_lights(&mut scene, n, args.seed, mix, args.shadow_resolution)?;
+            manyshadows::scene::loaders::seed_lights(
+                &mut scene,
+                n,
+                args.seed,
+                mix,
+                args.shadow_resolution,
+            )?;
         } else if let Some(r) = args.shadow_resolution {
             for l in &mut scene.lights {
                 l.shadow_resolution = r;

@@ -393,8 +393,14 @@ impl WebRenderer {
             let m = model.ok_or_else(|| err("no model is open: drop a model file on the page"))?;
             let mut scene = m.scene.clone();
             if let Some(n) = s.lights {
-                builtin::seed_lights(&mut scene, n, s.seed, LightMix::default(), None)
-                    .map_err(err)?;
+                manyshadows::scene::loaders::seed_lights(
+                    &mut scene,
+                    n,
+                    s.seed,
+                    LightMix::default(),
+                    None,
+                )
+                .map_err(err)?;
             }
             scene
         } else {

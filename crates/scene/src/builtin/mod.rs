@@ -112,30 +112,6 @@ pub fn build(name: &str, opts: &BuiltinOptions) -> Result<Scene, SceneError> {
     Ok(scene)
 }
 
-/// Replaces the lights of a scene read from a file (a model or a TOML scene) with the seeded
-/// layout of [`scatter_lights`], as `--lights N` does: in a glTF file's physical units (10 cd
-/// or lx per unit of the layout's colours) where the scene is lit physically. Errors: more
-/// than [`MAX_LIGHTS`].
-pub fn seed_lights(
-    scene: &mut Scene,
-    n: usize,
-    seed: u64,
-    mix: LightMix,
-    shadow_resolution: Option<u32>,
-) -> Result<(), SceneError> {
-    check_light_count(n)?;
-    scene.lights = scatter_lights(scene, n, seed, mix, shadow_resolution);
-    if scene.lighting == crate::look::Lighting::Physical {
-        let k = 1.0 / crate::loaders::PHONG_PER_LUX;
-        for l in &mut scene.lights {
-            l.ambient *= k;
-            l.diffuse *= k;
-            l.specular *= k;
-        }
-    }
-    Ok(())
-}
-
 /// A generic seeded layout of `n` lights inside `scene`'s world bounds, for scenes that have no
 /// layout of their own (TOML scenes given `--lights N`).
 ///

@@ -36,10 +36,14 @@ fn format_of(path: &Path) -> Option<Format> {
     }
 }
 
-/// Whether `path` ends as a model file this module reads (`.gltf`, `.glb`, `.obj`, `.ply`,
-/// `.ply.gz`, any case).
-pub(crate) fn is_model_file(path: &Path) -> bool {
-    format_of(path).is_some()
+impl super::files::MemoryFiles {
+    /// The files that are model files (`.gltf`, `.glb`, `.obj`, `.ply`, `.ply.gz`, any
+    /// case), sorted: what a page offers to open among dropped files.
+    pub fn models(&self) -> Vec<&str> {
+        self.names()
+            .filter(|n| format_of(Path::new(n)).is_some())
+            .collect()
+    }
 }
 
 /// Loads every triangle mesh in a file, choosing the format by extension (case-insensitive):
@@ -161,7 +165,7 @@ pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<LoadedScene
 /// that climbs above the model's folder is refused unless
 /// [`LoadOptions::allow_outside_paths`], and even then it stays inside the set).
 pub fn load_scene_from_memory(
-    files: &super::MemoryFiles,
+    files: &super::files::MemoryFiles,
     name: &str,
     options: &LoadOptions,
 ) -> Result<LoadedScene, SceneError> {

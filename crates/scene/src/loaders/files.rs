@@ -63,14 +63,6 @@ impl MemoryFiles {
         self.files.get(&key).map(|b| &b[..])
     }
 
-    /// The files that are model files (`.gltf`, `.glb`, `.obj`, `.ply`, `.ply.gz`), sorted:
-    /// what a page offers to open among dropped files.
-    pub fn models(&self) -> Vec<&str> {
-        self.names()
-            .filter(|n| super::dispatch::is_model_file(Path::new(n)))
-            .collect()
-    }
-
     fn lookup(&self, path: &Path) -> io::Result<Arc<[u8]>> {
         normalize(path)
             .and_then(|k| self.files.get(&k).cloned())

@@ -247,3 +247,27 @@ pub(crate) fn add_ground(scene: &mut Scene, ground: Ground) -> Option<String> {
          (catching shadows; --ground off leaves it out)"
     ))
 }
+
+/// Replaces the lights of a scene read from a file (a model or a TOML scene) with the seeded
+/// layout of [`scatter_lights`](crate::builtin::scatter_lights), as `--lights N` does: in a
+/// glTF file's physical units (10 cd or lx per unit of the layout's colours) where the scene
+/// is lit physically. Errors: more than [`MAX_LIGHTS`](crate::builtin::MAX_LIGHTS).
+pub fn seed_lights(
+    scene: &mut Scene,
+    n: usize,
+    seed: u64,
+    mix: crate::builtin::LightMix,
+    shadow_resolution: Option<u32>,
+) -> Result<(), crate::error::SceneError> {
+    crate::builtin::check_light_count(n)?;
+    scene.lights = crate::builtin::scatter_lights(scene, n, seed, mix, shadow_resolution);
+    if scene.lighting == Lighting::Physical {
+        let k = 1.0 / PHONG_PER_LUX;
+        for l in &mut scene.lights {
+            l.ambient *= k;
+            l.diffuse *= k;
+            l.specular *= k;
+        }
+    }
+    Ok(())
+}
