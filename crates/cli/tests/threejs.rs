@@ -25,14 +25,12 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use common::models::{light, pbr, physical};
 use common::{base64, repo, serve, tmp, Browser};
 use glam::{Mat4, Quat, Vec3};
 use manyshadows_scene::loaders::write_gltf;
 use manyshadows_scene::primitives::{cuboid, cylinder, plane, uv_sphere};
-use manyshadows_scene::{
-    Attenuation, Camera, Instance, Light, LightKind, Lighting, Material, Pbr, Scene, Texture,
-    TextureRef,
-};
+use manyshadows_scene::{Camera, Instance, Light, LightKind, Material, Scene, Texture, TextureRef};
 use serde_json::json;
 
 const W: u32 = 400;
@@ -68,23 +66,6 @@ fn three_dir() -> PathBuf {
     dir
 }
 
-fn light(kind: LightKind, colour: Vec3) -> Light {
-    Light {
-        kind,
-        ambient: Vec3::ZERO,
-        diffuse: colour,
-        specular: colour,
-        attenuation: Attenuation {
-            constant: 0.0,
-            linear: 0.0,
-            quadratic: 1.0,
-        },
-        casts_shadows: false,
-        shadow_resolution: 512,
-        size: 0.0,
-    }
-}
-
 /// A point light of `cd` candela (per channel) with an explicit range.
 fn point(position: Vec3, range: f32, cd: Vec3) -> Light {
     light(LightKind::Point { position, range }, cd)
@@ -101,26 +82,6 @@ fn sun(direction: Vec3, lux: Vec3) -> Light {
         },
         lux,
     )
-}
-
-fn pbr(base: Vec3, metallic: f32, roughness: f32) -> Material {
-    Material {
-        diffuse: base,
-        pbr: Some(Pbr {
-            metallic,
-            roughness,
-        }),
-        ..Material::default()
-    }
-}
-
-fn physical(name: &str, camera: Camera) -> Scene {
-    Scene {
-        name: name.into(),
-        lighting: Lighting::Physical,
-        camera,
-        ..Default::default()
-    }
 }
 
 /// A grey backdrop: a floor and a wall behind, so the frame is mostly shaded surface.

@@ -14,7 +14,8 @@ mod common;
 use std::path::Path;
 use std::process::Command;
 
-use common::{base64, on_path, repo, serve, tmp, Browser};
+use common::models::{light, pbr, physical};
+use common::{base64, encode_base64, on_path, repo, serve, tmp, Browser};
 use serde_json::json;
 
 const W: u32 = 480;
@@ -270,28 +271,6 @@ fn the_page_renders_the_native_frame_and_its_controls_work() {
     }
 }
 
-/// Standard base64 with padding (files handed to the page).
-fn encode_base64(bytes: &[u8]) -> String {
-    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            *chunk.get(1).unwrap_or(&0),
-            *chunk.get(2).unwrap_or(&0),
-        ];
-        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
-        for i in 0..4 {
-            if i <= chunk.len() {
-                out.push(A[(n >> (18 - 6 * i) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
-}
-
 /// A model as a user would have it: a checker-textured box and a sphere apart on no floor
 /// (their undersides cover less than the quarter of the footprint that makes a floor), with its
 /// own camera and no lights (so the loader adds the rig and the ground, in the page as in
@@ -299,23 +278,11 @@ fn encode_base64(bytes: &[u8]) -> String {
 fn user_model() -> manyshadows_scene::Scene {
     use glam::{Mat4, Quat, Vec3};
     use manyshadows_scene::primitives::{cuboid, uv_sphere};
-    use manyshadows_scene::{
-        Camera, Instance, Lighting, Material, Pbr, Scene, Texture, TextureRef,
-    };
-    let pbr = |base: Vec3, metallic: f32, roughness: f32| Material {
-        diffuse: base,
-        pbr: Some(Pbr {
-            metallic,
-            roughness,
-        }),
-        ..Material::default()
-    };
-    let mut s = Scene {
-        name: "user-model".into(),
-        lighting: Lighting::Physical,
-        camera: Camera::look_at(Vec3::new(3.6, 2.6, 4.6), Vec3::new(0.9, 0.3, 0.6)),
-        ..Default::default()
-    };
+    use manyshadows_scene::{Camera, Instance, Material, Texture, TextureRef};
+    let mut s = physical(
+        "user-model",
+        Camera::look_at(Vec3::new(3.6, 2.6, 4.6), Vec3::new(0.9, 0.3, 0.6)),
+    );
     s.textures.push(Texture::from_fn("checker", 64, 64, |x, y| {
         if (x / 8 + y / 8) % 2 == 0 {
             [220, 180, 60, 255]
@@ -347,21 +314,7 @@ fn user_model() -> manyshadows_scene::Scene {
 /// every light of a file cast shadows).
 fn lit_user_model() -> manyshadows_scene::Scene {
     use glam::Vec3;
-    use manyshadows_scene::{Attenuation, Light, LightKind};
-    let light = |kind, cd: f32| Light {
-        kind,
-        ambient: Vec3::ZERO,
-        diffuse: Vec3::splat(cd),
-        specular: Vec3::splat(cd),
-        attenuation: Attenuation {
-            constant: 0.0,
-            linear: 0.0,
-            quadratic: 1.0,
-        },
-        casts_shadows: true,
-        shadow_resolution: 512,
-        size: 0.0,
-    };
+    use manyshadows_scene::LightKind;
     let mut s = user_model();
     s.name = "lit-user-model".into();
     s.lights = vec![
@@ -372,14 +325,14 @@ fn lit_user_model() -> manyshadows_scene::Scene {
                 cutoff_deg: 40.0,
                 range: 20.0,
             },
-            40.0,
+            Vec3::splat(40.0),
         ),
         light(
             LightKind::Point {
                 position: Vec3::new(2.5, 2.5, -1.0),
                 range: 15.0,
             },
-            12.0,
+            Vec3::splat(12.0),
         ),
     ];
     s

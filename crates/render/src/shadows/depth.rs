@@ -93,31 +93,12 @@ pub(crate) fn layered_depth_pipeline(
     )
 }
 
-/// [`depth_pipeline`] that culls triangles whose front (counter-clockwise in the view, as
-/// world space winds the cullable casters: their front) faces away from the light: the
-/// rasterizer's back-face culling, exactly the world-space test `faces_away` of cull.wgsl for
-/// a view whose centre of projection is the light (spot, cube face, cascade).
+/// [`depth_pipeline`] that culls triangles whose front faces away from the light: the
+/// rasterizer's back-face culling with fronts wound `front` in the view (`Ccw`: as world space
+/// winds the cullable casters; `Cw`: a mirroring instance transform drawn from its mesh's own
+/// indices), exactly the world-space test `faces_away` of cull.wgsl for a view whose centre
+/// of projection is the light (spot, cube face, cascade).
 pub(crate) fn culled_depth_pipeline(
-    device: &wgpu::Device,
-    layout: &wgpu::PipelineLayout,
-    module: &wgpu::ShaderModule,
-    entry: &str,
-    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
-) -> wgpu::RenderPipeline {
-    depth_pipeline_with(
-        device,
-        layout,
-        module,
-        (entry, None),
-        buffers,
-        None,
-        Some(wgpu::FrontFace::Ccw),
-    )
-}
-
-/// [`culled_depth_pipeline`] for triangles wound `front` in the view (`Cw`: a mirroring
-/// instance transform drawn from its mesh's own indices).
-pub(crate) fn culled_depth_pipeline_facing(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,

@@ -10,7 +10,7 @@ use manyshadows_scene::primitives::cuboid;
 use manyshadows_scene::{Camera, Instance, Material, Scene, Texture, TextureRef};
 use serde_json::{json, Value};
 
-use crate::common::{png, temp_dir, write};
+use crate::common::{base64_decode, png, temp_dir, write};
 
 /// A textured box with a light and a camera, as one `.gltf` (buffer and image embedded).
 fn textured_box() -> Scene {
@@ -45,7 +45,7 @@ fn split_files() -> Vec<(String, Vec<u8>)> {
     let mut doc: Value = serde_json::from_slice(&std::fs::read(&embedded).unwrap()).unwrap();
     let decode = |uri: &str| {
         let data = uri.split_once(',').unwrap().1;
-        data_uri_bytes(data)
+        base64_decode(data)
     };
     let bin = decode(doc["buffers"][0]["uri"].as_str().unwrap());
     let image = decode(doc["images"][0]["uri"].as_str().unwrap());
@@ -57,26 +57,6 @@ fn split_files() -> Vec<(String, Vec<u8>)> {
         ("scene.bin".into(), bin),
         ("tex.png".into(), image),
     ]
-}
-
-fn data_uri_bytes(b64: &str) -> Vec<u8> {
-    let val = |c: u8| match c {
-        b'A'..=b'Z' => c - b'A',
-        b'a'..=b'z' => c - b'a' + 26,
-        b'0'..=b'9' => c - b'0' + 52,
-        b'+' => 62,
-        _ => 63,
-    } as u32;
-    let bytes: Vec<u8> = b64.bytes().filter(|&c| c != b'=').collect();
-    let mut out = Vec::new();
-    for chunk in bytes.chunks(4) {
-        let acc = chunk
-            .iter()
-            .enumerate()
-            .fold(0u32, |a, (i, &c)| a | val(c) << (18 - 6 * i));
-        out.extend_from_slice(&acc.to_be_bytes()[1..chunk.len()]);
-    }
-    out
 }
 
 fn memory(files: &[(String, Vec<u8>)], folder: &str) -> MemoryFiles {

@@ -196,8 +196,14 @@ impl GpuDriven {
             "cs_cull",
         );
         let draw = depth_pipeline(device, &draw_pipeline_layout, &module, "vs_draw", &[]);
-        let draw_culled =
-            culled_depth_pipeline(device, &draw_pipeline_layout, &module, "vs_draw", &[]);
+        let draw_culled = culled_depth_pipeline(
+            device,
+            &draw_pipeline_layout,
+            &module,
+            "vs_draw",
+            &[],
+            wgpu::FrontFace::Ccw,
+        );
         let draw_masked = crate::shadows::depth::masked_depth_pipeline(
             device,
             &draw_pipeline_layout,

@@ -254,7 +254,7 @@ impl Traditional {
             } else {
                 wgpu::FrontFace::Ccw
             };
-            let pipeline = crate::shadows::depth::culled_depth_pipeline_facing(
+            let pipeline = crate::shadows::depth::culled_depth_pipeline(
                 device,
                 &self.pipeline_layout,
                 module,

@@ -335,6 +335,7 @@ impl PageDraw {
             &draw_module,
             "vs_draw",
             &[],
+            wgpu::FrontFace::Ccw,
         );
         let clear_pl = pipeline_layout("vsm.clear_pipeline_layout", &clear_layout);
         let clear =
