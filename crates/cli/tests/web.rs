@@ -523,6 +523,28 @@ fn dropped_models_render_as_render_renders_the_files() {
     eprintln!("dropped .gltf + .bin + image vs render: mean FLIP {f:.4}");
     assert!(f <= DROP_MAX_FLIP, "dropped .gltf: mean FLIP {f:.4}");
 
+    // The same files in a .zip: the same frame, bit for bit.
+    let zip = {
+        use std::io::Write;
+        let mut w = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+        let options = zip::write::SimpleFileOptions::default()
+            .compression_method(zip::CompressionMethod::Deflated);
+        for f in &split {
+            w.start_file(format!("export/{f}"), options).unwrap();
+            w.write_all(&std::fs::read(models.join(f)).unwrap())
+                .unwrap();
+        }
+        w.finish().unwrap().into_inner()
+    };
+    std::fs::write(models.join("export.zip"), zip).unwrap();
+    let status = drop_files(&mut browser, &models, &[("export.zip", "export.zip")]);
+    eprintln!("export.zip: {status}");
+    assert!(!status.starts_with("not"), "a .zip of the files: {status}");
+    assert!(
+        frame(&mut browser) == gltf,
+        "the .zip gives another frame than its files"
+    );
+
     // Without its image: opened untextured, the note naming the image (as `render` says).
     let status = drop_files(
         &mut browser,

@@ -77,7 +77,8 @@ fn choose_model(files: &MemoryFiles, wanted: Option<&str>) -> Result<String, Str
     }
 }
 
-/// The files of two parallel JS arrays (names, `Uint8Array`s).
+/// The files of two parallel JS arrays (names, `Uint8Array`s); a `.zip` gives the files in
+/// it, in its folder.
 fn files_of(names: &js_sys::Array, data: &js_sys::Array) -> Result<MemoryFiles, String> {
     if names.length() != data.length() {
         return Err(format!(
@@ -93,7 +94,11 @@ fn files_of(names: &js_sys::Array, data: &js_sys::Array) -> Result<MemoryFiles, 
             .dyn_into::<js_sys::Uint8Array>()
             .map_err(|_| format!("{name}: its content is not a Uint8Array"))?
             .to_vec();
-        files.insert(&name, bytes)?;
+        if name.to_ascii_lowercase().ends_with(".zip") {
+            files.insert_zip(&name, &bytes)?;
+        } else {
+            files.insert(&name, bytes)?;
+        }
     }
     Ok(files)
 }
@@ -462,7 +467,8 @@ impl WebRenderer {
     }
 
     /// Opens a model from files (`names` and their `data`, parallel arrays: a .glb; a .gltf
-    /// with its .bin and images; an .obj with its .mtl and textures; a .ply): the model file
+    /// with its .bin and images; an .obj with its .mtl and textures; a .ply; a .zip of any of
+    /// those): the model file
     /// among them, or `main` where several are. The scene becomes that model, with the other
     /// settings of `query`. Returns the loader's notes, one per line. On an error (naming the
     /// file and what is wrong) the previous scene, model and settings stay.

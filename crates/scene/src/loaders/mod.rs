@@ -237,6 +237,7 @@ mod obj_text;
 pub(crate) mod options;
 mod paths;
 mod ply;
+mod zip_files;
 
 pub use common::{
     CREASE_ANGLE_DEG, DEFAULT_LIGHT_COUNT, GLTF_SIZE_EXTRA, MAX_DECOMPRESSED_BYTES, MAX_FILE_BYTES,
@@ -251,3 +252,4 @@ pub use gltf_write::write_gltf;
 pub use obj::{write_obj, MAX_MTL_BYTES};
 pub use options::{Ground, LoadOptions};
 pub use ply::write_ply_ascii;
+pub use zip_files::MAX_ZIP_ENTRIES;

@@ -39,7 +39,10 @@ fn textured_box() -> Scene {
 /// The files of `textured_box` as an exporter writes them: `scene.gltf`, `scene.bin` and
 /// `tex.png` (names relative to the model's folder).
 fn split_files() -> Vec<(String, Vec<u8>)> {
-    let dir = temp_dir("memory_split");
+    // One folder per call: the tests run in parallel.
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = temp_dir(&format!("memory_split_{call}"));
     let embedded = dir.join("embedded.gltf");
     write_gltf(&textured_box(), &embedded).unwrap();
     let mut doc: Value = serde_json::from_slice(&std::fs::read(&embedded).unwrap()).unwrap();
@@ -170,6 +173,66 @@ fn paths_resolve_only_among_the_files_given() {
         .to_string();
     assert!(
         e.contains("export/other.glb") && e.contains("not among"),
+        "{e}"
+    );
+}
+
+/// `files` as a zip archive (deflated), each under `folder`.
+fn zipped(files: &[(String, Vec<u8>)], folder: &str) -> Vec<u8> {
+    use std::io::Write;
+    let mut w = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let options = zip::write::SimpleFileOptions::default()
+        .compression_method(zip::CompressionMethod::Deflated);
+    for (name, bytes) in files {
+        w.start_file(format!("{folder}{name}"), options).unwrap();
+        w.write_all(bytes).unwrap();
+    }
+    w.finish().unwrap().into_inner()
+}
+
+#[test]
+fn a_zip_of_the_files_loads_as_the_files_do() {
+    let files = split_files();
+    let mut m = MemoryFiles::new();
+    let added = m
+        .insert_zip("drop/export.zip", &zipped(&files, "export/"))
+        .unwrap();
+    assert_eq!(added, 3);
+    assert_eq!(
+        m.names().collect::<Vec<_>>(),
+        [
+            "drop/export/scene.bin",
+            "drop/export/scene.gltf",
+            "drop/export/tex.png"
+        ]
+    );
+    let from_zip =
+        load_scene_from_memory(&m, "drop/export/scene.gltf", &LoadOptions::default()).unwrap();
+    let plain = load_scene_from_memory(
+        &memory(&files, "export/"),
+        "export/scene.gltf",
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(
+        format!("{:?}", from_zip.scene),
+        format!("{:?}", plain.scene)
+    );
+
+    // An entry that climbs out of the archive's folder, and what is not a zip: refused by name.
+    let evil = zipped(&[("../../outside.bin".to_string(), vec![1, 2, 3])], "");
+    let e = MemoryFiles::new()
+        .insert_zip("drop/evil.zip", &evil)
+        .unwrap_err();
+    assert!(
+        e.contains("drop/evil.zip") && e.contains("../../outside.bin"),
+        "{e}"
+    );
+    let e = MemoryFiles::new()
+        .insert_zip("notes.zip", b"PK but not really")
+        .unwrap_err();
+    assert!(
+        e.contains("notes.zip") && e.contains("not a zip archive"),
         "{e}"
     );
 }
