@@ -18,6 +18,15 @@ use common::models::{light, pbr, physical};
 use common::{base64, encode_base64, on_path, repo, serve, tmp, Browser};
 use serde_json::json;
 
+/// Chromium's compositor on SwiftShader's Vulkan: without a GPU, its default compositor
+/// cannot take a WebGPU canvas's frames (the page's device is lost at the first present,
+/// "Could not find SharedImageBackingFactory"); through Vulkan the canvas shows them.
+const PRESENTING: &[&str] = &[
+    "--use-angle=vulkan",
+    "--use-vulkan=swiftshader",
+    "--enable-features=Vulkan",
+];
+
 const W: u32 = 480;
 const H: u32 = 270;
 
@@ -123,7 +132,7 @@ fn the_page_renders_the_native_frame_and_its_controls_work() {
     let pkg = tmp("pkg");
     build_page(&pkg);
     let port = serve(repo().join("web/index.html"), vec![("pkg", pkg.clone())]);
-    let mut browser = Browser::start(&chromium_dir, &[]);
+    let mut browser = Browser::start(&chromium_dir, PRESENTING);
     let dir = tmp("native");
 
     // The atrium's 32 lights with the compute rasterizer, as `render` makes it. (The other
@@ -433,7 +442,7 @@ fn dropped_models_render_as_render_renders_the_files() {
         repo().join("web/index.html"),
         vec![("pkg", pkg.clone()), ("models", models.clone())],
     );
-    let mut browser = Browser::start(&chromium_dir, &[]);
+    let mut browser = Browser::start(&chromium_dir, PRESENTING);
     let dir = tmp("native-drop");
 
     // A small built-in scene first; the drop replaces it.

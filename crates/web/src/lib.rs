@@ -1,6 +1,7 @@
 //! The renderer in a web page: WebGPU through wgpu. A [`WebRenderer`] keeps one scene and
-//! renderer alive; each frame is rendered into a texture and read back (an offscreen frame:
-//! headless browsers do not present canvases, and the page draws the pixels into a 2D canvas).
+//! renderer alive; each frame is rendered into a texture and copied into the page's canvas
+//! through its WebGPU context ([`WebRenderer::present`]). Reading a frame back
+//! ([`WebRenderer::read_frame`]) is for the page's tests.
 //!
 //! Settings travel as a query string (`scene=atrium&technique=layered&lights=64&pcf=3x3`), the
 //! same text the page's URL and its controls use; see [`WebSettings`].
@@ -329,6 +330,15 @@ pub struct WebRenderer {
     model: Option<Model>,
     /// Shadow views the last frame drew (the others were kept from earlier frames).
     views_drawn: u32,
+    /// The page's canvas through its WebGPU context, where one is attached.
+    canvas: Option<Canvas>,
+}
+
+/// The page's canvas through its WebGPU context: `rgba8unorm`, written by copying the frame
+/// (`rgba8unorm-srgb`: the same bytes) into it.
+struct Canvas {
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
 }
 
 #[wasm_bindgen]
@@ -386,6 +396,7 @@ impl WebRenderer {
             target,
             model,
             views_drawn: 0,
+            canvas: None,
         })
     }
 
@@ -519,12 +530,100 @@ impl WebRenderer {
             .unwrap_or_default()
     }
 
-    /// Renders a frame and returns its RGBA8 (sRGB) pixels, row-major from the top-left.
-    pub async fn render(&mut self) -> Result<Vec<u8>, JsValue> {
+    /// Presents every later [`WebRenderer::present`] on `canvas` through its WebGPU context.
+    /// Errors: the browser gives the canvas no WebGPU context, or it cannot take the frame's
+    /// format (the page says so; WebGPU guarantees canvases `rgba8unorm`).
+    pub fn attach_canvas(&mut self, canvas: web_sys::HtmlCanvasElement) -> Result<(), JsValue> {
+        let surface = self
+            .ctx
+            .instance
+            .create_surface(wgpu::SurfaceTarget::Canvas(canvas))
+            .map_err(|e| err(format!("the canvas has no WebGPU context: {e}")))?;
+        let caps = surface.get_capabilities(&self.ctx.adapter);
+        let format = wgpu::TextureFormat::Rgba8Unorm;
+        if !caps.formats.contains(&format) {
+            return Err(err(format!(
+                "the canvas cannot take rgba8unorm (it offers {:?})",
+                caps.formats
+            )));
+        }
+        let config = wgpu::SurfaceConfiguration {
+            usage: wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::RENDER_ATTACHMENT,
+            format,
+            width: self.settings.width,
+            height: self.settings.height,
+            present_mode: wgpu::PresentMode::Fifo,
+            desired_maximum_frame_latency: 2,
+            alpha_mode: if caps.alpha_modes.contains(&wgpu::CompositeAlphaMode::Opaque) {
+                wgpu::CompositeAlphaMode::Opaque
+            } else {
+                caps.alpha_modes
+                    .first()
+                    .copied()
+                    .unwrap_or(wgpu::CompositeAlphaMode::Auto)
+            },
+            view_formats: vec![],
+            color_space: wgpu::SurfaceColorSpace::Auto,
+        };
+        self.ctx.device.set_device_lost_callback(|reason, message| {
+            console_error(&format!("device lost: {reason:?}: {message}"));
+        });
+        surface.configure(&self.ctx.device, &config);
+        self.canvas = Some(Canvas { surface, config });
+        Ok(())
+    }
+
+    /// Renders a frame, shows it on the attached canvas (no read-back) and resolves once the
+    /// GPU has finished it, so that the page's frame time is the frame's.
+    pub async fn present(&mut self) -> Result<(), JsValue> {
         let submitted = self.renderer.render_to(&self.target).map_err(err)?;
         self.views_drawn = submitted.shadow_stats.views_drawn;
+        let canvas = self
+            .canvas
+            .as_mut()
+            .ok_or_else(|| err("no canvas is attached"))?;
+        let (w, h) = (self.settings.width, self.settings.height);
+        if (canvas.config.width, canvas.config.height) != (w, h) {
+            canvas.config.width = w;
+            canvas.config.height = h;
+            canvas.surface.configure(&self.ctx.device, &canvas.config);
+        }
+        let texture = match canvas.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+            other => return Err(err(format!("the canvas gave no texture: {other:?}"))),
+        };
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        encoder.copy_texture_to_texture(
+            self.target.as_image_copy(),
+            texture.texture.as_image_copy(),
+            self.target.size(),
+        );
+        // A 4-byte buffer cleared after the copy: mapping it waits for the frame's work.
+        let done = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame done"),
+            size: 4,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        encoder.clear_buffer(&done, 0, None);
+        self.ctx.queue.submit([encoder.finish()]);
+        self.ctx.queue.present(texture);
+        let (tx, rx) = one_shot();
+        done.map_async(wgpu::MapMode::Read, .., move |r| tx(r.is_ok()));
+        if !rx.await {
+            return Err(err("the GPU did not finish the frame (was the device lost?)"));
+        }
+        if let Some(e) = self.ctx.take_uncaptured() {
+            return Err(err(format!("WebGPU error: {e}")));
+        }
+        Ok(())
+    }
+
+    /// The last frame's RGBA8 (sRGB) pixels, row-major from the top-left, read back from the
+    /// GPU (the page's tests; showing the frame does not need it).
+    pub async fn read_frame(&self) -> Result<Vec<u8>, JsValue> {
         let pixels = read_back(&self.ctx, &self.target).await?;
-        // Errors the browser reported while the frame ran (none are expected).
         if let Some(e) = self.ctx.take_uncaptured() {
             return Err(err(format!("WebGPU error: {e}")));
         }
@@ -681,7 +780,12 @@ async fn read_back(ctx: &GpuContext, target: &wgpu::Texture) -> Result<Vec<u8>, 
     );
     ctx.queue.submit([encoder.finish()]);
     let (tx, rx) = one_shot();
-    buffer.map_async(wgpu::MapMode::Read, .., move |r| tx(r.is_ok()));
+    buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+        if let Err(e) = &r {
+            console_error(&format!("mapping the frame for reading: {e}"));
+        }
+        tx(r.is_ok())
+    });
     if !rx.await {
         return Err(err("mapping the frame for reading failed"));
     }
