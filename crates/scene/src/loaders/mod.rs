@@ -247,7 +247,7 @@ pub use dispatch::{
     load_mesh, load_mesh_with, load_scene, load_scene_from_memory, load_scene_with, LoadedScene,
 };
 pub use files::MemoryFiles;
-pub use framing::seed_lights;
+pub use framing::{add_seeded_lights, seed_lights};
 pub use gltf_write::write_gltf;
 pub use obj::{write_obj, MAX_MTL_BYTES};
 pub use options::{Ground, LoadOptions};

@@ -123,3 +123,40 @@ fn a_model_with_a_floor_gets_none_unless_asked() {
     let auto = load_scene_with(&path, &with_ground(Ground::Auto)).unwrap();
     assert_eq!(auto.scene.instances.len(), 2, "{:?}", auto.notes);
 }
+
+#[test]
+fn added_lights_keep_the_models_own_and_seeded_lights_replace_them() {
+    use manyshadows_scene::builtin::{LightMix, MAX_LIGHTS};
+    use manyshadows_scene::loaders::{add_seeded_lights, seed_lights};
+    let dir = temp_dir("added-lights");
+    let bare = obj_of(&dir, "bare.obj", &cuboid(Vec3::ONE));
+    let loaded = load_scene_with(&bare, &with_ground(Ground::Auto)).unwrap();
+    let rig = loaded.scene.lights.clone();
+    assert!(!rig.is_empty(), "a bare model gets a rig");
+
+    // Added: the rig first, unchanged, then the layout `seed_lights` would have placed.
+    let mut added = loaded.scene.clone();
+    add_seeded_lights(&mut added, 16, 3, LightMix::All, None).unwrap();
+    let mut seeded = loaded.scene.clone();
+    seed_lights(&mut seeded, 16, 3, LightMix::All, None).unwrap();
+    assert_eq!(added.lights.len(), rig.len() + 16);
+    assert_eq!(
+        &added.lights[..rig.len()],
+        &rig[..],
+        "the model's own lights are kept"
+    );
+    assert_eq!(
+        &added.lights[rig.len()..],
+        &seeded.lights[..],
+        "the added lights are the seeded layout's"
+    );
+
+    // The total is what is checked against the limit, and the scene is left as it was.
+    let mut over = loaded.scene.clone();
+    let err = add_seeded_lights(&mut over, MAX_LIGHTS, 1, LightMix::All, None).unwrap_err();
+    assert!(
+        err.to_string().contains(&MAX_LIGHTS.to_string()),
+        "the refusal names the limit: {err}"
+    );
+    assert_eq!(over.lights, rig, "a refused addition changes nothing");
+}

@@ -1,0 +1,311 @@
+//! The page's score button: the current view's hard shadows against the exact CPU reference
+//! (`manyshadows-reference`, compiled to wasm32), scored as `manyshadows compare` scores them.
+//!
+//! The view is rendered once more as `compare` renders a variant (PCF off, the hard
+//! visibility mask on), its G-buffer and mask read back ([`manyshadows::read_deferred`]), and
+//! one ray traced per covered pixel and light in reach, a few rows at a time
+//! ([`ScoreRun::step`]): the page returns to its event loop between steps, so it shows
+//! progress and can stop the run. The result is `compare`'s numbers for the view (false
+//! shadow and false light outside the edge band, as fractions of the in-reach pairs) and the
+//! misclassified pixels in `compare`'s colours, to lay over the frame.
+
+use std::sync::atomic::AtomicBool;
+
+use manyshadows::scene::{Light, Scene};
+use manyshadows::{Pcf, RenderSettings, Renderer};
+use manyshadows_reference::score::{self, class};
+use manyshadows_reference::{
+    in_reach, reference_visibility, Mask, ReferenceVisibility, SurfacePoint, Surfaces, Tracer,
+};
+
+/// `compare`'s default edge band: errors within 2 pixels of a true shadow edge are counted
+/// apart.
+const EDGE_BAND: u32 = 2;
+
+fn now_ms() -> f64 {
+    js_sys::Date::now()
+}
+
+/// A score in progress: the reference traced row by row into `vis`.
+pub(crate) struct ScoreRun {
+    tracer: Tracer,
+    lights: Vec<Light>,
+    surfaces: Surfaces,
+    /// The technique's hard visibility mask of the same frame.
+    technique: Mask,
+    vis: ReferenceVisibility,
+    next_row: u32,
+    /// Rays (pairs in reach of a shadow-casting light) per row, and in all.
+    rays_per_row: Vec<u64>,
+    rays: u64,
+    rays_done: u64,
+    trace_ms: f64,
+    /// What preparing took: the extra frame and its read-backs, the BVH.
+    pub(crate) render_ms: f64,
+    pub(crate) bvh_ms: f64,
+    /// The technique scored.
+    technique_name: String,
+    /// Set once the last row is traced: the score, and the misclassification class per pixel.
+    result: Option<score::Score>,
+    classes: Option<Vec<u8>>,
+}
+
+impl ScoreRun {
+    /// Renders `scene` as `compare` renders a variant with `settings` (PCF off, visibility
+    /// mask on), reads the frame's G-buffer and mask back and builds the reference's BVH.
+    pub(crate) async fn start(
+        ctx: &manyshadows::GpuContext,
+        scene: &Scene,
+        settings: RenderSettings,
+    ) -> Result<Self, String> {
+        let t0 = now_ms();
+        let settings = settings.with_pcf(Pcf::Off).with_visibility(true);
+        let single_sided = settings.shadow.casters.single_sided;
+        let technique_name = settings.technique.name().to_string();
+        let (w, h) = (settings.width, settings.height);
+        let mut renderer = Renderer::new(ctx, scene, settings).map_err(|e| e.to_string())?;
+        let target = ctx
+            .device
+            .create_texture(&manyshadows::wgpu::TextureDescriptor {
+                label: Some("web.score.frame"),
+                size: manyshadows::wgpu::Extent3d {
+                    width: w,
+                    height: h,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: manyshadows::wgpu::TextureDimension::D2,
+                format: manyshadows::wgpu::TextureFormat::Rgba8UnormSrgb,
+                usage: manyshadows::wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | manyshadows::wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            });
+        renderer.render_to(&target).map_err(|e| e.to_string())?;
+        let g = manyshadows::read_deferred(|| renderer.read_gbuffer())
+            .await
+            .map_err(|e| e.to_string())?;
+        let (mask, _) = manyshadows::read_deferred(|| renderer.read_visibility())
+            .await
+            .map_err(|e| e.to_string())?;
+        let mask = mask.ok_or_else(|| {
+            format!("technique {technique_name} gave no visibility mask to score")
+        })?;
+        let render_ms = now_ms() - t0;
+        let points: Vec<Option<SurfacePoint>> = (0..g.position.len())
+            .map(|i| {
+                g.covered[i].then(|| SurfacePoint {
+                    position: g.position[i],
+                    normal: g.normal[i],
+                })
+            })
+            .collect();
+        let surfaces = Surfaces::new(g.width, g.height, points).map_err(|e| e.to_string())?;
+        let technique = Mask {
+            width: mask.width,
+            height: mask.height,
+            lights: mask.lights,
+            words_per_pixel: mask.words_per_pixel,
+            words: mask.words,
+        };
+        let t1 = now_ms();
+        let scene = renderer.scene();
+        let tracer = Tracer::with_rule(scene, single_sided).map_err(|e| e.to_string())?;
+        let bvh_ms = now_ms() - t1;
+        let lights = scene.lights.clone();
+        // The rays: every covered pixel's pairs in reach of a light that casts shadows.
+        let rays_per_row: Vec<u64> = (0..g.height as usize)
+            .map(|y| {
+                let row = &surfaces.points[y * g.width as usize..(y + 1) * g.width as usize];
+                row.iter()
+                    .flatten()
+                    .map(|p| {
+                        lights
+                            .iter()
+                            .filter(|l| l.casts_shadows && in_reach(l, p.position))
+                            .count() as u64
+                    })
+                    .sum()
+            })
+            .collect();
+        let rays = rays_per_row.iter().sum();
+        let n = lights.len() as u32;
+        Ok(Self {
+            tracer,
+            vis: ReferenceVisibility {
+                lit: Mask::zeros(g.width, g.height, n),
+                reach: Mask::zeros(g.width, g.height, n),
+                facing: Mask::zeros(g.width, g.height, n),
+            },
+            lights,
+            surfaces,
+            technique,
+            next_row: 0,
+            rays_per_row,
+            rays,
+            rays_done: 0,
+            trace_ms: 0.0,
+            render_ms,
+            bvh_ms,
+            technique_name,
+            result: None,
+            classes: None,
+        })
+    }
+
+    /// What the run will trace, as JSON: the frame's size, the lights, the rays.
+    pub(crate) fn plan_json(&self) -> String {
+        format!(
+            "{{\"technique\":\"{}\",\"width\":{},\"height\":{},\"lights\":{},\"rays\":{},\
+             \"triangles\":{},\"render_ms\":{:.1},\"bvh_ms\":{:.1}}}",
+            self.technique_name,
+            self.surfaces.width,
+            self.surfaces.height,
+            self.lights.len(),
+            self.rays,
+            self.tracer.triangle_count(),
+            self.render_ms,
+            self.bvh_ms
+        )
+    }
+
+    /// Traces rows for about `budget_ms` (at least one row); returns the fraction of the rays
+    /// traced so far. Once every row is traced the frame is scored.
+    pub(crate) fn step(&mut self, budget_ms: f64) -> Result<f64, String> {
+        let start = now_ms();
+        let (w, h) = (self.surfaces.width, self.surfaces.height);
+        let row_words = w as usize * self.vis.lit.words_per_pixel as usize;
+        while self.next_row < h {
+            // Rows at a time, as many as should fit the budget at the speed so far.
+            let speed = if self.trace_ms > 0.0 {
+                self.rays_done as f64 / self.trace_ms
+            } else {
+                0.0
+            };
+            let left = (budget_ms - (now_ms() - start)).max(1.0);
+            let mut rows = 1u32;
+            let mut rays = self.rays_per_row[self.next_row as usize];
+            while self.next_row + rows < h && speed > 0.0 {
+                let next = self.rays_per_row[(self.next_row + rows) as usize];
+                if (rays + next) as f64 > speed * left {
+                    break;
+                }
+                rays += next;
+                rows += 1;
+            }
+            let (a, b) = (self.next_row as usize, (self.next_row + rows) as usize);
+            let part = Surfaces::new(
+                w,
+                rows,
+                self.surfaces.points[a * w as usize..b * w as usize].to_vec(),
+            )
+            .map_err(|e| e.to_string())?;
+            let t = now_ms();
+            let v = reference_visibility(
+                &self.tracer,
+                &self.lights,
+                &part,
+                &|| {},
+                &AtomicBool::new(false),
+            )
+            .ok_or("the reference was cancelled")?;
+            self.trace_ms += now_ms() - t;
+            self.rays_done += rays;
+            for (dst, src) in [
+                (&mut self.vis.lit, &v.lit),
+                (&mut self.vis.reach, &v.reach),
+                (&mut self.vis.facing, &v.facing),
+            ] {
+                dst.words[a * row_words..b * row_words].copy_from_slice(&src.words);
+            }
+            self.next_row += rows;
+            if now_ms() - start >= budget_ms {
+                break;
+            }
+        }
+        if self.next_row >= h && self.classes.is_none() {
+            let band = score::edge_band(&self.vis.lit, &self.surfaces.covered(), EDGE_BAND);
+            let s = score::score(&self.vis, &band, &self.technique).map_err(|e| e.to_string())?;
+            self.classes = Some(
+                score::error_classes(&self.vis, &band, &self.technique, None)
+                    .map_err(|e| e.to_string())?,
+            );
+            self.result = Some(s);
+        }
+        Ok(if self.rays == 0 {
+            1.0
+        } else {
+            self.rays_done as f64 / self.rays as f64
+        })
+    }
+
+    /// The score once every row is traced, as JSON (`compare --json`'s names, over every
+    /// light: fractions of the in-reach pairs), `None` before.
+    pub(crate) fn result_json(&self) -> Option<String> {
+        let s = self.result.as_ref()?;
+        let c = s.total(|_| true);
+        Some(format!(
+            "{{\"technique\":\"{}\",\"width\":{},\"height\":{},\"lights\":{},\
+             \"in_reach_pixels\":{},\"false_shadow\":{},\"false_light\":{},\
+             \"false_shadow_fraction\":{},\"false_light_fraction\":{},\"error_fraction\":{},\
+             \"band_fraction\":{},\"band_error_fraction\":{},\"rays\":{},\"trace_ms\":{:.1},\
+             \"render_ms\":{:.1},\"bvh_ms\":{:.1},\"edge_band\":{}}}",
+            self.technique_name,
+            self.surfaces.width,
+            self.surfaces.height,
+            c.lights,
+            c.in_reach,
+            c.false_shadow,
+            c.false_light,
+            c.false_shadow_fraction(),
+            c.false_light_fraction(),
+            c.error_fraction(),
+            c.band_fraction(),
+            c.band_error_fraction(),
+            self.rays,
+            self.trace_ms,
+            self.render_ms,
+            self.bvh_ms,
+            EDGE_BAND
+        ))
+    }
+
+    /// The misclassified pixels to lay over the frame, RGBA: `compare`'s colours (red =
+    /// false shadow, green = false light, darker inside the edge band, yellow = both),
+    /// transparent elsewhere. Empty before the score.
+    pub(crate) fn overlay(&self) -> Vec<u8> {
+        let Some(classes) = &self.classes else {
+            return Vec::new();
+        };
+        let mut out = Vec::with_capacity(classes.len() * 4);
+        for &c in classes {
+            let px = if c & (class::FALSE_SHADOW | class::FALSE_LIGHT) != 0 {
+                [
+                    if c & class::FALSE_SHADOW != 0 { 255 } else { 0 },
+                    if c & class::FALSE_LIGHT != 0 { 255 } else { 0 },
+                    0,
+                    255,
+                ]
+            } else if c & (class::BAND_FALSE_SHADOW | class::BAND_FALSE_LIGHT) != 0 {
+                [
+                    if c & class::BAND_FALSE_SHADOW != 0 {
+                        130
+                    } else {
+                        0
+                    },
+                    if c & class::BAND_FALSE_LIGHT != 0 {
+                        130
+                    } else {
+                        0
+                    },
+                    0,
+                    255,
+                ]
+            } else {
+                [0; 4]
+            };
+            out.extend_from_slice(&px);
+        }
+        out
+    }
+}
