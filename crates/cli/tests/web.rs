@@ -787,7 +787,8 @@ fn the_score_button_scores_as_compare_and_a_public_model_opens() {
     );
     let camera = browser.eval("window.manyshadows.camera()", 10);
     let camera = camera.as_str().unwrap().to_string();
-    let page = browser.eval("window.manyshadows.score()", 900);
+    // Hard and soft: 16 samples per (pixel, sized light) of the soft reference.
+    let page = browser.eval("window.manyshadows.score(16)", 900);
     let text = browser.eval("window.manyshadows.scoreText()", 10);
     eprintln!("page's score: {page}\n{}", text.as_str().unwrap_or(""));
     assert!(
@@ -808,7 +809,7 @@ fn the_score_button_scores_as_compare_and_a_public_model_opens() {
             "--techniques",
             "compute",
             "--soft-samples",
-            "0",
+            "16",
             "--width",
             &W.to_string(),
             "--height",
@@ -845,6 +846,25 @@ fn the_score_button_scores_as_compare_and_a_public_model_opens() {
             "the page's {key} is {p:.4} %, compare's {n:.4} % (bound: 0.01 percentage points)"
         );
     }
+    // The soft visibility against the soft reference, as compare's soft table: the mean
+    // absolute error of the lit fraction over every scored pair and by the reference's class.
+    let native_soft = native["variants"][0]["soft"]["by_type"]["all"].clone();
+    for class in ["all", "umbra", "penumbra", "lit"] {
+        let (p, n) = (
+            page["soft"][class]["mean_abs_error"]
+                .as_f64()
+                .unwrap_or(f64::NAN),
+            native_soft[class]["mean_abs_error"]
+                .as_f64()
+                .unwrap_or(f64::NAN),
+        );
+        eprintln!("soft {class}: page {p:.5}, compare {n:.5}");
+        assert!(
+            (p - n).abs() <= 0.002,
+            "the page's soft {class} error is {p:.5}, compare's {n:.5} (bound 0.002)\n{page}"
+        );
+    }
+    assert_eq!(page["soft"]["samples"], 16, "{page}");
     // A real score, not an empty one: pairs in reach, errors in the band at least.
     assert!(
         page["in_reach_pixels"].as_u64().unwrap() > 100_000

@@ -731,13 +731,22 @@ impl WebRenderer {
     /// compare` scores a technique (PCF off, the hard visibility mask): renders the view once
     /// more, reads its G-buffer and mask back and builds the BVH. Resolves to what it will
     /// trace, as JSON (`width`, `height`, `lights`, `rays`, `triangles`, `render_ms`,
-    /// `bvh_ms`); [`WebRenderer::score_step`] then traces it.
-    pub async fn score_start(&mut self) -> Result<String, JsValue> {
+    /// `bvh_ms`, `soft_samples`); [`WebRenderer::score_step`] then traces it. With
+    /// `soft_samples` > 0 and a sized light that casts shadows, the soft reference too, with
+    /// that many samples per (pixel, sized light) rounded up to a square (`compare
+    /// --soft-samples N`), and the technique's soft visibility is scored against it.
+    pub async fn score_start(&mut self, soft_samples: u32) -> Result<String, JsValue> {
         self.score = None;
+        if soft_samples > 65_536 {
+            return Err(err(format!(
+                "{soft_samples} soft samples: at most 65,536 per pair (as compare)"
+            )));
+        }
         let run = score::ScoreRun::start(
             &self.ctx,
             self.renderer.scene(),
             self.settings.render_settings(),
+            soft_samples,
         )
         .await
         .map_err(err)?;

@@ -7,15 +7,20 @@
 //! ([`ScoreRun::step`]): the page returns to its event loop between steps, so it shows
 //! progress and can stop the run. The result is `compare`'s numbers for the view (false
 //! shadow and false light outside the edge band, as fractions of the in-reach pairs) and the
-//! misclassified pixels in `compare`'s colours, to lay over the frame.
+//! misclassified pixels in `compare`'s colours, to lay over the frame. With soft samples asked
+//! for and a sized light that casts shadows, the soft reference follows (the same samples per
+//! pair, seeds and rays as `compare --soft-samples N`), and the technique's soft visibility is
+//! scored against it: the mean absolute error of the lit fractions, by the reference's class.
 
 use std::sync::atomic::AtomicBool;
 
 use manyshadows::scene::{Light, Scene};
 use manyshadows::{Pcf, RenderSettings, Renderer};
 use manyshadows_reference::score::{self, class};
+use manyshadows_reference::soft::{grid_side, point_soft_visibility, seed};
 use manyshadows_reference::{
-    in_reach, reference_visibility, Mask, ReferenceVisibility, SurfacePoint, Surfaces, Tracer,
+    in_reach, reference_visibility, soft_score, Fractions, Mask, ReferenceVisibility, SoftScore,
+    SoftVisibility, SurfacePoint, Surfaces, Tracer,
 };
 
 /// `compare`'s default edge band: errors within 2 pixels of a true shadow edge are counted
@@ -48,6 +53,19 @@ pub(crate) struct ScoreRun {
     /// Set once the last row is traced: the score, and the misclassification class per pixel.
     result: Option<score::Score>,
     classes: Option<Vec<u8>>,
+    /// The soft part, where asked for and a sized light casts shadows.
+    soft: Option<SoftRun>,
+}
+
+/// The soft reference traced row by row after the hard one, and the technique's fractions.
+struct SoftRun {
+    /// Samples per (pixel, sized light) side: n² rays per pair.
+    n: u32,
+    technique: Fractions,
+    visible: Fractions,
+    next_row: u32,
+    rays_per_row: Vec<u64>,
+    result: Option<SoftScore>,
 }
 
 impl ScoreRun {
@@ -57,9 +75,15 @@ impl ScoreRun {
         ctx: &manyshadows::GpuContext,
         scene: &Scene,
         settings: RenderSettings,
+        soft_samples: u32,
     ) -> Result<Self, String> {
         let t0 = now_ms();
-        let settings = settings.with_pcf(Pcf::Off).with_visibility(true);
+        let sized = scene.lights.iter().any(|l| l.size > 0.0 && l.casts_shadows);
+        let soft_wanted = soft_samples > 0 && sized;
+        let settings = settings
+            .with_pcf(Pcf::Off)
+            .with_visibility(true)
+            .with_soft_visibility(soft_wanted);
         let single_sided = settings.shadow.casters.single_sided;
         let technique_name = settings.technique.name().to_string();
         let (w, h) = (settings.width, settings.height);
@@ -85,7 +109,7 @@ impl ScoreRun {
         let g = manyshadows::read_deferred(|| renderer.read_gbuffer())
             .await
             .map_err(|e| e.to_string())?;
-        let (mask, _) = manyshadows::read_deferred(|| renderer.read_visibility())
+        let (mask, soft_bytes) = manyshadows::read_deferred(|| renderer.read_visibility())
             .await
             .map_err(|e| e.to_string())?;
         let mask = mask.ok_or_else(|| {
@@ -128,7 +152,56 @@ impl ScoreRun {
                     .sum()
             })
             .collect();
-        let rays = rays_per_row.iter().sum();
+        let soft = match (soft_wanted, soft_bytes) {
+            (false, _) => None,
+            (true, None) => {
+                return Err(format!(
+                    "technique {technique_name} gave no soft visibility to score"
+                ))
+            }
+            (true, Some(b)) => {
+                let n = grid_side(soft_samples);
+                // n² rays per in-reach pair of a sized light that casts shadows, one per pair
+                // of a hard one (the hard reference's ray again).
+                let rays_per_row = (0..g.height as usize)
+                    .map(|y| {
+                        let row =
+                            &surfaces.points[y * g.width as usize..(y + 1) * g.width as usize];
+                        row.iter()
+                            .flatten()
+                            .map(|p| {
+                                lights
+                                    .iter()
+                                    .filter(|l| in_reach(l, p.position))
+                                    .map(|l| match (l.size > 0.0, l.casts_shadows) {
+                                        (true, true) => u64::from(n * n),
+                                        (false, true) => 1,
+                                        _ => 0,
+                                    })
+                                    .sum::<u64>()
+                            })
+                            .sum()
+                    })
+                    .collect();
+                Some(SoftRun {
+                    n,
+                    technique: Fractions {
+                        width: b.width,
+                        height: b.height,
+                        lights: b.lights,
+                        values: b.values.iter().map(|&v| f32::from(v) / 255.0).collect(),
+                    },
+                    visible: Fractions::zeros(g.width, g.height, lights.len() as u32),
+                    next_row: 0,
+                    rays_per_row,
+                    result: None,
+                })
+            }
+        };
+        let rays = rays_per_row.iter().sum::<u64>()
+            + soft
+                .as_ref()
+                .map_or(0, |s| s.rays_per_row.iter().sum::<u64>());
         let n = lights.len() as u32;
         Ok(Self {
             tracer,
@@ -150,6 +223,7 @@ impl ScoreRun {
             technique_name,
             result: None,
             classes: None,
+            soft,
         })
     }
 
@@ -157,7 +231,7 @@ impl ScoreRun {
     pub(crate) fn plan_json(&self) -> String {
         format!(
             "{{\"technique\":\"{}\",\"width\":{},\"height\":{},\"lights\":{},\"rays\":{},\
-             \"triangles\":{},\"render_ms\":{:.1},\"bvh_ms\":{:.1}}}",
+             \"triangles\":{},\"render_ms\":{:.1},\"bvh_ms\":{:.1},\"soft_samples\":{}}}",
             self.technique_name,
             self.surfaces.width,
             self.surfaces.height,
@@ -165,7 +239,8 @@ impl ScoreRun {
             self.rays,
             self.tracer.triangle_count(),
             self.render_ms,
-            self.bvh_ms
+            self.bvh_ms,
+            self.soft.as_ref().map_or(0, |s| s.n * s.n)
         )
     }
 
@@ -232,24 +307,127 @@ impl ScoreRun {
             );
             self.result = Some(s);
         }
-        Ok(if self.rays == 0 {
+        if self.next_row >= h {
+            self.step_soft(start, budget_ms)?;
+        }
+        Ok(if self.finished() {
             1.0
+        } else if self.rays == 0 {
+            0.0
         } else {
-            self.rays_done as f64 / self.rays as f64
+            (self.rays_done as f64 / self.rays as f64).min(0.999)
         })
+    }
+
+    /// The soft reference's next rows, while the budget that began at `start` lasts (at least
+    /// one row); scores the soft visibility after the last.
+    fn step_soft(&mut self, start: f64, budget_ms: f64) -> Result<(), String> {
+        let Some(soft) = self.soft.as_mut() else {
+            return Ok(());
+        };
+        let (w, h) = (self.surfaces.width as usize, self.surfaces.height);
+        let lights = self.lights.len();
+        while soft.next_row < h {
+            let speed = if self.trace_ms > 0.0 {
+                self.rays_done as f64 / self.trace_ms
+            } else {
+                0.0
+            };
+            let left = (budget_ms - (now_ms() - start)).max(1.0);
+            let mut rows = 1u32;
+            let mut rays = soft.rays_per_row[soft.next_row as usize];
+            while soft.next_row + rows < h && speed > 0.0 {
+                let next = soft.rays_per_row[(soft.next_row + rows) as usize];
+                if (rays + next) as f64 > speed * left {
+                    break;
+                }
+                rays += next;
+                rows += 1;
+            }
+            let t = now_ms();
+            // As `reference_soft_visibility` traces a row: the same samples and seeds.
+            for y in soft.next_row..soft.next_row + rows {
+                for x in 0..w {
+                    let pixel = y as usize * w + x;
+                    let Some(sp) = self.surfaces.points[pixel] else {
+                        continue;
+                    };
+                    for (li, light) in self.lights.iter().enumerate() {
+                        if !self.vis.reach.get(pixel, li as u32) {
+                            continue;
+                        }
+                        soft.visible.values[pixel * lights + li] = point_soft_visibility(
+                            &self.tracer,
+                            light,
+                            sp.position,
+                            sp.normal,
+                            soft.n,
+                            seed(x as u32, y, li as u32),
+                        );
+                    }
+                }
+            }
+            self.trace_ms += now_ms() - t;
+            self.rays_done += rays;
+            soft.next_row += rows;
+            if now_ms() - start >= budget_ms {
+                break;
+            }
+        }
+        if soft.next_row >= h && soft.result.is_none() {
+            let reference = SoftVisibility {
+                visible: soft.visible.clone(),
+                reach: self.vis.reach.clone(),
+                facing: self.vis.facing.clone(),
+                samples: soft.n * soft.n,
+            };
+            soft.result = Some(soft_score(&reference, &soft.technique).map_err(|e| e.to_string())?);
+        }
+        Ok(())
+    }
+
+    /// Whether every row of every part is traced and scored.
+    fn finished(&self) -> bool {
+        self.result.is_some() && self.soft.as_ref().is_none_or(|s| s.result.is_some())
     }
 
     /// The score once every row is traced, as JSON (`compare --json`'s names, over every
     /// light: fractions of the in-reach pairs), `None` before.
     pub(crate) fn result_json(&self) -> Option<String> {
+        if !self.finished() {
+            return None;
+        }
         let s = self.result.as_ref()?;
         let c = s.total(|_| true);
+        // The soft part: mean absolute error of the lit fractions over the scored pairs, and
+        // by the reference's class (`compare`'s soft table).
+        let soft = match self
+            .soft
+            .as_ref()
+            .and_then(|s| s.result.as_ref().map(|r| (s, r)))
+        {
+            Some((run, r)) => {
+                let t = r.total(|_| true);
+                let class = |c: &manyshadows_reference::soft_score::ClassError| {
+                    format!("{{\"pairs\":{},\"mean_abs_error\":{}}}", c.pairs, c.mean())
+                };
+                format!(
+                    "{{\"samples\":{},\"all\":{},\"umbra\":{},\"penumbra\":{},\"lit\":{}}}",
+                    run.n * run.n,
+                    class(&t.scored()),
+                    class(&t.umbra),
+                    class(&t.penumbra),
+                    class(&t.lit)
+                )
+            }
+            None => "null".into(),
+        };
         Some(format!(
             "{{\"technique\":\"{}\",\"width\":{},\"height\":{},\"lights\":{},\
              \"in_reach_pixels\":{},\"false_shadow\":{},\"false_light\":{},\
              \"false_shadow_fraction\":{},\"false_light_fraction\":{},\"error_fraction\":{},\
              \"band_fraction\":{},\"band_error_fraction\":{},\"rays\":{},\"trace_ms\":{:.1},\
-             \"render_ms\":{:.1},\"bvh_ms\":{:.1},\"edge_band\":{}}}",
+             \"render_ms\":{:.1},\"bvh_ms\":{:.1},\"edge_band\":{},\"soft\":{}}}",
             self.technique_name,
             self.surfaces.width,
             self.surfaces.height,
@@ -266,7 +444,8 @@ impl ScoreRun {
             self.trace_ms,
             self.render_ms,
             self.bvh_ms,
-            EDGE_BAND
+            EDGE_BAND,
+            soft
         ))
     }
 
