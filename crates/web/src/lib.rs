@@ -686,11 +686,11 @@ impl WebRenderer {
     /// The shadow atlas with its views outlined, or the virtual maps' page pool, as the last
     /// frame left it: an object `{side, rgba, note}` (RGBA8, `side`² pixels, shrunk by a whole
     /// factor to at most `max_side`). Errors: a technique with neither (irregular maps, rays),
-    /// or a depth texture over 4096² (its read-back would not fit the page's memory; the
-    /// window viewer shows it).
+    /// or depths over 8192² (their read-back, 4 bytes a texel and 3 for the picture, would
+    /// pass 1 GiB of the page's memory; the window viewer shows them).
     pub async fn shadow_picture(&self, max_side: u32) -> Result<js_sys::Object, JsValue> {
         let layout = self.renderer.shadow_layout();
-        if layout.side > 4096 {
+        if layout.side > 8192 {
             return Err(err(format!(
                 "the shadow depths ({}) are {}² texels ({} MiB): too large to read back in a web \
                  page; `manyshadows view --show-atlas` shows them",
@@ -805,6 +805,20 @@ impl WebRenderer {
     /// (while only the camera moves, every map but the cascades that follow the view).
     pub fn shadow_views_drawn(&self) -> u32 {
         self.views_drawn
+    }
+
+    /// What the technique fills: `atlas` (shadow views in tiles: the views-drawn count means
+    /// something), `pages` (virtual maps: the pages each frame needs), `mask` (irregular
+    /// maps: a visibility bit per pixel and light) or `rays`.
+    pub fn shadow_fills(&self) -> String {
+        match self.renderer.shadow_layout().fills {
+            manyshadows::Fills::Atlas => "atlas",
+            manyshadows::Fills::Pages => "pages",
+            manyshadows::Fills::Mask => "mask",
+            manyshadows::Fills::Rays => "rays",
+            _ => "other",
+        }
+        .into()
     }
 
     /// Shadow views of the frame in all.

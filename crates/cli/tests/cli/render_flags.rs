@@ -159,3 +159,45 @@ fn soft_taps_and_the_largest_penumbra_are_chosen_and_said() {
     let out = run(&[&common[..], &["--soft-taps", "8,9,10"]].concat());
     assert_clean_failure(&out, 2, "B,F");
 }
+
+/// `--light-samples K` needs shadow rays: with a technique that fills shadow maps (or a mask)
+/// it is refused naming the flag and the technique, before anything is loaded, instead of
+/// being ignored (it used to render every light without a word).
+#[test]
+fn light_samples_are_refused_by_name_where_the_technique_cannot_sample() {
+    let dir = tmp("light-samples-maps");
+    let out_png = dir.join("never.png");
+    let mut refused = 0;
+    for t in manyshadows::Technique::all() {
+        if t.info().fills == manyshadows::Fills::Rays {
+            continue;
+        }
+        let out = run(&[
+            "render",
+            "--scene",
+            "cubes",
+            "--technique",
+            t.name(),
+            "--light-samples",
+            "1",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--out",
+            out_png.to_str().unwrap(),
+        ]);
+        assert_clean_failure(&out, 1, "--light-samples");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            stderr.contains(&format!("technique {}", t.name())),
+            "{t}: the refusal names the technique: {stderr}"
+        );
+        assert!(!out_png.exists(), "{t}: a refused render wrote an image");
+        refused += 1;
+    }
+    assert!(
+        refused >= 6,
+        "every technique but the rays' ({refused} refused)"
+    );
+}

@@ -29,6 +29,16 @@ pub(crate) fn run(args: &ViewArgs) -> Result<()> {
         )?),
         None => None,
     };
+    if args.per_technique.light_samples > 0
+        && args.technique.info().fills != manyshadows::Fills::Rays
+    {
+        bail!(
+            "--light-samples {}: technique {} takes no sampled lights (they need shadow rays: \
+             --technique raytraced)",
+            args.per_technique.light_samples,
+            args.technique
+        );
+    }
     let scene = load(args)?;
     for (flag, k) in [
         ("--show-visibility", args.show_visibility),

@@ -128,7 +128,13 @@ fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
         .with_rays(
             c.options
                 .rays()
-                .with_light_samples(c.light_samples)
+                // The panel offers light samples with shadow rays only (other techniques
+                // refuse them); the slider keeps its value for when rays come back.
+                .with_light_samples(if c.technique.info().fills == Fills::Rays {
+                    c.light_samples
+                } else {
+                    0
+                })
                 // Reuse and the denoiser follow one camera: not with stereo eyes.
                 .with_denoise(
                     c.denoise && c.stereo.is_none() && c.technique.info().fills == Fills::Rays,
