@@ -171,20 +171,6 @@ impl RenderSettings {
                 ));
             }
         }
-        if self.rays.light_samples > 0 && self.technique.info().fills != crate::error::Fills::Rays {
-            // The sampled lights' visibility comes from shadow rays; shadow maps answer every
-            // light (sampling over them is not built yet).
-            return Err(bad(
-                "rays.light_samples",
-                format!(
-                    "{} with technique {}",
-                    self.rays.light_samples,
-                    self.technique.name()
-                ),
-                "sampled lights need shadow rays to take their visibility from: technique \
-                 raytraced (shadow maps answer every light: light_samples 0)",
-            ));
-        }
         if self.rays.denoise && self.technique.info().fills != crate::error::Fills::Rays {
             return Err(bad(
                 "rays.denoise",
@@ -197,6 +183,20 @@ impl RenderSettings {
                 "rays.reuse",
                 format!("on with technique {}", self.technique.name()),
                 "sampled shadow rays to reuse: technique raytraced",
+            ));
+        }
+        if self.rays.light_samples > 0 && self.technique.info().fills != crate::error::Fills::Rays {
+            // The sampled lights' visibility comes from shadow rays; shadow maps answer every
+            // light (sampling over them is not built yet).
+            return Err(bad(
+                "rays.light_samples",
+                format!(
+                    "{} with technique {}",
+                    self.rays.light_samples,
+                    self.technique.name()
+                ),
+                "sampled lights need shadow rays to take their visibility from: technique \
+                 raytraced (shadow maps answer every light: light_samples 0)",
             ));
         }
         self.clusters.validate()?;
