@@ -236,6 +236,26 @@ pub mod class {
     pub const BAND_FALSE_LIGHT: u8 = 8;
 }
 
+/// The colour of a pixel's [`class`] bits in the difference pictures (`compare`'s images, the
+/// web page's overlay): red false shadow, green false light (yellow both) outside the edge
+/// band, the same at 130 inside it; `None` for a pixel with no error.
+pub fn class_colour(c: u8) -> Option<[u8; 3]> {
+    let pick = |shadow: u8, light: u8, level: u8| {
+        [
+            if c & shadow != 0 { level } else { 0 },
+            if c & light != 0 { level } else { 0 },
+            0,
+        ]
+    };
+    if c & (class::FALSE_SHADOW | class::FALSE_LIGHT) != 0 {
+        Some(pick(class::FALSE_SHADOW, class::FALSE_LIGHT, 255))
+    } else if c & (class::BAND_FALSE_SHADOW | class::BAND_FALSE_LIGHT) != 0 {
+        Some(pick(class::BAND_FALSE_SHADOW, class::BAND_FALSE_LIGHT, 130))
+    } else {
+        None
+    }
+}
+
 /// Per pixel, the [`class`] bits of the lights selected by `light` (`None` = every light),
 /// over the pixels that face each light (as scored).
 pub fn error_classes(

@@ -16,7 +16,7 @@ use std::sync::atomic::AtomicBool;
 
 use manyshadows::scene::{Light, Scene};
 use manyshadows::{Pcf, RenderSettings, Renderer};
-use manyshadows_reference::score::{self, class};
+use manyshadows_reference::score;
 use manyshadows_reference::soft::{grid_side, point_soft_visibility, seed};
 use manyshadows_reference::{
     in_reach, reference_visibility, soft_score, Fractions, Mask, ReferenceVisibility, SoftScore,
@@ -29,6 +29,23 @@ const EDGE_BAND: u32 = 2;
 
 fn now_ms() -> f64 {
     js_sys::Date::now()
+}
+
+/// Rows from `first` to trace in about `left_ms` at `speed` rays per millisecond, and their
+/// rays: at least one row; every row at once is never guessed before a speed is known.
+fn rows_to_trace(rays_per_row: &[u64], first: u32, speed: f64, left_ms: f64) -> (u32, u64) {
+    let h = rays_per_row.len() as u32;
+    let mut rows = 1u32;
+    let mut rays = rays_per_row[first as usize];
+    while first + rows < h && speed > 0.0 {
+        let next = rays_per_row[(first + rows) as usize];
+        if (rays + next) as f64 > speed * left_ms {
+            break;
+        }
+        rays += next;
+        rows += 1;
+    }
+    (rows, rays)
 }
 
 /// A score in progress: the reference traced row by row into `vis`.
@@ -252,22 +269,8 @@ impl ScoreRun {
         let row_words = w as usize * self.vis.lit.words_per_pixel as usize;
         while self.next_row < h {
             // Rows at a time, as many as should fit the budget at the speed so far.
-            let speed = if self.trace_ms > 0.0 {
-                self.rays_done as f64 / self.trace_ms
-            } else {
-                0.0
-            };
             let left = (budget_ms - (now_ms() - start)).max(1.0);
-            let mut rows = 1u32;
-            let mut rays = self.rays_per_row[self.next_row as usize];
-            while self.next_row + rows < h && speed > 0.0 {
-                let next = self.rays_per_row[(self.next_row + rows) as usize];
-                if (rays + next) as f64 > speed * left {
-                    break;
-                }
-                rays += next;
-                rows += 1;
-            }
+            let (rows, rays) = rows_to_trace(&self.rays_per_row, self.next_row, self.speed(), left);
             let (a, b) = (self.next_row as usize, (self.next_row + rows) as usize);
             let part = Surfaces::new(
                 w,
@@ -322,28 +325,15 @@ impl ScoreRun {
     /// The soft reference's next rows, while the budget that began at `start` lasts (at least
     /// one row); scores the soft visibility after the last.
     fn step_soft(&mut self, start: f64, budget_ms: f64) -> Result<(), String> {
+        let mut speed = self.speed();
         let Some(soft) = self.soft.as_mut() else {
             return Ok(());
         };
         let (w, h) = (self.surfaces.width as usize, self.surfaces.height);
         let lights = self.lights.len();
         while soft.next_row < h {
-            let speed = if self.trace_ms > 0.0 {
-                self.rays_done as f64 / self.trace_ms
-            } else {
-                0.0
-            };
             let left = (budget_ms - (now_ms() - start)).max(1.0);
-            let mut rows = 1u32;
-            let mut rays = soft.rays_per_row[soft.next_row as usize];
-            while soft.next_row + rows < h && speed > 0.0 {
-                let next = soft.rays_per_row[(soft.next_row + rows) as usize];
-                if (rays + next) as f64 > speed * left {
-                    break;
-                }
-                rays += next;
-                rows += 1;
-            }
+            let (rows, rays) = rows_to_trace(&soft.rays_per_row, soft.next_row, speed, left);
             let t = now_ms();
             // As `reference_soft_visibility` traces a row: the same samples and seeds.
             for y in soft.next_row..soft.next_row + rows {
@@ -369,6 +359,7 @@ impl ScoreRun {
             }
             self.trace_ms += now_ms() - t;
             self.rays_done += rays;
+            speed = self.rays_done as f64 / self.trace_ms.max(1e-3);
             soft.next_row += rows;
             if now_ms() - start >= budget_ms {
                 break;
@@ -384,6 +375,15 @@ impl ScoreRun {
             soft.result = Some(soft_score(&reference, &soft.technique).map_err(|e| e.to_string())?);
         }
         Ok(())
+    }
+
+    /// Rays traced per millisecond so far (0 before the first row).
+    fn speed(&self) -> f64 {
+        if self.trace_ms > 0.0 {
+            self.rays_done as f64 / self.trace_ms
+        } else {
+            0.0
+        }
     }
 
     /// Whether every row of every part is traced and scored.
@@ -458,30 +458,9 @@ impl ScoreRun {
         };
         let mut out = Vec::with_capacity(classes.len() * 4);
         for &c in classes {
-            let px = if c & (class::FALSE_SHADOW | class::FALSE_LIGHT) != 0 {
-                [
-                    if c & class::FALSE_SHADOW != 0 { 255 } else { 0 },
-                    if c & class::FALSE_LIGHT != 0 { 255 } else { 0 },
-                    0,
-                    255,
-                ]
-            } else if c & (class::BAND_FALSE_SHADOW | class::BAND_FALSE_LIGHT) != 0 {
-                [
-                    if c & class::BAND_FALSE_SHADOW != 0 {
-                        130
-                    } else {
-                        0
-                    },
-                    if c & class::BAND_FALSE_LIGHT != 0 {
-                        130
-                    } else {
-                        0
-                    },
-                    0,
-                    255,
-                ]
-            } else {
-                [0; 4]
+            let px = match score::class_colour(c) {
+                Some([r, g, b]) => [r, g, b, 255],
+                None => [0; 4],
             };
             out.extend_from_slice(&px);
         }

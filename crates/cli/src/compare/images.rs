@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use manyshadows_reference::score::class;
+use manyshadows_reference::score::class_colour;
 use manyshadows_reference::Mask;
 
 /// Brightness the frame keeps under the difference colours.
@@ -44,29 +44,7 @@ pub(super) fn write_diff(path: &Path, rgba: &[u8], classes: &[u8], w: u32, h: u3
     for (px, &c) in rgba.chunks_exact(4).zip(classes) {
         let grey = (0.3 * px[0] as f32 + 0.59 * px[1] as f32 + 0.11 * px[2] as f32) * DIM;
         let g = grey as u8;
-        let out = if c & (class::FALSE_SHADOW | class::FALSE_LIGHT) != 0 {
-            [
-                if c & class::FALSE_SHADOW != 0 { 255 } else { 0 },
-                if c & class::FALSE_LIGHT != 0 { 255 } else { 0 },
-                0,
-            ]
-        } else if c & (class::BAND_FALSE_SHADOW | class::BAND_FALSE_LIGHT) != 0 {
-            [
-                if c & class::BAND_FALSE_SHADOW != 0 {
-                    130
-                } else {
-                    0
-                },
-                if c & class::BAND_FALSE_LIGHT != 0 {
-                    130
-                } else {
-                    0
-                },
-                0,
-            ]
-        } else {
-            [g, g, g]
-        };
+        let out = class_colour(c).unwrap_or([g, g, g]);
         rgb.extend_from_slice(&out);
     }
     image::save_buffer(path, &rgb, w, h, image::ExtendedColorType::Rgb8)
