@@ -171,23 +171,14 @@ impl RenderSettings {
                 ));
             }
         }
-        if self.rays.denoise && self.technique.info().fills != crate::error::Fills::Rays {
-            return Err(bad(
-                "rays.denoise",
-                format!("on with technique {}", self.technique.name()),
-                "shadow rays to denoise or accumulate: technique raytraced",
-            ));
-        }
-        if self.rays.reuse && self.technique.info().fills != crate::error::Fills::Rays {
-            return Err(bad(
-                "rays.reuse",
-                format!("on with technique {}", self.technique.name()),
-                "sampled shadow rays to reuse: technique raytraced",
-            ));
-        }
-        if self.rays.light_samples > 0 && self.technique.info().fills != crate::error::Fills::Rays {
-            // The sampled lights' visibility comes from shadow rays; shadow maps answer every
-            // light (sampling over them is not built yet).
+        // Sampled lights take their visibility from shadow rays or from the shadow maps
+        // (an atlas or virtual pages); irregular maps answer every light in one mask.
+        let fills = self.technique.info().fills;
+        let samples = matches!(
+            fills,
+            crate::error::Fills::Rays | crate::error::Fills::Atlas | crate::error::Fills::Pages
+        );
+        if self.rays.light_samples > 0 && !samples {
             return Err(bad(
                 "rays.light_samples",
                 format!(
@@ -195,8 +186,26 @@ impl RenderSettings {
                     self.rays.light_samples,
                     self.technique.name()
                 ),
-                "sampled lights need shadow rays to take their visibility from: technique \
-                 raytraced (shadow maps answer every light: light_samples 0)",
+                "sampled lights need shadow rays or shadow maps to take their visibility from: \
+                 technique irregular answers every light in one mask (light_samples 0)",
+            ));
+        }
+        if self.rays.denoise
+            && fills != crate::error::Fills::Rays
+            && !(samples && self.rays.light_samples > 0)
+        {
+            return Err(bad(
+                "rays.denoise",
+                format!("on with technique {}", self.technique.name()),
+                "sampled lights to denoise (light_samples 1 to 16 with a shadow-map technique), \
+                 or shadow rays: technique raytraced",
+            ));
+        }
+        if self.rays.reuse && !samples {
+            return Err(bad(
+                "rays.reuse",
+                format!("on with technique {}", self.technique.name()),
+                "sampled lights to reuse: technique raytraced or a shadow-map technique",
             ));
         }
         self.clusters.validate()?;

@@ -240,8 +240,8 @@ fn reuse_without_sampled_rays_is_refused_by_name() {
         &scene,
         &[
             RenderSettings::new(32, 32)
-                .with_technique(Technique::default())
-                .with_rays(RayOptions::default().with_light_samples(1).with_reuse(true)),
+                .with_technique(Technique::IRREGULAR)
+                .with_rays(RayOptions::default().with_reuse(true)),
             RenderSettings::new(32, 32)
                 .with_technique(Technique::RAYTRACED)
                 .with_rays(RayOptions::default().with_reuse(true)),

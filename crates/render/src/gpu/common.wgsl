@@ -25,9 +25,11 @@ struct FrameUniforms {
     // Ambient-only colour of pixels no light reaches, and sky colour: rgb + unused.
     sky: vec4<f32>,
     // Soft shadows of sized lights (pcss.wgsl): blocker-search taps, filter taps, largest
-    // penumbra radius in shadow texels, unused.
+    // penumbra radius in shadow texels; w: lights sampled per pixel over shadow maps (0:
+    // every light; shadow rays carry theirs).
     soft: vec4<f32>,
-    // Exposure scale (linear colour times it before the tone map), unused ×3 (look.rs).
+    // Exposure scale (linear colour times it before the tone map); y: the sampled lights'
+    // seed over shadow maps (bits of a u32); unused ×2 (look.rs).
     look: vec4<f32>,
     // Tone map (TONE_*); the frame number where rays are denoised or reused (else 0); in a
     // denoised frame whose lights changed, where the changed lights' records start in the

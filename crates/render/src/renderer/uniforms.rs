@@ -27,7 +27,11 @@ pub(super) fn frame_uniforms(
     let aspect = s.width as f32 / s.height as f32;
     let view = cam.view();
     let proj = cam.projection(aspect);
-    let (look, modes) = s.look.resolve(scene).uniforms();
+    let (mut look, modes) = s.look.resolve(scene).uniforms();
+    // Sampled lights over shadow maps (`lookup::NO_RAYS` reads them): the seed in `look.y`;
+    // the count in `soft.w` below. Shadow rays carry their own.
+    let maps_sample = s.technique.info().fills != crate::error::Fills::Rays;
+    look[1] = f32::from_bits(if maps_sample { s.rays.seed } else { 0 });
     let eyes = Eyes::new(cam, s.stereo, (s.width, s.height));
     let eye = |i: usize| i.min(eyes.cameras.len() - 1);
     FrameUniforms {
@@ -58,7 +62,11 @@ pub(super) fn frame_uniforms(
             s.soft.blocker_taps as f32,
             s.soft.filter_taps as f32,
             s.soft.max_penumbra.min(max_penumbra),
-            0.0,
+            if maps_sample {
+                s.rays.light_samples as f32
+            } else {
+                0.0
+            },
         ],
         look,
         modes,

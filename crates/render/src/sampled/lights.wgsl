@@ -310,6 +310,11 @@ fn resolve_samples(s: Surface, acc: ptr<function, Acc>) {
 // Whether the point `jitter` (0..1², on the light's shape) of light `i` reaches `s` (its
 // centre for a light without size): one ray.
 fn light_lit_point(i: u32, s: Surface, jitter: vec2<f32>) -> f32 {
+    if (!SHADOW_RAYS) {
+        // Shadow maps answer for the whole light: a sized light's percentage-closer soft
+        // fraction, a hard one's shadow test (the point on the shape is not needed).
+        return light_lit(i, s);
+    }
     let light = lights[i];
     if (light.diffuse.w > 0.0) {
         return ray_lit_area(light, s.p, s.n, 1u, jitter);

@@ -33,13 +33,16 @@ pub const ATLAS_TAPS: &str = "fn soft_tap_depth(c: ShadowCoord, t: vec2<f32>) ->
      \x20   return c;\n\
      }";
 
-/// What the passes call where shadows do not come from rays: no ray is ever cast.
+/// What the passes call where shadows do not come from rays: no ray is ever cast. Sampled
+/// lights (`ray_samples() > 0`) take their visibility from the shadow maps instead
+/// (`light_lit`'s map branch); their count and seed come in the frame's uniforms
+/// (`FrameUniforms::soft.w`, `look.y`; `renderer::uniforms`).
 pub const NO_RAYS: &str = "const SHADOW_RAYS: bool = false;\n\
      fn ray_lit(light: LightData, p: vec3<f32>, n: vec3<f32>) -> f32 { return 1.0; }\n\
      fn ray_lit_area(light: LightData, p: vec3<f32>, n: vec3<f32>, m: u32, jitter: vec2<f32>) -> f32 { return 1.0; }\n\
      fn ray_area_side() -> u32 { return 1u; }\n\
-     fn ray_samples() -> u32 { return 0u; }\n\
-     fn ray_seed() -> u32 { return 0u; }";
+     fn ray_samples() -> u32 { return u32(frame.soft.w); }\n\
+     fn ray_seed() -> u32 { return bitcast<u32>(frame.look.y); }";
 
 /// A source's part of the shadow-reading passes' WGSL. It defines `shadow_coord(light, p, n,
 /// view_depth) -> ShadowCoord`, `SHADOW_RAYS`, `ray_lit`, `ray_samples` and `ray_seed`, after

@@ -30,11 +30,11 @@ pub(crate) fn run(args: &ViewArgs) -> Result<()> {
         None => None,
     };
     if args.per_technique.light_samples > 0
-        && args.technique.info().fills != manyshadows::Fills::Rays
+        && args.technique.info().fills == manyshadows::Fills::Mask
     {
         bail!(
-            "--light-samples {}: technique {} takes no sampled lights (they need shadow rays: \
-             --technique raytraced)",
+            "--light-samples {}: technique {} takes no sampled lights (it answers every light \
+             in one mask; shadow rays or shadow maps sample them)",
             args.per_technique.light_samples,
             args.technique
         );

@@ -214,17 +214,24 @@ fn shadow_options(ui: &mut egui::Ui, choice: &mut Choice) {
     if choice.technique.info().fills != Fills::Rays {
         soft_taps(ui, &mut choice.soft);
     }
-    if choice.technique.info().fills == Fills::Rays {
+    let rays = choice.technique.info().fills == Fills::Rays;
+    if crate::view::state::samples_lights(choice.technique) {
         ui.add(
-            egui::Slider::new(&mut choice.light_samples, 0..=16)
-                .text("lights traced per pixel (0 = every light)"),
+            egui::Slider::new(&mut choice.light_samples, 0..=16).text(if rays {
+                "lights traced per pixel (0 = every light)"
+            } else {
+                "lights sampled per pixel (0 = every light)"
+            }),
         );
-        let what = if choice.light_samples > 0 {
-            "denoise the sampled rays"
-        } else {
-            "accumulate area samples over frames"
-        };
-        ui.checkbox(&mut choice.denoise, what);
+        // Without samples only rays have something to accumulate (area samples).
+        if rays || choice.light_samples > 0 {
+            let what = if choice.light_samples > 0 {
+                "denoise the sampled lights"
+            } else {
+                "accumulate area samples over frames"
+            };
+            ui.checkbox(&mut choice.denoise, what);
+        }
         if choice.light_samples > 0 {
             ui.checkbox(&mut choice.reuse, "reuse the sampled lights across frames");
             if choice.reuse {

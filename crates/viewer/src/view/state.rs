@@ -91,11 +91,19 @@ pub(super) struct State {
 
 /// The renderer's settings for a `width`×`height` frame with `c` (the budget only for
 /// techniques that fill an atlas).
+/// Whether technique `t` takes sampled lights: shadow rays, or shadow maps (an atlas or
+/// virtual pages) that answer for each sampled light; irregular maps answer every light.
+pub(super) fn samples_lights(t: manyshadows::Technique) -> bool {
+    matches!(t.info().fills, Fills::Rays | Fills::Atlas | Fills::Pages)
+}
+
 fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
-    let reused = c.reuse
-        && c.stereo.is_none()
-        && c.light_samples > 0
-        && c.technique.info().fills == Fills::Rays;
+    let samples = if samples_lights(c.technique) {
+        c.light_samples
+    } else {
+        0
+    };
+    let reused = c.reuse && c.stereo.is_none() && samples > 0;
     // Two eyes split the window: an even width (an odd window's last column is scaled over).
     let width = if c.stereo.is_some() {
         (width & !1).max(2)
@@ -128,16 +136,15 @@ fn settings(width: u32, height: u32, c: Choice) -> RenderSettings {
         .with_rays(
             c.options
                 .rays()
-                // The panel offers light samples with shadow rays only (other techniques
-                // refuse them); the slider keeps its value for when rays come back.
-                .with_light_samples(if c.technique.info().fills == Fills::Rays {
-                    c.light_samples
-                } else {
-                    0
-                })
-                // Reuse and the denoiser follow one camera: not with stereo eyes.
+                // The panel offers light samples where the technique takes them (irregular
+                // maps refuse them); the slider keeps its value for when it comes back.
+                .with_light_samples(samples)
+                // Reuse and the denoiser follow one camera: not with stereo eyes; with shadow
+                // maps they need samples (rays accumulate area samples without).
                 .with_denoise(
-                    c.denoise && c.stereo.is_none() && c.technique.info().fills == Fills::Rays,
+                    c.denoise
+                        && c.stereo.is_none()
+                        && (c.technique.info().fills == Fills::Rays || samples > 0),
                 )
                 .with_reuse(reused)
                 .with_spatial(if reused {
