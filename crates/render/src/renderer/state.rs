@@ -301,7 +301,11 @@ impl Renderer {
         if let Some(d) = parts.denoiser.as_mut().filter(|_| self.lights_changed) {
             // The records of the lights that changed may follow the frame's for the
             // denoiser's correction of its history.
-            d.follow_lights(&mut light_data, count);
+            d.follow_lights(
+                &mut light_data,
+                count,
+                settings.technique.info().fills == crate::error::Fills::Rays,
+            );
         }
         let bytes: &[u8] = bytemuck::cast_slice(&light_data);
         crate::gpu::buffers::grow_buffer(ctx, &mut parts.lights, bytes.len() as u64, "lights")?;

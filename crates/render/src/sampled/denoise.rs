@@ -55,7 +55,8 @@
 //! corrected in the same frame: where at most [`MAX_LIGHT_FIXES`] records went or came since
 //! the last frame ([`light_fixes`], slot by slot), they follow the frame's lights in the
 //! lights buffer, the lighting pass traces each once at every pixel (a sized light on a
-//! 4 × 4 grid), and the temporal pass adds what the lights that came add to the history's
+//! 4 × 4 grid; over shadow maps it reads the slot's map this frame, a sized light's
+//! percentage-closer fraction), and the temporal pass adds what the lights that came add to the history's
 //! means and takes away what those that went took (exact in expectation, whatever
 //! distribution drew the history's samples). The history's frame count is cut to its share
 //! of samples of the lights that stay, and that frame draws the lost share of a full
@@ -104,9 +105,11 @@ pub const MAX_LIGHT_FIXES: usize = 8;
 
 /// The light records that went and came between the lights of the last denoised frame
 /// (`old`) and this frame's (`new`), compared slot by slot: a slot whose record changed gives
-/// both, a slot past the shorter list one. `None` when they are more than
-/// [`MAX_LIGHT_FIXES`] (the lighting pass corrects the history for each: see the module's
-/// notes).
+/// both, a slot past the shorter list one. Each record carries its slot in its unused
+/// `attenuation.w` (as f32: shadow maps hold this frame's lights by slot, and the lighting
+/// pass reads a changed light's visibility through its slot's map). `None` when they are more
+/// than [`MAX_LIGHT_FIXES`] (the lighting pass corrects the history for each: see the
+/// module's notes).
 pub fn light_fixes(
     old: &[LightData],
     new: &[LightData],
@@ -118,8 +121,17 @@ pub fn light_fixes(
         if a.map(bytemuck::bytes_of) == b.map(bytemuck::bytes_of) {
             continue;
         }
-        gone.extend(a);
-        came.extend(b);
+        let slotted = |l: &LightData| LightData {
+            attenuation: [
+                l.attenuation[0],
+                l.attenuation[1],
+                l.attenuation[2],
+                i as f32,
+            ],
+            ..*l
+        };
+        gone.extend(a.map(slotted));
+        came.extend(b.map(slotted));
         if gone.len() + came.len() > MAX_LIGHT_FIXES {
             return None;
         }
@@ -414,9 +426,15 @@ impl Denoiser {
     /// correction for them; else the temporal pass cuts each pixel's history by how much its
     /// unshadowed light changed. (The unshadowed light is exact at once; only the shadow
     /// ratio's history is old.)
-    pub fn follow_lights(&mut self, buffer: &mut Vec<LightData>, count: usize) {
+    ///
+    /// Where the visibility comes from shadow maps (`traced` false) the lighting pass reads a
+    /// changed light's through its slot's map this frame: a light that went from a slot this
+    /// frame no longer has (fewer lights) has no map to read, and the change falls back.
+    pub fn follow_lights(&mut self, buffer: &mut Vec<LightData>, count: usize, traced: bool) {
         let records = buffer[..count].to_vec();
-        let fix = light_fixes(&self.seen_lights, &records).map(|(gone, came)| {
+        let fixes = light_fixes(&self.seen_lights, &records)
+            .filter(|(gone, _)| traced || gone.iter().all(|l| (l.attenuation[3] as usize) < count));
+        let fix = fixes.map(|(gone, came)| {
             let first = buffer.len() as u32;
             let counts = gone.len() as u32 | ((came.len() as u32) << 16);
             buffer.extend(gone);
@@ -527,9 +545,12 @@ mod fix_tests {
         assert_eq!((gone.len(), came.len()), (1, 1));
         assert_eq!(gone[0].position[0], 7.0);
         assert_eq!(came[0].position[0], -7.0);
+        // Each record carries its slot (the lighting pass reads its map through it).
+        assert_eq!((gone[0].attenuation[3], came[0].attenuation[3]), (7.0, 7.0));
         let (gone, came) = light_fixes(&old, &old[..18]).expect("two went");
         assert_eq!((gone.len(), came.len()), (2, 0));
         assert_eq!(gone[1].position[0], 19.0);
+        assert_eq!(gone[1].attenuation[3], 19.0);
         let (gone, came) = light_fixes(&old[..19], &old).expect("one came");
         assert_eq!((gone.len(), came.len()), (0, 1));
         let many: Vec<LightData> = (0..20).map(|i| light(100.0 + i as f32)).collect();

@@ -443,7 +443,12 @@ fn denoise_fix(s: Surface) -> DenoiseFix {
             continue;
         }
         var lit = 1.0;
-        if (light.diffuse.w > 0.0) {
+        if (!SHADOW_RAYS) {
+            // Over shadow maps: the slot's map this frame (denoise.rs `light_fixes` stamps
+            // the slot; `follow_lights` falls back where a slot went). Exact for a light whose
+            // colour changed; a light that moved is read where it is now.
+            lit = light_lit(u32(light.attenuation.w), s);
+        } else if (light.diffuse.w > 0.0) {
             lit = ray_lit_area(light, s.p, s.n, max(ray_area_side(), FIX_SIDE), soft_jitter(s.px, 0x9e3779b9u + c));
         } else {
             lit = ray_lit(light, s.p, s.n);

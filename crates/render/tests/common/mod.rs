@@ -442,6 +442,40 @@ pub fn raytraced(
     }
 }
 
+/// The technique the sampled-light tests run on `ctx`: raytraced where the adapter has what
+/// shadow rays need (the sampled lights' visibility traced), otherwise traditional shadow maps
+/// (the sampled lights' visibility read from the atlas: what the tests check holds for any
+/// shadow source, measured against the same technique with every light). Where the test
+/// command says the backend must offer ray queries, their absence fails the test instead.
+#[track_caller]
+pub fn sampling_technique(ctx: &GpuContext) -> manyshadows::Technique {
+    let unmet = manyshadows::Technique::RAYTRACED.info().unmet(ctx);
+    let Some(need) = unmet.first().map(|n| n.name()) else {
+        return manyshadows::Technique::RAYTRACED;
+    };
+    assert!(
+        !manyshadows_testkit::must_offer(&need),
+        "no {need}, which the test command says this backend must offer: the sampled lights \
+         would be tested through shadow maps only. On Linux the Vulkan run needs Mesa 25's \
+         lavapipe (`cargo xtask test` installs it)."
+    );
+    eprintln!("no {need}: the sampled lights take their visibility from shadow maps (traditional)");
+    manyshadows::Technique::TRADITIONAL
+}
+
+/// A renderer of `settings` with [`sampling_technique`]: shadow rays where the adapter traces
+/// them, shadow maps elsewhere (OpenGL). Any error fails the test.
+#[track_caller]
+pub fn sampler(
+    ctx: &GpuContext,
+    scene: &Scene,
+    settings: manyshadows::RenderSettings,
+) -> manyshadows::Renderer {
+    let technique = sampling_technique(ctx);
+    manyshadows::Renderer::new(ctx, scene, settings.with_technique(technique))
+        .unwrap_or_else(|e| panic!("{technique}: {e}"))
+}
+
 /// `e` is `technique`'s refusal on `ctx`'s device: the device lacks one of its needs, and the
 /// refusal names it. The refusal is recorded as a test that checked a refusal instead of
 /// running, and fails the test where the test command says the backend must offer the need
