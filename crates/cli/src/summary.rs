@@ -52,7 +52,14 @@ pub(crate) fn summary(
                   "max_penumbra": r.max_penumbra(), "area_samples": r.settings().rays.area_samples,
                   "light_samples": r.settings().rays.light_samples, "denoise": r.settings().rays.denoise,
                   "reuse": r.settings().rays.reuse, "spatial": r.settings().rays.spatial.name(),
-                  "technique_softens": r.settings().technique.info().soft_shadows },
+                  "technique_softens": r.settings().technique.info().soft_shadows,
+                  "seed": r.settings().rays.seed,
+                  "visibility_from": match r.settings().technique.info().fills {
+                      manyshadows::Fills::Rays => "shadow rays",
+                      manyshadows::Fills::Atlas => "the shadow atlas",
+                      manyshadows::Fills::Pages => "the virtual pages",
+                      _ => "the visibility mask",
+                  } },
         "estimate": estimate,
         "estimate_text": describe_estimate(estimate),
         "gpu_ms": frame.timings.gpu_ms,
@@ -163,6 +170,9 @@ fn print_scene(s: &serde_json::Value) {
     if let Some(look) = s["look"]["description"].as_str() {
         println!("look         {look}");
     }
+    if let Some(line) = describe_sampling(&s["soft"]) {
+        println!("sampling     {line}");
+    }
     let pr = &s["probes"];
     if let Some(n) = pr["probes"].as_u64() {
         let side = pr["side"].as_u64().unwrap_or(0);
@@ -188,6 +198,29 @@ fn print_scene(s: &serde_json::Value) {
                 .map_or("drawn in an unknown way", |p| p.describe())
         );
     }
+}
+
+/// The sampled lights in words (`None` where every light is shaded): how many per pixel, where
+/// their visibility comes from, and what reuses or denoises them.
+fn describe_sampling(soft: &serde_json::Value) -> Option<String> {
+    let k = soft["light_samples"].as_u64().filter(|&k| k > 0)?;
+    let mut line = format!(
+        "{k} light{} per pixel drawn by importance (seed {}), visibility from {}",
+        if k == 1 { "" } else { "s" },
+        soft["seed"],
+        soft["visibility_from"].as_str().unwrap_or("?")
+    );
+    if soft["reuse"].as_bool() == Some(true) {
+        line.push_str("; reused over frames");
+        match soft["spatial"].as_str() {
+            Some(mode) if mode != "off" => line.push_str(&format!(" and neighbours ({mode})")),
+            _ => {}
+        }
+    }
+    if soft["denoise"].as_bool() == Some(true) {
+        line.push_str("; denoised");
+    }
+    Some(line)
 }
 
 /// The light clusters.

@@ -9,6 +9,11 @@
 //! light count: mean, first and last errors, median frame times and the denoised frame over
 //! the plain one; across light counts, how the frames grow. Without `--reference` (`off`)
 //! only the times are taken, for light counts whose exact frames take too long.
+//!
+//! With a shadow-map technique (`--technique virtual` or an atlas one) the sampled lights take
+//! their visibility from its maps, and a fourth renderer draws the same technique with every
+//! light: each sampled frame is scored against it too (the sampling's noise alone), and its
+//! time and pages drawn are what sampling saves.
 
 use anyhow::{bail, Result};
 use clap::Args;
@@ -35,8 +40,12 @@ the mean, first and last errors, median GPU ms of each frame and the denoised fr
 plain one (the same frames, interleaved); across light counts, how each frame grows. Writes
 results.txt, results.json (every frame's numbers) and frames.png (error and time per frame).
 
-Needs ray queries (EXPERIMENTAL_RAY_QUERY: Vulkan with Mesa 25's lavapipe, or a GPU driver
-that has them). --reference off skips the exact frames (times only), for light counts whose
+With --technique raytraced (the default) needs ray queries (EXPERIMENTAL_RAY_QUERY: Vulkan
+with Mesa 25's lavapipe, or a GPU driver that has them). With a shadow-map technique
+(--technique virtual, traditional, ...) the sampled lights' visibility comes from its maps
+(any adapter), and a fourth renderer draws the same technique with every light: the sampled
+frames are scored against it too (the sampling's noise alone), and the table sets their time
+and pages drawn beside it. The exact frames are still traced where there are ray queries. --reference off skips the exact frames (times only), for light counts whose
 exact frames take long on a CPU adapter. --reuse makes both sampled renderers reuse their
 lights across frames (`render --reuse`): the plain column then shows reuse alone.
 
@@ -44,7 +53,8 @@ Examples:
   manyshadows bench denoise                                    # atrium, 1,024 lights, 60 frames
   manyshadows bench denoise --still --frames 8                 # a still camera converging
   manyshadows bench denoise --lights 1024,16384 --reference off --frames 10   # cost growth
-  manyshadows bench denoise --reuse --still --orbit 0 --frames 32   # reuse, alone and denoised";
+  manyshadows bench denoise --reuse --still --orbit 0 --frames 32   # reuse, alone and denoised
+  manyshadows bench denoise --technique virtual --reuse --still --frames 8   # over virtual maps";
 
 /// Arguments of `manyshadows bench denoise`.
 #[derive(Args, Debug, Clone)]
@@ -77,6 +87,11 @@ pub struct DenoiseArgs {
     /// Lights sampled per pixel (1 to 16).
     #[arg(long, default_value_t = 1)]
     pub light_samples: u32,
+    /// Where the sampled lights' visibility comes from: raytraced (shadow rays), virtual or an
+    /// atlas technique (its shadow maps; scored against the same technique with every light as
+    /// well). Irregular maps cannot sample.
+    #[arg(long, default_value = "raytraced", value_parser = crate::args::parse_technique)]
+    pub technique: manyshadows::Technique,
     /// Both sampled renderers reuse their lights across frames (`render --reuse`): the plain
     /// one then shows reuse alone, the denoised one reuse and the denoiser together.
     #[arg(long)]
@@ -124,6 +139,14 @@ struct FrameRow {
     denoised_lighting_ms: Option<f64>,
     denoise_ms: Option<f64>,
     exact_ms: Option<f64>,
+    /// Shadow maps: RMSE against the same technique with every light.
+    plain_every_rmse: Option<f64>,
+    denoised_every_rmse: Option<f64>,
+    /// Shadow maps: the every-light frame's GPU ms.
+    every_ms: Option<f64>,
+    /// Virtual maps: pages drawn this frame by the denoised renderer and by every light.
+    denoised_pages: Option<u32>,
+    every_pages: Option<u32>,
     /// With a still camera and a moving caster: how many frames behind the denoised shadow
     /// is (see [`trail`]).
     trail_frames: Option<u32>,
@@ -147,6 +170,16 @@ struct Record {
     denoise_median_ms: Option<f64>,
     /// Mean of the frames' trails (still camera, moving caster).
     mean_trail_frames: Option<f64>,
+    /// Shadow maps: mean RMSE against every light through the same maps.
+    plain_every_mean_rmse: Option<f64>,
+    denoised_every_mean_rmse: Option<f64>,
+    /// Shadow maps: median GPU ms of the every-light frame, and the denoised frame over it
+    /// (median of each frame's ratio).
+    every_median_ms: Option<f64>,
+    denoised_over_every_paired: Option<f64>,
+    /// Virtual maps: mean pages drawn per frame, denoised and every light.
+    denoised_mean_pages: Option<f64>,
+    every_mean_pages: Option<f64>,
 }
 
 #[derive(Serialize)]
@@ -157,6 +190,8 @@ struct Fields<'a> {
     orbit_degrees_per_frame: f32,
     caster_moves: bool,
     light_samples: u32,
+    /// Where the sampled lights' visibility comes from.
+    technique: String,
     reuse: bool,
     spatial: &'static str,
     /// Rays per side of the exact image's grid over each sized light.
@@ -295,6 +330,8 @@ struct Sequence {
     plain: Renderer,
     denoised: Renderer,
     exact: Option<Renderer>,
+    /// Shadow maps: the same technique with every light.
+    every: Option<Renderer>,
     /// The caster that circles, and the circle's radius.
     mover: Option<usize>,
     radius: f32,
@@ -307,7 +344,7 @@ impl Sequence {
     fn new(h: &Harness, args: &DenoiseArgs, n: usize, reference: bool) -> Result<Self> {
         let scene = seeded_scene(&args.scene, n, LightMix::All, None)?;
         let base = RenderSettings::new(args.width, args.height)
-            .with_technique(crate::techniques::first_filling(manyshadows::Fills::Rays))
+            .with_technique(args.technique)
             .with_clusters(match args.cluster_tile {
                 Some(t) => manyshadows::ClusterOptions::default().with_tile(t),
                 None => manyshadows::ClusterOptions::default(),
@@ -319,13 +356,29 @@ impl Sequence {
         let make = |rays: RayOptions| Renderer::new(&h.ctx, &scene, base.clone().with_rays(rays));
         let plain = make(sampled)?;
         let denoised = make(sampled.with_denoise(true))?;
-        let exact = if reference {
-            Some(make(
-                RayOptions::default().with_area_samples(args.reference_area_samples),
-            )?)
-        } else {
-            None
+        let maps = args.technique.info().fills != manyshadows::Fills::Rays;
+        let exact_rays = RayOptions::default().with_area_samples(args.reference_area_samples);
+        let rays = crate::techniques::first_filling(manyshadows::Fills::Rays);
+        let exact = match (reference, maps) {
+            (false, _) => None,
+            (true, false) => Some(make(exact_rays)?),
+            // Over shadow maps the exact frames need ray queries, which the adapter may lack.
+            (true, true) => match Renderer::new(
+                &h.ctx,
+                &scene,
+                base.clone().with_technique(rays).with_rays(exact_rays),
+            ) {
+                Ok(r) => Some(r),
+                Err(e) => {
+                    h.note(format!(
+                        "{n} lights: no exact frames ({rays}: {e}); scored against every light \
+                         through the same maps only"
+                    ));
+                    None
+                }
+            },
         };
+        let every = maps.then(|| make(RayOptions::default())).transpose()?;
         let mover = crate::render::moving_instance(args.move_instance, args.still, &scene, || {
             seen_caster(&h.ctx, &scene)
         })?;
@@ -345,6 +398,7 @@ impl Sequence {
             plain,
             denoised,
             exact,
+            every,
             mover,
             radius,
             rows: Vec::new(),
@@ -363,9 +417,8 @@ impl Sequence {
     ) -> Result<()> {
         let scene = &self.scene;
         let mut renderers: Vec<&mut Renderer> = vec![&mut self.plain, &mut self.denoised];
-        if let Some(e) = self.exact.as_mut() {
-            renderers.push(e);
-        }
+        renderers.extend(self.exact.as_mut());
+        renderers.extend(self.every.as_mut());
         if let Some(path) = path {
             let c = path[(f as usize).min(path.len() - 1)];
             let mut cam = scene.camera;
@@ -410,6 +463,15 @@ impl Sequence {
             }
             None => None,
         };
+        let every = match self.every.as_mut() {
+            Some(r) => {
+                let e = r.render()?;
+                h.advance(1);
+                Some(e)
+            }
+            None => None,
+        };
+        let pages = |f: &Frame| f.virtual_maps.as_ref().map(|v| v.drawn);
         let trail_frames = match &e {
             Some(e) if args.orbit == 0.0 && !args.still && path.is_none() => {
                 let t = trail(&d.rgba, &e.rgba, &self.past);
@@ -429,6 +491,11 @@ impl Sequence {
             denoised_lighting_ms: d.timings.gpu_ms.get(Stage::Lighting),
             denoise_ms: d.timings.gpu_ms.get(Stage::Denoise),
             exact_ms: e.as_ref().and_then(|e| e.timings.gpu_ms.total()),
+            plain_every_rmse: every.as_ref().map(|e| rmse_rgb(&p, e)),
+            denoised_every_rmse: every.as_ref().map(|e| rmse_rgb(&d, e)),
+            every_ms: every.as_ref().and_then(|e| e.timings.gpu_ms.total()),
+            denoised_pages: pages(&d),
+            every_pages: every.as_ref().and_then(pages),
         });
         Ok(())
     }
@@ -449,6 +516,15 @@ impl Sequence {
                 .collect()),
             denoise_median_ms: med(rows.iter().filter_map(|r| r.denoise_ms).collect()),
             mean_trail_frames: mean(rows.iter().filter_map(|r| r.trail_frames.map(f64::from))),
+            plain_every_mean_rmse: mean(rows.iter().filter_map(|r| r.plain_every_rmse)),
+            denoised_every_mean_rmse: mean(rows.iter().filter_map(|r| r.denoised_every_rmse)),
+            every_median_ms: med(rows.iter().filter_map(|r| r.every_ms).collect()),
+            denoised_over_every_paired: med(rows
+                .iter()
+                .filter_map(|r| crate::bench::harness::ratio(r.denoised_ms, r.every_ms))
+                .collect()),
+            denoised_mean_pages: mean(rows.iter().filter_map(|r| r.denoised_pages.map(f64::from))),
+            every_mean_pages: mean(rows.iter().filter_map(|r| r.every_pages.map(f64::from))),
             plain_median_ms,
             denoised_median_ms,
             frames: rows,
@@ -467,9 +543,20 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
         bail!("--orbit must be a finite number of degrees");
     }
     let reference = args.reference == "on";
+    if !matches!(
+        args.technique.info().fills,
+        manyshadows::Fills::Rays | manyshadows::Fills::Atlas | manyshadows::Fills::Pages
+    ) {
+        bail!(
+            "--technique {}: it cannot sample lights (irregular maps answer every light in one \
+             mask); use raytraced, virtual or an atlas technique",
+            args.technique
+        );
+    }
+    let maps = args.technique.info().fills != manyshadows::Fills::Rays;
     let path = crate::args::read_camera_path(args.camera_path.as_deref())?;
     let h = Harness::start_unscheduled(&args.output)?;
-    let per_frame = if reference { 3 } else { 2 };
+    let per_frame = 2 + u64::from(reference) + u64::from(maps);
     h.plan(args.lights.len() as u64 * u64::from(args.frames) * per_frame);
     // Every light count's renderers first, then the frames in turn across them (frame 1 of
     // each count, frame 2 of each, ...), so that a drift of the machine's speed during the run
@@ -522,17 +609,25 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
         x_name: "frame",
         panels: vec![
             (
-                "RMSE against every light traced".to_string(),
+                "RMSE against every light (traced, or through the same maps)".to_string(),
                 "RMSE (0-255)".to_string(),
                 per_frame(&[
                     ("plain", |x| x.plain_rmse),
                     ("denoised", |x| x.denoised_rmse),
+                    ("plain vs every light (same maps)", |x| x.plain_every_rmse),
+                    ("denoised vs every light (same maps)", |x| {
+                        x.denoised_every_rmse
+                    }),
                 ]),
             ),
             (
                 "GPU time per frame".to_string(),
                 "ms".to_string(),
-                per_frame(&[("plain", |x| x.plain_ms), ("denoised", |x| x.denoised_ms)]),
+                per_frame(&[
+                    ("plain", |x| x.plain_ms),
+                    ("denoised", |x| x.denoised_ms),
+                    ("every light (same maps)", |x| x.every_ms),
+                ]),
             ),
         ],
     }];
@@ -545,6 +640,7 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
             orbit_degrees_per_frame: args.orbit,
             caster_moves: !args.still,
             light_samples: args.light_samples,
+            technique: args.technique.to_string(),
             reuse: args.reuse,
             spatial: args.spatial.name(),
             reference_area_samples: args.reference_area_samples,
@@ -561,7 +657,7 @@ fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
         None => format!("camera {} deg/frame", args.orbit),
     };
     let mut t = format!(
-        "== bench denoise: {} at {}x{}, {} frames, {camera}, {}; K = {}{}\n   adapter: {adapter}\n",
+        "== bench denoise: {} at {}x{}, {} frames, {camera}, {}; K = {}, visibility from {}{}\n   adapter: {adapter}\n",
         args.scene,
         args.width,
         args.height,
@@ -572,6 +668,10 @@ fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
             "a caster circling"
         },
         args.light_samples,
+        match args.technique.info().fills {
+            manyshadows::Fills::Rays => "shadow rays".to_string(),
+            _ => format!("{}'s shadow maps", args.technique),
+        },
         match (args.reuse, args.spatial) {
             (false, _) => String::new(),
             (true, manyshadows::SpatialReuse::Off) =>
@@ -600,6 +700,34 @@ fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
             ms(r.denoise_median_ms),
             opt(r.cost_ratio),
             opt(r.cost_ratio_paired),
+        );
+    }
+    for r in records {
+        if r.every_median_ms.is_none() && r.denoised_every_mean_rmse.is_none() {
+            continue;
+        }
+        let first = r.frames.first();
+        let last = r.frames.last();
+        t += &format!(
+            "{} lights, against every light through the same maps: RMSE plain mean {} (first {}, \
+             last {}), denoised mean {} (first {}, last {}); every-light frame {} ms, denoised \
+             over it {}x (median of each frame's ratio){}\n",
+            r.lights,
+            opt(r.plain_every_mean_rmse),
+            opt(first.and_then(|x| x.plain_every_rmse)),
+            opt(last.and_then(|x| x.plain_every_rmse)),
+            opt(r.denoised_every_mean_rmse),
+            opt(first.and_then(|x| x.denoised_every_rmse)),
+            opt(last.and_then(|x| x.denoised_every_rmse)),
+            ms(r.every_median_ms),
+            opt(r.denoised_over_every_paired),
+            match (r.denoised_mean_pages, r.every_mean_pages) {
+                (Some(d), Some(e)) => format!(
+                    "; pages drawn per frame {d:.0} denoised, {e:.0} every light ({})",
+                    opt(crate::bench::harness::ratio(Some(d), Some(e))).to_string() + "x"
+                ),
+                _ => String::new(),
+            }
         );
     }
     for r in records {

@@ -7,6 +7,11 @@
 //! denoiser's history) is what is scored; the exact renderer traces every cluster light of
 //! every pixel each frame. Per frame: RMSE of the 8-bit RGB channels and ꟻLIP against the exact
 //! frame, and the GPU time.
+//!
+//! A shadow-map technique with sampled lights (`--light-samples K`: the sampled lights'
+//! visibility from its atlas or virtual pages) is scored twice: against the exact frame (where
+//! the adapter traces rays), and against the same technique with every light, which isolates
+//! the sampling's noise from the maps' own error. Without ray queries only the second runs.
 
 use anyhow::{bail, Context, Result};
 use manyshadows::{Fills, Frame, RayOptions, RenderSettings, Renderer, Technique};
@@ -23,15 +28,62 @@ use crate::render::{moving_instance, Sequence};
 #[derive(Serialize)]
 struct Scored {
     technique: String,
-    /// Per frame: RMSE against the exact frame (RGB, 0-255).
-    rmse: Vec<f64>,
-    /// Per frame: mean ꟻLIP against the exact frame.
-    flip: Vec<f64>,
+    /// Against the exact frame (absent without ray queries).
+    #[serde(flatten)]
+    exact: Option<Against>,
+    /// Sampled lights over shadow maps: against the same technique with every light.
+    every_light: Option<Against>,
     /// Per frame: GPU ms of the whole frame (where timestamps exist).
     gpu_ms: Vec<Option<f64>>,
+}
+
+/// One technique's frames against one reference's.
+#[derive(Serialize, Default)]
+struct Against {
+    /// Per frame: RMSE (RGB, 0-255).
+    rmse: Vec<f64>,
+    /// Per frame: mean ꟻLIP.
+    flip: Vec<f64>,
     mean_rmse: f64,
     max_rmse: f64,
     mean_flip: f64,
+}
+
+impl Against {
+    fn push(&mut self, reference: &Frame, frame: &Frame) -> Result<()> {
+        self.rmse.push(rmse_rgb(&reference.rgba, &frame.rgba));
+        self.flip.push(
+            manyshadows_reference::flip_rgba8(
+                &reference.rgba,
+                &frame.rgba,
+                reference.width,
+                reference.height,
+            )?
+            .mean,
+        );
+        Ok(())
+    }
+
+    fn finish(&mut self) {
+        let n = self.rmse.len().max(1) as f64;
+        self.mean_rmse = self.rmse.iter().sum::<f64>() / n;
+        self.max_rmse = self.rmse.iter().copied().fold(0.0, f64::max);
+        self.mean_flip = self.flip.iter().sum::<f64>() / n;
+    }
+}
+
+/// Whether `t` takes its sampled lights' visibility from shadow maps (an atlas or pages).
+fn samples_over_maps(t: Technique, rays: &RayOptions) -> bool {
+    rays.light_samples > 0 && matches!(t.info().fills, Fills::Atlas | Fills::Pages)
+}
+
+/// The ray options `t` renders the sequence with: the sampled lights' where it can sample.
+fn rays_of(t: Technique, sampled: RayOptions) -> RayOptions {
+    if t.info().fills == Fills::Rays || samples_over_maps(t, &sampled) {
+        sampled
+    } else {
+        RayOptions::default()
+    }
 }
 
 /// The ray options the sequence's ray techniques render with (`--light-samples`, `--reuse`,
@@ -64,6 +116,19 @@ pub(super) fn check_sequence_flags(args: &CompareArgs) -> Result<()> {
         check.technique = rays;
         check.rays = sampled_rays(args);
         check.validate().map_err(crate::args::flag_error)?;
+    }
+    if args.per_technique.light_samples > 0 && !args.techniques.is_empty() {
+        let can =
+            |t: &Technique| matches!(t.info().fills, Fills::Rays | Fills::Atlas | Fills::Pages);
+        if !args.techniques.iter().any(can) {
+            let names: Vec<String> = args.techniques.iter().map(|t| t.to_string()).collect();
+            bail!(
+                "--light-samples {}: none of the techniques ({}) can sample lights (irregular maps \
+                 answer every light in one mask); name raytraced, virtual or an atlas technique",
+                args.per_technique.light_samples,
+                names.join(", ")
+            );
+        }
     }
     if args.frames == 1 {
         let used = [
@@ -117,20 +182,6 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
             .with_visibility(false)
             .with_rays(rays)
     };
-    pb.set_message("building the exact renderer");
-    let exact_technique = crate::techniques::first_filling(Fills::Rays);
-    let mut exact = Renderer::new(
-        &ctx,
-        &scene,
-        settings(exact_technique, RayOptions::default()),
-    )
-    .with_context(|| {
-        format!(
-            "the exact frames of a sequence trace every light with {exact_technique}, which \
-                 needs ray queries (EXPERIMENTAL_RAY_QUERY: Vulkan with Mesa 25's lavapipe, or a \
-                 GPU driver that has them)"
-        )
-    })?;
     let named = !args.techniques.is_empty();
     let asked = if named {
         args.techniques.clone()
@@ -138,14 +189,47 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
         Technique::all()
     };
     let sampled = sampled_rays(&args);
-    let mut contenders: Vec<(String, Renderer)> = Vec::new();
+    pb.set_message("building the exact renderer");
+    let exact_technique = crate::techniques::first_filling(Fills::Rays);
+    let exact = match Renderer::new(
+        &ctx,
+        &scene,
+        settings(exact_technique, RayOptions::default()),
+    ) {
+        Ok(r) => Some(r),
+        // Sampled lights over shadow maps still have their every-light frames to be scored
+        // against.
+        Err(e) if asked.iter().any(|&t| samples_over_maps(t, &sampled)) => {
+            pb.suspend(|| {
+                eprintln!(
+                    "note: no exact frames ({exact_technique}: {e}); the sampled shadow-map \
+                     techniques are scored against their own frames with every light only"
+                )
+            });
+            None
+        }
+        Err(e) => {
+            return Err(anyhow::Error::from(e).context(format!(
+                "the exact frames of a sequence trace every light with {exact_technique}, which \
+                 needs ray queries (EXPERIMENTAL_RAY_QUERY: Vulkan with Mesa 25's lavapipe, or a \
+                 GPU driver that has them); without them, --light-samples K scores sampled \
+                 lights over shadow maps against the same maps with every light"
+            )))
+        }
+    };
+    let mut contenders: Vec<Contender> = Vec::new();
     for t in asked {
         pb.set_message(format!("building {t}"));
-        let rays = if t.info().fills == Fills::Rays {
-            sampled
-        } else {
-            RayOptions::default()
-        };
+        if exact.is_none() && !samples_over_maps(t, &sampled) {
+            if named {
+                bail!(
+                    "technique {t}: nothing to score it against without ray queries (only \
+                     sampled lights over shadow maps have their every-light frames)"
+                );
+            }
+            continue;
+        }
+        let rays = rays_of(t, sampled);
         let made = Renderer::new(&ctx, &scene, settings(t, rays)).map(|r| {
             let e = r.estimate_frame();
             (r, e)
@@ -154,10 +238,19 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
             if !args.insist {
                 crate::render::check_shadow_work(&r, &e)?;
             }
-            Ok(r)
+            // Sampled lights over shadow maps: the same technique with every light as well.
+            let every = samples_over_maps(t, &sampled)
+                .then(|| Renderer::new(&ctx, &scene, settings(t, RayOptions::default())))
+                .transpose()
+                .context("with every light")?;
+            Ok((r, every))
         });
         match checked {
-            Ok(r) => contenders.push((label(t, &args), r)),
+            Ok((r, every)) => contenders.push(Contender {
+                name: label(t, &args),
+                renderer: r,
+                every,
+            }),
             Err(e) if !named => pb.suspend(|| eprintln!("note: {t} left out: {e:#}")),
             Err(e) => return Err(e.context(format!("technique {t}"))),
         }
@@ -171,20 +264,20 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
         orbit: args.orbit,
         mover,
     };
-    let bar = crate::progress::bar(
-        u64::from(args.frames) * (contenders.len() as u64 + 1),
-        "frames",
-    );
+    let renderers = contenders
+        .iter()
+        .map(|c| 1 + u64::from(c.every.is_some()))
+        .sum::<u64>()
+        + u64::from(exact.is_some());
+    let bar = crate::progress::bar(u64::from(args.frames) * renderers, "frames");
+    let mut exact = exact;
     let mut scored: Vec<Scored> = contenders
         .iter()
-        .map(|(name, _)| Scored {
-            technique: name.clone(),
-            rmse: Vec::new(),
-            flip: Vec::new(),
+        .map(|c| Scored {
+            technique: c.name.clone(),
+            exact: exact.as_ref().map(|_| Against::default()),
+            every_light: c.every.as_ref().map(|_| Against::default()),
             gpu_ms: Vec::new(),
-            mean_rmse: 0.0,
-            max_rmse: 0.0,
-            mean_flip: 0.0,
         })
         .collect();
     let mut last: Vec<Frame> = Vec::new();
@@ -193,27 +286,36 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
     let started = std::time::Instant::now();
     for f in 0..args.frames {
         {
-            let mut all: Vec<&mut Renderer> = std::iter::once(&mut exact)
-                .chain(contenders.iter_mut().map(|(_, r)| r))
+            let mut all: Vec<&mut Renderer> = exact
+                .iter_mut()
+                .chain(
+                    contenders
+                        .iter_mut()
+                        .flat_map(|c| std::iter::once(&mut c.renderer).chain(c.every.as_mut())),
+                )
                 .collect();
             sequence.step(f, &scene, &mut all)?;
         }
         bar.set_message(format!("frame {}/{}: exact", f + 1, args.frames));
-        let e = exact.render()?;
-        bar.inc(1);
+        let e = exact.as_mut().map(|r| r.render()).transpose()?;
+        bar.inc(u64::from(e.is_some()));
         last.clear();
-        for ((name, r), s) in contenders.iter_mut().zip(&mut scored) {
-            bar.set_message(format!("frame {}/{}: {name}", f + 1, args.frames));
-            let fr = r.render()?;
+        for (c, s) in contenders.iter_mut().zip(&mut scored) {
+            bar.set_message(format!("frame {}/{}: {}", f + 1, args.frames, c.name));
+            let fr = c.renderer.render()?;
             bar.inc(1);
-            s.rmse.push(rmse_rgb(&e.rgba, &fr.rgba));
-            s.flip.push(
-                manyshadows_reference::flip_rgba8(&e.rgba, &fr.rgba, e.width, e.height)?.mean,
-            );
+            if let (Some(e), Some(a)) = (&e, s.exact.as_mut()) {
+                a.push(e, &fr)?;
+            }
+            if let (Some(every), Some(a)) = (c.every.as_mut(), s.every_light.as_mut()) {
+                let ev = every.render()?;
+                bar.inc(1);
+                a.push(&ev, &fr)?;
+            }
             s.gpu_ms.push(fr.timings.gpu_ms.total());
             last.push(fr);
         }
-        if f + 1 == args.frames {
+        if let Some(e) = e.filter(|_| f + 1 == args.frames) {
             image_out(
                 &args.out_dir.join("exact-last.png"),
                 e.width,
@@ -233,14 +335,15 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
     }
     bar.finish_and_clear();
     for (s, fr) in scored.iter_mut().zip(&last) {
-        let n = s.rmse.len().max(1) as f64;
-        s.mean_rmse = s.rmse.iter().sum::<f64>() / n;
-        s.max_rmse = s.rmse.iter().copied().fold(0.0, f64::max);
-        s.mean_flip = s.flip.iter().sum::<f64>() / n;
+        s.exact
+            .iter_mut()
+            .chain(s.every_light.as_mut())
+            .for_each(Against::finish);
         let file = format!("{}-last.png", s.technique);
         image_out(&args.out_dir.join(file), fr.width, fr.height, &fr.rgba)?;
     }
-    print_table(&args, &ctx.info.name, exact_technique, mover, &scored);
+    let exact_name = exact.as_ref().map(|_| exact_technique);
+    print_table(&args, &ctx.info.name, exact_name, mover, &scored);
     let plot = args.out_dir.join("sequence.png");
     plot_sequence(&plot, &args, &scored)?;
     eprintln!(
@@ -261,7 +364,7 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
         "reuse": args.per_technique.reuse,
         "spatial": args.per_technique.spatial.name(),
         "denoise": args.per_technique.denoise,
-        "exact": exact_technique.to_string(),
+        "exact": exact_name.map(|t| t.to_string()),
         "techniques": scored,
     });
     if let Some(p) = &args.json {
@@ -270,9 +373,18 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
     Ok(report)
 }
 
-/// The technique's row name: with its ray options when it casts rays.
+/// A technique's renderer over the sequence, and where it samples lights over shadow maps,
+/// the same technique with every light.
+struct Contender {
+    name: String,
+    renderer: Renderer,
+    every: Option<Renderer>,
+}
+
+/// The technique's row name: with its ray options when it samples lights.
 fn label(t: Technique, args: &CompareArgs) -> String {
-    if t.info().fills != Fills::Rays || args.per_technique.light_samples == 0 {
+    let rays = sampled_rays(args);
+    if rays.light_samples == 0 || rays_of(t, rays).light_samples == 0 {
         return t.to_string();
     }
     let mut s = format!("{t}-k{}", args.per_technique.light_samples);
@@ -292,7 +404,7 @@ fn label(t: Technique, args: &CompareArgs) -> String {
 fn print_table(
     args: &CompareArgs,
     adapter: &str,
-    exact: Technique,
+    exact: Option<Technique>,
     mover: Option<usize>,
     scored: &[Scored],
 ) {
@@ -304,13 +416,16 @@ fn print_table(
     let caster = mover.map_or("no caster moving".to_string(), |k| {
         format!("instance {k} circling")
     });
+    let against = match exact {
+        Some(t) => format!("each against every cluster light traced by {t}"),
+        None => "no exact frames (no ray queries)".to_string(),
+    };
     println!(
-        "{} frames of {}x{}, {camera}, {caster}; each against every cluster light traced by {exact} \
-         ({adapter})",
+        "{} frames of {}x{}, {camera}, {caster}; {against} ({adapter})",
         args.frames, args.width, args.height
     );
     println!(
-        "{:<28} {:>10} {:>8} {:>8} {:>8} {:>10} {:>12}",
+        "{:<40} {:>10} {:>8} {:>8} {:>8} {:>10} {:>12}",
         "technique", "mean RMSE", "first", "last", "max", "mean FLIP", "median GPU ms"
     );
     for s in scored {
@@ -319,34 +434,67 @@ fn print_table(
         let median = ms
             .get(ms.len() / 2)
             .map_or("n/a".to_string(), |m| format!("{m:.1}"));
-        println!(
-            "{:<28} {:>10.2} {:>8.2} {:>8.2} {:>8.2} {:>10.4} {:>12}",
-            s.technique,
-            s.mean_rmse,
-            s.rmse.first().copied().unwrap_or(0.0),
-            s.rmse.last().copied().unwrap_or(0.0),
-            s.max_rmse,
-            s.mean_flip,
-            median
+        let rows = s.exact.iter().map(|a| (s.technique.clone(), a)).chain(
+            s.every_light
+                .iter()
+                .map(|a| (format!("{} vs every light", s.technique), a)),
+        );
+        for (k, (name, a)) in rows.enumerate() {
+            println!(
+                "{:<40} {:>10.2} {:>8.2} {:>8.2} {:>8.2} {:>10.4} {:>12}",
+                name,
+                a.mean_rmse,
+                a.rmse.first().copied().unwrap_or(0.0),
+                a.rmse.last().copied().unwrap_or(0.0),
+                a.max_rmse,
+                a.mean_flip,
+                if k == 0 { median.as_str() } else { "" }
+            );
+        }
+    }
+    let mut footer = "RMSE of the 8-bit RGB channels (0-255) and FLIP".to_string();
+    if exact.is_some() {
+        footer.push_str(" against the exact frame of each frame");
+    }
+    if scored.iter().any(|s| s.every_light.is_some()) {
+        footer.push_str(
+            "; \"vs every light\": against the same technique's frame with every light (the \
+             sampling's noise alone)",
         );
     }
-    println!(
-        "RMSE of the 8-bit RGB channels (0-255) and FLIP against the exact frame of each frame"
-    );
+    println!("{footer}");
 }
 
 fn plot_sequence(path: &std::path::Path, args: &CompareArgs, scored: &[Scored]) -> Result<()> {
-    let series = |pick: &dyn Fn(&Scored, usize) -> Option<f64>| -> Vec<crate::bench::plot::Series> {
-        scored
-            .iter()
-            .map(|s| {
-                let points = (0..s.rmse.len())
-                    .filter_map(|k| pick(s, k).map(|v| ((k + 1) as f64, v)))
+    // Each technique's line against the exact frames, and against its every-light frames.
+    let lines = || {
+        scored.iter().flat_map(|s| {
+            s.exact.iter().map(|a| (s.technique.clone(), a)).chain(
+                s.every_light
+                    .iter()
+                    .map(|a| (format!("{} vs every light", s.technique), a)),
+            )
+        })
+    };
+    let series = |pick: &dyn Fn(&Against, usize) -> f64| -> Vec<crate::bench::plot::Series> {
+        lines()
+            .map(|(name, a)| {
+                let points = (0..a.rmse.len())
+                    .map(|k| ((k + 1) as f64, pick(a, k)))
                     .collect();
-                (s.technique.clone(), points)
+                (name, points)
             })
             .collect()
     };
+    let times: Vec<crate::bench::plot::Series> = scored
+        .iter()
+        .map(|s| {
+            let points = (0..s.gpu_ms.len())
+                .filter_map(|k| s.gpu_ms[k].map(|v| ((k + 1) as f64, v)))
+                .collect();
+            (s.technique.clone(), points)
+        })
+        .collect();
     crate::bench::plot::panels(
         path,
         &format!(
@@ -356,20 +504,16 @@ fn plot_sequence(path: &std::path::Path, args: &CompareArgs, scored: &[Scored]) 
         "frame",
         &[
             (
-                "RMSE against the exact frame".to_string(),
+                "RMSE against the reference frame".to_string(),
                 "RMSE (0-255)".to_string(),
-                series(&|s, k| Some(s.rmse[k])),
+                series(&|a, k| a.rmse[k]),
             ),
             (
-                "FLIP against the exact frame".to_string(),
+                "FLIP against the reference frame".to_string(),
                 "mean FLIP".to_string(),
-                series(&|s, k| Some(s.flip[k])),
+                series(&|a, k| a.flip[k]),
             ),
-            (
-                "GPU time per frame".to_string(),
-                "ms".to_string(),
-                series(&|s, k| s.gpu_ms[k]),
-            ),
+            ("GPU time per frame".to_string(), "ms".to_string(), times),
         ],
     )
 }

@@ -37,16 +37,60 @@ fn bench_shadows_puts_every_kind_of_shadow_side_by_side() {
     assert!(dir.join("shadows-cubes-96x54.png").exists());
 }
 
+/// `bench denoise --technique virtual`: the sampled lights' visibility from the pages, each
+/// frame scored against virtual maps with every light (the denoised frames far closer than the
+/// plain ones), with the every-light frame's time and pages beside them; the exact frames too
+/// where there are ray queries. Irregular maps cannot sample: refused naming the flag.
+fn bench_denoise_over_virtual_maps(rays_here: bool) {
+    let (dir, json) = bench_ok(
+        "denoise",
+        "--technique virtual --scene cubes --lights 48 --frames 4 --width 96 --height 72 --still",
+    );
+    assert_eq!(json["technique"], "virtual", "{json}");
+    let r = &records(&json)[0];
+    let (plain, denoised) = (
+        r["plain_every_mean_rmse"]
+            .as_f64()
+            .expect("plain against every light"),
+        r["denoised_every_mean_rmse"]
+            .as_f64()
+            .expect("denoised against every light"),
+    );
+    eprintln!("bench denoise over virtual maps: against every light, plain {plain:.2}, denoised {denoised:.2}");
+    assert!(plain > 0.0 && denoised < 0.7 * plain, "{r}");
+    let f = &r["frames"][0];
+    assert!(
+        f["every_ms"].is_number() || f["plain_ms"].is_null(),
+        "the every-light frame is timed where frames are: {f}"
+    );
+    assert!(
+        f["denoised_pages"].as_u64().is_some_and(|p| p > 0) && f["every_pages"].is_u64(),
+        "{f}"
+    );
+    assert_eq!(f["plain_rmse"].is_number(), rays_here, "{f}");
+    let text = std::fs::read_to_string(dir.join("results.txt")).unwrap();
+    assert!(
+        text.contains("against every light through the same maps")
+            && text.contains("virtual's shadow maps"),
+        "{text}"
+    );
+    rejects(
+        "denoise --technique irregular --scene cubes --lights 4 --frames 1",
+        "--technique irregular",
+    );
+}
+
 /// `bench denoise` on a tiny sequence: every frame scored against the exact image of that
 /// frame, the denoised frames closer than the plain ones on average (the denoiser's point:
 /// measured on cubes with 48 lights, 96x72, 4 frames), the cost ratio from the same
-/// sequence's medians; `--reference off` times only. Without ray queries it is refused naming
-/// the feature.
+/// sequence's medians; `--reference off` times only. Without ray queries the ray-traced run is
+/// refused naming the feature; sampled lights over virtual maps run on any backend.
 #[test]
 fn bench_denoise_scores_each_frame_of_a_sequence() {
     let args = "denoise --scene cubes --lights 48 --frames 4 --width 96 --height 72";
     let ctx = shared_gpu::context();
     let rays_here = shared_gpu::rays_here(&ctx);
+    bench_denoise_over_virtual_maps(rays_here);
     if !rays_here {
         rejects(args, "EXPERIMENTAL_RAY_QUERY");
         return;

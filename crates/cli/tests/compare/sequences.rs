@@ -47,12 +47,14 @@ fn compare_tells_each_frame_in_stages() {
 /// frame: the ray-traced technique with every light is that exact image (RMSE 0 in every frame
 /// of a turning camera and a moving caster, which fails if any renderer misses a step of the
 /// sequence), shadow maps differ from it a little, and sampled rays denoised over still frames
-/// come closer to it frame by frame. Without ray queries it is refused by name.
+/// come closer to it frame by frame. Without ray queries it is refused by name, but for
+/// sampled lights over shadow maps (below).
 #[test]
 fn compare_over_a_sequence_scores_each_frame_against_its_exact_image() {
     let ctx = shared_gpu::context();
     let rays_here = shared_gpu::rays_here(&ctx);
     let frame = ["--scene", "cubes", "--width", "160", "--height", "90"];
+    sampled_lights_over_maps_are_scored_against_every_light(&frame, rays_here);
     if !rays_here {
         let dir = tmp("sequence-refused");
         let out = run(&[
@@ -179,4 +181,76 @@ fn compare_over_a_sequence_scores_each_frame_against_its_exact_image() {
         .concat());
         assert_clean_failure_compare(&out, needle);
     }
+}
+
+/// Sampled lights over virtual maps, denoised over still frames (any backend: their visibility
+/// comes from the pages): scored against the same technique with every light, which they come
+/// closer to frame by frame, and against the exact frame where rays exist. Sampling with only
+/// techniques that cannot sample is refused naming the flag.
+fn sampled_lights_over_maps_are_scored_against_every_light(frame: &[&str], rays_here: bool) {
+    let (json, _) = compare(
+        "sequence-sampled-maps",
+        &[
+            frame,
+            &[
+                "--lights",
+                "64",
+                "--frames",
+                "6",
+                "--still",
+                "--techniques",
+                "virtual",
+                "--light-samples",
+                "1",
+                "--denoise",
+            ],
+        ]
+        .concat(),
+    );
+    let row = &json["techniques"][0];
+    assert_eq!(row["technique"], "virtual-k1-denoise", "{json}");
+    let series = |v: &Value| -> Vec<f64> {
+        v.as_array()
+            .unwrap_or_else(|| panic!("no series: {json}"))
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    };
+    let every = series(&row["every_light"]["rmse"]);
+    eprintln!("virtual K = 1 denoised against every light through the same pages: {every:?}");
+    assert_eq!(every.len(), 6);
+    assert!(
+        every.iter().all(|&x| x > 0.0),
+        "sampled frames differ: {every:?}"
+    );
+    assert!(
+        every[5] < 0.85 * every[0],
+        "the denoiser's history brings the still frames closer: {every:?}"
+    );
+    if rays_here {
+        let exact = series(&row["rmse"]);
+        eprintln!("and against the exact frames: {exact:?}");
+        assert_eq!(exact.len(), 6);
+        assert!(exact[5] < exact[0], "{exact:?}");
+    } else {
+        assert!(
+            row.get("rmse").is_none() && json["exact"].is_null(),
+            "{json}"
+        );
+    }
+    let dir = tmp("sequence-sampled-refused");
+    let out = run(&[
+        &["compare", "--out-dir", dir.to_str().unwrap()],
+        frame,
+        &[
+            "--frames",
+            "3",
+            "--techniques",
+            "irregular",
+            "--light-samples",
+            "1",
+        ],
+    ]
+    .concat());
+    assert_clean_failure_compare(&out, "--light-samples");
 }
