@@ -58,6 +58,7 @@ const WEB_TESTS: &[&str] = &[
     "the_page_renders_the_native_frame_and_its_controls_work",
     "dropped_models_render_as_render_renders_the_files",
     "the_score_button_scores_as_compare_and_a_public_model_opens",
+    "sampled_lights_run_in_the_page_at_4096_lights",
 ];
 const THREE_TESTS: &[&str] = &["gltf_models_render_as_three_js_renders_them"];
 

@@ -71,14 +71,16 @@ pub struct TechniqueArgs {
     /// for measuring.
     #[arg(long, value_enum, default_value_t = VirtualMarking::Tiles)]
     pub virtual_marking: VirtualMarking,
-    /// With shadow rays (a technique that casts them, see --technique): trace K lights per
-    /// pixel, picked among the pixel's cluster lights by importance (their unshadowed
-    /// contribution) and weighted so the image stays unbiased — noisy, at a cost that does
-    /// not grow with the light count. 0 (default) traces every cluster light: exact.
+    /// Shade K lights per pixel, picked among the pixel's cluster lights by importance (their
+    /// unshadowed contribution) and weighted so the image stays unbiased — noisy, at a
+    /// lighting cost that does not grow with the light count. Their visibility: shadow rays
+    /// with technique raytraced, else the technique's shadow maps (virtual and the atlas
+    /// techniques: a hard light's depth test, a sized light's PCSS fraction; no ray queries
+    /// needed). Irregular maps refuse it. 0 (default) shades every cluster light.
     #[arg(long, default_value_t = RayOptions::default().light_samples)]
     pub light_samples: u32,
-    /// With --light-samples K: denoise the sampled rays. The exact unshadowed light of every
-    /// cluster light times the rays' shadow ratio, accumulated over frames at each surface
+    /// With --light-samples K: denoise the sampled lights. The exact unshadowed light of every
+    /// cluster light times the samples' shadow ratio, accumulated over frames at each surface
     /// point (reprojected when the camera moves) and filtered by an edge-stopping wavelet
     /// (one pass for all lights). Biased where a pixel's lights are shadowed differently; with
     /// --frames it converges as the frames go by.
@@ -92,7 +94,7 @@ pub struct TechniqueArgs {
     /// With --light-samples K: reuse each pixel's sampled lights across frames (ReSTIR's
     /// temporal reuse). Each frame a new light is drawn and weighed against the one the
     /// pixel kept (found where the surface point was last frame) by its unshadowed light
-    /// times its visibility, both traced now (two rays per sample): lights that reach the
+    /// times its visibility, both read now (two rays per sample with shadow rays): lights that reach the
     /// pixel are kept, so with --frames a still image's noise falls frame by frame. Unbiased
     /// for a still camera and casters; combine with --denoise for the cleanest frames.
     #[arg(long)]

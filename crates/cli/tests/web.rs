@@ -64,14 +64,23 @@ fn frame(browser: &mut Browser) -> Vec<u8> {
 }
 
 fn render_native(dir: &Path, name: &str, args: &[&str]) -> image::RgbImage {
+    render_native_sized(dir, name, (W, H), args)
+}
+
+fn render_native_sized(
+    dir: &Path,
+    name: &str,
+    (w, h): (u32, u32),
+    args: &[&str],
+) -> image::RgbImage {
     let png = dir.join(format!("{name}.png"));
     let out = Command::new(env!("CARGO_BIN_EXE_manyshadows"))
         .args([
             "render",
             "--width",
-            &W.to_string(),
+            &w.to_string(),
             "--height",
-            &H.to_string(),
+            &h.to_string(),
         ])
         .args(args)
         .arg("--out")
@@ -402,21 +411,30 @@ fn drop_files(browser: &mut Browser, dir: &Path, files: &[(&str, &str)]) -> Stri
 /// The mean ꟻLIP of the page's frame against `render`'s; both and the error map go to
 /// target/test-artifacts/web-NAME-*.png.
 fn flip_against(rgba: &[u8], native: &image::RgbImage, name: &str) -> f64 {
-    assert_eq!(rgba.len(), (W * H * 4) as usize, "the page's frame size");
+    flip_against_sized(rgba, native, (W, H), name)
+}
+
+fn flip_against_sized(
+    rgba: &[u8],
+    native: &image::RgbImage,
+    (w, h): (u32, u32),
+    name: &str,
+) -> f64 {
+    assert_eq!(rgba.len(), (w * h * 4) as usize, "the page's frame size");
     let ours: Vec<u8> = native
         .pixels()
         .flat_map(|p| [p.0[0], p.0[1], p.0[2], 255])
         .collect();
-    let flip = manyshadows_reference::flip_rgba8(rgba, &ours, W, H).unwrap();
+    let flip = manyshadows_reference::flip_rgba8(rgba, &ours, w, h).unwrap();
     let artifacts = repo().join("target/test-artifacts");
     std::fs::create_dir_all(&artifacts).unwrap();
-    let page = image::RgbaImage::from_raw(W, H, rgba.to_vec()).unwrap();
+    let page = image::RgbaImage::from_raw(w, h, rgba.to_vec()).unwrap();
     page.save(artifacts.join(format!("web-{name}-page.png")))
         .unwrap();
     native
         .save(artifacts.join(format!("web-{name}-native.png")))
         .unwrap();
-    image::RgbImage::from_raw(W, H, flip.error_map.clone())
+    image::RgbImage::from_raw(w, h, flip.error_map.clone())
         .unwrap()
         .save(artifacts.join(format!("web-{name}-flip.png")))
         .unwrap();
@@ -1045,4 +1063,108 @@ fn the_score_button_scores_as_compare_and_a_public_model_opens() {
     );
     eprintln!("{record}");
     std::fs::write(artifacts.join("web-frame-time.txt"), record).unwrap();
+}
+
+/// The bound of issue 64 on the page's sampled frame against `render`'s.
+const SAMPLED_MAX_FLIP: f64 = 0.05;
+
+/// The sampled frame's size: the page's default.
+const SAMPLED: (u32, u32) = (480, 270);
+
+/// Sampled lights over shadow maps in the page (issue 64), where there are no ray queries:
+/// the atrium under 4,096 lights, four sampled per pixel from the atlas (`traditional`) and
+/// denoised over the page's 8 still frames, against `render --frames 8 --still` with the same
+/// options, within ꟻLIP 0.05 (measured 0.0459). Part of it is not the sampling's: the two
+/// devices' every-light frames differ too at 4,096 lights (RMSE 8.9 at 240×135, lights whose
+/// maps the overfull atlas reduces differently), and at 240×135 the sampled frames were 0.0504
+/// (K = 4) and 0.0509 (K = 1) apart. The page says it samples. Refused by name: reuse as well
+/// with virtual maps (12 storage buffers in the lighting pass, where SwiftShader's WebGPU binds
+/// 10), and irregular maps, which cannot sample. (Virtual maps are not the technique here: in
+/// SwiftShader's WebGPU their sampled frames at 1,024 lights and more lose the lights' direct
+/// term, where lavapipe's, also on WebGPU's limits, do not; at 256 lights they match.)
+#[test]
+#[ignore = "needs Chromium, the wasm32 target and wasm-bindgen-cli: run `cargo xtask test`, which installs them"]
+fn sampled_lights_run_in_the_page_at_4096_lights() {
+    let chromium_dir = tmp("chromium-sampled");
+    let pkg = tmp("pkg-sampled");
+    build_page(&pkg);
+    let port = serve(repo().join("web/index.html"), vec![("pkg", pkg.clone())]);
+    let mut browser = Browser::start(&chromium_dir, PRESENTING);
+    let dir = tmp("native-sampled");
+    open_page(
+        &mut browser,
+        &format!(
+            "http://127.0.0.1:{port}/?w={}&h={}&scene=atrium&technique=traditional&lights=4096\
+             &samples=4&denoise=1",
+            SAMPLED.0, SAMPLED.1
+        ),
+    );
+    let started = std::time::Instant::now();
+    let status = browser.eval("window.manyshadows.ready", 1800);
+    let status = status.as_str().unwrap_or("").to_string();
+    let info = browser.eval("window.manyshadows.info()", 10);
+    let info = info.as_str().unwrap_or("").to_string();
+    eprintln!(
+        "page, 8 frames in {:.0} s: {status}\n{info}",
+        started.elapsed().as_secs_f64()
+    );
+    assert!(
+        status.ends_with("still frame 8 of 8"),
+        "the page did not draw its 8 still frames: {status}\npage log:\n{}",
+        browser.log.join("\n")
+    );
+    assert!(
+        info.contains("4096 lights") && info.contains("4 lights sampled per pixel, denoised"),
+        "{info}"
+    );
+    let page = frame(&mut browser);
+    let native = render_native_sized(
+        &dir,
+        "sampled-4096",
+        SAMPLED,
+        &[
+            // The page draws no reflection probes (`render` gives the atrium its two).
+            "--probes",
+            "0",
+            "--scene",
+            "atrium",
+            "--technique",
+            "traditional",
+            "--lights",
+            "4096",
+            "--light-samples",
+            "4",
+            "--denoise",
+            "--frames",
+            "8",
+            "--still",
+        ],
+    );
+    let flip = flip_against_sized(&page, &native, SAMPLED, "sampled-4096");
+    eprintln!("sampled lights, 4,096 lights: page against render, mean FLIP {flip:.4}");
+    assert!(
+        flip <= SAMPLED_MAX_FLIP,
+        "mean FLIP {flip:.4} > {SAMPLED_MAX_FLIP} (target/test-artifacts/web-sampled-4096-*.png)"
+    );
+    let reused = browser.eval(
+        "window.manyshadows.set({sampling: '1/reuse/denoise', technique: 'virtual'})",
+        300,
+    );
+    let reused = reused.as_str().unwrap_or("");
+    eprintln!("reuse as well: {reused}");
+    // Where the browser's device binds 12 or more, it renders instead.
+    assert!(
+        !reused.starts_with("not") || reused.contains("max_storage_buffers_per_shader_stage"),
+        "{reused}"
+    );
+    // Irregular maps cannot sample: the page says so by name and keeps its frame.
+    let refused = browser.eval(
+        "window.manyshadows.set({sampling: '1/denoise', technique: 'irregular'})",
+        300,
+    );
+    let refused = refused.as_str().unwrap_or("");
+    assert!(
+        refused.starts_with("not applied") && refused.contains("light_samples"),
+        "{refused}"
+    );
 }

@@ -314,3 +314,40 @@ fn the_adapter_offers_what_the_test_command_expects() {
         ctx.describe()
     );
 }
+
+/// The lighting pass's storage buffers against the device's per-stage limit: on a device that
+/// binds 10 (Chromium's WebGPU on SwiftShader), sampled lights over virtual maps with the
+/// denoiser (10 buffers) render, and with reuse as well (12: the reservoirs and their motion)
+/// are refused naming the limit and the buffers, where creating the pass was a validation
+/// error in the browser.
+#[test]
+fn a_lighting_pass_past_the_storage_buffer_limit_is_refused_by_name() {
+    let _own = common::own_device_lock();
+    let ctx = context_with(wgpu::Limits {
+        max_storage_buffers_per_shader_stage: 10,
+        ..required_limits()
+    })
+    .expect("the adapter offers 10 storage buffers per stage");
+    let scene = builtin::build("cubes", &BuiltinOptions::default()).unwrap();
+    let sampled = manyshadows::RayOptions::default()
+        .with_light_samples(1)
+        .with_denoise(true);
+    let denoised = settings(Technique::VIRTUAL).with_rays(sampled);
+    Renderer::new(&ctx, &scene, denoised.clone())
+        .and_then(|mut r| r.render())
+        .expect("virtual maps, K = 1 denoised, on 10 storage buffers a stage");
+    match Renderer::new(&ctx, &scene, denoised.with_rays(sampled.with_reuse(true))) {
+        Err(e @ RenderError::LimitsTooSmall { .. }) => {
+            let text = e.to_string();
+            assert!(
+                text.contains("max_storage_buffers_per_shader_stage")
+                    && text.contains("allows 10")
+                    && text.contains("needs 12")
+                    && text.contains("reservoirs"),
+                "{text}"
+            );
+        }
+        Err(e) => panic!("refused for another reason: {e}"),
+        Ok(_) => panic!("12 storage buffers accepted on a device that binds 10"),
+    }
+}

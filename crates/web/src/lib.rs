@@ -595,6 +595,12 @@ impl WebRenderer {
         Ok(pixels)
     }
 
+    /// Whether frames carry history (sampled lights reused or denoised): still frames converge,
+    /// so the page draws a few more after each change.
+    pub fn accumulates(&self) -> bool {
+        self.settings.reuse || self.settings.denoise
+    }
+
     /// Shadow views the last frame drew; the other views' maps were kept from earlier frames
     /// (while only the camera moves, every map but the cascades that follow the view).
     pub fn shadow_views_drawn(&self) -> u32 {
@@ -701,7 +707,7 @@ impl WebRenderer {
         let adapter = self.ctx.describe();
         format!(
             "adapter: {}\nscene {}: {} lights, {} shadow views, {} {}²{}\n\
-             technique {}, {} point shadows, PCF {}, {} light loop\n{}\nthis device lacks: {}",
+             technique {}, {} point shadows, PCF {}, {} light loop{}\n{}\nthis device lacks: {}",
             if self.ctx.info.name.is_empty() {
                 "the browser's WebGPU (see above)".to_string()
             } else {
@@ -724,6 +730,19 @@ impl WebRenderer {
             self.settings.point_shadows.name(),
             self.settings.pcf.name(),
             self.settings.light_loop.name(),
+            match self.settings.light_samples {
+                0 => String::new(),
+                k => format!(
+                    "; {k} light{} sampled per pixel{}{}",
+                    if k == 1 { "" } else { "s" },
+                    if self.settings.reuse { ", reused" } else { "" },
+                    if self.settings.denoise {
+                        ", denoised"
+                    } else {
+                        ""
+                    }
+                ),
+            },
             self.renderer.look().describe(),
             if lacks.is_empty() {
                 "nothing the renderer uses".into()

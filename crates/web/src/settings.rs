@@ -30,6 +30,12 @@ pub(crate) struct WebSettings {
     /// Every light's size times this (the page's light-size slider: 1 = the scene's sizes,
     /// 0 = hard shadows).
     pub(crate) light_size: f32,
+    /// Lights sampled per pixel (0: every light), their reuse across frames and the denoiser
+    /// (`render --light-samples K --reuse --denoise`; the visibility from the technique's shadow
+    /// maps, as there).
+    pub(crate) light_samples: u32,
+    pub(crate) reuse: bool,
+    pub(crate) denoise: bool,
 }
 
 impl Default for WebSettings {
@@ -48,6 +54,9 @@ impl Default for WebSettings {
             light_loop: LightLoop::default(),
             view: View::default(),
             light_size: 1.0,
+            light_samples: 0,
+            reuse: false,
+            denoise: false,
         }
     }
 }
@@ -123,6 +132,9 @@ impl WebSettings {
                         .filter(|k| k.is_finite() && (0.0..=4.0).contains(k))
                         .ok_or_else(|| format!("size '{v}' is not a factor from 0 to 4"))?
                 }
+                "samples" => s.light_samples = num("samples")?.min(u64::from(u32::MAX)) as u32,
+                "reuse" => s.reuse = switch(v, "reuse")?,
+                "denoise" => s.denoise = switch(v, "denoise")?,
                 // Keys the page itself uses.
                 "report" | "auto" => {}
                 _ => return Err(format!("unknown setting '{k}'")),
@@ -146,10 +158,25 @@ impl WebSettings {
             .with_point_shadows(self.point_shadows)
             .with_pcf(self.pcf)
             .with_light_loop(self.light_loop)
+            .with_rays(
+                manyshadows::RayOptions::default()
+                    .with_light_samples(self.light_samples)
+                    .with_reuse(self.reuse)
+                    .with_denoise(self.denoise),
+            )
             .with_look(manyshadows::Look {
                 exposure: self.exposure,
                 ..Default::default()
             })
+    }
+}
+
+/// `1`/`on` or `0`/`off`.
+fn switch(v: &str, key: &str) -> Result<bool, String> {
+    match v {
+        "1" | "on" | "true" => Ok(true),
+        "0" | "off" | "false" | "" => Ok(false),
+        _ => Err(format!("{key} '{v}' is not 1 or 0")),
     }
 }
 

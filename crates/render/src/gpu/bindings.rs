@@ -208,6 +208,17 @@ impl BindingList {
         }
     }
 
+    /// The names of the storage buffers listed (read-only and read-write): a stage may bind
+    /// `max_storage_buffers_per_shader_stage` of them (10 in Chromium's WebGPU on SwiftShader,
+    /// 8 in WebGPU's defaults).
+    pub fn storage_buffers(&self) -> Vec<&'static str> {
+        self.bindings
+            .iter()
+            .filter(|b| matches!(b.kind, Kind::Storage(_) | Kind::StorageRw(_)))
+            .map(|b| b.name)
+            .collect()
+    }
+
     /// The WGSL declarations, one per line, numbered in order.
     pub fn wgsl(&self) -> String {
         (0u32..)

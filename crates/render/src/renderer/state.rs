@@ -136,6 +136,7 @@ impl Renderer {
             .min(max_dim);
         ctx.scoped("creating the renderer", || {
             let parts = FrameParts::new(ctx, scene, &settings, max_atlas)?;
+            crate::shading::lighting::check_limits(ctx, &parts.lighting())?;
             let lighting = LightingPass::new(
                 ctx,
                 &parts.lighting(),

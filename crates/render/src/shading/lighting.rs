@@ -9,6 +9,7 @@
 
 use std::collections::HashMap;
 
+use crate::error::RenderError;
 use crate::gpu::bindings::{Binding, BindingList, Part};
 use crate::gpu::context::GpuContext;
 use crate::gpu::timing::{GpuTimer, Span};
@@ -61,6 +62,29 @@ fn bindings(lookup: &LookupWgsl, parts: &[Part<'_>]) -> BindingList {
         lookup.bindings,
         parts,
     )
+}
+
+/// Refuses, naming the limit and the buffers, a lighting pass whose storage buffers (the frame's
+/// and the shadow source's, and those of the parts plugged in: the denoiser's, the reservoirs)
+/// are more than the device binds in one stage: measured in Chromium's WebGPU on SwiftShader,
+/// which allows 10, virtual maps with reuse and the denoiser need 12 (the layout's creation
+/// failed with a validation error).
+pub fn check_limits(ctx: &GpuContext, inputs: &LightingInputs<'_>) -> Result<(), RenderError> {
+    let buffers = bindings(&inputs.frame.shadows.lookup, &inputs.parts).storage_buffers();
+    let max = ctx.limits().max_storage_buffers_per_shader_stage;
+    if buffers.len() as u32 <= max {
+        return Ok(());
+    }
+    Err(RenderError::LimitsTooSmall {
+        adapter: ctx.describe(),
+        needs: "the lighting pass".into(),
+        shortfalls: vec![format!(
+            "max_storage_buffers_per_shader_stage: the device allows {max}, the lighting pass \
+             needs {} ({}); fewer parts plugged in need fewer (drop reuse or the denoiser)",
+            buffers.len(),
+            buffers.join(", ")
+        )],
+    })
 }
 
 /// The lighting pass's WGSL, shadows found through `lookup`, with `parts`, shading as `consts`
