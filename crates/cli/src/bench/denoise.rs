@@ -142,8 +142,10 @@ struct FrameRow {
     /// Shadow maps: RMSE against the same technique with every light.
     plain_every_rmse: Option<f64>,
     denoised_every_rmse: Option<f64>,
-    /// Shadow maps: the every-light frame's GPU ms.
+    /// Shadow maps: the every-light frame's GPU ms, and its RMSE against the exact frame (the
+    /// maps' own error, which no sampling removes).
     every_ms: Option<f64>,
+    every_exact_rmse: Option<f64>,
     /// Virtual maps: pages drawn this frame by the denoised renderer and by every light.
     denoised_pages: Option<u32>,
     every_pages: Option<u32>,
@@ -177,6 +179,8 @@ struct Record {
     /// (median of each frame's ratio).
     every_median_ms: Option<f64>,
     denoised_over_every_paired: Option<f64>,
+    /// Shadow maps: mean RMSE of the every-light frame against the exact frame.
+    every_exact_mean_rmse: Option<f64>,
     /// Virtual maps: mean pages drawn per frame, denoised and every light.
     denoised_mean_pages: Option<f64>,
     every_mean_pages: Option<f64>,
@@ -494,6 +498,7 @@ impl Sequence {
             plain_every_rmse: every.as_ref().map(|e| rmse_rgb(&p, e)),
             denoised_every_rmse: every.as_ref().map(|e| rmse_rgb(&d, e)),
             every_ms: every.as_ref().and_then(|e| e.timings.gpu_ms.total()),
+            every_exact_rmse: every.as_ref().zip(e.as_ref()).map(|(v, e)| rmse_rgb(v, e)),
             denoised_pages: pages(&d),
             every_pages: every.as_ref().and_then(pages),
         });
@@ -519,6 +524,7 @@ impl Sequence {
             plain_every_mean_rmse: mean(rows.iter().filter_map(|r| r.plain_every_rmse)),
             denoised_every_mean_rmse: mean(rows.iter().filter_map(|r| r.denoised_every_rmse)),
             every_median_ms: med(rows.iter().filter_map(|r| r.every_ms).collect()),
+            every_exact_mean_rmse: mean(rows.iter().filter_map(|r| r.every_exact_rmse)),
             denoised_over_every_paired: med(rows
                 .iter()
                 .filter_map(|r| crate::bench::harness::ratio(r.denoised_ms, r.every_ms))
@@ -711,7 +717,7 @@ fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
         t += &format!(
             "{} lights, against every light through the same maps: RMSE plain mean {} (first {}, \
              last {}), denoised mean {} (first {}, last {}); every-light frame {} ms, denoised \
-             over it {}x (median of each frame's ratio){}\n",
+             over it {}x (median of each frame's ratio){}{}\n",
             r.lights,
             opt(r.plain_every_mean_rmse),
             opt(first.and_then(|x| x.plain_every_rmse)),
@@ -721,6 +727,9 @@ fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
             opt(last.and_then(|x| x.denoised_every_rmse)),
             ms(r.every_median_ms),
             opt(r.denoised_over_every_paired),
+            r.every_exact_mean_rmse.map_or(String::new(), |e| format!(
+                "; the every-light frame itself {e:.2} from the exact one (the maps' own error)"
+            )),
             match (r.denoised_mean_pages, r.every_mean_pages) {
                 (Some(d), Some(e)) => format!(
                     "; pages drawn per frame {d:.0} denoised, {e:.0} every light ({})",
