@@ -40,13 +40,14 @@ the mean, first and last errors, median GPU ms of each frame and the denoised fr
 plain one (the same frames, interleaved); across light counts, how each frame grows. Writes
 results.txt, results.json (every frame's numbers) and frames.png (error and time per frame).
 
-With --technique raytraced (the default) needs ray queries (EXPERIMENTAL_RAY_QUERY: Vulkan
-with Mesa 25's lavapipe, or a GPU driver that has them). With a shadow-map technique
-(--technique virtual, traditional, ...) the sampled lights' visibility comes from its maps
-(any adapter), and a fourth renderer draws the same technique with every light: the sampled
-frames are scored against it too (the sampling's noise alone), and the table sets their time
-and pages drawn beside it. The exact frames are still traced where there are ray queries. --reference off skips the exact frames (times only), for light counts whose
-exact frames take long on a CPU adapter. --reuse makes both sampled renderers reuse their
+With the default --technique (shadow rays) it needs ray queries (EXPERIMENTAL_RAY_QUERY:
+Vulkan with Mesa 25's lavapipe, or a GPU driver that has them). With a shadow-map technique
+(virtual maps or an atlas technique) the sampled lights' visibility comes from its maps (any
+adapter), and a fourth renderer draws the same technique with every light: the sampled
+frames are scored against it too (the sampling's noise alone), and the table sets its time,
+pages drawn and own error against the exact frame beside them. The exact frames are still
+traced where there are ray queries. --reference off skips the exact frames (times only), for
+light counts whose exact frames take long on a CPU adapter. --reuse makes both sampled renderers reuse their
 lights across frames (`render --reuse`): the plain column then shows reuse alone.
 
 Examples:
@@ -87,10 +88,11 @@ pub struct DenoiseArgs {
     /// Lights sampled per pixel (1 to 16).
     #[arg(long, default_value_t = 1)]
     pub light_samples: u32,
-    /// Where the sampled lights' visibility comes from: raytraced (shadow rays), virtual or an
-    /// atlas technique (its shadow maps; scored against the same technique with every light as
-    /// well). Irregular maps cannot sample.
-    #[arg(long, default_value = "raytraced", value_parser = crate::args::parse_technique)]
+    /// Where the sampled lights' visibility comes from: shadow rays (the default), or virtual
+    /// maps or an atlas technique (their shadow maps; scored against the same technique with
+    /// every light as well). Irregular maps cannot sample.
+    #[arg(long, default_value_t = crate::techniques::first_filling(manyshadows::Fills::Rays),
+          value_parser = crate::args::parse_technique)]
     pub technique: manyshadows::Technique,
     /// Both sampled renderers reuse their lights across frames (`render --reuse`): the plain
     /// one then shows reuse alone, the denoised one reuse and the denoiser together.
