@@ -714,19 +714,21 @@ fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
         if r.every_median_ms.is_none() && r.denoised_every_mean_rmse.is_none() {
             continue;
         }
-        let first = r.frames.first();
-        let last = r.frames.last();
+        // `mean M (first F, last L)` of a per-frame series.
+        let series = |mean: Option<f64>, pick: fn(&FrameRow) -> Option<f64>| {
+            format!(
+                "mean {} (first {}, last {})",
+                opt(mean),
+                opt(r.frames.first().and_then(pick)),
+                opt(r.frames.last().and_then(pick))
+            )
+        };
         t += &format!(
-            "{} lights, against every light through the same maps: RMSE plain mean {} (first {}, \
-             last {}), denoised mean {} (first {}, last {}); every-light frame {} ms, denoised \
-             over it {}x (median of each frame's ratio){}{}\n",
+            "{} lights, against every light through the same maps: RMSE plain {}, denoised {}; \
+             every-light frame {} ms, denoised over it {}x (median of each frame's ratio){}{}\n",
             r.lights,
-            opt(r.plain_every_mean_rmse),
-            opt(first.and_then(|x| x.plain_every_rmse)),
-            opt(last.and_then(|x| x.plain_every_rmse)),
-            opt(r.denoised_every_mean_rmse),
-            opt(first.and_then(|x| x.denoised_every_rmse)),
-            opt(last.and_then(|x| x.denoised_every_rmse)),
+            series(r.plain_every_mean_rmse, |x| x.plain_every_rmse),
+            series(r.denoised_every_mean_rmse, |x| x.denoised_every_rmse),
             ms(r.every_median_ms),
             opt(r.denoised_over_every_paired),
             r.every_exact_mean_rmse.map_or(String::new(), |e| format!(

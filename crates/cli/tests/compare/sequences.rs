@@ -158,14 +158,7 @@ fn compare_over_a_sequence_scores_each_frame_against_its_exact_image() {
         .map(|v| v.as_f64().unwrap())
         .collect();
     eprintln!("K = 1 denoised over still frames: RMSE {e:?}");
-    assert!(
-        e.iter().all(|&x| x > 0.0),
-        "sampled frames are not exact: {e:?}"
-    );
-    assert!(
-        e[5] < 0.85 * e[0],
-        "the denoiser's history brings the still frames closer: {e:?}"
-    );
+    still_frames_converge(&e);
     // Sequence flags without a sequence, and a sequence of no frames.
     for (bad, needle) in [
         (vec!["--light-samples", "1"], "--light-samples"),
@@ -219,14 +212,7 @@ fn sampled_lights_over_maps_are_scored_against_every_light(frame: &[&str], rays_
     let every = series(&row["every_light"]["rmse"]);
     eprintln!("virtual K = 1 denoised against every light through the same pages: {every:?}");
     assert_eq!(every.len(), 6);
-    assert!(
-        every.iter().all(|&x| x > 0.0),
-        "sampled frames differ: {every:?}"
-    );
-    assert!(
-        every[5] < 0.85 * every[0],
-        "the denoiser's history brings the still frames closer: {every:?}"
-    );
+    still_frames_converge(&every);
     if rays_here {
         let exact = series(&row["rmse"]);
         eprintln!("and against the exact frames: {exact:?}");
@@ -253,4 +239,17 @@ fn sampled_lights_over_maps_are_scored_against_every_light(frame: &[&str], rays_
     ]
     .concat());
     assert_clean_failure_compare(&out, "--light-samples");
+}
+
+/// Six denoised still frames' errors: none exact (they are sampled), and the history brings
+/// the sixth well below the first.
+fn still_frames_converge(e: &[f64]) {
+    assert!(
+        e.iter().all(|&x| x > 0.0),
+        "sampled frames are not exact: {e:?}"
+    );
+    assert!(
+        e[5] < 0.85 * e[0],
+        "the denoiser's history brings the still frames closer: {e:?}"
+    );
 }
