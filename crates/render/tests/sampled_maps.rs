@@ -60,6 +60,14 @@ fn sampled_lights_over_shadow_maps_converge_to_every_light() {
             errors[0] > errors[1] && errors[1] > errors[2] && errors[2] > 0.0,
             "{t}: {errors:?}"
         );
+        // K = 16 of 48 lights leaves little noise (lavapipe: 0.89 both): sampled lights that
+        // took no visibility from the maps (every sample lit) stay far from the shadowed
+        // image however many are drawn.
+        assert!(
+            errors[2] < 1.5,
+            "{t}: K = 16 is {} from every light",
+            errors[2]
+        );
         if t != Technique::VIRTUAL {
             continue;
         }
@@ -88,12 +96,19 @@ fn sampled_lights_over_shadow_maps_converge_to_every_light() {
              plain {:.2}",
             errors[0]
         );
+        // Lavapipe: 0.87 of 13.61 (0.064x; the rays' test holds them to 0.08x). Denoised
+        // samples that took no visibility from the maps are the unshadowed light, far off.
         assert!(
-            denoised < 0.5 * errors[0],
+            denoised < 0.15 * errors[0],
             "{t}: denoised {denoised} vs {}",
             errors[0]
         );
-        assert!(reused < errors[0], "{t}: reused {reused} vs {}", errors[0]);
+        // Lavapipe: 3.65 (0.27x plain); 4.93 (0.36x) with the maps' visibility left out.
+        assert!(
+            reused < 0.3 * errors[0],
+            "{t}: reused {reused} vs {}",
+            errors[0]
+        );
     }
 }
 
