@@ -23,8 +23,7 @@ use serde::Serialize;
 
 use crate::bench::harness::{check_counts, check_scene, median, seeded_scene, Figure, Harness};
 
-mod table;
-use table::table;
+use crate::bench::denoise_table::{table, FrameRow, Record};
 
 /// `manyshadows bench denoise --help`.
 pub const LONG_ABOUT: &str = "\
@@ -129,66 +128,6 @@ pub struct DenoiseArgs {
     pub height: u32,
     #[command(flatten)]
     pub output: crate::bench::harness::OutputArgs,
-}
-
-/// One frame's numbers.
-#[derive(Serialize, Clone, Copy)]
-struct FrameRow {
-    frame: u32,
-    /// RMSE against the exact frame (None without the reference).
-    plain_rmse: Option<f64>,
-    denoised_rmse: Option<f64>,
-    plain_ms: Option<f64>,
-    denoised_ms: Option<f64>,
-    /// The denoised frame's lighting stage and its denoiser's passes with the composite.
-    denoised_lighting_ms: Option<f64>,
-    denoise_ms: Option<f64>,
-    exact_ms: Option<f64>,
-    /// Shadow maps: RMSE against the same technique with every light.
-    plain_every_rmse: Option<f64>,
-    denoised_every_rmse: Option<f64>,
-    /// Shadow maps: the every-light frame's GPU ms, and its RMSE against the exact frame (the
-    /// maps' own error, which no sampling removes).
-    every_ms: Option<f64>,
-    every_exact_rmse: Option<f64>,
-    /// Virtual maps: pages drawn this frame by the denoised renderer and by every light.
-    denoised_pages: Option<u32>,
-    every_pages: Option<u32>,
-    /// With a still camera and a moving caster: how many frames behind the denoised shadow
-    /// is (see [`trail`]).
-    trail_frames: Option<u32>,
-}
-
-/// One light count's sequence.
-#[derive(Serialize)]
-struct Record {
-    lights: usize,
-    frames: Vec<FrameRow>,
-    plain_mean_rmse: Option<f64>,
-    denoised_mean_rmse: Option<f64>,
-    plain_median_ms: Option<f64>,
-    denoised_median_ms: Option<f64>,
-    /// Denoised frame over plain frame, medians of the same sequence.
-    cost_ratio: Option<f64>,
-    /// The median of each frame's denoised over plain (the two alternate, so each pair saw
-    /// the machine alike).
-    cost_ratio_paired: Option<f64>,
-    /// Median of the denoiser's own passes and composite.
-    denoise_median_ms: Option<f64>,
-    /// Mean of the frames' trails (still camera, moving caster).
-    mean_trail_frames: Option<f64>,
-    /// Shadow maps: mean RMSE against every light through the same maps.
-    plain_every_mean_rmse: Option<f64>,
-    denoised_every_mean_rmse: Option<f64>,
-    /// Shadow maps: median GPU ms of the every-light frame, and the denoised frame over it
-    /// (median of each frame's ratio).
-    every_median_ms: Option<f64>,
-    denoised_over_every_paired: Option<f64>,
-    /// Shadow maps: mean RMSE of the every-light frame against the exact frame.
-    every_exact_mean_rmse: Option<f64>,
-    /// Virtual maps: mean pages drawn per frame, denoised and every light.
-    denoised_mean_pages: Option<f64>,
-    every_mean_pages: Option<f64>,
 }
 
 #[derive(Serialize)]
@@ -583,7 +522,12 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
         }
     }
     let records: Vec<Record> = sequences.into_iter().map(Sequence::record).collect();
-    let table = table(args, &h.adapter, &records);
+    let table = table(
+        &heading(args, &h.adapter),
+        args.reuse,
+        args.reference_area_samples,
+        &records,
+    );
     type Pick = fn(&FrameRow) -> Option<f64>;
     let per_frame = |picks: &[(&str, Pick)]| {
         let mut series = Vec::new();
@@ -651,5 +595,39 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
             records,
         },
         figures,
+    )
+}
+
+/// The first lines of results.txt: what ran, on which adapter.
+fn heading(args: &DenoiseArgs, adapter: &str) -> String {
+    let camera = match &args.camera_path {
+        Some(p) => format!("camera along {}", p.display()),
+        None => format!("camera {} deg/frame", args.orbit),
+    };
+    format!(
+        "== bench denoise: {} at {}x{}, {} frames, {camera}, {}; K = {}, visibility from {}{}\n   adapter: {adapter}\n",
+        args.scene,
+        args.width,
+        args.height,
+        args.frames,
+        if args.still {
+            "no caster moving"
+        } else {
+            "a caster circling"
+        },
+        args.light_samples,
+        match args.technique.info().fills {
+            manyshadows::Fills::Rays => "shadow rays".to_string(),
+            _ => format!("{}'s shadow maps", args.technique),
+        },
+        match (args.reuse, args.spatial) {
+            (false, _) => String::new(),
+            (true, manyshadows::SpatialReuse::Off) =>
+                ", lights reused across frames (plain: reuse alone)".to_string(),
+            (true, m) => format!(
+                ", lights reused across frames and between neighbours ({}; plain: without the denoiser)",
+                m.name()
+            ),
+        }
     )
 }

@@ -3,6 +3,7 @@
 //! ([`plot`]).
 
 pub(crate) mod denoise;
+mod denoise_table;
 pub(crate) mod estimate;
 pub(crate) mod harness;
 pub(crate) mod irregular;

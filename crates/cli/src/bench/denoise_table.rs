@@ -2,41 +2,75 @@
 //! through the same maps where the technique samples over them, the trails, and the growth
 //! across light counts.
 
-use super::{DenoiseArgs, FrameRow, Record};
+use serde::Serialize;
+
 use crate::bench::harness::{median, ms};
 
-pub(super) fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> String {
+/// One frame's numbers.
+#[derive(Serialize, Clone, Copy)]
+pub(super) struct FrameRow {
+    pub(super) frame: u32,
+    /// RMSE against the exact frame (None without the reference).
+    pub(super) plain_rmse: Option<f64>,
+    pub(super) denoised_rmse: Option<f64>,
+    pub(super) plain_ms: Option<f64>,
+    pub(super) denoised_ms: Option<f64>,
+    /// The denoised frame's lighting stage and its denoiser's passes with the composite.
+    pub(super) denoised_lighting_ms: Option<f64>,
+    pub(super) denoise_ms: Option<f64>,
+    pub(super) exact_ms: Option<f64>,
+    /// Shadow maps: RMSE against the same technique with every light.
+    pub(super) plain_every_rmse: Option<f64>,
+    pub(super) denoised_every_rmse: Option<f64>,
+    /// Shadow maps: the every-light frame's GPU ms, and its RMSE against the exact frame (the
+    /// maps' own error, which no sampling removes).
+    pub(super) every_ms: Option<f64>,
+    pub(super) every_exact_rmse: Option<f64>,
+    /// Virtual maps: pages drawn this frame by the denoised renderer and by every light.
+    pub(super) denoised_pages: Option<u32>,
+    pub(super) every_pages: Option<u32>,
+    /// With a still camera and a moving caster: how many frames behind the denoised shadow
+    /// is (see [`trail`]).
+    pub(super) trail_frames: Option<u32>,
+}
+
+/// One light count's sequence.
+#[derive(Serialize)]
+pub(super) struct Record {
+    pub(super) lights: usize,
+    pub(super) frames: Vec<FrameRow>,
+    pub(super) plain_mean_rmse: Option<f64>,
+    pub(super) denoised_mean_rmse: Option<f64>,
+    pub(super) plain_median_ms: Option<f64>,
+    pub(super) denoised_median_ms: Option<f64>,
+    /// Denoised frame over plain frame, medians of the same sequence.
+    pub(super) cost_ratio: Option<f64>,
+    /// The median of each frame's denoised over plain (the two alternate, so each pair saw
+    /// the machine alike).
+    pub(super) cost_ratio_paired: Option<f64>,
+    /// Median of the denoiser's own passes and composite.
+    pub(super) denoise_median_ms: Option<f64>,
+    /// Mean of the frames' trails (still camera, moving caster).
+    pub(super) mean_trail_frames: Option<f64>,
+    /// Shadow maps: mean RMSE against every light through the same maps.
+    pub(super) plain_every_mean_rmse: Option<f64>,
+    pub(super) denoised_every_mean_rmse: Option<f64>,
+    /// Shadow maps: median GPU ms of the every-light frame, and the denoised frame over it
+    /// (median of each frame's ratio).
+    pub(super) every_median_ms: Option<f64>,
+    pub(super) denoised_over_every_paired: Option<f64>,
+    /// Shadow maps: mean RMSE of the every-light frame against the exact frame.
+    pub(super) every_exact_mean_rmse: Option<f64>,
+    /// Virtual maps: mean pages drawn per frame, denoised and every light.
+    pub(super) denoised_mean_pages: Option<f64>,
+    pub(super) every_mean_pages: Option<f64>,
+}
+
+/// `heading`: the run's settings (see `denoise::heading`); `reuse`: whether the denoised frame
+/// also reuses lights; `area_samples`: rays per side over each sized light in the exact frame.
+pub(super) fn table(heading: &str, reuse: bool, area_samples: u32, records: &[Record]) -> String {
     let opt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}"));
-    let camera = match &args.camera_path {
-        Some(p) => format!("camera along {}", p.display()),
-        None => format!("camera {} deg/frame", args.orbit),
-    };
-    let mut t = format!(
-        "== bench denoise: {} at {}x{}, {} frames, {camera}, {}; K = {}, visibility from {}{}\n   adapter: {adapter}\n",
-        args.scene,
-        args.width,
-        args.height,
-        args.frames,
-        if args.still {
-            "no caster moving"
-        } else {
-            "a caster circling"
-        },
-        args.light_samples,
-        match args.technique.info().fills {
-            manyshadows::Fills::Rays => "shadow rays".to_string(),
-            _ => format!("{}'s shadow maps", args.technique),
-        },
-        match (args.reuse, args.spatial) {
-            (false, _) => String::new(),
-            (true, manyshadows::SpatialReuse::Off) =>
-                ", lights reused across frames (plain: reuse alone)".to_string(),
-            (true, m) => format!(
-                ", lights reused across frames and between neighbours ({}; plain: without the denoiser)",
-                m.name()
-            ),
-        }
-    );
+    let mut t = heading.to_string();
     t += "lights | RMSE plain: mean first last | denoised: mean first last | GPU ms plain denoised (its passes) | ratio paired\n";
     for r in records {
         let first = r.frames.first();
@@ -142,7 +176,7 @@ pub(super) fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> St
             t += &format!(
                 "what the denoiser{} adds to the plain frame (median of each frame's \
                  difference): {} ms at {} lights, {} ms at {} ({}x)\n",
-                if args.reuse { " and reuse" } else { "" },
+                if reuse { " and reuse" } else { "" },
                 ms(added(a)),
                 a.lights,
                 ms(added(b)),
@@ -156,7 +190,7 @@ pub(super) fn table(args: &DenoiseArgs, adapter: &str, records: &[Record]) -> St
          ({0}x{0} rays over each sized light); GPU ms: median over the frames of each \
          renderer's frame (the denoised one includes its passes); ratio: denoised over plain, of \
          the medians and (paired) the median of each frame's.\n",
-        args.reference_area_samples
+        area_samples
     );
     t
 }
