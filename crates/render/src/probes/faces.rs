@@ -169,7 +169,7 @@ impl ProbeFrame {
         clusters: &'a LightClusters,
         source: &'a dyn ShadowSource,
     ) -> LightingInputs<'a> {
-        let mut parts = crate::sampled::lighting_parts(None, None);
+        let mut parts = crate::sampled::lighting_parts(None, None, false);
         parts.push(crate::probes::maps::lighting_part(None));
         LightingInputs {
             frame: FrameInputs {
@@ -181,6 +181,7 @@ impl ProbeFrame {
                 shadows: source.output(),
             },
             parts,
+            wants: None,
         }
     }
 

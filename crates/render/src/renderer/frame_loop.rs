@@ -42,6 +42,17 @@ impl Renderer {
         if let Some(b) = boundary.as_deref_mut() {
             b(encoder, FramePart::Camera)?;
         }
+        if self.parts.wants.is_some() {
+            // The pairs the sampled lights will ask about, before the shadows are made for
+            // them alone (sampled/pages.rs); timed with the pages.
+            let span = self.timer.span(Stage::Pages);
+            self.lighting.record_own_as(
+                crate::sampled::pages::CHOOSE,
+                encoder,
+                (&self.timer, span),
+                (true, true),
+            );
+        }
         let parts = &mut self.parts;
         let shadow_stats = parts
             .source

@@ -17,6 +17,7 @@ use crate::gpu_scene::instances::GpuScene;
 use crate::probes::faces::ProbeFrame;
 use crate::sampled::denoise::Denoiser;
 use crate::sampled::motion::InstanceMotion;
+use crate::sampled::pages::PageWants;
 use crate::sampled::reuse::Reuse;
 use crate::settings::RenderSettings;
 use crate::shading::inputs::FrameInputs;
@@ -47,6 +48,9 @@ pub(super) struct FrameParts {
     pub denoiser: Option<Denoiser>,
     /// The reservoirs of reused light samples (`RayOptions::reuse`).
     pub reuse: Option<Reuse>,
+    /// The (pixel, light) pairs the sampled lights ask about, for a source that makes only
+    /// their shadows (`ShadowSource::marks_sampled_pairs`).
+    pub wants: Option<PageWants>,
     /// The reflection probes' faces and passes (scenes with probes).
     pub probes: Option<ProbeFrame>,
 }
@@ -105,6 +109,10 @@ impl FrameParts {
         )?;
         clusters.update(ctx, scene)?;
         clusters.bind(ctx, &frame_buffer, &lights, &gbuffer);
+        let samples = settings.rays.light_samples;
+        let wants = (samples > 0 && source.marks_sampled_pairs())
+            .then(|| PageWants::new(ctx, (settings.width, settings.height), samples))
+            .flatten();
         source.bind(
             ctx,
             &SourceInputs {
@@ -114,6 +122,7 @@ impl FrameParts {
                 gbuffer: &gbuffer,
                 clusters: &clusters,
                 instances: &gpu_scene.instances,
+                page_wants: wants.as_ref().map(|w| &w.buffer),
             },
         )?;
         let out = source.output();
@@ -177,6 +186,7 @@ impl FrameParts {
             motion,
             denoiser,
             reuse,
+            wants,
             probes,
         })
     }
@@ -199,6 +209,7 @@ impl FrameParts {
         let mut parts = crate::sampled::lighting_parts(
             self.denoiser.as_ref().map(|d| &d.buffers),
             self.reuse.as_ref(),
+            self.wants.is_some(),
         );
         parts.push(crate::probes::maps::lighting_part(
             self.probes.as_ref().map(|p| &p.maps),
@@ -206,6 +217,7 @@ impl FrameParts {
         LightingInputs {
             frame: self.frame_inputs(),
             parts,
+            wants: self.wants.as_ref().map(|w| &w.buffer),
         }
     }
 

@@ -324,6 +324,7 @@ impl Renderer {
                 gbuffer: &parts.gbuffer,
                 clusters: &parts.clusters,
                 instances: &parts.scene.instances,
+                page_wants: parts.wants.as_ref().map(|w| &w.buffer),
             },
         )?;
         let out = parts.source.output();

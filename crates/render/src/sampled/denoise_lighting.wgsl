@@ -9,6 +9,9 @@
 // frames of samples it stands for (0 = 1)], [the same estimate without, 0], [ambient +
 // emission, 0].
 fn denoise_store(px: vec2<i32>, a: vec4<f32>, shadowed: vec3<f32>, unshadowed: vec3<f32>, rest: vec3<f32>, frames: f32) {
+    if (choosing) {
+        return;
+    }
     let i = 4u * (u32(px.y) * u32(frame.viewport.x) + u32(px.x));
     denoise_px[i] = a;
     denoise_px[i + 1u] = vec4<f32>(shadowed, frames);
@@ -26,6 +29,9 @@ fn denoise_set_shadowed(px: vec2<i32>, shadowed: vec3<f32>) {
 // the luminance of the unshadowed light that went (denoise_fix), for the denoiser's temporal
 // pass.
 fn denoise_store_fix(px: vec2<i32>, shadowed: vec3<f32>, unshadowed: vec3<f32>, went: f32) {
+    if (choosing) {
+        return;
+    }
     let i = 2u * (u32(px.y) * u32(frame.viewport.x) + u32(px.x));
     denoise_ratio[i] = vec4<f32>(shadowed, 0.0);
     denoise_ratio[i + 1u] = vec4<f32>(unshadowed, went);

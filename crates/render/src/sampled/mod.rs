@@ -9,20 +9,27 @@
 pub mod denoise;
 pub mod motion;
 pub mod options;
+pub mod pages;
 pub mod reuse;
 
 use crate::gpu::bindings::Part;
 use crate::sampled::options::MAX_LIGHT_SAMPLES;
 
 /// The lighting pass's parts of sampled lights: the draws (always: the light loop visits
-/// every light through them, and without samples they add each light whole), reuse's and the
-/// denoiser's (each doing nothing where its buffers are `None`).
+/// every light through them, and without samples they add each light whole; with `choose`,
+/// their choose pass too: [`pages`]), reuse's and the denoiser's (each doing nothing where
+/// its buffers are `None`).
 pub fn lighting_parts<'a>(
     denoise: Option<&'a denoise::DenoiseBuffers>,
     reuse: Option<&'a reuse::Reuse>,
+    choose: bool,
 ) -> Vec<Part<'a>> {
+    let mut draws = draws();
+    if choose {
+        draws.own = &[pages::CHOOSE];
+    }
     vec![
-        draws(),
+        draws,
         reuse::lighting_part(reuse),
         denoise::lighting_part(denoise),
     ]

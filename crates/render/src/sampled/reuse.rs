@@ -351,6 +351,9 @@ fn reuse_load(r: u32, j: u32) -> vec4<u32> {
 // This frame's record of pixel `px`: its surface point and unit normal (`kept` false: none
 // kept, the next frame starts anew there).
 fn reuse_store_point(px: vec2<i32>, p: vec3<f32>, n: vec3<f32>, kept: bool) {
+    if (choosing) {
+        return;
+    }
     let r = reuse_record(1u - u32(reuse.flags.z), vec2<u32>(px));
     // The normal as four signed bytes, the fourth 1 (never 0: 0 marks none kept).
     let facing = select(0u, pack4x8snorm(vec4<f32>(n, 1.0)), kept);
@@ -360,6 +363,9 @@ fn reuse_store_point(px: vec2<i32>, p: vec3<f32>, n: vec3<f32>, kept: bool) {
 // Sample `j` of pixel `px` for the next frame, and with spatial reuse for `fs_spatial` too
 // (the third part, SPATIAL_SCRATCH, where neighbours read it this frame).
 fn reuse_store(px: vec2<i32>, j: u32, light: u32, w: f32, m: f32, point: vec2<f32>) {
+    if (choosing) {
+        return;
+    }
     let sample = vec4<u32>(light, bitcast<u32>(w), bitcast<u32>(m), pack2x16unorm(point));
     reservoirs[reuse_record(1u - u32(reuse.flags.z), vec2<u32>(px)) + 1u + j] = sample;
     if (SPATIAL != 0u) {
@@ -379,6 +385,9 @@ const SPATIAL_SAMPLED: u32 = 1u;
 const SPATIAL_SKY: u32 = 2u;
 
 fn spatial_store_rest(px: vec2<i32>, rest: vec3<f32>, what: u32) {
+    if (choosing) {
+        return;
+    }
     let r = reuse_record(SPATIAL_SCRATCH, vec2<u32>(px));
     reservoirs[r] = vec4<u32>(bitcast<vec3<u32>>(rest), what);
 }

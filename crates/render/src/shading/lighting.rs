@@ -31,12 +31,13 @@ pub const LIGHTING: &[Binding] = &[Binding::storage("materials", "array<Material
 /// (OpenGL cannot pair one texture with two samplers; at a texel centre bilinear weights are
 /// (1, 0, 0, 0), so a lookup there compares exactly one texel, as a nearest-filtered one
 /// would); and the visibility computed elsewhere (`fs_mask`: `counts.w` words per pixel, bit
-/// set = lit; `fs_fraction`: a byte per pixel and light, 255 = all of the light; `fs_main`
-/// binds a dummy).
+/// set = lit; `fs_fraction`: a byte per pixel and light, 255 = all of the light), or, where the
+/// source computes none, the (pixel, light) pairs the choose pass notes
+/// ([`LightingInputs::wants`]; a dummy without).
 pub const LIGHTING_SHADOWS: &[Binding] = &[
     Binding::texture_depth("atlas"),
     Binding::sampler_comparison("cmp_linear"),
-    Binding::storage("vis_mask", "array<u32>"),
+    Binding::storage_rw("vis_mask", "array<u32>"),
 ];
 
 /// The shadow texture's raw depths for the soft shadows' blocker search (the same texture
@@ -103,6 +104,11 @@ pub struct LightingInputs<'a> {
     pub frame: FrameInputs<'a>,
     /// What plugs into the pass besides the shadow source (the renderer's list).
     pub parts: Vec<Part<'a>>,
+    /// Where the sampled lights' choose pass (`fs_choose`, a part's own entry point) notes
+    /// the (pixel, light) pairs whose visibility the frame will ask for, for the shadow source
+    /// to make only their shadows (`sampled::pages`); bound as the mask where the source
+    /// leaves none.
+    pub wants: Option<&'a wgpu::Buffer>,
 }
 
 /// The lighting pass and its output image.
@@ -314,8 +320,20 @@ impl LightingPass {
         timer: &GpuTimer,
         span: Option<Span>,
     ) {
+        self.record_own_as(entry, encoder, (timer, span), (false, true));
+    }
+
+    /// [`Self::record_own`], writing the span's first (`begin`) and last (`end`) timestamps
+    /// as asked (the choose pass: a span of its own).
+    pub fn record_own_as(
+        &self,
+        entry: &str,
+        encoder: &mut wgpu::CommandEncoder,
+        (timer, span): (&GpuTimer, Option<Span>),
+        (begin, end): (bool, bool),
+    ) {
         if let Some(pipeline) = self.own.get(entry) {
-            let writes = timer.render_writes(span, false, true);
+            let writes = timer.render_writes(span, begin, end);
             self.pass_into(encoder, &self.color_view, pipeline, writes);
         }
     }
@@ -361,7 +379,7 @@ fn bind(
     let f = &inputs.frame;
     // `fs_main` never reads the mask, but one layout serves every entry point.
     let dummy_mask;
-    let mask = match f.shadows.mask {
+    let mask = match f.shadows.mask.or(inputs.wants) {
         Some(m) => m,
         None => {
             dummy_mask = device.create_buffer(&wgpu::BufferDescriptor {

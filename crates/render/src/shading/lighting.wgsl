@@ -228,6 +228,11 @@ fn tone_map_at(c: vec3<f32>, k: f32) -> vec3<f32> {
 // How much of light `i` reaches `s` past the casters, 0..1: from the visibility mask, a shadow
 // ray, or the shadow test of the atlas or page pool.
 fn light_lit(i: u32, s: Surface) -> f32 {
+    if (choosing) {
+        // The choose pass (sampled/lights.wgsl, `fs_choose`): the pair is noted, not looked up.
+        want_light(i, s);
+        return 1.0;
+    }
     if (s.mask == MASK_FRACTIONS) {
         let k = (u32(s.px.y) * u32(frame.viewport.x) + u32(s.px.x)) * frame.counts.x + i;
         return f32((vis_mask[k / 4u] >> (8u * (k % 4u))) & 255u) / 255.0;

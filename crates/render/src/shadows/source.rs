@@ -69,6 +69,10 @@ pub struct SourceInputs<'a> {
     pub clusters: &'a LightClusters,
     /// Scene instances (`array<InstanceData>`).
     pub instances: &'a wgpu::Buffer,
+    /// Where the sampled lights' choose pass notes the (pixel, light) pairs the frame asks
+    /// about (`sampled::pages`), for a source that [marks only
+    /// those](ShadowSource::marks_sampled_pairs).
+    pub page_wants: Option<&'a wgpu::Buffer>,
 }
 
 /// What a source leaves for the lighting and visibility passes: the view table, the depth
@@ -155,6 +159,13 @@ pub trait ShadowSource: std::any::Any {
     /// culling re-decided, buffers rewritten in place (grown when needed). Followed by
     /// [`ShadowSource::bind`].
     fn update(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), RenderError>;
+
+    /// Whether, given [`SourceInputs::page_wants`], the source makes shadows only for the
+    /// (pixel, light) pairs noted there (virtual maps' pages) instead of for every light that
+    /// reaches a pixel.
+    fn marks_sampled_pairs(&self) -> bool {
+        false
+    }
 
     /// Takes the renderer's buffers (after creation and after every update, since the
     /// renderer may have replaced one).

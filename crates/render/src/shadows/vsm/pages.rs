@@ -44,6 +44,9 @@ pub struct VsmInputs<'a> {
     pub instances: &'a wgpu::Buffer,
     /// World-space caster geometry.
     pub casters: &'a CasterGeometry,
+    /// The (pixel, light) pairs the sampled lights ask about (`sampled::pages`): where given,
+    /// only their pages are marked.
+    pub page_wants: Option<&'a wgpu::Buffer>,
 }
 
 /// The virtual shadow maps' plan, pool, page table and page passes.
@@ -174,6 +177,12 @@ impl VirtualShadows {
         };
         this.write_plan(ctx)?;
         Ok(this)
+    }
+
+    /// Whether the pages are marked for sampled pairs alone when the frame notes them
+    /// ([`VirtualOptions::sampled_pages`]).
+    pub fn sampled_pages(&self) -> bool {
+        self.options.sampled_pages
     }
 
     /// Side of the pool texture in texels.
@@ -313,7 +322,7 @@ impl VirtualShadows {
             clusters: inputs.clusters,
         };
         self.carry.bind(device, &table);
-        self.mark.bind(device, &samples, &table);
+        self.mark.bind(device, &samples, &table, inputs.page_wants);
         self.tiles.bind(device, &samples, &table);
         self.alloc.bind(
             device,
@@ -370,7 +379,15 @@ impl VirtualShadows {
             return;
         }
         let keep = keep && self.keep_pages && !casters.skinned();
-        let carried = self.cache.frame(&self.plan, keep, self.viewport);
+        let mut carried = self.cache.frame(&self.plan, keep, self.viewport);
+        if self.mark.wanted() {
+            // The pairs sampled change every frame: every pixel marks again (the pages it
+            // marks that were resident keep their depth all the same).
+            if let Marking::Carry(_) = carried.marking {
+                carried.marking = Marking::Full;
+                carried.spare = keep && carried.prev_entries > 0;
+            }
+        }
         if !carried.faces.is_empty() {
             ctx.queue
                 .write_buffer(&self.faces, 0, bytemuck::cast_slice(&carried.faces));
@@ -439,7 +456,9 @@ impl VirtualShadows {
                     }
                 };
                 if let Some(rect) = rect {
-                    if self.tiles.enabled() {
+                    if self.mark.wanted() {
+                        self.mark.record_wanted(&mut pass, rect);
+                    } else if self.tiles.enabled() {
                         self.tiles.record(&mut pass, rect);
                     } else {
                         self.mark.record(&mut pass, rect);

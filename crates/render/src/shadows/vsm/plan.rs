@@ -107,6 +107,12 @@ pub struct VirtualOptions {
     /// virtual`)", has the table). Default on; off asks only what the screen's level of
     /// detail asks.
     pub atlas_floor: bool,
+    /// With sampled lights (`RayOptions::light_samples` > 0): mark only the pages of the
+    /// (pixel, light) pairs the frame's samples ask about (the lights drawn, those the
+    /// reservoirs keep; `sampled::pages`) instead of every light that reaches a pixel. Default
+    /// on; off marks every light's pages (the same shadows where the samples look: for
+    /// measuring and tests).
+    pub sampled_pages: bool,
 }
 
 impl Default for VirtualOptions {
@@ -124,6 +130,7 @@ impl Default for VirtualOptions {
             expand_bytes: 24 << 20,
             tile_marking: true,
             atlas_floor: true,
+            sampled_pages: true,
         }
     }
 }
@@ -568,4 +575,5 @@ with_setters!(VirtualOptions {
     with_receiver_cull: receiver_cull: bool,
     with_expand_bytes: expand_bytes: u64,
     with_tile_marking: tile_marking: bool,
+    with_sampled_pages: sampled_pages: bool,
 });

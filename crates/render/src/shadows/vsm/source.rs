@@ -175,6 +175,10 @@ impl ShadowSource for VirtualSource {
         Ok(())
     }
 
+    fn marks_sampled_pairs(&self) -> bool {
+        self.maps.sampled_pages()
+    }
+
     fn bind(&mut self, ctx: &GpuContext, inputs: &SourceInputs<'_>) -> Result<(), RenderError> {
         self.maps.bind(
             ctx,
@@ -185,6 +189,7 @@ impl ShadowSource for VirtualSource {
                 clusters: inputs.clusters,
                 instances: inputs.instances,
                 casters: &self.table.casters,
+                page_wants: inputs.page_wants,
             },
         );
         Ok(())
