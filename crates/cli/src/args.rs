@@ -532,6 +532,8 @@ pub(crate) fn flag_error(e: manyshadows::RenderError) -> anyhow::Error {
         ("virtual_maps.directed_lod", "--virtual-directed-lod"),
         ("virtual_maps.bias_scale", "--virtual-bias"),
         ("virtual_maps.max_side", "--virtual-side"),
+        ("virtual_maps.sampled_pages", "--virtual-pages"),
+        ("virtual_maps.sampled_keep_frames", "--virtual-keep-frames"),
         ("rays.light_samples", "--light-samples"),
         ("rays.denoise", "--denoise"),
         ("rays.reuse", "--reuse"),

@@ -18,6 +18,15 @@ pub enum VirtualMarking {
     Pixels,
 }
 
+/// `--virtual-pages`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VirtualPages {
+    /// Those of the sampled (pixel, light) pairs.
+    Sampled,
+    /// Every light's.
+    Every,
+}
+
 /// Per-technique options (see the module).
 #[derive(Args, Debug, Clone, Copy, PartialEq)]
 pub struct TechniqueArgs {
@@ -71,6 +80,18 @@ pub struct TechniqueArgs {
     /// for measuring.
     #[arg(long, value_enum, default_value_t = VirtualMarking::Tiles)]
     pub virtual_marking: VirtualMarking,
+    /// --technique virtual with --light-samples: which pages are made. `sampled` (default):
+    /// only those of the (pixel, light) pairs the frame samples (and, for
+    /// --virtual-keep-frames frames, those asked before), found by a pass that runs the light
+    /// choice before the shadows; `every`: every light's that reaches a pixel (the same image
+    /// where the samples look, more pages: for measuring).
+    #[arg(long, value_enum, default_value_t = VirtualPages::Sampled)]
+    pub virtual_pages: VirtualPages,
+    /// --technique virtual with --light-samples: frames a page stays resident after a sample
+    /// last asked for it (0 to 64). The samples change every frame, so without this a page is
+    /// drawn anew each time a pixel comes back to its light.
+    #[arg(long, default_value_t = VirtualOptions::default().sampled_keep_frames)]
+    pub virtual_keep_frames: u32,
     /// Shade K lights per pixel, picked among the pixel's cluster lights by importance (their
     /// unshadowed contribution) and weighted so the image stays unbiased — noisy, at a
     /// lighting cost that does not grow with the light count. Their visibility: shadow rays
@@ -167,6 +188,8 @@ impl TechniqueArgs {
             .with_atlas_floor(self.virtual_atlas_floor)
             .with_bias_scale(self.virtual_bias)
             .with_tile_marking(self.virtual_marking == VirtualMarking::Tiles)
+            .with_sampled_pages(self.virtual_pages == VirtualPages::Sampled)
+            .with_sampled_keep_frames(self.virtual_keep_frames)
     }
 
     /// The sampled lights' and shadow rays' options.

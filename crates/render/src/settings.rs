@@ -208,6 +208,32 @@ impl RenderSettings {
                 "sampled lights to reuse: technique raytraced or a shadow-map technique",
             ));
         }
+        // Which pages sampled lights make: only where a technique fills pages and samples.
+        let paged = fills == crate::error::Fills::Pages && self.rays.light_samples > 0;
+        let defaults = VirtualOptions::default();
+        for (option, set) in [
+            (
+                "virtual_maps.sampled_pages",
+                self.virtual_maps.sampled_pages != defaults.sampled_pages,
+            ),
+            (
+                "virtual_maps.sampled_keep_frames",
+                self.virtual_maps.sampled_keep_frames != defaults.sampled_keep_frames,
+            ),
+        ] {
+            if set && !paged {
+                return Err(bad(
+                    option,
+                    format!(
+                        "set with technique {} and light_samples {}",
+                        self.technique.name(),
+                        self.rays.light_samples
+                    ),
+                    "sampled lights over pages made on demand: technique virtual with \
+                     light_samples 1 to 16",
+                ));
+            }
+        }
         self.clusters.validate()?;
         self.irregular.validate()?;
         self.virtual_maps.validate()?;

@@ -181,6 +181,97 @@ fn virtual_maps_make_pages_only_for_the_sampled_pairs() {
     }
 }
 
+/// Pages for sampled pairs stay resident `sampled_keep_frames` frames after a sample last
+/// asked for them: denoised samples change every frame (stratified over frames), so without
+/// that a page is drawn anew whenever a pixel comes back to its light. Kept, far fewer pages
+/// are drawn once the frames settle (lavapipe, cubes under 512 lights: about 115 a frame
+/// against 550 of 850 resident), and no pixel changes (a kept page is drawn as it would be
+/// anew).
+#[test]
+fn sampled_pages_stay_resident_for_the_frames_kept() {
+    let ctx = common::context();
+    let scene = scene_of(512);
+    let rays = RayOptions::default()
+        .with_light_samples(1)
+        .with_denoise(true);
+    let run = |keep: u32| {
+        let settings = RenderSettings::new(128, 96)
+            .with_technique(Technique::VIRTUAL)
+            .with_rays(rays)
+            .with_virtual_maps(VirtualOptions::default().with_sampled_keep_frames(keep));
+        let mut r = Renderer::new(&ctx, &scene, settings).expect("renderer");
+        let mut drawn = 0;
+        let mut last = None;
+        for k in 0..12 {
+            let f = r.render().expect("frame");
+            if k >= 8 {
+                drawn += f.virtual_maps.as_ref().expect("virtual stats").drawn;
+            }
+            last = Some(f);
+        }
+        (drawn, last.expect("a frame"))
+    };
+    let (drawn_kept, kept) = run(8);
+    let (drawn_none, none) = run(0);
+    let rmse = common::rmse(&kept, &none);
+    eprintln!(
+        "pages drawn over frames 9 to 12: {drawn_kept} kept 8 frames, {drawn_none} kept none; \
+         RMSE between the twelfth frames {rmse:.3}"
+    );
+    assert!(
+        f64::from(drawn_kept) < 0.5 * f64::from(drawn_none),
+        "{drawn_kept} pages drawn keeping them, {drawn_none} without"
+    );
+    assert!(rmse < 0.05, "keeping pages changed the frame: {rmse}");
+}
+
+/// Which pages sampled lights make is a choice only where a technique fills pages on demand
+/// and samples: set without samples, or with another technique, it is refused by name.
+#[test]
+fn sampled_page_options_apply_only_to_sampled_virtual_maps() {
+    let kept = VirtualOptions::default().with_sampled_keep_frames(2);
+    let every = VirtualOptions::default().with_sampled_pages(false);
+    let one = RayOptions::default().with_light_samples(1);
+    for (t, rays, options, refused) in [
+        (
+            Technique::VIRTUAL,
+            RayOptions::default(),
+            kept,
+            Some("sampled_keep_frames"),
+        ),
+        (
+            Technique::VIRTUAL,
+            RayOptions::default(),
+            every,
+            Some("sampled_pages"),
+        ),
+        (
+            Technique::TRADITIONAL,
+            one,
+            kept,
+            Some("sampled_keep_frames"),
+        ),
+        (Technique::VIRTUAL, one, kept, None),
+        (Technique::VIRTUAL, one, every, None),
+        (
+            Technique::VIRTUAL,
+            one,
+            VirtualOptions::default().with_sampled_keep_frames(65),
+            Some("sampled_keep_frames"),
+        ),
+    ] {
+        let s = RenderSettings::new(64, 48)
+            .with_technique(t)
+            .with_rays(rays)
+            .with_virtual_maps(options);
+        match (s.validate(), refused) {
+            (Ok(()), None) => {}
+            (Err(e), Some(name)) => assert!(e.to_string().contains(name), "{e}"),
+            (r, _) => panic!("{t} with {rays:?} and {options:?}: {r:?}"),
+        }
+    }
+}
+
 /// Irregular maps answer every light in one mask: sampling is refused, naming the technique.
 #[test]
 fn irregular_maps_refuse_sampled_lights_by_name() {

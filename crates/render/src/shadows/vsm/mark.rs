@@ -103,52 +103,11 @@ pub(crate) fn sample_group(
     })
 }
 
-/// The marking of sampled pairs (`cs_mark_wanted`, after [`MARK`]): per pixel, the pages of
-/// the lights the sampled lights' choose pass noted (`sampled::pages`) instead of every light
-/// of its cluster.
-const MARK_WANTED: &str = "
-@group(0) @binding(15) var<storage, read> page_wants: array<u32>;
-
-// `sampled/lights.wgsl`'s notes per pixel: 2 per sample and 2 more; none past the first
-// 0xffffffff.
-fn wants_per_pixel() -> u32 {
-    return 2u * u32(frame.soft.w) + 2u;
-}
-
-@compute @workgroup_size(8, 8, 1)
-fn cs_mark_wanted(@builtin(global_invocation_id) id: vec3<u32>) {
-    let px = id.xy + vec2<u32>(vsm.lod.yz);
-    let s = pixel_sample(px);
-    if (!s.valid) {
-        return;
-    }
-    let stride = wants_per_pixel();
-    let base = (px.y * u32(frame.viewport.x) + px.x) * stride;
-    for (var n = 0u; n < stride; n = n + 1u) {
-        let i = page_wants[base + n];
-        if (i >= frame.counts.x) {
-            return;
-        }
-        mark_light(i, s.p, s.n, s.view_depth);
-    }
-}
-";
-
-/// The per-pixel marking of sampled pairs: its layout, pipeline and bind group (with the
-/// notes bound).
-struct WantedPass {
-    layout: wgpu::BindGroupLayout,
-    mark: wgpu::ComputePipeline,
-    group: Option<wgpu::BindGroup>,
-}
-
-/// The per-pixel marking pass: its layout, pipeline and bind group; and, made when first
-/// bound with the sampled lights' notes, the marking of their pairs alone.
+/// The per-pixel marking pass: its layout, pipeline and bind group.
 pub(crate) struct MarkPass {
     layout: wgpu::BindGroupLayout,
     mark: wgpu::ComputePipeline,
     group: Option<wgpu::BindGroup>,
-    wanted: Option<WantedPass>,
 }
 
 impl MarkPass {
@@ -161,18 +120,15 @@ impl MarkPass {
             layout,
             mark,
             group: None,
-            wanted: None,
         }
     }
 
-    /// Builds the bind group (whenever a buffer it holds was replaced); with `wants`, the
-    /// sampled pairs' marking too, which then marks instead.
+    /// Builds the bind group (whenever a buffer it holds was replaced).
     pub(crate) fn bind(
         &mut self,
         device: &wgpu::Device,
         samples: &Samples<'_>,
         table: &TableBuffers<'_>,
-        wants: Option<&wgpu::Buffer>,
     ) {
         self.group = Some(sample_group(
             device,
@@ -182,59 +138,6 @@ impl MarkPass {
             table,
             &[],
         ));
-        let Some(wants) = wants else {
-            self.wanted = None;
-            return;
-        };
-        let wanted = self.wanted.get_or_insert_with(|| {
-            let mut entries = sample_layout();
-            entries.push(storage_entry(15, wgpu::ShaderStages::COMPUTE));
-            let layout = bind_group_layout(device, "vsm.mark_wanted_layout", &entries);
-            let code = module(
-                device,
-                "vsm.mark_wanted_shader",
-                &format!("{}{MARK_WANTED}", shader()),
-            );
-            let pl = pipeline_layout(device, "vsm.mark_wanted_pipeline_layout", &[&layout]);
-            let mark = compute_pipeline(device, "vsm.mark_wanted", &pl, &code, "cs_mark_wanted");
-            WantedPass {
-                layout,
-                mark,
-                group: None,
-            }
-        });
-        wanted.group = Some(sample_group(
-            device,
-            "vsm.mark_wanted_group",
-            &wanted.layout,
-            samples,
-            table,
-            &[whole_entry(15, wants)],
-        ));
-    }
-
-    /// Whether the pass marks the sampled pairs alone ([`Self::record_wanted`]).
-    pub(crate) fn wanted(&self) -> bool {
-        self.wanted.is_some()
-    }
-
-    /// Marks the pages of the sampled pairs of the pixels of `rect` (as [`Self::record`]).
-    pub(crate) fn record_wanted(
-        &self,
-        pass: &mut wgpu::ComputePass<'_>,
-        [x0, y0, x1, y1]: [u32; 4],
-    ) {
-        let Some(WantedPass {
-            mark,
-            group: Some(group),
-            ..
-        }) = &self.wanted
-        else {
-            return;
-        };
-        pass.set_bind_group(0, group, &[]);
-        pass.set_pipeline(mark);
-        pass.dispatch_workgroups((x1 - x0).div_ceil(8), (y1 - y0).div_ceil(8), 1);
     }
 
     /// Marks the pages the pixels of `rect` (x0, y0, x1, y1; its first pixel is

@@ -24,7 +24,9 @@
 //!    `vsm_tiles.wgsl`). With caching, when the camera, the lights and every face are as last
 //!    frame (only casters moved), last frame's pages carry over ([`carry`], `vsm_carry.wgsl`)
 //!    and only the pixels under the moved casters' old and new bounds ([`moved`]) are marked
-//!    again;
+//!    again. Under sampled lights each pixel marks only the lights its samples ask about
+//!    (noted by the lighting pass's choose pass, `crate::sampled::pages`), and pages asked
+//!    within the last frames stay asked ([`sampled`]);
 //! 2. *allocate* ([`alloc`], `vsm_alloc.wgsl`): the *admitted level* A is the finest level
 //!    whose marked pages fit the pool together with the asked pages of every coarser level.
 //!    Asked pages coarser than A and every marked page of A get pool pages in page-table order
@@ -65,6 +67,7 @@ pub mod mark;
 pub mod moved;
 pub mod pages;
 pub mod plan;
+pub mod sampled;
 pub mod source;
 pub mod table;
 pub mod tiles;

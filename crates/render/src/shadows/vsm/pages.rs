@@ -26,6 +26,7 @@ use crate::shadows::vsm::mark::{MarkPass, Samples};
 use crate::shadows::vsm::plan::{
     pool_side, TileMarking, VirtualOptions, VirtualPlan, VirtualStats, MAX_LEVELS, PAGE_SIZE,
 };
+use crate::shadows::vsm::sampled::SampledMarking;
 use crate::shadows::vsm::table::{TableBuffers, COUNTERS, TABLE_WORDS};
 use crate::shadows::vsm::tiles::TilePass;
 use crate::shadows::vsm::types::{VirtualFace, VsmUniforms};
@@ -78,6 +79,8 @@ pub struct VirtualShadows {
     cache: PageCache,
     carry: CarryPass,
     mark: MarkPass,
+    /// The marking of sampled pairs, in place of `mark` and `tiles` where the frame notes them.
+    sampled: Option<SampledMarking>,
     tiles: TilePass,
     alloc: AllocPass,
     /// Whether the stages' bind groups hold the current buffers ([`Self::bind`]).
@@ -170,6 +173,7 @@ impl VirtualShadows {
             cache: PageCache::new(scene, (width, height)),
             carry: CarryPass::new(device),
             mark: MarkPass::new(device),
+            sampled: None,
             tiles: TilePass::new(ctx, (width, height), options.tile_marking),
             alloc: AllocPass::new(device),
             bound: false,
@@ -322,7 +326,16 @@ impl VirtualShadows {
             clusters: inputs.clusters,
         };
         self.carry.bind(device, &table);
-        self.mark.bind(device, &samples, &table, inputs.page_wants);
+        self.mark.bind(device, &samples, &table);
+        match inputs.page_wants {
+            Some(wants) => self
+                .sampled
+                .get_or_insert_with(|| {
+                    SampledMarking::new(device, self.options.sampled_keep_frames)
+                })
+                .bind(device, &samples, &table, wants),
+            None => self.sampled = None,
+        }
         self.tiles.bind(device, &samples, &table);
         self.alloc.bind(
             device,
@@ -380,7 +393,7 @@ impl VirtualShadows {
         }
         let keep = keep && self.keep_pages && !casters.skinned();
         let mut carried = self.cache.frame(&self.plan, keep, self.viewport);
-        if self.mark.wanted() {
+        if self.sampled.is_some() {
             // The pairs sampled change every frame: every pixel marks again (the pages it
             // marks that were resident keep their depth all the same).
             if let Marking::Carry(_) = carried.marking {
@@ -431,6 +444,9 @@ impl VirtualShadows {
                 carried.prev_entries as u64 * TABLE_WORDS * 4,
             );
         }
+        if let Some(sampled) = &self.sampled {
+            sampled.begin(encoder, carried.prev_entries);
+        }
         encoder.clear_buffer(&self.table, 0, None);
         encoder.clear_buffer(&self.counters, 0, None);
         encoder.clear_buffer(&self.scratch, 0, None);
@@ -456,8 +472,8 @@ impl VirtualShadows {
                     }
                 };
                 if let Some(rect) = rect {
-                    if self.mark.wanted() {
-                        self.mark.record_wanted(&mut pass, rect);
+                    if let Some(sampled) = &self.sampled {
+                        sampled.record(&mut pass, rect, entries);
                     } else if self.tiles.enabled() {
                         self.tiles.record(&mut pass, rect);
                     } else {

@@ -113,7 +113,21 @@ pub struct VirtualOptions {
     /// on; off marks every light's pages (the same shadows where the samples look: for
     /// measuring and tests).
     pub sampled_pages: bool,
+    /// With [`Self::sampled_pages`]: frames a page stays resident after the last sample that
+    /// asked for it (asked again with no sample asking; 0 to 64, default 8). The samples change
+    /// every frame (new draws, stratified over frames where they are denoised), so without
+    /// this a page a pixel asks for every few frames is drawn anew each time it is asked
+    /// (the churn); lights no pixel sampled in that long draw nothing.
+    pub sampled_keep_frames: u32,
 }
+
+/// [`VirtualOptions::sampled_keep_frames`]' default: about the frames over which a pixel's
+/// denoised samples visit its lights (measured: docs/techniques.md, "Pages for the sampled
+/// pairs").
+pub const DEFAULT_SAMPLED_KEEP_FRAMES: u32 = 8;
+
+/// The most frames [`VirtualOptions::sampled_keep_frames`] allows.
+pub const MAX_SAMPLED_KEEP_FRAMES: u32 = 64;
 
 impl Default for VirtualOptions {
     fn default() -> Self {
@@ -131,6 +145,7 @@ impl Default for VirtualOptions {
             tile_marking: true,
             atlas_floor: true,
             sampled_pages: true,
+            sampled_keep_frames: DEFAULT_SAMPLED_KEEP_FRAMES,
         }
     }
 }
@@ -169,6 +184,13 @@ impl VirtualOptions {
                 "virtual_maps.bias_scale",
                 self.bias_scale,
                 "a fraction of the shadow bias from 0 to 16",
+            ));
+        }
+        if self.sampled_keep_frames > MAX_SAMPLED_KEEP_FRAMES {
+            return Err(RenderError::invalid_option(
+                "virtual_maps.sampled_keep_frames",
+                self.sampled_keep_frames,
+                "0 to 64 frames",
             ));
         }
         if self.max_side == 0 {
@@ -576,4 +598,5 @@ with_setters!(VirtualOptions {
     with_expand_bytes: expand_bytes: u64,
     with_tile_marking: tile_marking: bool,
     with_sampled_pages: sampled_pages: bool,
+    with_sampled_keep_frames: sampled_keep_frames: u32,
 });
