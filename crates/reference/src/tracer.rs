@@ -295,6 +295,30 @@ impl Shear {
     }
 }
 
+/// obvhs's `cwbvh::builder::build_cwbvh` (PLOC, reinsertion, conversion to the compressed
+/// wide BVH, with the same parameters), less its build timer: `std::time::Instant` panics in a
+/// browser, where the web page's score button builds this BVH.
+fn build_cwbvh(boxes: &[Aabb], config: BvhBuildParams) -> CwBvh {
+    let mut bvh2 = obvhs::ploc::PlocBuilder::with_capacity(boxes.len()).build(
+        config.ploc_search_distance,
+        boxes,
+        (0..boxes.len() as u32).collect::<Vec<_>>(),
+        config.sort_precision,
+        config.search_depth_threshold,
+    );
+    obvhs::bvh2::reinsertion::ReinsertionOptimizer::default().run(
+        &mut bvh2,
+        config.reinsertion_batch_ratio,
+        None,
+    );
+    obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh(
+        &bvh2,
+        config.max_prims_per_leaf.clamp(1, 3),
+        true,
+        false,
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -325,28 +349,4 @@ mod tests {
         assert_eq!(tracer.triangle_count(), 0);
         assert!(!tracer.occluded(Vec3::ZERO, Vec3::Y, f32::INFINITY));
     }
-}
-
-/// obvhs's `cwbvh::builder::build_cwbvh` (PLOC, reinsertion, conversion to the compressed
-/// wide BVH, with the same parameters), less its build timer: `std::time::Instant` panics in a
-/// browser, where the web page's score button builds this BVH.
-fn build_cwbvh(boxes: &[Aabb], config: BvhBuildParams) -> CwBvh {
-    let mut bvh2 = obvhs::ploc::PlocBuilder::with_capacity(boxes.len()).build(
-        config.ploc_search_distance,
-        boxes,
-        (0..boxes.len() as u32).collect::<Vec<_>>(),
-        config.sort_precision,
-        config.search_depth_threshold,
-    );
-    obvhs::bvh2::reinsertion::ReinsertionOptimizer::default().run(
-        &mut bvh2,
-        config.reinsertion_batch_ratio,
-        None,
-    );
-    obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh(
-        &bvh2,
-        config.max_prims_per_leaf.clamp(1, 3),
-        true,
-        false,
-    )
 }
