@@ -225,6 +225,47 @@ fn sampled_pages_stay_resident_for_the_frames_kept() {
     assert!(rmse < 0.05, "keeping pages changed the frame: {rmse}");
 }
 
+/// Kept pages leave the pool to the asked ones: in a pool of 1,600 pages, where the pages the
+/// samples ask for (about 1,000 to 1,300 a frame) and those kept from the last 8 frames (about
+/// 1,790 together unbounded) would not fit, pages are kept only up to three quarters of the
+/// pool, so no asked page is ever denied or quartered.
+#[test]
+fn kept_pages_never_push_asked_ones_out_of_the_pool() {
+    let ctx = common::context();
+    let scene = scene_of(512);
+    let options = VirtualOptions::default().with_pool_bytes(5120 * 5120 * 4);
+    let settings = RenderSettings::new(128, 96)
+        .with_technique(Technique::VIRTUAL)
+        .with_rays(
+            RayOptions::default()
+                .with_light_samples(1)
+                .with_denoise(true),
+        )
+        .with_virtual_maps(options);
+    let mut r = Renderer::new(&ctx, &scene, settings).expect("renderer");
+    let mut most = 0;
+    for k in 0..12 {
+        let s = r
+            .render()
+            .expect("frame")
+            .virtual_maps
+            .expect("virtual stats");
+        assert_eq!(s.pool_pages, 1600);
+        assert!(
+            s.denied == 0 && s.quarter_faces == 0,
+            "frame {}: {} pages denied, {} faces quartered, {} resident",
+            k + 1,
+            s.denied,
+            s.quarter_faces,
+            s.resident
+        );
+        most = most.max(s.resident);
+    }
+    eprintln!("most pages resident in a frame: {most} of 1600");
+    // Pages were kept at all (more than the samples of one frame ask for).
+    assert!(most > 1100, "{most}");
+}
+
 /// Which pages sampled lights make is a choice only where a technique fills pages on demand
 /// and samples: set without samples, or with another technique, it is refused by name.
 #[test]

@@ -18,6 +18,7 @@ use crate::shadows::vsm::table::{entry_groups, TableBuffers, TABLE_WORDS};
 pub(crate) struct SampledMarking {
     layout: wgpu::BindGroupLayout,
     mark: wgpu::ComputePipeline,
+    count: wgpu::ComputePipeline,
     keep: wgpu::ComputePipeline,
     group: Option<wgpu::BindGroup>,
     ages: wgpu::Buffer,
@@ -30,6 +31,7 @@ impl SampledMarking {
         let cs = wgpu::ShaderStages::COMPUTE;
         let mut entries = sample_layout();
         entries.extend([
+            storage_rw_entry(10, cs),
             storage_entry(14, cs),
             storage_entry(15, cs),
             storage_rw_entry(16, cs),
@@ -48,6 +50,7 @@ impl SampledMarking {
         let pl = pipeline_layout(device, "vsm.sampled_pipeline_layout", &[&layout]);
         Self {
             mark: compute_pipeline(device, "vsm.mark_wanted", &pl, &code, "cs_mark_wanted"),
+            count: compute_pipeline(device, "vsm.count_asked", &pl, &code, "cs_count_asked"),
             keep: compute_pipeline(device, "vsm.keep_recent", &pl, &code, "cs_keep_recent"),
             layout,
             group: None,
@@ -78,6 +81,7 @@ impl SampledMarking {
             samples,
             table,
             &[
+                whole_entry(10, table.counters),
                 whole_entry(14, table.prev_table),
                 whole_entry(15, wants),
                 whole_entry(16, &self.ages),
@@ -97,8 +101,9 @@ impl SampledMarking {
     }
 
     /// Marks the pages of the sampled pairs of the pixels of `rect` (x0, y0, x1, y1; its
-    /// first pixel is `VsmUniforms::lod.yz`), then asks again, in a table of `entries`
-    /// entries, for those resident last frame that samples asked for within the frames kept.
+    /// first pixel is `VsmUniforms::lod.yz`), then counts them and asks again, in a table of
+    /// `entries` entries, for those resident last frame that samples asked for within the
+    /// frames kept, while the pool has room (`vsm_sampled.wgsl`'s `KEEP_SHARE`).
     pub(crate) fn record(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
@@ -112,6 +117,8 @@ impl SampledMarking {
         pass.set_pipeline(&self.mark);
         pass.dispatch_workgroups((x1 - x0).div_ceil(8), (y1 - y0).div_ceil(8), 1);
         let (x, y) = entry_groups(u64::from(entries));
+        pass.set_pipeline(&self.count);
+        pass.dispatch_workgroups(x, y, 1);
         pass.set_pipeline(&self.keep);
         pass.dispatch_workgroups(x, y, 1);
     }

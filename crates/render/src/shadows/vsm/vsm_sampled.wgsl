@@ -11,7 +11,11 @@
 // sample asked for now is asked again, with the bounds it was drawn with, while the frames
 // since a sample last asked for it are at most KEEP_FRAMES (`ages`, per entry from frame to
 // frame: 1 + those frames; 0 for an entry no sample asked for, such as a resident ancestor).
-// Lights no pixel sampled in that long draw nothing.
+// Lights no pixel sampled in that long draw nothing. Kept pages must leave the pool to the
+// asked ones: they are kept only while the pages asked this frame (counted first, by
+// cs_count_asked) and those kept so far stay under KEEP_SHARE of the pool (past that, which
+// are kept depends on thread order: never a pixel of the frame, only how many pages are
+// drawn anew).
 
 @group(0) @binding(15) var<storage, read> page_wants: array<u32>;
 @group(0) @binding(16) var<storage, read_write> ages: array<u32>;
@@ -38,6 +42,21 @@ fn cs_mark_wanted(@builtin(global_invocation_id) id: vec3<u32>) {
             return;
         }
         mark_light(i, s.p, s.n, s.view_depth);
+    }
+}
+
+// Counters of vsm_table.wgsl's buffer this stage uses (free slots there): pages asked by
+// samples this frame, pages kept without.
+const COUNT_SAMPLED: u32 = 8u;
+const COUNT_RETAINED: u32 = 19u;
+// The share of the pool the asked and the kept pages may fill together.
+const KEEP_SHARE: f32 = 0.75;
+
+@compute @workgroup_size(64, 1, 1)
+fn cs_count_asked(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let e = gid.x + gid.y * groups.x * 64u;
+    if (e < vsm.counts.y && (atomicLoad(&vsm_table[e]) & MARK_ASKED) != 0u) {
+        atomicAdd(&counters[COUNT_SAMPLED], 1u);
     }
 }
 
@@ -75,8 +94,11 @@ fn cs_keep_recent(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
     if (was == 0u || was > KEEP_FRAMES) {
         return;
     }
-    let age = was + 1u;
-    ages[e] = age;
+    let budget = u32(KEEP_SHARE * f32(vsm.pool.w));
+    if (atomicLoad(&counters[COUNT_SAMPLED]) + atomicAdd(&counters[COUNT_RETAINED], 1u) >= budget) {
+        return;
+    }
+    ages[e] = was + 1u;
     if (vsm.counts.w != 0u) {
         atomicMax(&vsm_table[vsm.counts.y + e], prev_table[prev_keys_at() + at]);
         atomicOr(&vsm_table[cells_at() + e], prev_table[prev_cells_at() + at]);
