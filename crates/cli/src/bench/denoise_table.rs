@@ -30,7 +30,7 @@ pub(super) struct FrameRow {
     pub(super) denoised_pages: Option<u32>,
     pub(super) every_pages: Option<u32>,
     /// With a still camera and a moving caster: how many frames behind the denoised shadow
-    /// is (see [`trail`]).
+    /// is (`denoise.rs`, `trail`).
     pub(super) trail_frames: Option<u32>,
 }
 

@@ -560,24 +560,17 @@ fn spatial_resolve(s: Surface) -> vec3<f32> {
 // for (`light_lit` calls `want_light` while `choosing`): the K lights drawn, the lights last
 // frame's reservoirs kept, the lights whose change the denoiser corrects. The notes go to
 // `vis_mask` (the lighting pass's mask binding, which a source without a mask leaves free):
-// WANTS_PER_SAMPLE per sample and WANTS_EXTRA more per pixel, unused ones NO_WANT; the page
+// `wants_per_pixel(K)` words per pixel (pages.rs), unused ones NO_WANT; the page
 // marking (shadows/vsm, `cs_mark_wanted`) marks the pages of those pairs only. A pixel that
 // asks for more (the denoiser's catch-up samples or corrections in a frame whose lights
 // changed) loses the rest: their lookups fall back to the coarser pages that are resident.
-const WANTS_PER_SAMPLE: u32 = 2u;
-const WANTS_EXTRA: u32 = 2u;
-const NO_WANT: u32 = 0xffffffffu;
 
 var<private> choosing: bool = false;
 // Lights noted so far for this pixel.
 var<private> wanted: u32 = 0u;
 
-fn wants_per_pixel() -> u32 {
-    return WANTS_PER_SAMPLE * ray_samples() + WANTS_EXTRA;
-}
-
 fn wants_base(px: vec2<i32>) -> u32 {
-    return (u32(px.y) * u32(frame.viewport.x) + u32(px.x)) * wants_per_pixel();
+    return (u32(px.y) * u32(frame.viewport.x) + u32(px.x)) * wants_per_pixel(ray_samples());
 }
 
 // Notes light `i` for the pixel of `s` (once).
@@ -588,7 +581,7 @@ fn want_light(i: u32, s: Surface) {
             return;
         }
     }
-    if (wanted < wants_per_pixel()) {
+    if (wanted < wants_per_pixel(ray_samples())) {
         vis_mask[base + wanted] = i;
         wanted = wanted + 1u;
     }
@@ -601,7 +594,7 @@ fn fs_choose(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     wanted = 0u;
     let color = shade(px, MASK_NONE);
     let base = wants_base(px);
-    for (var n = wanted; n < wants_per_pixel(); n = n + 1u) {
+    for (var n = wanted; n < wants_per_pixel(ray_samples()); n = n + 1u) {
         vis_mask[base + n] = NO_WANT;
     }
     return color;

@@ -52,7 +52,8 @@ pub fn lighting_parts_declared(
 /// The draws of sampled lights (`lights.wgsl`).
 fn draws() -> Part<'static> {
     Part::wgsl(format!(
-        "const MAX_SAMPLES: u32 = {MAX_LIGHT_SAMPLES}u;\n{}",
+        "const MAX_SAMPLES: u32 = {MAX_LIGHT_SAMPLES}u;\n{}{}",
+        pages::wants_wgsl(),
         include_str!("lights.wgsl")
     ))
 }

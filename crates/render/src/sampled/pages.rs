@@ -17,10 +17,18 @@ use crate::gpu::context::GpuContext;
 pub const CHOOSE: &str = "fs_choose";
 
 /// Lights noted per sample (the one drawn and the one last frame's reservoir kept) and per
-/// pixel besides (the denoiser's corrections); `lights.wgsl`'s `WANTS_PER_SAMPLE` and
-/// `WANTS_EXTRA`.
+/// pixel besides (the denoiser's corrections).
 const WANTS_PER_SAMPLE: u64 = 2;
 const WANTS_EXTRA: u64 = 2;
+
+/// The notes' layout in WGSL, for the pass that writes them (`lights.wgsl`) and those that
+/// read them (virtual maps' marking): `wants_per_pixel(k)` words per pixel with `k` samples.
+pub fn wants_wgsl() -> String {
+    format!(
+        "const NO_WANT: u32 = 0xffffffffu;\n\
+         fn wants_per_pixel(k: u32) -> u32 {{ return {WANTS_PER_SAMPLE}u * k + {WANTS_EXTRA}u; }}\n"
+    )
+}
 
 /// Per pixel, the lights the choose pass noted (`2K + 2` words, unused ones `0xffffffff`).
 pub struct PageWants {

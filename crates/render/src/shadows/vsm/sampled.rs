@@ -42,8 +42,9 @@ impl SampledMarking {
             device,
             "vsm.sampled_shader",
             &format!(
-                "{}const KEEP_FRAMES: u32 = {keep_frames}u;\n{}",
+                "{}const KEEP_FRAMES: u32 = {keep_frames}u;\n{}{}",
                 super::mark::shader(),
+                crate::sampled::pages::wants_wgsl(),
                 include_str!("vsm_sampled.wgsl")
             ),
         );

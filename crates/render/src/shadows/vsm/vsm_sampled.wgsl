@@ -21,12 +21,6 @@
 @group(0) @binding(16) var<storage, read_write> ages: array<u32>;
 @group(0) @binding(17) var<storage, read> prev_ages: array<u32>;
 
-// `sampled/lights.wgsl`'s notes per pixel: 2 per sample and 2 more; none past the first
-// 0xffffffff.
-fn wants_per_pixel() -> u32 {
-    return 2u * u32(frame.soft.w) + 2u;
-}
-
 @compute @workgroup_size(8, 8, 1)
 fn cs_mark_wanted(@builtin(global_invocation_id) id: vec3<u32>) {
     let px = id.xy + vec2<u32>(vsm.lod.yz);
@@ -34,7 +28,7 @@ fn cs_mark_wanted(@builtin(global_invocation_id) id: vec3<u32>) {
     if (!s.valid) {
         return;
     }
-    let stride = wants_per_pixel();
+    let stride = wants_per_pixel(u32(frame.soft.w));
     let base = (px.y * u32(frame.viewport.x) + px.x) * stride;
     for (var n = 0u; n < stride; n = n + 1u) {
         let i = page_wants[base + n];
