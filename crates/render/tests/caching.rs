@@ -673,3 +673,39 @@ fn a_caster_moving_every_frame_matches_a_fresh_renderer() {
     let growth = sum(5..8) / sum(1..4);
     assert!(growth < 2.2, "triangles grew {growth:.2}x: {drawn:?}");
 }
+
+/// A frame whose cached shadows redraw no view does no shadow work on the GPU, and its timings
+/// say so: the shadow stage's span, which no pass wrote, times 0 ms. (Its queries kept the
+/// first frame's ticks, and the summary and `--frames` lines repeated that frame's shadow time
+/// on every still frame after it: 1,050 ms on frames that drew nothing.)
+#[test]
+fn a_frame_that_redraws_no_shadow_view_times_no_shadow_work() {
+    use manyshadows::gpu::timing::Stage;
+    use manyshadows::Renderer;
+    let ctx = common::context();
+    assert!(
+        ctx.has(wgpu::Features::TIMESTAMP_QUERY),
+        "the test adapter has no timestamp queries, which this test reads: use Mesa 25's \
+         lavapipe or llvmpipe (`cargo xtask test` installs them)"
+    );
+    let settings = manyshadows::RenderSettings::default()
+        .with_width(160)
+        .with_height(90)
+        .with_technique(Technique::TRADITIONAL)
+        .with_cache_shadows(true);
+    let mut r = Renderer::new(&ctx, &atrium(8), settings).expect("renderer");
+    let first = r.render().expect("first frame");
+    let second = r.render().expect("second frame");
+    let shadows = |f: &manyshadows::Frame| f.timings.gpu_ms.get(Stage::Shadows).unwrap_or(0.0);
+    assert!(first.shadow_stats.views_drawn > 0 && shadows(&first) > 0.0);
+    assert_eq!(second.shadow_stats.views_drawn, 0, "nothing changed");
+    assert_eq!(
+        shadows(&second),
+        0.0,
+        "no view drawn, yet the shadow stage timed {} ms (the first frame's {} ms)",
+        shadows(&second),
+        shadows(&first)
+    );
+    // The stages that did run are still timed.
+    assert!(second.timings.gpu_ms.get(Stage::Lighting).unwrap_or(0.0) > 0.0);
+}

@@ -152,6 +152,9 @@ impl serde::Serialize for GpuTimes {
 /// Most spans per frame.
 const MAX_SPANS: u32 = 32;
 
+const BEGUN: u8 = 1;
+const ENDED: u8 = 2;
+
 /// A span handle: indices of its two timestamps.
 #[derive(Clone, Copy, Debug)]
 pub struct Span {
@@ -163,6 +166,10 @@ pub struct Span {
 pub struct GpuTimer {
     queries: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     labels: Vec<(Stage, Span)>,
+    /// Per span, which of its timestamps a pass of this frame writes (`BEGUN`, `ENDED`): a
+    /// span no pass wrote (a stage that drew nothing, such as cached shadows that redrew no
+    /// view) times 0, never the ticks its queries kept from an earlier frame.
+    written: [Cell<u8>; MAX_SPANS as usize],
     period_ns: f32,
     stats: Option<StatQueries>,
 }
@@ -194,6 +201,7 @@ impl GpuTimer {
         Self {
             queries,
             labels: Vec::new(),
+            written: std::array::from_fn(|_| Cell::new(0)),
             period_ns: ctx.queue.get_timestamp_period(),
             stats: None,
         }
@@ -313,6 +321,9 @@ impl GpuTimer {
     /// Forgets the spans of the previous frame.
     pub fn reset(&mut self) {
         self.labels.clear();
+        for w in &self.written {
+            w.set(0);
+        }
         if let Some(q) = &self.stats {
             q.next.set(0);
             q.overflow.set(false);
@@ -346,6 +357,7 @@ impl GpuTimer {
         if !first && !last {
             return None;
         }
+        self.note_written(span, first, last);
         Some(wgpu::RenderPassTimestampWrites {
             query_set: set,
             beginning_of_pass_write_index: first.then_some(span.begin),
@@ -365,11 +377,38 @@ impl GpuTimer {
         if !first && !last {
             return None;
         }
+        self.note_written(span, first, last);
         Some(wgpu::ComputePassTimestampWrites {
             query_set: set,
             beginning_of_pass_write_index: first.then_some(span.begin),
             end_of_pass_write_index: last.then_some(span.end),
         })
+    }
+
+    fn note_written(&self, span: Span, first: bool, last: bool) {
+        let w = &self.written[(span.begin / 2) as usize];
+        w.set(w.get() | if first { BEGUN } else { 0 } | if last { ENDED } else { 0 });
+    }
+
+    /// This frame's spans, those whose passes did not write both timestamps made empty (their
+    /// end read at their beginning: 0 ms).
+    fn spans(&self) -> Vec<(Stage, Span)> {
+        self.labels
+            .iter()
+            .map(|&(stage, s)| {
+                if self.written[(s.begin / 2) as usize].get() == BEGUN | ENDED {
+                    (stage, s)
+                } else {
+                    (
+                        stage,
+                        Span {
+                            begin: s.begin,
+                            end: s.begin,
+                        },
+                    )
+                }
+            })
+            .collect()
     }
 
     /// Records the resolve of this frame's queries; call once after the last timed pass.
@@ -424,7 +463,7 @@ impl GpuTimer {
         }
         encoder.resolve_query_set(set, 0..n, resolve, 0);
         encoder.copy_buffer_to_buffer(resolve, 0, staging, 0, n as u64 * 8);
-        self.labels.clone()
+        self.spans()
     }
 
     /// GPU milliseconds of `spans` from their resolved `ticks`.
@@ -452,9 +491,9 @@ impl GpuTimer {
         let bytes = crate::gpu::readback::map_read(ctx, readback, 0..n * 8)?;
         let ticks: &[u64] = bytemuck::cast_slice(&bytes);
         Ok(GpuTimes(
-            self.labels
-                .iter()
-                .map(|&(stage, s)| {
+            self.spans()
+                .into_iter()
+                .map(|(stage, s)| {
                     let dt = ticks[s.end as usize].saturating_sub(ticks[s.begin as usize]);
                     (stage, dt as f64 * self.period_ns as f64 / 1e6)
                 })
