@@ -133,8 +133,13 @@ pub struct CompareArgs {
     /// the fraction they see. More samples, a closer reference: on the analytic penumbra
     /// test its mean error is 0.0048 at 256 samples and 0.0017 at 1,024, at 4 times the rays
     /// (docs/quality.md).
-    #[arg(long, default_value_t = 256, value_name = "N")]
-    pub(super) soft_samples: u32,
+    ///
+    /// Default: 256, or where that would trace more than one comparison's budget of 3 billion
+    /// soft rays (about ten minutes on two cores; pixels x sized lights x samples), the
+    /// largest square under it, at least 16, said in a note and in the table (a number given
+    /// here is never changed: past the budget it is refused).
+    #[arg(long, value_name = "N")]
+    pub(super) soft_samples: Option<u32>,
     /// The soft-shadow filter: on (lights rendered with their sizes), off (every light
     /// rendered hard, size 0, while the references keep the sizes), or on,off (each technique
     /// both ways, the hard runs labelled -hard): what the filter buys.

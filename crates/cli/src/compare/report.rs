@@ -263,6 +263,8 @@ fn soft_reference_json(args: &CompareArgs, plan: SoftPlan, r: &Reference) -> ser
         (SoftPlan::Traced(samples), Some(s)) => json!({
             "scored": true,
             "samples": samples,
+            // `--soft-samples` as given (null: the default, or fewer chosen to fit the budget).
+            "samples_asked": args.soft_samples,
             "filters": filters,
             "trace_ms": s.ms,
             "rays": s.rays,

@@ -37,31 +37,41 @@ pub(super) enum SoftPlan {
     Skipped(&'static str),
 }
 
+/// Samples of the soft reference per (pixel, sized light) when `--soft-samples` is not given:
+/// a 16x16 grid, unless that passes [`MAX_SOFT_RAYS`] (then the largest square under it).
+pub(super) const DEFAULT_SOFT_SAMPLES: u32 = 256;
+/// The fewest samples the default comes down to (a 4x4 grid): below it the reference's
+/// fractions are too coarse to score a penumbra by, and the flags must say what to give up.
+const MIN_CHOSEN_SOFT_SAMPLES: u32 = 16;
+
 /// Whether soft shadows are scored on `scene` under the flags: when it has a sized light that
-/// casts shadows, `--soft-samples` is not 0 and the reference is the CPU's. Fails when the
-/// soft reference would trace more than [`MAX_SOFT_RAYS`].
+/// casts shadows, `--soft-samples` is not 0 and the reference is the CPU's. Without
+/// `--soft-samples`, the samples are [`DEFAULT_SOFT_SAMPLES`] or the most whose rays fit
+/// [`MAX_SOFT_RAYS`] (said in a note), at least [`MIN_CHOSEN_SOFT_SAMPLES`]. Fails when the
+/// soft reference would trace more than [`MAX_SOFT_RAYS`] with the samples given, or with the
+/// fewest the default comes down to.
 pub(super) fn soft_plan(args: &CompareArgs, scene: &Scene) -> Result<SoftPlan> {
     if !has_sized_light(scene) {
         return Ok(SoftPlan::Skipped(
             "no light with a size casts shadows (--light-size, --sun-size size them)",
         ));
     }
-    if args.soft_samples == 0 {
+    let asked = args.soft_samples.unwrap_or(DEFAULT_SOFT_SAMPLES);
+    if asked == 0 {
         return Ok(SoftPlan::Skipped("--soft-samples 0"));
     }
-    let n = manyshadows_reference::soft::grid_side(args.soft_samples);
-    if args.soft_samples > manyshadows_reference::soft::MAX_SAMPLES {
+    let mut n = manyshadows_reference::soft::grid_side(asked);
+    if asked > manyshadows_reference::soft::MAX_SAMPLES {
         eprintln!(
-            "note: --soft-samples {} is clamped to {} (a {n}x{n} grid per pixel and sized light)",
-            args.soft_samples,
+            "note: --soft-samples {asked} is clamped to {} (a {n}x{n} grid per pixel and sized \
+             light)",
             n * n
         );
     }
     if args.reference == ReferenceTracer::Gpu && n > 16 {
         bail!(
-            "--soft-samples {}: the GPU reference traces at most 256 rays per (pixel, sized \
-             light) (a 16x16 grid); use --reference cpu for more",
-            args.soft_samples
+            "--soft-samples {asked}: the GPU reference traces at most 256 rays per (pixel, sized \
+             light) (a 16x16 grid); use --reference cpu for more"
         );
     }
     let sized = scene
@@ -70,8 +80,25 @@ pub(super) fn soft_plan(args: &CompareArgs, scene: &Scene) -> Result<SoftPlan> {
         .filter(|l| l.size > 0.0 && l.casts_shadows)
         .count() as u64;
     let pixels = args.width as u64 * args.height as u64;
-    let rays = pixels * sized * u64::from(n * n);
-    if rays > MAX_SOFT_RAYS {
+    let rays = |side: u32| pixels * sized * u64::from(side * side);
+    if args.soft_samples.is_none() && rays(n) > MAX_SOFT_RAYS {
+        let fits = (1..n).rev().find(|&side| rays(side) <= MAX_SOFT_RAYS);
+        if let Some(side) = fits.filter(|&side| side * side >= MIN_CHOSEN_SOFT_SAMPLES) {
+            eprintln!(
+                "note: the soft reference traces {} samples per (pixel, sized light) (a \
+                 {side}x{side} grid), not the default {}: {}x{} pixels x {sized} sized lights x \
+                 {} samples would pass the {MAX_SOFT_RAYS} rays one comparison traces; \
+                 --soft-samples N sets it",
+                side * side,
+                n * n,
+                args.width,
+                args.height,
+                n * n
+            );
+            n = side;
+        }
+    }
+    if rays(n) > MAX_SOFT_RAYS {
         bail!(
             "{}x{} pixels x {sized} sized lights x {} samples is more than {MAX_SOFT_RAYS} soft \
              reference rays; use fewer --soft-samples (0 scores hard shadows only), fewer lights \
@@ -329,4 +356,70 @@ pub(super) fn open(
         bvh_ms,
         soft,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    fn args(flags: &[&str]) -> CompareArgs {
+        #[derive(Parser)]
+        struct Only {
+            #[command(flatten)]
+            compare: CompareArgs,
+        }
+        let mut argv = vec!["compare"];
+        argv.extend_from_slice(flags);
+        let mut a = Only::parse_from(argv).compare;
+        a.scene = "atrium".into();
+        a
+    }
+
+    fn sized_lights(scene: &Scene) -> u64 {
+        scene
+            .lights
+            .iter()
+            .filter(|l| l.size > 0.0 && l.casts_shadows)
+            .count() as u64
+    }
+
+    /// `compare --lights 64` at its defaults (960x540, the atrium's sized lights): 256 samples
+    /// would pass the soft-ray budget, so the default comes down to the largest square under
+    /// it (and says so), where a number the user gives is refused instead.
+    #[test]
+    fn the_default_soft_samples_come_down_to_the_ray_budget_and_a_given_number_does_not() {
+        let a = args(&["--lights", "64"]);
+        let scene = load(&a).expect("the atrium");
+        let sized = sized_lights(&scene);
+        let pixels = u64::from(a.width) * u64::from(a.height);
+        assert!(
+            pixels * sized * 256 > MAX_SOFT_RAYS,
+            "the case must pass the budget at 256 samples: {pixels} pixels x {sized} lights"
+        );
+        let Ok(SoftPlan::Traced(samples)) = soft_plan(&a, &scene) else {
+            panic!("not traced: {:?}", soft_plan(&a, &scene));
+        };
+        let side = samples.isqrt();
+        assert_eq!(side * side, samples, "a square grid");
+        assert!(pixels * sized * u64::from(samples) <= MAX_SOFT_RAYS);
+        assert!(
+            pixels * sized * u64::from((side + 1) * (side + 1)) > MAX_SOFT_RAYS,
+            "{samples} is not the largest square under the budget"
+        );
+        assert!(samples >= MIN_CHOSEN_SOFT_SAMPLES);
+
+        let given = args(&["--lights", "64", "--soft-samples", "256"]);
+        let refused = soft_plan(&given, &scene).expect_err("256 given past the budget");
+        assert!(refused.to_string().contains("--soft-samples"), "{refused}");
+
+        // Under the budget the default stays 256.
+        let small = args(&["--lights", "64", "--width", "320", "--height", "180"]);
+        assert_eq!(soft_plan(&small, &scene).unwrap(), SoftPlan::Traced(256));
+
+        // Where even the fewest it comes down to would pass, it is refused, naming the flag.
+        let huge = args(&["--lights", "64", "--width", "8192", "--height", "8192"]);
+        let refused = soft_plan(&huge, &scene).expect_err("past the budget at 16 samples");
+        assert!(refused.to_string().contains("--soft-samples"), "{refused}");
+    }
 }

@@ -169,6 +169,13 @@ fn print_soft(report: &serde_json::Value, results: &[VariantResult], scene: &Sce
         s["trace_ms"].as_f64().unwrap_or(0.0) / 1e3,
         s["rays_per_second"].as_f64().unwrap_or(0.0) / 1e6,
     );
+    let default = crate::compare::setup::DEFAULT_SOFT_SAMPLES;
+    if s["samples_asked"].is_null() && s["samples"].as_u64().is_some_and(|n| n < default.into()) {
+        println!(
+            "                fewer than the default {default}, to fit the rays one comparison \
+             traces (--soft-samples N sets it)"
+        );
+    }
     println!(
         "{:<24} {:<13} {:>10} {:>10} {:>10} {:>10} {:>10} | {:>10} {:>7}",
         "technique", "lights", "penumbrae", "umbra", "penumbra", "lit", "all", "image RMSE", "FLIP"
