@@ -169,7 +169,7 @@ impl ProbeFrame {
         clusters: &'a LightClusters,
         source: &'a dyn ShadowSource,
     ) -> LightingInputs<'a> {
-        let mut parts = crate::sampled::lighting_parts(None, None, false);
+        let mut parts = crate::sampled::lighting_parts(None, None, None);
         parts.push(crate::probes::maps::lighting_part(None));
         LightingInputs {
             frame: FrameInputs {

@@ -222,7 +222,7 @@ impl Renderer {
             // A frame shaded with given fractions: no sampled lights, their histories are
             // the frame's own (the probes' reflections stay).
             let probes = inputs.parts.pop().expect("the probes' part is last");
-            inputs.parts = crate::sampled::lighting_parts(None, None, false);
+            inputs.parts = crate::sampled::lighting_parts(None, None, None);
             inputs.parts.push(probes);
             let consts = self.parts.shading_consts(&self.current, &self.settings);
             let pass = LightingPass::with_fractions(ctx, &inputs, (w, h), &consts);

@@ -110,8 +110,11 @@ impl FrameParts {
         clusters.update(ctx, scene)?;
         clusters.bind(ctx, &frame_buffer, &lights, &gbuffer);
         let samples = settings.rays.light_samples;
+        // The choose pass hands its draws over where they do not follow the shadows (the
+        // denoiser's catch-up samples without reuse do: sampled/pages.rs).
+        let carry = settings.rays.reuse || !settings.rays.denoise;
         let wants = (samples > 0 && source.marks_sampled_pairs())
-            .then(|| PageWants::new(ctx, (settings.width, settings.height), samples))
+            .then(|| PageWants::new(ctx, (settings.width, settings.height), samples, carry))
             .flatten();
         source.bind(
             ctx,
@@ -209,7 +212,7 @@ impl FrameParts {
         let mut parts = crate::sampled::lighting_parts(
             self.denoiser.as_ref().map(|d| &d.buffers),
             self.reuse.as_ref(),
-            self.wants.is_some(),
+            self.wants.as_ref().map(|w| w.carry),
         );
         parts.push(crate::probes::maps::lighting_part(
             self.probes.as_ref().map(|p| &p.maps),

@@ -587,6 +587,56 @@ fn want_light(i: u32, s: Surface) {
     }
 }
 
+// With CARRY (pages.rs, `PageWants::carry`) the choose pass also hands the lighting pass its
+// draws, after every pixel's notes in the same buffer (`carry_per_pixel(K)` words per pixel):
+// what the light loop and `pick_stratified` leave in `Acc` (the colour so far, the unshadowed
+// light, the weights' sum, the count of lights weighed, the random state, and per sample its
+// light, weight and point), so that the lighting pass does not run the loop again. The draws
+// do not depend on the shadows (CARRY is off where they do: the denoiser's catch-up samples
+// without reuse), so the lighting pass shades exactly what it would have drawn itself.
+fn carry_base(px: vec2<i32>) -> u32 {
+    let k = ray_samples();
+    let pixels = u32(frame.viewport.x) * u32(frame.viewport.y);
+    return pixels * wants_per_pixel(k) + (u32(px.y) * u32(frame.viewport.x) + u32(px.x)) * carry_per_pixel(k);
+}
+
+fn carry_store(px: vec2<i32>, acc: ptr<function, Acc>) {
+    let b = carry_base(px);
+    vis_mask[b] = bitcast<u32>((*acc).color.x);
+    vis_mask[b + 1u] = bitcast<u32>((*acc).color.y);
+    vis_mask[b + 2u] = bitcast<u32>((*acc).color.z);
+    vis_mask[b + 3u] = bitcast<u32>((*acc).unshadowed.x);
+    vis_mask[b + 4u] = bitcast<u32>((*acc).unshadowed.y);
+    vis_mask[b + 5u] = bitcast<u32>((*acc).unshadowed.z);
+    vis_mask[b + 6u] = bitcast<u32>((*acc).wsum);
+    vis_mask[b + 7u] = (*acc).count;
+    vis_mask[b + 8u] = (*acc).rng;
+    let k = ray_samples();
+    for (var j = 0u; j < k; j = j + 1u) {
+        // A pixel with no more lights than samples traces its first ones (resolve_samples).
+        vis_mask[b + 9u + 3u * j] = select((*acc).chosen[j], (*acc).first[j], (*acc).count <= k);
+        vis_mask[b + 10u + 3u * j] = bitcast<u32>((*acc).weight[j]);
+        vis_mask[b + 11u + 3u * j] = bitcast<u32>((*acc).frac[j]);
+    }
+}
+
+fn carry_load(px: vec2<i32>, acc: ptr<function, Acc>) {
+    let b = carry_base(px);
+    (*acc).color = bitcast<vec3<f32>>(vec3<u32>(vis_mask[b], vis_mask[b + 1u], vis_mask[b + 2u]));
+    (*acc).unshadowed = bitcast<vec3<f32>>(vec3<u32>(vis_mask[b + 3u], vis_mask[b + 4u], vis_mask[b + 5u]));
+    (*acc).wsum = bitcast<f32>(vis_mask[b + 6u]);
+    (*acc).count = vis_mask[b + 7u];
+    (*acc).rng = vis_mask[b + 8u];
+    let k = ray_samples();
+    for (var j = 0u; j < k; j = j + 1u) {
+        let light = vis_mask[b + 9u + 3u * j];
+        (*acc).chosen[j] = light;
+        (*acc).first[j] = light;
+        (*acc).weight[j] = bitcast<f32>(vis_mask[b + 10u + 3u * j]);
+        (*acc).frac[j] = bitcast<f32>(vis_mask[b + 11u + 3u * j]);
+    }
+}
+
 @fragment
 fn fs_choose(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     let px = vec2<i32>(frag.xy);

@@ -17,15 +17,16 @@ use crate::sampled::options::MAX_LIGHT_SAMPLES;
 
 /// The lighting pass's parts of sampled lights: the draws (always: the light loop visits
 /// every light through them, and without samples they add each light whole; with `choose`,
-/// their choose pass too: [`pages`]), reuse's and the denoiser's (each doing nothing where
-/// its buffers are `None`).
+/// their choose pass too, which with `choose == Some(true)` hands its draws to the lighting
+/// pass: [`pages`]), reuse's and the denoiser's (each doing nothing where its buffers are
+/// `None`).
 pub fn lighting_parts<'a>(
     denoise: Option<&'a denoise::DenoiseBuffers>,
     reuse: Option<&'a reuse::Reuse>,
-    choose: bool,
+    choose: Option<bool>,
 ) -> Vec<Part<'a>> {
-    let mut draws = draws();
-    if choose {
+    let mut draws = draws(choose == Some(true));
+    if choose.is_some() {
         draws.own = &[pages::CHOOSE];
     }
     vec![
@@ -43,16 +44,17 @@ pub fn lighting_parts_declared(
     reuse: Option<options::SpatialReuse>,
 ) -> Vec<Part<'static>> {
     vec![
-        draws(),
+        draws(false),
         reuse::lighting_part_declared(reuse),
         denoise::lighting_part_declared(denoise),
     ]
 }
 
-/// The draws of sampled lights (`lights.wgsl`).
-fn draws() -> Part<'static> {
+/// The draws of sampled lights (`lights.wgsl`); with `carry`, the choose pass hands them to
+/// the lighting pass ([`pages::PageWants::carry`]).
+fn draws(carry: bool) -> Part<'static> {
     Part::wgsl(format!(
-        "const MAX_SAMPLES: u32 = {MAX_LIGHT_SAMPLES}u;\n{}{}",
+        "const MAX_SAMPLES: u32 = {MAX_LIGHT_SAMPLES}u;\nconst CARRY: bool = {carry};\n{}{}",
         pages::wants_wgsl(),
         include_str!("lights.wgsl")
     ))

@@ -346,7 +346,12 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
         let cls = f32(u32(noise_px.x + 2 * noise_px.y) % 5u);
         acc.u0 = fract((cls + ign) / 5.0 + f32(pcg(ray_seed()) >> 8u) / 16777216.0);
     }
-    if (slot < CLUSTER_FIRST_SLOT || slot == CLUSTER_OVERFLOW) {
+    // The choose pass's draws, where it hands them over (sampled/lights.wgsl, CARRY): the
+    // loop's result without the loop.
+    let carried = CARRY && !choosing && ray_samples() > 0u;
+    if (carried) {
+        carry_load(px, &acc);
+    } else if (slot < CLUSTER_FIRST_SLOT || slot == CLUSTER_OVERFLOW) {
         // Every light: the reference loop, and the fallback of clusters without a slot.
         let count = frame.counts.x;
         for (var i = 0u; i < count; i = i + 1u) {
@@ -379,8 +384,11 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
             acc.k = catch_up_samples(acc.unshadowed, fix);
         }
     }
-    if (DENOISE && ray_samples() > 0u && acc.count > ray_samples()) {
+    if (DENOISE && ray_samples() > 0u && acc.count > ray_samples() && !carried) {
         pick_stratified(s, slot, &acc);
+    }
+    if (CARRY && choosing && ray_samples() > 0u) {
+        carry_store(px, &acc);
     }
     resolve_samples(s, &acc);
     if (PROBES) {
