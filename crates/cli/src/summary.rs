@@ -66,8 +66,34 @@ pub(crate) fn summary(
         "cpu_record_ms": frame.timings.cpu_record_ms,
         "frame_wall_ms": frame.timings.wall_ms,
         "total_wall_ms": total.as_secs_f64() * 1e3,
+        "peak_resident_bytes": peak_resident_bytes(),
         "output": args.out,
     })
+}
+
+/// The most resident memory this process has held so far (Linux: `VmHWM` of
+/// /proc/self/status), in bytes; `None` where the system does not say.
+pub(crate) fn peak_resident_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line
+        .trim_start_matches("VmHWM:")
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    Some(kib * 1024)
+}
+
+/// Bytes in words: `1.49 GiB`, `312 MiB`.
+pub(crate) fn describe_bytes(bytes: u64) -> String {
+    let mib = bytes as f64 / (1024.0 * 1024.0);
+    if mib >= 1024.0 {
+        format!("{:.2} GiB", mib / 1024.0)
+    } else {
+        format!("{mib:.0} MiB")
+    }
 }
 
 /// The frame's shading model, exposure and tone map.
@@ -264,6 +290,12 @@ fn print_times(s: &serde_json::Value) {
         s["frame_wall_ms"].as_f64().unwrap_or(0.0),
         s["total_wall_ms"].as_f64().unwrap_or(0.0) / 1e3
     );
+    if let Some(peak) = s["peak_resident_bytes"].as_u64() {
+        println!(
+            "memory       peak resident {} (the whole run: loading, every frame, reading back)",
+            describe_bytes(peak)
+        );
+    }
     println!("wrote        {}", s["output"].as_str().unwrap_or("?"));
 }
 

@@ -247,3 +247,52 @@ fn every_technique_summary_is_true_to_the_technique() {
         }
     }
 }
+
+/// The summary reports the run's peak resident memory (`memory` line, `peak_resident_bytes`
+/// in --json), and it is measured, not guessed: a 2048x2048 frame holds at least its 16 MiB
+/// of read-back pixels (and its G-buffer and image besides) more than a 64x64 one, so its
+/// peak must be at least 16 MiB higher.
+#[test]
+fn the_summary_reports_the_peak_resident_memory() {
+    let dir = tmp("peak-memory");
+    let peak = |side: &str| {
+        let json = dir.join(format!("s{side}.json"));
+        let png = dir.join(format!("f{side}.png"));
+        let out = run(&[
+            "render",
+            "--scene",
+            "cubes",
+            "--width",
+            side,
+            "--height",
+            side,
+            "--out",
+            png.to_str().unwrap(),
+            "--json",
+            json.to_str().unwrap(),
+        ]);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(stdout.contains("memory       peak resident"), "{stdout}");
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        v["peak_resident_bytes"]
+            .as_u64()
+            .unwrap_or_else(|| panic!("no peak_resident_bytes in {v}"))
+    };
+    let small = peak("64");
+    let large = peak("2048");
+    eprintln!("peak resident: 64x64 {small} bytes, 2048x2048 {large} bytes");
+    assert!(
+        small > 1 << 20,
+        "{small} bytes: not a process's resident memory"
+    );
+    assert!(
+        large >= small + (16 << 20),
+        "2048x2048 peaked at {large} bytes, 64x64 at {small}: under 16 MiB apart"
+    );
+}
