@@ -10,9 +10,10 @@
 //!   timed runs ([`Runs`]: medians of GPU time per stage and in total, CPU and wall time, the
 //!   work counters of the last run) and the ratios of each median to the baseline's **from
 //!   the same runs**.
-//! - [`Harness::finish`]: prints the bench's table (notes appended), writes `results.txt`,
-//!   `results.json` (`adapter`, `backend`, `warmup`, `repeats`, `notes`, then the bench's own
-//!   fields and records) and draws the plots.
+//! - [`Harness::finish`]: prints the bench's table (notes and the run's peak resident memory
+//!   appended), writes `results.txt`, `results.json` (`adapter`, `backend`, `warmup`,
+//!   `repeats`, `notes`, `peak_resident_bytes`, then the bench's own fields and records) and
+//!   draws the plots.
 //!
 //! What is measured is a [`Subject`]: a shadow generator alone ([`ShadowSubject`]: `bench
 //! layered`, `bench omni`) or whole frames of a renderer ([`FrameSubject`]: `bench irregular`,
@@ -217,6 +218,8 @@ struct Document<'a, F: Serialize> {
     #[serde(flatten)]
     schedule: Option<Schedule>,
     notes: &'a [String],
+    /// The run's peak resident memory, bytes (Linux: `VmHWM`; null elsewhere).
+    peak_resident_bytes: Option<u64>,
     #[serde(flatten)]
     fields: F,
 }
@@ -375,6 +378,13 @@ impl Harness {
         for n in &notes {
             table += &format!("note: {n}\n");
         }
+        let peak = crate::summary::peak_resident_bytes();
+        if let Some(peak) = peak {
+            table += &format!(
+                "memory: peak resident {} over the whole run (every configuration measured)\n",
+                crate::summary::describe_bytes(peak)
+            );
+        }
         print!("{table}");
         std::fs::write(self.out_dir.join("results.txt"), &table)?;
         let doc = Document {
@@ -382,6 +392,7 @@ impl Harness {
             backend: format!("{:?}", self.ctx.info.backend),
             schedule: self.schedule,
             notes: &notes,
+            peak_resident_bytes: peak,
             fields,
         };
         let json_path = self.out_dir.join("results.json");

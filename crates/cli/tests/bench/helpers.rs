@@ -48,6 +48,19 @@ pub(crate) fn bench_ok(command: &str, args: &str) -> (PathBuf, Value) {
     let json: Value =
         serde_json::from_slice(&std::fs::read(dir.join("results.json")).unwrap()).unwrap();
     assert!(json["adapter"].is_string(), "{json}");
+    // Every table reports the run's peak resident memory, measured (more than the 1 MiB no
+    // process running a GPU device stays under).
+    assert!(
+        stdout.contains("memory: peak resident"),
+        "no memory line: {stdout}"
+    );
+    assert!(
+        json["peak_resident_bytes"]
+            .as_u64()
+            .is_some_and(|b| b > 1 << 20),
+        "{}",
+        json["peak_resident_bytes"]
+    );
     (dir, json)
 }
 
