@@ -44,6 +44,7 @@ pub(crate) struct AllocBuffers<'a> {
 pub(crate) struct AllocPass {
     layout: wgpu::BindGroupLayout,
     count: wgpu::ComputePipeline,
+    count_keepable: wgpu::ComputePipeline,
     retain: wgpu::ComputePipeline,
     free: wgpu::ComputePipeline,
     count_new: wgpu::ComputePipeline,
@@ -77,6 +78,7 @@ impl AllocPass {
         let compute = |label: &str, entry| compute_pipeline(device, label, &pl, &code, entry);
         Self {
             count: compute("vsm.count", "cs_count"),
+            count_keepable: compute("vsm.count_keepable", "cs_count_keepable"),
             retain: compute("vsm.retain", "cs_retain"),
             free: compute("vsm.free", "cs_free"),
             count_new: compute("vsm.count_new", "cs_count_new"),
@@ -124,6 +126,7 @@ impl AllocPass {
         pass.set_bind_group(0, group, &[]);
         for (pipeline, (x, y)) in [
             (&self.count, blocks),
+            (&self.count_keepable, each),
             (&self.retain, each),
             (&self.free, (1, 1)),
             (&self.count_new, blocks),

@@ -13,7 +13,7 @@ pub(crate) const PAGE_TABLE: &str = include_str!("vsm_table.wgsl");
 pub(crate) const TABLE_WORDS: u64 = 3;
 
 /// Words of the counters buffer (see `vsm_table.wgsl`).
-pub(crate) const COUNTERS: usize = 33;
+pub(crate) const COUNTERS: usize = 34;
 
 /// The buffers `vsm_table.wgsl` binds (owned by [`super::pages`]).
 pub(crate) struct TableBuffers<'a> {

@@ -173,6 +173,69 @@ fn page_moved(face: VirtualFace, local: u32, level: u32) -> bool {
     return d.x <= d.z && d.y <= d.w && all(lo <= d.zw) && all(d.xy <= hi);
 }
 
+// Counter of this stage (a free slot of vsm_table.wgsl's buffer): where level 0 alone
+// overflows the pool, the level-0 pages that could keep last frame's whole pool page.
+const COUNT_KEEPABLE: u32 = 33u;
+
+// Entry `e`'s place in last frame's table, where its face is unchanged and the page does not
+// overlap where casters moved (else none: 0xffffffff).
+fn prev_at(e: u32, level: u32) -> u32 {
+    let face = vsm_faces[face_of(e)];
+    if (face.table.w == 0u || page_moved(face, e - face.table.x, level)) {
+        return 0xffffffffu;
+    }
+    return face.table.w - 1u + (e - face.table.x);
+}
+
+// Whether entry `e` (of `level`) may keep last frame's page: resident then in a whole pool page
+// of an unchanged face, drawn far and wide enough for this frame's samples.
+fn keepable(e: u32, level: u32, admitted: u32) -> bool {
+    let at = prev_at(e, level);
+    if (at == 0xffffffffu) {
+        return false;
+    }
+    let before = prev_table[at];
+    return before >= VSM_FIRST_PAGE && before < VSM_FIRST_PAGE + VSM_QUARTER
+        && covered(needed_bounds(e, level, admitted), prev_table[prev_keys_at() + at], prev_table[prev_cells_at() + at]);
+}
+
+// Keeps last frame's page of `e` and its depth (and the bounds it was drawn with).
+fn keep(e: u32, level: u32) {
+    let at = prev_at(e, level);
+    let before = prev_table[at];
+    atomicStore(&vsm_table[e], before);
+    atomicStore(&vsm_table[vsm.counts.y + e], prev_table[prev_keys_at() + at]);
+    atomicStore(&vsm_table[cells_at() + e], prev_table[prev_cells_at() + at]);
+    scratch[kept_at() + before - VSM_FIRST_PAGE] = 1u;
+    atomicAdd(&counters[COUNT_KEPT], 1u);
+}
+
+// Whether a marked level-0 entry `v` (vsm_table's word).
+fn marked_level_zero(v: u32) -> bool {
+    return v >= VSM_NEEDED_AT && v < VSM_NEEDED_AT + 2u * TAG_ASKED && (v - VSM_NEEDED_AT) % TAG_ASKED == 0u;
+}
+
+// Before cs_retain, where level 0 alone overflows the pool: counts the level-0 pages that could
+// keep their whole pool page (cs_retain keeps them all or none).
+@compute @workgroup_size(64, 1, 1)
+fn cs_count_keepable(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let e = gid.x + gid.y * groups.x * 64u;
+    if (e >= vsm.counts.y || atomicLoad(&counters[0]) <= vsm.pool.w) {
+        return;
+    }
+    if (marked_level_zero(atomicLoad(&vsm_table[e])) && keepable(e, 0u, 0u)) {
+        atomicAdd(&counters[COUNT_KEEPABLE], 1u);
+    }
+}
+
+// Whether the `k` keepable level-0 pages may be kept when level 0 (`n0` faces) overflows the
+// pool: only if every face still gets room, the new ones four to a page in what the kept ones
+// leave (cs_scan_new), so keeping never leaves a face unshadowed that a fresh frame shades.
+fn keep_in_overflow(k: u32, n0: u32) -> bool {
+    let pool = vsm.pool.w;
+    return k > 0u && k <= pool && (n0 - k + 3u) / 4u <= pool - k;
+}
+
 @compute @workgroup_size(64, 1, 1)
 fn cs_retain(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let e = gid.x + gid.y * groups.x * 64u;
@@ -185,11 +248,17 @@ fn cs_retain(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     }
     let level = (v - VSM_NEEDED_AT) % TAG_ASKED;
     let asked = v >= VSM_NEEDED_AT + TAG_ASKED;
-    if (atomicLoad(&counters[0]) > vsm.pool.w) {
-        // Not even level 0 fits: level-0 pages are placed by rank (cs_alloc_new; the last
-        // ones in quarter pages), nothing else is admitted and nothing is kept.
+    let n0 = atomicLoad(&counters[0]);
+    if (n0 > vsm.pool.w) {
+        // Not even level 0 fits: nothing else is admitted; level-0 pages keep last frame's
+        // whole pool pages where all of those that can fit beside the rest (keep_in_overflow),
+        // and the new ones are placed by rank (cs_alloc_new; the last ones in quarter pages).
         if (level == 0u) {
-            atomicStore(&vsm_table[e], VSM_NEW_AT);
+            if (keep_in_overflow(atomicLoad(&counters[COUNT_KEEPABLE]), n0) && keepable(e, 0u, 0u)) {
+                keep(e, 0u);
+            } else {
+                atomicStore(&vsm_table[e], VSM_NEW_AT);
+            }
         } else if (asked) {
             deny(e, level);
         } else {
@@ -208,23 +277,11 @@ fn cs_retain(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         deny(e, level);
         return;
     }
-    let face = vsm_faces[face_of(e)];
-    if (face.table.w != 0u && !page_moved(face, e - face.table.x, level)) {
-        let at = face.table.w - 1u + (e - face.table.x);
-        let before = prev_table[at];
-        let drawn = prev_table[prev_keys_at() + at];
-        let drawn_cells = prev_table[prev_cells_at() + at];
-        if (before >= VSM_FIRST_PAGE && before < VSM_FIRST_PAGE + VSM_QUARTER
-            && covered(needed_bounds(e, level, admitted), drawn, drawn_cells)) {
-            // Resident last frame, in an unchanged face, drawn far and wide enough: keep the
-            // page and its depth (and the bounds it was drawn with).
-            atomicStore(&vsm_table[e], before);
-            atomicStore(&vsm_table[vsm.counts.y + e], drawn);
-            atomicStore(&vsm_table[cells_at() + e], drawn_cells);
-            scratch[kept_at() + before - VSM_FIRST_PAGE] = 1u;
-            atomicAdd(&counters[COUNT_KEPT], 1u);
-            return;
-        }
+    if (keepable(e, level, admitted)) {
+        // Resident last frame, in an unchanged face, drawn far and wide enough: keep the
+        // page and its depth (and the bounds it was drawn with).
+        keep(e, level);
+        return;
     }
     atomicStore(&vsm_table[e], VSM_NEW_AT + level);
 }

@@ -25,7 +25,8 @@
 // get a whole pool page (the rest of 12 get quarters); 14: cluster draws and 15: triangles
 // drawn into pages (vsm_draw.wgsl's cull); 16: pages denied; 17: pages drawn this frame;
 // 18: level-0 pages denied (faces left unshadowed); [20, 28): pages asked per level; [28, 33):
-// the tile marking's VirtualStats::tiles.
+// the tile marking's VirtualStats::tiles; 33: level-0 pages that could be kept where level 0
+// overflows the pool (vsm_alloc.wgsl).
 @group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
 // Last frame's page table (for the pages it kept).
 @group(0) @binding(14) var<storage, read> prev_table: array<u32>;
