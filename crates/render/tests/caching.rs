@@ -675,9 +675,8 @@ fn a_caster_moving_every_frame_matches_a_fresh_renderer() {
 }
 
 /// A frame whose cached shadows redraw no view does no shadow work on the GPU, and its timings
-/// say so: the shadow stage's span, which no pass wrote, times 0 ms. (Its queries kept the
-/// first frame's ticks, and the summary and `--frames` lines repeated that frame's shadow time
-/// on every still frame after it: 1,050 ms on frames that drew nothing.)
+/// say so: the shadow stage's span, which no pass wrote, times 0 ms, not the ticks its queries
+/// kept from an earlier frame.
 #[test]
 fn a_frame_that_redraws_no_shadow_view_times_no_shadow_work() {
     use manyshadows::gpu::timing::Stage;
@@ -714,8 +713,7 @@ fn a_frame_that_redraws_no_shadow_view_times_no_shadow_work() {
 /// share pool pages four to one) still keeps pages across still frames: the faces that had
 /// whole pool pages keep them where every face still gets room beside them (the new ones in
 /// quarters), so a still frame draws only the quarter pages again, and its mask and image are
-/// a fresh renderer's. (Before, an overflowing level 0 kept nothing: every page was drawn
-/// anew each frame, as 8,507 of 8,507 at 16,384 lights in the default pool.)
+/// a fresh renderer's (docs/techniques.md has the figures at 16,384 lights).
 #[test]
 fn an_overflowing_pool_keeps_its_whole_pages_on_still_frames() {
     use manyshadows::Renderer;

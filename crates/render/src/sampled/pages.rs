@@ -8,8 +8,8 @@
 //! alone (`ShadowSource::marks_sampled_pairs`, `SourceInputs::page_wants`). Where the draws
 //! do not follow the shadows (all but the denoiser without reuse) it also hands them to the
 //! lighting pass in the same buffer ([`PageWants::carry`]), which then skips the light loop:
-//! the same image, byte for byte, with the lighting pass 0.65x as dear at 16,384 lights
-//! (atrium, 640x360, K = 1 denoised with reuse, lavapipe: 126 against 193 ms) and 0.8x at 64.
+//! the same image, byte for byte, at a lower lighting cost (docs/techniques.md, "Pages for the
+//! sampled pairs").
 //!
 //! Spatial reuse (`--spatial`) also asks, after the lighting pass, about neighbours' lights at
 //! each pixel; those pairs are not noted, and their lookups fall back to the coarser pages that
