@@ -414,6 +414,7 @@ fn a_caster_moved_into_a_new_face_gets_its_pages_marked() {
         camera: Camera::look_at(Vec3::new(0.0, 3.0, 9.0), Vec3::new(0.0, 1.5, 0.0)),
         lighting: Default::default(),
         probes: Vec::new(),
+        animations: Default::default(),
     };
     let settings = |cache| virtual_settings(256, 144, cache);
     let mut r = Renderer::new(&ctx, &scene, settings(true)).expect("renderer");
@@ -493,6 +494,7 @@ fn spot_over_floor(extra: Vec<manyshadows::scene::Instance>) -> Scene {
         camera: Camera::look_at(Vec3::new(0.0, 3.5, 12.0), Vec3::new(0.0, 2.5, 0.0)),
         lighting: Default::default(),
         probes: Vec::new(),
+        animations: Default::default(),
     }
 }
 

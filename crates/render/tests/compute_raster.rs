@@ -85,6 +85,7 @@ fn scene(meshes: Vec<Mesh>, lights: Vec<Light>) -> Scene {
         camera: Camera::look_at(Vec3::new(0.0, 6.0, 8.0), Vec3::ZERO),
         lighting: Default::default(),
         probes: Vec::new(),
+        animations: Default::default(),
     }
 }
 

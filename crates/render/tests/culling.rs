@@ -55,6 +55,7 @@ fn scene() -> Scene {
         camera: Camera::look_at(Vec3::new(0.0, 4.0, 6.0), Vec3::ZERO),
         lighting: Default::default(),
         probes: Vec::new(),
+        animations: Default::default(),
     }
 }
 

@@ -81,6 +81,7 @@ fn scene() -> Scene {
         camera: Camera::look_at(Vec3::new(0.0, 6.0, 10.0), Vec3::ZERO),
         lighting: Default::default(),
         probes: Vec::new(),
+        animations: Default::default(),
     }
 }
 

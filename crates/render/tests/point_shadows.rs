@@ -191,6 +191,7 @@ fn light_inside_geometry_lights_nothing_outside() {
         camera: Camera::look_at(Vec3::new(7.0, 4.0, 3.0), Vec3::new(7.0, 0.0, -1.0)),
         lighting: Default::default(),
         probes: Vec::new(),
+        animations: Default::default(),
     };
     for points in PointShadows::ALL {
         for technique in [Technique::TRADITIONAL, Technique::LAYERED] {

@@ -73,6 +73,7 @@ fn scene(sphere: Mesh) -> Scene {
         },
         lighting: Default::default(),
         probes: Vec::new(),
+        animations: Default::default(),
     }
 }
 

@@ -229,6 +229,7 @@ fn case(stage: Stage, lamp: Lamp) -> Case {
         camera,
         lighting: Default::default(),
         probes: Vec::new(),
+        animations: Default::default(),
     };
     scene.validate().expect("valid scene");
     // Every single-sided instance made plain: the shell a solid box.

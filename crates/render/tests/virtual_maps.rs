@@ -100,6 +100,7 @@ fn lamp_over_floor(
         camera,
         lighting: Default::default(),
         probes: Vec::new(),
+        animations: Default::default(),
     }
 }
 

@@ -2,7 +2,7 @@
 //!
 //! Pure scene data for manyshadows: no GPU code. It holds
 //!
-//! - the data model ([`Scene`], [`Mesh`], [`Instance`], [`Material`], [`Light`], [`Camera`]),
+//! - the data model ([`Scene`], its [`animation`]s, [`Mesh`], [`Instance`], [`Material`], [`Light`], [`Camera`]),
 //! - light-space maths ([`light_space`]): every view-projection a shadow technique must fill,
 //! - the shadow-atlas tile allocator ([`atlas`]),
 //! - file loaders ([`loaders`]: OBJ, glTF 2.0, PLY and `.ply.gz`) and the TOML scene format
@@ -12,6 +12,7 @@
 //!
 //! Everything here can be unit-tested without a graphics adapter.
 
+pub mod animation;
 pub mod atlas;
 pub mod builtin;
 pub mod error;

@@ -591,6 +591,10 @@ pub struct Scene {
     pub lighting: Lighting,
     /// Reflection probes (none: no reflections).
     pub probes: Vec<Probe>,
+    /// What moves over time: a glTF file's node animations (empty: a still scene). The
+    /// instances above are the rest pose; [`Animations::pose`](crate::animation::Animations::pose)
+    /// gives their transforms at a time.
+    pub animations: crate::animation::Animations,
 }
 
 /// The eight corners of the box from `lo` to `hi`.

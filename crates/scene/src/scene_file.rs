@@ -438,6 +438,7 @@ fn parse(
         camera: doc.camera.unwrap_or_default(),
         lighting: Default::default(),
         probes: doc.probe,
+        animations: Default::default(),
     };
     scene.validate()?;
     Ok(scene)

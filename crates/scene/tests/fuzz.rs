@@ -283,6 +283,7 @@ fn textured_scene() -> Scene {
         camera: Camera::look_at(Vec3::new(3.0, 2.0, 4.0), Vec3::ZERO),
         lighting: Default::default(),
         probes: Vec::new(),
+        animations: Default::default(),
     }
 }
 

@@ -318,6 +318,7 @@ fn bench_scene(mesh: &Mesh, maps: usize, resolution: u32, instances: usize) -> R
         camera: Camera::look_at(centre + Vec3::new(0.0, 1.0, 3.0) * distance, centre),
         lighting: Default::default(),
         probes: Vec::new(),
+        animations: Default::default(),
     };
     scene.validate()?;
     Ok(scene)

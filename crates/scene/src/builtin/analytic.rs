@@ -193,5 +193,6 @@ pub(crate) fn build(which: AnalyticLight, opts: &BuiltinOptions) -> Scene {
         camera: analytic_camera(),
         lighting: Default::default(),
         probes: Vec::new(),
+        animations: Default::default(),
     }
 }

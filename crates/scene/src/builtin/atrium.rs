@@ -763,6 +763,7 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
         } else {
             Vec::new()
         },
+        animations: Default::default(),
     }
 }
 

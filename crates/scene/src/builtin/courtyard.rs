@@ -514,6 +514,7 @@ pub(crate) fn build(opts: &BuiltinOptions, masks: bool) -> Scene {
         camera: Camera::look_at(COURTYARD_CAMERA_POSITION, COURTYARD_CAMERA_TARGET),
         lighting: Default::default(),
         probes: Vec::new(),
+        animations: Default::default(),
     };
     scene.camera.far = 80.0;
     scene.lights = if opts.lights.is_none() && opts.mix == LightMix::All {

@@ -144,6 +144,7 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
         camera: Camera::look_at(CUBES_CAMERA_POSITION, CUBES_CAMERA_TARGET),
         lighting: Default::default(),
         probes: Vec::new(),
+        animations: Default::default(),
     };
     scene.camera.far = 60.0;
     scene.lights = if opts.lights.is_none() && opts.mix == LightMix::All {

@@ -223,5 +223,6 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Result<Scene, SceneError> {
         camera,
         lighting: Default::default(),
         probes: Vec::new(),
+        animations: Default::default(),
     })
 }

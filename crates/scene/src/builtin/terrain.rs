@@ -347,5 +347,6 @@ pub(crate) fn build(opts: &BuiltinOptions) -> Scene {
         camera,
         lighting: Default::default(),
         probes: Vec::new(),
+        animations: Default::default(),
     }
 }

@@ -99,6 +99,7 @@ pub(super) fn test_scene(lights: Vec<Light>) -> Scene {
         camera: Camera::look_at(Vec3::new(0.0, 5.0, 10.0), Vec3::ZERO),
         lighting: Default::default(),
         probes: Vec::new(),
+        animations: Default::default(),
     }
 }
 

@@ -4,6 +4,7 @@
 
 use std::path::Path;
 
+use crate::animation::Animations;
 use glam::{Mat3, Mat4, Vec3};
 
 use crate::error::SceneError;
@@ -77,6 +78,11 @@ pub(crate) struct Parts {
     /// The file's camera; `None`: the default framing.
     pub camera: Option<Camera>,
     pub notes: Vec<String>,
+    /// The node each mesh is drawn at, for animation (empty: a format without nodes).
+    pub mesh_nodes: Vec<Option<usize>>,
+    /// The file's node tree and clips ([`Animations::moving`] is filled when the instances
+    /// are made).
+    pub animations: Animations,
 }
 
 /// A primitive's vertices as a file stores them (before any transform), its triangles as a

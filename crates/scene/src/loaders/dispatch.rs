@@ -10,6 +10,7 @@ use glam::Mat4;
 use super::common::{bounds_of_placed, check_file_size, check_triangles, parse_error, Parts};
 use super::framing::{add_ground, default_camera, default_rig};
 use super::options::LoadOptions;
+use crate::animation::Moving;
 use crate::error::SceneError;
 use crate::look::Lighting;
 use crate::model::{Camera, Instance, Material, Mesh, Scene};
@@ -150,6 +151,8 @@ pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<LoadedScene
                     lights: Vec::new(),
                     camera: None,
                     notes: Vec::new(),
+                    mesh_nodes: Vec::new(),
+                    animations: Default::default(),
                 }
             }
         };
@@ -189,6 +192,8 @@ fn assemble(
         lights,
         camera,
         mut notes,
+        mesh_nodes,
+        mut animations,
     } = parts;
     if meshes.is_empty() {
         return Err(parse_error(path, "the file contains no triangles"));
@@ -201,10 +206,38 @@ fn assemble(
     }
     let bounds = bounds_of_placed(&meshes, &transforms);
     let mut instances = Vec::new();
+    let animated = animations.animated_nodes();
+    let rest = animations.rest_worlds();
+    let mut frozen = std::collections::BTreeSet::new();
     for (mesh, (&material, placed)) in mesh_material.iter().zip(&transforms).enumerate() {
         for &t in placed {
+            let node = mesh_nodes.get(mesh).copied().flatten();
+            if let Some(n) = node.filter(|&n| animated.get(n) == Some(&true)) {
+                // The rest world transform is baked into the vertices (or into `t`): the
+                // animation moves the instance by W(t) · W₀⁻¹.
+                if rest[n].is_finite() && rest[n].determinant().abs() >= 1e-12 {
+                    animations.moving.push(Moving {
+                        instance: instances.len(),
+                        node: n,
+                        from_rest: rest[n].inverse() * t,
+                    });
+                } else {
+                    frozen.insert(n);
+                }
+            }
             instances.push(Instance::caster(mesh, material, t));
         }
+    }
+    if !frozen.is_empty() {
+        notes.push(format!(
+            "node(s) {frozen:?} are scaled to nothing at rest, so their meshes cannot be \
+             placed by the animation: they stay still"
+        ));
+    }
+    if !animations.clips.is_empty() && animations.moving.is_empty() {
+        notes.push(
+            "the file's animations move no mesh (only lights, cameras or empty nodes)".into(),
+        );
     }
     let name = path
         .file_name()
@@ -220,6 +253,7 @@ fn assemble(
         camera: Camera::default(),
         lighting,
         probes: Vec::new(),
+        animations,
     };
     scene.camera = camera.unwrap_or_else(|| default_camera(bounds));
     if scene.lights.is_empty() {

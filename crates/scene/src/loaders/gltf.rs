@@ -13,8 +13,10 @@
 //! once, from a buffer view, a `data:` URI or a file in the `.gltf`'s folder),
 //! `KHR_texture_transform` (baked into texture coordinates), `KHR_lights_punctual` lights and
 //! the first perspective camera, with the mappings documented in [`super`];
-//! `EXT_mesh_gpu_instancing` nodes become one instance per instance. Skins, morph targets and
-//! animations are ignored, and every other extension the file uses gets one note.
+//! `EXT_mesh_gpu_instancing` nodes become one instance per instance. Node animations are read
+//! (`gltf_animation`: the instances under an animated node move, see
+//! [`animation`](crate::animation)); skins and morph targets are not applied yet (one note
+//! says so), and every other extension the file uses gets one note.
 //!
 //! The `gltf` crate's accessors and wrappers assume a well-formed document in a few places
 //! (found by fuzzing or by reading them), so: accessor types, strides and counts are checked
@@ -35,6 +37,7 @@
 use std::path::Path;
 
 use super::common::{bake, bounds_of_placed, check_triangles, Parts};
+use super::gltf_animation::read_animations;
 use super::gltf_extensions::unsupported_notes;
 use super::gltf_geometry::read_geometry;
 use super::gltf_lights_camera::{read_camera, read_lights};
@@ -110,6 +113,7 @@ pub(super) fn load_scene(path: &Path, options: &LoadOptions) -> Result<Parts, Sc
     let bounds = bounds_of_placed(&geometry.meshes, &geometry.transforms);
     let lights = read_lights(path, &opened, &geometry.nodes, bounds, &mut notes)?;
     let camera = read_camera(&opened, &geometry.nodes, bounds, &mut notes);
+    let animations = read_animations(&opened, &mut notes);
     Ok(Parts {
         meshes: geometry.meshes,
         mesh_material,
@@ -119,5 +123,7 @@ pub(super) fn load_scene(path: &Path, options: &LoadOptions) -> Result<Parts, Sc
         lights,
         camera,
         notes,
+        mesh_nodes: geometry.mesh_nodes,
+        animations,
     })
 }

@@ -63,7 +63,10 @@ pub(super) const INDEX_TYPES: &[Component] = &[
 ];
 
 /// Checks an accessor's buffer views are safe to hand to the crate's readers.
-fn check_layout(a: &Accessor<'_>, bad: &dyn Fn(String) -> SceneError) -> Result<(), SceneError> {
+pub(super) fn check_layout(
+    a: &Accessor<'_>,
+    bad: &dyn Fn(String) -> SceneError,
+) -> Result<(), SceneError> {
     let size = a.size();
     let views = a
         .view()
@@ -173,4 +176,24 @@ where
     F: Clone + Fn(::gltf::Buffer<'a>) -> Option<&'s [u8]>,
 {
     read_floats!(a, get, 2).map(|v| v.into_iter().map(Vec2::from_array).collect())
+}
+
+/// A checked `SCALAR` accessor of floats (what animation key times are); `None` if its data
+/// is missing or outside its buffer, or not floats.
+pub(super) fn read_scalar<'a, 's, F>(a: &Accessor<'a>, get: F) -> Option<Vec<f32>>
+where
+    F: Clone + Fn(::gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    match a.data_type() {
+        DataType::F32 => Iter::<f32>::new(a.clone(), get).map(|it| it.collect()),
+        _ => None,
+    }
+}
+
+/// A checked `VEC4` accessor as floats; `None` if its data is missing or outside its buffer.
+pub(super) fn read_vec4<'a, 's, F>(a: &Accessor<'a>, get: F) -> Option<Vec<glam::Vec4>>
+where
+    F: Clone + Fn(::gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    read_floats!(a, get, 4).map(|v| v.into_iter().map(glam::Vec4::from_array).collect())
 }

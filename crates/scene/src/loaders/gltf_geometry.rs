@@ -33,6 +33,8 @@ pub(super) struct Geometry<'a> {
     /// The placements of each mesh: the identity (the node's transform is baked in), or one
     /// per instance of an `EXT_mesh_gpu_instancing` node.
     pub(super) transforms: Vec<Vec<Mat4>>,
+    /// The node each mesh is drawn at (`None`: a document without scenes).
+    pub(super) mesh_nodes: Vec<Option<usize>>,
     /// Remarks on instances left out.
     pub(super) notes: Vec<String>,
     /// Every node reached from the default scene with its world transform, depth-first.
@@ -52,54 +54,59 @@ pub(super) fn read_geometry<'a>(
         meshes: Vec::new(),
         materials: Vec::new(),
         transforms: Vec::new(),
+        mesh_nodes: Vec::new(),
         notes: Vec::new(),
         nodes: Vec::new(),
         skipped: 0,
     };
     let mut total_triangles = 0usize;
     // `world` is baked into the vertices; `placed` are the mesh's placements.
-    let mut emit =
-        |out: &mut Geometry<'a>, mesh: ::gltf::Mesh<'a>, world: Mat4, placed: &[Mat4]| {
-            for prim in mesh.primitives() {
-                let mode = prim.mode();
-                if !matches!(
+    let mut emit = |out: &mut Geometry<'a>,
+                    node: Option<usize>,
+                    mesh: ::gltf::Mesh<'a>,
+                    world: Mat4,
+                    placed: &[Mat4]| {
+        for prim in mesh.primitives() {
+            let mode = prim.mode();
+            if !matches!(
+                mode,
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
+                log::debug!(
+                    "{}: skipping a {:?} primitive of mesh {} (only triangles are loaded)",
+                    path.display(),
                     mode,
-                    Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
-                ) {
-                    log::debug!(
-                        "{}: skipping a {:?} primitive of mesh {} (only triangles are loaded)",
-                        path.display(),
-                        mode,
-                        mesh.index()
-                    );
-                    out.skipped += 1;
-                    continue;
-                }
-                let label = match mesh.name() {
-                    Some(n) => format!("{n}#{}", prim.index()),
-                    None => format!("mesh{}#{}", mesh.index(), prim.index()),
-                };
-                let draco = opened.json.pointer(&format!(
-                    "/meshes/{}/primitives/{}/extensions/KHR_draco_mesh_compression",
-                    mesh.index(),
-                    prim.index()
-                ));
-                let read = match draco {
-                    Some(ext) => decode_draco(path, &label, opened, ext)?,
-                    None => read_primitive(path, &label, &prim, &get)?,
-                };
-                let m = finish(path, &label, read, world)?;
-                if m.indices.is_empty() {
-                    continue;
-                }
-                total_triangles += m.triangle_count();
-                check_triangles(path, total_triangles)?;
-                out.meshes.push(m);
-                out.materials.push(prim.material().index());
-                out.transforms.push(placed.to_vec());
+                    mesh.index()
+                );
+                out.skipped += 1;
+                continue;
             }
-            Ok::<(), SceneError>(())
-        };
+            let label = match mesh.name() {
+                Some(n) => format!("{n}#{}", prim.index()),
+                None => format!("mesh{}#{}", mesh.index(), prim.index()),
+            };
+            let draco = opened.json.pointer(&format!(
+                "/meshes/{}/primitives/{}/extensions/KHR_draco_mesh_compression",
+                mesh.index(),
+                prim.index()
+            ));
+            let read = match draco {
+                Some(ext) => decode_draco(path, &label, opened, ext)?,
+                None => read_primitive(path, &label, &prim, &get)?,
+            };
+            let m = finish(path, &label, read, world)?;
+            if m.indices.is_empty() {
+                continue;
+            }
+            total_triangles += m.triangle_count();
+            check_triangles(path, total_triangles)?;
+            out.meshes.push(m);
+            out.materials.push(prim.material().index());
+            out.transforms.push(placed.to_vec());
+            out.mesh_nodes.push(node);
+        }
+        Ok::<(), SceneError>(())
+    };
 
     match document
         .default_scene()
@@ -142,10 +149,10 @@ pub(super) fn read_geometry<'a>(
                                 ));
                             }
                             if !placed.is_empty() {
-                                emit(&mut out, mesh, Mat4::IDENTITY, &placed)?;
+                                emit(&mut out, Some(node.index()), mesh, Mat4::IDENTITY, &placed)?;
                             }
                         }
-                        None => emit(&mut out, mesh, world, &[Mat4::IDENTITY])?,
+                        None => emit(&mut out, Some(node.index()), mesh, world, &[Mat4::IDENTITY])?,
                     }
                 }
                 let children: Vec<_> = node.children().collect();
@@ -155,7 +162,7 @@ pub(super) fn read_geometry<'a>(
         }
         None => {
             for mesh in document.meshes() {
-                emit(&mut out, mesh, Mat4::IDENTITY, &[Mat4::IDENTITY])?;
+                emit(&mut out, None, mesh, Mat4::IDENTITY, &[Mat4::IDENTITY])?;
             }
         }
     }

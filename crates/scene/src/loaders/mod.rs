@@ -222,6 +222,7 @@ mod files;
 mod framing;
 mod gltf;
 mod gltf_accessors;
+mod gltf_animation;
 mod gltf_draco;
 mod gltf_extensions;
 mod gltf_geometry;

@@ -114,6 +114,8 @@ pub(super) fn load_scene(path: &Path, options: &LoadOptions) -> Result<Parts, Sc
         lights: Vec::new(),
         camera: None,
         notes,
+        mesh_nodes: Vec::new(),
+        animations: Default::default(),
     })
 }
 

@@ -135,6 +135,7 @@ fn writer_scene() -> Scene {
         },
         lighting: Default::default(),
         probes: Vec::new(),
+        animations: Default::default(),
     }
 }
 

@@ -15,6 +15,7 @@ mod compressed;
 mod crease_normals;
 mod defaults;
 mod gaps;
+mod gltf_animation;
 mod gltf_extensions;
 mod gltf_geometry;
 mod gltf_scene;
