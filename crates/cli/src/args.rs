@@ -168,6 +168,8 @@ pub(crate) struct RenderArgs {
     pub(crate) mesh: Option<PathBuf>,
     #[command(flatten)]
     pub(crate) model: ModelArgs,
+    #[command(flatten)]
+    pub(crate) animation: AnimationArgs,
     /// Shadow-map resolution per view (texels per side) for every light.
     #[arg(long)]
     pub(crate) shadow_resolution: Option<u32>,
@@ -285,6 +287,97 @@ pub(crate) struct RenderArgs {
     pub(crate) json: Option<PathBuf>,
     #[command(flatten)]
     pub(crate) gpu: GpuArgs,
+}
+
+/// Which of a glTF file's animations plays, and when: shared by `render`, `compare` and the
+/// viewer.
+#[derive(Args, Debug, Clone, Default, PartialEq)]
+pub struct AnimationArgs {
+    /// A glTF file's animation to play: its name, its number from 0, or `all` (every one at
+    /// once) [default: 0, the first]. Refused for a scene without animations, with the list
+    /// where the name is not found.
+    #[arg(long, value_name = "NAME|INDEX|all")]
+    pub animation: Option<String>,
+    /// Seconds into the animation for the (first) frame [default: 0]. Playback loops: a time
+    /// past the animation's end is taken modulo its length.
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    pub time: Option<f32>,
+    /// With --frames N: frames per second of animation time, frame k at --time + k / F
+    /// [default: 30].
+    #[arg(long, value_name = "F")]
+    pub fps: Option<f32>,
+}
+
+/// Default --fps.
+pub(crate) const DEFAULT_FPS: f32 = 30.0;
+
+/// When a sequence's frames stand in a file's animation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Clock {
+    pub(crate) playing: manyshadows::scene::animation::Playing,
+    /// Seconds at frame 0.
+    pub(crate) start: f32,
+    pub(crate) fps: f32,
+}
+
+impl Clock {
+    /// Seconds at frame `f` (from 0).
+    pub(crate) fn at(&self, f: u32) -> f32 {
+        self.start + f as f32 / self.fps
+    }
+}
+
+impl AnimationArgs {
+    /// The clock these flags ask for on `scene` (`None`: it does not move), checked: a flag
+    /// for a scene without animations, an animation not in the file, a time or rate that is
+    /// not a finite positive number, --fps for a single frame, are refused by name.
+    pub(crate) fn clock(
+        &self,
+        scene: &manyshadows::scene::Scene,
+        frames: u32,
+    ) -> Result<Option<Clock>> {
+        let anims = &scene.animations;
+        if anims.is_empty() {
+            let flag = [
+                ("--animation", self.animation.is_some()),
+                ("--time", self.time.is_some()),
+                ("--fps", self.fps.is_some()),
+            ]
+            .into_iter()
+            .find(|(_, given)| *given);
+            if let Some((flag, _)) = flag {
+                bail!(
+                    "{flag}: scene {} has no animation that moves a mesh (a glTF file's node \
+                     animations play; built-in, TOML, OBJ and PLY scenes stand still)",
+                    scene.name
+                );
+            }
+            return Ok(None);
+        }
+        let playing = match &self.animation {
+            Some(a) => anims
+                .choose(a)
+                .map_err(|e| anyhow::anyhow!("--animation {a}: {e}"))?,
+            None => manyshadows::scene::animation::Playing::One(0),
+        };
+        let start = self.time.unwrap_or(0.0);
+        if !(start.is_finite() && start >= 0.0) {
+            bail!("--time {start}: must be a finite number of seconds, 0 or more");
+        }
+        if let Some(f) = self.fps {
+            if frames <= 1 {
+                bail!("--fps {f}: applies to a sequence (--frames 2 or more)");
+            }
+            if !(f.is_finite() && f > 0.0 && f <= 10_000.0) {
+                bail!("--fps {f}: must be a number of frames per second above 0, at most 10,000");
+            }
+        }
+        Ok(Some(Clock {
+            playing,
+            start,
+            fps: self.fps.unwrap_or(DEFAULT_FPS),
+        }))
+    }
 }
 
 /// How a model file (.gltf/.glb/.obj/.ply) is loaded: shared by `render`, `compare` and the

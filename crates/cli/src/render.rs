@@ -37,7 +37,8 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             )
         });
     }
-    let mover = moving_instance(args.move_instance, args.still, &scene, || {
+    let clock = args.animation.clock(&scene, args.frames)?;
+    let mover = moving_instance(args.move_instance, args.still, &scene, clock, || {
         Ok(scene.smallest_caster())
     })?;
     let path = crate::args::read_camera_path(args.camera_path.as_deref())?;
@@ -49,6 +50,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         path: path.as_deref(),
         orbit: args.orbit,
         mover,
+        clock,
     };
     for f in 0..args.frames {
         pb.set_message(format!("rendering frame {}/{}", f + 1, args.frames));
@@ -183,6 +185,8 @@ pub(crate) struct Sequence<'a> {
     pub(crate) orbit: f32,
     /// The instance that moves ([`moving_instance`]).
     pub(crate) mover: Option<usize>,
+    /// A file's animation, played from frame to frame (`--animation`, `--time`, `--fps`).
+    pub(crate) clock: Option<crate::args::Clock>,
 }
 
 impl Sequence<'_> {
@@ -218,7 +222,16 @@ impl Sequence<'_> {
                 glam::Mat4::from_translation(offset) * scene.instances[k].transform,
             )
         });
+        // Frame 0 stands at the clock's start already (the scene was loaded there).
+        let pose = self
+            .clock
+            .filter(|_| f > 0)
+            .map(|c| scene.animations.pose(c.playing, c.at(f)))
+            .unwrap_or_default();
         for r in renderers.iter_mut() {
+            for &(k, m) in &pose {
+                r.set_instance_transform(k, m)?;
+            }
             if let Some((k, m)) = instance {
                 r.set_instance_transform(k, m)?;
             }
@@ -232,10 +245,13 @@ impl Sequence<'_> {
 
 /// The instance a sequence moves: none with `--still`, `--move-instance` checked against the
 /// scene, else `default`'s choice.
+/// A scene whose file animates it moves as its animation says instead (`clock`), and an
+/// instance the animation moves cannot be moved as well.
 pub(crate) fn moving_instance(
     asked: Option<usize>,
     still: bool,
     scene: &manyshadows::scene::Scene,
+    clock: Option<crate::args::Clock>,
     default: impl FnOnce() -> Result<Option<usize>>,
 ) -> Result<Option<usize>> {
     match asked {
@@ -244,7 +260,11 @@ pub(crate) fn moving_instance(
             "--move-instance {k}: the scene has {} instances",
             scene.instances.len()
         ),
+        Some(k) if clock.is_some() && scene.animations.moving.iter().any(|m| m.instance == k) => {
+            bail!("--move-instance {k}: the file's animation moves that instance already")
+        }
         Some(k) => Ok(Some(k)),
+        None if clock.is_some() => Ok(None),
         None => default(),
     }
 }

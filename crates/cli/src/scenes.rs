@@ -75,6 +75,10 @@ pub(crate) fn load_scene(args: &RenderArgs) -> Result<Scene> {
         scene.camera.position = glam::Vec3::new(c[0], c[1], c[2]);
         scene.camera.target = glam::Vec3::new(c[3], c[4], c[5]);
     }
+    // A file's animation: its instances where the clock stands at the first frame.
+    if let Some(clock) = args.animation.clock(&scene, args.frames)? {
+        scene.set_time(clock.playing, clock.start);
+    }
     Ok(scene)
 }
 

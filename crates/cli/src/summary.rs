@@ -18,6 +18,22 @@ pub(crate) fn summary(
 ) -> serde_json::Value {
     let count = |t: &str| scene.lights.iter().filter(|l| l.type_name() == t).count();
     let plan = r.plan();
+    // Where the (last) frame stands in the file's animation.
+    let animation = args
+        .animation
+        .clock(scene, args.frames)
+        .ok()
+        .flatten()
+        .map(|c| {
+            let a = &scene.animations;
+            serde_json::json!({
+                "playing": a.describe(c.playing),
+                "time_s": a.wrap(c.playing, c.at(args.frames.saturating_sub(1))),
+                "duration_s": a.duration(c.playing),
+                "fps": c.fps,
+                "moving_instances": a.moving.len(),
+            })
+        });
     serde_json::json!({
         "adapter": describe_adapter(&ctx.info),
         "backend": format!("{:?}", ctx.info.backend),
@@ -30,6 +46,7 @@ pub(crate) fn summary(
             "eye": [frame.width / 2, frame.height] })),
         "triangles": r.triangles(),
         "instances": scene.instances.len(),
+        "animation": animation,
         "lights": { "total": scene.lights.len(), "spot": count("spot"), "point": count("point"), "directional": count("directional"),
                     "shadowed": scene.lights.iter().filter(|l| l.casts_shadows).count(),
                     "sizes": { "radius": size_range(scene, false), "sun_deg": size_range(scene, true) } },
@@ -193,6 +210,15 @@ fn print_scene(s: &serde_json::Value) {
         l["shadowed"],
         describe_sizes(&l["sizes"])
     );
+    let a = &s["animation"];
+    if let Some(playing) = a["playing"].as_str() {
+        println!(
+            "animation    {playing} at {:.3} s of {:.3} s ({} instances move)",
+            a["time_s"].as_f64().unwrap_or(0.0),
+            a["duration_s"].as_f64().unwrap_or(0.0),
+            a["moving_instances"]
+        );
+    }
     if let Some(look) = s["look"]["description"].as_str() {
         println!("look         {look}");
     }

@@ -609,6 +609,16 @@ fn box_corners(lo: Vec3, hi: Vec3) -> [Vec3; 8] {
 }
 
 impl Scene {
+    /// Places the instances that [`Scene::animations`] move where `playing` has them at `t`
+    /// seconds (looping past the end, see [`animation`](crate::animation)); the rest stay.
+    pub fn set_time(&mut self, playing: crate::animation::Playing, t: f32) {
+        for (k, m) in self.animations.pose(playing, t) {
+            if let Some(i) = self.instances.get_mut(k) {
+                i.transform = m;
+            }
+        }
+    }
+
     /// The shadow caster with the smallest mesh (bounding-box diagonal times the instance's
     /// largest scale): moving it changes the fewest shadow views. `None` without casters.
     pub fn smallest_caster(&self) -> Option<usize> {

@@ -327,9 +327,10 @@ impl Sequence {
             },
         };
         let every = maps.then(|| make(RayOptions::default())).transpose()?;
-        let mover = crate::render::moving_instance(args.move_instance, args.still, &scene, || {
-            seen_caster(&h.ctx, &scene)
-        })?;
+        let mover =
+            crate::render::moving_instance(args.move_instance, args.still, &scene, None, || {
+                seen_caster(&h.ctx, &scene)
+            })?;
         let radius = mover.map_or(0.0, |k| 0.5 * caster_size(&scene, k));
         match mover {
             Some(k) => h.note(format!(

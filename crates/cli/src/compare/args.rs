@@ -59,6 +59,8 @@ pub struct CompareArgs {
     pub(super) soft_maps: crate::args::SoftArgs,
     #[command(flatten)]
     pub(super) model: crate::args::ModelArgs,
+    #[command(flatten)]
+    pub(super) animation: crate::args::AnimationArgs,
     /// Reflection probes, seeded as `render --probes N` does (0: none); default the scene's
     /// own (the atrium's two). Their faces are lit like the frame and reflected into it, so
     /// they are part of the frames scored (and of a frame's cost).

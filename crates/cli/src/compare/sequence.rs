@@ -164,7 +164,8 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
     let pb = crate::progress::spinner("loading the scene");
     let scene = load(args)?;
     let path = crate::args::read_camera_path(args.camera_path.as_deref())?;
-    let mover = moving_instance(args.move_instance, args.still, &scene, || {
+    let clock = args.animation.clock(&scene, args.frames)?;
+    let mover = moving_instance(args.move_instance, args.still, &scene, clock, || {
         Ok(scene.smallest_caster())
     })?;
     pb.set_message("opening the GPU");
@@ -263,6 +264,7 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
         path: path.as_deref(),
         orbit: args.orbit,
         mover,
+        clock,
     };
     let renderers = contenders
         .iter()
@@ -343,7 +345,18 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
         image_out(&args.out_dir.join(file), fr.width, fr.height, &fr.rgba)?;
     }
     let exact_name = exact.as_ref().map(|_| exact_technique);
-    print_table(&args, &ctx.info.name, exact_name, mover, &scored);
+    let moving = match clock {
+        Some(c) => format!(
+            "animation {} at {} fps from {} s",
+            scene.animations.describe(c.playing),
+            c.fps,
+            c.start
+        ),
+        None => mover.map_or("no caster moving".to_string(), |k| {
+            format!("instance {k} circling")
+        }),
+    };
+    print_table(&args, &ctx.info.name, exact_name, &moving, &scored);
     let plot = args.out_dir.join("sequence.png");
     plot_sequence(&plot, &args, &scored)?;
     eprintln!(
@@ -405,7 +418,7 @@ fn print_table(
     args: &CompareArgs,
     adapter: &str,
     exact: Option<Technique>,
-    mover: Option<usize>,
+    caster: &str,
     scored: &[Scored],
 ) {
     let camera = match (&args.camera_path, args.orbit) {
@@ -413,9 +426,6 @@ fn print_table(
         (None, o) if o != 0.0 => format!("camera turning {o}° a frame"),
         _ => "camera still".to_string(),
     };
-    let caster = mover.map_or("no caster moving".to_string(), |k| {
-        format!("instance {k} circling")
-    });
     let against = match exact {
         Some(t) => format!("each against every cluster light traced by {t}"),
         None => "no exact frames (no ray queries)".to_string(),

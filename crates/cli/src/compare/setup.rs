@@ -181,6 +181,8 @@ pub(super) fn load(args: &CompareArgs) -> Result<Scene> {
         mesh: args.mesh.clone(),
         subdivide: args.subdivide,
         probes: args.probes,
+        animation: args.animation.clone(),
+        frames: args.frames,
         ..RenderArgs::default()
     };
     crate::scenes::load_scene(&ra)

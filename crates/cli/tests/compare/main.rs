@@ -22,8 +22,11 @@
 #[path = "../shared_gpu/mod.rs"]
 mod shared_gpu;
 
+#[path = "../common/animated.rs"]
+mod animated;
 mod helpers;
 
+mod animation;
 mod bounds;
 mod gpu_reference;
 mod messages;

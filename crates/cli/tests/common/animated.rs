@@ -1,0 +1,178 @@
+//! A glTF file that moves: a box sliding and turning over a ground under a spot light and a
+//! point light, both casting shadows, with one clip ("slide", LINEAR, 2 s), and the same scene
+//! frozen at any time with the box placed by hand (written through the scene crate's glTF writer), the independent truth of where the
+//! animation must have put it.
+//!
+//! The box's translation keys are x = −1.5, 1.5, −1.5 at 0, 1, 2 s (y = 0.5, resting on the
+//! ground), its rotation keys 0, 0.9π and 1.8π about y at the same times: each step turns less
+//! than half a circle, so the shorter arc glTF's LINEAR rotation takes is the one written, and
+//! the angle is linear in time between keys.
+
+use std::path::{Path, PathBuf};
+
+use glam::{Mat4, Quat, Vec3};
+use manyshadows_scene::loaders::write_gltf;
+use manyshadows_scene::primitives::{cuboid, plane};
+use manyshadows_scene::{
+    Attenuation, Camera, Instance, Light, LightKind, Lighting, Material, Pbr, Scene,
+};
+use serde_json::{json, Value};
+
+/// The box's x and turn (radians) at `t` seconds, worked out from the keys above (looping at
+/// 2 s).
+pub fn box_pose(t: f32) -> (f32, f32) {
+    let t = if t > 2.0 { t % 2.0 } else { t };
+    let (u, x0, x1, a0) = if t <= 1.0 {
+        (t, -1.5, 1.5, 0.0)
+    } else {
+        (t - 1.0, 1.5, -1.5, 0.9)
+    };
+    (x0 + (x1 - x0) * u, (a0 + 0.9 * u) * std::f32::consts::PI)
+}
+
+fn box_transform(t: f32) -> Mat4 {
+    let (x, a) = box_pose(t);
+    Mat4::from_translation(Vec3::new(x, 0.5, 0.0)) * Mat4::from_rotation_y(a)
+}
+
+fn shadowed(kind: LightKind, colour: f32) -> Light {
+    Light {
+        kind,
+        ambient: Vec3::ZERO,
+        diffuse: Vec3::splat(colour),
+        specular: Vec3::splat(colour),
+        attenuation: Attenuation {
+            constant: 0.0,
+            linear: 0.0,
+            quadratic: 1.0,
+        },
+        casts_shadows: true,
+        shadow_resolution: 1024,
+        size: 0.0,
+    }
+}
+
+/// The scene with the box where it stands at `t`.
+fn scene_at(t: f32) -> Scene {
+    let material = Material {
+        diffuse: Vec3::splat(0.7),
+        pbr: Some(Pbr {
+            metallic: 0.0,
+            roughness: 0.8,
+        }),
+        ..Material::default()
+    };
+    Scene {
+        name: "slide".into(),
+        lighting: Lighting::Physical,
+        meshes: vec![plane(8.0, 8.0, 1), cuboid(Vec3::ONE)],
+        materials: vec![material],
+        instances: vec![
+            Instance::caster(0, 0, Mat4::IDENTITY),
+            Instance::caster(1, 0, box_transform(t)),
+        ],
+        lights: vec![
+            shadowed(
+                LightKind::Spot {
+                    position: Vec3::new(0.5, 5.0, 1.0),
+                    direction: Vec3::new(-0.1, -1.0, -0.2).normalize(),
+                    cutoff_deg: 50.0,
+                    range: 40.0,
+                },
+                60.0,
+            ),
+            shadowed(
+                LightKind::Point {
+                    position: Vec3::new(-2.5, 2.5, 2.0),
+                    range: 40.0,
+                },
+                15.0,
+            ),
+        ],
+        camera: Camera {
+            position: Vec3::new(0.0, 5.0, 7.0),
+            target: Vec3::new(0.0, 0.3, 0.0),
+            ..Camera::default()
+        },
+        ..Default::default()
+    }
+}
+
+/// Writes the scene frozen at `t` (the box placed by hand) as `dir/frozen-<t>.gltf`.
+pub fn frozen(dir: &Path, t: f32) -> PathBuf {
+    let path = dir.join(format!("frozen-{t}.gltf"));
+    write_gltf(&scene_at(t), &path).unwrap();
+    path
+}
+
+/// Writes the animated file as `dir/slide.gltf`: the scene at rest (t = 0) with the box's node
+/// given translation and rotation keys.
+pub fn animated(dir: &Path) -> PathBuf {
+    let path = dir.join("slide.gltf");
+    write_gltf(&scene_at(0.0), &path).unwrap();
+    let mut doc: Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    // The box's node: the one drawing the second mesh written (the cuboid, 24 vertices).
+    let vertices = |mesh: &Value| -> Option<u64> {
+        let m = &doc["meshes"][mesh.as_u64()? as usize];
+        let position = m["primitives"][0]["attributes"]["POSITION"].as_u64()?;
+        doc["accessors"][position as usize]["count"].as_u64()
+    };
+    let node = doc["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|n| vertices(&n["mesh"]) == Some(24))
+        .expect("the box's node");
+    // An animated node carries translation, rotation and scale, never a matrix.
+    let n = doc["nodes"][node].as_object_mut().unwrap();
+    n.remove("matrix");
+    n.insert("translation".into(), json!([-1.5, 0.5, 0.0]));
+    let mut bin: Vec<u8> = Vec::new();
+    let mut floats = |v: &[f32]| {
+        let at = bin.len();
+        bin.extend(v.iter().flat_map(|f| f.to_le_bytes()));
+        (at, v.len() * 4)
+    };
+    let q = |a: f32| Quat::from_rotation_y(a * std::f32::consts::PI).to_array();
+    let times = floats(&[0.0, 1.0, 2.0]);
+    let moves = floats(&[-1.5, 0.5, 0.0, 1.5, 0.5, 0.0, -1.5, 0.5, 0.0]);
+    let turns = floats(&[q(0.0), q(0.9), q(1.8)].concat());
+    let buffer = doc["buffers"].as_array().unwrap().len();
+    let view0 = doc["bufferViews"].as_array().unwrap().len();
+    let accessor0 = doc["accessors"].as_array().unwrap().len();
+    std::fs::write(dir.join("slide-keys.bin"), &bin).unwrap();
+    doc["buffers"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({ "uri": "slide-keys.bin", "byteLength": bin.len() }));
+    for (k, ((at, len), (count, kind))) in [times, moves, turns]
+        .into_iter()
+        .zip([(3, "SCALAR"), (3, "VEC3"), (3, "VEC4")])
+        .enumerate()
+    {
+        doc["bufferViews"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({ "buffer": buffer, "byteOffset": at, "byteLength": len }));
+        let mut a =
+            json!({ "bufferView": view0 + k, "componentType": 5126, "count": count, "type": kind });
+        if k == 0 {
+            a["min"] = json!([0.0]);
+            a["max"] = json!([2.0]);
+        }
+        doc["accessors"].as_array_mut().unwrap().push(a);
+    }
+    doc["animations"] = json!([{
+        "name": "slide",
+        "samplers": [
+            { "input": accessor0, "output": accessor0 + 1, "interpolation": "LINEAR" },
+            { "input": accessor0, "output": accessor0 + 2, "interpolation": "LINEAR" }
+        ],
+        "channels": [
+            { "sampler": 0, "target": { "node": node, "path": "translation" } },
+            { "sampler": 1, "target": { "node": node, "path": "rotation" } }
+        ]
+    }]);
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    path
+}
