@@ -319,7 +319,8 @@ impl Animations {
     /// itself stays), 0 before 0 or where nothing lasts.
     pub fn wrap(&self, playing: Playing, t: f32) -> f32 {
         let d = self.duration(playing);
-        if !(t > 0.0) || !(d > 0.0) {
+        // NaN compares false: it lands here too.
+        if t.is_nan() || d.is_nan() || t <= 0.0 || d <= 0.0 {
             0.0
         } else if t <= d {
             t

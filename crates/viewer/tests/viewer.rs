@@ -3,6 +3,9 @@
 //! must show the frame `render` makes for the script's last camera. Needs the `xvfb` and
 //! `x11-apps` packages (`.ci/run` installs them); without them the test fails and says so.
 
+#[path = "../../cli/tests/common/animated.rs"]
+#[allow(dead_code)]
+mod animated;
 mod window;
 
 use std::process::Command;
@@ -89,6 +92,8 @@ fn the_viewer_without_a_display_says_what_to_do() {
             "no-such-script.txt",
         ),
         (&["--width", "0"][..], "at least 1"),
+        (&["--time", "1"][..], "--time: scene cubes has no animation"),
+        (&["--speed", "-1"][..], "--speed -1"),
     ] {
         let out = Command::new(env!("CARGO_BIN_EXE_manyshadows-view"))
             .args(["--scene", "cubes"])
@@ -599,4 +604,87 @@ fn the_window_takes_the_soft_shadow_taps_as_render_does() {
         "the window shows a different frame: {off} pixels differ (screenshot in \
          target/test-artifacts/viewer-soft-taps.png)"
     );
+}
+
+/// A glTF file's animation in the window: paused at 0.5 s, the window shows `render --time
+/// 0.5`'s frame; playing, each frame's line says a later time and the shadow views that see
+/// the box are redrawn (some, not all, after the first frame).
+#[test]
+#[ignore = "needs Xvfb and xwd: run `cargo xtask test`, which installs them"]
+fn the_window_plays_a_files_animation() {
+    let (_server, display) = xvfb();
+    let dir = tmp("animation");
+    let file = animated::animated(&dir);
+    let file = file.to_str().unwrap();
+    let size = (W, H);
+    let (w, h) = (W.to_string(), H.to_string());
+    let frame = ["--scene", file, "--width", &w, "--height", &h];
+    let shot = view(
+        &display,
+        &[&frame[..], &["--time", "0.5", "--paused", "--hide-panel"]].concat(),
+        3,
+        size,
+    );
+    save(&shot, size, "viewer-animation.png");
+    let png = dir.join("render.png");
+    manyshadows_cli::run(
+        [
+            &["manyshadows", "render"][..],
+            &frame[..],
+            &["--time", "0.5", "--out", png.to_str().unwrap()],
+        ]
+        .concat()
+        .iter()
+        .map(std::ffi::OsString::from),
+    )
+    .expect("manyshadows render");
+    let reference = image::open(&png).unwrap().to_rgb8();
+    let off = shot
+        .iter()
+        .zip(reference.pixels())
+        .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b.0[c]) > 2))
+        .count();
+    eprintln!(
+        "paused window vs render --time 0.5: {off} of {} pixels differ",
+        shot.len()
+    );
+    assert!(
+        off * 200 <= shot.len(),
+        "{off} pixels differ (target/test-artifacts/viewer-animation.png)"
+    );
+    let out = Command::new(env!("CARGO_BIN_EXE_manyshadows-view"))
+        .args(frame)
+        .args(["--hide-panel", "--exit-after", "5", "--speed", "0.5"])
+        .env("DISPLAY", &display)
+        .output()
+        .expect("run the viewer");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let times: Vec<f32> = stdout
+        .lines()
+        .filter_map(|l| {
+            l.split_once("; animation at ")?
+                .1
+                .strip_suffix(" s")?
+                .parse()
+                .ok()
+        })
+        .collect();
+    let drawn = views_drawn(&stdout);
+    eprintln!("times {times:?}, views drawn {drawn:?}");
+    assert_eq!(times.len(), 5, "{stdout}");
+    assert!(
+        times.windows(2).all(|w| w[1] > w[0]),
+        "time does not run: {times:?}"
+    );
+    for &(k, v) in &drawn[1..] {
+        assert!(
+            k > 0 && k < v,
+            "a moving box redraws some views, not all: {drawn:?}"
+        );
+    }
 }

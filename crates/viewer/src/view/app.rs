@@ -40,6 +40,8 @@ pub(crate) fn run(args: &ViewArgs) -> Result<()> {
         );
     }
     let scene = load(args)?;
+    // The animation flags, checked before any window opens (the state makes the player).
+    crate::view::player::Player::new(&scene, args)?;
     for (flag, k) in [
         ("--show-visibility", args.show_visibility),
         ("--follow", args.follow),

@@ -83,6 +83,24 @@ pub struct ViewArgs {
     /// redrawn (unless --no-cache; the panel counts them).
     #[arg(long)]
     pub(super) animate: bool,
+    /// A glTF file's animation to play: its name, its number from 0, or `all` [default: 0,
+    /// the first, playing from the start]. The panel plays, pauses, scrubs and changes speed.
+    #[arg(long, value_name = "NAME|INDEX|all")]
+    pub(super) animation: Option<String>,
+    /// Seconds into the file's animation to start at (looping past its end).
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    pub(super) time: Option<f32>,
+    /// Playback speed of the file's animation (1: as authored; 0 stands still).
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        value_name = "X",
+        allow_negative_numbers = true
+    )]
+    pub(super) speed: f32,
+    /// Start with the file's animation paused.
+    #[arg(long)]
+    pub(super) paused: bool,
     /// Camera to start from, `PX,PY,PZ,TX,TY,TZ` (default: the scene's camera).
     #[arg(long, value_parser = manyshadows_cli::parse_camera, allow_hyphen_values = true)]
     pub(super) camera: Option<[f32; 6]>,

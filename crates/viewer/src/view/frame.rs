@@ -1,5 +1,5 @@
 //! One frame of the window: the camera placed (script, fly controls, a followed light), the
-//! scene animated (`--animate`), the renderer drawn straight into the surface texture
+//! scene animated (`--animate`, or the file's own animation: `player`), the renderer drawn straight into the surface texture
 //! (`Renderer::render_to`), the panel over it, the texture presented, and a line on stdout.
 
 use std::time::Instant;
@@ -25,6 +25,12 @@ impl State {
         self.move_camera(script, dt);
         if animate {
             self.animate(app_scene, (now - self.started).as_secs_f32());
+        }
+        if let Some(p) = &mut self.player {
+            p.advance(app_scene, dt);
+            if let Err(e) = p.apply(app_scene, &mut self.renderer) {
+                self.message = Some(format!("animation: {e}"));
+            }
         }
         let texture = match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
@@ -118,8 +124,12 @@ impl State {
     fn print_frame_line(&self) {
         // The CPU time of the frame's record and submit, timings poll included: no wait for
         // the GPU (acquiring the surface's texture is the loop's only wait).
+        let at = self
+            .player
+            .map(|p| format!("; animation at {:.3} s", p.time))
+            .unwrap_or_default();
         println!(
-            "presented frame {}: {} of {} shadow views drawn; CPU {:.2} ms; GPU {} (an earlier frame)",
+            "presented frame {}: {} of {} shadow views drawn; CPU {:.2} ms; GPU {} (an earlier frame){at}",
             self.frames,
             self.views_drawn,
             self.renderer.shadow_views(),

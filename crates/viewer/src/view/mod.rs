@@ -11,7 +11,7 @@
 //! The parts: `args` (the flags, the controls' help, the camera script), `app` (the window
 //! and its event loop), `state` (what the window holds between frames), `camera` (the fly
 //! controls), `frame` (one frame, from the camera to the present), `panel` (the egui panel,
-//! a function per section) and `overlays` (the atlas and visibility pictures it shows).
+//! a function per section), `player` (a glTF file's animation: clip, time, speed, paused) and `overlays` (the atlas and visibility pictures it shows).
 
 mod app;
 mod args;
@@ -19,6 +19,7 @@ mod camera;
 mod frame;
 mod overlays;
 mod panel;
+mod player;
 mod state;
 
 pub(crate) use app::run;

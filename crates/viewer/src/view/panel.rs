@@ -1,15 +1,17 @@
 //! The on-screen panel (egui), drawn over the frame: the controls' help; the technique,
 //! point-shadow, PCF, caching, budget, light-count and (for shadow rays) sampling and denoising
-//! choices; the shadow views, memory and times of the last frame; the pictures to show (the
+//! choices; a glTF file's animation (clip, play, time, speed); the shadow views, memory and times of the last frame; the pictures to show (the
 //! atlas and one light's visibility, each in a window of its own) and the light to follow. Each section is a function; what the
 //! panel changed is applied after it is drawn (a new choice rebuilds the renderer).
 
+use manyshadows::scene::animation::Playing;
 use manyshadows::scene::light_space::PointShadows;
 use manyshadows::scene::Scene;
 use manyshadows::{wgpu, Fills, GpuTimes, Pcf, ShadowLayout, SoftShadows, SpatialReuse, Technique};
 
 use crate::view::args::CONTROLS;
 use crate::view::overlays::Overlays;
+use crate::view::player::{Player, MAX_SPEED};
 use crate::view::state::{Choice, State};
 
 /// What the panel shows, read from the state before egui borrows it.
@@ -27,11 +29,15 @@ struct Facts {
     /// The technique that drew the frame.
     technique: Technique,
     message: Option<String>,
+    /// The file's animations: each clip's name and duration, and the longest.
+    clips: Vec<(String, f32)>,
 }
 
 /// What the panel edits this frame, applied once it is drawn.
 struct Edits {
     choice: Choice,
+    /// Where the file's animation stands.
+    player: Option<Player>,
     light_count: usize,
     /// The light count's "apply" button was clicked.
     apply_lights: bool,
@@ -45,6 +51,7 @@ impl State {
         let facts = self.panel_facts();
         let mut edits = Edits {
             choice: self.choice,
+            player: self.player,
             light_count: self.light_count,
             apply_lights: false,
         };
@@ -83,6 +90,14 @@ impl State {
             views_waiting: self.views_waiting,
             technique: self.choice.technique,
             message: self.message.clone(),
+            clips: self
+                .renderer
+                .scene()
+                .animations
+                .clips
+                .iter()
+                .map(|c| (c.name.clone(), c.duration()))
+                .collect(),
         }
     }
 
@@ -135,6 +150,7 @@ impl State {
     /// The new light count kept, the lights scattered anew when it was applied, and the
     /// renderer rebuilt for a changed choice.
     fn apply_edits(&mut self, app_scene: &mut Scene, edits: Edits) {
+        self.player = edits.player;
         self.light_count = edits.light_count;
         if edits.apply_lights {
             app_scene.lights = manyshadows::scene::builtin::scatter_lights(
@@ -164,6 +180,9 @@ fn main_window(ctx: &egui::Context, facts: &Facts, edits: &mut Edits, overlays: 
             technique_menu(ui, &facts.menu, &mut edits.choice.technique);
             shadow_options(ui, &mut edits.choice);
             light_count_row(ui, edits);
+            if let Some(p) = &mut edits.player {
+                animation_rows(ui, &facts.clips, p);
+            }
             ui.separator();
             shadow_views(ui, facts, edits.choice.budget.is_some());
             times_and_message(ui, facts);
@@ -284,6 +303,36 @@ fn light_count_row(ui: &mut egui::Ui, edits: &mut Edits) {
         );
         edits.apply_lights = ui.button("apply").clicked();
     });
+}
+
+/// The file's animation: which clip (or all), play or pause, the time to scrub, the speed.
+fn animation_rows(ui: &mut egui::Ui, clips: &[(String, f32)], p: &mut Player) {
+    let name = |k: Playing| match k {
+        Playing::One(k) => clips.get(k).map_or("?".to_string(), |c| c.0.clone()),
+        Playing::All => "all".to_string(),
+    };
+    let before = p.playing;
+    ui.horizontal(|ui| {
+        egui::ComboBox::from_label("animation")
+            .selected_text(name(p.playing))
+            .show_ui(ui, |ui| {
+                for k in (0..clips.len()).map(Playing::One).chain([Playing::All]) {
+                    ui.selectable_value(&mut p.playing, k, name(k));
+                }
+            });
+        let mut play = !p.paused;
+        ui.checkbox(&mut play, "play");
+        p.paused = !play;
+    });
+    let duration = match p.playing {
+        Playing::One(k) => clips.get(k).map_or(0.0, |c| c.1),
+        Playing::All => clips.iter().map(|c| c.1).fold(0.0, f32::max),
+    };
+    if p.playing != before {
+        p.time = p.time.min(duration);
+    }
+    ui.add(egui::Slider::new(&mut p.time, 0.0..=duration.max(0.0)).text("seconds"));
+    ui.add(egui::Slider::new(&mut p.speed, 0.0..=MAX_SPEED).text("speed"));
 }
 
 /// The lights, shadow views and shadow memory, and what the technique fills: the views

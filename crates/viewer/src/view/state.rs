@@ -16,6 +16,7 @@ use winit::window::Window;
 use crate::view::args::ViewArgs;
 use crate::view::camera::FlyCamera;
 use crate::view::overlays::Overlays;
+use crate::view::player::Player;
 
 /// What the panel edits; a change of technique, point shadows or PCF rebuilds the renderer.
 #[derive(Clone, Copy, PartialEq)]
@@ -87,6 +88,8 @@ pub(super) struct State {
     pub(super) views_drawn: u64,
     /// The last frame's views left waiting by a budget: (stale, oldest in frames, unshadowed).
     pub(super) views_waiting: (u32, u32, u32),
+    /// A glTF file's animation (`None`: the scene does not move by itself).
+    pub(super) player: Option<Player>,
 }
 
 /// The renderer's settings for a `width`×`height` frame with `c` (the budget only for
@@ -185,6 +188,7 @@ impl State {
             probe_passes: args.probe_passes,
             single_sided: args.single_sided_shadows,
         };
+        let player = Player::new(scene, args)?;
         let renderer = Renderer::new(&ctx, scene, settings(config.width, config.height, choice))?;
         if !args.insist {
             if let Some(why) = manyshadows_cli::shadow_work_refusal(&renderer) {
@@ -230,6 +234,7 @@ impl State {
             insist: args.insist,
             views_drawn: 0,
             views_waiting: (0, 0, 0),
+            player,
             overlays: Overlays::new(
                 args.show_atlas,
                 args.show_visibility.or(args.follow).unwrap_or(0),
@@ -261,6 +266,9 @@ impl State {
                     self.renderer = r;
                     self.choice = choice;
                     self.message = None;
+                    if let Some(p) = &mut self.player {
+                        p.forget();
+                    }
                 }
             },
             // Unsupported choices (multiview without the feature, say) are said, not fatal.
