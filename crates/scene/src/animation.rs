@@ -228,6 +228,110 @@ pub struct Moving {
     pub from_rest: Mat4,
 }
 
+/// A mesh its joints bend (glTF 2.0 §3.7.3): each vertex is placed by the weighted sum of its
+/// joints' matrices, `Σ wᵢ · W(jointᵢ) · IBMᵢ`, its normal by the same sum's upper 3×3 (as
+/// three.js does), normalized. The mesh's node transform plays no part; its instance stands at
+/// the identity.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Skin {
+    /// The scene mesh it bends.
+    pub mesh: usize,
+    /// The node of each joint.
+    pub joints: Vec<usize>,
+    /// Each joint's inverse bind matrix (the identity where the file gives none).
+    pub inverse_bind: Vec<Mat4>,
+    /// Per vertex, four indices into `joints`.
+    pub vertex_joints: Vec<[u16; 4]>,
+    /// Per vertex, the four joints' weights (summing to 1).
+    pub vertex_weights: Vec<[f32; 4]>,
+    /// The mesh's vertices and normals as the file gives them, before any joint moves them.
+    pub bind_positions: Vec<Vec3>,
+    /// Normals in the same coordinates.
+    pub bind_normals: Vec<Vec3>,
+}
+
+impl Skin {
+    /// Why this skin cannot bend its mesh, if it cannot (`None`: it can): joints outside the
+    /// tree, a vertex naming a joint the skin lacks, counts that disagree, matrices not
+    /// finite.
+    pub fn problem(&self, nodes: usize) -> Option<String> {
+        if self.joints.is_empty() {
+            return Some("it has no joints".into());
+        }
+        if let Some(j) = self.joints.iter().find(|&&j| j >= nodes) {
+            return Some(format!("joint node {j} is not in the file's tree"));
+        }
+        if self.inverse_bind.len() != self.joints.len() {
+            return Some(format!(
+                "{} inverse bind matrices for {} joints",
+                self.inverse_bind.len(),
+                self.joints.len()
+            ));
+        }
+        if self.inverse_bind.iter().any(|m| !m.is_finite()) {
+            return Some("an inverse bind matrix is not finite".into());
+        }
+        let n = self.bind_positions.len();
+        if self.vertex_joints.len() != n
+            || self.vertex_weights.len() != n
+            || self.bind_normals.len() != n
+        {
+            return Some("joints, weights and vertices differ in number".into());
+        }
+        let count = self.joints.len();
+        for (v, (j, w)) in self
+            .vertex_joints
+            .iter()
+            .zip(&self.vertex_weights)
+            .enumerate()
+        {
+            if let Some(k) = (0..4).find(|&k| w[k] > 0.0 && usize::from(j[k]) >= count) {
+                return Some(format!(
+                    "vertex {v} names joint {} of a skin of {count} joints",
+                    j[k]
+                ));
+            }
+        }
+        None
+    }
+
+    /// The mesh's vertices and normals with its joints at `worlds` (every node's world
+    /// transform).
+    pub fn bend(&self, worlds: &[Mat4]) -> (Vec<Vec3>, Vec<Vec3>) {
+        let matrices: Vec<Mat4> = self
+            .joints
+            .iter()
+            .zip(&self.inverse_bind)
+            .map(|(&j, ibm)| worlds.get(j).copied().unwrap_or(Mat4::IDENTITY) * *ibm)
+            .collect();
+        let at = |j: u16| {
+            matrices
+                .get(usize::from(j))
+                .copied()
+                .unwrap_or(Mat4::IDENTITY)
+        };
+        let mut positions = Vec::with_capacity(self.bind_positions.len());
+        let mut normals = Vec::with_capacity(self.bind_positions.len());
+        for (((p, n), j), w) in self
+            .bind_positions
+            .iter()
+            .zip(&self.bind_normals)
+            .zip(&self.vertex_joints)
+            .zip(&self.vertex_weights)
+        {
+            let mut m = Mat4::ZERO;
+            for k in 0..4 {
+                if w[k] != 0.0 {
+                    m += at(j[k]) * w[k];
+                }
+            }
+            positions.push(m.transform_point3(*p));
+            normals.push(m.transform_vector3(*n).try_normalize().unwrap_or(*n));
+        }
+        (positions, normals)
+    }
+}
+
 /// Which clips play.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Playing {
@@ -247,12 +351,14 @@ pub struct Animations {
     pub clips: Vec<Clip>,
     /// The instances under an animated node.
     pub moving: Vec<Moving>,
+    /// The meshes joints bend.
+    pub skins: Vec<Skin>,
 }
 
 impl Animations {
-    /// True when nothing moves (no clip, or no instance under an animated node).
+    /// True when nothing moves (no clip, or no instance under an animated node and no skin).
     pub fn is_empty(&self) -> bool {
-        self.clips.is_empty() || self.moving.is_empty()
+        self.clips.is_empty() || (self.moving.is_empty() && self.skins.is_empty())
     }
 
     /// What `--animation` names: a clip's name, its index from 0, or `all`. The error lists
@@ -415,6 +521,34 @@ impl Animations {
                     }
                 }
                 false
+            })
+            .collect()
+    }
+
+    /// Every skinned mesh's vertices and normals at `t`: `(mesh, positions, normals)`.
+    pub fn bent(&self, playing: Playing, t: f32) -> Vec<(usize, Vec<Vec3>, Vec<Vec3>)> {
+        if self.skins.is_empty() {
+            return Vec::new();
+        }
+        let worlds = self.worlds(&self.locals(playing, t));
+        self.skins
+            .iter()
+            .map(|s| {
+                let (p, n) = s.bend(&worlds);
+                (s.mesh, p, n)
+            })
+            .collect()
+    }
+
+    /// Every skinned mesh's vertices and normals at rest (no clip playing: the joints where
+    /// the file's nodes put them).
+    pub fn bent_at_rest(&self) -> Vec<(usize, Vec<Vec3>, Vec<Vec3>)> {
+        let worlds = self.rest_worlds();
+        self.skins
+            .iter()
+            .map(|s| {
+                let (p, n) = s.bend(&worlds);
+                (s.mesh, p, n)
             })
             .collect()
     }
@@ -600,6 +734,7 @@ mod tests {
                 node: 1,
                 from_rest: Mat4::from_translation(Vec3::new(-2.0, 0.0, 0.0)),
             }],
+            skins: Vec::new(),
         };
         assert_eq!(anim.animated_nodes(), vec![true, true]);
         let pose = anim.pose(Playing::One(0), 1.0);

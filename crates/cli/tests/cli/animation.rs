@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use crate::animated::{animated, box_pose, frozen};
+use crate::animated::{animated, bending, bent, box_pose, frozen};
 use crate::helpers::{assert_clean_failure, run, run_ok, tmp};
 
 const FRAME: [&str; 4] = ["--width", "160", "--height", "120"];
@@ -159,6 +159,73 @@ fn animation_flags_that_cannot_apply_are_refused() {
                 &FRAME[..],
             ]
             .concat(),
+        );
+    }
+}
+
+/// A skinned tube bending at its upper joint: at 0.5 s (30°) and 1 s (60°) the frame is the
+/// frame of the same tube bent by hand (each vertex blended between itself and its turn about
+/// the joint, tests/common/animated.rs), while the straight tube differs; a sequence through
+/// kept views and kept pages ends on the single frame of its time (the bent mesh's shadows
+/// redrawn where its old and new bounds reach).
+#[test]
+fn a_skinned_mesh_bends_as_its_joints_turn() {
+    let dir = tmp("animation-skin");
+    let file = bending(&dir);
+    let straight = dir.join("straight.png");
+    // One exposure for all: the meter aims at the centre of the file's bounds as loaded, and
+    // the straight tube's bounds are taller than the bent one's (1 level over the ground).
+    let render = |scene: &Path, out: &Path, extra: &[&str]| {
+        render(scene, out, &[&["--exposure", "x2"][..], extra].concat())
+    };
+    let said = render(&file, &straight, &[]);
+    assert!(
+        said.contains("animation    'bend' (1 of 1) at 0.000 s"),
+        "{said}"
+    );
+    for t in [0.5f32, 1.0] {
+        let (a, f) = (
+            dir.join(format!("a-{t}.png")),
+            dir.join(format!("f-{t}.png")),
+        );
+        render(&file, &a, &["--time", &t.to_string()]);
+        render(&bent(&dir, t), &f, &[]);
+        let same = mean_difference(&a, &f);
+        let moved = mean_difference(&straight, &f);
+        eprintln!("t = {t} s: skinned vs bent by hand {same:.4}, straight vs bent {moved:.3}");
+        assert!(
+            same < 0.05,
+            "t = {t}: the skinned frame is {same} from the one bent by hand"
+        );
+        assert!(moved > 0.5, "t = {t}: the tube hardly bent ({moved})");
+    }
+    for technique in ["traditional", "virtual"] {
+        let seq = dir.join(format!("seq-{technique}.png"));
+        let said = render(
+            &file,
+            &seq,
+            &[
+                "--technique",
+                technique,
+                "--time",
+                "0.25",
+                "--frames",
+                "3",
+                "--fps",
+                "4",
+            ],
+        );
+        assert!(said.contains("at 0.750 s of 2.000 s"), "{said}");
+        let single = dir.join(format!("single-{technique}.png"));
+        render(
+            &file,
+            &single,
+            &["--technique", technique, "--time", "0.75"],
+        );
+        let d = mean_difference(&seq, &single);
+        assert!(
+            d < 0.05,
+            "{technique}: the sequence's last frame is {d} from the frame at 0.75 s"
         );
     }
 }

@@ -176,3 +176,177 @@ pub fn animated(dir: &Path) -> PathBuf {
     std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
     path
 }
+
+/// The bending tube's pivot: its upper joint, 1 above the lower one, which stands at the base.
+const PIVOT: Vec3 = Vec3::new(0.5, 1.0, 0.0);
+
+/// The upper joint's turn about z at `t` seconds (radians): 0 → 60° over the first second, back
+/// to 0 at 2 s (LINEAR keys 0, 60°, 0 at 0, 1, 2 s).
+pub fn bend_angle(t: f32) -> f32 {
+    let t = if t > 2.0 { t % 2.0 } else { t };
+    let u = if t <= 1.0 { t } else { 2.0 - t };
+    (60.0 * u).to_radians()
+}
+
+/// A tube of radius 0.2 and height 2 standing at x 0.5 (rings every 0.25, 16 sides, open
+/// ends), with each vertex's weight on the upper joint: 0 below y 0.5, 1 above 1.5, linear
+/// between.
+fn tube() -> (manyshadows_scene::Mesh, Vec<f32>) {
+    let (rings, sides) = (9u32, 16u32);
+    let mut mesh = manyshadows_scene::Mesh {
+        name: "tube".into(),
+        ..Default::default()
+    };
+    let mut upper = Vec::new();
+    for r in 0..rings {
+        let y = r as f32 * 0.25;
+        for k in 0..sides {
+            let a = k as f32 / sides as f32 * std::f32::consts::TAU;
+            let n = Vec3::new(a.cos(), 0.0, -a.sin());
+            mesh.positions.push(Vec3::new(PIVOT.x, y, 0.0) + 0.2 * n);
+            mesh.normals.push(n);
+            upper.push(((y - 0.5) / 1.0).clamp(0.0, 1.0));
+        }
+    }
+    for r in 0..rings - 1 {
+        for k in 0..sides {
+            let (a, b) = (r * sides + k, r * sides + (k + 1) % sides);
+            let (c, d) = (a + sides, b + sides);
+            mesh.indices.extend([a, b, d, a, d, c]);
+        }
+    }
+    (mesh, upper)
+}
+
+/// The tube's vertices and normals bent by hand: each is its weighted blend of itself and its
+/// turn about the pivot (the linear blend skinning does, written out without matrices).
+pub fn bent_tube(t: f32) -> manyshadows_scene::Mesh {
+    let (mut mesh, upper) = tube();
+    let turn = Quat::from_rotation_z(bend_angle(t));
+    for ((p, n), w) in mesh.positions.iter_mut().zip(&mut mesh.normals).zip(&upper) {
+        let turned = PIVOT + turn * (*p - PIVOT);
+        *p = *p * (1.0 - w) + turned * *w;
+        *n = (*n * (1.0 - w) + (turn * *n) * *w).normalize();
+    }
+    mesh
+}
+
+/// The scene with the tube bent as at `t`.
+fn tube_scene(t: f32) -> Scene {
+    let mut scene = scene_at(0.0);
+    scene.name = "bend".into();
+    scene.meshes[1] = bent_tube(t);
+    scene.instances[1].transform = Mat4::IDENTITY;
+    scene.materials[0].double_sided = true;
+    scene
+}
+
+/// Writes the scene with the tube bent by hand as at `t`, `dir/bent-<t>.gltf`.
+pub fn bent(dir: &Path, t: f32) -> PathBuf {
+    let path = dir.join(format!("bent-{t}.gltf"));
+    write_gltf(&tube_scene(t), &path).unwrap();
+    path
+}
+
+/// Writes the bending file, `dir/bend.gltf`: the straight tube skinned to two joints (the
+/// lower at the tube's base, the upper 1 above it, its child), and one clip, "bend", turning
+/// the upper joint about z by 0, 60° and 0 at 0, 1 and 2 s.
+pub fn bending(dir: &Path) -> PathBuf {
+    let path = dir.join("bend.gltf");
+    write_gltf(&tube_scene(0.0), &path).unwrap();
+    let (_, upper) = tube();
+    let mut doc: Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    let node = doc["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|n| {
+            let m = &doc["meshes"][n["mesh"].as_u64().unwrap_or(u64::MAX) as usize];
+            let p = m["primitives"][0]["attributes"]["POSITION"].as_u64();
+            p.is_some_and(|p| doc["accessors"][p as usize]["count"] == 9 * 16)
+        })
+        .expect("the tube's node");
+    let mesh = doc["nodes"][node]["mesh"].as_u64().unwrap() as usize;
+    let mut bin: Vec<u8> = Vec::new();
+    let mut chunk = |bytes: Vec<u8>| {
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        let at = bin.len();
+        bin.extend(&bytes);
+        (at, bytes.len())
+    };
+    let f32s = |v: &[f32]| v.iter().flat_map(|f| f.to_le_bytes()).collect::<Vec<u8>>();
+    let joints: Vec<u8> = upper
+        .iter()
+        .flat_map(|_| [0u16, 1, 0, 0])
+        .flat_map(u16::to_le_bytes)
+        .collect();
+    let weights: Vec<f32> = upper.iter().flat_map(|&w| [1.0 - w, w, 0.0, 0.0]).collect();
+    let base = Vec3::new(PIVOT.x, 0.0, 0.0);
+    let ibm: Vec<f32> = [
+        Mat4::from_translation(-base),
+        Mat4::from_translation(-PIVOT),
+    ]
+    .iter()
+    .flat_map(|m| m.to_cols_array())
+    .collect();
+    let q = |deg: f32| Quat::from_rotation_z(deg.to_radians()).to_array();
+    let views = [
+        chunk(joints),
+        chunk(f32s(&weights)),
+        chunk(f32s(&ibm)),
+        chunk(f32s(&[0.0, 1.0, 2.0])),
+        chunk(f32s(&[q(0.0), q(60.0), q(0.0)].concat())),
+    ];
+    std::fs::write(dir.join("bend-skin.bin"), &bin).unwrap();
+    let buffer = doc["buffers"].as_array().unwrap().len();
+    doc["buffers"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({ "uri": "bend-skin.bin", "byteLength": bin.len() }));
+    let view0 = doc["bufferViews"].as_array().unwrap().len();
+    let a0 = doc["accessors"].as_array().unwrap().len();
+    let n = upper.len();
+    let kinds = [
+        (5123, n, "VEC4"),
+        (5126, n, "VEC4"),
+        (5126, 2, "MAT4"),
+        (5126, 3, "SCALAR"),
+        (5126, 3, "VEC4"),
+    ];
+    for (k, ((at, len), (component, count, kind))) in views.into_iter().zip(kinds).enumerate() {
+        doc["bufferViews"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({ "buffer": buffer, "byteOffset": at, "byteLength": len }));
+        let mut a = json!({ "bufferView": view0 + k, "componentType": component, "count": count, "type": kind });
+        if k == 3 {
+            a["min"] = json!([0.0]);
+            a["max"] = json!([2.0]);
+        }
+        doc["accessors"].as_array_mut().unwrap().push(a);
+    }
+    let attributes = &mut doc["meshes"][mesh]["primitives"][0]["attributes"];
+    attributes["JOINTS_0"] = json!(a0);
+    attributes["WEIGHTS_0"] = json!(a0 + 1);
+    // The joints: the lower at the base, the upper its child 1 above; a root of the scene.
+    let lower = doc["nodes"].as_array().unwrap().len();
+    doc["nodes"].as_array_mut().unwrap().extend([
+        json!({ "name": "lower", "translation": base.to_array(), "children": [lower + 1] }),
+        json!({ "name": "upper", "translation": [0.0, 1.0, 0.0] }),
+    ]);
+    doc["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!(lower));
+    doc["nodes"][node]["skin"] = json!(0);
+    doc["skins"] = json!([{ "joints": [lower, lower + 1], "inverseBindMatrices": a0 + 2 }]);
+    doc["animations"] = json!([{
+        "name": "bend",
+        "samplers": [{ "input": a0 + 3, "output": a0 + 4, "interpolation": "LINEAR" }],
+        "channels": [{ "sampler": 0, "target": { "node": lower + 1, "path": "rotation" } }]
+    }]);
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    path
+}

@@ -266,6 +266,8 @@ impl MeshCache {
         skinned: bool,
     ) -> Vec<Decision> {
         let points = light_points(scene);
+        // A skinned mesh bends: normal cones taken at load would not hold.
+        let bends = |mesh: usize| scene.animations.skins.iter().any(|s| s.mesh == mesh);
         scene
             .instances
             .iter()
@@ -285,7 +287,7 @@ impl MeshCache {
                         cullable: true,
                         flip: false,
                         mirrored: inst.transform.determinant() < 0.0,
-                        cone_ok: !skinned && is_similarity(inst.transform),
+                        cone_ok: !skinned && !bends(inst.mesh) && is_similarity(inst.transform),
                         masked: false,
                         front_only: true,
                     };
@@ -309,7 +311,10 @@ impl MeshCache {
                     cullable,
                     flip: cullable && closure == Closure::Inward,
                     mirrored: inst.transform.determinant() < 0.0,
-                    cone_ok: cullable && !skinned && is_similarity(inst.transform),
+                    cone_ok: cullable
+                        && !skinned
+                        && !bends(inst.mesh)
+                        && is_similarity(inst.transform),
                     masked,
                     front_only: false,
                 }

@@ -43,6 +43,10 @@ pub struct DrawItem {
     pub camera_cull: CameraCull,
 }
 
+/// An instance whose world bounding sphere changed: (instance, before, after), each sphere
+/// (centre, radius).
+pub type MovedSphere = (usize, (Vec3, f32), (Vec3, f32));
+
 /// Which faces of a draw the camera pass keeps.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum CameraCull {
@@ -70,6 +74,8 @@ pub struct GpuScene {
     pub materials: wgpu::Buffer,
     /// One per instance, in instance order.
     pub draws: Vec<DrawItem>,
+    /// Where each mesh lives in the shared buffers, in the scene's mesh order.
+    pub meshes: Vec<MeshRange>,
     /// Triangles over all instances.
     pub triangles: u64,
     /// Skinning, if attached with [`GpuScene::attach_skin`] (benchmarks).
@@ -141,14 +147,7 @@ impl GpuScene {
             }
             // Morton-ordered triangles: better vertex reuse in every pass (same image).
             indices.extend(morton_order(mesh));
-            let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
-            let c = (lo + hi) * 0.5;
-            let r = mesh
-                .positions
-                .iter()
-                .map(|p| p.distance(c))
-                .fold(0.0f32, f32::max);
-            spheres.push((c, r));
+            spheres.push(bounding_sphere(&mesh.positions));
         }
         let bytes = [
             ("positions", positions.len() as u64 * 12),
@@ -270,12 +269,16 @@ impl GpuScene {
             positions: buf(
                 "scene.positions",
                 bytemuck::cast_slice(&positions),
-                wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
+                wgpu::BufferUsages::VERTEX
+                    | wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST,
             ),
             normals: buf(
                 "scene.normals",
                 bytemuck::cast_slice(&normals),
-                wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
+                wgpu::BufferUsages::VERTEX
+                    | wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST,
             ),
             uvs: buf(
                 "scene.uvs",
@@ -298,6 +301,7 @@ impl GpuScene {
                 wgpu::BufferUsages::STORAGE,
             ),
             draws,
+            meshes: ranges,
             triangles: scene.triangle_count() as u64,
             skin: None,
             masks,
@@ -315,6 +319,39 @@ impl GpuScene {
     ) -> Result<(), RenderError> {
         self.skin = Some(crate::gpu_scene::skinning::GpuSkin::new(ctx, scene, skin)?);
         Ok(())
+    }
+
+    /// Rewrites mesh `mesh`'s vertices and normals (as many as it has: a skinned mesh bent)
+    /// and the bounding spheres of the instances that draw it (`transforms`: every
+    /// instance's); returns each such instance with its world sphere before and after.
+    pub fn set_mesh_vertices(
+        &mut self,
+        queue: &wgpu::Queue,
+        mesh: usize,
+        positions: &[Vec3],
+        normals: &[Vec3],
+        transforms: &[Mat4],
+    ) -> Vec<MovedSphere> {
+        let Some(range) = self.meshes.get(mesh).copied() else {
+            return Vec::new();
+        };
+        let at = range.base_vertex as u64 * POSITION_STRIDE;
+        let flat = |v: &[Vec3]| v.iter().map(|p| p.to_array()).collect::<Vec<[f32; 3]>>();
+        queue.write_buffer(&self.positions, at, bytemuck::cast_slice(&flat(positions)));
+        queue.write_buffer(&self.normals, at, bytemuck::cast_slice(&flat(normals)));
+        let object = bounding_sphere(positions);
+        let mut moved = Vec::new();
+        for (k, d) in self.draws.iter_mut().enumerate() {
+            if d.mesh.base_vertex != range.base_vertex || d.mesh.first_index != range.first_index {
+                continue;
+            }
+            let m = transforms.get(k).copied().unwrap_or(Mat4::IDENTITY);
+            let old = d.sphere;
+            d.object_sphere = object;
+            d.sphere = (m.transform_point3(object.0), object.1 * max_axis_scale(m));
+            moved.push((k, old, d.sphere));
+        }
+        moved
     }
 
     /// Replaces one instance's model matrix (e.g. a moving object between frames) and its
@@ -340,6 +377,22 @@ impl GpuScene {
             bytemuck::bytes_of(&data),
         );
     }
+}
+
+/// A sphere around `positions`: the centre of their box, the farthest one's distance.
+fn bounding_sphere(positions: &[Vec3]) -> (Vec3, f32) {
+    let (lo, hi) = positions
+        .iter()
+        .fold(None, |b: Option<(Vec3, Vec3)>, &p| {
+            Some(b.map_or((p, p), |(lo, hi)| (lo.min(p), hi.max(p))))
+        })
+        .unwrap_or((Vec3::ZERO, Vec3::ZERO));
+    let c = (lo + hi) * 0.5;
+    let r = positions
+        .iter()
+        .map(|p| p.distance(c))
+        .fold(0.0f32, f32::max);
+    (c, r)
 }
 
 /// Largest length of the matrix's three axes: how much it can grow a sphere.

@@ -276,6 +276,70 @@ impl Renderer {
         Ok(())
     }
 
+    /// Gives mesh `mesh` new vertices and normals, as many as it has (a skinned mesh bent:
+    /// [`Scene::set_time`](manyshadows_scene::Scene::set_time) computes them, or
+    /// `Animations::bent`). Every instance drawing it gets a bounding sphere around the new
+    /// vertices, and what its old and new spheres reach is redrawn (kept atlas views, virtual
+    /// pages, probe faces); ray tracing builds the mesh's structure again. Errors: no such mesh,
+    /// another number of vertices or normals, a value that is not finite.
+    pub fn set_mesh_vertices(
+        &mut self,
+        mesh: usize,
+        positions: &[glam::Vec3],
+        normals: &[glam::Vec3],
+    ) -> Result<(), RenderError> {
+        let count = self.current.meshes.len();
+        let Some(m) = self.current.meshes.get(mesh) else {
+            return Err(SceneError::InvalidMesh {
+                mesh: format!("mesh {mesh}"),
+                reason: format!("no such mesh (the scene has {count})"),
+            }
+            .into());
+        };
+        let bad = |reason: String| SceneError::InvalidMesh {
+            mesh: m.name.clone(),
+            reason,
+        };
+        if positions.len() != m.positions.len() || normals.len() != m.positions.len() {
+            return Err(bad(format!(
+                "{} positions and {} normals for a mesh of {} vertices (a mesh keeps its \
+                 vertex count)",
+                positions.len(),
+                normals.len(),
+                m.positions.len()
+            ))
+            .into());
+        }
+        if let Some(v) = positions.iter().chain(normals).position(|p| !p.is_finite()) {
+            return Err(bad(format!(
+                "vertex {} has a position or normal that is not finite",
+                v % positions.len().max(1)
+            ))
+            .into());
+        }
+        let transforms: Vec<glam::Mat4> =
+            self.current.instances.iter().map(|i| i.transform).collect();
+        let moved = self.parts.scene.set_mesh_vertices(
+            &self.ctx.queue,
+            mesh,
+            positions,
+            normals,
+            &transforms,
+        );
+        for (k, old, new) in moved {
+            if self.parts.scene.draws[k].casts_shadows {
+                self.parts.source.note_moved(old, new);
+            }
+        }
+        self.parts.source.note_deformed(&self.ctx, mesh, positions);
+        let m = &mut self.current.meshes[mesh];
+        m.positions = positions.to_vec();
+        m.normals = normals.to_vec();
+        self.dirty = true;
+        self.probes_stale = true;
+        Ok(())
+    }
+
     /// The side of the texture shadows are read from and the widest penumbra its lookup
     /// filters at one level (the frame uniforms').
     pub(super) fn shadow_side(&self) -> (u32, f32) {

@@ -175,6 +175,11 @@ pub trait ShadowSource: std::any::Any {
     /// shadowed must be redrawn by the next frame (sources that keep work between frames).
     fn note_moved(&mut self, _old: (Vec3, f32), _new: (Vec3, f32)) {}
 
+    /// Mesh `mesh`'s vertices became `positions` (a skinned mesh bent; the renderer also
+    /// notes each of its instances' spheres as moved): sources that keep a mesh's geometry of
+    /// their own (ray tracing's bottom-level structures) take the new positions.
+    fn note_deformed(&mut self, _ctx: &GpuContext, _mesh: usize, _positions: &[Vec3]) {}
+
     /// Records the frame's shadow work after the G-buffer and clusters, opening its own timer
     /// spans (`shadows`, and `pages` before it for virtual maps).
     fn record(

@@ -15,8 +15,8 @@
 //! the first perspective camera, with the mappings documented in [`super`];
 //! `EXT_mesh_gpu_instancing` nodes become one instance per instance. Node animations are read
 //! (`gltf_animation`: the instances under an animated node move, see
-//! [`animation`](crate::animation)); skins and morph targets are not applied yet (one note
-//! says so), and every other extension the file uses gets one note.
+//! [`animation`](crate::animation)), and skins bend their meshes; morph targets are not
+//! applied yet (one note says so), and every other extension the file uses gets one note.
 //!
 //! The `gltf` crate's accessors and wrappers assume a well-formed document in a few places
 //! (found by fuzzing or by reading them), so: accessor types, strides and counts are checked
@@ -110,10 +110,17 @@ pub(super) fn load_scene(path: &Path, options: &LoadOptions) -> Result<Parts, Sc
             }
         }
     }
+    // Skinned meshes stand where their joints put them at rest.
+    let skinned = std::mem::take(&mut geometry.skinned);
+    let animations = read_animations(path, &opened, &geometry.meshes, skinned, &mut notes)?;
+    for (mesh, positions, normals) in animations.bent_at_rest() {
+        let m = &mut geometry.meshes[mesh];
+        m.positions = positions;
+        m.normals = normals;
+    }
     let bounds = bounds_of_placed(&geometry.meshes, &geometry.transforms);
     let lights = read_lights(path, &opened, &geometry.nodes, bounds, &mut notes)?;
     let camera = read_camera(&opened, &geometry.nodes, bounds, &mut notes);
-    let animations = read_animations(&opened, &mut notes);
     Ok(Parts {
         meshes: geometry.meshes,
         mesh_material,

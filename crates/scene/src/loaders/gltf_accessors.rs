@@ -197,3 +197,18 @@ where
 {
     read_floats!(a, get, 4).map(|v| v.into_iter().map(glam::Vec4::from_array).collect())
 }
+
+/// A checked `VEC4` accessor of unsigned bytes or shorts (skin joints); `None` if its data is
+/// missing or outside its buffer, or of another type.
+pub(super) fn read_joints<'a, 's, F>(a: &Accessor<'a>, get: F) -> Option<Vec<[u16; 4]>>
+where
+    F: Clone + Fn(::gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    match a.data_type() {
+        DataType::U8 => {
+            Iter::<[u8; 4]>::new(a.clone(), get).map(|it| it.map(|v| v.map(u16::from)).collect())
+        }
+        DataType::U16 => Iter::<[u16; 4]>::new(a.clone(), get).map(|it| it.collect()),
+        _ => None,
+    }
+}

@@ -8,23 +8,43 @@
 //! its buffer, key times not finite or not increasing, values not finite, a count that does
 //! not match its interpolation, a zero rotation) is dropped, and the clip's note says which
 //! and why; a clip left without channels is dropped with it. Morph-target weight channels are
-//! not played yet (the file's default weights are drawn), said in one note; so are skins.
+//! not played yet (the file's default weights are drawn), said in one note.
+//!
+//! Skins (§3.7.3): a skinned node's primitives are read in the mesh's own coordinates with
+//! their `JOINTS_0` and `WEIGHTS_0` (`gltf_geometry`); here each gets its joints and inverse
+//! bind matrices (`MAT4` floats, the identity where absent) as a [`Skin`]. A skin that cannot
+//! bend its mesh (a vertex naming a joint the skin lacks, a joint outside the tree, matrices
+//! not finite or too few) is refused by name: there is no sensible mesh to draw instead.
 
 use ::gltf::accessor::{DataType, Dimensions};
 use ::gltf::animation::{Interpolation as GltfInterpolation, Property as GltfProperty};
 use glam::{Mat4, Quat, Vec3, Vec4};
 
-use super::gltf_accessors::{check_layout, read_scalar, read_vec3, read_vec4};
-use super::gltf_open::Opened;
-use crate::animation::{Animations, Channel, Clip, Interpolation, Node, Property};
+use std::path::Path;
 
-/// The animations of `opened`, and notes on what was dropped.
-pub(super) fn read_animations(opened: &Opened, notes: &mut Vec<String>) -> Animations {
+use super::common::parse_error;
+use super::gltf_accessors::{check_layout, read_scalar, read_vec3, read_vec4};
+use super::gltf_geometry::SkinnedPrimitive;
+use super::gltf_open::Opened;
+use crate::animation::{Animations, Channel, Clip, Interpolation, Node, Property, Skin};
+use crate::error::SceneError;
+use crate::model::Mesh;
+
+/// The animations and skins of `opened`, and notes on what was dropped. `meshes` are the
+/// document's meshes (`skinned`: each one's skin, its vertices still in the mesh's own
+/// coordinates, as the skin's bind data); a skin that cannot bend its mesh is refused by name.
+pub(super) fn read_animations(
+    path: &Path,
+    opened: &Opened,
+    meshes: &[Mesh],
+    skinned: Vec<Option<SkinnedPrimitive>>,
+    notes: &mut Vec<String>,
+) -> Result<Animations, SceneError> {
     let document = &opened.document;
     let buffers = &opened.buffers;
     let get = |b: ::gltf::Buffer<'_>| buffers.get(b.index()).map(|d| d.0.as_slice());
-    if document.animations().len() == 0 {
-        return Animations::default();
+    if document.animations().len() == 0 && skinned.iter().all(Option::is_none) {
+        return Ok(Animations::default());
     }
     let mut nodes: Vec<Node> = document
         .nodes()
@@ -116,18 +136,64 @@ pub(super) fn read_animations(opened: &Opened, notes: &mut Vec<String>) -> Anima
              the file's default weights)"
         ));
     }
-    if document.skins().len() > 0 {
-        notes.push(
-            "skins are not applied: skinned meshes are drawn in their bind pose, at their \
-             node"
-                .into(),
-        );
+    let mut skins = Vec::new();
+    for (mesh, primitive) in skinned.into_iter().enumerate() {
+        let Some(primitive) = primitive else {
+            continue;
+        };
+        let refuse = |why: String| {
+            parse_error(
+                path,
+                format!(
+                    "glTF skin {} of mesh {}: {why}",
+                    primitive.skin,
+                    meshes.get(mesh).map_or("?", |m| m.name.as_str())
+                ),
+            )
+        };
+        let skin = document
+            .skins()
+            .nth(primitive.skin)
+            .ok_or_else(|| refuse("no such skin".into()))?;
+        let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
+        let inverse_bind = match skin.inverse_bind_matrices() {
+            None => vec![Mat4::IDENTITY; joints.len()],
+            Some(a) => {
+                if a.data_type() != DataType::F32 || a.dimensions() != Dimensions::Mat4 {
+                    return Err(refuse(format!(
+                        "inverse bind matrices are {:?} {:?}, not MAT4 floats",
+                        a.dimensions(),
+                        a.data_type()
+                    )));
+                }
+                check_layout(&a, &bad("inverse bind matrices")).map_err(|e| refuse(reason(e)))?;
+                ::gltf::accessor::Iter::<[[f32; 4]; 4]>::new(a.clone(), get)
+                    .map(|it| it.map(|m| Mat4::from_cols_array_2d(&m)).collect::<Vec<_>>())
+                    .filter(|m| m.len() == a.count())
+                    .ok_or_else(|| refuse("inverse bind matrices outside their buffer".into()))?
+            }
+        };
+        let m = &meshes[mesh];
+        let s = Skin {
+            mesh,
+            joints,
+            inverse_bind,
+            vertex_joints: primitive.joints,
+            vertex_weights: primitive.weights,
+            bind_positions: m.positions.clone(),
+            bind_normals: m.normals.clone(),
+        };
+        if let Some(why) = s.problem(nodes.len()) {
+            return Err(refuse(why));
+        }
+        skins.push(s);
     }
-    Animations {
+    Ok(Animations {
         nodes: std::mem::take(&mut nodes),
         clips,
         moving: Vec::new(),
-    }
+        skins,
+    })
 }
 
 /// A sampler's key times and values, checked; the error says why it cannot be read.
@@ -139,12 +205,6 @@ fn read_channel<'a, 's, F>(
 where
     F: Clone + Fn(::gltf::Buffer<'a>) -> Option<&'s [u8]>,
 {
-    let bad = |what: &'static str| {
-        move |reason: String| crate::error::SceneError::Parse {
-            path: std::path::PathBuf::new(),
-            reason: format!("{what} {reason}"),
-        }
-    };
     let input = sampler.input();
     if input.data_type() != DataType::F32
         || input.normalized()
@@ -200,10 +260,18 @@ where
     Ok((times, values))
 }
 
+/// A parse error of `what` (its path empty: [`reason`] takes the words out).
+fn bad(what: &'static str) -> impl Fn(String) -> SceneError {
+    move |reason: String| SceneError::Parse {
+        path: std::path::PathBuf::new(),
+        reason: format!("{what} {reason}"),
+    }
+}
+
 /// The reason inside a parse error.
-fn reason(e: crate::error::SceneError) -> String {
+fn reason(e: SceneError) -> String {
     match e {
-        crate::error::SceneError::Parse { reason, .. } => reason,
+        SceneError::Parse { reason, .. } => reason,
         other => other.to_string(),
     }
 }

@@ -17,13 +17,24 @@ use super::common::{
     check_finite, check_triangles, mesh_name, parse_error, set_normals, too_large, RawTriangles,
 };
 use super::gltf_accessors::{
-    check_accessor, read_vec2, read_vec3, INDEX_TYPES, NORMAL_TYPES, POSITION_TYPES, TEXCOORD_TYPES,
+    check_accessor, read_joints, read_vec2, read_vec3, read_vec4, INDEX_TYPES, NORMAL_TYPES,
+    POSITION_TYPES, TEXCOORD_TYPES,
 };
 use super::gltf_draco::decode_draco;
 use super::gltf_instancing::instance_transforms;
 use super::gltf_open::Opened;
 use crate::error::SceneError;
 use crate::model::Mesh;
+
+/// A skinned primitive's skin and its vertices' joints and weights (`JOINTS_0`, `WEIGHTS_0`).
+pub(super) struct SkinnedPrimitive {
+    /// The document's skin.
+    pub(super) skin: usize,
+    /// Per vertex, four indices into the skin's joints.
+    pub(super) joints: Vec<[u16; 4]>,
+    /// Per vertex, the four joints' weights, summing to 1 (normalized as three.js does).
+    pub(super) weights: Vec<[f32; 4]>,
+}
 
 /// The triangle meshes of a document, in depth-first node order.
 pub(super) struct Geometry<'a> {
@@ -33,8 +44,11 @@ pub(super) struct Geometry<'a> {
     /// The placements of each mesh: the identity (the node's transform is baked in), or one
     /// per instance of an `EXT_mesh_gpu_instancing` node.
     pub(super) transforms: Vec<Vec<Mat4>>,
-    /// The node each mesh is drawn at (`None`: a document without scenes).
+    /// The node each mesh is drawn at (`None`: a document without scenes, or a skinned mesh,
+    /// which its joints place).
     pub(super) mesh_nodes: Vec<Option<usize>>,
+    /// Each mesh's skin, for a skinned node's primitives (in the mesh's own coordinates).
+    pub(super) skinned: Vec<Option<SkinnedPrimitive>>,
     /// Remarks on instances left out.
     pub(super) notes: Vec<String>,
     /// Every node reached from the default scene with its world transform, depth-first.
@@ -55,6 +69,7 @@ pub(super) fn read_geometry<'a>(
         materials: Vec::new(),
         transforms: Vec::new(),
         mesh_nodes: Vec::new(),
+        skinned: Vec::new(),
         notes: Vec::new(),
         nodes: Vec::new(),
         skipped: 0,
@@ -65,7 +80,8 @@ pub(super) fn read_geometry<'a>(
                     node: Option<usize>,
                     mesh: ::gltf::Mesh<'a>,
                     world: Mat4,
-                    placed: &[Mat4]| {
+                    placed: &[Mat4],
+                    skin: Option<usize>| {
         for prim in mesh.primitives() {
             let mode = prim.mode();
             if !matches!(
@@ -91,10 +107,32 @@ pub(super) fn read_geometry<'a>(
                 prim.index()
             ));
             let read = match draco {
+                Some(_) if skin.is_some() => {
+                    return Err(parse_error(
+                        path,
+                        format!(
+                            "glTF primitive {label} is skinned and Draco-compressed, which this \
+                             loader does not read (decompress it, e.g. with gltf-transform)"
+                        ),
+                    ))
+                }
                 Some(ext) => decode_draco(path, &label, opened, ext)?,
                 None => read_primitive(path, &label, &prim, &get)?,
             };
-            let m = finish(path, &label, read, world)?;
+            let vertices = read.positions.len();
+            let skinned = match skin {
+                Some(skin) => {
+                    let (joints, weights) =
+                        read_skin_attributes(path, &label, &prim, &get, vertices)?;
+                    Some(SkinnedPrimitive {
+                        skin,
+                        joints,
+                        weights,
+                    })
+                }
+                None => None,
+            };
+            let m = finish(path, &label, read, world, skinned.is_some())?;
             if m.indices.is_empty() {
                 continue;
             }
@@ -103,7 +141,9 @@ pub(super) fn read_geometry<'a>(
             out.meshes.push(m);
             out.materials.push(prim.material().index());
             out.transforms.push(placed.to_vec());
-            out.mesh_nodes.push(node);
+            out.mesh_nodes
+                .push(if skinned.is_some() { None } else { node });
+            out.skinned.push(skinned);
         }
         Ok::<(), SceneError>(())
     };
@@ -130,7 +170,18 @@ pub(super) fn read_geometry<'a>(
                     ));
                 }
                 let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-                if let Some(mesh) = node.mesh() {
+                if let (Some(mesh), Some(skin)) = (node.mesh(), node.skin()) {
+                    // A skinned mesh is placed by its joints alone (the node's own transform
+                    // is ignored, glTF 2.0 §3.7.3.3): its vertices stay in its own coordinates.
+                    emit(
+                        &mut out,
+                        Some(node.index()),
+                        mesh,
+                        Mat4::IDENTITY,
+                        &[Mat4::IDENTITY],
+                        Some(skin.index()),
+                    )?;
+                } else if let Some(mesh) = node.mesh() {
                     match instance_transforms(path, opened, node.index())? {
                         // The node's mesh is drawn once per instance, at world × instance
                         // (EXT_mesh_gpu_instancing), and not at the node itself.
@@ -149,10 +200,24 @@ pub(super) fn read_geometry<'a>(
                                 ));
                             }
                             if !placed.is_empty() {
-                                emit(&mut out, Some(node.index()), mesh, Mat4::IDENTITY, &placed)?;
+                                emit(
+                                    &mut out,
+                                    Some(node.index()),
+                                    mesh,
+                                    Mat4::IDENTITY,
+                                    &placed,
+                                    None,
+                                )?;
                             }
                         }
-                        None => emit(&mut out, Some(node.index()), mesh, world, &[Mat4::IDENTITY])?,
+                        None => emit(
+                            &mut out,
+                            Some(node.index()),
+                            mesh,
+                            world,
+                            &[Mat4::IDENTITY],
+                            None,
+                        )?,
                     }
                 }
                 let children: Vec<_> = node.children().collect();
@@ -162,7 +227,14 @@ pub(super) fn read_geometry<'a>(
         }
         None => {
             for mesh in document.meshes() {
-                emit(&mut out, None, mesh, Mat4::IDENTITY, &[Mat4::IDENTITY])?;
+                emit(
+                    &mut out,
+                    None,
+                    mesh,
+                    Mat4::IDENTITY,
+                    &[Mat4::IDENTITY],
+                    None,
+                )?;
             }
         }
     }
@@ -329,7 +401,15 @@ where
 }
 
 /// Checks a primitive's vertices and bakes the node's world transform into them.
-fn finish(path: &Path, label: &str, read: RawTriangles, world: Mat4) -> Result<Mesh, SceneError> {
+/// `smooth`: normals the file lacks are computed without splitting vertices at creases (a
+/// skinned primitive's vertices must stay those its joints and weights are given for).
+fn finish(
+    path: &Path,
+    label: &str,
+    read: RawTriangles,
+    world: Mat4,
+    smooth: bool,
+) -> Result<Mesh, SceneError> {
     let name = mesh_name(path, Some(label));
     let RawTriangles {
         positions,
@@ -365,8 +445,84 @@ fn finish(path: &Path, label: &str, read: RawTriangles, world: Mat4) -> Result<M
         indices,
     };
     super::common::check_indices(&mesh)?;
-    set_normals(&mut mesh, normals);
+    if smooth && normals.is_none() {
+        mesh.compute_normals();
+    } else {
+        set_normals(&mut mesh, normals);
+    }
     Ok(mesh)
+}
+
+/// Per vertex, four joints and their weights.
+type JointsAndWeights = (Vec<[u16; 4]>, Vec<[f32; 4]>);
+
+/// A skinned primitive's `JOINTS_0` (unsigned bytes or shorts) and `WEIGHTS_0` (floats, or
+/// normalized unsigned bytes or shorts), one per vertex, weights normalized to sum 1 (a vertex
+/// whose weights are all 0 follows its first joint), as three.js's loader does.
+fn read_skin_attributes<'p, 's, F>(
+    path: &Path,
+    label: &str,
+    prim: &'p ::gltf::Primitive<'p>,
+    get: &F,
+    vertices: usize,
+) -> Result<JointsAndWeights, SceneError>
+where
+    F: Clone + Fn(::gltf::Buffer<'p>) -> Option<&'s [u8]>,
+{
+    use ::gltf::accessor::DataType;
+    let bad =
+        |what: String| parse_error(path, format!("glTF primitive {label} is skinned: {what}"));
+    let joints = prim
+        .get(&Semantic::Joints(0))
+        .ok_or_else(|| bad("it has no JOINTS_0".into()))?;
+    let weights = prim
+        .get(&Semantic::Weights(0))
+        .ok_or_else(|| bad("it has no WEIGHTS_0".into()))?;
+    check_accessor(
+        path,
+        label,
+        "JOINTS_0",
+        &joints,
+        &[(DataType::U8, false), (DataType::U16, false)],
+        Dimensions::Vec4,
+    )?;
+    check_accessor(
+        path,
+        label,
+        "WEIGHTS_0",
+        &weights,
+        &[
+            (DataType::F32, false),
+            (DataType::U8, true),
+            (DataType::U16, true),
+        ],
+        Dimensions::Vec4,
+    )?;
+    let j = read_joints(&joints, get.clone())
+        .filter(|j| j.len() == vertices)
+        .ok_or_else(|| {
+            bad("JOINTS_0 is missing, outside its buffer or not one per vertex".into())
+        })?;
+    let w = read_vec4(&weights, get.clone())
+        .filter(|w| w.len() == vertices)
+        .ok_or_else(|| {
+            bad("WEIGHTS_0 is missing, outside its buffer or not one per vertex".into())
+        })?;
+    let mut out = Vec::with_capacity(vertices);
+    for (v, w) in w.into_iter().enumerate() {
+        if !w.is_finite() || w.min_element() < 0.0 {
+            return Err(bad(format!(
+                "vertex {v} has weights {w} (finite, 0 or more)"
+            )));
+        }
+        let sum = w.element_sum();
+        out.push(if sum > 0.0 {
+            (w / sum).to_array()
+        } else {
+            [1.0, 0.0, 0.0, 0.0]
+        });
+    }
+    Ok((j, out))
 }
 
 #[cfg(test)]

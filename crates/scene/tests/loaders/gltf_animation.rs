@@ -171,3 +171,63 @@ fn a_file_without_animations_moves_nothing() {
     assert!(loaded.scene.animations.is_empty());
     assert!(loaded.scene.animations.choose("0").is_err());
 }
+
+/// The quad skinned to one joint (node 1, standing 2 above the origin, no inverse bind
+/// matrices: the identity), every vertex on joint `joint` with weight 1.
+fn skinned_quad(joint: u16) -> serde_json::Value {
+    let mut doc = quad_doc(json!([
+        { "mesh": 0, "skin": 0 },
+        { "translation": [0.0, 2.0, 0.0] }
+    ]));
+    let mut bin: Vec<u8> = (0..4)
+        .flat_map(|_| [joint, 0, 0, 0])
+        .flat_map(u16::to_le_bytes)
+        .collect();
+    bin.extend(floats(&[1.0, 0.0, 0.0, 0.0].repeat(4)));
+    let uri = format!("data:application/octet-stream;base64,{}", base64(&bin));
+    doc["buffers"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({ "uri": uri, "byteLength": bin.len() }));
+    let views = doc["bufferViews"].as_array().unwrap().len();
+    doc["bufferViews"].as_array_mut().unwrap().extend([
+        json!({ "buffer": 1, "byteOffset": 0, "byteLength": 32 }),
+        json!({ "buffer": 1, "byteOffset": 32, "byteLength": 64 }),
+    ]);
+    let accessors = doc["accessors"].as_array().unwrap().len();
+    doc["accessors"].as_array_mut().unwrap().extend([
+        json!({ "bufferView": views, "componentType": 5123, "count": 4, "type": "VEC4" }),
+        json!({ "bufferView": views + 1, "componentType": 5126, "count": 4, "type": "VEC4" }),
+    ]);
+    let attributes = &mut doc["meshes"][0]["primitives"][0]["attributes"];
+    attributes["JOINTS_0"] = json!(accessors);
+    attributes["WEIGHTS_0"] = json!(accessors + 1);
+    doc["skins"] = json!([{ "joints": [1] }]);
+    doc
+}
+
+#[test]
+fn a_skin_places_its_mesh_by_its_joints_and_a_bad_one_is_refused() {
+    let dir = temp_dir("gltf_skin");
+    let loaded = scene_of(&save_json(&dir, "skinned.gltf", &skinned_quad(0)));
+    let scene = &loaded.scene;
+    assert_eq!(scene.animations.skins.len(), 1, "{:?}", loaded.notes);
+    // The node's own transform plays no part; the joint 2 above lifts every vertex by 2.
+    let quad = &scene.meshes[scene.animations.skins[0].mesh];
+    assert!(
+        quad.positions.contains(&Vec3::new(1.0, 3.0, 0.0)),
+        "{:?}",
+        quad.positions
+    );
+    assert_eq!(scene.instances[0].transform, glam::Mat4::IDENTITY);
+    // A vertex naming a joint the skin lacks: refused, naming the skin and the vertex.
+    let path = save_json(&dir, "bad-skin.gltf", &skinned_quad(3));
+    let err = manyshadows_scene::loaders::load_scene(&path)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("glTF skin 0 of mesh")
+            && err.contains("vertex 0 names joint 3 of a skin of 1 joints"),
+        "{err}"
+    );
+}

@@ -91,6 +91,9 @@ impl Player {
         for (k, m) in scene.animations.pose(self.playing, self.time) {
             renderer.set_instance_transform(k, m)?;
         }
+        for (mesh, positions, normals) in scene.animations.bent(self.playing, self.time) {
+            renderer.set_mesh_vertices(mesh, &positions, &normals)?;
+        }
         self.applied = Some((self.playing, self.time));
         Ok(())
     }

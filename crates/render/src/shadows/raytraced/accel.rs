@@ -16,8 +16,9 @@
 //! so the ray leaves the triangle's back side towards a light on its front side (the CPU
 //! reference's rule). Their instance's material word carries [`FRONT_ONLY`].
 //!
-//! Skinned casters exist only in the atlas benchmark's workloads (`GpuScene::attach_skin`),
-//! never in a [`crate::Renderer`] frame, so no BLAS here is ever deformed.
+//! A skinned mesh that bends (a glTF file's skin, `Renderer::set_mesh_vertices`) has its BLASes
+//! built again from the new vertices ([`RayAccel::deform`]), then the TLAS. The atlas
+//! benchmark's skinning workload (`GpuScene::attach_skin`) never reaches a ray-traced frame.
 
 use glam::Mat4;
 use manyshadows_scene::masks::MaskSet;
@@ -62,6 +63,9 @@ struct Item {
 /// The acceleration structures and the buffers the rays read.
 pub struct RayAccel {
     blas: Vec<wgpu::Blas>,
+    /// Per BLAS: its mesh, its size, its input vertex and index buffers, and whether its
+    /// vertices changed since it was built (a bent skinned mesh: rebuilt by the next record).
+    built: Vec<Built>,
     items: Vec<Item>,
     tlas: wgpu::Tlas,
     /// Per item: first word of its mesh's masked texture coordinates, material; then the
@@ -71,6 +75,15 @@ pub struct RayAccel {
     pub params: wgpu::Buffer,
     /// The TLAS must be built before the next ray is cast.
     dirty: bool,
+}
+
+/// What a BLAS was built from, to build it again when its mesh bends.
+struct Built {
+    mesh: usize,
+    size: wgpu::BlasTriangleGeometrySizeDescriptor,
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    stale: bool,
 }
 
 /// Row-major 3×4 affine part of `m`, as a TLAS instance's transform.
@@ -202,7 +215,7 @@ impl RayAccel {
                 let mesh = &scene.meshes[m];
                 let positions: Vec<[f32; 3]> =
                     mesh.positions.iter().map(|p| p.to_array()).collect();
-                let usage = wgpu::BufferUsages::BLAS_INPUT;
+                let usage = wgpu::BufferUsages::BLAS_INPUT | wgpu::BufferUsages::COPY_DST;
                 (
                     device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                         label: Some("raytraced.blas_vertices"),
@@ -320,8 +333,21 @@ impl RayAccel {
             ));
         }
         let _ = gpu;
+        let built = keys
+            .iter()
+            .zip(sizes)
+            .zip(inputs)
+            .map(|((&(mesh, _), size), (vertices, indices))| Built {
+                mesh,
+                size,
+                vertices,
+                indices,
+                stale: false,
+            })
+            .collect();
         Ok(Self {
             blas,
+            built,
             items,
             tlas,
             geometry,
@@ -348,12 +374,52 @@ impl RayAccel {
         }
     }
 
-    /// Records the TLAS build if an instance moved since the last one; true if it did.
+    /// Mesh `mesh` bent to `positions` (as many as it had): its BLASes are built again, from
+    /// these, by the next [`RayAccel::record`] (wgpu has no refit; a rebuild, measured in
+    /// docs/real-content.md).
+    pub fn deform(&mut self, queue: &wgpu::Queue, mesh: usize, positions: &[glam::Vec3]) {
+        let flat: Vec<[f32; 3]> = positions.iter().map(|p| p.to_array()).collect();
+        for b in self.built.iter_mut().filter(|b| b.mesh == mesh) {
+            if b.size.vertex_count as usize == flat.len() {
+                queue.write_buffer(&b.vertices, 0, bytemuck::cast_slice(&flat));
+                b.stale = true;
+                self.dirty = true;
+            }
+        }
+    }
+
+    /// Records the builds of the BLASes of bent meshes, and the TLAS's if an instance moved or
+    /// a BLAS was built since the last one; true if it did.
     pub fn record(&mut self, encoder: &mut wgpu::CommandEncoder) -> bool {
         if !self.dirty {
             return false;
         }
-        encoder.build_acceleration_structures(std::iter::empty(), std::iter::once(&self.tlas));
+        let entries: Vec<wgpu::BlasBuildEntry<'_>> = self
+            .blas
+            .iter()
+            .zip(&self.built)
+            .filter(|(_, b)| b.stale)
+            .map(|(blas, b)| wgpu::BlasBuildEntry {
+                blas,
+                geometry: wgpu::BlasGeometries::TriangleGeometries(vec![
+                    wgpu::BlasTriangleGeometry {
+                        size: &b.size,
+                        vertex_buffer: &b.vertices,
+                        first_vertex: 0,
+                        vertex_stride: 12,
+                        index_buffer: Some(&b.indices),
+                        first_index: Some(0),
+                        transform_buffer: None,
+                        transform_buffer_offset: None,
+                    },
+                ]),
+            })
+            .collect();
+        encoder.build_acceleration_structures(entries.iter(), std::iter::once(&self.tlas));
+        drop(entries);
+        for b in &mut self.built {
+            b.stale = false;
+        }
         self.dirty = false;
         true
     }

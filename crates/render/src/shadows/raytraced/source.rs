@@ -150,6 +150,10 @@ impl ShadowSource for RaytracedSource {
 
     fn note_moved(&mut self, _old: (glam::Vec3, f32), _new: (glam::Vec3, f32)) {}
 
+    fn note_deformed(&mut self, ctx: &GpuContext, mesh: usize, positions: &[glam::Vec3]) {
+        self.accel.deform(&ctx.queue, mesh, positions);
+    }
+
     /// The TLAS build, timed as the `accel` stage between two empty compute passes that
     /// carry its timestamps; the rays themselves are cast by the lighting pass.
     fn record(
