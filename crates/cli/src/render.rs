@@ -228,7 +228,7 @@ impl Sequence<'_> {
             .map(|c| scene.animations.pose(c.playing, c.at(f)))
             .unwrap_or_default();
         let bent = now
-            .map(|c| scene.animations.bent(c.playing, c.at(f)))
+            .map(|c| scene.animations.deformed(c.playing, c.at(f)))
             .unwrap_or_default();
         for r in renderers.iter_mut() {
             for &(k, m) in &pose {

@@ -32,6 +32,7 @@ pub(crate) fn summary(
                 "duration_s": a.duration(c.playing),
                 "fps": c.fps,
                 "moving_instances": a.moving.len(),
+                "deformed_meshes": a.deformed_at_rest().len(),
             })
         });
     serde_json::json!({
@@ -212,11 +213,22 @@ fn print_scene(s: &serde_json::Value) {
     );
     let a = &s["animation"];
     if let Some(playing) = a["playing"].as_str() {
+        let count = |n: u64, one: &str, many: &str| match n {
+            1 => format!("1 {one}"),
+            n => format!("{n} {many}"),
+        };
+        let mut what = Vec::new();
+        if let Some(n) = a["moving_instances"].as_u64().filter(|&n| n > 0) {
+            what.push(count(n, "instance moves", "instances move"));
+        }
+        if let Some(n) = a["deformed_meshes"].as_u64().filter(|&n| n > 0) {
+            what.push(count(n, "mesh deforms", "meshes deform"));
+        }
         println!(
-            "animation    {playing} at {:.3} s of {:.3} s ({} instances move)",
+            "animation    {playing} at {:.3} s of {:.3} s ({})",
             a["time_s"].as_f64().unwrap_or(0.0),
             a["duration_s"].as_f64().unwrap_or(0.0),
-            a["moving_instances"]
+            what.join(", ")
         );
     }
     if let Some(look) = s["look"]["description"].as_str() {

@@ -188,6 +188,8 @@ pub struct Clip {
     pub name: String,
     /// What it drives; every channel plays (the loader drops those that cannot).
     pub channels: Vec<Channel>,
+    /// The morph-target weights it drives.
+    pub weights: Vec<WeightChannel>,
 }
 
 impl Clip {
@@ -196,6 +198,7 @@ impl Clip {
         self.channels
             .iter()
             .filter_map(|c| c.times.last().copied())
+            .chain(self.weights.iter().filter_map(|c| c.times.last().copied()))
             .fold(0.0, f32::max)
     }
 }
@@ -296,8 +299,18 @@ impl Skin {
     }
 
     /// The mesh's vertices and normals with its joints at `worlds` (every node's world
-    /// transform).
+    /// transform), from its bind vertices.
     pub fn bend(&self, worlds: &[Mat4]) -> (Vec<Vec3>, Vec<Vec3>) {
+        self.bend_from(worlds, &self.bind_positions, &self.bind_normals)
+    }
+
+    /// [`Skin::bend`] from other vertices of the same mesh (its morph targets applied first).
+    pub fn bend_from(
+        &self,
+        worlds: &[Mat4],
+        bind_positions: &[Vec3],
+        bind_normals: &[Vec3],
+    ) -> (Vec<Vec3>, Vec<Vec3>) {
         let matrices: Vec<Mat4> = self
             .joints
             .iter()
@@ -312,10 +325,9 @@ impl Skin {
         };
         let mut positions = Vec::with_capacity(self.bind_positions.len());
         let mut normals = Vec::with_capacity(self.bind_positions.len());
-        for (((p, n), j), w) in self
-            .bind_positions
+        for (((p, n), j), w) in bind_positions
             .iter()
-            .zip(&self.bind_normals)
+            .zip(bind_normals)
             .zip(&self.vertex_joints)
             .zip(&self.vertex_weights)
         {
@@ -329,6 +341,143 @@ impl Skin {
             normals.push(m.transform_vector3(*n).try_normalize().unwrap_or(*n));
         }
         (positions, normals)
+    }
+}
+
+/// A mesh's morph targets (glTF 2.0 §3.7.2.2): its vertices are its base plus each target's
+/// displacement times that target's weight, its normals likewise, normalized. The weights are
+/// its node's, animated by `weights` channels, else the node's or mesh's default.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Morph {
+    /// The scene mesh it shapes.
+    pub mesh: usize,
+    /// The node whose weights it takes.
+    pub node: usize,
+    /// The vertices and normals without any target (in the mesh's coordinates as loaded).
+    pub base_positions: Vec<Vec3>,
+    /// Normals without any target.
+    pub base_normals: Vec<Vec3>,
+    /// Per target, a displacement per vertex.
+    pub position_deltas: Vec<Vec<Vec3>>,
+    /// Per target, a normal displacement per vertex (zeros where the file gives none).
+    pub normal_deltas: Vec<Vec<Vec3>>,
+    /// The weights where no channel drives them.
+    pub default_weights: Vec<f32>,
+}
+
+impl Morph {
+    /// The vertices and normals at `weights` (missing weights count 0).
+    pub fn shape(&self, weights: &[f32]) -> (Vec<Vec3>, Vec<Vec3>) {
+        let mut p = self.base_positions.clone();
+        let mut n = self.base_normals.clone();
+        for (k, &w) in weights.iter().enumerate() {
+            if w == 0.0 {
+                continue;
+            }
+            if let Some(d) = self.position_deltas.get(k) {
+                for (p, d) in p.iter_mut().zip(d) {
+                    *p += *d * w;
+                }
+            }
+            if let Some(d) = self.normal_deltas.get(k) {
+                for (n, d) in n.iter_mut().zip(d) {
+                    *n += *d * w;
+                }
+            }
+        }
+        for (n, base) in n.iter_mut().zip(&self.base_normals) {
+            *n = n.try_normalize().unwrap_or(*base);
+        }
+        (p, n)
+    }
+}
+
+/// A node's morph-target weights over time: `targets` weights per key (three times that for a
+/// cubic spline: in-tangents, values, out-tangents).
+#[derive(Clone, Debug, PartialEq)]
+pub struct WeightChannel {
+    /// The node.
+    pub node: usize,
+    /// How its keys are joined.
+    pub interpolation: Interpolation,
+    /// Key times in seconds: finite, strictly increasing, at least one.
+    pub times: Vec<f32>,
+    /// Weights per key.
+    pub targets: usize,
+    /// The keys' weights, `targets` per key (per part of a cubic key).
+    pub values: Vec<f32>,
+}
+
+impl WeightChannel {
+    /// Why this channel cannot be played, if it cannot.
+    pub fn problem(&self, nodes: usize) -> Option<String> {
+        let per_key = if self.interpolation == Interpolation::CubicSpline {
+            3
+        } else {
+            1
+        };
+        if self.node >= nodes {
+            return Some(format!("node {} is not in the scene's tree", self.node));
+        }
+        if self.times.is_empty() || self.targets == 0 {
+            return Some("it has no keys or no targets".into());
+        }
+        if self.values.len() != per_key * self.targets * self.times.len() {
+            return Some(format!(
+                "it has {} key times but {} weights ({} expected for {} targets)",
+                self.times.len(),
+                self.values.len(),
+                per_key * self.targets * self.times.len(),
+                self.targets
+            ));
+        }
+        if self.times.iter().any(|t| !t.is_finite()) || self.values.iter().any(|v| !v.is_finite()) {
+            return Some("a key time or weight is not finite".into());
+        }
+        if self.times.windows(2).any(|w| w[1] <= w[0]) {
+            return Some("its key times do not increase".into());
+        }
+        None
+    }
+
+    /// The weights at `t`, held at the ends.
+    pub fn sample(&self, t: f32) -> Vec<f32> {
+        let (n, m) = (self.times.len(), self.targets);
+        let cubic = self.interpolation == Interpolation::CubicSpline;
+        let part = |k: usize, which: usize| -> &[f32] {
+            let at = if cubic { (3 * k + which) * m } else { k * m };
+            &self.values[at..at + m]
+        };
+        let value = |k: usize| part(k, 1).to_vec();
+        let after = self.times.partition_point(|&k| k <= t);
+        if after == 0 {
+            return value(0);
+        }
+        if after >= n {
+            return value(n - 1);
+        }
+        let k = after - 1;
+        let dt = self.times[after] - self.times[k];
+        let u = ((t - self.times[k]) / dt).clamp(0.0, 1.0);
+        match self.interpolation {
+            Interpolation::Step => value(k),
+            Interpolation::Linear => part(k, 1)
+                .iter()
+                .zip(part(k + 1, 1))
+                .map(|(a, b)| a + (b - a) * u)
+                .collect(),
+            Interpolation::CubicSpline => {
+                let (u2, u3) = (u * u, u * u * u);
+                (0..m)
+                    .map(|i| {
+                        (2.0 * u3 - 3.0 * u2 + 1.0) * part(k, 1)[i]
+                            + (u3 - 2.0 * u2 + u) * dt * part(k, 2)[i]
+                            + (-2.0 * u3 + 3.0 * u2) * part(k + 1, 1)[i]
+                            + (u3 - u2) * dt * part(k + 1, 0)[i]
+                    })
+                    .collect()
+            }
+        }
     }
 }
 
@@ -353,12 +502,15 @@ pub struct Animations {
     pub moving: Vec<Moving>,
     /// The meshes joints bend.
     pub skins: Vec<Skin>,
+    /// The meshes morph targets shape.
+    pub morphs: Vec<Morph>,
 }
 
 impl Animations {
     /// True when nothing moves (no clip, or no instance under an animated node and no skin).
     pub fn is_empty(&self) -> bool {
-        self.clips.is_empty() || (self.moving.is_empty() && self.skins.is_empty())
+        self.clips.is_empty()
+            || (self.moving.is_empty() && self.skins.is_empty() && self.morphs.is_empty())
     }
 
     /// What `--animation` names: a clip's name, its index from 0, or `all`. The error lists
@@ -525,32 +677,58 @@ impl Animations {
             .collect()
     }
 
-    /// Every skinned mesh's vertices and normals at `t`: `(mesh, positions, normals)`.
-    pub fn bent(&self, playing: Playing, t: f32) -> Vec<(usize, Vec<Vec3>, Vec<Vec3>)> {
-        if self.skins.is_empty() {
+    /// Every deformed mesh's vertices and normals at `t` (wrapped as [`Self::wrap`] says):
+    /// `(mesh, positions, normals)`, its morph targets weighted as the clips have them, then
+    /// its skin bent by its joints.
+    pub fn deformed(&self, playing: Playing, t: f32) -> Vec<(usize, Vec<Vec3>, Vec<Vec3>)> {
+        if self.skins.is_empty() && self.morphs.is_empty() {
             return Vec::new();
         }
         let worlds = self.worlds(&self.locals(playing, t));
-        self.skins
-            .iter()
-            .map(|s| {
-                let (p, n) = s.bend(&worlds);
-                (s.mesh, p, n)
-            })
-            .collect()
+        let t = self.wrap(playing, t);
+        let mut driven: Vec<(usize, Vec<f32>)> = Vec::new();
+        for clip in self.playing(playing) {
+            for c in &clip.weights {
+                driven.retain(|(n, _)| *n != c.node);
+                driven.push((c.node, c.sample(t)));
+            }
+        }
+        self.deform(&worlds, &driven)
     }
 
-    /// Every skinned mesh's vertices and normals at rest (no clip playing: the joints where
-    /// the file's nodes put them).
-    pub fn bent_at_rest(&self) -> Vec<(usize, Vec<Vec3>, Vec<Vec3>)> {
-        let worlds = self.rest_worlds();
-        self.skins
+    /// Every deformed mesh at rest: the joints where the file's nodes put them, the default
+    /// morph weights.
+    pub fn deformed_at_rest(&self) -> Vec<(usize, Vec<Vec3>, Vec<Vec3>)> {
+        self.deform(&self.rest_worlds(), &[])
+    }
+
+    fn deform(
+        &self,
+        worlds: &[Mat4],
+        weights: &[(usize, Vec<f32>)],
+    ) -> Vec<(usize, Vec<Vec3>, Vec<Vec3>)> {
+        let mut out: Vec<(usize, Vec<Vec3>, Vec<Vec3>)> = self
+            .morphs
             .iter()
-            .map(|s| {
-                let (p, n) = s.bend(&worlds);
-                (s.mesh, p, n)
+            .map(|m| {
+                let w = weights
+                    .iter()
+                    .find(|(n, _)| *n == m.node)
+                    .map_or(&m.default_weights, |(_, w)| w);
+                let (p, n) = m.shape(w);
+                (m.mesh, p, n)
             })
-            .collect()
+            .collect();
+        for s in &self.skins {
+            match out.iter_mut().find(|(mesh, _, _)| *mesh == s.mesh) {
+                Some((_, p, n)) => (*p, *n) = s.bend_from(worlds, p, n),
+                None => {
+                    let (p, n) = s.bend(worlds);
+                    out.push((s.mesh, p, n));
+                }
+            }
+        }
+        out
     }
 
     /// The moving instances' transforms at `t`: `(instance, W(t) · W₀⁻¹ · P)`. A transform
@@ -666,6 +844,42 @@ mod tests {
     }
 
     #[test]
+    fn weights_join_their_keys_target_by_target() {
+        // Two targets: (0, 1) at 0 s, (1, 0) at 2 s.
+        let c = WeightChannel {
+            node: 0,
+            interpolation: Interpolation::Linear,
+            times: vec![0.0, 2.0],
+            targets: 2,
+            values: vec![0.0, 1.0, 1.0, 0.0],
+        };
+        assert_eq!(c.problem(1), None);
+        assert_eq!(c.sample(0.5), vec![0.25, 0.75]);
+        assert_eq!(c.sample(3.0), vec![1.0, 0.0]);
+        let short = WeightChannel {
+            values: vec![0.0, 1.0, 1.0],
+            ..c.clone()
+        };
+        assert!(short
+            .problem(1)
+            .unwrap()
+            .contains("4 expected for 2 targets"));
+        // The shape: base plus each target's displacement times its weight.
+        let m = Morph {
+            mesh: 0,
+            node: 0,
+            base_positions: vec![Vec3::ZERO],
+            base_normals: vec![Vec3::Y],
+            position_deltas: vec![vec![Vec3::X], vec![Vec3::Z]],
+            normal_deltas: vec![vec![Vec3::ZERO], vec![Vec3::ZERO]],
+            default_weights: vec![0.0, 0.0],
+        };
+        let (p, n) = m.shape(&c.sample(0.5));
+        assert_eq!(p, vec![Vec3::new(0.25, 0.0, 0.75)]);
+        assert_eq!(n, vec![Vec3::Y]);
+    }
+
+    #[test]
     fn channels_that_cannot_play_say_why() {
         let one = [Vec4::ZERO];
         let bad = channel(
@@ -718,6 +932,7 @@ mod tests {
                 node(Some(0), Vec3::new(2.0, 0.0, 0.0)),
             ],
             clips: vec![Clip {
+                weights: Vec::new(),
                 name: "turn".into(),
                 channels: vec![channel(
                     Property::Rotation,
@@ -735,6 +950,7 @@ mod tests {
                 from_rest: Mat4::from_translation(Vec3::new(-2.0, 0.0, 0.0)),
             }],
             skins: Vec::new(),
+            morphs: Vec::new(),
         };
         assert_eq!(anim.animated_nodes(), vec![true, true]);
         let pose = anim.pose(Playing::One(0), 1.0);

@@ -610,15 +610,15 @@ fn box_corners(lo: Vec3, hi: Vec3) -> [Vec3; 8] {
 
 impl Scene {
     /// Places the instances that [`Scene::animations`] move where `playing` has them at `t`
-    /// seconds (looping past the end, see [`animation`](crate::animation)), and bends the
-    /// skinned meshes as their joints then stand; the rest stay.
+    /// seconds (looping past the end, see [`animation`](crate::animation)), and shapes the
+    /// meshes their morph targets and skins deform as they then stand; the rest stay.
     pub fn set_time(&mut self, playing: crate::animation::Playing, t: f32) {
         for (k, m) in self.animations.pose(playing, t) {
             if let Some(i) = self.instances.get_mut(k) {
                 i.transform = m;
             }
         }
-        for (mesh, positions, normals) in self.animations.bent(playing, t) {
+        for (mesh, positions, normals) in self.animations.deformed(playing, t) {
             if let Some(m) = self.meshes.get_mut(mesh) {
                 m.positions = positions;
                 m.normals = normals;

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use crate::animated::{animated, bending, bent, box_pose, frozen};
+use crate::animated::{animated, bending, bent, box_pose, curled, curling, frozen};
 use crate::helpers::{assert_clean_failure, run, run_ok, tmp};
 
 const FRAME: [&str; 4] = ["--width", "160", "--height", "120"];
@@ -54,7 +54,7 @@ fn render_at_a_time_places_what_the_file_animates() {
         let said = render(&file, &a, &["--time", &t.to_string()]);
         assert!(
             said.contains(&format!(
-                "animation    'slide' (1 of 1) at {t:.3} s of 2.000 s (1 instances move)"
+                "animation    'slide' (1 of 1) at {t:.3} s of 2.000 s (1 instance moves)"
             )),
             "{said}"
         );
@@ -171,16 +171,35 @@ fn animation_flags_that_cannot_apply_are_refused() {
 #[test]
 fn a_skinned_mesh_bends_as_its_joints_turn() {
     let dir = tmp("animation-skin");
-    let file = bending(&dir);
+    deforms_as_by_hand(&dir, &bending(&dir), "bend", |t| bent(&dir, t));
+}
+
+/// A card whose morph target curls its top: at 0.5 s (half the target) and 1 s (all of it) the
+/// frame is the frame of the card curled by hand, and a sequence ends on the single frame of
+/// its time, as for the skin above.
+#[test]
+fn a_morph_target_shapes_its_mesh_as_its_weight_says() {
+    let dir = tmp("animation-morph");
+    deforms_as_by_hand(&dir, &curling(&dir), "curl", |t| curled(&dir, t));
+}
+
+/// `file`, whose clip `clip` deforms a mesh, against the same scene deformed by hand at 0.5 s
+/// and 1 s (`by_hand(t)` writes it), and through a sequence.
+fn deforms_as_by_hand(
+    dir: &Path,
+    file: &Path,
+    clip: &str,
+    by_hand: impl Fn(f32) -> std::path::PathBuf,
+) {
     let straight = dir.join("straight.png");
     // One exposure for all: the meter aims at the centre of the file's bounds as loaded, and
     // the straight tube's bounds are taller than the bent one's (1 level over the ground).
     let render = |scene: &Path, out: &Path, extra: &[&str]| {
         render(scene, out, &[&["--exposure", "x2"][..], extra].concat())
     };
-    let said = render(&file, &straight, &[]);
+    let said = render(file, &straight, &[]);
     assert!(
-        said.contains("animation    'bend' (1 of 1) at 0.000 s"),
+        said.contains(&format!("animation    '{clip}' (1 of 1) at 0.000 s")),
         "{said}"
     );
     for t in [0.5f32, 1.0] {
@@ -188,11 +207,11 @@ fn a_skinned_mesh_bends_as_its_joints_turn() {
             dir.join(format!("a-{t}.png")),
             dir.join(format!("f-{t}.png")),
         );
-        render(&file, &a, &["--time", &t.to_string()]);
-        render(&bent(&dir, t), &f, &[]);
+        render(file, &a, &["--time", &t.to_string()]);
+        render(&by_hand(t), &f, &[]);
         let same = mean_difference(&a, &f);
         let moved = mean_difference(&straight, &f);
-        eprintln!("t = {t} s: skinned vs bent by hand {same:.4}, straight vs bent {moved:.3}");
+        eprintln!("{clip}, t = {t} s: file vs by hand {same:.4}, at rest vs by hand {moved:.3}");
         assert!(
             same < 0.05,
             "t = {t}: the skinned frame is {same} from the one bent by hand"
@@ -202,7 +221,7 @@ fn a_skinned_mesh_bends_as_its_joints_turn() {
     for technique in ["traditional", "virtual"] {
         let seq = dir.join(format!("seq-{technique}.png"));
         let said = render(
-            &file,
+            file,
             &seq,
             &[
                 "--technique",
@@ -217,11 +236,7 @@ fn a_skinned_mesh_bends_as_its_joints_turn() {
         );
         assert!(said.contains("at 0.750 s of 2.000 s"), "{said}");
         let single = dir.join(format!("single-{technique}.png"));
-        render(
-            &file,
-            &single,
-            &["--technique", technique, "--time", "0.75"],
-        );
+        render(file, &single, &["--technique", technique, "--time", "0.75"]);
         let d = mean_difference(&seq, &single);
         assert!(
             d < 0.05,

@@ -350,3 +350,138 @@ pub fn bending(dir: &Path) -> PathBuf {
     std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
     path
 }
+
+/// The card's one morph target's weight at `t`: 0 → 1 over the first second, back to 0 at 2 s
+/// (LINEAR keys 0, 1, 0 at 0, 1, 2 s).
+pub fn morph_weight(t: f32) -> f32 {
+    let t = if t > 2.0 { t % 2.0 } else { t };
+    if t <= 1.0 {
+        t
+    } else {
+        2.0 - t
+    }
+}
+
+/// A standing card, 1 wide and 1.5 tall at x 0 to 1 (a 6 × 8 grid facing +z), and its morph
+/// target's displacement: its top curls 0.8 towards +z, (y / 1.5)² of that at height y.
+fn card() -> (manyshadows_scene::Mesh, Vec<Vec3>) {
+    let (nx, ny) = (6u32, 8u32);
+    let mut mesh = manyshadows_scene::Mesh {
+        name: "card".into(),
+        ..Default::default()
+    };
+    let mut delta = Vec::new();
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let (x, y) = (i as f32 / nx as f32, 1.5 * j as f32 / ny as f32);
+            mesh.positions.push(Vec3::new(x, y, 0.0));
+            mesh.normals.push(Vec3::Z);
+            delta.push(Vec3::new(0.0, 0.0, 0.8 * (y / 1.5).powi(2)));
+        }
+    }
+    for j in 0..ny {
+        for i in 0..nx {
+            let a = j * (nx + 1) + i;
+            let (b, c, d) = (a + 1, a + nx + 1, a + nx + 2);
+            mesh.indices.extend([a, b, d, a, d, c]);
+        }
+    }
+    (mesh, delta)
+}
+
+/// The scene with the card curled by `w` of its target (normals as the file gives them: the
+/// target has no normal displacements, so they stay +z).
+fn card_scene(w: f32) -> Scene {
+    let mut scene = scene_at(0.0);
+    scene.name = "curl".into();
+    let (mut mesh, delta) = card();
+    for (p, d) in mesh.positions.iter_mut().zip(&delta) {
+        *p += *d * w;
+    }
+    scene.meshes[1] = mesh;
+    scene.instances[1].transform = Mat4::IDENTITY;
+    scene.materials[0].double_sided = true;
+    scene
+}
+
+/// Writes the scene with the card curled by hand as at `t`, `dir/curled-<t>.gltf`.
+pub fn curled(dir: &Path, t: f32) -> PathBuf {
+    let path = dir.join(format!("curled-{t}.gltf"));
+    write_gltf(&card_scene(morph_weight(t)), &path).unwrap();
+    path
+}
+
+/// Writes the morphing file, `dir/curl.gltf`: the flat card with one morph target and one
+/// clip, "curl", driving its weight 0, 1, 0 at 0, 1, 2 s.
+pub fn curling(dir: &Path) -> PathBuf {
+    let path = dir.join("curl.gltf");
+    write_gltf(&card_scene(0.0), &path).unwrap();
+    let (mesh, delta) = card();
+    let mut doc: Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    let node = doc["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|n| {
+            let m = &doc["meshes"][n["mesh"].as_u64().unwrap_or(u64::MAX) as usize];
+            let p = m["primitives"][0]["attributes"]["POSITION"].as_u64();
+            p.is_some_and(|p| doc["accessors"][p as usize]["count"] == mesh.positions.len())
+        })
+        .expect("the card's node");
+    let m = doc["nodes"][node]["mesh"].as_u64().unwrap() as usize;
+    let f32s = |v: &[f32]| v.iter().flat_map(|f| f.to_le_bytes()).collect::<Vec<u8>>();
+    let deltas: Vec<f32> = delta.iter().flat_map(|d| d.to_array()).collect();
+    let mut bin = f32s(&deltas);
+    let keys = bin.len();
+    bin.extend(f32s(&[0.0, 1.0, 2.0]));
+    let weights = bin.len();
+    bin.extend(f32s(&[0.0, 1.0, 0.0]));
+    std::fs::write(dir.join("curl-morph.bin"), &bin).unwrap();
+    let buffer = doc["buffers"].as_array().unwrap().len();
+    doc["buffers"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({ "uri": "curl-morph.bin", "byteLength": bin.len() }));
+    let view0 = doc["bufferViews"].as_array().unwrap().len();
+    let a0 = doc["accessors"].as_array().unwrap().len();
+    let (lo, hi) = delta.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(l, h), d| (l.min(*d), h.max(*d)),
+    );
+    for (k, (at, len, count, kind)) in [
+        (0, keys, delta.len(), "VEC3"),
+        (keys, 12, 3, "SCALAR"),
+        (weights, 12, 3, "SCALAR"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        doc["bufferViews"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({ "buffer": buffer, "byteOffset": at, "byteLength": len }));
+        let mut a =
+            json!({ "bufferView": view0 + k, "componentType": 5126, "count": count, "type": kind });
+        match k {
+            0 => {
+                a["min"] = json!(lo.to_array());
+                a["max"] = json!(hi.to_array());
+            }
+            1 => {
+                a["min"] = json!([0.0]);
+                a["max"] = json!([2.0]);
+            }
+            _ => {}
+        }
+        doc["accessors"].as_array_mut().unwrap().push(a);
+    }
+    doc["meshes"][m]["primitives"][0]["targets"] = json!([{ "POSITION": a0 }]);
+    doc["meshes"][m]["weights"] = json!([0.0]);
+    doc["animations"] = json!([{
+        "name": "curl",
+        "samplers": [{ "input": a0 + 1, "output": a0 + 2, "interpolation": "LINEAR" }],
+        "channels": [{ "sampler": 0, "target": { "node": node, "path": "weights" } }]
+    }]);
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    path
+}

@@ -110,10 +110,19 @@ pub(super) fn load_scene(path: &Path, options: &LoadOptions) -> Result<Parts, Sc
             }
         }
     }
-    // Skinned meshes stand where their joints put them at rest.
+    // Skinned meshes stand where their joints put them at rest, morphed ones at their default
+    // weights.
     let skinned = std::mem::take(&mut geometry.skinned);
-    let animations = read_animations(path, &opened, &geometry.meshes, skinned, &mut notes)?;
-    for (mesh, positions, normals) in animations.bent_at_rest() {
+    let morphed = std::mem::take(&mut geometry.morphed);
+    let animations = read_animations(
+        path,
+        &opened,
+        &geometry.meshes,
+        skinned,
+        morphed,
+        &mut notes,
+    )?;
+    for (mesh, positions, normals) in animations.deformed_at_rest() {
         let m = &mut geometry.meshes[mesh];
         m.positions = positions;
         m.normals = normals;

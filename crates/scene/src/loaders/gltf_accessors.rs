@@ -212,3 +212,26 @@ where
         _ => None,
     }
 }
+
+/// A checked `SCALAR` accessor of floats or normalized integers, as floats; `None` if its
+/// data is missing or outside its buffer, or of another type.
+pub(super) fn read_scalar_any<'a, 's, F>(a: &Accessor<'a>, get: F) -> Option<Vec<f32>>
+where
+    F: Clone + Fn(::gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    let norm = a.normalized();
+    match (a.data_type(), norm) {
+        (DataType::F32, _) => Iter::<f32>::new(a.clone(), get).map(|it| it.collect()),
+        (DataType::I8, true) => Iter::<i8>::new(a.clone(), get)
+            .map(|it| it.map(|c| (c as f32 / 127.0).max(-1.0)).collect()),
+        (DataType::U8, true) => {
+            Iter::<u8>::new(a.clone(), get).map(|it| it.map(|c| c as f32 / 255.0).collect())
+        }
+        (DataType::I16, true) => Iter::<i16>::new(a.clone(), get)
+            .map(|it| it.map(|c| (c as f32 / 32767.0).max(-1.0)).collect()),
+        (DataType::U16, true) => {
+            Iter::<u16>::new(a.clone(), get).map(|it| it.map(|c| c as f32 / 65535.0).collect())
+        }
+        _ => None,
+    }
+}

@@ -7,8 +7,8 @@
 //! allows. A channel that cannot play (a type the specification does not allow, data outside
 //! its buffer, key times not finite or not increasing, values not finite, a count that does
 //! not match its interpolation, a zero rotation) is dropped, and the clip's note says which
-//! and why; a clip left without channels is dropped with it. Morph-target weight channels are
-//! not played yet (the file's default weights are drawn), said in one note.
+//! and why; a clip left without channels is dropped with it. Morph-target weight channels
+//! (`SCALAR`, as many weights per key as the node's mesh has targets) play too.
 //!
 //! Skins (§3.7.3): a skinned node's primitives are read in the mesh's own coordinates with
 //! their `JOINTS_0` and `WEIGHTS_0` (`gltf_geometry`); here each gets its joints and inverse
@@ -23,10 +23,12 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 use std::path::Path;
 
 use super::common::parse_error;
-use super::gltf_accessors::{check_layout, read_scalar, read_vec3, read_vec4};
-use super::gltf_geometry::SkinnedPrimitive;
+use super::gltf_accessors::{check_layout, read_scalar, read_scalar_any, read_vec3, read_vec4};
+use super::gltf_geometry::{MorphedPrimitive, SkinnedPrimitive};
 use super::gltf_open::Opened;
-use crate::animation::{Animations, Channel, Clip, Interpolation, Node, Property, Skin};
+use crate::animation::{
+    Animations, Channel, Clip, Interpolation, Morph, Node, Property, Skin, WeightChannel,
+};
 use crate::error::SceneError;
 use crate::model::Mesh;
 
@@ -38,12 +40,16 @@ pub(super) fn read_animations(
     opened: &Opened,
     meshes: &[Mesh],
     skinned: Vec<Option<SkinnedPrimitive>>,
+    morphed: Vec<Option<MorphedPrimitive>>,
     notes: &mut Vec<String>,
 ) -> Result<Animations, SceneError> {
     let document = &opened.document;
     let buffers = &opened.buffers;
     let get = |b: ::gltf::Buffer<'_>| buffers.get(b.index()).map(|d| d.0.as_slice());
-    if document.animations().len() == 0 && skinned.iter().all(Option::is_none) {
+    if document.animations().len() == 0
+        && skinned.iter().all(Option::is_none)
+        && morphed.iter().all(Option::is_none)
+    {
         return Ok(Animations::default());
     }
     let mut nodes: Vec<Node> = document
@@ -67,13 +73,13 @@ pub(super) fn read_animations(
         }
     }
     let mut clips = Vec::new();
-    let mut weights = 0usize;
     for (k, anim) in document.animations().enumerate() {
         let name = anim
             .name()
             .map(str::to_owned)
             .unwrap_or_else(|| format!("animation {k}"));
         let mut channels = Vec::new();
+        let mut weights = Vec::new();
         let mut dropped = Vec::new();
         for (c, channel) in anim.channels().enumerate() {
             let target = channel.target();
@@ -82,7 +88,14 @@ pub(super) fn read_animations(
                 GltfProperty::Rotation => Property::Rotation,
                 GltfProperty::Scale => Property::Scale,
                 GltfProperty::MorphTargetWeights => {
-                    weights += 1;
+                    let node = target.node().index();
+                    let sampler = channel.sampler();
+                    match read_weights(&sampler, &get, nodes.len(), node) {
+                        Ok(w) => weights.push(w),
+                        Err(why) => {
+                            dropped.push(format!("channel {c} (node {node} weights): {why}"))
+                        }
+                    }
                     continue;
                 }
             };
@@ -120,7 +133,7 @@ pub(super) fn read_animations(
                 dropped.join("; ")
             ));
         }
-        if channels.is_empty() {
+        if channels.is_empty() && weights.is_empty() {
             if !dropped.is_empty() {
                 notes.push(format!(
                     "animation '{name}' has nothing left to play: dropped"
@@ -128,13 +141,11 @@ pub(super) fn read_animations(
             }
             continue;
         }
-        clips.push(Clip { name, channels });
-    }
-    if weights > 0 {
-        notes.push(format!(
-            "{weights} morph-target weight channel(s) not played (morph targets are drawn at \
-             the file's default weights)"
-        ));
+        clips.push(Clip {
+            name,
+            channels,
+            weights,
+        });
     }
     let mut skins = Vec::new();
     for (mesh, primitive) in skinned.into_iter().enumerate() {
@@ -188,12 +199,94 @@ pub(super) fn read_animations(
         }
         skins.push(s);
     }
+    let morphs = morphed
+        .into_iter()
+        .enumerate()
+        .filter_map(|(mesh, m)| {
+            let m = m?;
+            let base = &meshes[mesh];
+            Some(Morph {
+                mesh,
+                node: m.node,
+                base_positions: base.positions.clone(),
+                base_normals: base.normals.clone(),
+                position_deltas: m.positions,
+                normal_deltas: m.normals,
+                default_weights: m.weights,
+            })
+        })
+        .collect();
     Ok(Animations {
         nodes: std::mem::take(&mut nodes),
         clips,
         moving: Vec::new(),
         skins,
+        morphs,
     })
+}
+
+/// A weights channel's keys, checked: `SCALAR` floats (or the normalized integer types
+/// §3.11.5 allows), as many per key as the node's mesh has targets.
+fn read_weights<'a, 's, F>(
+    sampler: &::gltf::animation::Sampler<'a>,
+    get: &F,
+    nodes: usize,
+    node: usize,
+) -> Result<WeightChannel, String>
+where
+    F: Clone + Fn(::gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    let input = sampler.input();
+    if input.data_type() != DataType::F32 || input.dimensions() != Dimensions::Scalar {
+        return Err("key times are not SCALAR floats".into());
+    }
+    check_layout(&input, &bad("key times")).map_err(reason)?;
+    let output = sampler.output();
+    let allowed = [
+        (DataType::F32, false),
+        (DataType::I8, true),
+        (DataType::U8, true),
+        (DataType::I16, true),
+        (DataType::U16, true),
+    ];
+    if output.dimensions() != Dimensions::Scalar
+        || !allowed.contains(&(output.data_type(), output.normalized()))
+    {
+        return Err(format!(
+            "weights are {:?} {:?}, not SCALAR floats or normalized integers",
+            output.dimensions(),
+            output.data_type()
+        ));
+    }
+    check_layout(&output, &bad("weights")).map_err(reason)?;
+    let times = read_scalar(&input, get.clone())
+        .filter(|t| t.len() == input.count())
+        .ok_or("key times are missing or outside their buffer")?;
+    let values = read_scalar_any(&output, get.clone())
+        .filter(|v| v.len() == output.count())
+        .ok_or("weights are missing or outside their buffer")?;
+    let interpolation = match sampler.interpolation() {
+        GltfInterpolation::Step => Interpolation::Step,
+        GltfInterpolation::Linear => Interpolation::Linear,
+        GltfInterpolation::CubicSpline => Interpolation::CubicSpline,
+    };
+    let per_key = if interpolation == Interpolation::CubicSpline {
+        3
+    } else {
+        1
+    };
+    let targets = values.len() / (per_key * times.len()).max(1);
+    let ch = WeightChannel {
+        node,
+        interpolation,
+        times,
+        targets,
+        values,
+    };
+    match ch.problem(nodes) {
+        Some(why) => Err(why),
+        None => Ok(ch),
+    }
 }
 
 /// A sampler's key times and values, checked; the error says why it cannot be read.

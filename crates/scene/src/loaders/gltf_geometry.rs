@@ -36,6 +36,22 @@ pub(super) struct SkinnedPrimitive {
     pub(super) weights: Vec<[f32; 4]>,
 }
 
+/// A primitive's morph targets, in the mesh's coordinates as loaded (the node's rest transform
+/// baked into the displacements as into the vertices).
+pub(super) struct MorphedPrimitive {
+    /// The node whose weights shape it.
+    pub(super) node: usize,
+    /// Per target, a displacement per vertex.
+    pub(super) positions: Vec<Vec<Vec3>>,
+    /// Per target, a normal displacement per vertex (zeros where the target has none).
+    pub(super) normals: Vec<Vec<Vec3>>,
+    /// The node's default weights, else the mesh's, else zeros.
+    pub(super) weights: Vec<f32>,
+}
+
+/// Most morph targets a primitive may have.
+const MAX_MORPH_TARGETS: usize = 256;
+
 /// The triangle meshes of a document, in depth-first node order.
 pub(super) struct Geometry<'a> {
     pub(super) meshes: Vec<Mesh>,
@@ -49,6 +65,8 @@ pub(super) struct Geometry<'a> {
     pub(super) mesh_nodes: Vec<Option<usize>>,
     /// Each mesh's skin, for a skinned node's primitives (in the mesh's own coordinates).
     pub(super) skinned: Vec<Option<SkinnedPrimitive>>,
+    /// Each mesh's morph targets, for a primitive that has them.
+    pub(super) morphed: Vec<Option<MorphedPrimitive>>,
     /// Remarks on instances left out.
     pub(super) notes: Vec<String>,
     /// Every node reached from the default scene with its world transform, depth-first.
@@ -70,6 +88,7 @@ pub(super) fn read_geometry<'a>(
         transforms: Vec::new(),
         mesh_nodes: Vec::new(),
         skinned: Vec::new(),
+        morphed: Vec::new(),
         notes: Vec::new(),
         nodes: Vec::new(),
         skipped: 0,
@@ -120,6 +139,32 @@ pub(super) fn read_geometry<'a>(
                 None => read_primitive(path, &label, &prim, &get)?,
             };
             let vertices = read.positions.len();
+            let targets = prim.morph_targets().len();
+            let morphed = match node {
+                Some(n) if targets > 0 => {
+                    if draco.is_some() {
+                        return Err(parse_error(
+                            path,
+                            format!(
+                                "glTF primitive {label} has morph targets and is \
+                                 Draco-compressed, which this loader does not read (decompress \
+                                 it, e.g. with gltf-transform)"
+                            ),
+                        ));
+                    }
+                    let defaults = opened
+                        .document
+                        .nodes()
+                        .nth(n)
+                        .and_then(|n| n.weights())
+                        .or(mesh.weights())
+                        .unwrap_or(&[]);
+                    Some(read_morph_targets(
+                        path, &label, &prim, &get, vertices, world, n, defaults,
+                    )?)
+                }
+                _ => None,
+            };
             let skinned = match skin {
                 Some(skin) => {
                     let (joints, weights) =
@@ -132,7 +177,13 @@ pub(super) fn read_geometry<'a>(
                 }
                 None => None,
             };
-            let m = finish(path, &label, read, world, skinned.is_some())?;
+            let m = finish(
+                path,
+                &label,
+                read,
+                world,
+                skinned.is_some() || morphed.is_some(),
+            )?;
             if m.indices.is_empty() {
                 continue;
             }
@@ -144,6 +195,7 @@ pub(super) fn read_geometry<'a>(
             out.mesh_nodes
                 .push(if skinned.is_some() { None } else { node });
             out.skinned.push(skinned);
+            out.morphed.push(morphed);
         }
         Ok::<(), SceneError>(())
     };
@@ -451,6 +503,95 @@ fn finish(
         set_normals(&mut mesh, normals);
     }
     Ok(mesh)
+}
+
+/// A primitive's morph targets (`POSITION` and `NORMAL` displacements, of the types those
+/// attributes allow), one per vertex, taken through the linear part of `world` (normals
+/// through its inverse transpose) as the vertices are baked.
+#[allow(clippy::too_many_arguments)]
+fn read_morph_targets<'p, 's, F>(
+    path: &Path,
+    label: &str,
+    prim: &'p ::gltf::Primitive<'p>,
+    get: &F,
+    vertices: usize,
+    world: Mat4,
+    node: usize,
+    defaults: &[f32],
+) -> Result<MorphedPrimitive, SceneError>
+where
+    F: Clone + Fn(::gltf::Buffer<'p>) -> Option<&'s [u8]>,
+{
+    let targets = prim.morph_targets().len();
+    if targets > MAX_MORPH_TARGETS {
+        return Err(too_large(
+            path,
+            format!(
+                "glTF primitive {label} has {targets} morph targets (at most {MAX_MORPH_TARGETS})"
+            ),
+        ));
+    }
+    let linear = Mat3::from_mat4(world);
+    let normal_matrix = if linear.determinant().abs() > 1e-30 {
+        linear.inverse().transpose()
+    } else {
+        Mat3::IDENTITY
+    };
+    let mut out = MorphedPrimitive {
+        node,
+        positions: Vec::with_capacity(targets),
+        normals: Vec::with_capacity(targets),
+        weights: (0..targets)
+            .map(|k| defaults.get(k).copied().unwrap_or(0.0))
+            .collect(),
+    };
+    for (k, target) in prim.morph_targets().enumerate() {
+        let what = |a: &str| format!("morph target {k} {a}");
+        let read = |a: Option<::gltf::Accessor<'p>>, name: &str, types, m: Mat3| {
+            let Some(a) = a else {
+                return Ok(vec![Vec3::ZERO; vertices]);
+            };
+            check_accessor(path, label, &what(name), &a, types, Dimensions::Vec3)?;
+            let d = read_vec3(&a, get.clone())
+                .filter(|d| d.len() == vertices)
+                .ok_or_else(|| {
+                    parse_error(
+                        path,
+                        format!(
+                            "glTF primitive {label}: {} is missing, outside its buffer or not \
+                             one per vertex",
+                            what(name)
+                        ),
+                    )
+                })?;
+            if d.iter().any(|v| !v.is_finite()) {
+                return Err(parse_error(
+                    path,
+                    format!("glTF primitive {label}: {} is not finite", what(name)),
+                ));
+            }
+            Ok::<_, SceneError>(d.into_iter().map(|v| m * v).collect::<Vec<Vec3>>())
+        };
+        out.positions.push(read(
+            target.positions(),
+            "POSITION",
+            POSITION_TYPES,
+            linear,
+        )?);
+        out.normals.push(read(
+            target.normals(),
+            "NORMAL",
+            NORMAL_TYPES,
+            normal_matrix,
+        )?);
+    }
+    if out.weights.iter().any(|w| !w.is_finite()) {
+        return Err(parse_error(
+            path,
+            format!("glTF primitive {label}: a default morph weight is not finite"),
+        ));
+    }
+    Ok(out)
 }
 
 /// Per vertex, four joints and their weights.

@@ -91,7 +91,7 @@ impl Player {
         for (k, m) in scene.animations.pose(self.playing, self.time) {
             renderer.set_instance_transform(k, m)?;
         }
-        for (mesh, positions, normals) in scene.animations.bent(self.playing, self.time) {
+        for (mesh, positions, normals) in scene.animations.deformed(self.playing, self.time) {
             renderer.set_mesh_vertices(mesh, &positions, &normals)?;
         }
         self.applied = Some((self.playing, self.time));
