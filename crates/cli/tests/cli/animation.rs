@@ -214,9 +214,9 @@ fn deforms_as_by_hand(
         eprintln!("{clip}, t = {t} s: file vs by hand {same:.4}, at rest vs by hand {moved:.3}");
         assert!(
             same < 0.05,
-            "t = {t}: the skinned frame is {same} from the one bent by hand"
+            "{clip}, t = {t}: the file's frame is {same} from the one by hand"
         );
-        assert!(moved > 0.5, "t = {t}: the tube hardly bent ({moved})");
+        assert!(moved > 0.2, "{clip}, t = {t}: the mesh hardly moved ({moved})");
     }
     for technique in ["traditional", "virtual"] {
         let seq = dir.join(format!("seq-{technique}.png"));

@@ -3,6 +3,7 @@
 
 #![allow(dead_code)]
 
+pub mod animated;
 pub mod models;
 
 use std::io::{BufRead, BufReader, Write};
