@@ -126,6 +126,11 @@ pub(crate) enum BenchCommand {
     /// and a plot.
     #[command(mut_arg("out_dir", |a| a.default_value("bench-probes").required(false)))]
     Probes(Box<bench::probes::ProbesArgs>),
+    /// Scenes that move as authored (the skinned `crowd`, or an animated glTF file) per
+    /// technique against the same scene frozen, same runs: whole-frame and shadow GPU time,
+    /// views or pages redrawn a frame, CPU time of the pose; table and results.json.
+    #[command(mut_arg("out_dir", |a| a.default_value("bench-animation").required(false)))]
+    Animation(Box<bench::animation::AnimationArgs>),
     /// Stereo frames: both eyes' G-buffers in one layered or multiview pass against one pass
     /// per eye (and one mono eye for scale), per scene and eye size; G-buffer and whole-frame
     /// GPU time, CPU time, ratios to per-eye; table, results.json and a plot.

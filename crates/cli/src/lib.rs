@@ -110,6 +110,7 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
         Some(Command::Bench(BenchCommand::Soft(args))) => bench::soft::soft(&args),
         Some(Command::Bench(BenchCommand::Stereo(args))) => bench::stereo::stereo(&args),
         Some(Command::Bench(BenchCommand::Probes(args))) => bench::probes::probes(&args),
+        Some(Command::Bench(BenchCommand::Animation(args))) => bench::animation::animation(&args),
         Some(Command::Bench(BenchCommand::Estimate(args))) => bench::estimate::estimate(&args),
         Some(Command::Bench(BenchCommand::Denoise(args))) => bench::denoise::denoise(&args),
         Some(Command::Bench(BenchCommand::Suite(args))) => bench::suite::suite(&args),

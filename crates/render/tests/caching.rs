@@ -759,3 +759,97 @@ fn an_overflowing_pool_keeps_its_whole_pages_on_still_frames() {
         );
     }
 }
+
+/// Bounding sphere as the renderer takes one: the centre of the vertices' box, the farthest
+/// vertex's distance.
+fn sphere_of(positions: &[Vec3]) -> (Vec3, f32) {
+    let lo = positions
+        .iter()
+        .fold(Vec3::splat(f32::MAX), |a, &p| a.min(p));
+    let hi = positions
+        .iter()
+        .fold(Vec3::splat(f32::MIN), |a, &p| a.max(p));
+    let c = (lo + hi) * 0.5;
+    (
+        c,
+        positions.iter().map(|p| p.distance(c)).fold(0.0, f32::max),
+    )
+}
+
+/// The skinned crowd with 256 lights: after every tube bends a step, the frame redraws exactly
+/// the views that a tube's old or new bounding sphere reaches (counted here from the plan's
+/// views and the tubes' vertices, bent on the CPU), which includes every view whose frustum a
+/// sphere meets by this test's own plane test (Gribb–Hartmann, from the view-projection), and
+/// fewer than every view; a frame with nothing moving redraws none.
+#[test]
+fn a_bending_crowd_redraws_the_views_its_bounds_reach() {
+    use manyshadows::scene::animation::Playing;
+    let ctx = common::context();
+    let scene = builtin::build(
+        "crowd",
+        &BuiltinOptions {
+            lights: Some(256),
+            mix: LightMix::All,
+            light_sizes: manyshadows::scene::light_size::LightSizes::HARD,
+            ..BuiltinOptions::default()
+        },
+    )
+    .unwrap();
+    let settings = manyshadows::RenderSettings::default()
+        .with_width(160)
+        .with_height(90);
+    let mut r = manyshadows::Renderer::new(&ctx, &scene, settings).unwrap();
+    let first = r.render().unwrap();
+    let views = r.plan().views.clone();
+    assert_eq!(first.shadow_stats.views_drawn as usize, views.len());
+    let still = r.render().unwrap();
+    assert_eq!(still.shadow_stats.views_drawn, 0, "nothing moved");
+    let before: Vec<(Vec3, f32)> = scene
+        .animations
+        .skins
+        .iter()
+        .map(|s| sphere_of(&scene.meshes[s.mesh].positions))
+        .collect();
+    let bent = scene.animations.deformed(Playing::One(0), 0.25);
+    let mut spheres = before.clone();
+    for (mesh, p, n) in &bent {
+        r.set_mesh_vertices(*mesh, p, n).unwrap();
+        spheres.push(sphere_of(p));
+    }
+    let frame = r.render().unwrap();
+    assert_eq!(r.plan().views.len(), views.len(), "the plan stayed");
+    let by_rule = views
+        .iter()
+        .filter(|v| spheres.iter().any(|&(c, rad)| v.sphere_visible(c, rad)))
+        .count();
+    // This test's own frustum test: the six planes of the view-projection (0..1 depth).
+    let by_planes = views
+        .iter()
+        .filter(|v| {
+            let m = v.view_proj.transpose();
+            let (x, y, z, w) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
+            let planes = [w + x, w - x, w + y, w - y, z, w - z];
+            spheres.iter().any(|&(c, rad)| {
+                planes.iter().all(|p| {
+                    let n = p.truncate();
+                    p.dot(c.extend(1.0)) >= -rad * n.length()
+                })
+            })
+        })
+        .count();
+    let drawn = frame.shadow_stats.views_drawn as usize;
+    eprintln!(
+        "crowd, 256 lights: {drawn} of {} views redrawn; the bounds reach {by_rule} by the \
+         renderer's rule, {by_planes} by plane test",
+        views.len()
+    );
+    assert_eq!(
+        drawn, by_rule,
+        "redrawn views against those the moved bounds reach"
+    );
+    assert!(
+        by_planes <= drawn,
+        "a view a moved sphere meets was not redrawn"
+    );
+    assert!(drawn < views.len(), "every view redrawn");
+}

@@ -2,6 +2,7 @@
 //! (warm-up, round-robin runs, medians, progress, results: [`harness`]) and the plots
 //! ([`plot`]).
 
+pub(crate) mod animation;
 pub(crate) mod denoise;
 mod denoise_table;
 pub(crate) mod estimate;

@@ -174,3 +174,27 @@ fn bench_estimate_sets_each_estimate_beside_its_frame() {
 fn records_of(json: &Value) -> Vec<Value> {
     records(json).clone()
 }
+
+/// `bench animation` on a small crowd: each technique's animated frames redraw some of their
+/// views or pages every frame (the tubes bend), the frozen ones none, and the pose's CPU time
+/// is measured for the animated frames only; a scene where nothing moves is refused.
+#[test]
+fn bench_animation_measures_moving_against_frozen() {
+    let (_, json) = bench_ok(
+        "animation",
+        "--crowd 4 --lights 8 --screen 64x36 --repeats 1 --warmup 1 --techniques traditional,virtual",
+    );
+    let rows = json["records"].as_array().unwrap();
+    assert_eq!(rows.len(), 4, "{json}");
+    for r in rows {
+        let drawn = r["drawn"].as_u64().unwrap();
+        match r["state"].as_str().unwrap() {
+            "animated" => {
+                assert!(drawn > 0, "{r}");
+                assert!(r["pose_cpu_ms"].as_f64().unwrap() > 0.0, "{r}");
+            }
+            _ => assert_eq!(drawn, 0, "{r}"),
+        }
+    }
+    rejects("animation --scene cubes", "nothing in it moves");
+}

@@ -216,7 +216,10 @@ fn deforms_as_by_hand(
             same < 0.05,
             "{clip}, t = {t}: the file's frame is {same} from the one by hand"
         );
-        assert!(moved > 0.2, "{clip}, t = {t}: the mesh hardly moved ({moved})");
+        assert!(
+            moved > 0.2,
+            "{clip}, t = {t}: the mesh hardly moved ({moved})"
+        );
     }
     for technique in ["traditional", "virtual"] {
         let seq = dir.join(format!("seq-{technique}.png"));

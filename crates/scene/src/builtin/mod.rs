@@ -13,6 +13,7 @@
 //! | `cubes` | a floor, a few boxes and a sphere, one light of each type | 3 | small golden images |
 //! | `courtyard` | textured floor and walls, a lattice roof, banners, shrubs and a wire fence (alpha-masked cards), a few solids | 8 | real-content features: textures and alpha-masked casters in every technique ([`courtyard`]) |
 //! | `courtyard-opaque` | `courtyard` with every material opaque | 8 | the same geometry without masks: what masks change |
+//! | `crowd` | 64 tubes over a floor, each skinned to two joints and swaying (one 2 s clip) | 16 | animation: moving, deforming casters that caching, pages and rays must follow ([`crowd`]) |
 //!
 //! Light layouts are **seeded and deterministic**: the same [`BuiltinOptions`] always give the
 //! same scene. Geometry does not depend on the seed (so benchmarks with different light
@@ -35,6 +36,7 @@
 pub mod analytic;
 pub mod atrium;
 pub mod courtyard;
+pub mod crowd;
 pub mod cubes;
 pub mod dragon;
 pub(crate) mod lights;
@@ -63,6 +65,7 @@ pub const SCENE_NAMES: &[&str] = &[
     "cubes",
     "courtyard",
     "courtyard-opaque",
+    "crowd",
 ];
 
 /// Builds the built-in scene `name` (one of [`SCENE_NAMES`]). With more than
@@ -102,6 +105,7 @@ pub fn build(name: &str, opts: &BuiltinOptions) -> Result<Scene, SceneError> {
         "cubes" => cubes::build(opts),
         "courtyard" => courtyard::build(opts, true),
         "courtyard-opaque" => courtyard::build(opts, false),
+        "crowd" => crowd::build(opts),
         _ => unreachable!("checked against SCENE_NAMES above"),
     };
     if opts.lights.is_some_and(|n| n > LOCAL_LAYOUT_ABOVE) {

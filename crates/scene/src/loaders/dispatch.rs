@@ -234,7 +234,7 @@ fn assemble(
              placed by the animation: they stay still"
         ));
     }
-    if !animations.clips.is_empty() && animations.moving.is_empty() {
+    if !animations.clips.is_empty() && animations.is_empty() {
         notes.push(
             "the file's animations move no mesh (only lights, cameras or empty nodes)".into(),
         );
