@@ -717,10 +717,68 @@ fn dropped_models_render_as_render_renders_the_files() {
         "a double-click does not frame the model again"
     );
 
+    animated_model_plays(&mut browser, &models, &dir);
+
     drop(browser);
     for d in [chromium_dir, pkg, dir, models] {
         let _ = std::fs::remove_dir_all(d);
     }
+}
+
+/// A dropped animated glTF (the sliding, turning box of tests/common/animated.rs, a .gltf with
+/// its key buffer): the page shows its animation controls, paused at 0.5 s it shows `render
+/// --time 0.5`'s frame (within the drop bound), another time another frame, and playing, its
+/// time runs.
+fn animated_model_plays(browser: &mut Browser, models: &Path, dir: &Path) {
+    let file = common::animated::animated(models);
+    let status = drop_files(
+        browser,
+        models,
+        &[
+            ("slide.gltf", "slide.gltf"),
+            ("slide-keys.bin", "slide-keys.bin"),
+        ],
+    );
+    assert!(!status.starts_with("not"), "slide.gltf: {status}");
+    let clips = browser.eval("window.manyshadows.animations()", 10);
+    assert_eq!(clips[0]["name"], "slide", "{clips}");
+    assert_eq!(clips[0]["duration"], 2.0, "{clips}");
+    let shown = browser.eval("document.getElementById('anim_row').hidden", 10);
+    assert_eq!(shown, json!(false), "the animation controls are hidden");
+    let status = browser.eval("window.manyshadows.animate(0, 0.5, false)", 900);
+    assert!(
+        !status.as_str().unwrap_or("").starts_with("not"),
+        "{status}"
+    );
+    let half = frame(browser);
+    let native = render_native(
+        dir,
+        "slide-0.5",
+        &["--scene", file.to_str().unwrap(), "--time", "0.5"],
+    );
+    let f = flip_against(&half, &native, "drop-animated");
+    eprintln!("dropped animated .gltf at 0.5 s vs render --time 0.5: mean FLIP {f:.4}");
+    assert!(
+        f <= DROP_MAX_FLIP,
+        "dropped animated .gltf at 0.5 s: mean FLIP {f:.4}"
+    );
+    browser.eval("window.manyshadows.animate(0, 1.25, false)", 900);
+    let later = frame(browser);
+    assert!(
+        differing_pixels(&later, &native) > 100,
+        "1.25 s shows the frame of 0.5 s"
+    );
+    // Playing: the time runs (the page draws frame after frame meanwhile).
+    browser.eval("window.manyshadows.animate(0, 0, true)", 900);
+    let t = browser.eval(
+        "new Promise((r) => setTimeout(() => r(window.manyshadows.animationTime()), 1500))",
+        60,
+    );
+    assert!(
+        t.as_f64().unwrap_or(0.0) > 0.0,
+        "the animation does not play: {t}"
+    );
+    browser.eval("window.manyshadows.animate(0, 0, false)", 900);
 }
 
 /// The Stanford dragon's npm package (`cargo xtask test` unpacks it into target/npm; also in

@@ -12,6 +12,7 @@
 //! framing camera and ground. `scene=model` then means that model.
 #![cfg(target_arch = "wasm32")]
 
+use manyshadows::scene::animation::Playing;
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
 use manyshadows::scene::loaders::{load_scene_from_memory, Ground, LoadOptions, MemoryFiles};
 use manyshadows::scene::{Camera, Scene};
@@ -140,6 +141,21 @@ pub fn technique_names() -> String {
         .join("\n")
 }
 
+/// `text` as a JSON string (quotes, backslashes and control characters escaped).
+fn json_string(text: &str) -> String {
+    let mut out = String::from("\"");
+    for c in text.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
 /// One scene on the browser's WebGPU device, rendered on demand.
 #[wasm_bindgen]
 pub struct WebRenderer {
@@ -158,6 +174,8 @@ pub struct WebRenderer {
     score: Option<score::ScoreRun>,
     /// The page's canvas through its WebGPU context, where one is attached.
     canvas: Option<Canvas>,
+    /// The animation and time the renderer's scene was last placed at (`None`: as built).
+    applied: Option<(Playing, f32)>,
 }
 
 /// The page's canvas through its WebGPU context: `rgba8unorm`, written by copying the frame
@@ -225,6 +243,7 @@ impl WebRenderer {
             last_gpu_times: String::new(),
             score: None,
             canvas: None,
+            applied: None,
         })
     }
 
@@ -310,6 +329,7 @@ impl WebRenderer {
             self.renderer = renderer;
             self.base_camera = base_camera;
             self.target = target;
+            self.applied = None;
         }
         self.settings = next;
         Ok(())
@@ -337,6 +357,7 @@ impl WebRenderer {
         self.renderer = renderer;
         self.base_camera = base_camera;
         self.target = target;
+        self.applied = None;
         self.settings = next;
         let notes = self.notes_of(&model);
         self.model = Some(model);
@@ -358,6 +379,59 @@ impl WebRenderer {
             .as_ref()
             .map(|m| self.notes_of(m))
             .unwrap_or_default()
+    }
+
+    /// The scene's animations as JSON, `[{"name": …, "duration": …}]` in the file's order
+    /// (`[]` when nothing in it moves).
+    pub fn animations(&self) -> String {
+        let a = &self.renderer.scene().animations;
+        if a.is_empty() {
+            return "[]".into();
+        }
+        let clips: Vec<String> = a
+            .clips
+            .iter()
+            .map(|c| {
+                format!(
+                    "{{\"name\":{},\"duration\":{}}}",
+                    json_string(&c.name),
+                    c.duration()
+                )
+            })
+            .collect();
+        format!("[{}]", clips.join(","))
+    }
+
+    /// Places the scene where animation `which` (its number from 0, its name, or `all`) has
+    /// it at `t` seconds (looping past its end): moved instances and deformed meshes, as
+    /// `render --time` does. Nothing is redone where the scene already stands there, so a
+    /// paused animation keeps its shadow maps. Errors: no such animation, a time that is not
+    /// finite.
+    pub fn set_time(&mut self, which: String, t: f32) -> Result<(), JsValue> {
+        if !t.is_finite() {
+            return Err(err(format!(
+                "animation time {t}: not a finite number of seconds"
+            )));
+        }
+        let a = &self.renderer.scene().animations;
+        if a.is_empty() {
+            return Ok(());
+        }
+        let playing = a.choose(&which).map_err(err)?;
+        let t = a.wrap(playing, t);
+        if self.applied == Some((playing, t)) {
+            return Ok(());
+        }
+        let pose = a.pose(playing, t);
+        let deformed = a.deformed(playing, t);
+        for (k, m) in pose {
+            self.renderer.set_instance_transform(k, m).map_err(err)?;
+        }
+        for (mesh, p, n) in deformed {
+            self.renderer.set_mesh_vertices(mesh, &p, &n).map_err(err)?;
+        }
+        self.applied = Some((playing, t));
+        Ok(())
     }
 
     /// The open model's file name, empty without one.
