@@ -245,8 +245,12 @@ pub struct Skin {
     pub inverse_bind: Vec<Mat4>,
     /// Per vertex, four indices into `joints`.
     pub vertex_joints: Vec<[u16; 4]>,
-    /// Per vertex, the four joints' weights (summing to 1).
+    /// Per vertex, the four joints' weights (summing to 1 with `extra_weights`).
     pub vertex_weights: Vec<[f32; 4]>,
+    /// Per vertex, four more joints (glTF's `JOINTS_1`), or empty.
+    pub extra_joints: Vec<[u16; 4]>,
+    /// Their weights (glTF's `WEIGHTS_1`), or empty.
+    pub extra_weights: Vec<[f32; 4]>,
     /// The mesh's vertices and normals as the file gives them, before any joint moves them.
     pub bind_positions: Vec<Vec3>,
     /// Normals in the same coordinates.
@@ -278,15 +282,19 @@ impl Skin {
         if self.vertex_joints.len() != n
             || self.vertex_weights.len() != n
             || self.bind_normals.len() != n
+            || self.extra_joints.len() != self.extra_weights.len()
+            || !(self.extra_joints.is_empty() || self.extra_joints.len() == n)
         {
             return Some("joints, weights and vertices differ in number".into());
         }
         let count = self.joints.len();
+        let extra = self.extra_joints.iter().zip(&self.extra_weights);
         for (v, (j, w)) in self
             .vertex_joints
             .iter()
             .zip(&self.vertex_weights)
             .enumerate()
+            .chain(extra.enumerate())
         {
             if let Some(k) = (0..4).find(|&k| w[k] > 0.0 && usize::from(j[k]) >= count) {
                 return Some(format!(
@@ -325,16 +333,20 @@ impl Skin {
         };
         let mut positions = Vec::with_capacity(self.bind_positions.len());
         let mut normals = Vec::with_capacity(self.bind_positions.len());
-        for (((p, n), j), w) in bind_positions
+        for (v, (((p, n), j), w)) in bind_positions
             .iter()
             .zip(bind_normals)
             .zip(&self.vertex_joints)
             .zip(&self.vertex_weights)
+            .enumerate()
         {
             let mut m = Mat4::ZERO;
-            for k in 0..4 {
-                if w[k] != 0.0 {
-                    m += at(j[k]) * w[k];
+            let extra = self.extra_joints.get(v).zip(self.extra_weights.get(v));
+            for (j, w) in std::iter::once((j, w)).chain(extra) {
+                for k in 0..4 {
+                    if w[k] != 0.0 {
+                        m += at(j[k]) * w[k];
+                    }
                 }
             }
             positions.push(m.transform_point3(*p));

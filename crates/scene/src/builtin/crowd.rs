@@ -109,6 +109,8 @@ pub fn build_with(count: usize, opts: &BuiltinOptions) -> Scene {
             ],
             vertex_joints: vec![[0, 1, 0, 0]; mesh.positions.len()],
             vertex_weights: upper.iter().map(|&w| [1.0 - w, w, 0.0, 0.0]).collect(),
+            extra_joints: Vec::new(),
+            extra_weights: Vec::new(),
             bind_positions: mesh.positions.clone(),
             bind_normals: mesh.normals.clone(),
         });

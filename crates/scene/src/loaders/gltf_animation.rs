@@ -191,6 +191,8 @@ pub(super) fn read_animations(
             inverse_bind,
             vertex_joints: primitive.joints,
             vertex_weights: primitive.weights,
+            extra_joints: primitive.extra_joints,
+            extra_weights: primitive.extra_weights,
             bind_positions: m.positions.clone(),
             bind_normals: m.normals.clone(),
         };

@@ -11,7 +11,7 @@ use std::path::Path;
 use ::gltf::accessor::Dimensions;
 use ::gltf::mesh::Mode;
 use ::gltf::Semantic;
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 
 use super::common::{
     check_finite, check_triangles, mesh_name, parse_error, set_normals, too_large, RawTriangles,
@@ -32,8 +32,13 @@ pub(super) struct SkinnedPrimitive {
     pub(super) skin: usize,
     /// Per vertex, four indices into the skin's joints.
     pub(super) joints: Vec<[u16; 4]>,
-    /// Per vertex, the four joints' weights, summing to 1 (normalized as three.js does).
+    /// Per vertex, the four joints' weights, summing to 1 (normalized as three.js does) with
+    /// `extra_weights`.
     pub(super) weights: Vec<[f32; 4]>,
+    /// `JOINTS_1` where the primitive has it (empty otherwise).
+    pub(super) extra_joints: Vec<[u16; 4]>,
+    /// `WEIGHTS_1` where the primitive has it (empty otherwise).
+    pub(super) extra_weights: Vec<[f32; 4]>,
 }
 
 /// A primitive's morph targets, in the mesh's coordinates as loaded (the node's rest transform
@@ -167,12 +172,14 @@ pub(super) fn read_geometry<'a>(
             };
             let skinned = match skin {
                 Some(skin) => {
-                    let (joints, weights) =
+                    let (joints, weights, extra_joints, extra_weights) =
                         read_skin_attributes(path, &label, &prim, &get, vertices)?;
                     Some(SkinnedPrimitive {
                         skin,
                         joints,
                         weights,
+                        extra_joints,
+                        extra_weights,
                     })
                 }
                 None => None,
@@ -594,12 +601,15 @@ where
     Ok(out)
 }
 
-/// Per vertex, four joints and their weights.
-type JointsAndWeights = (Vec<[u16; 4]>, Vec<[f32; 4]>);
+/// Per vertex, four joints and their weights (`JOINTS_0`, `WEIGHTS_0`), and four more where
+/// the primitive has `JOINTS_1` and `WEIGHTS_1` (empty otherwise).
+type JointsAndWeights = (Vec<[u16; 4]>, Vec<[f32; 4]>, Vec<[u16; 4]>, Vec<[f32; 4]>);
 
 /// A skinned primitive's `JOINTS_0` (unsigned bytes or shorts) and `WEIGHTS_0` (floats, or
-/// normalized unsigned bytes or shorts), one per vertex, weights normalized to sum 1 (a vertex
-/// whose weights are all 0 follows its first joint), as three.js's loader does.
+/// normalized unsigned bytes or shorts), one per vertex, and `JOINTS_1`/`WEIGHTS_1` where both
+/// are given (up to eight joints a vertex); each vertex's weights normalized to sum 1 over all
+/// its joints (a vertex whose weights are all 0 follows its first joint), as three.js's loader
+/// does.
 fn read_skin_attributes<'p, 's, F>(
     path: &Path,
     label: &str,
@@ -613,57 +623,77 @@ where
     use ::gltf::accessor::DataType;
     let bad =
         |what: String| parse_error(path, format!("glTF primitive {label} is skinned: {what}"));
-    let joints = prim
-        .get(&Semantic::Joints(0))
-        .ok_or_else(|| bad("it has no JOINTS_0".into()))?;
-    let weights = prim
-        .get(&Semantic::Weights(0))
-        .ok_or_else(|| bad("it has no WEIGHTS_0".into()))?;
-    check_accessor(
-        path,
-        label,
-        "JOINTS_0",
-        &joints,
-        &[(DataType::U8, false), (DataType::U16, false)],
-        Dimensions::Vec4,
-    )?;
-    check_accessor(
-        path,
-        label,
-        "WEIGHTS_0",
-        &weights,
-        &[
-            (DataType::F32, false),
-            (DataType::U8, true),
-            (DataType::U16, true),
-        ],
-        Dimensions::Vec4,
-    )?;
-    let j = read_joints(&joints, get.clone())
-        .filter(|j| j.len() == vertices)
-        .ok_or_else(|| {
-            bad("JOINTS_0 is missing, outside its buffer or not one per vertex".into())
-        })?;
-    let w = read_vec4(&weights, get.clone())
-        .filter(|w| w.len() == vertices)
-        .ok_or_else(|| {
-            bad("WEIGHTS_0 is missing, outside its buffer or not one per vertex".into())
-        })?;
-    let mut out = Vec::with_capacity(vertices);
-    for (v, w) in w.into_iter().enumerate() {
-        if !w.is_finite() || w.min_element() < 0.0 {
-            return Err(bad(format!(
-                "vertex {v} has weights {w} (finite, 0 or more)"
-            )));
+    let read_set = |set: u32| -> Result<Option<(Vec<[u16; 4]>, Vec<Vec4>)>, SceneError> {
+        let (jn, wn) = (format!("JOINTS_{set}"), format!("WEIGHTS_{set}"));
+        let (Some(joints), Some(weights)) = (
+            prim.get(&Semantic::Joints(set)),
+            prim.get(&Semantic::Weights(set)),
+        ) else {
+            return Ok(None);
+        };
+        check_accessor(
+            path,
+            label,
+            &jn,
+            &joints,
+            &[(DataType::U8, false), (DataType::U16, false)],
+            Dimensions::Vec4,
+        )?;
+        check_accessor(
+            path,
+            label,
+            &wn,
+            &weights,
+            &[
+                (DataType::F32, false),
+                (DataType::U8, true),
+                (DataType::U16, true),
+            ],
+            Dimensions::Vec4,
+        )?;
+        let j = read_joints(&joints, get.clone())
+            .filter(|j| j.len() == vertices)
+            .ok_or_else(|| {
+                bad(format!(
+                    "{jn} is missing, outside its buffer or not one per vertex"
+                ))
+            })?;
+        let w = read_vec4(&weights, get.clone())
+            .filter(|w| w.len() == vertices)
+            .ok_or_else(|| {
+                bad(format!(
+                    "{wn} is missing, outside its buffer or not one per vertex"
+                ))
+            })?;
+        if let Some((v, w)) = w
+            .iter()
+            .enumerate()
+            .find(|(_, w)| !w.is_finite() || w.min_element() < 0.0)
+        {
+            return Err(bad(format!("vertex {v} has {wn} {w} (finite, 0 or more)")));
         }
-        let sum = w.element_sum();
-        out.push(if sum > 0.0 {
-            (w / sum).to_array()
+        Ok(Some((j, w)))
+    };
+    let (j0, w0) = read_set(0)?.ok_or_else(|| bad("it has no JOINTS_0 and WEIGHTS_0".into()))?;
+    let (j1, w1) = read_set(1)?.unwrap_or_default();
+    let mut n0 = Vec::with_capacity(vertices);
+    let mut n1 = Vec::with_capacity(w1.len());
+    for v in 0..vertices {
+        let extra = w1.get(v).copied();
+        let sum = w0[v].element_sum() + extra.map_or(0.0, Vec4::element_sum);
+        if sum > 0.0 {
+            n0.push((w0[v] / sum).to_array());
+            if let Some(e) = extra {
+                n1.push((e / sum).to_array());
+            }
         } else {
-            [1.0, 0.0, 0.0, 0.0]
-        });
+            n0.push([1.0, 0.0, 0.0, 0.0]);
+            if extra.is_some() {
+                n1.push([0.0; 4]);
+            }
+        }
     }
-    Ok((j, out))
+    Ok((j0, n0, j1, n1))
 }
 
 #[cfg(test)]

@@ -231,3 +231,49 @@ fn a_skin_places_its_mesh_by_its_joints_and_a_bad_one_is_refused() {
         "{err}"
     );
 }
+
+/// Eight joints a vertex (`JOINTS_1`, `WEIGHTS_1`): the first set puts weight 1 on joint 0
+/// (2 above the origin), the second weight 1 on joint 1 (4 above); normalized over both, each
+/// vertex takes half of each, so it stands 3 above.
+#[test]
+fn a_second_set_of_joints_counts_with_the_first() {
+    let dir = temp_dir("gltf_skin_eight");
+    let mut doc = skinned_quad(0);
+    doc["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({ "translation": [0.0, 4.0, 0.0] }));
+    doc["skins"] = json!([{ "joints": [1, 2] }]);
+    let mut bin: Vec<u8> = (0..4)
+        .flat_map(|_| [1u16, 0, 0, 0])
+        .flat_map(u16::to_le_bytes)
+        .collect();
+    bin.extend(floats(&[1.0, 0.0, 0.0, 0.0].repeat(4)));
+    let uri = format!("data:application/octet-stream;base64,{}", base64(&bin));
+    let buffer = doc["buffers"].as_array().unwrap().len();
+    doc["buffers"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({ "uri": uri, "byteLength": bin.len() }));
+    let views = doc["bufferViews"].as_array().unwrap().len();
+    doc["bufferViews"].as_array_mut().unwrap().extend([
+        json!({ "buffer": buffer, "byteOffset": 0, "byteLength": 32 }),
+        json!({ "buffer": buffer, "byteOffset": 32, "byteLength": 64 }),
+    ]);
+    let accessors = doc["accessors"].as_array().unwrap().len();
+    doc["accessors"].as_array_mut().unwrap().extend([
+        json!({ "bufferView": views, "componentType": 5123, "count": 4, "type": "VEC4" }),
+        json!({ "bufferView": views + 1, "componentType": 5126, "count": 4, "type": "VEC4" }),
+    ]);
+    let attributes = &mut doc["meshes"][0]["primitives"][0]["attributes"];
+    attributes["JOINTS_1"] = json!(accessors);
+    attributes["WEIGHTS_1"] = json!(accessors + 1);
+    let loaded = scene_of(&save_json(&dir, "eight.gltf", &doc));
+    let scene = &loaded.scene;
+    let quad = &scene.meshes[scene.animations.skins[0].mesh];
+    assert!(
+        quad.positions.contains(&Vec3::new(1.0, 4.0, 0.0)),
+        "{:?}",
+        quad.positions
+    );
+}
