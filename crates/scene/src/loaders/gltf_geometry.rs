@@ -605,6 +605,9 @@ where
 /// the primitive has `JOINTS_1` and `WEIGHTS_1` (empty otherwise).
 type JointsAndWeights = (Vec<[u16; 4]>, Vec<[f32; 4]>, Vec<[u16; 4]>, Vec<[f32; 4]>);
 
+/// One set of four joints and weights a vertex, as read.
+type OneSet = (Vec<[u16; 4]>, Vec<Vec4>);
+
 /// A skinned primitive's `JOINTS_0` (unsigned bytes or shorts) and `WEIGHTS_0` (floats, or
 /// normalized unsigned bytes or shorts), one per vertex, and `JOINTS_1`/`WEIGHTS_1` where both
 /// are given (up to eight joints a vertex); each vertex's weights normalized to sum 1 over all
@@ -623,7 +626,7 @@ where
     use ::gltf::accessor::DataType;
     let bad =
         |what: String| parse_error(path, format!("glTF primitive {label} is skinned: {what}"));
-    let read_set = |set: u32| -> Result<Option<(Vec<[u16; 4]>, Vec<Vec4>)>, SceneError> {
+    let read_set = |set: u32| -> Result<Option<OneSet>, SceneError> {
         let (jn, wn) = (format!("JOINTS_{set}"), format!("WEIGHTS_{set}"));
         let (Some(joints), Some(weights)) = (
             prim.get(&Semantic::Joints(set)),
@@ -678,11 +681,11 @@ where
     let (j1, w1) = read_set(1)?.unwrap_or_default();
     let mut n0 = Vec::with_capacity(vertices);
     let mut n1 = Vec::with_capacity(w1.len());
-    for v in 0..vertices {
+    for (v, w) in w0.iter().enumerate() {
         let extra = w1.get(v).copied();
-        let sum = w0[v].element_sum() + extra.map_or(0.0, Vec4::element_sum);
+        let sum = w.element_sum() + extra.map_or(0.0, Vec4::element_sum);
         if sum > 0.0 {
-            n0.push((w0[v] / sum).to_array());
+            n0.push((*w / sum).to_array());
             if let Some(e) = extra {
                 n1.push((e / sum).to_array());
             }
