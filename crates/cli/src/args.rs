@@ -282,6 +282,10 @@ pub(crate) struct RenderArgs {
     /// format in the renderer's visibility module docs) and one PNG per light (white = lit).
     #[arg(long)]
     pub(crate) visibility_out: Option<PathBuf>,
+    /// Also write every frame of a sequence into this folder (made if missing), as
+    /// frame_0001.png, frame_0002.png, … (`--out` still gets the last).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out_dir: Option<PathBuf>,
     /// Also write the summary as JSON.
     #[arg(long)]
     pub(crate) json: Option<PathBuf>,
@@ -587,6 +591,12 @@ pub(crate) fn check_render_args(args: &RenderArgs) -> Result<()> {
                 p.display()
             );
         }
+    }
+    if let Some(p) = args.out_dir.as_ref().filter(|p| p.exists() && !p.is_dir()) {
+        bail!(
+            "--out-dir {}: that is a file; give a folder (made if missing) for the frames",
+            p.display()
+        );
     }
     if let Some(p) = args
         .visibility_out

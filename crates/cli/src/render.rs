@@ -84,6 +84,10 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             let line = format!("frame {:>3}: {}", f + 1, fr.report.frame);
             pb.suspend(|| eprintln!("{line}"));
         }
+        if let Some(dir) = &args.out_dir {
+            let path = dir.join(format!("frame_{:04}.png", f + 1));
+            pb.suspend(|| write_rgba_png(&path, fr.width, fr.height, &fr.rgba))?;
+        }
         walls.push(fr.timings.wall_ms);
         frame = Some(fr);
     }

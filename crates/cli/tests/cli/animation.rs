@@ -72,8 +72,10 @@ fn render_at_a_time_places_what_the_file_animates() {
         assert!(moved > 1.0, "t = {t}: the box hardly moved ({moved})");
     }
     // Through the atlas's kept views and virtual maps' kept pages alike: what moved is redrawn.
+    // Every frame is written with --out-dir, the last one also to --out.
     for technique in ["traditional", "virtual"] {
         let seq = dir.join(format!("seq-{technique}.png"));
+        let frames = dir.join(format!("frames-{technique}"));
         let said = render(
             &file,
             &seq,
@@ -86,7 +88,20 @@ fn render_at_a_time_places_what_the_file_animates() {
                 "3",
                 "--fps",
                 "4",
+                "--out-dir",
+                frames.to_str().unwrap(),
             ],
+        );
+        for k in 1..=3 {
+            assert!(
+                frames.join(format!("frame_{k:04}.png")).is_file(),
+                "frame {k} not written"
+            );
+        }
+        assert_eq!(mean_difference(&frames.join("frame_0003.png"), &seq), 0.0);
+        assert!(
+            mean_difference(&frames.join("frame_0001.png"), &seq) > 0.1,
+            "the first frame is the last"
         );
         let lines: Vec<&str> = said.lines().filter(|l| l.starts_with("frame ")).collect();
         assert_eq!(lines.len(), 3, "{said}");
