@@ -322,15 +322,15 @@ impl GpuScene {
     }
 
     /// Rewrites mesh `mesh`'s vertices and normals (as many as it has: a skinned mesh bent)
-    /// and the bounding spheres of the instances that draw it (`transforms`: every
-    /// instance's); returns each such instance with its world sphere before and after.
+    /// and the bounding spheres of the instances that draw it (`transform`: an instance's
+    /// transform by its index); returns each such instance with its world sphere before and after.
     pub fn set_mesh_vertices(
         &mut self,
         queue: &wgpu::Queue,
         mesh: usize,
         positions: &[Vec3],
         normals: &[Vec3],
-        transforms: &[Mat4],
+        transform: impl Fn(usize) -> Mat4,
     ) -> Vec<MovedSphere> {
         let Some(range) = self.meshes.get(mesh).copied() else {
             return Vec::new();
@@ -345,7 +345,7 @@ impl GpuScene {
             if d.mesh.base_vertex != range.base_vertex || d.mesh.first_index != range.first_index {
                 continue;
             }
-            let m = transforms.get(k).copied().unwrap_or(Mat4::IDENTITY);
+            let m = transform(k);
             let old = d.sphere;
             d.object_sphere = object;
             d.sphere = (m.transform_point3(object.0), object.1 * max_axis_scale(m));

@@ -317,15 +317,15 @@ impl Renderer {
             ))
             .into());
         }
-        let transforms: Vec<glam::Mat4> =
-            self.current.instances.iter().map(|i| i.transform).collect();
-        let moved = self.parts.scene.set_mesh_vertices(
-            &self.ctx.queue,
-            mesh,
-            positions,
-            normals,
-            &transforms,
-        );
+        let instances = &self.current.instances;
+        let moved =
+            self.parts
+                .scene
+                .set_mesh_vertices(&self.ctx.queue, mesh, positions, normals, |k| {
+                    instances
+                        .get(k)
+                        .map_or(glam::Mat4::IDENTITY, |i| i.transform)
+                });
         for (k, old, new) in moved {
             if self.parts.scene.draws[k].casts_shadows {
                 self.parts.source.note_moved(old, new);

@@ -1,7 +1,7 @@
 //! `crowd`: a skinned crowd for animation. A grid of tubes, 2 m tall, each skinned to two
 //! joints (its base and its middle) and swaying at its middle, every tube about its own axis,
 //! over a floor: the moving, deforming content that caching, virtual pages and ray tracing's
-//! rebuilt structures must follow (`bench animation`, issue 66). Its one clip, "sway", turns
+//! rebuilt structures must follow (`bench animation`). Its one clip, "sway", turns
 //! each upper joint by 0, +35°, 0, −35°, 0 at 0, 0.5, 1, 1.5 and 2 s (LINEAR).
 //!
 //! Each tube is a mesh of its own (a skin bends one mesh), with vertices in world coordinates
