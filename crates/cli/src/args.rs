@@ -77,7 +77,7 @@ pub(crate) struct RenderArgs {
     /// with its MTL; .ply/.ply.gz), rendered with its own lights and camera (a light rig of 8
     /// and a framing camera when it has none). Built-ins: atrium, terrain, dragon, cubes,
     /// courtyard (textures and alpha-masked foliage, lattice, banners), courtyard-opaque,
-    /// plane-spot, plane-point, plane-directional, crowd (64 skinned tubes swaying: animation).
+    /// plane-spot, plane-point, plane-directional, crowd (64 skinned tubes swaying: animation), walker (one skinned figure walking: animation).
     #[arg(long, default_value = "atrium")]
     pub(crate) scene: String,
     /// Shadow technique (--help lists them all, with what each fills and needs).

@@ -21,6 +21,7 @@ use manyshadows::scene::builtin::{self, LightMix};
 use manyshadows::{Frame, RayOptions, RenderSettings, Renderer, Stage};
 use serde::Serialize;
 
+use crate::args::Clock;
 use crate::bench::harness::{check_counts, check_scene, median, seeded_scene, Figure, Harness};
 
 use crate::bench::denoise_table::{table, FrameRow, Record};
@@ -83,6 +84,15 @@ pub struct DenoiseArgs {
     /// Move no caster (with --orbit 0: still frames, as `render --still`).
     #[arg(long)]
     pub still: bool,
+    /// Play the scene's animation (a name, a number from 0, or `all`: `crowd`'s "sway",
+    /// `walker`'s "walk") from 0 s, frame k at k / --fps, instead of circling a caster; and
+    /// beside each light count, the same frames with the scene frozen at 0 s, whose error the
+    /// moving one's is set against (the histories' following of bent surfaces).
+    #[arg(long, value_name = "NAME|INDEX|all")]
+    pub animation: Option<String>,
+    /// With --animation: frames per second of animation time.
+    #[arg(long, default_value_t = crate::args::DEFAULT_FPS)]
+    pub fps: f32,
     /// The instance that circles (default: the nearest caster to the camera among the smaller
     /// half whose centre the camera sees, so that its shadow's motion is in the frames).
     #[arg(long)]
@@ -286,11 +296,27 @@ struct Sequence {
     rows: Vec<FrameRow>,
     /// The last exact frames, newest first (for the trail).
     past: std::collections::VecDeque<Vec<u8>>,
+    /// The animation played (`--animation`), if this sequence moves with it.
+    clock: Option<Clock>,
+    /// With --animation: whether this sequence plays it ("moving") or holds it ("frozen").
+    animation: Option<&'static str>,
 }
 
 impl Sequence {
-    fn new(h: &Harness, args: &DenoiseArgs, n: usize, reference: bool) -> Result<Self> {
-        let scene = seeded_scene(&args.scene, n, LightMix::All, None)?;
+    /// `clock`: the animation the frames play (`None`: none plays); `frozen`: the animation
+    /// whose first frame this sequence holds throughout, as the moving one's twin.
+    fn new(
+        h: &Harness,
+        args: &DenoiseArgs,
+        n: usize,
+        reference: bool,
+        (clock, frozen): (Option<Clock>, Option<Clock>),
+    ) -> Result<Self> {
+        let mut scene = seeded_scene(&args.scene, n, LightMix::All, None)?;
+        // Animated or frozen, the frames start from the pose at 0 s.
+        if let Some(c) = clock.or(frozen) {
+            scene.set_time(c.playing, c.start);
+        }
         let base = RenderSettings::new(args.width, args.height)
             .with_technique(args.technique)
             .with_clusters(match args.cluster_tile {
@@ -327,8 +353,9 @@ impl Sequence {
             },
         };
         let every = maps.then(|| make(RayOptions::default())).transpose()?;
+        let still = args.still || frozen.is_some();
         let mover =
-            crate::render::moving_instance(args.move_instance, args.still, &scene, None, || {
+            crate::render::moving_instance(args.move_instance, still, &scene, clock, || {
                 seen_caster(&h.ctx, &scene)
             })?;
         let radius = mover.map_or(0.0, |k| 0.5 * caster_size(&scene, k));
@@ -336,7 +363,7 @@ impl Sequence {
             Some(k) => h.note(format!(
                 "{n} lights: instance {k} circles (radius {radius:.2})"
             )),
-            None if !args.still => h.note(format!(
+            None if !still && clock.is_none() => h.note(format!(
                 "{n} lights: no caster near the camera moves a pixel when moved: none moves"
             )),
             None => {}
@@ -352,6 +379,12 @@ impl Sequence {
             radius,
             rows: Vec::new(),
             past: Default::default(),
+            clock,
+            animation: match (clock, frozen) {
+                (Some(_), _) => Some("moving"),
+                (None, Some(_)) => Some("frozen"),
+                (None, None) => None,
+            },
         })
     }
 
@@ -376,6 +409,15 @@ impl Sequence {
             for r in renderers.iter_mut() {
                 r.set_camera(cam)?;
             }
+        }
+        if self.clock.is_some() {
+            let sequence = crate::render::Sequence {
+                path: None,
+                orbit: 0.0,
+                mover: None,
+                clock: self.clock,
+            };
+            sequence.step(f, scene, &mut renderers)?;
         }
         if f > 0 {
             for r in renderers.iter_mut() {
@@ -450,6 +492,7 @@ impl Sequence {
         let denoised_median_ms = med(rows.iter().filter_map(|r| r.denoised_ms).collect());
         Record {
             lights: self.lights,
+            animation: self.animation,
             plain_mean_rmse: mean(rows.iter().filter_map(|r| r.plain_rmse)),
             denoised_mean_rmse: mean(rows.iter().filter_map(|r| r.denoised_rmse)),
             cost_ratio: crate::bench::harness::ratio(denoised_median_ms, plain_median_ms),
@@ -474,6 +517,32 @@ impl Sequence {
             frames: rows,
         }
     }
+}
+
+/// The clock of `--animation` on the scene (checked: a scene without animations, an unknown
+/// name, a rate that is not a positive number, are refused by name), frames from 0 s.
+fn animation_clock(args: &DenoiseArgs) -> Result<Option<Clock>> {
+    let Some(asked) = &args.animation else {
+        return Ok(None);
+    };
+    if !(args.fps.is_finite() && args.fps > 0.0 && args.fps <= 10_000.0) {
+        bail!(
+            "--fps {}: must be a number of frames per second above 0, at most 10,000",
+            args.fps
+        );
+    }
+    if args.move_instance.is_some() {
+        bail!(
+            "--move-instance: with --animation the scene's animation moves it, no caster circles"
+        );
+    }
+    let scene = seeded_scene(&args.scene, 1, LightMix::All, None)?;
+    let flags = crate::args::AnimationArgs {
+        animation: Some(asked.clone()),
+        time: None,
+        fps: Some(args.fps),
+    };
+    flags.clock(&scene, args.frames.max(2))
 }
 
 /// Runs `manyshadows bench denoise`.
@@ -501,21 +570,27 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
     let path = crate::args::read_camera_path(args.camera_path.as_deref())?;
     let h = Harness::start_unscheduled(&args.output)?;
     let per_frame = 2 + u64::from(reference) + u64::from(maps);
-    h.plan(args.lights.len() as u64 * u64::from(args.frames) * per_frame);
+    let twins = if args.animation.is_some() { 2 } else { 1 };
+    h.plan(args.lights.len() as u64 * u64::from(args.frames) * per_frame * twins);
     // Every light count's renderers first, then the frames in turn across them (frame 1 of
     // each count, frame 2 of each, ...), so that a drift of the machine's speed during the run
     // weighs on every count alike and the growth between counts is a same-run ratio.
+    let clock = animation_clock(args)?;
     let mut sequences = Vec::new();
     for &n in &args.lights {
         h.message(format!("{}, {n} lights: building", args.scene));
-        sequences.push(Sequence::new(&h, args, n, reference)?);
+        sequences.push(Sequence::new(&h, args, n, reference, (clock, None))?);
+        if clock.is_some() {
+            sequences.push(Sequence::new(&h, args, n, reference, (None, clock))?);
+        }
     }
     for f in 0..args.frames {
         for q in sequences.iter_mut() {
             h.message(format!(
-                "{}, {} lights: frame {}/{}",
+                "{}, {} lights{}: frame {}/{}",
                 args.scene,
                 q.lights,
+                q.animation.map_or(String::new(), |a| format!(", {a}")),
                 f + 1,
                 args.frames
             ));
@@ -541,7 +616,12 @@ pub fn denoise(args: &DenoiseArgs) -> Result<()> {
                     .collect();
                 if !points.is_empty() {
                     series.push((
-                        format!("{} lights, K = {} {name}", r.lights, args.light_samples),
+                        format!(
+                            "{} lights{}, K = {} {name}",
+                            r.lights,
+                            r.animation.map_or(String::new(), |a| format!(" {a}")),
+                            args.light_samples
+                        ),
                         points,
                     ));
                 }

@@ -38,6 +38,8 @@ pub(super) struct FrameRow {
 #[derive(Serialize)]
 pub(super) struct Record {
     pub(super) lights: usize,
+    /// With --animation: "moving" (the animation plays) or "frozen" (held at 0 s).
+    pub(super) animation: Option<&'static str>,
     pub(super) frames: Vec<FrameRow>,
     pub(super) plain_mean_rmse: Option<f64>,
     pub(super) denoised_mean_rmse: Option<f64>,
@@ -66,6 +68,16 @@ pub(super) struct Record {
     pub(super) every_mean_pages: Option<f64>,
 }
 
+impl Record {
+    /// Its light count, and with --animation whether it moves.
+    fn label(&self) -> String {
+        match self.animation {
+            Some(a) => format!("{} {a}", self.lights),
+            None => self.lights.to_string(),
+        }
+    }
+}
+
 /// `heading`: the run's settings (see `denoise::heading`); `reuse`: whether the denoised frame
 /// also reuses lights; `area_samples`: rays per side over each sized light in the exact frame.
 pub(super) fn table(heading: &str, reuse: bool, area_samples: u32, records: &[Record]) -> String {
@@ -77,7 +89,7 @@ pub(super) fn table(heading: &str, reuse: bool, area_samples: u32, records: &[Re
         let last = r.frames.last();
         t += &format!(
             "{:>6} | {:>16} {:>5} {:>5} | {:>14} {:>5} {:>5} | {:>14} {:>8} ({:>6}) | {:>5} {:>6}\n",
-            r.lights,
+            r.label(),
             opt(r.plain_mean_rmse),
             opt(first.and_then(|x| x.plain_rmse)),
             opt(last.and_then(|x| x.plain_rmse)),
@@ -124,6 +136,31 @@ pub(super) fn table(heading: &str, reuse: bool, area_samples: u32, records: &[Re
             }
         );
     }
+    // With --animation: each moving sequence against its frozen twin (same light count).
+    for m in records.iter().filter(|r| r.animation == Some("moving")) {
+        let Some(f) = records
+            .iter()
+            .find(|r| r.animation == Some("frozen") && r.lights == m.lights)
+        else {
+            continue;
+        };
+        let ratio = |a: Option<f64>, b: Option<f64>| {
+            crate::bench::harness::ratio(a, b).map_or("-".to_string(), |x| format!("{x:.2}x"))
+        };
+        t += &format!(
+            "{} lights, moving against frozen: mean RMSE denoised {} vs {} ({}), plain {} vs {} \
+             ({}); denoised frame {} vs {} ms\n",
+            m.lights,
+            opt(m.denoised_mean_rmse),
+            opt(f.denoised_mean_rmse),
+            ratio(m.denoised_mean_rmse, f.denoised_mean_rmse),
+            opt(m.plain_mean_rmse),
+            opt(f.plain_mean_rmse),
+            ratio(m.plain_mean_rmse, f.plain_mean_rmse),
+            ms(m.denoised_median_ms),
+            ms(f.denoised_median_ms),
+        );
+    }
     for r in records {
         if let Some(trail) = r.mean_trail_frames {
             t += &format!(
@@ -135,8 +172,13 @@ pub(super) fn table(heading: &str, reuse: bool, area_samples: u32, records: &[Re
             );
         }
     }
-    if let (Some(a), Some(b)) = (records.first(), records.last()) {
-        if records.len() > 1 {
+    // Growth across light counts: the moving (or only) sequence of each.
+    let counts: Vec<&Record> = records
+        .iter()
+        .filter(|r| r.animation != Some("frozen"))
+        .collect();
+    if let (Some(&a), Some(&b)) = (counts.first(), counts.last()) {
+        if counts.len() > 1 {
             // The frames of the counts alternate, so frame k of each saw the machine alike:
             // the median of the frame-by-frame ratios is the steadier figure.
             type Pick = fn(&FrameRow) -> Option<f64>;

@@ -9,7 +9,7 @@ pub use crate::frame::gbuffer_shaders::{
 };
 use crate::gpu::context::GpuContext;
 use crate::gpu_scene::instances::{
-    CameraCull, GpuScene, NORMAL_LAYOUT, POSITION_LAYOUT, UV_LAYOUT,
+    CameraCull, GpuScene, LAST_POSITION_LAYOUT, NORMAL_LAYOUT, POSITION_LAYOUT, UV_LAYOUT,
 };
 
 /// xyz world position (`f32` bits in a `u32` target, because OpenGL ES and WebGL cannot render
@@ -30,6 +30,11 @@ pub const EMISSION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm
 /// histories that follow moving instances ([`GBufferViews::MonoMoving`],
 /// sampled/motion.rs), on devices whose colour attachments hold it beside the others.
 pub const INSTANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+
+/// The instance target where meshes bend (`GpuScene::last_positions`): the instance seen + 1,
+/// then the f32 bits of the offset, in this frame's world, from the point to where its bent
+/// mesh held it last frame (before its instance's motion; gbuffer.wgsl `MovingVsOut`).
+pub const MOTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
 
 /// G-buffer targets and the pipeline that fills them.
 pub struct GBuffer {
@@ -206,13 +211,18 @@ impl GBuffer {
             );
             None
         };
+        let instance_format = if scene.last_positions.is_some() {
+            MOTION_FORMAT
+        } else {
+            INSTANCE_FORMAT
+        };
         let instance_bytes = bytes_needed
             - if emission.is_some() {
                 0
             } else {
                 EMISSION_FORMAT.target_pixel_byte_cost().unwrap_or(4)
             }
-            + INSTANCE_FORMAT.target_pixel_byte_cost().unwrap_or(4);
+            + instance_format.target_pixel_byte_cost().unwrap_or(16);
         let instance = if !matches!(views_drawn, GBufferViews::MonoMoving) {
             None
         } else if attachment_bytes >= instance_bytes {
@@ -221,7 +231,7 @@ impl GBuffer {
                 "gbuffer.instance",
                 w,
                 h,
-                INSTANCE_FORMAT,
+                instance_format,
                 color_usage,
             ))
         } else {
@@ -324,12 +334,19 @@ impl GBuffer {
             Some(POSITION_FORMAT),
             Some(NORMAL_FORMAT),
             emission.as_ref().map(|_| EMISSION_FORMAT),
-            instance.as_ref().map(|_| INSTANCE_FORMAT),
+            instance.as_ref().map(|_| instance_format),
         ]
         .into_iter()
         .flatten()
         .map(|f| Some(f.into()))
         .collect();
+        // `vs_moving` reads the last frame's positions too (gbuffer_record.rs binds them).
+        let moving_vertices = instance.is_some()
+            && pull.is_none()
+            && faces.is_none()
+            && !face_layers
+            && !layered
+            && !multiview;
         let pipeline = |fragment: &str, cull: CameraCull| {
             let (front_face, cull_mode) = match cull {
                 CameraCull::None => (wgpu::FrontFace::Ccw, None),
@@ -360,6 +377,13 @@ impl GBuffer {
                     // Clusters' vertices are read from storage.
                     buffers: if pull.is_some() {
                         &[]
+                    } else if moving_vertices {
+                        &[
+                            Some(POSITION_LAYOUT),
+                            Some(NORMAL_LAYOUT),
+                            Some(UV_LAYOUT),
+                            Some(LAST_POSITION_LAYOUT),
+                        ]
                     } else {
                         &[Some(POSITION_LAYOUT), Some(NORMAL_LAYOUT), Some(UV_LAYOUT)]
                     },

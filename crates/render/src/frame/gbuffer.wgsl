@@ -21,7 +21,8 @@ struct VsOut {
 }
 
 // The same with the scene instance drawn, which the `_moving` entry points keep per pixel
-// (sampled/motion.rs): one camera only (`vs_moving`).
+// (sampled/motion.rs): one camera only (`vs_moving`); and where the point was last frame
+// before its instance moved, as an offset in this frame's world (zero unless its mesh bent).
 struct MovingVsOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) world: vec3<f32>,
@@ -30,6 +31,7 @@ struct MovingVsOut {
     @location(3) uv: vec2<f32>,
     @location(4) @interpolate(flat) eye: u32,
     @location(5) @interpolate(flat) instance: u32,
+    @location(6) bent: vec3<f32>,
 }
 
 fn without_instance(v: MovingVsOut) -> VsOut {
@@ -49,16 +51,20 @@ fn vs_main(
     return surface_vertex(position, normal, uv, instance / eyes, instance % eyes);
 }
 
-// One camera, the instance drawn kept (`MovingVsOut`).
+// One camera, the instance drawn kept (`MovingVsOut`), and the vertex's position last frame
+// (`last`: gpu_scene/last_positions.rs, or this frame's where meshes do not bend) taken as an
+// offset through this frame's model matrix: the instance's motion takes it the rest of the way.
 @vertex
 fn vs_moving(
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
+    @location(3) last: vec3<f32>,
     @builtin(instance_index) instance: u32,
 ) -> MovingVsOut {
     let v = surface_vertex(position, normal, uv, instance, 0u);
-    return MovingVsOut(v.clip, v.world, v.normal, v.material, v.uv, v.eye, instance);
+    let bent = (instances[instance].model * vec4<f32>(last - position, 0.0)).xyz;
+    return MovingVsOut(v.clip, v.world, v.normal, v.material, v.uv, v.eye, instance, bent);
 }
 
 fn surface_vertex(position: vec3<f32>, normal: vec3<f32>, uv: vec2<f32>, instance: u32, eye: u32) -> VsOut {
@@ -157,12 +163,13 @@ struct GBufferOutEmission {
     @location(2) emission: vec4<f32>,
 }
 
-// With the instance seen (sampled/motion.rs: histories that follow moving instances): the
-// scene instance + 1 (the clear value 0: no geometry).
+// With the instance seen (sampled/motion.rs: histories that follow moving instances): x, the
+// scene instance + 1 (the clear value 0: no geometry); yzw, the bent offset's f32 bits (kept
+// where the target has them: gbuffer.rs `MOTION_FORMAT`, for scenes whose meshes bend).
 struct GBufferOutMoving {
     @location(0) position: vec4<u32>,
     @location(1) normal_material: vec4<u32>,
-    @location(2) instance: u32,
+    @location(2) instance: vec4<u32>,
 }
 
 // Both.
@@ -170,7 +177,7 @@ struct GBufferOutEmissionMoving {
     @location(0) position: vec4<u32>,
     @location(1) normal_material: vec4<u32>,
     @location(2) emission: vec4<f32>,
-    @location(3) instance: u32,
+    @location(3) instance: vec4<u32>,
 }
 
 fn emission_texel(mat: MaterialData, uv: vec2<f32>, d: Derivs) -> vec4<f32> {
@@ -218,13 +225,17 @@ fn with_emission(s: Shaded, uv: vec2<f32>) -> GBufferOutEmission {
     return GBufferOutEmission(s.g.position, s.g.normal_material, emission_texel(s.mat, uv, s.d));
 }
 
+fn motion_texel(v: MovingVsOut) -> vec4<u32> {
+    return vec4<u32>(v.instance + 1u, bitcast<vec3<u32>>(v.bent));
+}
+
 fn with_instance(s: Shaded, v: MovingVsOut) -> GBufferOutMoving {
-    return GBufferOutMoving(s.g.position, s.g.normal_material, v.instance + 1u);
+    return GBufferOutMoving(s.g.position, s.g.normal_material, motion_texel(v));
 }
 
 fn with_both(s: Shaded, v: MovingVsOut) -> GBufferOutEmissionMoving {
     let e = emission_texel(s.mat, v.uv, s.d);
-    return GBufferOutEmissionMoving(s.g.position, s.g.normal_material, e, v.instance + 1u);
+    return GBufferOutEmissionMoving(s.g.position, s.g.normal_material, e, motion_texel(v));
 }
 
 @fragment

@@ -259,6 +259,14 @@ impl GBuffer {
         pass.set_vertex_buffer(0, scene.positions.slice(..));
         pass.set_vertex_buffer(1, scene.normals.slice(..));
         pass.set_vertex_buffer(2, scene.uvs.slice(..));
+        if self.instance.is_some() {
+            // The moving pipelines' last positions: this frame's where no mesh bends.
+            let last = scene
+                .last_positions
+                .as_ref()
+                .map_or(&scene.positions, |l| &l.buffer);
+            pass.set_vertex_buffer(3, last.slice(..));
+        }
         pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
         // Opaque surfaces first (early depth testing), then the alpha-tested ones.
         for masked in [false, true] {

@@ -80,6 +80,9 @@ pub struct GpuScene {
     pub triangles: u64,
     /// Skinning, if attached with [`GpuScene::attach_skin`] (benchmarks).
     pub skin: Option<crate::gpu_scene::skinning::GpuSkin>,
+    /// The positions the last frame drew, kept with [`GpuScene::keep_last_positions`] for
+    /// histories that follow bent meshes.
+    pub last_positions: Option<crate::gpu_scene::last_positions::LastPositions>,
     /// The coverage bits of alpha-tested materials (read by shadow passes through the caster
     /// geometry, [`crate::gpu_scene::casters`]).
     pub masks: MaskSet,
@@ -99,6 +102,13 @@ pub const POSITION_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBuffe
     array_stride: POSITION_STRIDE,
     step_mode: wgpu::VertexStepMode::Vertex,
     attributes: &wgpu::vertex_attr_array![0 => Float32x3],
+};
+
+/// Vertex layout of the last frame's positions (location 3: gpu_scene/last_positions.rs).
+pub const LAST_POSITION_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: POSITION_STRIDE,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &wgpu::vertex_attr_array![3 => Float32x3],
 };
 
 /// Vertex layout of the normal buffer (location 1).
@@ -304,6 +314,7 @@ impl GpuScene {
             meshes: ranges,
             triangles: scene.triangle_count() as u64,
             skin: None,
+            last_positions: None,
             masks,
             textures,
         })
@@ -319,6 +330,21 @@ impl GpuScene {
     ) -> Result<(), RenderError> {
         self.skin = Some(crate::gpu_scene::skinning::GpuSkin::new(ctx, scene, skin)?);
         Ok(())
+    }
+
+    /// Keeps the positions the last frame drew from now on (histories that follow the
+    /// surfaces of bent meshes: the G-buffer reads them), starting as `scene`'s, which this
+    /// was uploaded from.
+    pub fn keep_last_positions(&mut self, ctx: &GpuContext, scene: &Scene) {
+        let positions: Vec<[f32; 3]> = scene
+            .meshes
+            .iter()
+            .flat_map(|m| m.positions.iter().map(|p| p.to_array()))
+            .collect();
+        self.last_positions = Some(crate::gpu_scene::last_positions::LastPositions::new(
+            &ctx.device,
+            &positions,
+        ));
     }
 
     /// Rewrites mesh `mesh`'s vertices and normals (as many as it has: a skinned mesh bent)
@@ -337,7 +363,11 @@ impl GpuScene {
         };
         let at = range.base_vertex as u64 * POSITION_STRIDE;
         let flat = |v: &[Vec3]| v.iter().map(|p| p.to_array()).collect::<Vec<[f32; 3]>>();
-        queue.write_buffer(&self.positions, at, bytemuck::cast_slice(&flat(positions)));
+        let now = flat(positions);
+        if let Some(last) = &mut self.last_positions {
+            last.note(queue, mesh, at, &now);
+        }
+        queue.write_buffer(&self.positions, at, bytemuck::cast_slice(&now));
         queue.write_buffer(&self.normals, at, bytemuck::cast_slice(&flat(normals)));
         let object = bounding_sphere(positions);
         let mut moved = Vec::new();

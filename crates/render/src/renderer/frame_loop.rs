@@ -98,6 +98,9 @@ impl Renderer {
     /// each frame, and the denoiser's correction for changed lights, this frame only).
     fn begin_histories(&mut self, ctx: &GpuContext) {
         let parts = &mut self.parts;
+        if let Some(l) = &mut parts.scene.last_positions {
+            l.begin_frame(&ctx.queue);
+        }
         if let Some(m) = &mut parts.motion {
             let instances = &self.current.instances;
             m.upload(&ctx.queue, |i| instances[i].transform);

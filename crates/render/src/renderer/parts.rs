@@ -64,7 +64,12 @@ impl FrameParts {
         settings: &RenderSettings,
         max_atlas: u32,
     ) -> Result<Self, RenderError> {
-        let gpu_scene = GpuScene::new(ctx, scene)?;
+        let mut gpu_scene = GpuScene::new(ctx, scene)?;
+        // Histories of surface points follow bent meshes (any mesh may be bent:
+        // `Renderer::set_mesh_vertices`) by the positions the last frame drew.
+        if (settings.rays.denoise || settings.rays.reuse) && settings.stereo.is_none() {
+            gpu_scene.keep_last_positions(ctx, scene);
+        }
         let mut source = crate::registry::create(ctx, scene, &gpu_scene, settings, max_atlas)?;
         let light_data = lights_or_placeholder(source.light_data(scene));
         let lights = ctx

@@ -154,7 +154,7 @@ fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
     // (denoise.rs): the light on a moving surface changes.
     let footprint = distance(pos, p.camera.xyz) * p.pixel.x;
     let back = instance_back(gid.xy);
-    let was = last_frame_position(back, pos);
+    let was = last_frame_position(gid.xy, back, pos);
     let moved = any(was != pos);
     let n = normal_at(gid.xy);
     let g = history_at(was, last_frame_normal(back, n), footprint);

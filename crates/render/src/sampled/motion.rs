@@ -7,8 +7,9 @@
 //! (`GBuffer::instance`, `GBufferViews::MonoMoving`), and [`InstanceMotion::back`] holds per
 //! instance the transform from this frame's world back to last frame's (`last · now⁻¹`,
 //! the identity for instances that did not move), so the point is taken back to where it
-//! was before it is projected and compared. Skinned vertices are not followed (their motion
-//! is not an instance's).
+//! was before it is projected and compared. A point on a bent mesh (skinned or morphed) was
+//! also elsewhere on its instance: the G-buffer keeps beside the instance the offset to where
+//! the mesh held it last frame (gpu_scene/last_positions.rs), added first.
 
 use glam::Mat4;
 
@@ -165,9 +166,20 @@ fn instance_back(px: vec2<u32>) -> mat4x4<f32> {
     return motion_back[k - 1u];
 }
 
-// Where the surface point `p` was last frame (`back`: `instance_back` of its pixel).
-fn last_frame_position(back: mat4x4<f32>, p: vec3<f32>) -> vec3<f32> {
-    return (back * vec4<f32>(p, 1.0)).xyz;
+// Where the surface point `p` of pixel `px` was last frame (`back`: `instance_back` of the
+// pixel): where its bent mesh held it (the offset the G-buffer keeps beside the instance,
+// zero where no mesh bends: gbuffer.rs `MOTION_FORMAT`), then taken by its instance's motion.
+fn last_frame_position(px: vec2<u32>, back: mat4x4<f32>, p: vec3<f32>) -> vec3<f32> {
+    return (back * vec4<f32>(p + bent_offset(px), 1.0)).xyz;
+}
+
+// The offset from pixel `px`'s point to where its bent mesh held it last frame. An
+// `INSTANCE_FORMAT` target (no mesh bends) reads (0, 0, 1) in yzw: 1 is the bits of the least
+// denormal, taken as 0.
+fn bent_offset(px: vec2<u32>) -> vec3<f32> {
+    let at = min(px, textureDimensions(gbuf_instance) - vec2<u32>(1u));
+    let bits = textureLoad(gbuf_instance, vec2<i32>(at), 0).yzw;
+    return select(bitcast<vec3<f32>>(bits), vec3<f32>(0.0), bits == vec3<u32>(0u, 0u, 1u));
 }
 
 // Which way the unit normal `n` faced last frame.

@@ -311,7 +311,7 @@ fn reuse_history(px: vec2<i32>, p: vec3<f32>, n: vec3<f32>) -> u32 {
         return 0xffffffffu;
     }
     let back = instance_back(vec2<u32>(px));
-    let was = last_frame_position(back, p);
+    let was = last_frame_position(vec2<u32>(px), back, p);
     reuse_moved = any(was != p);
     let clip = reuse.prev_view_proj * vec4<f32>(was, 1.0);
     if (clip.w <= 0.0) {

@@ -14,6 +14,7 @@
 //! | `courtyard` | textured floor and walls, a lattice roof, banners, shrubs and a wire fence (alpha-masked cards), a few solids | 8 | real-content features: textures and alpha-masked casters in every technique ([`courtyard`]) |
 //! | `courtyard-opaque` | `courtyard` with every material opaque | 8 | the same geometry without masks: what masks change |
 //! | `crowd` | 64 tubes over a floor, each skinned to two joints and swaying (one 2 s clip) | 16 | animation: moving, deforming casters that caching, pages and rays must follow ([`crowd`]) |
+//! | `walker` | one figure skinned to eight joints walking across a floor (one 2 s clip, "walk") | 16 | animation: a bent surface the denoiser's and reservoirs' histories must follow ([`walker`]) |
 //!
 //! Light layouts are **seeded and deterministic**: the same [`BuiltinOptions`] always give the
 //! same scene. Geometry does not depend on the seed (so benchmarks with different light
@@ -42,6 +43,7 @@ pub mod dragon;
 pub(crate) mod lights;
 mod options;
 pub mod terrain;
+pub mod walker;
 
 use crate::error::SceneError;
 use crate::model::{Light, Scene};
@@ -66,6 +68,7 @@ pub const SCENE_NAMES: &[&str] = &[
     "courtyard",
     "courtyard-opaque",
     "crowd",
+    "walker",
 ];
 
 /// Builds the built-in scene `name` (one of [`SCENE_NAMES`]). With more than
@@ -106,6 +109,7 @@ pub fn build(name: &str, opts: &BuiltinOptions) -> Result<Scene, SceneError> {
         "courtyard" => courtyard::build(opts, true),
         "courtyard-opaque" => courtyard::build(opts, false),
         "crowd" => crowd::build(opts),
+        "walker" => walker::build(opts),
         _ => unreachable!("checked against SCENE_NAMES above"),
     };
     if opts.lights.is_some_and(|n| n > LOCAL_LAYOUT_ABOVE) {
