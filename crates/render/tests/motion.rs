@@ -162,7 +162,10 @@ fn a_bent_mesh_is_followed_as_a_moved_instance_is() {
                 &bent.render().expect("frame"),
             ));
         }
-        eprintln!("denoise {} reuse {}: apart {apart:.3?}", rays.denoise, rays.reuse);
+        eprintln!(
+            "denoise {} reuse {}: apart {apart:.3?}",
+            rays.denoise, rays.reuse
+        );
         seen.push((rays.denoise, apart));
     }
     for (denoise, apart) in seen {
