@@ -194,6 +194,33 @@ pub(crate) struct Sequence<'a> {
 }
 
 impl Sequence<'_> {
+    /// The moving instance at frame `f` and its transform there (none at frame 0): a step of
+    /// 0.35 radians a frame along a circle 0.3 wide in the ground plane.
+    fn moved_instance(&self, f: u32, scene: &Scene) -> Option<(usize, glam::Mat4)> {
+        self.mover.filter(|_| f > 0).map(|k| {
+            let a = f as f32 * 0.35;
+            let offset = glam::Vec3::new(0.3 * a.cos() - 0.3, 0.0, 0.3 * a.sin());
+            (
+                k,
+                glam::Mat4::from_translation(offset) * scene.instances[k].transform,
+            )
+        })
+    }
+
+    /// `scene` as its geometry stands at frame `f` (what [`Self::step`] sets on the
+    /// renderers, less the camera): the moving instance moved and the animation posed, for
+    /// the CPU reference of that frame.
+    pub(crate) fn posed(&self, f: u32, scene: &Scene) -> Scene {
+        let mut posed = scene.clone();
+        if let Some(c) = self.clock {
+            posed.set_time(c.playing, c.at(f));
+        }
+        if let Some((k, m)) = self.moved_instance(f, scene) {
+            posed.instances[k].transform = m;
+        }
+        posed
+    }
+
     /// Sets frame `f` (from 0) of `scene`'s sequence on every renderer alike: the path's
     /// camera, and after the first frame the moving instance one step further along its
     /// circle (0.3 wide in the ground plane, 0.35 radians a frame) and the camera turned.
@@ -218,14 +245,7 @@ impl Sequence<'_> {
             cam.position = cam.target + turn * (cam.position - cam.target);
             moved = true;
         }
-        let instance = self.mover.filter(|_| f > 0).map(|k| {
-            let a = f as f32 * 0.35;
-            let offset = glam::Vec3::new(0.3 * a.cos() - 0.3, 0.0, 0.3 * a.sin());
-            (
-                k,
-                glam::Mat4::from_translation(offset) * scene.instances[k].transform,
-            )
-        });
+        let instance = self.moved_instance(f, scene);
         // Frame 0 stands at the clock's start already (the scene was loaded there).
         let now = self.clock.filter(|_| f > 0);
         let pose = now

@@ -88,6 +88,12 @@ pub struct CompareArgs {
     /// Half-width of the edge band in pixels (Chebyshev distance to a reference edge).
     #[arg(long, default_value_t = 2)]
     pub(super) edge_band: u32,
+    /// With --frames N: also score every frame's hard visibility mask, per technique, against
+    /// the CPU reference traced for that frame (the scene as it stands then: the moving
+    /// instance, the animation's pose): false shadow and false light outside the edge band.
+    /// One CPU reference per frame. Not with --light-samples (sampled lights keep no hard mask).
+    #[arg(long)]
+    pub(super) misclassified: bool,
     /// Receiver bias towards the light, in shadow texels.
     #[arg(long, default_value_t = ShadowBias::default().constant, allow_negative_numbers = true)]
     pub(super) bias_constant: f32,

@@ -98,7 +98,7 @@ fn shadow_rays(reach: &Mask, lights: &[Light]) -> u64 {
     rays
 }
 
-fn trace_reference(
+pub(super) fn trace_reference(
     multi: &MultiProgress,
     renderer: &Renderer,
     tracer: &Tracer,

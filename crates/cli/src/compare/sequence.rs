@@ -35,6 +35,34 @@ struct Scored {
     every_light: Option<Against>,
     /// Per frame: GPU ms of the whole frame (where timestamps exist).
     gpu_ms: Vec<Option<f64>>,
+    /// With --misclassified: its hard mask against each frame's CPU reference.
+    misclassified: Option<Misclassified>,
+}
+
+/// A technique's hard visibility masks against the CPU reference of each frame.
+#[derive(Serialize, Default)]
+struct Misclassified {
+    /// Per frame: (pixel, light) pairs in reach misclassified outside the edge band (false
+    /// shadow plus false light).
+    outside_band: Vec<u64>,
+    /// Per frame: the same as a share of the pairs in reach.
+    fraction: Vec<f64>,
+    /// The largest share, and its frame (from 1).
+    max_fraction: f64,
+    max_frame: u32,
+}
+
+impl Misclassified {
+    fn push(&mut self, c: &manyshadows_reference::score::Counts) {
+        let wrong = c.false_shadow + c.false_light;
+        let share = wrong as f64 / c.in_reach.max(1) as f64;
+        self.outside_band.push(wrong);
+        self.fraction.push(share);
+        if self.fraction.len() == 1 || share > self.max_fraction {
+            self.max_fraction = share;
+            self.max_frame = self.fraction.len() as u32;
+        }
+    }
 }
 
 /// One technique's frames against one reference's.
@@ -130,8 +158,16 @@ pub(super) fn check_sequence_flags(args: &CompareArgs) -> Result<()> {
             );
         }
     }
+    if args.misclassified && args.per_technique.light_samples > 0 {
+        bail!(
+            "--misclassified scores hard visibility masks, which sampled lights \
+             (--light-samples {}) do not keep; score it without --light-samples",
+            args.per_technique.light_samples
+        );
+    }
     if args.frames == 1 {
         let used = [
+            ("--misclassified", args.misclassified),
             ("--orbit", args.orbit != 0.0),
             ("--camera-path", args.camera_path.is_some()),
             ("--move-instance", args.move_instance.is_some()),
@@ -180,7 +216,7 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
         // The frame people see: PCF as the technique's default, no visibility masks.
         crate::compare::setup::settings(&args, t, false)
             .with_pcf(manyshadows::Pcf::default())
-            .with_visibility(false)
+            .with_visibility(args.misclassified)
             .with_rays(rays)
     };
     let named = !args.techniques.is_empty();
@@ -199,12 +235,18 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
     ) {
         Ok(r) => Some(r),
         // Sampled lights over shadow maps still have their every-light frames to be scored
-        // against.
-        Err(e) if asked.iter().any(|&t| samples_over_maps(t, &sampled)) => {
+        // against, and with --misclassified every technique its masks.
+        Err(e) if args.misclassified || asked.iter().any(|&t| samples_over_maps(t, &sampled)) => {
             pb.suspend(|| {
                 eprintln!(
-                    "note: no exact frames ({exact_technique}: {e}); the sampled shadow-map \
-                     techniques are scored against their own frames with every light only"
+                    "note: no exact frames ({exact_technique}: {e}); {}",
+                    if args.misclassified {
+                        "each technique's masks are scored against each frame's CPU reference \
+                         (--misclassified), its frames against no exact image"
+                    } else {
+                        "the sampled shadow-map techniques are scored against their own frames \
+                         with every light only"
+                    }
                 )
             });
             None
@@ -221,7 +263,8 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
     let mut contenders: Vec<Contender> = Vec::new();
     for t in asked {
         pb.set_message(format!("building {t}"));
-        if exact.is_none() && !samples_over_maps(t, &sampled) {
+        // Without exact frames a technique is still scored by its masks (--misclassified).
+        if exact.is_none() && !samples_over_maps(t, &sampled) && !args.misclassified {
             if named {
                 bail!(
                     "technique {t}: nothing to score it against without ray queries (only \
@@ -280,6 +323,7 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
             exact: exact.as_ref().map(|_| Against::default()),
             every_light: c.every.as_ref().map(|_| Against::default()),
             gpu_ms: Vec::new(),
+            misclassified: args.misclassified.then(Misclassified::default),
         })
         .collect();
     let mut last: Vec<Frame> = Vec::new();
@@ -316,6 +360,10 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
             }
             s.gpu_ms.push(fr.timings.gpu_ms.total());
             last.push(fr);
+        }
+        if args.misclassified {
+            bar.set_message(format!("frame {}/{}: CPU reference", f + 1, args.frames));
+            misclassified(&args, &sequence, f, &scene, &contenders, &last, &mut scored)?;
         }
         if let Some(e) = e.filter(|_| f + 1 == args.frames) {
             image_out(
@@ -384,6 +432,51 @@ pub(super) fn run_sequence(args: &CompareArgs) -> Result<serde_json::Value> {
         crate::compare::report::write_json(p, &report)?;
     }
     Ok(report)
+}
+
+/// Frame `f`'s hard masks (`frames`, one per contender) against the CPU reference traced from
+/// the first contender's G-buffer through the scene as it stands at that frame.
+fn misclassified(
+    args: &CompareArgs,
+    sequence: &Sequence,
+    f: u32,
+    scene: &manyshadows::scene::Scene,
+    contenders: &[Contender],
+    frames: &[Frame],
+    scored: &mut [Scored],
+) -> Result<()> {
+    let Some(first) = contenders.first() else {
+        return Ok(());
+    };
+    let posed = sequence.posed(f, scene);
+    let tracer = manyshadows_reference::Tracer::with_rule(&posed, args.single_sided_shadows)?;
+    let hidden =
+        indicatif::MultiProgress::with_draw_target(indicatif::ProgressDrawTarget::hidden());
+    let r = crate::compare::reference::trace_reference(
+        &hidden,
+        &first.renderer,
+        &tracer,
+        &posed,
+        args.edge_band,
+    )?;
+    for (fr, s) in frames.iter().zip(scored.iter_mut()) {
+        let Some(m) = s.misclassified.as_mut() else {
+            continue;
+        };
+        let vis = fr.visibility.as_ref().with_context(|| {
+            format!("{}: the renderer returned no visibility mask", s.technique)
+        })?;
+        let mask = manyshadows_reference::Mask {
+            width: vis.width,
+            height: vis.height,
+            lights: vis.lights,
+            words_per_pixel: vis.words_per_pixel,
+            words: vis.words.clone(),
+        };
+        let score = manyshadows_reference::score::score(&r.vis, &r.band, &mask)?;
+        m.push(&score.total(|_| true));
+    }
+    Ok(())
 }
 
 /// A technique's renderer over the sequence, and where it samples lights over shadow maps,
@@ -461,6 +554,29 @@ fn print_table(
                 if k == 0 { median.as_str() } else { "" }
             );
         }
+    }
+    if scored.iter().any(|s| s.misclassified.is_some()) {
+        println!(
+            "{:<40} {:>10} {:>8} {:>8} {:>14}",
+            "hard mask vs each frame's CPU reference", "mean", "first", "last", "max (frame)"
+        );
+        for s in scored {
+            let Some(m) = &s.misclassified else { continue };
+            let pct = |v: Option<&f64>| v.map_or("-".to_string(), |v| format!("{:.3}%", 100.0 * v));
+            let mean = m.fraction.iter().sum::<f64>() / m.fraction.len().max(1) as f64;
+            println!(
+                "{:<40} {:>10} {:>8} {:>8} {:>14}",
+                s.technique,
+                pct(Some(&mean)),
+                pct(m.fraction.first()),
+                pct(m.fraction.last()),
+                format!("{} ({})", pct(Some(&m.max_fraction)), m.max_frame)
+            );
+        }
+        println!(
+            "misclassified: false shadow and false light outside the edge band, as a share of \
+             the (pixel, light) pairs in reach"
+        );
     }
     let mut footer = "RMSE of the 8-bit RGB channels (0-255) and FLIP".to_string();
     if exact.is_some() {

@@ -164,6 +164,11 @@ fn compare_over_a_sequence_scores_each_frame_against_its_exact_image() {
         (vec!["--light-samples", "1"], "--light-samples"),
         (vec!["--orbit", "2"], "--orbit"),
         (vec!["--frames", "0"], "--frames"),
+        (vec!["--misclassified"], "--misclassified"),
+        (
+            vec!["--frames", "2", "--misclassified", "--light-samples", "1"],
+            "--misclassified",
+        ),
     ] {
         let dir = tmp("sequence-bad");
         let out = run(&[
