@@ -101,6 +101,9 @@ impl Renderer {
         if let Some(l) = &mut parts.scene.last_positions {
             l.begin_frame(&ctx.queue);
         }
+        if let Some(d) = &mut parts.denoiser {
+            d.upload_moved(&ctx.queue);
+        }
         if let Some(m) = &mut parts.motion {
             let instances = &self.current.instances;
             m.upload(&ctx.queue, |i| instances[i].transform);

@@ -270,6 +270,14 @@ impl Renderer {
         if old.casts_shadows {
             let new = self.parts.scene.draws[instance].sphere;
             self.parts.source.note_moved(old.sphere, new);
+            if let Some(d) = self
+                .parts
+                .denoiser
+                .as_mut()
+                .filter(|_| self.settings.rays.moved_shadows)
+            {
+                d.note_moved(old.sphere, new);
+            }
         }
         self.dirty = true;
         self.probes_stale = true;
@@ -329,6 +337,19 @@ impl Renderer {
         for (k, old, new) in moved {
             if self.parts.scene.draws[k].casts_shadows {
                 self.parts.source.note_moved(old, new);
+                if let Some(d) = self
+                    .parts
+                    .denoiser
+                    .as_mut()
+                    .filter(|_| self.settings.rays.moved_shadows)
+                {
+                    let world = self
+                        .current
+                        .instances
+                        .get(k)
+                        .map_or(glam::Mat4::IDENTITY, |i| i.transform);
+                    d.note_bent(&self.current.meshes[mesh].positions, positions, world);
+                }
             }
         }
         self.parts.source.note_deformed(&self.ctx, mesh, positions);

@@ -70,8 +70,18 @@
 //! frame's exact unshadowed light keeps, to the fourth power, and a history cut below one
 //! frame is dropped (a pixel the change did not reach keeps its history whole). How these
 //! rules measured, and what was tried before them: docs/techniques.md, "The denoiser when
-//! lights change". A moving caster's old shadows stay in the ratio where the surface did not
-//! move: detecting that (temporal gradients, A-SVGF) is not done.
+//! lights change".
+//!
+//! **When casters move** over surfaces that do not, their old shadows would stay in the
+//! ratio's history. The renderer hands the denoiser a sphere per moved caster (per run of
+//! [`BENT_CHUNK`] vertices of a bent mesh) around where it was and is; the lighting pass
+//! tests the segment of every light it traces against them (`moved_caster_between`), and a
+//! pixel whose segment passes one keeps at most [`SHADOW_MOVED_HISTORY`] frames (a point that
+//! moved itself keeps [`MOVING_HISTORY`]). Only the lights sampled are tested, so a pixel is
+//! caught about as often as the moved shadow weighs in its light. What this does not do: draw
+//! more samples where the history was cut (the shadow there rests on one frame's samples and
+//! the spatial filter), or tell a changed visibility from an unchanged one (temporal
+//! gradients, A-SVGF).
 
 use crate::error::RenderError;
 use crate::frame::gbuffer::GBuffer;
@@ -87,11 +97,19 @@ pub use crate::sampled::options::MAX_HISTORY;
 /// 1, 2, 8 or the whole history); docs/techniques.md, "Histories under motion".
 pub const MOVING_HISTORY: u32 = 4;
 
+/// Casters moved since the last frame that the lighting pass tests shadow rays against (each
+/// one sphere around where it was and where it is); more are merged into one sphere around
+/// the rest. A pixel whose sampled light's segment passes one keeps at most
+/// [`MOVING_HISTORY`] frames of history: its shadow may have moved under it
+/// (`denoise_lighting.wgsl`, `moved_caster_between`).
+pub const MAX_MOVED_CASTERS: usize = 64;
+
 /// The denoiser's WGSL: its passes and what `last_frame_position` needs.
 fn shader_source() -> String {
     format!(
-        "const MOVING_HISTORY: f32 = {:?}f;\n{}{}",
+        "const MOVING_HISTORY: f32 = {:?}f;\nconst SHADOW_MOVED_POWER: f32 = {:?}f;\n{}{}",
         MOVING_HISTORY as f32,
+        SHADOW_MOVED_POWER,
         include_str!("denoise.wgsl"),
         crate::sampled::motion::wgsl()
     )
@@ -207,8 +225,10 @@ pub fn lighting_part(buffers: Option<&DenoiseBuffers>) -> Part<'_> {
 /// not: what a shader is composed of.
 pub fn lighting_part_declared(on: bool) -> Part<'static> {
     let consts = format!(
-        "const DENOISE: bool = {on};\nconst CATCH_UP_FRAMES: f32 = {:?}f;\n",
-        MAX_HISTORY as f32
+        "const DENOISE: bool = {on};\nconst CATCH_UP_FRAMES: f32 = {:?}f;\n\
+         const DENOISE_MOVED_SLOTS: u32 = {}u;\n",
+        MAX_HISTORY as f32,
+        MAX_MOVED_CASTERS + 1
     );
     if on {
         Part {
@@ -223,7 +243,9 @@ pub fn lighting_part_declared(on: bool) -> Part<'static> {
             "{consts}fn denoise_store(px: vec2<i32>, a: vec4<f32>, s: vec3<f32>, \
                  u: vec3<f32>, r: vec3<f32>, f: f32) {{}}\n\
                  fn denoise_set_shadowed(px: vec2<i32>, s: vec3<f32>) {{}}\n\
-                 fn denoise_store_fix(px: vec2<i32>, s: vec3<f32>, u: vec3<f32>, g: f32) {{}}\n"
+                 fn denoise_store_fix(px: vec2<i32>, s: vec3<f32>, u: vec3<f32>, g: f32) {{}}\n\
+                 fn moved_caster_between(i: u32, s: Surface) -> bool {{ return false; }}\n\
+                 fn denoise_note_shadow_moved(px: vec2<i32>, share: f32) {{}}\n"
         ))
     }
 }
@@ -264,6 +286,10 @@ pub struct Denoiser {
     /// What [`Denoiser::follow_lights`] found for the next frame; [`Denoiser::record`] takes
     /// it (a frame prepared but never recorded keeps it for the next).
     change: Option<LightChange>,
+    /// Casters moved since the last frame: a sphere around each one's old and new bounds.
+    moved: Vec<(glam::Vec3, f32)>,
+    /// Whether the ratio buffer's tail holds moved casters (to be cleared once none move).
+    moved_written: bool,
 }
 
 /// A change of lights the next denoised frame follows.
@@ -276,6 +302,65 @@ struct LightChange {
     /// adds. `None`: more changed than are corrected for, and the temporal pass cuts each
     /// pixel's frame count by the change of its unshadowed light.
     fix: Option<[u32; 2]>,
+}
+
+/// Bytes at the end of the ratio buffer for the moved casters: a count, then
+/// [`MAX_MOVED_CASTERS`] spheres (`denoise_lighting.wgsl`, `DENOISE_MOVED_SLOTS`).
+fn moved_tail_bytes() -> u64 {
+    (MAX_MOVED_CASTERS as u64 + 1) * 16
+}
+
+/// How a still point's history is cut where a light traced there passes a caster that moved
+/// since the last frame ([`MAX_MOVED_CASTERS`]): it counts as many frames as the share of
+/// the point's unshadowed light the other lights carry, to this power.
+pub const SHADOW_MOVED_POWER: f32 = 4.0;
+
+/// Vertices per sphere of a bent mesh (`Denoiser::note_bent`).
+pub const BENT_CHUNK: usize = 32;
+
+/// `spheres` brought down to at most `max`: ordered along the axis they spread most on and
+/// enclosed in runs of neighbours (each run one sphere), so that close ones merge.
+fn merged(mut spheres: Vec<(glam::Vec3, f32)>, max: usize) -> Vec<(glam::Vec3, f32)> {
+    if spheres.len() <= max {
+        return spheres;
+    }
+    let (lo, hi) = spheres.iter().fold(
+        (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN)),
+        |(lo, hi), (c, _)| (lo.min(*c), hi.max(*c)),
+    );
+    let spread = hi - lo;
+    let axis = if spread.x >= spread.y && spread.x >= spread.z {
+        0
+    } else if spread.y >= spread.z {
+        1
+    } else {
+        2
+    };
+    spheres.sort_by(|a, b| a.0[axis].total_cmp(&b.0[axis]));
+    let run = spheres.len().div_ceil(max);
+    spheres
+        .chunks(run)
+        .map(|c| {
+            c.iter()
+                .copied()
+                .reduce(enclosing)
+                .expect("a run is not empty")
+        })
+        .collect()
+}
+
+/// The smallest sphere around two spheres (centre, radius).
+fn enclosing(a: (glam::Vec3, f32), b: (glam::Vec3, f32)) -> (glam::Vec3, f32) {
+    let d = a.0.distance(b.0);
+    if d + b.1 <= a.1 {
+        return a;
+    }
+    if d + a.1 <= b.1 {
+        return b;
+    }
+    let r = 0.5 * (d + a.1 + b.1);
+    let c = a.0 + (b.0 - a.0) * ((r - a.1) / d.max(1e-30));
+    (c, r)
 }
 
 fn storage(ctx: &GpuContext, label: &str, bytes: u64) -> wgpu::Buffer {
@@ -308,7 +393,7 @@ impl Denoiser {
         let limit = limits
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size);
-        if pixels * 64 > limit {
+        if pixels * 64 + moved_tail_bytes() > limit {
             return Err(RenderError::TooLarge {
                 what: format!("the denoiser's per-pixel buffers of a {w}x{h} frame"),
                 needed: pixels * 64,
@@ -319,7 +404,13 @@ impl Denoiser {
         }
         let buffers = DenoiseBuffers {
             pixels: storage(ctx, "denoise.pixels", pixels * 64),
-            ratio: storage(ctx, "denoise.ratio", pixels * 32),
+            // Per pixel, then the casters moved since the last frame (`moved_tail_bytes`).
+            ratio: ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("denoise.ratio"),
+                size: pixels * 32 + moved_tail_bytes(),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
         };
         let history = [
             storage(ctx, "denoise.history0", pixels * 64),
@@ -416,6 +507,8 @@ impl Denoiser {
             prev_view_proj: None,
             seen_lights: lights,
             change: None,
+            moved: Vec::new(),
+            moved_written: false,
         })
     }
 
@@ -445,6 +538,47 @@ impl Denoiser {
             lights: records,
             fix,
         });
+    }
+
+    /// A shadow caster moved before the next frame, its world bounds from `old` to `new`
+    /// (centre, radius).
+    pub fn note_moved(&mut self, old: (glam::Vec3, f32), new: (glam::Vec3, f32)) {
+        self.moved.push(enclosing(old, new));
+    }
+
+    /// A shadow caster's mesh was bent before the next frame, its vertices from `old` to
+    /// `new` (in the same order; `world` takes them to the world): one sphere per run of
+    /// [`BENT_CHUNK`] vertices around where they were and are, far tighter than the whole
+    /// mesh's bounds (a walking figure's limbs, not the figure).
+    pub fn note_bent(&mut self, old: &[glam::Vec3], new: &[glam::Vec3], world: glam::Mat4) {
+        for (a, b) in old.chunks(BENT_CHUNK).zip(new.chunks(BENT_CHUNK)) {
+            let points = a.iter().chain(b).map(|&p| world.transform_point3(p));
+            let (lo, hi) = points.clone().fold(
+                (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN)),
+                |(lo, hi), p| (lo.min(p), hi.max(p)),
+            );
+            let c = 0.5 * (lo + hi);
+            let r = points.map(|p| p.distance(c)).fold(0.0f32, f32::max);
+            if a != b {
+                self.moved.push((c, r));
+            }
+        }
+    }
+
+    /// Before a frame's passes: the casters moved since the last frame go to the end of the
+    /// ratio buffer (a count, then the spheres; past [`MAX_MOVED_CASTERS`] the last sphere
+    /// encloses the rest), for the lighting pass's test; nothing is written when none moved
+    /// this frame or the last.
+    pub fn upload_moved(&mut self, queue: &wgpu::Queue) {
+        if self.moved.is_empty() && !self.moved_written {
+            return;
+        }
+        let spheres = merged(std::mem::take(&mut self.moved), MAX_MOVED_CASTERS);
+        let mut data = vec![[spheres.len() as f32, 0.0, 0.0, 0.0]];
+        data.extend(spheres.iter().map(|(c, r)| [c.x, c.y, c.z, *r]));
+        let at = self.buffers.ratio.size() - moved_tail_bytes();
+        queue.write_buffer(&self.buffers.ratio, at, bytemuck::cast_slice(&data));
+        self.moved_written = !spheres.is_empty();
     }
 
     /// `FrameUniforms::modes.zw` for the next frame: where the changed lights' records

@@ -193,6 +193,14 @@ fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
             let kept = stays * stays;
             h0.w = floor(h0.w * kept * kept);
         }
+        // A light traced here passes a caster that moved (denoise_lighting.wgsl,
+        // `moved_caster_between`): the shadow may have moved under a still point too.
+        // Its history counts as many frames as the share of its light that stays, to the
+        // power SHADOW_MOVED_POWER (as when lights change); cut below one frame it is dropped.
+        let moved_share = px_in[4u * i + 2u].w;
+        if (moved_share > 0.0 && !moved) {
+            h0.w = floor(h0.w * pow(1.0 - moved_share, SHADOW_MOVED_POWER));
+        }
         frames = min(round(h0.w) + weight, select(f32(p.size.w), MOVING_HISTORY, moved));
         let a = min(weight / frames, 1.0);
         shadowed = mix(h0.rgb, shadowed, a);

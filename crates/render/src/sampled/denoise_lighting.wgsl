@@ -19,6 +19,53 @@ fn denoise_store(px: vec2<i32>, a: vec4<f32>, shadowed: vec3<f32>, unshadowed: v
     denoise_px[i + 3u] = vec4<f32>(rest, 0.0);
 }
 
+// Marks the pixel's shadow as maybe moved this frame (after `denoise_store`): the segment to
+// a light it traced passes a caster that moved (`moved_caster_between`); the temporal pass
+// then keeps at most MOVING_HISTORY frames of its history.
+fn denoise_note_shadow_moved(px: vec2<i32>, share: f32) {
+    if (choosing) {
+        return;
+    }
+    let i = 4u * (u32(px.y) * u32(frame.viewport.x) + u32(px.x));
+    denoise_px[i + 2u].w = share;
+}
+
+// Whether a caster that moved since the last frame (a sphere around its old and new bounds,
+// at the end of `denoise_ratio`: denoise.rs `upload_moved`) may lie between `s` and light `i`:
+// the segment to the light's centre (a directional light: the ray towards it) passes within
+// the sphere's radius grown by the light's size (the cone to its shape is no wider).
+fn moved_caster_between(i: u32, s: Surface) -> bool {
+    let base = arrayLength(&denoise_ratio) - DENOISE_MOVED_SLOTS;
+    let n = min(u32(denoise_ratio[base].x), DENOISE_MOVED_SLOTS - 1u);
+    if (n == 0u) {
+        return false;
+    }
+    let light = lights[i];
+    let size = max(light.diffuse.w, 0.0);
+    let directional = light.shadow.z == LIGHT_DIRECTIONAL;
+    for (var k = 1u; k <= n; k = k + 1u) {
+        let m = denoise_ratio[base + k];
+        let to_c = m.xyz - s.p;
+        var near = 0.0;
+        var grow = 0.0;
+        if (directional) {
+            let axis = -light.direction.xyz;
+            let t = max(dot(to_c, axis), 0.0);
+            near = length(to_c - axis * t);
+            grow = t * size;
+        } else {
+            let seg = light.position.xyz - s.p;
+            let t = clamp(dot(to_c, seg) / max(dot(seg, seg), 1e-30), 0.0, 1.0);
+            near = length(to_c - seg * t);
+            grow = size;
+        }
+        if (near <= m.w + grow) {
+            return true;
+        }
+    }
+    return false;
+}
+
 // Replaces the pixel's estimate with shadows (spatial reuse's, after the lighting pass's).
 fn denoise_set_shadowed(px: vec2<i32>, shadowed: vec3<f32>) {
     let i = 4u * (u32(px.y) * u32(frame.viewport.x) + u32(px.x));

@@ -31,6 +31,9 @@ struct Acc {
     est_unshadowed: vec3<f32>,
     // Whether the samples went through temporal reuse (resolve_reused).
     reused: bool,
+    // With DENOISE: the largest share of the pixel's unshadowed light of a light traced whose
+    // segment passes a caster that moved since the last frame (`moved_caster_between`).
+    shadow_moved: f32,
     // Where frames are denoised: the pixel's first point of its low-discrepancy sequence
     // (`sample_point`), and checkpoints (a light with the running sum before it, after every
     // CHECKPOINT_EVERY weighed or CHECKPOINT_VISITED visited lights), from which
@@ -270,6 +273,9 @@ fn resolve_samples(s: Surface, acc: ptr<function, Acc>) {
             let i = (*acc).first[j];
             let t = light_terms(i, s);
             direct = direct + light_lit(i, s) * t.att * t.ds;
+            if (DENOISE) {
+                note_moved_share(acc, i, s);
+            }
         }
         (*acc).color = (*acc).color + direct;
         if (DENOISE) {
@@ -292,6 +298,7 @@ fn resolve_samples(s: Surface, acc: ptr<function, Acc>) {
         var lit = 0.0;
         if (DENOISE) {
             lit = light_lit_point(i, s, sample_shape_point(s, i, (*acc).frac[j]));
+            note_moved_share(acc, i, s);
         } else {
             lit = light_lit(i, s);
         }
@@ -305,6 +312,19 @@ fn resolve_samples(s: Surface, acc: ptr<function, Acc>) {
         (*acc).est_shadowed = direct / f32(n);
         (*acc).est_unshadowed = unlit / f32(n);
     }
+}
+
+// With DENOISE: light `i`, traced at `s`, passes a caster that moved since the last frame:
+// its share of the pixel's unshadowed light is the most of the history's ratio that may have
+// changed with it (the temporal pass cuts the history by it).
+fn note_moved_share(acc: ptr<function, Acc>, i: u32, s: Surface) {
+    if (!moved_caster_between(i, s)) {
+        return;
+    }
+    let luma = vec3<f32>(0.2126, 0.7152, 0.0722);
+    let t = light_terms(i, s);
+    let share = dot(t.att * t.ds, luma) / max(dot((*acc).unshadowed, luma), 1e-30);
+    (*acc).shadow_moved = max((*acc).shadow_moved, clamp(share, 0.0, 1.0));
 }
 
 // Whether the point `jitter` (0..1², on the light's shape) of light `i` reaches `s` (its
@@ -342,6 +362,9 @@ fn resolve_reused(s: Surface, acc: ptr<function, Acc>) {
         let f_new = tn.att * tn.ds;
         let jn = soft_jitter(s.px, yn);
         let vn = light_lit_point(yn, s, jn);
+        if (DENOISE) {
+            note_moved_share(acc, yn, s);
+        }
         var m_old = 0.0;
         var y_old = yn;
         var j_old = jn;
@@ -361,6 +384,9 @@ fn resolve_reused(s: Surface, acc: ptr<function, Acc>) {
                     let p_old = dot(f_old, luma);
                     if (p_old > 0.0) {
                         v_old = light_lit_point(y_old, s, j_old);
+                        if (DENOISE) {
+                            note_moved_share(acc, y_old, s);
+                        }
                         w_old = p_old * v_old * w_kept;
                     }
                 }

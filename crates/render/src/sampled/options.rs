@@ -49,6 +49,11 @@ pub struct RayOptions {
     /// every pixel involved could have drawn it (rays from each), [`SpatialReuse::Biased`]
     /// by their frame counts alone (cheaper, darker where neighbours see different lights).
     pub spatial: SpatialReuse,
+    /// With `denoise`: where a light traced at a still point passes a shadow caster that moved
+    /// since the last frame, the point's history is cut by that light's share of its light
+    /// (sampled/denoise.rs, "When casters move"), so a moving caster's old shadow leaves the
+    /// ratio. On by default; off keeps such histories whole (what it does, measured).
+    pub moved_shadows: bool,
 }
 
 /// Spatial reuse of sampled lights ([`RayOptions::spatial`]).
@@ -99,6 +104,7 @@ impl Default for RayOptions {
             denoise: false,
             reuse: false,
             spatial: SpatialReuse::Off,
+            moved_shadows: true,
         }
     }
 }
@@ -161,4 +167,5 @@ with_setters!(RayOptions {
     with_denoise: denoise: bool,
     with_reuse: reuse: bool,
     with_spatial: spatial: SpatialReuse,
+    with_moved_shadows: moved_shadows: bool,
 });

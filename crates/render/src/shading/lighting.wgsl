@@ -327,6 +327,7 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     acc.est_shadowed = vec3<f32>(0.0);
     acc.est_unshadowed = vec3<f32>(0.0);
     acc.reused = false;
+    acc.shadow_moved = 0.0;
     var slot = CLUSTER_OVERFLOW;
     if (clusters.words.w != 0u) {
         slot = cluster_slots[cluster_index(clusters, vec2<u32>(px), s.view_depth)];
@@ -408,6 +409,9 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     }
     if (DENOISE) {
         denoise_store(px, vec4<f32>(acc.unshadowed, 1.0), acc.est_shadowed, acc.est_unshadowed, rest, f32(acc.k) / f32(max(ray_samples(), 1u)));
+        if (acc.shadow_moved > 0.0) {
+            denoise_note_shadow_moved(px, acc.shadow_moved);
+        }
         if (frame.modes.w != 0u) {
             denoise_store_fix(s.px, fix.with_shadows, fix.without, fix.went);
         }
