@@ -24,9 +24,10 @@ const PELVIS_Y: f32 = 0.95;
 /// The clip's length in seconds (two strides of 1 s each).
 pub const DURATION: f32 = 2.0;
 
-/// A vertical tube of `sides` sides around the axis through `x, z`, from `y0` down or up to
-/// `y1` in `rings` rings, radius `r`, capped at both ends; appended to `mesh`, each vertex
-/// weighted by `weights(y)` (joint indices into the skin, weights).
+/// A vertical tube of 12 sides around the axis through `x, z`, between heights `y0` and `y1`
+/// in `rings` rings, radius `r`, capped at both ends (the caps' rims share the side's
+/// vertices, so their normals are the side's); appended to `mesh`, each vertex weighted by
+/// `weights(y)` (joint indices into the skin, weights).
 #[allow(clippy::too_many_arguments)]
 fn tube(
     mesh: &mut Mesh,
@@ -38,6 +39,8 @@ fn tube(
     weights: impl Fn(f32) -> ([u16; 4], [f32; 4]),
 ) {
     let sides = 12u32;
+    // Built upwards whichever way it was asked, so that its faces wind outwards.
+    let (y0, y1) = (y0.min(y1), y0.max(y1));
     let first = mesh.positions.len() as u32;
     let mut push = |p: Vec3, n: Vec3| {
         mesh.positions.push(p);
@@ -55,9 +58,8 @@ fn tube(
         }
     }
     // The caps' centres.
-    let up = if y1 > y0 { Vec3::Y } else { -Vec3::Y };
-    push(Vec3::new(x, y0, z), -up);
-    push(Vec3::new(x, y1, z), up);
+    push(Vec3::new(x, y0, z), -Vec3::Y);
+    push(Vec3::new(x, y1, z), Vec3::Y);
     let (c0, c1) = (first + (rings + 1) * sides, first + (rings + 1) * sides + 1);
     for k in 0..rings {
         for s in 0..sides {
