@@ -186,6 +186,17 @@ fn first_reference(
     Ok(r)
 }
 
+/// A frame's hard visibility mask as the reference crate scores it.
+pub(super) fn mask_of(vis: &manyshadows::VisibilityMask) -> Mask {
+    Mask {
+        width: vis.width,
+        height: vis.height,
+        lights: vis.lights,
+        words_per_pixel: vis.words_per_pixel,
+        words: vis.words.clone(),
+    }
+}
+
 /// Variant `v`'s frame scored against `r`, its difference images written.
 fn score_variant(
     setup: &Setup,
@@ -200,13 +211,7 @@ fn score_variant(
         .visibility
         .as_ref()
         .context("the renderer returned no visibility mask")?;
-    let mask = Mask {
-        width: vis.width,
-        height: vis.height,
-        lights: vis.lights,
-        words_per_pixel: vis.words_per_pixel,
-        words: vis.words.clone(),
-    };
+    let mask = mask_of(vis);
     let score = score::score(&r.vis, &r.band, &mask)?;
     let plan = renderer.plan();
     let footprints = footprints(renderer, scene_v, r)?;

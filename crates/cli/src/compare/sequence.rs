@@ -466,13 +466,7 @@ fn misclassified(
         let vis = fr.visibility.as_ref().with_context(|| {
             format!("{}: the renderer returned no visibility mask", s.technique)
         })?;
-        let mask = manyshadows_reference::Mask {
-            width: vis.width,
-            height: vis.height,
-            lights: vis.lights,
-            words_per_pixel: vis.words_per_pixel,
-            words: vis.words.clone(),
-        };
+        let mask = crate::compare::scoring::mask_of(vis);
         let score = manyshadows_reference::score::score(&r.vis, &r.band, &mask)?;
         m.push(&score.total(|_| true));
     }
