@@ -248,18 +248,9 @@ impl Sequence<'_> {
         let instance = self.moved_instance(f, scene);
         // Frame 0 stands at the clock's start already (the scene was loaded there).
         let now = self.clock.filter(|_| f > 0);
-        let pose = now
-            .map(|c| scene.animations.pose(c.playing, c.at(f)))
-            .unwrap_or_default();
-        let bent = now
-            .map(|c| scene.animations.deformed(c.playing, c.at(f)))
-            .unwrap_or_default();
         for r in renderers.iter_mut() {
-            for &(k, m) in &pose {
-                r.set_instance_transform(k, m)?;
-            }
-            for (mesh, positions, normals) in &bent {
-                r.set_mesh_vertices(*mesh, positions, normals)?;
+            if let Some(c) = now {
+                r.set_time(c.playing, c.at(f))?;
             }
             if let Some((k, m)) = instance {
                 r.set_instance_transform(k, m)?;

@@ -134,7 +134,7 @@ pub use probes::maps::{ProbeMaps, ProbePasses, ProbeStats};
 pub use renderer::{FramePart, Renderer};
 pub use report::{Frame, FrameEstimate, FrameTimings, ShadowLayout, ShadowWork, SubmittedFrame};
 pub use sampled::options::{RayOptions, SpatialReuse, DEFAULT_AREA_SAMPLES};
-pub use settings::RenderSettings;
+pub use settings::{Deform, RenderSettings};
 pub use shading::look::{Exposure, Look, ResolvedLook, Shading, ToneMap};
 pub use shadows::cost::{Cost, EstimatedWork, LightingRead};
 pub use shadows::descriptor::{Culling, Need, Requirement, TechniqueInfo};

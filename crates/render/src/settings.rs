@@ -18,6 +18,19 @@ use crate::shadows::options::{Pcf, ShadowBias, ShadowOptions, SoftShadows};
 use crate::shadows::source::{SourceSettings, TechniqueOptions};
 use crate::shadows::vsm::plan::VirtualOptions;
 
+/// Where skinned and morphed meshes are bent ([`RenderSettings::deform`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Deform {
+    /// A compute pass writes the bent vertices into the scene's buffers from the joints'
+    /// matrices and the morph weights, which are all the CPU evaluates (gpu_scene/deform.rs);
+    /// the bounds come from the joints.
+    #[default]
+    Gpu,
+    /// The CPU bends every vertex and uploads it (`Renderer::set_mesh_vertices`); the bounds
+    /// are the bent vertices' own. The same vertices up to rounding: for comparison.
+    Cpu,
+}
+
 /// How a frame is rendered.
 #[derive(Clone, Debug)]
 #[non_exhaustive]
@@ -75,6 +88,9 @@ pub struct RenderSettings {
     pub stereo: Option<Stereo>,
     /// How reflection probes' face G-buffers are drawn (scenes with probes).
     pub probe_passes: ProbePasses,
+    /// Where skinned and morphed meshes are bent as an animation plays
+    /// ([`crate::Renderer::set_time`]): on the GPU (default) or the CPU.
+    pub deform: Deform,
     /// Options of techniques without a field here (one added beside the built-in ones),
     /// one per type: [`RenderSettings::with_technique_options`].
     pub technique_options: Vec<std::sync::Arc<dyn TechniqueOptions>>,
@@ -105,6 +121,7 @@ impl Default for RenderSettings {
             look: Look::default(),
             stereo: None,
             probe_passes: ProbePasses::default(),
+            deform: Deform::default(),
             technique_options: Vec::new(),
         }
     }
@@ -269,6 +286,7 @@ with_setters!(RenderSettings {
     with_clusters: clusters: ClusterOptions,
     with_stereo: stereo: Option<Stereo>,
     with_probe_passes: probe_passes: ProbePasses,
+    with_deform: deform: Deform,
 });
 
 impl RenderSettings {

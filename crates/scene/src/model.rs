@@ -623,6 +623,7 @@ impl Scene {
                 m.positions = positions;
                 m.normals = normals;
             }
+            self.animations.bent_bounds.remove(&mesh);
         }
     }
 
@@ -650,15 +651,24 @@ impl Scene {
             .sum()
     }
 
+    /// Mesh `mesh`'s box `(min, max)` as it stands: its box in `Animations::bent_bounds`
+    /// where it is bent away from its vertices (on the GPU), else its vertices' box; `None`
+    /// for an empty or missing mesh.
+    pub fn mesh_bounds(&self, mesh: usize) -> Option<(Vec3, Vec3)> {
+        let bent = self.animations.bent_bounds.get(&mesh).copied();
+        bent.or_else(|| self.meshes.get(mesh).and_then(Mesh::bounds))
+    }
+
     /// World-space bounds `(min, max)` of all instances (optionally only shadow casters);
-    /// `None` if there is no geometry.
+    /// `None` if there is no geometry. A mesh bent on the GPU counts with its box in
+    /// `Animations::bent_bounds`.
     pub fn world_bounds(&self, casters_only: bool) -> Option<(Vec3, Vec3)> {
         let mut out: Option<(Vec3, Vec3)> = None;
         for inst in &self.instances {
             if casters_only && !inst.casts_shadows {
                 continue;
             }
-            let Some((lo, hi)) = self.meshes.get(inst.mesh).and_then(Mesh::bounds) else {
+            let Some((lo, hi)) = self.mesh_bounds(inst.mesh) else {
                 continue;
             };
             for corner in box_corners(lo, hi) {

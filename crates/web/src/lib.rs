@@ -422,14 +422,7 @@ impl WebRenderer {
         if self.applied == Some((playing, t)) {
             return Ok(());
         }
-        let pose = a.pose(playing, t);
-        let deformed = a.deformed(playing, t);
-        for (k, m) in pose {
-            self.renderer.set_instance_transform(k, m).map_err(err)?;
-        }
-        for (mesh, p, n) in deformed {
-            self.renderer.set_mesh_vertices(mesh, &p, &n).map_err(err)?;
-        }
+        self.renderer.set_time(playing, t).map_err(err)?;
         self.applied = Some((playing, t));
         Ok(())
     }

@@ -1,8 +1,10 @@
 //! `manyshadows bench animation`: scenes that move as authored (the built-in skinned `crowd`,
 //! or an animated glTF file), per technique, against the same scene frozen, in the same runs:
 //! whole-frame and shadow GPU time, the views or pages each frame redraws (caching follows what
-//! moved), and the CPU time of the pose (node transforms, skins and morph targets evaluated on
-//! the CPU and handed to the renderer).
+//! moved), and what bending the skinned and morphed meshes costs: on the GPU (the default:
+//! the CPU evaluates the joints' matrices and morph weights, a compute pass bends the
+//! vertices, timed as the `deform` stage) or on the CPU (every vertex bent and uploaded),
+//! `--deform` choosing, both in one run with `--deform both`.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -11,8 +13,7 @@ use anyhow::{bail, Result};
 use clap::Args;
 use manyshadows::scene::animation::Playing;
 use manyshadows::scene::builtin::{self, BuiltinOptions, LightMix};
-use manyshadows::scene::Scene;
-use manyshadows::{GpuContext, RenderSettings, Renderer, Stage, Technique};
+use manyshadows::{Deform, GpuContext, RenderSettings, Renderer, Stage, Technique};
 use serde::Serialize;
 
 use crate::bench::harness::{check_counts, ms, ratio, Contender, Harness, Run, RunArgs, Subject};
@@ -38,6 +39,10 @@ pub struct AnimationArgs {
     /// The camera's frame (WxH).
     #[arg(long, default_value = "640x360")]
     pub screen: String,
+    /// Where the skinned and morphed meshes are bent: `gpu` (a compute pass), `cpu` (every
+    /// vertex on the CPU, uploaded), or `both` (each, beside the frozen scene, same runs).
+    #[arg(long, default_value = "gpu")]
+    pub deform: String,
     #[command(flatten)]
     pub run: RunArgs,
 }
@@ -53,11 +58,17 @@ pub(crate) struct Counters {
     pose_ms: f64,
 }
 
+/// The contenders' states: label, where meshes bend (`None`: frozen).
+const STATES: [(&str, Option<Deform>); 3] = [
+    ("animated", Some(Deform::Gpu)),
+    ("animated-cpu", Some(Deform::Cpu)),
+    ("frozen", None),
+];
+
 /// Frames of a renderer whose scene moves by `step` seconds of its animation before each
 /// (0: frozen).
 struct Animated {
     renderer: Renderer,
-    scene: Arc<Scene>,
     step: f32,
     time: f32,
 }
@@ -69,13 +80,7 @@ impl Subject for Animated {
         let t0 = Instant::now();
         if self.step > 0.0 {
             self.time += self.step;
-            let a = &self.scene.animations;
-            for (k, m) in a.pose(Playing::One(0), self.time) {
-                self.renderer.set_instance_transform(k, m)?;
-            }
-            for (mesh, p, n) in a.deformed(Playing::One(0), self.time) {
-                self.renderer.set_mesh_vertices(mesh, &p, &n)?;
-            }
+            self.renderer.set_time(Playing::One(0), self.time)?;
         }
         let pose_ms = t0.elapsed().as_secs_f64() * 1e3;
         let f = self.renderer.render()?;
@@ -101,7 +106,11 @@ struct Record {
     /// Its shadows are rays (no views or pages to count).
     rays: bool,
     state: &'static str,
+    /// Where its meshes bend (`None`: frozen).
+    deform: Option<&'static str>,
     frame_gpu_ms: Option<f64>,
+    /// The GPU's bending pass (`deform` stage; meshes bent on the GPU only).
+    deform_gpu_ms: Option<f64>,
     shadows_gpu_ms: Option<f64>,
     frame_ratio_vs_frozen: Option<f64>,
     drawn: u64,
@@ -120,6 +129,12 @@ pub fn animation(args: &AnimationArgs) -> Result<()> {
         bail!(
             "--step {}: seconds between frames, above 0 and at most 10",
             args.step
+        );
+    }
+    if !["gpu", "cpu", "both"].contains(&args.deform.as_str()) {
+        bail!(
+            "--deform {}: where meshes bend, gpu, cpu or both",
+            args.deform
         );
     }
     let (w, h) = crate::bench::harness::parse_screen(&args.screen)?;
@@ -167,7 +182,8 @@ pub fn animation(args: &AnimationArgs) -> Result<()> {
             unmet.is_empty()
         })
         .collect();
-    hh.plan(hh.units(2 * techniques.len(), 1));
+    let states = if args.deform == "both" { 3 } else { 2 };
+    hh.plan(hh.units(states * techniques.len(), 1));
     let mut records = Vec::new();
     for t in techniques {
         hh.message(format!("{t}"));
@@ -175,15 +191,21 @@ pub fn animation(args: &AnimationArgs) -> Result<()> {
             .with_width(w)
             .with_height(h)
             .with_technique(t);
-        let contenders = ["animated", "frozen"]
+        let contenders = STATES
             .into_iter()
-            .map(|state| {
+            .filter(|(_, d)| match (args.deform.as_str(), d) {
+                (_, None) | ("both", _) => true,
+                ("cpu", Some(d)) => *d == Deform::Cpu,
+                (_, Some(d)) => *d == Deform::Gpu,
+            })
+            .map(|(state, deform)| {
+                let mut settings = settings.clone();
+                settings.deform = deform.unwrap_or_default();
                 Ok(Contender {
                     label: state.to_string(),
                     subject: Animated {
-                        renderer: Renderer::new(&hh.ctx, &scene, settings.clone())?,
-                        scene: scene.clone(),
-                        step: if state == "animated" { args.step } else { 0.0 },
+                        renderer: Renderer::new(&hh.ctx, &scene, settings)?,
+                        step: if deform.is_some() { args.step } else { 0.0 },
                         time: 0.0,
                     },
                 })
@@ -204,12 +226,17 @@ pub fn animation(args: &AnimationArgs) -> Result<()> {
             records.push(Record {
                 technique: t.name().to_string(),
                 rays: t.info().fills == manyshadows::Fills::Rays,
-                state: if o.label == "animated" {
-                    "animated"
-                } else {
-                    "frozen"
-                },
+                state: STATES
+                    .iter()
+                    .find(|(l, _)| *l == o.label)
+                    .map_or("frozen", |(l, _)| l),
+                deform: STATES
+                    .iter()
+                    .find(|(l, _)| *l == o.label)
+                    .and_then(|(_, d)| *d)
+                    .map(|d| if d == Deform::Gpu { "gpu" } else { "cpu" }),
                 frame_gpu_ms: o.runs.gpu_ms(),
+                deform_gpu_ms: o.runs.stage(Stage::Deform),
                 shadows_gpu_ms: o.runs.stage(Stage::Shadows),
                 frame_ratio_vs_frozen: ratio(o.runs.gpu_ms(), frozen),
                 drawn: median(&|c| c.drawn as f64) as u64,
@@ -224,8 +251,9 @@ pub fn animation(args: &AnimationArgs) -> Result<()> {
     let _ = writeln!(
         text,
         "== bench animation: {} ({} instances, {} lights), camera {}, {:.4} s of animation a \
-         frame against the same scene frozen; median GPU ms, views or pages drawn a frame, CPU \
-         ms of the pose\n   adapter: {}",
+         frame against the same scene frozen (`animated`: meshes bent on the GPU, \
+         `animated-cpu`: on the CPU); median GPU ms, the GPU's bending pass, views or pages drawn \
+         a frame, CPU ms of the pose\n   adapter: {}",
         scene.name,
         scene.instances.len(),
         scene.lights.len(),
@@ -235,10 +263,11 @@ pub fn animation(args: &AnimationArgs) -> Result<()> {
     );
     let _ = writeln!(
         text,
-        "{:<12} | {:<8} | {:>9} | {:>10} | {:>6} | {:>15} | {:>8} | {:>7}",
+        "{:<12} | {:<12} | {:>9} | {:>9} | {:>10} | {:>6} | {:>15} | {:>8} | {:>7}",
         "technique",
         "state",
         "frame ms",
+        "deform ms",
         "shadows ms",
         "ratio",
         "drawn a frame",
@@ -248,10 +277,11 @@ pub fn animation(args: &AnimationArgs) -> Result<()> {
     for r in &records {
         let _ = writeln!(
             text,
-            "{:<12} | {:<8} | {:>9} | {:>10} | {:>6} | {:>15} | {:>8.2} | {:>7.2}",
+            "{:<12} | {:<12} | {:>9} | {:>9} | {:>10} | {:>6} | {:>15} | {:>8.2} | {:>7.2}",
             r.technique,
             r.state,
             ms(r.frame_gpu_ms),
+            ms(r.deform_gpu_ms),
             ms(r.shadows_gpu_ms),
             r.frame_ratio_vs_frozen
                 .map_or(String::new(), |v| format!("{v:.2}")),

@@ -177,24 +177,36 @@ fn records_of(json: &Value) -> Vec<Value> {
 
 /// `bench animation` on a small crowd: each technique's animated frames redraw some of their
 /// views or pages every frame (the tubes bend), the frozen ones none, and the pose's CPU time
-/// is measured for the animated frames only; a scene where nothing moves is refused.
+/// is measured for the animated frames only; with `--deform both`, the meshes bent on the GPU
+/// (their bending pass timed) and on the CPU (no bending pass) in the same run. A scene where
+/// nothing moves is refused, and so is an unknown `--deform`.
 #[test]
 fn bench_animation_measures_moving_against_frozen() {
     let (_, json) = bench_ok(
         "animation",
-        "--crowd 4 --lights 8 --screen 64x36 --repeats 1 --warmup 1 --techniques traditional,virtual",
+        "--crowd 4 --lights 8 --screen 64x36 --repeats 1 --warmup 1 --techniques traditional,virtual \
+         --deform both",
     );
     let rows = json["records"].as_array().unwrap();
-    assert_eq!(rows.len(), 4, "{json}");
+    assert_eq!(rows.len(), 6, "{json}");
     for r in rows {
         let drawn = r["drawn"].as_u64().unwrap();
-        match r["state"].as_str().unwrap() {
-            "animated" => {
+        let bending = r["deform_gpu_ms"].as_f64();
+        match (r["state"].as_str().unwrap(), r["deform"].as_str()) {
+            ("animated", Some("gpu")) => {
                 assert!(drawn > 0, "{r}");
                 assert!(r["pose_cpu_ms"].as_f64().unwrap() > 0.0, "{r}");
+                assert!(bending.is_some_and(|ms| ms > 0.0), "{r}");
             }
-            _ => assert_eq!(drawn, 0, "{r}"),
+            ("animated-cpu", Some("cpu")) => {
+                assert!(drawn > 0, "{r}");
+                assert!(r["pose_cpu_ms"].as_f64().unwrap() > 0.0, "{r}");
+                assert!(bending.is_none(), "{r}");
+            }
+            ("frozen", None) => assert!(drawn == 0 && bending.is_none(), "{r}"),
+            other => panic!("unexpected state {other:?}: {r}"),
         }
     }
     rejects("animation --scene cubes", "nothing in it moves");
+    rejects("animation --deform gpus", "--deform");
 }

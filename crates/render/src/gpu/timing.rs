@@ -44,6 +44,9 @@ struct StatQueries {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum Stage {
+    /// Skinned and morphed meshes bent on the GPU (gpu_scene/deform.rs), before anything
+    /// draws; only in frames after a new pose.
+    Deform,
     /// The camera's G-buffer.
     GBuffer,
     /// Assigning lights to clusters.
@@ -68,6 +71,7 @@ pub enum Stage {
 impl Stage {
     /// Every stage, in frame order.
     pub const ALL: &'static [Stage] = &[
+        Stage::Deform,
         Stage::GBuffer,
         Stage::Clusters,
         Stage::Pages,
@@ -79,10 +83,11 @@ impl Stage {
         Stage::Visibility,
     ];
 
-    /// The stage's name in reports and JSON (`gbuffer`, `clusters`, `pages`, `accel`,
+    /// The stage's name in reports and JSON (`deform`, `gbuffer`, `clusters`, `pages`, `accel`,
     /// `shadows`, `probes`, `lighting`, `denoise`, `visibility`).
     pub fn name(self) -> &'static str {
         match self {
+            Stage::Deform => "deform",
             Stage::GBuffer => "gbuffer",
             Stage::Clusters => "clusters",
             Stage::Pages => "pages",
@@ -525,6 +530,7 @@ mod tests {
         assert_eq!(
             names,
             [
+                "deform",
                 "gbuffer",
                 "clusters",
                 "pages",

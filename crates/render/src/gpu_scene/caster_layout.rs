@@ -229,9 +229,10 @@ pub(crate) fn light_points(scene: &Scene) -> Vec<Vec3> {
         .collect()
 }
 
-/// True if any of `points` lies in the world box of `mesh` placed by `transform`.
-pub(crate) fn light_inside(mesh: &Mesh, transform: Mat4, points: &[Vec3]) -> bool {
-    mesh.bounds().is_some_and(|(lo, hi)| {
+/// True if any of `points` lies in the world box of a mesh (its box `bounds`) placed by
+/// `transform`.
+pub(crate) fn light_inside(bounds: Option<(Vec3, Vec3)>, transform: Mat4, points: &[Vec3]) -> bool {
+    bounds.is_some_and(|(lo, hi)| {
         let corners = (0..8).map(|k| {
             transform.transform_point3(Vec3::new(
                 if k & 1 == 0 { lo.x } else { hi.x },
@@ -266,8 +267,11 @@ impl MeshCache {
         skinned: bool,
     ) -> Vec<Decision> {
         let points = light_points(scene);
-        // A skinned mesh bends: normal cones taken at load would not hold.
-        let bends = |mesh: usize| scene.animations.skins.iter().any(|s| s.mesh == mesh);
+        // A skinned or morphed mesh bends: normal cones taken at load would not hold.
+        let bends = |mesh: usize| {
+            let a = &scene.animations;
+            a.skins.iter().any(|s| s.mesh == mesh) || a.morphs.iter().any(|m| m.mesh == mesh)
+        };
         scene
             .instances
             .iter()
@@ -306,7 +310,8 @@ impl MeshCache {
                 };
                 let cullable = !masked
                     && closure != Closure::Open
-                    && (assume_closed || !light_inside(mesh, inst.transform, &points));
+                    && (assume_closed
+                        || !light_inside(scene.mesh_bounds(inst.mesh), inst.transform, &points));
                 Decision {
                     cullable,
                     flip: cullable && closure == Closure::Inward,

@@ -281,7 +281,8 @@ impl GpuScene {
                 bytemuck::cast_slice(&positions),
                 wgpu::BufferUsages::VERTEX
                     | wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_DST,
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC,
             ),
             normals: buf(
                 "scene.normals",
@@ -369,7 +370,21 @@ impl GpuScene {
         }
         queue.write_buffer(&self.positions, at, bytemuck::cast_slice(&now));
         queue.write_buffer(&self.normals, at, bytemuck::cast_slice(&flat(normals)));
-        let object = bounding_sphere(positions);
+        self.set_mesh_sphere(mesh, bounding_sphere(positions), transform)
+    }
+
+    /// Gives every instance drawing mesh `mesh` the bounding sphere `object` (in the mesh's
+    /// coordinates; `transform`: an instance's transform by its index); returns each such
+    /// instance with its world sphere before and after.
+    pub fn set_mesh_sphere(
+        &mut self,
+        mesh: usize,
+        object: (Vec3, f32),
+        transform: impl Fn(usize) -> Mat4,
+    ) -> Vec<MovedSphere> {
+        let Some(range) = self.meshes.get(mesh).copied() else {
+            return Vec::new();
+        };
         let mut moved = Vec::new();
         for (k, d) in self.draws.iter_mut().enumerate() {
             if d.mesh.base_vertex != range.base_vertex || d.mesh.first_index != range.first_index {

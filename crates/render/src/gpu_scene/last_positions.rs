@@ -25,6 +25,10 @@ pub struct LastPositions {
     moving: Vec<usize>,
     /// Where each mesh's first vertex lies in the buffer, in bytes.
     at: HashMap<usize, u64>,
+    /// Ranges `(first byte, bytes)` of meshes bent on the GPU before the next frame
+    /// ([`LastPositions::note_gpu`]), and before the last.
+    gpu_next: Vec<(u64, u64)>,
+    gpu_last: Vec<(u64, u64)>,
 }
 
 impl LastPositions {
@@ -42,6 +46,8 @@ impl LastPositions {
             next: HashMap::new(),
             moving: Vec::new(),
             at: HashMap::new(),
+            gpu_next: Vec::new(),
+            gpu_last: Vec::new(),
         }
     }
 
@@ -57,6 +63,30 @@ impl LastPositions {
             }
         }
         self.next.insert(mesh, positions.to_vec());
+    }
+
+    /// The mesh at `bytes` (first byte, length) of the buffer is bent on the GPU before the
+    /// next frame draws (gpu_scene/deform.rs): [`LastPositions::record_gpu`] copies what the
+    /// last frame drew before the bend.
+    pub fn note_gpu(&mut self, bytes: (u64, u64)) {
+        if !self.gpu_next.contains(&bytes) {
+            self.gpu_next.push(bytes);
+        }
+    }
+
+    /// Before the GPU bends meshes for a frame: every mesh bent on the GPU for this frame or
+    /// the last gets its last positions copied from `positions` (what the last frame drew;
+    /// for a mesh not bent again, its positions now, so that it stands still).
+    pub fn record_gpu(&mut self, encoder: &mut wgpu::CommandEncoder, positions: &wgpu::Buffer) {
+        let last = std::mem::take(&mut self.gpu_last);
+        for &(at, len) in self
+            .gpu_next
+            .iter()
+            .chain(last.iter().filter(|r| !self.gpu_next.contains(r)))
+        {
+            encoder.copy_buffer_to_buffer(positions, at, &self.buffer, at, len);
+        }
+        self.gpu_last = std::mem::take(&mut self.gpu_next);
     }
 
     /// Before a frame's passes: meshes bent between the last two frames but not since get

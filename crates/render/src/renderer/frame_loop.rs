@@ -17,7 +17,7 @@ use crate::shadows::source::ShadowStats;
 
 impl Renderer {
     /// Records one frame after deriving the GPU state from any change, pass by pass in the
-    /// order of the algorithm: the G-buffer, the light clusters, the shadows, the probes'
+    /// order of the algorithm: the meshes bent on the GPU (after a new pose), the G-buffer, the light clusters, the shadows, the probes'
     /// faces, the lighting (with what follows it), the denoiser and its composite, the
     /// visibility mask; returns the shadow work counters.
     fn record_frame(
@@ -30,6 +30,25 @@ impl Renderer {
         self.timer.reset();
         self.begin_histories(ctx);
         self.parts.write_uniforms(ctx);
+        let scene = &mut self.parts.scene;
+        if let Some(l) = &mut scene.last_positions {
+            // Before the bend: what the last frame drew.
+            l.record_gpu(encoder, &scene.positions);
+        }
+        if let Some(d) = self
+            .parts
+            .deformer
+            .as_mut()
+            .and_then(Option::as_mut)
+            .filter(|d| d.pending())
+        {
+            let span = self.timer.span(Stage::Deform);
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("deform"),
+                timestamp_writes: self.timer.compute_writes(span, true, true),
+            });
+            d.record(&mut pass);
+        }
         let span = self.timer.span(Stage::GBuffer);
         let parts = &mut self.parts;
         parts

@@ -53,6 +53,9 @@ pub(super) struct FrameParts {
     pub wants: Option<PageWants>,
     /// The reflection probes' faces and passes (scenes with probes).
     pub probes: Option<ProbeFrame>,
+    /// Skinned and morphed meshes bent on the GPU: made by the first pose
+    /// (`Renderer::set_bending`); `Some(None)` where the scene has none it can bend.
+    pub deformer: Option<Option<crate::gpu_scene::deform::Deformer>>,
 }
 
 impl FrameParts {
@@ -196,6 +199,7 @@ impl FrameParts {
             reuse,
             wants,
             probes,
+            deformer: None,
         })
     }
 

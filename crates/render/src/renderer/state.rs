@@ -353,9 +353,133 @@ impl Renderer {
             }
         }
         self.parts.source.note_deformed(&self.ctx, mesh, positions);
+        self.current.animations.bent_bounds.remove(&mesh);
         let m = &mut self.current.meshes[mesh];
         m.positions = positions.to_vec();
         m.normals = normals.to_vec();
+        self.dirty = true;
+        self.probes_stale = true;
+        Ok(())
+    }
+
+    /// Poses the scene's animations at `t` seconds (`playing`: which clips; wrapped as
+    /// `Animations::wrap` says): every instance an animated node moves gets its transform
+    /// ([`Renderer::set_instance_transform`]), and every skinned or morphed mesh is bent
+    /// ([`Renderer::set_bending`]). Errors: a pose that is not finite.
+    pub fn set_time(
+        &mut self,
+        playing: manyshadows_scene::animation::Playing,
+        t: f32,
+    ) -> Result<(), RenderError> {
+        let anim = &self.current.animations;
+        let pose = anim.pose(playing, t);
+        let bending =
+            (!anim.skins.is_empty() || !anim.morphs.is_empty()).then(|| anim.bending(playing, t));
+        for (k, m) in pose {
+            self.set_instance_transform(k, m)?;
+        }
+        match bending {
+            Some(b) => self.set_bending(&b),
+            None => Ok(()),
+        }
+    }
+
+    /// Bends every skinned and morphed mesh of the scene's animations as `bending` says (its
+    /// nodes' world transforms and morph weights: `Animations::bending`). With
+    /// [`Deform::Gpu`](crate::Deform) (the default) the CPU evaluates only the joints'
+    /// matrices and the bounds drawn from them, and a compute pass bends the vertices before
+    /// the next frame draws (gpu_scene/deform.rs); the meshes' vertices in
+    /// [`Renderer::scene`] stay as loaded. With `Deform::Cpu`, or for a skin that pass cannot
+    /// bound (weights not convex), the CPU bends them ([`Renderer::set_mesh_vertices`]).
+    /// Either way, what the meshes' old and new bounds reach is redrawn and the histories
+    /// follow. Errors: a matrix or weight that is not finite.
+    pub fn set_bending(
+        &mut self,
+        bending: &manyshadows_scene::animation::Bending,
+    ) -> Result<(), RenderError> {
+        let finite = bending.worlds.iter().all(|m| m.is_finite())
+            && bending
+                .weights
+                .iter()
+                .all(|(_, w)| w.iter().all(|x| x.is_finite()));
+        if !finite {
+            return Err(SceneError::InvalidMesh {
+                mesh: "the animation's pose".into(),
+                reason: "a node's transform or a morph weight is not finite".into(),
+            }
+            .into());
+        }
+        if self.settings.deform == crate::Deform::Gpu && self.parts.deformer.is_none() {
+            self.parts.deformer = Some(crate::gpu_scene::deform::Deformer::new(
+                &self.ctx,
+                &self.current,
+                &self.parts.scene,
+            ));
+        }
+        let deformer = self
+            .parts
+            .deformer
+            .as_mut()
+            .and_then(Option::as_mut)
+            .filter(|_| self.settings.deform == crate::Deform::Gpu);
+        let on_cpu = |mesh: usize| deformer.as_ref().is_none_or(|d| !d.bends(mesh));
+        let cpu: Vec<_> = self.current.animations.bend_where(bending, on_cpu);
+        let Some(deformer) = deformer else {
+            for (mesh, positions, normals) in cpu {
+                self.set_mesh_vertices(mesh, &positions, &normals)?;
+            }
+            return Ok(());
+        };
+        let bent = deformer.pose(&self.ctx.queue, &self.current.animations, bending);
+        let ranges: Vec<(usize, u64, u64)> = deformer.ranges().collect();
+        let instances = &self.current.instances;
+        let transform = |k: usize| {
+            instances
+                .get(k)
+                .map_or(glam::Mat4::IDENTITY, |i| i.transform)
+        };
+        for b in bent {
+            let (lo, hi) = b.parts.iter().map(|(_, now)| now).fold(
+                (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN)),
+                |(lo, hi), &(c, r)| (lo.min(c - r), hi.max(c + r)),
+            );
+            if lo.cmple(hi).all() {
+                self.current.animations.bent_bounds.insert(b.mesh, (lo, hi));
+            }
+            let moved = self
+                .parts
+                .scene
+                .set_mesh_sphere(b.mesh, b.sphere, transform);
+            for (k, old, new) in moved {
+                if !self.parts.scene.draws[k].casts_shadows {
+                    continue;
+                }
+                self.parts.source.note_moved(old, new);
+                if let Some(d) = self
+                    .parts
+                    .denoiser
+                    .as_mut()
+                    .filter(|_| self.settings.rays.moved_shadows)
+                {
+                    let world = transform(k);
+                    let scale = crate::gpu_scene::deform::max_stretch(world);
+                    let to_world =
+                        |(c, r): (glam::Vec3, f32)| (world.transform_point3(c), r * scale);
+                    for &(was, is) in b.parts.iter().filter(|(was, is)| was != is) {
+                        d.note_moved(to_world(was), to_world(is));
+                    }
+                }
+            }
+            if let Some(&(_, at, len)) = ranges.iter().find(|r| r.0 == b.mesh) {
+                if let Some(l) = &mut self.parts.scene.last_positions {
+                    l.note_gpu((at, len));
+                }
+                self.parts.source.note_deformed_on_gpu(b.mesh, (at, len));
+            }
+        }
+        for (mesh, positions, normals) in cpu {
+            self.set_mesh_vertices(mesh, &positions, &normals)?;
+        }
         self.dirty = true;
         self.probes_stale = true;
         Ok(())

@@ -180,6 +180,11 @@ pub trait ShadowSource: std::any::Any {
     /// their own (ray tracing's bottom-level structures) take the new positions.
     fn note_deformed(&mut self, _ctx: &GpuContext, _mesh: usize, _positions: &[Vec3]) {}
 
+    /// Mesh `mesh` is bent on the GPU before the next frame draws, its vertices `bytes`
+    /// (first byte, length) into the scene's positions (gpu_scene/deform.rs): sources that
+    /// keep a mesh's geometry of their own copy it from there.
+    fn note_deformed_on_gpu(&mut self, _mesh: usize, _bytes: (u64, u64)) {}
+
     /// Records the frame's shadow work after the G-buffer and clusters, opening its own timer
     /// spans (`shadows`, and `pages` before it for virtual maps).
     fn record(

@@ -224,6 +224,7 @@ pub(super) fn read_animations(
         moving: Vec::new(),
         skins,
         morphs,
+        bent_bounds: Default::default(),
     })
 }
 

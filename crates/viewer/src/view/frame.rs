@@ -28,7 +28,7 @@ impl State {
         }
         if let Some(p) = &mut self.player {
             p.advance(app_scene, dt);
-            if let Err(e) = p.apply(app_scene, &mut self.renderer) {
+            if let Err(e) = p.apply(&mut self.renderer) {
                 self.message = Some(format!("animation: {e}"));
             }
         }

@@ -84,16 +84,11 @@ impl Player {
 
     /// The pose at the current time set on `renderer`, if the clip or time changed since the
     /// last; an error is the renderer's words.
-    pub(super) fn apply(&mut self, scene: &Scene, renderer: &mut Renderer) -> Result<()> {
+    pub(super) fn apply(&mut self, renderer: &mut Renderer) -> Result<()> {
         if self.applied == Some((self.playing, self.time)) {
             return Ok(());
         }
-        for (k, m) in scene.animations.pose(self.playing, self.time) {
-            renderer.set_instance_transform(k, m)?;
-        }
-        for (mesh, positions, normals) in scene.animations.deformed(self.playing, self.time) {
-            renderer.set_mesh_vertices(mesh, &positions, &normals)?;
-        }
+        renderer.set_time(self.playing, self.time)?;
         self.applied = Some((self.playing, self.time));
         Ok(())
     }

@@ -84,6 +84,8 @@ struct Built {
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
     stale: bool,
+    /// Bent on the GPU: where its vertices lie in the scene's positions, in bytes.
+    copy_from: Option<u64>,
 }
 
 /// Row-major 3×4 affine part of `m`, as a TLAS instance's transform.
@@ -343,6 +345,7 @@ impl RayAccel {
                 vertices,
                 indices,
                 stale: false,
+                copy_from: None,
             })
             .collect();
         Ok(Self {
@@ -388,11 +391,31 @@ impl RayAccel {
         }
     }
 
-    /// Records the builds of the BLASes of bent meshes, and the TLAS's if an instance moved or
+    /// Mesh `mesh` is bent on the GPU, `bytes` (first byte, length) into the scene's
+    /// positions: the next [`RayAccel::record`] copies its vertices from there and builds its
+    /// BLASes again.
+    pub fn deform_on_gpu(&mut self, mesh: usize, bytes: (u64, u64)) {
+        for b in self.built.iter_mut().filter(|b| b.mesh == mesh) {
+            if u64::from(b.size.vertex_count) * 12 == bytes.1 {
+                b.copy_from = Some(bytes.0);
+                b.stale = true;
+                self.dirty = true;
+            }
+        }
+    }
+
+    /// Records the builds of the BLASes of bent meshes (those bent on the GPU first copy
+    /// their vertices from `positions`, the scene's), and the TLAS's if an instance moved or
     /// a BLAS was built since the last one; true if it did.
-    pub fn record(&mut self, encoder: &mut wgpu::CommandEncoder) -> bool {
+    pub fn record(&mut self, encoder: &mut wgpu::CommandEncoder, positions: &wgpu::Buffer) -> bool {
         if !self.dirty {
             return false;
+        }
+        for b in &mut self.built {
+            if let Some(at) = b.copy_from.take() {
+                let len = u64::from(b.size.vertex_count) * 12;
+                encoder.copy_buffer_to_buffer(positions, at, &b.vertices, 0, len);
+            }
         }
         let entries: Vec<wgpu::BlasBuildEntry<'_>> = self
             .blas

@@ -154,12 +154,16 @@ impl ShadowSource for RaytracedSource {
         self.accel.deform(&ctx.queue, mesh, positions);
     }
 
+    fn note_deformed_on_gpu(&mut self, mesh: usize, bytes: (u64, u64)) {
+        self.accel.deform_on_gpu(mesh, bytes);
+    }
+
     /// The TLAS build, timed as the `accel` stage between two empty compute passes that
     /// carry its timestamps; the rays themselves are cast by the lighting pass.
     fn record(
         &mut self,
         _ctx: &GpuContext,
-        _scene: &GpuScene,
+        scene: &GpuScene,
         encoder: &mut wgpu::CommandEncoder,
         timer: &mut GpuTimer,
     ) -> ShadowStats {
@@ -168,7 +172,7 @@ impl ShadowSource for RaytracedSource {
             label: Some("raytraced.accel_begin"),
             timestamp_writes: timer.compute_writes(span, true, false),
         }));
-        let built = self.accel.record(encoder);
+        let built = self.accel.record(encoder, &scene.positions);
         drop(encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("raytraced.accel_end"),
             timestamp_writes: timer.compute_writes(span, false, true),
