@@ -111,6 +111,9 @@ struct Record {
     frame_gpu_ms: Option<f64>,
     /// The GPU's bending pass (`deform` stage; meshes bent on the GPU only).
     deform_gpu_ms: Option<f64>,
+    /// Ray-traced shadows' acceleration structures built (`accel` stage: the bent meshes'
+    /// bottom-level ones again, and the top-level one).
+    accel_gpu_ms: Option<f64>,
     shadows_gpu_ms: Option<f64>,
     frame_ratio_vs_frozen: Option<f64>,
     drawn: u64,
@@ -237,6 +240,7 @@ pub fn animation(args: &AnimationArgs) -> Result<()> {
                     .map(|d| if d == Deform::Gpu { "gpu" } else { "cpu" }),
                 frame_gpu_ms: o.runs.gpu_ms(),
                 deform_gpu_ms: o.runs.stage(Stage::Deform),
+                accel_gpu_ms: o.runs.stage(Stage::Accel),
                 shadows_gpu_ms: o.runs.stage(Stage::Shadows),
                 frame_ratio_vs_frozen: ratio(o.runs.gpu_ms(), frozen),
                 drawn: median(&|c| c.drawn as f64) as u64,
@@ -252,8 +256,8 @@ pub fn animation(args: &AnimationArgs) -> Result<()> {
         text,
         "== bench animation: {} ({} instances, {} lights), camera {}, {:.4} s of animation a \
          frame against the same scene frozen (`animated`: meshes bent on the GPU, \
-         `animated-cpu`: on the CPU); median GPU ms, the GPU's bending pass, views or pages drawn \
-         a frame, CPU ms of the pose\n   adapter: {}",
+         `animated-cpu`: on the CPU); median GPU ms, the GPU's bending pass, ray tracing's \
+         structures built, views or pages drawn a frame, CPU ms of the pose\n   adapter: {}",
         scene.name,
         scene.instances.len(),
         scene.lights.len(),
@@ -263,12 +267,13 @@ pub fn animation(args: &AnimationArgs) -> Result<()> {
     );
     let _ = writeln!(
         text,
-        "{:<12} | {:<12} | {:>9} | {:>9} | {:>10} | {:>6} | {:>15} | {:>8} | {:>7}",
+        "{:<12} | {:<12} | {:>9} | {:>9} | {:>10} | {:>8} | {:>6} | {:>15} | {:>8} | {:>7}",
         "technique",
         "state",
         "frame ms",
         "deform ms",
         "shadows ms",
+        "accel ms",
         "ratio",
         "drawn a frame",
         "pose ms",
@@ -277,12 +282,13 @@ pub fn animation(args: &AnimationArgs) -> Result<()> {
     for r in &records {
         let _ = writeln!(
             text,
-            "{:<12} | {:<12} | {:>9} | {:>9} | {:>10} | {:>6} | {:>15} | {:>8.2} | {:>7.2}",
+            "{:<12} | {:<12} | {:>9} | {:>9} | {:>10} | {:>8} | {:>6} | {:>15} | {:>8.2} | {:>7.2}",
             r.technique,
             r.state,
             ms(r.frame_gpu_ms),
             ms(r.deform_gpu_ms),
             ms(r.shadows_gpu_ms),
+            ms(r.accel_gpu_ms),
             r.frame_ratio_vs_frozen
                 .map_or(String::new(), |v| format!("{v:.2}")),
             if r.rays {
