@@ -74,11 +74,12 @@
 //!
 //! **When casters move** over surfaces that do not, their old shadows would stay in the
 //! ratio's history. The renderer hands the denoiser a sphere per moved caster (per run of
-//! [`BENT_CHUNK`] vertices of a bent mesh) around where it was and is; the lighting pass
-//! tests the segment of every light it traces against them (`moved_caster_between`), and a
-//! pixel whose segment passes one keeps at most [`SHADOW_MOVED_HISTORY`] frames (a point that
-//! moved itself keeps [`MOVING_HISTORY`]). Only the lights sampled are tested, so a pixel is
-//! caught about as often as the moved shadow weighs in its light. What this does not do: draw
+//! [`BENT_CHUNK`] vertices of a mesh bent on the CPU, per joint of one bent on the GPU)
+//! around where it was and is; while casters moved, the lighting pass tests the segment of
+//! every light it visits for a pixel against them (`moved_caster_between`), and the share of
+//! the pixel's unshadowed light whose segment passes one cuts its history by
+//! [`SHADOW_MOVED_POWER`] (a point that moved itself keeps [`MOVING_HISTORY`]). What this does
+//! not do: draw
 //! more samples where the history was cut (the shadow there rests on one frame's samples and
 //! the spatial filter), or tell a changed visibility from an unchanged one (temporal
 //! gradients, A-SVGF).
@@ -245,6 +246,7 @@ pub fn lighting_part_declared(on: bool) -> Part<'static> {
                  fn denoise_set_shadowed(px: vec2<i32>, s: vec3<f32>) {{}}\n\
                  fn denoise_store_fix(px: vec2<i32>, s: vec3<f32>, u: vec3<f32>, g: f32) {{}}\n\
                  fn moved_caster_between(i: u32, s: Surface) -> bool {{ return false; }}\n\
+                 fn moved_casters() -> u32 {{ return 0u; }}\n\
                  fn denoise_note_shadow_moved(px: vec2<i32>, share: f32) {{}}\n"
         ))
     }

@@ -30,6 +30,12 @@ fn denoise_note_shadow_moved(px: vec2<i32>, share: f32) {
     denoise_px[i + 2u].w = share;
 }
 
+// Casters that moved since the last frame (0: none, and `moved_caster_between` is false).
+fn moved_casters() -> u32 {
+    let base = arrayLength(&denoise_ratio) - DENOISE_MOVED_SLOTS;
+    return min(u32(denoise_ratio[base].x), DENOISE_MOVED_SLOTS - 1u);
+}
+
 // Whether a caster that moved since the last frame (a sphere around its old and new bounds,
 // at the end of `denoise_ratio`: denoise.rs `upload_moved`) may lie between `s` and light `i`:
 // the segment to the light's centre (a directional light: the ray towards it) passes within

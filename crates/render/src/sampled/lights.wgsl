@@ -31,9 +31,13 @@ struct Acc {
     est_unshadowed: vec3<f32>,
     // Whether the samples went through temporal reuse (resolve_reused).
     reused: bool,
-    // With DENOISE: the largest share of the pixel's unshadowed light of a light traced whose
-    // segment passes a caster that moved since the last frame (`moved_caster_between`).
+    // With DENOISE: the share of the pixel's unshadowed light whose segment passes a caster
+    // that moved since the last frame (`moved_caster_between`): every light visited is
+    // tested (`moved_light` sums their luminance while casters moved, `track_moved`), and
+    // at least the largest share of a light traced.
     shadow_moved: f32,
+    moved_light: f32,
+    track_moved: bool,
     // Where frames are denoised: the pixel's first point of its low-discrepancy sequence
     // (`sample_point`), and checkpoints (a light with the running sum before it, after every
     // CHECKPOINT_EVERY weighed or CHECKPOINT_VISITED visited lights), from which
@@ -103,6 +107,10 @@ fn visit(i: u32, s: Surface, acc: ptr<function, Acc>) {
     }
     if (DENOISE) {
         (*acc).unshadowed = (*acc).unshadowed + t.att * t.ds;
+        if ((*acc).track_moved && moved_caster_between(i, s)) {
+            (*acc).moved_light = (*acc).moved_light
+                + dot(t.att * t.ds, vec3<f32>(0.2126, 0.7152, 0.0722));
+        }
     }
     if (k == 0u) {
         // Every light traced, its area samples new each frame: the direct light is kept

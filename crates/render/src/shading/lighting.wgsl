@@ -328,6 +328,8 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     acc.est_unshadowed = vec3<f32>(0.0);
     acc.reused = false;
     acc.shadow_moved = 0.0;
+    acc.moved_light = 0.0;
+    acc.track_moved = DENOISE && moved_casters() > 0u;
     var slot = CLUSTER_OVERFLOW;
     if (clusters.words.w != 0u) {
         slot = cluster_slots[cluster_index(clusters, vec2<u32>(px), s.view_depth)];
@@ -409,6 +411,10 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
     }
     if (DENOISE) {
         denoise_store(px, vec4<f32>(acc.unshadowed, 1.0), acc.est_shadowed, acc.est_unshadowed, rest, f32(acc.k) / f32(max(ray_samples(), 1u)));
+        if (acc.moved_light > 0.0) {
+            let all = dot(acc.unshadowed, vec3<f32>(0.2126, 0.7152, 0.0722));
+            acc.shadow_moved = max(acc.shadow_moved, clamp(acc.moved_light / max(all, 1e-30), 0.0, 1.0));
+        }
         if (acc.shadow_moved > 0.0) {
             denoise_note_shadow_moved(px, acc.shadow_moved);
         }
