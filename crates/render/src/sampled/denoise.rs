@@ -78,11 +78,11 @@
 //! around where it was and is; while casters moved, the lighting pass tests the segment of
 //! every light it visits for a pixel against them (`moved_caster_between`), and the share of
 //! the pixel's unshadowed light whose segment passes one cuts its history by
-//! [`SHADOW_MOVED_POWER`] (a point that moved itself keeps [`MOVING_HISTORY`]). What this does
-//! not do: draw
-//! more samples where the history was cut (the shadow there rests on one frame's samples and
-//! the spatial filter), or tell a changed visibility from an unchanged one (temporal
-//! gradients, A-SVGF).
+//! [`SHADOW_MOVED_POWER`] (a point that moved itself keeps [`MOVING_HISTORY`]); with reuse
+//! the frame draws the lost frames again there, beside the reservoirs (lighting.wgsl
+//! `moved_catch_up_samples`). What this does not do: tell a changed visibility from an
+//! unchanged one (temporal gradients, A-SVGF), so the samples go wherever the conservative
+//! spheres reach.
 
 use crate::error::RenderError;
 use crate::frame::gbuffer::GBuffer;
@@ -227,9 +227,10 @@ pub fn lighting_part(buffers: Option<&DenoiseBuffers>) -> Part<'_> {
 pub fn lighting_part_declared(on: bool) -> Part<'static> {
     let consts = format!(
         "const DENOISE: bool = {on};\nconst CATCH_UP_FRAMES: f32 = {:?}f;\n\
-         const DENOISE_MOVED_SLOTS: u32 = {}u;\n",
+         const DENOISE_MOVED_SLOTS: u32 = {}u;\nconst SHADOW_MOVED_POWER: f32 = {:?}f;\n",
         MAX_HISTORY as f32,
-        MAX_MOVED_CASTERS + 1
+        MAX_MOVED_CASTERS + 1,
+        SHADOW_MOVED_POWER
     );
     if on {
         Part {

@@ -422,9 +422,19 @@ fn resolve_reused(s: Surface, acc: ptr<function, Acc>) {
         }
         reuse_store(s.px, j, y, w, min(m_old + 1.0, reuse_cap()), jy);
     }
-    (*acc).color = (*acc).color + direct / f32(k);
+    // Catch-up samples beside the reservoirs (a history a moved caster cut:
+    // lighting.wgsl `moved_catch_up_samples`), each drawn and traced as without reuse, kept
+    // in no reservoir.
+    let n = max((*acc).k, k);
+    for (var j = k; j < n; j = j + 1u) {
+        let i = (*acc).chosen[j];
+        let t = light_terms(i, s);
+        let term = t.att * t.ds * ((*acc).wsum / (*acc).weight[j]);
+        direct = direct + light_lit_point(i, s, sample_shape_point(s, i, (*acc).frac[j])) * term;
+    }
+    (*acc).color = (*acc).color + direct / f32(n);
     if (DENOISE) {
-        (*acc).est_shadowed = direct / f32(k);
+        (*acc).est_shadowed = direct / f32(n);
         (*acc).est_unshadowed = (*acc).unshadowed;
     }
 }

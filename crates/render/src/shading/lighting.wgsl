@@ -387,6 +387,9 @@ fn shade(px: vec2<i32>, mask: u32) -> vec4<f32> {
             acc.k = catch_up_samples(acc.unshadowed, fix);
         }
     }
+    if (DENOISE && REUSE && ray_samples() > 0u && acc.moved_light > 0.0) {
+        acc.k = max(acc.k, moved_catch_up_samples(acc.unshadowed, acc.moved_light));
+    }
     if (DENOISE && ray_samples() > 0u && acc.count > ray_samples() && !carried) {
         pick_stratified(s, slot, &acc);
     }
@@ -501,6 +504,19 @@ fn catch_up_samples(unshadowed: vec3<f32>, fix: DenoiseFix) -> u32 {
     let luma = vec3<f32>(0.2126, 0.7152, 0.0722);
     let before = dot(unshadowed - fix.without, luma);
     let lost = clamp(fix.went / max(before, 1e-30), 0.0, 1.0);
+    let frames = u32(round(CATCH_UP_FRAMES * lost));
+    return min(k * (1u + frames), MAX_SAMPLES);
+}
+
+// With reuse: a still point whose light passes a caster that moved loses that share of its
+// history (the temporal pass cuts it, denoise.wgsl); like a light change (`catch_up_samples`)
+// this frame draws the lost frames again, beside the reservoirs (`resolve_reused`), and its
+// estimate counts as that many frames.
+fn moved_catch_up_samples(unshadowed: vec3<f32>, moved: f32) -> u32 {
+    let k = ray_samples();
+    let all = dot(unshadowed, vec3<f32>(0.2126, 0.7152, 0.0722));
+    let share = clamp(moved / max(all, 1e-30), 0.0, 1.0);
+    let lost = 1.0 - pow(1.0 - share, SHADOW_MOVED_POWER);
     let frames = u32(round(CATCH_UP_FRAMES * lost));
     return min(k * (1u + frames), MAX_SAMPLES);
 }
