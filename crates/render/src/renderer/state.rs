@@ -386,7 +386,7 @@ impl Renderer {
 
     /// Bends every skinned and morphed mesh of the scene's animations as `bending` says (its
     /// nodes' world transforms and morph weights: `Animations::bending`). With
-    /// [`Deform::Gpu`](crate::Deform) (the default) the CPU evaluates only the joints'
+    /// [`Deform::Gpu`](crate::settings::Deform) (the default) the CPU evaluates only the joints'
     /// matrices and the bounds drawn from them, and a compute pass bends the vertices before
     /// the next frame draws (gpu_scene/deform.rs); the meshes' vertices in
     /// [`Renderer::scene`] stay as loaded. With `Deform::Cpu`, or for a skin that pass cannot
@@ -409,7 +409,7 @@ impl Renderer {
             }
             .into());
         }
-        if self.settings.deform == crate::Deform::Gpu && self.parts.deformer.is_none() {
+        if self.settings.deform == crate::settings::Deform::Gpu && self.parts.deformer.is_none() {
             self.parts.deformer = Some(crate::gpu_scene::deform::Deformer::new(
                 &self.ctx,
                 &self.current,
@@ -421,7 +421,7 @@ impl Renderer {
             .deformer
             .as_mut()
             .and_then(Option::as_mut)
-            .filter(|_| self.settings.deform == crate::Deform::Gpu);
+            .filter(|_| self.settings.deform == crate::settings::Deform::Gpu);
         let on_cpu = |mesh: usize| deformer.as_ref().is_none_or(|d| !d.bends(mesh));
         let cpu: Vec<_> = self.current.animations.bend_where(bending, on_cpu);
         let Some(deformer) = deformer else {

@@ -1,12 +1,10 @@
 //! Meshes bent as they play: skins (glTF 2.0 §3.7.3) and morph targets (§3.7.2.2), on the
 //! CPU. [`Bending`] is what bends them at one time (every node's world transform and the
-//! morph weights the clips drive); [`Animations::bend`] bends every deformed mesh from it.
+//! morph weights the clips drive); [`bend_meshes`] bends every deformed mesh from it.
 //! The renderer bends the same meshes on the GPU from the same [`Bending`] (its `deform`
 //! pass); this is the path the CPU references and `Renderer::set_mesh_vertices` take.
 
 use glam::{Mat4, Vec3};
-
-use super::{Animations, Playing};
 
 /// What bends the deformed meshes at one time.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -218,74 +216,31 @@ impl Morph {
     }
 }
 
-impl Animations {
-    /// What bends the meshes at `t` (wrapped as [`Animations::wrap`] says).
-    pub fn bending(&self, playing: Playing, t: f32) -> Bending {
-        let worlds = self.worlds(&self.locals(playing, t));
-        let t = self.wrap(playing, t);
-        let mut weights: Vec<(usize, Vec<f32>)> = Vec::new();
-        for clip in self.playing(playing) {
-            for c in &clip.weights {
-                weights.retain(|(n, _)| *n != c.node);
-                weights.push((c.node, c.sample(t)));
+/// Every mesh of `skins` and `morphs` that `keep` keeps, bent by `bending`: `(mesh,
+/// positions, normals)`, its morph targets weighted first, then its skin bent by its joints
+/// ([`Animations::bend_where`](super::Animations::bend_where)).
+pub fn bend_meshes(
+    skins: &[Skin],
+    morphs: &[Morph],
+    bending: &Bending,
+    keep: impl Fn(usize) -> bool,
+) -> Vec<(usize, Vec<Vec3>, Vec<Vec3>)> {
+    let mut out: Vec<(usize, Vec<Vec3>, Vec<Vec3>)> = morphs
+        .iter()
+        .filter(|m| keep(m.mesh))
+        .map(|m| {
+            let (p, n) = m.shape(m.weights_in(bending));
+            (m.mesh, p, n)
+        })
+        .collect();
+    for s in skins.iter().filter(|s| keep(s.mesh)) {
+        match out.iter_mut().find(|(mesh, _, _)| *mesh == s.mesh) {
+            Some((_, p, n)) => (*p, *n) = s.bend_from(&bending.worlds, p, n),
+            None => {
+                let (p, n) = s.bend(&bending.worlds);
+                out.push((s.mesh, p, n));
             }
         }
-        Bending { worlds, weights }
     }
-
-    /// What bends the meshes at rest: the joints where the file's nodes put them, the
-    /// default morph weights.
-    pub fn bending_at_rest(&self) -> Bending {
-        Bending {
-            worlds: self.rest_worlds(),
-            weights: Vec::new(),
-        }
-    }
-
-    /// Every deformed mesh's vertices and normals at `t` (wrapped as [`Animations::wrap`]
-    /// says): `(mesh, positions, normals)`, its morph targets weighted as the clips have
-    /// them, then its skin bent by its joints.
-    pub fn deformed(&self, playing: Playing, t: f32) -> Vec<(usize, Vec<Vec3>, Vec<Vec3>)> {
-        if self.skins.is_empty() && self.morphs.is_empty() {
-            return Vec::new();
-        }
-        self.bend(&self.bending(playing, t))
-    }
-
-    /// Every deformed mesh at rest.
-    pub fn deformed_at_rest(&self) -> Vec<(usize, Vec<Vec3>, Vec<Vec3>)> {
-        self.bend(&self.bending_at_rest())
-    }
-
-    /// Every deformed mesh bent by `bending`: `(mesh, positions, normals)`.
-    pub fn bend(&self, bending: &Bending) -> Vec<(usize, Vec<Vec3>, Vec<Vec3>)> {
-        self.bend_where(bending, |_| true)
-    }
-
-    /// [`Animations::bend`] for the meshes `keep` keeps alone.
-    pub fn bend_where(
-        &self,
-        bending: &Bending,
-        keep: impl Fn(usize) -> bool,
-    ) -> Vec<(usize, Vec<Vec3>, Vec<Vec3>)> {
-        let mut out: Vec<(usize, Vec<Vec3>, Vec<Vec3>)> = self
-            .morphs
-            .iter()
-            .filter(|m| keep(m.mesh))
-            .map(|m| {
-                let (p, n) = m.shape(m.weights_in(bending));
-                (m.mesh, p, n)
-            })
-            .collect();
-        for s in self.skins.iter().filter(|s| keep(s.mesh)) {
-            match out.iter_mut().find(|(mesh, _, _)| *mesh == s.mesh) {
-                Some((_, p, n)) => (*p, *n) = s.bend_from(&bending.worlds, p, n),
-                None => {
-                    let (p, n) = s.bend(&bending.worlds);
-                    out.push((s.mesh, p, n));
-                }
-            }
-        }
-        out
-    }
+    out
 }

@@ -413,7 +413,7 @@ impl Animations {
         }
     }
 
-    pub(crate) fn playing(&self, playing: Playing) -> impl Iterator<Item = &Clip> {
+    fn playing(&self, playing: Playing) -> impl Iterator<Item = &Clip> {
         let range = match playing {
             Playing::One(k) => k..(k + 1).min(self.clips.len()),
             Playing::All => 0..self.clips.len(),
@@ -547,6 +547,57 @@ impl Animations {
                 Some((m.instance, out))
             })
             .collect()
+    }
+}
+
+impl Animations {
+    /// What bends the meshes at `t` (wrapped as [`Animations::wrap`] says): every node's
+    /// world transform, and the morph weights the playing clips drive.
+    pub fn bending(&self, playing: Playing, t: f32) -> Bending {
+        let worlds = self.worlds(&self.locals(playing, t));
+        let t = self.wrap(playing, t);
+        let mut weights: Vec<(usize, Vec<f32>)> = Vec::new();
+        for c in self.playing(playing).flat_map(|clip| &clip.weights) {
+            weights.retain(|(n, _)| *n != c.node);
+            weights.push((c.node, c.sample(t)));
+        }
+        Bending { worlds, weights }
+    }
+
+    /// What bends the meshes at rest: the joints where the file's nodes put them, the
+    /// default morph weights.
+    pub fn bending_at_rest(&self) -> Bending {
+        Bending {
+            worlds: self.rest_worlds(),
+            weights: Vec::new(),
+        }
+    }
+
+    /// Every deformed mesh's vertices and normals at `t`: `(mesh, positions, normals)`.
+    pub fn deformed(&self, playing: Playing, t: f32) -> Vec<(usize, Vec<Vec3>, Vec<Vec3>)> {
+        if self.skins.is_empty() && self.morphs.is_empty() {
+            return Vec::new();
+        }
+        self.bend(&self.bending(playing, t))
+    }
+
+    /// Every deformed mesh at rest.
+    pub fn deformed_at_rest(&self) -> Vec<(usize, Vec<Vec3>, Vec<Vec3>)> {
+        self.bend(&self.bending_at_rest())
+    }
+
+    /// Every deformed mesh bent by `bending`: `(mesh, positions, normals)`.
+    pub fn bend(&self, bending: &Bending) -> Vec<(usize, Vec<Vec3>, Vec<Vec3>)> {
+        self.bend_where(bending, |_| true)
+    }
+
+    /// [`Animations::bend`] for the meshes `keep` keeps alone (`deform::bend_meshes`).
+    pub fn bend_where(
+        &self,
+        bending: &Bending,
+        keep: impl Fn(usize) -> bool,
+    ) -> Vec<(usize, Vec<Vec3>, Vec<Vec3>)> {
+        deform::bend_meshes(&self.skins, &self.morphs, bending, keep)
     }
 }
 
