@@ -270,12 +270,7 @@ impl Renderer {
         if old.casts_shadows {
             let new = self.parts.scene.draws[instance].sphere;
             self.parts.source.note_moved(old.sphere, new);
-            if let Some(d) = self
-                .parts
-                .denoiser
-                .as_mut()
-                .filter(|_| self.settings.rays.moved_shadows)
-            {
+            if let Some(d) = moved_casters_denoiser(&mut self.parts, &self.settings) {
                 d.note_moved(old.sphere, new);
             }
         }
@@ -337,12 +332,7 @@ impl Renderer {
         for (k, old, new) in moved {
             if self.parts.scene.draws[k].casts_shadows {
                 self.parts.source.note_moved(old, new);
-                if let Some(d) = self
-                    .parts
-                    .denoiser
-                    .as_mut()
-                    .filter(|_| self.settings.rays.moved_shadows)
-                {
+                if let Some(d) = moved_casters_denoiser(&mut self.parts, &self.settings) {
                     let world = self
                         .current
                         .instances
@@ -455,12 +445,7 @@ impl Renderer {
                     continue;
                 }
                 self.parts.source.note_moved(old, new);
-                if let Some(d) = self
-                    .parts
-                    .denoiser
-                    .as_mut()
-                    .filter(|_| self.settings.rays.moved_shadows)
-                {
+                if let Some(d) = moved_casters_denoiser(&mut self.parts, &self.settings) {
                     let world = transform(k);
                     let scale = crate::gpu_scene::deform::max_stretch(world);
                     let to_world =
@@ -581,4 +566,16 @@ fn visibility_pass(
         settings.soft_visibility,
     )
     .map(Some)
+}
+
+/// The denoiser, where it follows moved casters (`RayOptions::moved_shadows`): what a moved
+/// or bent caster is noted to.
+fn moved_casters_denoiser<'p>(
+    parts: &'p mut FrameParts,
+    settings: &RenderSettings,
+) -> Option<&'p mut crate::sampled::denoise::Denoiser> {
+    parts
+        .denoiser
+        .as_mut()
+        .filter(|_| settings.rays.moved_shadows)
 }
