@@ -15,7 +15,8 @@
 //! of its joints' images, so inside any sphere that encloses them: the bounds are
 //! conservative. A morph target's displacement widens each sphere by its weight times its
 //! longest displacement (through the joint's largest scale). A skin whose weights are not
-//! so (built by hand, not loaded) is bent on the CPU instead (`Renderer::set_bending`).
+//! so, or that names a joint it lacks (built by hand, not loaded: the loader refuses it), is
+//! bent on the CPU instead (`Renderer::set_bending`).
 
 use glam::{Mat4, Vec3};
 use manyshadows_scene::animation::{Animations, Bending};
@@ -205,7 +206,10 @@ impl Deformer {
                 && bind_n.len() == count
                 && skin.is_none_or(|s| {
                     let s = &anim.skins[s];
-                    s.bind_positions.len() == count && s.is_convex() && s.joints.len() <= 1 << 16
+                    s.bind_positions.len() == count
+                        && s.is_convex()
+                        && s.problem(anim.nodes.len()).is_none()
+                        && s.joints.len() <= 1 << 16
                 })
                 && morph.is_none_or(|m| {
                     let m = &anim.morphs[m];
